@@ -1,0 +1,67 @@
+"""The ``accugrid`` command line.
+
+Every module in ``codegen/commands/`` is one subcommand: it defines ``NAME``, ``HELP``,
+``add_arguments(parser)`` and ``run(args) -> int``. Exit codes (DESIGN.md): 0 success, 2 bad input
+or arguments (one line naming file, line and column, no traceback), 1 internal error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import pkgutil
+import sys
+import traceback
+
+from codegen import __version__, commands
+from kinematics.errors import InputError
+
+EXIT_OK, EXIT_INTERNAL, EXIT_INPUT = 0, 1, 2
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="accugrid",
+        description="Grid-based TCP error compensation for robotic drilling. "
+        "Lengths in mm, angles in degrees.",
+    )
+    parser.add_argument("--version", action="version", version=f"accugrid {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
+        module = importlib.import_module(f"{commands.__name__}.{info.name}")
+        cmd = sub.add_parser(
+            module.NAME,
+            help=module.HELP,
+            description=module.__doc__,
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+        module.add_arguments(cmd)
+        cmd.set_defaults(handler=module.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the CLI; returns the process exit code (also used by the console script)."""
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.handler(args) or EXIT_OK)
+    except InputError as exc:
+        print(f"accugrid {args.command}: error: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except KeyboardInterrupt:
+        print(f"accugrid {args.command}: interrupted", file=sys.stderr)
+        return EXIT_INTERNAL
+    except Exception as exc:  # noqa: BLE001 - the last line of defence: exit 1, not a traceback
+        if os.environ.get("ACCUGRID_DEBUG"):
+            traceback.print_exc()
+        print(
+            f"accugrid {args.command}: internal error: {type(exc).__name__}: {exc} "
+            "(set ACCUGRID_DEBUG=1 for the traceback)",
+            file=sys.stderr,
+        )
+        return EXIT_INTERNAL
+
+
+if __name__ == "__main__":
+    sys.exit(main())

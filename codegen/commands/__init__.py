@@ -1,0 +1,1 @@
+"""One module per ``accugrid`` subcommand (see ``codegen.cli``)."""

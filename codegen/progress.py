@@ -1,0 +1,16 @@
+"""Progress bars for long work: shown on a terminal, silent in pipes and files (DESIGN.md, CLI)."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterable, Iterator
+from typing import TypeVar
+
+from tqdm import tqdm
+
+T = TypeVar("T")
+
+
+def progress(items: Iterable[T], desc: str, total: int | None = None) -> Iterator[T]:
+    """Iterate ``items`` with a bar on stderr when stderr is a terminal."""
+    yield from tqdm(items, desc=desc, total=total, disable=not sys.stderr.isatty(), leave=False)

@@ -1,0 +1,55 @@
+"""The only way numbers and user text reach a robot program (DESIGN.md, "Output safety").
+
+- ``fixed``: one fixed-point formatter; never ``str(float)`` or ``%g`` in a program.
+- ``comment_text``: user text made harmless inside a one-line comment of any dialect.
+- ``krl_identifier``: a valid KRL name ([A-Za-z_][A-Za-z0-9_]*, at most 24 characters).
+"""
+
+from __future__ import annotations
+
+import re
+import unicodedata
+
+import numpy as np
+
+KRL_NAME_MAX = 24
+COMMENT_MAX = 60
+
+_NOT_SAFE = re.compile(r"[^A-Za-z0-9 _.,:+\-=/#@]")
+_NOT_IDENT = re.compile(r"[^A-Za-z0-9_]")
+
+
+def fixed(value: float, decimals: int = 3) -> str:
+    """Format a finite number in fixed point with exactly ``decimals`` places; ``-0.000`` -> ``0.000``.
+
+    Raises ValueError for NaN or infinity: such a number must never reach a program.
+    """
+    value = float(value)
+    if not np.isfinite(value):
+        raise ValueError(f"refusing to write a non-finite number ({value}) into a program")
+    text = f"{value:.{decimals}f}"
+    if text.startswith("-") and not text.strip("-0."):
+        text = text[1:]
+    return text
+
+
+def comment_text(text: str, limit: int = COMMENT_MAX) -> str:
+    """User text reduced to a safe single-line comment body.
+
+    Accents are folded to ASCII, and anything that could end a comment or start a statement in KRL
+    or RS274NGC (newlines, ``;``, ``(``, ``)``, ``%``, ``&``, quotes, braces, control characters) becomes
+    ``_``; the result is at most ``limit`` characters.
+    """
+    folded = unicodedata.normalize("NFKD", str(text)).encode("ascii", "ignore").decode("ascii")
+    cleaned = _NOT_SAFE.sub("_", folded).strip()
+    return cleaned[:limit]
+
+
+def krl_identifier(text: str, prefix: str = "P", limit: int = KRL_NAME_MAX) -> str:
+    """A KRL identifier derived from user text: invalid characters become ``_``, a leading digit
+    gets ``prefix``, and the result is cut to ``limit`` (24) characters."""
+    name = _NOT_IDENT.sub("_", unicodedata.normalize("NFKD", str(text)))
+    name = name.encode("ascii", "ignore").decode("ascii") or prefix
+    if not (name[0].isalpha() or name[0] == "_"):
+        name = prefix + name
+    return name[:limit]

@@ -1,0 +1,4 @@
+"""Pure geometry: robot models, forward/inverse kinematics, the DH error model, frame maths.
+
+This is the lowest layer of accugrid; it imports nothing from ``compensation`` or ``codegen``.
+"""
