@@ -20,7 +20,7 @@ _NOT_IDENT = re.compile(r"[^A-Za-z0-9_]")
 
 
 def fixed(value: float, decimals: int = 3) -> str:
-    """Format a finite number in fixed point with exactly ``decimals`` places; ``-0.000`` -> ``0.000``.
+    """Format a finite number with exactly ``decimals`` places; ``-0.000`` becomes ``0.000``.
 
     Raises ValueError for NaN or infinity: such a number must never reach a program.
     """
@@ -36,9 +36,9 @@ def fixed(value: float, decimals: int = 3) -> str:
 def comment_text(text: str, limit: int = COMMENT_MAX) -> str:
     """User text reduced to a safe single-line comment body.
 
-    Accents are folded to ASCII, and anything that could end a comment or start a statement in KRL
-    or RS274NGC (newlines, ``;``, ``(``, ``)``, ``%``, ``&``, quotes, braces, control characters) becomes
-    ``_``; the result is at most ``limit`` characters.
+    Accents are folded to ASCII, and anything that could end a comment or start a statement in
+    KRL or RS274NGC (newlines, ``;``, ``(``, ``)``, ``%``, ``&``, quotes, braces, control
+    characters) becomes ``_``; the result is at most ``limit`` characters.
     """
     folded = unicodedata.normalize("NFKD", str(text)).encode("ascii", "ignore").decode("ascii")
     cleaned = _NOT_SAFE.sub("_", folded).strip()

@@ -21,7 +21,7 @@ from kinematics.errors import InputError
 
 @dataclass
 class Table:
-    """A parsed CSV: header names as written, lower-cased lookup, raw cells and file line numbers."""
+    """A parsed CSV: header names as written, raw cells and the file line of each row."""
 
     path: str
     header: list[str]
