@@ -1,0 +1,229 @@
+"""The error-similarity grid model (seed Sec. 2.3): measured vertex errors in, predicted errors and
+corrected commands out.
+
+The error is e = P - M (commanded minus measured, DESIGN.md). Inside the grid the error at a point
+is interpolated from the 8 vertices of its cell (``compensation.interpolation``): inverse-distance
+weighting (seed Eq. 12-13, the default, power 1) or trilinear. The corrected command is
+P' = P + e(P) (Eq. 14); with K iterations P'_k = P + e(P'_(k-1)), which removes the second-order
+term e(P) - e(P + e).
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from compensation.interpolation import blend, corner_indices, idw_weights, locate, trilinear_weights
+from compensation.measurements import (
+    COORD_TOL_MM,
+    REPEAT_TOL_MM,
+    build_grid,
+    measurements_from_arrays,
+    read_measurements,
+)
+from kinematics.errors import InputError
+
+METHODS = ("idw", "trilinear")
+OUTSIDE = ("error", "clamp")
+MAX_CORRECTION_MM = 5.0  # default safety limit on the length of any one correction
+BOX_TOL_MM = 1e-6  # a point this close outside the grid box still counts as inside
+_CHUNK = 65536  # points per block: keeps the (block, 8) temporaries in cache
+
+
+class GridModel:
+    """Measured TCP errors at the vertices of an axis-aligned regular grid (robot frame).
+
+    origin, step (3,) mm; counts (3,) int (vertices per axis, >= 2); errors (nx, ny, nz, 3) mm,
+    e = P - M at the vertices; orientation_abc (3,) deg or None: the TCP orientation of the
+    measurement; source_sha256: SHA-256 of the measurement file (None for arrays).
+    """
+
+    def __init__(
+        self,
+        origin: np.ndarray,
+        step: np.ndarray,
+        errors: np.ndarray,
+        orientation_abc: np.ndarray | None = None,
+        source_sha256: str | None = None,
+        source_path: str | None = None,
+        repeats: np.ndarray | None = None,
+        spread_mm: float = 0.0,
+    ) -> None:
+        self.errors = np.array(errors, dtype=float)
+        if self.errors.ndim != 4 or self.errors.shape[3] != 3 or min(self.errors.shape[:3]) < 2:
+            raise ValueError(f"errors must be (nx, ny, nz, 3) with n >= 2, got {self.errors.shape}")
+        self.origin = np.array(origin, dtype=float).reshape(3)
+        self.step = np.array(step, dtype=float).reshape(3)
+        if not (self.step > 0).all() or not np.isfinite(self.errors).all():
+            raise ValueError("grid steps must be positive and errors finite")
+        self.counts = np.array(self.errors.shape[:3], dtype=np.int64)
+        self.orientation_abc = None if orientation_abc is None else np.array(orientation_abc, float)
+        self.source_sha256 = source_sha256
+        self.source_path = source_path
+        self.repeats = repeats
+        self.spread_mm = float(spread_mm)
+        # per-axis vertex values (3, nx*ny*nz), contiguous for the gathers in predict
+        self._values = np.ascontiguousarray(self.errors.reshape(-1, 3).T)
+
+    @classmethod
+    def from_measurements(
+        cls,
+        source: str | os.PathLike[str] | tuple,
+        coord_tol_mm: float = COORD_TOL_MM,
+        repeat_tol_mm: float = REPEAT_TOL_MM,
+    ) -> GridModel:
+        """Build from a measurement CSV path or a tuple (commanded (N,3), measured (N,3)[, abc]).
+
+        Repeats of a commanded point are averaged; InputError (file, line) when the points are
+        not a complete regular grid or repeats disagree by more than ``repeat_tol_mm``.
+        """
+        if isinstance(source, tuple):
+            meas = measurements_from_arrays(*source)
+        else:
+            meas = read_measurements(source)
+        grid = build_grid(meas, coord_tol_mm=coord_tol_mm, repeat_tol_mm=repeat_tol_mm)
+        return cls(
+            grid.origin,
+            grid.step,
+            grid.errors,
+            orientation_abc=grid.abc,
+            source_sha256=meas.sha256,
+            source_path=meas.path,
+            repeats=grid.repeats,
+            spread_mm=grid.spread_mm,
+        )
+
+    @property
+    def upper(self) -> np.ndarray:
+        """The grid's far corner (3,) mm."""
+        return self.origin + (self.counts - 1) * self.step
+
+    def vertices(self) -> np.ndarray:
+        """Vertex positions (nx, ny, nz, 3) mm."""
+        axes = [self.origin[a] + np.arange(self.counts[a]) * self.step[a] for a in range(3)]
+        return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
+
+    def contains(self, points: np.ndarray) -> np.ndarray:
+        """(N,) bool: inside the grid box, boundary included (within 1e-6 mm)."""
+        points = _as_points(points)
+        lo, hi = self.origin - BOX_TOL_MM, self.upper + BOX_TOL_MM
+        return ((points >= lo) & (points <= hi)).all(axis=1)
+
+    def predict(
+        self,
+        points: np.ndarray,
+        method: str = "idw",
+        power: float = 1.0,
+        outside: str = "error",
+    ) -> np.ndarray:
+        """Predicted error e (N, 3) mm at points (N, 3) mm.
+
+        outside="error": InputError naming the points outside the grid box; "clamp": such a
+        point gets the error of the nearest point of the box (in the nearest cell).
+        """
+        _check_options(method, power, outside)
+        points = self._inside(_as_points(points), outside)
+        out = np.empty_like(points)
+        for start in range(0, len(points), _CHUNK):
+            block = slice(start, start + _CHUNK)
+            out[block] = self._predict_block(points[block], method, power)
+        return out
+
+    def correct(
+        self,
+        points: np.ndarray,
+        iterations: int = 1,
+        method: str = "idw",
+        power: float = 1.0,
+        outside: str = "error",
+        max_correction_mm: float | None = MAX_CORRECTION_MM,
+    ) -> np.ndarray:
+        """Corrected commands P' (N, 3) mm for targets P (N, 3) mm: P'_k = P + e(P'_(k-1)).
+
+        The outside rule applies to P; iterates that step out of the box (by at most one
+        correction) are evaluated at the nearest box point. InputError for the whole job when
+        any correction |P' - P| exceeds ``max_correction_mm`` (None: no limit).
+        """
+        _check_options(method, power, outside)
+        if int(iterations) != iterations or iterations < 1:
+            raise InputError(f"iterations must be a whole number >= 1, got {iterations}")
+        points = _as_points(points)
+        inside = self._inside(points, outside)
+        command = points + self.predict(inside, method, power, "clamp")
+        for _ in range(int(iterations) - 1):
+            command = points + self.predict(command, method, power, "clamp")
+        if max_correction_mm is not None and len(points):
+            length = np.linalg.norm(command - points, axis=1)
+            worst = int(np.argmax(length))
+            if length[worst] > max_correction_mm:
+                raise InputError(
+                    f"correction of {length[worst]:.3f} mm at point {worst} "
+                    f"{_fmt(points[worst])} exceeds the safety limit of {max_correction_mm:g} mm; "
+                    "refusing the whole job (check the grid, or raise the limit)"
+                )
+        return command
+
+    def describe(self) -> str:
+        """Multi-line summary: source, origin, step, counts, repeats, error range per axis."""
+        e = self.errors.reshape(-1, 3)
+        lines = [
+            f"grid       {self.source_path or '(arrays)'}",
+            f"origin     {_fmt(self.origin)} mm, far corner {_fmt(self.upper)} mm",
+            f"step       {_fmt(self.step)} mm, vertices "
+            + "x".join(str(int(c)) for c in self.counts)
+            + f" = {int(np.prod(self.counts))}",
+        ]
+        if self.repeats is not None:
+            lines.append(
+                f"repeats    {int(self.repeats.min())}..{int(self.repeats.max())} per vertex, "
+                f"largest spread {self.spread_mm:.4f} mm"
+            )
+        for axis, name in enumerate("xyz"):
+            lines.append(f"error e{name}   {e[:, axis].min():+.4f} .. {e[:, axis].max():+.4f} mm")
+        if self.orientation_abc is not None:
+            lines.append(f"orientation a,b,c {_fmt(self.orientation_abc)} deg")
+        return "\n".join(lines)
+
+    def _inside(self, points: np.ndarray, outside: str) -> np.ndarray:
+        """Points as given when inside; outside ones clamped to the box or an InputError."""
+        inside = self.contains(points)
+        if inside.all() or outside == "clamp":
+            return np.clip(points, self.origin, self.upper)
+        bad = np.flatnonzero(~inside)
+        listed = "; ".join(f"point {i} {_fmt(points[i])}" for i in bad[:5])
+        raise InputError(
+            f"{bad.size} point(s) outside the grid box {_fmt(self.origin)}..{_fmt(self.upper)} "
+            f"mm: {listed} (use outside='clamp' to use the nearest cell)"
+        )
+
+    def _predict_block(self, points: np.ndarray, method: str, power: float) -> np.ndarray:
+        cell, frac = locate(points, self.origin, self.step, self.counts)
+        if method == "idw":
+            weights = idw_weights(frac, self.step, power)
+        else:
+            weights = trilinear_weights(frac)
+        return blend(self._values, corner_indices(cell, self.counts), weights)
+
+
+def _check_options(method: str, power: float, outside: str) -> None:
+    if method not in METHODS:
+        raise InputError(f"unknown method '{method}' (choose {' or '.join(METHODS)})")
+    if outside not in OUTSIDE:
+        raise InputError(f"unknown outside rule '{outside}' (choose {' or '.join(OUTSIDE)})")
+    if not (np.isfinite(power) and power > 0):
+        raise InputError(f"the inverse-distance power must be > 0, got {power}")
+
+
+def _as_points(points: np.ndarray) -> np.ndarray:
+    points = np.asarray(points, dtype=float)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise InputError(f"points must be an (N, 3) array in mm, got shape {points.shape}")
+    if not np.isfinite(points).all():
+        row = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
+        raise InputError(f"point {row} is not finite: {points[row].tolist()}")
+    return points
+
+
+def _fmt(v: np.ndarray) -> str:
+    return "(" + ", ".join(f"{x:.3f}" for x in np.asarray(v, dtype=float)) + ")"

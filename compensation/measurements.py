@@ -1,0 +1,237 @@
+"""Laser-tracker measurements in, one averaged error per vertex of a regular grid out.
+
+A measurement row is a commanded TCP position P and the measured position M (robot frame, mm),
+optionally with the commanded orientation a,b,c (KUKA ABC, deg). Rows with the same commanded
+position are repeats and are averaged. Together the commanded positions must form a complete
+axis-aligned regular grid; anything else is an InputError that says what is wrong and where.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from compensation.csvtable import Table, parse_table
+from compensation.orientation import rotation_angle_deg
+from kinematics.errors import InputError
+
+COORD_TOL_MM = 1e-3  # two commanded coordinates closer than this are the same grid level
+REPEAT_TOL_MM = 0.5  # largest allowed distance of a repeat from the mean of its vertex
+ORIENTATION_TOL_DEG = 0.1  # every row must be commanded at the same a,b,c within this
+_SHOW = 5  # how many offending items an error message lists
+
+
+@dataclass
+class Measurements:
+    """Rows of a measurement session: commanded and measured (N, 3) mm, a,b,c (N, 3) deg or None.
+
+    ``path``/``lines`` locate each row for error messages (``path`` None for arrays).
+    """
+
+    commanded: np.ndarray
+    measured: np.ndarray
+    abc: np.ndarray | None
+    path: str | None = None
+    lines: np.ndarray | None = None
+    sha256: str | None = None
+
+    def where(self, row: int) -> str:
+        """Human location of a row: 'line 12' for a file, 'row 3' (0-based) for arrays."""
+        return f"line {self.lines[row]}" if self.lines is not None else f"row {row}"
+
+
+@dataclass
+class VertexGrid:
+    """An axis-aligned regular grid with one averaged error per vertex.
+
+    origin, step (3,) mm; counts (3,) int; errors (nx, ny, nz, 3) mm, e = P - M;
+    repeats (nx, ny, nz) int; spread_mm: largest distance of a repeat from its vertex mean.
+    """
+
+    origin: np.ndarray
+    step: np.ndarray
+    counts: np.ndarray
+    errors: np.ndarray
+    repeats: np.ndarray
+    spread_mm: float
+    abc: np.ndarray | None
+
+
+def read_measurements(path: str | os.PathLike[str]) -> Measurements:
+    """Read a measurement CSV (DESIGN.md): x,y,z,x_meas,y_meas,z_meas required, a,b,c optional."""
+    path = os.fspath(path)
+    try:
+        raw = Path(path).read_bytes()
+    except OSError as exc:
+        raise InputError(f"cannot read: {exc.strerror or exc}", path) from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InputError("not UTF-8 text", path, raw[: exc.start].count(b"\n") + 1) from None
+    table = parse_table(text, path)
+    table.require(["x", "y", "z", "x_meas", "y_meas", "z_meas"])
+    if not len(table):
+        raise InputError("no measurement rows", path)
+    abc = _abc_columns(table)
+    return Measurements(
+        commanded=table.floats(["x", "y", "z"]),
+        measured=table.floats(["x_meas", "y_meas", "z_meas"]),
+        abc=abc,
+        path=path,
+        lines=np.asarray(table.lines),
+        sha256=hashlib.sha256(raw).hexdigest(),
+    )
+
+
+def _abc_columns(table: Table) -> np.ndarray | None:
+    present = [table.has(n) for n in ("a", "b", "c")]
+    if not any(present):
+        return None
+    if not all(present):
+        table.require(["a", "b", "c"])
+    return table.floats(["a", "b", "c"])
+
+
+def measurements_from_arrays(
+    commanded: np.ndarray, measured: np.ndarray, abc: np.ndarray | None = None
+) -> Measurements:
+    """Wrap (N, 3) arrays; InputError for wrong shapes or non-finite values (naming the row)."""
+    arrays = {"commanded": commanded, "measured": measured}
+    if abc is not None:
+        arrays["abc"] = abc
+    checked = {}
+    for name, value in arrays.items():
+        value = np.asarray(value, dtype=float)
+        if value.ndim != 2 or value.shape[1] != 3 or not len(value):
+            raise InputError(f"{name} must be a non-empty (N, 3) array, got shape {value.shape}")
+        bad = np.flatnonzero(~np.isfinite(value).all(axis=1))
+        if bad.size:
+            raise InputError(f"{name} row {bad[0]} is not finite: {value[bad[0]].tolist()}")
+        checked[name] = value
+    lengths = {len(v) for v in checked.values()}
+    if len(lengths) != 1:
+        raise InputError(f"commanded, measured (and abc) differ in length: {sorted(lengths)}")
+    return Measurements(checked["commanded"], checked["measured"], checked.get("abc"))
+
+
+def build_grid(
+    meas: Measurements, coord_tol_mm: float = COORD_TOL_MM, repeat_tol_mm: float = REPEAT_TOL_MM
+) -> VertexGrid:
+    """Detect the regular grid of the commanded points and average the repeats of each vertex.
+
+    InputError when the points are not a complete axis-aligned regular grid (uneven spacing,
+    stray or missing vertices), when repeats disagree by more than ``repeat_tol_mm``, or when
+    the rows were commanded at different orientations.
+    """
+    origin, step, counts, index = _detect_axes(meas, coord_tol_mm)
+    flat = np.ravel_multi_index(index.T, tuple(counts))
+    n_vertices = int(np.prod(counts))
+    repeats = np.bincount(flat, minlength=n_vertices)
+    missing = np.flatnonzero(repeats == 0)
+    if missing.size:
+        ijk = np.column_stack(np.unravel_index(missing[:_SHOW], tuple(counts)))
+        listed = "; ".join(_fmt(origin + v * step) for v in ijk)
+        raise InputError(
+            f"{missing.size} of {n_vertices} grid vertices not measured "
+            f"(grid {_fmt_counts(counts)} at step {_fmt(step)} mm), e.g. {listed}",
+            meas.path,
+        )
+    error_rows = meas.commanded - meas.measured
+    sums = np.zeros((n_vertices, 3))
+    np.add.at(sums, flat, error_rows)
+    mean = sums / repeats[:, None]
+    spread = np.linalg.norm(error_rows - mean[flat], axis=1)
+    worst = int(np.argmax(spread))
+    if spread[worst] > repeat_tol_mm:
+        same = np.flatnonzero(flat == flat[worst])
+        rows = ", ".join(meas.where(r) for r in same[:_SHOW])
+        raise InputError(
+            f"repeated measurements of {_fmt(meas.commanded[worst])} disagree: one lies "
+            f"{spread[worst]:.3f} mm from their mean (limit {repeat_tol_mm:g} mm; {rows})",
+            meas.path,
+            None if meas.lines is None else int(meas.lines[worst]),
+        )
+    return VertexGrid(
+        origin=origin,
+        step=step,
+        counts=counts,
+        errors=mean.reshape(*counts, 3),
+        repeats=repeats.reshape(tuple(counts)),
+        spread_mm=float(spread.max()),
+        abc=_common_orientation(meas),
+    )
+
+
+def _detect_axes(
+    meas: Measurements, tol: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per axis: group coordinates into levels, check even spacing; vertex index (N, 3) per row."""
+    origin, step, counts = np.empty(3), np.empty(3), np.empty(3, dtype=int)
+    index = np.empty(meas.commanded.shape, dtype=np.int64)
+    for axis, name in enumerate("xyz"):
+        values = meas.commanded[:, axis]
+        order = np.argsort(values, kind="stable")
+        starts = np.concatenate(([True], np.diff(values[order]) > tol))
+        level_of_sorted = np.cumsum(starts) - 1
+        n_levels = int(level_of_sorted[-1]) + 1
+        level = np.empty(len(values), dtype=np.int64)
+        level[order] = level_of_sorted
+        centres = np.bincount(level, weights=values) / np.bincount(level)
+        if n_levels < 2:
+            raise InputError(
+                f"the commanded points span a single {name} value ({centres[0]:.4f} mm): "
+                "a grid needs at least 2 levels per axis",
+                meas.path,
+            )
+        gaps = np.diff(centres)
+        spacing = (centres[-1] - centres[0]) / (n_levels - 1)
+        if np.abs(gaps - spacing).max() > tol:
+            raise InputError(_uneven_message(name, centres, np.bincount(level), tol), meas.path)
+        origin[axis], step[axis], counts[axis] = centres[0], spacing, n_levels
+        index[:, axis] = level
+    return origin, step, counts, index
+
+
+def _uneven_message(name: str, centres: np.ndarray, members: np.ndarray, tol: float) -> str:
+    gaps = ", ".join(f"{g:.4f}" for g in np.diff(centres)[:12])
+    levels = ", ".join(f"{c:.4f}" for c in centres[:12]) + (" ..." if len(centres) > 12 else "")
+    text = (
+        f"uneven grid spacing along {name}: levels {levels} mm, gaps {gaps} mm "
+        f"(must be equal within {tol:g} mm)"
+    )
+    typical = np.median(members)
+    stray = np.flatnonzero(members < typical)
+    if stray.size:
+        listed = ", ".join(f"{name}={centres[i]:.4f} ({members[i]} rows)" for i in stray[:_SHOW])
+        text += f"; sparsely populated levels (stray points?): {listed}"
+    return text
+
+
+def _common_orientation(meas: Measurements) -> np.ndarray | None:
+    """The one a,b,c of the session (deg), or None; InputError if rows differ by > tolerance."""
+    if meas.abc is None:
+        return None
+    reference = meas.abc[0]
+    angle = rotation_angle_deg(meas.abc, reference)
+    bad = int(np.argmax(angle))
+    if angle[bad] > ORIENTATION_TOL_DEG:
+        raise InputError(
+            f"a grid holds for one TCP orientation, but this row's a,b,c "
+            f"{_fmt(meas.abc[bad])} deg differs by {angle[bad]:.3f} deg from the first row's "
+            f"{_fmt(reference)} deg (limit {ORIENTATION_TOL_DEG:g} deg)",
+            meas.path,
+            None if meas.lines is None else int(meas.lines[bad]),
+        )
+    return reference.copy()
+
+
+def _fmt(v: np.ndarray) -> str:
+    return "(" + ", ".join(f"{x:.4f}" for x in np.asarray(v, dtype=float)) + ")"
+
+
+def _fmt_counts(counts: np.ndarray) -> str:
+    return "x".join(str(int(c)) for c in counts)
