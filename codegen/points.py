@@ -1,0 +1,160 @@
+"""The drilling points CSV (DESIGN.md "Points") and the tool orientation of each hole.
+
+Columns: ``x,y,z`` (mm, program BASE frame) required; ``id`` optional (unique, non-empty);
+orientation either ``a,b,c`` (KUKA ABC, deg) or ``i,j,k`` (drill axis into the part, any non-zero
+length, normalised here); ``diameter``, ``depth`` (mm) and ``feed`` (mm/s) optional and positive,
+an empty cell meaning "the cell file's default"; other columns are carried through in ``table``.
+
+The rotation about a given drill axis (``i,j,k`` input) is chosen by ``orient_along_axes``.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from compensation.csvtable import Table, parse_table, read_table
+from kinematics.errors import InputError
+from kinematics.frames import abc_to_matrix
+
+AXIS_MIN_LENGTH = 1e-9  # an i,j,k vector shorter than this has no direction
+MAX_TILT_DEG = 150.0  # i,j,k axes further than this from the reference tool axis are refused
+
+
+@dataclass
+class Points:
+    """Parsed drilling points. Arrays are float64; row r came from file line ``lines[r]``."""
+
+    path: str
+    table: Table
+    ids: list[str]
+    xyz: np.ndarray  # (N, 3) mm
+    abc: np.ndarray | None  # (N, 3) deg, when given as a,b,c
+    axis: np.ndarray | None  # (N, 3) unit drill axis into the part (from i,j,k or a,b,c tool Z)
+    diameter: np.ndarray  # (N,) mm, NaN when not given
+    depth: np.ndarray  # (N,) mm, NaN when not given
+    feed: np.ndarray  # (N,) mm/s, NaN when not given
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    @property
+    def lines(self) -> list[int]:
+        return self.table.lines
+
+    @property
+    def orientation(self) -> str | None:
+        """ "abc", "ijk" or None (no orientation columns)."""
+        if self.abc is not None:
+            return "abc"
+        return None if self.axis is None else "ijk"
+
+    def label(self, r: int) -> str:
+        """How messages name hole r: its id and file line."""
+        return f"hole '{self.ids[r]}' ({self.path}:{self.lines[r]})"
+
+
+def read_points(path: str | os.PathLike[str]) -> Points:
+    """Read and validate a points CSV file (see module docstring)."""
+    return _points(read_table(path))
+
+
+def parse_points(text: str, path: str = "<string>") -> Points:
+    """Parse points CSV text; ``path`` is used in messages only."""
+    return _points(parse_table(text, path))
+
+
+def _points(table: Table) -> Points:
+    table.require(["x", "y", "z"])
+    xyz = table.floats(["x", "y", "z"])
+    ids = _ids(table)
+    has_abc = [table.has(n) for n in "abc"]
+    has_ijk = [table.has(n) for n in "ijk"]
+    if any(has_abc) and any(has_ijk):
+        raise InputError(
+            "give the orientation either as a,b,c or as i,j,k, not both", table.path, 1
+        )
+    abc = axis = None
+    if any(has_abc):
+        table.require(["a", "b", "c"])
+        abc = table.floats(["a", "b", "c"])
+        axis = abc_to_matrix(abc)[:, :, 2] if len(abc) else np.zeros((0, 3))
+    elif any(has_ijk):
+        table.require(["i", "j", "k"])
+        raw = table.floats(["i", "j", "k"])
+        length = np.linalg.norm(raw, axis=1)
+        short = np.flatnonzero(~(length > AXIS_MIN_LENGTH))
+        if short.size:
+            raise InputError("drill axis i,j,k has zero length", *table.where(int(short[0]), "i"))
+        axis = raw / length[:, None]
+    return Points(
+        path=table.path,
+        table=table,
+        ids=ids,
+        xyz=xyz,
+        abc=abc,
+        axis=axis,
+        diameter=_optional_positive(table, "diameter"),
+        depth=_optional_positive(table, "depth"),
+        feed=_optional_positive(table, "feed"),
+    )
+
+
+def _ids(table: Table) -> list[str]:
+    if not table.has("id"):
+        return [str(r + 1) for r in range(len(table))]
+    ids = [t.strip() for t in table.text("id")]
+    first: dict[str, int] = {}
+    for r, name in enumerate(ids):
+        if not name:
+            raise InputError("empty id", *table.where(r, "id"))
+        if name in first:
+            raise InputError(
+                f"duplicate id '{name}' (first on line {table.lines[first[name]]})",
+                *table.where(r, "id"),
+            )
+        first[name] = r
+    return ids
+
+
+def _optional_positive(table: Table, name: str) -> np.ndarray:
+    if not table.has(name):
+        return np.full(len(table), np.nan)
+    values = table.floats([name], allow_empty=True)[:, 0]
+    bad = np.flatnonzero(values <= 0)
+    if bad.size:
+        r = int(bad[0])
+        raise InputError(f"{name} must be positive, got {values[r]:g}", *table.where(r, name))
+    return values
+
+
+def orient_along_axes(axis: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Tool rotations (N, 3, 3) whose Z axis is each drill axis (N, 3, unit), nearest ``reference``.
+
+    The rule: each hole gets the reference orientation (3, 3) tilted by the smallest rotation that
+    turns the reference tool Z onto the hole's drill axis (Rodrigues' formula about
+    z_ref x axis). Of all rotations about the drill axis this is the one closest to the reference
+    (smallest relative rotation angle), it is a smooth function of the axis, so neighbouring holes
+    get neighbouring wrist angles, and it keeps the wrist where the reference puts it (the
+    orientation the grid was measured at, well inside the joint limits). The rule degenerates at
+    180 deg: callers refuse axes that ``too_tilted`` flags, naming the hole.
+    """
+    axis = np.asarray(axis, dtype=float)
+    z_ref = reference[:, 2]
+    cos = axis @ z_ref
+    v = np.cross(z_ref, axis)
+    # R_align = I + [v]x + [v]x^2 / (1 + cos); [v]x^2 = v v^T - |v|^2 I
+    vx = np.zeros((len(axis), 3, 3))
+    vx[:, 0, 1], vx[:, 0, 2], vx[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
+    vx[:, 1, 0], vx[:, 2, 0], vx[:, 2, 1] = v[:, 2], -v[:, 1], v[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = 1.0 / (1.0 + cos)
+    align = np.eye(3) + vx + (vx @ vx) * scale[:, None, None]
+    return align @ reference
+
+
+def too_tilted(axis: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """(N,) bool: drill axes (N, 3) too far from the reference tool Z for ``orient_along_axes``."""
+    return np.asarray(axis) @ reference[:, 2] < np.cos(np.radians(MAX_TILT_DEG))
