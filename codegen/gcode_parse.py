@@ -1,0 +1,318 @@
+"""RS274NGC reader: every move of a G-code program with its absolute target and the exact span of
+each number, for pre-flight correction.
+
+Follows the modal state a CAM post relies on: motion mode (G0/G1/G2/G3, canned cycles G73/G81-G89
+with G98/G99 and sticky Z and R), G90/G91 (incremental targets are made absolute), G20/G21
+(targets in mm; ``scale`` converts back), G17/G18/G19, N-numbers, ``( )`` and ``;`` comments,
+words in any order and case, with or without spaces. G54 is the program frame (the power-on
+default); anything that moves the program frame in a way the cell does not describe (G55-G59.3,
+G92, G52, G10) or leaves the position unknown (G28/G30, G53, expressions, O-word control flow)
+makes the affected moves carry a ``reason`` instead of being guessed.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from dataclasses import dataclass, field
+
+from codegen.krl_parse import check_text, decimals_of, split_lines
+from kinematics.errors import InputError
+
+_WORD_RE = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
+_EXPR_RE = re.compile(r"([A-Za-z])\s*([#\[])")
+_OWORD_RE = re.compile(
+    r"\s*[Oo]\s*(?:\d+|<[^>]*>)\s*(sub|endsub|if|elseif|else|endif|while|endwhile|do|call|"
+    r"return|repeat|endrepeat|break|continue)\b",
+    re.I,
+)
+AXES = "XYZ"
+ROTARY = "ABCUVW"
+CYCLES = frozenset(("73", "81", "82", "83", "84", "85", "86", "87", "88", "89"))
+MOTION_MODES = frozenset(("0", "1", "2", "3", "80")) | CYCLES
+INCH_MM = 25.4
+
+
+@dataclass(frozen=True)
+class Word:
+    """One word's number: ``text[start:end]`` is the number as written (without the letter)."""
+
+    letter: str
+    value: float
+    start: int
+    end: int
+    decimals: int
+
+
+@dataclass
+class GcodeMove:
+    """One move (or cycle hole). Positions are absolute, in mm, in the program frame."""
+
+    path: str | None
+    line: int
+    column: int
+    motion: str  # "G0", "G1", "G2", "G3", "G81", ..., "G28", "G53"
+    start: tuple[float, float, float]  # where the move starts (NaN where unknown)
+    target: tuple[float, float, float]  # the end point; for a cycle the hole bottom (X, Y, Z)
+    words: dict[str, Word]  # X/Y/Z (and R for a cycle) words on the line
+    incremental: bool  # G91: words are increments
+    scale: float  # mm per program unit (25.4 under G20)
+    reason: str = ""  # why the move cannot be placed or corrected ("" when it can)
+    rotary: dict[str, float] = field(default_factory=dict)  # A/B/C/U/V/W in effect
+    setters: tuple[int | None, int | None, int | None] = (None, None, None)
+    # index (in the returned list) of the move that last set each start coordinate
+    retract: str = ""  # cycles: "G98" or "G99"
+    r_mm: float = math.nan  # cycles: the R plane (absolute mm)
+    end: tuple[float, float, float] = (math.nan, math.nan, math.nan)  # where the tool ends
+
+    x = property(lambda self: self.target[0])
+    y = property(lambda self: self.target[1])
+    z = property(lambda self: self.target[2])
+    a = property(lambda self: self.rotary.get("A"))
+
+    @property
+    def is_arc(self) -> bool:
+        return self.motion in ("G2", "G3")
+
+    @property
+    def is_cycle(self) -> bool:
+        return self.motion[1:] in CYCLES
+
+
+def _blank_comments(line: str, path: str | None, lineno: int) -> str:
+    """The line with ``( )`` comments and the ``;`` tail replaced by spaces (offsets kept)."""
+    if "(" not in line and ";" not in line and ")" not in line:
+        return line
+    out = list(line)
+    i = 0
+    n = len(line)
+    while i < n:
+        ch = line[i]
+        if ch == "(":
+            close = line.find(")", i + 1)
+            if close < 0:
+                raise InputError("unclosed '(' comment", path, lineno, i + 1)
+            out[i : close + 1] = " " * (close + 1 - i)
+            i = close + 1
+            continue
+        if ch == ")":
+            raise InputError("')' without '('", path, lineno, i + 1)
+        if ch == ";":
+            out[i:] = " " * (n - i)
+            break
+        i += 1
+    return "".join(out)
+
+
+def _gnum(value: float) -> str:
+    """G-code number as a key: 1 -> "1", 91.1 -> "91.1"."""
+    return f"{value:.1f}".rstrip("0").rstrip(".")
+
+
+def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[GcodeMove]:
+    """Every move of an RS274NGC program, in order (see the module docstring for the rules)."""
+    path = None if path is None else os.fspath(path)
+    check_text(text, path)
+    moves: list[GcodeMove] = []
+    pos = [math.nan, math.nan, math.nan]  # current absolute position, mm, program frame
+    setter: list[int | None] = [None, None, None]
+    rotary: dict[str, float] = {}
+    motion = "0"
+    incremental = False
+    scale = 1.0
+    plane = "17"
+    retract = "G98"
+    cycle_z = math.nan
+    cycle_r = math.nan
+    frame_reason = ""  # set while the program frame is not the cell's
+    flow_reason = ""
+    comp_reason = ""
+    offset = 0
+    for lineno, raw in enumerate(split_lines(text), start=1):
+        line_offset = offset
+        offset += len(raw) + 1
+        stripped = raw.strip()
+        if not stripped or stripped.startswith("%"):
+            continue
+        if _OWORD_RE.match(raw):
+            flow_reason = flow_reason or f"O-word control flow from line {lineno}"
+            continue
+        line = _blank_comments(raw, path, lineno)
+        if line.lstrip().startswith("/"):
+            line = line.replace("/", " ", 1)
+        expr = _EXPR_RE.search(line)
+        words: dict[str, list[Word]] = {}
+        rest = list(line)
+        for m in _WORD_RE.finditer(line):
+            letter = m.group(1).upper()
+            number = m.group(2)
+            start = m.start(2)
+            words.setdefault(letter, []).append(
+                Word(
+                    letter,
+                    float(number),
+                    line_offset + start,
+                    line_offset + m.end(2),
+                    decimals_of(number),
+                )
+            )
+            rest[m.start() : m.end()] = " " * (m.end() - m.start())
+        residue = "".join(rest).strip()
+        if residue and expr is None:
+            col = next(i for i, ch in enumerate(rest) if not ch.isspace())
+            raise InputError(
+                f"cannot read {residue.split()[0]!r} as a G-code word", path, lineno, col + 1
+            )
+        for letter, ws in words.items():
+            if len(ws) > 1 and letter not in "GM":
+                raise InputError(
+                    f"word {letter} given twice", path, lineno, ws[1].start - line_offset
+                )
+        gcodes = [_gnum(w.value) for w in words.get("G", [])]
+        axis_words = {k: words[k][0] for k in AXES if k in words}
+        for g in gcodes:
+            if g == "20":
+                scale = INCH_MM
+            elif g == "21":
+                scale = 1.0
+            elif g == "90":
+                incremental = False
+            elif g == "91":
+                incremental = True
+            elif g in ("17", "18", "19"):
+                plane = g
+            elif g in ("98", "99"):
+                retract = "G" + g
+            elif g == "54":
+                frame_reason = "" if not frame_reason.startswith("work offset") else ""
+            elif g in ("55", "56", "57", "58", "59", "59.1", "59.2", "59.3"):
+                frame_reason = f"work offset G{g} (line {lineno}): the cell gives only G54"
+            elif g in ("92", "52", "92.3"):
+                frame_reason = f"G{g} offset (line {lineno}) moves the program frame"
+            elif g in ("92.1", "92.2"):
+                frame_reason = ""
+            elif g == "10":
+                frame_reason = f"G10 (line {lineno}) changes the work offsets"
+            elif g in ("41", "42", "41.1", "42.1"):
+                comp_reason = f"cutter compensation G{g} (line {lineno}) offsets the path"
+            elif g == "40":
+                comp_reason = ""
+            elif g in ("68", "51"):
+                frame_reason = f"G{g} (line {lineno}) rotates or scales the program"
+            elif g in MOTION_MODES:
+                motion = g
+        for letter in ROTARY:
+            if letter in words:
+                rotary[letter] = words[letter][0].value
+        nonmodal = [
+            g
+            for g in gcodes
+            if g
+            in ("4", "10", "28", "28.1", "30", "30.1", "52", "53", "92", "92.1", "92.2", "92.3")
+        ]
+        if nonmodal and nonmodal[0] in (
+            "4",
+            "10",
+            "28.1",
+            "30.1",
+            "52",
+            "92",
+            "92.1",
+            "92.2",
+            "92.3",
+        ):
+            continue  # the axis words are parameters, not a move
+        if expr is not None and expr.group(1).upper() in AXES + ROTARY:
+            flow_reason = flow_reason or f"expression {expr.group(0)}.. at line {lineno}"
+            pos = [math.nan] * 3
+            continue
+        if not axis_words and not (set(ROTARY) & set(words)):
+            continue
+        column = min(w.start for w in axis_words.values()) - line_offset + 1 if axis_words else 1
+        start = tuple(pos)
+        setters = tuple(setter)
+        index = len(moves)
+        if nonmodal:  # G28/G30 (via a point) or G53 (machine coordinates)
+            name = "G" + nonmodal[0]
+            moves.append(
+                GcodeMove(
+                    path,
+                    lineno,
+                    column,
+                    name,
+                    start,
+                    (math.nan,) * 3,
+                    axis_words,
+                    incremental,
+                    scale,
+                    f"{name}: a machine-coordinate or home move",
+                    dict(rotary),
+                    setters,
+                )
+            )
+            pos = [math.nan] * 3
+            setter = [index] * 3
+            continue
+        target = list(pos)
+        for i, k in enumerate(AXES):
+            if k in axis_words:
+                value = axis_words[k].value * scale
+                if incremental and motion not in CYCLES:
+                    target[i] = pos[i] + value
+                else:
+                    target[i] = value
+        reason = flow_reason or frame_reason or comp_reason
+        move = GcodeMove(
+            path,
+            lineno,
+            column,
+            "G" + motion,
+            start,
+            tuple(target),
+            axis_words,
+            incremental,
+            scale,
+            "",
+            dict(rotary),
+            setters,
+        )
+        if motion == "80":
+            move.reason = "axis words with G80 (no motion mode)"
+            pos = [math.nan] * 3
+        elif motion in CYCLES:
+            if "Z" in axis_words:
+                cycle_z = axis_words["Z"].value * scale
+            if "R" in words:
+                cycle_r = words["R"][0].value * scale
+                move.words = dict(axis_words, R=words["R"][0])
+            move.retract = retract
+            move.r_mm = cycle_r
+            bottom = [target[0], target[1], cycle_z]
+            move.target = tuple(bottom)
+            if incremental:
+                reason = reason or "canned cycle in G91 (incremental cycle words)"
+            elif plane != "17":
+                reason = reason or f"canned cycle in plane G{plane} (only G17 is read)"
+            elif math.isnan(cycle_r) or math.isnan(cycle_z):
+                reason = reason or "canned cycle without an R plane or Z depth"
+            clear = cycle_r if retract == "G99" else max(pos[2], cycle_r)
+            pos = [target[0], target[1], clear if not incremental else math.nan]
+        else:
+            if motion in ("2", "3"):
+                reason = reason or (
+                    f"arc G{motion}: its end point and centre would have to move together"
+                )
+            pos = target
+        missing = [k for i, k in enumerate(AXES) if math.isnan(move.target[i])]
+        if missing and not reason:
+            reason = f"{','.join(missing)} not known here (no absolute value since the start)"
+        if rotary and any(v != 0.0 for v in rotary.values()) and not reason:
+            move.rotary = dict(rotary)
+        move.reason = move.reason or reason
+        move.end = tuple(pos)
+        for i, k in enumerate(AXES):
+            if k in axis_words or (move.is_cycle and i == 2):
+                setter[i] = index
+        moves.append(move)
+    return moves
