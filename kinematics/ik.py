@@ -1,0 +1,103 @@
+"""Closed-form inverse kinematics of a 6R arm with a spherical wrist (KUKA KR type), batched.
+
+Supported DH structure (checked by ``closed_form_supported``): alpha_1, alpha_3, alpha_4, alpha_5 =
+±90°, alpha_2 = 0, d_2 = d_3 = 0, a_4 = a_5 = d_5 = 0 (axes 4, 5, 6 meet in the wrist point).
+Every reachable flange pose has up to 8 solutions: 2 shoulder (wrist point in front of or behind
+the A1 axis) × 2 elbow × 2 wrist (A5 sign). Lengths in mm, angles in radians.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from kinematics.dh import DHTable, link_matrices
+
+_TOL = 1e-9
+
+
+def closed_form_supported(table: DHTable) -> bool:
+    """True when ``table`` has the spherical-wrist structure the closed form needs."""
+    if table.n != 6:
+        return False
+    right = np.abs(np.abs(np.sin(table.alpha[[0, 2, 3, 4]])) - 1.0) < 1e-12
+    zero = np.abs(
+        np.array([np.sin(table.alpha[1]), table.d[1], table.d[2], table.a[3], table.a[4]])
+    )
+    return bool(right.all() and (zero < 1e-12).all() and abs(table.d[4]) < 1e-12)
+
+
+def wrap(angle: np.ndarray) -> np.ndarray:
+    """Angles (any shape) rad wrapped into (-pi, pi]."""
+    out = np.mod(angle + np.pi, 2 * np.pi) - np.pi
+    return np.where(out == -np.pi, np.pi, out)
+
+
+def wrist_points(table: DHTable, flange: np.ndarray) -> np.ndarray:
+    """Wrist point (intersection of axes 4, 5, 6) (N, 3) mm for flange poses (N, 4, 4)."""
+    rot = flange[:, :3, :3] @ _rot_x(-table.alpha[5])
+    return flange[:, :3, 3] - table.a[5] * rot[:, :, 0] - table.d[5] * rot[:, :, 2]
+
+
+def all_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """All 8 joint solutions for flange poses (N, 4, 4) mm.
+
+    Returns KUKA joint angles (N, 8, 6) rad wrapped into (-pi, pi] and a (N, 8) mask of candidates
+    whose wrist point is reachable (others are NaN). Joint limits are not applied here.
+    """
+    flange = np.asarray(flange, dtype=float).reshape(-1, 4, 4)
+    n = len(flange)
+    r6 = flange[:, :3, :3] @ _rot_x(-table.alpha[5])  # frame 6 before its fixed Rot(X, alpha_6)
+    pw = wrist_points(table, flange)
+
+    # Shoulder: the arm plane contains the A1 axis, so theta_1 points at the wrist or away.
+    toward = np.arctan2(pw[:, 1], pw[:, 0])
+    th1 = np.stack([toward, toward + np.pi], axis=1)  # (N, 2)
+    c1, s1 = np.cos(th1), np.sin(th1)
+    # Wrist point in frame 1 (after Rot(X, alpha_1)): planar two-link problem in its x-y plane.
+    radial = c1 * pw[:, None, 0] + s1 * pw[:, None, 1] - table.a[0]
+    height = pw[:, None, 2] - table.d[0]
+    sa1 = np.sin(table.alpha[0])
+    px, py = radial, sa1 * height
+    a2 = table.a[1]
+    bx, by = table.a[2], -np.sin(table.alpha[2]) * table.d[3]
+    l3, beta = np.hypot(bx, by), np.arctan2(by, bx)
+    cos_g = (px**2 + py**2 - a2**2 - l3**2) / (2 * a2 * l3)  # (N, 2)
+    reach = np.abs(cos_g) <= 1 + _TOL
+    gamma_abs = np.arccos(np.clip(cos_g, -1.0, 1.0))
+    gamma = np.stack([gamma_abs, -gamma_abs], axis=2)  # (N, 2 shoulder, 2 elbow)
+    th3 = gamma - beta
+    th2 = np.arctan2(py, px)[:, :, None] - np.arctan2(l3 * np.sin(gamma), a2 + l3 * np.cos(gamma))
+    th1 = np.repeat(th1[:, :, None], 2, axis=2)
+    reach = np.repeat(reach[:, :, None], 2, axis=2)
+
+    # Wrist: W = (base_R_3)^T R6 = Rz(th4) Rx(al4) Rz(th5) Rx(al5) Rz(th6).
+    arm = np.stack([th1, th2, th3], axis=-1).reshape(n * 4, 3)
+    r3 = np.repeat(np.eye(3)[None], n * 4, axis=0)
+    for i in range(3):
+        r3 = r3 @ link_matrices(arm[:, i], 0.0, 0.0, table.alpha[i])[:, :3, :3]
+    w = np.swapaxes(r3, 1, 2) @ np.repeat(r6, 4, axis=0)
+    s4, s5 = np.sign(np.sin(table.alpha[3])), np.sign(np.sin(table.alpha[4]))
+    wx, wy, wz = w[:, 0, 2], w[:, 1, 2], w[:, 2, 2]
+    th5 = np.arctan2(np.hypot(wx, wy), -s4 * s5 * wz)
+    # On the wrist singularity (A5 = 0) only A4 + A6 matters: put it all into A6.
+    th4 = np.where(np.hypot(wx, wy) < 1e-12, 0.0, np.arctan2(s5 * wy, s5 * wx))
+    th4 = np.stack([th4, th4 + np.pi], axis=1).reshape(-1)
+    th5 = np.stack([th5, -th5], axis=1).reshape(-1)
+    w2 = np.repeat(w, 2, axis=0)
+    r45 = link_matrices(th4, 0.0, 0.0, table.alpha[3])[:, :3, :3]
+    r45 = r45 @ link_matrices(th5, 0.0, 0.0, table.alpha[4])[:, :3, :3]
+    m = np.swapaxes(r45, 1, 2) @ w2
+    th6 = np.arctan2(m[:, 1, 0], m[:, 0, 0])
+
+    theta = np.empty((n * 8, 6))
+    theta[:, :3] = np.repeat(arm, 2, axis=0)
+    theta[:, 3], theta[:, 4], theta[:, 5] = th4, th5, th6
+    q = wrap(table.axis_angles(theta)).reshape(n, 8, 6)
+    ok = np.repeat(reach.reshape(n, 4), 2, axis=1)
+    q[~ok] = np.nan
+    return q, ok
+
+
+def _rot_x(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])

@@ -1,0 +1,249 @@
+"""Robot models: a standard-DH serial arm (seed Eq. 2) on Pinocchio, with KUKA joint conventions.
+
+A robot is YAML data (``kinematics/robots/*.yaml`` for the built-ins, or a user file): six DH rows
+``{a_mm, alpha_deg, d_mm, theta_offset_deg, sign}`` with theta = sign * A + theta_offset, joint
+limits ``limits_deg`` ([min, max] per axis), an optional ``tool`` {x, y, z, a, b, c} (flange_T_tool)
+and optional ``errors`` (per row Δa mm, Δd mm, Δα rad, Δθ rad) that define the "true" robot. A
+YAML file may instead name a URDF (``urdf: file``, ``tip: frame``), see ``kinematics.urdf``.
+
+Joint vectors are KUKA axis angles A1..A6 in radians, shape (N, 6); poses are (N, 4, 4) mm.
+
+KUKA Status and Turn (DESIGN.md, checked against the KUKA/Siemens/Beckhoff descriptions):
+Turn bit i is set when A(i+1) < 0. Status bit 0 is set when the wrist point has x < 0 in the A1
+frame (overhead area; the A1 frame is $ROBROOT turned with A1), bit 1 when A3 >= phi (phi: the A3
+angle at which the A2 axis, the A3 axis and the wrist point are in line, arm stretched; -1.957 deg
+for the KR 210, -atan(41/1200)), bit 2 when A5 < 0.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from kinematics import ik as closed
+from kinematics.dh import DHTable, chain, flange_poses
+from kinematics.errors import InputError
+from kinematics.frames import invert, pose_from_xyzabc
+from kinematics.yamlfile import YamlDoc
+
+BUILTIN = ("kr210", "kr210-paper")
+_LIMIT_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class IKSolution:
+    """Result of ``Robot.ik`` for N poses (see the field comments for shapes)."""
+
+    q: np.ndarray  # (N, 6) rad, NaN rows where there is no solution
+    ok: np.ndarray  # (N,) bool
+    reason: np.ndarray  # (N,) object: "" when ok, else why not
+    status: np.ndarray  # (N,) int KUKA Status of q (-1 where there is no solution)
+    turn: np.ndarray  # (N,) int KUKA Turn of q (-1 where there is no solution)
+
+
+@dataclass(frozen=True)
+class Robot:
+    """A serial robot in standard DH form with KUKA axis conventions and a tool."""
+
+    name: str
+    dh: DHTable
+    joint_limits_deg: np.ndarray  # (6, 2) [min, max]
+    flange_T_tool: np.ndarray = field(default_factory=lambda: np.eye(4))
+    errors: np.ndarray | None = None  # (6, 4) Δa mm, Δd mm, Δα rad, Δθ rad of the true robot
+    description: str = ""
+
+    def with_tool(self, flange_T_tool: np.ndarray) -> Robot:
+        """The same robot with another tool (4, 4) mm."""
+        tool = np.array(flange_T_tool, dtype=float).reshape(4, 4)
+        return Robot(self.name, self.dh, self.joint_limits_deg, tool, self.errors, self.description)
+
+    def true_robot(self) -> Robot | None:
+        """The robot with its parameter errors applied (the "real" arm), or None without errors."""
+        if self.errors is None:
+            return None
+        return Robot(
+            f"{self.name} (true)",
+            self.dh.with_errors(self.errors),
+            self.joint_limits_deg,
+            self.flange_T_tool,
+            None,
+            self.description,
+        )
+
+    @property
+    def phi_rad(self) -> float:
+        """A3 angle (rad) at which the A2 axis, A3 axis and wrist point are in line (stretched)."""
+        beta = np.arctan2(-np.sin(self.dh.alpha[2]) * self.dh.d[3], self.dh.a[2])
+        return float(closed.wrap(self.dh.axis_angles(np.array([0, 0, -beta, 0, 0, 0]))[2]))
+
+    def fk(self, q: np.ndarray) -> np.ndarray:
+        """TCP poses robot_T_tcp (N, 4, 4) mm for joint vectors q (N, 6) rad."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        return flange_poses(self.dh, q) @ self.flange_T_tool
+
+    def fk_pinocchio(self, q: np.ndarray) -> np.ndarray:
+        """The same as ``fk`` through Pinocchio, one pose at a time (reference and peer; slow)."""
+        import pinocchio as pin
+
+        model, frame = self.pinocchio_model()
+        data = model.createData()
+        q = np.atleast_2d(np.asarray(q, dtype=float)) * self.dh.sign
+        out = np.empty((len(q), 4, 4))
+        for k, qk in enumerate(q):
+            pin.framesForwardKinematics(model, data, qk)
+            out[k] = data.oMf[frame].homogeneous
+        return out
+
+    def pinocchio_model(self):
+        """(pinocchio.Model, tcp frame id): revolute-Z joints with q_pin = sign * A (rad, mm)."""
+        return _pinocchio_model(self.dh, self.joint_limits_deg, self.flange_T_tool)
+
+    def ik(self, robot_T_tcp: np.ndarray, status=None, turn=None) -> IKSolution:
+        """Joint solutions for TCP poses (N, 4, 4) mm with KUKA Status/Turn (int or (N,) ints).
+
+        ``status=None``: basic area, A3 >= phi, and of the two wrist solutions the one with
+        |A4| <= 90 deg. ``turn=None``: every angle in (-180, 180] (closest to 0).
+        """
+        poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
+        n = len(poses)
+        if not closed.closed_form_supported(self.dh):
+            raise InputError(f"robot {self.name}: DH structure has no closed-form inverse")
+        cand, reach = closed.all_solutions(self.dh, poses @ invert(self.flange_T_tool))
+        cand_status, _ = status_turn(self, cand.reshape(-1, 6))
+        cand_status = cand_status.reshape(n, 8)
+        if status is None:
+            match = reach & ((cand_status & 3) == 2) & (np.abs(cand[:, :, 3]) <= np.pi / 2)
+        else:
+            want = np.broadcast_to(np.asarray(status, dtype=int), (n,))[:, None]
+            singular_wrist = np.abs(cand[:, :, 4]) < 1e-12  # A5 = 0: either bit 2 fits
+            match = reach & (
+                (cand_status == want) | (singular_wrist & ((cand_status & 3) == (want & 3)))
+            )
+        found = match.any(axis=1)
+        pick = np.argmax(match, axis=1)
+        q = cand[np.arange(n), pick].copy()
+        q[~found] = np.nan
+        reason = np.full(n, "", dtype=object)
+        reason[~found] = "unreachable"
+        reason[~found & reach.any(axis=1)] = "no solution with the requested status"
+        if turn is not None:
+            want_neg = np.broadcast_to(np.asarray(turn, dtype=int), (n,))[:, None] >> np.arange(6)
+            want_neg = (want_neg & 1).astype(bool)
+            q = np.where(want_neg & (q >= 0), q - 2 * np.pi, q)
+            q = np.where(~want_neg & (q < 0), q + 2 * np.pi, q)
+        lo, hi = np.radians(self.joint_limits_deg).T
+        outside = found[:, None] & ((q < lo - _LIMIT_TOL) | (q > hi + _LIMIT_TOL))
+        for axis in range(5, -1, -1):  # report the lowest axis outside its limits
+            lo_deg, hi_deg = self.joint_limits_deg[axis]
+            reason[outside[:, axis]] = f"A{axis + 1} outside limits {lo_deg:g}..{hi_deg:g} deg"
+        ok = found & ~outside.any(axis=1)
+        s, t = status_turn(self, np.where(found[:, None], q, 0.0))
+        return IKSolution(q, ok, reason, np.where(found, s, -1), np.where(found, t, -1))
+
+    def ik_all(self, robot_T_tcp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """All 8 solutions (N, 8, 6) rad in (-pi, pi] and their reachability mask (N, 8)."""
+        poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
+        return closed.all_solutions(self.dh, poses @ invert(self.flange_T_tool))
+
+
+def status_turn(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """KUKA Status and Turn (N,) int for joint vectors q (N, 6) rad (definitions: module doc)."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    turn = ((q < 0) << np.arange(6)).sum(axis=1)
+    wrist = chain(robot.dh, q)[3][:, :3, 3]
+    a1 = robot.dh.sign[0] * q[:, 0]
+    x_a1 = wrist[:, 0] * np.cos(a1) + wrist[:, 1] * np.sin(a1)
+    status = (x_a1 < 0).astype(int) + 2 * (q[:, 2] >= robot.phi_rad) + 4 * (q[:, 4] < 0)
+    return status, turn
+
+
+def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:
+    """A built-in robot by name ("kr210", "kr210-paper") or a robot YAML file by path."""
+    text_name = os.fspath(name_or_path)
+    if text_name in BUILTIN:
+        data = resources.files("kinematics").joinpath("robots", f"{text_name}.yaml").read_text()
+        return _robot_from_doc(YamlDoc.parse(data, f"<built-in {text_name}>"))
+    path = Path(text_name)
+    if not path.is_file():
+        if path.suffix.lower() not in (".yaml", ".yml") and os.sep not in text_name:
+            raise InputError(f"unknown robot {text_name!r} (built-in: {', '.join(BUILTIN)})")
+        raise InputError("robot file not found", path)
+    doc = YamlDoc.parse(path.read_text(encoding="utf-8"), path)
+    if doc.has("urdf"):
+        from kinematics.urdf import urdf_robot_from_doc
+
+        return urdf_robot_from_doc(doc, path.parent)
+    return _robot_from_doc(doc)
+
+
+def _robot_from_doc(doc: YamlDoc) -> Robot:
+    name = doc.string("name")
+    rows = doc.sequence("dh", length=6)
+    a, alpha, d, offset, sign = (np.empty(6) for _ in range(5))
+    for i in range(len(rows)):
+        key = ("dh", i)
+        a[i] = doc.number(*key, "a_mm")
+        alpha[i] = np.radians(doc.number(*key, "alpha_deg"))
+        d[i] = doc.number(*key, "d_mm")
+        offset[i] = np.radians(doc.number(*key, "theta_offset_deg", default=0.0))
+        sign[i] = doc.number(*key, "sign", default=1.0)
+        if sign[i] not in (1.0, -1.0):
+            raise doc.error(f"{doc.keyname(*key, 'sign')} must be 1 or -1", *key, "sign")
+    limits = np.empty((6, 2))
+    doc.sequence("limits_deg", length=6)
+    for i in range(6):
+        doc.sequence("limits_deg", i, length=2)
+        limits[i] = [doc.number("limits_deg", i, 0), doc.number("limits_deg", i, 1)]
+        if limits[i, 0] >= limits[i, 1]:
+            raise doc.error(
+                f"{doc.keyname('limits_deg', i)}: min must be below max", "limits_deg", i
+            )
+    tool = np.eye(4)
+    if doc.has("tool"):
+        tool = pose_from_xyzabc([doc.number("tool", k, default=0.0) for k in "xyzabc"])
+    errors = None
+    if doc.has("errors"):
+        doc.sequence("errors", length=6)
+        keys = ("da_mm", "dd_mm", "dalpha_rad", "dtheta_rad")
+        errors = np.array([[doc.number("errors", i, k) for k in keys] for i in range(6)])
+    table = DHTable(a=a, d=d, alpha=alpha, theta_offset=offset, sign=sign)
+    description = doc.string("description", default="")
+    return Robot(name, table, limits, tool, errors, description)
+
+
+def _pinocchio_model(dh: DHTable, limits_deg: np.ndarray, flange_T_tool: np.ndarray):
+    import pinocchio as pin
+
+    model = pin.Model()
+    parent, placement = 0, pin.SE3.Identity()
+    for i in range(dh.n):
+        parent = model.addJoint(parent, pin.JointModelRZ(), placement, f"A{i + 1}")
+        fixed = _rot_z(dh.theta_offset[i])
+        fixed[2, 3] = dh.d[i]
+        fixed = fixed @ _trans_x_rot_x(dh.a[i], dh.alpha[i])
+        placement = pin.SE3(fixed)
+    limits = np.sort(dh.sign[:, None] * np.radians(limits_deg), axis=1)
+    model.lowerPositionLimit, model.upperPositionLimit = limits[:, 0].copy(), limits[:, 1].copy()
+    flange = model.addFrame(pin.Frame("flange", parent, placement, pin.FrameType.OP_FRAME))
+    tcp = pin.SE3(placement.homogeneous @ flange_T_tool)
+    frame = model.addFrame(pin.Frame("tcp", parent, flange, tcp, pin.FrameType.OP_FRAME))
+    return model, frame
+
+
+def _rot_z(angle: float) -> np.ndarray:
+    out = np.eye(4)
+    c, s = np.cos(angle), np.sin(angle)
+    out[:2, :2] = [[c, -s], [s, c]]
+    return out
+
+
+def _trans_x_rot_x(a: float, alpha: float) -> np.ndarray:
+    out = np.eye(4)
+    c, s = np.cos(alpha), np.sin(alpha)
+    out[1:3, 1:3] = [[c, -s], [s, c]]
+    out[0, 3] = a
+    return out

@@ -1,0 +1,79 @@
+"""Error-field simulation: where the true robot goes when its controller uses the nominal model.
+
+For commanded TCP positions at a fixed orientation: nominal IK (the controller), then FK of the
+"true" robot (nominal DH plus parameter errors) gives the reached position. Optional Gaussian noise
+models the robot's repeatability and the laser tracker. Positions (N, 3) mm, robot frame.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from kinematics.errors import InputError
+from kinematics.frames import abc_to_matrix
+from kinematics.robot import Robot
+
+
+def commanded_poses(points: np.ndarray, abc_deg: np.ndarray) -> np.ndarray:
+    """TCP poses (N, 4, 4) at positions (N, 3) mm with one KUKA orientation abc_deg (3,)."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    poses = np.tile(np.eye(4), (len(points), 1, 1))
+    poses[:, :3, :3] = abc_to_matrix(np.asarray(abc_deg, dtype=float).reshape(3))
+    poses[:, :3, 3] = points
+    return poses
+
+
+def commanded_joints(robot: Robot, points: np.ndarray, abc_deg: np.ndarray) -> np.ndarray:
+    """Nominal-model joints (N, 6) rad for the commanded positions; InputError if any fails."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    sol = robot.ik(commanded_poses(points, abc_deg))
+    if not sol.ok.all():
+        bad = np.flatnonzero(~sol.ok)
+        first = bad[0]
+        x, y, z = points[first]
+        raise InputError(
+            f"{len(bad)} of {len(points)} points cannot be reached by {robot.name} at "
+            f"A B C = {' '.join(f'{v:g}' for v in np.ravel(abc_deg))} deg; first: "
+            f"X {x:g} Y {y:g} Z {z:g} ({sol.reason[first]})"
+        )
+    return sol.q
+
+
+def reached_positions(robot: Robot, points: np.ndarray, abc_deg: np.ndarray) -> np.ndarray:
+    """Positions (N, 3) mm the true robot's TCP reaches when commanded to points (N, 3) at abc_deg.
+
+    Without parameter errors (no true robot) the reached positions equal the commanded ones up to
+    round-off. Raises InputError if a point is unreachable or needs a joint outside its limits.
+    """
+    q = commanded_joints(robot, points, abc_deg)
+    true = robot.true_robot() or robot
+    return true.fk(q)[:, :3, 3]
+
+
+def simulate_measurements(
+    robot: Robot,
+    points: np.ndarray,
+    abc_deg: np.ndarray,
+    repeats: int = 1,
+    noise_tracker_mm: float = 0.0,
+    noise_repeat_mm: float = 0.0,
+    seed: int = 0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """A simulated laser-tracker session: (commanded (N*repeats, 3), measured (N*repeats, 3)) mm.
+
+    Repeats are consecutive rows. Each row gets Gaussian repeatability noise (the robot lands a
+    little elsewhere each visit, sigma ``noise_repeat_mm`` per axis) and tracker noise (sigma
+    ``noise_tracker_mm`` per axis), drawn in that order from ``numpy.random.default_rng(seed)``.
+    """
+    if repeats < 1:
+        raise InputError(f"repeats must be at least 1, got {repeats}")
+    if noise_tracker_mm < 0 or noise_repeat_mm < 0:
+        raise InputError("noise must not be negative")
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    reached = reached_positions(robot, points, abc_deg)
+    commanded = np.repeat(points, repeats, axis=0)
+    measured = np.repeat(reached, repeats, axis=0)
+    rng = np.random.default_rng(seed)
+    measured = measured + rng.normal(0.0, noise_repeat_mm, measured.shape)
+    measured = measured + rng.normal(0.0, noise_tracker_mm, measured.shape)
+    return commanded, measured
