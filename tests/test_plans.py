@@ -1,0 +1,122 @@
+"""Sampling plans: grid order, experiment design and the plan CSV."""
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from compensation.csvtable import parse_table
+from compensation.plans import (
+    SEED_CENTRES,
+    SEED_STEPS,
+    experiment_plan,
+    grid_axes,
+    grid_plan,
+    path_length,
+    serpentine_order,
+)
+from compensation.test_points import cube_test_points, cube_vertices
+from kinematics.errors import InputError
+
+counts = st.integers(1, 6)
+
+
+@given(counts, counts, counts)
+def test_serpentine_visits_every_vertex_once_by_unit_moves(nx, ny, nz):
+    order = serpentine_order((nx, ny, nz))
+    assert sorted(order.tolist()) == list(range(nx * ny * nz))
+    ijk = np.column_stack(np.unravel_index(order, (nx, ny, nz)))
+    if len(ijk) > 1:
+        moves = np.abs(np.diff(ijk, axis=0)).sum(axis=1)
+        assert np.all(moves == 1)
+
+
+def test_grid_plan_path_is_shortest_and_beats_naive_order():
+    lo, hi, step = (0.0, 0.0, 0.0), (400.0, 600.0, 800.0), 200.0
+    snake = grid_plan(lo, hi, step, (0, 90, 0))
+    naive = grid_plan(lo, hi, step, (0, 90, 0), order="naive")
+    n = 3 * 4 * 5
+    assert len(snake.points) == len(naive.points) == n
+    # same set of vertices, each once
+    key = lambda p: sorted(map(tuple, np.round(p, 6)))  # noqa: E731
+    assert key(snake.points) == key(naive.points)
+    assert len(set(map(tuple, snake.points))) == n
+    assert snake.path_length() == pytest.approx((n - 1) * step)
+    # raster order: per x level, 4*5 points; y rows return, x levels return
+    assert naive.path_length() > snake.path_length()
+
+
+def test_grid_axes_widen_and_centre_when_not_whole_steps():
+    axes = grid_axes((0, 0, 0), (100, 250, 200), 100)
+    np.testing.assert_allclose(axes[0], [0, 100])
+    np.testing.assert_allclose(axes[1], [-25, 75, 175, 275])
+    np.testing.assert_allclose(axes[2], [0, 100, 200])
+
+
+def test_path_length():
+    assert path_length(np.array([[0.0, 0, 0], [3, 4, 0], [3, 4, 12]])) == pytest.approx(17.0)
+    assert path_length(np.zeros((1, 3))) == 0.0
+
+
+def test_experiment_plan_holds_every_cube_point_repeats_times():
+    plan = experiment_plan(SEED_CENTRES, SEED_STEPS, 5, (0, 90, 0))
+    assert len(plan.points) == 5 * 9 * 5 * 17
+    cen, stp = np.array(plan.extra["centre"]), np.array(plan.extra["step"], dtype=float)
+    lab, rep = np.array(plan.extra["label"]), np.array(plan.extra["repeat"], dtype=int)
+    for name, centre in SEED_CENTRES.items():
+        for step in SEED_STEPS:
+            sel = (cen == name) & (stp == step)
+            assert sel.sum() == 5 * 17
+            want = np.concatenate(
+                [
+                    cube_vertices(np.array([centre]), step)[0],
+                    cube_test_points(np.array([centre]), step)[0],
+                ]
+            )
+            labels = [f"C{i}" for i in range(1, 9)] + [f"P{i}" for i in range(1, 10)]
+            for r in range(1, 6):
+                rows = sel & (rep == r)
+                got = dict(zip(lab[rows], plan.points[rows], strict=True))
+                assert sorted(got) == sorted(labels)
+                for k, label in enumerate(labels):
+                    np.testing.assert_allclose(got[label], want[k])
+    # rows of a cube are contiguous: the operator finishes one cube before the next
+    key = [f"{c}/{s}" for c, s in zip(cen, stp, strict=True)]
+    changes = sum(a != b for a, b in zip(key, key[1:], strict=False))
+    assert changes == 5 * 9 - 1
+
+
+def test_plan_csv_round_trips():
+    plan = experiment_plan({"D": (1700, 0, 1500)}, [20, 80], 2, (0, 90, 0))
+    table = parse_table(plan.csv_text(), "plan.csv")
+    assert table.header[:7] == ["id", "x", "y", "z", "a", "b", "c"]
+    assert table.header[-3:] == ["x_meas", "y_meas", "z_meas"]
+    np.testing.assert_allclose(table.floats(["x", "y", "z"]), plan.points)
+    np.testing.assert_allclose(
+        table.floats(["a", "b", "c"]), np.tile([0, 90, 0], (len(plan.ids), 1))
+    )
+    assert table.text("id") == plan.ids and len(set(plan.ids)) == len(plan.ids)
+
+
+@pytest.mark.parametrize(
+    "centres, steps, repeats, match",
+    [
+        ({}, [20], 1, "at least one centre"),
+        ({"A,B": (0, 0, 0)}, [20], 1, "centre name"),
+        ({"A": (0, 0, 0)}, [20, 20], 1, "distinct"),
+        ({"A": (0, 0, 0)}, [20], 0, "repeats"),
+        ({"A": (0, 0, 0)}, [-20], 1, "step"),
+    ],
+)
+def test_experiment_plan_bad_inputs(centres, steps, repeats, match):
+    with pytest.raises(InputError, match=match):
+        experiment_plan(centres, steps, repeats, (0, 90, 0))
+
+
+def test_grid_plan_bad_inputs():
+    with pytest.raises(InputError, match="min < max"):
+        grid_plan((0, 0, 0), (0, 100, 100), 50, (0, 0, 0))
+    with pytest.raises(InputError, match="step"):
+        grid_plan((0, 0, 0), (100, 100, 100), 0, (0, 0, 0))
+    with pytest.raises(InputError, match="order"):
+        grid_plan((0, 0, 0), (100, 100, 100), 50, (0, 0, 0), order="random")
