@@ -1,0 +1,170 @@
+"""Pre-flight correction of an existing KRL (.src/.dat) or G-code program.
+
+Every Cartesian position that can be placed in the robot frame is corrected with the grid
+(P' = P + e, robot frame, converted back to the program frame); only those X, Y, Z numbers change,
+with the input's decimal places. Every other byte (spacing, comments, line endings, encoding) is
+kept. Positions outside the grid (home, clearance, approach poses) stay as they are; anything
+that cannot be placed (frame arithmetic ':', a base from a variable or a call, EK(), AXIS/E6AXIS
+targets, $POS_ACT, G55-G59/G92 offsets, arcs) is left untouched. The report lists each position
+with its status and reason.
+
+KRL: PROGRAM is a .src or .dat; give the .dat beside it as the second argument. A .dat position
+takes the base of the motions that use it ($BASE = BASE_DATA[n], BAS(#BASE,n), FDAT BASE_NO);
+BASE_DATA values come from --config-dat or the cell file (base, base_data); base 0 is the robot
+frame. Without a .src (or where a routine starts without setting $BASE), --base N says which
+BASE_DATA the positions are in.
+G-code: positions are in the cell's program_frame (default: its base), G54 active.
+
+Output: for one file, -o is the output file (or an existing directory). For a .src/.dat pair,
+-o is a directory (the files keep their names, which KRL needs to match DEF/DEFDAT) or the output
+.src path, with the .dat written beside it under the same stem.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+from codegen.atomic import check_targets, write_files
+from codegen.cell import load_cell
+from codegen.rewrite import (
+    MAX_BYTES,
+    Options,
+    add_header,
+    dialect,
+    krl_header,
+    read_program,
+    report_csv,
+    rewrite_gcode,
+    rewrite_krl,
+)
+from compensation import GridModel
+from kinematics.errors import InputError
+
+NAME = "rewrite"
+HELP = "correct the positions of an existing KRL or G-code program in place (pre-flight)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("program", metavar="PROGRAM", help="KRL .src/.dat or G-code file")
+    parser.add_argument("dat", nargs="?", metavar="PROGRAM.dat", help="the .dat of a KRL .src")
+    parser.add_argument("--cell", required=True, metavar="CELL.yaml", help="cell file (frames)")
+    parser.add_argument("--grid", metavar="MEAS.csv", help="measurement CSV (overrides the cell)")
+    parser.add_argument("-o", "--output", required=True, metavar="OUT", help="output file or dir")
+    parser.add_argument("--report", metavar="REPORT.csv", help="write the per-position report")
+    parser.add_argument(
+        "--strict", action="store_true", help="error when a position lies outside the grid"
+    )
+    parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    parser.add_argument(
+        "--config-dat", metavar="$config.dat", help="KRL $config.dat with BASE_DATA[n] values"
+    )
+    parser.add_argument(
+        "--base",
+        type=int,
+        metavar="N",
+        help="BASE_DATA number in effect where the program does not set one (a lone .dat, or "
+        "the start of a routine); 0 = robot frame",
+    )
+    parser.add_argument(
+        "--trust-calls",
+        action="store_true",
+        help="KRL: assume calls to other routines do not change $BASE",
+    )
+    parser.add_argument(
+        "--ignore-external-axes",
+        action="store_true",
+        help="correct positions with non-zero E1..E6 (KRL) or A/B/C (G-code): they do not move "
+        "the robot or the part",
+    )
+    parser.add_argument(
+        "--decimals",
+        type=int,
+        metavar="N",
+        help="decimals of corrected numbers (default: as input)",
+    )
+    parser.add_argument(
+        "--max-mb",
+        type=float,
+        default=MAX_BYTES / 2**20,
+        metavar="MiB",
+        help=f"refuse program files larger than this (default {MAX_BYTES // 2**20})",
+    )
+    parser.add_argument("--header", action="store_true", help="add the accugrid comment header")
+
+
+def _outputs(inputs: list[Path], output: str) -> dict[Path, Path]:
+    out = Path(output)
+    if len(inputs) == 1:
+        return {inputs[0]: out / inputs[0].name if out.is_dir() else out}
+    if out.suffix.lower() == ".src":
+        return {p: out.with_suffix(p.suffix) for p in inputs}
+    if out.suffix:
+        raise InputError("for a .src/.dat pair -o must be a directory or a .src path", output)
+    return {p: out / p.name for p in inputs}
+
+
+def run(args: argparse.Namespace) -> int:
+    inputs = [Path(args.program)] + ([Path(args.dat)] if args.dat else [])
+    kinds = {dialect(p) for p in inputs}
+    if len(inputs) == 2 and (
+        kinds != {"krl"} or inputs[0].suffix.lower() == inputs[1].suffix.lower()
+    ):
+        raise InputError("the second file must be the .dat of a KRL .src", args.dat)
+    if args.decimals is not None and not 0 <= args.decimals <= 9:
+        raise InputError(f"--decimals must be 0..9, got {args.decimals}")
+    if args.base is not None and not 0 <= args.base <= 32:
+        raise InputError(f"--base must be a BASE_DATA number 0..32, got {args.base}")
+    outputs = _outputs(inputs, args.output)
+    targets = list(outputs.values()) + ([Path(args.report)] if args.report else [])
+    if len(set(map(os.path.abspath, targets))) != len(targets):
+        raise InputError("two outputs would have the same name", args.output)
+    all_inputs = inputs + [Path(args.cell)] + ([Path(args.config_dat)] if args.config_dat else [])
+    check_targets(targets, all_inputs, args.force)
+
+    cell = load_cell(args.cell)
+    grid = args.grid or cell.grid_path
+    if grid is None:
+        raise InputError("no grid: give --grid or set grid in the cell file", args.cell)
+    model = GridModel.from_measurements(grid)
+    max_bytes = int(args.max_mb * 2**20)
+    opts = Options(
+        model=model,
+        base_data=cell.base_data,
+        robot_T_program=cell.robot_T_program,
+        iterations=cell.iterations,
+        power=cell.power,
+        decimals=args.decimals,
+        strict=args.strict,
+        base_override=args.base,
+        trust_calls=args.trust_calls,
+        ignore_external_axes=args.ignore_external_axes,
+        max_bytes=max_bytes,
+    )
+    texts = {os.fspath(p): read_program(p, max_bytes) for p in inputs}
+    if kinds == {"krl"}:
+        config = read_program(args.config_dat, max_bytes) if args.config_dat else None
+        result = rewrite_krl(texts, opts, config)
+    else:
+        result = rewrite_gcode(os.fspath(inputs[0]), texts[os.fspath(inputs[0])], opts)
+    files: dict[Path, bytes] = {}
+    for path in inputs:
+        text = result.texts[os.fspath(path)]
+        if args.header:
+            lines = krl_header(result, os.fspath(path), args.cell, opts)
+            text = add_header(text, lines, dialect(path))
+        files[outputs[path]] = text.encode("latin-1")
+    if args.report:
+        files[Path(args.report)] = report_csv(result.rows).encode("utf-8")
+    write_files(files, all_inputs, args.force)
+    counts = {
+        s: sum(r.status == s for r in result.rows) for s in ("corrected", "outside", "skipped")
+    }
+    largest, _ = result.largest()
+    print(
+        f"rewrite: {counts['corrected']} corrected (largest {largest:.3f} mm), "
+        f"{counts['outside']} outside the grid, {counts['skipped']} skipped -> "
+        + ", ".join(os.fspath(p) for p in outputs.values())
+    )
+    return 0

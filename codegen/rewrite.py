@@ -1,0 +1,513 @@
+"""Pre-flight correction of an existing KRL or G-code program (``accugrid rewrite``).
+
+Each Cartesian position that can be placed in the robot frame is corrected with the grid model
+(P' = P + e, in the robot frame, converted back to the program's frame) and only its X, Y, Z
+numbers are replaced in the text; every other byte is kept. Files are handled as bytes decoded
+as latin-1 (one character per byte, so any encoding and any line ending survives unchanged).
+
+Rules (never guess; what cannot be placed is reported with the reason):
+- KRL inline aggregates use the base in effect at that line (see ``codegen.krl_parse``); a
+  position declared in a .dat takes the base of the motions that use it, and is corrected once
+  however many motions use it. Unused .dat positions have no base unless ``base_override``.
+- BASE_DATA[n] comes from ``--config-dat`` (if it defines n), else from the cell's ``base`` and
+  ``base_data``; base 0 ($NULLFRAME, BAS(#BASE,0)) is the robot frame ($WORLD = $ROBROOT).
+- G-code positions are in the cell's program frame (G54). Axes a line does not write keep their
+  commanded value; the report gives the remaining difference (``residual_mm``). Under G91 the
+  increments are recomputed from the commanded (rewritten) previous position, so every later move
+  lands where it should. Arcs are not corrected and neither is the move that sets an arc's start.
+- Positions outside the grid box stay as they are (an error with ``strict``).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from codegen.gcode_parse import GcodeMove, parse_gcode
+from codegen.header import file_sha256, header_lines
+from codegen.krl_parse import BaseRef, KrlPosition, KrlUse, scan_krl
+from codegen.textsafe import comment_text, fixed
+from compensation import GridModel
+from kinematics.errors import InputError
+from kinematics.frames import pose_from_xyzabc
+
+MAX_BYTES = 64 * 2**20
+REPORT_COLUMNS = (
+    "file,line,name,status,reason,x,y,z,x_new,y_new,z_new,dx,dy,dz,correction_mm,residual_mm"
+)
+KRL_SUFFIXES = (".src", ".dat", ".sub")
+
+
+@dataclass
+class Options:
+    """How to rewrite. Frames are (4, 4) mm poses."""
+
+    model: GridModel
+    base_data: dict[int, np.ndarray]  # BASE_DATA[n] -> robot_T_base
+    robot_T_program: np.ndarray  # G-code program frame
+    iterations: int = 1
+    power: float = 1.0
+    decimals: int | None = None  # None: keep each number's own decimal places
+    strict: bool = False
+    base_override: int | None = None
+    trust_calls: bool = False
+    ignore_external_axes: bool = False
+    max_bytes: int = MAX_BYTES
+
+
+@dataclass
+class Row:
+    """One position (or unresolved motion target) in the report."""
+
+    file: str
+    line: int
+    name: str
+    status: str  # "corrected", "outside", "skipped"
+    reason: str = ""
+    old: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
+    new: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
+    residual_mm: float = math.nan
+
+
+@dataclass
+class Result:
+    """Rewritten texts by input path (latin-1 str), the report rows and the largest correction."""
+
+    texts: dict[str, str]
+    rows: list[Row]
+
+    @property
+    def corrected(self) -> list[Row]:
+        return [r for r in self.rows if r.status == "corrected"]
+
+    def largest(self) -> tuple[float, Row | None]:
+        best, where = 0.0, None
+        for row in self.corrected:
+            d = float(np.linalg.norm(row.new - row.old))
+            if d > best:
+                best, where = d, row
+        return best, where
+
+
+def read_program(path: str | os.PathLike[str], max_bytes: int = MAX_BYTES) -> str:
+    """A program's bytes as latin-1 text (byte-preserving); InputError when unreadable or huge."""
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        if size > max_bytes:
+            raise InputError(
+                f"file is {size / 2**20:.1f} MiB, over the limit of {max_bytes / 2**20:.1f} MiB "
+                "(--max-mb)",
+                os.fspath(path),
+            )
+        return path.read_bytes().decode("latin-1")
+    except OSError as exc:
+        raise InputError(f"cannot read: {exc.strerror or exc}", os.fspath(path)) from None
+
+
+def dialect(path: str | os.PathLike[str]) -> str:
+    """ "krl" for .src/.dat/.sub, else "gcode"."""
+    return "krl" if Path(path).suffix.lower() in KRL_SUFFIXES else "gcode"
+
+
+def splice(text: str, edits: list[tuple[int, int, str]]) -> str:
+    """Replace ``text[start:end]`` by each new string (non-overlapping edits, any order)."""
+    if not edits:
+        return text
+    edits.sort()
+    parts, last = [], 0
+    for start, end, new in edits:
+        parts.append(text[last:start])
+        parts.append(new)
+        last = end
+    parts.append(text[last:])
+    return "".join(parts)
+
+
+def _format(value: float, decimals: int, forced: int | None) -> str:
+    places = forced if forced is not None else (3 if decimals < 0 else decimals)
+    return fixed(value, places)
+
+
+def _number_text(old_text: str, old_value: float, new_value: float, decimals: int, forced) -> str:
+    """The new literal; the old one when the change does not show at the chosen decimals."""
+    if "e" in old_text.lower() and forced is None:
+        decimals = 3  # an exponent literal is written in fixed point with 3 decimals
+    new_text = _format(new_value, decimals, forced)
+    return old_text if float(new_text) == old_value and forced is None else new_text
+
+
+def _correct(points_robot: np.ndarray, opts: Options) -> tuple[np.ndarray, np.ndarray]:
+    """(inside (N,) bool, corrected robot-frame points (N,3); NaN rows outside)."""
+    out = np.full_like(points_robot, np.nan)
+    if not len(points_robot):
+        return np.zeros(0, bool), out
+    inside = opts.model.contains(points_robot)
+    if inside.any():
+        out[inside] = opts.model.correct(
+            points_robot[inside], iterations=opts.iterations, power=opts.power
+        )
+    return inside, out
+
+
+def _outside_reason(robot_xyz: np.ndarray) -> str:
+    x, y, z = (fixed(v) for v in robot_xyz)
+    return f"outside the grid (robot frame {x}, {y}, {z} mm): left as is"
+
+
+def _strict_check(rows: list[Row], opts: Options) -> None:
+    if opts.strict:
+        outside = [r for r in rows if r.status == "outside"]
+        if outside:
+            r = outside[0]
+            raise InputError(
+                f"{len(outside)} position(s) outside the grid (--strict); first: {r.name}: "
+                f"{r.reason}",
+                r.file,
+                r.line,
+            )
+
+
+# ---------------------------------------------------------------- KRL
+
+
+def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = None) -> Result:
+    """Rewrite a KRL .src and/or .dat (texts by path); ``config_dat`` text adds BASE_DATA."""
+    initial = (
+        BaseRef("number", 0, number=opts.base_override) if opts.base_override is not None else None
+    )
+    scans = [
+        scan_krl(text, path, initial_base=initial, trust_calls=opts.trust_calls)
+        for path, text in texts.items()
+    ]
+    base_data = dict(opts.base_data)
+    if config_dat is not None:
+        for n, (xyzabc, _) in scan_krl(config_dat, "$config.dat").base_data.items():
+            base_data[n] = pose_from_xyzabc(np.array(xyzabc))
+    fdats: dict[str, tuple[int | None, int, str]] = {}
+    assigned: dict[str, tuple[str, int]] = {}
+    named: dict[str, list[KrlPosition]] = {}
+    for scan in scans:
+        fdats.update(scan.fdats)
+        for key, line in scan.assigned.items():
+            assigned.setdefault(key, (scan.path or "", line))
+        for pos in scan.positions:
+            if pos.kind != "motion":
+                named.setdefault(pos.key, []).append(pos)
+    uses: dict[str, list[KrlUse]] = {}
+    for scan in scans:
+        for use in scan.uses:
+            if not use.reason and use.name:
+                uses.setdefault(use.name, []).append(use)
+
+    def resolve(base: BaseRef) -> tuple[object, np.ndarray | None, str]:
+        """(identity key, robot_T_base or None, reason)."""
+        if base.kind == "fdat":
+            entry = fdats.get(base.fdat or "")
+            if entry is None:
+                return None, None, f"FDAT {base.fdat} (line {base.line}) is not in the given files"
+            if entry[0] is None:
+                return None, None, entry[2]
+            base = BaseRef("number", base.line, number=entry[0])
+        if base.kind == "number":
+            n = base.number
+            if n in base_data:
+                return ("n", n), base_data[n], ""
+            if n == 0:
+                return ("n", 0), np.eye(4), ""
+            return None, None, f"BASE_DATA[{n}] is in neither the cell file nor --config-dat"
+        if base.kind == "literal":
+            return ("lit", base.xyzabc), pose_from_xyzabc(np.array(base.xyzabc)), ""
+        return None, None, f"base unknown: {base.reason}"
+
+    rows: list[Row] = []
+    placed: list[tuple[KrlPosition, Row, np.ndarray]] = []
+    for scan in scans:
+        for pos in scan.positions:
+            row = Row(scan.path or "", pos.line, pos.name, "skipped")
+            if all(k in pos.numbers for k in "XYZ"):
+                row.old = np.array([pos.numbers[k].value for k in "XYZ"])
+            rows.append(row)
+            reason = pos.reason
+            frame = None
+            if not reason and not opts.ignore_external_axes:
+                moving = [
+                    k
+                    for k in ("E1", "E2", "E3", "E4", "E5", "E6")
+                    if pos.numbers.get(k) is not None and pos.numbers[k].value != 0.0
+                ]
+                if moving:
+                    reason = (
+                        f"external axis {moving[0]} = {pos.numbers[moving[0]].value:g}: the robot "
+                        "frame depends on external kinematics (--ignore-external-axes if not)"
+                    )
+            if not reason and pos.kind == "motion":
+                _, frame, reason = resolve(pos.base)
+            elif not reason:
+                frame, reason = _decl_frame(pos, named, uses, assigned, resolve, opts)
+            if reason:
+                row.reason = reason
+                continue
+            placed.append((pos, row, frame))
+    for scan in scans:
+        for use in scan.uses:
+            if use.reason:
+                rows.append(Row(scan.path or "", use.line, use.text, "skipped", use.reason))
+            elif use.name not in named and not (
+                use.name.endswith("[*]") and any(k.startswith(use.name[:-3] + "[") for k in named)
+            ):
+                rows.append(
+                    Row(
+                        scan.path or "",
+                        use.line,
+                        use.text,
+                        "skipped",
+                        f"{use.text} is not declared in the given files",
+                    )
+                )
+    edits: dict[str, list[tuple[int, int, str]]] = {p: [] for p in texts}
+    if placed:
+        base_xyz = np.array([row.old for _, row, _ in placed])
+        frames = np.array([f for _, _, f in placed])
+        robot = np.einsum("nij,nj->ni", frames[:, :3, :3], base_xyz) + frames[:, :3, 3]
+        inside, corrected = _correct(robot, opts)
+        back = np.einsum("nji,nj->ni", frames[:, :3, :3], corrected - robot)  # R^T e
+        for i, (pos, row, _) in enumerate(placed):
+            if not inside[i]:
+                row.status, row.reason = "outside", _outside_reason(robot[i])
+                continue
+            target = row.old + back[i]
+            text = texts[row.file]
+            new = np.empty(3)
+            for j, k in enumerate("XYZ"):
+                num = pos.numbers[k]
+                old_text = text[num.start : num.end]
+                new_text = _number_text(old_text, num.value, target[j], num.decimals, opts.decimals)
+                new[j] = float(new_text)
+                if new_text != old_text:
+                    edits[row.file].append((num.start, num.end, new_text))
+            row.status, row.new = "corrected", new
+            row.residual_mm = float(np.linalg.norm(new - target))
+    _strict_check(rows, opts)
+    return Result({p: splice(t, edits[p]) for p, t in texts.items()}, rows)
+
+
+def _decl_frame(pos, named, uses, assigned, resolve, opts) -> tuple[np.ndarray | None, str]:
+    """The base of a .dat position from the motions that use it."""
+    key = pos.key
+    if len(named.get(key, ())) > 1:
+        lines = ", ".join(str(p.line) for p in named[key])
+        return None, f"{pos.name} is defined more than once (lines {lines})"
+    wild = key.split("[")[0] + "[*]" if key.endswith("]") else None
+    for k in (key, wild):
+        if k in assigned:
+            where = assigned[k]
+            return None, f"{pos.name} is assigned at run time ({Path(where[0]).name}:{where[1]})"
+    found = uses.get(key, []) + (uses.get(wild, []) if wild else [])
+    if not found:
+        if opts.base_override is not None:
+            _, frame, reason = resolve(BaseRef("number", 0, number=opts.base_override))
+            return frame, reason
+        return None, (
+            f"{pos.name} is not used by a motion in the given program, so its base is unknown "
+            "(give the .src, or --base N)"
+        )
+    keys, frame = {}, None
+    for use in found:
+        ident, frame_i, reason = resolve(use.base)
+        if reason:
+            return None, f"used at line {use.line} where the {reason}"
+        keys.setdefault(ident, use.line)
+        frame = frame_i
+    if len(keys) > 1:
+        lines = ", ".join(str(line) for line in keys.values())
+        return None, f"{pos.name} is used under different bases (lines {lines})"
+    return frame, ""
+
+
+# ---------------------------------------------------------------- G-code
+
+
+def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
+    """Rewrite one RS274NGC program."""
+    moves = parse_gcode(text, path)
+    rows = [Row(path, m.line, m.motion, "skipped", m.reason) for m in moves]
+    for m, row in zip(moves, rows, strict=True):
+        row.old = np.array(m.target, dtype=float)
+        if not row.reason and m.rotary and not opts.ignore_external_axes:
+            turned = {k: v for k, v in m.rotary.items() if v != 0.0}
+            if turned:
+                k, v = next(iter(turned.items()))
+                row.reason = (
+                    f"rotary axis {k} = {v:g} moves the part (--ignore-external-axes if not)"
+                )
+    _protect_arc_starts(moves, rows)
+    todo = [i for i, r in enumerate(rows) if not r.reason]
+    desired = np.array([m.target for m in moves], dtype=float).reshape(-1, 3)
+    if todo:
+        prog = desired[todo]
+        t = opts.robot_T_program
+        robot = prog @ t[:3, :3].T + t[:3, 3]
+        inside, corrected = _correct(robot, opts)
+        back = (corrected - robot) @ t[:3, :3]  # R^T e, row-wise
+        for j, i in enumerate(todo):
+            if inside[j]:
+                rows[i].status = "corrected"
+                desired[i] = prog[j] + back[j]
+            else:
+                rows[i].status, rows[i].reason = "outside", _outside_reason(robot[j])
+    edits = _gcode_edits(text, moves, rows, desired, opts)
+    _strict_check(rows, opts)
+    return Result({path: splice(text, edits)}, rows)
+
+
+def _protect_arc_starts(moves: list[GcodeMove], rows: list[Row]) -> None:
+    """An arc keeps its start point: the moves that set it are not corrected either."""
+    for i, m in enumerate(moves):
+        if not m.is_arc:
+            continue
+        if m.incremental:
+            for j in range(i):
+                rows[j].reason = rows[j].reason or (
+                    f"precedes the incremental arc at line {m.line}, whose start must not move"
+                )
+            continue
+        for j in m.setters:
+            if j is not None and not rows[j].reason:
+                rows[
+                    j
+                ].reason = f"sets the start of the arc at line {m.line}, which is not corrected"
+
+
+def _gcode_edits(
+    text: str, moves: list[GcodeMove], rows: list[Row], desired: np.ndarray, opts: Options
+) -> list[tuple[int, int, str]]:
+    """Walk the program with the commanded (rewritten) position; new word numbers."""
+    edits: list[tuple[int, int, str]] = []
+    cmd = [math.nan] * 3
+    cycle_z = math.nan
+    for move, row, want in zip(moves, rows, desired, strict=True):
+        if move.motion in ("G28", "G30", "G53"):
+            cmd = [math.nan] * 3
+            continue
+        changed = row.status == "corrected"
+        end = list(cmd)
+        for i, k in enumerate("XYZ"):
+            word = move.words.get(k)
+            if word is None:
+                continue
+            goal = want[i] if not math.isnan(want[i]) else move.target[i]
+            incremental = move.incremental and not move.is_cycle
+            if incremental:
+                if math.isnan(cmd[i]) or math.isnan(goal):
+                    value = word.value  # start unknown: keep the increment as written
+                else:
+                    value = (goal - cmd[i]) / move.scale
+            elif move.is_cycle and i == 2:
+                value = goal / move.scale
+            else:
+                value = goal / move.scale
+            old_text = text[word.start : word.end]
+            if math.isnan(value):
+                new_text = old_text
+            elif changed or incremental:
+                new_text = _number_text(old_text, word.value, value, word.decimals, opts.decimals)
+            else:
+                new_text = old_text
+            if new_text != old_text:
+                edits.append((word.start, word.end, new_text))
+            written = float(new_text) * move.scale
+            if move.is_cycle and i == 2:
+                cycle_z = written
+            elif incremental:
+                end[i] = cmd[i] + written
+            else:
+                end[i] = written
+        if move.is_cycle:
+            reached = [end[0], end[1], cycle_z]
+            if move.incremental or math.isnan(move.r_mm):
+                end = [end[0], end[1], math.nan]
+            elif move.retract == "G99":
+                end = [end[0], end[1], move.r_mm]
+            else:
+                end = [end[0], end[1], max(cmd[2], move.r_mm)]
+        else:
+            reached = end
+        if changed:
+            row.new = np.array(reached, dtype=float)
+            row.residual_mm = float(np.linalg.norm(row.new - want))
+        cmd = end
+    return edits
+
+
+# ---------------------------------------------------------------- files
+
+
+def krl_header(result: Result, command_path: str, cell_path: str, opts: Options) -> list[str]:
+    """DESIGN.md header lines for a rewritten program."""
+    largest, where = result.largest()
+    return header_lines(
+        "rewrite",
+        command_path,
+        file_sha256(command_path),
+        cell_path,
+        file_sha256(cell_path),
+        opts.model.source_path,
+        opts.model.source_sha256,
+        opts.model.step,
+        largest,
+        None if where is None else f"{where.name} line {where.line}",
+        len(result.corrected),
+    )
+
+
+def add_header(text: str, lines: list[str], kind: str) -> str:
+    """Insert comment lines after the leading ``&`` (KRL) or ``%`` (G-code) lines."""
+    newline = "\r\n" if "\r\n" in text else "\n"
+    body = [comment_text(line, 200) for line in lines]
+    block = "".join((f"; {b}" if kind == "krl" else f"({b})") + newline for b in body)
+    pos = 0
+    lead = "&" if kind == "krl" else "%"
+    while text.startswith(lead, pos):
+        nl = text.find("\n", pos)
+        if nl < 0:
+            return text + newline + block
+        pos = nl + 1
+    return text[:pos] + block + text[pos:]
+
+
+def report_csv(rows: list[Row], decimals: int = 4) -> str:
+    """The report as CSV text (DESIGN.md style: header row, mm)."""
+
+    def num(v: float) -> str:
+        return "" if v is None or not np.isfinite(v) else fixed(v, decimals)
+
+    out = [REPORT_COLUMNS]
+    for r in rows:
+        delta = r.new - r.old if r.status == "corrected" else np.full(3, np.nan)
+        length = float(np.linalg.norm(delta)) if r.status == "corrected" else math.nan
+        cells = [
+            Path(r.file).name,
+            str(r.line),
+            _csv(r.name),
+            r.status,
+            _csv(r.reason),
+            *(num(v) for v in r.old),
+            *(num(v) for v in r.new),
+            *(num(v) for v in delta),
+            num(length),
+            num(r.residual_mm),
+        ]
+        out.append(",".join(cells))
+    return "\n".join(out) + "\n"
+
+
+def _csv(text: str) -> str:
+    text = text.replace("\r", " ").replace("\n", " ")
+    if any(c in text for c in ',"'):
+        return '"' + text.replace('"', '""') + '"'
+    return text
