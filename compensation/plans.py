@@ -75,19 +75,19 @@ def path_length(points: np.ndarray) -> float:
 
 
 def grid_axes(lo, hi, step_mm: float) -> list[np.ndarray]:
-    """Vertex coordinates per axis of a regular grid covering the box lo..hi (mm).
+    """Vertex coordinates per axis of a regular grid spanning the box lo..hi (mm) exactly.
 
-    When a side is not a whole number of steps the grid is widened to the next whole number and
-    centred on the box, so that every point of the box lies inside the grid.
+    Each side is cut into ceil(side / step_mm) equal cells, so the step of an axis is step_mm when
+    it divides the side and a little smaller otherwise (the seed's "convenience of the region
+    partition"); the grid never leaves the box.
     """
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))) or np.any(hi <= lo):
         raise InputError(f"region must have min < max on every axis (got {lo} .. {hi})")
     if not np.isfinite(step_mm) or step_mm <= 0:
         raise InputError(f"grid step must be > 0 mm, got {step_mm:g}")
-    cells = np.ceil((hi - lo) / step_mm - 1e-9).astype(int)
-    start = 0.5 * (lo + hi) - 0.5 * cells * step_mm
-    return [start[k] + step_mm * np.arange(cells[k] + 1) for k in range(3)]
+    cells = np.maximum(np.ceil((hi - lo) / step_mm - 1e-9), 1).astype(int)
+    return [np.linspace(lo[k], hi[k], cells[k] + 1) for k in range(3)]
 
 
 def serpentine_order(counts) -> np.ndarray:

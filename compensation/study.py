@@ -415,9 +415,9 @@ def random_points(lo, hi, n: int, seed: int = 0) -> np.ndarray:
 def simulate_validation(
     measure: Measure, lo, hi, step_mm: float, repeats: int, n_points: int, seed: int = 0
 ) -> Validation:
-    """Seed Table 5 in simulation: measure the grid at step_mm over lo..hi (widened and centred
-    when not a whole number of steps), then measure random points commanded without and with
-    the correction."""
+    """Seed Table 5 in simulation: measure the grid at step_mm over lo..hi (an axis whose side is
+    not a whole number of steps gets the next smaller step that is, see grid_axes), then measure
+    random points commanded without and with the correction."""
     axes = grid_axes(lo, hi, step_mm)
     vertices = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     measured = measure(vertices, repeats, 2)

@@ -46,10 +46,10 @@ def test_grid_plan_path_is_shortest_and_beats_naive_order():
     assert naive.path_length() > snake.path_length()
 
 
-def test_grid_axes_widen_and_centre_when_not_whole_steps():
+def test_grid_axes_shrink_the_step_to_partition_the_region():
     axes = grid_axes((0, 0, 0), (100, 250, 200), 100)
     np.testing.assert_allclose(axes[0], [0, 100])
-    np.testing.assert_allclose(axes[1], [-25, 75, 175, 275])
+    np.testing.assert_allclose(axes[1], [0, 250 / 3, 500 / 3, 250])
     np.testing.assert_allclose(axes[2], [0, 100, 200])
 
 

@@ -214,3 +214,31 @@ def test_validation_before_and_after():
 def test_study_needs_two_steps():
     with pytest.raises(InputError, match="two steps"):
         run(lambda p: np.zeros_like(p), steps=np.array([100.0]))
+
+
+# Seed Table 4 (published, real KR210): step, max X Y Z, min X Y Z, std X Y Z (mm).
+SEED_TABLE4 = np.array(
+    [
+        [20, 0.165, 0.059, 0.167, -0.016, -0.098, -0.06, 0.05, 0.04, 0.073],
+        [80, 0.182, 0.211, 0.21, -0.027, -0.266, -0.132, 0.055, 0.108, 0.081],
+        [140, 0.228, 0.204, 0.226, -0.074, -0.248, -0.176, 0.064, 0.105, 0.109],
+        [200, 0.279, 0.213, 0.265, -0.107, -0.224, -0.228, 0.084, 0.109, 0.121],
+        [260, 0.283, 0.195, 0.278, -0.119, -0.245, -0.262, 0.102, 0.108, 0.13],
+        [320, 0.393, 0.183, 0.461, -0.181, -0.261, -0.393, 0.127, 0.117, 0.177],
+        [380, 0.406, 0.182, 0.464, -0.189, -0.233, -0.372, 0.13, 0.112, 0.198],
+        [440, 0.493, 0.205, 0.556, -0.226, -0.235, -0.471, 0.153, 0.123, 0.22],
+        [500, 0.45, 0.227, 0.648, -0.271, -0.251, -0.443, 0.16, 0.122, 0.238],
+    ]
+)
+
+
+def test_decision_rule_on_the_seed_table_4_gives_the_seed_choice():
+    """The seed reads thresholds of 200-250 mm in X and Z, none in Y, and picks 200 mm."""
+    steps = SEED_TABLE4[:, 0]
+    table = [Summary(r[1:4], r[4:7], r[7:10]) for r in SEED_TABLE4]
+    max_curves = [fit_curve(steps, SEED_TABLE4[:, 1 + a]) for a in range(3)]
+    min_curves = [fit_curve(steps, SEED_TABLE4[:, 4 + a]) for a in range(3)]
+    decision = choose_step(steps, table, max_curves, min_curves, 0.3, 0.5)
+    th = decision.thresholds
+    assert 200 < th[0] < 250 and np.isinf(th[1]) and 200 < th[2] < 250
+    assert decision.step == 200.0
