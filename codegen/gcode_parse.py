@@ -167,7 +167,7 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
         for letter, ws in words.items():
             if len(ws) > 1 and letter not in "GM":
                 raise InputError(
-                    f"word {letter} given twice", path, lineno, ws[1].start - line_offset
+                    f"word {letter} given twice", path, lineno, ws[1].start - line_offset + 1
                 )
         gcodes = [_gnum(w.value) for w in words.get("G", [])]
         axis_words = {k: words[k][0] for k in AXES if k in words}

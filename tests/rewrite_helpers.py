@@ -1,0 +1,64 @@
+"""Shared by the rewrite tests: a synthetic measurement grid and a cell file in a temp folder.
+
+The error field is known, so tests can check the applied corrections without trusting the code
+under test: ``field="constant"`` gives e = E_CONST everywhere (IDW of equal vertex errors is that
+constant), ``field="smooth"`` a linear field that IDW reproduces only approximately.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+E_CONST = np.array([0.25, -0.125, 0.375])  # mm, e = P - M
+
+
+def error_field(points: np.ndarray, field: str) -> np.ndarray:
+    """e(P) (N, 3) mm."""
+    if field == "constant":
+        return np.tile(E_CONST, (len(points), 1))
+    x, y, z = points.T
+    return np.stack([0.2 + 1e-4 * x, -0.1 + 2e-4 * z, 0.3 - 1e-4 * y], axis=1)
+
+
+def write_grid(
+    path: Path, lower=(-1500, -1500, -500), upper=(2500, 1500, 2000), step=250.0, field="smooth"
+) -> Path:
+    """A complete measurement CSV (id,x,y,z,x_meas,y_meas,z_meas) with M = P - e(P)."""
+    axes = [np.arange(lo, hi + step / 2, step) for lo, hi in zip(lower, upper, strict=True)]
+    commanded = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    measured = commanded - error_field(commanded, field)
+    rows = ["id,x,y,z,x_meas,y_meas,z_meas"]
+    for i, (p, m) in enumerate(zip(commanded, measured, strict=True)):
+        rows.append(f"{i}," + ",".join(f"{v:.4f}" for v in (*p, *m)))
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def write_cell(folder: Path, field="smooth", base_data=None, program_frame=None, **grid) -> Path:
+    """cell.yaml + grid.csv in ``folder``; base 1 = robot frame unless ``base_data`` says more.
+
+    ``base_data``: {n: (x, y, z, a, b, c)}; number 1 is the cell's ``base``.
+    """
+    write_grid(folder / "grid.csv", field=field, **grid)
+    base_data = dict(base_data or {})
+    base1 = base_data.pop(1, (0, 0, 0, 0, 0, 0))
+    lines = [
+        "robot: kr210",
+        "grid: grid.csv",
+        "tool: {number: 1, x: 0, y: 0, z: 250, a: 0, b: 0, c: 0}",
+        "base: {number: 1, " + _frame(base1) + "}",
+    ]
+    if base_data:
+        lines.append("base_data:")
+        lines += [f"  {n}: {{{_frame(f)}}}" for n, f in base_data.items()]
+    if program_frame is not None:
+        lines.append("program_frame: {" + _frame(program_frame) + "}")
+    cell = folder / "cell.yaml"
+    cell.write_text("\n".join(lines) + "\n")
+    return cell
+
+
+def _frame(f) -> str:
+    return ", ".join(f"{k}: {v}" for k, v in zip("xyzabc", f, strict=True))

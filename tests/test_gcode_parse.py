@@ -1,0 +1,76 @@
+"""RS274NGC parser: modal state, absolute targets, spans, and what it refuses to guess."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from codegen.gcode_parse import parse_gcode
+from kinematics.errors import InputError
+
+
+def test_words_any_order_case_no_spaces_comments_and_spans():
+    text = "%\nN10g21g90(set up; mm)\nn20 G0 x1.5Y-2Z10.25 ; go\ny3 X4(mid)z.5\nN30G1Z-1.0F100\n%\n"
+    moves = parse_gcode(text, "a.ngc")
+    assert [m.target for m in moves] == [(1.5, -2.0, 10.25), (4.0, 3.0, 0.5), (4.0, 3.0, -1.0)]
+    assert [m.motion for m in moves] == ["G0", "G0", "G1"]
+    assert [m.line for m in moves] == [3, 4, 5]
+    for m in moves:
+        for w in m.words.values():
+            assert float(text[w.start : w.end]) == w.value
+    assert moves[1].setters == (0, 0, 0) and moves[2].setters == (1, 1, 1)
+
+
+def test_incremental_and_inch_targets_are_absolute_mm():
+    moves = parse_gcode("G20 G90 G0 X1 Y1 Z1\nG91 G1 X0.5 Z-2\nY-1\n")
+    assert moves[0].scale == 25.4
+    assert moves[1].incremental
+    expected = [(25.4, 25.4, 25.4), (38.1, 25.4, -25.4), (38.1, 0.0, -25.4)]
+    for m, e in zip(moves, expected, strict=True):
+        assert m.target == pytest.approx(e)
+
+
+def test_canned_cycles_sticky_z_r_and_retract():
+    text = "G17 G90 G0 X0 Y0 Z50\nG99 G81 X10 Y20 Z-5 R2 F100\nX30\nG98 G83 X40 Z-8 R3 Q1\nG80\n"
+    moves = parse_gcode(text)
+    holes = moves[1:]
+    assert [h.target for h in holes] == [(10, 20, -5), (30, 20, -5), (40, 20, -8)]
+    assert [h.motion for h in holes] == ["G81", "G81", "G83"]
+    assert holes[0].end == (10, 20, 2)  # G99: back to R
+    assert holes[2].end == (40, 20, 3)  # G98: back to the higher of old Z (R of the previous) and R
+    assert "R" in holes[0].words and not any(h.reason for h in holes)
+
+
+@pytest.mark.parametrize(
+    ("program", "reason"),
+    [
+        ("G0 X0 Y0 Z0\nG55 G0 X1 Y1 Z1\n", "G55"),
+        ("G0 X0 Y0 Z0\nG92 X0 Y0\nG0 X1 Y1 Z1\n", "G92"),
+        ("G0 X0 Y0 Z0\nG2 X10 Y0 I5 J0\n", "arc"),
+        ("G0 X0 Y0 Z0\nG41 D1 G1 X10\n", "cutter compensation"),
+        ("G0 Z5\n", "X,Y not known"),
+        ("G0 X0 Y0 Z0\nG18 G81 X1 Z-1 R1\n", "plane G18"),
+        ("G0 X0 Y0 Z0\nG91 G81 X1 Y1 Z-1 R1\n", "G91"),
+        ("o100 sub\nG0 X0 Y0 Z0\n", "O-word"),
+    ],
+)
+def test_not_guessed(program, reason):
+    moves = parse_gcode(program)
+    assert reason in moves[-1].reason
+
+
+def test_home_and_machine_moves_make_the_position_unknown():
+    moves = parse_gcode("G0 X0 Y0 Z0\nG28 Z10\nG0 X5\nG53 G0 Z0\n")
+    assert moves[1].motion == "G28" and moves[1].reason
+    assert math.isnan(moves[2].target[1]) and "not known" in moves[2].reason
+
+
+@pytest.mark.parametrize(
+    ("text", "line", "column"),
+    [("G0 X1 (open\n", 1, 7), ("G0 X1\nG1 X2 Y$3\n", 2, 7), ("G0 X1 X2\n", 1, 8)],
+)
+def test_malformed(text, line, column):
+    with pytest.raises(InputError) as err:
+        parse_gcode(text, "bad.ngc")
+    assert (err.value.line, err.value.column) == (line, column)
