@@ -1,0 +1,150 @@
+"""`accugrid rewrite` on the real programs in ../shared/realworld (RoboDK, a KUKA controller, a
+person, G-code generators), with a synthetic grid that covers their positions.
+
+Checked without trusting the rewrite: a generic tokenizer shows the output differs from the input
+only in numbers on the lines the report says were corrected; re-parsing the output gives the
+reported new positions; the report has a row for every position the parser finds.
+"""
+
+from __future__ import annotations
+
+import csv
+import re
+
+import numpy as np
+import pytest
+from rewrite_helpers import write_cell
+
+from codegen.cli import main
+from codegen.gcode_parse import parse_gcode
+from codegen.krl_parse import scan_krl
+
+TOKEN = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?|\s+|[^\d\s.+-]+|.", re.S)
+NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?$")
+
+# (inputs, extra options, how many positions must be corrected at least)
+CASES = {
+    "robodk": (["krl/robodk_Program.src"], [], 2),
+    "xpoints_alone": (["krl/chinamilling_xPoints.dat"], ["--base", "0"], 100),
+    "xpoints_no_base": (["krl/chinamilling_xPoints.dat"], [], 0),
+    "st1_st2_pair": (
+        ["krl/chinamilling_st1_st2.src", "krl/chinamilling_xPoints.dat"],
+        ["--ignore-external-axes"],
+        1,
+    ),
+    "job1_side1": (
+        ["krl/chinamilling_St1_Job1_Side1.src", "krl/chinamilling_St1_Job1_Side1.dat"],
+        ["--base", "11", "--trust-calls"],
+        13,
+    ),
+    "job1_side1_strict_rules": (
+        ["krl/chinamilling_St1_Job1_Side1.src", "krl/chinamilling_St1_Job1_Side1.dat"],
+        [],
+        0,
+    ),
+    "heatsink": (["gcode/norn93_1_heatsink_drill.gcode"], ["--decimals", "3"], 40),
+    "drill_practice": (["gcode/norn93_drill_practice.gcode"], [], 4),
+    "vertical_slot": (["gcode/pygcode_vertical-slot.ngc"], [], 4),
+}
+
+
+def _line_of(text: str, offset: int) -> int:
+    return text.count("\n", 0, offset) + 1
+
+
+def changed_lines(before: str, after: str) -> set[int]:
+    """Lines whose numbers differ; fails when anything but a number differs."""
+    a, b = TOKEN.findall(before), TOKEN.findall(after)
+    assert len(a) == len(b), "token count changed"
+    lines, offset = set(), 0
+    for ta, tb in zip(a, b, strict=True):
+        if ta != tb:
+            assert NUMBER.match(ta) and NUMBER.match(tb), (ta, tb)
+            lines.add(_line_of(before, offset))
+        offset += len(ta)
+    return lines
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_realworld_rewrite(realworld, tmp_path, case):
+    names, options, at_least = CASES[case]
+    cell = write_cell(tmp_path, base_data={11: (1200, -300, 700, 30, 0, 0)})
+    inputs = [realworld / n for n in names]
+    out = tmp_path / "out"
+    target = out if len(inputs) == 2 else out / inputs[0].name  # a pair: -o is a folder
+    args = ["rewrite", *map(str, inputs), "--cell", str(cell), "-o", str(target)]
+    report = tmp_path / "report.csv"
+    assert main([*args, "--report", str(report), *options]) == 0
+    rows = list(csv.DictReader(report.open()))
+    corrected = [r for r in rows if r["status"] == "corrected"]
+    assert len(corrected) >= at_least
+    for path in inputs:
+        before = path.read_bytes().decode("latin-1")
+        after = (out / path.name).read_bytes().decode("latin-1")
+        mine = [r for r in rows if r["file"] == path.name]
+        lines = changed_lines(before, after)
+        assert lines <= {int(r["line"]) for r in mine if r["status"] == "corrected"}
+        if path.suffix.lower() in (".src", ".dat"):
+            scan_before = scan_krl(before, path.name)
+            scan_after = scan_krl(after, path.name)
+            keys = {(int(r["line"]), r["name"]) for r in mine}
+            for p in scan_before.positions:  # every position the parser finds is reported
+                assert (p.line, p.name) in keys
+            by_key = {(int(r["line"]), r["name"]): r for r in mine}
+            for p_old, p_new in zip(scan_before.positions, scan_after.positions, strict=True):
+                row = by_key[(p_old.line, p_old.name)]
+                new_xyz = np.array([p_new.x, p_new.y, p_new.z], dtype=float)
+                if row["status"] == "corrected":
+                    want = [float(row[k]) for k in ("x_new", "y_new", "z_new")]
+                    assert np.allclose(new_xyz, want, atol=1e-4)
+                    assert {k: v for k, v in p_new.values.items() if k not in "XYZ"} == {
+                        k: v for k, v in p_old.values.items() if k not in "XYZ"
+                    }
+                else:
+                    assert p_new.values == p_old.values
+        else:
+            moves_before, moves_after = parse_gcode(before), parse_gcode(after)
+            assert len(mine) == len(moves_before)
+            for row, m in zip(mine, moves_after, strict=True):
+                assert int(row["line"]) == m.line
+                if row["status"] == "corrected":
+                    want = [float(row[k]) for k in ("x_new", "y_new", "z_new")]
+                    assert np.allclose(m.target, want, atol=1e-4)
+    skipped = [r for r in rows if r["status"] != "corrected"]
+    assert all(r["reason"] for r in skipped)
+
+
+def test_realworld_reasons(realworld, tmp_path):
+    """The rules for what is not placed, on the real files."""
+    cell = write_cell(tmp_path)
+    side = realworld / "krl" / "chinamilling_St1_Job1_Side1.src"
+    report = tmp_path / "r.csv"
+    args = [str(side), str(side.with_suffix(".dat")), "--cell", str(cell)]
+    assert main(["rewrite", *args, "-o", str(tmp_path / "o"), "--report", str(report)]) == 0
+    text = report.read_text()
+    assert "frame arithmetic" in text and "MoveSettings" in text and "$POS_ACT" in text
+    robodk = realworld / "krl" / "robodk_Program.src"
+    assert (
+        main(
+            [
+                "rewrite",
+                str(robodk),
+                "--cell",
+                str(cell),
+                "-o",
+                str(tmp_path / "r.src"),
+                "--report",
+                str(report),
+                "--force",
+            ]
+        )
+        == 0
+    )
+    rows = list(csv.DictReader(report.open()))
+    assert [r["status"] for r in rows if r["name"] == "LIN"] == [
+        "corrected",
+        "corrected",
+        "skipped",
+        "skipped",
+    ]
+    assert "Subprog" in rows[-2]["reason"] or any("Subprog" in r["reason"] for r in rows)
