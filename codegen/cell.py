@@ -79,6 +79,7 @@ class Cell:
     turn: int | None = None
     allow_config_change: bool = False
     singular_a5_deg: float = 5.0
+    reference_abc: tuple[float, float, float] = (0.0, 90.0, 0.0)
     # correction
     iterations: int = 1
     power: float = 1.0
@@ -202,6 +203,12 @@ class _Reader:
         xyzabc = [self.number(d, k, key, 0.0) for k in _FRAME_KEYS]
         return number, pose_from_xyzabc(np.array(xyzabc))
 
+    def abc(self, data: object, key: str, default: tuple) -> tuple[float, float, float]:
+        if data is None:
+            return default
+        d = self.mapping(data, key, {"a", "b", "c"})
+        return tuple(self.number(d, k, key, 0.0) for k in "abc")
+
     # -- the file ------------------------------------------------------------------------
     def cell(self, data: object, sha256: str) -> Cell:
         top = self.mapping(data, "", _TOP_KEYS)
@@ -267,7 +274,7 @@ class _Reader:
         cf = self.mapping(
             top.get("configuration"),
             "configuration",
-            {"status", "turn", "allow_change", "singular_a5"},
+            {"status", "turn", "allow_change", "singular_a5", "reference"},
         )
         co = self.mapping(top.get("correction"), "correction", {"iterations", "power"})
         gc = self.mapping(top.get("gcode"), "gcode", {"spindle_rpm", "canned_cycles"})
@@ -313,6 +320,9 @@ class _Reader:
             turn=self.integer(cf, "turn", "configuration", None, 0, 63, optional=True),
             allow_config_change=self.boolean(cf, "allow_change", "configuration", False),
             singular_a5_deg=self.number(cf, "singular_a5", "configuration", 5.0, 0.0, 90.0),
+            reference_abc=self.abc(
+                cf.get("reference"), "configuration.reference", (0.0, 90.0, 0.0)
+            ),
             iterations=self.integer(co, "iterations", "correction", 1, 1, 10),
             power=self.number(co, "power", "correction", 1.0, 0.0, 10.0, True),
             spindle_rpm=self.number(gc, "spindle_rpm", "gcode", 6000.0, 0.0, 10**6, True),

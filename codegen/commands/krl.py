@@ -1,0 +1,42 @@
+"""Write a corrected KUKA KRL drilling program (.src/.dat) from a points CSV.
+
+Each hole: travel (PTP ... C_PTP, or LIN ... C_DIS) to the approach point on the drill axis, LIN at
+approach speed to the clearance point, LIN at the feed to the depth, WAIT SEC dwell, LIN back to
+the retract point. Positions are E6POS in the .dat, in the cell's BASE frame (BASE_DATA[n]), with
+the KUKA Status and Turn from the robot model's IK. Every hole is corrected with the grid (its
+point mapped to the robot frame, P' = P + e(P), and the same e applied to all its positions).
+Long jobs are split into NAME_001, NAME_002, ... called from NAME.src (program.lines_per_file).
+
+Units: mm, deg, mm/s in the inputs; $VEL.CP in m/s in the program. Exit 2 on bad input, with
+nothing written.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from codegen.atomic import check_targets, write_files
+from codegen.job import add_job_arguments, prepare, summary
+from codegen.krl_emit import render_krl
+
+NAME = "krl"
+HELP = "corrected KUKA KRL drilling program (.src/.dat) from a points CSV"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_job_arguments(parser)
+    parser.add_argument(
+        "-o", "--output", required=True, metavar="DIR", help="folder for NAME.src and NAME.dat"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    out = Path(args.output)
+    job = prepare(args, NAME)
+    name = job.program.cell.program_name
+    check_targets([out / f"{name}.src", out / f"{name}.dat"], job.inputs, args.force)
+    files = render_krl(job.program, job.header, args.templates)
+    written = write_files({out / f: text for f, text in files.items()}, job.inputs, args.force)
+    print(summary(job, written))
+    return 0

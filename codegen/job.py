@@ -1,0 +1,107 @@
+"""What ``accugrid krl`` and ``accugrid gcode`` share: read the inputs, build the corrected
+program, make the header, report warnings. The dialect commands only render and write."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+from codegen.cell import Cell, load_cell
+from codegen.header import file_sha256, header_lines
+from codegen.points import read_points
+from codegen.program import Program, build_program
+from compensation import GridModel
+from kinematics.errors import InputError
+from kinematics.robot import load_robot
+
+
+@dataclass
+class Job:
+    program: Program
+    header: list[str]
+    inputs: list[Path]  # never overwritten
+
+
+def add_job_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options both dialect commands take (besides -o)."""
+    parser.add_argument("points", metavar="POINTS", help="drilling points CSV (BASE frame, mm)")
+    parser.add_argument("--cell", required=True, metavar="CELL", help="cell YAML file")
+    parser.add_argument(
+        "--grid",
+        metavar="MEAS",
+        help="grid measurement CSV (robot frame, mm); overrides the cell file's grid",
+    )
+    parser.add_argument(
+        "--no-correction",
+        action="store_true",
+        help="write the nominal (uncorrected) program; no grid is read",
+    )
+    parser.add_argument(
+        "--allow-config-change",
+        action="store_true",
+        help="let a hole that cannot reach the program's KUKA Status take another one "
+        "(same as configuration.allow_change in the cell file)",
+    )
+    parser.add_argument(
+        "--templates",
+        metavar="DIR",
+        help="folder with your copies of the templates (a copy of templates/ or of its "
+        "krl/ or gcode/ folder)",
+    )
+    parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
+
+
+def grid_path(args: argparse.Namespace, cell: Cell) -> Path | None:
+    """The measurement to correct with: --grid, else the cell's; None with --no-correction."""
+    if args.no_correction:
+        if args.grid is not None:
+            raise InputError("--grid and --no-correction exclude each other")
+        return None
+    path = Path(args.grid) if args.grid is not None else cell.grid_path
+    if path is None:
+        raise InputError(
+            "no grid: name one in the cell file (grid:), give --grid, or use --no-correction",
+            args.cell,
+        )
+    return path
+
+
+def prepare(args: argparse.Namespace, command: str) -> Job:
+    """Read POINTS, CELL and the grid; build the program; print its warnings to stderr."""
+    cell = load_cell(args.cell)
+    if args.allow_config_change:
+        cell = dataclasses.replace(cell, allow_config_change=True)
+    grid_file = grid_path(args, cell)
+    points = read_points(args.points)
+    grid = None if grid_file is None else GridModel.from_measurements(grid_file)
+    robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
+    program = build_program(points, cell, robot, grid)
+    for warning in program.warnings:
+        print(f"accugrid {command}: warning: {warning}", file=sys.stderr)
+    largest, hole = program.largest_correction()
+    header = header_lines(
+        command,
+        args.points,
+        file_sha256(args.points),
+        args.cell,
+        cell.sha256,
+        grid_file,
+        None if grid is None else grid.source_sha256,
+        None if grid is None else grid.step,
+        largest,
+        None if hole is None else points.ids[hole],
+        len(program),
+    )
+    inputs = [Path(args.points), Path(args.cell)] + ([grid_file] if grid_file else [])
+    return Job(program, header, inputs)
+
+
+def summary(job: Job, written: list[Path]) -> str:
+    """One line for stdout after writing."""
+    largest, _ = job.program.largest_correction()
+    names = ", ".join(str(p) for p in written[:3]) + (" ..." if len(written) > 3 else "")
+    what = "corrected" if job.program.corrected else "uncorrected"
+    return f"wrote {names}: {len(job.program)} holes, {what}, largest correction {largest:.3f} mm"

@@ -1,0 +1,304 @@
+"""The neutral drilling program: corrected, reachable poses per hole, independent of the dialect.
+
+Per hole, four positions on the drill axis (tool Z, pointing into the part), in the BASE frame:
+
+- ``APP`` approach: ``drilling.approach`` mm before the hole; travel (PTP or LIN) ends here;
+- ``CLR`` clearance: ``drilling.clearance`` mm before the hole; approach speed from APP to here;
+- ``BOT`` bottom: ``depth`` mm into the part; drilling feed from CLR to here, then the dwell;
+- ``RET`` retract: ``drilling.retract`` mm before the hole, at approach speed.
+
+Correction (DESIGN.md): the hole point is mapped to the robot frame (robot_T_base), corrected
+with the grid (P' = P + e(P)), and the same vector e is added to all four positions of the hole.
+The grid's error changes by well under a micrometre over the few centimetres between them, while
+correcting each separately would bend the drill axis by that difference; one vector per hole
+keeps the axis straight and the hole where the grid says. Orientation is not corrected.
+
+Every corrected pose goes through IK: unreachable or out-of-limit poses are InputErrors naming
+the hole; |A5| below ``configuration.singular_a5`` is a warning. The KUKA Status/Turn is the
+cell's, or the first hole's IK solution, and stays the same for the whole program unless
+``configuration.allow_change`` lets a hole that cannot reach it take its own.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from codegen.cell import Cell
+from codegen.points import Points, orient_along_axes, too_tilted
+from codegen.textsafe import fixed
+from compensation.grid import MAX_CORRECTION_MM
+from kinematics.errors import InputError
+from kinematics.frames import abc_to_matrix, invert, matrix_to_abc
+
+STAGES = ("APP", "CLR", "BOT", "RET")
+GRID_ORIENTATION_TOL_DEG = 5.0  # the grid's errors hold near the orientation it was measured at
+_LISTED = 5  # holes named in one message
+MAX_AXIS_JUMP_DEG = 180.0  # a larger joint move between consecutive poses: a wrist flip or wrap
+
+
+@dataclass
+class Program:
+    """A corrected drilling job. N holes; positions (N, 4, 3) mm in the BASE frame, stage order
+    ``STAGES``; rotations (N, 3, 3) tool orientation in the BASE frame."""
+
+    cell: Cell
+    points: Points
+    nominal: np.ndarray  # (N, 4, 3) mm, BASE frame, before correction
+    positions: np.ndarray  # (N, 4, 3) mm, BASE frame, corrected
+    rotations: np.ndarray  # (N, 3, 3)
+    correction: np.ndarray  # (N, 3) mm, robot frame, e added to every stage of the hole
+    feed_mm_s: np.ndarray  # (N,)
+    depth_mm: np.ndarray  # (N,)
+    status: np.ndarray  # (N, 4) int, KUKA Status per pose (stage order STAGES)
+    turn: np.ndarray  # (N, 4) int, KUKA Turn per pose
+    warnings: list[str]
+    corrected: bool
+
+    def __len__(self) -> int:
+        return len(self.positions)
+
+    def largest_correction(self) -> tuple[float, int | None]:
+        """(length mm, hole index) of the largest correction; (0, None) for no holes."""
+        if not len(self):
+            return 0.0, None
+        length = np.linalg.norm(self.correction, axis=1)
+        i = int(np.argmax(length))
+        return float(length[i]), i
+
+    def labels(self, lo: int = 0, hi: int | None = None) -> list[str]:
+        """Comment text of holes lo..hi-1: id, depth and diameter (templates sanitize it)."""
+        pts = self.points
+        hi = len(self) if hi is None else hi
+        out = []
+        for i in range(lo, hi):
+            text = f"{pts.ids[i]} depth {fixed(self.depth_mm[i])}"
+            if not np.isnan(pts.diameter[i]):
+                text += f" dia {fixed(pts.diameter[i])}"
+            out.append(text)
+        return out
+
+    def in_frame(self, robot_T_frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (N, 4, 3) mm and KUKA A,B,C (N, 3) deg in another frame given in the robot
+        frame (e.g. ``cell.robot_T_program`` for G-code)."""
+        frame_T_base = invert(robot_T_frame) @ self.cell.robot_T_base
+        rot = frame_T_base[:3, :3]
+        pos = self.positions @ rot.T + frame_T_base[:3, 3]
+        abc = matrix_to_abc(rot @ self.rotations) if len(self) else np.zeros((0, 3))
+        return pos, abc
+
+
+def build_program(points: Points, cell: Cell, robot, grid=None) -> Program:
+    """Corrected, IK-checked program for ``points`` in ``cell`` (``grid``: a GridModel or None for
+    no correction; ``robot``: a kinematics Robot with the cell's tool)."""
+    n = len(points)
+    if points.axis is None:
+        raise InputError(
+            "the points have no orientation: add columns a,b,c or i,j,k", points.path, 1
+        )
+    rotations = _rotations(points, cell)
+    axis = rotations[:, :, 2]
+    depth = np.where(np.isnan(points.depth), cell.depth_mm, points.depth)
+    feed = np.where(np.isnan(points.feed), cell.feed_mm_s, points.feed)
+    offsets = np.stack(
+        [
+            np.full(n, -cell.approach_mm),
+            np.full(n, -cell.clearance_mm),
+            depth,
+            np.full(n, -cell.retract_mm),
+        ],
+        axis=1,
+    )
+    nominal = points.xyz[:, None, :] + offsets[:, :, None] * axis[:, None, :]
+    base_rot = cell.robot_T_base[:3, :3]
+    holes_robot = points.xyz @ base_rot.T + cell.robot_T_base[:3, 3]
+    warnings: list[str] = []
+    if grid is None:
+        correction = np.zeros((n, 3))
+    else:
+        correction = _correction(points, cell, grid, holes_robot)
+        warnings += _orientation_warnings(points, grid, base_rot @ rotations)
+    positions = nominal + (correction @ base_rot)[:, None, :]  # e rotated into the BASE frame
+    status, turn, ik_warnings = _configuration(points, cell, robot, positions, rotations)
+    return Program(
+        cell=cell,
+        points=points,
+        nominal=nominal,
+        positions=positions,
+        rotations=rotations,
+        correction=correction,
+        feed_mm_s=feed,
+        depth_mm=depth,
+        status=status,
+        turn=turn,
+        warnings=warnings + ik_warnings,
+        corrected=grid is not None,
+    )
+
+
+def _rotations(points: Points, cell: Cell) -> np.ndarray:
+    """Tool rotations (N, 3, 3) in the BASE frame: from a,b,c, or by the i,j,k rule of
+    ``orient_along_axes`` around the cell's reference orientation (a robot-frame A,B,C)."""
+    if points.abc is not None:
+        return abc_to_matrix(points.abc).reshape(-1, 3, 3)
+    reference = cell.robot_T_base[:3, :3].T @ abc_to_matrix(np.array(cell.reference_abc))
+    bad = np.flatnonzero(too_tilted(points.axis, reference))
+    if bad.size:
+        raise InputError(
+            f"{points.label(int(bad[0]))}: the drill axis i,j,k is more than 150 deg from the "
+            "reference tool axis (configuration.reference); give a,b,c for this hole or turn "
+            "the reference",
+            *points.table.where(int(bad[0]), "i"),
+        )
+    return orient_along_axes(points.axis, reference)
+
+
+def _correction(points: Points, cell: Cell, grid, holes_robot: np.ndarray) -> np.ndarray:
+    """e (N, 3) robot frame at every hole; InputError naming holes outside the grid or with a
+    correction above the safety limit."""
+    outside = np.flatnonzero(~grid.contains(holes_robot))
+    if outside.size:
+        named = "; ".join(points.label(int(i)) for i in outside[:_LISTED])
+        more = f" and {outside.size - _LISTED} more" if outside.size > _LISTED else ""
+        raise InputError(
+            f"{outside.size} hole(s) outside the grid box {_fmt(grid.origin)}..{_fmt(grid.upper)} "
+            f"mm (robot frame): {named}{more}",
+            *points.table.where(int(outside[0])),
+        )
+    command = grid.correct(
+        holes_robot, iterations=cell.iterations, power=cell.power, max_correction_mm=None
+    )
+    correction = command - holes_robot
+    length = np.linalg.norm(correction, axis=1)
+    worst = int(np.argmax(length)) if len(length) else 0
+    if len(length) and length[worst] > MAX_CORRECTION_MM:
+        raise InputError(
+            f"{points.label(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
+            f"limit of {MAX_CORRECTION_MM:g} mm; check the grid and the base frame",
+            *points.table.where(worst),
+        )
+    return correction
+
+
+def _orientation_warnings(points: Points, grid, robot_rotations: np.ndarray) -> list[str]:
+    if grid.orientation_abc is None or not len(points):
+        return []
+    ref = abc_to_matrix(grid.orientation_abc)
+    trace = np.einsum("ij,nij->n", ref, robot_rotations)
+    angle = np.degrees(np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0)))
+    far = np.flatnonzero(angle > GRID_ORIENTATION_TOL_DEG)
+    if not far.size:
+        return []
+    i = int(far[np.argmax(angle[far])])
+    return [
+        f"{far.size} hole(s) more than {GRID_ORIENTATION_TOL_DEG:g} deg from the grid's "
+        f"measured orientation {_fmt(grid.orientation_abc)} deg (largest {angle[i]:.1f} deg "
+        f"at {points.label(i)}): their correction is less trustworthy"
+    ]
+
+
+def _configuration(
+    points: Points, cell: Cell, robot, positions: np.ndarray, rotations: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """IK of every pose: Status and Turn (N, 4) per pose and the warnings."""
+    n = len(points)
+    if n == 0:
+        return np.zeros((0, 4), int), np.zeros((0, 4), int), []
+    stages = len(STAGES) - (1 if cell.retract_mm == cell.approach_mm else 0)
+    poses = np.tile(np.eye(4), (n, stages, 1, 1))
+    poses[:, :, :3, :3] = (cell.robot_T_base[:3, :3] @ rotations)[:, None]
+    base_rot, base_org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
+    poses[:, :, :3, 3] = positions[:, :stages] @ base_rot.T + base_org
+    flat = poses.reshape(-1, 4, 4)
+    status = cell.status
+    if status is None:
+        first = robot.ik(flat[:1], turn=cell.turn)
+        if not first.ok[0]:
+            _fail(points, 0, 0, first.reason[0], cell)
+        status = int(first.status[0])
+    sol = robot.ik(flat, status=status, turn=cell.turn)
+    ok = sol.ok.reshape(n, stages)
+    q = sol.q.reshape(n, stages, 6)
+    pose_status = sol.status.reshape(n, stages).astype(int)
+    pose_turn = sol.turn.reshape(n, stages).astype(int)
+    warnings: list[str] = []
+    failed = np.flatnonzero(~ok.all(axis=1))
+    if failed.size and cell.allow_config_change:
+        # a failing hole takes the default configuration of its approach pose for all its poses
+        own = robot.ik(poses[failed, 0])
+        retry = robot.ik(
+            poses[failed].reshape(-1, 4, 4),
+            status=np.repeat(np.where(own.ok, own.status, 0), stages),
+        )
+        ok[failed] = retry.ok.reshape(-1, stages) & own.ok[:, None]
+        q[failed] = retry.q.reshape(-1, stages, 6)
+        pose_status[failed] = retry.status.reshape(-1, stages)
+        pose_turn[failed] = retry.turn.reshape(-1, stages)
+        changed = failed[ok[failed].all(axis=1)]
+        if changed.size:
+            warnings.append(
+                f"{changed.size} hole(s) take another Status than {status} "
+                f"(configuration.allow_change), first {points.label(int(changed[0]))}"
+            )
+    failed = np.flatnonzero(~ok.all(axis=1))
+    if failed.size:
+        hole = int(failed[0])
+        stage = int(np.flatnonzero(~ok[hole])[0])
+        reason = sol.reason.reshape(n, stages)[hole, stage] or "no solution"
+        _fail(points, hole, stage, reason, cell, failed.size, status, cell.turn)
+    warnings += _branch_jumps(points, cell, q)
+    a5 = np.degrees(np.abs(q[:, :, 4])).min(axis=1)
+    near = np.flatnonzero(a5 < cell.singular_a5_deg)
+    if near.size:
+        named = ", ".join(f"{points.label(int(i))} |A5| {a5[i]:.1f} deg" for i in near[:_LISTED])
+        more = f" and {near.size - _LISTED} more" if near.size > _LISTED else ""
+        warnings.append(
+            f"{near.size} hole(s) within {cell.singular_a5_deg:g} deg of the wrist singularity "
+            f"(A5 = 0): {named}{more}"
+        )
+    if stages == 3:  # RET is the APP position
+        pose_status = np.concatenate([pose_status, pose_status[:, :1]], axis=1)
+        pose_turn = np.concatenate([pose_turn, pose_turn[:, :1]], axis=1)
+    return pose_status, pose_turn, warnings
+
+
+def _branch_jumps(points: Points, cell: Cell, q: np.ndarray) -> list[str]:
+    """An axis turning more than ``MAX_AXIS_JUMP_DEG`` between consecutive poses (a wrist flip or
+    a change of branch): InputError naming the hole, or a warning with allow_change."""
+    seq = q.reshape(-1, 6)
+    jump = np.degrees(np.abs(np.diff(seq, axis=0))).max(axis=1)
+    bad = np.flatnonzero(jump > MAX_AXIS_JUMP_DEG)
+    if not bad.size:
+        return []
+    hole = int((bad[0] + 1) // q.shape[1])
+    message = (
+        f"{points.label(hole)}: an axis turns {jump[bad[0]]:.0f} deg from the previous pose "
+        f"(more than {MAX_AXIS_JUMP_DEG:g} deg: the robot changes configuration on the way)"
+    )
+    if not cell.allow_config_change:
+        raise InputError(
+            message + "; reorder the holes or set configuration.allow_change",
+            *points.table.where(hole),
+        )
+    return [message + f"; {bad.size} such move(s) in the program"]
+
+
+def _fail(points, hole, stage, reason, cell, count=1, status=None, turn=None) -> None:
+    config = "" if status is None else f" with Status {status}"
+    config += "" if turn is None else f" Turn {turn}"
+    hint = (
+        ""
+        if status is None or cell.allow_config_change
+        else " (configuration.allow_change lets a hole take another Status)"
+    )
+    more = f"; {count - 1} more hole(s) fail" if count > 1 else ""
+    raise InputError(
+        f"{points.label(hole)}: the {STAGES[stage]} pose is not reachable{config}: {reason}"
+        f"{more}{hint}",
+        *points.table.where(hole),
+    )
+
+
+def _fmt(v: np.ndarray) -> str:
+    return "(" + ", ".join(f"{x:.1f}" for x in np.asarray(v, dtype=float)) + ")"

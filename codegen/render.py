@@ -1,0 +1,61 @@
+"""The Jinja2 environment the program dialects are rendered with.
+
+StrictUndefined (a misspelt variable is an error, never an empty string), no autoescaping (the
+output is not HTML), and numbers and user text only through the ``codegen.textsafe`` filters:
+``fixed`` (numbers), ``comment`` (user text inside a comment), ``ident`` (KRL names). A template
+error (in a user's ``--templates`` copy) is an InputError naming the template file and line.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import jinja2
+
+from codegen.textsafe import comment_text, fixed, krl_identifier
+from kinematics.errors import InputError
+from templates import TEMPLATE_DIR
+
+
+def template_dir(dialect: str, templates: str | os.PathLike[str] | None = None) -> Path:
+    """Folder of a dialect's templates: the built-in one, or ``templates`` (a copy of the whole
+    templates folder holding ``<dialect>/``, or of the dialect folder itself)."""
+    if templates is None:
+        return TEMPLATE_DIR / dialect
+    root = Path(templates)
+    if not root.is_dir():
+        raise InputError("--templates: not a folder", os.fspath(root))
+    return root / dialect if (root / dialect).is_dir() else root
+
+
+def environment(folder: Path, newline: str = "\n") -> jinja2.Environment:
+    """A strict environment loading from ``folder``; ``newline`` is the output line ending."""
+    env = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(os.fspath(folder)),
+        undefined=jinja2.StrictUndefined,
+        autoescape=False,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+        newline_sequence=newline,
+    )
+    env.filters["fixed"] = fixed
+    env.filters["comment"] = comment_text
+    env.filters["ident"] = krl_identifier
+    return env
+
+
+def render(env: jinja2.Environment, template: str, /, **context: object) -> str:
+    """Render ``template``; template and undefined-variable errors become InputErrors."""
+    try:
+        return env.get_template(template).render(**context)
+    except jinja2.TemplateNotFound as exc:
+        folder = env.loader.searchpath[0] if isinstance(env.loader, jinja2.FileSystemLoader) else ""
+        raise InputError(f"template '{exc.name}' not found", folder) from None
+    except jinja2.TemplateSyntaxError as exc:
+        raise InputError(
+            f"template syntax error: {exc.message}", exc.filename, exc.lineno
+        ) from None
+    except jinja2.UndefinedError as exc:
+        raise InputError(f"template uses an undefined value: {exc.message}", template) from None
