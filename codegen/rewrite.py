@@ -20,6 +20,7 @@ Rules (never guess; what cannot be placed is reported with the reason):
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 from dataclasses import dataclass, field
@@ -27,8 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from codegen import __version__
 from codegen.gcode_parse import GcodeMove, parse_gcode
-from codegen.header import file_sha256, header_lines
 from codegen.krl_parse import BaseRef, KrlPosition, KrlUse, scan_krl
 from codegen.textsafe import comment_text, fixed
 from compensation import GridModel
@@ -128,17 +129,18 @@ def splice(text: str, edits: list[tuple[int, int, str]]) -> str:
     return "".join(parts)
 
 
-def _format(value: float, decimals: int, forced: int | None) -> str:
-    places = forced if forced is not None else (3 if decimals < 0 else decimals)
-    return fixed(value, places)
+def precision(numbers) -> int:
+    """A file's precision: the most decimals among its X, Y, Z numbers (3 when it has none).
+
+    CAM posts drop trailing zeros (``X25.``, ``X24.5``, ``X24.125`` are one precision), so a
+    corrected number gets the file's precision, not its own digits."""
+    return max((n.decimals for n in numbers if n.decimals >= 0), default=3)
 
 
-def _number_text(old_text: str, old_value: float, new_value: float, decimals: int, forced) -> str:
-    """The new literal; the old one when the change does not show at the chosen decimals."""
-    if "e" in old_text.lower() and forced is None:
-        decimals = 3  # an exponent literal is written in fixed point with 3 decimals
-    new_text = _format(new_value, decimals, forced)
-    return old_text if float(new_text) == old_value and forced is None else new_text
+def _number_text(old_text: str, old_value: float, new_value: float, places: int) -> str:
+    """The new literal with ``places`` decimals; the old one when the value does not change."""
+    new_text = fixed(new_value, places)
+    return old_text if float(new_text) == old_value else new_text
 
 
 def _correct(points_robot: np.ndarray, opts: Options) -> tuple[np.ndarray, np.ndarray]:
@@ -270,6 +272,10 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
                     )
                 )
     edits: dict[str, list[tuple[int, int, str]]] = {p: [] for p in texts}
+    places_of = {
+        scan.path: precision(p.numbers[k] for p in scan.positions for k in "XYZ" if k in p.numbers)
+        for scan in scans
+    }
     if placed:
         base_xyz = np.array([row.old for _, row, _ in placed])
         frames = np.array([f for _, _, f in placed])
@@ -282,11 +288,12 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
                 continue
             target = row.old + back[i]
             text = texts[row.file]
+            places = opts.decimals if opts.decimals is not None else places_of[row.file]
             new = np.empty(3)
             for j, k in enumerate("XYZ"):
                 num = pos.numbers[k]
                 old_text = text[num.start : num.end]
-                new_text = _number_text(old_text, num.value, target[j], num.decimals, opts.decimals)
+                new_text = _number_text(old_text, num.value, target[j], places)
                 new[j] = float(new_text)
                 if new_text != old_text:
                     edits[row.file].append((num.start, num.end, new_text))
@@ -388,6 +395,10 @@ def _gcode_edits(
 ) -> list[tuple[int, int, str]]:
     """Walk the program with the commanded (rewritten) position; new word numbers."""
     edits: list[tuple[int, int, str]] = []
+    if opts.decimals is not None:
+        places = opts.decimals
+    else:
+        places = precision(w for m in moves for k, w in m.words.items() if k in "XYZ")
     cmd = [math.nan] * 3
     cycle_z = math.nan
     for move, row, want in zip(moves, rows, desired, strict=True):
@@ -415,7 +426,7 @@ def _gcode_edits(
             if math.isnan(value):
                 new_text = old_text
             elif changed or incremental:
-                new_text = _number_text(old_text, word.value, value, word.decimals, opts.decimals)
+                new_text = _number_text(old_text, word.value, value, places)
             else:
                 new_text = old_text
             if new_text != old_text:
@@ -447,22 +458,28 @@ def _gcode_edits(
 # ---------------------------------------------------------------- files
 
 
-def krl_header(result: Result, command_path: str, cell_path: str, opts: Options) -> list[str]:
-    """DESIGN.md header lines for a rewritten program."""
+def header_lines(result: Result, program: str, cell: str, opts: Options) -> list[str]:
+    """DESIGN.md header: accugrid version, input and grid SHA-256, grid step, largest correction.
+
+    File names only (no directories, no dates), so the same inputs give the same bytes."""
     largest, where = result.largest()
-    return header_lines(
-        "rewrite",
-        command_path,
-        file_sha256(command_path),
-        cell_path,
-        file_sha256(cell_path),
-        opts.model.source_path,
-        opts.model.source_sha256,
-        opts.model.step,
-        largest,
-        None if where is None else f"{where.name} line {where.line}",
-        len(result.corrected),
-    )
+    model = opts.model
+    step = " x ".join(fixed(s) for s in model.step)
+    at = "" if where is None else f" at {where.name} line {where.line}"
+    grid = Path(model.source_path).name if model.source_path else "arrays"
+    return [
+        f"accugrid {__version__} rewrite",
+        f"program {Path(program).name} sha256 {_sha256(program)}",
+        f"cell {Path(cell).name} sha256 {_sha256(cell)}",
+        f"grid {grid} sha256 {model.source_sha256}",
+        f"grid step {step} mm",
+        f"largest correction {fixed(largest)} mm{at}",
+        f"positions corrected {len(result.corrected)}",
+    ]
+
+
+def _sha256(path: str) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def add_header(text: str, lines: list[str], kind: str) -> str:

@@ -33,7 +33,7 @@ from codegen.rewrite import (
     Options,
     add_header,
     dialect,
-    krl_header,
+    header_lines,
     read_program,
     report_csv,
     rewrite_gcode,
@@ -152,7 +152,7 @@ def run(args: argparse.Namespace) -> int:
     for path in inputs:
         text = result.texts[os.fspath(path)]
         if args.header:
-            lines = krl_header(result, os.fspath(path), args.cell, opts)
+            lines = header_lines(result, os.fspath(path), args.cell, opts)
             text = add_header(text, lines, dialect(path))
         files[outputs[path]] = text.encode("latin-1")
     if args.report:
