@@ -4,3 +4,14 @@
 set -eu
 mkdir -p out
 accugrid --version
+
+# Drilling programs: simulated laser-tracker grid (the same command made examples/grid_200mm.csv)
+# -> the example wing-panel holes -> corrected KUKA KRL and G-code.
+accugrid simulate --robot kr210-paper --region 1200 2200 -600 600 1100 2100 --step 200 \
+    --abc 0 90 0 --tool 0 0 250 0 0 0 --repeats 5 --noise-tracker 0.02 --noise-repeat 0.03 \
+    --seed 1 -o out/grid_200mm.csv --force
+cmp out/grid_200mm.csv examples/grid_200mm.csv
+accugrid krl examples/wing_panel_points.csv --cell examples/cell.yaml --grid out/grid_200mm.csv \
+    -o out/krl --force
+accugrid gcode examples/wing_panel_points.csv --cell examples/cell.yaml --grid out/grid_200mm.csv \
+    -o out/wing_panel.ngc --force
