@@ -51,8 +51,12 @@ class Points:
             return "abc"
         return None if self.axis is None else "ijk"
 
+    def name(self, r: int) -> str:
+        """How a message located at hole r's line names it."""
+        return f"hole '{self.ids[r]}'"
+
     def label(self, r: int) -> str:
-        """How messages name hole r: its id and file line."""
+        """How messages name hole r among others: its id and file line."""
         return f"hole '{self.ids[r]}' ({self.path}:{self.lines[r]})"
 
 

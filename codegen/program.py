@@ -146,7 +146,7 @@ def _rotations(points: Points, cell: Cell) -> np.ndarray:
     bad = np.flatnonzero(too_tilted(points.axis, reference))
     if bad.size:
         raise InputError(
-            f"{points.label(int(bad[0]))}: the drill axis i,j,k is more than 150 deg from the "
+            f"{points.name(int(bad[0]))}: the drill axis i,j,k is more than 150 deg from the "
             "reference tool axis (configuration.reference); give a,b,c for this hole or turn "
             "the reference",
             *points.table.where(int(bad[0]), "i"),
@@ -174,7 +174,7 @@ def _correction(points: Points, cell: Cell, grid, holes_robot: np.ndarray) -> np
     worst = int(np.argmax(length)) if len(length) else 0
     if len(length) and length[worst] > MAX_CORRECTION_MM:
         raise InputError(
-            f"{points.label(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
+            f"{points.name(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
             f"limit of {MAX_CORRECTION_MM:g} mm; check the grid and the base frame",
             *points.table.where(worst),
         )
@@ -273,7 +273,7 @@ def _branch_jumps(points: Points, cell: Cell, q: np.ndarray) -> list[str]:
         return []
     hole = int((bad[0] + 1) // q.shape[1])
     message = (
-        f"{points.label(hole)}: an axis turns {jump[bad[0]]:.0f} deg from the previous pose "
+        f"{points.name(hole)}: an axis turns {jump[bad[0]]:.0f} deg from the previous pose "
         f"(more than {MAX_AXIS_JUMP_DEG:g} deg: the robot changes configuration on the way)"
     )
     if not cell.allow_config_change:
@@ -294,7 +294,7 @@ def _fail(points, hole, stage, reason, cell, count=1, status=None, turn=None) ->
     )
     more = f"; {count - 1} more hole(s) fail" if count > 1 else ""
     raise InputError(
-        f"{points.label(hole)}: the {STAGES[stage]} pose is not reachable{config}: {reason}"
+        f"{points.name(hole)}: the {STAGES[stage]} pose is not reachable{config}: {reason}"
         f"{more}{hint}",
         *points.table.where(hole),
     )

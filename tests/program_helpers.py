@@ -1,0 +1,70 @@
+"""Shared inputs for the drilling-program tests: the example cell, its robot, a synthetic grid
+with a known smooth error field, and point sets on the example panel."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from codegen.cell import Cell, load_cell
+from codegen.points import parse_points
+from codegen.textsafe import fixed
+from compensation import GridModel
+from kinematics.robot import load_robot
+
+ROOT = Path(__file__).resolve().parents[1]
+CELL = ROOT / "examples" / "cell.yaml"
+POINTS = ROOT / "examples" / "wing_panel_points.csv"
+
+
+def error_field(p: np.ndarray) -> np.ndarray:
+    """A smooth, clearly non-constant error field e(P) (N, 3) mm for P (N, 3) mm (robot frame)."""
+    u = (p - [1700.0, 0.0, 1600.0]) / 500.0
+    return np.stack(
+        [
+            1.0 + 0.8 * u[:, 0] + 0.3 * u[:, 1] ** 2,
+            -0.5 + 0.6 * u[:, 2],
+            2.0 - 0.7 * u[:, 1] * u[:, 2],
+        ],
+        axis=1,
+    )
+
+
+@lru_cache(maxsize=1)
+def grid() -> GridModel:
+    """Synthetic grid over the demo region (step 200 mm), measured at A 0 B 90 C 0."""
+    axes = [np.arange(1200, 2201, 200.0), np.arange(-600, 601, 200.0), np.arange(1100, 2101, 200.0)]
+    commanded = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    measured = commanded - error_field(commanded)
+    abc = np.tile([0.0, 90.0, 0.0], (len(commanded), 1))
+    return GridModel.from_measurements((commanded, measured, abc))
+
+
+@lru_cache(maxsize=1)
+def cell() -> Cell:
+    return load_cell(CELL)
+
+
+@lru_cache(maxsize=1)
+def robot():
+    return load_robot(cell().robot_name).with_tool(cell().flange_T_tool)
+
+
+def panel_csv(xy: np.ndarray, ids: list[str] | None = None, tilt: float = 4000.0) -> str:
+    """Points CSV text for holes at base (x, y) (N, 2) on the example's curved skin (radius
+    ``tilt`` mm about base Y), i,j,k into the skin."""
+    lines = ["id,x,y,z,i,j,k,diameter,depth"]
+    for n, (x, y) in enumerate(xy):
+        z = np.sqrt(tilt**2 - (x - 287.5) ** 2) - tilt
+        i, k = -(x - 287.5) / tilt, -(z + tilt) / tilt
+        name = ids[n] if ids is not None else f"H{n + 1}"
+        lines.append(
+            f"{name},{fixed(x)},{fixed(y)},{fixed(z, 4)},{fixed(i, 6)},0,{fixed(k, 6)},4.83,7"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def panel_points(xy: np.ndarray, ids: list[str] | None = None):
+    return parse_points(panel_csv(xy, ids), "panel.csv")

@@ -1,0 +1,185 @@
+"""The program model: one grid correction per hole in the right frames, a straight drill axis,
+IK-checked poses with a constant Status, and errors/warnings that name the hole."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from program_helpers import cell, error_field, grid, panel_points, robot
+
+from codegen.points import parse_points
+from codegen.program import STAGES, build_program
+from kinematics.errors import InputError
+from kinematics.frames import pose_from_xyzabc, transform_points
+
+ROWS = np.array([[x, y] for y in (150.0, 450.0) for x in np.arange(0.0, 576.0, 25.0)])
+
+
+def robot_poses(program, stage):
+    """robot_T_tcp (N, 4, 4) of one stage, built independently of the program code."""
+    c = program.cell
+    poses = np.tile(np.eye(4), (len(program), 1, 1))
+    poses[:, :3, :3] = c.robot_T_base[:3, :3] @ program.rotations
+    poses[:, :3, 3] = transform_points(c.robot_T_base, program.positions[:, stage])
+    return poses
+
+
+def test_nominal_positions_lie_on_the_drill_axis():
+    pts = panel_points(ROWS)
+    prog = build_program(pts, cell(), robot(), None)
+    c = cell()
+    axis = prog.rotations[:, :, 2]
+    np.testing.assert_allclose(axis, pts.axis, atol=1e-12)
+    expected = {
+        "APP": pts.xyz - c.approach_mm * axis,
+        "CLR": pts.xyz - c.clearance_mm * axis,
+        "BOT": pts.xyz + 7.0 * axis,  # depth column
+        "RET": pts.xyz - c.retract_mm * axis,
+    }
+    for k, stage in enumerate(STAGES):
+        np.testing.assert_allclose(prog.nominal[:, k], expected[stage], atol=1e-9)
+    # without a grid nothing moves
+    np.testing.assert_array_equal(prog.positions, prog.nominal)
+    assert not prog.corrected and prog.largest_correction()[0] == 0.0
+
+
+def test_every_stage_gets_the_hole_correction():
+    pts = panel_points(ROWS)
+    prog = build_program(pts, cell(), robot(), grid())
+    c = cell()
+    hole_robot = transform_points(c.robot_T_base, pts.xyz)
+    e = grid().predict(hole_robot)  # the grid's own prediction at the hole point
+    np.testing.assert_allclose(prog.correction, e, atol=1e-9)
+    for k in range(4):
+        moved = transform_points(c.robot_T_base, prog.positions[:, k]) - transform_points(
+            c.robot_T_base, prog.nominal[:, k]
+        )
+        np.testing.assert_allclose(moved, e, atol=1e-9)
+    # the field is not constant: the approach point's own error would differ
+    app_robot = transform_points(c.robot_T_base, prog.nominal[:, 0])
+    assert np.abs(grid().predict(app_robot) - e).max() > 1e-3
+    # hence the corrected drill axis is the nominal one, shifted
+    d = prog.positions[:, 2] - prog.positions[:, 0]
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    np.testing.assert_allclose(d, prog.rotations[:, :, 2], atol=1e-12)
+    length, hole = prog.largest_correction()
+    assert length == pytest.approx(np.linalg.norm(e, axis=1).max())
+    assert hole == int(np.argmax(np.linalg.norm(e, axis=1)))
+
+
+def test_correction_iterations_come_from_the_cell():
+    pts = panel_points(ROWS)
+    c = dataclasses.replace(cell(), iterations=3)
+    prog = build_program(pts, c, robot(), grid())
+    hole_robot = transform_points(c.robot_T_base, pts.xyz)
+    np.testing.assert_allclose(
+        prog.correction, grid().correct(hole_robot, iterations=3) - hole_robot, atol=1e-9
+    )
+    once = build_program(pts, cell(), robot(), grid()).correction
+    assert np.abs(prog.correction - once).max() > 1e-4
+
+
+def test_ik_status_constant_and_fk_reproduces_every_pose():
+    pts = panel_points(ROWS)
+    prog = build_program(pts, cell(), robot(), grid())
+    assert prog.status.shape == (len(pts), 4)
+    assert len(set(prog.status.ravel().tolist())) == 1
+    for stage in range(4):
+        poses = robot_poses(prog, stage)
+        sol = robot().ik(poses, status=prog.status[:, stage], turn=prog.turn[:, stage])
+        assert sol.ok.all()
+        np.testing.assert_allclose(robot().fk(sol.q), poses, atol=1e-6)
+    assert prog.warnings == []
+
+
+def test_unreachable_hole_is_named():
+    text = "id,x,y,z,a,b,c\nNEAR,0,150,0,-90,0,180\nFAR-AWAY,0,150,-3000,-90,0,180\n"
+    with pytest.raises(InputError) as info:
+        build_program(parse_points(text, "p.csv"), cell(), robot(), None)
+    assert "hole 'FAR-AWAY'" in info.value.message
+    assert "not reachable" in info.value.message
+    assert (info.value.path, info.value.line) == ("p.csv", 3)
+
+
+def test_hole_outside_the_grid_is_named():
+    # base y 1500 -> robot Z 2500, above the grid (Z 1100..2100) but reachable
+    text = "id,x,y,z,i,j,k\nIN,0,150,0,0,0,-1\nHIGH,0,1200,0,0,0,-1\n"
+    with pytest.raises(InputError) as info:
+        build_program(parse_points(text, "p.csv"), cell(), robot(), grid())
+    assert "1 hole(s) outside the grid box" in info.value.message
+    assert "hole 'HIGH' (p.csv:3)" in info.value.message
+
+
+def test_status_that_cannot_be_kept_is_an_error_unless_allowed():
+    pts = panel_points(ROWS[:3])
+    c = dataclasses.replace(cell(), status=0)  # elbow below the A2-A3 line: A2 beyond its limit
+    with pytest.raises(InputError, match="with Status 0: A2 outside limits") as info:
+        build_program(pts, c, robot(), None)
+    assert "configuration.allow_change" in info.value.message
+    prog = build_program(pts, dataclasses.replace(c, allow_config_change=True), robot(), None)
+    assert any("another Status than 0" in w for w in prog.warnings)
+    assert (prog.status != 0).all()
+
+
+def test_wrist_singularity_warning_names_the_hole():
+    c = cell()
+    r = robot()
+    q = np.radians([[0.0, -90.0, 110.0, 0.0, 1.0, 0.0]])  # A5 = 1 deg
+    pose = r.fk(q)[0]
+    base_T_tcp = np.linalg.inv(c.robot_T_base) @ pose
+    from kinematics.frames import xyzabc_from_pose
+
+    # the hole point is the pose + approach along the tool axis (the APP stage is the pose)
+    x = xyzabc_from_pose(base_T_tcp)
+    hole = x[:3] + c.approach_mm * base_T_tcp[:3, 2]
+    text = "id,x,y,z,a,b,c\nSING-1," + ",".join(f"{v:.6f}" for v in [*hole, *x[3:]]) + "\n"
+    prog = build_program(parse_points(text, "s.csv"), c, r, None)
+    assert len(prog.warnings) == 1
+    assert "wrist singularity" in prog.warnings[0] and "hole 'SING-1'" in prog.warnings[0]
+    np.testing.assert_allclose(pose_from_xyzabc(x)[:3, 3], base_T_tcp[:3, 3], atol=1e-6)
+
+
+def test_orientation_far_from_the_grid_is_a_warning():
+    # drill axis tilted 20 deg away from base -Z (robot +X): still reachable
+    t = np.radians(20)
+    text = f"id,x,y,z,i,j,k\nTILT,100,300,0,{np.sin(t):.6f},0,{-np.cos(t):.6f}\n"
+    prog = build_program(parse_points(text, "t.csv"), cell(), robot(), grid())
+    assert any("from the grid's measured orientation" in w and "TILT" in w for w in prog.warnings)
+
+
+def test_points_without_orientation_are_refused():
+    with pytest.raises(InputError, match="no orientation"):
+        build_program(parse_points("x,y,z\n0,150,0\n", "p.csv"), cell(), robot(), None)
+
+
+def test_program_frame_conversion_keeps_the_robot_pose():
+    pts = panel_points(ROWS[:5])
+    prog = build_program(pts, cell(), robot(), grid())
+    robot_T_program = pose_from_xyzabc(np.array([1500.0, -100.0, 900.0, 30.0, -10.0, 5.0]))
+    pos, abc = prog.in_frame(robot_T_program)
+    poses = np.tile(np.eye(4), (len(prog), 1, 1))
+    poses[:, :3, :3] = pose_from_xyzabc(np.column_stack([pos[:, 0], abc]))[:, :3, :3]
+    poses[:, :3, 3] = pos[:, 0]
+    np.testing.assert_allclose(robot_T_program @ poses, robot_poses(prog, 0), atol=1e-9)
+
+
+@given(
+    st.lists(
+        st.tuples(st.floats(-100, 650), st.floats(100, 550)), min_size=1, max_size=12, unique=True
+    )
+)
+def test_any_panel_point_set_keeps_axis_straight_and_status(xy):
+    pts = panel_points(np.array(xy))
+    prog = build_program(pts, cell(), robot(), grid())
+    d = prog.positions - prog.positions[:, :1]
+    # all four positions on one line along the tool Z axis
+    cross = np.cross(d, prog.rotations[:, None, :, 2])
+    assert np.abs(cross).max() < 1e-9
+    assert len(set(prog.status.ravel().tolist())) == 1
+    np.testing.assert_allclose(
+        prog.correction, error_field(transform_points(cell().robot_T_base, pts.xyz)), atol=0.2
+    )
