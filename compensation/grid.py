@@ -14,7 +14,14 @@ import os
 
 import numpy as np
 
-from compensation.interpolation import blend, corner_indices, idw_weights, locate, trilinear_weights
+from compensation.interpolation import (
+    MAX_POWER,
+    blend,
+    corner_indices,
+    idw_weights,
+    locate,
+    trilinear_weights,
+)
 from compensation.measurements import (
     COORD_TOL_MM,
     REPEAT_TOL_MM,
@@ -123,11 +130,18 @@ class GridModel:
         point gets the error of the nearest point of the box (in the nearest cell).
         """
         _check_options(method, power, outside)
-        points = self._inside(_as_points(points), outside)
+        points = _as_points(points)
+        lo, hi = self.origin[:, None], self.upper[:, None]
         out = np.empty_like(points)
         for start in range(0, len(points), _CHUNK):
-            block = slice(start, start + _CHUNK)
-            out[block] = self._predict_block(points[block], method, power)
+            block = np.ascontiguousarray(points[start : start + _CHUNK].T)  # (3, n)
+            if not (
+                (block.min(axis=1) >= self.origin).all() and (block.max(axis=1) <= self.upper).all()
+            ):
+                if outside == "error":
+                    self._refuse_outside(points)
+                np.clip(block, lo, hi, out=block)
+            out[start : start + _CHUNK] = self._predict_block(block, method, power).T
         return out
 
     def correct(
@@ -149,16 +163,16 @@ class GridModel:
         if int(iterations) != iterations or iterations < 1:
             raise InputError(f"iterations must be a whole number >= 1, got {iterations}")
         points = _as_points(points)
-        inside = self._inside(points, outside)
-        command = points + self.predict(inside, method, power, "clamp")
+        command = points + self.predict(points, method, power, outside)
         for _ in range(int(iterations) - 1):
             command = points + self.predict(command, method, power, "clamp")
         if max_correction_mm is not None and len(points):
-            length = np.linalg.norm(command - points, axis=1)
-            worst = int(np.argmax(length))
-            if length[worst] > max_correction_mm:
+            delta = command - points
+            length2 = np.einsum("ij,ij->i", delta, delta)
+            worst = int(np.argmax(length2))
+            if length2[worst] > max_correction_mm**2:
                 raise InputError(
-                    f"correction of {length[worst]:.3f} mm at point {worst} "
+                    f"correction of {np.sqrt(length2[worst]):.3f} mm at point {worst} "
                     f"{_fmt(points[worst])} exceeds the safety limit of {max_correction_mm:g} mm; "
                     "refusing the whole job (check the grid, or raise the limit)"
                 )
@@ -185,20 +199,19 @@ class GridModel:
             lines.append(f"orientation a,b,c {_fmt(self.orientation_abc)} deg")
         return "\n".join(lines)
 
-    def _inside(self, points: np.ndarray, outside: str) -> np.ndarray:
-        """Points as given when inside; outside ones clamped to the box or an InputError."""
-        inside = self.contains(points)
-        if inside.all() or outside == "clamp":
-            return np.clip(points, self.origin, self.upper)
-        bad = np.flatnonzero(~inside)
-        listed = "; ".join(f"point {i} {_fmt(points[i])}" for i in bad[:5])
-        raise InputError(
-            f"{bad.size} point(s) outside the grid box {_fmt(self.origin)}..{_fmt(self.upper)} "
-            f"mm: {listed} (use outside='clamp' to use the nearest cell)"
-        )
+    def _refuse_outside(self, points: np.ndarray) -> None:
+        """InputError naming the points (N, 3) outside the grid box, if any."""
+        bad = np.flatnonzero(~self.contains(points))
+        if bad.size:
+            listed = "; ".join(f"point {i} {_fmt(points[i])}" for i in bad[:5])
+            raise InputError(
+                f"{bad.size} point(s) outside the grid box {_fmt(self.origin)}.."
+                f"{_fmt(self.upper)} mm: {listed} (use outside='clamp' to use the nearest cell)"
+            )
 
-    def _predict_block(self, points: np.ndarray, method: str, power: float) -> np.ndarray:
-        cell, frac = locate(points, self.origin, self.step, self.counts)
+    def _predict_block(self, points_t: np.ndarray, method: str, power: float) -> np.ndarray:
+        """Predicted error (3, n) at points (3, n) inside the box."""
+        cell, frac = locate(points_t, self.origin, self.step, self.counts)
         if method == "idw":
             weights = idw_weights(frac, self.step, power)
         else:
@@ -211,8 +224,10 @@ def _check_options(method: str, power: float, outside: str) -> None:
         raise InputError(f"unknown method '{method}' (choose {' or '.join(METHODS)})")
     if outside not in OUTSIDE:
         raise InputError(f"unknown outside rule '{outside}' (choose {' or '.join(OUTSIDE)})")
-    if not (np.isfinite(power) and power > 0):
-        raise InputError(f"the inverse-distance power must be > 0, got {power}")
+    if not (0 < power <= MAX_POWER):
+        raise InputError(
+            f"the inverse-distance power must be > 0 and <= {MAX_POWER:g}, got {power}"
+        )
 
 
 def _as_points(points: np.ndarray) -> np.ndarray:

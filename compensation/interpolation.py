@@ -6,8 +6,11 @@ point on a face shared by two cells goes to the upper cell, and the upper bounda
 the last cell. ``frac`` is the local coordinate in the cell, 0..1 per axis inside the grid.
 
 - IDW (seed Eq. 12-13): q_i = s_i^-p / sum_j s_j^-p, s_i the distance (mm) to corner i. At a
-  vertex (s_i = 0) the weight is exactly 1 there and 0 elsewhere. Not continuous across faces.
+  vertex (s_i < 1e-9 of the smallest step) the weight is exactly 1 there and 0 elsewhere.
+  Not continuous across faces. Power 0 < p <= 16.
 - Trilinear: q_i = prod over axes of (f or 1 - f); continuous across faces.
+
+Arrays are axis-major for speed: points and frac (3, N), weights and corner indices (8, N).
 """
 
 from __future__ import annotations
@@ -16,56 +19,68 @@ import numpy as np
 
 # corner bits (8, 3): bx, by, bz of corner c = 4 bx + 2 by + bz
 CORNERS = np.array([[c >> 2 & 1, c >> 1 & 1, c & 1] for c in range(8)])
-_HIT = 1e-12  # a distance below this fraction of the smallest step counts as "at the vertex"
+VERTEX_SNAP = 1e-9  # IDW: closer to a vertex than this fraction of the smallest step = at it
+MAX_POWER = 16.0  # IDW powers above this overflow s^-p for points near a vertex
 
 
 def locate(
-    points: np.ndarray, origin: np.ndarray, step: np.ndarray, counts: np.ndarray
+    points_t: np.ndarray, origin: np.ndarray, step: np.ndarray, counts: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Enclosing cell (N, 3) int64 and local coordinates frac (N, 3) of points (N, 3) mm."""
-    t = (points - origin) / step
+    """Enclosing cell (3, N) int64 and local coordinates frac (3, N) of points (3, N) mm."""
+    t = (points_t - origin[:, None]) / step[:, None]
     cell = np.floor(t)
-    np.clip(cell, 0, counts - 2, out=cell)
-    return cell.astype(np.int64), t - cell
+    np.clip(cell, 0, (counts - 2)[:, None], out=cell)
+    t -= cell
+    return cell.astype(np.int64), t
 
 
 def idw_weights(frac: np.ndarray, step: np.ndarray, power: float = 1.0) -> np.ndarray:
-    """Inverse-distance weights (N, 8) of the cell corners for local coordinates frac (N, 3)."""
-    near = np.square(frac * step)  # squared distance to the lower corner, per axis
-    far = np.square((1.0 - frac) * step)
-    pair = np.stack((near, far), axis=1)  # (N, 2, 3): index 1 = upper corner (b = 1)
-    d2 = (
-        pair[:, :, None, None, 0] + pair[:, None, :, None, 1] + pair[:, None, None, :, 2]
-    ).reshape(-1, 8)
-    hit = d2 <= (_HIT * float(np.min(step))) ** 2
-    with np.errstate(divide="ignore"):
-        inv = 1.0 / np.sqrt(d2) if power == 1.0 else d2 ** (-0.5 * power)
-    at_vertex = hit.any(axis=1)
+    """Inverse-distance weights (8, N) of the cell corners for local coordinates frac (3, N)."""
+    # squared distance per axis to the lower (b = 0) and upper (b = 1) corner
+    side = [(np.square(frac[a] * step[a]), np.square((1.0 - frac[a]) * step[a])) for a in range(3)]
+    inv = np.empty((8, frac.shape[1]))
+    for c, (bx, by, bz) in enumerate(CORNERS):
+        np.add(side[0][bx], side[1][by], out=inv[c])
+        inv[c] += side[2][bz]
+    # at a vertex (distance below 1e-9 of the smallest step, which absorbs the rounding of
+    # (p - origin) / step) that vertex alone: exact there, no division by zero
+    hit = inv <= (VERTEX_SNAP * float(np.min(step))) ** 2
+    at_vertex = hit.any(axis=0)
+    with np.errstate(divide="ignore", over="ignore"):  # only where hit: replaced below
+        if power == 1.0:
+            np.sqrt(inv, out=inv)
+            np.reciprocal(inv, out=inv)
+        else:
+            np.power(inv, -0.5 * power, out=inv)
     if at_vertex.any():
-        inv[at_vertex] = hit[at_vertex]
-    inv /= inv.sum(axis=1, keepdims=True)
+        inv[:, at_vertex] = hit[:, at_vertex]
+    total = inv.sum(axis=0)
+    inv *= 1.0 / total
     return inv
 
 
 def trilinear_weights(frac: np.ndarray) -> np.ndarray:
-    """Trilinear weights (N, 8) of the cell corners for local coordinates frac (N, 3)."""
-    pair = np.stack((1.0 - frac, frac), axis=1)  # (N, 2, 3)
-    return (
-        pair[:, :, None, None, 0] * pair[:, None, :, None, 1] * pair[:, None, None, :, 2]
-    ).reshape(-1, 8)
+    """Trilinear weights (8, N) of the cell corners for local coordinates frac (3, N)."""
+    side = [(1.0 - frac[a], frac[a]) for a in range(3)]
+    out = np.empty((8, frac.shape[1]))
+    for c, (bx, by, bz) in enumerate(CORNERS):
+        np.multiply(side[0][bx], side[1][by], out=out[c])
+        out[c] *= side[2][bz]
+    return out
 
 
 def corner_indices(cell: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """Flat vertex indices (N, 8) of the corners of cells (N, 3); vertices in C order."""
+    """Flat vertex indices (8, N) of the corners of cells (3, N); vertices in C order."""
     ny, nz = int(counts[1]), int(counts[2])
-    base = (cell[:, 0] * ny + cell[:, 1]) * nz + cell[:, 2]
+    base = (cell[0] * ny + cell[1]) * nz + cell[2]
     offsets = (CORNERS[:, 0] * ny + CORNERS[:, 1]) * nz + CORNERS[:, 2]
-    return base[:, None] + offsets
+    return base + offsets[:, None]
 
 
 def blend(values: np.ndarray, corners: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """Sum of weights (N, 8) times per-vertex values (3, M) at corners (N, 8) -> (N, 3)."""
-    out = np.empty((len(corners), 3))
+    """Weighted sum (3, N) of per-vertex values (3, M) at corners (8, N) with weights (8, N)."""
+    out = np.zeros((3, corners.shape[1]))
     for axis in range(3):
-        out[:, axis] = np.einsum("nc,nc->n", weights, values[axis][corners])
+        for c in range(8):
+            out[axis] += weights[c] * values[axis].take(corners[c])
     return out

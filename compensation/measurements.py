@@ -137,7 +137,8 @@ def build_grid(
         listed = "; ".join(_fmt(origin + v * step) for v in ijk)
         raise InputError(
             f"{missing.size} of {n_vertices} grid vertices not measured "
-            f"(grid {_fmt_counts(counts)} at step {_fmt(step)} mm), e.g. {listed}",
+            f"(grid {_fmt_counts(counts)} at step {_fmt(step)} mm), e.g. {listed}"
+            + _sparse_planes(meas, origin, step, counts, index, repeats > 0),
             meas.path,
         )
     error_rows = meas.commanded - meas.measured
@@ -194,6 +195,31 @@ def _detect_axes(
         origin[axis], step[axis], counts[axis] = centres[0], spacing, n_levels
         index[:, axis] = level
     return origin, step, counts, index
+
+
+def _sparse_planes(
+    meas: Measurements,
+    origin: np.ndarray,
+    step: np.ndarray,
+    counts: np.ndarray,
+    index: np.ndarray,
+    measured: np.ndarray,
+) -> str:
+    """'; planes with few vertices (stray points?): ...' for grid planes less than half measured."""
+    covered = measured.reshape(tuple(counts))
+    found = []
+    for axis, name in enumerate("xyz"):
+        per_plane = covered.sum(axis=tuple(a for a in range(3) if a != axis))
+        full = int(np.prod(counts)) // int(counts[axis])
+        for level in np.flatnonzero(per_plane < full / 2):
+            first = int(np.flatnonzero(index[:, axis] == level)[0])
+            found.append(
+                f"{name}={origin[axis] + level * step[axis]:.4f} has {per_plane[level]} of "
+                f"{full} vertices ({meas.where(first)})"
+            )
+    return (
+        "; planes with few vertices (stray points?): " + ", ".join(found[:_SHOW]) if found else ""
+    )
 
 
 def _uneven_message(name: str, centres: np.ndarray, members: np.ndarray, tol: float) -> str:
