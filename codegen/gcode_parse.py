@@ -59,7 +59,7 @@ class GcodeMove:
     incremental: bool  # G91: words are increments
     scale: float  # mm per program unit (25.4 under G20)
     reason: str = ""  # why the move cannot be placed or corrected ("" when it can)
-    rotary: dict[str, float] = field(default_factory=dict)  # A/B/C/U/V/W in effect
+    rotary: dict[str, float] = field(default_factory=dict)  # A/B/C/U/V/W words in effect
     setters: tuple[int | None, int | None, int | None] = (None, None, None)
     # index (in the returned list) of the move that last set each start coordinate
     retract: str = ""  # cycles: "G98" or "G99"
@@ -307,8 +307,6 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
         missing = [k for i, k in enumerate(AXES) if math.isnan(move.target[i])]
         if missing and not reason:
             reason = f"{','.join(missing)} not known here (no absolute value since the start)"
-        if rotary and any(v != 0.0 for v in rotary.values()) and not reason:
-            move.rotary = dict(rotary)
         move.reason = move.reason or reason
         move.end = tuple(pos)
         for i, k in enumerate(AXES):

@@ -11,10 +11,13 @@ Rules (never guess; what cannot be placed is reported with the reason):
   however many motions use it. Unused .dat positions have no base unless ``base_override``.
 - BASE_DATA[n] comes from ``--config-dat`` (if it defines n), else from the cell's ``base`` and
   ``base_data``; base 0 ($NULLFRAME, BAS(#BASE,0)) is the robot frame ($WORLD = $ROBROOT).
-- G-code positions are in the cell's program frame (G54). Axes a line does not write keep their
-  commanded value; the report gives the remaining difference (``residual_mm``). Under G91 the
-  increments are recomputed from the commanded (rewritten) previous position, so every later move
-  lands where it should. Arcs are not corrected and neither is the move that sets an arc's start.
+- G-code positions are in the cell's program frame (G54); A, B, C words are the tool
+  orientation (as ``accugrid gcode`` writes them) and stay as written. A canned cycle's hole
+  (X, Y, Z) is corrected, and its R plane by the Z correction at (X, Y, R). Axes a line does not
+  write keep their commanded value; the report gives the remaining difference (``residual_mm``).
+  Under G91 the increments are recomputed from the commanded (rewritten) previous position, so
+  every later move lands where it should. Arcs are not corrected, nor the moves that set an
+  arc's start.
 - Positions outside the grid box stay as they are (an error with ``strict``).
 """
 
@@ -345,13 +348,6 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
     rows = [Row(path, m.line, m.motion, "skipped", m.reason) for m in moves]
     for m, row in zip(moves, rows, strict=True):
         row.old = np.array(m.target, dtype=float)
-        if not row.reason and m.rotary and not opts.ignore_external_axes:
-            turned = {k: v for k, v in m.rotary.items() if v != 0.0}
-            if turned:
-                k, v = next(iter(turned.items()))
-                row.reason = (
-                    f"rotary axis {k} = {v:g} moves the part (--ignore-external-axes if not)"
-                )
     _protect_arc_starts(moves, rows)
     todo = [i for i, r in enumerate(rows) if not r.reason]
     desired = np.array([m.target for m in moves], dtype=float).reshape(-1, 3)
@@ -367,7 +363,8 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
                 desired[i] = prog[j] + back[j]
             else:
                 rows[i].status, rows[i].reason = "outside", _outside_reason(robot[j])
-    edits = _gcode_edits(text, moves, rows, desired, opts)
+    r_planes = _corrected_r_planes(moves, rows, desired, opts)
+    edits = _gcode_edits(text, moves, rows, desired, r_planes, opts)
     _strict_check(rows, opts)
     return Result({path: splice(text, edits)}, rows)
 
@@ -390,8 +387,37 @@ def _protect_arc_starts(moves: list[GcodeMove], rows: list[Row]) -> None:
                 ].reason = f"sets the start of the arc at line {m.line}, which is not corrected"
 
 
+def _corrected_r_planes(
+    moves: list[GcodeMove], rows: list[Row], desired: np.ndarray, opts: Options
+) -> np.ndarray:
+    """(N,) corrected R plane (mm) of each corrected cycle that writes R; NaN: keep R.
+
+    The R point is (X, Y, R) of the hole; only its Z correction can be written."""
+    out = np.full(len(moves), np.nan)
+    idx = [
+        i
+        for i, (m, r) in enumerate(zip(moves, rows, strict=True))
+        if m.is_cycle and "R" in m.words and r.status == "corrected"
+    ]
+    if idx:
+        pts = np.array([[moves[i].target[0], moves[i].target[1], moves[i].r_mm] for i in idx])
+        t = opts.robot_T_program
+        robot = pts @ t[:3, :3].T + t[:3, 3]
+        inside, corrected = _correct(robot, opts)
+        back = (corrected - robot) @ t[:3, :3]
+        for j, i in enumerate(idx):
+            if inside[j]:
+                out[i] = pts[j, 2] + back[j, 2]
+    return out
+
+
 def _gcode_edits(
-    text: str, moves: list[GcodeMove], rows: list[Row], desired: np.ndarray, opts: Options
+    text: str,
+    moves: list[GcodeMove],
+    rows: list[Row],
+    desired: np.ndarray,
+    r_planes: np.ndarray,
+    opts: Options,
 ) -> list[tuple[int, int, str]]:
     """Walk the program with the commanded (rewritten) position; new word numbers."""
     edits: list[tuple[int, int, str]] = []
@@ -400,8 +426,8 @@ def _gcode_edits(
     else:
         places = precision(w for m in moves for k, w in m.words.items() if k in "XYZ")
     cmd = [math.nan] * 3
-    cycle_z = math.nan
-    for move, row, want in zip(moves, rows, desired, strict=True):
+    cycle_z = r_cmd = math.nan
+    for move, row, want, r_new in zip(moves, rows, desired, r_planes, strict=True):
         if move.motion in ("G28", "G30", "G53"):
             cmd = [math.nan] * 3
             continue
@@ -438,14 +464,23 @@ def _gcode_edits(
                 end[i] = cmd[i] + written
             else:
                 end[i] = written
+        if move.is_cycle and "R" in move.words:
+            word = move.words["R"]
+            old_text = text[word.start : word.end]
+            new_text = old_text
+            if not math.isnan(r_new):
+                new_text = _number_text(old_text, word.value, r_new / move.scale, places)
+            if new_text != old_text:
+                edits.append((word.start, word.end, new_text))
+            r_cmd = float(new_text) * move.scale
         if move.is_cycle:
             reached = [end[0], end[1], cycle_z]
             if move.incremental or math.isnan(move.r_mm):
                 end = [end[0], end[1], math.nan]
             elif move.retract == "G99":
-                end = [end[0], end[1], move.r_mm]
+                end = [end[0], end[1], r_cmd]
             else:
-                end = [end[0], end[1], max(cmd[2], move.r_mm)]
+                end = [end[0], end[1], max(cmd[2], r_cmd)]
         else:
             reached = end
         if changed:

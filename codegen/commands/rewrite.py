@@ -13,7 +13,8 @@ takes the base of the motions that use it ($BASE = BASE_DATA[n], BAS(#BASE,n), F
 BASE_DATA values come from --config-dat or the cell file (base, base_data); base 0 is the robot
 frame. Without a .src (or where a routine starts without setting $BASE), --base N says which
 BASE_DATA the positions are in.
-G-code: positions are in the cell's program_frame (default: its base), G54 active.
+G-code: positions are in the cell's program_frame (default: its base), G54 active; A, B, C
+words are the tool orientation and stay as written.
 
 Output: for one file, -o is the output file (or an existing directory). For a .src/.dat pair,
 -o is a directory (the files keep their names, which KRL needs to match DEF/DEFDAT) or the output
@@ -75,8 +76,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--ignore-external-axes",
         action="store_true",
-        help="correct positions with non-zero E1..E6 (KRL) or A/B/C (G-code): they do not move "
-        "the robot or the part",
+        help="KRL: correct positions with non-zero E1..E6 (the external axes do not move the "
+        "robot or the base)",
     )
     parser.add_argument(
         "--decimals",
