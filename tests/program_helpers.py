@@ -3,6 +3,8 @@ with a known smooth error field, and point sets on the example panel."""
 
 from __future__ import annotations
 
+import csv
+import io
 from functools import lru_cache
 from pathlib import Path
 
@@ -55,15 +57,16 @@ def robot():
 def panel_csv(xy: np.ndarray, ids: list[str] | None = None, tilt: float = 4000.0) -> str:
     """Points CSV text for holes at base (x, y) (N, 2) on the example's curved skin (radius
     ``tilt`` mm about base Y), i,j,k into the skin."""
-    lines = ["id,x,y,z,i,j,k,diameter,depth"]
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["id", "x", "y", "z", "i", "j", "k", "diameter", "depth"])
     for n, (x, y) in enumerate(xy):
         z = np.sqrt(tilt**2 - (x - 287.5) ** 2) - tilt
         i, k = -(x - 287.5) / tilt, -(z + tilt) / tilt
         name = ids[n] if ids is not None else f"H{n + 1}"
-        lines.append(
-            f"{name},{fixed(x)},{fixed(y)},{fixed(z, 4)},{fixed(i, 6)},0,{fixed(k, 6)},4.83,7"
-        )
-    return "\n".join(lines) + "\n"
+        row = [fixed(x), fixed(y), fixed(z, 4), fixed(i, 6), "0", fixed(k, 6), "4.83", "7"]
+        writer.writerow([name, *row])
+    return out.getvalue()
 
 
 def panel_points(xy: np.ndarray, ids: list[str] | None = None):

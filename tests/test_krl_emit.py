@@ -1,0 +1,221 @@
+"""KRL output: round trip through the KRL parser to the printed precision, structure a KR C4
+accepts, harmless user text, splitting into sub-programs, and the `accugrid krl` command."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import shutil
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from program_helpers import CELL, POINTS, ROOT, cell, grid, panel_points, robot
+
+from codegen.cli import main
+from codegen.krl_emit import render_krl
+from codegen.krl_parse import parse_krl
+from codegen.program import build_program
+from kinematics.errors import InputError
+from kinematics.frames import abc_to_matrix
+
+ROWS = np.array([[x, y] for y in (150.0, 175.0, 450.0) for x in np.arange(0.0, 576.0, 25.0)])
+NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*$")
+NASTY = [
+    "A\nEND\nDEF X( )",
+    "B; $OUT[1]=TRUE",
+    "C(x) %{PE} &ACCESS",
+    "D" * 200,
+    'E"\r\n{X 1}',
+]
+
+
+def program_for(xy, ids=None, c=None, corrected=True):
+    return build_program(
+        panel_points(np.asarray(xy), ids), c or cell(), robot(), grid() if corrected else None
+    )
+
+
+def decls(files):
+    """name -> parsed E6POS of every .dat of a job."""
+    out = {}
+    for fname, text in files.items():
+        if fname.endswith(".dat"):
+            for p in parse_krl(text, fname):
+                assert p.kind == "decl" and p.type == "E6POS"
+                out[p.name] = p
+    return out
+
+
+def statements(text):
+    """Code lines with comments and the &ACCESS/&REL header removed, stripped, blanks dropped."""
+    code = (ln.split(";", 1)[0].strip() for ln in text.split("\r\n"))
+    return [ln for ln in code if ln and not ln.startswith("&")]
+
+
+def check_round_trip(program, files):
+    parsed = decls(files)
+    same_ret = program.cell.retract_mm == program.cell.approach_mm
+    stages = ("APP", "CLR", "BOT") if same_ret else ("APP", "CLR", "BOT", "RET")
+    assert len(parsed) == len(program) * len(stages)
+    half = 0.5 * 10.0**-program.cell.decimals + 1e-9
+    for i in range(len(program)):
+        for k, stage in enumerate(stages):
+            p = parsed[f"XH{i + 1}_{stage}"]
+            np.testing.assert_allclose([p.x, p.y, p.z], program.positions[i, k], atol=half, rtol=0)
+            rot = abc_to_matrix(np.array([p.a, p.b, p.c]))
+            # 0.0005 deg per printed angle bounds the rotation error
+            np.testing.assert_allclose(rot, program.rotations[i], atol=3e-5)
+            assert (p.s, p.t) == (program.status[i, k], program.turn[i, k])
+            assert [p.values[f"E{n}"] for n in range(1, 7)] == [0.0] * 6
+
+
+@settings(max_examples=25)
+@given(
+    st.lists(
+        st.tuples(st.floats(-100, 650), st.floats(100, 550)), min_size=1, max_size=15, unique=True
+    )
+)
+def test_round_trip_recovers_every_corrected_pose(xy):
+    program = program_for(xy)
+    files = render_krl(program, ["header"])
+    check_round_trip(program, files)
+
+
+def test_example_structure_a_kr_c4_accepts():
+    program = program_for(ROWS)
+    files = render_krl(program, ["accugrid test header"])
+    assert sorted(files) == ["WING_PANEL.dat", "WING_PANEL.src"]
+    src, dat = files["WING_PANEL.src"], files["WING_PANEL.dat"]
+    for text in (src, dat):
+        assert text.startswith("&ACCESS RVP\r\n&REL 1\r\n; accugrid test header\r\n")
+        assert "\n" not in text.replace("\r\n", "")
+    s = statements(src)
+    assert s[0] == "DEF WING_PANEL( )" and s[-1] == "END"
+    assert "BAS(#INITMOV,0)" in s and "$BASE = BASE_DATA[1]" in s and "$TOOL = TOOL_DATA[1]" in s
+    assert "$OUT[1] = TRUE" in s and s[-2] == "$OUT[1] = FALSE"
+    d = statements(dat)
+    assert d[0] == "DEFDAT WING_PANEL" and d[-1] == "ENDDAT"
+    # every motion goes to a declared position, every declared position is used
+    targets = [ln.split()[1] for ln in s if ln.startswith(("PTP ", "LIN "))]
+    declared = set(decls(files))
+    assert set(targets) == declared
+    assert all(NAME_RE.match(n) and len(n) <= 24 for n in declared)
+    # per hole: PTP travel (approximated), LIN approach, LIN feed, dwell, LIN retract (approximated)
+    assert [ln.split()[0] for ln in s].count("PTP") == len(program)
+    assert s.count("WAIT SEC 0.500") == len(program)
+    assert f"$VEL.CP = {5 / 1000:.4f}" in s  # 5 mm/s feed in m/s
+    assert all(ln.endswith("C_PTP") for ln in s if ln.startswith("PTP"))
+    check_round_trip(program, files)
+
+
+def test_labels_cannot_inject_statements():
+    program = program_for(ROWS[: len(NASTY)], NASTY)
+    plain = program_for(ROWS[: len(NASTY)], [f"H{i}" for i in range(len(NASTY))])
+    files = render_krl(program, ["header"])
+    ref = render_krl(plain, ["header"])
+    for name in files:
+        # the controller sees exactly the statements of a program with plain ids
+        assert statements(files[name]) == statements(ref[name])
+        lines = files[name].split("\r\n")
+        assert len(lines) == len(ref[name].split("\r\n"))
+        for ln in lines:
+            assert len(ln) < 400
+            if ln.startswith("; hole"):
+                assert not re.search(r"[;(%&\"{}]", ln[1:])
+
+
+def test_split_into_sub_programs():
+    c = dataclasses.replace(cell(), lines_per_file=80)
+    program = program_for(ROWS, c=c)
+    files = render_krl(program, ["h1", "h2"])
+    parts = sorted(f[:-4] for f in files if f.endswith(".src") and f != "WING_PANEL.src")
+    assert len(parts) > 1 and parts[0] == "WING_PANEL_001"
+    assert all(n.count("\n") <= 80 for n in files.values())
+    assert all(len(p) <= 24 and NAME_RE.match(p) for p in parts)
+    main_s = statements(files["WING_PANEL.src"])
+    assert [ln for ln in main_s if re.fullmatch(r"WING_PANEL_\d+\( \)", ln)] == [
+        f"{p}( )" for p in parts
+    ]
+    assert "BAS(#INITMOV,0)" in main_s and not any(ln.startswith(("PTP", "LIN")) for ln in main_s)
+    for p in parts:
+        s, d = statements(files[f"{p}.src"]), statements(files[f"{p}.dat"])
+        assert s[0] == f"DEF {p}( )" and d[0] == f"DEFDAT {p}"
+        # each module declares exactly the positions its motions use
+        used = {ln.split()[1] for ln in s if ln.startswith(("PTP ", "LIN "))}
+        assert used == set(decls({f"{p}.dat": files[f"{p}.dat"]}))
+    # holes stay in order across the modules
+    order = [
+        int(re.match(r"XH(\d+)_", ln.split()[1]).group(1))
+        for p in parts
+        for ln in statements(files[f"{p}.src"])
+        if ln.startswith("PTP")
+    ]
+    assert order == list(range(1, len(program) + 1))
+    check_round_trip(program, files)
+
+
+def test_identical_output_for_identical_input():
+    a = render_krl(program_for(ROWS), ["h"])
+    b = render_krl(program_for(ROWS), ["h"])
+    assert a == b
+
+
+def test_user_templates_and_strict_undefined(tmp_path):
+    program = program_for(ROWS[:2])
+    copy = tmp_path / "tpl"
+    shutil.copytree(ROOT / "templates", copy)
+    src = copy / "krl" / "program.src.j2"
+    src.write_text(src.read_text().replace("END\n", "; my shop\nEND\n"))
+    files = render_krl(program, ["h"], copy)
+    assert "; my shop\r\nEND\r\n" in files["WING_PANEL.src"]
+    src.write_text("DEF {{ nmae }}( )\n")
+    with pytest.raises(InputError, match="undefined"):
+        render_krl(program, ["h"], copy)
+    src.write_text("DEF {% if %}\n")
+    with pytest.raises(InputError, match="syntax") as info:
+        render_krl(program, ["h"], copy / "krl")
+    assert info.value.line == 1
+
+
+def run_cli(*args):
+    return main(["krl", str(POINTS), "--cell", str(CELL), *map(str, args)])
+
+
+def test_command_writes_reproducible_files_and_refuses_overwrite(tmp_path, capsys):
+    out = tmp_path / "krl"
+    assert run_cli("-o", out) == 0
+    first = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert sorted(first) == ["WING_PANEL.dat", "WING_PANEL.src"]
+    text = first["WING_PANEL.src"].decode()
+    assert "; grid grid_200mm.csv sha256 " in text and "; largest correction " in text
+    assert run_cli("-o", out) == 2
+    assert "use --force" in capsys.readouterr().err
+    assert run_cli("-o", out, "--force") == 0
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == first
+
+
+def test_command_no_correction_and_grid_override(tmp_path, capsys):
+    assert run_cli("-o", tmp_path / "n", "--no-correction") == 0
+    nominal = (tmp_path / "n" / "WING_PANEL.dat").read_text()
+    assert "largest correction 0.000 mm" in (tmp_path / "n" / "WING_PANEL.src").read_text()
+    assert run_cli("-o", tmp_path / "c") == 0
+    assert (tmp_path / "c" / "WING_PANEL.dat").read_text() != nominal
+    assert run_cli("-o", tmp_path / "x", "--grid", tmp_path / "missing.csv") == 2
+    assert "missing.csv" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
+    assert (
+        run_cli("-o", tmp_path / "y", "--grid", CELL.parent / "grid_200mm.csv", "--no-correction")
+        == 2
+    )
+
+
+def test_command_bad_points_write_nothing(tmp_path, capsys):
+    bad = tmp_path / "p.csv"
+    bad.write_text("id,x,y,z,i,j,k\nA,1,2,3,0,0,-1\nA,4,5,6,0,0,-1\n")
+    out = tmp_path / "o"
+    assert main(["krl", str(bad), "--cell", str(CELL), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"{bad}:3:1: duplicate id 'A'" in err and "Traceback" not in err
+    assert not out.exists()
