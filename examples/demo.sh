@@ -15,3 +15,8 @@ accugrid krl examples/wing_panel_points.csv --cell examples/cell.yaml --grid out
     -o out/krl --force
 accugrid gcode examples/wing_panel_points.csv --cell examples/cell.yaml --grid out/grid_200mm.csv \
     -o out/wing_panel.ngc --force
+
+# The grid model on its own: the same holes in the robot frame -> corrected points CSV
+# (every input column, then x_cmd,y_cmd,z_cmd = P + e and ex,ey,ez = e, mm).
+accugrid correct examples/wing_panel_robot.csv --grid out/grid_200mm.csv \
+    -o out/wing_panel_corrected.csv --force

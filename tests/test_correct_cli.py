@@ -1,0 +1,174 @@
+"""`accugrid correct`: the corrected-points CSV, its summary, and every refusal."""
+
+from __future__ import annotations
+
+import csv
+import io
+
+import numpy as np
+import pytest
+from conftest import EXAMPLES
+
+from codegen.cli import main
+from compensation import GridModel
+
+SHIFT = np.array([0.1, -0.2, 0.3])  # a constant error e = P - M of the synthetic grid
+
+
+def write_grid(tmp_path, abc=(0.0, 90.0, 0.0), shift=SHIFT):
+    """A 3 x 3 x 3 grid (X 1000..1400, Y -200..200, Z 1000..1400) whose error is ``shift``."""
+    lines = ["id,x,y,z,a,b,c,x_meas,y_meas,z_meas"]
+    for x in (1000, 1200, 1400):
+        for y in (-200, 0, 200):
+            for z in (1000, 1200, 1400):
+                meas = np.array([x, y, z]) - shift
+                nums = [x, y, z, *abc, *meas]
+                lines.append("V," + ",".join(f"{v:.4f}" for v in nums))
+    path = tmp_path / "grid.csv"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def write_points(tmp_path, text):
+    path = tmp_path / "points.csv"
+    path.write_text(text)
+    return path
+
+
+def read_rows(path):
+    text = path.read_text()
+    body = [line for line in text.splitlines(keepends=True) if not line.startswith("#")]
+    return list(csv.reader(io.StringIO("".join(body))))
+
+
+def run(tmp_path, points, *extra, grid=None):
+    out = tmp_path / "out.csv"
+    grid = grid or write_grid(tmp_path)
+    code = main(["correct", str(points), "--grid", str(grid), "-o", str(out), *extra])
+    return code, out
+
+
+def test_constant_error_is_added_and_input_columns_are_untouched(tmp_path, capsys):
+    points = write_points(
+        tmp_path,
+        "# two holes\nid,x,y,z,note,a,b,c\n"
+        'H1,1100.5,-12,1399.25,"countersink, 100 deg",0,90,0\n'
+        "H2,1400,200,1000,,0,90,0\n",
+    )
+    code, out = run(tmp_path, points)
+    assert code == 0
+    rows = read_rows(out)
+    assert rows[0] == "id,x,y,z,note,a,b,c,x_cmd,y_cmd,z_cmd,ex,ey,ez,flag".split(",")
+    assert rows[1][:8] == ["H1", "1100.5", "-12", "1399.25", "countersink, 100 deg", "0", "90", "0"]
+    assert rows[1][8:] == ["1100.6000", "-12.2000", "1399.5500", "0.1000", "-0.2000", "0.3000", ""]
+    assert rows[2][8:14] == ["1400.1000", "199.8000", "1000.3000", "0.1000", "-0.2000", "0.3000"]
+    assert out.read_text().startswith("# accugrid correct: grid ")
+    summary = capsys.readouterr().out
+    assert "corrected  2 point(s), idw power 1, 1 iteration" in summary
+    assert "largest correction 0.3742 mm" in summary and "flagged    0 point(s)" in summary
+
+
+def test_the_demo_points_match_the_grid_model(tmp_path):
+    points = EXAMPLES / "wing_panel_robot.csv"
+    grid = EXAMPLES / "grid_200mm.csv"
+    code, out = run(tmp_path, points, "--iterations", "3", "--method", "trilinear", grid=grid)
+    assert code == 0
+    rows = read_rows(out)
+    header, body = rows[0], rows[1:]
+    col = {name: i for i, name in enumerate(header)}
+    xyz = np.array([[float(r[col[n]]) for n in "xyz"] for r in body])
+    cmd = np.array([[float(r[col[n]]) for n in ("x_cmd", "y_cmd", "z_cmd")] for r in body])
+    e = np.array([[float(r[col[n]]) for n in ("ex", "ey", "ez")] for r in body])
+    expected = GridModel.from_measurements(grid).correct(xyz, iterations=3, method="trilinear")
+    np.testing.assert_allclose(cmd, expected, atol=5e-5)
+    np.testing.assert_allclose(cmd - xyz, e, atol=1.1e-4)
+    source = read_rows(points)
+    assert [r[: len(source[0])] for r in body] == source[1:]
+
+
+def test_outside_points_are_named_or_clamped_and_flagged(tmp_path, capsys):
+    points = write_points(tmp_path, "id,x,y,z\nin,1200,0,1200\nfar,1450,0,1200\n")
+    code, out = run(tmp_path, points)
+    err = capsys.readouterr().err
+    assert code == 2 and not out.exists()
+    assert "points.csv:3: 1 point(s) outside the grid box" in err and "hole 'far'" in err
+    code, out = run(tmp_path, points, "--outside", "clamp")
+    assert code == 0
+    rows = read_rows(out)
+    assert rows[2][4:] == ["1450.1000", "-0.2000", "1200.3000", "0.1000", "-0.2000", "0.3000"] + [
+        "outside grid: clamped"
+    ]
+    assert "flagged    1 point(s)" in capsys.readouterr().out
+
+
+def test_safety_limit_refuses_the_job_and_keeps_the_old_output(tmp_path, capsys):
+    grid = write_grid(tmp_path, shift=np.array([4.0, 3.0, 0.0]))  # 5 mm corrections
+    points = write_points(tmp_path, "id,x,y,z\nA,1200,0,1200\n")
+    out = tmp_path / "out.csv"
+    out.write_text("old\n")
+    code, _ = run(tmp_path, points, "--force", grid=grid)
+    assert code == 0  # exactly 5 mm is allowed
+    out.write_text("old\n")
+    code, _ = run(tmp_path, points, "--force", "--max-correction", "4.9", grid=grid)
+    assert code == 2 and out.read_text() == "old\n"
+    assert "correction of 5.000 mm exceeds the safety limit of 4.9 mm" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("orientation", "args", "code", "flag"),
+    [
+        ("0,90,0", [], 0, ""),
+        ("0,83,0", [], 0, "orientation 7.0 deg from grid"),
+        ("20,90,0", [], 2, None),  # 20 deg about robot Z
+        ("0,70,0", ["--allow-orientation"], 0, "orientation 20.0 deg from grid"),
+        ("0,70,0", ["--orientation-limit", "25"], 0, "orientation 20.0 deg from grid"),
+    ],
+)
+def test_orientation_far_from_the_grid_is_flagged_or_refused(
+    tmp_path, capsys, orientation, args, code, flag
+):
+    points = write_points(tmp_path, f"id,x,y,z,a,b,c\nA,1200,0,1200,{orientation}\n")
+    result, out = run(tmp_path, points, *args)
+    assert result == code
+    if code:
+        assert "more than 15 deg from the grid's orientation" in capsys.readouterr().err
+        assert not out.exists()
+    else:
+        assert read_rows(out)[1][-1] == flag
+
+
+def test_drill_axis_orientation_is_compared_with_the_grid_tool_axis(tmp_path):
+    # grid at A 0 B 90 C 0: the tool Z axis (third column of Ry(90 deg)) is robot +X
+    points = write_points(tmp_path, "id,x,y,z,i,j,k\nA,1200,0,1200,2,0,0\nB,1200,0,1200,1,1,0\n")
+    code, out = run(tmp_path, points, "--allow-orientation")
+    assert code == 0
+    flags = [r[-1] for r in read_rows(out)[1:]]
+    assert flags == ["", "orientation 45.0 deg from grid"]
+
+
+@pytest.mark.parametrize(
+    ("points", "args", "message"),
+    [
+        ("x,y,z\n1200,0,1200\n", ["--method", "idw", "--power", "0"], "power must be > 0"),
+        ("x,y,z\n1200,0,1200\n", ["--iterations", "0"], "iterations must be"),
+        ("x,y,z,ex\n1200,0,1200,1\n", [], "column(s) ex would be written"),
+        ("x,y,z\n1200,zero,1200\n", [], "points.csv:2:2: 'zero' in column 'y'"),
+        ("x,y,z\n1200,0,1200\n", ["--max-correction", "0"], "--max-correction must be > 0"),
+    ],
+)
+def test_bad_input_is_one_line_exit_2(tmp_path, capsys, points, args, message):
+    code, out = run(tmp_path, write_points(tmp_path, points), *args)
+    err = capsys.readouterr().err
+    assert code == 2 and not out.exists()
+    assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_existing_output_needs_force_and_inputs_are_never_targets(tmp_path, capsys):
+    points = write_points(tmp_path, "x,y,z\n1200,0,1200\n")
+    out = tmp_path / "out.csv"
+    out.write_text("keep\n")
+    code, _ = run(tmp_path, points)
+    assert code == 2 and out.read_text() == "keep\n"
+    grid = write_grid(tmp_path)
+    code = main(["correct", str(points), "--grid", str(grid), "-o", str(points), "--force"])
+    assert code == 2 and "refusing to overwrite an input file" in capsys.readouterr().err
