@@ -120,3 +120,69 @@ def test_grid_plan_bad_inputs():
         grid_plan((0, 0, 0), (100, 100, 100), 0, (0, 0, 0))
     with pytest.raises(InputError, match="order"):
         grid_plan((0, 0, 0), (100, 100, 100), 50, (0, 0, 0), order="random")
+
+
+# --- the `accugrid plan` command -------------------------------------------------------------
+
+import re  # noqa: E402
+
+from codegen.cli import main  # noqa: E402
+
+
+def test_plan_cube_writes_csv_and_krl(tmp_path, capsys):
+    out = tmp_path / "out"
+    argv = ["plan", "cube", "--centre", "1700", "0", "1500", "--step", "200"]
+    argv += ["--repeats", "2", "-o", str(out), "--wait-input", "7"]
+    assert main(argv) == 0
+    table = parse_table((out / "measure_cube.csv").read_text(), "csv")
+    assert len(table) == 34
+    src = (out / "measure_cube.src").read_text()
+    dat = (out / "measure_cube.dat").read_text()
+    assert src.startswith("&ACCESS RVP\n&REL 1\nDEF measure_cube( )\n")
+    assert "BAS (#INITMOV,0 )" in src and src.rstrip().endswith("END")
+    moves = re.findall(r"^(PTP|LIN) (XMP\d+) ; (\S+)$", src, flags=re.M)
+    assert [m[0] for m in moves] == ["PTP"] + ["LIN"] * 33
+    assert [m[2] for m in moves] == table.text("id")
+    assert src.count("WAIT FOR $IN[7] ; tracker done") == 34
+    pattern = r"^DECL E6POS (XMP\d+)=\{X ([-\d.]+),Y ([-\d.]+),Z ([-\d.]+),"
+    decl = {m[0]: m[1:] for m in re.findall(pattern, dat, re.M)}
+    assert len(decl) == 17  # one declaration per distinct position
+    xyz = table.floats(["x", "y", "z"])
+    for (_, name, _), p in zip(moves, xyz, strict=True):
+        np.testing.assert_allclose([float(v) for v in decl[name]], p, atol=5e-4)
+    assert all(re.fullmatch(r"-?\d+\.\d{3}", v) for d in decl.values() for v in d)
+    assert re.search(r"S \d+,T \d+,", dat)
+    # refuses to overwrite without --force, then works with it
+    assert main(argv) == 2
+    assert main([*argv, "--force"]) == 0
+
+
+def test_plan_grid_reports_path_lengths(tmp_path, capsys):
+    argv = ["plan", "grid", "--region", "1500", "1900", "-200", "200", "1300", "1700"]
+    assert main([*argv, "--step", "200", "-o", str(tmp_path), "--wait-sec", "1.5"]) == 0
+    text = capsys.readouterr().out
+    assert "path 5200.0 mm (serpentine 5200.0 mm, naive raster" in text
+    src = (tmp_path / "measure_grid.src").read_text()
+    assert src.count("WAIT SEC 1.500 ; tracker measures") == 27
+
+
+def test_plan_unreachable_cube_is_input_error(tmp_path, capsys):
+    argv = ["plan", "experiment", "--centre", "FAR", "3500", "0", "1500", "--steps", "20,80"]
+    assert main([*argv, "-o", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "cannot be reached" in err and "FAR_S20_R1_C1" in err
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(
+    "extra, match",
+    [
+        (["--steps", "500:20:60"], "--steps"),
+        (["--steps", "a,b"], "--steps"),
+        (["--wait-sec", "-1"], "--wait-sec"),
+        (["--centre", "D", "1", "2", "x"], "numbers"),
+    ],
+)
+def test_plan_bad_options(tmp_path, capsys, extra, match):
+    assert main(["plan", "experiment", *extra, "-o", str(tmp_path)]) == 2
+    assert match in capsys.readouterr().err

@@ -242,3 +242,59 @@ def test_decision_rule_on_the_seed_table_4_gives_the_seed_choice():
     th = decision.thresholds
     assert 200 < th[0] < 250 and np.isinf(th[1]) and 200 < th[2] < 250
     assert decision.step == 200.0
+
+
+# --- the `accugrid study` command ------------------------------------------------------------
+
+from codegen.cli import main  # noqa: E402
+
+QUICK = ["--centre", "D", "1700", "0", "1500", "--steps", "20:380:120", "--repeats", "2"]
+QUICK += ["--validation-points", "30", "--region", "1500", "1900", "-200", "200", "1300", "1700"]
+
+
+def test_study_cli_simulated(tmp_path, capsys):
+    out = tmp_path / "study"
+    assert main(["study", "--simulate", "kr210-paper", *QUICK, "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "Table 4" in text and "Table 5" in text and "chosen" in text
+    t4 = parse_table((out / "table4.csv").read_text(), "t4")
+    np.testing.assert_allclose(t4.floats(["step_mm"])[:, 0], [20, 140, 260, 380])
+    stats = t4.floats(["max_x", "min_x", "std_x"])
+    assert np.all(stats[:, 0] >= stats[:, 1]) and np.all(stats[:, 2] >= 0)
+    t5 = parse_table((out / "table5.csv").read_text(), "t5")
+    assert t5.text("calibration") == ["before", "after"]
+    before, after = t5.floats(["std_z"])[:, 0]
+    assert after < before
+    for name in ("fig12.png", "table5_hist.png"):
+        assert (out / name).read_bytes().startswith(b"\x89PNG")
+    report = (out / "report.md").read_text()
+    assert "](fig12.png)" in report and "](table5_hist.png)" in report
+    # same settings, same numbers
+    again = tmp_path / "again"
+    assert main(["study", "--simulate", "kr210-paper", *QUICK, "-o", str(again)]) == 0
+    assert (again / "table4.csv").read_bytes() == (out / "table4.csv").read_bytes()
+
+
+def test_study_cli_cube_outside_reach(tmp_path, capsys):
+    argv = ["study", "--simulate", "kr210-paper", "--centre", "FAR", "3400", "0", "1500"]
+    assert main([*argv, "--steps", "20,80", "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "cube of centre FAR at step 20 mm is outside the reach of kr210-paper" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_study_cli_measured(tmp_path, capsys):
+    plan = write(tmp_path, filled_plan_text(steps=(20.0, 140.0, 260.0, 380.0)))
+    assert main(["study", "--measured", str(plan), "-o", str(tmp_path / "m")]) == 0
+    text = capsys.readouterr().out
+    assert "Table 5: not computed (no --validate files given)" in text
+    t4 = parse_table((tmp_path / "m" / "table4.csv").read_text(), "t4")
+    assert len(t4) == 4
+
+
+def test_study_cli_measured_missing_value(tmp_path, capsys):
+    lines = filled_plan_text().splitlines()
+    lines[3] = lines[3][: lines[3].rindex(",")] + ","
+    plan = write(tmp_path, "\n".join(lines) + "\n")
+    assert main(["study", "--measured", str(plan), "-o", str(tmp_path / "m")]) == 2
+    assert "plan.csv:4:" in capsys.readouterr().err

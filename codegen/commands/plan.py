@@ -1,0 +1,379 @@
+"""Write a measurement plan: the positions a laser-tracker operator measures, in order.
+
+  grid        vertices of a regular grid over a region, serpentine (boustrophedon) order: every
+              move goes to a neighbouring vertex, so the path is as short as a grid allows; the
+              path length is printed next to the naive raster order's.
+  cube        one cube's vertices C1..C8 and test points P1..P9 (GB/T 12642-2001 / ISO 9283:1998
+              test points plus the seed's P6..P9, seed Sec. 4.3), --repeats times.
+  experiment  the seed's step experiment (Sec. 4.2, 5): for every centre and step, the cube's 8
+              vertices and 9 test points, --repeats rounds each (default: seed Table 3 centres
+              D-H, steps 20..500 mm every 60, 5 repeats, A B C = 0 90 0).
+
+Outputs in DIR: NAME.csv (id,x,y,z,a,b,c[,centre,step,label,repeat],x_meas,y_meas,z_meas with
+the measured columns empty for the operator) and the KUKA KRL program NAME.src/NAME.dat that
+visits every row with LIN at the fixed orientation (first motion a complete PTP) and waits at
+each for the tracker: WAIT SEC (--wait-sec) or WAIT FOR $IN[n] (--wait-input). Positions are in
+the robot frame ($BASE = $NULLFRAME, i.e. $ROBROOT = $WORLD) unless --base-number names a
+BASE_DATA that equals the robot frame. Every position is checked for reachability with the
+robot's IK (--robot, --tool), which also gives its KUKA S and T. Lengths in mm, angles in deg.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import jinja2
+import numpy as np
+
+from codegen import __version__
+from codegen.atomic import check_targets, write_files
+from codegen.textsafe import comment_text, fixed, krl_identifier
+from compensation.plans import (
+    SEED_ABC,
+    SEED_CENTRES,
+    SEED_REGION,
+    SEED_REPEATS,
+    Plan,
+    cube_plan,
+    experiment_plan,
+    grid_plan,
+)
+from kinematics.errors import InputError
+from kinematics.frames import pose_from_xyzabc
+from kinematics.robot import load_robot
+from kinematics.simulation import commanded_poses
+from templates import TEMPLATE_DIR
+
+NAME = "plan"
+HELP = "measurement plans: grid, one cube's ISO 9283 test points, or the seed's step experiment"
+
+MAX_WAIT_SEC = 600.0
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    sub = parser.add_subparsers(dest="kind", metavar="KIND", required=True)
+    grid = sub.add_parser("grid", help="grid vertices over a region, serpentine order")
+    grid.add_argument(
+        "--region",
+        nargs=6,
+        type=float,
+        metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
+        default=[SEED_REGION[0][0], SEED_REGION[1][0], SEED_REGION[0][1], SEED_REGION[1][1]]
+        + [SEED_REGION[0][2], SEED_REGION[1][2]],
+        help="box in the robot frame, mm (default: the seed's 1000 x 1200 x 1000 mm region "
+        "placed at X 1200..2200, Y -600..600, Z 1100..2100)",
+    )
+    grid.add_argument(
+        "--step",
+        type=float,
+        required=True,
+        metavar="MM",
+        help="grid step, mm; a side that is not a whole number of steps gets the next "
+        "smaller step that is",
+    )
+    grid.add_argument(
+        "--order",
+        choices=["serpentine", "naive"],
+        default="serpentine",
+        help="visiting order (default: serpentine)",
+    )
+    grid.add_argument("--repeats", type=int, default=1, help="rounds over the grid (default: 1)")
+    cube = sub.add_parser("cube", help="one cube's vertices C1..C8 and test points P1..P9")
+    cube.add_argument(
+        "--centre", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"), help="mm"
+    )
+    cube.add_argument("--step", type=float, required=True, metavar="MM", help="cube edge, mm")
+    cube.add_argument(
+        "--repeats", type=int, default=SEED_REPEATS, help=f"rounds (default: {SEED_REPEATS})"
+    )
+    exp = sub.add_parser("experiment", help="the seed's step experiment (Sec. 4.2, 5)")
+    add_experiment_arguments(exp)
+    for p in (grid, cube, exp):
+        _common(p)
+
+
+def add_experiment_arguments(parser: argparse.ArgumentParser) -> None:
+    """--centre/--steps/--repeats as shared by `plan experiment` and `study`."""
+    parser.add_argument(
+        "--centre",
+        nargs=4,
+        action="append",
+        metavar=("NAME", "X", "Y", "Z"),
+        help="a cube centre, mm; repeat for more (default: seed Table 3, D 1700 0 1500, "
+        "E 2000 -350 1800, F 1400 350 1900, G 1400 -350 1400, H 2000 350 1400)",
+    )
+    parser.add_argument(
+        "--steps",
+        default="20:500:60",
+        help="cube steps in mm: FIRST:LAST:INCREMENT or a comma list (default: 20:500:60)",
+    )
+    parser.add_argument(
+        "--repeats",
+        type=int,
+        default=SEED_REPEATS,
+        help=f"measurements of every point (default: {SEED_REPEATS})",
+    )
+
+
+def _common(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--abc",
+        nargs=3,
+        type=float,
+        default=list(SEED_ABC),
+        metavar=("A", "B", "C"),
+        help="fixed TCP orientation, KUKA A B C in deg (default: 0 90 0)",
+    )
+    parser.add_argument(
+        "--robot",
+        default="kr210",
+        help="robot for the reach check and S/T: built-in name or YAML (default: kr210)",
+    )
+    parser.add_argument(
+        "--tool",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "A", "B", "C"),
+        help="measured point (SMR) on the flange, flange_T_tool in mm and deg "
+        "(default: the flange centre)",
+    )
+    parser.add_argument(
+        "--tool-number", type=int, default=1, help="TOOL_DATA index in the program (default: 1)"
+    )
+    parser.add_argument(
+        "--base-number",
+        type=int,
+        default=0,
+        help="BASE_DATA index in the program; 0 = $NULLFRAME, the robot frame (default: 0)",
+    )
+    parser.add_argument(
+        "--vel",
+        type=float,
+        default=0.25,
+        metavar="M_S",
+        help="LIN speed $VEL.CP, m/s (default: 0.25)",
+    )
+    wait = parser.add_mutually_exclusive_group()
+    wait.add_argument(
+        "--wait-sec",
+        type=float,
+        default=3.0,
+        metavar="S",
+        help="dwell at each position for the tracker, s (default: 3)",
+    )
+    wait.add_argument(
+        "--wait-input",
+        type=int,
+        metavar="N",
+        help="instead of a dwell, wait at each position until $IN[N] is TRUE",
+    )
+    parser.add_argument("--name", help="program and file name (default: measure_KIND)")
+    parser.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
+    parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    parser.add_argument(
+        "--templates",
+        type=Path,
+        help="folder with krl/measure.src.j2 and krl/measure.dat.j2 (default: built-in)",
+    )
+
+
+def parse_steps(text: str) -> np.ndarray:
+    """Steps in mm from "FIRST:LAST:INCREMENT" (inclusive) or "S1,S2,..."."""
+    try:
+        if ":" in text:
+            first, last, inc = (float(v) for v in text.split(":"))
+            if inc <= 0 or last < first:
+                raise ValueError
+            steps = np.arange(first, last + 1e-9 * max(1.0, abs(last)), inc)
+        else:
+            steps = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise InputError(
+            f"--steps {text!r}: use FIRST:LAST:INCREMENT (increment > 0) or a comma list of mm"
+        ) from None
+    if not np.all(np.isfinite(steps)) or np.any(steps <= 0):
+        raise InputError(f"--steps {text!r}: steps must be finite and > 0 mm")
+    return steps
+
+
+def parse_centres(items: list[list[str]] | None) -> dict[str, tuple[float, float, float]]:
+    """--centre NAME X Y Z options (None: the seed's D-H)."""
+    if not items:
+        return dict(SEED_CENTRES)
+    centres: dict[str, tuple[float, float, float]] = {}
+    for name, *xyz in items:
+        try:
+            point = tuple(float(v) for v in xyz)
+        except ValueError:
+            raise InputError(f"--centre {name}: X Y Z must be numbers (mm), got {xyz}") from None
+        if name in centres:
+            raise InputError(f"--centre {name} given twice")
+        centres[name] = point
+    return centres
+
+
+def build_plan(args: argparse.Namespace) -> tuple[Plan, list[str]]:
+    """The plan of the chosen kind and lines describing it."""
+    if args.kind == "grid":
+        r = args.region
+        lo, hi = (r[0], r[2], r[4]), (r[1], r[3], r[5])
+        plan = grid_plan(lo, hi, args.step, args.abc)
+        naive = grid_plan(lo, hi, args.step, args.abc, order="naive")
+        if args.order == "naive":
+            plan = naive
+        if int(args.repeats) < 1:
+            raise InputError(f"--repeats must be >= 1, got {args.repeats}")
+        steps = np.unique(np.round(np.diff(np.unique(plan.points[:, 0])), 6))
+        info = [
+            f"grid plan: {len(plan.points)} vertices, {args.order} order",
+            f"path {plan.path_length():.1f} mm (serpentine "
+            f"{grid_plan(lo, hi, args.step, args.abc).path_length():.1f} mm, naive raster "
+            f"{naive.path_length():.1f} mm)",
+        ]
+        if len(steps) and abs(steps[0] - args.step) > 1e-6:
+            info.append(f"note: step shrunk to partition the region exactly, X {steps[0]:.3f} mm")
+        if args.repeats > 1:
+            plan = Plan(
+                np.tile(plan.points, (args.repeats, 1)),
+                plan.abc,
+                [f"{i}_R{r + 1}" for r in range(args.repeats) for i in plan.ids],
+            )
+        return plan, info
+    if args.kind == "cube":
+        plan = cube_plan(args.centre, args.step, args.repeats, args.abc)
+        return plan, [f"cube plan: 8 vertices + 9 test points x {args.repeats} repeats"]
+    centres = parse_centres(args.centre)
+    steps = parse_steps(args.steps)
+    plan = experiment_plan(centres, steps, args.repeats, args.abc)
+    info = [
+        f"experiment plan: {len(centres)} centres x {len(steps)} steps x 17 points x "
+        f"{args.repeats} repeats = {len(plan.points)} rows",
+        f"steps {', '.join(f'{s:g}' for s in steps)} mm, path {plan.path_length():.1f} mm",
+    ]
+    return plan, info
+
+
+def reach(plan: Plan, args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray, str]:
+    """KUKA S and T (N,) of every position; InputError naming the first unreachable one."""
+    robot = load_robot(args.robot)
+    if args.tool is not None:
+        robot = robot.with_tool(pose_from_xyzabc(np.array(args.tool, dtype=float)))
+    sol = robot.ik(commanded_poses(plan.points, plan.abc))
+    if not sol.ok.all():
+        bad = np.flatnonzero(~sol.ok)
+        i = int(bad[0])
+        x, y, z = plan.points[i]
+        raise InputError(
+            f"{len(bad)} of {len(plan.points)} plan positions cannot be reached by {robot.name}; "
+            f"first: {plan.ids[i]} X {x:.3f} Y {y:.3f} Z {z:.3f} ({sol.reason[i]})"
+        )
+    return sol.status, sol.turn, robot.name
+
+
+def environment(template_dir: Path | None) -> jinja2.Environment:
+    root = Path(template_dir) if template_dir is not None else TEMPLATE_DIR
+    env = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(root / "krl")),
+        undefined=jinja2.StrictUndefined,
+        keep_trailing_newline=True,
+        autoescape=False,
+    )
+    env.filters["fixed"] = fixed
+    env.filters["comment"] = comment_text
+    return env
+
+
+def render_krl(
+    plan: Plan,
+    status: np.ndarray,
+    turn: np.ndarray,
+    name: str,
+    header: list[str],
+    args: argparse.Namespace,
+) -> tuple[str, str]:
+    """(.src, .dat) texts: one E6POS per distinct position, one LIN + wait per plan row."""
+    if args.wait_input is not None and not 1 <= args.wait_input <= 4096:
+        raise InputError(f"--wait-input must be an input number 1..4096, got {args.wait_input}")
+    if not 0 <= args.wait_sec <= MAX_WAIT_SEC:
+        raise InputError(f"--wait-sec must be 0..{MAX_WAIT_SEC:g} s, got {args.wait_sec:g}")
+    if not 0 < args.vel <= 2.0:
+        raise InputError(f"--vel must be in (0, 2] m/s, got {args.vel:g}")
+    for option in ("tool_number", "base_number"):
+        value = getattr(args, option)
+        low = 1 if option == "tool_number" else 0
+        if not low <= value <= 32:
+            raise InputError(f"--{option.replace('_', '-')} must be {low}..32, got {value}")
+    unique, index = np.unique(np.round(plan.points, 4), axis=0, return_inverse=True)
+    index = index.reshape(-1)
+    # number the distinct positions in order of first visit
+    first_visit = np.full(len(unique), len(plan.points))
+    np.minimum.at(first_visit, index, np.arange(len(plan.points)))
+    rank = np.empty(len(unique), dtype=int)
+    rank[np.argsort(first_visit)] = np.arange(len(unique))
+    names = [f"XMP{k + 1}" for k in range(len(unique))]
+    rows_of = first_visit[np.argsort(first_visit)]
+    a, b, c = plan.abc
+    points = [
+        {
+            "name": names[k],
+            "x": plan.points[r, 0],
+            "y": plan.points[r, 1],
+            "z": plan.points[r, 2],
+            "a": a,
+            "b": b,
+            "c": c,
+            "s": int(status[r]),
+            "t": int(turn[r]),
+        }
+        for k, r in enumerate(rows_of)
+    ]
+    moves = [
+        {"point": names[rank[index[r]]], "label": plan.ids[r]} for r in range(len(plan.points))
+    ]
+    env = environment(args.templates)
+    context = {
+        "name": name,
+        "header": header,
+        "tool": args.tool_number,
+        "base": args.base_number,
+        "vel_cp": args.vel,
+        "wait_sec": args.wait_sec,
+        "wait_input": args.wait_input,
+        "moves": moves,
+        "points": points,
+    }
+    try:
+        src = env.get_template("measure.src.j2").render(context)
+        dat = env.get_template("measure.dat.j2").render(context)
+    except jinja2.TemplateError as exc:
+        raise InputError(f"template error: {exc}", getattr(exc, "filename", None)) from None
+    return src, dat
+
+
+def run(args: argparse.Namespace) -> int:
+    plan, info = build_plan(args)
+    name = krl_identifier(args.name or f"measure_{args.kind}", prefix="M")
+    out = Path(args.output)
+    targets = {out / f"{name.lower()}.{ext}": None for ext in ("csv", "src", "dat")}
+    check_targets(targets, force=args.force)
+    status, turn, robot_name = reach(plan, args)
+    if args.wait_input is not None:
+        wait = f"WAIT FOR $IN[{args.wait_input}]"
+    else:
+        wait = f"WAIT SEC {fixed(args.wait_sec)}"
+    header = [
+        f"accugrid {__version__} plan {args.kind}",
+        "inputs none, positions generated from the command-line settings",
+        *info,
+        f"orientation A B C {' '.join(fixed(v) for v in plan.abc)} deg, robot {robot_name}",
+        "largest correction 0.000 mm, measurement positions are not corrected",
+        f"{len(plan.points)} positions, first by PTP, then LIN, each followed by {wait}",
+    ]
+    src, dat = render_krl(plan, status, turn, name, header, args)
+    paths = list(targets)
+    write_files({paths[0]: plan.csv_text(), paths[1]: src, paths[2]: dat}, force=args.force)
+    for line in info:
+        print(line)
+    print(f"wrote {', '.join(str(p) for p in paths)}")
+    return 0

@@ -1,0 +1,428 @@
+"""The statistical grid-step study of the seed (Sec. 4.2-4.4, Sec. 5): choose the largest grid
+step whose compensated error meets the tolerance, then validate it (Tables 4-5, Fig. 12).
+
+For every step, each centre's cube is modelled from its 8 vertices (IDW, seed Eq. 12-13), its 9
+test points (GB/T 12642 / ISO 9283 positions plus the seed's P6-P9) are corrected (Eq. 14), and
+the remaining error r = target - reached is summarised over all centres per axis: max, min and
+standard deviation (Table 4; max/min are the mean over repeat rounds of each round's max/min,
+the seed's rule). Cubic curves of max and min against the step give each axis's threshold step
+(where a curve leaves +-tolerance, Fig. 12). The chosen step is the largest tested step within
+every threshold whose measured max/min lie in the band and whose standard deviation is
+"relatively small": std <= --std-fraction x tolerance on every axis. Table 5: a grid at that step
+over the whole --region, errors before/after correction at --validation-points random points.
+
+Inputs: --simulate ROBOT (a built-in or YAML robot with parameter errors; tracker and
+repeatability noise, seeded) or --measured FILE (the `accugrid plan experiment` CSV with
+x_meas,y_meas,z_meas filled in; its test points measured without correction, so r is
+(P - M) - e_pred(P), the first-order effect of the correction). With --measured, Table 5 needs
+--validate GRID POINTS: the measurement CSV of the grid at the chosen step and a CSV of random
+points (x,y,z,x_meas,y_meas,z_meas) measured without correction.
+
+Outputs in DIR: table4.csv, table5.csv, fig12.png, table5_hist.png, report.md. Lengths in mm,
+angles in degrees.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import time
+from pathlib import Path
+
+import numpy as np
+
+from codegen.atomic import check_targets, write_files
+from codegen.commands.plan import add_experiment_arguments, parse_centres, parse_steps
+from codegen.progress import progress
+from compensation.csvtable import read_table
+from compensation.grid import GridModel
+from compensation.plans import SEED_ABC, SEED_REGION
+from compensation.study import (
+    AXES,
+    DEFAULT_STD_FRACTION,
+    DEFAULT_TOLERANCE_MM,
+    REPEAT_RULES,
+    StudyResult,
+    Summary,
+    Validation,
+    analyse,
+    design,
+    measured_residuals,
+    read_experiment,
+    simulate_study,
+    simulate_validation,
+)
+from kinematics.errors import InputError
+from kinematics.frames import pose_from_xyzabc
+from kinematics.robot import Robot, load_robot
+from kinematics.simulation import commanded_poses, simulate_measurements
+
+NAME = "study"
+HELP = "grid-step study of the seed (Tables 4-5, Fig. 12): simulated or measured"
+
+OUTPUTS = ("table4.csv", "table5.csv", "fig12.png", "table5_hist.png", "report.md")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument(
+        "--simulate",
+        metavar="ROBOT",
+        help="simulate ROBOT (built-in name or YAML), e.g. kr210-paper",
+    )
+    source.add_argument(
+        "--measured", metavar="FILE", help="filled-in `accugrid plan experiment` CSV"
+    )
+    add_experiment_arguments(parser)
+    parser.add_argument(
+        "--abc",
+        nargs=3,
+        type=float,
+        default=list(SEED_ABC),
+        metavar=("A", "B", "C"),
+        help="simulated TCP orientation, KUKA A B C in deg (default: 0 90 0)",
+    )
+    parser.add_argument(
+        "--tool",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "A", "B", "C"),
+        help="simulated tool, flange_T_tool in mm and deg (default: the flange)",
+    )
+    parser.add_argument(
+        "--noise-tracker",
+        type=float,
+        default=0.02,
+        metavar="MM",
+        help="simulated tracker noise, Gaussian sigma per axis, mm (default: 0.02)",
+    )
+    parser.add_argument(
+        "--noise-repeat",
+        type=float,
+        default=0.03,
+        metavar="MM",
+        help="simulated robot repeatability, Gaussian sigma per axis, mm (default: 0.03)",
+    )
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    r = SEED_REGION
+    parser.add_argument(
+        "--region",
+        nargs=6,
+        type=float,
+        metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
+        default=[r[0][0], r[1][0], r[0][1], r[1][1], r[0][2], r[1][2]],
+        help="validation region in the robot frame, mm (default: the seed's 1000 x 1200 x 1000 "
+        "mm region placed at X 1200..2200, Y -600..600, Z 1100..2100)",
+    )
+    parser.add_argument(
+        "--tolerance",
+        type=float,
+        default=DEFAULT_TOLERANCE_MM,
+        metavar="MM",
+        help=f"accuracy requirement +-MM per axis (default: {DEFAULT_TOLERANCE_MM})",
+    )
+    parser.add_argument(
+        "--std-fraction",
+        type=float,
+        default=DEFAULT_STD_FRACTION,
+        metavar="F",
+        help="'relatively small' standard deviation: std <= F x tolerance on every axis "
+        f"(default: {DEFAULT_STD_FRACTION})",
+    )
+    parser.add_argument(
+        "--repeat-rule",
+        choices=REPEAT_RULES,
+        default=REPEAT_RULES[0],
+        help="how repeats enter max/min: the seed's mean of per-round extremes (default) or "
+        "extremes of per-point means",
+    )
+    parser.add_argument(
+        "--validation-points",
+        type=int,
+        default=200,
+        metavar="N",
+        help="random points for Table 5 in simulation (default: 200)",
+    )
+    parser.add_argument(
+        "--validate",
+        nargs=2,
+        metavar=("GRID", "POINTS"),
+        help="with --measured: grid measurement CSV at the chosen step and measured random points",
+    )
+    parser.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
+    parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
+
+
+def simulated_measure(robot: Robot, abc: np.ndarray, args: argparse.Namespace):
+    """measure(points, repeats, stream) for compensation.study, seeded per stream."""
+
+    def measure(points: np.ndarray, repeats: int, stream: int) -> np.ndarray:
+        _, measured = simulate_measurements(
+            robot,
+            points,
+            abc,
+            repeats,
+            args.noise_tracker,
+            args.noise_repeat,
+            seed=args.seed * 1000 + stream,
+        )
+        return measured
+
+    return measure
+
+
+def check_reach(robot: Robot, names, centres, steps, abc) -> None:
+    """InputError naming the first cube point the robot cannot reach at abc."""
+    cubes = design(names, centres, steps)
+    points = np.concatenate([cubes.vertex_cmd, cubes.test_target], axis=2)  # (C, S, 17, 3)
+    sol = robot.ik(commanded_poses(points.reshape(-1, 3), abc))
+    if sol.ok.all():
+        return
+    i = int(np.flatnonzero(~sol.ok)[0])
+    c, s, k = np.unravel_index(i, points.shape[:3])
+    label = f"C{k + 1}" if k < 8 else f"P{k - 7}"
+    x, y, z = points[c, s, k]
+    raise InputError(
+        f"cube of centre {names[c]} at step {steps[s]:g} mm is outside the reach of "
+        f"{robot.name}: {label} X {x:.3f} Y {y:.3f} Z {z:.3f} ({sol.reason[i]}); "
+        "move the centre or drop the step"
+    )
+
+
+def _region(args) -> tuple[np.ndarray, np.ndarray]:
+    r = args.region
+    return np.array([r[0], r[2], r[4]]), np.array([r[1], r[3], r[5]])
+
+
+def measured_validation(grid_path: str, points_path: str) -> Validation:
+    """Table 5 from measurements: errors before (P - M) and after (P - M - e_pred(P))."""
+    model = GridModel.from_measurements(grid_path)
+    table = read_table(points_path)
+    table.require(["x", "y", "z", "x_meas", "y_meas", "z_meas"])
+    if not len(table):
+        raise InputError("no validation points", table.path, 1)
+    points = table.floats(["x", "y", "z"])
+    measured = table.floats(["x_meas", "y_meas", "z_meas"])
+    outside = np.flatnonzero(~model.contains(points))
+    if outside.size:
+        raise InputError(
+            f"{outside.size} validation points lie outside the grid", *table.where(int(outside[0]))
+        )
+    before = (points - measured)[:, None, :]
+    after = before - model.predict(points)[:, None, :]
+    return Validation(float(model.step.max()), points, before, after, model)
+
+
+def _fmt(v: float) -> str:
+    return f"{v:.3f}"
+
+
+def text_table(header: list[str], rows: list[list[str]]) -> str:
+    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(header)]
+    line = lambda cells: "  ".join(c.rjust(w) for c, w in zip(cells, widths, strict=True))  # noqa: E731
+    return "\n".join([line(header), line(["-" * w for w in widths])] + [line(r) for r in rows])
+
+
+STAT_HEADER = [f"{k} {a}" for k in ("max", "min", "std") for a in AXES]
+
+
+def _stat_cells(row: Summary) -> list[str]:
+    return [_fmt(v) for v in (*row.max, *row.min, *row.std)]
+
+
+def table4(result: StudyResult) -> tuple[list[str], list[list[str]]]:
+    rows = [[f"{s:g}", *_stat_cells(r)] for s, r in zip(result.steps, result.table, strict=True)]
+    return ["step mm", *STAT_HEADER], rows
+
+
+def table5(before: Summary, after: Summary) -> tuple[list[str], list[list[str]]]:
+    return ["", *STAT_HEADER], [["before", *_stat_cells(before)], ["after", *_stat_cells(after)]]
+
+
+def csv_text(header: list[str], rows: list[list[str]]) -> str:
+    names = [h.replace(" mm", "_mm").replace(" ", "_").lower() or "calibration" for h in header]
+    return "\n".join([",".join(names)] + [",".join(r) for r in rows]) + "\n"
+
+
+def _png(fig) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110, metadata={"Software": None})
+    return buf.getvalue()
+
+
+def plot_fig12(result: StudyResult) -> bytes:
+    """Seed Fig. 12: max/min error against step per axis, cubic curves, tolerance band."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    tol = result.tolerance_mm
+    steps = result.steps
+    dense = np.linspace(steps.min(), steps.max(), 300)
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), sharey=True)
+    for a, ax in enumerate(axes):
+        ax.axhspan(-tol, tol, color="tab:green", alpha=0.08, label=f"±{tol:g} mm")
+        ax.axhline(tol, color="tab:green", lw=0.8)
+        ax.axhline(-tol, color="tab:green", lw=0.8)
+        ax.plot(steps, [r.max[a] for r in result.table], "o", color="tab:red", label="max")
+        ax.plot(steps, [r.min[a] for r in result.table], "s", color="tab:blue", label="min")
+        ax.plot(dense, result.max_curves[a](dense), "-", color="tab:red", lw=1)
+        ax.plot(dense, result.min_curves[a](dense), "-", color="tab:blue", lw=1)
+        th = result.decision.thresholds[a]
+        if np.isfinite(th):
+            ax.axvline(th, color="gray", ls=":", label=f"threshold {th:.0f} mm")
+        if result.decision.step is not None:
+            ax.axvline(result.decision.step, color="black", ls="--", label="chosen step")
+        ax.set_title(f"{AXES[a]} after compensation")
+        ax.set_xlabel("grid step (mm)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="best", framealpha=0.6)
+    axes[0].set_ylabel("remaining error (mm)")
+    fig.tight_layout()
+    data = _png(fig)
+    plt.close(fig)
+    return data
+
+
+def plot_hist(validation: Validation) -> bytes:
+    """Table 5 before/after histograms per axis (all samples)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    before = validation.before.reshape(-1, 3)
+    after = validation.after.reshape(-1, 3)
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    for a, ax in enumerate(axes):
+        lo = min(before[:, a].min(), after[:, a].min())
+        hi = max(before[:, a].max(), after[:, a].max())
+        bins = np.linspace(lo, hi, 40)
+        ax.hist(before[:, a], bins=bins, alpha=0.6, label="before", color="tab:orange")
+        ax.hist(after[:, a], bins=bins, alpha=0.6, label="after", color="tab:blue")
+        ax.set_title(f"{AXES[a]} error at validation points")
+        ax.set_xlabel("error (mm)")
+        ax.legend(fontsize=8)
+    axes[0].set_ylabel("samples")
+    fig.tight_layout()
+    data = _png(fig)
+    plt.close(fig)
+    return data
+
+
+def _md_table(header: list[str], rows: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
+
+
+def run(args: argparse.Namespace) -> int:
+    out = Path(args.output)
+    targets = [out / name for name in OUTPUTS]
+    inputs = [p for p in [args.measured, *(args.validate or [])] if p]
+    check_targets(targets, inputs=inputs, force=args.force)
+    if args.validate and not args.measured:
+        raise InputError("--validate goes with --measured (simulation validates by itself)")
+    lo, hi = _region(args)
+    started = time.perf_counter()
+    settings: list[str] = []
+    if args.simulate:
+        robot = load_robot(args.simulate)
+        if args.tool is not None:
+            robot = robot.with_tool(pose_from_xyzabc(np.array(args.tool, dtype=float)))
+        abc = np.array(args.abc, dtype=float)
+        centres = parse_centres(args.centre)
+        names, xyz = list(centres), np.array(list(centres.values()), dtype=float)
+        steps = parse_steps(args.steps)
+        check_reach(robot, names, xyz, steps, abc)
+        measure = simulated_measure(robot, abc, args)
+        cubes, residuals = simulate_study(measure, names, xyz, steps, args.repeats, progress)
+        settings += [
+            f"simulated robot {robot.name}, A B C {' '.join(f'{v:g}' for v in abc)} deg",
+            f"noise: tracker {args.noise_tracker:g} mm, repeatability {args.noise_repeat:g} mm "
+            f"(sigma per axis), seed {args.seed}",
+        ]
+    else:
+        cubes = read_experiment(args.measured)
+        residuals = measured_residuals(cubes, progress)
+        settings.append(f"measured plan {Path(args.measured).name} (test points uncorrected)")
+    result = analyse(cubes, residuals, args.tolerance, args.std_fraction, args.repeat_rule)
+    settings += [
+        "centres "
+        + ", ".join(
+            f"{n} ({', '.join(f'{v:g}' for v in c)})"
+            for n, c in zip(cubes.names, cubes.centres, strict=True)
+        ),
+        f"steps {', '.join(f'{s:g}' for s in cubes.steps)} mm, {cubes.repeats} repeats, "
+        f"tolerance +-{args.tolerance:g} mm, std fraction {args.std_fraction:g}, "
+        f"repeat rule {args.repeat_rule}",
+    ]
+    validation = None
+    step = result.decision.step
+    if step is not None and args.simulate:
+        validation = simulate_validation(
+            measure, lo, hi, step, args.repeats, args.validation_points, seed=args.seed
+        )
+    elif step is not None and args.validate:
+        validation = measured_validation(*args.validate)
+    elapsed = time.perf_counter() - started
+
+    h4, r4 = table4(result)
+    print("Table 4: remaining error after compensation per cube step (mm)")
+    print(text_table(h4, r4))
+    print()
+    for reason in result.decision.reasons:
+        print(reason)
+    files: dict[Path, str | bytes] = {out / "table4.csv": csv_text(h4, r4)}
+    files[out / "fig12.png"] = plot_fig12(result)
+    report = [
+        "# Grid-step study (accugrid study)",
+        "",
+        *[f"- {s}" for s in settings],
+        f"- validation region X {lo[0]:g}..{hi[0]:g}, Y {lo[1]:g}..{hi[1]:g}, "
+        f"Z {lo[2]:g}..{hi[2]:g} mm",
+        f"- study time {elapsed:.2f} s",
+        "",
+        "## Table 4: remaining error after compensation (mm)",
+        "",
+        _md_table(h4, r4),
+        "",
+        "## Decision (seed Sec. 4.4)",
+        "",
+        *[f"- {r}" for r in result.decision.reasons],
+        "",
+        "![Fig. 12: error-step curves](fig12.png)",
+        "",
+        "## Table 5: validation at the chosen step (mm)",
+        "",
+    ]
+    if validation is not None:
+        before, after = validation.table(args.repeat_rule)
+        h5, r5 = table5(before, after)
+        steps_used = " x ".join(f"{s:.3f}" for s in validation.model.step)
+        print()
+        print(
+            f"Table 5: {len(validation.points)} random points, grid step {steps_used} mm "
+            f"({int(np.prod(validation.model.counts))} vertices)"
+        )
+        print(text_table(h5, r5))
+        files[out / "table5.csv"] = csv_text(h5, r5)
+        files[out / "table5_hist.png"] = plot_hist(validation)
+        report += [
+            f"{len(validation.points)} random points; grid step {steps_used} mm, "
+            f"{int(np.prod(validation.model.counts))} vertices.",
+            "",
+            _md_table(h5, r5),
+            "",
+            "![Table 5 histograms](table5_hist.png)",
+        ]
+    else:
+        why = "no step chosen" if step is None else "no --validate files given"
+        print(f"\nTable 5: not computed ({why})")
+        files[out / "table5.csv"] = "calibration\n"
+        report.append(f"Not computed ({why}).")
+        files.pop(out / "table5_hist.png", None)
+    files[out / "report.md"] = "\n".join(report) + "\n"
+    written = write_files(files, inputs=inputs, force=args.force)
+    print(f"\nstudy time {elapsed:.2f} s; wrote {', '.join(str(p) for p in written)}")
+    return 0
