@@ -139,6 +139,14 @@ def _common(parser: argparse.ArgumentParser) -> None:
         "(default: the flange centre)",
     )
     parser.add_argument(
+        "--status",
+        type=int,
+        choices=range(8),
+        metavar="S",
+        help="KUKA Status (0..7) for every position (default: the IK default configuration "
+        "at the first position)",
+    )
+    parser.add_argument(
         "--tool-number", type=int, default=1, help="TOOL_DATA index in the program (default: 1)"
     )
     parser.add_argument(
@@ -254,21 +262,29 @@ def build_plan(args: argparse.Namespace) -> tuple[Plan, list[str]]:
     return plan, info
 
 
-def reach(plan: Plan, args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray, str]:
-    """KUKA S and T (N,) of every position; InputError naming the first unreachable one."""
+def reach(plan: Plan, args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray, str, int]:
+    """KUKA S and T (N,) of every position in one Status (--status, or the IK default at the
+    first position): LIN moves keep the configuration of the first PTP, so the whole plan must
+    be reachable in it. InputError naming the first position that is not."""
     robot = load_robot(args.robot)
     if args.tool is not None:
         robot = robot.with_tool(pose_from_xyzabc(np.array(args.tool, dtype=float)))
-    sol = robot.ik(commanded_poses(plan.points, plan.abc))
+    poses = commanded_poses(plan.points, plan.abc)
+    status = args.status
+    if status is None:
+        first = robot.ik(poses[:1])
+        status = int(first.status[0]) if first.ok[0] else None
+    sol = robot.ik(poses, status=status)
     if not sol.ok.all():
         bad = np.flatnonzero(~sol.ok)
         i = int(bad[0])
         x, y, z = plan.points[i]
         raise InputError(
-            f"{len(bad)} of {len(plan.points)} plan positions cannot be reached by {robot.name}; "
-            f"first: {plan.ids[i]} X {x:.3f} Y {y:.3f} Z {z:.3f} ({sol.reason[i]})"
+            f"{len(bad)} of {len(plan.points)} plan positions cannot be reached by {robot.name}"
+            f"{'' if status is None else f' in Status {status}'}; first: {plan.ids[i]} "
+            f"X {x:.3f} Y {y:.3f} Z {z:.3f} ({sol.reason[i]})"
         )
-    return sol.status, sol.turn, robot.name
+    return sol.status, sol.turn, robot.name, int(status)
 
 
 def environment(template_dir: Path | None) -> jinja2.Environment:
@@ -357,7 +373,7 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     targets = {out / f"{name.lower()}.{ext}": None for ext in ("csv", "src", "dat")}
     check_targets(targets, force=args.force)
-    status, turn, robot_name = reach(plan, args)
+    status, turn, robot_name, config = reach(plan, args)
     if args.wait_input is not None:
         wait = f"WAIT FOR $IN[{args.wait_input}]"
     else:
@@ -366,7 +382,8 @@ def run(args: argparse.Namespace) -> int:
         f"accugrid {__version__} plan {args.kind}",
         "inputs none, positions generated from the command-line settings",
         *info,
-        f"orientation A B C {' '.join(fixed(v) for v in plan.abc)} deg, robot {robot_name}",
+        f"orientation A B C {' '.join(fixed(v) for v in plan.abc)} deg, robot {robot_name}, "
+        f"Status {config}",
         "largest correction 0.000 mm, measurement positions are not corrected",
         f"{len(plan.points)} positions, first by PTP, then LIN, each followed by {wait}",
     ]

@@ -55,7 +55,7 @@ from compensation.study import (
 from kinematics.errors import InputError
 from kinematics.frames import pose_from_xyzabc
 from kinematics.robot import Robot, load_robot
-from kinematics.simulation import commanded_poses, simulate_measurements
+from kinematics.simulation import commanded_poses
 
 NAME = "study"
 HELP = "grid-step study of the seed (Tables 4-5, Fig. 12): simulated or measured"
@@ -104,6 +104,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="simulated robot repeatability, Gaussian sigma per axis, mm (default: 0.03)",
     )
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    parser.add_argument(
+        "--status",
+        type=int,
+        choices=range(8),
+        metavar="S",
+        help="KUKA Status (0..7) the simulated robot keeps for every point, as a program of LIN "
+        "moves does (default: the IK default configuration at the first centre)",
+    )
     r = SEED_REGION
     parser.add_argument(
         "--region",
@@ -153,39 +161,55 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 
-def simulated_measure(robot: Robot, abc: np.ndarray, args: argparse.Namespace):
-    """measure(points, repeats, stream) for compensation.study, seeded per stream."""
+def simulated_measure(robot: Robot, abc: np.ndarray, status: int, args: argparse.Namespace):
+    """measure(points, repeats, stream) for compensation.study, seeded per stream.
+
+    Like kinematics.simulation.simulate_measurements (nominal IK, true FK, repeatability then
+    tracker noise), but every point is reached in one KUKA Status, as a KRL program that starts
+    with one PTP and continues with LIN keeps its configuration. (The IK default picks the wrist
+    solution with |A4| <= 90 deg point by point, which flips the wrist inside a cube near A5 = 0
+    and makes the simulated error field jump there.)
+    """
+    true = robot.true_robot() or robot
 
     def measure(points: np.ndarray, repeats: int, stream: int) -> np.ndarray:
-        _, measured = simulate_measurements(
-            robot,
-            points,
-            abc,
-            repeats,
-            args.noise_tracker,
-            args.noise_repeat,
-            seed=args.seed * 1000 + stream,
-        )
-        return measured
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        sol = robot.ik(commanded_poses(points, abc), status=status)
+        if not sol.ok.all():
+            i = int(np.flatnonzero(~sol.ok)[0])
+            x, y, z = points[i]
+            raise InputError(
+                f"{robot.name} cannot reach X {x:.3f} Y {y:.3f} Z {z:.3f} in Status {status} "
+                f"({sol.reason[i]})"
+            )
+        reached = np.repeat(true.fk(sol.q)[:, :3, 3], repeats, axis=0)
+        rng = np.random.default_rng(args.seed * 1000 + stream)
+        reached = reached + rng.normal(0.0, args.noise_repeat, reached.shape)
+        return reached + rng.normal(0.0, args.noise_tracker, reached.shape)
 
     return measure
 
 
-def check_reach(robot: Robot, names, centres, steps, abc) -> None:
-    """InputError naming the first cube point the robot cannot reach at abc."""
+def check_reach(robot: Robot, names, centres, steps, abc, status) -> int:
+    """The KUKA Status of the whole study (``status``, or the IK default at the first centre)
+    after checking that every cube point is reachable in it; InputError naming the first cube
+    point that is not."""
     cubes = design(names, centres, steps)
+    if status is None:
+        first = robot.ik(commanded_poses(np.asarray(centres[:1], dtype=float), abc))
+        status = int(first.status[0]) if first.ok[0] else None
     points = np.concatenate([cubes.vertex_cmd, cubes.test_target], axis=2)  # (C, S, 17, 3)
-    sol = robot.ik(commanded_poses(points.reshape(-1, 3), abc))
+    sol = robot.ik(commanded_poses(points.reshape(-1, 3), abc), status=status)
     if sol.ok.all():
-        return
+        return int(status)
     i = int(np.flatnonzero(~sol.ok)[0])
     c, s, k = np.unravel_index(i, points.shape[:3])
     label = f"C{k + 1}" if k < 8 else f"P{k - 7}"
     x, y, z = points[c, s, k]
     raise InputError(
         f"cube of centre {names[c]} at step {steps[s]:g} mm is outside the reach of "
-        f"{robot.name}: {label} X {x:.3f} Y {y:.3f} Z {z:.3f} ({sol.reason[i]}); "
-        "move the centre or drop the step"
+        f"{robot.name}: {label} X {x:.3f} Y {y:.3f} Z {z:.3f} ({sol.reason[i]}"
+        f"{'' if status is None else f', Status {status}'}); move the centre or drop the step"
     )
 
 
@@ -334,11 +358,12 @@ def run(args: argparse.Namespace) -> int:
         centres = parse_centres(args.centre)
         names, xyz = list(centres), np.array(list(centres.values()), dtype=float)
         steps = parse_steps(args.steps)
-        check_reach(robot, names, xyz, steps, abc)
-        measure = simulated_measure(robot, abc, args)
+        status = check_reach(robot, names, xyz, steps, abc, args.status)
+        measure = simulated_measure(robot, abc, status, args)
         cubes, residuals = simulate_study(measure, names, xyz, steps, args.repeats, progress)
         settings += [
-            f"simulated robot {robot.name}, A B C {' '.join(f'{v:g}' for v in abc)} deg",
+            f"simulated robot {robot.name}, A B C {' '.join(f'{v:g}' for v in abc)} deg, "
+            f"KUKA Status {status} throughout",
             f"noise: tracker {args.noise_tracker:g} mm, repeatability {args.noise_repeat:g} mm "
             f"(sigma per axis), seed {args.seed}",
         ]
