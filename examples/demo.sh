@@ -20,3 +20,11 @@ accugrid gcode examples/wing_panel_points.csv --cell examples/cell.yaml --grid o
 # (every input column, then x_cmd,y_cmd,z_cmd = P + e and ex,ey,ez = e, mm).
 accugrid correct examples/wing_panel_robot.csv --grid out/grid_200mm.csv \
     -o out/wing_panel_corrected.csv --force
+
+# Planning and choosing the step (seed Sec. 4-5), quick version: one centre, four steps.
+# The tracker plan (CSV + KRL measurement program), then the study on the simulated robot:
+# Table 4, the chosen step, Table 5, Fig. 12 and a report in out/study/.
+accugrid plan experiment --centre D 1700 0 1500 --steps 20:380:120 --repeats 3 \
+    -o out/plan --force
+accugrid study --simulate kr210-paper --centre D 1700 0 1500 --steps 20:380:120 --repeats 3 \
+    --region 1500 1900 -200 200 1300 1700 --validation-points 50 -o out/study --force
