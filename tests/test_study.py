@@ -298,3 +298,12 @@ def test_study_cli_measured_missing_value(tmp_path, capsys):
     plan = write(tmp_path, "\n".join(lines) + "\n")
     assert main(["study", "--measured", str(plan), "-o", str(tmp_path / "m")]) == 2
     assert "plan.csv:4:" in capsys.readouterr().err
+
+
+def test_study_cli_option_errors(tmp_path, capsys):
+    plan = write(tmp_path, filled_plan_text())
+    argv = ["study", "--measured", str(plan), "-o", str(tmp_path / "m")]
+    assert main([*argv, "--validation-step", "200"]) == 2
+    assert "--validation-step goes with --simulate" in capsys.readouterr().err
+    assert main(["study", "--simulate", "kr210-paper", "--steps", "100", "-o", str(tmp_path)]) == 2
+    assert "two steps" in capsys.readouterr().err

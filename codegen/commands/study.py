@@ -152,6 +152,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="random points for Table 5 in simulation (default: 200)",
     )
     parser.add_argument(
+        "--validation-step",
+        type=float,
+        metavar="MM",
+        help="in simulation, validate a grid at this step instead of the chosen one "
+        "(e.g. 200 to compare with the seed's Table 5)",
+    )
+    parser.add_argument(
         "--validate",
         nargs=2,
         metavar=("GRID", "POINTS"),
@@ -384,6 +391,12 @@ def run(args: argparse.Namespace) -> int:
     ]
     validation = None
     step = result.decision.step
+    if args.validation_step is not None:
+        if not args.simulate:
+            raise InputError("--validation-step goes with --simulate")
+        if not args.validation_step > 0:
+            raise InputError(f"--validation-step must be > 0 mm, got {args.validation_step:g}")
+        step = args.validation_step
     if step is not None and args.simulate:
         validation = simulate_validation(
             measure, lo, hi, step, args.repeats, args.validation_points, seed=args.seed
@@ -426,15 +439,16 @@ def run(args: argparse.Namespace) -> int:
         h5, r5 = table5(before, after)
         steps_used = " x ".join(f"{s:.3f}" for s in validation.model.step)
         print()
+        chosen = "" if step == result.decision.step else " (--validation-step, not the chosen)"
         print(
-            f"Table 5: {len(validation.points)} random points, grid step {steps_used} mm "
+            f"Table 5: {len(validation.points)} random points, grid step {steps_used} mm{chosen} "
             f"({int(np.prod(validation.model.counts))} vertices)"
         )
         print(text_table(h5, r5))
         files[out / "table5.csv"] = csv_text(h5, r5)
         files[out / "table5_hist.png"] = plot_hist(validation)
         report += [
-            f"{len(validation.points)} random points; grid step {steps_used} mm, "
+            f"{len(validation.points)} random points; grid step {steps_used} mm{chosen}, "
             f"{int(np.prod(validation.model.counts))} vertices.",
             "",
             _md_table(h5, r5),
