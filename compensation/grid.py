@@ -70,6 +70,7 @@ class GridModel:
         self.source_path = source_path
         self.repeats = repeats
         self.spread_mm = float(spread_mm)
+        self.errors.flags.writeable = False  # predict works from the copy below
         # per-axis vertex values (3, nx*ny*nz), contiguous for the gathers in predict
         self._values = np.ascontiguousarray(self.errors.reshape(-1, 3).T)
 
