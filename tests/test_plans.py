@@ -127,6 +127,7 @@ def test_grid_plan_bad_inputs():
 import re  # noqa: E402
 
 from codegen.cli import main  # noqa: E402
+from codegen.krl_parse import parse_krl  # noqa: E402
 
 
 def test_plan_cube_writes_csv_and_krl(tmp_path, capsys):
@@ -136,10 +137,13 @@ def test_plan_cube_writes_csv_and_krl(tmp_path, capsys):
     assert main(argv) == 0
     table = parse_table((out / "measure_cube.csv").read_text(), "csv")
     assert len(table) == 34
+    raw = (out / "measure_cube.src").read_bytes()
+    assert raw.count(b"\r\n") == raw.count(b"\n")  # CRLF, like the drilling programs
     src = (out / "measure_cube.src").read_text()
     dat = (out / "measure_cube.dat").read_text()
-    assert src.startswith("&ACCESS RVP\n&REL 1\nDEF measure_cube( )\n")
-    assert "BAS (#INITMOV,0 )" in src and src.rstrip().endswith("END")
+    assert src.startswith("&ACCESS RVP\n&REL 1\n; accugrid ")
+    assert "\nDEF measure_cube( )\n" in src and "BAS(#INITMOV,0)" in src
+    assert src.rstrip().endswith("END") and "$BASE = $NULLFRAME" in src
     moves = re.findall(r"^(PTP|LIN) (XMP\d+) ; (\S+)$", src, flags=re.M)
     assert [m[0] for m in moves] == ["PTP"] + ["LIN"] * 33
     assert [m[2] for m in moves] == table.text("id")
@@ -151,7 +155,10 @@ def test_plan_cube_writes_csv_and_krl(tmp_path, capsys):
     for (_, name, _), p in zip(moves, xyz, strict=True):
         np.testing.assert_allclose([float(v) for v in decl[name]], p, atol=5e-4)
     assert all(re.fullmatch(r"-?\d+\.\d{3}", v) for d in decl.values() for v in d)
-    assert re.search(r"S \d+,T \d+,", dat)
+    assert len(set(re.findall(r",S (\d+),T ", dat))) == 1  # one Status for the whole plan
+    # the REWRITE engineer's KRL parser reads every declared position back
+    parsed = [p for p in parse_krl(dat, "measure_cube.dat") if p.kind == "decl"]
+    assert sorted(p.name for p in parsed) == sorted(decl)
     # refuses to overwrite without --force, then works with it
     assert main(argv) == 2
     assert main([*argv, "--force"]) == 0

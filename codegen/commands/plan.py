@@ -23,12 +23,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import jinja2
 import numpy as np
 
 from codegen import __version__
 from codegen.atomic import check_targets, write_files
-from codegen.textsafe import comment_text, fixed, krl_identifier
+from codegen.render import environment, render, template_dir
+from codegen.textsafe import fixed, krl_identifier
 from compensation.plans import (
     SEED_ABC,
     SEED_CENTRES,
@@ -43,7 +43,6 @@ from kinematics.errors import InputError
 from kinematics.frames import pose_from_xyzabc
 from kinematics.robot import load_robot
 from kinematics.simulation import commanded_poses
-from templates import TEMPLATE_DIR
 
 NAME = "plan"
 HELP = "measurement plans: grid, one cube's ISO 9283 test points, or the seed's step experiment"
@@ -156,6 +155,13 @@ def _common(parser: argparse.ArgumentParser) -> None:
         help="BASE_DATA index in the program; 0 = $NULLFRAME, the robot frame (default: 0)",
     )
     parser.add_argument(
+        "--ptp-percent",
+        type=int,
+        default=20,
+        metavar="P",
+        help="speed of the first PTP, percent of maximum (default: 20)",
+    )
+    parser.add_argument(
         "--vel",
         type=float,
         default=0.25,
@@ -182,7 +188,8 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--templates",
         type=Path,
-        help="folder with krl/measure.src.j2 and krl/measure.dat.j2 (default: built-in)",
+        help="copy of the templates folder (or of its krl/) with measure.src.j2 and "
+        "measure.dat.j2 (default: built-in)",
     )
 
 
@@ -287,19 +294,6 @@ def reach(plan: Plan, args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray,
     return sol.status, sol.turn, robot.name, int(status)
 
 
-def environment(template_dir: Path | None) -> jinja2.Environment:
-    root = Path(template_dir) if template_dir is not None else TEMPLATE_DIR
-    env = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(root / "krl")),
-        undefined=jinja2.StrictUndefined,
-        keep_trailing_newline=True,
-        autoescape=False,
-    )
-    env.filters["fixed"] = fixed
-    env.filters["comment"] = comment_text
-    return env
-
-
 def render_krl(
     plan: Plan,
     status: np.ndarray,
@@ -313,6 +307,8 @@ def render_krl(
         raise InputError(f"--wait-input must be an input number 1..4096, got {args.wait_input}")
     if not 0 <= args.wait_sec <= MAX_WAIT_SEC:
         raise InputError(f"--wait-sec must be 0..{MAX_WAIT_SEC:g} s, got {args.wait_sec:g}")
+    if not 1 <= args.ptp_percent <= 100:
+        raise InputError(f"--ptp-percent must be 1..100, got {args.ptp_percent}")
     if not 0 < args.vel <= 2.0:
         raise InputError(f"--vel must be in (0, 2] m/s, got {args.vel:g}")
     for option in ("tool_number", "base_number"):
@@ -347,23 +343,21 @@ def render_krl(
     moves = [
         {"point": names[rank[index[r]]], "label": plan.ids[r]} for r in range(len(plan.points))
     ]
-    env = environment(args.templates)
+    env = environment(template_dir("krl", args.templates), newline="\r\n")
     context = {
         "name": name,
         "header": header,
         "tool": args.tool_number,
         "base": args.base_number,
+        "ptp_percent": args.ptp_percent,
         "vel_cp": args.vel,
         "wait_sec": args.wait_sec,
         "wait_input": args.wait_input,
         "moves": moves,
         "points": points,
     }
-    try:
-        src = env.get_template("measure.src.j2").render(context)
-        dat = env.get_template("measure.dat.j2").render(context)
-    except jinja2.TemplateError as exc:
-        raise InputError(f"template error: {exc}", getattr(exc, "filename", None)) from None
+    src = render(env, "measure.src.j2", **context)
+    dat = render(env, "measure.dat.j2", **context)
     return src, dat
 
 
