@@ -66,6 +66,24 @@ def test_weights_are_non_negative_and_sum_to_one(frac, step, power):
         np.testing.assert_allclose(weights.sum(axis=0), 1.0, rtol=0, atol=1e-12)
 
 
+@given(
+    arrays(float, (3, 30), elements=st.sampled_from([0.0, 1.0]) | st.floats(0.0, 1.0)),
+    st.tuples(*[st.floats(0.5, 500.0)] * 3),
+    st.floats(0.25, 6.0),
+)
+def test_idw_weights_are_seed_eq_12(frac, step, power):
+    """q_i = (1/s_i^p) / sum_j (1/s_j^p) from brute-force corner distances; one-hot within the
+    documented 1e-9 steps of a vertex."""
+    step = np.array(step)
+    s = np.linalg.norm((frac.T * step)[:, None, :] - CORNERS * step, axis=2)  # (30, 8) mm
+    at_vertex = s.min(axis=1) <= 1e-9 * step.min()
+    s_far = s[~at_vertex]
+    expected = np.zeros_like(s)
+    expected[~at_vertex] = s_far**-power / (s_far**-power).sum(axis=1, keepdims=True)
+    expected[at_vertex, s[at_vertex].argmin(axis=1)] = 1.0
+    np.testing.assert_allclose(idw_weights(frac, step, power).T, expected, rtol=1e-9, atol=1e-15)
+
+
 @given(st.data(), grids(), st.sampled_from(METHODS))
 def test_prediction_within_its_cells_vertex_range(data, model, method):
     name, power = method
