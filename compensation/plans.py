@@ -149,6 +149,11 @@ CUBE_LABELS = VERTEX_LABELS + TEST_LABELS
 CUBE_ORDER = _cube_order()
 
 
+def _mm_text(value: float) -> str:
+    """A length for ids and the step column: 4 decimals without trailing zeros ("200", "12.5")."""
+    return f"{value:.4f}".rstrip("0").rstrip(".")
+
+
 def _name(name: str) -> str:
     text = str(name).strip()
     if not text or any(ch in text for ch in ',"\r\n#'):
@@ -189,7 +194,7 @@ def experiment_plan(
     per_cube = repeats * len(CUBE_ORDER)
     labels = np.array(CUBE_LABELS)[CUBE_ORDER]
     col_centre = [n for n in names for _ in range(n_s * per_cube)]
-    col_step = [f"{s:g}" for s in stp for _ in range(per_cube)]
+    col_step = [_mm_text(s) for s in stp for _ in range(per_cube)]
     col_label = [str(lab) for _ in range(n_c * n_s * repeats) for lab in labels]
     col_rep = [str(r + 1) for _ in range(n_c * n_s) for r in range(repeats) for _ in labels]
     ids = [

@@ -193,3 +193,8 @@ def test_plan_unreachable_cube_is_input_error(tmp_path, capsys):
 def test_plan_bad_options(tmp_path, capsys, extra, match):
     assert main(["plan", "experiment", *extra, "-o", str(tmp_path)]) == 2
     assert match in capsys.readouterr().err
+
+
+def test_experiment_step_column_keeps_precision():
+    plan = experiment_plan({"A": (1700, 0, 1500)}, [12.5, 1234567.0], 1, (0, 90, 0))
+    assert sorted(set(plan.extra["step"])) == ["12.5", "1234567"]

@@ -307,3 +307,28 @@ def test_study_cli_option_errors(tmp_path, capsys):
     assert "--validation-step goes with --simulate" in capsys.readouterr().err
     assert main(["study", "--simulate", "kr210-paper", "--steps", "100", "-o", str(tmp_path)]) == 2
     assert "two steps" in capsys.readouterr().err
+
+
+def test_study_cli_measured_with_validation(tmp_path, capsys):
+    from compensation.plans import grid_plan
+    from compensation.study import random_points
+
+    grid = grid_plan((1500, -300, 1300), (1900, 300, 1700), 100.0, (0, 90, 0))
+    meas = grid.points - smooth_field(grid.points)
+    lines = grid.csv_text().splitlines()
+    body = [
+        ln[:-2] + ",".join(f"{v:.4f}" for v in m) for ln, m in zip(lines[1:], meas, strict=True)
+    ]
+    grid_csv = write(tmp_path, "\n".join([lines[0], *body]) + "\n", "grid.csv")
+    pts = random_points((1500, -300, 1300), (1900, 300, 1700), 40, seed=5)
+    rows = [
+        ",".join(f"{v:.4f}" for v in (*p, *(p - e)))
+        for p, e in zip(pts, smooth_field(pts), strict=True)
+    ]
+    points_csv = write(tmp_path, "x,y,z,x_meas,y_meas,z_meas\n" + "\n".join(rows) + "\n", "pts.csv")
+    plan = write(tmp_path, filled_plan_text(steps=(20.0, 140.0, 260.0, 380.0)))
+    argv = ["study", "--measured", str(plan), "--validate", str(grid_csv), str(points_csv)]
+    assert main([*argv, "-o", str(tmp_path / "m")]) == 0
+    t5 = parse_table((tmp_path / "m" / "table5.csv").read_text(), "t5")
+    (bx, bz), (ax, az) = t5.floats(["std_x", "std_z"])
+    assert ax < 0.2 * bx and az < 0.5 * bz
