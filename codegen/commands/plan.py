@@ -14,8 +14,10 @@ the measured columns empty for the operator) and the KUKA KRL program NAME.src/N
 visits every row with LIN at the fixed orientation (first motion a complete PTP) and waits at
 each for the tracker: WAIT SEC (--wait-sec) or WAIT FOR $IN[n] (--wait-input). Positions are in
 the robot frame ($BASE = $NULLFRAME, i.e. $ROBROOT = $WORLD) unless --base-number names a
-BASE_DATA that equals the robot frame. Every position is checked for reachability with the
-robot's IK (--robot, --tool), which also gives its KUKA S and T. Lengths in mm, angles in deg.
+BASE_DATA that equals the robot frame. Every position is checked with the robot's IK (--robot,
+--tool) in one KUKA Status for the whole plan (--status; default: the IK default at the first
+position), since LIN moves keep the first PTP's configuration; the IK also gives each E6POS its T.
+Lengths in mm, angles in deg, speeds in m/s.
 """
 
 from __future__ import annotations
