@@ -55,16 +55,28 @@ def test_repeats_are_averaged_and_the_grid_is_reported(tmp_path):
     assert "vertices 3x2x2 = 12" in text and "repeats    5..5" in text
 
 
-@given(st.randoms(use_true_random=False), st.integers(1, 3))
-def test_row_order_and_repeat_count_do_not_matter(rnd, repeats):
-    points = grid_rows((2, 3, 2))
+@given(
+    st.randoms(use_true_random=False),
+    st.integers(1, 3),
+    st.tuples(*[st.integers(2, 4)] * 3),
+    st.tuples(*[st.floats(5.0, 500.0)] * 3),
+    st.tuples(*[st.floats(-3000.0, 3000.0)] * 3),
+)
+def test_any_regular_grid_is_found_whatever_the_row_order(rnd, repeats, counts, step, origin):
+    points = grid_rows(counts, step, origin)
     error = np.arange(points.size, dtype=float).reshape(points.shape) * 0.01
     commanded = np.repeat(points, repeats, axis=0)
+    # commanded coordinates jitter by up to 2e-4 mm (a controller's rounding): still one vertex
+    jitter = np.array([rnd.uniform(-2e-4, 2e-4) for _ in range(commanded.size)])
+    commanded = commanded + jitter.reshape(commanded.shape)
     measured = commanded - np.repeat(error, repeats, axis=0)
     order = list(range(len(commanded)))
     rnd.shuffle(order)
     model = GridModel.from_measurements((commanded[order], measured[order]))
-    np.testing.assert_allclose(model.errors.reshape(-1, 3), error, atol=1e-12)
+    np.testing.assert_array_equal(model.counts, counts)
+    np.testing.assert_allclose(model.step, step, atol=2e-4)
+    np.testing.assert_allclose(model.origin, origin, atol=2e-4)
+    np.testing.assert_allclose(model.errors.reshape(-1, 3), error, atol=1e-9)
     assert model.orientation_abc is None and model.source_sha256 is None
 
 
