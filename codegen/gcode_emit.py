@@ -9,38 +9,42 @@ header). Per hole: ``G0`` to the approach point with A B C; where the drill axis
 height, then ``G0 Z`` to the retract point if that differs. Otherwise explicit moves along the
 drill axis: ``G1`` to the clearance point at approach speed, ``G1`` to the bottom at the feed,
 ``G4`` dwell, ``G1`` back to the retract point at approach speed. Feeds are mm/min (``G94``).
+
+Numbers go through ``fixed`` only: per-hole numbers are formatted once in Python
+(``program.decimals`` for mm and deg, 1 decimal for F) and reach the template as text; the
+template formats its scalar settings with the ``fixed`` filter.
 """
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import NamedTuple
-
-import numpy as np
 
 from codegen.program import Program
 from codegen.render import environment, render, template_dir
+from codegen.textsafe import fixed
 
 
 class GcodeHole(NamedTuple):
+    """One hole; coordinates (X, Y, Z), A B C and the feed already formatted by ``fixed``."""
+
     label: str
-    app: tuple[float, float, float]
-    clr: tuple[float, float, float]
-    bot: tuple[float, float, float]
-    ret: tuple[float, float, float]
-    abc: tuple[float, float, float]
-    feed_mm_min: float
+    app: tuple[str, str, str]
+    clr: tuple[str, str, str]
+    bot: tuple[str, str, str]
+    ret: tuple[str, str, str]
+    abc: tuple[str, str, str]
+    feed: str  # mm/min
     canned: bool
     retract_move: bool
 
 
-def canned_holes(positions: np.ndarray, decimals: int) -> np.ndarray:
-    """(N,) bool: holes whose four positions (N, 4, 3) share X, Y at ``decimals`` and go down in
-    Z from approach over clearance to bottom (the drill axis is the program's -Z)."""
-    scale = 10.0**decimals
-    xy = np.round(positions[:, :, :2] * scale)
-    same_xy = (xy == xy[:, :1]).all(axis=(1, 2))
-    z = positions[:, :, 2]
-    return same_xy & (z[:, 0] > z[:, 1]) & (z[:, 1] > z[:, 2]) & (z[:, 3] > z[:, 1])
+def canned(coords: list[tuple[str, str, str]], z: list[float]) -> bool:
+    """A hole's four formatted positions (APP, CLR, BOT, RET) allow a canned cycle: the same
+    printed X and Y, and Z going down from approach over clearance to the bottom (the drill axis
+    is the program's -Z), with the retract above the clearance."""
+    xy = {c[:2] for c in coords}
+    return len(xy) == 1 and z[0] > z[1] > z[2] and z[3] > z[1]
 
 
 def render_gcode(program: Program, header: list[str], templates=None) -> str:
@@ -48,14 +52,22 @@ def render_gcode(program: Program, header: list[str], templates=None) -> str:
     cell = program.cell
     env = environment(template_dir("gcode", templates))
     pos, abc = program.in_frame(cell.robot_T_program)
-    canned = canned_holes(pos, cell.decimals) & cell.canned_cycles
-    scale = 10.0**cell.decimals
-    retract_move = np.round(pos[:, 3, 2] * scale) != np.round(pos[:, 0, 2] * scale)
     labels = program.labels()
-    coords, angles = pos.tolist(), abc.tolist()
-    feeds = (program.feed_mm_s * 60.0).tolist()
+    d = cell.decimals
+    number = lru_cache(maxsize=4096)(fixed)  # feeds repeat
+    coords = [[tuple(fixed(v, d) for v in p) for p in hole] for hole in pos.tolist()]
+    angles = [tuple(fixed(v, d) for v in a) for a in abc.tolist()]
+    feeds = [number(f, 1) for f in (program.feed_mm_s * 60.0).tolist()]
+    heights = pos[:, :, 2].tolist()
     holes = [
-        GcodeHole(label, *coords[i], angles[i], feeds[i], bool(canned[i]), bool(retract_move[i]))
+        GcodeHole(
+            label,
+            *coords[i],
+            angles[i],
+            feeds[i],
+            cell.canned_cycles and canned(coords[i], heights[i]),
+            coords[i][3][2] != coords[i][0][2],
+        )
         for i, label in enumerate(labels)
     ]
     return render(

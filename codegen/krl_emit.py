@@ -3,8 +3,9 @@
 Templates ``program.src.j2`` and ``program.dat.j2`` (``templates/krl/``), rendered with CRLF line
 ends as the controller's own files have. Position names are ``XH<n>_APP|CLR|BOT|RET`` (n = hole
 number in the file, so always valid and unique, at most 24 characters); the hole id goes into a
-comment. Numbers go through ``fixed`` only: mm and deg with ``program.decimals``, speeds in m/s with
-4 decimals, S and T as integers.
+comment. Numbers go through ``fixed`` only: per-hole numbers are formatted once in Python (mm and
+deg with ``program.decimals``, $VEL.CP in m/s with 4 decimals, S and T as integers) and reach the
+template as text; the template formats its scalar settings with the ``fixed`` filter.
 
 Splitting: when a job would make a ``.src`` or ``.dat`` longer than ``program.lines_per_file``,
 the holes go into numbered modules ``NAME_001``, ``NAME_002``, ... (each its own ``.src``/``.dat``
@@ -16,34 +17,42 @@ per module follow from the rendered lines per hole of the template in use.
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import NamedTuple
 
-from codegen.program import Program
+import numpy as np
+
+from codegen.program import STAGES, Program
 from codegen.render import environment, render, template_dir
+from codegen.textsafe import fixed
 from kinematics.errors import InputError
 
 MAX_PARTS = 999  # NAME_001..NAME_999 keeps names <= 24 characters with a 20-character NAME
 
 
 class KrlHole(NamedTuple):
+    """One hole in the .src: comment text (sanitized by the template), position names, feed."""
+
     label: str
     app: str
     clr: str
     bot: str
     ret: str
-    feed_m_s: float
+    feed: str  # $VEL.CP in m/s, already formatted by ``fixed``
 
 
 class KrlPosition(NamedTuple):
+    """One E6POS of the .dat; numbers already formatted by ``fixed``."""
+
     name: str
-    x: float
-    y: float
-    z: float
-    a: float
-    b: float
-    c: float
-    s: int
-    t: int
+    x: str
+    y: str
+    z: str
+    a: str
+    b: str
+    c: str
+    s: str
+    t: str
 
 
 def render_krl(program: Program, header: list[str], templates=None) -> dict[str, str]:
@@ -51,7 +60,7 @@ def render_krl(program: Program, header: list[str], templates=None) -> dict[str,
     env = environment(template_dir("krl", templates), newline="\r\n")
     cell = program.cell
     pos, abc = program.in_frame(cell.robot_T_base)
-    same_ret = cell.retract_mm == cell.approach_mm
+    records = _Records(program, pos, abc)
     common = {
         "header": header,
         "decimals": cell.decimals,
@@ -70,7 +79,7 @@ def render_krl(program: Program, header: list[str], templates=None) -> dict[str,
     }
 
     def files(name: str, role: str, lo: int, hi: int, calls=()) -> tuple[str, str]:
-        holes, positions = _holes(program, pos, abc, lo, hi, same_ret)
+        holes, positions = records.slice(lo, hi)
         src = render(
             env, "program.src.j2", name=name, role=role, holes=holes, calls=list(calls), **common
         )
@@ -78,24 +87,24 @@ def render_krl(program: Program, header: list[str], templates=None) -> dict[str,
         return src, dat
 
     name, limit, n = cell.program_name, cell.lines_per_file, len(program)
-    src, dat = files(name, "single", 0, n)
-    if max(_lines(src), _lines(dat)) <= limit:
-        return {f"{name}.src": src, f"{name}.dat": dat}
-    per_part = _holes_per_part(files, name, limit)
-    parts = -(-n // per_part)
-    if parts > MAX_PARTS:
-        raise InputError(
-            f"{n} holes need {parts} sub-programs of {per_part} holes, more than {MAX_PARTS}: "
-            "raise program.lines_per_file",
-            cell.path,
-        )
-    out: dict[str, str] = {}
-    calls = [f"{name}_{k + 1:03d}" for k in range(parts)]
-    for k, part in enumerate(calls):
-        out[f"{part}.src"], out[f"{part}.dat"] = files(
-            part, "part", k * per_part, min(n, (k + 1) * per_part)
-        )
-    out[f"{name}.src"], out[f"{name}.dat"] = files(name, "main", 0, 0, calls)
+    if n < 2 or n <= _capacity(files, name, "single", limit):
+        out = dict(zip((f"{name}.src", f"{name}.dat"), files(name, "single", 0, n), strict=True))
+    else:
+        per_part = _capacity(files, f"{name}_001", "part", limit)
+        parts = -(-n // per_part)
+        if parts > MAX_PARTS:
+            raise InputError(
+                f"{n} holes need {parts} sub-programs of {per_part} holes, more than "
+                f"{MAX_PARTS}: raise program.lines_per_file",
+                cell.path,
+            )
+        out = {}
+        calls = [f"{name}_{k + 1:03d}" for k in range(parts)]
+        for k, part in enumerate(calls):
+            out[f"{part}.src"], out[f"{part}.dat"] = files(
+                part, "part", k * per_part, min(n, (k + 1) * per_part)
+            )
+        out[f"{name}.src"], out[f"{name}.dat"] = files(name, "main", 0, 0, calls)
     for file, text in out.items():
         if _lines(text) > limit:
             raise InputError(
@@ -106,39 +115,64 @@ def render_krl(program: Program, header: list[str], templates=None) -> dict[str,
     return out
 
 
-def _holes_per_part(files, name: str, limit: int) -> int:
-    """Holes per module from the rendered size of a 1- and a 2-hole module."""
-    one = [_lines(t) for t in files(f"{name}_001", "part", 0, 1)]
-    two = [_lines(t) for t in files(f"{name}_001", "part", 0, 2)]
+def _capacity(files, name: str, role: str, limit: int) -> int:
+    """Holes that fit one file pair of ``role``, from rendering it with 1 and 2 holes."""
+    one = [_lines(t) for t in files(name, role, 0, 1)]
+    two = [_lines(t) for t in files(name, role, 0, 2)]
     fits = []
     for a, b in zip(one, two, strict=True):
-        per_hole, fixed_part = max(b - a, 1), a - max(b - a, 1)
-        fits.append((limit - fixed_part) // per_hole)
+        per_hole = max(b - a, 1)
+        fits.append((limit - (a - per_hole)) // per_hole)
     per_part = min(fits)
     if per_part < 1:
         raise InputError(f"program.lines_per_file ({limit}) cannot hold one hole per file")
     return int(per_part)
 
 
-def _holes(program: Program, pos, abc, lo: int, hi: int, same_ret: bool):
-    """Template records of holes lo..hi-1: KrlHole list and KrlPosition list."""
-    labels = program.labels(lo, hi)
-    status, turn = program.status.tolist(), program.turn.tolist()
-    stages = ("APP", "CLR", "BOT") if same_ret else ("APP", "CLR", "BOT", "RET")
-    holes, positions = [], []
-    coords = pos[lo:hi].tolist()
-    angles = abc[lo:hi].tolist()
-    for i in range(lo, hi):
-        names = [f"XH{i + 1}_{s}" for s in stages]
-        ret = names[0] if same_ret else names[3]
-        holes.append(
-            KrlHole(labels[i - lo], names[0], names[1], names[2], ret, program.feed_mm_s[i] / 1000)
-        )
-        a, b, c = angles[i - lo]
-        for k, nm in enumerate(names):
-            x, y, z = coords[i - lo][k]
-            positions.append(KrlPosition(nm, x, y, z, a, b, c, status[i][k], turn[i][k]))
-    return holes, positions
+class _Records:
+    """Template records of a program, numbers formatted once by ``fixed`` (mm and deg with the
+    cell's decimals, $VEL.CP m/s with 4, S and T as integers)."""
+
+    def __init__(self, program: Program, pos: np.ndarray, abc: np.ndarray) -> None:
+        self.program = program
+        self.pos, self.abc = pos, abc
+        cell = program.cell
+        self.decimals = cell.decimals
+        self.stages = (0, 1, 2) if cell.retract_mm == cell.approach_mm else (0, 1, 2, 3)
+        self.number = lru_cache(maxsize=4096)(fixed)  # S, T and feeds repeat
+
+    def slice(self, lo: int, hi: int) -> tuple[list[KrlHole], list[KrlPosition]]:
+        """Records of holes lo..hi-1."""
+        d, num, program = self.decimals, self.number, self.program
+        coords = self.pos[lo:hi].tolist()
+        angles = self.abc[lo:hi].tolist()
+        status = program.status[lo:hi].tolist()
+        turn = program.turn[lo:hi].tolist()
+        feeds = (program.feed_mm_s[lo:hi] / 1000.0).tolist()
+        labels = program.labels(lo, hi)
+        holes, positions = [], []
+        for j in range(hi - lo):
+            base = f"XH{lo + j + 1}_"
+            names = [base + STAGES[k] for k in self.stages]
+            ret = names[3] if len(names) == 4 else names[0]
+            holes.append(KrlHole(labels[j], names[0], names[1], names[2], ret, num(feeds[j], 4)))
+            a, b, c = (fixed(v, d) for v in angles[j])
+            for k, nm in enumerate(names):
+                x, y, z = coords[j][k]
+                positions.append(
+                    KrlPosition(
+                        nm,
+                        fixed(x, d),
+                        fixed(y, d),
+                        fixed(z, d),
+                        a,
+                        b,
+                        c,
+                        num(status[j][k], 0),
+                        num(turn[j][k], 0),
+                    )
+                )
+        return holes, positions
 
 
 def _lines(text: str) -> int:

@@ -22,6 +22,7 @@ cell's, or the first hole's IK solution, and stays the same for the whole progra
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -71,11 +72,13 @@ class Program:
         """Comment text of holes lo..hi-1: id, depth and diameter (templates sanitize it)."""
         pts = self.points
         hi = len(self) if hi is None else hi
+        number = lru_cache(maxsize=1024)(fixed)  # depths and diameters repeat
+        depth, dia = self.depth_mm[lo:hi].tolist(), pts.diameter[lo:hi].tolist()
         out = []
-        for i in range(lo, hi):
-            text = f"{pts.ids[i]} depth {fixed(self.depth_mm[i])}"
-            if not np.isnan(pts.diameter[i]):
-                text += f" dia {fixed(pts.diameter[i])}"
+        for j, i in enumerate(range(lo, hi)):
+            text = f"{pts.ids[i]} depth {number(depth[j])}"
+            if dia[j] == dia[j]:  # not NaN
+                text += f" dia {number(dia[j])}"
             out.append(text)
         return out
 
