@@ -173,3 +173,34 @@ def test_command_bad_paths(tmp_path, capsys, option):
     out = tmp_path / "x.ngc"
     assert run_cli("-o", out, option, tmp_path / "nope") == 2
     assert "nope" in capsys.readouterr().err and not out.exists()
+
+
+def test_command_header_names_the_inputs(tmp_path):
+    import hashlib
+
+    from codegen import __version__
+    from codegen.points import read_points
+    from compensation import GridModel
+    from kinematics.frames import transform_points
+
+    out = tmp_path / "h.ngc"
+    assert run_cli("-o", out) == 0
+    head = [ln[1:-1] for ln in out.read_text().split("\n")[:7]]
+    grid_file = CELL.parent / "grid_200mm.csv"
+
+    def sha(p):
+        return hashlib.sha256(p.read_bytes()).hexdigest()
+
+    model = GridModel.from_measurements(grid_file)
+    pts = read_points(POINTS)
+    e = model.predict(transform_points(cell().robot_T_base, pts.xyz))
+    worst = int(np.argmax(np.linalg.norm(e, axis=1)))
+    assert head == [
+        f"accugrid {__version__} gcode",
+        f"points wing_panel_points.csv sha256 {sha(POINTS)}",
+        f"cell cell.yaml sha256 {sha(CELL)}",
+        f"grid grid_200mm.csv sha256 {sha(grid_file)}",
+        "grid step 200.000 x 200.000 x 200.000 mm",
+        f"largest correction {np.linalg.norm(e[worst]):.3f} mm at hole {pts.ids[worst]}",
+        f"holes {len(pts)}",
+    ]

@@ -124,3 +124,24 @@ def test_too_tilted_axes_flagged():
     reference = abc_to_matrix(np.array([0.0, 90.0, 0.0]))  # tool Z = robot +X
     flags = too_tilted(np.array([[1.0, 0, 0], [0, 1.0, 0], [-1.0, 0, 0]]), reference)
     assert flags.tolist() == [False, False, True]
+
+
+numbers = st.floats(-1e6, 1e6, allow_nan=False).map(lambda v: repr(v))
+odd_text = st.sampled_from(
+    ["1_000", " 2.5 ", "1e3", "+4", "-0", ".5", "5.", "0x10", "1,5", "", "1 2"]
+)
+
+
+@given(st.lists(st.tuples(numbers, numbers, st.one_of(numbers, odd_text)), min_size=1, max_size=8))
+def test_fast_number_path_agrees_with_the_table_reader(rows):
+    from compensation.csvtable import parse_table
+
+    text = "x,y,z\n" + "".join(f'{a},{b},"{c}"\n' for a, b, c in rows)
+    try:
+        expected = parse_table(text, "p.csv").floats(["x", "y", "z"])
+    except InputError as err:
+        with pytest.raises(InputError) as info:
+            parse_points(text, "p.csv")
+        assert str(info.value) == str(err)
+        return
+    np.testing.assert_array_equal(parse_points(text, "p.csv").xyz, expected)
