@@ -10,6 +10,7 @@ import pytest
 from conftest import EXAMPLES
 
 from codegen.cli import main
+from codegen.commands.correct import ADDED
 from compensation import GridModel
 
 SHIFT = np.array([0.1, -0.2, 0.3])  # a constant error e = P - M of the synthetic grid
@@ -172,3 +173,14 @@ def test_existing_output_needs_force_and_inputs_are_never_targets(tmp_path, caps
     grid = write_grid(tmp_path)
     code = main(["correct", str(points), "--grid", str(grid), "-o", str(points), "--force"])
     assert code == 2 and "refusing to overwrite an input file" in capsys.readouterr().err
+
+
+def test_same_inputs_give_byte_identical_output_and_empty_points_work(tmp_path):
+    points = write_points(tmp_path, "id,x,y,z\nA,1234.5,-67.8,1111.1\n")
+    run(tmp_path, points)
+    first = (tmp_path / "out.csv").read_bytes()
+    code, out = run(tmp_path, points, "--force")
+    assert code == 0 and out.read_bytes() == first
+    empty = write_points(tmp_path, "id,x,y,z\n")
+    code, out = run(tmp_path, empty, "--force")
+    assert code == 0 and read_rows(out) == [["id", "x", "y", "z", *ADDED]]
