@@ -50,6 +50,7 @@ def test_defaults_and_relative_paths(tmp_path):
     assert cell.retract_mm == cell.approach_mm
     assert cell.program_name == "ACCUGRID" and cell.decimals == 3
     assert cell.status is None and not cell.allow_config_change
+    assert cell.reference_abc == (0.0, 90.0, 0.0)
 
 
 def test_program_frame_overrides_base(tmp_path):
@@ -83,6 +84,8 @@ def test_sha256_is_of_the_file_bytes(tmp_path):
         ("base_data: {x: {x: 1}}\n", "base_data.x", 4),
         ("base_data: {2: {x: 1}}\n", "base_data.2", 4),
         ("gcode: {canned_cycles: maybe}\n", "gcode.canned_cycles", 4),
+        ("configuration: {reference: {a: 1, q: 2}}\n", "configuration.reference.q", 4),
+        ("configuration:\n  reference: {b: x}\n", "configuration.reference.b", 5),
     ],
 )
 def test_bad_keys_are_named(tmp_path, extra, key, line):
