@@ -16,11 +16,14 @@ import math
 import os
 import re
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from codegen.krl_parse import check_text, decimals_of, split_lines
 from kinematics.errors import InputError
 
 _WORD_RE = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
+_COMMENT_RE = re.compile(r"\([^)]*\)|;.*", re.S)
+_LINE_RE = re.compile(r"(?:\s*[A-Za-z]\s*[-+]?(?:\d+\.?\d*|\.\d+))*\s*")
 _EXPR_RE = re.compile(r"([A-Za-z])\s*([#\[])")
 _OWORD_RE = re.compile(
     r"\s*[Oo]\s*(?:\d+|<[^>]*>)\s*(sub|endsub|if|elseif|else|endif|while|endwhile|do|call|"
@@ -34,18 +37,22 @@ MOTION_MODES = frozenset(("0", "1", "2", "3", "80")) | CYCLES
 INCH_MM = 25.4
 
 
-@dataclass(frozen=True)
-class Word:
-    """One word's number: ``text[start:end]`` is the number as written (without the letter)."""
+class Word(NamedTuple):
+    """One word's number: ``text[start:end]`` is ``literal`` (without the letter)."""
 
     letter: str
     value: float
     start: int
     end: int
-    decimals: int
+    literal: str
+
+    @property
+    def decimals(self) -> int:
+        """Digits after the decimal point as written."""
+        return decimals_of(self.literal)
 
 
-@dataclass
+@dataclass(slots=True)
 class GcodeMove:
     """One move (or cycle hole). Positions are absolute, in mm, in the program frame."""
 
@@ -65,6 +72,7 @@ class GcodeMove:
     retract: str = ""  # cycles: "G98" or "G99"
     r_mm: float = math.nan  # cycles: the R plane (absolute mm)
     end: tuple[float, float, float] = (math.nan, math.nan, math.nan)  # where the tool ends
+    is_cycle: bool = False  # a canned-cycle hole (G73, G81-G89)
 
     x = property(lambda self: self.target[0])
     y = property(lambda self: self.target[1])
@@ -75,34 +83,29 @@ class GcodeMove:
     def is_arc(self) -> bool:
         return self.motion in ("G2", "G3")
 
-    @property
-    def is_cycle(self) -> bool:
-        return self.motion[1:] in CYCLES
+
+def _refuse(line: str, path: str | None, lineno: int) -> None:
+    """InputError at the first thing in a (comment-free) line that is not a word."""
+    rest = _WORD_RE.sub(lambda m: " " * len(m.group(0)), line)
+    col = len(rest) - len(rest.lstrip())
+    bad = rest.split()[0] if rest.split() else line.strip()
+    raise InputError(f"cannot read {bad!r} as a G-code word", path, lineno, col + 1)
 
 
 def _blank_comments(line: str, path: str | None, lineno: int) -> str:
     """The line with ``( )`` comments and the ``;`` tail replaced by spaces (offsets kept)."""
     if "(" not in line and ";" not in line and ")" not in line:
         return line
-    out = list(line)
-    i = 0
-    n = len(line)
-    while i < n:
-        ch = line[i]
-        if ch == "(":
-            close = line.find(")", i + 1)
-            if close < 0:
-                raise InputError("unclosed '(' comment", path, lineno, i + 1)
-            out[i : close + 1] = " " * (close + 1 - i)
-            i = close + 1
-            continue
-        if ch == ")":
-            raise InputError("')' without '('", path, lineno, i + 1)
-        if ch == ";":
-            out[i:] = " " * (n - i)
-            break
-        i += 1
-    return "".join(out)
+    out = _COMMENT_RE.sub(_spaces, line)
+    if "(" in out:
+        raise InputError("unclosed '(' comment", path, lineno, out.index("(") + 1)
+    if ")" in out:
+        raise InputError("')' without '('", path, lineno, out.index(")") + 1)
+    return out
+
+
+def _spaces(m: re.Match) -> str:
+    return " " * (m.end() - m.start())
 
 
 def _gnum(value: float) -> str:
@@ -142,35 +145,23 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
         if line.lstrip().startswith("/"):
             line = line.replace("/", " ", 1)
         expr = _EXPR_RE.search(line)
-        words: dict[str, list[Word]] = {}
-        rest = list(line)
+        if expr is None and _LINE_RE.fullmatch(line) is None:
+            _refuse(line, path, lineno)
+        words: dict[str, Word] = {}
+        gwords: list[float] = []
         for m in _WORD_RE.finditer(line):
             letter = m.group(1).upper()
             number = m.group(2)
-            start = m.start(2)
-            words.setdefault(letter, []).append(
-                Word(
-                    letter,
-                    float(number),
-                    line_offset + start,
-                    line_offset + m.end(2),
-                    decimals_of(number),
-                )
+            if letter == "G":
+                gwords.append(float(number))
+                continue
+            if letter in words and letter != "M":
+                raise InputError(f"word {letter} given twice", path, lineno, m.start(2) + 1)
+            words[letter] = Word(
+                letter, float(number), line_offset + m.start(2), line_offset + m.end(2), number
             )
-            rest[m.start() : m.end()] = " " * (m.end() - m.start())
-        residue = "".join(rest).strip()
-        if residue and expr is None:
-            col = next(i for i, ch in enumerate(rest) if not ch.isspace())
-            raise InputError(
-                f"cannot read {residue.split()[0]!r} as a G-code word", path, lineno, col + 1
-            )
-        for letter, ws in words.items():
-            if len(ws) > 1 and letter not in "GM":
-                raise InputError(
-                    f"word {letter} given twice", path, lineno, ws[1].start - line_offset + 1
-                )
-        gcodes = [_gnum(w.value) for w in words.get("G", [])]
-        axis_words = {k: words[k][0] for k in AXES if k in words}
+        gcodes = [_gnum(v) for v in gwords]
+        axis_words = {k: words[k] for k in AXES if k in words}
         for g in gcodes:
             if g == "20":
                 scale = INCH_MM
@@ -204,7 +195,7 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
                 motion = g
         for letter in ROTARY:
             if letter in words:
-                rotary[letter] = words[letter][0].value
+                rotary[letter] = words[letter].value
         nonmodal = [
             g
             for g in gcodes
@@ -281,11 +272,12 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
             move.reason = "axis words with G80 (no motion mode)"
             pos = [math.nan] * 3
         elif motion in CYCLES:
+            move.is_cycle = True
             if "Z" in axis_words:
                 cycle_z = axis_words["Z"].value * scale
             if "R" in words:
-                cycle_r = words["R"][0].value * scale
-                move.words = dict(axis_words, R=words["R"][0])
+                cycle_r = words["R"].value * scale
+                move.words = dict(axis_words, R=words["R"])
             move.retract = retract
             move.r_mm = cycle_r
             bottom = [target[0], target[1], cycle_z]

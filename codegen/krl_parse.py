@@ -22,6 +22,7 @@ from __future__ import annotations
 import os
 import re
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from kinematics.errors import InputError
 
@@ -30,6 +31,7 @@ MOTIONS = frozenset(
 )
 POSITION_TYPES = frozenset(("E6POS", "POS", "FRAME", "AXIS", "E6AXIS"))
 CARTESIAN_KEYS = frozenset("X Y Z A B C S T E1 E2 E3 E4 E5 E6".split())
+_JOINTS = frozenset(("A1", "A2", "A3", "A4", "A5", "A6"))
 JOINT_KEYS = frozenset("A1 A2 A3 A4 A5 A6 E1 E2 E3 E4 E5 E6".split())
 _NOT_CALLS = (
     frozenset(
@@ -42,8 +44,8 @@ _NOT_CALLS = (
 )
 
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-_NUMBER_RE = re.compile(NUMBER + r"$")
-_COMPONENT_RE = re.compile(r"\s*([A-Za-z_]\w*)\s+(\S.*?)\s*$", re.S)
+_FLAT_RE = re.compile(r"(\s*([A-Za-z_]\w*)\s+)(?:(" + NUMBER + r")|('[^']*')|([^,]*?))(\s*(?:,|$))")
+_ITEM_RE = re.compile(r"\s*([A-Za-z_]\w*)\s+(?:(" + NUMBER + r")|('[^']*')|([^,]*?))\s*(?:,|$)")
 _TYPE_PREFIX_RE = re.compile(r"\s*([A-Za-z_]\w*)\s*:")
 _LABEL_RE = re.compile(r"\s*([A-Za-z_]\w*)\s*:(?!:)\s*")
 _WORD_RE = re.compile(r"\s*([A-Za-z_$]\w*)")
@@ -61,15 +63,22 @@ _CALL_RE = re.compile(r"\s*([A-Za-z_]\w*)\s*\(")
 _ROUTINE_RE = re.compile(r"\s*(?:GLOBAL\s+)?(DEF|DEFFCT)\s+(?:\w+\s+)?([A-Za-z_]\w*)\s*\(", re.I)
 
 
-@dataclass(frozen=True)
-class Number:
-    """One literal in a program: ``text[start:end]`` is the literal as written."""
+class Number(NamedTuple):
+    """One literal in a program: ``text[start:end]`` is ``literal``, the number as written."""
 
     key: str  # component, upper case: "X", "A", "S", "E1", "A1"
     value: float
     start: int  # character offset in the text given to the parser
     end: int
-    decimals: int  # digits after the decimal point as written (-1 for S/T bit strings)
+    literal: str
+
+    @property
+    def decimals(self) -> int:
+        """Digits after the decimal point as written (-1 for an S/T bit string)."""
+        return -1 if self.literal[:1] == "'" else decimals_of(self.literal)
+
+
+_new_number = tuple.__new__  # a Number without the NamedTuple constructor's Python frame
 
 
 @dataclass(frozen=True)
@@ -111,11 +120,14 @@ class KrlPosition:
     numbers: dict[str, Number]
     base: BaseRef | None = None  # for motion aggregates: the base in effect there
     reason: str = ""  # why this aggregate is not a placeable Cartesian position by itself
+    _key: str | None = field(default=None, repr=False, compare=False)
 
     @property
     def key(self) -> str:
         """Normalized variable name (upper case, no spaces) used to match motions to it."""
-        return normalize_name(self.name)
+        if self._key is None:
+            self._key = normalize_name(self.name)
+        return self._key
 
     @property
     def values(self) -> dict[str, float]:
@@ -166,6 +178,8 @@ class KrlScan:
 
 def normalize_name(name: str) -> str:
     """``lfWorkPos[ 3 ]`` -> ``LFWORKPOS[3]``; a non-integer index becomes ``[*]``."""
+    if "[" not in name and " " not in name and "\t" not in name:
+        return name.upper()
     name = re.sub(r"\s+", "", name).upper()
     head, bracket, rest = name.partition("[")
     if not bracket:
@@ -176,8 +190,10 @@ def normalize_name(name: str) -> str:
 
 def decimals_of(text: str) -> int:
     """Digits after the decimal point in a number literal as written (0 without a point)."""
-    mantissa = re.split(r"[eE]", text)[0]
-    return len(mantissa.split(".")[1]) if "." in mantissa else 0
+    if "e" in text or "E" in text:
+        text = text.replace("E", "e").split("e")[0]
+    point = text.find(".")
+    return 0 if point < 0 else len(text) - point - 1
 
 
 def split_lines(text: str) -> list[str]:
@@ -213,6 +229,9 @@ def code_part(line: str, path: str | None, lineno: int) -> str:
 
 def match_brace(code: str, start: int, path: str | None, lineno: int) -> int:
     """Index just past the ``}`` matching the ``{`` at ``start``; InputError when unbalanced."""
+    close = code.find("}", start)
+    if close > 0 and code.find("{", start + 1, close) < 0 and code.find('"', start, close) < 0:
+        return close + 1
     depth = 0
     in_string = False
     for i in range(start, len(code)):
@@ -249,44 +268,86 @@ def parse_aggregate(
         body = code[body_start : end - 1]
     numbers: dict[str, Number] = {}
     reason = ""
+    if "{" in body or '"' in body:
+        items = _split_top(body)  # nested aggregates or strings: item by item
+    else:
+        items = None
+    stop = end - 1
+    if items is None:  # the common flat aggregate: one C-level scan, spans by arithmetic
+        cursor = body_start
+        for lead, key, number, bits, other, trail in _FLAT_RE.findall(code, body_start, stop):
+            key = key.upper()
+            vstart = cursor + len(lead)
+            if key in numbers:
+                raise InputError(f"component {key} given twice", path, lineno, vstart + 1)
+            if number:
+                cursor = vstart + len(number)
+                numbers[key] = _new_number(
+                    Number, (key, float(number), offset + vstart, offset + cursor, number)
+                )
+            elif bits:
+                cursor = vstart + len(bits)
+                numbers[key] = _bits(key, bits, vstart, offset, path, lineno)
+            else:
+                cursor = vstart + len(other)
+                if key in CARTESIAN_KEYS or key in JOINT_KEYS:
+                    reason = reason or f"component {key} is {other!r}, not a number"
+            cursor += len(trail)
+        if cursor != stop and code[body_start:stop].strip():
+            _refuse_item(code, body_start, stop, path, lineno)
+        return type_name, numbers, reason, end
     pos = 0
-    for item in _split_top(body):
-        m = _COMPONENT_RE.match(item)
+    for item in items:
         item_start = body_start + pos
         pos += len(item) + 1
         if not item.strip():
             continue
+        m = _ITEM_RE.fullmatch(code, item_start, item_start + len(item))
         if m is None:
             raise InputError(
-                f"cannot read aggregate component {item.strip()!r}",
-                path,
-                lineno,
-                item_start + 1,
+                f"cannot read aggregate component {item.strip()!r}", path, lineno, item_start + 1
             )
         key = m.group(1).upper()
-        value = m.group(2)
-        vstart = item_start + m.start(2)
         if key in numbers:
-            raise InputError(f"component {key} given twice", path, lineno, vstart + 1)
-        if _NUMBER_RE.match(value):
+            raise InputError(f"component {key} given twice", path, lineno, m.start(2) + 1)
+        if m.group(2) is not None:
             numbers[key] = Number(
-                key, float(value), offset + vstart, offset + vstart + len(value), decimals_of(value)
+                key,
+                float(m.group(2)),
+                offset + m.start(2),
+                offset + m.end(2),
+                m.group(2),
             )
-        elif value[:1] == "'" and value[-1:] == "'" and len(value) > 2:
-            bits = value[1:-1].replace(" ", "")
-            base = {"B": 2, "H": 16}.get(bits[:1].upper())
-            try:
-                number = int(bits[1:], base) if base else None
-            except ValueError:
-                number = None
-            if number is None:
-                raise InputError(f"bad literal {value} for {key}", path, lineno, vstart + 1)
-            numbers[key] = Number(
-                key, float(number), offset + vstart, offset + vstart + len(value), -1
-            )
-        elif key in CARTESIAN_KEYS or key in JOINT_KEYS:
-            reason = reason or f"component {key} is {value!r}, not a number"
+        elif m.group(3) is not None:
+            numbers[key] = _bits(key, m.group(3), m.start(3), offset, path, lineno)
     return type_name, numbers, reason, end
+
+
+def _refuse_item(code: str, start: int, stop: int, path: str | None, lineno: int) -> None:
+    """InputError at the first part of an aggregate body that is not ``NAME value``."""
+    expected = start
+    for m in _ITEM_RE.finditer(code, start, stop):
+        if m.start() != expected:
+            break
+        expected = m.end()
+    col = expected + len(code[expected:stop]) - len(code[expected:stop].lstrip())
+    item = code[col:stop].split(",")[0].strip()
+    raise InputError(f"cannot read aggregate component {item!r}", path, lineno, col + 1)
+
+
+def _bits(key: str, value: str, start: int, offset: int, path, lineno: int) -> Number:
+    """A Status/Turn literal 'B010' or 'H1F' at ``start`` as a Number (decimals -1)."""
+    kind = value[1:2]
+    base = 2 if kind in "Bb" else 16 if kind in "Hh" else 0
+    try:
+        number = int(value[2:-1].replace(" ", ""), base) if base and kind else None
+    except ValueError:
+        number = None
+    if number is None:
+        raise InputError(f"bad literal {value} for {key}", path, lineno, start + 1)
+    return _new_number(
+        Number, (key, float(number), offset + start, offset + start + len(value), value)
+    )
 
 
 def _split_top(body: str) -> list[str]:
@@ -312,8 +373,11 @@ def _split_top(body: str) -> list[str]:
 
 def position_reason(type_name: str, numbers: dict[str, Number]) -> str:
     """Why an aggregate is not a complete Cartesian position ("" when it is one)."""
+    if "X" in numbers and "Y" in numbers and "Z" in numbers and "A1" not in numbers:
+        if type_name != "AXIS" and type_name != "E6AXIS" and _JOINTS.isdisjoint(numbers):
+            return ""
     keys = set(numbers)
-    if type_name in ("AXIS", "E6AXIS") or keys & {"A1", "A2", "A3", "A4", "A5", "A6"}:
+    if type_name in ("AXIS", "E6AXIS") or keys & _JOINTS:
         return "joint-space target (AXIS/E6AXIS): not a Cartesian position"
     missing = [k for k in "XYZ" if k not in keys]
     if missing:

@@ -26,14 +26,14 @@ from __future__ import annotations
 import hashlib
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from codegen import __version__
 from codegen.gcode_parse import GcodeMove, parse_gcode
-from codegen.krl_parse import BaseRef, KrlPosition, KrlUse, scan_krl
+from codegen.krl_parse import BaseRef, KrlPosition, KrlUse, decimals_of, scan_krl
 from codegen.textsafe import comment_text, fixed
 from compensation import GridModel
 from kinematics.errors import InputError
@@ -44,6 +44,7 @@ REPORT_COLUMNS = (
     "file,line,name,status,reason,x,y,z,x_new,y_new,z_new,dx,dy,dz,correction_mm,residual_mm"
 )
 KRL_SUFFIXES = (".src", ".dat", ".sub")
+NAN3 = (math.nan, math.nan, math.nan)
 
 
 @dataclass
@@ -72,8 +73,8 @@ class Row:
     name: str
     status: str  # "corrected", "outside", "skipped"
     reason: str = ""
-    old: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
-    new: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
+    old: tuple[float, float, float] = NAN3  # position as written (program/base frame, mm)
+    new: tuple[float, float, float] = NAN3  # as rewritten (corrected rows)
     residual_mm: float = math.nan
 
 
@@ -91,7 +92,7 @@ class Result:
     def largest(self) -> tuple[float, Row | None]:
         best, where = 0.0, None
         for row in self.corrected:
-            d = float(np.linalg.norm(row.new - row.old))
+            d = math.dist(row.new, row.old)
             if d > best:
                 best, where = d, row
         return best, where
@@ -132,12 +133,20 @@ def splice(text: str, edits: list[tuple[int, int, str]]) -> str:
     return "".join(parts)
 
 
-def precision(numbers) -> int:
-    """A file's precision: the most decimals among its X, Y, Z numbers (3 when it has none).
+def precision(literals) -> int:
+    """A file's precision: the most decimals among its X, Y, Z literals (3 when it has none).
 
     CAM posts drop trailing zeros (``X25.``, ``X24.5``, ``X24.125`` are one precision), so a
     corrected number gets the file's precision, not its own digits."""
-    return max((n.decimals for n in numbers if n.decimals >= 0), default=3)
+    best = -1
+    for lit in literals:
+        if "e" in lit or "E" in lit:
+            places = decimals_of(lit)
+        else:
+            point = lit.find(".")
+            places = 0 if point < 0 else len(lit) - point - 1
+        best = max(best, places)
+    return 3 if best < 0 else best
 
 
 def _number_text(old_text: str, old_value: float, new_value: float, places: int) -> str:
@@ -209,8 +218,15 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
             if not use.reason and use.name:
                 uses.setdefault(use.name, []).append(use)
 
+    resolved: dict[BaseRef, tuple[object, np.ndarray | None, str]] = {}
+
     def resolve(base: BaseRef) -> tuple[object, np.ndarray | None, str]:
-        """(identity key, robot_T_base or None, reason)."""
+        """(identity key, robot_T_base or None, reason), once per distinct base."""
+        if base not in resolved:
+            resolved[base] = _resolve(base)
+        return resolved[base]
+
+    def _resolve(base: BaseRef) -> tuple[object, np.ndarray | None, str]:
         if base.kind == "fdat":
             entry = fdats.get(base.fdat or "")
             if entry is None:
@@ -235,7 +251,7 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
         for pos in scan.positions:
             row = Row(scan.path or "", pos.line, pos.name, "skipped")
             if all(k in pos.numbers for k in "XYZ"):
-                row.old = np.array([pos.numbers[k].value for k in "XYZ"])
+                row.old = (pos.numbers["X"].value, pos.numbers["Y"].value, pos.numbers["Z"].value)
             rows.append(row)
             reason = pos.reason
             frame = None
@@ -276,7 +292,9 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
                 )
     edits: dict[str, list[tuple[int, int, str]]] = {p: [] for p in texts}
     places_of = {
-        scan.path: precision(p.numbers[k] for p in scan.positions for k in "XYZ" if k in p.numbers)
+        scan.path: precision(
+            p.numbers[k].literal for p in scan.positions for k in "XYZ" if k in p.numbers
+        )
         for scan in scans
     }
     if placed:
@@ -285,14 +303,15 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
         robot = np.einsum("nij,nj->ni", frames[:, :3, :3], base_xyz) + frames[:, :3, 3]
         inside, corrected = _correct(robot, opts)
         back = np.einsum("nji,nj->ni", frames[:, :3, :3], corrected - robot)  # R^T e
+        targets = (base_xyz + back).tolist()
         for i, (pos, row, _) in enumerate(placed):
             if not inside[i]:
                 row.status, row.reason = "outside", _outside_reason(robot[i])
                 continue
-            target = row.old + back[i]
+            target = targets[i]
             text = texts[row.file]
             places = opts.decimals if opts.decimals is not None else places_of[row.file]
-            new = np.empty(3)
+            new = [0.0, 0.0, 0.0]
             for j, k in enumerate("XYZ"):
                 num = pos.numbers[k]
                 old_text = text[num.start : num.end]
@@ -300,8 +319,8 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
                 new[j] = float(new_text)
                 if new_text != old_text:
                     edits[row.file].append((num.start, num.end, new_text))
-            row.status, row.new = "corrected", new
-            row.residual_mm = float(np.linalg.norm(new - target))
+            row.status, row.new = "corrected", tuple(new)
+            row.residual_mm = math.dist(new, target)
     _strict_check(rows, opts)
     return Result({p: splice(t, edits[p]) for p, t in texts.items()}, rows)
 
@@ -347,7 +366,7 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
     moves = parse_gcode(text, path)
     rows = [Row(path, m.line, m.motion, "skipped", m.reason) for m in moves]
     for m, row in zip(moves, rows, strict=True):
-        row.old = np.array(m.target, dtype=float)
+        row.old = m.target
     _protect_arc_starts(moves, rows)
     todo = [i for i, r in enumerate(rows) if not r.reason]
     desired = np.array([m.target for m in moves], dtype=float).reshape(-1, 3)
@@ -424,7 +443,7 @@ def _gcode_edits(
     if opts.decimals is not None:
         places = opts.decimals
     else:
-        places = precision(w for m in moves for k, w in m.words.items() if k in "XYZ")
+        places = precision(w.literal for m in moves for k, w in m.words.items() if k in "XYZ")
     cmd = [math.nan] * 3
     cycle_z = r_cmd = math.nan
     for move, row, want, r_new in zip(moves, rows, desired, r_planes, strict=True):
@@ -484,8 +503,8 @@ def _gcode_edits(
         else:
             reached = end
         if changed:
-            row.new = np.array(reached, dtype=float)
-            row.residual_mm = float(np.linalg.norm(row.new - want))
+            row.new = tuple(reached)
+            row.residual_mm = math.dist(reached, want)
         cmd = end
     return edits
 
@@ -540,8 +559,11 @@ def report_csv(rows: list[Row], decimals: int = 4) -> str:
 
     out = [REPORT_COLUMNS]
     for r in rows:
-        delta = r.new - r.old if r.status == "corrected" else np.full(3, np.nan)
-        length = float(np.linalg.norm(delta)) if r.status == "corrected" else math.nan
+        if r.status == "corrected":
+            delta = tuple(n - o for n, o in zip(r.new, r.old, strict=True))
+            length = math.hypot(*delta)
+        else:
+            delta, length = NAN3, math.nan
         cells = [
             Path(r.file).name,
             str(r.line),
