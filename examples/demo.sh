@@ -28,3 +28,12 @@ accugrid plan experiment --centre D 1700 0 1500 --steps 20:380:120 --repeats 3 \
     -o out/plan --force
 accugrid study --simulate kr210-paper --centre D 1700 0 1500 --steps 20:380:120 --repeats 3 \
     --region 1500 1900 -200 200 1300 1700 --validation-points 50 -o out/study --force
+
+# Pre-flight rewrite of programs a CAM system wrote (examples/cam_drill.*): only the numbers of
+# the positions inside the grid change; the report lists every position with its status/reason.
+# The grid is the cell's (examples/grid_200mm.csv).
+accugrid rewrite examples/cam_drill.src examples/cam_drill.dat --cell examples/cell.yaml \
+    -o out/rewrite --report out/rewrite/cam_drill_krl_report.csv --force
+accugrid rewrite examples/cam_drill.ngc --cell examples/cell.yaml \
+    -o out/rewrite/cam_drill.ngc --report out/rewrite/cam_drill_ngc_report.csv --force
+diff examples/cam_drill.dat out/rewrite/cam_drill.dat || true
