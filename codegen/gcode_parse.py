@@ -35,6 +35,11 @@ ROTARY = "ABCUVW"
 CYCLES = frozenset(("73", "81", "82", "83", "84", "85", "86", "87", "88", "89"))
 MOTION_MODES = frozenset(("0", "1", "2", "3", "80")) | CYCLES
 INCH_MM = 25.4
+_ROTARY_SET = frozenset(ROTARY)
+_NONMODAL = frozenset("4 10 28 28.1 30 30.1 52 53 92 92.1 92.2 92.3".split())
+_PARAMETER_CODES = frozenset("4 10 28.1 30.1 52 92 92.1 92.2 92.3".split())
+_G_NAMES = {float(g): g for g in (str(i) for i in range(100))}
+_new_word = tuple.__new__  # a Word without the NamedTuple constructor's Python frame
 
 
 class Word(NamedTuple):
@@ -157,13 +162,16 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
                 continue
             if letter in words and letter != "M":
                 raise InputError(f"word {letter} given twice", path, lineno, m.start(2) + 1)
-            words[letter] = Word(
-                letter, float(number), line_offset + m.start(2), line_offset + m.end(2), number
+            words[letter] = _new_word(
+                Word,
+                (letter, float(number), line_offset + m.start(2), line_offset + m.end(2), number),
             )
-        gcodes = [_gnum(v) for v in gwords]
+        gcodes = [_G_NAMES.get(v) or _gnum(v) for v in gwords] if gwords else gwords
         axis_words = {k: words[k] for k in AXES if k in words}
         for g in gcodes:
-            if g == "20":
+            if g in MOTION_MODES:
+                motion = g
+            elif g == "20":
                 scale = INCH_MM
             elif g == "21":
                 scale = 1.0
@@ -191,34 +199,19 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
                 comp_reason = ""
             elif g in ("68", "51"):
                 frame_reason = f"G{g} (line {lineno}) rotates or scales the program"
-            elif g in MOTION_MODES:
-                motion = g
-        for letter in ROTARY:
-            if letter in words:
-                rotary[letter] = words[letter].value
-        nonmodal = [
-            g
-            for g in gcodes
-            if g
-            in ("4", "10", "28", "28.1", "30", "30.1", "52", "53", "92", "92.1", "92.2", "92.3")
-        ]
-        if nonmodal and nonmodal[0] in (
-            "4",
-            "10",
-            "28.1",
-            "30.1",
-            "52",
-            "92",
-            "92.1",
-            "92.2",
-            "92.3",
-        ):
+        has_rotary = not _ROTARY_SET.isdisjoint(words)
+        if has_rotary:
+            for letter in ROTARY:
+                if letter in words:
+                    rotary[letter] = words[letter].value
+        nonmodal = [g for g in gcodes if g in _NONMODAL] if gcodes else gcodes
+        if nonmodal and nonmodal[0] in _PARAMETER_CODES:
             continue  # the axis words are parameters, not a move
         if expr is not None and expr.group(1).upper() in AXES + ROTARY:
             flow_reason = flow_reason or f"expression {expr.group(0)}.. at line {lineno}"
             pos = [math.nan] * 3
             continue
-        if not axis_words and not (set(ROTARY) & set(words)):
+        if not axis_words and not has_rotary:
             continue
         column = min(w.start for w in axis_words.values()) - line_offset + 1 if axis_words else 1
         start = tuple(pos)

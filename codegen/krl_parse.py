@@ -107,7 +107,7 @@ class BaseRef:
         return self.reason
 
 
-@dataclass
+@dataclass(slots=True)
 class KrlPosition:
     """A position aggregate found in a program (values in mm / deg as written)."""
 
@@ -147,7 +147,7 @@ class KrlPosition:
     t = property(lambda self: self._get("T"))
 
 
-@dataclass
+@dataclass(slots=True)
 class KrlUse:
     """A motion that goes to a named position, or to something that is not a literal."""
 

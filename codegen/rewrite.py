@@ -64,7 +64,7 @@ class Options:
     max_bytes: int = MAX_BYTES
 
 
-@dataclass
+@dataclass(slots=True)
 class Row:
     """One position (or unresolved motion target) in the report."""
 
@@ -299,11 +299,15 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
     }
     if placed:
         base_xyz = np.array([row.old for _, row, _ in placed])
-        frames = np.array([f for _, _, f in placed])
+        unique: dict[int, int] = {}
+        which = np.array([unique.setdefault(id(f), len(unique)) for _, _, f in placed])
+        by_id = {id(f): f for _, _, f in placed}
+        frames = np.array([by_id[k] for k in unique])[which]  # (N, 4, 4) from a few frames
         robot = np.einsum("nij,nj->ni", frames[:, :3, :3], base_xyz) + frames[:, :3, 3]
         inside, corrected = _correct(robot, opts)
         back = np.einsum("nji,nj->ni", frames[:, :3, :3], corrected - robot)  # R^T e
         targets = (base_xyz + back).tolist()
+        inside = inside.tolist()
         for i, (pos, row, _) in enumerate(placed):
             if not inside[i]:
                 row.status, row.reason = "outside", _outside_reason(robot[i])
