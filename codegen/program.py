@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -36,6 +37,7 @@ from kinematics.frames import abc_to_matrix, invert, matrix_to_abc
 STAGES = ("APP", "CLR", "BOT", "RET")
 GRID_ORIENTATION_TOL_DEG = 5.0  # the grid's errors hold near the orientation it was measured at
 _LISTED = 5  # holes named in one message
+IK_BLOCK = 16384  # poses per IK call
 MAX_AXIS_JUMP_DEG = 180.0  # a larger joint move between consecutive poses: a wrist flip or wrap
 
 
@@ -220,7 +222,7 @@ def _configuration(
         if not first.ok[0]:
             _fail(points, 0, 0, first.reason[0], cell)
         status = int(first.status[0])
-    sol = robot.ik(flat, status=status, turn=cell.turn)
+    sol = _ik_blocks(robot, flat, status, cell.turn)
     ok = sol.ok.reshape(n, stages)
     q = sol.q.reshape(n, stages, 6)
     pose_status = sol.status.reshape(n, stages).astype(int)
@@ -264,6 +266,21 @@ def _configuration(
         pose_status = np.concatenate([pose_status, pose_status[:, :1]], axis=1)
         pose_turn = np.concatenate([pose_turn, pose_turn[:, :1]], axis=1)
     return pose_status, pose_turn, warnings
+
+
+def _ik_blocks(robot, poses: np.ndarray, status, turn) -> SimpleNamespace:
+    """``robot.ik`` of poses (M, 4, 4) in blocks of ``IK_BLOCK``: the same result, with the IK's
+    (M, 8, ...) temporaries bounded in memory."""
+    parts = [
+        robot.ik(poses[i : i + IK_BLOCK], status=status, turn=turn)
+        for i in range(0, len(poses), IK_BLOCK)
+    ]
+    return SimpleNamespace(
+        **{
+            f: np.concatenate([getattr(s, f) for s in parts])
+            for f in ("q", "ok", "reason", "status", "turn")
+        }
+    )
 
 
 def _branch_jumps(points: Points, cell: Cell, q: np.ndarray) -> list[str]:
