@@ -55,7 +55,12 @@ def render_gcode(program: Program, header: list[str], templates=None) -> str:
     labels = program.labels()
     d = cell.decimals
     number = lru_cache(maxsize=4096)(fixed)  # feeds repeat
-    coords = [[tuple(fixed(v, d) for v in p) for p in hole] for hole in pos.tolist()]
+    # RET is usually the APP position (same distance): format it once
+    same_ret = (pos[:, 3] == pos[:, 0]).all(axis=1).tolist()
+    coords = []
+    for hole, same in zip(pos.tolist(), same_ret, strict=True):
+        text = [tuple(fixed(v, d) for v in p) for p in (hole[:3] if same else hole)]
+        coords.append(text + [text[0]] if same else text)
     angles = [tuple(fixed(v, d) for v in a) for a in abc.tolist()]
     feeds = [number(f, 1) for f in (program.feed_mm_s * 60.0).tolist()]
     heights = pos[:, :, 2].tolist()
