@@ -200,7 +200,8 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
             elif g in ("68", "51"):
                 frame_reason = f"G{g} (line {lineno}) rotates or scales the program"
         has_rotary = not _ROTARY_SET.isdisjoint(words)
-        if has_rotary:
+        if has_rotary:  # a new dict: moves share the one in effect when they were read
+            rotary = dict(rotary)
             for letter in ROTARY:
                 if letter in words:
                     rotary[letter] = words[letter].value
@@ -231,7 +232,7 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
                     incremental,
                     scale,
                     f"{name}: a machine-coordinate or home move",
-                    dict(rotary),
+                    rotary,
                     setters,
                 )
             )
@@ -239,13 +240,11 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
             setter = [index] * 3
             continue
         target = list(pos)
+        relative = incremental and motion not in CYCLES
         for i, k in enumerate(AXES):
-            if k in axis_words:
-                value = axis_words[k].value * scale
-                if incremental and motion not in CYCLES:
-                    target[i] = pos[i] + value
-                else:
-                    target[i] = value
+            word = axis_words.get(k)
+            if word is not None:
+                target[i] = pos[i] + word.value * scale if relative else word.value * scale
         reason = flow_reason or frame_reason or comp_reason
         move = GcodeMove(
             path,
@@ -258,7 +257,7 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
             incremental,
             scale,
             "",
-            dict(rotary),
+            rotary,
             setters,
         )
         if motion == "80":
@@ -289,13 +288,18 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
                     f"arc G{motion}: its end point and centre would have to move together"
                 )
             pos = target
-        missing = [k for i, k in enumerate(AXES) if math.isnan(move.target[i])]
-        if missing and not reason:
-            reason = f"{','.join(missing)} not known here (no absolute value since the start)"
-        move.reason = move.reason or reason
+        t = move.target
+        if not reason and (t[0] != t[0] or t[1] != t[1] or t[2] != t[2]):  # NaN: unknown
+            missing = ",".join(k for i, k in enumerate(AXES) if math.isnan(t[i]))
+            reason = f"{missing} not known here (no absolute value since the start)"
+        if reason and not move.reason:
+            move.reason = reason
         move.end = tuple(pos)
-        for i, k in enumerate(AXES):
-            if k in axis_words or (move.is_cycle and i == 2):
-                setter[i] = index
+        if "X" in axis_words:
+            setter[0] = index
+        if "Y" in axis_words:
+            setter[1] = index
+        if "Z" in axis_words or move.is_cycle:
+            setter[2] = index
         moves.append(move)
     return moves
