@@ -9,9 +9,11 @@ Per hole, four positions on the drill axis (tool Z, pointing into the part), in 
 
 Correction (DESIGN.md): the hole point is mapped to the robot frame (robot_T_base), corrected
 with the grid (P' = P + e(P)), and the same vector e is added to all four positions of the hole.
-The grid's error changes by well under a micrometre over the few centimetres between them, while
-correcting each separately would bend the drill axis by that difference; one vector per hole
-keeps the axis straight and the hole where the grid says. Orientation is not corrected.
+Correcting each position by its own e would bend the drill axis by the difference, and that is
+not small: the error changes over the 30-40 mm between approach and bottom, and inverse-distance
+weighting over the 8 vertices of a cell jumps where the positions straddle a cell face (0.22 mm at
+the example grid's Y = 0 plane). One vector per hole keeps the axis straight and the hole where
+the grid says. Orientation is not corrected.
 
 Every corrected pose goes through IK: unreachable or out-of-limit poses are InputErrors naming
 the hole; |A5| below ``configuration.singular_a5`` is a warning. The KUKA Status/Turn is the

@@ -35,7 +35,7 @@ def test_example_cell_frames():
     np.testing.assert_allclose(cell.robot_T_base[:3, :3] @ [0, 0, 1], [-1, 0, 0], atol=1e-12)
     np.testing.assert_allclose(cell.robot_T_base[:3, :3] @ [1, 0, 0], [0, -1, 0], atol=1e-12)
     np.testing.assert_allclose(
-        transform_points(cell.robot_T_base, np.zeros((1, 3)))[0], [1800, 300, 1000]
+        transform_points(cell.robot_T_base, np.zeros((1, 3)))[0], [1700, 300, 1000]
     )
     np.testing.assert_allclose(cell.flange_T_tool[:3, 3], [0, 0, 250])
     assert cell.base_data[1] is cell.robot_T_base
