@@ -545,7 +545,7 @@ def add_header(text: str, lines: list[str], kind: str) -> str:
     newline = "\r\n" if "\r\n" in text else "\n"
     body = [comment_text(line, 200) for line in lines]
     block = "".join((f"; {b}" if kind == "krl" else f"({b})") + newline for b in body)
-    pos = 0
+    pos = 3 if text.startswith("\xef\xbb\xbf") else 0  # after a UTF-8 byte-order mark
     lead = "&" if kind == "krl" else "%"
     while text.startswith(lead, pos):
         nl = text.find("\n", pos)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +15,7 @@ from scipy.spatial.transform import Rotation
 from codegen.cli import main
 from codegen.gcode_parse import parse_gcode
 from codegen.krl_parse import parse_krl
-from codegen.rewrite import Options, rewrite_gcode
+from codegen.rewrite import Options, rewrite_gcode, rewrite_krl
 from compensation import GridModel
 
 BASE2 = (100.0, 50.0, 0.0, 90.0, 0.0, 0.0)  # robot_T_base of BASE_DATA[2]
@@ -327,3 +328,51 @@ def test_round_trip_with_the_generator(tmp_path, dialect):
         (nominal / w.name if nominal.is_dir() else nominal).read_bytes() for w, _ in pairs
     ]
     assert [g.read_bytes() for _, g in pairs] != nominal_bytes  # something was corrected
+
+
+NUM_TOKEN = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
+spaces = st.text(" \t", max_size=3)
+krl_value = st.integers(-400_000, 400_000).map(lambda v: f"{v / 1000:.3f}")
+
+
+@settings(max_examples=30)
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from(["LIN", "lin", "PTP", "SLin"]),
+            spaces,
+            spaces,
+            st.lists(krl_value, min_size=3, max_size=3),
+            st.sampled_from(["", " ; done {X 1}", ";", " C_DIS ;FOLD x"]),
+            st.booleans(),
+        ),
+        min_size=1,
+        max_size=6,
+    )
+)
+def test_krl_rewrite_changes_only_the_position_numbers(lines):
+    """Random case, whitespace and comments around inline aggregates: the output has the same
+    text between numbers, and each X, Y, Z is the input plus the constant error (base = robot)."""
+    body = ["DEF r ( )", "BAS (#BASE,0)"]
+    for kw, w1, w2, (x, y, z), tail, typed in lines:
+        prefix = f"POS:{w1}" if typed else ""
+        agg = f"{{{w2}{prefix}X {x},{w1}y{w2} {y} ,Z {z}{w1},A 0.0,B 90.0,C 0.0}}"
+        body.append(f"{w1}{kw}{w2} {agg}{tail}")
+    text = "\r\n".join(body + ["END"]) + "\r\n"
+    opts = Options(model=CONST_MODEL, base_data={}, robot_T_program=np.eye(4))
+    out = rewrite_krl({"r.src": text}, opts).texts["r.src"]
+    assert NUM_TOKEN.split(out) == NUM_TOKEN.split(text)
+    before, after = parse_krl(text, "r.src"), parse_krl(out, "r.src")
+    for b, a in zip(before, after, strict=True):
+        want = np.array([b.x, b.y, b.z]) + E_CONST
+        assert np.allclose([a.x, a.y, a.z], want, atol=5e-4)
+        assert (a.a, a.b, a.c) == (b.a, b.b, b.c)
+
+
+def _const_model():
+    axes = [np.arange(-600.0, 601.0, 300.0)] * 3
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    return GridModel.from_measurements((pts, pts - E_CONST))
+
+
+CONST_MODEL = _const_model()
