@@ -754,6 +754,26 @@ def _base_value(code: str, at: int, off: int, lineno: int, scan: KrlScan) -> Bas
 _TRAILING = re.compile(r"\s*(?:,|C_\w+|WITH\b|CA\b|$)", re.I)
 
 
+_WITH_BASE_RE = re.compile(r"\bWITH\b.*?\$BASE\s*=\s*(.*?)\s*(?:,\s*\$|$)", re.I)
+_SBASE_RE = re.compile(r"SBASE\s*\(\s*([A-Za-z_]\w*)\s*\.\s*BASE_NO\s*\)$", re.I)
+
+
+def _with_base(code: str, lineno: int) -> BaseRef | None:
+    """The base a spline motion sets for itself: ``WITH ..., $BASE = SBASE(FP1.BASE_NO)`` (the
+    KSS 8 inline form) or ``$BASE = BASE_DATA[n]``; None when the WITH part does not set it."""
+    m = _WITH_BASE_RE.search(code)
+    if m is None:
+        return None
+    value = m.group(1)
+    sbase = _SBASE_RE.match(value)
+    if sbase:
+        return BaseRef("fdat", lineno, fdat=sbase.group(1).upper())
+    n = _BASE_DATA_RE.match(value)
+    if n:
+        return BaseRef("number", lineno, number=int(n.group(1)))
+    return BaseRef("unknown", lineno, reason=f"WITH $BASE = {value}: not a BASE_DATA number")
+
+
 def _motion(
     code: str,
     at: int,
@@ -766,6 +786,9 @@ def _motion(
 ) -> None:
     count = 2 if word in ("CIRC", "SCIRC", "CIRC_REL", "SCIRC_REL") else 1
     relative = word.endswith("_REL")
+    base = flow.state
+    if "$" in code and "WITH" in code.upper():
+        base = _with_base(code, lineno) or base
     for _ in range(count):
         while at < len(code) and code[at] in " \t,":
             at += 1
@@ -809,7 +832,7 @@ def _motion(
                     why = f"frame arithmetic ':' in {target_text}: computed at run time"
                 else:
                     why = ""
-                pos, _ = _add_position(code, s, off, lineno, scan, "motion", "", word, flow.state)
+                pos, _ = _add_position(code, s, off, lineno, scan, "motion", "", word, base)
                 pos.reason = why or pos.reason
                 flow.record(pos)
             else:
@@ -825,6 +848,6 @@ def _motion(
                     why = f"frame arithmetic ':' in {target_text}: computed at run time"
                 else:
                     why = ""
-                use = KrlUse(scan.path, lineno, s + 1, word, name, operand, flow.state, why)
+                use = KrlUse(scan.path, lineno, s + 1, word, name, operand, base, why)
                 scan.uses.append(use)
                 flow.record(use)

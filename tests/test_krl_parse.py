@@ -207,3 +207,25 @@ def test_random_whitespace_case_and_comments(kw, w0, w1, w2, values, tail, typed
     for key, value in zip("XYZABC", values, strict=True):
         n = pos.numbers[key]
         assert text[n.start : n.end] == value
+
+
+def test_spline_inline_form_sets_its_own_base():
+    """KSS 8 inline forms: SPTP XP1 WITH ..., $BASE = SBASE(FP1.BASE_NO), ..."""
+    text = "\n".join(
+        [
+            "DEF s()",
+            "SPTP XP1 WITH $VEL_AXIS[1] = SVEL_JOINT(100.0), $TOOL = STOOL2(FP1), "
+            "$BASE = SBASE(FP1.BASE_NO), $IPO_MODE = SIPO_MODE(FP1.IPO_FRAME)",
+            "SLIN {X 1,Y 2,Z 3} WITH $BASE = BASE_DATA[4]",
+            "SLIN {X 1,Y 2,Z 3} WITH $BASE = lbase",
+            "SLIN {X 1,Y 2,Z 3}",
+            "END",
+        ]
+    )
+    scan = scan_krl(text, "s.src")
+    assert scan.uses[0].base.kind == "fdat" and scan.uses[0].base.fdat == "FP1"
+    kinds = [p.base.kind for p in scan.positions]
+    assert kinds == ["number", "unknown", "unknown"]
+    assert scan.positions[0].base.number == 4
+    assert "lbase" in scan.positions[1].base.reason
+    assert "inherited" in scan.positions[2].base.reason  # WITH applies to its motion only
