@@ -45,6 +45,7 @@ REPORT_COLUMNS = (
 )
 KRL_SUFFIXES = (".src", ".dat", ".sub")
 NAN3 = (math.nan, math.nan, math.nan)
+_EXTERNAL = frozenset(("E1", "E2", "E3", "E4", "E5", "E6"))
 
 
 @dataclass
@@ -56,7 +57,7 @@ class Options:
     robot_T_program: np.ndarray  # G-code program frame
     iterations: int = 1
     power: float = 1.0
-    decimals: int | None = None  # None: keep each number's own decimal places
+    decimals: int | None = None  # None: the file's precision (see ``precision``)
     strict: bool = False
     base_override: int | None = None
     trust_calls: bool = False
@@ -218,13 +219,15 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
             if not use.reason and use.name:
                 uses.setdefault(use.name, []).append(use)
 
-    resolved: dict[BaseRef, tuple[object, np.ndarray | None, str]] = {}
+    resolved: dict[int, tuple[object, np.ndarray | None, str]] = {}
 
     def resolve(base: BaseRef) -> tuple[object, np.ndarray | None, str]:
-        """(identity key, robot_T_base or None, reason), once per distinct base."""
-        if base not in resolved:
-            resolved[base] = _resolve(base)
-        return resolved[base]
+        """(identity key, robot_T_base or None, reason), once per base object."""
+        found = resolved.get(id(base))
+        if found is None:
+            found = resolved[id(base)] = _resolve(base)
+            keep.append(base)  # the id stays valid while the object lives
+        return found
 
     def _resolve(base: BaseRef) -> tuple[object, np.ndarray | None, str]:
         if base.kind == "fdat":
@@ -245,22 +248,21 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
             return ("lit", base.xyzabc), pose_from_xyzabc(np.array(base.xyzabc)), ""
         return None, None, f"base unknown: {base.reason}"
 
+    keep: list[BaseRef] = []
     rows: list[Row] = []
     placed: list[tuple[KrlPosition, Row, np.ndarray]] = []
     for scan in scans:
+        path = scan.path or ""
         for pos in scan.positions:
-            row = Row(scan.path or "", pos.line, pos.name, "skipped")
-            if all(k in pos.numbers for k in "XYZ"):
-                row.old = (pos.numbers["X"].value, pos.numbers["Y"].value, pos.numbers["Z"].value)
+            row = Row(path, pos.line, pos.name, "skipped")
+            nums = pos.numbers
+            if "X" in nums and "Y" in nums and "Z" in nums:
+                row.old = (nums["X"].value, nums["Y"].value, nums["Z"].value)
             rows.append(row)
             reason = pos.reason
             frame = None
-            if not reason and not opts.ignore_external_axes:
-                moving = [
-                    k
-                    for k in ("E1", "E2", "E3", "E4", "E5", "E6")
-                    if pos.numbers.get(k) is not None and pos.numbers[k].value != 0.0
-                ]
+            if not reason and not opts.ignore_external_axes and not _EXTERNAL.isdisjoint(nums):
+                moving = [k for k in sorted(_EXTERNAL) if k in nums and nums[k].value != 0.0]
                 if moving:
                     reason = (
                         f"external axis {moving[0]} = {pos.numbers[moving[0]].value:g}: the robot "
@@ -556,35 +558,30 @@ def add_header(text: str, lines: list[str], kind: str) -> str:
 
 
 def report_csv(rows: list[Row], decimals: int = 4) -> str:
-    """The report as CSV text (DESIGN.md style: header row, mm)."""
-
-    def num(v: float) -> str:
-        return "" if v is None or not np.isfinite(v) else fixed(v, decimals)
-
+    """The report as CSV text (DESIGN.md style: header row, mm, ``decimals`` places)."""
+    corrected = ",".join([f"%.{decimals}f"] * 11)  # x..z, x_new..z_new, dx..dz, length, residual
+    old_only = ",".join([f"%.{decimals}f"] * 3) + ",,,,,,,,"
+    names: dict[str, str] = {}
     out = [REPORT_COLUMNS]
     for r in rows:
+        file = names.get(r.file) or names.setdefault(r.file, _csv(Path(r.file).name))
+        head = f"{file},{r.line},{_csv(r.name)},{r.status},{_csv(r.reason)},"
         if r.status == "corrected":
-            delta = tuple(n - o for n, o in zip(r.new, r.old, strict=True))
-            length = math.hypot(*delta)
+            (x, y, z), (u, v, w) = r.old, r.new
+            dx, dy, dz = u - x, v - y, w - z
+            length = math.sqrt(dx * dx + dy * dy + dz * dz)
+            numbers = corrected % (x, y, z, u, v, w, dx, dy, dz, length, r.residual_mm)
+        elif r.old[0] == r.old[0] and r.old[1] == r.old[1] and r.old[2] == r.old[2]:
+            numbers = old_only % r.old
         else:
-            delta, length = NAN3, math.nan
-        cells = [
-            Path(r.file).name,
-            str(r.line),
-            _csv(r.name),
-            r.status,
-            _csv(r.reason),
-            *(num(v) for v in r.old),
-            *(num(v) for v in r.new),
-            *(num(v) for v in delta),
-            num(length),
-            num(r.residual_mm),
-        ]
-        out.append(",".join(cells))
+            numbers = ",,,,,,,,,,"
+        out.append(head + numbers.replace("-0.0000,", "0.0000,").replace("nan", ""))
     return "\n".join(out) + "\n"
 
 
 def _csv(text: str) -> str:
+    if "," not in text and '"' not in text and "\n" not in text and "\r" not in text:
+        return text
     text = text.replace("\r", " ").replace("\n", " ")
     if any(c in text for c in ',"'):
         return '"' + text.replace('"', '""') + '"'
