@@ -10,9 +10,10 @@ inline-form FOLD lines are comments). It finds:
 - uses: motions that go to a named position (``PTP XP1``, ``LIN lfWorkPos[i]``);
 - base frame context, followed in program order: ``$BASE = BASE_DATA[n]``, ``$BASE = {FRAME: ..}``,
   ``$BASE = $NULLFRAME``, ``BAS(#BASE, n)``, ``FDAT_ACT = Fname`` (``BASE_NO`` of the FDAT
-  declaration). What cannot be decided is an ``unknown`` base with the reason: frame arithmetic
-  ``:``, a variable, ``EK(...)``, the start of a routine (inherited from the caller), a call that
-  may change it, a jump target, a branch or loop that changes it.
+  declaration), and for one spline motion ``WITH $BASE = SBASE(Fname.BASE_NO)``. What cannot be
+  decided is an ``unknown`` base with the reason: frame arithmetic ``:``, a variable, ``EK(...)``,
+  the start of a routine (inherited from the caller), a call that may change it, a jump target,
+  a branch or loop that changes it.
 
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
 """
@@ -438,7 +439,9 @@ class _Flow:
 
     def label(self, name: str, line: int) -> None:
         s = self.state
-        self.state = BaseRef(s.kind, s.line, s.number, s.xyzabc, s.fdat, s.reason, f"{name}")
+        self.state = BaseRef(
+            s.kind, s.line, s.number, s.xyzabc, s.fdat, s.reason, f"{name} (line {line})"
+        )
 
     def call(self, name: str, line: int) -> None:
         if not self.trust_calls:
@@ -460,7 +463,7 @@ class _Flow:
             block["has_else"] = True
             self.state = block["start"]
 
-    def close(self, keyword: str, line: int) -> None:
+    def close(self, line: int) -> None:
         if not self.blocks:
             return
         block = self.blocks.pop()
@@ -568,10 +571,10 @@ def _statement(
         flow.branch()
         return
     if word in _CLOSERS:
-        flow.close(word, lineno)
+        flow.close(lineno)
         return
     if word in MOTIONS:
-        _motion(code, rest_at, word, off, lineno, scan, flow, decl_types)
+        _motion(code, rest_at, word, off, lineno, scan, flow)
         return
     if (
         word == "DECL"
@@ -782,7 +785,6 @@ def _motion(
     lineno: int,
     scan: KrlScan,
     flow: _Flow,
-    decl_types: dict[str, str],
 ) -> None:
     count = 2 if word in ("CIRC", "SCIRC", "CIRC_REL", "SCIRC_REL") else 1
     relative = word.endswith("_REL")

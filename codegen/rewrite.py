@@ -388,7 +388,7 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
                 desired[i] = prog[j] + back[j]
             else:
                 rows[i].status, rows[i].reason = "outside", _outside_reason(robot[j])
-    r_planes = _corrected_r_planes(moves, rows, desired, opts)
+    r_planes = _corrected_r_planes(moves, rows, opts)
     edits = _gcode_edits(text, moves, rows, desired, r_planes, opts)
     _strict_check(rows, opts)
     return Result({path: splice(text, edits)}, rows)
@@ -405,16 +405,13 @@ def _protect_arc_starts(moves: list[GcodeMove], rows: list[Row]) -> None:
                     f"precedes the incremental arc at line {m.line}, whose start must not move"
                 )
             continue
+        why = f"sets the start of the arc at line {m.line}, which is not corrected"
         for j in m.setters:
             if j is not None and not rows[j].reason:
-                rows[
-                    j
-                ].reason = f"sets the start of the arc at line {m.line}, which is not corrected"
+                rows[j].reason = why
 
 
-def _corrected_r_planes(
-    moves: list[GcodeMove], rows: list[Row], desired: np.ndarray, opts: Options
-) -> np.ndarray:
+def _corrected_r_planes(moves: list[GcodeMove], rows: list[Row], opts: Options) -> np.ndarray:
     """(N,) corrected R plane (mm) of each corrected cycle that writes R; NaN: keep R.
 
     The R point is (X, Y, R) of the hole; only its Z correction can be written."""
