@@ -219,3 +219,33 @@ def test_command_bad_points_write_nothing(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"{bad}:3:1: duplicate id 'A'" in err and "Traceback" not in err
     assert not out.exists()
+
+
+def test_lin_travel_clamp_and_external_axes():
+    c = dataclasses.replace(
+        cell(), travel_motion="lin", clamp_output=2, external_axes=(100.0, 0, 0, 0, 0, -5.5)
+    )
+    program = program_for(ROWS[:3], c=c)
+    files = render_krl(program, ["h"])
+    s = statements(files["WING_PANEL.src"])
+    assert not any(ln.startswith("PTP") for ln in s)
+    i = s.index("LIN XH1_APP C_DIS")
+    assert s[i - 1] == "$VEL.CP = 0.5000"  # 500 mm/s travel
+    assert s[i + 2 : i + 4] == ["LIN XH1_CLR", "$OUT_C[2] = TRUE"]
+    assert s.count("$OUT[2] = FALSE") == 3
+    for p in decls(files).values():
+        assert p.values["E1"] == 100.0 and p.values["E6"] == -5.5
+
+
+def test_command_allow_config_change(tmp_path, capsys):
+    text = CELL.read_text().replace("  # status: 2 ", "  status: 0   ")
+    assert "  status: 0" in text
+    cell_file = tmp_path / "cell.yaml"
+    cell_file.write_text(text)
+    (tmp_path / "grid_200mm.csv").write_bytes((CELL.parent / "grid_200mm.csv").read_bytes())
+    args = ["krl", str(POINTS), "--cell", str(cell_file), "-o", str(tmp_path / "o")]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "hole 'WP-R1-001'" in err and "with Status 0" in err
+    assert main([*args, "--allow-config-change"]) == 0
+    assert "warning: 72 hole(s) take another Status than 0" in capsys.readouterr().err

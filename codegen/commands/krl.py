@@ -17,6 +17,7 @@ import argparse
 from pathlib import Path
 
 from codegen.atomic import check_targets, write_files
+from codegen.cell import load_cell
 from codegen.job import add_job_arguments, prepare, summary
 from codegen.krl_emit import render_krl
 
@@ -33,9 +34,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
+    name = load_cell(args.cell).program_name  # refuse existing outputs before the work
+    inputs = [args.points, args.cell] + ([args.grid] if args.grid else [])
+    check_targets([out / f"{name}.src", out / f"{name}.dat"], inputs, args.force)
     job = prepare(args, NAME)
-    name = job.program.cell.program_name
-    check_targets([out / f"{name}.src", out / f"{name}.dat"], job.inputs, args.force)
     files = render_krl(job.program, job.header, args.templates)
     written = write_files({out / f: text for f, text in files.items()}, job.inputs, args.force)
     print(summary(job, written))
