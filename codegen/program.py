@@ -30,7 +30,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from codegen.cell import Cell
-from codegen.points import Points, orient_along_axes, too_tilted
+from codegen.points import MAX_TILT_DEG, Points, orient_along_axes, too_tilted
 from codegen.textsafe import fixed
 from compensation.grid import MAX_CORRECTION_MM
 from kinematics.errors import InputError
@@ -100,6 +100,8 @@ def build_program(points: Points, cell: Cell, robot, grid=None) -> Program:
     """Corrected, IK-checked program for ``points`` in ``cell`` (``grid``: a GridModel or None for
     no correction; ``robot``: a kinematics Robot with the cell's tool)."""
     n = len(points)
+    if n == 0:
+        raise InputError("no drilling points in the file", points.path)
     if points.axis is None:
         raise InputError(
             "the points have no orientation: add columns a,b,c or i,j,k", points.path, 1
@@ -153,7 +155,8 @@ def _rotations(points: Points, cell: Cell) -> np.ndarray:
     bad = np.flatnonzero(too_tilted(points.axis, reference))
     if bad.size:
         raise InputError(
-            f"{points.name(int(bad[0]))}: the drill axis i,j,k is more than 150 deg from the "
+            f"{points.name(int(bad[0]))}: the drill axis i,j,k is more than {MAX_TILT_DEG:g} deg "
+            "from the "
             "reference tool axis (configuration.reference); give a,b,c for this hole or turn "
             "the reference",
             *points.table.where(int(bad[0]), "i"),

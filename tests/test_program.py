@@ -151,9 +151,20 @@ def test_orientation_far_from_the_grid_is_a_warning():
     assert any("from the grid's measured orientation" in w and "TILT" in w for w in prog.warnings)
 
 
-def test_points_without_orientation_are_refused():
+def test_points_without_orientation_or_holes_are_refused():
     with pytest.raises(InputError, match="no orientation"):
         build_program(parse_points("x,y,z\n0,150,0\n", "p.csv"), cell(), robot(), None)
+    with pytest.raises(InputError, match="no drilling points"):
+        build_program(parse_points("x,y,z,i,j,k\n", "p.csv"), cell(), robot(), None)
+
+
+def test_axis_opposite_the_reference_is_refused():
+    # base +Z = robot -X: pointing the drill back at the robot, 180 deg from the reference
+    with pytest.raises(InputError, match="more than 150 deg") as info:
+        build_program(
+            parse_points("id,x,y,z,i,j,k\nBACK,0,150,0,0,0,1\n", "p.csv"), cell(), robot(), None
+        )
+    assert "hole 'BACK'" in info.value.message and info.value.column == 5
 
 
 def test_program_frame_conversion_keeps_the_robot_pose():
