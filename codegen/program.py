@@ -156,9 +156,8 @@ def _rotations(points: Points, cell: Cell) -> np.ndarray:
     if bad.size:
         raise InputError(
             f"{points.name(int(bad[0]))}: the drill axis i,j,k is more than {MAX_TILT_DEG:g} deg "
-            "from the "
-            "reference tool axis (configuration.reference); give a,b,c for this hole or turn "
-            "the reference",
+            "from the reference tool axis (configuration.reference); give a,b,c for this hole "
+            "or turn the reference",
             *points.table.where(int(bad[0]), "i"),
         )
     return orient_along_axes(points.axis, reference)
