@@ -1,0 +1,227 @@
+"""Simulate a laser-tracker measurement of a robot's TCP error on a cubic grid.
+
+The controller drives the nominal kinematic model to every grid vertex (KUKA default configuration:
+basic area, A3 >= phi, wrist with |A4| <= 90 deg); the "true" robot (nominal DH plus the parameter
+errors of its YAML, e.g. seed Table 1 for kr210-paper) lands where its own forward kinematics puts
+it. Optional Gaussian noise: robot repeatability and tracker, per axis, seeded. The result is a
+measurement CSV (id,x,y,z,a,b,c,x_meas,y_meas,z_meas; mm and deg) for `accugrid correct` & co.
+
+--plot FILE draws seed Fig. 3: the X, Y, Z components of the error e = P - M over the plane of
+seed Table 2 (X 1000..2000, Y -500..500, Z 1800 mm, A 0, B 90, C 0 deg). Lengths in mm, angles in
+degrees.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+
+import numpy as np
+
+from codegen.atomic import check_targets, write_files
+from codegen.textsafe import comment_text, fixed
+from kinematics.errors import InputError
+from kinematics.frames import pose_from_xyzabc
+from kinematics.robot import Robot, load_robot
+from kinematics.simulation import reached_positions, simulate_measurements
+
+NAME = "simulate"
+HELP = "simulate a laser-tracker grid measurement of a robot (measurement CSV, seed Fig. 3)"
+
+FIG3_X = (1000.0, 2000.0)
+FIG3_Y = (-500.0, 500.0)
+FIG3_Z = 1800.0
+FIG3_ABC = (0.0, 90.0, 0.0)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--robot",
+        default="kr210-paper",
+        help="built-in robot (kr210, kr210-paper) or robot YAML file (default: kr210-paper)",
+    )
+    parser.add_argument(
+        "--region",
+        nargs=6,
+        type=float,
+        metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
+        help="grid box in the robot frame, mm (needed with -o)",
+    )
+    parser.add_argument("--step", type=float, help="grid step, mm (needed with -o)")
+    parser.add_argument(
+        "--abc",
+        nargs=3,
+        type=float,
+        default=[0.0, 90.0, 0.0],
+        metavar=("A", "B", "C"),
+        help="TCP orientation at every vertex, KUKA A B C in deg (default: 0 90 0)",
+    )
+    parser.add_argument(
+        "--tool",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "A", "B", "C"),
+        help="tool on the flange (flange_T_tool), mm and deg (default: the flange itself)",
+    )
+    parser.add_argument(
+        "--repeats", type=int, default=1, help="measurements per vertex (default: 1)"
+    )
+    parser.add_argument(
+        "--noise-tracker",
+        type=float,
+        default=0.0,
+        metavar="MM",
+        help="laser-tracker noise, Gaussian sigma per axis, mm (default: 0)",
+    )
+    parser.add_argument(
+        "--noise-repeat",
+        type=float,
+        default=0.0,
+        metavar="MM",
+        help="robot repeatability, Gaussian sigma per axis and visit, mm (default: 0)",
+    )
+    parser.add_argument(
+        "--seed", type=int, default=0, help="random seed for the noise (default: 0)"
+    )
+    parser.add_argument("-o", "--output", metavar="CSV", help="measurement CSV to write")
+    parser.add_argument("--plot", metavar="PNG", help="draw seed Fig. 3 into this PNG file")
+    parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
+
+
+def run(args: argparse.Namespace) -> int:
+    if not args.output and not args.plot:
+        raise InputError("nothing to do: give -o CSV and/or --plot PNG")
+    inputs = [args.robot] if _is_file(args.robot) else []
+    check_targets([t for t in (args.output, args.plot) if t], inputs, args.force)
+    robot = load_robot(args.robot)
+    if args.tool is not None:
+        robot = robot.with_tool(pose_from_xyzabc(args.tool))
+    if robot.true_robot() is None:
+        print(
+            f"note: robot {robot.name} has no parameter errors; the simulated error is noise only"
+        )
+    outputs: dict[str, bytes | str] = {}
+    if args.output:
+        outputs[args.output] = _measurement_csv(robot, args)
+    if args.plot:
+        outputs[args.plot] = _fig3_png(robot)
+    write_files(outputs, inputs, force=args.force)
+    for path in outputs:
+        print(f"wrote {path}")
+    return 0
+
+
+def grid_points(region: list[float], step_mm: float) -> tuple[np.ndarray, list[str]]:
+    """Vertices (N, 3) mm of the grid from each region minimum in ``step_mm`` up to the maximum
+    (x outermost, z innermost), and notes for axes whose maximum is not on the step."""
+    if step_mm is None or not step_mm > 0:
+        raise InputError(f"--step must be positive, got {step_mm}")
+    axes, notes = [], []
+    for name, lo, hi in zip("XYZ", region[0::2], region[1::2], strict=True):
+        if not lo < hi:
+            raise InputError(f"--region: {name} minimum {lo:g} must be below maximum {hi:g}")
+        count = int(np.floor((hi - lo) / step_mm + 1e-9)) + 1
+        values = lo + step_mm * np.arange(count)
+        if hi - values[-1] > 1e-6:
+            notes.append(f"{name} stops at {values[-1]:g} (region maximum {hi:g} is off the step)")
+        axes.append(values)
+    mesh = np.meshgrid(*axes, indexing="ij")
+    return np.column_stack([m.ravel() for m in mesh]), notes
+
+
+def _measurement_csv(robot: Robot, args: argparse.Namespace) -> str:
+    if args.region is None or args.step is None:
+        raise InputError("-o needs --region XMIN XMAX YMIN YMAX ZMIN ZMAX and --step MM")
+    points, notes = grid_points(args.region, args.step)
+    for note in notes:
+        print(f"note: {note}")
+    commanded, measured = simulate_measurements(
+        robot,
+        points,
+        args.abc,
+        repeats=args.repeats,
+        noise_tracker_mm=args.noise_tracker,
+        noise_repeat_mm=args.noise_repeat,
+        seed=args.seed,
+    )
+    error = points - reached_positions(robot, points, args.abc)
+    _print_summary(robot, len(points), args.repeats, error, commanded - measured)
+
+    region = " ".join(f"{v:g}" for v in args.region)
+    header = comment_text(
+        f"accugrid simulate: robot {robot.name}, region {region} mm, step {args.step:g} mm, "
+        f"abc {' '.join(f'{v:g}' for v in args.abc)} deg, repeats {args.repeats}, "
+        f"noise tracker {args.noise_tracker:g} mm, repeat {args.noise_repeat:g} mm, "
+        f"seed {args.seed}",
+        limit=400,
+    )
+    lines = [f"# {header}", "id,x,y,z,a,b,c,x_meas,y_meas,z_meas"]
+    abc = ",".join(fixed(v, 4) for v in args.abc)
+    ids = np.repeat(np.arange(1, len(points) + 1), args.repeats)
+    for ident, cmd, meas in zip(ids, commanded, measured, strict=True):
+        cmd_text = ",".join(fixed(v, 4) for v in cmd)
+        meas_text = ",".join(fixed(v, 4) for v in meas)
+        lines.append(f"P{ident},{cmd_text},{abc},{meas_text}")
+    return "\n".join(lines) + "\n"
+
+
+def _print_summary(
+    robot: Robot, n_points: int, repeats: int, error: np.ndarray, measured_error: np.ndarray
+) -> None:
+    norm = np.linalg.norm(error, axis=1)
+    print(
+        f"{robot.name}: {n_points} grid points x {repeats} repeats = {n_points * repeats} rows; "
+        "error e = P - M (mm) without noise:"
+    )
+    for k, axis in enumerate("XYZ"):
+        print(
+            f"  e{axis.lower()}: min {error[:, k].min():8.3f}  max {error[:, k].max():8.3f}  "
+            f"mean {error[:, k].mean():8.3f}"
+        )
+    print(f"  |e|: mean {norm.mean():.3f}  max {norm.max():.3f}")
+    noise = np.linalg.norm(measured_error - np.repeat(error, repeats, axis=0), axis=1)
+    print(f"  noise in the measured rows: rms {np.sqrt(np.mean(noise**2)):.4f} mm")
+
+
+def fig3_field(robot: Robot, samples: int = 51) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The seed Fig. 3 plane: X (s,), Y (s,) mm and the error e = P - M (s, s, 3) mm."""
+    xs = np.linspace(*FIG3_X, samples)
+    ys = np.linspace(*FIG3_Y, samples)
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    points = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, FIG3_Z)])
+    error = points - reached_positions(robot, points, FIG3_ABC)
+    return xs, ys, error.reshape(samples, samples, 3)
+
+
+def _fig3_png(robot: Robot) -> bytes:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    xs, ys, error = fig3_field(robot)
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.6), constrained_layout=True)
+    for k, (ax, axis) in enumerate(zip(axes, "XYZ", strict=True)):
+        field = error[:, :, k].T  # rows = Y, columns = X
+        mesh = ax.contourf(xs, ys, field, levels=20, cmap="viridis")
+        ax.contour(xs, ys, field, levels=10, colors="k", linewidths=0.4)
+        fig.colorbar(mesh, ax=ax, label=f"D_{axis} (mm)")
+        ax.set_title(f"({'abc'[k]}) D_{axis}: {field.min():.2f} .. {field.max():.2f} mm")
+        ax.set_xlabel("X (mm)")
+        ax.set_ylabel("Y (mm)")
+        ax.set_aspect("equal")
+        print(f"  Fig. 3 D_{axis}: min {field.min():.3f}  max {field.max():.3f} mm")
+    fig.suptitle(
+        f"{robot.name}: TCP error e = P - M at Z {FIG3_Z:g} mm, A B C "
+        f"{' '.join(f'{v:g}' for v in FIG3_ABC)} deg (seed Fig. 3)"
+    )
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    plt.close(fig)
+    return buffer.getvalue()
+
+
+def _is_file(name: str) -> bool:
+    from pathlib import Path
+
+    return Path(name).is_file()
