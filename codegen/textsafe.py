@@ -7,10 +7,9 @@
 
 from __future__ import annotations
 
+import math
 import re
 import unicodedata
-
-import numpy as np
 
 KRL_NAME_MAX = 24
 COMMENT_MAX = 60
@@ -25,7 +24,7 @@ def fixed(value: float, decimals: int = 3) -> str:
     Raises ValueError for NaN or infinity: such a number must never reach a program.
     """
     value = float(value)
-    if not np.isfinite(value):
+    if not math.isfinite(value):
         raise ValueError(f"refusing to write a non-finite number ({value}) into a program")
     text = f"{value:.{decimals}f}"
     if text.startswith("-") and not text.strip("-0."):
