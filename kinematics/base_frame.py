@@ -95,15 +95,14 @@ def fit_robot_frame(
     plane = PlaneFit(plane.point, up, plane.rms_mm, plane.max_mm, plane.n_points)
     z_axis = a1.normal * np.sign(a1.normal @ up)
     tilt = float(np.degrees(np.arccos(np.clip(z_axis @ up, -1.0, 1.0))))
-    origin = intersect_line_plane(
-        a1.center,
-        z_axis,
-        plane.point - smr_radius_mm * up,
-        up,
-        min_angle_deg=90.0 - MAX_AXIS_TILT_DEG,
-        what=f"A1 axis vs base plane (the axis is tilted {tilt:.2f}° from the plane normal, "
-        f"at most {MAX_AXIS_TILT_DEG:g}° is accepted)",
-    )
+    if tilt > MAX_AXIS_TILT_DEG:
+        raise InputError(
+            f"the A1 axis is tilted {tilt:.2f}° from the base-plane normal (at most "
+            f"{MAX_AXIS_TILT_DEG:g}° is accepted): are these points of the same robot, the base "
+            "plane scanned on its mounting surface and the arc traced by A1 alone?",
+            src_a1,
+        )
+    origin = intersect_line_plane(a1.center, z_axis, plane.point - smr_radius_mm * up, up)
 
     arm = holes.center - origin
     arm -= (arm @ z_axis) * z_axis
