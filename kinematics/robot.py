@@ -32,6 +32,7 @@ from kinematics.yamlfile import YamlDoc
 
 BUILTIN = ("kr210", "kr210-paper")
 _LIMIT_TOL = 1e-9
+HOME_RAD = np.radians([0.0, -90.0, 90.0, 0.0, 0.0, 0.0])  # KUKA home, the default IK reference
 
 
 @dataclass(frozen=True)
@@ -102,11 +103,16 @@ class Robot:
         """(pinocchio.Model, tcp frame id): revolute-Z joints with q_pin = sign * A (rad, mm)."""
         return _pinocchio_model(self.dh, self.joint_limits_deg, self.flange_T_tool)
 
-    def ik(self, robot_T_tcp: np.ndarray, status=None, turn=None) -> IKSolution:
+    def ik(self, robot_T_tcp: np.ndarray, status=None, turn=None, reference=None) -> IKSolution:
         """Joint solutions for TCP poses (N, 4, 4) mm with KUKA Status/Turn (int or (N,) ints).
 
-        ``status=None``: basic area, A3 >= phi, and of the two wrist solutions the one with
-        |A4| <= 90 deg. ``turn=None``: every angle in (-180, 180] (closest to 0).
+        ``status=None``: basic area and A3 >= phi (Status bits 0, 1 = 0, 1), and of the two wrist
+        solutions the one closest (sum of squared joint differences, angles wrapped) to the
+        reference configuration ``reference`` ((6,) or (N, 6) rad; default KUKA home
+        A = 0, -90, 90, 0, 0, 0 deg), i.e. by default the wrist with |A4| + |A6| < 180 deg.
+        Per pose this choice still switches branch somewhere (any per-pose rule must); to keep
+        one configuration along a path or a grid, give one ``status`` for all poses.
+        ``turn=None``: every angle in (-180, 180] (closest to 0).
         """
         poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
         n = len(poses)
@@ -116,15 +122,19 @@ class Robot:
         cand_status, _ = status_turn(self, cand.reshape(-1, 6))
         cand_status = cand_status.reshape(n, 8)
         if status is None:
-            match = reach & ((cand_status & 3) == 2) & (np.abs(cand[:, :, 3]) <= np.pi / 2)
+            match = reach & ((cand_status & 3) == 2)
+            ref = HOME_RAD if reference is None else np.asarray(reference, dtype=float)
+            ref = np.broadcast_to(ref, (n, 6))[:, None]
+            distance = np.where(match, (closed.wrap(cand - ref) ** 2).sum(axis=2), np.inf)
+            pick = np.argmin(distance, axis=1)
         else:
             want = np.broadcast_to(np.asarray(status, dtype=int), (n,))[:, None]
             singular_wrist = np.abs(cand[:, :, 4]) < 1e-12  # A5 = 0: either bit 2 fits
             match = reach & (
                 (cand_status == want) | (singular_wrist & ((cand_status & 3) == (want & 3)))
             )
+            pick = np.argmax(match, axis=1)
         found = match.any(axis=1)
-        pick = np.argmax(match, axis=1)
         q = cand[np.arange(n), pick].copy()
         q[~found] = np.nan
         reason = np.full(n, "", dtype=object)

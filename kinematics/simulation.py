@@ -23,29 +23,57 @@ def commanded_poses(points: np.ndarray, abc_deg: np.ndarray) -> np.ndarray:
     return poses
 
 
-def commanded_joints(robot: Robot, points: np.ndarray, abc_deg: np.ndarray) -> np.ndarray:
-    """Nominal-model joints (N, 6) rad for the commanded positions; InputError if any fails."""
+def grid_status(robot: Robot, points: np.ndarray, abc_deg: np.ndarray) -> int:
+    """The one KUKA Status a measurement run keeps: the IK default's Status at the first point.
+
+    A real KUKA LIN program keeps one Status for every point; letting the default configuration
+    choose per point would flip the wrist between neighbouring points (A5 sign, A4 by 180 deg)
+    and put jumps of the true robot's error into the field. InputError if the first point fails.
+    """
+    sol = robot.ik(commanded_poses(np.asarray(points, dtype=float).reshape(-1, 3)[:1], abc_deg))
+    if not sol.ok[0]:
+        _unreachable(robot, points, abc_deg, sol)
+    return int(sol.status[0])
+
+
+def commanded_joints(
+    robot: Robot, points: np.ndarray, abc_deg: np.ndarray, status: int | None = None
+) -> np.ndarray:
+    """Nominal-model joints (N, 6) rad for the commanded positions in one KUKA Status (default:
+    ``grid_status``); InputError if any point fails."""
     points = np.asarray(points, dtype=float).reshape(-1, 3)
-    sol = robot.ik(commanded_poses(points, abc_deg))
+    if len(points) == 0:
+        return np.zeros((0, 6))
+    if status is None:
+        status = grid_status(robot, points, abc_deg)
+    sol = robot.ik(commanded_poses(points, abc_deg), status=status)
     if not sol.ok.all():
-        bad = np.flatnonzero(~sol.ok)
-        first = bad[0]
-        x, y, z = points[first]
-        raise InputError(
-            f"{len(bad)} of {len(points)} points cannot be reached by {robot.name} at "
-            f"A B C = {' '.join(f'{v:g}' for v in np.ravel(abc_deg))} deg; first: "
-            f"X {x:g} Y {y:g} Z {z:g} ({sol.reason[first]})"
-        )
+        _unreachable(robot, points, abc_deg, sol)
     return sol.q
 
 
-def reached_positions(robot: Robot, points: np.ndarray, abc_deg: np.ndarray) -> np.ndarray:
+def _unreachable(robot: Robot, points: np.ndarray, abc_deg: np.ndarray, sol) -> None:
+    bad = np.flatnonzero(~sol.ok)
+    first = bad[0]
+    x, y, z = np.asarray(points, dtype=float).reshape(-1, 3)[first]
+    raise InputError(
+        f"{len(bad)} of {len(sol.ok)} points cannot be reached by {robot.name} at "
+        f"A B C = {' '.join(f'{v:g}' for v in np.ravel(abc_deg))} deg; first: "
+        f"X {x:g} Y {y:g} Z {z:g} ({sol.reason[first]})"
+    )
+
+
+def reached_positions(
+    robot: Robot, points: np.ndarray, abc_deg: np.ndarray, status: int | None = None
+) -> np.ndarray:
     """Positions (N, 3) mm the true robot's TCP reaches when commanded to points (N, 3) at abc_deg.
 
-    Without parameter errors (no true robot) the reached positions equal the commanded ones up to
-    round-off. Raises InputError if a point is unreachable or needs a joint outside its limits.
+    The controller solves every point in one KUKA ``status`` (default: ``grid_status``, the IK
+    default's Status at the first point). Without parameter errors (no true robot) the reached
+    positions equal the commanded ones up to round-off. Raises InputError if a point is
+    unreachable in that Status or needs a joint outside its limits.
     """
-    q = commanded_joints(robot, points, abc_deg)
+    q = commanded_joints(robot, points, abc_deg, status)
     true = robot.true_robot() or robot
     return true.fk(q)[:, :3, 3]
 
@@ -58,19 +86,21 @@ def simulate_measurements(
     noise_tracker_mm: float = 0.0,
     noise_repeat_mm: float = 0.0,
     seed: int = 0,
+    status: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """A simulated laser-tracker session: (commanded (N*repeats, 3), measured (N*repeats, 3)) mm.
 
     Repeats are consecutive rows. Each row gets Gaussian repeatability noise (the robot lands a
     little elsewhere each visit, sigma ``noise_repeat_mm`` per axis) and tracker noise (sigma
     ``noise_tracker_mm`` per axis), drawn in that order from ``numpy.random.default_rng(seed)``.
+    ``status``: as ``reached_positions`` (one KUKA Status for all points).
     """
     if repeats < 1:
         raise InputError(f"repeats must be at least 1, got {repeats}")
     if noise_tracker_mm < 0 or noise_repeat_mm < 0:
         raise InputError("noise must not be negative")
     points = np.asarray(points, dtype=float).reshape(-1, 3)
-    reached = reached_positions(robot, points, abc_deg)
+    reached = reached_positions(robot, points, abc_deg, status)
     commanded = np.repeat(points, repeats, axis=0)
     measured = np.repeat(reached, repeats, axis=0)
     rng = np.random.default_rng(seed)

@@ -16,7 +16,7 @@ from hypothesis.extra.numpy import arrays
 
 from kinematics.dh import chain
 from kinematics.errors import InputError
-from kinematics.frames import matrix_to_abc, pose_from_xyzabc
+from kinematics.frames import abc_to_matrix, pose_from_xyzabc
 from kinematics.robot import load_robot, status_turn
 
 ROBOTS = Path(__file__).resolve().parents[1] / "kinematics" / "robots"
@@ -75,7 +75,7 @@ def test_home_pose_is_the_kuka_data_sheet_pose(name):
     home = np.radians([[0.0, -90.0, 90.0, 0.0, 0.0, 0.0]])
     pose = load_robot(name).fk(home)[0]
     np.testing.assert_allclose(pose[:3, 3], [1765.0, 0.0, 1784.0], atol=1e-9)
-    np.testing.assert_allclose(matrix_to_abc(pose[:3, :3]), [0.0, 90.0, 0.0], atol=1e-6)
+    np.testing.assert_allclose(pose[:3, :3], abc_to_matrix([0.0, 90.0, 0.0]), atol=1e-12)
 
 
 @given(q=joints_within_limits(8))

@@ -1,10 +1,12 @@
 """Simulate a laser-tracker measurement of a robot's TCP error on a cubic grid.
 
-The controller drives the nominal kinematic model to every grid vertex (KUKA default configuration:
-basic area, A3 >= phi, wrist with |A4| <= 90 deg); the "true" robot (nominal DH plus the parameter
-errors of its YAML, e.g. seed Table 1 for kr210-paper) lands where its own forward kinematics puts
-it. Optional Gaussian noise: robot repeatability and tracker, per axis, seeded. The result is a
-measurement CSV (id,x,y,z,a,b,c,x_meas,y_meas,z_meas; mm and deg) for `accugrid correct` & co.
+The controller drives the nominal kinematic model to every grid vertex in ONE KUKA Status, as a LIN
+program does (--status S, default: the IK default configuration's Status at the first vertex, i.e.
+basic area, A3 >= phi and the wrist closest to A4 = A5 = A6 = 0); the "true" robot (nominal DH
+plus the parameter errors of its YAML, e.g. seed Table 1 for kr210-paper) lands where its own
+forward kinematics puts it. Optional Gaussian noise: robot repeatability and tracker, per axis,
+seeded. The result is a measurement CSV (id,x,y,z,a,b,c,x_meas,y_meas,z_meas; mm and deg) for
+`accugrid correct` & co.
 
 --plot FILE draws seed Fig. 3: the X, Y, Z components of the error e = P - M over the plane of
 seed Table 2 (X 1000..2000, Y -500..500, Z 1800 mm, A 0, B 90, C 0 deg). Lengths in mm, angles in
@@ -23,7 +25,7 @@ from codegen.textsafe import comment_text, fixed
 from kinematics.errors import InputError
 from kinematics.frames import pose_from_xyzabc
 from kinematics.robot import Robot, load_robot
-from kinematics.simulation import reached_positions, simulate_measurements
+from kinematics.simulation import grid_status, reached_positions, simulate_measurements
 
 NAME = "simulate"
 HELP = "simulate a laser-tracker grid measurement of a robot (measurement CSV, seed Fig. 3)"
@@ -62,6 +64,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=float,
         metavar=("X", "Y", "Z", "A", "B", "C"),
         help="tool on the flange (flange_T_tool), mm and deg (default: the flange itself)",
+    )
+    parser.add_argument(
+        "--status",
+        type=int,
+        choices=range(8),
+        metavar="S",
+        help="KUKA Status 0..7 kept for every vertex (default: the IK default's at the first)",
     )
     parser.add_argument(
         "--repeats", type=int, default=1, help="measurements per vertex (default: 1)"
@@ -104,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
     if args.output:
         outputs[args.output] = _measurement_csv(robot, args)
     if args.plot:
-        outputs[args.plot] = _fig3_png(robot)
+        outputs[args.plot] = _fig3_png(robot, args.status)
     write_files(outputs, inputs, force=args.force)
     for path in outputs:
         print(f"wrote {path}")
@@ -135,6 +144,8 @@ def _measurement_csv(robot: Robot, args: argparse.Namespace) -> str:
     points, notes = grid_points(args.region, args.step)
     for note in notes:
         print(f"note: {note}")
+    status = args.status if args.status is not None else grid_status(robot, points, args.abc)
+    print(f"KUKA Status {status} (binary {status:03b}) for every vertex")
     commanded, measured = simulate_measurements(
         robot,
         points,
@@ -143,14 +154,15 @@ def _measurement_csv(robot: Robot, args: argparse.Namespace) -> str:
         noise_tracker_mm=args.noise_tracker,
         noise_repeat_mm=args.noise_repeat,
         seed=args.seed,
+        status=status,
     )
-    error = points - reached_positions(robot, points, args.abc)
+    error = points - reached_positions(robot, points, args.abc, status)
     _print_summary(robot, len(points), args.repeats, error, commanded - measured)
 
     region = " ".join(f"{v:g}" for v in args.region)
     header = comment_text(
         f"accugrid simulate: robot {robot.name}, region {region} mm, step {args.step:g} mm, "
-        f"abc {' '.join(f'{v:g}' for v in args.abc)} deg, repeats {args.repeats}, "
+        f"abc {' '.join(f'{v:g}' for v in args.abc)} deg, status {status}, repeats {args.repeats}, "
         f"noise tracker {args.noise_tracker:g} mm, repeat {args.noise_repeat:g} mm, "
         f"seed {args.seed}",
         limit=400,
@@ -183,23 +195,26 @@ def _print_summary(
     print(f"  noise in the measured rows: rms {np.sqrt(np.mean(noise**2)):.4f} mm")
 
 
-def fig3_field(robot: Robot, samples: int = 51) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The seed Fig. 3 plane: X (s,), Y (s,) mm and the error e = P - M (s, s, 3) mm."""
+def fig3_field(
+    robot: Robot, samples: int = 51, status: int | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The seed Fig. 3 plane: X (s,), Y (s,) mm and the error e = P - M (s, s, 3) mm, in one
+    KUKA Status (default: the IK default's at the plane's first point, X 1000 Y -500)."""
     xs = np.linspace(*FIG3_X, samples)
     ys = np.linspace(*FIG3_Y, samples)
     gx, gy = np.meshgrid(xs, ys, indexing="ij")
     points = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, FIG3_Z)])
-    error = points - reached_positions(robot, points, FIG3_ABC)
+    error = points - reached_positions(robot, points, FIG3_ABC, status)
     return xs, ys, error.reshape(samples, samples, 3)
 
 
-def _fig3_png(robot: Robot) -> bytes:
+def _fig3_png(robot: Robot, status: int | None) -> bytes:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    xs, ys, error = fig3_field(robot)
+    xs, ys, error = fig3_field(robot, status=status)
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.6), constrained_layout=True)
     for k, (ax, axis) in enumerate(zip(axes, "XYZ", strict=True)):
         field = error[:, :, k].T  # rows = Y, columns = X
