@@ -7,6 +7,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from codegen.textsafe import fixed
 from kinematics.base_frame import RobotFrameFit
 from kinematics.fitting import CircleFit
 from kinematics.frames import invert, transform_points
@@ -44,7 +45,7 @@ def plot_frame_fit(fit: RobotFrameFit, points: Mapping[str, np.ndarray]) -> byte
         robot(_circle_points(fit.flange_holes)),
     )
 
-    fig = plt.figure(figsize=(15, 5.2), dpi=100)
+    fig = plt.figure(figsize=(15, 5.6), dpi=100)
     ax = fig.add_subplot(1, 3, 1, projection="3d")
     reach = float(np.max(np.linalg.norm(base[:, :2], axis=1)))
     grid = np.linspace(-reach, reach, 2)
@@ -63,6 +64,7 @@ def plot_frame_fit(fit: RobotFrameFit, points: Mapping[str, np.ndarray]) -> byte
     ax.plot([0, 0], [0, 0], [0, float(np.max(arc[:, 2]))], color="b", lw=0.6, ls=":")
     span = float(np.max(np.abs(np.vstack([base, arc, holes]))))
     ax.set(xlim=(-span, span), ylim=(-span, span), zlim=(0, 2 * span))
+    ax.zaxis.labelpad = 12
     ax.set_box_aspect((1, 1, 1))
     ax.set_xlabel("X mm")
     ax.set_ylabel("Y mm")
@@ -79,8 +81,8 @@ def plot_frame_fit(fit: RobotFrameFit, points: Mapping[str, np.ndarray]) -> byte
     ax2.set_xlabel("Y mm")
     ax2.set_ylabel("Z mm")
     ax2.set_title(
-        f"Flange holes at mechanical zero\ncentre X {centre[0]:.2f}, Y {centre[1]:.3f}, "
-        f"Z {centre[2]:.2f} mm"
+        f"Flange holes at mechanical zero\ncentre X {fixed(centre[0], 2)}, "
+        f"Y {fixed(centre[1], 3)}, Z {fixed(centre[2], 2)} mm"
     )
 
     ax3 = fig.add_subplot(1, 3, 3)

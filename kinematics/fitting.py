@@ -11,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from kinematics.errors import InputError
 
@@ -146,6 +145,9 @@ def fit_circle(points: np.ndarray, what: str = "circle fit") -> CircleFit:
     ``scipy.optimize.least_squares``. InputError for fewer than 3 points, collinear points, or an
     arc under ``MIN_ARC_DEG``. The normal's sign is arbitrary (callers orient it).
     """
+    # Imported here: scipy.optimize costs ~0.5 s, and every accugrid command imports this module.
+    from scipy.optimize import least_squares
+
     pts = _as_points(points, what)
     centroid, _, vt = _principal_axes(pts, what)
     e1, e2, n0 = vt[0], vt[1], vt[2]
