@@ -167,3 +167,19 @@ def test_transform_refusals(tmp_path, frame_file, capsys):
     assert transform(partial, frame, out) == 2
     assert f"{frame}:6: key 'tracker_T_robot.b' must be a finite number" in _error_line(capsys)
     assert not out.exists()
+
+
+def test_frame_matrix_must_agree_with_xyzabc(tmp_path, frame_file, capsys):
+    edited = tmp_path / "edited.yaml"
+    text = frame_file.read_text()
+    line_a = next(line for line in text.splitlines() if line.startswith("  a: "))
+    edited.write_text(text.replace(line_a, "  a: 10.0"))
+    matrix_line = text.splitlines().index("  matrix:") + 1
+    assert transform(TRACKER / "meas_tracker.csv", edited, tmp_path / "out.csv") == 2
+    err = _error_line(capsys)
+    assert f"{edited}:{matrix_line}: key 'tracker_T_robot.matrix' disagrees" in err
+    missing = tmp_path / "missing.csv"
+    code, out = fit_frame(tmp_path, files={**FILES, "--base-plane": missing})
+    assert code == 2
+    assert f"{missing}: cannot read" in _error_line(capsys)
+    assert not out.exists()

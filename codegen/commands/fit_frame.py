@@ -61,13 +61,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _points(path: str) -> tuple[np.ndarray, bytes]:
-    try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise InputError(f"cannot read: {exc.strerror or exc}", path) from None
+    """The x,y,z columns (N, 3) mm of a tracker CSV and the file's bytes (for its SHA-256)."""
     table = read_table(path)
     table.require(["x", "y", "z"])
-    return table.floats(["x", "y", "z"]), raw
+    return table.floats(["x", "y", "z"]), Path(path).read_bytes()
 
 
 def run(args: argparse.Namespace) -> int:
