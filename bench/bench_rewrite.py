@@ -23,6 +23,7 @@ from compensation import GridModel  # noqa: E402
 from kinematics.frames import invert, transform_points  # noqa: E402
 
 N = 100_000
+REPEATS = 3
 CELL = ROOT / "examples" / "cell.yaml"
 
 
@@ -114,11 +115,11 @@ def main_bench() -> None:
             out = folder / f"out{i}"
             target = out if len(inputs) == 2 else out / inputs[0].name
             args = ["rewrite", *map(str, inputs), "--cell", str(CELL), "-o", str(target)]
-            runs = [run_child([*args, "--force"]) for _ in range(2)]
+            runs = [run_child([*args, "--force"]) for _ in range(REPEATS)]
             seconds = min(r[0] for r in runs)
             peak = max(r[1] for r in runs)
             rows.append((name, f"{size:.1f}", f"{seconds:.2f}", f"{peak:.0f}"))
-    print(table(rows, ("program", "MiB", "rewrite s (best of 2)", "peak RSS MiB")))
+    print(table(rows, ("program", "MiB", f"rewrite s (best of {REPEATS})", "peak RSS MiB")))
     print("(the command inside a fresh process: cell, grid, parse, correct, splice, atomic write;")
     print(" peak RSS includes the interpreter, numpy and scipy: compare with the baseline row)")
 

@@ -36,6 +36,7 @@ CYCLES = frozenset(("73", "81", "82", "83", "84", "85", "86", "87", "88", "89"))
 MOTION_MODES = frozenset(("0", "1", "2", "3", "80")) | CYCLES
 INCH_MM = 25.4
 _ROTARY_SET = frozenset(ROTARY)
+_KEPT = frozenset(AXES + ROTARY + "R")  # letters whose Word a move needs
 _NONMODAL = frozenset("4 10 28 28.1 30 30.1 52 53 92 92.1 92.2 92.3".split())
 _PARAMETER_CODES = frozenset("4 10 28.1 30.1 52 92 92.1 92.2 92.3".split())
 _G_NAMES = {float(g): g for g in (str(i) for i in range(100))}
@@ -101,6 +102,10 @@ def _blank_comments(line: str, path: str | None, lineno: int) -> str:
     """The line with ``( )`` comments and the ``;`` tail replaced by spaces (offsets kept)."""
     if "(" not in line and ";" not in line and ")" not in line:
         return line
+    if ";" not in line and line.count("(") == 1 and line.count(")") == 1:
+        start, end = line.find("("), line.find(")") + 1
+        if start < end:  # one ( ) comment: what the regex below does, without a callback
+            return line[:start] + " " * (end - start) + line[end:]
     out = _COMMENT_RE.sub(_spaces, line)
     if "(" in out:
         raise InputError("unclosed '(' comment", path, lineno, out.index("(") + 1)
@@ -152,20 +157,23 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
         expr = _EXPR_RE.search(line)
         if expr is None and _LINE_RE.fullmatch(line) is None:
             _refuse(line, path, lineno)
-        words: dict[str, Word] = {}
+        words: dict[str, Word | None] = {}
         gwords: list[float] = []
         for m in _WORD_RE.finditer(line):
-            letter = m.group(1).upper()
-            number = m.group(2)
+            letter, number = m.group(1, 2)
+            letter = letter.upper()
             if letter == "G":
                 gwords.append(float(number))
                 continue
             if letter in words and letter != "M":
                 raise InputError(f"word {letter} given twice", path, lineno, m.start(2) + 1)
-            words[letter] = _new_word(
-                Word,
-                (letter, float(number), line_offset + m.start(2), line_offset + m.end(2), number),
-            )
+            if letter in _KEPT:
+                start, end = m.span(2)
+                words[letter] = _new_word(
+                    Word, (letter, float(number), line_offset + start, line_offset + end, number)
+                )
+            else:  # N, F, S, M, T, ...: only seen (a second one is an error), never a position
+                words[letter] = None
         gcodes = [_G_NAMES.get(v) or _gnum(v) for v in gwords] if gwords else gwords
         axis_words = {k: words[k] for k in AXES if k in words}
         for g in gcodes:

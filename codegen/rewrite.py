@@ -26,6 +26,7 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -45,7 +46,9 @@ REPORT_COLUMNS = (
 )
 KRL_SUFFIXES = (".src", ".dat", ".sub")
 NAN3 = (math.nan, math.nan, math.nan)
-_EXTERNAL = frozenset(("E1", "E2", "E3", "E4", "E5", "E6"))
+_EXTERNAL_AXES = ("E1", "E2", "E3", "E4", "E5", "E6")
+_EXTERNAL = frozenset(_EXTERNAL_AXES)
+_FRACTION_RE = re.compile(r"\.(\d*)")
 
 
 @dataclass
@@ -139,15 +142,38 @@ def precision(literals) -> int:
 
     CAM posts drop trailing zeros (``X25.``, ``X24.5``, ``X24.125`` are one precision), so a
     corrected number gets the file's precision, not its own digits."""
-    best = -1
-    for lit in literals:
-        if "e" in lit or "E" in lit:
-            places = decimals_of(lit)
-        else:
-            point = lit.find(".")
-            places = 0 if point < 0 else len(lit) - point - 1
-        best = max(best, places)
-    return 3 if best < 0 else best
+    joined = "\n".join(literals)
+    if not joined:
+        return 3
+    if "e" in joined or "E" in joined:
+        return max(map(decimals_of, joined.split("\n")))
+    return max(map(len, _FRACTION_RE.findall(joined)), default=0)
+
+
+def fixed_many(values: np.ndarray, places: int) -> list[str]:
+    """``fixed(v, places)`` of each value (N,), formatted in one pass; ValueError on NaN/inf."""
+    values = np.asarray(values, dtype=float)
+    if not len(values):
+        return []
+    if not np.isfinite(values).all():
+        bad = values[~np.isfinite(values)][0]
+        raise ValueError(f"refusing to write a non-finite number ({bad}) into a program")
+    texts = ((f"%.{places}f\n" * len(values)) % tuple(values.tolist())).split("\n")
+    texts.pop()
+    negative_zero = "-" + fixed(0.0, places)
+    for i in np.flatnonzero(np.abs(values) < 10.0**-places).tolist():
+        if texts[i] == negative_zero:
+            texts[i] = texts[i][1:]
+    return texts
+
+
+def number_texts(
+    old_texts: list[str], old_values: np.ndarray, new_values: np.ndarray, places: int
+) -> list[str]:
+    """New literals (N,) with ``places`` decimals; the old literal where the value is unchanged."""
+    new_texts = fixed_many(new_values, places)
+    same = np.array(list(map(float, new_texts))) == old_values
+    return [o if k else n for o, n, k in zip(old_texts, new_texts, same.tolist(), strict=True)]
 
 
 def _number_text(old_text: str, old_value: float, new_value: float, places: int) -> str:
@@ -262,7 +288,7 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
             reason = pos.reason
             frame = None
             if not reason and not opts.ignore_external_axes and not _EXTERNAL.isdisjoint(nums):
-                moving = [k for k in sorted(_EXTERNAL) if k in nums and nums[k].value != 0.0]
+                moving = [k for k in _EXTERNAL_AXES if k in nums and nums[k].value != 0.0]
                 if moving:
                     reason = (
                         f"external axis {moving[0]} = {pos.numbers[moving[0]].value:g}: the robot "
@@ -300,35 +326,53 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
         for scan in scans
     }
     if placed:
-        base_xyz = np.array([row.old for _, row, _ in placed])
-        unique: dict[int, int] = {}
-        which = np.array([unique.setdefault(id(f), len(unique)) for _, _, f in placed])
-        by_id = {id(f): f for _, _, f in placed}
-        frames = np.array([by_id[k] for k in unique])[which]  # (N, 4, 4) from a few frames
-        robot = np.einsum("nij,nj->ni", frames[:, :3, :3], base_xyz) + frames[:, :3, 3]
-        inside, corrected = _correct(robot, opts)
-        back = np.einsum("nji,nj->ni", frames[:, :3, :3], corrected - robot)  # R^T e
-        targets = (base_xyz + back).tolist()
-        inside = inside.tolist()
-        for i, (pos, row, _) in enumerate(placed):
-            if not inside[i]:
-                row.status, row.reason = "outside", _outside_reason(robot[i])
-                continue
-            target = targets[i]
-            text = texts[row.file]
-            places = opts.decimals if opts.decimals is not None else places_of[row.file]
-            new = [0.0, 0.0, 0.0]
-            for j, k in enumerate("XYZ"):
-                num = pos.numbers[k]
-                old_text = text[num.start : num.end]
-                new_text = _number_text(old_text, num.value, target[j], places)
-                new[j] = float(new_text)
-                if new_text != old_text:
-                    edits[row.file].append((num.start, num.end, new_text))
-            row.status, row.new = "corrected", tuple(new)
-            row.residual_mm = math.dist(new, target)
+        _correct_krl(placed, texts, edits, places_of, opts)
     _strict_check(rows, opts)
     return Result({p: splice(t, edits[p]) for p, t in texts.items()}, rows)
+
+
+def _correct_krl(
+    placed: list[tuple[KrlPosition, Row, np.ndarray]],
+    texts: dict[str, str],
+    edits: dict[str, list[tuple[int, int, str]]],
+    places_of: dict[str, int],
+    opts: Options,
+) -> None:
+    """Correct the placed positions at once: rows updated, X, Y, Z edits added per file.
+
+    ``placed``: (position, its row, robot_T_base (4, 4)) for N positions; frames are shared
+    objects, so the N frames come from a few distinct ones."""
+    base_xyz = np.array([row.old for _, row, _ in placed])  # (N, 3) mm, base frame
+    unique: dict[int, int] = {}
+    which = np.array([unique.setdefault(id(f), len(unique)) for _, _, f in placed])
+    by_id = {id(f): f for _, _, f in placed}
+    frames = np.array([by_id[k] for k in unique])[which]  # (N, 4, 4)
+    robot = np.einsum("nij,nj->ni", frames[:, :3, :3], base_xyz) + frames[:, :3, 3]
+    inside, corrected = _correct(robot, opts)
+    back = np.einsum("nji,nj->ni", frames[:, :3, :3], corrected - robot)  # R^T e
+    targets = base_xyz + back
+    for i in np.flatnonzero(~inside).tolist():
+        row = placed[i][1]
+        row.status, row.reason = "outside", _outside_reason(robot[i])
+    for file in texts:
+        idx = [i for i in np.flatnonzero(inside).tolist() if placed[i][1].file == file]
+        if not idx:
+            continue
+        text = texts[file]
+        places = opts.decimals if opts.decimals is not None else places_of[file]
+        numbers = [pos.numbers[k] for i in idx for pos in (placed[i][0],) for k in "XYZ"]
+        olds = [text[n.start : n.end] for n in numbers]
+        news = number_texts(olds, base_xyz[idx].ravel(), targets[idx].ravel(), places)
+        written = np.array(list(map(float, news))).reshape(-1, 3)
+        residual = np.linalg.norm(written - targets[idx], axis=1).tolist()
+        for i, new, res in zip(idx, written.tolist(), residual, strict=True):
+            row = placed[i][1]
+            row.status, row.new, row.residual_mm = "corrected", tuple(new), res
+        edits[file] += [
+            (n.start, n.end, new)
+            for n, old, new in zip(numbers, olds, news, strict=True)
+            if new != old
+        ]
 
 
 def _decl_frame(pos, named, uses, assigned, resolve, opts) -> tuple[np.ndarray | None, str]:
@@ -441,42 +485,42 @@ def _gcode_edits(
     r_planes: np.ndarray,
     opts: Options,
 ) -> list[tuple[int, int, str]]:
-    """Walk the program with the commanded (rewritten) position; new word numbers."""
+    """Walk the program with the commanded (rewritten) position; new word numbers.
+
+    ``desired`` (N, 3) mm: where each move should land (program frame); ``r_planes`` (N,) mm:
+    corrected R planes (NaN: keep). Absolute words are formatted in one pass beforehand; only
+    increments (which depend on what was written before) are formatted on the way."""
     edits: list[tuple[int, int, str]] = []
     if opts.decimals is not None:
         places = opts.decimals
     else:
         places = precision(w.literal for m in moves for k, w in m.words.items() if k in "XYZ")
+    scales = np.array([m.scale for m in moves]).reshape(-1, 1)
+    absolute = _formatted(desired / scales, places)
+    r_texts = _formatted(r_planes / scales[:, 0], places)
     cmd = [math.nan] * 3
     cycle_z = r_cmd = math.nan
-    for move, row, want, r_new in zip(moves, rows, desired, r_planes, strict=True):
+    for n, (move, row) in enumerate(zip(moves, rows, strict=True)):
         if move.motion in ("G28", "G30", "G53"):
             cmd = [math.nan] * 3
             continue
         changed = row.status == "corrected"
+        incremental = move.incremental and not move.is_cycle
         end = list(cmd)
         for i, k in enumerate("XYZ"):
             word = move.words.get(k)
             if word is None:
                 continue
-            goal = want[i] if not math.isnan(want[i]) else move.target[i]
-            incremental = move.incremental and not move.is_cycle
+            old_text = new_text = word.literal
             if incremental:
-                if math.isnan(cmd[i]) or math.isnan(goal):
-                    value = word.value  # start unknown: keep the increment as written
-                else:
+                goal = desired[n, i]
+                if not (math.isnan(cmd[i]) or math.isnan(goal)):
                     value = (goal - cmd[i]) / move.scale
-            elif move.is_cycle and i == 2:
-                value = goal / move.scale
-            else:
-                value = goal / move.scale
-            old_text = text[word.start : word.end]
-            if math.isnan(value):
-                new_text = old_text
-            elif changed or incremental:
-                new_text = _number_text(old_text, word.value, value, places)
-            else:
-                new_text = old_text
+                    new_text = _number_text(old_text, word.value, value, places)
+            elif changed and absolute[n][i] is not None:
+                new_text = absolute[n][i]
+                if float(new_text) == word.value:
+                    new_text = old_text
             if new_text != old_text:
                 edits.append((word.start, word.end, new_text))
             written = float(new_text) * move.scale
@@ -488,11 +532,9 @@ def _gcode_edits(
                 end[i] = written
         if move.is_cycle and "R" in move.words:
             word = move.words["R"]
-            old_text = text[word.start : word.end]
-            new_text = old_text
-            if not math.isnan(r_new):
-                new_text = _number_text(old_text, word.value, r_new / move.scale, places)
-            if new_text != old_text:
+            new_text = word.literal
+            if r_texts[n] is not None and float(r_texts[n]) != word.value:
+                new_text = r_texts[n]
                 edits.append((word.start, word.end, new_text))
             r_cmd = float(new_text) * move.scale
         if move.is_cycle:
@@ -507,9 +549,23 @@ def _gcode_edits(
             reached = end
         if changed:
             row.new = tuple(reached)
-            row.residual_mm = math.dist(reached, want)
+            row.residual_mm = math.dist(reached, desired[n])
         cmd = end
     return edits
+
+
+def _formatted(values: np.ndarray, places: int) -> list:
+    """``fixed`` text of each finite value of an (N,) or (N, k) array, None where NaN (same shape,
+    as nested lists)."""
+    flat = values.ravel()
+    finite = np.flatnonzero(np.isfinite(flat))
+    out: list = [None] * len(flat)
+    for i, t in zip(finite.tolist(), fixed_many(flat[finite], places), strict=True):
+        out[i] = t
+    if values.ndim == 1:
+        return out
+    k = values.shape[1]
+    return [out[i : i + k] for i in range(0, len(out), k)]
 
 
 # ---------------------------------------------------------------- files

@@ -24,6 +24,7 @@ Output: for one file, -o is the output file (or an existing directory). For a .s
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 from pathlib import Path
 
@@ -144,11 +145,19 @@ def run(args: argparse.Namespace) -> int:
         max_bytes=max_bytes,
     )
     texts = {os.fspath(p): read_program(p, max_bytes) for p in inputs}
-    if kinds == {"krl"}:
-        config = read_program(args.config_dat, max_bytes) if args.config_dat else None
-        result = rewrite_krl(texts, opts, config)
-    else:
-        result = rewrite_gcode(os.fspath(inputs[0]), texts[os.fspath(inputs[0])], opts)
+    # The parsers build millions of small acyclic objects; the cycle collector would walk them
+    # again and again while they are built (15 % of a 100k-position rewrite), for nothing.
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        if kinds == {"krl"}:
+            config = read_program(args.config_dat, max_bytes) if args.config_dat else None
+            result = rewrite_krl(texts, opts, config)
+        else:
+            result = rewrite_gcode(os.fspath(inputs[0]), texts[os.fspath(inputs[0])], opts)
+    finally:
+        if collecting:
+            gc.enable()
     files: dict[Path, bytes] = {}
     for path in inputs:
         text = result.texts[os.fspath(path)]
