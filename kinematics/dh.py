@@ -69,12 +69,13 @@ def link_matrices(theta: np.ndarray, d: float, a: float, alpha: float) -> np.nda
     return out
 
 
-def chain(table: DHTable, q: np.ndarray) -> list[np.ndarray]:
-    """Cumulative link poses base_T_i for i = 1..n over N joint vectors: list of (N, 4, 4)."""
+def chain(table: DHTable, q: np.ndarray, links: int | None = None) -> list[np.ndarray]:
+    """Cumulative link poses base_T_i for i = 1..links (default n) over N joint vectors q (N, n):
+    list of (N, 4, 4)."""
     theta = table.theta(np.atleast_2d(q))
     frames = []
     pose = None
-    for i in range(table.n):
+    for i in range(table.n if links is None else links):
         link = link_matrices(theta[:, i], table.d[i], table.a[i], table.alpha[i])
         pose = link if pose is None else pose @ link
         frames.append(pose)

@@ -20,16 +20,14 @@ def closed_form_supported(table: DHTable) -> bool:
     if table.n != 6:
         return False
     right = np.abs(np.abs(np.sin(table.alpha[[0, 2, 3, 4]])) - 1.0) < 1e-12
-    zero = np.abs(
-        np.array([np.sin(table.alpha[1]), table.d[1], table.d[2], table.a[3], table.a[4]])
-    )
+    zero = np.abs(np.array([table.alpha[1], table.d[1], table.d[2], table.a[3], table.a[4]]))
     return bool(right.all() and (zero < 1e-12).all() and abs(table.d[4]) < 1e-12)
 
 
 def wrap(angle: np.ndarray) -> np.ndarray:
     """Angles (any shape) rad wrapped into (-pi, pi]."""
-    out = np.mod(angle + np.pi, 2 * np.pi) - np.pi
-    return np.where(out == -np.pi, np.pi, out)
+    out = angle - (2 * np.pi) * np.round(np.asarray(angle) / (2 * np.pi))
+    return np.where(out <= -np.pi, out + 2 * np.pi, out)
 
 
 def wrist_points(table: DHTable, flange: np.ndarray) -> np.ndarray:
@@ -67,27 +65,38 @@ def all_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, np.nd
     gamma = np.stack([gamma_abs, -gamma_abs], axis=2)  # (N, 2 shoulder, 2 elbow)
     th3 = gamma - beta
     th2 = np.arctan2(py, px)[:, :, None] - np.arctan2(l3 * np.sin(gamma), a2 + l3 * np.cos(gamma))
-    th1 = np.repeat(th1[:, :, None], 2, axis=2)
     reach = np.repeat(reach[:, :, None], 2, axis=2)
 
-    # Wrist: W = (base_R_3)^T R6 = Rz(th4) Rx(al4) Rz(th5) Rx(al5) Rz(th6).
-    arm = np.stack([th1, th2, th3], axis=-1).reshape(n * 4, 3)
-    r3 = np.repeat(np.eye(3)[None], n * 4, axis=0)
-    for i in range(3):
-        r3 = r3 @ link_matrices(arm[:, i], 0.0, 0.0, table.alpha[i])[:, :3, :3]
-    w = np.swapaxes(r3, 1, 2) @ np.repeat(r6, 4, axis=0)
+    # Wrist: W = (base_R_3)^T R6 = Rz(th4) Rx(al4) Rz(th5) Rx(al5) Rz(th6), where base_R_3 =
+    # Rz(th1) Rx(al1) Rz(th2 + th3) Rx(al3) (alpha_2 = 0). With C = (Rz(th1) Rx(al1))^T R6 per
+    # shoulder, W = B^T C for B = Rz(phi) Rx(al3), phi = th2 + th3, written out entry by entry.
+    shoulder = link_matrices(th1.reshape(-1), 0.0, 0.0, table.alpha[0])[:, :3, :3]
+    c = (np.swapaxes(shoulder, 1, 2) @ np.repeat(r6, 2, axis=0)).reshape(n, 2, 1, 3, 3)
+    cphi, sphi = np.cos(th2 + th3).reshape(n, 2, 2, 1), np.sin(th2 + th3).reshape(n, 2, 2, 1)
+    ca3, sa3 = np.cos(table.alpha[2]), np.sin(table.alpha[2])
+    c0, c1, c2 = c[:, :, :, 0], c[:, :, :, 1], c[:, :, :, 2]  # rows of C: (n, 2, 1, 3)
+    w0 = (cphi * c0 + sphi * c1).reshape(n * 4, 3)  # rows of W: (4n, 3)
+    w1 = (ca3 * (cphi * c1 - sphi * c0) + sa3 * c2).reshape(n * 4, 3)
+    w2 = (sa3 * (sphi * c0 - cphi * c1) + ca3 * c2).reshape(n * 4, 3)
+    arm = np.stack([np.repeat(th1[:, :, None], 2, axis=2), th2, th3], axis=-1).reshape(n * 4, 3)
     s4, s5 = np.sign(np.sin(table.alpha[3])), np.sign(np.sin(table.alpha[4]))
-    wx, wy, wz = w[:, 0, 2], w[:, 1, 2], w[:, 2, 2]
+    wx, wy, wz = w0[:, 2], w1[:, 2], w2[:, 2]
+    singular = np.hypot(wx, wy) < 1e-12
     th5 = np.arctan2(np.hypot(wx, wy), -s4 * s5 * wz)
     # On the wrist singularity (A5 = 0) only A4 + A6 matters: put it all into A6.
-    th4 = np.where(np.hypot(wx, wy) < 1e-12, 0.0, np.arctan2(s5 * wy, s5 * wx))
+    th4 = np.where(singular, 0.0, np.arctan2(s5 * wy, s5 * wx))
+    # Row 3 of W is s4 * (sin th5 cos th6, -sin th5 sin th6, -s5 cos th5) with th5 >= 0; on the
+    # singularity W = Rx(alpha4 + alpha5) Rz(th6).
+    turned = np.cos(table.alpha[3] + table.alpha[4])
+    th6 = np.where(
+        singular,
+        np.arctan2(turned * w1[:, 0], w0[:, 0]),
+        np.arctan2(-s4 * w2[:, 1], s4 * w2[:, 0]),
+    )
+    # The other wrist solution: A4 + 180 deg, -A5, A6 + 180 deg.
     th4 = np.stack([th4, th4 + np.pi], axis=1).reshape(-1)
     th5 = np.stack([th5, -th5], axis=1).reshape(-1)
-    w2 = np.repeat(w, 2, axis=0)
-    r45 = link_matrices(th4, 0.0, 0.0, table.alpha[3])[:, :3, :3]
-    r45 = r45 @ link_matrices(th5, 0.0, 0.0, table.alpha[4])[:, :3, :3]
-    m = np.swapaxes(r45, 1, 2) @ w2
-    th6 = np.arctan2(m[:, 1, 0], m[:, 0, 0])
+    th6 = np.stack([th6, th6 + np.pi], axis=1).reshape(-1)
 
     theta = np.empty((n * 8, 6))
     theta[:, :3] = np.repeat(arm, 2, axis=0)

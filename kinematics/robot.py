@@ -118,9 +118,10 @@ class Robot:
         n = len(poses)
         if not closed.closed_form_supported(self.dh):
             raise InputError(f"robot {self.name}: DH structure has no closed-form inverse")
-        cand, reach = closed.all_solutions(self.dh, poses @ invert(self.flange_T_tool))
-        cand_status, _ = status_turn(self, cand.reshape(-1, 6))
-        cand_status = cand_status.reshape(n, 8)
+        flange = poses @ invert(self.flange_T_tool)
+        cand, reach = closed.all_solutions(self.dh, flange)
+        wrist = np.repeat(closed.wrist_points(self.dh, flange), 8, axis=0)
+        cand_status = _status(self, cand.reshape(-1, 6), wrist).reshape(n, 8)
         if status is None:
             match = reach & ((cand_status & 3) == 2)
             ref = HOME_RAD if reference is None else np.asarray(reference, dtype=float)
@@ -151,7 +152,8 @@ class Robot:
             lo_deg, hi_deg = self.joint_limits_deg[axis]
             reason[outside[:, axis]] = f"A{axis + 1} outside limits {lo_deg:g}..{hi_deg:g} deg"
         ok = found & ~outside.any(axis=1)
-        s, t = status_turn(self, np.where(found[:, None], q, 0.0))
+        final = np.where(found[:, None], q, 0.0)  # after Turn: A3, A5 may have moved by 360 deg
+        s, t = _status(self, final, wrist[::8]), _turn(final)
         return IKSolution(q, ok, reason, np.where(found, s, -1), np.where(found, t, -1))
 
     def ik_all(self, robot_T_tcp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -163,12 +165,24 @@ class Robot:
 def status_turn(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """KUKA Status and Turn (N,) int for joint vectors q (N, 6) rad (definitions: module doc)."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
-    turn = ((q < 0) << np.arange(6)).sum(axis=1)
-    wrist = chain(robot.dh, q)[3][:, :3, 3]
-    a1 = robot.dh.sign[0] * q[:, 0]
+    base_T_3 = chain(robot.dh, q, links=3)[2]  # the wrist point is the origin of frame 4
+    dh, theta4 = robot.dh, robot.dh.theta(q)[:, 3]
+    offset = np.stack(
+        [dh.a[3] * np.cos(theta4), dh.a[3] * np.sin(theta4), np.full_like(theta4, dh.d[3])]
+    )
+    wrist = np.einsum("nij,jn->ni", base_T_3[:, :3, :3], offset) + base_T_3[:, :3, 3]
+    return _status(robot, q, wrist), _turn(q)
+
+
+def _status(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> np.ndarray:
+    """KUKA Status (N,) of joint vectors q (N, 6) rad whose wrist point is ``wrist`` (N, 3) mm."""
+    a1 = robot.dh.sign[0] * q[:, 0] + robot.dh.theta_offset[0]
     x_a1 = wrist[:, 0] * np.cos(a1) + wrist[:, 1] * np.sin(a1)
-    status = (x_a1 < 0).astype(int) + 2 * (q[:, 2] >= robot.phi_rad) + 4 * (q[:, 4] < 0)
-    return status, turn
+    return (x_a1 < 0).astype(int) + 2 * (q[:, 2] >= robot.phi_rad) + 4 * (q[:, 4] < 0)
+
+
+def _turn(q: np.ndarray) -> np.ndarray:
+    return ((q < 0) << np.arange(q.shape[1])).sum(axis=1)
 
 
 def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:
