@@ -30,6 +30,7 @@ _OWORD_RE = re.compile(
     r"return|repeat|endrepeat|break|continue)\b",
     re.I,
 )
+_OWORD_ANY_RE = re.compile(r"^" + _OWORD_RE.pattern, re.I | re.M)  # a line _OWORD_RE may match
 AXES = "XYZ"
 ROTARY = "ABCUVW"
 CYCLES = frozenset(("73", "81", "82", "83", "84", "85", "86", "87", "88", "89"))
@@ -142,19 +143,26 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
     flow_reason = ""
     comp_reason = ""
     offset = 0
+    # whole-text checks first: most programs have no O-words, block deletes or expressions,
+    # and then no line needs those per-line regex calls
+    owords = _OWORD_ANY_RE.search(text) is not None
+    slashes = "/" in text
+    exprs = "#" in text or "[" in text
+    expr = None
     for lineno, raw in enumerate(split_lines(text), start=1):
         line_offset = offset
         offset += len(raw) + 1
         stripped = raw.strip()
         if not stripped or stripped.startswith("%"):
             continue
-        if _OWORD_RE.match(raw):
+        if owords and _OWORD_RE.match(raw):
             flow_reason = flow_reason or f"O-word control flow from line {lineno}"
             continue
         line = _blank_comments(raw, path, lineno)
-        if line.lstrip().startswith("/"):
+        if slashes and line.lstrip().startswith("/"):
             line = line.replace("/", " ", 1)
-        expr = _EXPR_RE.search(line)
+        if exprs:
+            expr = _EXPR_RE.search(line)
         if expr is None and _LINE_RE.fullmatch(line) is None:
             _refuse(line, path, lineno)
         words: dict[str, Word | None] = {}
