@@ -29,7 +29,7 @@ def error_jacobian(robot: Robot, q: np.ndarray) -> np.ndarray:
         before = frames[i - 1] if i > 0 else np.broadcast_to(np.eye(4), (n, 4, 4))
         after = invert(frames[i]) @ tcp  # V_(i+1): link i+1 .. n and the tool
         d_link = link_derivatives(theta[:, i], dh.d[i], dh.a[i], dh.alpha[i])
-        d_tcp = np.einsum("nij,npjk,nkl->npil", before, d_link, after)
+        d_tcp = before[:, None] @ d_link @ after[:, None]  # (N, 4 parameters, 4, 4)
         cols = slice(4 * i, 4 * i + 4)
         jac[:, :3, cols] = np.swapaxes(d_tcp[:, :, :3, 3], 1, 2)
         skew = d_tcp[:, :, :3, :3] @ rot_t[:, None]  # dR · R^T, skew-symmetric to first order
