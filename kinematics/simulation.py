@@ -23,17 +23,18 @@ def commanded_poses(points: np.ndarray, abc_deg: np.ndarray) -> np.ndarray:
     return poses
 
 
-def grid_status(robot: Robot, points: np.ndarray, abc_deg: np.ndarray) -> int:
+def grid_status(robot: Robot, points: np.ndarray, abc_deg: np.ndarray) -> int | None:
     """The one KUKA Status a measurement run keeps: the IK default's Status at the first point.
 
     A real KUKA LIN program keeps one Status for every point; letting the default configuration
     choose per point would flip the wrist between neighbouring points (A5 sign, A4 by 180 deg)
     and put jumps of the true robot's error into the field. InputError if the first point fails.
+    None for robots without KUKA Status (URDF robots: numeric IK from one start for every point).
     """
     sol = robot.ik(commanded_poses(np.asarray(points, dtype=float).reshape(-1, 3)[:1], abc_deg))
     if not sol.ok[0]:
         _unreachable(robot, points, abc_deg, sol)
-    return int(sol.status[0])
+    return int(sol.status[0]) if sol.status[0] >= 0 else None
 
 
 def commanded_joints(
@@ -45,7 +46,7 @@ def commanded_joints(
     if len(points) == 0:
         return np.zeros((0, 6))
     if status is None:
-        status = grid_status(robot, points, abc_deg)
+        status = grid_status(robot, points, abc_deg)  # still None for a URDF robot
     sol = robot.ik(commanded_poses(points, abc_deg), status=status)
     if not sol.ok.all():
         _unreachable(robot, points, abc_deg, sol)

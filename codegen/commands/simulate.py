@@ -145,7 +145,8 @@ def _measurement_csv(robot: Robot, args: argparse.Namespace) -> str:
     for note in notes:
         print(f"note: {note}")
     status = args.status if args.status is not None else grid_status(robot, points, args.abc)
-    print(f"KUKA Status {status} (binary {status:03b}) for every vertex")
+    if status is not None:
+        print(f"KUKA Status {status} (binary {status:03b}) for every vertex")
     commanded, measured = simulate_measurements(
         robot,
         points,

@@ -1,0 +1,155 @@
+"""Robots that are not in DH form: a URDF loaded through Pinocchio, with numeric IK.
+
+A robot YAML names the URDF and the frame that is the flange::
+
+    name: my-arm
+    urdf: my_arm.urdf        # relative to the YAML file
+    tip: tool0               # URDF link or frame used as the flange
+    tool: {x: 0, y: 0, z: 250, a: 0, b: 0, c: 0}   # optional flange_T_tool, mm and deg
+
+Joint angles are the URDF joint values in the URDF's order (rad); joint limits come from the URDF.
+Poses are (N, 4, 4) in mm (the URDF's metres times 1000). FK and IK run one pose at a time through
+Pinocchio (no closed form): IK is damped least squares on the 6D pose error with
+``pinocchio.computeFrameJacobian``. KUKA Status and Turn are not defined for these robots.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from kinematics.errors import InputError
+from kinematics.frames import pose_from_xyzabc
+from kinematics.ik import wrap
+from kinematics.yamlfile import YamlDoc
+
+_MM = 1000.0
+_DAMPING = 1e-6  # squared damping of the least-squares step (dimensionless, metres and rad)
+_TOLERANCE = 1e-12  # |6D error| in metres / rad at which a solution is accepted
+_ITERATIONS = 200
+_MAX_STEP = 0.5  # largest joint change per iteration, rad or m
+
+
+@dataclass(frozen=True)
+class UrdfRobot:
+    """A serial robot from a URDF: ``fk``/``ik``/``with_tool`` as ``kinematics.robot.Robot``."""
+
+    name: str
+    model: object  # pinocchio.Model
+    tip: int  # frame id of the flange
+    flange_T_tool: np.ndarray = field(default_factory=lambda: np.eye(4))
+    description: str = ""
+
+    @property
+    def joint_limits_deg(self) -> np.ndarray:
+        """(n, 2) [min, max] from the URDF, degrees."""
+        lo, hi = self.model.lowerPositionLimit, self.model.upperPositionLimit
+        return np.degrees(np.column_stack([lo, hi]))
+
+    @property
+    def _revolute(self) -> np.ndarray:
+        """(n,) bool: joints whose angle may be wrapped into (-pi, pi] (one-coordinate revolute)."""
+        kinds = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
+        return np.array([j.shortname() in kinds for j in self.model.joints[1:]])
+
+    def with_tool(self, flange_T_tool: np.ndarray) -> UrdfRobot:
+        tool = np.array(flange_T_tool, dtype=float).reshape(4, 4)
+        return UrdfRobot(self.name, self.model, self.tip, tool, self.description)
+
+    def true_robot(self) -> None:
+        """URDF robots carry no parameter errors."""
+        return None
+
+    def fk(self, q: np.ndarray) -> np.ndarray:
+        """TCP poses (N, 4, 4) mm for joint vectors q (N, n) rad."""
+        import pinocchio as pin
+
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        data = self.model.createData()
+        out = np.empty((len(q), 4, 4))
+        for k, qk in enumerate(q):
+            pin.framesForwardKinematics(self.model, data, qk)
+            out[k] = _to_mm(data.oMf[self.tip].homogeneous) @ self.flange_T_tool
+        return out
+
+    def ik(self, robot_T_tcp: np.ndarray, status=None, turn=None, reference=None):
+        """Damped-least-squares IK for poses (N, 4, 4) mm from ``reference`` ((n,) or (N, n) rad,
+        default the middle of the joint limits): an ``IKSolution`` with status and turn -1."""
+        import pinocchio as pin
+
+        from kinematics.robot import IKSolution
+
+        if status is not None or turn is not None:
+            raise InputError(f"robot {self.name} (URDF) has no KUKA Status/Turn")
+        poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
+        n, dof = len(poses), self.model.nq
+        lo, hi = self.model.lowerPositionLimit, self.model.upperPositionLimit
+        start = (lo + hi) / 2 if reference is None else np.asarray(reference, dtype=float)
+        start = np.broadcast_to(start, (n, dof))
+        flange = poses @ np.linalg.inv(self.flange_T_tool)
+        data = self.model.createData()
+        q = np.full((n, dof), np.nan)
+        reason = np.full(n, "", dtype=object)
+        for k in range(n):
+            target = pin.SE3(_to_m(flange[k]))
+            qk = start[k].copy()
+            for _ in range(_ITERATIONS):
+                pin.framesForwardKinematics(self.model, data, qk)
+                error = pin.log6(data.oMf[self.tip].actInv(target)).vector
+                if np.linalg.norm(error) < _TOLERANCE:
+                    break
+                jac = pin.computeFrameJacobian(self.model, data, qk, self.tip, pin.LOCAL)
+                step = jac.T @ np.linalg.solve(jac @ jac.T + _DAMPING * np.eye(6), error)
+                step *= min(1.0, _MAX_STEP / max(np.abs(step).max(), 1e-300))
+                qk = pin.integrate(self.model, qk, step)
+            else:
+                reason[k] = "unreachable (numeric IK did not converge)"
+                continue
+            qk = np.where(self._revolute, wrap(qk), qk)
+            q[k] = qk
+            outside = np.flatnonzero((qk < lo - 1e-9) | (qk > hi + 1e-9))
+            if outside.size:
+                i = int(outside[0])
+                name = self.model.names[i + 1]
+                reason[k] = (
+                    f"{name} outside limits {np.degrees(lo[i]):g}..{np.degrees(hi[i]):g} deg"
+                )
+        ok = reason == ""
+        minus = np.full(n, -1)
+        return IKSolution(q, ok, reason, minus, minus)
+
+
+def urdf_robot_from_doc(doc: YamlDoc, folder: Path) -> UrdfRobot:
+    """The UrdfRobot a robot YAML describes (keys: name, urdf, tip, optional tool, description)."""
+    import pinocchio as pin
+
+    path = folder / doc.string("urdf")
+    if not path.is_file():
+        raise doc.error(f"{doc.keyname('urdf')}: URDF file not found: {path}", "urdf")
+    try:
+        model = pin.buildModelFromUrdf(str(path))
+    except (RuntimeError, ValueError) as exc:
+        raise InputError(f"cannot read the URDF: {exc}".splitlines()[0], path) from None
+    tip_name = doc.string("tip")
+    if not model.existFrame(tip_name):
+        names = ", ".join(f.name for f in model.frames if f.name != "universe")
+        raise doc.error(f"{doc.keyname('tip')}: no frame {tip_name!r} in the URDF ({names})", "tip")
+    tool = np.eye(4)
+    if doc.has("tool"):
+        tool = pose_from_xyzabc([doc.number("tool", k, default=0.0) for k in "xyzabc"])
+    description = doc.string("description", default="")
+    return UrdfRobot(doc.string("name"), model, model.getFrameId(tip_name), tool, description)
+
+
+def _to_mm(pose_m: np.ndarray) -> np.ndarray:
+    out = np.array(pose_m, dtype=float)
+    out[:3, 3] *= _MM
+    return out
+
+
+def _to_m(pose_mm: np.ndarray) -> np.ndarray:
+    out = np.array(pose_mm, dtype=float)
+    out[:3, 3] /= _MM
+    return out
