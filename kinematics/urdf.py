@@ -30,6 +30,7 @@ _DAMPING = 1e-6  # squared damping of the least-squares step (dimensionless, met
 _TOLERANCE = 1e-12  # |6D error| in metres / rad at which a solution is accepted
 _ITERATIONS = 200
 _MAX_STEP = 0.5  # largest joint change per iteration, rad or m
+_RESTARTS = 8  # further deterministic starts when the first does not reach a pose within limits
 
 
 @dataclass(frozen=True)
@@ -92,33 +93,54 @@ class UrdfRobot:
         data = self.model.createData()
         q = np.full((n, dof), np.nan)
         reason = np.full(n, "", dtype=object)
+        starts = np.concatenate(
+            [start[:, None], np.broadcast_to(self._restarts(), (n, _RESTARTS, dof))], axis=1
+        )
         for k in range(n):
             target = pin.SE3(_to_m(flange[k]))
-            qk = start[k].copy()
-            for _ in range(_ITERATIONS):
-                pin.framesForwardKinematics(self.model, data, qk)
-                error = pin.log6(data.oMf[self.tip].actInv(target)).vector
-                if np.linalg.norm(error) < _TOLERANCE:
+            reason[k] = "unreachable (numeric IK did not converge)"
+            for guess in starts[k]:
+                qk = self._solve(data, target, guess)
+                if qk is None:
+                    continue
+                outside = np.flatnonzero((qk < lo - 1e-9) | (qk > hi + 1e-9))
+                if reason[k].startswith("unreachable") or not outside.size:
+                    q[k] = qk
+                    reason[k] = self._limit_reason(int(outside[0])) if outside.size else ""
+                if not outside.size:
                     break
-                jac = pin.computeFrameJacobian(self.model, data, qk, self.tip, pin.LOCAL)
-                step = jac.T @ np.linalg.solve(jac @ jac.T + _DAMPING * np.eye(6), error)
-                step *= min(1.0, _MAX_STEP / max(np.abs(step).max(), 1e-300))
-                qk = pin.integrate(self.model, qk, step)
-            else:
-                reason[k] = "unreachable (numeric IK did not converge)"
-                continue
-            qk = np.where(self._revolute, wrap(qk), qk)
-            q[k] = qk
-            outside = np.flatnonzero((qk < lo - 1e-9) | (qk > hi + 1e-9))
-            if outside.size:
-                i = int(outside[0])
-                name = self.model.names[i + 1]
-                reason[k] = (
-                    f"{name} outside limits {np.degrees(lo[i]):g}..{np.degrees(hi[i]):g} deg"
-                )
         ok = reason == ""
         minus = np.full(n, -1)
         return IKSolution(q, ok, reason, minus, minus)
+
+    def _solve(self, data, target, guess: np.ndarray) -> np.ndarray | None:
+        """Damped least squares from ``guess`` (n,) to the flange placement ``target`` (SE3, m)."""
+        import pinocchio as pin
+
+        qk = guess.copy()
+        for _ in range(_ITERATIONS):
+            pin.framesForwardKinematics(self.model, data, qk)
+            error = pin.log6(data.oMf[self.tip].actInv(target)).vector
+            if np.linalg.norm(error) < _TOLERANCE:
+                return np.where(self._revolute, wrap(qk), qk)
+            jac = pin.computeFrameJacobian(self.model, data, qk, self.tip, pin.LOCAL)
+            step = jac.T @ np.linalg.solve(jac @ jac.T + _DAMPING * np.eye(6), error)
+            step *= min(1.0, _MAX_STEP / max(np.abs(step).max(), 1e-300))
+            qk = pin.integrate(self.model, qk, step)
+        return None
+
+    def _restarts(self) -> np.ndarray:
+        """(_RESTARTS, n) fixed further start configurations inside the joint limits (seeded)."""
+        lo, hi = self.model.lowerPositionLimit, self.model.upperPositionLimit
+        u = np.random.default_rng(0).random((_RESTARTS, len(lo)))
+        return lo + u * (hi - lo)
+
+    def _limit_reason(self, i: int) -> str:
+        lo, hi = (
+            np.degrees(self.model.lowerPositionLimit[i]),
+            np.degrees(self.model.upperPositionLimit[i]),
+        )
+        return f"{self.model.names[i + 1]} outside limits {lo:g}..{hi:g} deg"
 
 
 def urdf_robot_from_doc(doc: YamlDoc, folder: Path) -> UrdfRobot:
