@@ -64,7 +64,7 @@ def main_bench() -> None:
     scaled = peer_time * N / N_PEER
     rows.append(("peer: Pinocchio FK, Python loop", f"{N:,} (10k x 10)", f"{scaled:.3f}", "-"))
     print(table(rows, ("kinematics", "poses", "best s", "peak MiB")))
-    print(f"FK speed-up over the Pinocchio per-pose loop: {scaled / fk_time:.0f}x")
+    print(f"FK speed-up over the Pinocchio per-pose loop: {scaled / fk_time:.1f}x")
 
 
 if __name__ == "__main__":
