@@ -498,6 +498,8 @@ def _gcode_edits(
     scales = np.array([m.scale for m in moves]).reshape(-1, 1)
     absolute = _formatted(desired / scales, places)
     r_texts = _formatted(r_planes / scales[:, 0], places)
+    goals = desired.tolist()
+    reached_rows: list[tuple[Row, list[float], list[float]]] = []
     cmd = [math.nan] * 3
     cycle_z = r_cmd = math.nan
     for n, (move, row) in enumerate(zip(moves, rows, strict=True)):
@@ -513,7 +515,7 @@ def _gcode_edits(
                 continue
             old_text = new_text = word.literal
             if incremental:
-                goal = desired[n, i]
+                goal = goals[n][i]
                 if not (math.isnan(cmd[i]) or math.isnan(goal)):
                     value = (goal - cmd[i]) / move.scale
                     new_text = _number_text(old_text, word.value, value, places)
@@ -548,9 +550,13 @@ def _gcode_edits(
         else:
             reached = end
         if changed:
-            row.new = tuple(reached)
-            row.residual_mm = math.dist(reached, desired[n])
+            reached_rows.append((row, reached, goals[n]))
         cmd = end
+    if reached_rows:
+        _, reached, goal = zip(*reached_rows, strict=True)
+        residual = np.linalg.norm(np.subtract(reached, goal), axis=1).tolist()
+        for (row, new, _), res in zip(reached_rows, residual, strict=True):
+            row.new, row.residual_mm = tuple(new), res
     return edits
 
 

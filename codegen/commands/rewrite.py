@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import gc
 import os
+from collections import Counter
 from pathlib import Path
 
 from codegen.atomic import check_targets, write_files
@@ -168,9 +169,7 @@ def run(args: argparse.Namespace) -> int:
     if args.report:
         files[Path(args.report)] = report_csv(result.rows).encode("utf-8")
     write_files(files, all_inputs, args.force)
-    counts = {
-        s: sum(r.status == s for r in result.rows) for s in ("corrected", "outside", "skipped")
-    }
+    counts = Counter(r.status for r in result.rows)
     largest, _ = result.largest()
     print(
         f"rewrite: {counts['corrected']} corrected (largest {largest:.3f} mm), "
