@@ -144,6 +144,8 @@ class Robot:
         if turn is not None:
             want_neg = np.broadcast_to(np.asarray(turn, dtype=int), (n,))[:, None] >> np.arange(6)
             want_neg = (want_neg & 1).astype(bool)
+            round_off = ~want_neg & (q < 0) & (q > -_LIMIT_TOL)  # e.g. -1e-17 for an A1 of 0
+            q = np.where(round_off, 0.0, q)
             q = np.where(want_neg & (q >= 0), q - 2 * np.pi, q)
             q = np.where(~want_neg & (q < 0), q + 2 * np.pi, q)
         lo, hi = np.radians(self.joint_limits_deg).T
