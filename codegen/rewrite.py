@@ -496,10 +496,11 @@ def _gcode_edits(
     else:
         places = precision(w.literal for m in moves for k, w in m.words.items() if k in "XYZ")
     scales = np.array([m.scale for m in moves]).reshape(-1, 1)
-    absolute = _formatted(desired / scales, places)
+    corrected = np.array([r.status == "corrected" for r in rows]).reshape(-1, 1)
+    absolute = _formatted(np.where(corrected, desired / scales, np.nan).ravel(), places)
     r_texts = _formatted(r_planes / scales[:, 0], places)
-    goals = desired.tolist()
-    reached_rows: list[tuple[Row, list[float], list[float]]] = []
+    reached_rows: list[tuple[Row, list[float]]] = []
+    reached_at: list[int] = []  # the move of each reached_rows entry
     cmd = [math.nan] * 3
     cycle_z = r_cmd = math.nan
     for n, (move, row) in enumerate(zip(moves, rows, strict=True)):
@@ -515,12 +516,12 @@ def _gcode_edits(
                 continue
             old_text = new_text = word.literal
             if incremental:
-                goal = goals[n][i]
+                goal = float(desired[n, i])
                 if not (math.isnan(cmd[i]) or math.isnan(goal)):
                     value = (goal - cmd[i]) / move.scale
                     new_text = _number_text(old_text, word.value, value, places)
-            elif changed and absolute[n][i] is not None:
-                new_text = absolute[n][i]
+            elif changed and absolute[3 * n + i] is not None:
+                new_text = absolute[3 * n + i]
                 if float(new_text) == word.value:
                     new_text = old_text
             if new_text != old_text:
@@ -550,28 +551,24 @@ def _gcode_edits(
         else:
             reached = end
         if changed:
-            reached_rows.append((row, reached, goals[n]))
+            reached_rows.append((row, reached))
+            reached_at.append(n)
         cmd = end
     if reached_rows:
-        _, reached, goal = zip(*reached_rows, strict=True)
-        residual = np.linalg.norm(np.subtract(reached, goal), axis=1).tolist()
-        for (row, new, _), res in zip(reached_rows, residual, strict=True):
+        reached = np.array([new for _, new in reached_rows])
+        residual = np.linalg.norm(reached - desired[reached_at], axis=1).tolist()
+        for (row, new), res in zip(reached_rows, residual, strict=True):
             row.new, row.residual_mm = tuple(new), res
     return edits
 
 
-def _formatted(values: np.ndarray, places: int) -> list:
-    """``fixed`` text of each finite value of an (N,) or (N, k) array, None where NaN (same shape,
-    as nested lists)."""
-    flat = values.ravel()
-    finite = np.flatnonzero(np.isfinite(flat))
-    out: list = [None] * len(flat)
-    for i, t in zip(finite.tolist(), fixed_many(flat[finite], places), strict=True):
-        out[i] = t
-    if values.ndim == 1:
-        return out
-    k = values.shape[1]
-    return [out[i : i + k] for i in range(0, len(out), k)]
+def _formatted(values: np.ndarray, places: int) -> list[str | None]:
+    """``fixed`` text of each value (N,), None where NaN."""
+    finite = np.flatnonzero(np.isfinite(values))
+    out: list[str | None] = [None] * len(values)
+    for i, text in zip(finite.tolist(), fixed_many(values[finite], places), strict=True):
+        out[i] = text
+    return out
 
 
 # ---------------------------------------------------------------- files
