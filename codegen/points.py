@@ -72,7 +72,7 @@ def parse_points(text: str, path: str = "<string>") -> Points:
 
 def _points(table: Table) -> Points:
     table.require(["x", "y", "z"])
-    xyz = _floats(table, ["x", "y", "z"])
+    xyz = table.floats(["x", "y", "z"])
     ids = _ids(table)
     has_abc = [table.has(n) for n in "abc"]
     has_ijk = [table.has(n) for n in "ijk"]
@@ -83,11 +83,11 @@ def _points(table: Table) -> Points:
     abc = axis = None
     if any(has_abc):
         table.require(["a", "b", "c"])
-        abc = _floats(table, ["a", "b", "c"])
+        abc = table.floats(["a", "b", "c"])
         axis = abc_to_matrix(abc)[:, :, 2] if len(abc) else np.zeros((0, 3))
     elif any(has_ijk):
         table.require(["i", "j", "k"])
-        raw = _floats(table, ["i", "j", "k"])
+        raw = table.floats(["i", "j", "k"])
         length = np.linalg.norm(raw, axis=1)
         short = np.flatnonzero(~(length > AXIS_MIN_LENGTH))
         if short.size:
@@ -104,22 +104,6 @@ def _points(table: Table) -> Points:
         depth=_optional_positive(table, "depth"),
         feed=_optional_positive(table, "feed"),
     )
-
-
-def _floats(table: Table, names: list[str], allow_empty: bool = False) -> np.ndarray:
-    """``table.floats`` with a vectorized fast path; any bad cell goes to ``table.floats``, which
-    raises the located error (or maps empty cells to NaN when ``allow_empty``)."""
-    try:
-        cols = [table.index(n) for n in names]
-        rows = table.rows
-        values = np.array([[row[c] for c in cols] for row in rows], dtype=float).reshape(
-            len(rows), len(cols)
-        )
-    except ValueError:
-        return table.floats(names, allow_empty)
-    if not np.isfinite(values).all():
-        return table.floats(names, allow_empty)
-    return values
 
 
 def _ids(table: Table) -> list[str]:
@@ -142,7 +126,7 @@ def _ids(table: Table) -> list[str]:
 def _optional_positive(table: Table, name: str) -> np.ndarray:
     if not table.has(name):
         return np.full(len(table), np.nan)
-    values = _floats(table, [name], allow_empty=True)[:, 0]
+    values = table.floats([name], allow_empty=True)[:, 0]
     bad = np.flatnonzero(values <= 0)
     if bad.size:
         r = int(bad[0])

@@ -68,6 +68,14 @@ class Table:
         empty cell is NaN when ``allow_empty`` and an error otherwise.
         """
         cols = [self.index(n) for n in names]
+        try:  # fast path: every cell a finite number
+            out = np.array([[row[i] for i in cols] for row in self.rows], dtype=float)
+            out = out.reshape(len(self.rows), len(cols))
+            if np.isfinite(out).all():
+                return out
+        except ValueError:
+            pass
+        # slow path: find the first bad cell and say where it is
         out = np.empty((len(self.rows), len(cols)))
         for r, row in enumerate(self.rows):
             for c, i in enumerate(cols):
