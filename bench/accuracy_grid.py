@@ -25,7 +25,7 @@ from bench.timing import table  # noqa: E402
 from compensation import GridModel  # noqa: E402
 from kinematics.frames import pose_from_xyzabc  # noqa: E402
 from kinematics.robot import load_robot  # noqa: E402
-from kinematics.simulation import commanded_joints, commanded_poses  # noqa: E402
+from kinematics.simulation import commanded_joints, grid_status  # noqa: E402
 
 ABC = np.array([0.0, 90.0, 0.0])
 LOW, HIGH = np.array([1200.0, -600.0, 1100.0]), np.array([2200.0, 600.0, 2100.0])
@@ -38,16 +38,10 @@ def demo_robot():
     return load_robot("kr210-paper").with_tool(pose_from_xyzabc([0, 0, 250, 0, 0, 0]))
 
 
-def reach(robot, commands: np.ndarray, status: int | None) -> tuple[np.ndarray, np.ndarray]:
+def reach(robot, commands: np.ndarray, status: int) -> tuple[np.ndarray, np.ndarray]:
     """True TCP positions (N, 3) mm and nominal A5 (N,) deg for commands (N, 3) at ABC: the
-    controller's IK (kinematics' default configuration, or one fixed KUKA Status), true FK."""
-    if status is None:  # as kinematics.simulation.reached_positions
-        q = commanded_joints(robot, commands, ABC)
-    else:
-        solution = robot.ik(commanded_poses(commands, ABC), status=status)
-        if not solution.ok.all():
-            raise SystemExit(f"Status {status}: {solution.reason[~solution.ok][0]}")
-        q = solution.q
+    controller's IK in one KUKA Status (as a LIN program keeps it), then the true FK."""
+    q = commanded_joints(robot, commands, ABC, status)
     return robot.true_robot().fk(q)[:, :3, 3], np.degrees(q[:, 4])
 
 
@@ -59,7 +53,7 @@ def noisy(positions: np.ndarray, rng: np.random.Generator, noise: bool) -> np.nd
     return positions + rng.normal(0.0, TRACKER_MM, positions.shape)
 
 
-def grid_model(robot, status: int | None, noise: bool, repeats: int = 5, seed: int = 1):
+def grid_model(robot, status: int, noise: bool, repeats: int = 5, seed: int = 1):
     """The simulated tracker measurement of the study region at STEP (5 repeats) as a GridModel."""
     axes = [np.arange(LOW[a], HIGH[a] + STEP / 2, STEP) for a in range(3)]
     vertices = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
@@ -102,7 +96,7 @@ def face_jumps(model: GridModel, samples: int = 21) -> tuple[float, np.ndarray]:
     return worst, where
 
 
-def study(robot, status: int | None, targets: np.ndarray, seed: int, noise: bool) -> GridModel:
+def study(robot, status: int, targets: np.ndarray, seed: int, noise: bool) -> GridModel:
     """Print the Table 5-style rows for one controller IK; returns the grid model."""
     model = grid_model(robot, status, noise)
     rng = np.random.default_rng(seed)
@@ -116,8 +110,7 @@ def study(robot, status: int | None, targets: np.ndarray, seed: int, noise: bool
         residual = targets - noisy(reach(robot, command, status)[0], rng, noise)
         rows.append((f"After {method}", str(iterations), *stats(residual)))
         clear_rows.append((f"After {method}", str(iterations), *stats(np.abs(residual[clear]))[:3]))
-    ik = "kinematics' default IK" if status is None else f"IK with fixed Status {status}"
-    print(f"\n-- controller: {ik} --")
+    print(f"\n-- controller: IK in KUKA Status {status} for grid and targets --")
     print("residual P - M (mm); columns: Max X Y Z | Min X Y Z | Std X Y Z")
     head = ("", "iter", "max X", "Y", "Z", "min X", "Y", "Z", "std X", "Y", "Z")
     print(table(rows, head))
@@ -141,13 +134,15 @@ def main() -> None:
         f"{REPEAT_MM if noise else 0} mm; {args.targets} random targets (seed {args.seed})"
     )
     print()
-    for status in (None, 6):
-        model = study(robot, status, targets, args.seed + 1, noise)
-        jump, where = face_jumps(model)
-        print(
-            f"largest IDW jump across a cell face of this grid: {jump:.4f} mm at "
-            f"({', '.join(f'{v:.0f}' for v in where)}) mm (trilinear: continuous)"
-        )
+    # The grid holds for the configuration it was measured in: grid and targets share one Status
+    # (kinematics.simulation.grid_status: the IK default at the grid's first vertex).
+    status = grid_status(robot, LOW[None], ABC)
+    model = study(robot, status, targets, args.seed + 1, noise)
+    jump, where = face_jumps(model)
+    print(
+        f"largest IDW jump across a cell face of this grid: {jump:.4f} mm at "
+        f"({', '.join(f'{v:.0f}' for v in where)}) mm (trilinear: continuous)"
+    )
 
 
 if __name__ == "__main__":
