@@ -35,7 +35,7 @@ import numpy as np
 from codegen import __version__
 from codegen.gcode_parse import GcodeMove, parse_gcode
 from codegen.krl_parse import BaseRef, KrlPosition, KrlUse, decimals_of, scan_krl
-from codegen.textsafe import comment_text, fixed
+from codegen.textsafe import comment_text, fixed, fixed_many
 from compensation import GridModel
 from kinematics.errors import InputError
 from kinematics.frames import pose_from_xyzabc
@@ -148,23 +148,6 @@ def precision(literals) -> int:
     if "e" in joined or "E" in joined:
         return max(map(decimals_of, joined.split("\n")))
     return max(map(len, _FRACTION_RE.findall(joined)), default=0)
-
-
-def fixed_many(values: np.ndarray, places: int) -> list[str]:
-    """``fixed(v, places)`` of each value (N,), formatted in one pass; ValueError on NaN/inf."""
-    values = np.asarray(values, dtype=float)
-    if not len(values):
-        return []
-    if not np.isfinite(values).all():
-        bad = values[~np.isfinite(values)][0]
-        raise ValueError(f"refusing to write a non-finite number ({bad}) into a program")
-    texts = ((f"%.{places}f\n" * len(values)) % tuple(values.tolist())).split("\n")
-    texts.pop()
-    negative_zero = "-" + fixed(0.0, places)
-    for i in np.flatnonzero(np.abs(values) < 10.0**-places).tolist():
-        if texts[i] == negative_zero:
-            texts[i] = texts[i][1:]
-    return texts
 
 
 def number_texts(

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from codegen.atomic import write_files
 from codegen.cli import main
-from codegen.textsafe import comment_text, fixed, krl_identifier
+from codegen.textsafe import comment_text, fixed, fixed_many, krl_identifier
 from compensation.csvtable import parse_table
 from kinematics import frames
 from kinematics.errors import InputError
@@ -138,3 +138,16 @@ def test_cli_version_and_unknown_command(capsys):
     with pytest.raises(SystemExit) as exit_info:
         main(["no-such-command"])
     assert exit_info.value.code == 2
+
+
+@given(
+    st.lists(st.floats(-1e6, 1e6) | st.sampled_from([0.0, -0.0, -1e-9, 5e-4, -5e-4]), max_size=50),
+    st.integers(0, 6),
+)
+def test_fixed_many_equals_fixed(values, decimals):
+    assert fixed_many(np.array(values), decimals) == [fixed(v, decimals) for v in values]
+
+
+def test_fixed_many_refuses_nan():
+    with pytest.raises(ValueError):
+        fixed_many(np.array([1.0, float("inf")]), 3)
