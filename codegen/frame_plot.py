@@ -62,13 +62,14 @@ def plot_frame_fit(fit: RobotFrameFit, points: Mapping[str, np.ndarray]) -> byte
         tip[i] = axis_len
         ax.plot([0, tip[0]], [0, tip[1]], [0, tip[2]], color=color, lw=2)
     ax.plot([0, 0], [0, 0], [0, float(np.max(arc[:, 2]))], color="b", lw=0.6, ls=":")
-    span = float(np.max(np.abs(np.vstack([base, arc, holes]))))
-    ax.set(xlim=(-span, span), ylim=(-span, span), zlim=(0, 2 * span))
-    ax.zaxis.labelpad = 12
-    ax.set_box_aspect((1, 1, 1))
+    everything = np.vstack([base, arc, holes])
+    span = float(np.max(np.abs(everything[:, :2])))
+    top = float(np.max(everything[:, 2])) * 1.1
+    ax.set(xlim=(-span, span), ylim=(-span, span), zlim=(0.0, top))
+    ax.set_box_aspect((2 * span, 2 * span, top))
     ax.set_xlabel("X mm")
     ax.set_ylabel("Y mm")
-    ax.set_zlabel("Z mm")
+    ax.set_zlabel("Z mm", labelpad=8)
     ax.set_title("Fitted robot frame (A1 axis dotted)")
     ax.legend(loc="upper left", fontsize=7)
 
@@ -81,8 +82,9 @@ def plot_frame_fit(fit: RobotFrameFit, points: Mapping[str, np.ndarray]) -> byte
     ax2.set_xlabel("Y mm")
     ax2.set_ylabel("Z mm")
     ax2.set_title(
-        f"Flange holes at mechanical zero\ncentre X {fixed(centre[0], 2)}, "
-        f"Y {fixed(centre[1], 3)}, Z {fixed(centre[2], 2)} mm"
+        f"Flange holes at mechanical zero (robot frame)\ncentre X {fixed(centre[0], 2)}, "
+        f"Y {fixed(centre[1], 3)}, Z {fixed(centre[2], 2)} mm",
+        fontsize=10,
     )
 
     ax3 = fig.add_subplot(1, 3, 3)
@@ -109,7 +111,7 @@ def plot_frame_fit(fit: RobotFrameFit, points: Mapping[str, np.ndarray]) -> byte
     ax3.set_title("Fit residuals")
     ax3.legend(fontsize=7)
 
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.97))
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", metadata={"Software": None})
     plt.close(fig)
