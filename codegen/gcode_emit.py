@@ -17,12 +17,12 @@ template formats its scalar settings with the ``fixed`` filter.
 
 from __future__ import annotations
 
-from functools import lru_cache
 from typing import NamedTuple
 
+import numpy as np
+
 from codegen.program import Program
-from codegen.render import environment, render, template_dir
-from codegen.textsafe import fixed
+from codegen.render import environment, fixed_texts, render, template_dir
 
 
 class GcodeHole(NamedTuple):
@@ -39,12 +39,13 @@ class GcodeHole(NamedTuple):
     retract_move: bool
 
 
-def canned(coords: list[tuple[str, str, str]], z: list[float]) -> bool:
-    """A hole's four formatted positions (APP, CLR, BOT, RET) allow a canned cycle: the same
-    printed X and Y, and Z going down from approach over clearance to the bottom (the drill axis
-    is the program's -Z), with the retract above the clearance."""
-    xy = {c[:2] for c in coords}
-    return len(xy) == 1 and z[0] > z[1] > z[2] and z[3] > z[1]
+def canned(text: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """Holes (N,) that allow a canned cycle, from their formatted positions ``text`` (N, 4, 3)
+    (APP, CLR, BOT, RET) and heights ``z`` (N, 4): the same printed X and Y, and Z going down from
+    approach over clearance to the bottom (the drill axis is the program's -Z), with the retract
+    above the clearance."""
+    same_xy = (text[:, :, :2] == text[:, :1, :2]).all(axis=(1, 2))
+    return same_xy & (z[:, 0] > z[:, 1]) & (z[:, 1] > z[:, 2]) & (z[:, 3] > z[:, 1])
 
 
 def render_gcode(program: Program, header: list[str], templates=None) -> str:
@@ -52,29 +53,27 @@ def render_gcode(program: Program, header: list[str], templates=None) -> str:
     cell = program.cell
     env = environment(template_dir("gcode", templates))
     pos, abc = program.in_frame(cell.robot_T_program)
-    labels = program.labels()
     d = cell.decimals
-    number = lru_cache(maxsize=4096)(fixed)  # feeds repeat
     # RET is usually the APP position (same distance): format it once
-    same_ret = (pos[:, 3] == pos[:, 0]).all(axis=1).tolist()
-    coords = []
-    for hole, same in zip(pos.tolist(), same_ret, strict=True):
-        text = [tuple(fixed(v, d) for v in p) for p in (hole[:3] if same else hole)]
-        coords.append(text + [text[0]] if same else text)
-    angles = [tuple(fixed(v, d) for v in a) for a in abc.tolist()]
-    feeds = [number(f, 1) for f in (program.feed_mm_s * 60.0).tolist()]
-    heights = pos[:, :, 2].tolist()
-    holes = [
-        GcodeHole(
-            label,
-            *coords[i],
-            angles[i],
-            feeds[i],
-            cell.canned_cycles and canned(coords[i], heights[i]),
-            coords[i][3][2] != coords[i][0][2],
+    same_ret = (pos[:, 3] == pos[:, 0]).all(axis=1)
+    text = np.empty(pos.shape, dtype=object)
+    text[:, :3] = fixed_texts(pos[:, :3], d)
+    text[:, 3] = text[:, 0]
+    text[~same_ret, 3] = fixed_texts(pos[~same_ret, 3], d)
+    cycle = canned(text, pos[:, :, 2]) if cell.canned_cycles else np.zeros(len(pos), bool)
+    retract_move = text[:, 3, 2] != text[:, 0, 2]
+    coords = [list(map(tuple, hole)) for hole in text.tolist()]
+    holes = list(
+        map(
+            GcodeHole,
+            program.labels(),
+            *zip(*coords, strict=True),
+            map(tuple, fixed_texts(abc, d, distinct=True).tolist()),
+            fixed_texts(program.feed_mm_s * 60.0, 1, distinct=True).tolist(),
+            cycle.tolist(),
+            retract_move.tolist(),
         )
-        for i, label in enumerate(labels)
-    ]
+    )
     return render(
         env,
         "program.ngc.j2",

@@ -17,14 +17,12 @@ per module follow from the rendered lines per hole of the template in use.
 
 from __future__ import annotations
 
-from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
 
 from codegen.program import STAGES, Program
-from codegen.render import environment, render, template_dir
-from codegen.textsafe import fixed
+from codegen.render import environment, fixed_texts, render, template_dir
 from kinematics.errors import InputError
 
 MAX_PARTS = 999  # NAME_001..NAME_999 keeps names <= 24 characters with a 20-character NAME
@@ -130,48 +128,47 @@ def _capacity(files, name: str, role: str, limit: int) -> int:
 
 
 class _Records:
-    """Template records of a program, numbers formatted once by ``fixed`` (mm and deg with the
-    cell's decimals, $VEL.CP m/s with 4, S and T as integers)."""
+    """Template records of a program, numbers formatted by ``fixed`` (mm and deg with the cell's
+    decimals, $VEL.CP m/s with 4, S and T as integers); angles, S, T and feeds, which repeat,
+    once per distinct value for the whole program."""
 
     def __init__(self, program: Program, pos: np.ndarray, abc: np.ndarray) -> None:
         self.program = program
-        self.pos, self.abc = pos, abc
         cell = program.cell
         self.decimals = cell.decimals
-        self.stages = (0, 1, 2) if cell.retract_mm == cell.approach_mm else (0, 1, 2, 3)
-        self.number = lru_cache(maxsize=4096)(fixed)  # S, T and feeds repeat
+        self.stages = [0, 1, 2] if cell.retract_mm == cell.approach_mm else [0, 1, 2, 3]
+        self.names = [STAGES[k] for k in self.stages]
+        self.pos = pos[:, self.stages]
+        self.abc = fixed_texts(abc, self.decimals, distinct=True)
+        self.st = fixed_texts(
+            np.stack([program.status[:, self.stages], program.turn[:, self.stages]], axis=2),
+            0,
+            distinct=True,
+        )
+        self.feed = fixed_texts(program.feed_mm_s / 1000.0, 4, distinct=True)
 
     def slice(self, lo: int, hi: int) -> tuple[list[KrlHole], list[KrlPosition]]:
         """Records of holes lo..hi-1."""
-        d, num, program = self.decimals, self.number, self.program
-        coords = self.pos[lo:hi].tolist()
-        angles = self.abc[lo:hi].tolist()
-        status = program.status[lo:hi].tolist()
-        turn = program.turn[lo:hi].tolist()
-        feeds = (program.feed_mm_s[lo:hi] / 1000.0).tolist()
-        labels = program.labels(lo, hi)
-        holes, positions = [], []
-        for j in range(hi - lo):
-            base = f"XH{lo + j + 1}_"
-            names = [base + STAGES[k] for k in self.stages]
-            ret = names[3] if len(names) == 4 else names[0]
-            holes.append(KrlHole(labels[j], names[0], names[1], names[2], ret, num(feeds[j], 4)))
-            a, b, c = (fixed(v, d) for v in angles[j])
-            for k, nm in enumerate(names):
-                x, y, z = coords[j][k]
-                positions.append(
-                    KrlPosition(
-                        nm,
-                        fixed(x, d),
-                        fixed(y, d),
-                        fixed(z, d),
-                        a,
-                        b,
-                        c,
-                        num(status[j][k], 0),
-                        num(turn[j][k], 0),
-                    )
-                )
+        n, k = hi - lo, len(self.stages)
+        names = [f"XH{i}_{s}" for i in range(lo + 1, hi + 1) for s in self.names]
+        table = np.empty((n, k, 9), dtype=object)
+        table[:, :, 0] = np.array(names, dtype=object).reshape(n, k)
+        table[:, :, 1:4] = fixed_texts(self.pos[lo:hi], self.decimals)
+        table[:, :, 4:7] = self.abc[lo:hi, None, :]
+        table[:, :, 7:9] = self.st[lo:hi]
+        positions = list(map(KrlPosition._make, table.reshape(n * k, 9).tolist()))
+        ret = names[3::4] if k == 4 else names[0::3]
+        holes = list(
+            map(
+                KrlHole,
+                self.program.labels(lo, hi),
+                names[0::k],
+                names[1::k],
+                names[2::k],
+                ret,
+                self.feed[lo:hi].tolist(),
+            )
+        )
         return holes, positions
 
 

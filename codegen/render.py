@@ -9,9 +9,11 @@ error (in a user's ``--templates`` copy) is an InputError naming the template fi
 from __future__ import annotations
 
 import os
+from itertools import repeat
 from pathlib import Path
 
 import jinja2
+import numpy as np
 
 from codegen.textsafe import comment_text, fixed, krl_identifier
 from kinematics.errors import InputError
@@ -59,3 +61,15 @@ def render(env: jinja2.Environment, template: str, /, **context: object) -> str:
         ) from None
     except jinja2.UndefinedError as exc:
         raise InputError(f"template uses an undefined value: {exc.message}", template) from None
+
+
+def fixed_texts(values: np.ndarray, decimals: int, distinct: bool = False) -> np.ndarray:
+    """``fixed(v, decimals)`` of every value, as an object array of the same shape. ``distinct``:
+    format each distinct value once (worth it where values repeat, e.g. angles of a pattern)."""
+    values = np.asarray(values, dtype=float)
+    if not distinct:
+        flat = list(map(fixed, values.ravel().tolist(), repeat(decimals)))
+        return np.array(flat, dtype=object).reshape(values.shape)
+    unique, inverse = np.unique(values.ravel(), return_inverse=True)
+    texts = np.array(list(map(fixed, unique.tolist(), repeat(decimals))), dtype=object)
+    return texts[inverse.ravel()].reshape(values.shape)
