@@ -41,12 +41,26 @@ def all_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, np.nd
 
     Returns KUKA joint angles (N, 8, 6) rad wrapped into (-pi, pi] and a (N, 8) mask of candidates
     whose wrist point is reachable (others are NaN). Joint limits are not applied here.
+    Candidate order: shoulder (2) x elbow (2) x wrist (2).
     """
     flange = np.asarray(flange, dtype=float).reshape(-1, 4, 4)
     n = len(flange)
-    r6 = flange[:, :3, :3] @ _rot_x(-table.alpha[5])  # frame 6 before its fixed Rot(X, alpha_6)
-    pw = wrist_points(table, flange)
+    th1, th2, th3, reach = arm_solutions(table, flange)
+    r6 = flange[:, :3, :3] @ _rot_x(-table.alpha[5])
+    c = _shoulder_c(table, th1.reshape(-1), np.repeat(r6, 2, axis=0)).reshape(n, 2, 1, 3, 3)
+    arm = np.stack([np.repeat(th1[:, :, None], 2, axis=2), th2, th3], axis=-1).reshape(n * 4, 3)
+    q = _joints(table, arm, *(w.reshape(-1) for w in wrist_angles(table, c, th2 + th3)))
+    q = q.reshape(n, 8, 6)
+    ok = np.repeat(reach.reshape(n, 4), 2, axis=1)
+    q[~ok] = np.nan
+    return q, ok
 
+
+def arm_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, ...]:
+    """DH angles of the 4 arm solutions for flange poses (N, 4, 4) mm: theta_1 (N, 2 shoulder),
+    theta_2 and theta_3 (N, 2 shoulder, 2 elbow) rad, and (N, 2, 2) whether the wrist point is
+    reachable (NaN angles where not)."""
+    pw = wrist_points(table, flange)
     # Shoulder: the arm plane contains the A1 axis, so theta_1 points at the wrist or away.
     toward = np.arctan2(pw[:, 1], pw[:, 0])
     th1 = np.stack([toward, toward + np.pi], axis=1)  # (N, 2)
@@ -65,22 +79,41 @@ def all_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, np.nd
     gamma = np.stack([gamma_abs, -gamma_abs], axis=2)  # (N, 2 shoulder, 2 elbow)
     th3 = gamma - beta
     th2 = np.arctan2(py, px)[:, :, None] - np.arctan2(l3 * np.sin(gamma), a2 + l3 * np.cos(gamma))
-    reach = np.repeat(reach[:, :, None], 2, axis=2)
+    return th1, th2, th3, np.repeat(reach[:, :, None], 2, axis=2)
 
-    # Wrist: W = (base_R_3)^T R6 = Rz(th4) Rx(al4) Rz(th5) Rx(al5) Rz(th6), where base_R_3 =
-    # Rz(th1) Rx(al1) Rz(th2 + th3) Rx(al3) (alpha_2 = 0). With C = (Rz(th1) Rx(al1))^T R6 per
-    # shoulder, W = B^T C for B = Rz(phi) Rx(al3), phi = th2 + th3, written out entry by entry.
-    shoulder = link_matrices(th1.reshape(-1), 0.0, 0.0, table.alpha[0])[:, :3, :3]
-    c = (np.swapaxes(shoulder, 1, 2) @ np.repeat(r6, 2, axis=0)).reshape(n, 2, 1, 3, 3)
-    cphi, sphi = np.cos(th2 + th3).reshape(n, 2, 2, 1), np.sin(th2 + th3).reshape(n, 2, 2, 1)
+
+def arm_wrists(
+    table: DHTable, flange: np.ndarray, th1: np.ndarray, th2: np.ndarray, th3: np.ndarray
+) -> np.ndarray:
+    """The 2 wrist solutions of one arm solution per pose: flange poses (M, 4, 4) mm, DH angles
+    th1, th2, th3 (M,) rad -> KUKA joint angles (M, 2, 6) rad wrapped into (-pi, pi]; the same
+    numbers ``all_solutions`` gives for that arm solution."""
+    r6 = flange[:, :3, :3] @ _rot_x(-table.alpha[5])
+    wrist = wrist_angles(table, _shoulder_c(table, th1, r6), th2 + th3)
+    return _joints(table, np.stack([th1, th2, th3], axis=-1), *wrist).reshape(-1, 2, 6)
+
+
+def _shoulder_c(table: DHTable, th1: np.ndarray, r6: np.ndarray) -> np.ndarray:
+    """C = (Rz(th1) Rx(al1))^T R6 (M, 3, 3) for th1 (M,) and R6 (M, 3, 3)."""
+    shoulder = link_matrices(th1, 0.0, 0.0, table.alpha[0])[:, :3, :3]
+    return np.swapaxes(shoulder, 1, 2) @ r6
+
+
+def wrist_angles(table: DHTable, c: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, ...]:
+    """DH theta_4, theta_5 (>= 0), theta_6 (shape of ``phi``) rad of the first wrist solution.
+
+    W = (base_R_3)^T R6 = Rz(th4) Rx(al4) Rz(th5) Rx(al5) Rz(th6), where base_R_3 =
+    Rz(th1) Rx(al1) Rz(th2 + th3) Rx(al3) (alpha_2 = 0). With C = (Rz(th1) Rx(al1))^T R6
+    (..., 3, 3), W = B^T C for B = Rz(phi) Rx(al3), phi = th2 + th3, written out entry by entry.
+    """
+    cphi, sphi = np.cos(phi)[..., None], np.sin(phi)[..., None]
     ca3, sa3 = np.cos(table.alpha[2]), np.sin(table.alpha[2])
-    c0, c1, c2 = c[:, :, :, 0], c[:, :, :, 1], c[:, :, :, 2]  # rows of C: (n, 2, 1, 3)
-    w0 = (cphi * c0 + sphi * c1).reshape(n * 4, 3)  # rows of W: (4n, 3)
-    w1 = (ca3 * (cphi * c1 - sphi * c0) + sa3 * c2).reshape(n * 4, 3)
-    w2 = (sa3 * (sphi * c0 - cphi * c1) + ca3 * c2).reshape(n * 4, 3)
-    arm = np.stack([np.repeat(th1[:, :, None], 2, axis=2), th2, th3], axis=-1).reshape(n * 4, 3)
+    c0, c1, c2 = c[..., 0, :], c[..., 1, :], c[..., 2, :]  # rows of C
+    w0 = cphi * c0 + sphi * c1  # rows of W
+    w1 = ca3 * (cphi * c1 - sphi * c0) + sa3 * c2
+    w2 = sa3 * (sphi * c0 - cphi * c1) + ca3 * c2
     s4, s5 = np.sign(np.sin(table.alpha[3])), np.sign(np.sin(table.alpha[4]))
-    wx, wy, wz = w0[:, 2], w1[:, 2], w2[:, 2]
+    wx, wy, wz = w0[..., 2], w1[..., 2], w2[..., 2]
     singular = np.hypot(wx, wy) < 1e-12
     th5 = np.arctan2(np.hypot(wx, wy), -s4 * s5 * wz)
     # On the wrist singularity (A5 = 0) only A4 + A6 matters: put it all into A6.
@@ -90,21 +123,24 @@ def all_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, np.nd
     turned = np.cos(table.alpha[3] + table.alpha[4])
     th6 = np.where(
         singular,
-        np.arctan2(turned * w1[:, 0], w0[:, 0]),
-        np.arctan2(-s4 * w2[:, 1], s4 * w2[:, 0]),
+        np.arctan2(turned * w1[..., 0], w0[..., 0]),
+        np.arctan2(-s4 * w2[..., 1], s4 * w2[..., 0]),
     )
-    # The other wrist solution: A4 + 180 deg, -A5, A6 + 180 deg.
+    return th4, th5, th6
+
+
+def _joints(
+    table: DHTable, arm: np.ndarray, th4: np.ndarray, th5: np.ndarray, th6: np.ndarray
+) -> np.ndarray:
+    """KUKA angles (2M, 6) rad in (-pi, pi]: arm DH angles (M, 3) with both wrist solutions of
+    th4, th5, th6 (M,) (the other one: A4 + 180 deg, -A5, A6 + 180 deg), wrist order inner."""
     th4 = np.stack([th4, th4 + np.pi], axis=1).reshape(-1)
     th5 = np.stack([th5, -th5], axis=1).reshape(-1)
     th6 = np.stack([th6, th6 + np.pi], axis=1).reshape(-1)
-
-    theta = np.empty((n * 8, 6))
+    theta = np.empty((len(th4), 6))
     theta[:, :3] = np.repeat(arm, 2, axis=0)
     theta[:, 3], theta[:, 4], theta[:, 5] = th4, th5, th6
-    q = wrap(table.axis_angles(theta)).reshape(n, 8, 6)
-    ok = np.repeat(reach.reshape(n, 4), 2, axis=1)
-    q[~ok] = np.nan
-    return q, ok
+    return wrap(table.axis_angles(theta))
 
 
 def _rot_x(angle: float) -> np.ndarray:

@@ -119,28 +119,11 @@ class Robot:
         if not closed.closed_form_supported(self.dh):
             raise InputError(f"robot {self.name}: DH structure has no closed-form inverse")
         flange = poses @ invert(self.flange_T_tool)
-        cand, reach = closed.all_solutions(self.dh, flange)
-        wrist = np.repeat(closed.wrist_points(self.dh, flange), 8, axis=0)
-        cand_status = _status(self, cand.reshape(-1, 6), wrist).reshape(n, 8)
-        if status is None:
-            match = reach & ((cand_status & 3) == 2)
-            ref = HOME_RAD if reference is None else np.asarray(reference, dtype=float)
-            ref = np.broadcast_to(ref, (n, 6))[:, None]
-            distance = np.where(match, (closed.wrap(cand - ref) ** 2).sum(axis=2), np.inf)
-            pick = np.argmin(distance, axis=1)
-        else:
-            want = np.broadcast_to(np.asarray(status, dtype=int), (n,))[:, None]
-            singular_wrist = np.abs(cand[:, :, 4]) < 1e-12  # A5 = 0: either bit 2 fits
-            match = reach & (
-                (cand_status == want) | (singular_wrist & ((cand_status & 3) == (want & 3)))
-            )
-            pick = np.argmax(match, axis=1)
-        found = match.any(axis=1)
-        q = cand[np.arange(n), pick].copy()
-        q[~found] = np.nan
+        wrist = closed.wrist_points(self.dh, flange)
+        q, found, reach = self._pick(flange, wrist, status, reference)
         reason = np.full(n, "", dtype=object)
         reason[~found] = "unreachable"
-        reason[~found & reach.any(axis=1)] = "no solution with the requested status"
+        reason[~found & reach] = "no solution with the requested status"
         if turn is not None:
             want_neg = np.broadcast_to(np.asarray(turn, dtype=int), (n,))[:, None] >> np.arange(6)
             want_neg = (want_neg & 1).astype(bool)
@@ -155,8 +138,83 @@ class Robot:
             reason[outside[:, axis]] = f"A{axis + 1} outside limits {lo_deg:g}..{hi_deg:g} deg"
         ok = found & ~outside.any(axis=1)
         final = np.where(found[:, None], q, 0.0)  # after Turn: A3, A5 may have moved by 360 deg
-        s, t = _status(self, final, wrist[::8]), _turn(final)
+        s, t = _status(self, final, wrist), _turn(final)
         return IKSolution(q, ok, reason, np.where(found, s, -1), np.where(found, t, -1))
+
+    def _pick(self, flange, wrist, status, reference) -> tuple[np.ndarray, ...]:
+        """The solution ``ik`` picks per flange pose (N, 4, 4), before Turn and limits: q (N, 6)
+        rad in (-pi, pi] (NaN where none), found (N,), any candidate reachable (N,).
+
+        Status bits 0 and 1 (shoulder, elbow) follow from the 4 arm solutions alone; where one
+        arm solution has the wanted bits, only its 2 wrists are solved. Poses where that does not
+        settle it (several arm solutions fit, or neither wrist has the wanted bit 2) take all 8
+        candidates, so the pick is the same as over all 8 in candidate order."""
+        n, dh = len(flange), self.dh
+        th1, th2, th3, reach = closed.arm_solutions(dh, flange)
+        arm = np.zeros((n, 4, 6))
+        arm[:, :, 0] = np.repeat(th1, 2, axis=1)
+        arm[:, :, 2] = th3.reshape(n, 4)
+        arm_q = closed.wrap(dh.axis_angles(arm)).reshape(-1, 6)
+        bits = _status(self, arm_q, np.repeat(wrist, 4, axis=0)).reshape(n, 4) & 3
+        want = 2 if status is None else np.broadcast_to(np.asarray(status, dtype=int), (n,))
+        fits = reach.reshape(n, 4) & (bits == np.bitwise_and(want, 3)[..., None])
+        one = fits.sum(axis=1) == 1
+        q = np.full((n, 6), np.nan)
+        found = np.zeros(n, bool)
+        rows = np.flatnonzero(one)
+        a = np.argmax(fits[rows], axis=1)
+        s, e = a // 2, a % 2
+        cand = closed.arm_wrists(
+            dh, flange[rows], th1[rows, s], th2[rows, s, e], th3[rows, s, e]
+        )  # (m, 2, 6)
+        if status is None:
+            ref = HOME_RAD if reference is None else np.asarray(reference, dtype=float)
+            ref = np.broadcast_to(ref, (n, 6))[rows, None]
+            pick = np.argmin((closed.wrap(cand - ref) ** 2).sum(axis=2), axis=1)
+            settled = np.ones(len(rows), bool)
+        else:
+            cand_status = _status(self, cand.reshape(-1, 6), np.repeat(wrist[rows], 2, axis=0))
+            match = self._status_match(cand.reshape(-1, 6), cand_status, want[rows].repeat(2))
+            match = match.reshape(-1, 2)
+            pick, settled = np.argmax(match, axis=1), match.any(axis=1)
+        done = rows[settled]
+        q[done] = cand[settled, pick[settled]]
+        found[done] = True
+        rest = np.flatnonzero(~one & fits.any(axis=1))
+        rest = np.concatenate([rest, rows[~settled]]) if status is not None else rest
+        if rest.size:
+            q[rest], found[rest] = self._pick_all(flange[rest], wrist[rest], want, rest, reference)
+        return q, found, reach.reshape(n, 4).any(axis=1)
+
+    def _pick_all(self, flange, wrist, want, rows, reference) -> tuple[np.ndarray, np.ndarray]:
+        """``_pick`` over all 8 candidates for poses ``rows``; want = 2 means the default."""
+        m = len(flange)
+        cand, reach = closed.all_solutions(self.dh, flange)
+        cand_status = _status(self, cand.reshape(-1, 6), np.repeat(wrist, 8, axis=0)).reshape(m, 8)
+        if np.ndim(want) == 0:
+            match = reach & ((cand_status & 3) == 2)
+            ref = HOME_RAD if reference is None else np.asarray(reference, dtype=float)
+            if ref.ndim == 2:
+                ref = ref[rows]
+            ref = np.broadcast_to(ref, (m, 6))[:, None]
+            distance = np.where(match, (closed.wrap(cand - ref) ** 2).sum(axis=2), np.inf)
+            pick = np.argmin(distance, axis=1)
+        else:
+            match = reach & self._status_match(
+                cand.reshape(-1, 6), cand_status.reshape(-1), want[rows].repeat(8)
+            ).reshape(m, 8)
+            pick = np.argmax(match, axis=1)
+        found = match.any(axis=1)
+        q = cand[np.arange(m), pick]
+        q[~found] = np.nan
+        return q, found
+
+    @staticmethod
+    def _status_match(q: np.ndarray, cand_status: np.ndarray, want: np.ndarray) -> np.ndarray:
+        """Candidates (M, 6) with the wanted Status; on the wrist singularity (A5 = 0) either
+        bit 2 fits."""
+        singular_wrist = np.abs(q[:, 4]) < 1e-12
+        return (cand_status == want) | (singular_wrist & ((cand_status & 3) == (want & 3)))
 
     def ik_all(self, robot_T_tcp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """All 8 solutions (N, 8, 6) rad in (-pi, pi] and their reachability mask (N, 8)."""
