@@ -118,19 +118,23 @@ def _shorten(text: str, limit: int = 40) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
-def read_table(path: str | os.PathLike[str]) -> Table:
-    """Read a CSV file into a Table; InputError for unreadable, empty, ragged or non-UTF-8 files."""
-    path = os.fspath(path)
+def read_text(path: str | os.PathLike[str]) -> tuple[bytes, str]:
+    """A file's bytes (for hashing) and its UTF-8 text (BOM dropped); InputError if unreadable."""
     try:
         raw = Path(path).read_bytes()
     except OSError as exc:
         raise InputError(f"cannot read: {exc.strerror or exc}", path) from None
     try:
-        text = raw.decode("utf-8-sig")
+        return raw, raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         line = raw[: exc.start].count(b"\n") + 1
         raise InputError("not UTF-8 text", path, line) from None
-    return parse_table(text, path)
+
+
+def read_table(path: str | os.PathLike[str]) -> Table:
+    """Read a CSV file into a Table; InputError for unreadable, empty, ragged or non-UTF-8 files."""
+    path = os.fspath(path)
+    return parse_table(read_text(path)[1], path)
 
 
 def parse_table(text: str, path: str = "<string>") -> Table:

@@ -11,11 +11,10 @@ from __future__ import annotations
 import hashlib
 import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from compensation.csvtable import Table, parse_table
+from compensation.csvtable import Table, parse_table, read_text
 from compensation.orientation import rotation_angle_deg
 from kinematics.errors import InputError
 
@@ -64,14 +63,7 @@ class VertexGrid:
 def read_measurements(path: str | os.PathLike[str]) -> Measurements:
     """Read a measurement CSV (DESIGN.md): x,y,z,x_meas,y_meas,z_meas required, a,b,c optional."""
     path = os.fspath(path)
-    try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise InputError(f"cannot read: {exc.strerror or exc}", path) from None
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise InputError("not UTF-8 text", path, raw[: exc.start].count(b"\n") + 1) from None
+    raw, text = read_text(path)
     table = parse_table(text, path)
     table.require(["x", "y", "z", "x_meas", "y_meas", "z_meas"])
     if not len(table):
