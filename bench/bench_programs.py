@@ -3,7 +3,7 @@ every pose (issue target: under 5 s each). Stages timed separately, then the who
 
 Holes: a 400 x 250 pattern at 1.5 mm pitch on the example wing panel (examples/cell.yaml, drill
 axis normal to the 4 m radius skin), corrected with examples/grid_200mm.csv. The last two rows are
-the whole commands (CSV file in, program files out). Peak MiB is traced Python memory.
+the whole commands (CSV file in, program files out). Best of 3; peak MiB is traced Python memory.
 """
 
 from __future__ import annotations
@@ -81,7 +81,7 @@ def main() -> None:
     rows = []
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         for name, func in stages:
-            seconds, peak = measure(func, repeats=1)
+            seconds, peak = measure(func, repeats=3)
             rows.append((name, f"{seconds:.2f}", f"{peak:.0f}"))
     shutil.rmtree(tmp)
     files = render_krl(program, header)
