@@ -9,13 +9,12 @@ error (in a user's ``--templates`` copy) is an InputError naming the template fi
 from __future__ import annotations
 
 import os
-from itertools import repeat
 from pathlib import Path
 
 import jinja2
 import numpy as np
 
-from codegen.textsafe import comment_text, fixed, krl_identifier
+from codegen.textsafe import comment_text, fixed, fixed_many, krl_identifier
 from kinematics.errors import InputError
 from templates import TEMPLATE_DIR
 
@@ -64,12 +63,11 @@ def render(env: jinja2.Environment, template: str, /, **context: object) -> str:
 
 
 def fixed_texts(values: np.ndarray, decimals: int, distinct: bool = False) -> np.ndarray:
-    """``fixed(v, decimals)`` of every value, as an object array of the same shape. ``distinct``:
-    format each distinct value once (worth it where values repeat, e.g. angles of a pattern)."""
+    """``fixed(v, decimals)`` of every value (via ``fixed_many``), as an object array of the same
+    shape. ``distinct``: format each distinct value once (where values repeat, e.g. angles)."""
     values = np.asarray(values, dtype=float)
     if not distinct:
-        flat = list(map(fixed, values.ravel().tolist(), repeat(decimals)))
-        return np.array(flat, dtype=object).reshape(values.shape)
+        return np.array(fixed_many(values.ravel(), decimals), dtype=object).reshape(values.shape)
     unique, inverse = np.unique(values.ravel(), return_inverse=True)
-    texts = np.array(list(map(fixed, unique.tolist(), repeat(decimals))), dtype=object)
+    texts = np.array(fixed_many(unique, decimals), dtype=object)
     return texts[inverse.ravel()].reshape(values.shape)
