@@ -29,10 +29,10 @@ import numpy as np
 
 from codegen import __version__
 from codegen.atomic import check_targets, write_files
+from codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
 from codegen.render import environment, render, template_dir
 from codegen.textsafe import fixed, krl_identifier
 from compensation.plans import (
-    SEED_ABC,
     SEED_CENTRES,
     SEED_REGION,
     SEED_REPEATS,
@@ -42,8 +42,6 @@ from compensation.plans import (
     grid_plan,
 )
 from kinematics.errors import InputError
-from kinematics.frames import pose_from_xyzabc
-from kinematics.robot import load_robot
 from kinematics.simulation import commanded_poses
 
 NAME = "plan"
@@ -118,33 +116,20 @@ def add_experiment_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--abc",
-        nargs=3,
-        type=float,
-        default=list(SEED_ABC),
-        metavar=("A", "B", "C"),
-        help="fixed TCP orientation, KUKA A B C in deg (default: 0 90 0)",
-    )
+    add_abc(parser, "fixed TCP orientation")
     parser.add_argument(
         "--robot",
         default="kr210",
         help="robot for the reach check and S/T: built-in name or YAML (default: kr210)",
     )
-    parser.add_argument(
-        "--tool",
-        nargs=6,
-        type=float,
-        metavar=("X", "Y", "Z", "A", "B", "C"),
-        help="measured point (SMR) on the flange, flange_T_tool in mm and deg "
+    add_tool(
+        parser,
+        "measured point (SMR) on the flange, flange_T_tool in mm and deg "
         "(default: the flange centre)",
     )
-    parser.add_argument(
-        "--status",
-        type=int,
-        choices=range(8),
-        metavar="S",
-        help="KUKA Status (0..7) for every position (default: the IK default configuration "
+    add_status(
+        parser,
+        "KUKA Status (0..7) for every position (default: the IK default configuration "
         "at the first position)",
     )
     parser.add_argument(
@@ -275,9 +260,7 @@ def reach(plan: Plan, args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray,
     """KUKA S and T (N,) of every position in one Status (--status, or the IK default at the
     first position): LIN moves keep the configuration of the first PTP, so the whole plan must
     be reachable in it. InputError naming the first position that is not."""
-    robot = load_robot(args.robot)
-    if args.tool is not None:
-        robot = robot.with_tool(pose_from_xyzabc(np.array(args.tool, dtype=float)))
+    robot = robot_with_tool(args.robot, args.tool)
     poses = commanded_poses(plan.points, plan.abc)
     status = args.status
     if status is None:

@@ -21,10 +21,10 @@ import io
 import numpy as np
 
 from codegen.atomic import check_targets, write_files
+from codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
 from codegen.textsafe import comment_text, fixed
 from kinematics.errors import InputError
-from kinematics.frames import pose_from_xyzabc
-from kinematics.robot import Robot, load_robot
+from kinematics.robot import Robot
 from kinematics.simulation import grid_status, reached_positions, simulate_measurements
 
 NAME = "simulate"
@@ -50,27 +50,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="grid box in the robot frame, mm (needed with -o)",
     )
     parser.add_argument("--step", type=float, help="grid step, mm (needed with -o)")
-    parser.add_argument(
-        "--abc",
-        nargs=3,
-        type=float,
-        default=[0.0, 90.0, 0.0],
-        metavar=("A", "B", "C"),
-        help="TCP orientation at every vertex, KUKA A B C in deg (default: 0 90 0)",
-    )
-    parser.add_argument(
-        "--tool",
-        nargs=6,
-        type=float,
-        metavar=("X", "Y", "Z", "A", "B", "C"),
-        help="tool on the flange (flange_T_tool), mm and deg (default: the flange itself)",
-    )
-    parser.add_argument(
-        "--status",
-        type=int,
-        choices=range(8),
-        metavar="S",
-        help="KUKA Status 0..7 kept for every vertex (default: the IK default's at the first)",
+    add_abc(parser, "TCP orientation at every vertex")
+    add_tool(parser, "tool on the flange (flange_T_tool), mm and deg (default: the flange itself)")
+    add_status(
+        parser, "KUKA Status 0..7 kept for every vertex (default: the IK default's at the first)"
     )
     parser.add_argument(
         "--repeats", type=int, default=1, help="measurements per vertex (default: 1)"
@@ -102,9 +85,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("nothing to do: give -o CSV and/or --plot PNG")
     inputs = [args.robot] if _is_file(args.robot) else []
     check_targets([t for t in (args.output, args.plot) if t], inputs, args.force)
-    robot = load_robot(args.robot)
-    if args.tool is not None:
-        robot = robot.with_tool(pose_from_xyzabc(args.tool))
+    robot = robot_with_tool(args.robot, args.tool)
     if robot.true_robot() is None:
         print(
             f"note: robot {robot.name} has no parameter errors; the simulated error is noise only"

@@ -32,11 +32,12 @@ from pathlib import Path
 import numpy as np
 
 from codegen.atomic import check_targets, write_files
+from codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
 from codegen.commands.plan import add_experiment_arguments, parse_centres, parse_steps
 from codegen.progress import progress
 from compensation.csvtable import read_table
 from compensation.grid import GridModel
-from compensation.plans import SEED_ABC, SEED_REGION
+from compensation.plans import SEED_REGION
 from compensation.study import (
     AXES,
     DEFAULT_STD_FRACTION,
@@ -53,8 +54,7 @@ from compensation.study import (
     simulate_validation,
 )
 from kinematics.errors import InputError
-from kinematics.frames import pose_from_xyzabc
-from kinematics.robot import Robot, load_robot
+from kinematics.robot import Robot
 from kinematics.simulation import commanded_poses
 
 NAME = "study"
@@ -74,21 +74,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--measured", metavar="FILE", help="filled-in `accugrid plan experiment` CSV"
     )
     add_experiment_arguments(parser)
-    parser.add_argument(
-        "--abc",
-        nargs=3,
-        type=float,
-        default=list(SEED_ABC),
-        metavar=("A", "B", "C"),
-        help="simulated TCP orientation, KUKA A B C in deg (default: 0 90 0)",
-    )
-    parser.add_argument(
-        "--tool",
-        nargs=6,
-        type=float,
-        metavar=("X", "Y", "Z", "A", "B", "C"),
-        help="simulated tool, flange_T_tool in mm and deg (default: the flange)",
-    )
+    add_abc(parser, "simulated TCP orientation")
+    add_tool(parser, "simulated tool, flange_T_tool in mm and deg (default: the flange)")
     parser.add_argument(
         "--noise-tracker",
         type=float,
@@ -104,12 +91,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="simulated robot repeatability, Gaussian sigma per axis, mm (default: 0.03)",
     )
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
-    parser.add_argument(
-        "--status",
-        type=int,
-        choices=range(8),
-        metavar="S",
-        help="KUKA Status (0..7) the simulated robot keeps for every point, as a program of LIN "
+    add_status(
+        parser,
+        "KUKA Status (0..7) the simulated robot keeps for every point, as a program of LIN "
         "moves does (default: the IK default configuration at the first centre)",
     )
     r = SEED_REGION
@@ -358,9 +342,7 @@ def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     settings: list[str] = []
     if args.simulate:
-        robot = load_robot(args.simulate)
-        if args.tool is not None:
-            robot = robot.with_tool(pose_from_xyzabc(np.array(args.tool, dtype=float)))
+        robot = robot_with_tool(args.simulate, args.tool)
         abc = np.array(args.abc, dtype=float)
         centres = parse_centres(args.centre)
         names, xyz = list(centres), np.array(list(centres.values()), dtype=float)
