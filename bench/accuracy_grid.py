@@ -21,11 +21,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from accugrid.compensation import GridModel  # noqa: E402
+from accugrid.kinematics.frames import pose_from_xyzabc  # noqa: E402
+from accugrid.kinematics.robot import load_robot  # noqa: E402
+from accugrid.kinematics.simulation import commanded_joints, grid_status  # noqa: E402
 from bench.timing import table  # noqa: E402
-from compensation import GridModel  # noqa: E402
-from kinematics.frames import pose_from_xyzabc  # noqa: E402
-from kinematics.robot import load_robot  # noqa: E402
-from kinematics.simulation import commanded_joints, grid_status  # noqa: E402
 
 ABC = np.array([0.0, 90.0, 0.0])
 LOW, HIGH = np.array([1200.0, -600.0, 1100.0]), np.array([2200.0, 600.0, 2100.0])

@@ -15,8 +15,8 @@ from scipy.interpolate import RegularGridInterpolator
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from accugrid.compensation import GridModel  # noqa: E402
 from bench.timing import measure, table  # noqa: E402
-from compensation import GridModel  # noqa: E402
 
 N = 1_000_000
 REPEATS = 7  # best of 7: the machine is shared

@@ -17,11 +17,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from accugrid.kinematics.error_model import error_jacobian  # noqa: E402
+from accugrid.kinematics.frames import pose_from_xyzabc  # noqa: E402
+from accugrid.kinematics.robot import load_robot  # noqa: E402
+from accugrid.kinematics.simulation import simulate_measurements  # noqa: E402
 from bench.timing import measure, table  # noqa: E402
-from kinematics.error_model import error_jacobian  # noqa: E402
-from kinematics.frames import pose_from_xyzabc  # noqa: E402
-from kinematics.robot import load_robot  # noqa: E402
-from kinematics.simulation import simulate_measurements  # noqa: E402
 
 N = 100_000
 N_PEER = 10_000

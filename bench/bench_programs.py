@@ -20,15 +20,15 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from accugrid.codegen.cell import load_cell  # noqa: E402
+from accugrid.codegen.cli import main as cli  # noqa: E402
+from accugrid.codegen.gcode_emit import render_gcode  # noqa: E402
+from accugrid.codegen.krl_emit import render_krl  # noqa: E402
+from accugrid.codegen.points import parse_points  # noqa: E402
+from accugrid.codegen.program import build_program  # noqa: E402
+from accugrid.compensation import GridModel  # noqa: E402
+from accugrid.kinematics.robot import load_robot  # noqa: E402
 from bench.timing import measure, table  # noqa: E402
-from codegen.cell import load_cell  # noqa: E402
-from codegen.cli import main as cli  # noqa: E402
-from codegen.gcode_emit import render_gcode  # noqa: E402
-from codegen.krl_emit import render_krl  # noqa: E402
-from codegen.points import parse_points  # noqa: E402
-from codegen.program import build_program  # noqa: E402
-from compensation import GridModel  # noqa: E402
-from kinematics.robot import load_robot  # noqa: E402
 
 HOLES = 100_000
 RADIUS_MM = 4000.0

@@ -17,10 +17,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from accugrid.codegen.cell import load_cell  # noqa: E402
+from accugrid.compensation import GridModel  # noqa: E402
+from accugrid.kinematics.frames import invert, transform_points  # noqa: E402
 from bench.timing import table  # noqa: E402
-from codegen.cell import load_cell  # noqa: E402
-from compensation import GridModel  # noqa: E402
-from kinematics.frames import invert, transform_points  # noqa: E402
 
 N = 100_000
 REPEATS = 3
@@ -78,7 +78,7 @@ def gcode(folder: Path) -> list[Path]:
 
 CHILD = """
 import resource, sys, time
-from codegen.cli import main
+from accugrid.codegen.cli import main
 start = time.perf_counter()
 rc = main(sys.argv[1:])
 seconds = time.perf_counter() - start

@@ -15,12 +15,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from accugrid.codegen.commands.study import check_reach, simulated_measure  # noqa: E402
+from accugrid.compensation.plans import SEED_ABC, SEED_CENTRES, SEED_REGION, SEED_STEPS  # noqa: E402
+from accugrid.compensation.study import analyse, simulate_study, simulate_validation  # noqa: E402
+from accugrid.kinematics.robot import load_robot  # noqa: E402
+from accugrid.kinematics.simulation import simulate_measurements  # noqa: E402
 from bench.timing import measure, table  # noqa: E402
-from codegen.commands.study import check_reach, simulated_measure  # noqa: E402
-from compensation.plans import SEED_ABC, SEED_CENTRES, SEED_REGION, SEED_STEPS  # noqa: E402
-from compensation.study import analyse, simulate_study, simulate_validation  # noqa: E402
-from kinematics.robot import load_robot  # noqa: E402
-from kinematics.simulation import simulate_measurements  # noqa: E402
 
 
 def main_bench() -> None:

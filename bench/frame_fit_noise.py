@@ -17,9 +17,9 @@ from scipy.spatial.transform import Rotation
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from timing import table  # noqa: E402
 
-from kinematics import fitting  # noqa: E402
-from kinematics.base_frame import fit_robot_frame  # noqa: E402
-from kinematics.tracker_sim import simulate_tracker_points  # noqa: E402
+from accugrid.kinematics import fitting  # noqa: E402
+from accugrid.kinematics.base_frame import fit_robot_frame  # noqa: E402
+from accugrid.kinematics.tracker_sim import simulate_tracker_points  # noqa: E402
 
 
 def random_frame(rng: np.random.Generator) -> np.ndarray:

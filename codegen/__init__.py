@@ -1,8 +1,5 @@
 """File IO, the neutral program model, KRL and G-code emitters and parsers, and the CLI."""
 
-from importlib.metadata import PackageNotFoundError, version
+from accugrid import __version__
 
-try:
-    __version__ = version("accugrid")
-except PackageNotFoundError:  # running from a source tree that was never installed
-    __version__ = "0.0.0+source"
+__all__ = ["__version__"]

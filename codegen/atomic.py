@@ -12,7 +12,7 @@ import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
-from kinematics.errors import InputError
+from accugrid.kinematics.errors import InputError
 
 
 def check_targets(

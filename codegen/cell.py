@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from kinematics.errors import InputError
-from kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import pose_from_xyzabc
 
 _FRAME_KEYS = ("x", "y", "z", "a", "b", "c")
 _TOP_KEYS = {

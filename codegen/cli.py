@@ -14,8 +14,8 @@ import pkgutil
 import sys
 import traceback
 
-from codegen import __version__, commands
-from kinematics.errors import InputError
+from accugrid.codegen import __version__, commands
+from accugrid.kinematics.errors import InputError
 
 EXIT_OK, EXIT_INTERNAL, EXIT_INPUT = 0, 1, 2
 

@@ -11,9 +11,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from compensation.plans import SEED_ABC
-from kinematics.frames import pose_from_xyzabc
-from kinematics.robot import Robot, load_robot
+from accugrid.compensation.plans import SEED_ABC
+from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.robot import Robot, load_robot
 
 
 def add_abc(parser: argparse.ArgumentParser, help_text: str) -> None:

@@ -15,12 +15,12 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from codegen import __version__
-from codegen.textsafe import fixed
-from kinematics.base_frame import RobotFrameFit
-from kinematics.errors import InputError
-from kinematics.fitting import CircleFit
-from kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
+from accugrid.codegen import __version__
+from accugrid.codegen.textsafe import fixed
+from accugrid.kinematics.base_frame import RobotFrameFit
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.fitting import CircleFit
+from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
 
 KEYS = ("x", "y", "z", "a", "b", "c")
 MATRIX_TOL = 1e-6

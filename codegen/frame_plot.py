@@ -7,10 +7,10 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from codegen.textsafe import fixed
-from kinematics.base_frame import RobotFrameFit
-from kinematics.fitting import CircleFit
-from kinematics.frames import invert, transform_points
+from accugrid.codegen.textsafe import fixed
+from accugrid.kinematics.base_frame import RobotFrameFit
+from accugrid.kinematics.fitting import CircleFit
+from accugrid.kinematics.frames import invert, transform_points
 
 
 def _circle_points(fit: CircleFit, n: int = 361) -> np.ndarray:

@@ -21,8 +21,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from codegen.program import Program
-from codegen.render import environment, fixed_texts, render, template_dir
+from accugrid.codegen.program import Program
+from accugrid.codegen.render import environment, fixed_texts, render, template_dir
 
 
 class GcodeHole(NamedTuple):

@@ -18,8 +18,8 @@ import re
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
-from codegen.krl_parse import check_text, decimals_of, split_lines
-from kinematics.errors import InputError
+from accugrid.codegen.krl_parse import check_text, decimals_of, split_lines
+from accugrid.kinematics.errors import InputError
 
 _WORD_RE = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
 _COMMENT_RE = re.compile(r"\([^)]*\)|;.*", re.S)

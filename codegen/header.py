@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from codegen import __version__
-from codegen.textsafe import fixed
+from accugrid.codegen import __version__
+from accugrid.codegen.textsafe import fixed
 
 
 def file_sha256(path: str | os.PathLike[str]) -> str:

@@ -9,13 +9,13 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from codegen.cell import Cell, load_cell
-from codegen.header import file_sha256, header_lines
-from codegen.points import read_points
-from codegen.program import Program, build_program
-from compensation import GridModel
-from kinematics.errors import InputError
-from kinematics.robot import load_robot
+from accugrid.codegen.cell import Cell, load_cell
+from accugrid.codegen.header import file_sha256, header_lines
+from accugrid.codegen.points import read_points
+from accugrid.codegen.program import Program, build_program
+from accugrid.compensation import GridModel
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.robot import load_robot
 
 
 @dataclass

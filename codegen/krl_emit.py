@@ -21,9 +21,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from codegen.program import STAGES, Program
-from codegen.render import environment, fixed_texts, render, template_dir
-from kinematics.errors import InputError
+from accugrid.codegen.program import STAGES, Program
+from accugrid.codegen.render import environment, fixed_texts, render, template_dir
+from accugrid.kinematics.errors import InputError
 
 MAX_PARTS = 999  # NAME_001..NAME_999 keeps names <= 24 characters with a 20-character NAME
 

@@ -25,7 +25,7 @@ import re
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
-from kinematics.errors import InputError
+from accugrid.kinematics.errors import InputError
 
 MOTIONS = frozenset(
     "PTP LIN CIRC SPTP SLIN SCIRC SPL PTP_REL LIN_REL CIRC_REL SPTP_REL SLIN_REL SCIRC_REL".split()

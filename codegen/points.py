@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from compensation.csvtable import Table, parse_table, read_table
-from kinematics.errors import InputError
-from kinematics.frames import abc_to_matrix
+from accugrid.compensation.csvtable import Table, parse_table, read_table
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix
 
 AXIS_MIN_LENGTH = 1e-9  # an i,j,k vector shorter than this has no direction
 MAX_TILT_DEG = 150.0  # i,j,k axes further than this from the reference tool axis are refused

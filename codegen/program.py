@@ -29,12 +29,12 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from codegen.cell import Cell
-from codegen.points import MAX_TILT_DEG, Points, orient_along_axes, too_tilted
-from codegen.textsafe import fixed
-from compensation.grid import MAX_CORRECTION_MM
-from kinematics.errors import InputError
-from kinematics.frames import abc_to_matrix, invert, matrix_to_abc
+from accugrid.codegen.cell import Cell
+from accugrid.codegen.points import MAX_TILT_DEG, Points, orient_along_axes, too_tilted
+from accugrid.codegen.textsafe import fixed
+from accugrid.compensation.grid import MAX_CORRECTION_MM
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix, invert, matrix_to_abc
 
 STAGES = ("APP", "CLR", "BOT", "RET")
 GRID_ORIENTATION_TOL_DEG = 5.0  # the grid's errors hold near the orientation it was measured at

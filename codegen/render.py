@@ -14,9 +14,9 @@ from pathlib import Path
 import jinja2
 import numpy as np
 
-from codegen.textsafe import comment_text, fixed, fixed_many, krl_identifier
-from kinematics.errors import InputError
-from templates import TEMPLATE_DIR
+from accugrid.codegen.textsafe import comment_text, fixed, fixed_many, krl_identifier
+from accugrid.kinematics.errors import InputError
+from accugrid.templates import TEMPLATE_DIR
 
 
 def template_dir(dialect: str, templates: str | os.PathLike[str] | None = None) -> Path:

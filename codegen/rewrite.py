@@ -32,13 +32,13 @@ from pathlib import Path
 
 import numpy as np
 
-from codegen import __version__
-from codegen.gcode_parse import GcodeMove, parse_gcode
-from codegen.krl_parse import BaseRef, KrlPosition, KrlUse, decimals_of, scan_krl
-from codegen.textsafe import comment_text, fixed, fixed_many
-from compensation import GridModel
-from kinematics.errors import InputError
-from kinematics.frames import pose_from_xyzabc
+from accugrid.codegen import __version__
+from accugrid.codegen.gcode_parse import GcodeMove, parse_gcode
+from accugrid.codegen.krl_parse import BaseRef, KrlPosition, KrlUse, decimals_of, scan_krl
+from accugrid.codegen.textsafe import comment_text, fixed, fixed_many
+from accugrid.compensation import GridModel
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import pose_from_xyzabc
 
 MAX_BYTES = 64 * 2**20
 REPORT_COLUMNS = (

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from kinematics.errors import InputError
+from accugrid.kinematics.errors import InputError
 
 
 @dataclass

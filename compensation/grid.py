@@ -14,7 +14,7 @@ import os
 
 import numpy as np
 
-from compensation.interpolation import (
+from accugrid.compensation.interpolation import (
     MAX_POWER,
     blend,
     corner_indices,
@@ -22,14 +22,14 @@ from compensation.interpolation import (
     locate,
     trilinear_weights,
 )
-from compensation.measurements import (
+from accugrid.compensation.measurements import (
     COORD_TOL_MM,
     REPEAT_TOL_MM,
     build_grid,
     measurements_from_arrays,
     read_measurements,
 )
-from kinematics.errors import InputError
+from accugrid.kinematics.errors import InputError
 
 METHODS = ("idw", "trilinear")
 OUTSIDE = ("error", "clamp")

@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from compensation.csvtable import Table, parse_table, read_text
-from compensation.orientation import rotation_angle_deg
-from kinematics.errors import InputError
+from accugrid.compensation.csvtable import Table, parse_table, read_text
+from accugrid.compensation.orientation import rotation_angle_deg
+from accugrid.kinematics.errors import InputError
 
 COORD_TOL_MM = 1e-3  # two commanded coordinates closer than this are the same grid level
 REPEAT_TOL_MM = 0.5  # largest allowed distance of a repeat from the mean of its vertex

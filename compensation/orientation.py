@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from kinematics.frames import abc_to_matrix
+from accugrid.kinematics.frames import abc_to_matrix
 
 
 def rotation_angle_deg(abc_deg: np.ndarray, reference_abc_deg: np.ndarray) -> np.ndarray:

@@ -16,8 +16,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from compensation.test_points import TEST_LABELS, VERTEX_LABELS, cube_test_points, cube_vertices
-from kinematics.errors import InputError
+from accugrid.compensation.test_points import (
+    TEST_LABELS,
+    VERTEX_LABELS,
+    cube_test_points,
+    cube_vertices,
+)
+from accugrid.kinematics.errors import InputError
 
 #: Seed Table 3: the five cube centres D-H (robot frame, mm); orientation ABC 0 90 0 for all.
 SEED_CENTRES: dict[str, tuple[float, float, float]] = {

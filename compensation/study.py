@@ -34,11 +34,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.polynomial import Polynomial
 
-from compensation.csvtable import read_table
-from compensation.grid import GridModel
-from compensation.plans import grid_axes
-from compensation.test_points import TEST_LABELS, VERTEX_LABELS, cube_test_points, cube_vertices
-from kinematics.errors import InputError
+from accugrid.compensation.csvtable import read_table
+from accugrid.compensation.grid import GridModel
+from accugrid.compensation.plans import grid_axes
+from accugrid.compensation.test_points import (
+    TEST_LABELS,
+    VERTEX_LABELS,
+    cube_test_points,
+    cube_vertices,
+)
+from accugrid.kinematics.errors import InputError
 
 Measure = Callable[[np.ndarray, int, int], np.ndarray]
 Progress = Callable[[Iterable, str, int], Iterable]

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from kinematics.errors import InputError
+from accugrid.kinematics.errors import InputError
 
 #: Fraction of the diagonal length between a diagonal end and its test point (ISO 9283 §7.2.1).
 DIAGONAL_FRACTION = 0.1

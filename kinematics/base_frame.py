@@ -20,8 +20,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from kinematics.errors import InputError
-from kinematics.fitting import CircleFit, PlaneFit, fit_circle, fit_plane, intersect_line_plane
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.fitting import (
+    CircleFit,
+    PlaneFit,
+    fit_circle,
+    fit_plane,
+    intersect_line_plane,
+)
 
 SMR_RADIUS_MM = 19.05
 """Default SMR radius: a 1.5-inch (38.1 mm) spherically mounted reflector."""

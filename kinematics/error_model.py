@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from kinematics.dh import chain, link_derivatives
-from kinematics.frames import invert
-from kinematics.robot import Robot
+from accugrid.kinematics.dh import chain, link_derivatives
+from accugrid.kinematics.frames import invert
+from accugrid.kinematics.robot import Robot
 
 
 def error_jacobian(robot: Robot, q: np.ndarray) -> np.ndarray:

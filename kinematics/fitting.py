@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from kinematics.errors import InputError
+from accugrid.kinematics.errors import InputError
 
 MIN_ARC_DEG = 30.0
 """Shortest arc a circle fit accepts. The centre and normal errors of a circle fit grow roughly

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from kinematics.dh import DHTable, link_matrices
+from accugrid.kinematics.dh import DHTable, link_matrices
 
 _TOL = 1e-9
 

@@ -24,11 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
-from kinematics import ik as closed
-from kinematics.dh import DHTable, chain, flange_poses
-from kinematics.errors import InputError
-from kinematics.frames import invert, pose_from_xyzabc
-from kinematics.yamlfile import YamlDoc
+from accugrid.kinematics import ik as closed
+from accugrid.kinematics.dh import DHTable, chain, flange_poses
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import invert, pose_from_xyzabc
+from accugrid.kinematics.yamlfile import YamlDoc
 
 BUILTIN = ("kr210", "kr210-paper")
 _LIMIT_TOL = 1e-9
@@ -249,7 +249,11 @@ def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:
     """A built-in robot by name ("kr210", "kr210-paper") or a robot YAML file by path."""
     text_name = os.fspath(name_or_path)
     if text_name in BUILTIN:
-        data = resources.files("kinematics").joinpath("robots", f"{text_name}.yaml").read_text()
+        data = (
+            resources.files("accugrid.kinematics")
+            .joinpath("robots", f"{text_name}.yaml")
+            .read_text()
+        )
         return _robot_from_doc(YamlDoc.parse(data, f"<built-in {text_name}>"))
     path = Path(text_name)
     if not path.is_file():
@@ -258,7 +262,7 @@ def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:
         raise InputError("robot file not found", path)
     doc = YamlDoc.parse(path.read_text(encoding="utf-8"), path)
     if doc.has("urdf"):
-        from kinematics.urdf import urdf_robot_from_doc
+        from accugrid.kinematics.urdf import urdf_robot_from_doc
 
         return urdf_robot_from_doc(doc, path.parent)
     return _robot_from_doc(doc)

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from kinematics.errors import InputError
-from kinematics.frames import abc_to_matrix
-from kinematics.robot import Robot
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix
+from accugrid.kinematics.robot import Robot
 
 
 def commanded_poses(points: np.ndarray, abc_deg: np.ndarray) -> np.ndarray:

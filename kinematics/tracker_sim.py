@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from kinematics.frames import transform_points
+from accugrid.kinematics.frames import transform_points
 
 FLANGE_CENTER_MM = np.array([1765.0, 0.0, 1784.0])
 HOLE_CIRCLE_DIAMETER_MM = 160.0

@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from kinematics.errors import InputError
-from kinematics.frames import pose_from_xyzabc
-from kinematics.ik import wrap
-from kinematics.yamlfile import YamlDoc
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.ik import wrap
+from accugrid.kinematics.yamlfile import YamlDoc
 
 _MM = 1000.0
 _DAMPING = 1e-6  # squared damping of the least-squares step (dimensionless, metres and rad)
@@ -80,7 +80,7 @@ class UrdfRobot:
         default the middle of the joint limits): an ``IKSolution`` with status and turn -1."""
         import pinocchio as pin
 
-        from kinematics.robot import IKSolution
+        from accugrid.kinematics.robot import IKSolution
 
         if status is not None or turn is not None:
             raise InputError(f"robot {self.name} (URDF) has no KUKA Status/Turn")

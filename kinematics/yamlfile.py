@@ -9,7 +9,7 @@ from typing import Any
 
 import yaml
 
-from kinematics.errors import InputError
+from accugrid.kinematics.errors import InputError
 
 _MISSING = object()
 

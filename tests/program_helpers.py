@@ -10,11 +10,11 @@ from pathlib import Path
 
 import numpy as np
 
-from codegen.cell import Cell, load_cell
-from codegen.points import parse_points
-from codegen.textsafe import fixed
-from compensation import GridModel
-from kinematics.robot import load_robot
+from accugrid.codegen.cell import Cell, load_cell
+from accugrid.codegen.points import parse_points
+from accugrid.codegen.textsafe import fixed
+from accugrid.compensation import GridModel
+from accugrid.kinematics.robot import load_robot
 
 ROOT = Path(__file__).resolve().parents[1]
 CELL = ROOT / "examples" / "cell.yaml"

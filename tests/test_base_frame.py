@@ -13,10 +13,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from kinematics.base_frame import MAX_AXIS_TILT_DEG, fit_robot_frame
-from kinematics.errors import InputError
-from kinematics.frames import invert, transform_points
-from kinematics.tracker_sim import simulate_tracker_points
+from accugrid.kinematics.base_frame import MAX_AXIS_TILT_DEG, fit_robot_frame
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import invert, transform_points
+from accugrid.kinematics.tracker_sim import simulate_tracker_points
 
 ORIGIN_PER_SIGMA = 15.0  # mm of origin error per mm of noise sigma
 AXIS_PER_SIGMA = 0.35  # deg of axis error per mm of noise sigma

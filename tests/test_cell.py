@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from codegen.cell import load_cell
-from kinematics.errors import InputError
-from kinematics.frames import transform_points
+from accugrid.codegen.cell import load_cell
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import transform_points
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "cell.yaml"
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES
 
-from codegen.cli import main
-from codegen.commands.correct import ADDED
-from compensation import GridModel
+from accugrid.codegen.cli import main
+from accugrid.codegen.commands.correct import ADDED
+from accugrid.compensation import GridModel
 
 SHIFT = np.array([0.1, -0.2, 0.3])  # a constant error e = P - M of the synthetic grid
 

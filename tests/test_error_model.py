@@ -11,10 +11,10 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from scipy.spatial.transform import Rotation
 
-from kinematics.error_model import error_jacobian, predicted_error
-from kinematics.frames import pose_from_xyzabc
-from kinematics.robot import load_robot
-from kinematics.simulation import commanded_joints
+from accugrid.kinematics.error_model import error_jacobian, predicted_error
+from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.robot import load_robot
+from accugrid.kinematics.simulation import commanded_joints
 
 
 @lru_cache(maxsize=2)

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES
 
-from codegen.cli import main
-from codegen.frame_file import load_frame
-from kinematics.frames import invert, pose_from_xyzabc, transform_points
+from accugrid.codegen.cli import main
+from accugrid.codegen.frame_file import load_frame
+from accugrid.kinematics.frames import invert, pose_from_xyzabc, transform_points
 
 TRACKER = EXAMPLES / "tracker"
 FILES = {

@@ -13,8 +13,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from kinematics.errors import InputError
-from kinematics.fitting import MIN_ARC_DEG, fit_circle, fit_plane, intersect_line_plane
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.fitting import MIN_ARC_DEG, fit_circle, fit_plane, intersect_line_plane
 
 
 def _angle_rad(u: np.ndarray, v: np.ndarray) -> float:

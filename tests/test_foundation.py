@@ -7,12 +7,12 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from codegen.atomic import write_files
-from codegen.cli import main
-from codegen.textsafe import comment_text, fixed, fixed_many, krl_identifier
-from compensation.csvtable import parse_table
-from kinematics import frames
-from kinematics.errors import InputError
+from accugrid.codegen.atomic import write_files
+from accugrid.codegen.cli import main
+from accugrid.codegen.textsafe import comment_text, fixed, fixed_many, krl_identifier
+from accugrid.compensation.csvtable import parse_table
+from accugrid.kinematics import frames
+from accugrid.kinematics.errors import InputError
 
 
 def test_table_skips_comments_and_tracks_lines():

@@ -12,12 +12,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from program_helpers import CELL, POINTS, cell, grid, panel_points, robot
 
-from codegen.cli import main
-from codegen.gcode_emit import render_gcode
-from codegen.gcode_parse import parse_gcode
-from codegen.points import parse_points
-from codegen.program import build_program
-from kinematics.frames import abc_to_matrix, pose_from_xyzabc
+from accugrid.codegen.cli import main
+from accugrid.codegen.gcode_emit import render_gcode
+from accugrid.codegen.gcode_parse import parse_gcode
+from accugrid.codegen.points import parse_points
+from accugrid.codegen.program import build_program
+from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc
 
 # rows as in the example: row 2 staggered by 12.5 mm, so its hole at x 287.5 is on the crown
 ROWS = np.array(
@@ -178,10 +178,10 @@ def test_command_bad_paths(tmp_path, capsys, option):
 def test_command_header_names_the_inputs(tmp_path):
     import hashlib
 
-    from codegen import __version__
-    from codegen.points import read_points
-    from compensation import GridModel
-    from kinematics.frames import transform_points
+    from accugrid.codegen import __version__
+    from accugrid.codegen.points import read_points
+    from accugrid.compensation import GridModel
+    from accugrid.kinematics.frames import transform_points
 
     out = tmp_path / "h.ngc"
     assert run_cli("-o", out) == 0

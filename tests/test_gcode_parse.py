@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from codegen.gcode_parse import parse_gcode
-from kinematics.errors import InputError
+from accugrid.codegen.gcode_parse import parse_gcode
+from accugrid.kinematics.errors import InputError
 
 
 def test_words_any_order_case_no_spaces_comments_and_spans():

@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 from program_helpers import cell, grid, panel_points, robot
 
-from codegen.gcode_emit import render_gcode
-from codegen.program import build_program
-from kinematics.frames import abc_to_matrix, pose_from_xyzabc
+from accugrid.codegen.gcode_emit import render_gcode
+from accugrid.codegen.program import build_program
+from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc
 
 RS274 = shutil.which("rs274") or ("/usr/bin/rs274" if os.path.exists("/usr/bin/rs274") else None)
 MOVE_RE = re.compile(r"(STRAIGHT_TRAVERSE|STRAIGHT_FEED)\(([^)]*)\)")

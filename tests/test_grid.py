@@ -10,15 +10,15 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from compensation import GridModel
-from compensation.interpolation import (
+from accugrid.compensation import GridModel
+from accugrid.compensation.interpolation import (
     CORNERS,
     corner_indices,
     idw_weights,
     locate,
     trilinear_weights,
 )
-from kinematics.errors import InputError
+from accugrid.kinematics.errors import InputError
 
 METHODS = [("idw", 1.0), ("idw", 2.0), ("idw", 0.5), ("trilinear", 1.0)]
 

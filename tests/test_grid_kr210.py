@@ -15,10 +15,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from compensation import GridModel
-from kinematics.frames import pose_from_xyzabc
-from kinematics.robot import load_robot
-from kinematics.simulation import commanded_poses
+from accugrid.compensation import GridModel
+from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.robot import load_robot
+from accugrid.kinematics.simulation import commanded_poses
 
 ABC = np.array([0.0, 90.0, 0.0])
 STATUS = 6  # basic area, A3 >= phi, A5 < 0

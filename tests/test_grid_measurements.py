@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from compensation import GridModel
-from kinematics.errors import InputError
+from accugrid.compensation import GridModel
+from accugrid.kinematics.errors import InputError
 
 HEADER = "id,x,y,z,a,b,c,x_meas,y_meas,z_meas"
 

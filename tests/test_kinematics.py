@@ -14,10 +14,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from kinematics.dh import chain
-from kinematics.errors import InputError
-from kinematics.frames import abc_to_matrix, pose_from_xyzabc
-from kinematics.robot import load_robot, status_turn
+from accugrid.kinematics.dh import chain
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc
+from accugrid.kinematics.robot import load_robot, status_turn
 
 ROBOTS = Path(__file__).resolve().parents[1] / "kinematics" / "robots"
 TOOL = pose_from_xyzabc([12.0, -30.0, 250.0, 10.0, 20.0, -5.0])

@@ -13,12 +13,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from program_helpers import CELL, POINTS, ROOT, cell, grid, panel_points, robot
 
-from codegen.cli import main
-from codegen.krl_emit import render_krl
-from codegen.krl_parse import parse_krl
-from codegen.program import build_program
-from kinematics.errors import InputError
-from kinematics.frames import abc_to_matrix
+from accugrid.codegen.cli import main
+from accugrid.codegen.krl_emit import render_krl
+from accugrid.codegen.krl_parse import parse_krl
+from accugrid.codegen.program import build_program
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix
 
 ROWS = np.array([[x, y] for y in (150.0, 175.0, 450.0) for x in np.arange(0.0, 576.0, 25.0)])
 NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*$")

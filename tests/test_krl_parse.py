@@ -6,8 +6,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from codegen.krl_parse import BaseRef, parse_krl, scan_krl
-from kinematics.errors import InputError
+from accugrid.codegen.krl_parse import BaseRef, parse_krl, scan_krl
+from accugrid.kinematics.errors import InputError
 
 
 def spans_ok(text, pos):

@@ -5,8 +5,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from compensation.csvtable import parse_table
-from compensation.plans import (
+from accugrid.compensation.csvtable import parse_table
+from accugrid.compensation.plans import (
     SEED_CENTRES,
     SEED_STEPS,
     experiment_plan,
@@ -15,8 +15,8 @@ from compensation.plans import (
     path_length,
     serpentine_order,
 )
-from compensation.test_points import cube_test_points, cube_vertices
-from kinematics.errors import InputError
+from accugrid.compensation.test_points import cube_test_points, cube_vertices
+from accugrid.kinematics.errors import InputError
 
 counts = st.integers(1, 6)
 
@@ -126,8 +126,8 @@ def test_grid_plan_bad_inputs():
 
 import re  # noqa: E402
 
-from codegen.cli import main  # noqa: E402
-from codegen.krl_parse import parse_krl  # noqa: E402
+from accugrid.codegen.cli import main  # noqa: E402
+from accugrid.codegen.krl_parse import parse_krl  # noqa: E402
 
 
 def test_plan_cube_writes_csv_and_krl(tmp_path, capsys):

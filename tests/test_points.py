@@ -7,9 +7,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from codegen.points import orient_along_axes, parse_points, read_points, too_tilted
-from kinematics.errors import InputError
-from kinematics.frames import abc_to_matrix
+from accugrid.codegen.points import orient_along_axes, parse_points, read_points, too_tilted
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix
 
 
 def test_parse_abc_with_extra_columns():
@@ -134,7 +134,7 @@ odd_text = st.sampled_from(
 
 @given(st.lists(st.tuples(numbers, numbers, st.one_of(numbers, odd_text)), min_size=1, max_size=8))
 def test_fast_number_path_agrees_with_the_table_reader(rows):
-    from compensation.csvtable import parse_table
+    from accugrid.compensation.csvtable import parse_table
 
     text = "x,y,z\n" + "".join(f'{a},{b},"{c}"\n' for a, b, c in rows)
     try:

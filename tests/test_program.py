@@ -11,10 +11,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 from program_helpers import cell, error_field, grid, panel_points, robot
 
-from codegen.points import parse_points
-from codegen.program import STAGES, build_program
-from kinematics.errors import InputError
-from kinematics.frames import pose_from_xyzabc, transform_points
+from accugrid.codegen.points import parse_points
+from accugrid.codegen.program import STAGES, build_program
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import pose_from_xyzabc, transform_points
 
 ROWS = np.array([[x, y] for y in (150.0, 450.0) for x in np.arange(0.0, 576.0, 25.0)])
 
@@ -131,7 +131,7 @@ def test_wrist_singularity_warning_names_the_hole():
     q = np.radians([[0.0, -90.0, 110.0, 0.0, 1.0, 0.0]])  # A5 = 1 deg
     pose = r.fk(q)[0]
     base_T_tcp = np.linalg.inv(c.robot_T_base) @ pose
-    from kinematics.frames import xyzabc_from_pose
+    from accugrid.kinematics.frames import xyzabc_from_pose
 
     # the hole point is the pose + approach along the tool axis (the APP stage is the pose)
     x = xyzabc_from_pose(base_T_tcp)

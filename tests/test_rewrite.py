@@ -12,11 +12,11 @@ from hypothesis import strategies as st
 from rewrite_helpers import E_CONST, error_field, write_cell, write_grid
 from scipy.spatial.transform import Rotation
 
-from codegen.cli import main
-from codegen.gcode_parse import parse_gcode
-from codegen.krl_parse import parse_krl
-from codegen.rewrite import Options, rewrite_gcode, rewrite_krl
-from compensation import GridModel
+from accugrid.codegen.cli import main
+from accugrid.codegen.gcode_parse import parse_gcode
+from accugrid.codegen.krl_parse import parse_krl
+from accugrid.codegen.rewrite import Options, rewrite_gcode, rewrite_krl
+from accugrid.compensation import GridModel
 
 BASE2 = (100.0, 50.0, 0.0, 90.0, 0.0, 0.0)  # robot_T_base of BASE_DATA[2]
 R2 = Rotation.from_euler("ZYX", BASE2[3:], degrees=True).as_matrix()

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 from rewrite_helpers import write_cell
 
-from codegen.cli import main
-from codegen.gcode_parse import parse_gcode
-from codegen.krl_parse import scan_krl
+from accugrid.codegen.cli import main
+from accugrid.codegen.gcode_parse import parse_gcode
+from accugrid.codegen.krl_parse import scan_krl
 
 TOKEN = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?|\s+|[^\d\s.+-]+|.", re.S)
 NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?$")

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from conftest import ROOT
 
-from codegen.cli import main
-from kinematics.frames import pose_from_xyzabc
-from kinematics.robot import load_robot
-from kinematics.simulation import reached_positions
+from accugrid.codegen.cli import main
+from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.robot import load_robot
+from accugrid.kinematics.simulation import reached_positions
 
 REGION = ["1400", "1800", "-200", "200", "1300", "1500"]
 

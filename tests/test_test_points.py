@@ -6,13 +6,13 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from compensation.test_points import (
+from accugrid.compensation.test_points import (
     TEST_LABELS,
     VERTEX_LABELS,
     cube_test_points,
     cube_vertices,
 )
-from kinematics.errors import InputError
+from accugrid.kinematics.errors import InputError
 
 CENTRE = np.array([[100.0, 200.0, 300.0]])
 STEP = 50.0

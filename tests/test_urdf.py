@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from kinematics.errors import InputError
-from kinematics.robot import load_robot
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.robot import load_robot
 
 # A 6R arm with lengths in metres: Z, Y, Y joints to a wrist, then Z, Y, Z (spherical wrist).
 URDF = """<?xml version="1.0"?>
@@ -128,7 +128,7 @@ def test_bad_tip_and_missing_urdf_name_the_key(tmp_path):
 
 
 def test_simulation_of_a_urdf_robot_reaches_the_commanded_points(tiny):
-    from kinematics.simulation import reached_positions
+    from accugrid.kinematics.simulation import reached_positions
 
     points = np.array([[500.0, 0.0, 700.0], [550.0, 50.0, 750.0], [500.0, -60.0, 800.0]])
     np.testing.assert_allclose(reached_positions(tiny, points, [0, 90, 0]), points, atol=1e-6)

@@ -24,14 +24,14 @@ import io
 
 import numpy as np
 
-from codegen.atomic import check_targets, write_files
-from codegen.points import Points, read_points
-from codegen.textsafe import comment_text, fixed
-from compensation.grid import MAX_CORRECTION_MM, GridModel
-from compensation.measurements import REPEAT_TOL_MM
-from compensation.orientation import rotation_angle_deg
-from kinematics.errors import InputError
-from kinematics.frames import abc_to_matrix
+from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.points import Points, read_points
+from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.compensation.grid import MAX_CORRECTION_MM, GridModel
+from accugrid.compensation.measurements import REPEAT_TOL_MM
+from accugrid.compensation.orientation import rotation_angle_deg
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix
 
 NAME = "correct"
 HELP = "corrected points CSV: P' = P + e, e interpolated from a measured error grid"

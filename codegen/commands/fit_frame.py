@@ -22,12 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
-from codegen.atomic import check_targets, write_files
-from codegen.frame_file import frame_yaml
-from compensation.csvtable import read_table
-from kinematics.base_frame import SMR_RADIUS_MM, RobotFrameFit, fit_robot_frame
-from kinematics.errors import InputError
-from kinematics.frames import xyzabc_from_pose
+from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.frame_file import frame_yaml
+from accugrid.compensation.csvtable import read_table
+from accugrid.kinematics.base_frame import SMR_RADIUS_MM, RobotFrameFit, fit_robot_frame
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import xyzabc_from_pose
 
 NAME = "fit-frame"
 HELP = "robot base frame (tracker_T_robot) from tracker points on base, A1 arc and flange holes"
@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
     }
     outputs: dict[str, bytes | str] = {args.output: frame_yaml(fit, digests)}
     if args.plot:
-        from codegen.frame_plot import plot_frame_fit
+        from accugrid.codegen.frame_plot import plot_frame_fit
 
         points = {key: value[0] for key, value in loaded.items()}
         outputs[args.plot] = plot_frame_fit(fit, points)

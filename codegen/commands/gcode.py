@@ -16,9 +16,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from codegen.atomic import check_targets, write_files
-from codegen.gcode_emit import render_gcode
-from codegen.job import add_job_arguments, prepare, summary
+from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.gcode_emit import render_gcode
+from accugrid.codegen.job import add_job_arguments, prepare, summary
 
 NAME = "gcode"
 HELP = "corrected RS274NGC (LinuxCNC) drilling program from a points CSV"

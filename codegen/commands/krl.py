@@ -16,10 +16,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from codegen.atomic import check_targets, write_files
-from codegen.cell import load_cell
-from codegen.job import add_job_arguments, prepare, summary
-from codegen.krl_emit import render_krl
+from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cell import load_cell
+from accugrid.codegen.job import add_job_arguments, prepare, summary
+from accugrid.codegen.krl_emit import render_krl
 
 NAME = "krl"
 HELP = "corrected KUKA KRL drilling program (.src/.dat) from a points CSV"

@@ -27,12 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
-from codegen import __version__
-from codegen.atomic import check_targets, write_files
-from codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
-from codegen.render import environment, render, template_dir
-from codegen.textsafe import fixed, krl_identifier
-from compensation.plans import (
+from accugrid.codegen import __version__
+from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
+from accugrid.codegen.render import environment, render, template_dir
+from accugrid.codegen.textsafe import fixed, krl_identifier
+from accugrid.compensation.plans import (
     SEED_CENTRES,
     SEED_REGION,
     SEED_REPEATS,
@@ -41,8 +41,8 @@ from compensation.plans import (
     experiment_plan,
     grid_plan,
 )
-from kinematics.errors import InputError
-from kinematics.simulation import commanded_poses
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.simulation import commanded_poses
 
 NAME = "plan"
 HELP = "measurement plans: grid, one cube's ISO 9283 test points, or the seed's step experiment"

@@ -29,9 +29,9 @@ import os
 from collections import Counter
 from pathlib import Path
 
-from codegen.atomic import check_targets, write_files
-from codegen.cell import load_cell
-from codegen.rewrite import (
+from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cell import load_cell
+from accugrid.codegen.rewrite import (
     MAX_BYTES,
     Options,
     add_header,
@@ -42,8 +42,8 @@ from codegen.rewrite import (
     rewrite_gcode,
     rewrite_krl,
 )
-from compensation import GridModel
-from kinematics.errors import InputError
+from accugrid.compensation import GridModel
+from accugrid.kinematics.errors import InputError
 
 NAME = "rewrite"
 HELP = "correct the positions of an existing KRL or G-code program in place (pre-flight)"

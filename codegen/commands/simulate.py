@@ -20,12 +20,12 @@ import io
 
 import numpy as np
 
-from codegen.atomic import check_targets, write_files
-from codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
-from codegen.textsafe import comment_text, fixed
-from kinematics.errors import InputError
-from kinematics.robot import Robot
-from kinematics.simulation import grid_status, reached_positions, simulate_measurements
+from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
+from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.robot import Robot
+from accugrid.kinematics.simulation import grid_status, reached_positions, simulate_measurements
 
 NAME = "simulate"
 HELP = "simulate a laser-tracker grid measurement of a robot (measurement CSV, seed Fig. 3)"

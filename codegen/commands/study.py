@@ -31,14 +31,14 @@ from pathlib import Path
 
 import numpy as np
 
-from codegen.atomic import check_targets, write_files
-from codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
-from codegen.commands.plan import add_experiment_arguments, parse_centres, parse_steps
-from codegen.progress import progress
-from compensation.csvtable import read_table
-from compensation.grid import GridModel
-from compensation.plans import SEED_REGION
-from compensation.study import (
+from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
+from accugrid.codegen.commands.plan import add_experiment_arguments, parse_centres, parse_steps
+from accugrid.codegen.progress import progress
+from accugrid.compensation.csvtable import read_table
+from accugrid.compensation.grid import GridModel
+from accugrid.compensation.plans import SEED_REGION
+from accugrid.compensation.study import (
     AXES,
     DEFAULT_STD_FRACTION,
     DEFAULT_TOLERANCE_MM,
@@ -53,9 +53,9 @@ from compensation.study import (
     simulate_study,
     simulate_validation,
 )
-from kinematics.errors import InputError
-from kinematics.robot import Robot
-from kinematics.simulation import commanded_poses
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.robot import Robot
+from accugrid.kinematics.simulation import commanded_poses
 
 NAME = "study"
 HELP = "grid-step study of the seed (Tables 4-5, Fig. 12): simulated or measured"

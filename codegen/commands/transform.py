@@ -21,12 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
-from codegen.atomic import check_targets, write_files
-from codegen.frame_file import load_frame
-from codegen.textsafe import comment_text, fixed
-from compensation.csvtable import Table, parse_table
-from kinematics.errors import InputError
-from kinematics.frames import invert, transform_points
+from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.frame_file import load_frame
+from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.compensation.csvtable import Table, parse_table
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import invert, transform_points
 
 NAME = "transform"
 HELP = "map tracker-frame x,y,z / x_meas,y_meas,z_meas columns into the robot frame"

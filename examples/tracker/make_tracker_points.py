@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from kinematics.frames import pose_from_xyzabc, transform_points
-from kinematics.tracker_sim import simulate_tracker_points
+from accugrid.kinematics.frames import pose_from_xyzabc, transform_points
+from accugrid.kinematics.tracker_sim import simulate_tracker_points
 
 HERE = Path(__file__).resolve().parent
 TRUE_XYZABC = np.array([-2850.0, 1960.0, -1210.0, -37.5, 0.3, -0.2])
