@@ -30,8 +30,8 @@ _API = {
     "load_cell": "accugrid.codegen.cell",
     "Program": "accugrid.codegen.program",
     "build_program": "accugrid.codegen.program",
-    "render_krl": "accugrid.codegen.krl_emit",
-    "render_gcode": "accugrid.codegen.gcode_emit",
+    "render_krl": "accugrid.codegen.krl.emit",
+    "render_gcode": "accugrid.codegen.gcode.emit",
 }
 
 __all__ = ["__version__", *_API]

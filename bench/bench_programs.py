@@ -22,8 +22,8 @@ sys.path.insert(0, str(ROOT))
 
 from accugrid.codegen.cell import load_cell  # noqa: E402
 from accugrid.codegen.cli import main as cli  # noqa: E402
-from accugrid.codegen.gcode_emit import render_gcode  # noqa: E402
-from accugrid.codegen.krl_emit import render_krl  # noqa: E402
+from accugrid.codegen.gcode.emit import render_gcode  # noqa: E402
+from accugrid.codegen.krl.emit import render_krl  # noqa: E402
 from accugrid.codegen.points import parse_points  # noqa: E402
 from accugrid.codegen.program import build_program  # noqa: E402
 from accugrid.compensation import GridModel  # noqa: E402

@@ -6,7 +6,7 @@ numbers are replaced in the text; every other byte is kept. Files are handled as
 as latin-1 (one character per byte, so any encoding and any line ending survives unchanged).
 
 Rules (never guess; what cannot be placed is reported with the reason):
-- KRL inline aggregates use the base in effect at that line (see ``codegen.krl_parse``); a
+- KRL inline aggregates use the base in effect at that line (see ``codegen.krl.parse``); a
   position declared in a .dat takes the base of the motions that use it, and is corrected once
   however many motions use it. Unused .dat positions have no base unless ``base_override``.
 - BASE_DATA[n] comes from ``--config-dat`` (if it defines n), else from the cell's ``base`` and
@@ -33,8 +33,8 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen import __version__
-from accugrid.codegen.gcode_parse import GcodeMove, parse_gcode
-from accugrid.codegen.krl_parse import BaseRef, KrlPosition, KrlUse, decimals_of, scan_krl
+from accugrid.codegen.gcode.parse import GcodeMove, parse_gcode
+from accugrid.codegen.krl.parse import BaseRef, KrlPosition, KrlUse, decimals_of, scan_krl
 from accugrid.codegen.textsafe import comment_text, fixed, fixed_many
 from accugrid.compensation import GridModel
 from accugrid.kinematics.errors import InputError

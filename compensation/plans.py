@@ -4,7 +4,7 @@
   order. Every move of that order goes to a neighbouring vertex, so its length is
   (N - 1) * step, the shortest possible for N vertices spaced one step apart.
 - Experiment plan (seed Sec. 4.2 / 5): for every centre and every step, the cube's 8 vertices
-  C1..C8 and its 9 test points P1..P9 (compensation.test_points), measured ``repeats`` times.
+  C1..C8 and its 9 test points P1..P9 (compensation.cube_points), measured ``repeats`` times.
 
 A plan is a list of commanded positions (robot frame, mm) at one fixed orientation (KUKA ABC deg)
 with an id per row and, for experiments, the centre name, step, label and repeat of each row.
@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from accugrid.compensation.test_points import (
+from accugrid.compensation.cube_points import (
     TEST_LABELS,
     VERTEX_LABELS,
     cube_test_points,

@@ -1,7 +1,7 @@
 """The statistical grid-step study of the seed (Sec. 4.2-4.4, Sec. 5, Tables 4-5, Fig. 12).
 
 For every step and every centre, the cube's grid model is built from its 8 measured vertices, its
-9 test points (compensation.test_points) are corrected (P' = P + e, Eq. 14) and the remaining
+9 test points (compensation.cube_points) are corrected (P' = P + e, Eq. 14) and the remaining
 error r = P - M (target minus reached, the sign of DESIGN.md) is collected over all centres.
 
 - Table 4: per step and axis, the max, min and standard deviation of r. Repeats follow the seed
@@ -35,14 +35,14 @@ import numpy as np
 from numpy.polynomial import Polynomial
 
 from accugrid.compensation.csvtable import read_table
-from accugrid.compensation.grid import GridModel
-from accugrid.compensation.plans import grid_axes
-from accugrid.compensation.test_points import (
+from accugrid.compensation.cube_points import (
     TEST_LABELS,
     VERTEX_LABELS,
     cube_test_points,
     cube_vertices,
 )
+from accugrid.compensation.grid import GridModel
+from accugrid.compensation.plans import grid_axes
 from accugrid.kinematics.errors import InputError
 
 Measure = Callable[[np.ndarray, int, int], np.ndarray]

@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 from program_helpers import CELL, POINTS, cell, grid, panel_points, robot
 
 from accugrid.codegen.cli import main
-from accugrid.codegen.gcode_emit import render_gcode
-from accugrid.codegen.gcode_parse import parse_gcode
+from accugrid.codegen.gcode.emit import render_gcode
+from accugrid.codegen.gcode.parse import parse_gcode
 from accugrid.codegen.points import parse_points
 from accugrid.codegen.program import build_program
 from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc

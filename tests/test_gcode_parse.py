@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from accugrid.codegen.gcode_parse import parse_gcode
+from accugrid.codegen.gcode.parse import parse_gcode
 from accugrid.kinematics.errors import InputError
 
 

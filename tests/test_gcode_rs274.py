@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from program_helpers import cell, grid, panel_points, robot
 
-from accugrid.codegen.gcode_emit import render_gcode
+from accugrid.codegen.gcode.emit import render_gcode
 from accugrid.codegen.program import build_program
 from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc
 

@@ -14,8 +14,8 @@ from hypothesis import strategies as st
 from program_helpers import CELL, POINTS, ROOT, cell, grid, panel_points, robot
 
 from accugrid.codegen.cli import main
-from accugrid.codegen.krl_emit import render_krl
-from accugrid.codegen.krl_parse import parse_krl
+from accugrid.codegen.krl.emit import render_krl
+from accugrid.codegen.krl.parse import parse_krl
 from accugrid.codegen.program import build_program
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from accugrid.codegen.krl_parse import BaseRef, parse_krl, scan_krl
+from accugrid.codegen.krl.parse import BaseRef, parse_krl, scan_krl
 from accugrid.kinematics.errors import InputError
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -10,12 +11,20 @@ from pathlib import Path
 import accugrid
 
 ROOT = Path(__file__).resolve().parents[1]
+PACKAGE_FOLDERS = ("kinematics", "compensation", "codegen", "templates")
 
 
 def test_wheel_top_level_is_accugrid_alone(tmp_path: Path) -> None:
+    # build from a copy: setuptools keeps a build/ folder beside the sources it builds
+    source = tmp_path / "source"
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
+    for folder in PACKAGE_FOLDERS:
+        shutil.copytree(ROOT / folder, source / folder, ignore=ignore)
+    for name in ("pyproject.toml", "__init__.py", "README.md"):
+        shutil.copy(ROOT / name, source / name)
     subprocess.run(
         [sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation"]
-        + ["-w", str(tmp_path), str(ROOT)],
+        + ["-w", str(tmp_path), str(source)],
         check=True,
         capture_output=True,
     )
@@ -35,7 +44,7 @@ def test_source_folders_are_not_importable_by_their_own_names(tmp_path: Path) ->
     """From any other folder, the installed accugrid exposes no `kinematics`, `codegen`, ..."""
     code = (
         "import importlib.util as u, accugrid.kinematics.robot;"
-        "print([n for n in ('kinematics','compensation','codegen','templates') if u.find_spec(n)])"
+        f"print([n for n in {PACKAGE_FOLDERS!r} if u.find_spec(n)])"
     )
     out = subprocess.run(
         [sys.executable, "-c", code], cwd=tmp_path, check=True, capture_output=True, text=True

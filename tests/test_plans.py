@@ -6,6 +6,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from accugrid.compensation.csvtable import parse_table
+from accugrid.compensation.cube_points import cube_test_points, cube_vertices
 from accugrid.compensation.plans import (
     SEED_CENTRES,
     SEED_STEPS,
@@ -15,7 +16,6 @@ from accugrid.compensation.plans import (
     path_length,
     serpentine_order,
 )
-from accugrid.compensation.test_points import cube_test_points, cube_vertices
 from accugrid.kinematics.errors import InputError
 
 counts = st.integers(1, 6)
@@ -127,7 +127,7 @@ def test_grid_plan_bad_inputs():
 import re  # noqa: E402
 
 from accugrid.codegen.cli import main  # noqa: E402
-from accugrid.codegen.krl_parse import parse_krl  # noqa: E402
+from accugrid.codegen.krl.parse import parse_krl  # noqa: E402
 
 
 def test_plan_cube_writes_csv_and_krl(tmp_path, capsys):

@@ -13,8 +13,8 @@ from rewrite_helpers import E_CONST, error_field, write_cell, write_grid
 from scipy.spatial.transform import Rotation
 
 from accugrid.codegen.cli import main
-from accugrid.codegen.gcode_parse import parse_gcode
-from accugrid.codegen.krl_parse import parse_krl
+from accugrid.codegen.gcode.parse import parse_gcode
+from accugrid.codegen.krl.parse import parse_krl
 from accugrid.codegen.rewrite import Options, rewrite_gcode, rewrite_krl
 from accugrid.compensation import GridModel
 

@@ -16,8 +16,8 @@ import pytest
 from rewrite_helpers import write_cell
 
 from accugrid.codegen.cli import main
-from accugrid.codegen.gcode_parse import parse_gcode
-from accugrid.codegen.krl_parse import scan_krl
+from accugrid.codegen.gcode.parse import parse_gcode
+from accugrid.codegen.krl.parse import scan_krl
 
 TOKEN = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?|\s+|[^\d\s.+-]+|.", re.S)
 NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?$")

@@ -17,7 +17,7 @@ import argparse
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.gcode_emit import render_gcode
+from accugrid.codegen.gcode.emit import render_gcode
 from accugrid.codegen.job import add_job_arguments, prepare, summary
 
 NAME = "gcode"

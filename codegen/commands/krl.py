@@ -19,7 +19,7 @@ from pathlib import Path
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cell import load_cell
 from accugrid.codegen.job import add_job_arguments, prepare, summary
-from accugrid.codegen.krl_emit import render_krl
+from accugrid.codegen.krl.emit import render_krl
 
 NAME = "krl"
 HELP = "corrected KUKA KRL drilling program (.src/.dat) from a points CSV"

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from accugrid.compensation.test_points import (
+from accugrid.compensation.cube_points import (
     TEST_LABELS,
     VERTEX_LABELS,
     cube_test_points,

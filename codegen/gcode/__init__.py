@@ -1,0 +1,1 @@
+"""The G-code dialect (RS274/NGC as LinuxCNC reads it): emitter and parser."""

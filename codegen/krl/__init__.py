@@ -1,0 +1,1 @@
+"""The KUKA KRL dialect: emitter (program model to .src/.dat text) and parser."""
