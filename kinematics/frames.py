@@ -8,21 +8,43 @@ Every function accepts a single item or a stack: (3,) or (N, 3) angles, (4, 4) o
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
+
+# |B| within this of 90 deg (rad) is gimbal lock: C is set to 0 and the rotation goes into A
+# (scipy's Rotation.as_euler uses the same threshold and rule; it is the tests' peer).
+GIMBAL_LOCK_RAD = 1e-7
 
 
 def abc_to_matrix(abc_deg: np.ndarray) -> np.ndarray:
-    """KUKA A, B, C in degrees, (3,) or (N, 3) -> rotation matrices (3, 3) or (N, 3, 3)."""
-    return Rotation.from_euler("ZYX", np.asarray(abc_deg, dtype=float), degrees=True).as_matrix()
+    """KUKA A, B, C in degrees, (3,) or (N, 3) -> rotation matrices (3, 3) or (N, 3, 3).
+
+    R = Rz(A)·Ry(B)·Rx(C), written out (numpy only: the CLI's start-up needs no scipy).
+    """
+    ca, cb, cc = np.moveaxis(np.cos(np.radians(np.asarray(abc_deg, dtype=float))), -1, 0)
+    sa, sb, sc = np.moveaxis(np.sin(np.radians(np.asarray(abc_deg, dtype=float))), -1, 0)
+    rows = [
+        [ca * cb, ca * sb * sc - sa * cc, ca * sb * cc + sa * sc],
+        [sa * cb, sa * sb * sc + ca * cc, sa * sb * cc - ca * sc],
+        [-sb, cb * sc, cb * cc],
+    ]
+    return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
 
 
 def matrix_to_abc(rot: np.ndarray) -> np.ndarray:
     """Rotation matrices (3, 3) or (N, 3, 3) -> KUKA A, B, C in degrees, (3,) or (N, 3).
 
-    B is in [-90, 90]; at B = ±90 (gimbal lock) scipy sets C = 0 and puts the rotation into A.
+    A and C are in (-180, 180], B in [-90, 90]; at B = ±90 (gimbal lock, within
+    ``GIMBAL_LOCK_RAD``) C is 0 and A carries the rotation about the vertical.
     """
     rot = np.asarray(rot, dtype=float)
-    return Rotation.from_matrix(rot).as_euler("ZYX", degrees=True)
+    b = np.arctan2(-rot[..., 2, 0], np.hypot(rot[..., 0, 0], rot[..., 1, 0]))
+    locked = np.pi / 2 - np.abs(b) <= GIMBAL_LOCK_RAD
+    a = np.where(
+        locked,
+        np.arctan2(-rot[..., 0, 1], rot[..., 1, 1]),
+        np.arctan2(rot[..., 1, 0], rot[..., 0, 0]),
+    )
+    c = np.where(locked, 0.0, np.arctan2(rot[..., 2, 1], rot[..., 2, 2]))
+    return np.degrees(np.stack([a, b, c], axis=-1))
 
 
 def pose_from_xyzabc(xyzabc: np.ndarray) -> np.ndarray:

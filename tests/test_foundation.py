@@ -151,3 +151,26 @@ def test_fixed_many_equals_fixed(values, decimals):
 def test_fixed_many_refuses_nan():
     with pytest.raises(ValueError):
         fixed_many(np.array([1.0, float("inf")]), 3)
+
+
+@given(
+    st.floats(-179.9, 179.9),
+    st.one_of(st.floats(-89.99, 89.99), st.sampled_from([-90.0, 90.0])),
+    st.floats(-179.9, 179.9),
+)
+def test_kuka_abc_matches_scipy_zyx_including_gimbal_lock(a, b, c):
+    """The numpy ABC conversions agree with scipy's Rotation (ZYX intrinsic), the usual peer;
+    at B = ±90 both put the whole vertical rotation into A and set C = 0."""
+    import warnings
+
+    from scipy.spatial.transform import Rotation
+
+    peer = Rotation.from_euler("ZYX", [a, b, c], degrees=True)
+    np.testing.assert_allclose(frames.abc_to_matrix([a, b, c]), peer.as_matrix(), atol=1e-12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # scipy warns at gimbal lock
+        expected = peer.as_euler("ZYX", degrees=True)
+    got = frames.matrix_to_abc(peer.as_matrix())
+    np.testing.assert_allclose(got, expected, atol=1e-6)
+    if abs(b) == 90.0:
+        assert got[2] == 0.0
