@@ -15,6 +15,7 @@ HERE = Path(__file__).resolve().parent
 
 def main(names: list[str]) -> None:
     scripts = sorted(HERE.glob("bench_*.py"))
+    names = [n for n in names if not n.startswith("--")]  # flags (--million) go to the scripts
     if names:
         scripts = [s for s in scripts if any(n in s.stem for n in names)]
     for script in scripts:

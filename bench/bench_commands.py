@@ -1,0 +1,150 @@
+"""Whole commands against their I/O floor (issue 14): each row runs the real `accugrid` process
+and, in the same run, a floor: a bare Python process that imports what the row names or reads the
+same input files and writes the same number of files and bytes. Ratio = command / floor.
+
+Medians of 5 runs (3 for the 1e5 jobs, 1 for the 1e6 jobs); peak RSS of the process from
+wait4. `python bench/bench_commands.py --million` adds the 1e6 rows (minutes, GiB).
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from bench.bench_programs import points_csv  # noqa: E402
+from bench.bench_rewrite import gcode, krl_pair  # noqa: E402
+from bench.timing import table  # noqa: E402
+
+CELL = ROOT / "examples" / "cell.yaml"
+GRID = ROOT / "examples" / "grid_200mm.csv"
+ACCUGRID = str(Path(sys.executable).with_name("accugrid"))
+
+# The floor process: read every input file whole, write the given files with as many bytes.
+FLOOR_IO = """
+import sys
+inputs, outputs = sys.argv[1].split("|"), sys.argv[2].split("|")
+sizes = [int(s) for s in sys.argv[3].split("|")]
+for path in inputs:
+    with open(path, "rb") as f:
+        f.read()
+for path, size in zip(outputs, sizes):
+    with open(path, "wb") as f:
+        f.write(b"x" * size)
+"""
+
+
+def run(argv: list[str]) -> tuple[float, float]:
+    """(wall s, peak RSS MiB) of one process; SystemExit if it fails."""
+    start = time.perf_counter()
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    _, status, usage = os.wait4(proc.pid, 0)
+    seconds = time.perf_counter() - start
+    if os.waitstatus_to_exitcode(status) != 0:
+        raise SystemExit(f"{' '.join(argv[:3])}... failed: {proc.stderr.read().decode()[:300]}")
+    proc.stderr.close()
+    return seconds, usage.ru_maxrss / 1024
+
+
+def median_run(argv: list[str], repeats: int) -> tuple[float, float]:
+    runs = [run(argv) for _ in range(repeats)]
+    return statistics.median(r[0] for r in runs), max(r[1] for r in runs)
+
+
+def outputs_of(target: Path) -> list[Path]:
+    return sorted(p for p in target.rglob("*") if p.is_file()) if target.is_dir() else [target]
+
+
+def io_floor(inputs: list[Path], written: list[Path], scratch: Path, repeats: int):
+    """The floor of a job that read ``inputs`` and wrote ``written`` (same count and sizes)."""
+    scratch.mkdir(exist_ok=True)
+    outs = [str(scratch / f"f{i}") for i in range(len(written))]
+    sizes = [str(p.stat().st_size) for p in written]
+    argv = [sys.executable, "-c", FLOOR_IO, "|".join(map(str, inputs)), "|".join(outs)]
+    return median_run([*argv, "|".join(sizes)], repeats)
+
+
+def job_row(name, args, inputs, target, tmp, repeats):
+    seconds, peak = median_run([ACCUGRID, *args, "--force"], repeats)
+    floor, _ = io_floor(inputs, outputs_of(target), tmp / "floor", repeats)
+    return name, seconds, peak, "same I/O in Python", floor
+
+
+def main(million: bool) -> None:
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="accugrid-bench-") as folder:
+        tmp = Path(folder)
+        one = tmp / "one.csv"
+        one.write_text("x,y,z\n1700,0,1500\n")
+        seconds, peak = median_run([ACCUGRID, "--help"], 5)
+        floor, _ = median_run([sys.executable, "-c", "import numpy"], 5)
+        rows.append(("accugrid --help", seconds, peak, "import numpy", floor))
+        seconds, peak = median_run(
+            [ACCUGRID, "correct", str(one), "--grid", str(GRID), "-o", str(tmp / "c1.csv")]
+            + ["--force"],
+            5,
+        )
+        floor, _ = median_run([sys.executable, "-c", "import numpy, scipy.spatial"], 5)
+        rows.append(("accugrid correct, 1 point", seconds, peak, "import numpy, scipy", floor))
+
+        sizes = [(100_000, 3)] + ([(1_000_000, 1)] if million else [])
+        for n, repeats in sizes:
+            label = f"{n:.0e}".replace("+0", "")
+            holes = tmp / f"holes{n}.csv"
+            holes.write_text(points_csv(n))
+            job = [str(holes), "--cell", str(CELL)]
+            krl_out, ngc_out = tmp / f"krl{n}", tmp / f"holes{n}.ngc"
+            rows.append(
+                job_row(
+                    f"accugrid krl, {label} holes",
+                    ["krl", *job, "-o", str(krl_out)],
+                    [holes, CELL, GRID],
+                    krl_out,
+                    tmp,
+                    repeats,
+                )
+            )
+            rows.append(
+                job_row(
+                    f"accugrid gcode, {label} holes",
+                    ["gcode", *job, "-o", str(ngc_out)],
+                    [holes, CELL, GRID],
+                    ngc_out,
+                    tmp,
+                    repeats,
+                )
+            )
+        pair_dir = tmp / "pair"
+        pair_dir.mkdir()
+        pair = krl_pair(pair_dir)
+        out = tmp / "rewritten"
+        args = ["rewrite", *map(str, pair), "--cell", str(CELL), "-o", str(out)]
+        rows.append(
+            job_row("accugrid rewrite, 1e5 KRL pair", args, [*pair, CELL, GRID], out, tmp, 3)
+        )
+        (ngc,) = gcode(pair_dir)
+        out_ngc = tmp / "rewritten.ngc"
+        args = ["rewrite", str(ngc), "--cell", str(CELL), "-o", str(out_ngc)]
+        rows.append(
+            job_row("accugrid rewrite, 1e5 G-code", args, [ngc, CELL, GRID], out_ngc, tmp, 3)
+        )
+    print(
+        table(
+            [
+                (name, f"{s:.2f}", f"{peak:.0f}", floor_name, f"{floor:.2f}", f"{s / floor:.1f}x")
+                for name, s, peak, floor_name, floor in rows
+            ],
+            ("command", "median s", "peak RSS MiB", "floor", "floor s", "ratio"),
+        )
+    )
+
+
+if __name__ == "__main__":
+    main("--million" in sys.argv[1:])
