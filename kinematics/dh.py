@@ -83,8 +83,16 @@ def chain(table: DHTable, q: np.ndarray, links: int | None = None) -> list[np.nd
 
 
 def flange_poses(table: DHTable, q: np.ndarray) -> np.ndarray:
-    """Flange poses base_T_flange (N, 4, 4) mm for joint vectors q (N, n) rad."""
-    return chain(table, q)[-1]
+    """Flange poses base_T_flange (N, 4, 4) mm for joint vectors q (N, n) rad.
+
+    Like ``chain(table, q)[-1]`` without keeping the n - 1 intermediate (N, 4, 4) frames."""
+    theta = table.theta(np.atleast_2d(q))
+    pose = link_matrices(theta[:, 0], table.d[0], table.a[0], table.alpha[0])
+    for i in range(1, table.n):
+        np.matmul(
+            pose, link_matrices(theta[:, i], table.d[i], table.a[i], table.alpha[i]), out=pose
+        )
+    return pose
 
 
 def link_derivatives(theta: np.ndarray, d: float, a: float, alpha: float) -> np.ndarray:
