@@ -14,8 +14,10 @@ from scipy.spatial.transform import Rotation
 
 from accugrid.codegen.cli import main
 from accugrid.codegen.gcode.parse import parse_gcode
+from accugrid.codegen.gcode.rewrite import rewrite_gcode
 from accugrid.codegen.krl.parse import parse_krl
-from accugrid.codegen.rewrite import Options, rewrite_gcode, rewrite_krl
+from accugrid.codegen.krl.rewrite import rewrite_krl
+from accugrid.codegen.rewrite import Options
 from accugrid.compensation import GridModel
 
 BASE2 = (100.0, 50.0, 0.0, 90.0, 0.0, 0.0)  # robot_T_base of BASE_DATA[2]
@@ -102,7 +104,10 @@ def test_header_only_when_asked(job):
     folder, cell, src, dat = job
     assert run(src, dat, "--cell", cell, "-o", folder / "h", "--header") == 0
     text = (folder / "h" / "job.src").read_bytes().decode("latin-1")
-    assert text.startswith("&ACCESS RVP\r\n; accugrid ")
+    # below the DEF line: controller-written files have only & lines above it (issue 11 item 8)
+    assert text.startswith("&ACCESS RVP\r\nDEF job ( )\r\n; accugrid ")
+    dat_text = (folder / "h" / "job.dat").read_bytes().decode("latin-1")
+    assert dat_text.startswith("&ACCESS RVP\r\nDEFDAT job\r\n; accugrid ")
     assert "sha256" in text and "; largest correction" in text
     assert run(src, dat, "--cell", cell, "-o", folder / "n") == 0
     assert "accugrid" not in (folder / "n" / "job.src").read_text("latin-1")

@@ -31,17 +31,10 @@ from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cell import load_cell
-from accugrid.codegen.rewrite import (
-    MAX_BYTES,
-    Options,
-    add_header,
-    dialect,
-    header_lines,
-    read_program,
-    report_csv,
-    rewrite_gcode,
-    rewrite_krl,
-)
+from accugrid.codegen.gcode.rewrite import rewrite_gcode
+from accugrid.codegen.krl.rewrite import rewrite_krl
+from accugrid.codegen.program_text import MAX_BYTES, add_header, dialect, read_program
+from accugrid.codegen.rewrite import Options, header_lines, report_csv
 from accugrid.compensation import GridModel
 from accugrid.kinematics.errors import InputError
 

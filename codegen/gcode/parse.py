@@ -18,7 +18,7 @@ import re
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
-from accugrid.codegen.krl.parse import check_text, decimals_of, split_lines
+from accugrid.codegen.program_text import check_text, decimals_of, split_lines
 from accugrid.kinematics.errors import InputError
 
 _WORD_RE = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")

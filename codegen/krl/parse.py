@@ -25,6 +25,7 @@ import re
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
+from accugrid.codegen.program_text import check_text, decimals_of, split_lines
 from accugrid.kinematics.errors import InputError
 
 MOTIONS = frozenset(
@@ -187,29 +188,6 @@ def normalize_name(name: str) -> str:
         return head
     index = rest.rstrip("]")
     return f"{head}[{index}]" if index.isdigit() else f"{head}[*]"
-
-
-def decimals_of(text: str) -> int:
-    """Digits after the decimal point in a number literal as written (0 without a point)."""
-    if "e" in text or "E" in text:
-        text = text.replace("E", "e").split("e")[0]
-    point = text.find(".")
-    return 0 if point < 0 else len(text) - point - 1
-
-
-def split_lines(text: str) -> list[str]:
-    """Lines with their endings removed from the split but counted: '\\n' (or lone '\\r')."""
-    if "\n" not in text and "\r" in text:
-        return text.split("\r")
-    return text.split("\n")
-
-
-def check_text(text: str, path: str | os.PathLike[str] | None) -> None:
-    """Refuse binary data: a NUL byte is never part of a program."""
-    nul = text.find("\x00")
-    if nul >= 0:
-        line = text.count("\n", 0, nul) + 1
-        raise InputError("binary data (NUL byte), not a program", path, line)
 
 
 def code_part(line: str, path: str | None, lineno: int) -> str:

@@ -1,0 +1,183 @@
+"""Program text shared by the dialects' readers and rewriters: reading a program byte for byte,
+lines, number literals, precision, and replacing spans of text.
+
+Programs are handled as bytes decoded as latin-1 (one character per byte), so any encoding and any
+line ending survives a rewrite unchanged; offsets are character (= byte) offsets.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+
+from accugrid.codegen.textsafe import comment_text, fixed, fixed_many
+from accugrid.kinematics.errors import InputError
+
+__all__ = [
+    "KRL_SUFFIXES",
+    "MAX_BYTES",
+    "MIN_PLACES_INCH",
+    "MIN_PLACES_MM",
+    "add_header",
+    "check_text",
+    "decimals_of",
+    "dialect",
+    "formatted",
+    "number_text",
+    "number_texts",
+    "precision",
+    "read_program",
+    "splice",
+    "split_lines",
+]
+
+MAX_BYTES = 64 * 2**20
+KRL_SUFFIXES = (".src", ".dat", ".sub")
+MIN_PLACES_MM = 2  # a corrected number is never coarser than 0.01 mm ...
+MIN_PLACES_INCH = 3  # ... or 0.001 in, unless the user asks (--decimals)
+_FRACTION_RE = re.compile(r"\.(\d*+)")
+
+
+def read_program(path: str | os.PathLike[str], max_bytes: int = MAX_BYTES) -> str:
+    """A program's bytes as latin-1 text (byte-preserving); InputError when unreadable or huge."""
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        if size > max_bytes:
+            raise InputError(
+                f"file is {size / 2**20:.1f} MiB, over the limit of {max_bytes / 2**20:.1f} MiB "
+                "(--max-mb)",
+                os.fspath(path),
+            )
+        return path.read_bytes().decode("latin-1")
+    except OSError as exc:
+        raise InputError(f"cannot read: {exc.strerror or exc}", os.fspath(path)) from None
+
+
+def dialect(path: str | os.PathLike[str]) -> str:
+    """ "krl" for .src/.dat/.sub, else "gcode"."""
+    return "krl" if Path(path).suffix.lower() in KRL_SUFFIXES else "gcode"
+
+
+def split_lines(text: str) -> list[str]:
+    """Lines with their endings removed from the split but counted: '\\n' (or lone '\\r')."""
+    if "\n" not in text and "\r" in text:
+        return text.split("\r")
+    return text.split("\n")
+
+
+def check_text(text: str, path: str | os.PathLike[str] | None) -> None:
+    """Refuse binary data: a NUL byte is never part of a program."""
+    nul = text.find("\x00")
+    if nul >= 0:
+        line = text.count("\n", 0, nul) + 1
+        raise InputError("binary data (NUL byte), not a program", path, line)
+
+
+def decimals_of(text: str) -> int:
+    """Digits after the decimal point in a number literal as written (0 without a point)."""
+    if "e" in text or "E" in text:
+        text = text.replace("E", "e").split("e")[0]
+    point = text.find(".")
+    return 0 if point < 0 else len(text) - point - 1
+
+
+def splice(text: str, edits: list[tuple[int, int, str]]) -> str:
+    """Replace ``text[start:end]`` by each new string (non-overlapping edits, any order)."""
+    if not edits:
+        return text
+    edits.sort()
+    parts, last = [], 0
+    for start, end, new in edits:
+        parts.append(text[last:start])
+        parts.append(new)
+        last = end
+    parts.append(text[last:])
+    return "".join(parts)
+
+
+def precision(literals, minimum: int = 0) -> int:
+    """A file's precision: the most decimals among its X, Y, Z literals (3 when it has none), and
+    at least ``minimum``.
+
+    CAM posts drop trailing zeros (``X25.``, ``X24.5``, ``X24.125`` are one precision), so a
+    corrected number gets the file's precision, not its own digits; ``minimum`` keeps a coarse
+    file (one decimal in inches, integer mm) from rounding the correction away."""
+    joined = "\n".join(literals)
+    if not joined:
+        return max(3, minimum)
+    if "e" in joined or "E" in joined:
+        found = max(map(decimals_of, joined.split("\n")))
+    else:
+        found = max(map(len, _FRACTION_RE.findall(joined)), default=0)
+    return max(found, minimum)
+
+
+def number_texts(
+    old_texts: list[str], old_values: np.ndarray, new_values: np.ndarray, places: int
+) -> list[str]:
+    """New literals (N,) with ``places`` decimals; the old literal where the value is unchanged."""
+    new_texts = fixed_many(new_values, places)
+    same = np.array(list(map(float, new_texts))) == old_values
+    return [o if k else n for o, n, k in zip(old_texts, new_texts, same.tolist(), strict=True)]
+
+
+def number_text(old_text: str, old_value: float, new_value: float, places: int) -> str:
+    """The new literal with ``places`` decimals; the old one when the value does not change."""
+    new_text = fixed(new_value, places)
+    return old_text if float(new_text) == old_value else new_text
+
+
+def formatted(values: np.ndarray, places: np.ndarray | int) -> list[str | None]:
+    """``fixed`` text of each value (N,) with its places (N,) or one count; None where NaN."""
+    values = np.asarray(values, dtype=float)
+    places = np.broadcast_to(np.asarray(places, dtype=int), values.shape)
+    out: list[str | None] = [None] * len(values)
+    for p in np.unique(places).tolist():
+        idx = np.flatnonzero(np.isfinite(values) & (places == p))
+        for i, text in zip(idx.tolist(), fixed_many(values[idx], p), strict=True):
+            out[i] = text
+    return out
+
+
+def add_header(text: str, lines: list[str], kind: str) -> str:
+    """Insert comment lines: KRL right below the ``DEF``/``DEFDAT`` line (controller-written
+    files have only ``&`` lines above it), G-code after the leading ``%`` lines."""
+    newline = "\r\n" if "\r\n" in text else "\n"
+    body = [comment_text(line, 200) for line in lines]
+    block = "".join((f"; {b}" if kind == "krl" else f"({b})") + newline for b in body)
+    pos = 3 if text.startswith("\xef\xbb\xbf") else 0  # after a UTF-8 byte-order mark
+    if kind == "krl":
+        at = _after_def_line(text, pos)
+        if at is not None:
+            return text[:at] + block + text[at:]
+    lead = "&" if kind == "krl" else "%"
+    while text.startswith(lead, pos):
+        nl = text.find("\n", pos)
+        if nl < 0:
+            return text + newline + block
+        pos = nl + 1
+    return text[:pos] + block + text[pos:]
+
+
+_DEF_LINE_RE = re.compile(r"[ \t]*+(?:GLOBAL[ \t]++)?+(?:DEF|DEFFCT|DEFDAT)\b", re.I)
+
+
+def _after_def_line(text: str, pos: int) -> int | None:
+    """Offset just after the first ``DEF``/``DEFFCT``/``DEFDAT`` line (None: none, or it is the
+    last line without an ending)."""
+    while pos < len(text):
+        nl = text.find("\n", pos)
+        end = len(text) if nl < 0 else nl
+        line = text[pos:end]
+        if line.strip() and not line.lstrip().startswith(("&", ";")):
+            if _DEF_LINE_RE.match(line):
+                return None if nl < 0 else nl + 1
+            return None
+        if nl < 0:
+            return None
+        pos = nl + 1
+    return None
