@@ -39,6 +39,7 @@ from accugrid.codegen.textsafe import comment_text, fixed, fixed_many
 from accugrid.compensation import GridModel
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.inputfile import read_input_bytes
 
 MAX_BYTES = 64 * 2**20
 REPORT_COLUMNS = (
@@ -113,7 +114,7 @@ def read_program(path: str | os.PathLike[str], max_bytes: int = MAX_BYTES) -> st
                 "(--max-mb)",
                 os.fspath(path),
             )
-        return path.read_bytes().decode("latin-1")
+        return read_input_bytes(path, max_bytes).decode("latin-1")
     except OSError as exc:
         raise InputError(f"cannot read: {exc.strerror or exc}", os.fspath(path)) from None
 
