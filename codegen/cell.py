@@ -1,13 +1,12 @@
 """The cell file: robot, grid, tool, base frames and the drilling process, as YAML.
 
-Read with ``yaml.safe_load``; every key is validated and an error names the key (``tool.z``) with
-its file line. Paths in the file are relative to the file. Lengths mm, angles deg, speeds mm/s,
-times s. The commented reference is ``examples/cell.yaml``.
+Read with ``kinematics.yamlfile.load_yaml``; every key is validated and an error names the key
+(``tool.z``) with its file line. Paths in the file are relative to the file. Lengths mm, angles
+deg, speeds mm/s, times s. The commented reference is ``examples/cell.yaml``.
 """
 
 from __future__ import annotations
 
-import hashlib
 import math
 import os
 from collections.abc import Mapping
@@ -15,10 +14,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.yamlfile import YamlDoc, load_yaml
 
 _FRAME_KEYS = ("x", "y", "z", "a", "b", "c")
 _TOP_KEYS = {
@@ -93,47 +92,19 @@ class Cell:
 def load_cell(path: str | os.PathLike[str]) -> Cell:
     """Read and validate a cell YAML file; InputError naming the key and line on any problem."""
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise InputError(f"cannot read: {exc.strerror or exc}", os.fspath(path)) from None
-    try:
-        text = raw.decode("utf-8-sig")
-        data = yaml.safe_load(text)
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-    except UnicodeDecodeError:
-        raise InputError("not UTF-8 text", os.fspath(path)) from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = None if mark is None else mark.line + 1
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise InputError(f"invalid YAML: {problem}", os.fspath(path), line) from None
-    return _Reader(path, root).cell(data, hashlib.sha256(raw).hexdigest())
+    doc = load_yaml(path)
+    return _Reader(path, doc).cell(doc.data, doc.sha256)
 
 
 class _Reader:
     """Validation with key paths and YAML lines for the messages."""
 
-    def __init__(self, path: Path, root: yaml.Node | None) -> None:
+    def __init__(self, path: Path, doc: YamlDoc) -> None:
         self.path = path
-        self.root = root
+        self.doc = doc
 
     def error(self, key: str, message: str) -> InputError:
-        return InputError(f"{key}: {message}", os.fspath(self.path), self._line(key))
-
-    def _line(self, key: str) -> int | None:
-        node = self.root
-        line = None
-        for part in key.split("."):
-            if not isinstance(node, yaml.MappingNode):
-                break
-            for k, v in node.value:
-                if str(k.value) == part:
-                    line, node = k.start_mark.line + 1, v
-                    break
-            else:
-                break
-        return line
+        return InputError(f"{key}: {message}", os.fspath(self.path), self.doc.line(*key.split(".")))
 
     # -- typed getters -------------------------------------------------------------------
     def mapping(self, data: object, key: str, allowed: set[str] | None = None) -> dict:

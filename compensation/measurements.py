@@ -14,9 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.compensation.csvtable import Table, parse_table, read_text
+from accugrid.compensation.csvtable import Table, parse_table
 from accugrid.compensation.orientation import rotation_angle_deg
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.inputfile import read_input_text
 
 COORD_TOL_MM = 1e-3  # two commanded coordinates closer than this are the same grid level
 REPEAT_TOL_MM = 0.5  # largest allowed distance of a repeat from the mean of its vertex
@@ -63,7 +64,7 @@ class VertexGrid:
 def read_measurements(path: str | os.PathLike[str]) -> Measurements:
     """Read a measurement CSV (DESIGN.md): x,y,z,x_meas,y_meas,z_meas required, a,b,c optional."""
     path = os.fspath(path)
-    raw, text = read_text(path)
+    raw, text = read_input_text(path)
     table = parse_table(text, path)
     table.require(["x", "y", "z", "x_meas", "y_meas", "z_meas"])
     if not len(table):
@@ -119,6 +120,9 @@ def build_grid(
     stray or missing vertices), when repeats disagree by more than ``repeat_tol_mm``, or when
     the rows were commanded at different orientations.
     """
+    for what, tol in (("coordinate", coord_tol_mm), ("repeat", repeat_tol_mm)):
+        if not (np.isfinite(tol) and tol >= 0.0):
+            raise InputError(f"the {what} tolerance must be a finite number >= 0 mm, got {tol}")
     origin, step, counts, index = _detect_axes(meas, coord_tol_mm)
     flat = np.ravel_multi_index(index.T, tuple(counts))
     n_vertices = int(np.prod(counts))

@@ -28,7 +28,7 @@ from accugrid.kinematics import ik as closed
 from accugrid.kinematics.dh import DHTable, chain, flange_poses
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import invert, pose_from_xyzabc
-from accugrid.kinematics.yamlfile import YamlDoc
+from accugrid.kinematics.yamlfile import YamlDoc, load_yaml
 
 BUILTIN = ("kr210", "kr210-paper")
 _LIMIT_TOL = 1e-9
@@ -256,11 +256,11 @@ def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:
         )
         return _robot_from_doc(YamlDoc.parse(data, f"<built-in {text_name}>"))
     path = Path(text_name)
-    if not path.is_file():
+    if not path.exists():
         if path.suffix.lower() not in (".yaml", ".yml") and os.sep not in text_name:
             raise InputError(f"unknown robot {text_name!r} (built-in: {', '.join(BUILTIN)})")
         raise InputError("robot file not found", path)
-    doc = YamlDoc.parse(path.read_text(encoding="utf-8"), path)
+    doc = load_yaml(path)
     if doc.has("urdf"):
         from accugrid.kinematics.urdf import urdf_robot_from_doc
 

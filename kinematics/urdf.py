@@ -23,6 +23,7 @@ import numpy as np
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.ik import wrap
+from accugrid.kinematics.inputfile import note_input
 from accugrid.kinematics.yamlfile import YamlDoc
 
 _MM = 1000.0
@@ -150,6 +151,7 @@ def urdf_robot_from_doc(doc: YamlDoc, folder: Path) -> UrdfRobot:
     path = folder / doc.string("urdf")
     if not path.is_file():
         raise doc.error(f"{doc.keyname('urdf')}: URDF file not found: {path}", "urdf")
+    note_input(path)  # read by Pinocchio, an input all the same
     try:
         model = pin.buildModelFromUrdf(str(path))
     except (RuntimeError, ValueError) as exc:
