@@ -134,3 +134,15 @@ def test_bad_joint_errors_section_is_a_located_error(tmp_path, section, message)
     path = _robot_file(tmp_path, "joint_errors:\n" + section)
     with pytest.raises(InputError, match=message):
         load_robot(path)
+
+
+def test_realistic_robot_makes_the_seed_study_choose_the_seeds_step(tmp_path, capsys):
+    # Seed Sec. 5 chose 200 mm on the real KR210 (thresholds 200-250 mm in X and Z); the
+    # geometric-only kr210-paper chooses 440 mm. Default study settings = the seed's design.
+    from accugrid.codegen.cli import main
+
+    assert main(["study", "--simulate", "kr210-realistic", "-o", str(tmp_path / "s")]) == 0
+    out = capsys.readouterr().out
+    assert "step 200 mm chosen" in out
+    threshold_z = float(out.split("threshold step Z: ")[1].split(" mm")[0])
+    assert 200.0 <= threshold_z <= 250.0
