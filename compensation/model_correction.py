@@ -9,8 +9,11 @@ P'_0 = P. reach differs from the identity by millimetres over metres, so every s
 three orders of magnitude; it stops when |P - reach(P')| < ``tol_mm``.
 
 With a residual grid (``residual_grid``: at every vertex the measured error minus the model's, so
-r = reach_model - M, mm) the arm is taken to reach reach(P') - r(P'), and the iteration solves
-reach(P') = P + r(P') instead. The orientation R stays as commanded: only positions are corrected.
+r = reach_model - M, mm) the arm is taken to reach reach(P') - r, and the iteration solves
+reach(P') = P + r(P). r is interpolated at the target, not at the moving command: the two differ
+by the correction (millimetres), over which r changes by micrometres, and IDW, which jumps across
+cell faces, would otherwise keep the iteration from settling next to a face. The orientation R
+stays as commanded: only positions are corrected.
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ from accugrid.kinematics.robot import Robot
 
 __all__ = ["MAX_ITERATIONS", "TOL_MM", "ModelCorrection", "model_correct", "residual_grid"]
 
-TOL_MM = 1e-4  # default: well inside the 0.001 mm the command is written with
+TOL_MM = 1e-3  # default: |P - reach(P')| below 0.001 mm
 MAX_ITERATIONS = 12
 
 
@@ -38,7 +41,7 @@ class ModelCorrection:
     command: np.ndarray  # (N, 3) mm, P'; the target itself where not ok
     ok: np.ndarray  # (N,) bool
     reason: np.ndarray  # (N,) object: "" when ok, else why not
-    miss_mm: np.ndarray  # (N,) |P (+ r) - reach(P')| at the returned command, mm (NaN if none)
+    miss_mm: np.ndarray  # (N,) |P + r(P) - reach(P')| at the returned command, mm (NaN if none)
     iterations: int  # passes over the points (each one nominal IK + calibrated FK)
 
     @property
@@ -80,18 +83,16 @@ def model_correct(
     """Commands P' (N, 3) mm for targets P (N, 3) mm (robot frame) at KUKA A, B, C ``abc_deg``
     ((N, 3) or (3,) deg) in one KUKA ``status`` (None: the IK default per point).
 
-    ``grid``: a residual grid (``residual_grid``) added as r(P'), interpolated by ``method`` /
-    ``power``; ``outside`` applies to the targets as in ``GridModel.predict`` (iterates use the
-    nearest box point). Unreachable targets and targets that do not converge within
-    ``max_iterations`` are ``ok = False`` with the reason, vectorized over N.
+    ``grid``: a residual grid (``residual_grid``) added as r(P), interpolated by ``method`` /
+    ``power``, ``outside`` as in ``GridModel.predict``. Unreachable targets and targets that do
+    not converge within ``max_iterations`` are ``ok = False`` with the reason, vectorized over N.
     """
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     n = len(points)
     rotations = np.broadcast_to(abc_to_matrix(np.asarray(abc_deg, dtype=float)), (n, 3, 3))
     if not tol_mm > 0 or int(max_iterations) < 1:
         raise InputError("tolerance must be > 0 mm and iterations >= 1")
-    if grid is not None:
-        grid.predict(points, method, power, outside)  # the outside rule, on the targets
+    goals = points if grid is None else points + grid.predict(points, method, power, outside)
     command = points.copy()
     ok = np.zeros(n, bool)
     miss_mm = np.full(n, np.nan)
@@ -105,10 +106,7 @@ def model_correct(
         )
         reason[active[~reached]] = why[~reached]
         active, reach = active[reached], reach[reached]
-        goal = points[active]
-        if grid is not None:
-            goal = goal + grid.predict(command[active], method, power, "clamp")
-        miss = goal - reach
+        miss = goals[active] - reach
         length = np.linalg.norm(miss, axis=1)
         miss_mm[active] = length
         done = length < tol_mm
