@@ -97,6 +97,19 @@ class Table:
         except ValueError as exc:
             raise InputError(str(exc), self.path, self.lines[r], i + 1) from None
 
+    def check_bounds(
+        self, values: np.ndarray, names: Sequence[str], limit: float, unit: str
+    ) -> None:
+        """InputError at the first cell of ``values`` (N, len(names)), read from the columns
+        ``names``, beyond +-``limit`` (in ``unit``)."""
+        rows, cols = np.nonzero(np.abs(values) > limit)
+        if rows.size:
+            r, name = int(rows[0]), names[int(cols[0])]
+            raise InputError(
+                f"{name} {values[r, cols[0]]:g} {unit} is beyond the limit of {limit:g} {unit}",
+                *self.where(r, name),
+            )
+
     def where(self, r: int, name: str | None = None) -> tuple[str, int, int | None]:
         """(path, line, column) of row r (0-based), for InputError(…, *table.where(r, name))."""
         return self.path, self.lines[r], None if name is None else self.index(name) + 1
