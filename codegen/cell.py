@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from accugrid.codegen.textsafe import KRL_RESERVED
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.yamlfile import YamlDoc, load_yaml
@@ -223,7 +224,8 @@ class _Reader:
             raise self.error(
                 "program.name",
                 "must be a KRL name: a letter or _, then letters, digits or _, at most 20 "
-                f"characters (4 are kept for the sub-program suffix), got {name!r}",
+                f"characters (4 are kept for the sub-program suffix), not a KRL keyword, got "
+                f"{name!r}",
             )
         sp = self.mapping(
             top.get("speeds"), "speeds", {"travel", "approach", "feed", "ptp_percent"}
@@ -314,6 +316,7 @@ class _Reader:
 def _is_krl_name(name: str) -> bool:
     return (
         bool(name)
+        and name.upper() not in KRL_RESERVED
         and (name[0].isascii() and (name[0].isalpha() or name[0] == "_"))
         and all(ch.isascii() and (ch.isalnum() or ch == "_") for ch in name)
     )

@@ -257,3 +257,16 @@ def test_library_warnings_are_held_back_on_error_and_shown_on_success(monkeypatc
     monkeypatch.setattr(correct, "run", warns_then(False))
     with pytest.warns(RuntimeWarning, match="overflow encountered"):
         assert main(argv) == 0
+
+
+@pytest.mark.parametrize("name", ["END", "def", "Lin", "DECL"])
+def test_krl_keywords_are_no_program_names(tmp_path, name):
+    """Item 13: `DEF END( )` must never be written."""
+    from accugrid.codegen.textsafe import krl_identifier
+
+    path = tmp_path / "cell.yaml"
+    path.write_text((EXAMPLES / "cell.yaml").read_text().replace("WING_PANEL", name))
+    with pytest.raises(InputError, match="not a KRL keyword") as info:
+        load_cell(path)
+    assert info.value.line is not None
+    assert krl_identifier(name, prefix="M") == "M" + name
