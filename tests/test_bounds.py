@@ -180,3 +180,16 @@ def test_fit_frame_blames_the_base_plane_for_a_stray_base_plane_point(tmp_path, 
     err = capsys.readouterr().err
     assert code == 2
     assert f"error: {plane}: base plane: point 3 lies" in err
+
+
+def test_a_single_link_urdf_is_a_located_input_error(tmp_path):
+    """Item 6: a URDF without a joint ended in an internal error."""
+    from accugrid.kinematics.robot import load_robot
+
+    (tmp_path / "one.urdf").write_text(
+        '<?xml version="1.0"?><robot name="one"><link name="flange"/></robot>\n'
+    )
+    (tmp_path / "robot.yaml").write_text("name: one\nurdf: one.urdf\ntip: flange\n")
+    with pytest.raises(InputError, match="no movable joint") as info:
+        load_robot(tmp_path / "robot.yaml")
+    assert info.value.path == str(tmp_path / "one.urdf")
