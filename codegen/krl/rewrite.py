@@ -9,16 +9,18 @@ $ROBROOT).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
 
 from accugrid.codegen.krl.parse import BaseRef, KrlPosition, KrlUse, scan_krl
-from accugrid.codegen.program_text import number_texts, precision, splice
+from accugrid.codegen.program_text import MIN_PLACES_MM, number_texts, precision, splice
 from accugrid.codegen.rewrite import (
     Options,
     Result,
     Row,
+    check_orientation,
     correct_points,
     outside_reason,
     strict_check,
@@ -136,7 +138,8 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
     edits: dict[str, list[tuple[int, int, str]]] = {p: [] for p in texts}
     places_of = {
         scan.path: precision(
-            p.numbers[k].literal for p in scan.positions for k in "XYZ" if k in p.numbers
+            (p.numbers[k].literal for p in scan.positions for k in "XYZ" if k in p.numbers),
+            MIN_PLACES_MM,
         )
         for scan in scans
     }
@@ -157,11 +160,18 @@ def _correct_krl(
 
     ``placed``: (position, its row, robot_T_base (4, 4)) for N positions; frames are shared
     objects, so the N frames come from a few distinct ones."""
-    base_xyz = np.array([row.old for _, row, _ in placed])  # (N, 3) mm, base frame
     unique: dict[int, int] = {}
     which = np.array([unique.setdefault(id(f), len(unique)) for _, _, f in placed])
     by_id = {id(f): f for _, _, f in placed}
     frames = np.array([by_id[k] for k in unique])[which]  # (N, 4, 4)
+    abc = np.array([[_value(pos, k) for k in "ABC"] for pos, _, _ in placed]).reshape(-1, 3)
+    keep = check_orientation(frames[:, :3, :3], abc, [row for _, row, _ in placed], opts)
+    if not keep.all():
+        placed = [p for p, k in zip(placed, keep.tolist(), strict=True) if k]
+        frames = frames[keep]
+        if not placed:
+            return
+    base_xyz = np.array([row.old for _, row, _ in placed])  # (N, 3) mm, base frame
     robot = np.einsum("nij,nj->ni", frames[:, :3, :3], base_xyz) + frames[:, :3, 3]
     inside, corrected = correct_points(robot, opts)
     back = np.einsum("nji,nj->ni", frames[:, :3, :3], corrected - robot)  # R^T e
@@ -183,11 +193,17 @@ def _correct_krl(
         for i, new, res in zip(idx, written.tolist(), residual, strict=True):
             row = placed[i][1]
             row.status, row.new, row.residual_mm = "corrected", tuple(new), res
+            row.rounding_mm = res
         edits[file] += [
             (n.start, n.end, new)
             for n, old, new in zip(numbers, olds, news, strict=True)
             if new != old
         ]
+
+
+def _value(pos: KrlPosition, key: str) -> float:
+    number = pos.numbers.get(key)
+    return math.nan if number is None else number.value
 
 
 def _decl_frame(pos, named, uses, assigned, resolve, opts) -> tuple[np.ndarray | None, str]:
