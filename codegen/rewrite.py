@@ -62,6 +62,7 @@ class Options:
     decimals: int | None = None  # None: the file's precision (see ``precision``)
     strict: bool = False
     base_override: int | None = None
+    tool_number: int | None = None  # the cell's TOOL_DATA number (the TCP the grid holds for)
     trust_calls: bool = False
     ignore_external_axes: bool = False
     max_bytes: int = MAX_BYTES

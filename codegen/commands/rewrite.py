@@ -178,6 +178,7 @@ def run(args: argparse.Namespace) -> int:
         decimals=args.decimals,
         strict=args.strict,
         base_override=args.base,
+        tool_number=cell.tool_number,
         trust_calls=args.trust_calls,
         ignore_external_axes=args.ignore_external_axes,
         max_bytes=max_bytes,
