@@ -28,7 +28,7 @@ from accugrid.codegen.cell import load_cell
 from accugrid.codegen.cli import main
 from accugrid.codegen.frame_file import load_frame
 from accugrid.codegen.points import read_points
-from accugrid.codegen.rewrite import read_program
+from accugrid.codegen.program_text import read_program
 from accugrid.compensation.csvtable import read_table
 from accugrid.compensation.measurements import build_grid, read_measurements
 from accugrid.kinematics.errors import MESSAGE_MAX, InputError
