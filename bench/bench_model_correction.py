@@ -1,8 +1,10 @@
 """Model-based correction (compensation.model_correction) of 100,000 targets: the command P' that
 the calibrated arm, driven by the nominal controller in one KUKA Status, takes to P.
 
-The calibrated model is kr210-realistic (its true robot: seed Table 1 DH errors, compliance under
-gravity, reducer harmonics; the most expensive FK a calibrated model can have). Targets: uniform in
+Calibrated models: kr210-realistic itself (its true robot: seed Table 1 DH errors, compliance
+under gravity, reducer harmonics; the steepest error field and the most expensive FK), the same
+with compliance only (what ``accugrid identify --compliance`` writes), and kr210-paper (DH errors
+only) with a 27-vertex residual grid of what it leaves of kr210-realistic. Targets: uniform in
 the seed region X 1300-2100, Y -500-500, Z 1200-2000 mm, orientations A 0 B 90 C 0 tilted by up to
 25 deg, Status 6. Floor: one pass (nominal IK + calibrated FK of all targets), what any
 correction that checks its result must spend at least. Landing: the commands driven through the
@@ -14,6 +16,7 @@ Run: .venv/bin/python bench/bench_model_correction.py
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +30,7 @@ from accugrid.compensation.model_correction import (  # noqa: E402
     residual_grid,
 )
 from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc  # noqa: E402
+from accugrid.kinematics.joint_errors import JointErrors  # noqa: E402
 from accugrid.kinematics.robot import load_robot  # noqa: E402
 from bench.timing import measure, table  # noqa: E402
 
@@ -52,6 +56,10 @@ def tilted_orientations(rng: np.random.Generator, n: int) -> np.ndarray:
 def main_bench() -> None:
     robot = load_robot("kr210-realistic")
     paper = load_robot("kr210-paper")
+    errors = robot.joint_errors
+    compliant = replace(
+        robot, joint_errors=JointErrors.from_compliance(errors.compliance, errors.masses)
+    )
     rng = np.random.default_rng(0)
     points = rng.uniform([1300, -500, 1200], [2100, 500, 2000], size=(N, 3))
     abc = tilted_orientations(rng, N)
@@ -69,6 +77,7 @@ def main_bench() -> None:
         ("model, tol 0.001 mm (default)", robot, None, 1e-3),
         ("model, tol 0.0001 mm", robot, None, 1e-4),
         ("model, tol 1e-7 mm", robot, None, 1e-7),
+        ("DH + compliance model, tol 0.001 mm", compliant, None, 1e-3),
         ("model (paper) + 27-vertex residual grid, 0.001", paper, grid, 1e-3),
     ]
     for name, model, residual, tol in cases:
