@@ -158,3 +158,30 @@ def test_correct_cli_needs_a_grid_or_a_model(tmp_path, capsys):
     points.write_text("id,x,y,z\nH1,1500,100,1400\n")
     assert main(["correct", str(points), "-o", str(tmp_path / "out.csv")]) == 2
     assert "--grid MEAS, --model CAL.yaml or both" in capsys.readouterr().err
+
+
+def test_correct_cli_residual_grid_of_a_perfect_model_changes_nothing(tmp_path, capsys):
+    # The vertices measured on kr210-realistic's arm (noise-free, 4 decimals) and the model
+    # kr210-realistic itself: the residual is only the rounding, so model + grid gives the
+    # model's commands.
+    grid = tmp_path / "grid.csv"
+    argv = ["simulate", "--robot", "kr210-realistic", "--region", "1300", "2100", "-500", "500"]
+    argv += ["1200", "2000", "--step", "400", "--abc", "0", "90", "0", "-o", str(grid)]
+    assert main(argv) == 0
+    points = tmp_path / "points.csv"
+    points.write_text("id,x,y,z,a,b,c\nH1,1500,100,1400,0,90,0\nH2,1700,-300,1600,10,80,5\n")
+    alone, both = tmp_path / "alone.csv", tmp_path / "both.csv"
+    common = ["correct", str(points), "--model", "kr210-realistic", "--status", "6"]
+    assert main([*common, "-o", str(alone)]) == 0
+    assert main([*common, "--grid", str(grid), "-o", str(both)]) == 0
+    out = capsys.readouterr().out
+    residual = [line for line in out.splitlines() if line.startswith("error e")]
+    assert len(residual) == 3
+    for line in residual:  # "error ex   -0.0000 .. +0.0001 mm"
+        low, high = (float(v) for v in line.split()[2:5:2])
+        assert -1e-4 <= low <= high <= 1e-4
+    keys = ("x_cmd", "y_cmd", "z_cmd")
+    a = np.array([[float(r[k]) for k in keys] for r in _rows(alone)])
+    b = np.array([[float(r[k]) for k in keys] for r in _rows(both)])
+    np.testing.assert_allclose(a, b, atol=3e-4, rtol=0)
+    assert "orientation 11.2 deg from residual grid" in _rows(both)[1]["flag"]
