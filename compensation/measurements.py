@@ -30,6 +30,9 @@ class Measurements:
     """Rows of a measurement session: commanded and measured (N, 3) mm, a,b,c (N, 3) deg or None.
 
     ``path``/``lines`` locate each row for error messages (``path`` None for arrays).
+    ``joints``: the logged axis angles a1..a6 (N, 6) KUKA deg or None; ``joint_decimals`` (N, 6)
+    and ``position_decimals`` (N, 3) int: digits after the point as printed (for the round-off
+    the logged numbers carry); ``status``: column ``s`` (N,) int KUKA Status or None.
     """
 
     commanded: np.ndarray
@@ -38,6 +41,10 @@ class Measurements:
     path: str | None = None
     lines: np.ndarray | None = None
     sha256: str | None = None
+    joints: np.ndarray | None = None
+    joint_decimals: np.ndarray | None = None
+    position_decimals: np.ndarray | None = None
+    status: np.ndarray | None = None
 
     def where(self, row: int) -> str:
         """Human location of a row: 'line 12' for a file, 'row 3' (0-based) for arrays."""
@@ -62,7 +69,8 @@ class VertexGrid:
 
 
 def read_measurements(path: str | os.PathLike[str]) -> Measurements:
-    """Read a measurement CSV (DESIGN.md): x,y,z,x_meas,y_meas,z_meas required, a,b,c optional."""
+    """Read a measurement CSV (DESIGN.md): x,y,z,x_meas,y_meas,z_meas required; a,b,c, the
+    logged joints a1..a6 (all six or none) and the Status s optional."""
     path = os.fspath(path)
     raw, text = read_input_text(path)
     table = parse_table(text, path)
@@ -70,6 +78,12 @@ def read_measurements(path: str | os.PathLike[str]) -> Measurements:
     if not len(table):
         raise InputError("no measurement rows", path)
     abc = _abc_columns(table)
+    joint_names = [f"a{i}" for i in range(1, 7)]
+    joints = joint_decimals = None
+    if any(table.has(n) for n in joint_names):
+        table.require(joint_names)
+        joints = table.floats(joint_names)
+        joint_decimals = table.decimals(joint_names)
     return Measurements(
         commanded=table.floats(["x", "y", "z"]),
         measured=table.floats(["x_meas", "y_meas", "z_meas"]),
@@ -77,7 +91,25 @@ def read_measurements(path: str | os.PathLike[str]) -> Measurements:
         path=path,
         lines=np.asarray(table.lines),
         sha256=hashlib.sha256(raw).hexdigest(),
+        joints=joints,
+        joint_decimals=joint_decimals,
+        position_decimals=table.decimals(["x", "y", "z"]),
+        status=_status_column(table),
     )
+
+
+def _status_column(table: Table) -> np.ndarray | None:
+    """Column ``s`` as KUKA Status ints 0..7 (N,), or None; InputError at a bad cell."""
+    if not table.has("s"):
+        return None
+    values = table.floats(["s"])[:, 0]
+    bad = np.flatnonzero((values != np.round(values)) | (values < 0) | (values > 7))
+    if bad.size:
+        raise InputError(
+            f"column 's' must be a KUKA Status 0..7, got {values[bad[0]]:g}",
+            *table.where(int(bad[0]), "s"),
+        )
+    return values.astype(int)
 
 
 def _abc_columns(table: Table) -> np.ndarray | None:
