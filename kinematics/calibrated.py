@@ -1,7 +1,8 @@
 """The calibrated robot file: a robot YAML (``kinematics.robot``) with the identified parameters.
 
 It holds the nominal model (``dh``, ``limits_deg``), the identified DH errors (``errors``: per row
-Δa mm, Δd mm, Δα rad, Δθ rad), the identified TCP (``tool``: x, y, z mm, a, b, c deg) and an
+Δa mm, Δd mm, Δα rad, Δθ rad), the identified TCP (``tool``: x, y, z mm, a, b, c deg), with
+compliance the ``joint_errors`` section (compliance rad/N·m and the gravity model) and an
 ``identification:`` summary that ``load_robot`` ignores. Loaded, its ``true_robot()`` is the
 calibrated arm. Numbers are written with full float precision (shortest round-trip form), so the
 reloaded model gives the same FK to the last bit of the DH values.
@@ -15,6 +16,7 @@ import yaml
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification
+from accugrid.kinematics.joint_errors import JointErrors
 from accugrid.kinematics.robot import Robot
 
 __all__ = ["calibrated_yaml", "check_same_robot", "identification_summary"]
@@ -102,11 +104,40 @@ def calibrated_yaml(robot: Robot, summary: dict | None = None, header: str = "")
         doc["errors"] = [
             {k: float(v) for k, v in zip(keys, row, strict=True)} for row in robot.errors
         ]
+    if robot.joint_errors is not None:
+        doc["joint_errors"] = _joint_errors_dict(robot.joint_errors)
     if summary is not None:
         doc["identification"] = summary
     text = yaml.safe_dump(doc, sort_keys=False, default_flow_style=None, width=100)
     comments = "".join(f"# {line}\n" for line in header.splitlines())
     return comments + text
+
+
+def _joint_errors_dict(moves: JointErrors) -> dict:
+    """The ``joint_errors:`` section ``load_robot`` reads (compliance, masses, harmonics,
+    thermal, gravity)."""
+    out: dict = {"compliance_rad_per_nm": [float(c) for c in moves.compliance]}
+    out["masses"] = [
+        {"link": m.link, "kg": float(m.kg), "at_mm": [float(v) for v in m.at_mm]}
+        for m in moves.masses
+    ]
+    if moves.harmonics:
+        out["harmonics"] = [
+            {
+                "axis": h.axis,
+                "order": h.order,
+                "amplitude_rad": float(h.amplitude_rad),
+                "phase_deg": float(np.degrees(h.phase_rad)),
+            }
+            for h in moves.harmonics
+        ]
+    if moves.thermal is not None:
+        out["thermal"] = {
+            "delta_t_k": float(moves.thermal.delta_t_k),
+            "expansion_per_k": float(moves.thermal.expansion_per_k),
+        }
+    out["gravity_mps2"] = float(moves.gravity_mps2)
+    return out
 
 
 def check_same_robot(model: Robot, robot: Robot, where: str | None = None) -> None:

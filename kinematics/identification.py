@@ -4,7 +4,10 @@ The parameter vector x (n,) starts with the 24 DH errors of seed Eq. 2, link-maj
 ``error_model``: Δa_i mm, Δd_i mm, Δα_i rad, Δθ_i rad for i = 1..6; then the TCP offset in the
 flange frame (Δx, Δy, Δz mm, added to the tool's translation); with ``base_frame`` then the
 correction of the tracker frame: translation (mm) and rotation vector (rad) of
-``T0⁻¹ · tracker_T_robot``, where T0 is the rigid fit of the commanded to the measured positions.
+``T0⁻¹ · tracker_T_robot``, where T0 is the rigid fit of the commanded to the measured positions;
+with ``compliance`` last the compliance of A2 and A3 (rad/N·m): the arm reaches FK(q + δ) with
+δ_j = c_j · τ_j(q), τ the gravity torque of the robot's lumped masses (``kinematics.joint_errors``,
+the same model the calibrated robot's ``true_robot`` applies).
 
 Residuals are positions only: the measured TCP position (in the robot frame, or ``T0⁻¹ ·``
 tracker coordinates with ``base_frame``) minus the model's TCP position at the pose's joints, in
@@ -31,9 +34,11 @@ from accugrid.kinematics.dh import PARAMETERS, flange_poses
 from accugrid.kinematics.error_model import error_jacobian
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
+from accugrid.kinematics.joint_errors import JointErrors
 from accugrid.kinematics.robot import Robot
 
 __all__ = [
+    "COMPLIANT_AXES",
     "RTOL",
     "CrossValidation",
     "Identification",
@@ -45,6 +50,7 @@ __all__ = [
     "pose_set",
 ]
 
+COMPLIANT_AXES = (1, 2)  # A2, A3 (0-based): the axes that carry the arm against gravity
 RTOL = 1e-7  # singular value / largest below this: unidentifiable direction (scaled Jacobian)
 OUTLIER_SIGMA = 3.0  # a row is an outlier when an axis residual is beyond this many robust sigmas
 OUTLIER_FLOOR_MM = 1e-3  # ... and beyond this (below any tracker's resolution)
@@ -59,20 +65,23 @@ _SHOW = 5
 _LENGTH = {"a": "mm", "d": "mm", "alpha": "rad", "theta": "rad"}
 
 
-def parameter_names(base_frame: bool = False) -> list[str]:
+def parameter_names(base_frame: bool = False, compliance: bool = False) -> list[str]:
     """Names of the parameters in x order: ``da1 dd1 dalpha1 dtheta1 ... tool_x tool_y tool_z``
-    [``base_x base_y base_z base_rx base_ry base_rz``]."""
+    [``base_x base_y base_z base_rx base_ry base_rz``] [``compliance_a2 compliance_a3``]."""
     names = [f"d{p}{i}" for i in range(1, 7) for p in PARAMETERS]
     names += ["tool_x", "tool_y", "tool_z"]
     if base_frame:
         names += ["base_x", "base_y", "base_z", "base_rx", "base_ry", "base_rz"]
+    if compliance:
+        names += [f"compliance_a{axis + 1}" for axis in COMPLIANT_AXES]
     return names
 
 
-def parameter_units(base_frame: bool = False) -> list[str]:
-    """Unit of each parameter in x order: 'mm' or 'rad'."""
+def parameter_units(base_frame: bool = False, compliance: bool = False) -> list[str]:
+    """Unit of each parameter in x order: 'mm', 'rad' or 'rad/Nm'."""
     units = [_LENGTH[p] for _ in range(6) for p in PARAMETERS] + ["mm"] * 3
-    return units + (["mm"] * 3 + ["rad"] * 3 if base_frame else [])
+    units += ["mm"] * 3 + ["rad"] * 3 if base_frame else []
+    return units + (["rad/Nm"] * len(COMPLIANT_AXES) if compliance else [])
 
 
 @dataclass(frozen=True)
@@ -189,28 +198,56 @@ def _check_logged_joints(robot, q, commanded, joint_decimals, position_decimals,
 
 
 def identification_jacobian(
-    robot: Robot, q: np.ndarray, x: np.ndarray | None = None, base_frame: bool = False
+    robot: Robot,
+    q: np.ndarray,
+    x: np.ndarray | None = None,
+    base_frame: bool = False,
+    compliance: bool = False,
 ) -> np.ndarray:
     """∂(model TCP position)/∂x: (N, 3, n) mm per parameter unit at joints q (N, 6) rad and
     parameters x (n,) (default 0, the nominal model), for pose planning and ``identify``."""
-    model = _Model(robot, base_frame, np.eye(4))
+    model = _Model(robot, base_frame, np.eye(4), compliance)
     x = np.zeros(model.n) if x is None else np.asarray(x, dtype=float)
     return model.jacobian(x, np.atleast_2d(np.asarray(q, dtype=float)))
+
+
+def _masses(robot: Robot) -> tuple:
+    """The robot's gravity model (``joint_errors.masses``) for compliance; InputError if none."""
+    masses = () if robot.joint_errors is None else robot.joint_errors.masses
+    if not masses:
+        raise InputError(
+            f"robot {robot.name} has no gravity model: compliance needs joint_errors.masses "
+            "(lumped link masses) in the robot YAML"
+        )
+    return masses
 
 
 class _Model:
     """The measured-position model of a parameter vector x (layout: module docstring)."""
 
-    def __init__(self, robot: Robot, base_frame: bool, base_T0: np.ndarray) -> None:
+    def __init__(
+        self, robot: Robot, base_frame: bool, base_T0: np.ndarray, compliance: bool = False
+    ) -> None:
         self.robot, self.base_frame, self.base_T0 = robot, base_frame, base_T0
-        self.n = 27 + (6 if base_frame else 0)
+        self.gravity = (
+            JointErrors.from_compliance(np.zeros(6), _masses(robot)) if compliance else None
+        )
+        self.i_comp = 27 + (6 if base_frame else 0)
+        self.n = self.i_comp + (len(COMPLIANT_AXES) if compliance else 0)
 
     def arm(self, x: np.ndarray) -> Robot:
-        """The nominal robot with the DH errors and TCP offset of x applied (no errors left)."""
+        """The nominal robot with the DH errors, TCP offset and compliance of x applied, as a
+        robot without errors (its ``fk`` is the calibrated arm's)."""
         r = self.robot
         tool = r.flange_T_tool.copy()
         tool[:3, 3] += x[24:27]
-        return Robot(r.name, r.dh.with_errors(x[:24].reshape(6, 4)), r.joint_limits_deg, tool)
+        moves = None
+        if self.gravity is not None:
+            c = np.zeros(6)
+            c[list(COMPLIANT_AXES)] = x[self.i_comp : self.i_comp + len(COMPLIANT_AXES)]
+            moves = JointErrors.from_compliance(c, self.gravity.masses)
+        dh = r.dh.with_errors(x[:24].reshape(6, 4))
+        return Robot(r.name, dh, r.joint_limits_deg, tool, fk_joint_errors=moves)
 
     def _base(self, x: np.ndarray) -> np.ndarray:
         from scipy.spatial.transform import Rotation
@@ -219,25 +256,34 @@ class _Model:
 
     def positions(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
         """Model TCP positions (N, 3) mm in the measurement frame (robot frame, or T0⁻¹·tracker)."""
-        arm = self.arm(x)
-        flange = flange_poses(arm.dh, q)
-        p = flange[:, :3, :3] @ arm.flange_T_tool[:3, 3] + flange[:, :3, 3]
+        p = self.arm(x).fk(q)[:, :3, 3]
         if self.base_frame:
             p = p @ self._base(x).T + x[27:30]
         return p
 
     def jacobian(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
-        """(N, 3, n) derivatives of ``positions``."""
+        """(N, 3, n) derivatives of ``positions`` (the compliance columns hold the gravity
+        torques fixed, which is exact in c; their change with the DH errors is ignored)."""
         arm = self.arm(x)
+        moved = q
+        if arm.fk_joint_errors is not None:
+            moved = q + arm.fk_joint_errors.delta(arm.dh, q)
+        static = Robot(arm.name, arm.dh, arm.joint_limits_deg, arm.flange_T_tool)
         jac = np.empty((len(q), 3, self.n))
-        jac[:, :, :24] = error_jacobian(arm, q)[:, :3]
-        flange = flange_poses(arm.dh, q)
+        jac[:, :, :24] = error_jacobian(static, moved)[:, :3]
+        flange = flange_poses(arm.dh, moved)
         jac[:, :, 24:27] = flange[:, :3, :3]
+        if self.gravity is not None:
+            torque = self.gravity.gravity_torques(arm.dh, q)  # (N, 6) N·m = ∂δ/∂c
+            for k, axis in enumerate(COMPLIANT_AXES):  # ∂p/∂A = sign · ∂p/∂θ (Δθ column)
+                column = jac[:, :, 4 * axis + 3] * arm.dh.sign[axis]
+                jac[:, :, self.i_comp + k] = column * torque[:, axis, None]
         if self.base_frame:
             from scipy.spatial.transform import Rotation
 
             rot = self._base(x)
-            jac[:, :, :27] = rot @ jac[:, :, :27]
+            rest = np.r_[0:27, self.i_comp : self.n]
+            jac[:, :, rest] = rot @ jac[:, :, rest]
             jac[:, :, 27:30] = np.eye(3)
             p = flange[:, :3, :3] @ arm.flange_T_tool[:3, 3] + flange[:, :3, 3]
             for k in range(3):
@@ -328,23 +374,26 @@ def identify(
     robot: Robot,
     data: PoseSet,
     base_frame: bool = False,
+    compliance: bool = False,
     folds: int = 0,
     rtol: float = RTOL,
 ) -> Identification:
     """Identify the DH errors and TCP offset (and the tracker frame) from ``data``.
 
     ``robot``: the nominal model with the nominal tool (its own ``errors`` are not used).
-    ``folds`` >= 2 also runs k-fold cross-validation over the distinct poses. InputError for
+    ``compliance``: also the compliance of A2, A3 (rad/N·m) under the gravity torques of the
+    robot's ``joint_errors.masses``. ``folds`` >= 2 also runs k-fold cross-validation over the distinct poses. InputError for
     too few poses, poses in one plane or one orientation, or data that leave more directions
     unidentifiable than the robot's structural ones.
     """
     base_T0 = _rigid_fit(data.commanded, data.measured) if base_frame else np.eye(4)
     target = _in_robot_frame(base_T0, data.measured)
-    model = _Model(robot, base_frame, base_T0)
+    model = _Model(robot, base_frame, base_T0, compliance)
+    names = parameter_names(base_frame, compliance)
     x0 = np.zeros(model.n)
     sub = _subspace(model.jacobian(x0, data.q), rtol)
     reference = _subspace(model.jacobian(x0, _reference_joints(robot)), rtol)
-    _check_rank(sub, reference, data, base_frame)
+    _check_rank(sub, reference, data, names)
     x, residuals, sigma = _fit(model, sub, data.q, target)
     rows = len(data)
     rank = sub.basis.shape[1]
@@ -356,7 +405,6 @@ def identify(
     std = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", directions, cov_z, directions), 0.0))
     identifiable = np.linalg.norm(sub.null, axis=1) < 1e-6
     kept = sub.singular[:rank]
-    names = parameter_names(base_frame)
     null = _readable_null(sub.null)
     outliers = _outliers(residuals, sigma, data.labels)
     tracker = None
@@ -376,11 +424,12 @@ def identify(
         arm.flange_T_tool,
         x[:24].reshape(6, 4).copy(),
         f"{robot.name} calibrated by accugrid identify from {data.poses} poses",
+        arm.fk_joint_errors,
     )
     return Identification(
         robot=calibrated,
         names=names,
-        units=parameter_units(base_frame),
+        units=parameter_units(base_frame, compliance),
         x=x,
         std=std,
         identifiable=identifiable,
@@ -485,7 +534,7 @@ def _check_geometry(data: PoseSet) -> None:
         )
 
 
-def _check_rank(sub: _Subspace, reference: _Subspace, data: PoseSet, base: bool) -> None:
+def _check_rank(sub: _Subspace, reference: _Subspace, data: PoseSet, names: list[str]) -> None:
     """InputError for fewer poses than identifiable parameters, poses in one plane or one
     orientation, and data that lose directions a spread-out pose set identifies."""
     rank, wanted = sub.basis.shape[1], reference.basis.shape[1]
@@ -496,7 +545,6 @@ def _check_rank(sub: _Subspace, reference: _Subspace, data: PoseSet, base: bool)
             data.path,
         )
     _check_geometry(data)
-    names = parameter_names(base)
     if rank < wanted:
         # directions lost beyond the structural ones: the data null space outside the reference's
         lost = sub.null - reference.null @ (reference.null.T @ sub.null)

@@ -76,3 +76,16 @@ def test_model_of_another_robot_is_refused():
     ):
         check_same_robot(other, KR210, "cal.yaml")
     check_same_robot(load_robot("kr210-paper"), KR210)  # same nominal model: accepted
+
+
+def test_compliance_section_reloads(tmp_path):
+    from accugrid.kinematics.joint_errors import JointErrors
+
+    masses = load_robot("kr210-realistic").joint_errors.masses
+    moves = JointErrors.from_compliance([0, 1.5e-7, 2.5e-7, 0, 0, 0], masses)
+    robot = Robot("c", KR210.dh, KR210.joint_limits_deg, np.eye(4), np.zeros((6, 4)), "", moves)
+    path = tmp_path / "cal.yaml"
+    path.write_text(calibrated_yaml(robot))
+    loaded = load_robot(path)
+    np.testing.assert_array_equal(loaded.joint_errors.compliance, moves.compliance)
+    np.testing.assert_array_equal(loaded.true_robot().fk(Q), robot.true_robot().fk(Q))

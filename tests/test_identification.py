@@ -306,3 +306,49 @@ def test_rank_loss_beyond_the_structural_directions_is_named():
     data = measured_set(true_arm(TABLE1, np.zeros(3)), q)
     with pytest.raises(InputError, match="more parameter combinations unidentifiable"):
         identify(NOMINAL, data)
+
+
+# ---- compliance -----------------------------------------------------------------------------
+
+REALISTIC = load_robot("kr210-realistic")
+
+
+def test_compliance_of_a2_a3_is_recovered_with_the_geometric_errors():
+    from accugrid.kinematics.joint_errors import JointErrors
+
+    nominal = REALISTIC.with_tool(TOOL)  # its masses are the gravity model
+    errors = TABLE1.copy()
+    errors[1, 1] = errors[2, 1] = 0.0
+    errors[5] = 0.0
+    c = np.array([0.0, 1.0e-7, 2.0e-7, 0.0, 0.0, 0.0])
+    moves = JointErrors.from_compliance(c, REALISTIC.joint_errors.masses)
+    true = Robot("t", nominal.dh, nominal.joint_limits_deg, TOOL, errors, "", moves).true_robot()
+    q = random_joints(60, 21)
+    commanded = nominal.fk(q)
+    data = pose_set(
+        nominal,
+        commanded[:, :3, 3],
+        true.fk(q)[:, :3, 3],
+        matrix_to_abc(commanded[:, :3, :3]),
+        np.degrees(q),
+    )
+    result = identify(nominal, data, compliance=True)
+    assert result.names[-2:] == ["compliance_a2", "compliance_a3"]
+    assert result.units[-2:] == ["rad/Nm", "rad/Nm"]
+    np.testing.assert_allclose(result.x[-2:], c[1:3], rtol=1e-6)
+    np.testing.assert_allclose(result.robot.errors, errors, atol=1e-6)
+    # the calibrated robot's true arm applies the identified compliance
+    np.testing.assert_allclose(result.robot.joint_errors.compliance, c, rtol=1e-6, atol=1e-15)
+    q_new = random_joints(100, 22)
+    np.testing.assert_allclose(
+        result.robot.true_robot().fk(q_new)[:, :3, 3], true.fk(q_new)[:, :3, 3], atol=1e-6
+    )
+    # a geometric model alone cannot follow the sag
+    geometric = identify(nominal, data)
+    assert np.abs(geometric.residuals).max() > 0.01
+
+
+def test_compliance_needs_a_gravity_model():
+    data = measured_set(true_arm(TABLE1, np.zeros(3)), random_joints(40, 23))
+    with pytest.raises(InputError, match="no gravity model"):
+        identify(NOMINAL, data, compliance=True)

@@ -7,8 +7,10 @@ round-off of their printed decimals) and the Status s. Without logged joints eac
 are the nominal IK in its Status: column s, else --status, else the IK default per pose.
 
 Identified (position-only residuals, robust Gauss-Newton, kinematics.identification): the 24 DH
-errors of seed Eq. 2 (Δa, Δd mm; Δα, Δθ rad), the TCP offset in the flange (mm) and, with
---base-frame, the tracker-to-robot frame (then x_meas.. may be in tracker coordinates).
+errors of seed Eq. 2 (Δa, Δd mm; Δα, Δθ rad), the TCP offset in the flange (mm), with
+--base-frame the tracker-to-robot frame (then x_meas.. may be in tracker coordinates) and with
+--compliance the compliance of A2 and A3 under gravity (rad/N.m; the robot YAML must carry the
+gravity model, joint_errors.masses).
 Directions the data cannot see (SVD of the column-scaled Jacobian) are held at zero and listed.
 
 Output: a robot YAML (-o) loadable wherever a robot is accepted: the nominal model, the identified
@@ -67,6 +69,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="also identify the tracker-to-robot frame (measured positions in tracker coordinates)",
     )
+    parser.add_argument(
+        "--compliance",
+        action="store_true",
+        help="also identify the compliance of A2 and A3 (rad/N.m) under gravity; needs the "
+        "robot's gravity model (joint_errors.masses in its YAML, e.g. kr210-realistic)",
+    )
     parser.add_argument("-o", "--output", required=True, metavar="CAL.yaml", help="robot YAML")
     parser.add_argument("--urdf", metavar="FILE.urdf", help="also write the model as URDF")
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
@@ -97,7 +105,9 @@ def run(args: argparse.Namespace) -> int:
         labels=[meas.where(r) for r in range(len(meas.commanded))],
         path=meas.path,
     )
-    result = identify(robot, data, base_frame=args.base_frame, folds=args.folds)
+    result = identify(
+        robot, data, base_frame=args.base_frame, compliance=args.compliance, folds=args.folds
+    )
     source = Path(args.measurements).name
     summary = identification_summary(result, robot, source, meas.sha256)
     header = f"accugrid {__version__} identify: {robot.name} calibrated from {source}"
@@ -109,7 +119,8 @@ def run(args: argparse.Namespace) -> int:
     write_files(outputs, inputs, args.force)
     print(_summary(args.output, robot, result))
     if args.urdf:
-        print(f"wrote {args.urdf}")
+        extra = " (geometric part only: URDF has no joint compliance)" if args.compliance else ""
+        print(f"wrote {args.urdf}{extra}")
     return 0
 
 
