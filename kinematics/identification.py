@@ -380,11 +380,12 @@ def identify(
 ) -> Identification:
     """Identify the DH errors and TCP offset (and the tracker frame) from ``data``.
 
-    ``robot``: the nominal model with the nominal tool (its own ``errors`` are not used).
-    ``compliance``: also the compliance of A2, A3 (rad/N·m) under the gravity torques of the
-    robot's ``joint_errors.masses``. ``folds`` >= 2 also runs k-fold cross-validation over the distinct poses. InputError for
-    too few poses, poses in one plane or one orientation, or data that leave more directions
-    unidentifiable than the robot's structural ones.
+    ``robot``: the nominal model with the nominal tool (its own ``errors`` and joint errors
+    are not used). ``compliance``: also the compliance of A2, A3 (rad/N·m) under the gravity
+    torques of the robot's ``joint_errors.masses``. ``folds`` >= 2 also runs k-fold
+    cross-validation over the distinct poses. InputError for too few poses, poses in one plane
+    or one orientation, or data that leave more directions unidentifiable than the robot's
+    structural ones.
     """
     base_T0 = _rigid_fit(data.commanded, data.measured) if base_frame else np.eye(4)
     target = _in_robot_frame(base_T0, data.measured)
