@@ -48,6 +48,7 @@ __all__ = [
     "identify",
     "parameter_names",
     "pose_set",
+    "select_poses",
 ]
 
 COMPLIANT_AXES = (1, 2)  # A2, A3 (0-based): the axes that carry the arm against gravity
@@ -368,6 +369,48 @@ def _reference_joints(robot: Robot) -> np.ndarray:
     q = lo + rng.random((_REFERENCE_POSES, 6)) * (hi - lo)
     q[:, 4] = np.where(np.abs(q[:, 4]) < 0.3, 0.3, q[:, 4])
     return q
+
+
+def select_poses(
+    robot: Robot,
+    q: np.ndarray,
+    count: int,
+    base_frame: bool = False,
+    compliance: bool = False,
+) -> tuple[np.ndarray, float]:
+    """Greedy D-optimal choice of ``count`` of the candidate joints q (M, 6) rad: each step adds
+    the candidate that most increases det(JᵀJ) of the column-scaled identification Jacobian in
+    the robot's identifiable subspace (the structural directions of ``identify`` left out).
+    Returns the chosen row indices (count,) in choice order and the set's O1 index."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    if not 1 <= count <= len(q):
+        raise InputError(f"cannot choose {count} poses from {len(q)} candidates")
+    model = _Model(robot, base_frame, np.eye(4), compliance)
+    reference = _subspace(model.jacobian(np.zeros(model.n), _reference_joints(robot)), RTOL)
+    rank = reference.basis.shape[1]
+    if count * 3 < rank:
+        raise InputError(
+            f"{count} poses cannot identify {rank} parameters: choose at least {-(-rank // 3)}"
+        )
+    # each candidate's 3 rows in the identifiable coordinates (M, 3, r)
+    rows = (model.jacobian(np.zeros(model.n), q) / reference.scale) @ reference.basis
+    info = 1e-9 * np.eye(rank) * np.mean(rows**2) * 3  # regularised start, tiny against a pose
+    inverse = np.linalg.inv(info)
+    chosen: list[int] = []
+    free = np.ones(len(q), dtype=bool)
+    for _ in range(count):
+        # det(I + J A⁻¹ Jᵀ) = the factor by which adding a candidate multiplies det(A)
+        gain = np.linalg.det(np.eye(3) + rows @ inverse @ np.swapaxes(rows, 1, 2))
+        gain[~free] = -np.inf
+        best = int(np.argmax(gain))
+        chosen.append(best)
+        free[best] = False
+        j = rows[best]
+        middle = np.linalg.inv(np.eye(3) + j @ inverse @ j.T)
+        inverse = inverse - inverse @ j.T @ middle @ j @ inverse  # Woodbury
+    sing = np.linalg.svd(rows[chosen].reshape(-1, rank), compute_uv=False)
+    o1 = float(np.exp(np.mean(np.log(np.maximum(sing, 1e-300)))) / np.sqrt(count))
+    return np.array(chosen), o1
 
 
 def identify(

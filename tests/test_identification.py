@@ -352,3 +352,44 @@ def test_compliance_needs_a_gravity_model():
     data = measured_set(true_arm(TABLE1, np.zeros(3)), random_joints(40, 23))
     with pytest.raises(InputError, match="no gravity model"):
         identify(NOMINAL, data, compliance=True)
+
+
+# ---- pose selection -------------------------------------------------------------------------
+
+
+def _log_det(q: np.ndarray) -> float:
+    """log det of JᵀJ of the column-scaled Jacobian, identifiable part (test's own SVD)."""
+    jac = identification_jacobian(NOMINAL, q).reshape(-1, 27)
+    reference = identification_jacobian(NOMINAL, random_joints(200, 99)).reshape(-1, 27)
+    scale = np.sqrt(np.mean(reference**2, axis=0))
+    vt = np.linalg.svd(reference / scale)[2][:22]  # the 22 identifiable directions
+    return float(np.linalg.slogdet(((jac / scale) @ vt.T).T @ ((jac / scale) @ vt.T))[1])
+
+
+def test_greedy_selection_beats_random_subsets_of_the_same_size():
+    from accugrid.kinematics.identification import select_poses
+
+    candidates = random_joints(400, 30)
+    chosen, o1 = select_poses(NOMINAL, candidates, 30)
+    assert len(set(chosen.tolist())) == 30
+    best = _log_det(candidates[chosen])
+    rng = np.random.default_rng(31)
+    randoms = [_log_det(candidates[rng.choice(400, 30, replace=False)]) for _ in range(20)]
+    assert best > max(randoms)
+    # and identification from the chosen poses has a better O1 than from a random 30
+    true = true_arm(TABLE1, np.zeros(3))
+    picked = identify(NOMINAL, measured_set(true, candidates[chosen]))
+    random_fit = identify(
+        NOMINAL, measured_set(true, candidates[rng.choice(400, 30, replace=False)])
+    )
+    assert picked.o1 == pytest.approx(o1, rel=1e-3)  # identify scales by the data, not the set
+    assert picked.o1 > random_fit.o1
+
+
+def test_selection_refuses_impossible_counts():
+    from accugrid.kinematics.identification import select_poses
+
+    with pytest.raises(InputError, match="cannot choose 50 poses from 40"):
+        select_poses(NOMINAL, random_joints(40, 32), 50)
+    with pytest.raises(InputError, match="choose at least 8"):
+        select_poses(NOMINAL, random_joints(40, 32), 5)
