@@ -213,6 +213,13 @@ def test_g54_does_not_cancel_an_offset(offset, reason):
     assert reason in moves[-1].reason
 
 
+def test_g10_names_what_it_changes():
+    moves = parse_gcode("G90 G0 X0 Y0 Z0\nG10 L1 P1 Z0.0 R5.0\nG1 X5 Y5 Z5\n")
+    assert "G10 L1 (line 2) changes the tool table" in moves[-1].reason
+    moves = parse_gcode("G90 G0 X0 Y0 Z0\nG10 L20 P1 X0\nG1 X5 Y5 Z5\n")
+    assert "G10 L20 (line 2) changes the work offsets" in moves[-1].reason
+
+
 @pytest.mark.parametrize(
     ("program", "cleared"),
     [
@@ -238,6 +245,7 @@ def test_what_cancels_an_offset(program, cleared):
         ("G33 Z-10 K1", "spindle-synchronized motion G33"),
         ("G0.5 X10", "unknown G-code G0.5"),
         ("G999 X10", "unknown G-code G999"),
+        ("G1 G999 X10", "unknown G-code G999"),  # whatever the order of the words
     ],
 )
 def test_unknown_motions_are_reported_not_corrected(tmp_path, cell, code, what):
