@@ -207,6 +207,10 @@ def _blank_comments(line: str, path: str | None, lineno: int) -> str:
     """The line with ``( )`` comments and the ``;`` tail replaced by spaces (offsets kept)."""
     if "(" not in line and ";" not in line and ")" not in line:
         return line
+    if ";" not in line and line.count("(") == 1 and line.count(")") == 1:
+        start, end = line.find("("), line.find(")") + 1
+        if start < end:  # the common case: one ( ) comment
+            return line[:start] + " " * (end - start) + line[end:]
     parts: list[str] = []
     pos, n = 0, len(line)
     found = {c: line.find(c) for c in "(;)"}  # next of each, refreshed only once passed
