@@ -344,7 +344,10 @@ def test_lone_dat_with_base_fdat_wins_and_only_pos(tmp_path):
         "ENDDAT\n"
     )
     out, rep = tmp_path / "o.dat", tmp_path / "r.csv"
-    assert rewrite(dat, "--cell", cell, "-o", out, "--report", rep, "--base", "0") == 0
+    assert rewrite(dat, "--cell", cell, "-o", out, "--report", rep) == 0
+    assert out.read_bytes() == dat.read_bytes()  # without --base no motion says it is a position
+    assert "(give the .src, or --base N)" in report(rep)[0]["reason"]
+    assert rewrite(dat, "--cell", cell, "-o", out, "--report", rep, "--force", "--base", "0") == 0
     rows = {r["name"]: r for r in report(rep)}
     assert rows["XP1"]["status"] == "corrected"  # in BASE_DATA[2] (its FDAT), not --base 0
     want = np.array([1000.0, 0.0, 1000.0]) + R2.T @ E_CONST
