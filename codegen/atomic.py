@@ -1,71 +1,278 @@
-"""Writing outputs safely: all files of a job appear together or not at all.
+"""Writing outputs safely: inputs are never replaced, a job's files appear whole or not at all.
 
-Each file is written to a temporary file in its target folder and renamed over the target only
-after every file of the job has been written. An existing output is refused without ``force``;
-an input file is never a target.
+Refused, with exit 2, even with ``--force``:
+
+- a target that is one of the command's inputs: the same file (device and inode, so through
+  symlinks and hard links) as a path the command was given, a file inside a given input folder
+  (``--templates``), or any file the command read through ``kinematics.inputfile``;
+- a target that exists and is not a regular file (``/dev/null``, a FIFO, a device, a folder);
+- a target whose folder is a file.
+
+Writing (``write_files``): every file goes first to a temporary file beside its target
+(``.NAME.PID.RANDOM.accugrid.tmp``, created with the umask's permissions), then one sync makes the
+data durable, then the temporaries are renamed over the targets. The ``main`` files are renamed
+last; the entry point (the last of them, e.g. ``NAME.src`` of a KRL job) is removed before any
+rename, and ``stale`` files (modules of an earlier job with the same name) are removed before
+the main files are renamed: a job killed at any moment (even by SIGKILL) never leaves its entry
+point beside a mix of old and new files. SIGTERM, SIGHUP and SIGINT are held during the
+renames; before them they end the write with the temporaries removed (exit 128 + signal).
+Temporaries a killed process left behind are removed by the next write into the same folder.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
-import tempfile
-from collections.abc import Iterable, Mapping
+import secrets
+import signal
+import stat
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.inputfile import file_identities, tracked_inputs
+
+__all__ = ["check_targets", "write_files"]
+
+_TMP_SUFFIX = ".accugrid.tmp"
+_SIGNALS = tuple(
+    getattr(signal, name) for name in ("SIGTERM", "SIGHUP", "SIGINT") if hasattr(signal, name)
+)
+
+PathLike = str | os.PathLike[str]
+
+
+def _input_identities(inputs: Iterable[PathLike | None]) -> set[tuple[int, int]]:
+    """(device, inode) of every input: given paths (a folder: every file in it) and the files
+    read under ``track_inputs``."""
+    found = set(tracked_inputs())
+    for item in inputs:
+        if item is not None:
+            found |= file_identities(item)
+    return found
+
+
+def _kind(mode: int) -> str:
+    kinds = {stat.S_IFDIR: "a folder", stat.S_IFIFO: "a FIFO", stat.S_IFCHR: "a device"}
+    return kinds.get(stat.S_IFMT(mode), "not a regular file")
+
+
+def _check_one(path: Path, input_ids: set[tuple[int, int]], force: bool) -> None:
+    where = os.fspath(path)
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:
+        if exc.errno == errno.ENOTDIR:  # a parent is a file: said below
+            st = None
+        else:
+            raise InputError(f"cannot use as output: {exc.strerror or exc}", where) from None
+    if st is not None:
+        if (st.st_dev, st.st_ino) in input_ids:
+            raise InputError("refusing to overwrite an input file", where)
+        if not stat.S_ISREG(st.st_mode):
+            raise InputError(f"output exists and is {_kind(st.st_mode)}; refusing it", where)
+        if not force:
+            raise InputError("output exists (use --force to overwrite)", where)
+    for parent in path.absolute().parents:
+        try:
+            pst = os.stat(parent)
+        except OSError:
+            continue
+        if not stat.S_ISDIR(pst.st_mode):
+            raise InputError(f"cannot create the output: {parent} is not a folder", where)
+        break
 
 
 def check_targets(
-    targets: Iterable[str | os.PathLike[str]],
-    inputs: Iterable[str | os.PathLike[str]] = (),
+    targets: Iterable[PathLike],
+    inputs: Iterable[PathLike | None] = (),
     force: bool = False,
 ) -> None:
-    """Refuse before any work is done: a target that is an input, or exists without ``force``."""
-    input_paths = [Path(p).resolve() for p in inputs if p is not None]
+    """Refuse before any work is done: a target that is an input, exists without ``force``, is
+    not a regular file, or cannot be created (see the module docstring)."""
+    input_ids = _input_identities(inputs)
     for target in targets:
-        path = Path(target)
-        resolved = path.resolve()
-        if resolved in input_paths or any(_same_file(path, p) for p in input_paths):
-            raise InputError("refusing to overwrite an input file", os.fspath(target))
-        if path.exists() and not force:
-            raise InputError("output exists (use --force to overwrite)", os.fspath(target))
-        if path.is_dir():
-            raise InputError("output is a directory", os.fspath(target))
+        _check_one(Path(target), input_ids, force)
 
 
-def _same_file(a: Path, b: Path) -> bool:
-    try:
-        return a.exists() and b.exists() and os.path.samefile(a, b)
-    except OSError:
+def _remove_dead_temps(folders: Iterable[Path]) -> None:
+    """Delete temporaries in ``folders`` left by accugrid processes that no longer run."""
+    for folder in folders:
+        try:
+            entries = list(os.scandir(folder))
+        except OSError:
+            continue
+        for entry in entries:
+            if not (entry.name.startswith(".") and entry.name.endswith(_TMP_SUFFIX)):
+                continue
+            parts = entry.name[: -len(_TMP_SUFFIX)].rsplit(".", 2)
+            if len(parts) != 3 or not parts[1].isdigit() or _alive(int(parts[1])):
+                continue
+            with contextlib.suppress(OSError):
+                os.unlink(entry.path)
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
         return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True
+
+
+class _Stop(BaseException):
+    """A termination signal arrived while the temporaries were being written."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise_stop(signum: int, frame: object) -> None:
+    raise _Stop(signum)
+
+
+@contextlib.contextmanager
+def _signals_end_write() -> Iterator[None]:
+    """Turn SIGTERM/SIGHUP/SIGINT into an exception (so ``finally`` cleans up); restore after."""
+    previous = {}
+    try:
+        for sig in _SIGNALS:
+            previous[sig] = signal.signal(sig, _raise_stop)
+    except ValueError:  # not the main thread: leave the handlers alone
+        pass
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """Hold the termination signals (delivered after the block) while the renames run."""
+    mask = getattr(signal, "pthread_sigmask", None)
+    if mask is None:
+        yield
+        return
+    old = mask(signal.SIG_BLOCK, _SIGNALS)
+    try:
+        yield
+    finally:
+        mask(signal.SIG_SETMASK, old)
+
+
+def _temp_name(path: Path) -> str:
+    return os.path.join(
+        path.parent, f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}{_TMP_SUFFIX}"
+    )
+
+
+def _write_temp(tmp: str, payload: bytes) -> None:
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies
+    try:
+        view = memoryview(payload)
+        while view:
+            view = view[os.write(fd, view) :]
+    finally:
+        os.close(fd)
+
+
+def _sync(temps: list[str]) -> None:
+    """Make the temporaries durable: one system-wide sync for a job, fsync for a single file."""
+    if len(temps) > 1 and hasattr(os, "sync"):
+        os.sync()
+        return
+    for tmp in temps:
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+def _sync_folders(folders: set[Path]) -> None:
+    for folder in folders:
+        with contextlib.suppress(OSError):
+            fd = os.open(folder, os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
 
 
 def write_files(
-    contents: Mapping[str | os.PathLike[str], bytes | str],
-    inputs: Iterable[str | os.PathLike[str]] = (),
+    contents: Mapping[PathLike, bytes | str],
+    inputs: Iterable[PathLike | None] = (),
     force: bool = False,
+    main: Iterable[PathLike] = (),
+    stale: Iterable[PathLike] = (),
 ) -> list[Path]:
     """Write every file of a job atomically; text is encoded as UTF-8 with newlines untouched.
 
-    Returns the written paths. On any failure the targets are left as they were.
+    ``main``: targets among ``contents`` renamed last, in order (the entry point last), after
+    their old versions and the ``stale`` files (leftovers of an earlier job of the same name,
+    deleted unless rewritten) are removed. Returns the written paths. On an error or signal
+    before the renames the targets are left as they were and no temporary remains.
     """
-    check_targets(contents, inputs, force)
-    temps: list[tuple[str, Path]] = []
+    paths = {Path(t): data for t, data in contents.items()}
+    main_paths = [Path(p) for p in main]
+    stale_paths = [Path(p) for p in stale if Path(p) not in paths]
+    input_ids = _input_identities(inputs)
+    for path in list(paths) + stale_paths:
+        _check_one(path, input_ids, force)
+    folders = {p.parent for p in paths}
+    for folder in sorted(folders):
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError(
+                f"cannot create the output folder: {exc.strerror or exc}", os.fspath(folder)
+            ) from None
+    _remove_dead_temps(folders)
+    temps: dict[Path, str] = {}
     try:
-        for target, data in contents.items():
-            path = Path(target)
-            path.parent.mkdir(parents=True, exist_ok=True)
-            payload = data.encode("utf-8") if isinstance(data, str) else data
-            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-            temps.append((tmp, path))
-            with os.fdopen(fd, "wb") as handle:
-                handle.write(payload)
-                handle.flush()
-                os.fsync(handle.fileno())
-        for tmp, path in temps:
-            os.replace(tmp, path)
+        with _signals_end_write():
+            for path, data in paths.items():
+                payload = data.encode("utf-8") if isinstance(data, str) else data
+                temps[path] = _temp_name(path)  # known before it exists: always cleaned
+                try:
+                    _write_temp(temps[path], payload)
+                except OSError as exc:
+                    raise InputError(f"cannot write: {exc.strerror or exc}", path) from None
+            _sync(list(temps.values()))
+            with _signals_held():
+                _swap(temps, main_paths, stale_paths)
+    except _Stop as stop:
+        raise SystemExit(128 + stop.signum) from None
     finally:
-        for tmp, _ in temps:
-            if os.path.exists(tmp):
+        for tmp in temps.values():
+            with contextlib.suppress(OSError):
                 os.unlink(tmp)
-    return [Path(t) for t in contents]
+    _sync_folders(folders)
+    return list(paths)
+
+
+def _swap(temps: dict[Path, str], main: list[Path], stale: list[Path]) -> None:
+    """Rename the temporaries over their targets, ``main`` last in order. When the job has more
+    than one file, the old entry point (the last of ``main``) is removed first, so no moment
+    shows it beside a mix of old and new files."""
+    last = [p for p in main if p in temps]
+    if last and (len(temps) > 1 or stale):
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(last[-1])
+    for path, tmp in temps.items():
+        if path not in last:
+            os.replace(tmp, path)
+    for path in stale:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(path)
+    for path in last:
+        os.replace(temps[path], path)

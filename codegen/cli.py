@@ -13,9 +13,11 @@ import os
 import pkgutil
 import sys
 import traceback
+import warnings
 
 from accugrid.codegen import __version__, commands
-from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.errors import InputError, printable
+from accugrid.kinematics.inputfile import track_inputs
 
 EXIT_OK, EXIT_INTERNAL, EXIT_INPUT = 0, 1, 2
 
@@ -42,25 +44,35 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; returns the process exit code (also used by the console script)."""
+    """Run the CLI; returns the process exit code (also used by the console script).
+
+    Library warnings (numpy, ...) are held while the command runs: shown after a success, dropped
+    after an error so the one-line message stands alone. Every file the command reads is tracked
+    as an input that no output may replace (``codegen.atomic``).
+    """
     args = build_parser().parse_args(argv)
-    try:
-        return int(args.handler(args) or EXIT_OK)
-    except InputError as exc:
-        print(f"accugrid {args.command}: error: {exc}", file=sys.stderr)
-        return EXIT_INPUT
-    except KeyboardInterrupt:
-        print(f"accugrid {args.command}: interrupted", file=sys.stderr)
-        return EXIT_INTERNAL
-    except Exception as exc:  # noqa: BLE001 - the last line of defence: exit 1, not a traceback
-        if os.environ.get("ACCUGRID_DEBUG"):
-            traceback.print_exc()
-        print(
-            f"accugrid {args.command}: internal error: {type(exc).__name__}: {exc} "
-            "(set ACCUGRID_DEBUG=1 for the traceback)",
-            file=sys.stderr,
-        )
-        return EXIT_INTERNAL
+    with warnings.catch_warnings(record=True) as held, track_inputs():
+        warnings.simplefilter("default")
+        try:
+            code = int(args.handler(args) or EXIT_OK)
+        except InputError as exc:
+            print(f"accugrid {args.command}: error: {exc}", file=sys.stderr)
+            return EXIT_INPUT
+        except KeyboardInterrupt:
+            print(f"accugrid {args.command}: interrupted", file=sys.stderr)
+            return EXIT_INTERNAL
+        except Exception as exc:  # noqa: BLE001 - the last line of defence: exit 1, no traceback
+            if os.environ.get("ACCUGRID_DEBUG"):
+                traceback.print_exc()
+            print(
+                f"accugrid {args.command}: internal error: {type(exc).__name__}: "
+                f"{printable(exc)} (set ACCUGRID_DEBUG=1 for the traceback)",
+                file=sys.stderr,
+            )
+            return EXIT_INTERNAL
+    for w in held:
+        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    return code
 
 
 if __name__ == "__main__":

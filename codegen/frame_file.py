@@ -10,10 +10,8 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Mapping
-from pathlib import Path
 
 import numpy as np
-import yaml
 
 from accugrid.codegen import __version__
 from accugrid.codegen.textsafe import fixed
@@ -21,6 +19,7 @@ from accugrid.kinematics.base_frame import RobotFrameFit
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.fitting import CircleFit
 from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
+from accugrid.kinematics.yamlfile import load_yaml
 
 KEYS = ("x", "y", "z", "a", "b", "c")
 MATRIX_TOL = 1e-6
@@ -74,23 +73,6 @@ def frame_yaml(fit: RobotFrameFit, inputs: Mapping[str, tuple[str, str]]) -> str
     return "\n".join(lines) + "\n"
 
 
-def _key_line(root: yaml.Node | None, keys: tuple[str, ...]) -> int | None:
-    """1-based line of the deepest of ``keys`` found in a composed YAML document."""
-    line = None
-    node = root
-    for key in keys:
-        if not isinstance(node, yaml.MappingNode):
-            break
-        for k_node, v_node in node.value:
-            if isinstance(k_node, yaml.ScalarNode) and k_node.value == key:
-                line = k_node.start_mark.line + 1
-                node = v_node
-                break
-        else:
-            break
-    return line
-
-
 def _number(value: object) -> float | None:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return None
@@ -100,23 +82,11 @@ def _number(value: object) -> float | None:
 def load_frame(path: str | os.PathLike[str]) -> np.ndarray:
     """Read tracker_T_robot (4, 4) mm from a frame YAML; InputError naming file, line and key."""
     path = os.fspath(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"cannot read: {exc.strerror or exc}", path) from None
-    except UnicodeDecodeError:
-        raise InputError("not UTF-8 text", path) from None
-    try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        problem = getattr(exc, "problem", None) or "invalid YAML"
-        line, col = (mark.line + 1, mark.column + 1) if mark is not None else (None, None)
-        raise InputError(f"invalid YAML: {problem}", path, line, col) from None
+    doc = load_yaml(path)
+    data = doc.data
 
     def fail(message: str, *keys: str) -> InputError:
-        return InputError(message, path, _key_line(root, keys))
+        return InputError(message, path, doc.line(*keys))
 
     if not isinstance(data, dict) or "tracker_T_robot" not in data:
         raise fail("missing key 'tracker_T_robot' (is this a file written by accugrid fit-frame?)")

@@ -15,6 +15,7 @@ import numpy as np
 
 from accugrid.codegen.textsafe import comment_text, fixed, fixed_many
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.inputfile import read_input_bytes
 
 __all__ = [
     "KRL_SUFFIXES",
@@ -52,7 +53,7 @@ def read_program(path: str | os.PathLike[str], max_bytes: int = MAX_BYTES) -> st
                 "(--max-mb)",
                 os.fspath(path),
             )
-        return path.read_bytes().decode("latin-1")
+        return read_input_bytes(path, max_bytes).decode("latin-1")
     except OSError as exc:
         raise InputError(f"cannot read: {exc.strerror or exc}", os.fspath(path)) from None
 

@@ -16,6 +16,7 @@ import numpy as np
 
 from accugrid.codegen.textsafe import comment_text, fixed, fixed_many, krl_identifier
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.inputfile import note_input
 from accugrid.templates import TEMPLATE_DIR
 
 
@@ -32,6 +33,7 @@ def template_dir(dialect: str, templates: str | os.PathLike[str] | None = None) 
 
 def environment(folder: Path, newline: str = "\n") -> jinja2.Environment:
     """A strict environment loading from ``folder``; ``newline`` is the output line ending."""
+    note_input(folder)  # templates are inputs: no output may replace them
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(os.fspath(folder)),
         undefined=jinja2.StrictUndefined,

@@ -1,22 +1,34 @@
 """Reading the CSV files of DESIGN.md with errors that name file, line and column.
 
-Format: UTF-8 (a BOM is tolerated), a header row, comma-separated, ``.`` decimal point; lines whose
-first field starts with ``#`` are comments; blank lines are skipped; column names are
-case-insensitive. Quoted fields may hold commas and newlines (they are data, never syntax).
+Format: UTF-8 (a BOM is tolerated), a header row, comma-separated, ``.`` decimal point; lines end
+with LF, CRLF or CR; lines whose first field starts with ``#`` are comments; blank lines are
+skipped; column names are case-insensitive. Quoted fields may hold commas and line breaks (they
+are data, never syntax). Numbers are ASCII decimals only (``parse_number``). Files are read by
+the guarded reader (``kinematics.inputfile``: regular files, size limit).
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
+import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.inputfile import read_input_text
+
+__all__ = ["Table", "parse_number", "parse_table", "read_table"]
+
+_DECIMAL = re.compile(
+    r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|(?i:nan|inf|infinity))"
+)  # nan and inf pass here to be refused as "not a finite number"
+_NOT_DECIMAL_CHAR = re.compile(r"[_nNiI\x1c-\x1f]")  # what float() takes beyond ASCII decimals
+_BLANKS = " \t\n\r\x0b\x0c"  # around a number: ASCII blanks only (float() takes more)
 
 
 @dataclass
@@ -62,51 +74,42 @@ class Table:
         return [row[i] for row in self.rows]
 
     def floats(self, names: Sequence[str], allow_empty: bool = False) -> np.ndarray:
-        """Columns as a float64 array (N, len(names)).
+        """Columns as a float64 array (N, len(names)), each column converted in one pass.
 
-        A cell that is not a finite number raises InputError naming file, line and column; an
-        empty cell is NaN when ``allow_empty`` and an error otherwise.
+        Cells must be ASCII decimal numbers (``parse_number``). A cell that is not a finite number
+        raises InputError naming file, line and column; an empty cell is NaN when
+        ``allow_empty`` and an error otherwise.
         """
         cols = [self.index(n) for n in names]
-        try:  # fast path: every cell a finite number
-            out = np.array([[row[i] for i in cols] for row in self.rows], dtype=float)
-            out = out.reshape(len(self.rows), len(cols))
-            if np.isfinite(out).all():
-                return out
-        except ValueError:
-            pass
-        # slow path: find the first bad cell and say where it is
         out = np.empty((len(self.rows), len(cols)))
-        for r, row in enumerate(self.rows):
-            for c, i in enumerate(cols):
-                out[r, c] = self._number(row[i], r, i, allow_empty)
+        for c, i in enumerate(cols):
+            cells = [row[i] for row in self.rows]
+            column = _fast_column(cells, allow_empty)
+            if column is None:  # slow path: find the first bad cell and say where it is
+                column = [self._number(cell, r, i, allow_empty) for r, cell in enumerate(cells)]
+            out[:, c] = column
         return out
 
     def _number(self, cell: str, r: int, i: int, allow_empty: bool) -> float:
-        text = cell.strip()
-        if not text:
-            if allow_empty:
-                return math.nan
-            raise InputError(
-                f"empty cell in column '{self.header[i]}'", self.path, self.lines[r], i + 1
-            )
+        if allow_empty and not cell.strip(_BLANKS):
+            return math.nan
         try:
-            value = float(text)
-        except ValueError:
+            return parse_number(cell, f"in column '{self.header[i]}'")
+        except ValueError as exc:
+            raise InputError(str(exc), self.path, self.lines[r], i + 1) from None
+
+    def check_bounds(
+        self, values: np.ndarray, names: Sequence[str], limit: float, unit: str
+    ) -> None:
+        """InputError at the first cell of ``values`` (N, len(names)), read from the columns
+        ``names``, beyond +-``limit`` (in ``unit``)."""
+        rows, cols = np.nonzero(np.abs(values) > limit)
+        if rows.size:
+            r, name = int(rows[0]), names[int(cols[0])]
             raise InputError(
-                f"'{_shorten(text)}' in column '{self.header[i]}' is not a number",
-                self.path,
-                self.lines[r],
-                i + 1,
-            ) from None
-        if not math.isfinite(value):
-            raise InputError(
-                f"'{_shorten(text)}' in column '{self.header[i]}' is not a finite number",
-                self.path,
-                self.lines[r],
-                i + 1,
+                f"{name} {values[r, cols[0]]:g} {unit} is beyond the limit of {limit:g} {unit}",
+                *self.where(r, name),
             )
-        return value
 
     def where(self, r: int, name: str | None = None) -> tuple[str, int, int | None]:
         """(path, line, column) of row r (0-based), for InputError(…, *table.where(r, name))."""
@@ -114,32 +117,51 @@ class Table:
 
 
 def _shorten(text: str, limit: int = 40) -> str:
-    text = text.replace("\n", "\\n").replace("\r", "\\r")
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
-def read_text(path: str | os.PathLike[str]) -> tuple[bytes, str]:
-    """A file's bytes (for hashing) and its UTF-8 text (BOM dropped); InputError if unreadable."""
+def parse_number(cell: str, what: str = "") -> float:
+    """One CSV cell as a finite float: an ASCII decimal number (``-12.5``, ``.5``, ``1e-3``),
+    surrounding blanks allowed. ValueError (message naming the cell) for anything else: empty,
+    ``1_000``, ``nan``, ``inf``, non-ASCII digits, or a value beyond the float range."""
+    text = cell.strip(_BLANKS)
+    where = f" {what}" if what else ""
+    if not text:
+        raise ValueError(f"empty cell{where}")
+    if not _DECIMAL.fullmatch(text):
+        raise ValueError(f"'{_shorten(text)}'{where} is not a number (ASCII decimal)")
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"'{_shorten(text)}'{where} is not a finite number")
+    return value
+
+
+def _fast_column(cells: list[str], allow_empty: bool) -> np.ndarray | None:
+    """The cells as floats when all are valid for ``parse_number`` (or empty, with
+    ``allow_empty``: NaN); None when any is not (the caller then locates it)."""
+    joined = " ".join(cells)
+    if not joined.isascii() or _NOT_DECIMAL_CHAR.search(joined):
+        return None  # float() would take 1_000, nan, inf or non-ASCII digits
+    if allow_empty:
+        cells = [cell if cell.strip(_BLANKS) else "nan" for cell in cells]
     try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise InputError(f"cannot read: {exc.strerror or exc}", path) from None
-    try:
-        return raw, raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        line = raw[: exc.start].count(b"\n") + 1
-        raise InputError("not UTF-8 text", path, line) from None
+        column = np.fromiter(map(float, cells), dtype=float, count=len(cells))
+    except ValueError:
+        return None
+    return None if np.isinf(column).any() else column
 
 
 def read_table(path: str | os.PathLike[str]) -> Table:
-    """Read a CSV file into a Table; InputError for unreadable, empty, ragged or non-UTF-8 files."""
+    """Read a CSV file into a Table; InputError for unreadable, empty, ragged or non-UTF-8 files,
+    and for anything the guarded reader refuses (``kinematics.inputfile``)."""
     path = os.fspath(path)
-    return parse_table(read_text(path)[1], path)
+    return parse_table(read_input_text(path)[1], path)
 
 
 def parse_table(text: str, path: str = "<string>") -> Table:
     """Parse CSV text (see module docstring); ``path`` is used in error messages only."""
-    reader = csv.reader(text.splitlines(keepends=True), strict=True)
+    # Lines end only at CR, LF or CRLF: VT, FF, NEL and U+2028 inside a field are data.
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
     header: list[str] | None = None
     rows: list[list[str]] = []
     lines: list[int] = []

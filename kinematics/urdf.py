@@ -23,6 +23,7 @@ import numpy as np
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.ik import wrap
+from accugrid.kinematics.inputfile import note_input
 from accugrid.kinematics.yamlfile import YamlDoc
 
 _MM = 1000.0
@@ -150,10 +151,13 @@ def urdf_robot_from_doc(doc: YamlDoc, folder: Path) -> UrdfRobot:
     path = folder / doc.string("urdf")
     if not path.is_file():
         raise doc.error(f"{doc.keyname('urdf')}: URDF file not found: {path}", "urdf")
+    note_input(path)  # read by Pinocchio, an input all the same
     try:
         model = pin.buildModelFromUrdf(str(path))
     except (RuntimeError, ValueError) as exc:
         raise InputError(f"cannot read the URDF: {exc}".splitlines()[0], path) from None
+    if model.nq == 0:
+        raise InputError("the URDF has no movable joint (a robot needs at least one)", path)
     tip_name = doc.string("tip")
     if not model.existFrame(tip_name):
         names = ", ".join(f.name for f in model.frames if f.name != "universe")

@@ -1,7 +1,16 @@
-"""YAML configuration via ``yaml.safe_load``, with errors naming the key, line and column."""
+"""The one YAML loader: strict, bounded, with errors naming file, key, line and column.
+
+Every configuration file (robot, cell, frame) is read by ``load_yaml``: the file through the
+guarded reader (``kinematics.inputfile``: regular file, size limit, UTF-8), then a safe loader that
+refuses what no accugrid file needs and what makes a small file expensive: aliases and anchors
+(``&a``/``*a``, the "billion laughs"), explicit tags (``!!int``, ``!!python/...``), duplicate keys
+(the last one would win silently), nesting deeper than ``MAX_DEPTH``, complex keys, and integers
+outside the float range. Each refusal is an InputError at the offending line and column.
+"""
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 from dataclasses import dataclass
@@ -10,35 +19,131 @@ from typing import Any
 import yaml
 
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.inputfile import MAX_CONFIG_BYTES, read_input_text
 
+__all__ = ["MAX_DEPTH", "YamlDoc", "load_yaml"]
+
+MAX_DEPTH = 32  # nested mappings/sequences; our files use 4
+_INT_CHARS = 400  # a longer integer is beyond float64 (and slow to convert): refused unread
 _MISSING = object()
+
+
+class _Refused(yaml.YAMLError):
+    def __init__(self, problem: str, mark: yaml.Mark | None) -> None:
+        super().__init__(problem)
+        self.problem = problem
+        self.problem_mark = mark
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """SafeLoader without aliases, anchors, tags, duplicate keys, deep nesting or huge ints."""
+
+    def __init__(self, stream: str) -> None:
+        super().__init__(stream)
+        self._depth = 0
+
+    def compose_node(self, parent: yaml.Node | None, index: object) -> yaml.Node:
+        event = self.peek_event()
+        if isinstance(event, yaml.AliasEvent):
+            raise _Refused("aliases (*name) are not accepted", event.start_mark)
+        if getattr(event, "anchor", None) is not None:
+            raise _Refused("anchors (&name) are not accepted", event.start_mark)
+        if getattr(event, "tag", None) is not None:
+            raise _Refused(
+                f"explicit tags ({event.tag}) are not accepted; write the plain value",
+                event.start_mark,
+            )
+        self._depth += 1
+        try:
+            if self._depth > MAX_DEPTH:
+                raise _Refused(f"nested deeper than {MAX_DEPTH} levels", event.start_mark)
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
+
+    def compose_mapping_node(self, anchor: str | None) -> yaml.MappingNode:
+        node = super().compose_mapping_node(anchor)
+        seen: dict[tuple[str, str], yaml.Node] = {}
+        for key, _ in node.value:
+            if not isinstance(key, yaml.ScalarNode):
+                raise _Refused("keys must be plain values", key.start_mark)
+            ident = (key.tag, key.value)
+            if ident in seen:
+                first = seen[ident].start_mark.line + 1
+                raise _Refused(
+                    f"duplicate key '{key.value}' (first on line {first})", key.start_mark
+                )
+            seen[ident] = key
+        return node
+
+    def construct_yaml_int(self, node: yaml.ScalarNode) -> int:
+        value = None if len(node.value) > _INT_CHARS else super().construct_yaml_int(node)
+        if value is None or abs(value) > 1e308:
+            raise _Refused("integer out of range (beyond 1e308)", node.start_mark)
+        return value
+
+
+_StrictLoader.add_constructor("tag:yaml.org,2002:int", _StrictLoader.construct_yaml_int)
+
+
+def _located(exc: yaml.YAMLError, text: str, path: str) -> InputError:
+    """An InputError at the position a PyYAML error names."""
+    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+    problem = getattr(exc, "problem", None) or getattr(exc, "reason", None) or "invalid YAML"
+    if mark is not None:
+        return InputError(f"invalid YAML: {problem}", path, mark.line + 1, mark.column + 1)
+    position = getattr(exc, "position", None)  # ReaderError: a character YAML does not allow
+    if isinstance(position, int):
+        head = text[:position]
+        line = head.count("\n") + 1
+        return InputError(f"invalid YAML: {problem}", path, line, position - head.rfind("\n"))
+    return InputError(f"invalid YAML: {problem}", path)
+
+
+def load_yaml(path: str | os.PathLike[str], limit: int = MAX_CONFIG_BYTES) -> YamlDoc:
+    """Read and parse a YAML file (see the module docstring); InputError on any problem."""
+    raw, text = read_input_text(path, limit)
+    return YamlDoc.parse(text, path, hashlib.sha256(raw).hexdigest())
 
 
 @dataclass(frozen=True)
 class YamlDoc:
-    """A parsed YAML mapping plus the source position of every key path (1-based line, column)."""
+    """A parsed YAML mapping plus the source position of every key path (1-based line, column).
+
+    Mapping keys in ``marks`` are the key's text as written; sequence items their index.
+    ``sha256`` is the file's digest (empty for text not read from a file).
+    """
 
     data: dict
     marks: dict[tuple, tuple[int, int]]
     path: str
+    sha256: str = ""
 
     @classmethod
-    def parse(cls, text: str, path: str | os.PathLike[str]) -> YamlDoc:
+    def parse(cls, text: str, path: str | os.PathLike[str], sha256: str = "") -> YamlDoc:
+        """Parse YAML text strictly; an empty document is an empty mapping."""
         path = os.fspath(path)
         try:
-            data = yaml.safe_load(text)
-            node = yaml.compose(text)
+            loader = _StrictLoader(text)  # checks the characters first
+            try:
+                node = loader.get_single_node()
+                data = {} if node is None else loader.construct_document(node)
+            finally:
+                loader.dispose()
         except yaml.YAMLError as exc:
-            mark = getattr(exc, "problem_mark", None)
-            problem = getattr(exc, "problem", None) or "invalid YAML"
-            if mark is None:
-                raise InputError(problem, path) from None
-            raise InputError(problem, path, mark.line + 1, mark.column + 1) from None
+            raise _located(exc, text, path) from None
         if not isinstance(data, dict):
-            raise InputError("expected a YAML mapping at the top level", path, 1, 1)
+            raise InputError("the top level must be a mapping (key: value lines)", path, 1, 1)
         marks: dict[tuple, tuple[int, int]] = {}
         _collect(node, (), marks)
-        return cls(data, marks, path)
+        return cls(data, marks, path, sha256)
+
+    def line(self, *keys: Any) -> int | None:
+        """1-based line of the deepest of ``keys`` present in the file (None if none is)."""
+        for depth in range(len(keys), 0, -1):
+            if keys[:depth] in self.marks:
+                return self.marks[keys[:depth]][0]
+        return None
 
     def keyname(self, *keys: Any) -> str:
         """Human name of a key path, e.g. ``dh[2].a_mm``."""
@@ -109,7 +214,7 @@ def _collect(node: yaml.Node | None, prefix: tuple, marks: dict) -> None:
     marks.setdefault(prefix, (node.start_mark.line + 1, node.start_mark.column + 1))
     if isinstance(node, yaml.MappingNode):
         for key_node, value_node in node.value:
-            key = prefix + (key_node.value,)
+            key = prefix + (str(key_node.value),)
             marks[key] = (key_node.start_mark.line + 1, key_node.start_mark.column + 1)
             _collect(value_node, key, marks)
     elif isinstance(node, yaml.SequenceNode):

@@ -39,6 +39,14 @@ def run(args: argparse.Namespace) -> int:
     check_targets([out / f"{name}.src", out / f"{name}.dat"], inputs, args.force)
     job = prepare(args, NAME)
     files = render_krl(job.program, job.header, args.templates)
-    written = write_files({out / f: text for f, text in files.items()}, job.inputs, args.force)
+    # NAME.src last (NAME.dat before it); modules of an earlier, longer job of this name go
+    stale = [p for p in out.glob(f"{name}_[0-9][0-9][0-9].*") if p.suffix in (".src", ".dat")]
+    written = write_files(
+        {out / f: text for f, text in files.items()},
+        job.inputs,
+        args.force,
+        main=[out / f"{name}.dat", out / f"{name}.src"],
+        stale=stale,
+    )
     print(summary(job, written))
     return 0

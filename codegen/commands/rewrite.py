@@ -210,7 +210,8 @@ def run(args: argparse.Namespace) -> int:
         files[outputs[path]] = text.encode("latin-1")
     if args.report:
         files[Path(args.report)] = report_csv(result.rows).encode("utf-8")
-    write_files(files, all_inputs, args.force)
+    # a KRL pair: the .src (what a controller runs) replaced last
+    write_files(files, all_inputs + [grid], args.force, main=[outputs[inputs[0]]])
     for line in warnings(result, opts):
         print(f"accugrid rewrite: warning: {line}", file=sys.stderr)
     counts = Counter(r.status for r in result.rows)

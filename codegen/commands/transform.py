@@ -27,6 +27,7 @@ from accugrid.codegen.textsafe import comment_text, fixed
 from accugrid.compensation.csvtable import Table, parse_table
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import invert, transform_points
+from accugrid.kinematics.inputfile import read_input_text
 
 NAME = "transform"
 HELP = "map tracker-frame x,y,z / x_meas,y_meas,z_meas columns into the robot frame"
@@ -52,17 +53,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="map robot-frame coordinates into the tracker frame instead",
     )
     parser.add_argument("--force", action="store_true", help="overwrite an existing output")
-
-
-def _read_text(path: str) -> tuple[str, bytes]:
-    try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise InputError(f"cannot read: {exc.strerror or exc}", path) from None
-    try:
-        return raw.decode("utf-8-sig"), raw
-    except UnicodeDecodeError as exc:
-        raise InputError("not UTF-8 text", path, raw[: exc.start].count(b"\n") + 1) from None
 
 
 def _chosen(table: Table, choice: str | None) -> list[tuple[str, str, str]]:
@@ -93,7 +83,7 @@ def _mapped(table: Table, triple: tuple[str, str, str], pose: np.ndarray) -> np.
 
 def run(args: argparse.Namespace) -> int:
     check_targets([args.output], [args.table, args.frame], args.force)
-    text, _ = _read_text(args.table)
+    text = read_input_text(args.table)[1]
     table = parse_table(text, args.table)
     tracker_T_robot = load_frame(args.frame)
     frame_sha = hashlib.sha256(Path(args.frame).read_bytes()).hexdigest()
