@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import csv
 import math
+import os
+import stat
 
 import numpy as np
 import pytest
@@ -18,6 +20,7 @@ from rewrite_helpers import E_CONST, write_cell, write_grid
 from accugrid.codegen.cli import main
 from accugrid.codegen.gcode.parse import parse_gcode
 from accugrid.codegen.krl.parse import parse_krl
+from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 
 GRID_ABC = (0.0, 90.0, 0.0)  # the orientation the test grids are measured at (robot frame)
@@ -189,8 +192,6 @@ def test_parameter_assignments_are_read_and_parameter_words_reported(realworld, 
     ],
 )
 def test_malformed_parameters_are_located(text, column, message):
-    from accugrid.kinematics.errors import InputError
-
     with pytest.raises(InputError) as err:
         parse_gcode(text, "p.ngc")
     assert message in str(err.value) and err.value.column == column
@@ -433,3 +434,19 @@ def test_config_dat_fdats_and_positions_are_read(tmp_path, cell):
     rows = report(rep)
     assert rows[0]["status"] == "corrected"  # FHOME: BASE_NO 0, the robot frame
     assert "joint-space target" in rows[1]["reason"]
+
+
+def test_outputs_are_readable_by_others_under_umask_022(tmp_path, cell):
+    """A transfer service must be able to read the programs (they were 0600 before)."""
+    src, dat = tmp_path / "job.src", tmp_path / "job.dat"
+    src.write_text(krl_src("LIN XP1"))
+    dat.write_text("DEFDAT job\nDECL E6POS XP1={X 1000.0,Y 0.0,Z 1000.0,A 0.0,B 90.0,C 0.0}\n")
+    old = os.umask(0o022)
+    try:
+        assert (
+            rewrite(src, dat, "--cell", cell, "-o", tmp_path / "o", "--report", tmp_path / "r") == 0
+        )
+    finally:
+        os.umask(old)
+    for path in (tmp_path / "o" / "job.src", tmp_path / "o" / "job.dat", tmp_path / "r"):
+        assert stat.S_IMODE(path.stat().st_mode) == 0o644
