@@ -242,7 +242,8 @@ def _gnum(value: float) -> str:
 
 
 def _skip_blank(line: str, i: int) -> int:
-    while i < len(line) and line[i] in " \t\r\f\v":
+    """The first index from ``i`` that is not whitespace (the same whitespace as ``\\s``)."""
+    while i < len(line) and line[i].isspace():
         i += 1
     return i
 
@@ -270,7 +271,7 @@ def _expression_end(line: str, i: int, path: str | None, lineno: int) -> int:
             raise InputError("unclosed '<' parameter name", path, lineno, i + 1)
         return close + 1
     m = _DIGITS_RE.match(line, i)
-    if m is None or line[i - 1] != "#":
+    if m is None:
         raise InputError("cannot read this parameter or expression", path, lineno, i + 1)
     return m.end()
 
