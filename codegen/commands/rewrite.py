@@ -45,7 +45,7 @@ from accugrid.codegen.rewrite import (
     Options,
     header_lines,
     report_csv,
-    warnings,
+    warning_lines,
 )
 from accugrid.compensation import GridModel
 from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
@@ -216,7 +216,7 @@ def run(args: argparse.Namespace) -> int:
         files[Path(args.report)] = report_csv(result.rows).encode("utf-8")
     # a KRL pair: the .src (what a controller runs) replaced last
     write_files(files, all_inputs + [grid], args.force, main=[outputs[inputs[0]]])
-    for line in warnings(result, opts):
+    for line in warning_lines(result, opts):
         print(f"accugrid rewrite: warning: {line}", file=sys.stderr)
     counts = Counter(r.status for r in result.rows)
     largest, _ = result.largest()
