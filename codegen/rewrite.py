@@ -22,6 +22,7 @@ from accugrid.codegen.header import file_sha256
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation import GridModel
+from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
 
 __all__ = [
@@ -49,8 +50,7 @@ class Options:
     model: GridModel
     base_data: dict[int, np.ndarray]  # BASE_DATA[n] -> robot_T_base
     robot_T_program: np.ndarray  # G-code program frame
-    iterations: int = 1
-    power: float = 1.0
+    correction: CorrectionSettings = CorrectionSettings()
     decimals: int | None = None  # None: the file's precision (see ``precision``)
     strict: bool = False
     base_override: int | None = None
@@ -100,9 +100,7 @@ def correct_points(points_robot: np.ndarray, opts: Options) -> tuple[np.ndarray,
         return np.zeros(0, bool), out
     inside = opts.model.contains(points_robot)
     if inside.any():
-        out[inside] = opts.model.correct(
-            points_robot[inside], iterations=opts.iterations, power=opts.power
-        )
+        out[inside] = opts.model.correct(points_robot[inside], opts.correction)
     return inside, out
 
 

@@ -13,6 +13,7 @@ from program_helpers import cell, error_field, grid, panel_points, robot
 
 from accugrid.codegen.points import parse_points
 from accugrid.codegen.program import STAGES, build_program
+from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc, transform_points
 
@@ -73,7 +74,7 @@ def test_every_stage_gets_the_hole_correction():
 
 def test_correction_iterations_come_from_the_cell():
     pts = panel_points(ROWS)
-    c = dataclasses.replace(cell(), iterations=3)
+    c = dataclasses.replace(cell(), correction=CorrectionSettings(iterations=3))
     prog = build_program(pts, c, robot(), grid())
     hole_robot = transform_points(c.robot_T_base, pts.xyz)
     np.testing.assert_allclose(

@@ -29,9 +29,10 @@ from accugrid.codegen.points import Points, read_points
 from accugrid.codegen.textsafe import comment_text, fixed
 from accugrid.compensation.grid import MAX_CORRECTION_MM, GridModel
 from accugrid.compensation.measurements import REPEAT_TOL_MM
-from accugrid.compensation.orientation import rotation_angle_deg
+from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
+from accugrid.kinematics.units import mm_text
 
 NAME = "correct"
 HELP = "corrected points CSV: P' = P + e, e interpolated from a measured error grid"
@@ -109,9 +110,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="overwrite an existing output")
 
 
-def run(args: argparse.Namespace) -> int:
+def settings_from(args: argparse.Namespace) -> CorrectionSettings:
+    """The correction settings the options ask for."""
     if not args.max_correction > 0:
         raise InputError(f"--max-correction must be > 0 mm, got {args.max_correction}")
+    return CorrectionSettings(
+        method=args.method,
+        power=args.power,
+        iterations=args.iterations,
+        outside=args.outside,
+        max_correction_mm=args.max_correction,
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    settings = settings_from(args)
     if not 0 <= args.orientation_tol <= args.orientation_limit:
         raise InputError("need 0 <= --orientation-tol <= --orientation-limit (deg)")
     check_targets([args.output], [args.points, args.grid], args.force)
@@ -124,21 +137,14 @@ def run(args: argparse.Namespace) -> int:
             points.path,
             1,
         )
+    rotations = None if points.abc is None else abc_to_matrix(points.abc).reshape(-1, 3, 3)
+    found = model.check(points.xyz, settings, rotations=rotations, axes=points.axis)
     flags: list[list[str]] = [[] for _ in range(len(points))]
-    _check_outside(points, model, args.outside, flags)
-    _check_orientation(points, model, args, flags)
-    command = model.correct(
-        points.xyz,
-        iterations=args.iterations,
-        method=args.method,
-        power=args.power,
-        outside=args.outside,
-        max_correction_mm=None,
-    )
-    correction = command - points.xyz
-    length = np.linalg.norm(correction, axis=1)
+    _check_outside(points, model, found.outside, settings.outside, flags)
+    _check_orientation(points, model, found.angle, args, flags)
+    length = found.length
     worst = int(np.argmax(length)) if len(points) else None
-    if worst is not None and length[worst] > args.max_correction:
+    if found.too_long.size:
         raise InputError(
             f"{points.label(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
             f"limit of {args.max_correction:g} mm; refusing the whole job (check the grid)",
@@ -148,22 +154,23 @@ def run(args: argparse.Namespace) -> int:
         f"accugrid correct: grid {args.grid} sha256 {model.source_sha256}, method "
         f"{args.method}, power {args.power:g}, iterations {args.iterations}"
     )
-    text = _corrected_csv(points, command, correction, flags, header)
+    text = _corrected_csv(points, found.command, found.correction, flags, header)
     write_files({args.output: text}, [args.points, args.grid], force=args.force)
     _print_summary(model, points, args, length, worst, flags)
     return 0
 
 
-def _check_outside(points: Points, model: GridModel, rule: str, flags: list[list[str]]) -> None:
-    outside = np.flatnonzero(~model.contains(points.xyz))
+def _check_outside(
+    points: Points, model: GridModel, outside: np.ndarray, rule: str, flags: list[list[str]]
+) -> None:
     if not outside.size:
         return
     if rule == "error":
         named = "; ".join(points.label(int(i)) for i in outside[:_LISTED])
         more = f" and {outside.size - _LISTED} more" if outside.size > _LISTED else ""
         raise InputError(
-            f"{outside.size} point(s) outside the grid box {_fmt(model.origin)}.."
-            f"{_fmt(model.upper)} mm (robot frame): {named}{more} (--outside clamp uses the "
+            f"{outside.size} point(s) outside the grid box {mm_text(model.origin)}.."
+            f"{mm_text(model.upper)} mm (robot frame): {named}{more} (--outside clamp uses the "
             "nearest cell)",
             *points.table.where(int(outside[0])),
         )
@@ -171,20 +178,13 @@ def _check_outside(points: Points, model: GridModel, rule: str, flags: list[list
         flags[i].append("outside grid: clamped")
 
 
-def orientation_difference_deg(points: Points, model: GridModel) -> np.ndarray | None:
-    """(N,) deg between each point's orientation and the grid's, or None if either lacks one."""
-    if model.orientation_abc is None or points.orientation is None or not len(points):
-        return None
-    if points.abc is not None:
-        return rotation_angle_deg(points.abc, model.orientation_abc)
-    tool_z = abc_to_matrix(model.orientation_abc)[:, 2]
-    return np.degrees(np.arccos(np.clip(points.axis @ tool_z, -1.0, 1.0)))
-
-
 def _check_orientation(
-    points: Points, model: GridModel, args: argparse.Namespace, flags: list[list[str]]
+    points: Points,
+    model: GridModel,
+    angle: np.ndarray | None,
+    args: argparse.Namespace,
+    flags: list[list[str]],
 ) -> None:
-    angle = orientation_difference_deg(points, model)
     if angle is None:
         return
     beyond = np.flatnonzero(angle > args.orientation_limit)
@@ -192,7 +192,7 @@ def _check_orientation(
         i = int(beyond[0])
         raise InputError(
             f"{beyond.size} point(s) more than {args.orientation_limit:g} deg from the grid's "
-            f"orientation {_fmt(model.orientation_abc)} deg, first {points.label(i)} at "
+            f"orientation {mm_text(model.orientation_abc)} deg, first {points.label(i)} at "
             f"{angle[i]:.1f} deg: the grid does not hold there (--allow-orientation to go on)",
             *points.table.where(i),
         )
@@ -241,7 +241,3 @@ def _print_summary(
     if len(flagged) > _LISTED:
         print(f"  ... and {len(flagged) - _LISTED} more (see the flag column)")
     print(f"wrote {args.output}")
-
-
-def _fmt(v: np.ndarray) -> str:
-    return "(" + ", ".join(f"{x:.3f}" for x in np.asarray(v, dtype=float)) + ")"
