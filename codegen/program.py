@@ -33,6 +33,7 @@ from accugrid.codegen.cell import Cell
 from accugrid.codegen.points import Points
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation.grid import GridModel
+from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import (
     MAX_TILT_DEG,
@@ -64,8 +65,7 @@ class Program:
     correction: np.ndarray  # (N, 3) mm, robot frame, e added to every stage of the hole
     feed_mm_s: np.ndarray  # (N,)
     depth_mm: np.ndarray  # (N,)
-    status: np.ndarray  # (N, 4) int, KUKA Status per pose (stage order STAGES)
-    turn: np.ndarray  # (N, 4) int, KUKA Turn per pose
+    configuration: Configuration  # (N, 4) per pose, stage order STAGES; emitters convert it
     warnings: list[str]
     corrected: bool
 
@@ -146,8 +146,7 @@ def build_program(points: Points, cell: Cell, robot, grid=None) -> Program:
         correction=correction,
         feed_mm_s=feed,
         depth_mm=depth,
-        status=status,
-        turn=turn,
+        configuration=Configuration.from_kuka(status, turn),
         warnings=warnings + ik_warnings,
         corrected=grid is not None,
     )
