@@ -169,9 +169,13 @@ def _signals_held() -> Iterator[None]:
         mask(signal.SIG_SETMASK, old)
 
 
-def _write_temp(path: Path, payload: bytes) -> str:
-    name = f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}{_TMP_SUFFIX}"
-    tmp = os.path.join(path.parent, name)
+def _temp_name(path: Path) -> str:
+    return os.path.join(
+        path.parent, f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}{_TMP_SUFFIX}"
+    )
+
+
+def _write_temp(tmp: str, payload: bytes) -> None:
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies
     try:
         view = memoryview(payload)
@@ -179,7 +183,6 @@ def _write_temp(path: Path, payload: bytes) -> str:
             view = view[os.write(fd, view) :]
     finally:
         os.close(fd)
-    return tmp
 
 
 def _sync(temps: list[str]) -> None:
@@ -239,8 +242,9 @@ def write_files(
         with _signals_end_write():
             for path, data in paths.items():
                 payload = data.encode("utf-8") if isinstance(data, str) else data
+                temps[path] = _temp_name(path)  # known before it exists: always cleaned
                 try:
-                    temps[path] = _write_temp(path, payload)
+                    _write_temp(temps[path], payload)
                 except OSError as exc:
                     raise InputError(f"cannot write: {exc.strerror or exc}", path) from None
             _sync(list(temps.values()))

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from accugrid.codegen.textsafe import KRL_RESERVED
 from accugrid.compensation.interpolation import METHODS
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
@@ -22,6 +23,10 @@ from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.yamlfile import YamlDoc, load_yaml
 
 _FRAME_KEYS = ("x", "y", "z", "a", "b", "c")
+# Bounds on every length and angle a program can carry (speeds, times and counts have their own)
+FRAME_MAX_MM = 1e6  # |x|, |y|, |z| of a frame, external axis positions
+ANGLE_MAX_DEG = 360.0  # |a|, |b|, |c|
+DISTANCE_MAX_MM = 1e4  # approach, clearance, retract, depth, peck, apo_cdis
 _TOP_KEYS = {
     "robot",
     "grid",
@@ -172,14 +177,15 @@ class _Reader:
         if not d:
             raise self.error(key, "is required (x, y, z in mm; a, b, c in deg)")
         number = self.integer(d, "number", key, None, 1, 32) if numbered else None
-        xyzabc = [self.number(d, k, key, 0.0) for k in _FRAME_KEYS]
+        xyzabc = [self.number(d, k, key, 0.0, -FRAME_MAX_MM, FRAME_MAX_MM) for k in "xyz"]
+        xyzabc += [self.number(d, k, key, 0.0, -ANGLE_MAX_DEG, ANGLE_MAX_DEG) for k in "abc"]
         return number, pose_from_xyzabc(np.array(xyzabc))
 
     def abc(self, data: object, key: str, default: tuple) -> tuple[float, float, float]:
         if data is None:
             return default
         d = self.mapping(data, key, {"a", "b", "c"})
-        return tuple(self.number(d, k, key, 0.0) for k in "abc")
+        return tuple(self.number(d, k, key, 0.0, -ANGLE_MAX_DEG, ANGLE_MAX_DEG) for k in "abc")
 
     # -- the file ------------------------------------------------------------------------
     def cell(self, data: object, sha256: str) -> Cell:
@@ -219,7 +225,8 @@ class _Reader:
             raise self.error(
                 "program.name",
                 "must be a KRL name: a letter or _, then letters, digits or _, at most 20 "
-                f"characters (4 are kept for the sub-program suffix), got {name!r}",
+                f"characters (4 are kept for the sub-program suffix), not a KRL keyword, got "
+                f"{name!r}",
             )
         sp = self.mapping(
             top.get("speeds"), "speeds", {"travel", "approach", "feed", "ptp_percent"}
@@ -256,8 +263,8 @@ class _Reader:
         ext = self.mapping(
             top.get("external_axes"), "external_axes", {f"e{i}" for i in range(1, 7)}
         )
-        approach = self.number(dr, "approach", "drilling", 30.0, 0.0, strict_lo=True)
-        clearance = self.number(dr, "clearance", "drilling", 2.0, 0.0)
+        approach = self.number(dr, "approach", "drilling", 30.0, 0.0, DISTANCE_MAX_MM, True)
+        clearance = self.number(dr, "clearance", "drilling", 2.0, 0.0, DISTANCE_MAX_MM)
         if clearance >= approach:
             raise self.error(
                 "drilling.clearance",
@@ -281,14 +288,14 @@ class _Reader:
             feed_mm_s=self.number(sp, "feed", "speeds", 5.0, 0.0, 2000.0, True),
             ptp_percent=self.number(sp, "ptp_percent", "speeds", 50.0, 0.0, 100.0, True),
             travel_motion=motion,
-            apo_cdis_mm=self.number(dr, "apo_cdis", "drilling", 5.0, 0.0),
+            apo_cdis_mm=self.number(dr, "apo_cdis", "drilling", 5.0, 0.0, DISTANCE_MAX_MM),
             apo_ptp_percent=self.number(dr, "apo_ptp_percent", "drilling", 50.0, 0.0, 100.0),
             approach_mm=approach,
             clearance_mm=clearance,
-            retract_mm=self.number(dr, "retract", "drilling", approach, 0.0, strict_lo=True),
-            depth_mm=self.number(dr, "depth", "drilling", 10.0, 0.0, strict_lo=True),
+            retract_mm=self.number(dr, "retract", "drilling", approach, 0.0, DISTANCE_MAX_MM, True),
+            depth_mm=self.number(dr, "depth", "drilling", 10.0, 0.0, DISTANCE_MAX_MM, True),
             dwell_s=self.number(dr, "dwell", "drilling", 0.5, 0.0, 60.0),
-            peck_mm=self.number(dr, "peck", "drilling", 0.0, 0.0),
+            peck_mm=self.number(dr, "peck", "drilling", 0.0, 0.0, DISTANCE_MAX_MM),
             spindle_output=self.integer(out, "spindle", "outputs", 1, 1, 4096),
             clamp_output=self.integer(out, "clamp", "outputs", None, 1, 4096, optional=True),
             status=self.integer(cf, "status", "configuration", None, 0, 7, optional=True),
@@ -306,7 +313,8 @@ class _Reader:
             spindle_rpm=self.number(gc, "spindle_rpm", "gcode", 6000.0, 0.0, 10**6, True),
             canned_cycles=self.boolean(gc, "canned_cycles", "gcode", True),
             external_axes=tuple(
-                self.number(ext, f"e{i}", "external_axes", 0.0) for i in range(1, 7)
+                self.number(ext, f"e{i}", "external_axes", 0.0, -FRAME_MAX_MM, FRAME_MAX_MM)
+                for i in range(1, 7)
             ),
             sha256=sha256,
         )
@@ -315,6 +323,7 @@ class _Reader:
 def _is_krl_name(name: str) -> bool:
     return (
         bool(name)
+        and name.upper() not in KRL_RESERVED
         and (name[0].isascii() and (name[0].isalpha() or name[0] == "_"))
         and all(ch.isascii() and (ch.isalnum() or ch == "_") for ch in name)
     )

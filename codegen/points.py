@@ -4,6 +4,8 @@ Columns: ``x,y,z`` (mm, program BASE frame) required; ``id`` optional (unique, n
 orientation either ``a,b,c`` (KUKA ABC, deg) or ``i,j,k`` (drill axis into the part, any non-zero
 length, normalised here); ``diameter``, ``depth`` (mm) and ``feed`` (mm/s) optional and positive,
 an empty cell meaning "the cell file's default"; other columns are carried through in ``table``.
+Bounds: coordinates within +-``COORD_MAX_MM``, feed up to ``FEED_MAX_MM_S``, diameter and depth
+up to ``SIZE_MAX_MM``: a program never carries an absurd number.
 
 The rotation about a given drill axis (``i,j,k`` input) is chosen by
 ``kinematics.frames.orient_along_axes``.
@@ -21,6 +23,9 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 
 AXIS_MIN_LENGTH = 1e-9  # an i,j,k vector shorter than this has no direction
+COORD_MAX_MM = 1e6  # |x|, |y|, |z| beyond 1 km are refused (no cell is that large)
+FEED_MAX_MM_S = 2000.0  # same limit as the cell's speeds
+SIZE_MAX_MM = 1e4  # diameter and depth
 
 
 @dataclass
@@ -73,6 +78,7 @@ def parse_points(text: str, path: str = "<string>") -> Points:
 def _points(table: Table) -> Points:
     table.require(["x", "y", "z"])
     xyz = table.floats(["x", "y", "z"])
+    table.check_bounds(xyz, ["x", "y", "z"], COORD_MAX_MM, "mm")
     ids = _ids(table)
     has_abc = [table.has(n) for n in "abc"]
     has_ijk = [table.has(n) for n in "ijk"]
@@ -88,11 +94,12 @@ def _points(table: Table) -> Points:
     elif any(has_ijk):
         table.require(["i", "j", "k"])
         raw = table.floats(["i", "j", "k"])
-        length = np.linalg.norm(raw, axis=1)
-        short = np.flatnonzero(~(length > AXIS_MIN_LENGTH))
+        largest = np.max(np.abs(raw), axis=1, initial=0.0)  # scaled first: huge i,j,k
+        short = np.flatnonzero(~(largest > AXIS_MIN_LENGTH))  # must not overflow the norm
         if short.size:
             raise InputError("drill axis i,j,k has zero length", *table.where(int(short[0]), "i"))
-        axis = raw / length[:, None]
+        axis = raw / largest[:, None]
+        axis /= np.linalg.norm(axis, axis=1)[:, None]
     return Points(
         path=table.path,
         table=table,
@@ -100,9 +107,9 @@ def _points(table: Table) -> Points:
         xyz=xyz,
         abc=abc,
         axis=axis,
-        diameter=_optional_positive(table, "diameter"),
-        depth=_optional_positive(table, "depth"),
-        feed=_optional_positive(table, "feed"),
+        diameter=_optional_positive(table, "diameter", SIZE_MAX_MM, "mm"),
+        depth=_optional_positive(table, "depth", SIZE_MAX_MM, "mm"),
+        feed=_optional_positive(table, "feed", FEED_MAX_MM_S, "mm/s"),
     )
 
 
@@ -123,7 +130,7 @@ def _ids(table: Table) -> list[str]:
     return ids
 
 
-def _optional_positive(table: Table, name: str) -> np.ndarray:
+def _optional_positive(table: Table, name: str, limit: float, unit: str) -> np.ndarray:
     if not table.has(name):
         return np.full(len(table), np.nan)
     values = table.floats([name], allow_empty=True)[:, 0]
@@ -131,4 +138,5 @@ def _optional_positive(table: Table, name: str) -> np.ndarray:
     if bad.size:
         r = int(bad[0])
         raise InputError(f"{name} must be positive, got {values[r]:g}", *table.where(r, name))
+    table.check_bounds(values[:, None], [name], limit, unit)
     return values

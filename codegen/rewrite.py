@@ -19,19 +19,25 @@ import numpy as np
 
 from accugrid.codegen import __version__
 from accugrid.codegen.header import file_sha256
+from accugrid.codegen.program import GRID_ORIENTATION_TOL_DEG
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation import GridModel
 from accugrid.compensation.settings import CorrectionSettings
+from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
 
 __all__ = [
+    "ORIENTATION_LIMIT_DEG",
     "REPORT_COLUMNS",
     "Options",
     "Result",
     "Row",
+    "check_orientation",
     "correct_points",
     "header_lines",
+    "warnings",
     "outside_reason",
     "report_csv",
     "strict_check",
@@ -41,6 +47,7 @@ REPORT_COLUMNS = (
     "file,line,name,status,reason,x,y,z,x_new,y_new,z_new,dx,dy,dz,correction_mm,residual_mm"
 )
 NAN3 = (math.nan, math.nan, math.nan)
+ORIENTATION_LIMIT_DEG = 15.0  # as ``accugrid correct --orientation-limit``
 
 
 @dataclass
@@ -54,9 +61,14 @@ class Options:
     decimals: int | None = None  # None: the file's precision (see ``precision``)
     strict: bool = False
     base_override: int | None = None
+    tool_number: int | None = None  # the cell's TOOL_DATA number (the TCP the grid holds for)
     trust_calls: bool = False
     ignore_external_axes: bool = False
     max_bytes: int = MAX_BYTES
+    orientation_tol: float = GRID_ORIENTATION_TOL_DEG  # deg: flag beyond (as ``correct``)
+    orientation_limit: float = ORIENTATION_LIMIT_DEG  # deg: skip beyond
+    allow_orientation: bool = False  # correct (and flag) beyond the limit instead
+    tolerance_mm: float = DEFAULT_TOLERANCE_MM  # warn when rounding leaves more than a tenth
 
 
 @dataclass(slots=True)
@@ -71,6 +83,7 @@ class Row:
     old: tuple[float, float, float] = NAN3  # position as written (program/base frame, mm)
     new: tuple[float, float, float] = NAN3  # as rewritten (corrected rows)
     residual_mm: float = math.nan
+    rounding_mm: float = math.nan  # how far rounding to the written decimals leaves it (mm)
 
 
 @dataclass
@@ -102,6 +115,57 @@ def correct_points(points_robot: np.ndarray, opts: Options) -> tuple[np.ndarray,
     if inside.any():
         out[inside] = opts.model.correct(points_robot[inside], opts.correction)
     return inside, out
+
+
+def check_orientation(
+    robot_rot: np.ndarray, abc: np.ndarray, rows: list[Row], opts: Options
+) -> np.ndarray:
+    """Compare each position's orientation with the grid's (``accugrid correct``'s rule).
+
+    ``robot_rot`` (N, 3, 3): the frame each position is written in (robot_T_base rotation);
+    ``abc`` (N, 3) deg: its A, B, C as written (NaN rows: no orientation, not checked). A row
+    beyond ``orientation_limit`` is skipped with the reason (unless ``allow_orientation``), one
+    beyond ``orientation_tol`` flagged in its reason. Returns the (N,) bool of rows to correct."""
+    keep = np.ones(len(rows), bool)
+    ref = opts.model.orientation_abc
+    known = np.flatnonzero(np.isfinite(abc).all(axis=1))
+    if ref is None or not known.size:
+        return keep
+    angle = rotation_angle_deg(robot_rot[known] @ abc_to_matrix(abc[known]), abc_to_matrix(ref))
+    grid = ", ".join(fixed(v) for v in ref)
+    for i, a in zip(known.tolist(), angle.tolist(), strict=True):
+        if a > opts.orientation_limit and not opts.allow_orientation:
+            keep[i] = False
+            rows[i].reason = (
+                f"orientation {a:.1f} deg from the grid's ({grid}), more than "
+                f"--orientation-limit {opts.orientation_limit:g}: the grid does not hold there"
+            )
+        elif a > opts.orientation_tol:
+            rows[i].reason = f"flag: orientation {a:.1f} deg from the grid's ({grid})"
+    return keep
+
+
+def warnings(result: Result, opts: Options) -> list[str]:
+    """What the user must know although nothing failed: rounding that eats the tolerance,
+    positions flagged for their orientation."""
+    out = []
+    rounded = [r for r in result.corrected if r.rounding_mm > opts.tolerance_mm / 10]
+    if rounded:
+        worst = max(rounded, key=lambda r: r.rounding_mm)
+        out.append(
+            f"rounding to the written decimals leaves {len(rounded)} position(s) more than a "
+            f"tenth of the tolerance ({opts.tolerance_mm:g} mm) off, up to "
+            f"{worst.rounding_mm:.3f} mm ({Path(worst.file).name} line {worst.line}): give "
+            "more --decimals"
+        )
+    flagged = [r for r in result.corrected if r.reason.startswith("flag: orientation")]
+    if flagged:
+        out.append(
+            f"{len(flagged)} corrected position(s) more than --orientation-tol "
+            f"{opts.orientation_tol:g} deg from the grid's orientation (see the report), first "
+            f"{Path(flagged[0].file).name} line {flagged[0].line}"
+        )
+    return out
 
 
 def outside_reason(robot_xyz: np.ndarray) -> str:

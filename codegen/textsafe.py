@@ -3,7 +3,8 @@
 - ``fixed`` (and ``fixed_many``, the same for an array): the one fixed-point formatter; never
   ``str(float)`` or ``%g`` in a program.
 - ``comment_text``: user text made harmless inside a one-line comment of any dialect.
-- ``krl_identifier``: a valid KRL name ([A-Za-z_][A-Za-z0-9_]*, at most 24 characters).
+- ``krl_identifier``: a valid KRL name ([A-Za-z_][A-Za-z0-9_]*, at most 24 characters, not a
+  reserved word: ``KRL_RESERVED``).
 """
 
 from __future__ import annotations
@@ -14,7 +15,27 @@ import unicodedata
 
 import numpy as np
 
+__all__ = [
+    "COMMENT_MAX",
+    "KRL_NAME_MAX",
+    "KRL_RESERVED",
+    "comment_text",
+    "fixed",
+    "fixed_many",
+    "krl_identifier",
+]
+
 KRL_NAME_MAX = 24
+KRL_RESERVED = frozenset(
+    """AND ANIN ANOUT AXIS B_AND B_EXOR B_NOT B_OR BOOL BRAKE C_DIS C_ORI C_PTP C_SPL C_VEL CASE
+    CHAR CIRC CIRC_REL CONST CONTINUE DECL DEF DEFAULT DEFDAT DEFFCT DELAY DISTANCE DO E6AXIS
+    E6POS ELSE END ENDDAT ENDFCT ENDFOR ENDIF ENDLOOP ENDSPLINE ENDSWITCH ENDWHILE ENUM EXIT EXOR
+    EXT EXTFCT FALSE FOR FRAME GLOBAL GOTO HALT IF IMPORT IN INT INTERRUPT IS LIN LIN_REL LOOP
+    MAXIMUM MINIMUM NOT OFF ON OR POS PRIO PTP PTP_REL PUBLIC REAL REPEAT RESUME RETURN SCIRC SEC
+    SIGNAL SLIN SPL SPLINE SPTP STEP STRUC SWITCH THEN TIME_BLOCK TO TRIGGER TRUE UNTIL WAIT WHEN
+    WHILE""".split()
+)
+"""KRL keywords and type names (KUKA System Software 8 manual): never a name we write."""
 COMMENT_MAX = 60
 
 _NOT_SAFE = re.compile(r"[^A-Za-z0-9 _.,:+\-=/#@]")
@@ -69,9 +90,9 @@ def comment_text(text: str, limit: int = COMMENT_MAX) -> str:
 
 def krl_identifier(text: str, prefix: str = "P", limit: int = KRL_NAME_MAX) -> str:
     """A KRL identifier derived from user text: invalid characters become ``_``, a leading digit
-    gets ``prefix``, and the result is cut to ``limit`` (24) characters."""
+    or a reserved word gets ``prefix``, and the result is cut to ``limit`` (24) characters."""
     name = _NOT_IDENT.sub("_", unicodedata.normalize("NFKD", str(text)))
     name = name.encode("ascii", "ignore").decode("ascii") or prefix
-    if not (name[0].isalpha() or name[0] == "_"):
+    if not (name[0].isalpha() or name[0] == "_") or name[:limit].upper() in KRL_RESERVED:
         name = prefix + name
     return name[:limit]

@@ -27,7 +27,8 @@ __all__ = ["Table", "parse_number", "parse_table", "read_table"]
 _DECIMAL = re.compile(
     r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|(?i:nan|inf|infinity))"
 )  # nan and inf pass here to be refused as "not a finite number"
-_NOT_DECIMAL_CHAR = re.compile(r"[_nNiI]")  # what float() takes beyond ASCII decimals
+_NOT_DECIMAL_CHAR = re.compile(r"[_nNiI\x1c-\x1f]")  # what float() takes beyond ASCII decimals
+_BLANKS = " \t\n\r\x0b\x0c"  # around a number: ASCII blanks only (float() takes more)
 
 
 @dataclass
@@ -90,12 +91,25 @@ class Table:
         return out
 
     def _number(self, cell: str, r: int, i: int, allow_empty: bool) -> float:
-        if not cell.strip() and allow_empty:
+        if allow_empty and not cell.strip(_BLANKS):
             return math.nan
         try:
             return parse_number(cell, f"in column '{self.header[i]}'")
         except ValueError as exc:
             raise InputError(str(exc), self.path, self.lines[r], i + 1) from None
+
+    def check_bounds(
+        self, values: np.ndarray, names: Sequence[str], limit: float, unit: str
+    ) -> None:
+        """InputError at the first cell of ``values`` (N, len(names)), read from the columns
+        ``names``, beyond +-``limit`` (in ``unit``)."""
+        rows, cols = np.nonzero(np.abs(values) > limit)
+        if rows.size:
+            r, name = int(rows[0]), names[int(cols[0])]
+            raise InputError(
+                f"{name} {values[r, cols[0]]:g} {unit} is beyond the limit of {limit:g} {unit}",
+                *self.where(r, name),
+            )
 
     def where(self, r: int, name: str | None = None) -> tuple[str, int, int | None]:
         """(path, line, column) of row r (0-based), for InputError(…, *table.where(r, name))."""
@@ -110,7 +124,7 @@ def parse_number(cell: str, what: str = "") -> float:
     """One CSV cell as a finite float: an ASCII decimal number (``-12.5``, ``.5``, ``1e-3``),
     surrounding blanks allowed. ValueError (message naming the cell) for anything else: empty,
     ``1_000``, ``nan``, ``inf``, non-ASCII digits, or a value beyond the float range."""
-    text = cell.strip()
+    text = cell.strip(_BLANKS)
     where = f" {what}" if what else ""
     if not text:
         raise ValueError(f"empty cell{where}")
@@ -125,11 +139,11 @@ def parse_number(cell: str, what: str = "") -> float:
 def _fast_column(cells: list[str], allow_empty: bool) -> np.ndarray | None:
     """The cells as floats when all are valid for ``parse_number`` (or empty, with
     ``allow_empty``: NaN); None when any is not (the caller then locates it)."""
-    joined = "\x1f".join(cells)
+    joined = " ".join(cells)
     if not joined.isascii() or _NOT_DECIMAL_CHAR.search(joined):
         return None  # float() would take 1_000, nan, inf or non-ASCII digits
     if allow_empty:
-        cells = [cell if cell.strip() else "nan" for cell in cells]
+        cells = [cell if cell.strip(_BLANKS) else "nan" for cell in cells]
     try:
         column = np.fromiter(map(float, cells), dtype=float, count=len(cells))
     except ValueError:

@@ -23,6 +23,7 @@ from accugrid.kinematics.units import mm_text
 COORD_TOL_MM = 1e-3  # two commanded coordinates closer than this are the same grid level
 REPEAT_TOL_MM = 0.5  # largest allowed distance of a repeat from the mean of its vertex
 ORIENTATION_TOL_DEG = 0.1  # every row must be commanded at the same a,b,c within this
+COORD_MAX_MM = 1e6  # positions beyond 1 km are refused at their cell (no robot reaches them)
 _SHOW = 5  # how many offending items an error message lists
 
 
@@ -71,9 +72,13 @@ def read_measurements(path: str | os.PathLike[str]) -> Measurements:
     if not len(table):
         raise InputError("no measurement rows", path)
     abc = _abc_columns(table)
+    columns = {}
+    for names in (["x", "y", "z"], ["x_meas", "y_meas", "z_meas"]):
+        columns[names[0]] = table.floats(names)
+        table.check_bounds(columns[names[0]], names, COORD_MAX_MM, "mm")
     return Measurements(
-        commanded=table.floats(["x", "y", "z"]),
-        measured=table.floats(["x_meas", "y_meas", "z_meas"]),
+        commanded=columns["x"],
+        measured=columns["x_meas"],
         abc=abc,
         path=path,
         lines=np.asarray(table.lines),
@@ -183,15 +188,27 @@ def _detect_axes(
             raise InputError(
                 f"the commanded points span a single {name} value ({centres[0]:.4f} mm): "
                 "a grid needs at least 2 levels per axis",
-                meas.path,
+                *_located(meas, 0),
             )
         gaps = np.diff(centres)
         spacing = (centres[-1] - centres[0]) / (n_levels - 1)
-        if np.abs(gaps - spacing).max() > tol:
-            raise InputError(_uneven_message(name, centres, np.bincount(level), tol), meas.path)
+        off = np.abs(gaps - spacing) > tol
+        if off.any():
+            members = np.bincount(level)
+            stray = np.flatnonzero(members < np.median(members))
+            culprit = int(stray[0]) if stray.size else int(np.flatnonzero(off)[0]) + 1
+            first_row = int(np.flatnonzero(level == culprit)[0])
+            raise InputError(
+                _uneven_message(name, centres, members, tol), *_located(meas, first_row)
+            )
         origin[axis], step[axis], counts[axis] = centres[0], spacing, n_levels
         index[:, axis] = level
     return origin, step, counts, index
+
+
+def _located(meas: Measurements, row: int) -> tuple[str | None, int | None]:
+    """(path, line) of a row, for InputError; the line is None for arrays."""
+    return meas.path, None if meas.lines is None else int(meas.lines[row])
 
 
 def _sparse_planes(

@@ -79,6 +79,21 @@ def path_length(points: np.ndarray) -> float:
     return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
 
 
+MAX_GRID_VERTICES = 10**6
+"""Most vertices a grid may have (a 20 mm step over the seed's region has 158,000)."""
+
+
+def check_vertex_count(counts, step_mm: float) -> None:
+    """InputError when a grid of ``counts`` (3,) vertices per axis (floats: checked before any
+    array is made) exceeds ``MAX_GRID_VERTICES``."""
+    total = float(np.prod(np.asarray(counts, dtype=float)))
+    if not total <= MAX_GRID_VERTICES:
+        raise InputError(
+            f"grid step {step_mm:g} mm would make {total:.3g} vertices, more than "
+            f"{MAX_GRID_VERTICES:,}: use a larger step"
+        )
+
+
 def grid_axes(lo, hi, step_mm: float) -> list[np.ndarray]:
     """Vertex coordinates per axis of a regular grid spanning the box lo..hi (mm) exactly.
 
@@ -91,7 +106,9 @@ def grid_axes(lo, hi, step_mm: float) -> list[np.ndarray]:
         raise InputError(f"region must have min < max on every axis (got {lo} .. {hi})")
     if not np.isfinite(step_mm) or step_mm <= 0:
         raise InputError(f"grid step must be > 0 mm, got {step_mm:g}")
-    cells = np.maximum(np.ceil((hi - lo) / step_mm - 1e-9), 1).astype(int)
+    cells = np.maximum(np.ceil((hi - lo) / step_mm - 1e-9), 1)
+    check_vertex_count(cells + 1, step_mm)
+    cells = cells.astype(int)
     return [np.linspace(lo[k], hi[k], cells[k] + 1) for k in range(3)]
 
 

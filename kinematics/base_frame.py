@@ -43,6 +43,10 @@ MIN_HEIGHT_MM = 100.0
 MIN_ARM_MM = 100.0
 """The flange-hole centre must lie at least this far from the A1 axis, or X is not defined."""
 
+PLANE_STRAY_MM = 1.0
+"""A base-plane point this far from the fitted plane is a stray (a scanned surface is flat to a
+few 0.01 mm): when the A1 checks fail, the base-plane file is blamed for it, not the A1 file."""
+
 
 @dataclass(frozen=True)
 class RobotFrameFit:
@@ -71,6 +75,19 @@ def _located(fit, points: np.ndarray, what: str, source: str | None):
         raise InputError(err.message, source) from None
 
 
+def _refuse_stray_plane_point(plane: PlaneFit, points: np.ndarray, source: str | None) -> None:
+    """InputError naming the base-plane file when one of its points (N, 3) mm lies more than
+    ``PLANE_STRAY_MM`` off the plane: the A1 checks that follow would blame the A1 file."""
+    if plane.max_mm > PLANE_STRAY_MM:
+        worst = int(np.argmax(np.abs(plane.distances(points))))
+        raise InputError(
+            f"base plane: point {worst + 1} lies {plane.max_mm:.3f} mm off the plane fitted "
+            f"through the others' (rms {plane.rms_mm:.3f} mm; at most {PLANE_STRAY_MM:g} mm): "
+            "a stray point?",
+            source,
+        )
+
+
 def fit_robot_frame(
     base_plane: np.ndarray,
     a1_circle: np.ndarray,
@@ -92,6 +109,7 @@ def fit_robot_frame(
 
     height = float(plane.distances(a1.center[None])[0])
     if abs(height) < MIN_HEIGHT_MM:
+        _refuse_stray_plane_point(plane, base_plane, src_plane)
         raise InputError(
             f"the A1 circle's centre is only {abs(height):.1f} mm from the base plane (at least "
             f"{MIN_HEIGHT_MM:g} mm needed to tell up from down): are these the flange points?",
@@ -102,6 +120,7 @@ def fit_robot_frame(
     z_axis = a1.normal * np.sign(a1.normal @ up)
     tilt = float(np.degrees(np.arccos(np.clip(z_axis @ up, -1.0, 1.0))))
     if tilt > MAX_AXIS_TILT_DEG:
+        _refuse_stray_plane_point(plane, base_plane, src_plane)
         raise InputError(
             f"the A1 axis is tilted {tilt:.2f}° from the base-plane normal (at most "
             f"{MAX_AXIS_TILT_DEG:g}° is accepted): are these points of the same robot, the base "

@@ -3,8 +3,10 @@
 A robot is YAML data (``kinematics/robots/*.yaml`` for the built-ins, or a user file): six DH rows
 ``{a_mm, alpha_deg, d_mm, theta_offset_deg, sign}`` with theta = sign * A + theta_offset, joint
 limits ``limits_deg`` ([min, max] per axis), an optional ``tool`` {x, y, z, a, b, c} (flange_T_tool)
-and optional ``errors`` (per row Δa mm, Δd mm, Δα rad, Δθ rad) that define the "true" robot. A
-YAML file may instead name a URDF (``urdf: file``, ``tip: frame``), see ``kinematics.urdf``.
+and optional ``errors`` (per row Δa mm, Δd mm, Δα rad, Δθ rad) and ``joint_errors`` (compliance
+under gravity, transmission harmonics, thermal growth; ``kinematics.joint_errors``) that define the
+"true" robot. A YAML file may instead name a URDF (``urdf: file``, ``tip: frame``), see
+``kinematics.urdf``.
 
 Joint vectors are KUKA axis angles A1..A6 in radians, shape (N, 6); poses are (N, 4, 4) mm.
 
@@ -15,7 +17,7 @@ KUKA Status and Turn, the branch selection of ``Robot.ik`` and ``IKSolution``:
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 
@@ -26,9 +28,16 @@ from accugrid.kinematics.configuration import IKSolution, kuka_words, select
 from accugrid.kinematics.dh import DHTable, flange_poses
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import invert, pose_from_xyzabc
+from accugrid.kinematics.joint_errors import (
+    GRAVITY_MPS2,
+    Harmonic,
+    JointErrors,
+    PointMass,
+    Thermal,
+)
 from accugrid.kinematics.yamlfile import YamlDoc, load_yaml
 
-BUILTIN = ("kr210", "kr210-paper")
+BUILTIN = ("kr210", "kr210-paper", "kr210-realistic")
 _LIMIT_TOL = 1e-9
 
 
@@ -42,23 +51,35 @@ class Robot:
     flange_T_tool: np.ndarray = field(default_factory=lambda: np.eye(4))
     errors: np.ndarray | None = None  # (6, 4) Δa mm, Δd mm, Δα rad, Δθ rad of the true robot
     description: str = ""
+    joint_errors: JointErrors | None = None  # non-geometric errors of the true robot
+    fk_joint_errors: JointErrors | None = None  # δ(q) this robot's own ``fk`` adds (true robots)
 
     def with_tool(self, flange_T_tool: np.ndarray) -> Robot:
         """The same robot with another tool (4, 4) mm."""
-        tool = np.array(flange_T_tool, dtype=float).reshape(4, 4)
-        return Robot(self.name, self.dh, self.joint_limits_deg, tool, self.errors, self.description)
+        return replace(self, flange_T_tool=np.array(flange_T_tool, dtype=float).reshape(4, 4))
 
     def true_robot(self) -> Robot | None:
-        """The robot with its parameter errors applied (the "real" arm), or None without errors."""
-        if self.errors is None:
+        """The "real" arm, or None without errors: DH errors added, thermal growth applied, and
+        an ``fk`` that adds the joint errors δ(q) to the commanded joints (its ``ik`` does not
+        know δ; use it for FK only)."""
+        if self.errors is None and self.joint_errors is None:
             return None
+        dh = self.dh if self.errors is None else self.dh.with_errors(self.errors)
+        moves = None
+        if self.joint_errors is not None:
+            if self.joint_errors.thermal is not None:
+                dh = self.joint_errors.thermal.apply(dh)
+            if np.any(self.joint_errors.compliance) or self.joint_errors.harmonics:
+                moves = self.joint_errors
         return Robot(
             f"{self.name} (true)",
-            self.dh.with_errors(self.errors),
+            dh,
             self.joint_limits_deg,
             self.flange_T_tool,
             None,
             self.description,
+            None,
+            moves,
         )
 
     @property
@@ -70,6 +91,8 @@ class Robot:
     def fk(self, q: np.ndarray) -> np.ndarray:
         """TCP poses robot_T_tcp (N, 4, 4) mm for joint vectors q (N, 6) rad."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
+        if self.fk_joint_errors is not None:
+            q = q + self.fk_joint_errors.delta(self.dh, q)
         return flange_poses(self.dh, q) @ self.flange_T_tool
 
     def fk_pinocchio(self, q: np.ndarray) -> np.ndarray:
@@ -134,7 +157,7 @@ class Robot:
 
 
 def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:
-    """A built-in robot by name ("kr210", "kr210-paper") or a robot YAML file by path."""
+    """A built-in robot by name (``BUILTIN``) or a robot YAML file by path."""
     text_name = os.fspath(name_or_path)
     if text_name in BUILTIN:
         data = (
@@ -188,7 +211,64 @@ def _robot_from_doc(doc: YamlDoc) -> Robot:
         errors = np.array([[doc.number("errors", i, k) for k in keys] for i in range(6)])
     table = DHTable(a=a, d=d, alpha=alpha, theta_offset=offset, sign=sign)
     description = doc.string("description", default="")
-    return Robot(name, table, limits, tool, errors, description)
+    joint_errors = _joint_errors_from_doc(doc) if doc.has("joint_errors") else None
+    return Robot(name, table, limits, tool, errors, description, joint_errors)
+
+
+def _joint_errors_from_doc(doc: YamlDoc) -> JointErrors:
+    """The ``joint_errors:`` section: ``compliance_rad_per_nm`` (6 numbers), ``masses`` (list of
+    {link 1..6, kg, at_mm [x, y, z]}), ``harmonics`` (list of {axis 1..6, order, amplitude_rad,
+    phase_deg}), ``thermal`` {delta_t_k, expansion_per_k}, ``gravity_mps2``."""
+    key = "joint_errors"
+    doc.get(key, "compliance_rad_per_nm", default={})  # checks that the section is a mapping
+    compliance = np.zeros(6)
+    if doc.has(key, "compliance_rad_per_nm"):
+        doc.sequence(key, "compliance_rad_per_nm", length=6)
+        compliance = np.array([doc.number(key, "compliance_rad_per_nm", i) for i in range(6)])
+    masses = []
+    if doc.has(key, "masses"):
+        for i in range(len(doc.sequence(key, "masses"))):
+            k = (key, "masses", i)
+            link = _whole(doc, 1, 6, *k, "link")
+            kg = doc.number(*k, "kg")
+            if kg < 0:
+                raise doc.error(f"{doc.keyname(*k, 'kg')} must not be negative", *k, "kg")
+            doc.sequence(*k, "at_mm", length=3)
+            masses.append(PointMass(link, kg, tuple(doc.number(*k, "at_mm", j) for j in range(3))))
+    harmonics = []
+    if doc.has(key, "harmonics"):
+        for i in range(len(doc.sequence(key, "harmonics"))):
+            k = (key, "harmonics", i)
+            harmonics.append(
+                Harmonic(
+                    _whole(doc, 1, 6, *k, "axis"),
+                    _whole(doc, 0, 100000, *k, "order"),
+                    doc.number(*k, "amplitude_rad"),
+                    np.radians(doc.number(*k, "phase_deg", default=0.0)),
+                )
+            )
+    if np.any(compliance) and not masses:
+        raise doc.error(
+            f"{doc.keyname(key, 'compliance_rad_per_nm')} needs 'masses' (the gravity model)",
+            key,
+            "compliance_rad_per_nm",
+        )
+    thermal = None
+    if doc.has(key, "thermal"):
+        thermal = Thermal(
+            doc.number(key, "thermal", "delta_t_k", default=0.0),
+            doc.number(key, "thermal", "expansion_per_k", default=Thermal.expansion_per_k),
+        )
+    gravity = doc.number(key, "gravity_mps2", default=GRAVITY_MPS2)
+    return JointErrors(compliance, tuple(masses), tuple(harmonics), thermal, gravity)
+
+
+def _whole(doc: YamlDoc, lo: int, hi: int, *keys) -> int:
+    """An integer in lo..hi at ``keys``, else a located InputError."""
+    value = doc.number(*keys)
+    if value != int(value) or not lo <= value <= hi:
+        raise doc.error(f"{doc.keyname(*keys)} must be a whole number {lo}..{hi}", *keys)
+    return int(value)
 
 
 def _pinocchio_model(dh: DHTable, limits_deg: np.ndarray, flange_T_tool: np.ndarray):

@@ -155,6 +155,8 @@ def urdf_robot_from_doc(doc: YamlDoc, folder: Path) -> UrdfRobot:
         model = pin.buildModelFromUrdf(str(path))
     except (RuntimeError, ValueError) as exc:
         raise InputError(f"cannot read the URDF: {exc}".splitlines()[0], path) from None
+    if model.nq == 0:
+        raise InputError("the URDF has no movable joint (a robot needs at least one)", path)
     tip_name = doc.string("tip")
     if not model.existFrame(tip_name):
         names = ", ".join(f.name for f in model.frames if f.name != "universe")

@@ -123,14 +123,15 @@ class YamlDoc:
     def parse(cls, text: str, path: str | os.PathLike[str], sha256: str = "") -> YamlDoc:
         """Parse YAML text strictly; an empty document is an empty mapping."""
         path = os.fspath(path)
-        loader = _StrictLoader(text)
         try:
-            node = loader.get_single_node()
-            data = {} if node is None else loader.construct_document(node)
+            loader = _StrictLoader(text)  # checks the characters first
+            try:
+                node = loader.get_single_node()
+                data = {} if node is None else loader.construct_document(node)
+            finally:
+                loader.dispose()
         except yaml.YAMLError as exc:
             raise _located(exc, text, path) from None
-        finally:
-            loader.dispose()
         if not isinstance(data, dict):
             raise InputError("the top level must be a mapping (key: value lines)", path, 1, 1)
         marks: dict[tuple, tuple[int, int]] = {}

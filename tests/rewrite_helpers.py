@@ -23,15 +23,22 @@ def error_field(points: np.ndarray, field: str) -> np.ndarray:
 
 
 def write_grid(
-    path: Path, lower=(-1500, -1500, -500), upper=(2500, 1500, 2000), step=250.0, field="smooth"
+    path: Path,
+    lower=(-1500, -1500, -500),
+    upper=(2500, 1500, 2000),
+    step=250.0,
+    field="smooth",
+    abc=None,
 ) -> Path:
-    """A complete measurement CSV (id,x,y,z,x_meas,y_meas,z_meas) with M = P - e(P)."""
+    """A complete measurement CSV (id,x,y,z[,a,b,c],x_meas,y_meas,z_meas) with M = P - e(P);
+    ``abc``: the TCP orientation (KUKA A, B, C deg) the grid was measured at."""
     axes = [np.arange(lo, hi + step / 2, step) for lo, hi in zip(lower, upper, strict=True)]
     commanded = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     measured = commanded - error_field(commanded, field)
-    rows = ["id,x,y,z,x_meas,y_meas,z_meas"]
+    rows = ["id,x,y,z," + ("a,b,c," if abc is not None else "") + "x_meas,y_meas,z_meas"]
     for i, (p, m) in enumerate(zip(commanded, measured, strict=True)):
-        rows.append(f"{i}," + ",".join(f"{v:.4f}" for v in (*p, *m)))
+        values = (*p, *abc, *m) if abc is not None else (*p, *m)
+        rows.append(f"{i}," + ",".join(f"{v:.4f}" for v in values))
     path.write_text("\n".join(rows) + "\n")
     return path
 

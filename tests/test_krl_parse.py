@@ -156,8 +156,8 @@ def test_fdat_labels_loops_and_calls():
     scan = scan_krl(text, "c.src")
     uses = {u.name: u for u in scan.uses}
     assert uses["XP1"].base.kind == "fdat" and uses["XP1"].base.fdat == "FP1"
-    assert scan.fdats["FP1"][0] == 7
-    assert scan.fdats["FP2"][0] is None and "external TCP" in scan.fdats["FP2"][2]
+    assert scan.fdats["FP1"].base_no == 7
+    assert scan.fdats["FP2"].base_no is None and "external TCP" in scan.fdats["FP2"].reason
     assert uses["XP2"].base.kind == "unknown" and "Sub()" in uses["XP2"].base.reason
     assert "jump target" in uses["XP3"].base.reason
     assert "loop" in scan.positions[0].base.reason

@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import gc
 import os
+import sys
 from collections import Counter
 from pathlib import Path
 
@@ -33,9 +34,17 @@ from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cell import load_cell
 from accugrid.codegen.gcode.rewrite import rewrite_gcode
 from accugrid.codegen.krl.rewrite import rewrite_krl
+from accugrid.codegen.program import GRID_ORIENTATION_TOL_DEG
 from accugrid.codegen.program_text import MAX_BYTES, add_header, dialect, read_program
-from accugrid.codegen.rewrite import Options, header_lines, report_csv
+from accugrid.codegen.rewrite import (
+    ORIENTATION_LIMIT_DEG,
+    Options,
+    header_lines,
+    report_csv,
+    warnings,
+)
 from accugrid.compensation import GridModel
+from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
 from accugrid.kinematics.errors import InputError
 
 NAME = "rewrite"
@@ -88,12 +97,43 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"refuse program files larger than this (default {MAX_BYTES // 2**20})",
     )
     parser.add_argument("--header", action="store_true", help="add the accugrid comment header")
+    parser.add_argument(
+        "--orientation-tol",
+        type=float,
+        default=GRID_ORIENTATION_TOL_DEG,
+        metavar="DEG",
+        help="flag positions whose orientation differs from the grid's by more, deg "
+        f"(default: {GRID_ORIENTATION_TOL_DEG:g}, as accugrid correct)",
+    )
+    parser.add_argument(
+        "--orientation-limit",
+        type=float,
+        default=ORIENTATION_LIMIT_DEG,
+        metavar="DEG",
+        help="leave positions whose orientation differs from the grid's by more uncorrected, "
+        f"deg (default: {ORIENTATION_LIMIT_DEG:g}, as accugrid correct)",
+    )
+    parser.add_argument(
+        "--allow-orientation",
+        action="store_true",
+        help="correct (and flag) positions beyond --orientation-limit",
+    )
+    parser.add_argument(
+        "--tolerance",
+        type=float,
+        default=DEFAULT_TOLERANCE_MM,
+        metavar="MM",
+        help="hole position tolerance: warn when rounding to the written decimals leaves more "
+        f"than a tenth of it (default: {DEFAULT_TOLERANCE_MM:g})",
+    )
 
 
 def _outputs(inputs: list[Path], output: str) -> dict[Path, Path]:
     out = Path(output)
     if len(inputs) == 1:
         return {inputs[0]: out / inputs[0].name if out.is_dir() else out}
+    if out.is_dir():  # an existing folder, whatever its name (out.v2)
+        return {p: out / p.name for p in inputs}
     if out.suffix.lower() == ".src":
         return {p: out.with_suffix(p.suffix) for p in inputs}
     if out.suffix:
@@ -110,6 +150,10 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("the second file must be the .dat of a KRL .src", args.dat)
     if args.decimals is not None and not 0 <= args.decimals <= 9:
         raise InputError(f"--decimals must be 0..9, got {args.decimals}")
+    if not 0 <= args.orientation_tol <= args.orientation_limit:
+        raise InputError("need 0 <= --orientation-tol <= --orientation-limit (deg)")
+    if not args.tolerance > 0:
+        raise InputError(f"--tolerance must be > 0 mm, got {args.tolerance}")
     if args.base is not None and not 0 <= args.base <= 32:
         raise InputError(f"--base must be a BASE_DATA number 0..32, got {args.base}")
     outputs = _outputs(inputs, args.output)
@@ -133,9 +177,14 @@ def run(args: argparse.Namespace) -> int:
         decimals=args.decimals,
         strict=args.strict,
         base_override=args.base,
+        tool_number=cell.tool_number,
         trust_calls=args.trust_calls,
         ignore_external_axes=args.ignore_external_axes,
         max_bytes=max_bytes,
+        orientation_tol=args.orientation_tol,
+        orientation_limit=args.orientation_limit,
+        allow_orientation=args.allow_orientation,
+        tolerance_mm=args.tolerance,
     )
     texts = {os.fspath(p): read_program(p, max_bytes) for p in inputs}
     # The parsers build millions of small acyclic objects; the cycle collector would walk them
@@ -162,6 +211,8 @@ def run(args: argparse.Namespace) -> int:
         files[Path(args.report)] = report_csv(result.rows).encode("utf-8")
     # a KRL pair: the .src (what a controller runs) replaced last
     write_files(files, all_inputs + [grid], args.force, main=[outputs[inputs[0]]])
+    for line in warnings(result, opts):
+        print(f"accugrid rewrite: warning: {line}", file=sys.stderr)
     counts = Counter(r.status for r in result.rows)
     largest, _ = result.largest()
     print(

@@ -23,6 +23,7 @@ import numpy as np
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
 from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.compensation.plans import check_vertex_count
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.simulation import grid_status, reached_positions, simulate_measurements
@@ -106,6 +107,7 @@ def grid_points(region: list[float], step_mm: float) -> tuple[np.ndarray, list[s
     (x outermost, z innermost), and notes for axes whose maximum is not on the step."""
     if step_mm is None or not step_mm > 0:
         raise InputError(f"--step must be positive, got {step_mm}")
+    check_vertex_count(np.floor(np.ptp(np.reshape(region, (3, 2)), axis=1) / step_mm) + 1, step_mm)
     axes, notes = [], []
     for name, lo, hi in zip("XYZ", region[0::2], region[1::2], strict=True):
         if not lo < hi:

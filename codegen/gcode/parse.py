@@ -4,10 +4,16 @@ each number, for pre-flight correction.
 Follows the modal state a CAM post relies on: motion mode (G0/G1/G2/G3, canned cycles G73/G81-G89
 with G98/G99 and sticky Z and R), G90/G91 (incremental targets are made absolute), G20/G21
 (targets in mm; ``scale`` converts back), G17/G18/G19, N-numbers, ``( )`` and ``;`` comments,
-words in any order and case, with or without spaces. G54 is the program frame (the power-on
-default); anything that moves the program frame in a way the cell does not describe (G55-G59.3,
-G92, G52, G10) or leaves the position unknown (G28/G30, G53, expressions, O-word control flow)
-makes the affected moves carry a ``reason`` instead of being guessed.
+words in any order and case, with or without spaces, and parameter assignments (``#1 = 5``,
+``#<_z> = 0.4``). G54 is the program frame (the power-on default). Reported instead of guessed:
+anything that moves the program frame in a way the cell does not describe (G55-G59.3 until G54,
+G92/G52/G92.3 until G92.1/G92.2, G10, G68/G51 until G69/G50, cutter compensation until G40), a
+motion whose geometry is not known (G5 splines, G33 threading, G38 probing, any other G-code),
+a word that uses a parameter or an expression (that axis is unknown until written again), a
+position left unknown (G28/G30, G53) and O-word control flow.
+
+Every pattern is linear in its input (possessive quantifiers; comments and expressions are
+scanned by hand), so a hostile line cannot make the reader backtrack.
 """
 
 from __future__ import annotations
@@ -15,22 +21,27 @@ from __future__ import annotations
 import math
 import os
 import re
+import string
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
 from accugrid.codegen.program_text import check_text, decimals_of, split_lines
 from accugrid.kinematics.errors import InputError
 
-_WORD_RE = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
-_COMMENT_RE = re.compile(r"\([^)]*\)|;.*", re.S)
-_LINE_RE = re.compile(r"(?:\s*[A-Za-z]\s*[-+]?(?:\d+\.?\d*|\.\d+))*\s*")
-_EXPR_RE = re.compile(r"([A-Za-z])\s*([#\[])")
+__all__ = ["AXES", "CYCLES", "INCH_MM", "ROTARY", "GcodeMove", "Word", "parse_gcode"]
+
+_NUMBER = r"[-+]?+(?:\d++(?:\.\d*+)?+|\.\d++)"
+_NUMBER_RE = re.compile(_NUMBER)
+_WORD_RE = re.compile(r"([A-Za-z])\s*+(" + _NUMBER + ")")
+_LINE_RE = re.compile(r"(?:\s*+[A-Za-z]\s*+" + _NUMBER + r")*+\s*+")
+_DIGITS_RE = re.compile(r"\d++")
 _OWORD_RE = re.compile(
-    r"\s*[Oo]\s*(?:\d+|<[^>]*>)\s*(sub|endsub|if|elseif|else|endif|while|endwhile|do|call|"
+    r"\s*+[Oo]\s*+(?:\d++|<[^>]*+>)\s*+(sub|endsub|if|elseif|else|endif|while|endwhile|do|call|"
     r"return|repeat|endrepeat|break|continue)\b",
     re.I,
 )
-_OWORD_ANY_RE = re.compile(r"^" + _OWORD_RE.pattern, re.I | re.M)  # a line _OWORD_RE may match
+_OWORD_ANY_RE = re.compile(r"^[^\S\n]*+[Oo]", re.M)  # a line _OWORD_RE may match
+_LETTERS = frozenset(string.ascii_letters)
 AXES = "XYZ"
 ROTARY = "ABCUVW"
 CYCLES = frozenset(("73", "81", "82", "83", "84", "85", "86", "87", "88", "89"))
@@ -40,8 +51,29 @@ _ROTARY_SET = frozenset(ROTARY)
 _KEPT = frozenset(AXES + ROTARY + "R")  # letters whose Word a move needs
 _NONMODAL = frozenset("4 10 28 28.1 30 30.1 52 53 92 92.1 92.2 92.3".split())
 _PARAMETER_CODES = frozenset("4 10 28.1 30.1 52 92 92.1 92.2 92.3".split())
+# G-codes that neither move nor change where a programmed position lands (or whose effect is
+# followed above); any other G-code is a motion this reader does not know
+_HARMLESS = frozenset(
+    "17 18 19 20 21 40 43 43.1 49 54 61 61.1 64 80 90 90.1 91 91.1 93 94 95 96 97 98 99".split()
+)
+_KNOWN_MOTIONS = {
+    "2": "arc G2",
+    "3": "arc G3",
+    "5": "spline G5",
+    "5.1": "quadratic spline G5.1",
+    "5.2": "NURBS G5.2",
+    "33": "spindle-synchronized motion G33",
+    "33.1": "rigid tapping G33.1",
+    "38.2": "probe G38.2",
+    "38.3": "probe G38.3",
+    "38.4": "probe G38.4",
+    "38.5": "probe G38.5",
+    "76": "threading cycle G76",
+}
+_WCS = frozenset(("55", "56", "57", "58", "59", "59.1", "59.2", "59.3"))
 _G_NAMES = {float(g): g for g in (str(i) for i in range(100))}
 _new_word = tuple.__new__  # a Word without the NamedTuple constructor's Python frame
+_NAN3 = (math.nan, math.nan, math.nan)
 
 
 class Word(NamedTuple):
@@ -66,7 +98,7 @@ class GcodeMove:
     path: str | None
     line: int
     column: int
-    motion: str  # "G0", "G1", "G2", "G3", "G81", ..., "G28", "G53"
+    motion: str  # "G0", "G1", "G2", "G3", "G81", ..., "G28", "G53", "G5", "G999"
     start: tuple[float, float, float]  # where the move starts (NaN where unknown)
     target: tuple[float, float, float]  # the end point; for a cycle the hole bottom (X, Y, Z)
     words: dict[str, Word]  # X/Y/Z (and R for a cycle) words on the line
@@ -78,7 +110,7 @@ class GcodeMove:
     # index (in the returned list) of the move that last set each start coordinate
     retract: str = ""  # cycles: "G98" or "G99"
     r_mm: float = math.nan  # cycles: the R plane (absolute mm)
-    end: tuple[float, float, float] = (math.nan, math.nan, math.nan)  # where the tool ends
+    end: tuple[float, float, float] = _NAN3  # where the tool ends
     is_cycle: bool = False  # a canned-cycle hole (G73, G81-G89)
 
     x = property(lambda self: self.target[0])
@@ -91,32 +123,110 @@ class GcodeMove:
         return self.motion in ("G2", "G3")
 
 
-def _refuse(line: str, path: str | None, lineno: int) -> None:
-    """InputError at the first thing in a (comment-free) line that is not a word."""
-    rest = _WORD_RE.sub(lambda m: " " * len(m.group(0)), line)
-    col = len(rest) - len(rest.lstrip())
-    bad = rest.split()[0] if rest.split() else line.strip()
-    raise InputError(f"cannot read {bad!r} as a G-code word", path, lineno, col + 1)
+class _Line(NamedTuple):
+    """One block read: its words (None for letters that are never a position), G numbers, and
+    the letters written with a parameter or an expression (letter -> text as written)."""
+
+    words: dict[str, Word | None]
+    gcodes: list[str]
+    exprs: dict[str, str]
+
+
+@dataclass(slots=True)
+class _Modal:
+    """The modal state while reading, and why the program frame is not the cell's G54 frame.
+
+    Each reason has its own field because each is cancelled by its own code: G54 ends a G55-G59.3
+    selection but not a G92/G52 offset, a G10 table change or a G68 rotation."""
+
+    motion: str = "0"
+    incremental: bool = False
+    scale: float = 1.0
+    plane: str = "17"
+    retract: str = "G98"
+    cycle_z: float = math.nan
+    cycle_r: float = math.nan
+    pos: list[float] = field(default_factory=lambda: [math.nan] * 3)  # absolute mm, program frame
+    setter: list[int | None] = field(default_factory=lambda: [None] * 3)
+    rotary: dict[str, float] = field(default_factory=dict)
+    flow: str = ""  # control flow / unknown modal state: for the rest of the program
+    wcs: str = ""  # G55-G59.3 (cleared by G54)
+    offset: str = ""  # G92/G52/G92.3 (cleared by G92.1/G92.2)
+    table: str = ""  # G10 changed the work offsets: for the rest of the program
+    transform: str = ""  # G68/G51 (cleared by G69/G50)
+    comp: str = ""  # cutter compensation G41/G42 (cleared by G40)
+    unknown_motion: str = ""  # the motion mode is not one whose geometry is known
+
+    def frame_reason(self) -> str:
+        return self.flow or self.wcs or self.offset or self.table or self.transform or self.comp
+
+    def apply(self, g: str, lineno: int) -> None:
+        """One G-code of a block (its number as text: "1", "91.1")."""
+        if g in MOTION_MODES:
+            self.motion, self.unknown_motion = g, ""
+        elif g == "20" or g == "21":
+            self.scale = INCH_MM if g == "20" else 1.0
+        elif g == "90" or g == "91":
+            self.incremental = g == "91"
+        elif g in ("17", "18", "19"):
+            self.plane = g
+        elif g in ("98", "99"):
+            self.retract = "G" + g
+        elif g == "54":
+            self.wcs = ""  # back to the cell's frame; offsets, tables, rotations still apply
+        elif g in _WCS:
+            self.wcs = f"work offset G{g} (line {lineno}): the cell gives only G54"
+        elif g in ("92", "52", "92.3"):
+            self.offset = f"G{g} offset (line {lineno}) moves the program frame"
+        elif g in ("92.1", "92.2"):
+            self.offset = ""
+        elif g == "10":
+            self.table = f"G10 (line {lineno}) changes the work offsets"
+        elif g in ("41", "42", "41.1", "42.1"):
+            self.comp = f"cutter compensation G{g} (line {lineno}) offsets the path"
+        elif g == "40":
+            self.comp = ""
+        elif g in ("68", "51"):
+            self.transform = f"G{g} (line {lineno}) rotates or scales the program"
+        elif g in ("69", "50"):
+            self.transform = ""
+        elif g in _NONMODAL or g in _HARMLESS:
+            pass
+        else:  # a motion whose geometry is not known, or a code this reader does not know
+            self.motion = g
+            what = _KNOWN_MOTIONS.get(g, f"unknown G-code G{g}")
+            self.unknown_motion = (
+                f"{what} (line {lineno}): its geometry is not known to accugrid, not corrected"
+            )
 
 
 def _blank_comments(line: str, path: str | None, lineno: int) -> str:
     """The line with ``( )`` comments and the ``;`` tail replaced by spaces (offsets kept)."""
     if "(" not in line and ";" not in line and ")" not in line:
         return line
-    if ";" not in line and line.count("(") == 1 and line.count(")") == 1:
-        start, end = line.find("("), line.find(")") + 1
-        if start < end:  # one ( ) comment: what the regex below does, without a callback
-            return line[:start] + " " * (end - start) + line[end:]
-    out = _COMMENT_RE.sub(_spaces, line)
-    if "(" in out:
-        raise InputError("unclosed '(' comment", path, lineno, out.index("(") + 1)
-    if ")" in out:
-        raise InputError("')' without '('", path, lineno, out.index(")") + 1)
-    return out
-
-
-def _spaces(m: re.Match) -> str:
-    return " " * (m.end() - m.start())
+    parts: list[str] = []
+    pos, n = 0, len(line)
+    found = {c: line.find(c) for c in "(;)"}  # next of each, refreshed only once passed
+    while True:
+        for c, at in found.items():
+            if 0 <= at < pos:
+                found[c] = line.find(c, pos)
+        hits = [at for at in found.values() if at >= 0]
+        if not hits:
+            parts.append(line[pos:])
+            return "".join(parts)
+        at = min(hits)
+        parts.append(line[pos:at])
+        if line[at] == ")":
+            raise InputError("')' without '('", path, lineno, at + 1)
+        if line[at] == ";":
+            parts.append(" " * (n - at))
+            return "".join(parts)
+        close = found[")"] if found[")"] > at else line.find(")", at)
+        if close < 0:
+            raise InputError("unclosed '(' comment", path, lineno, at + 1)
+        parts.append(" " * (close + 1 - at))
+        pos = close + 1
 
 
 def _gnum(value: float) -> str:
@@ -124,31 +234,276 @@ def _gnum(value: float) -> str:
     return f"{value:.1f}".rstrip("0").rstrip(".")
 
 
+def _skip_blank(line: str, i: int) -> int:
+    while i < len(line) and line[i] in " \t\r\f\v":
+        i += 1
+    return i
+
+
+def _expression_end(line: str, i: int, path: str | None, lineno: int) -> int:
+    """End of the parameter reference (``#1``, ``##2``, ``#<name>``) or ``[expression]`` that
+    starts at ``line[i]`` (after an optional sign)."""
+    if line[i] in "+-":
+        i = _skip_blank(line, i + 1)
+    while i < len(line) and line[i] == "#":
+        i = _skip_blank(line, i + 1)
+    if i < len(line) and line[i] == "[":
+        depth = 0
+        for j in range(i, len(line)):
+            if line[j] == "[":
+                depth += 1
+            elif line[j] == "]":
+                depth -= 1
+                if depth == 0:
+                    return j + 1
+        raise InputError("unclosed '[' expression", path, lineno, i + 1)
+    if i < len(line) and line[i] == "<":
+        close = line.find(">", i)
+        if close < 0:
+            raise InputError("unclosed '<' parameter name", path, lineno, i + 1)
+        return close + 1
+    m = _DIGITS_RE.match(line, i)
+    if m is None or line[i - 1] != "#":
+        raise InputError("cannot read this parameter or expression", path, lineno, i + 1)
+    return m.end()
+
+
+def _is_expression(line: str, i: int) -> bool:
+    if i < len(line) and line[i] in "+-":
+        i = _skip_blank(line, i + 1)
+    return i < len(line) and line[i] in "#["
+
+
+def _scan(line: str, offset: int, path: str | None, lineno: int) -> _Line:
+    """Read a comment-free block word by word (the slow path: parameters, expressions, errors).
+
+    ``offset``: text offset of ``line[0]``. InputError at the first thing that is not a word or a
+    parameter assignment."""
+    block = _Line({}, [], {})
+    i, n = 0, len(line)
+    while True:
+        i = _skip_blank(line, i)
+        if i >= n:
+            return block
+        ch = line[i]
+        if ch == "#":  # parameter assignment: #1 = 5, #<_z> = [#1 + 2]
+            end = _skip_blank(line, _expression_end(line, i, path, lineno))
+            if line[end : end + 1] != "=":
+                raise InputError("a parameter outside a word must be assigned", path, lineno, i + 1)
+            value = _skip_blank(line, end + 1)
+            m = _NUMBER_RE.match(line, value)
+            if m is None and not _is_expression(line, value):
+                raise InputError("cannot read the parameter's value", path, lineno, value + 1)
+            i = m.end() if m else _expression_end(line, value, path, lineno)
+            continue
+        if ch not in _LETTERS:
+            bad = line[i:].split()[0]
+            raise InputError(f"cannot read {bad!r} as a G-code word", path, lineno, i + 1)
+        letter = ch.upper()
+        at = _skip_blank(line, i + 1)
+        m = _NUMBER_RE.match(line, at)
+        if m is None and not _is_expression(line, at):
+            bad = line[i:].split()[0]
+            raise InputError(f"cannot read {bad!r} as a G-code word", path, lineno, i + 1)
+        if m is not None:
+            end = m.end()
+            _put(block, letter, m.group(), at, end, offset, path, lineno)
+        else:
+            end = _expression_end(line, at, path, lineno)
+            if (letter in block.words or letter in block.exprs) and letter != "M":
+                raise InputError(f"word {letter} given twice", path, lineno, at + 1)
+            block.exprs[letter] = line[i:end]
+        i = end
+
+
+def _put(block: _Line, letter: str, number: str, at: int, end: int, offset: int, path, lineno):
+    """Add one word read at ``line[at:end]`` (its number) to ``block``; ``offset``: of line[0]."""
+    if letter == "G":
+        value = float(number)
+        block.gcodes.append(_G_NAMES.get(value) or _gnum(value))
+        return
+    words = block.words
+    if (letter in words or letter in block.exprs) and letter != "M":
+        raise InputError(f"word {letter} given twice", path, lineno, at + 1)
+    if letter in _KEPT:
+        words[letter] = _new_word(Word, (letter, float(number), offset + at, offset + end, number))
+    else:  # N, F, S, M, T, ...: only seen (a second one is an error), never a position
+        words[letter] = None
+
+
+def _fast_line(line: str, offset: int, path: str | None, lineno: int) -> _Line | None:
+    """A block of plain words read in one regex pass; None when it needs ``_scan``."""
+    if _LINE_RE.fullmatch(line) is None:
+        return None
+    block = _Line({}, [], {})
+    for m in _WORD_RE.finditer(line):
+        start, end = m.span(2)
+        _put(block, m.group(1).upper(), m.group(2), start, end, offset, path, lineno)
+    return block
+
+
+class _Reader:
+    """Reads one program: ``moves`` in order, the modal state in ``state``."""
+
+    def __init__(self, path: str | None) -> None:
+        self.path = path
+        self.state = _Modal()
+        self.moves: list[GcodeMove] = []
+
+    def block(self, block: _Line, lineno: int, line_offset: int) -> None:
+        state = self.state
+        words = block.words
+        for g in block.gcodes:
+            state.apply(g, lineno)
+        if "G" in block.exprs:
+            state.flow = state.flow or (
+                f"G-code from an expression {block.exprs['G']} (line {lineno}): the modal state "
+                "is not known"
+            )
+        has_rotary = not _ROTARY_SET.isdisjoint(words)
+        if has_rotary:  # a new dict: moves share the one in effect when they were read
+            state.rotary = dict(state.rotary)
+            for letter in ROTARY:
+                if letter in words:
+                    state.rotary[letter] = words[letter].value
+        if not _ROTARY_SET.isdisjoint(block.exprs):
+            has_rotary = True
+            state.rotary = dict(state.rotary)
+            for letter in ROTARY:
+                if letter in block.exprs:
+                    state.rotary[letter] = math.nan
+        nonmodal = [g for g in block.gcodes if g in _NONMODAL] if block.gcodes else []
+        if nonmodal and nonmodal[0] in _PARAMETER_CODES:
+            return  # the axis words are parameters, not a move
+        axis_words = {k: words[k] for k in AXES if k in words}
+        moving = [k for k in block.exprs if k in _KEPT]
+        if not axis_words and not has_rotary and not moving:
+            return
+        if axis_words:
+            column = min(w.start for w in axis_words.values()) - line_offset + 1
+        else:
+            column = 1
+        if nonmodal:  # G28/G30 (via a point) or G53 (machine coordinates)
+            name = "G" + nonmodal[0]
+            self._add(
+                self._move(lineno, column, name, _NAN3, axis_words),
+                f"{name}: a machine-coordinate or home move",
+                [math.nan] * 3,
+                AXES,
+            )
+            return
+        if state.motion in CYCLES:
+            self._cycle(lineno, column, axis_words, words, block.exprs)
+        else:
+            self._straight(lineno, column, axis_words, block.exprs)
+
+    def _move(self, lineno, column, motion, target, words) -> GcodeMove:
+        s = self.state
+        return GcodeMove(
+            self.path,
+            lineno,
+            column,
+            motion,
+            tuple(s.pos),
+            target,
+            words,
+            s.incremental,
+            s.scale,
+            "",
+            s.rotary,
+            tuple(s.setter),
+        )
+
+    def _add(self, move: GcodeMove, reason: str, end: list[float], written) -> None:
+        """Append ``move`` with its reason (or "not known" for a NaN target), ending at ``end``."""
+        t = move.target
+        if not reason and (t[0] != t[0] or t[1] != t[1] or t[2] != t[2]):  # NaN: unknown
+            missing = ",".join(k for i, k in enumerate(AXES) if math.isnan(t[i]))
+            reason = f"{missing} not known here (no absolute value since the start)"
+        move.reason = reason
+        move.end = tuple(end)
+        index = len(self.moves)
+        for i, k in enumerate(AXES):
+            if k in written:
+                self.state.setter[i] = index
+        self.state.pos = end
+        self.moves.append(move)
+
+    def _straight(self, lineno, column, axis_words, exprs) -> None:
+        s = self.state
+        target = list(s.pos)
+        for i, k in enumerate(AXES):
+            word = axis_words.get(k)
+            if word is not None:
+                value = word.value * s.scale
+                target[i] = s.pos[i] + value if s.incremental else value
+            elif k in exprs:
+                target[i] = math.nan
+        move = self._move(lineno, column, "G" + s.motion, tuple(target), axis_words)
+        reason = _expression_reason(exprs, lineno) or s.frame_reason() or s.unknown_motion
+        if s.motion == "80":
+            reason = reason or "axis words with G80 (no motion mode)"
+            target = [math.nan] * 3
+        elif s.motion in ("2", "3"):
+            reason = reason or (
+                f"arc G{s.motion}: its end point and centre would have to move together"
+            )
+        elif s.unknown_motion:
+            target = [math.nan] * 3  # where an unknown motion ends is not known either
+        self._add(move, reason, target, set(axis_words) | set(exprs))
+
+    def _cycle(self, lineno, column, axis_words, words, exprs) -> None:
+        s = self.state
+        target = list(s.pos)
+        for i, k in enumerate("XY"):
+            if k in axis_words:
+                target[i] = axis_words[k].value * s.scale
+            elif k in exprs:
+                target[i] = math.nan
+        if "Z" in axis_words:
+            s.cycle_z = axis_words["Z"].value * s.scale
+        elif "Z" in exprs:
+            s.cycle_z = math.nan
+        move_words = dict(axis_words)
+        if "R" in words:
+            s.cycle_r = words["R"].value * s.scale
+            move_words["R"] = words["R"]
+        elif "R" in exprs:
+            s.cycle_r = math.nan
+        move = self._move(lineno, column, "G" + s.motion, (target[0], target[1], s.cycle_z), {})
+        move.words = move_words
+        move.is_cycle = True
+        move.retract = s.retract
+        move.r_mm = s.cycle_r
+        reason = _expression_reason(exprs, lineno) or s.frame_reason()
+        if s.incremental:
+            reason = reason or "canned cycle in G91 (incremental cycle words)"
+        elif s.plane != "17":
+            reason = reason or f"canned cycle in plane G{s.plane} (only G17 is read)"
+        elif math.isnan(s.cycle_r) or math.isnan(s.cycle_z):
+            reason = reason or "canned cycle without an R plane or Z depth"
+        clear = s.cycle_r if s.retract == "G99" else max(s.pos[2], s.cycle_r)
+        end = [target[0], target[1], clear if not s.incremental else math.nan]
+        self._add(move, reason, end, set(axis_words) | set(exprs) | {"Z"})
+
+
+def _expression_reason(exprs: dict[str, str], lineno: int) -> str:
+    used = [text for k, text in exprs.items() if k in _KEPT]
+    if not used:
+        return ""
+    return f"{used[0]} uses a parameter or an expression (line {lineno}): not guessed"
+
+
 def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[GcodeMove]:
     """Every move of an RS274NGC program, in order (see the module docstring for the rules)."""
     path = None if path is None else os.fspath(path)
     check_text(text, path)
-    moves: list[GcodeMove] = []
-    pos = [math.nan, math.nan, math.nan]  # current absolute position, mm, program frame
-    setter: list[int | None] = [None, None, None]
-    rotary: dict[str, float] = {}
-    motion = "0"
-    incremental = False
-    scale = 1.0
-    plane = "17"
-    retract = "G98"
-    cycle_z = math.nan
-    cycle_r = math.nan
-    frame_reason = ""  # set while the program frame is not the cell's
-    flow_reason = ""
-    comp_reason = ""
+    reader = _Reader(path)
     offset = 0
-    # whole-text checks first: most programs have no O-words, block deletes or expressions,
-    # and then no line needs those per-line regex calls
+    # whole-text checks first: most programs have no O-words or block deletes, and then no line
+    # needs those per-line checks
     owords = _OWORD_ANY_RE.search(text) is not None
     slashes = "/" in text
-    exprs = "#" in text or "[" in text
-    expr = None
     for lineno, raw in enumerate(split_lines(text), start=1):
         line_offset = offset
         offset += len(raw) + 1
@@ -156,166 +511,14 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
         if not stripped or stripped.startswith("%"):
             continue
         if owords and _OWORD_RE.match(raw):
-            flow_reason = flow_reason or f"O-word control flow from line {lineno}"
+            state = reader.state
+            state.flow = state.flow or f"O-word control flow from line {lineno}"
             continue
         line = _blank_comments(raw, path, lineno)
         if slashes and line.lstrip().startswith("/"):
             line = line.replace("/", " ", 1)
-        if exprs:
-            expr = _EXPR_RE.search(line)
-        if expr is None and _LINE_RE.fullmatch(line) is None:
-            _refuse(line, path, lineno)
-        words: dict[str, Word | None] = {}
-        gwords: list[float] = []
-        for m in _WORD_RE.finditer(line):
-            letter, number = m.group(1, 2)
-            letter = letter.upper()
-            if letter == "G":
-                gwords.append(float(number))
-                continue
-            if letter in words and letter != "M":
-                raise InputError(f"word {letter} given twice", path, lineno, m.start(2) + 1)
-            if letter in _KEPT:
-                start, end = m.span(2)
-                words[letter] = _new_word(
-                    Word, (letter, float(number), line_offset + start, line_offset + end, number)
-                )
-            else:  # N, F, S, M, T, ...: only seen (a second one is an error), never a position
-                words[letter] = None
-        gcodes = [_G_NAMES.get(v) or _gnum(v) for v in gwords] if gwords else gwords
-        axis_words = {k: words[k] for k in AXES if k in words}
-        for g in gcodes:
-            if g in MOTION_MODES:
-                motion = g
-            elif g == "20":
-                scale = INCH_MM
-            elif g == "21":
-                scale = 1.0
-            elif g == "90":
-                incremental = False
-            elif g == "91":
-                incremental = True
-            elif g in ("17", "18", "19"):
-                plane = g
-            elif g in ("98", "99"):
-                retract = "G" + g
-            elif g == "54":
-                frame_reason = "" if not frame_reason.startswith("work offset") else ""
-            elif g in ("55", "56", "57", "58", "59", "59.1", "59.2", "59.3"):
-                frame_reason = f"work offset G{g} (line {lineno}): the cell gives only G54"
-            elif g in ("92", "52", "92.3"):
-                frame_reason = f"G{g} offset (line {lineno}) moves the program frame"
-            elif g in ("92.1", "92.2"):
-                frame_reason = ""
-            elif g == "10":
-                frame_reason = f"G10 (line {lineno}) changes the work offsets"
-            elif g in ("41", "42", "41.1", "42.1"):
-                comp_reason = f"cutter compensation G{g} (line {lineno}) offsets the path"
-            elif g == "40":
-                comp_reason = ""
-            elif g in ("68", "51"):
-                frame_reason = f"G{g} (line {lineno}) rotates or scales the program"
-        has_rotary = not _ROTARY_SET.isdisjoint(words)
-        if has_rotary:  # a new dict: moves share the one in effect when they were read
-            rotary = dict(rotary)
-            for letter in ROTARY:
-                if letter in words:
-                    rotary[letter] = words[letter].value
-        nonmodal = [g for g in gcodes if g in _NONMODAL] if gcodes else gcodes
-        if nonmodal and nonmodal[0] in _PARAMETER_CODES:
-            continue  # the axis words are parameters, not a move
-        if expr is not None and expr.group(1).upper() in AXES + ROTARY:
-            flow_reason = flow_reason or f"expression {expr.group(0)}.. at line {lineno}"
-            pos = [math.nan] * 3
-            continue
-        if not axis_words and not has_rotary:
-            continue
-        column = min(w.start for w in axis_words.values()) - line_offset + 1 if axis_words else 1
-        start = tuple(pos)
-        setters = tuple(setter)
-        index = len(moves)
-        if nonmodal:  # G28/G30 (via a point) or G53 (machine coordinates)
-            name = "G" + nonmodal[0]
-            moves.append(
-                GcodeMove(
-                    path,
-                    lineno,
-                    column,
-                    name,
-                    start,
-                    (math.nan,) * 3,
-                    axis_words,
-                    incremental,
-                    scale,
-                    f"{name}: a machine-coordinate or home move",
-                    rotary,
-                    setters,
-                )
-            )
-            pos = [math.nan] * 3
-            setter = [index] * 3
-            continue
-        target = list(pos)
-        relative = incremental and motion not in CYCLES
-        for i, k in enumerate(AXES):
-            word = axis_words.get(k)
-            if word is not None:
-                target[i] = pos[i] + word.value * scale if relative else word.value * scale
-        reason = flow_reason or frame_reason or comp_reason
-        move = GcodeMove(
-            path,
-            lineno,
-            column,
-            "G" + motion,
-            start,
-            tuple(target),
-            axis_words,
-            incremental,
-            scale,
-            "",
-            rotary,
-            setters,
-        )
-        if motion == "80":
-            move.reason = "axis words with G80 (no motion mode)"
-            pos = [math.nan] * 3
-        elif motion in CYCLES:
-            move.is_cycle = True
-            if "Z" in axis_words:
-                cycle_z = axis_words["Z"].value * scale
-            if "R" in words:
-                cycle_r = words["R"].value * scale
-                move.words = dict(axis_words, R=words["R"])
-            move.retract = retract
-            move.r_mm = cycle_r
-            bottom = [target[0], target[1], cycle_z]
-            move.target = tuple(bottom)
-            if incremental:
-                reason = reason or "canned cycle in G91 (incremental cycle words)"
-            elif plane != "17":
-                reason = reason or f"canned cycle in plane G{plane} (only G17 is read)"
-            elif math.isnan(cycle_r) or math.isnan(cycle_z):
-                reason = reason or "canned cycle without an R plane or Z depth"
-            clear = cycle_r if retract == "G99" else max(pos[2], cycle_r)
-            pos = [target[0], target[1], clear if not incremental else math.nan]
-        else:
-            if motion in ("2", "3"):
-                reason = reason or (
-                    f"arc G{motion}: its end point and centre would have to move together"
-                )
-            pos = target
-        t = move.target
-        if not reason and (t[0] != t[0] or t[1] != t[1] or t[2] != t[2]):  # NaN: unknown
-            missing = ",".join(k for i, k in enumerate(AXES) if math.isnan(t[i]))
-            reason = f"{missing} not known here (no absolute value since the start)"
-        if reason and not move.reason:
-            move.reason = reason
-        move.end = tuple(pos)
-        if "X" in axis_words:
-            setter[0] = index
-        if "Y" in axis_words:
-            setter[1] = index
-        if "Z" in axis_words or move.is_cycle:
-            setter[2] = index
-        moves.append(move)
-    return moves
+        block = _fast_line(line, line_offset, path, lineno)
+        if block is None:
+            block = _scan(line, line_offset, path, lineno)
+        reader.block(block, lineno, line_offset)
+    return reader.moves

@@ -15,11 +15,19 @@ import math
 import numpy as np
 
 from accugrid.codegen.gcode.parse import GcodeMove, parse_gcode
-from accugrid.codegen.program_text import formatted, number_text, precision, splice
+from accugrid.codegen.program_text import (
+    MIN_PLACES_INCH,
+    MIN_PLACES_MM,
+    formatted,
+    number_text,
+    precision,
+    splice,
+)
 from accugrid.codegen.rewrite import (
     Options,
     Result,
     Row,
+    check_orientation,
     correct_points,
     outside_reason,
     strict_check,
@@ -36,6 +44,11 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
         row.old = m.target
     _protect_arc_starts(moves, rows)
     todo = [i for i, r in enumerate(rows) if not r.reason]
+    if todo:
+        abc = np.array([[moves[i].rotary.get(k, math.nan) for k in "ABC"] for i in todo])
+        rot = np.broadcast_to(opts.robot_T_program[:3, :3], (len(todo), 3, 3))
+        keep = check_orientation(rot, abc, [rows[i] for i in todo], opts)
+        todo = [i for i, k in zip(todo, keep.tolist(), strict=True) if k]
     desired = np.array([m.target for m in moves], dtype=float).reshape(-1, 3)
     if todo:
         prog = desired[todo]
@@ -108,13 +121,12 @@ def _gcode_edits(
     corrected R planes (NaN: keep). Absolute words are formatted in one pass beforehand; only
     increments (which depend on what was written before) are formatted on the way."""
     edits: list[tuple[int, int, str]] = []
-    if opts.decimals is not None:
-        places = opts.decimals
-    else:
-        places = precision(w.literal for m in moves for k, w in m.words.items() if k in "XYZ")
     scales = np.array([m.scale for m in moves]).reshape(-1, 1)
+    places = _places(moves, scales[:, 0], opts)
     corrected = np.array([r.status == "corrected" for r in rows]).reshape(-1, 1)
-    absolute = formatted(np.where(corrected, desired / scales, np.nan).ravel(), places)
+    absolute = formatted(
+        np.where(corrected, desired / scales, np.nan).ravel(), np.repeat(places, 3)
+    )
     r_texts = formatted(r_planes / scales[:, 0], places)
     reached_rows: list[tuple[Row, list[float]]] = []
     reached_at: list[int] = []  # the move of each reached_rows entry
@@ -136,7 +148,7 @@ def _gcode_edits(
                 goal = float(desired[n, i])
                 if not (math.isnan(cmd[i]) or math.isnan(goal)):
                     value = (goal - cmd[i]) / move.scale
-                    new_text = number_text(old_text, word.value, value, places)
+                    new_text = number_text(old_text, word.value, value, int(places[n]))
             elif changed and absolute[3 * n + i] is not None:
                 new_text = absolute[3 * n + i]
                 if float(new_text) == word.value:
@@ -173,7 +185,19 @@ def _gcode_edits(
         cmd = end
     if reached_rows:
         reached = np.array([new for _, new in reached_rows])
-        residual = np.linalg.norm(reached - desired[reached_at], axis=1).tolist()
-        for (row, new), res in zip(reached_rows, residual, strict=True):
-            row.new, row.residual_mm = tuple(new), res
+        off = np.abs(reached - desired[reached_at])
+        residual = np.linalg.norm(off, axis=1).tolist()
+        wrote = np.array([[k in moves[n].words for k in "XYZ"] for n in reached_at])
+        rounding = np.where(wrote, off, 0.0).max(axis=1).tolist()
+        for (row, new), res, rnd in zip(reached_rows, residual, rounding, strict=True):
+            row.new, row.residual_mm, row.rounding_mm = tuple(new), res, rnd
     return edits
+
+
+def _places(moves: list[GcodeMove], scales: np.ndarray, opts: Options) -> np.ndarray:
+    """Decimals of each move's corrected numbers (N,): ``--decimals``, else the file's precision
+    but never coarser than 0.01 mm (0.001 in under G20)."""
+    if opts.decimals is not None:
+        return np.full(len(moves), opts.decimals)
+    found = precision(w.literal for m in moves for k, w in m.words.items() if k in "XYZ")
+    return np.where(scales == 1.0, max(found, MIN_PLACES_MM), max(found, MIN_PLACES_INCH))

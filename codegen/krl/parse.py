@@ -45,24 +45,54 @@ _NOT_CALLS = (
     | MOTIONS
 )
 
-NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-_FLAT_RE = re.compile(r"(\s*([A-Za-z_]\w*)\s+)(?:(" + NUMBER + r")|('[^']*')|([^,]*?))(\s*(?:,|$))")
-_ITEM_RE = re.compile(r"\s*([A-Za-z_]\w*)\s+(?:(" + NUMBER + r")|('[^']*')|([^,]*?))\s*(?:,|$)")
-_TYPE_PREFIX_RE = re.compile(r"\s*([A-Za-z_]\w*)\s*:")
-_LABEL_RE = re.compile(r"\s*([A-Za-z_]\w*)\s*:(?!:)\s*")
-_WORD_RE = re.compile(r"\s*([A-Za-z_$]\w*)")
+# Every pattern is linear in its input: possessive quantifiers (no backtracking into a number or
+# a run of spaces), no lazy scan followed by an optional tail, and no pattern that a search would
+# restart at every character of a long run (the flat-aggregate item starts at a word start only).
+NUMBER = r"[-+]?+(?:\d++(?:\.\d*+)?+|\.\d++)(?:[eE][-+]?+\d++)?+"
+_END = r"(?=\s*+(?:,|$))"
+_FLAT_RE = re.compile(
+    r"(?<![\w$])([A-Za-z_]\w*+)(\s++)(?:("
+    + NUMBER
+    + ")"
+    + _END
+    + "|('[^']*+')"
+    + _END
+    + r"|([^,]*+))(\s*+(?:,\s*+|$))"
+)
+_ITEM_RE = re.compile(
+    r"\s*+([A-Za-z_]\w*+)\s++(?:("
+    + NUMBER
+    + ")"
+    + _END
+    + "|('[^']*+')"
+    + _END
+    + r"|([^,]*+))\s*+(?:,|$)"
+)
+_TYPE_PREFIX_RE = re.compile(r"\s*+([A-Za-z_]\w*+)\s*+:")
+_LABEL_RE = re.compile(r"\s*+([A-Za-z_]\w*+)\s*+:(?!:)\s*+")
+_WORD_RE = re.compile(r"\s*+([A-Za-z_$]\w*+)")
 _DECL_RE = re.compile(
-    r"\s*(?:GLOBAL\s+)?(?:DECL\s+)?(?:GLOBAL\s+)?(?:CONST\s+)?([A-Za-z_]\w*)\s+([A-Za-z_$]\w*)\s*(\[[^\]]*\])?\s*",
+    r"\s*+(?:GLOBAL\s++)?(?:DECL\s++)?(?:GLOBAL\s++)?(CONST\s++)?([A-Za-z_]\w*+)\s++"
+    r"([A-Za-z_$]\w*+)\s*+(\[[^\]]*+\])?+\s*+",
     re.I,
 )
-_GLOBAL_DECL_RE = re.compile(r"\s*GLOBAL\s+DECL\b", re.I)
-_TARGET_NAME_RE = re.compile(r"([A-Za-z_$][\w$]*)\s*(\[[^\]]*\])?((?:\s*\.\s*\w+)*)")
-_ASSIGN_RE = re.compile(r"\s*([A-Za-z_$][\w$]*)\s*(\[[^\]]*\])?((?:\s*\.\s*\w+)*)\s*=(?!=)\s*")
-_INT_RE = re.compile(r"\s*\+?(\d+)\s*$")
-_BAS_RE = re.compile(r"\s*BAS\s*\(\s*#\s*(\w+)\s*(?:,\s*(.*?))?\s*\)\s*$", re.I)
-_BASE_DATA_RE = re.compile(r"\s*BASE_DATA\s*\[\s*(\d+)\s*\]\s*$", re.I)
-_CALL_RE = re.compile(r"\s*([A-Za-z_]\w*)\s*\(")
-_ROUTINE_RE = re.compile(r"\s*(?:GLOBAL\s+)?(DEF|DEFFCT)\s+(?:\w+\s+)?([A-Za-z_]\w*)\s*\(", re.I)
+_GLOBAL_DECL_RE = re.compile(r"\s*+GLOBAL\s++DECL\b", re.I)
+_NAME = r"([A-Za-z_$][\w$]*+)\s*+(\[[^\]]*+\])?+((?:\s*+\.\s*+\w++)*+)"
+_TARGET_NAME_RE = re.compile(_NAME)
+_ASSIGN_RE = re.compile(r"\s*+" + _NAME + r"\s*+=(?!=)\s*+")
+_INT_RE = re.compile(r"\s*+\+?(\d++)\s*+$")
+_BAS_RE = re.compile(r"\s*+BAS\s*+\(\s*+#\s*+(\w++)", re.I)
+_BASE_DATA_RE = re.compile(r"\s*+BASE_DATA\s*+\[\s*+(\d++)\s*+\]\s*+$", re.I)
+_CALL_RE = re.compile(r"\s*+([A-Za-z_]\w*+)\s*+\(")
+_ROUTINE_RE = re.compile(
+    r"\s*+(?:GLOBAL\s++)?(DEF|DEFFCT)\s++(?:\w++\s++)?([A-Za-z_]\w*+)\s*+\(", re.I
+)
+_WITH_RE = re.compile(r"\bWITH\b", re.I)
+_BASE_SET_RE = re.compile(r"\$BASE\s*+=\s*+", re.I)
+_NEXT_SYSVAR_RE = re.compile(r",\s*+\$")
+_APPROXIMATION_RE = re.compile(r"\s(?:C_(?:DIS|PTP|ORI|VEL|SPL)|WITH)\b", re.I)
+_INDEX_RE = re.compile(r"\[\s*+(\d++)\s*+\]")
+_IDENT_RE = re.compile(r"[A-Za-z_]\w*+")
 
 
 class Number(NamedTuple):
@@ -163,6 +193,31 @@ class KrlUse:
     reason: str = ""  # non-empty: the motion's target cannot be a stored position as is
 
 
+class Fdat(NamedTuple):
+    """An FDAT (``DECL FDAT FP1={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE}``) as far as it places a
+    position: the base (None with ``reason`` when it is not a BASE_DATA number, e.g. an external
+    TCP) and the tool (None when not given or not a number)."""
+
+    base_no: int | None
+    tool_no: int | None
+    line: int
+    reason: str = ""
+
+
+class Declared(NamedTuple):
+    """A variable declaration: its type (upper case) and line."""
+
+    type: str
+    line: int
+
+
+class FrameUse(NamedTuple):
+    """A name used as a frame, not as a position (``$TOOL = T1``, ``BASE_DATA[1]:P1``)."""
+
+    line: int
+    reason: str
+
+
 @dataclass
 class KrlScan:
     """Everything read from one file."""
@@ -170,24 +225,36 @@ class KrlScan:
     path: str | None
     positions: list[KrlPosition] = field(default_factory=list)
     uses: list[KrlUse] = field(default_factory=list)
-    fdats: dict[str, tuple[int | None, int, str]] = field(default_factory=dict)
-    # FDAT name -> (BASE_NO or None, line, reason when None)
+    fdats: dict[str, Fdat] = field(default_factory=dict)  # FDAT name (upper case) -> its values
     base_data: dict[int, tuple[tuple[float, ...], int]] = field(default_factory=dict)
     # BASE_DATA[n] = {..} in this file -> (xyzabc, line)
     assigned: dict[str, int] = field(default_factory=dict)
     # names given a non-literal value at run time -> first line
+    declared: dict[str, Declared] = field(default_factory=dict)  # variable (upper case, no index)
+    frame_uses: dict[str, FrameUse] = field(default_factory=dict)  # normalized name -> first use
 
 
 def normalize_name(name: str) -> str:
-    """``lfWorkPos[ 3 ]`` -> ``LFWORKPOS[3]``; a non-integer index becomes ``[*]``."""
+    """``lfWorkPos[ 3 ]`` -> ``LFWORKPOS[3]``; a non-integer index becomes ``[*]``; a member path
+    is kept (``gsCNC1[i].fCNC`` -> ``GSCNC1[*].FCNC``)."""
     if "[" not in name and " " not in name and "\t" not in name:
         return name.upper()
-    name = re.sub(r"\s+", "", name).upper()
+    name = re.sub(r"\s++", "", name).upper()
     head, bracket, rest = name.partition("[")
     if not bracket:
         return head
-    index = rest.rstrip("]")
-    return f"{head}[{index}]" if index.isdigit() else f"{head}[*]"
+    index, _, member = rest.partition("]")
+    index = index if index.isascii() and index.isdigit() else "*"
+    return f"{head}[{index}]{member}"
+
+
+def wildcard(key: str) -> str:
+    """The key a use with a variable index has: ``P[3].F`` -> ``P[*].F`` (the key itself when it
+    has no index)."""
+    head, bracket, rest = key.partition("[")
+    if not bracket:
+        return key
+    return f"{head}[*]{rest.partition(']')[2]}"
 
 
 def code_part(line: str, path: str | None, lineno: int) -> str:
@@ -253,10 +320,10 @@ def parse_aggregate(
         items = None
     stop = end - 1
     if items is None:  # the common flat aggregate: one C-level scan, spans by arithmetic
-        cursor = body_start
-        for lead, key, number, bits, other, trail in _FLAT_RE.findall(code, body_start, stop):
+        cursor = body_start + len(body) - len(body.lstrip())  # items start at a word
+        for key, gap, number, bits, other, trail in _FLAT_RE.findall(code, cursor, stop):
             key = key.upper()
-            vstart = cursor + len(lead)
+            vstart = cursor + len(key) + len(gap)
             if key in numbers:
                 raise InputError(f"component {key} given twice", path, lineno, vstart + 1)
             if number:
@@ -270,7 +337,7 @@ def parse_aggregate(
             else:
                 cursor = vstart + len(other)
                 if key in CARTESIAN_KEYS or key in JOINT_KEYS:
-                    reason = reason or f"component {key} is {other!r}, not a number"
+                    reason = reason or f"component {key} is {other.strip()!r}, not a number"
             cursor += len(trail)
         if cursor != stop and code[body_start:stop].strip():
             _refuse_item(code, body_start, stop, path, lineno)
@@ -305,8 +372,9 @@ def parse_aggregate(
 def _refuse_item(code: str, start: int, stop: int, path: str | None, lineno: int) -> None:
     """InputError at the first part of an aggregate body that is not ``NAME value``."""
     expected = start
-    for m in _ITEM_RE.finditer(code, start, stop):
-        if m.start() != expected:
+    while True:  # anchored matches: a search would restart at every character
+        m = _ITEM_RE.match(code, expected, stop)
+        if m is None or m.end() == expected:
             break
         expected = m.end()
     col = expected + len(code[expected:stop]) - len(code[expected:stop].lstrip())
@@ -368,6 +436,19 @@ def position_reason(type_name: str, numbers: dict[str, Number]) -> str:
     return ""
 
 
+@dataclass(slots=True)
+class _Block:
+    """An open IF/SWITCH/loop: the base when it opened, at the end of each branch so far, and the
+    positions and uses recorded inside it."""
+
+    keyword: str
+    line: int
+    start: BaseRef
+    ends: list[BaseRef] = field(default_factory=list)
+    records: list[KrlPosition | KrlUse] = field(default_factory=list)
+    has_else: bool = False
+
+
 class _Flow:
     """$BASE through a routine: conditionals, loops, jump targets and calls."""
 
@@ -375,7 +456,7 @@ class _Flow:
         self.initial = initial
         self.trust_calls = trust_calls
         self.state = initial
-        self.blocks: list[dict] = []
+        self.blocks: list[_Block] = []
         self.sets_base = False
         self.records: list[KrlPosition | KrlUse] = []
 
@@ -413,7 +494,7 @@ class _Flow:
     def record(self, rec: KrlPosition | KrlUse) -> None:
         self.records.append(rec)
         for block in self.blocks:
-            block["records"].append(rec)
+            block.records.append(rec)
 
     def label(self, name: str, line: int) -> None:
         s = self.state
@@ -430,26 +511,24 @@ class _Flow:
             )
 
     def open(self, keyword: str, line: int) -> None:
-        self.blocks.append(
-            {"kw": keyword, "line": line, "start": self.state, "ends": [], "records": []}
-        )
+        self.blocks.append(_Block(keyword, line, self.state))
 
     def branch(self) -> None:
         if self.blocks:
             block = self.blocks[-1]
-            block["ends"].append(self.state)
-            block["has_else"] = True
-            self.state = block["start"]
+            block.ends.append(self.state)
+            block.has_else = True
+            self.state = block.start
 
     def close(self, line: int) -> None:
         if not self.blocks:
             return
         block = self.blocks.pop()
-        start = block["start"]
-        where = f"{block['kw']} at line {block['line']}"
-        if block["kw"] in ("IF", "SWITCH"):
-            ends = block["ends"] + [self.state]
-            if not block.get("has_else"):
+        start = block.start
+        where = f"{block.keyword} at line {block.line}"
+        if block.keyword in ("IF", "SWITCH"):
+            ends = block.ends + [self.state]
+            if not block.has_else:
                 ends.append(start)
             if all(e is start for e in ends):
                 self.state = start
@@ -462,10 +541,10 @@ class _Flow:
             return
         if self.state is not start:  # a loop body that changes the base
             changed = BaseRef("unknown", line, reason=f"$BASE changes inside the loop {where}")
-            for rec in block["records"]:
+            for rec in block.records:
                 if rec.base is start:
                     rec.base = changed
-            if block["kw"] != "REPEAT":
+            if block.keyword != "REPEAT":
                 self.state = changed
 
 
@@ -490,7 +569,6 @@ def scan_krl(
     check_text(text, path)
     scan = KrlScan(path)
     flow = _Flow(initial_base or BaseRef("unknown", 0, reason="no $BASE set"), trust_calls)
-    decl_types: dict[str, str] = {}
     offset = 0
     for lineno, line in enumerate(split_lines(text), start=1):
         line_offset = offset
@@ -501,7 +579,7 @@ def scan_krl(
         if code.count("{") != code.count("}"):
             col = code.find("{") if code.count("{") > code.count("}") else code.find("}")
             raise InputError("unbalanced braces", path, lineno, col + 1)
-        _statement(code, line_offset, lineno, scan, flow, decl_types)
+        _statement(code, line_offset, lineno, scan, flow)
     flow.finish_routine()
     return scan
 
@@ -511,14 +589,7 @@ def parse_krl(text: str, path: str | os.PathLike[str] | None = None) -> list[Krl
     return scan_krl(text, path).positions
 
 
-def _statement(
-    code: str,
-    off: int,
-    lineno: int,
-    scan: KrlScan,
-    flow: _Flow,
-    decl_types: dict[str, str],
-) -> None:
+def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> None:
     pos = 0
     label = _LABEL_RE.match(code)
     if label and label.group(1).upper() not in _NOT_CALLS:
@@ -560,36 +631,64 @@ def _statement(
         or (word in POSITION_TYPES or word == "FDAT")
         and _DECL_RE.match(code, pos)
     ):
-        _decl(code, pos, off, lineno, scan, decl_types)
+        _decl(code, pos, off, lineno, scan)
         return
     if word == "BAS":
-        m = _BAS_RE.match(code, pos)
-        if m and m.group(1).upper() == "BASE":
-            arg = m.group(2) or ""
-            n = _INT_RE.match(arg)
-            if n:
-                flow.set(BaseRef("number", lineno, number=int(n.group(1))))
-            else:
-                flow.set(BaseRef("unknown", lineno, reason=f"BAS(#BASE, {arg}): not a number"))
+        _bas(code, pos, lineno, flow)
         return
     assign = _ASSIGN_RE.match(code, pos)
     if assign:
-        _assignment(code, assign, off, lineno, scan, flow, decl_types)
+        _assignment(code, assign, off, lineno, scan, flow)
         return
     call = _CALL_RE.match(code, pos)
     if call and word not in _NOT_CALLS:
         flow.call(call.group(1), lineno)
+    elif word not in _NOT_CALLS and _DECL_RE.match(code, pos):
+        _declare(code, pos, lineno, scan)  # a local declaration: "INT i", "sCNC1 gs[4]"
 
 
-def _decl(
-    code: str, pos: int, off: int, lineno: int, scan: KrlScan, decl_types: dict[str, str]
-) -> None:
+def _bas(code: str, pos: int, lineno: int, flow: _Flow) -> None:
+    """``BAS(#BASE, n)`` sets BASE_DATA[n]; other BAS commands leave the base."""
+    m = _BAS_RE.match(code, pos)
+    if m is None or m.group(1).upper() != "BASE":
+        return
+    rest = code[m.end() :].strip()
+    if not rest.endswith(")"):
+        return
+    inner = rest[:-1].strip()
+    if inner and not inner.startswith(","):
+        return
+    arg = inner[1:].strip()
+    n = _INT_RE.match(arg)
+    if n:
+        flow.set(BaseRef("number", lineno, number=int(n.group(1))))
+    else:
+        flow.set(BaseRef("unknown", lineno, reason=f"BAS(#BASE, {arg}): not a number"))
+
+
+def _declare(code: str, pos: int, lineno: int, scan: KrlScan) -> tuple[re.Match, str] | None:
+    """Record every name a declaration declares (``E6POS a, b[4]``); (its match, type)."""
     m = _DECL_RE.match(code, pos)
     if m is None:
+        return None
+    type_name = m.group(2).upper()
+    names = [m.group(3)]
+    if "=" not in code[m.end() :]:  # no value: more names may follow, "E6POS a, b"
+        for part in _split_top(code[m.end() :].lstrip(",")):
+            more = _IDENT_RE.match(part.strip())
+            if more:
+                names.append(more.group())
+    for name in names:
+        scan.declared.setdefault(name.upper(), Declared(type_name, lineno))
+    return m, type_name
+
+
+def _decl(code: str, pos: int, off: int, lineno: int, scan: KrlScan) -> None:
+    found = _declare(code, pos, lineno, scan)
+    if found is None:
         return
-    type_name = m.group(1).upper()
-    name = m.group(2)
-    decl_types[name.upper()] = type_name
+    m, type_name = found
+    name = m.group(3)
     rest = code[m.end() :]
     if not rest.startswith("="):
         return
@@ -597,35 +696,40 @@ def _decl(
     while value_at < len(code) and code[value_at] in " \t":
         value_at += 1
     if type_name == "FDAT":
-        _fdat(code, value_at, name, lineno, scan)
+        scan.fdats[name.upper()] = _fdat_values(code, value_at, scan.path, lineno)
         return
-    if type_name not in POSITION_TYPES or code[value_at : value_at + 1] != "{":
+    if code[value_at : value_at + 1] != "{":
         return
-    full = name + (m.group(3) or "")
-    _add_position(code, value_at, off, lineno, scan, "decl", type_name, full, None)
+    full = name + (m.group(4) or "")
+    if type_name not in POSITION_TYPES:
+        _struc_positions(code, value_at, off, lineno, scan, "decl", full)
+        return
+    pos, _ = _add_position(code, value_at, off, lineno, scan, "decl", type_name, full, None)
+    if m.group(1) and not pos.reason:
+        pos.reason = f"{full} is declared CONST: a constant, not a taught position"
 
 
-def _fdat(code: str, at: int, name: str, lineno: int, scan: KrlScan) -> None:
-    base_no, reason = _fdat_base(code, at, scan.path, lineno)
-    scan.fdats[name.upper()] = (base_no, lineno, reason)
-
-
-def _fdat_base(code: str, at: int, path: str | None, lineno: int) -> tuple[int | None, str]:
+def _fdat_values(code: str, at: int, path: str | None, lineno: int) -> Fdat:
+    """The FDAT aggregate at ``code[at]``: BASE_NO (unless IPO_FRAME is not #BASE), TOOL_NO."""
     if code[at : at + 1] != "{":
-        return None, "FDAT is not a literal"
+        return Fdat(None, None, lineno, "FDAT is not a literal")
     body = code[at + 1 : match_brace(code, at, path, lineno) - 1]
     fields = {}
     for item in _split_top(body):
         parts = item.split(None, 1)
         if len(parts) == 2:
             fields[parts[0].upper().rstrip(":")] = parts[1].strip()
+    tool = fields.get("TOOL_NO", "")
+    tool_no = int(tool) if tool.isascii() and tool.isdigit() and len(tool) <= 3 else None
     ipo = fields.get("IPO_FRAME", "#BASE").replace(" ", "").upper()
     if ipo != "#BASE":
-        return None, f"IPO_FRAME {ipo}: a fixed tool (external TCP), not a base frame"
+        return Fdat(
+            None, tool_no, lineno, f"IPO_FRAME {ipo}: a fixed tool (external TCP), not a base frame"
+        )
     base_no = fields.get("BASE_NO")
-    if base_no is None or not base_no.isdigit():
-        return None, f"FDAT BASE_NO is {base_no!r}, not a number"
-    return int(base_no), ""
+    if base_no is None or not (base_no.isascii() and base_no.isdigit() and len(base_no) <= 3):
+        return Fdat(None, tool_no, lineno, f"FDAT BASE_NO is {base_no!r}, not a number")
+    return Fdat(int(base_no), tool_no, lineno)
 
 
 def _add_position(
@@ -647,6 +751,74 @@ def _add_position(
     return pos, end
 
 
+_MAX_NESTING = 8
+
+
+def _struc_positions(
+    code: str, at: int, off: int, lineno: int, scan: KrlScan, kind: str, name: str, depth: int = 0
+) -> None:
+    """The position members of a user STRUC value ``{fCNC {X ..}, grFeedrate 95}`` at
+    ``code[at]``, named ``name.member`` (``gsCNC1[3].fCnC``); other members are not positions."""
+    if depth > _MAX_NESTING:
+        raise InputError(f"aggregates nested more than {_MAX_NESTING} deep", scan.path, lineno)
+    end = match_brace(code, at, scan.path, lineno)
+    body_start = at + 1
+    prefix = _TYPE_PREFIX_RE.match(code, body_start, end - 1)
+    if prefix:
+        body_start = prefix.end()
+    item_start = body_start
+    for item in _split_top(code[body_start : end - 1]):
+        start, item_start = item_start, item_start + len(item) + 1
+        member = _IDENT_RE.match(item, len(item) - len(item.lstrip()))
+        if member is None:
+            continue
+        value = member.end() + len(item[member.end() :]) - len(item[member.end() :].lstrip())
+        if item[value : value + 1] != "{":
+            continue
+        value_at = start + value
+        full = f"{name}.{member.group()}"
+        inner_end = match_brace(code, value_at, scan.path, lineno)
+        if "{" in code[value_at + 1 : inner_end]:
+            _struc_positions(code, value_at, off, lineno, scan, kind, full, depth + 1)
+            continue
+        pos, _ = _add_position(code, value_at, off, lineno, scan, kind, "", full, None)
+        if not set(pos.numbers) & (CARTESIAN_KEYS | JOINT_KEYS):
+            scan.positions.pop()  # an aggregate of some other structure type
+
+
+def _colon_operands(text: str) -> list[str]:
+    """The names among the operands of a top-level ``:`` expression (``BASE_DATA[1]:P1``)."""
+    parts, depth, in_string, last = [], 0, False, 0
+    for i, ch in enumerate(text):
+        if ch == '"':
+            in_string = not in_string
+        elif in_string:
+            continue
+        elif ch in "{[(":
+            depth += 1
+        elif ch in "}])":
+            depth -= 1
+        elif ch == ":" and depth == 0:
+            parts.append(text[last:i])
+            last = i + 1
+    if not parts:
+        return []
+    parts.append(text[last:])
+    names = []
+    for part in parts:
+        m = _TARGET_NAME_RE.fullmatch(part.strip())
+        if m:
+            names.append(normalize_name(part.strip()))
+    return names
+
+
+def _frame_use(scan: KrlScan, name: str, lineno: int, reason: str) -> None:
+    scan.frame_uses.setdefault(name, FrameUse(lineno, reason))
+
+
+_FRAME_TARGETS = ("$TOOL", "$BASE", "$LOAD", "TOOL_DATA", "BASE_DATA", "LOAD_DATA", "$NULLFRAME")
+
+
 def _assignment(
     code: str,
     m: re.Match,
@@ -654,13 +826,28 @@ def _assignment(
     lineno: int,
     scan: KrlScan,
     flow: _Flow,
-    decl_types: dict[str, str],
 ) -> None:
     target = m.group(1).upper()
     index = m.group(2) or ""
-    member = re.sub(r"\s+", "", m.group(3) or "").upper()
+    member = re.sub(r"\s++", "", m.group(3) or "").upper()
     value_at = m.end()
     value = code[value_at:].strip()
+    if ":" in value:
+        for name in _colon_operands(value):
+            _frame_use(
+                scan,
+                name,
+                lineno,
+                f"an operand of ':' at line {lineno} ({value}): a frame or an offset, not a "
+                "position by itself",
+            )
+    if target in _FRAME_TARGETS and _TARGET_NAME_RE.fullmatch(value):
+        _frame_use(
+            scan,
+            normalize_name(value),
+            lineno,
+            f"assigned to {m.group(1)}{index} at line {lineno}: a frame, not a drilling position",
+        )
     if target == "$BASE" and not member:
         flow.set(_base_value(code, value_at, off, lineno, scan))
         return
@@ -669,33 +856,36 @@ def _assignment(
         return
     if target == "FDAT_ACT":
         if value.startswith("{"):
-            base_no, reason = _fdat_base(code, value_at, scan.path, lineno)
+            fdat = _fdat_values(code, value_at, scan.path, lineno)
             flow.set(
-                BaseRef("number", lineno, number=base_no)
-                if base_no is not None
-                else BaseRef("unknown", lineno, reason=reason)
+                BaseRef("number", lineno, number=fdat.base_no)
+                if fdat.base_no is not None
+                else BaseRef("unknown", lineno, reason=fdat.reason)
             )
-        elif re.fullmatch(r"[A-Za-z_]\w*", value):
+        elif _IDENT_RE.fullmatch(value):
             flow.set(BaseRef("fdat", lineno, fdat=value.upper()))
         else:
             flow.set(BaseRef("unknown", lineno, reason=f"FDAT_ACT = {value}: not a name"))
         return
     if target == "BASE_DATA" and not member:
-        n = re.fullmatch(r"\[\s*(\d+)\s*\]", index)
+        n = _INDEX_RE.fullmatch(index)
         if n and value.startswith("{") and ":" not in value.replace("FRAME:", ""):
             prefix, numbers, reason, _ = parse_aggregate(code, value_at, off, scan.path, lineno)
             if not reason and all(k in numbers for k in "XYZABC"):
                 xyzabc = tuple(numbers[k].value for k in "XYZABC")
                 scan.base_data[int(n.group(1))] = (xyzabc, lineno)
         return
-    if target in ("$TOOL", "TOOL_DATA", "$LOAD", "$NULLFRAME"):
+    if target in _FRAME_TARGETS:
         return
     name = m.group(1) + index
-    if not member and value.startswith("{") and code[value_at : value_at + 1] == "{":
+    if not member and code[value_at : value_at + 1] == "{":
         end = match_brace(code, value_at, scan.path, lineno)
         if not code[end:].strip():
-            type_name = decl_types.get(target, "")
-            if type_name and type_name not in POSITION_TYPES:
+            declared = scan.declared.get(target)
+            type_name = declared.type if declared else ""
+            nested = "{" in code[value_at + 1 : end - 1]
+            if nested or type_name and type_name not in POSITION_TYPES:
+                _struc_positions(code, value_at, off, lineno, scan, "assign", name)
                 return
             pos, _ = _add_position(
                 code, value_at, off, lineno, scan, "assign", type_name, name, None
@@ -703,10 +893,10 @@ def _assignment(
             if not pos.numbers or not set(pos.numbers) & (CARTESIAN_KEYS | JOINT_KEYS):
                 scan.positions.pop()  # an aggregate of some other structure type
             return
-    key = normalize_name(name)
+    key = normalize_name(name)  # a member assigned changes the variable
     scan.assigned.setdefault(key, lineno)
-    if key.endswith("]"):
-        scan.assigned.setdefault(key.split("[")[0] + "[*]", lineno)
+    if "[" in key:
+        scan.assigned.setdefault(wildcard(key), lineno)
 
 
 def _base_value(code: str, at: int, off: int, lineno: int, scan: KrlScan) -> BaseRef:
@@ -732,20 +922,20 @@ def _base_value(code: str, at: int, off: int, lineno: int, scan: KrlScan) -> Bas
     return BaseRef("unknown", lineno, reason=f"$BASE = {value}: set from a variable")
 
 
-_TRAILING = re.compile(r"\s*(?:,|C_\w+|WITH\b|CA\b|$)", re.I)
-
-
-_WITH_BASE_RE = re.compile(r"\bWITH\b.*?\$BASE\s*=\s*(.*?)\s*(?:,\s*\$|$)", re.I)
-_SBASE_RE = re.compile(r"SBASE\s*\(\s*([A-Za-z_]\w*)\s*\.\s*BASE_NO\s*\)$", re.I)
+_SBASE_RE = re.compile(r"SBASE\s*+\(\s*+([A-Za-z_]\w*+)\s*+\.\s*+BASE_NO\s*+\)$", re.I)
 
 
 def _with_base(code: str, lineno: int) -> BaseRef | None:
     """The base a spline motion sets for itself: ``WITH ..., $BASE = SBASE(FP1.BASE_NO)`` (the
     KSS 8 inline form) or ``$BASE = BASE_DATA[n]``; None when the WITH part does not set it."""
-    m = _WITH_BASE_RE.search(code)
-    if m is None:
+    with_m = _WITH_RE.search(code)
+    if with_m is None:
         return None
-    value = m.group(1)
+    base_m = _BASE_SET_RE.search(code, with_m.end())
+    if base_m is None:
+        return None
+    stop = _NEXT_SYSVAR_RE.search(code, base_m.end())
+    value = code[base_m.end() : stop.start() if stop else len(code)].strip()
     sbase = _SBASE_RE.match(value)
     if sbase:
         return BaseRef("fdat", lineno, fdat=sbase.group(1).upper())
@@ -753,6 +943,35 @@ def _with_base(code: str, lineno: int) -> BaseRef | None:
     if n:
         return BaseRef("number", lineno, number=int(n.group(1)))
     return BaseRef("unknown", lineno, reason=f"WITH $BASE = {value}: not a BASE_DATA number")
+
+
+def _operands(code: str, at: int, path: str | None, lineno: int) -> tuple[list, int]:
+    """The operands of one motion target at ``code[at]`` joined by ``:``: ("agg"|"name"|"other",
+    start, end) each, and where the target ends (before C_DIS/C_VEL/WITH...)."""
+    operands: list[tuple[str, int, int]] = []
+    while True:
+        if code[at] == "{":
+            end = match_brace(code, at, path, lineno)
+            operands.append(("agg", at, end))
+        else:
+            m = _TARGET_NAME_RE.match(code, at)
+            if m is None or m.end() == at or code[m.end() : m.end() + 1] == "(":
+                clause = _APPROXIMATION_RE.search(code, at)
+                end = clause.start() if clause else len(code)
+                operands.append(("other", at, end))
+            else:
+                end = m.end()
+                operands.append(("name", at, end))
+        at = end
+        while at < len(code) and code[at] in " \t":
+            at += 1
+        if code[at : at + 1] == ":":
+            at += 1
+            while at < len(code) and code[at] in " \t":
+                at += 1
+            if at < len(code):
+                continue
+        return operands, at
 
 
 def _motion(
@@ -775,33 +994,7 @@ def _motion(
         if at >= len(code):
             return
         start = at
-        operands: list[tuple[str, int, int]] = []  # ("agg"|"name"|"other", start, end)
-        while True:
-            if code[at] == "{":
-                end = match_brace(code, at, scan.path, lineno)
-                operands.append(("agg", at, end))
-            else:
-                m = _TARGET_NAME_RE.match(code, at)
-                if m is None or m.end() == at:
-                    end = len(code)
-                    operands.append(("other", at, end))
-                else:
-                    end = m.end()
-                    if code[end : end + 1] == "(":
-                        operands.append(("other", at, len(code)))
-                        end = len(code)
-                    else:
-                        operands.append(("name", at, end))
-            at = end
-            while at < len(code) and code[at] in " \t":
-                at += 1
-            if code[at : at + 1] == ":":
-                at += 1
-                while at < len(code) and code[at] in " \t":
-                    at += 1
-                if at < len(code):
-                    continue
-            break
+        operands, at = _operands(code, at, scan.path, lineno)
         target_text = code[start:at].strip()
         arith = len(operands) > 1
         for kind, s, e in operands:
@@ -820,12 +1013,19 @@ def _motion(
                 name = normalize_name(operand) if kind == "name" else ""
                 if kind == "name" and name.startswith("$"):
                     why = f"system variable {operand}: the position is only known at run time"
-                elif kind != "name" or "." in name:
+                elif kind != "name":
                     why = f"target {operand!r} is an expression"
                 elif relative:
                     why = f"relative motion {word}: an offset, not a position"
                 elif arith:
                     why = f"frame arithmetic ':' in {target_text}: computed at run time"
+                    _frame_use(
+                        scan,
+                        name,
+                        lineno,
+                        f"an operand of ':' at line {lineno} ({target_text}): a frame or an "
+                        "offset, not a position by itself",
+                    )
                 else:
                     why = ""
                 use = KrlUse(scan.path, lineno, s + 1, word, name, operand, base, why)

@@ -1,0 +1,111 @@
+"""Non-geometric errors of a real arm, as joint-angle perturbations inside its forward kinematics.
+
+The true robot reaches FK(q + δ(q)) when its controller commands the KUKA axis angles q (N, 6) rad.
+δ (N, 6) rad is the sum of
+
+- **joint compliance under gravity**: δ_j = c_j · τ_j(q), c_j in rad per N·m and τ_j the static
+  gravity torque on axis j (N·m, about the positive KUKA axis direction, so a positive c deflects
+  the joint the way gravity pulls it). τ comes from lumped point masses, each fixed in one DH link
+  frame (frame i is the pose A_1 ... A_i of seed Eq. 1; mm), with gravity along −Z of the robot
+  base (floor mounting): τ_j = sign_j · z_{j−1} · Σ_{masses on links ≥ j} (p_m − o_{j−1}) × m g.
+- **reducer transmission errors**: δ_j += Σ_k A_jk sin(k_jk · q_j + φ_jk), amplitudes in rad.
+
+Thermal drift is a change of the link lengths, not of the joint angles: ``JointErrors.thermal``
+(a ``Thermal``) scales every DH a and d by 1 + expansion · ΔT in ``Robot.true_robot``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from accugrid.kinematics.dh import DHTable, chain
+
+__all__ = ["GRAVITY_MPS2", "Harmonic", "JointErrors", "PointMass", "Thermal"]
+
+GRAVITY_MPS2 = 9.80665
+
+
+@dataclass(frozen=True)
+class PointMass:
+    """A lumped mass ``kg`` at ``at_mm`` (3,) in DH link frame ``link`` (1..6)."""
+
+    link: int
+    kg: float
+    at_mm: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Harmonic:
+    """One transmission-error term amplitude_rad · sin(order · A_axis + phase_rad); axis 1..6."""
+
+    axis: int
+    order: int
+    amplitude_rad: float
+    phase_rad: float = 0.0
+
+
+@dataclass(frozen=True)
+class Thermal:
+    """Linear thermal growth: every DH a, d scaled by 1 + expansion_per_k · delta_t_k."""
+
+    delta_t_k: float = 0.0
+    expansion_per_k: float = 1.2e-5  # structural steel / cast iron, 1/K
+
+    @property
+    def scale(self) -> float:
+        return 1.0 + self.expansion_per_k * self.delta_t_k
+
+    def apply(self, dh: DHTable) -> DHTable:
+        """The DH table with its lengths a, d (mm) grown by ``scale``."""
+        return DHTable(dh.a * self.scale, dh.d * self.scale, dh.alpha, dh.theta_offset, dh.sign)
+
+
+@dataclass(frozen=True)
+class JointErrors:
+    """Compliance (``compliance`` (6,) rad/(N·m) and ``masses``), ``harmonics`` and ``thermal``."""
+
+    compliance: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    masses: tuple[PointMass, ...] = ()
+    harmonics: tuple[Harmonic, ...] = ()
+    thermal: Thermal | None = None
+    gravity_mps2: float = GRAVITY_MPS2
+
+    @classmethod
+    def from_compliance(
+        cls, compliance: np.ndarray, masses: tuple[PointMass, ...] | list[PointMass]
+    ) -> JointErrors:
+        """Compliance only: c (6,) rad per N·m (zeros on axes without compliance) and masses."""
+        c = np.array(compliance, dtype=float).reshape(6)
+        return cls(compliance=c, masses=tuple(masses))
+
+    def gravity_torques(self, dh: DHTable, q: np.ndarray) -> np.ndarray:
+        """Static gravity torques τ (N, 6) N·m about the positive KUKA axes at joints q (N, 6) rad.
+
+        This is also ∂δ/∂c: ∂δ_j/∂c_j = τ_j(q), ∂δ_j/∂c_i = 0 for i ≠ j."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        tau = np.zeros((len(q), 6))
+        if not self.masses:
+            return tau
+        frames = [np.broadcast_to(np.eye(4), (len(q), 4, 4))] + chain(dh, q)  # base_T_0 .. 6
+        weight = np.array([0.0, 0.0, -self.gravity_mps2])  # N per kg, base frame
+        for m in self.masses:
+            link = frames[m.link]
+            p = link[:, :3, :3] @ np.asarray(m.at_mm, dtype=float) + link[:, :3, 3]  # (N, 3) mm
+            force = m.kg * weight
+            for j in range(m.link):  # joint j + 1 turns about z of frame j through its origin
+                lever_m = (p - frames[j][:, :3, 3]) * 1e-3
+                moment = np.cross(lever_m, force)
+                tau[:, j] += dh.sign[j] * np.einsum("ni,ni->n", moment, frames[j][:, :3, 2])
+        return tau
+
+    def delta(self, dh: DHTable, q: np.ndarray) -> np.ndarray:
+        """Joint-angle perturbation δ (N, 6) rad at commanded KUKA angles q (N, 6) rad."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        out = np.zeros((len(q), 6))
+        if np.any(self.compliance):
+            out += self.compliance * self.gravity_torques(dh, q)
+        for h in self.harmonics:
+            out[:, h.axis - 1] += h.amplitude_rad * np.sin(h.order * q[:, h.axis - 1] + h.phase_rad)
+        return out

@@ -1,0 +1,299 @@
+"""Issue 12 items 1, 2, 5 and 16: inputs are never replaced, special files are refused, a job's
+files appear whole or not at all, temporaries never stay behind."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import stat
+import subprocess
+import sys
+
+import pytest
+from conftest import EXAMPLES, ROOT
+
+from accugrid.codegen import atomic
+from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cli import main
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.inputfile import read_input_bytes, track_inputs
+
+
+@pytest.fixture
+def cell_dir(tmp_path):
+    """A copy of the example cell (built-in robot), its grid and the wing-panel points."""
+    for name in ("cell.yaml", "grid_200mm.csv", "wing_panel_points.csv", "cam_drill.ngc"):
+        shutil.copy(EXAMPLES / name, tmp_path / name)
+    return tmp_path
+
+
+def snapshot(folder):
+    return {p.name: p.read_text("latin-1") for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def run(argv, capsys):
+    code = main([str(a) for a in argv])
+    return code, capsys.readouterr().err
+
+
+# ---------------------------------------------------------------- item 1: inputs never written
+
+
+def test_rewrite_refuses_the_grid_the_cell_names_as_output_and_report(cell_dir, capsys):
+    before = snapshot(cell_dir)
+    grid = cell_dir / "grid_200mm.csv"
+    ngc = cell_dir / "cam_drill.ngc"
+    cell = cell_dir / "cell.yaml"
+    code, err = run(["rewrite", ngc, "--cell", cell, "-o", grid, "--force"], capsys)
+    assert code == 2 and "refusing to overwrite an input file" in err
+    out = cell_dir / "out.ngc"
+    code, err = run(
+        ["rewrite", ngc, "--cell", cell, "-o", out, "--report", grid, "--force"], capsys
+    )
+    assert code == 2 and "refusing to overwrite an input file" in err
+    assert snapshot(cell_dir) == before
+
+
+def test_gcode_refuses_the_robot_yaml_the_cell_names(cell_dir, capsys):
+    robot = cell_dir / "robot.yaml"
+    shutil.copy(ROOT / "kinematics" / "robots" / "kr210-paper.yaml", robot)
+    cell = cell_dir / "cell.yaml"
+    cell.write_text(cell.read_text().replace("robot: kr210-paper", "robot: robot.yaml"))
+    before = snapshot(cell_dir)
+    argv = ["gcode", cell_dir / "wing_panel_points.csv", "--cell", cell, "-o", robot, "--force"]
+    code, err = run(argv, capsys)
+    assert code == 2 and f"{robot}: refusing to overwrite an input file" in err
+    assert snapshot(cell_dir) == before
+
+
+def test_gcode_refuses_a_template_file_and_symlinks_or_hard_links_to_inputs(cell_dir, capsys):
+    templates = cell_dir / "templates"
+    shutil.copytree(ROOT / "templates" / "gcode", templates)
+    points = cell_dir / "wing_panel_points.csv"
+    (cell_dir / "link.csv").symlink_to(points)
+    os.link(points, cell_dir / "hard.csv")
+    before = snapshot(cell_dir)
+    common = ["gcode", points, "--cell", cell_dir / "cell.yaml", "--force"]
+    for target in (
+        next(templates.glob("*.j2")),
+        cell_dir / "link.csv",
+        cell_dir / "hard.csv",
+    ):
+        code, err = run([*common, "--templates", templates, "-o", target], capsys)
+        assert code == 2 and "refusing to overwrite an input file" in err, target
+    assert snapshot(cell_dir) == before
+
+
+def test_tracked_inputs_are_refused_even_when_not_passed():
+    with track_inputs():
+        read_input_bytes(EXAMPLES / "cell.yaml")
+        with pytest.raises(InputError, match="refusing to overwrite an input"):
+            check_targets([EXAMPLES / "cell.yaml"], force=True)
+
+
+# ---------------------------------------------------------------- item 5: special files
+
+
+def test_special_outputs_are_refused_even_with_force(tmp_path):
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    for target, kind in ((os.devnull, "device"), (fifo, "FIFO"), (tmp_path, "folder")):
+        with pytest.raises(InputError, match=f"output exists and is a {kind}"):
+            write_files({target: "x"}, force=True)
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode) and stat.S_ISCHR(os.stat(os.devnull).st_mode)
+
+
+def test_an_output_whose_folder_is_a_file_is_an_input_error(tmp_path):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(InputError, match="is not a folder"):
+        write_files({tmp_path / "file" / "out.csv": "y"})
+
+
+def test_fifo_and_dev_zero_inputs_are_refused_without_blocking(tmp_path):
+    """Issue items 5, 6 and 16: a FIFO input, /dev/zero and a symlink to it (past --max-mb)."""
+    fifo = tmp_path / "points.csv"
+    os.mkfifo(fifo)
+    (tmp_path / "zero.ngc").symlink_to("/dev/zero")
+    cell = EXAMPLES / "cell.yaml"
+    runs = [
+        ["correct", fifo, "--grid", EXAMPLES / "grid_200mm.csv", "-o", tmp_path / "o.csv"],
+        ["rewrite", tmp_path / "zero.ngc", "--cell", cell, "-o", tmp_path / "o.ngc"],
+        ["rewrite", "/dev/zero", "--cell", cell, "-o", tmp_path / "o.ngc"],
+    ]
+    for argv in runs:
+        proc = subprocess.run(
+            [sys.executable, "-m", "accugrid.codegen.cli", *map(str, argv)],
+            capture_output=True,
+            text=True,
+            timeout=60,  # a guard against a hang, not a timing assertion
+        )
+        assert proc.returncode == 2, proc.stderr
+        assert "not a regular file" in proc.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["points.csv", "zero.ngc"]
+
+
+# ---------------------------------------------------------------- item 2: whole or nothing
+
+
+def test_permissions_follow_the_umask(tmp_path):
+    old = os.umask(0o022)
+    try:
+        (path,) = write_files({tmp_path / "a.src": "x"})
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o644
+
+
+def test_a_failure_while_writing_leaves_targets_and_no_temporaries(tmp_path, monkeypatch):
+    old = {tmp_path / f"J_{k}.src": f"old {k}" for k in range(4)}
+    write_files(old)
+    real = atomic._write_temp
+    calls = []
+
+    def failing(tmp, payload):
+        calls.append(tmp)
+        if len(calls) == 3:
+            raise OSError(28, "No space left on device")
+        real(tmp, payload)
+
+    monkeypatch.setattr(atomic, "_write_temp", failing)
+    with pytest.raises(InputError, match="No space left"):
+        write_files({p: "new" for p in old}, force=True)
+    assert {p: p.read_text() for p in old} == old
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in old)
+
+
+def job(name, parts, tag):
+    """A KRL-like job: NAME.src calls NAME_001..; every file says which job it belongs to.
+    File name -> text."""
+    files = {
+        f"{name}_{k:03d}.{ext}": f"{tag}" for k in range(1, parts + 1) for ext in "src dat".split()
+    }
+    files[f"{name}.dat"] = tag
+    files[f"{name}.src"] = (
+        tag + " calls " + " ".join(f"{name}_{k:03d}" for k in range(1, parts + 1))
+    )
+    return files
+
+
+def write_job(folder, files, name, **kw):
+    stale = [p for p in folder.glob(f"{name}_[0-9][0-9][0-9].*")]
+    return write_files(
+        {folder / f: t for f, t in files.items()},
+        force=True,
+        main=[folder / f"{name}.dat", folder / f"{name}.src"],
+        stale=stale,
+        **kw,
+    )
+
+
+def consistent(folder, name):
+    """The invariant a kill must keep: if NAME.src exists, every module it calls exists and is
+    from the same job as it."""
+    main_src = folder / f"{name}.src"
+    if not main_src.exists():
+        return True
+    tag, _, calls = main_src.read_text().partition(" calls ")
+    return (
+        all(
+            (folder / f"{m}.{ext}").exists() and (folder / f"{m}.{ext}").read_text() == tag
+            for m in calls.split()
+            for ext in ("src", "dat")
+        )
+        and (folder / f"{name}.dat").read_text() == tag
+    )
+
+
+class Killed(BaseException):
+    """Stands for SIGKILL: the process stops at once, nothing is cleaned up."""
+
+
+@pytest.mark.parametrize("new_parts", [2, 5])
+def test_a_job_killed_at_any_step_of_the_swap_never_mixes_jobs(tmp_path, monkeypatch, new_parts):
+    """Issue item 2: stop the swap after every possible number of file operations."""
+    name = "JOB"
+    steps = 2 * new_parts + 2 + 8  # renames + removals, with room to spare
+    for stop_after in range(steps):
+        folder = tmp_path / f"k{stop_after}"
+        folder.mkdir()
+        write_job(folder, job(name, 4, "old"), name)
+        count = [0]
+
+        def op(real, count=count, stop_after=stop_after):
+            def wrapped(*args):
+                if count[0] == stop_after:
+                    raise Killed
+                count[0] += 1
+                return real(*args)
+
+            return wrapped
+
+        monkeypatch.setattr(atomic.os, "replace", op(os.replace))
+        monkeypatch.setattr(atomic.os, "unlink", op(os.unlink))
+        try:
+            write_job(folder, job(name, new_parts, "new"), name)
+        except Killed:
+            pass
+        monkeypatch.undo()
+        assert consistent(folder, name), (stop_after, snapshot(folder))
+        main_src = folder / f"{name}.src"
+        if main_src.exists() and main_src.read_text().startswith("new"):
+            assert snapshot(folder) == job(name, new_parts, "new")
+
+
+def test_a_complete_job_replaces_a_longer_one_without_stale_modules(tmp_path):
+    write_job(tmp_path, job("JOB", 4, "old"), "JOB")
+    write_job(tmp_path, job("JOB", 2, "new"), "JOB")
+    assert snapshot(tmp_path) == job("JOB", 2, "new")
+
+
+def test_temporaries_of_dead_processes_are_removed(tmp_path):
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True
+    )
+    pid = int(dead.stdout)
+    leftover = tmp_path / f".A.src.{pid}.deadbeef.accugrid.tmp"
+    leftover.write_text("half")
+    write_files({tmp_path / "A.src": "whole"})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["A.src"]
+
+
+SIGTERM_SCRIPT = """
+import sys, time
+from accugrid.codegen import atomic
+real = atomic._write_temp
+def slow(tmp, payload):
+    real(tmp, payload)
+    print("wrote", flush=True)
+    time.sleep(0.2)
+atomic._write_temp = slow
+atomic.write_files({f"{sys.argv[1]}/F_{k}.src": "new" for k in range(50)}, force=True)
+"""
+
+
+def test_sigterm_while_writing_removes_the_temporaries(tmp_path):
+    proc = subprocess.Popen(
+        [sys.executable, "-c", SIGTERM_SCRIPT, str(tmp_path)], stdout=subprocess.PIPE, text=True
+    )
+    for _ in range(3):
+        proc.stdout.readline()
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(timeout=60) == 128 + signal.SIGTERM
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_krl_job_over_a_longer_one_leaves_only_the_new_modules(cell_dir, capsys):
+    cell = cell_dir / "cell.yaml"
+    points = cell_dir / "wing_panel_points.csv"
+    text = cell.read_text()
+    cell.write_text(text.replace("lines_per_file: 5000 ", "lines_per_file: 120  "))
+    assert run(["krl", points, "--cell", cell, "-o", cell_dir / "krl"], capsys)[0] == 0
+    long_job = sorted(p.name for p in (cell_dir / "krl").iterdir())
+    cell.write_text(text.replace("lines_per_file: 5000 ", "lines_per_file: 400  "))
+    assert run(["krl", points, "--cell", cell, "-o", cell_dir / "krl", "--force"], capsys)[0] == 0
+    short_job = sorted(p.name for p in (cell_dir / "krl").iterdir())
+    assert len(short_job) < len(long_job)
+    main_src = (cell_dir / "krl" / "WING_PANEL.src").read_text()
+    modules = {p[:-4] for p in short_job if p != "WING_PANEL.src" and p != "WING_PANEL.dat"}
+    assert modules and all(m in main_src for m in modules)

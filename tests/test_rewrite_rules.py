@@ -1,0 +1,270 @@
+"""Issue 11: what `accugrid rewrite` must never do (correct what is not a drilling position, round a
+correction away, refuse a whole program for one unread line), each on its real or minimal case.
+
+Expected values come from the constant error field of ``rewrite_helpers`` (e = E_CONST
+everywhere, so a corrected base-frame position is p + R^T e) and from the rules, not from the
+code under test.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import numpy as np
+import pytest
+from rewrite_helpers import E_CONST, write_cell, write_grid
+
+from accugrid.codegen.cli import main
+from accugrid.codegen.gcode.parse import parse_gcode
+from accugrid.codegen.krl.parse import parse_krl
+from accugrid.kinematics.frames import abc_to_matrix
+
+GRID_ABC = (0.0, 90.0, 0.0)  # the orientation the test grids are measured at (robot frame)
+
+
+def rewrite(*args) -> int:
+    return main(["rewrite", *map(str, args)])
+
+
+def report(path) -> list[dict[str, str]]:
+    return list(csv.DictReader(open(path, newline="")))
+
+
+@pytest.fixture
+def cell(tmp_path):
+    """Constant error field, base 1 = robot frame, grid measured at A 0 B 90 C 0."""
+    path = write_cell(tmp_path, field="constant")
+    write_grid(tmp_path / "grid.csv", field="constant", abc=GRID_ABC)
+    return path
+
+
+def krl_src(*lines: str) -> str:
+    return "DEF job( )\nBAS(#BASE,1)\n" + "\n".join(lines) + "\nEND\n"
+
+
+# ---------------------------------------------------------------- item 1: orientation
+
+
+def _tilted(deg: float) -> str:
+    """A, B, C (robot frame = base 1) tilted ``deg`` from the grid's about the X axis."""
+    rot = abc_to_matrix(np.array(GRID_ABC)) @ abc_to_matrix(np.array([0.0, 0.0, deg]))
+    # about the tool's own X axis: for GRID_ABC = (0, 90, 0) that is C = deg
+    assert np.allclose(rot, abc_to_matrix(np.array([0.0, 90.0, deg])))
+    return f"A 0.0,B 90.0,C {deg}"
+
+
+@pytest.mark.parametrize(
+    ("options", "statuses"),
+    [
+        ([], ["corrected", "corrected", "skipped"]),
+        (["--orientation-limit", "90"], ["corrected", "corrected", "corrected"]),
+        (["--allow-orientation"], ["corrected", "corrected", "corrected"]),
+        (["--orientation-tol", "15", "--orientation-limit", "15"], ["corrected"] * 2 + ["skipped"]),
+    ],
+)
+def test_orientation_flag_and_limit_as_correct(tmp_path, cell, options, statuses, capsys):
+    src = tmp_path / "job.src"
+    src.write_text(
+        krl_src(
+            f"LIN {{X 1000.0,Y 0.0,Z 1000.0,{_tilted(0.0)}}}",
+            f"LIN {{X 1000.0,Y 0.0,Z 1000.0,{_tilted(10.0)}}}",
+            f"LIN {{X 1000.0,Y 0.0,Z 1000.0,{_tilted(89.9)}}}",
+        )
+    )
+    out, rep = tmp_path / "out.src", tmp_path / "r.csv"
+    assert rewrite(src, "--cell", cell, "-o", out, "--report", rep, *options) == 0
+    rows = report(rep)
+    assert [r["status"] for r in rows] == statuses
+    assert rows[0]["reason"] == ""  # at the grid's orientation: nothing to say
+    tol = (
+        float(options[options.index("--orientation-tol") + 1])
+        if "--orientation-tol" in options
+        else 5
+    )
+    if tol < 10:
+        assert rows[1]["reason"].startswith("flag: orientation 10.0 deg")
+    else:
+        assert rows[1]["reason"] == ""
+    if statuses[2] == "skipped":
+        assert "orientation 89.9 deg" in rows[2]["reason"]
+        assert "--orientation-limit" in rows[2]["reason"]
+        assert "C 89.9}" in out.read_text()  # left exactly as written
+    else:
+        assert rows[2]["reason"].startswith("flag: orientation 89.9 deg")
+        assert "more than --orientation-tol" in capsys.readouterr().err
+
+
+def test_orientation_in_the_base_frame_and_gcode_abc(tmp_path):
+    """The check compares robot-frame orientations: base rotation times the written A, B, C."""
+    base2 = (0.0, 0.0, 0.0, 90.0, 0.0, 0.0)  # rotated 90 deg about Z
+    cell = write_cell(tmp_path, field="constant", base_data={2: base2}, program_frame=base2)
+    write_grid(tmp_path / "grid.csv", field="constant", abc=GRID_ABC)
+    # base_R^T grid_R: the grid's orientation written in base 2 is A -90 B 90 C 0
+    src = tmp_path / "b.src"
+    src.write_text(
+        "DEF b( )\nBAS(#BASE,2)\nLIN {X 0.0,Y -1000.0,Z 1000.0,A -90.0,B 90.0,C 0.0}\n"
+        "LIN {X 0.0,Y -1000.0,Z 1000.0,A 0.0,B 90.0,C 0.0}\nEND\n"
+    )
+    rep = tmp_path / "r.csv"
+    assert rewrite(src, "--cell", cell, "-o", tmp_path / "o.src", "--report", rep) == 0
+    assert [r["status"] for r in report(rep)] == ["corrected", "skipped"]
+    ngc = tmp_path / "p.ngc"
+    ngc.write_text("G90 G0 X0 Y-1000 Z1000 A-90 B90 C0\nG1 X1 A0\nG1 X2 Y-1000 Z1000\n")
+    rep2 = tmp_path / "r2.csv"
+    assert rewrite(ngc, "--cell", cell, "-o", tmp_path / "p2.ngc", "--report", rep2) == 0
+    rows = report(rep2)
+    assert [r["status"] for r in rows] == ["corrected", "skipped", "skipped"]
+    assert "orientation 90.0 deg" in rows[1]["reason"]  # A stays 0 for the next move too
+
+
+# ---------------------------------------------------------------- item 4: precision
+
+
+def test_inch_one_decimal_program_keeps_the_correction(realworld, tmp_path):
+    """RS274NGC manual example 3 (G20, one decimal): z-1.1 must not become z-1.2."""
+    cell = write_cell(tmp_path, field="constant")
+    program = realworld / "gcode" / "printhor_example3_inch.gcode"
+    out, rep = tmp_path / "e3.gcode", tmp_path / "r.csv"
+    assert rewrite(program, "--cell", cell, "-o", out, "--report", rep) == 0
+    first = out.read_text().splitlines()[2]
+    e_in = E_CONST / 25.4  # the constant error in inches
+    want = (3 + e_in[0], 4 + e_in[1], 0.2 + e_in[2], -1.1 + e_in[2])
+    assert first == "n0030 g81 x{:.3f} y{:.3f} r{:.3f} z{:.3f}".format(*want)
+    for row in report(rep):
+        if row["status"] == "corrected":
+            assert float(row["residual_mm"]) <= 0.0005 * 25.4 * math.sqrt(3)
+
+
+def test_integer_mm_krl_gets_hundredths_and_a_rounding_warning(tmp_path, cell, capsys):
+    src = tmp_path / "int.src"
+    src.write_text(krl_src("LIN {X 1000,Y 20,Z 1000,A 0,B 90,C 0}"))
+    out = tmp_path / "o.src"
+    assert rewrite(src, "--cell", cell, "-o", out) == 0
+    x, y, z = np.array([1000, 20, 1000]) + E_CONST
+    assert f"LIN {{X {x:.2f},Y {y:.2f},Z {z:.2f},A 0,B 90,C 0}}" in out.read_text()
+    assert "warning" not in capsys.readouterr().err
+    assert rewrite(src, "--cell", cell, "-o", tmp_path / "d0.src", "--decimals", "0") == 0
+    err = capsys.readouterr().err
+    assert "rounding to the written decimals leaves 1 position(s)" in err
+    assert "tolerance (0.3 mm)" in err
+
+
+# ---------------------------------------------------------------- item 5: parameters
+
+
+def test_parameter_assignments_are_read_and_parameter_words_reported(realworld, tmp_path, cell):
+    lagun = realworld / "gcode" / "lagun_HEMA-P005.cnc"
+    out = tmp_path / "lagun.cnc"
+    assert rewrite(lagun, "--cell", cell, "-o", out) == 0
+    assert out.read_bytes() == lagun.read_bytes()  # every move is in o<drill> (not given)
+    program = (
+        "#<_z_clearance> = 0.4\n#1=5 #<a> = [#1 + 2]\n"
+        "G90 G0 X1000 Y0 Z1000\nG1 Z#<_z_clearance>\nG1 X1001 Y1\nG1 X1002 Y2 Z1002\n"
+        "G1 X[#1*2] Y3 Z1003\nG1 X1004 Y4 Z-#1\n"
+    )
+    moves = parse_gcode(program)
+    assert [m.line for m in moves] == [3, 4, 5, 6, 7, 8]
+    assert "Z#<_z_clearance> uses a parameter" in moves[1].reason
+    assert "Z not known" in moves[2].reason  # Z is unknown until written again
+    assert moves[3].reason == "" and moves[3].target == (1002, 2, 1002)
+    assert "X[#1*2] uses a parameter" in moves[4].reason
+    assert "Z-#1 uses a parameter" in moves[5].reason
+    ngc = tmp_path / "p.ngc"
+    ngc.write_text(program)
+    rep = tmp_path / "r.csv"
+    assert rewrite(ngc, "--cell", cell, "-o", tmp_path / "p2.ngc", "--report", rep) == 0
+    assert [r["status"] for r in report(rep)] == ["corrected"] + ["skipped"] * 2 + ["corrected"] + [
+        "skipped"
+    ] * 2
+
+
+@pytest.mark.parametrize(
+    ("text", "column", "message"),
+    [
+        ("#1 5\n", 1, "must be assigned"),
+        ("#<a = 5\n", 2, "unclosed '<'"),
+        ("G1 X[1+2\n", 5, "unclosed '['"),
+        ("#1 = abc\n", 6, "cannot read the parameter's value"),
+    ],
+)
+def test_malformed_parameters_are_located(text, column, message):
+    from accugrid.kinematics.errors import InputError
+
+    with pytest.raises(InputError) as err:
+        parse_gcode(text, "p.ngc")
+    assert message in str(err.value) and err.value.column == column
+
+
+# ---------------------------------------------------------------- item 6: G54 after offsets
+
+
+@pytest.mark.parametrize(
+    ("offset", "reason"),
+    [
+        ("G92 X0 Y0", "G92 offset"),
+        ("G52 X10 Y10", "G52 offset"),
+        ("G10 L2 P1 X100", "G10"),
+        ("G68 X0 Y0 R30", "G68"),
+    ],
+)
+def test_g54_does_not_cancel_an_offset(offset, reason):
+    moves = parse_gcode(f"G90 G0 X0 Y0 Z0\n{offset}\nG54\nG1 X5 Y5 Z5\n")
+    assert reason in moves[-1].reason
+
+
+@pytest.mark.parametrize(
+    ("program", "cleared"),
+    [
+        ("G55\nG54\nG1 X5 Y5 Z5\n", True),  # G54 ends a G55 selection
+        ("G92 X0\nG92.1\nG1 X5 Y5 Z5\n", True),
+        ("G68 X0 Y0 R30\nG69\nG1 X5 Y5 Z5\n", True),
+        ("G10 L2 P1 X100\nG54\nG1 X5 Y5 Z5\n", False),
+    ],
+)
+def test_what_cancels_an_offset(program, cleared):
+    moves = parse_gcode("G90 G0 X0 Y0 Z0\n" + program)
+    assert (moves[-1].reason == "") == cleared
+
+
+# ---------------------------------------------------------------- item 9: unknown motions
+
+
+@pytest.mark.parametrize(
+    ("code", "what"),
+    [
+        ("G5 X10 Y10 I1 J1 P1 Q1", "spline G5"),
+        ("G38.2 Z-10", "probe G38.2"),
+        ("G33 Z-10 K1", "spindle-synchronized motion G33"),
+        ("G0.5 X10", "unknown G-code G0.5"),
+        ("G999 X10", "unknown G-code G999"),
+    ],
+)
+def test_unknown_motions_are_reported_not_corrected(tmp_path, cell, code, what):
+    program = f"G90 G0 X1000 Y0 Z1000\n{code}\nX1001\nG1 X1002 Y1 Z1001\n"
+    moves = parse_gcode(program)
+    assert what in moves[1].reason and "not corrected" in moves[1].reason
+    assert moves[2].reason  # the unknown motion mode stays in effect
+    assert moves[3].reason == ""  # a known motion code ends it
+    ngc = tmp_path / "u.ngc"
+    ngc.write_text(program)
+    out, rep = tmp_path / "u2.ngc", tmp_path / "r.csv"
+    assert rewrite(ngc, "--cell", cell, "-o", out, "--report", rep) == 0
+    assert [r["status"] for r in report(rep)] == ["corrected", "skipped", "skipped", "corrected"]
+    assert out.read_text().splitlines()[1] == code  # the unknown motion's line is untouched
+
+
+# ---------------------------------------------------------------- item 8: output folder
+
+
+def test_existing_output_folder_with_a_dot(tmp_path, cell):
+    src, dat = tmp_path / "job.src", tmp_path / "job.dat"
+    src.write_text(krl_src("LIN XP1"))
+    dat.write_text("DEFDAT job\nDECL E6POS XP1={X 1000.0,Y 0.0,Z 1000.0,A 0.0,B 90.0,C 0.0}\n")
+    folder = tmp_path / "out.v2"
+    folder.mkdir()
+    assert rewrite(src, dat, "--cell", cell, "-o", folder) == 0
+    assert (folder / "job.src").exists() and (folder / "job.dat").exists()
+    (p1,) = parse_krl((folder / "job.dat").read_text())
+    want = np.array([1000.0, 0.0, 1000.0]) + E_CONST
+    assert np.allclose([p1.x, p1.y, p1.z], want, atol=0.005)  # 2 decimals at least (item 4)
