@@ -17,14 +17,15 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen import __version__
-from accugrid.codegen.header import file_sha256
+from accugrid.codegen.header import grid_lines, input_line
+from accugrid.codegen.header import header_lines as make_header
 from accugrid.codegen.program import GRID_ORIENTATION_TOL_DEG
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation import GridModel
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
+from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
 
@@ -192,18 +193,15 @@ def header_lines(result: Result, program: str, cell: str, opts: Options) -> list
     File names only (no directories, no dates), so the same inputs give the same bytes."""
     largest, where = result.largest()
     model = opts.model
-    step = " x ".join(fixed(s) for s in model.step)
     at = "" if where is None else f" at {where.name} line {where.line}"
     grid = Path(model.source_path).name if model.source_path else "arrays"
-    return [
-        f"accugrid {__version__} rewrite",
-        f"program {Path(program).name} sha256 {file_sha256(program)}",
-        f"cell {Path(cell).name} sha256 {file_sha256(cell)}",
-        f"grid {grid} sha256 {model.source_sha256}",
-        f"grid step {step} mm",
-        f"largest correction {fixed(largest)} mm{at}",
-        f"positions corrected {len(result.corrected)}",
+    inputs = [
+        input_line("program", program, file_sha256(program)),
+        input_line("cell", cell, file_sha256(cell)),
+        *grid_lines(grid, model.source_sha256, model.step),
     ]
+    closing = [f"positions corrected {len(result.corrected)}"]
+    return make_header("rewrite", inputs, (), largest, at, closing)
 
 
 def report_csv(rows: list[Row], decimals: int = 4) -> str:

@@ -8,13 +8,13 @@ axis-aligned regular grid; anything else is an InputError that says what is wron
 
 from __future__ import annotations
 
-import hashlib
 import os
 from dataclasses import dataclass
 
 import numpy as np
 
 from accugrid.compensation.csvtable import Table, parse_table
+from accugrid.kinematics.digest import sha256_hex
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
 from accugrid.kinematics.inputfile import read_input_text
@@ -82,7 +82,7 @@ def read_measurements(path: str | os.PathLike[str]) -> Measurements:
         abc=abc,
         path=path,
         lines=np.asarray(table.lines),
-        sha256=hashlib.sha256(raw).hexdigest(),
+        sha256=sha256_hex(raw),
     )
 
 

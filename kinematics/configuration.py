@@ -36,6 +36,7 @@ __all__ = [
     "kuka_turn",
     "kuka_words",
     "select",
+    "solve_in_one_status",
     "status_turn",
 ]
 
@@ -83,6 +84,20 @@ class Configuration:
             kuka_status(self.shoulder, self.elbow, self.wrist),
             kuka_turn(self.negative),
         )
+
+
+def solve_in_one_status(
+    robot, poses: np.ndarray, status: int | None = None, first: np.ndarray | None = None
+) -> tuple[IKSolution, int | None]:
+    """IK of TCP poses (N, 4, 4) mm all in one KUKA Status, as a program that starts with one PTP
+    and continues with LIN keeps its configuration: ``status``, or the Status of the IK default
+    at ``first`` (a (4, 4) pose; default the first pose). Returns the solution (check ``ok``)
+    and the Status used (None when ``first`` is unreachable or the robot has no KUKA Status)."""
+    poses = np.asarray(poses, dtype=float).reshape(-1, 4, 4)
+    if status is None and len(poses):
+        start = robot.ik(poses[:1] if first is None else np.reshape(first, (1, 4, 4)))
+        status = int(start.status[0]) if start.ok[0] and start.status[0] >= 0 else None
+    return robot.ik(poses, status=status), status
 
 
 def kuka_status(shoulder: np.ndarray, elbow: np.ndarray, wrist: np.ndarray) -> np.ndarray:

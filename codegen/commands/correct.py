@@ -21,15 +21,18 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+from pathlib import Path
 
 import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
 from accugrid.codegen.points import Points, read_points
-from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.codegen.textsafe import fixed
 from accugrid.compensation.grid import MAX_CORRECTION_MM, GridModel
 from accugrid.compensation.measurements import REPEAT_TOL_MM
 from accugrid.compensation.settings import CorrectionSettings
+from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.units import mm_text
@@ -150,10 +153,14 @@ def run(args: argparse.Namespace) -> int:
             f"limit of {args.max_correction:g} mm; refusing the whole job (check the grid)",
             *points.table.where(worst),
         )
-    header = (
-        f"accugrid correct: grid {args.grid} sha256 {model.source_sha256}, method "
-        f"{args.method}, power {args.power:g}, iterations {args.iterations}"
-    )
+    inputs = [
+        input_line("points", args.points, file_sha256(args.points)),
+        *grid_lines(Path(args.grid).name, model.source_sha256, model.step),
+    ]
+    details = [f"method {args.method}, power {args.power:g}, iterations {args.iterations}"]
+    where = "" if worst is None else f" at hole {points.ids[worst]}"
+    largest = 0.0 if worst is None else float(length[worst])
+    header = header_lines("correct", inputs, details, largest, where, [f"points {len(points)}"])
     text = _corrected_csv(points, found.command, found.correction, flags, header)
     write_files({args.output: text}, [args.points, args.grid], force=args.force)
     _print_summary(model, points, args, length, worst, flags)
@@ -205,10 +212,10 @@ def _corrected_csv(
     command: np.ndarray,
     correction: np.ndarray,
     flags: list[list[str]],
-    header: str,
+    header: list[str],
 ) -> str:
     out = io.StringIO()
-    out.write(f"# {comment_text(header, limit=400)}\n")
+    out.write(csv_comment(header))
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow([*points.table.header, *ADDED])
     for r, row in enumerate(points.table.rows):
