@@ -102,11 +102,11 @@ def read_measurements(path: str | os.PathLike[str]) -> Measurements:
         joints=joints,
         joint_decimals=joint_decimals,
         position_decimals=table.decimals(["x", "y", "z"]),
-        status=_status_column(table),
+        status=status_column(table),
     )
 
 
-def _status_column(table: Table) -> np.ndarray | None:
+def status_column(table: Table) -> np.ndarray | None:
     """Column ``s`` as KUKA Status ints 0..7 (N,), or None; InputError at a bad cell."""
     if not table.has("s"):
         return None

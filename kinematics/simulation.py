@@ -1,8 +1,9 @@
 """Error-field simulation: where the true robot goes when its controller uses the nominal model.
 
-For commanded TCP positions at a fixed orientation: nominal IK (the controller), then FK of the
-"true" robot (nominal DH plus parameter errors) gives the reached position. Optional Gaussian noise
-models the robot's repeatability and the laser tracker. Positions (N, 3) mm, robot frame.
+For commanded TCP positions at one orientation (abc_deg (3,)) or one per row ((N, 3), a plan of
+scattered poses): nominal IK (the controller), then FK of the "true" robot (nominal DH plus
+parameter errors) gives the reached position. Optional Gaussian noise models the robot's
+repeatability and the laser tracker. Positions (N, 3) mm, robot frame; KUKA A, B, C in deg.
 """
 
 from __future__ import annotations
@@ -15,10 +16,10 @@ from accugrid.kinematics.robot import Robot
 
 
 def commanded_poses(points: np.ndarray, abc_deg: np.ndarray) -> np.ndarray:
-    """TCP poses (N, 4, 4) at positions (N, 3) mm with one KUKA orientation abc_deg (3,)."""
+    """TCP poses (N, 4, 4) at positions (N, 3) mm with KUKA orientation abc_deg (3,) or (N, 3)."""
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     poses = np.tile(np.eye(4), (len(points), 1, 1))
-    poses[:, :3, :3] = abc_to_matrix(np.asarray(abc_deg, dtype=float).reshape(3))
+    poses[:, :3, :3] = abc_to_matrix(_abc_rows(abc_deg, len(points)))
     poses[:, :3, 3] = points
     return poses
 
@@ -31,7 +32,8 @@ def grid_status(robot: Robot, points: np.ndarray, abc_deg: np.ndarray) -> int | 
     and put jumps of the true robot's error into the field. InputError if the first point fails.
     None for robots without KUKA Status (URDF robots: numeric IK from one start for every point).
     """
-    sol = robot.ik(commanded_poses(np.asarray(points, dtype=float).reshape(-1, 3)[:1], abc_deg))
+    first = np.asarray(points, dtype=float).reshape(-1, 3)[:1]
+    sol = robot.ik(commanded_poses(first, _abc_rows(abc_deg, len(points))[:1]))
     if not sol.ok[0]:
         _unreachable(robot, points, abc_deg, sol)
     return int(sol.status[0]) if sol.status[0] >= 0 else None
@@ -53,21 +55,36 @@ def commanded_joints(
     return sol.q
 
 
+def _abc_rows(abc_deg: np.ndarray, n: int) -> np.ndarray:
+    """KUKA A, B, C (3,) for all rows or (n, 3) one per row, as (n, 3) deg."""
+    abc = np.asarray(abc_deg, dtype=float)
+    if abc.shape not in ((3,), (n, 3)):
+        raise InputError(f"orientation must be one A B C or one per point, got shape {abc.shape}")
+    return np.broadcast_to(abc, (n, 3))
+
+
 def _unreachable(robot: Robot, points: np.ndarray, abc_deg: np.ndarray, sol) -> None:
     bad = np.flatnonzero(~sol.ok)
     first = bad[0]
     x, y, z = np.asarray(points, dtype=float).reshape(-1, 3)[first]
+    abc = np.asarray(abc_deg, dtype=float)
+    where = (
+        f"at A B C = {' '.join(f'{v:g}' for v in abc)} deg; first: X {x:g} Y {y:g} Z {z:g}"
+        if abc.ndim == 1
+        else f"in one Status; first: X {x:g} Y {y:g} Z {z:g} A B C "
+        + " ".join(f"{v:g}" for v in abc[first])
+    )
     raise InputError(
-        f"{len(bad)} of {len(sol.ok)} points cannot be reached by {robot.name} at "
-        f"A B C = {' '.join(f'{v:g}' for v in np.ravel(abc_deg))} deg; first: "
-        f"X {x:g} Y {y:g} Z {z:g} ({sol.reason[first]})"
+        f"{len(bad)} of {len(sol.ok)} points cannot be reached by {robot.name} {where} "
+        f"({sol.reason[first]})"
     )
 
 
 def reached_positions(
     robot: Robot, points: np.ndarray, abc_deg: np.ndarray, status: int | None = None
 ) -> np.ndarray:
-    """Positions (N, 3) mm the true robot's TCP reaches when commanded to points (N, 3) at abc_deg.
+    """Positions (N, 3) mm the true robot's TCP reaches when commanded to points (N, 3) at abc_deg
+    ((3,) or (N, 3) deg).
 
     The controller solves every point in one KUKA ``status`` (default: ``grid_status``, the IK
     default's Status at the first point). Without parameter errors (no true robot) the reached

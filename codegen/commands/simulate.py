@@ -8,6 +8,12 @@ forward kinematics puts it. Optional Gaussian noise: robot repeatability and tra
 seeded. The result is a measurement CSV (id,x,y,z,a,b,c,x_meas,y_meas,z_meas; mm and deg) for
 `accugrid correct` & co.
 
+--plan PLAN.csv simulates a session at the plan's commanded poses instead of a grid (x,y,z and
+a,b,c per row, as `accugrid plan` writes them; each row at its own orientation), all in one
+Status: --status, else the plan's column s (one value), else the IK default's at the first row.
+Its CSV also carries the joints the controller logs, a1..a6 (KUKA deg, 4 decimals), and s, for
+`accugrid identify`.
+
 --plot FILE draws seed Fig. 3: the X, Y, Z components of the error e = P - M over the plane of
 seed Table 2 (X 1000..2000, Y -500..500, Z 1800 mm, A 0, B 90, C 0 deg). Lengths in mm, angles in
 degrees.
@@ -17,16 +23,25 @@ from __future__ import annotations
 
 import argparse
 import io
+from pathlib import Path
 
 import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
+from accugrid.codegen.points import Points, read_points
 from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.compensation.measurements import status_column
 from accugrid.compensation.plans import check_vertex_count
+from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import Robot
-from accugrid.kinematics.simulation import grid_status, reached_positions, simulate_measurements
+from accugrid.kinematics.simulation import (
+    commanded_joints,
+    grid_status,
+    reached_positions,
+    simulate_measurements,
+)
 
 NAME = "simulate"
 HELP = "simulate a laser-tracker grid measurement of a robot (measurement CSV, seed Fig. 3)"
@@ -51,6 +66,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="grid box in the robot frame, mm (needed with -o)",
     )
     parser.add_argument("--step", type=float, help="grid step, mm (needed with -o)")
+    parser.add_argument(
+        "--plan",
+        metavar="PLAN.csv",
+        help="simulate at the commanded poses of this plan/measurement CSV (x,y,z,a,b,c per row, "
+        "mm and deg) instead of a grid; writes the logged joints a1..a6 and s as well",
+    )
     add_abc(parser, "TCP orientation at every vertex")
     add_tool(parser, "tool on the flange (flange_T_tool), mm and deg (default: the flange itself)")
     add_status(
@@ -84,7 +105,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if not args.output and not args.plot:
         raise InputError("nothing to do: give -o CSV and/or --plot PNG")
-    inputs = [args.robot] if _is_file(args.robot) else []
+    inputs = ([args.robot] if _is_file(args.robot) else []) + ([args.plan] if args.plan else [])
     check_targets([t for t in (args.output, args.plot) if t], inputs, args.force)
     robot = robot_with_tool(args.robot, args.tool)
     if robot.true_robot() is None:
@@ -93,7 +114,8 @@ def run(args: argparse.Namespace) -> int:
         )
     outputs: dict[str, bytes | str] = {}
     if args.output:
-        outputs[args.output] = _measurement_csv(robot, args)
+        session = _plan_csv if args.plan else _measurement_csv
+        outputs[args.output] = session(robot, args)
     if args.plot:
         outputs[args.plot] = _fig3_png(robot, args.status)
     write_files(outputs, inputs, force=args.force)
@@ -161,12 +183,76 @@ def _measurement_csv(robot: Robot, args: argparse.Namespace) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _plan_csv(robot: Robot, args: argparse.Namespace) -> str:
+    """The measurement CSV of a simulated session at the poses of ``args.plan``."""
+    if args.region is not None or args.step is not None:
+        raise InputError("--plan takes its poses from the plan: drop --region and --step")
+    plan = read_points(args.plan)
+    if plan.abc is None:
+        raise InputError("the plan needs each row's orientation: columns a,b,c (deg)", plan.path)
+    if len(plan) == 0:
+        raise InputError("the plan has no poses", plan.path)
+    status = _plan_status(plan, args.status)
+    if status is None:
+        status = grid_status(robot, plan.xyz, plan.abc)
+    if status is not None:
+        print(f"KUKA Status {status} (binary {status:03b}) for every pose")
+    commanded, measured = simulate_measurements(
+        robot,
+        plan.xyz,
+        plan.abc,
+        repeats=args.repeats,
+        noise_tracker_mm=args.noise_tracker,
+        noise_repeat_mm=args.noise_repeat,
+        seed=args.seed,
+        status=status,
+    )
+    joints_deg = np.degrees(commanded_joints(robot, plan.xyz, plan.abc, status))
+    error = plan.xyz - reached_positions(robot, plan.xyz, plan.abc, status)
+    _print_summary(robot, len(plan), args.repeats, error, commanded - measured, "plan poses")
+    header = comment_text(
+        f"accugrid simulate: robot {robot.name}, plan {Path(args.plan).name} sha256 "
+        f"{file_sha256(args.plan)}, status {status}, repeats {args.repeats}, noise "
+        f"tracker {args.noise_tracker:g} mm, repeat {args.noise_repeat:g} mm, seed {args.seed}",
+        limit=400,
+    )
+    joint_names = ",".join(f"a{k}" for k in range(1, 7))
+    lines = [f"# {header}", f"id,x,y,z,a,b,c,x_meas,y_meas,z_meas,{joint_names},s"]
+    rows = np.repeat(np.arange(len(plan)), args.repeats)
+    for row, cmd, meas in zip(rows, commanded, measured, strict=True):
+        cells = [plan.ids[row]]
+        cells += [fixed(v, 4) for v in (*cmd, *plan.abc[row], *meas, *joints_deg[row])]
+        lines.append(",".join(cells) + f",{'' if status is None else status}")
+    return "\n".join(lines) + "\n"
+
+
+def _plan_status(plan: Points, status: int | None) -> int | None:
+    """--status, else the plan's column s when it holds one Status; InputError when they differ."""
+    column = status_column(plan.table)
+    if column is None:
+        return status
+    values = np.unique(column)
+    if len(values) > 1 or (status is not None and values[0] != status):
+        found = ", ".join(str(v) for v in values)
+        wanted = "" if status is None else f" (--status {status})"
+        raise InputError(
+            f"one simulated session keeps one KUKA Status{wanted}; the plan's column s has {found}",
+            plan.path,
+        )
+    return int(values[0])
+
+
 def _print_summary(
-    robot: Robot, n_points: int, repeats: int, error: np.ndarray, measured_error: np.ndarray
+    robot: Robot,
+    n_points: int,
+    repeats: int,
+    error: np.ndarray,
+    measured_error: np.ndarray,
+    what: str = "grid points",
 ) -> None:
     norm = np.linalg.norm(error, axis=1)
     print(
-        f"{robot.name}: {n_points} grid points x {repeats} repeats = {n_points * repeats} rows; "
+        f"{robot.name}: {n_points} {what} x {repeats} repeats = {n_points * repeats} rows; "
         "error e = P - M (mm) without noise:"
     )
     for k, axis in enumerate("XYZ"):
@@ -221,6 +307,4 @@ def _fig3_png(robot: Robot, status: int | None) -> bytes:
 
 
 def _is_file(name: str) -> bool:
-    from pathlib import Path
-
     return Path(name).is_file()
