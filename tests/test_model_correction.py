@@ -13,7 +13,7 @@ from hypothesis.extra.numpy import arrays
 from accugrid.codegen.cli import main
 from accugrid.compensation.model_correction import model_correct, residual_grid
 from accugrid.compensation.settings import CorrectionSettings
-from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc
+from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
 
 CALIBRATED = load_robot("kr210-realistic")  # its true robot stands for the calibrated arm
@@ -188,3 +188,29 @@ def test_correct_cli_residual_grid_of_a_perfect_model_changes_nothing(tmp_path, 
     b = np.array([[float(r[k]) for k in keys] for r in _rows(both)])
     np.testing.assert_allclose(a, b, atol=3e-4, rtol=0)
     assert "orientation 11.2 deg from residual grid" in _rows(both)[1]["flag"]
+
+
+def test_the_controller_keeps_its_own_tool_while_the_model_holds_the_real_tcp():
+    # the controller solves with its TOOL_DATA; the calibrated arm carries the TCP it measured
+    controller_tool = pose_from_xyzabc([0.0, 0.0, 250.0, 0.0, 0.0, 0.0])
+    real_tcp = pose_from_xyzabc([0.3, -0.2, 250.1, 0.0, 0.0, 0.0])
+    calibrated = PAPER.with_tool(real_tcp)
+    controller = PAPER.with_tool(controller_tool)
+    rng = np.random.default_rng(4)
+    points = rng.uniform(LO, HI, (40, 3))
+    abc = tilted(np.array([0.0, 90.0, 0.0]), rng.uniform(-12.0, 12.0, (40, 3)))
+
+    def land(command):
+        sol = controller.ik(
+            np.array([pose_from_xyzabc([*p, *a]) for p, a in zip(command, abc)]), status=STATUS
+        )
+        assert sol.ok.all()
+        return calibrated.true_robot().fk(sol.q)[:, :3, 3]
+
+    right = model_correct(calibrated, points, abc, STATUS, controller_tool=controller_tool)
+    assert right.ok.all()
+    assert np.linalg.norm(land(right.command) - points, axis=1).max() < 2e-3
+    # solved with the measured TCP as if it were the controller's, the tilted targets miss by
+    # about the TCP offset turned with the orientation
+    wrong = model_correct(calibrated, points, abc, STATUS)
+    assert np.linalg.norm(land(wrong.command) - points, axis=1).max() > 0.05
