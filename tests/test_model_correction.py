@@ -15,6 +15,7 @@ from accugrid.compensation.model_correction import model_correct, residual_grid
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
+from accugrid.kinematics.simulation import commanded_poses
 
 CALIBRATED = load_robot("kr210-realistic")  # its true robot stands for the calibrated arm
 PAPER = load_robot("kr210-paper")
@@ -201,9 +202,7 @@ def test_the_controller_keeps_its_own_tool_while_the_model_holds_the_real_tcp():
     abc = tilted(np.array([0.0, 90.0, 0.0]), rng.uniform(-12.0, 12.0, (40, 3)))
 
     def land(command):
-        sol = controller.ik(
-            np.array([pose_from_xyzabc([*p, *a]) for p, a in zip(command, abc)]), status=STATUS
-        )
+        sol = controller.ik(commanded_poses(command, abc), status=STATUS)
         assert sol.ok.all()
         return calibrated.true_robot().fk(sol.q)[:, :3, 3]
 
