@@ -12,7 +12,12 @@ Status, the true FK, seeded repeatability and tracker noise). For each budget N 
   up to ``tilt_deg`` from the grid orientation; ``identify`` (DH errors, TCP, A2/A3 compliance
   when the robot has a gravity model); ``model_correct`` of each target at its own orientation;
 - model + residual grid: that model plus a 27-vertex (3 x 3 x 3) residual grid measured at the
-  grid orientation (``residual_grid``), trilinear.
+  grid orientation (``residual_grid``), trilinear;
+- model + joint residual: that model plus its residual at the N poses (measured − model, mean of
+  the repeats) interpolated in joint space (A1-A3, deg; thin-plate spline, smoothing
+  ``JOINT_SMOOTHING``) at each target's joints: no extra points. Non-geometric errors (reducer
+  harmonics) follow the joints, not the position (Appl. Sci. 14(24) 11682, 2024); k-fold
+  cross-validation over the poses (``joint_residual_cv``) says whether it predicts.
 
 Held out: targets inside the region (``margin_mm`` in) at the grid orientation and tilted up to
 ``target_tilt_deg``. The score is where the arm lands when commanded P' (noise-free: the
@@ -42,11 +47,22 @@ __all__ = [
     "ComparisonRow",
     "compare_methods",
     "grid_counts",
+    "joint_residual",
+    "joint_residual_cv",
     "lattice",
     "tilted_abc",
 ]
 
-METHODS = ("uncorrected", "grid idw", "grid trilinear", "model", "model + residual grid")
+METHODS = (
+    "uncorrected",
+    "grid idw",
+    "grid trilinear",
+    "model",
+    "model + residual grid",
+    "model + joint residual",
+)
+JOINT_AXES = 3  # the joint residual is interpolated over A1..A3
+JOINT_SMOOTHING = 1.0  # thin-plate spline smoothing (scipy RBFInterpolator), deg-scaled data
 TARGET_SETS = ("grid orientation", "tilted")
 RESIDUAL_COUNTS = (3, 3, 3)  # vertices per axis of the residual grid (27)
 _SLACK_MM = 5.0  # a target is kept when the nominal IK also solves it this far off on each axis
@@ -70,6 +86,7 @@ class Comparison:
     """All rows, plus what was simulated (for the report)."""
 
     rows: list[ComparisonRow]
+    joint_cv: dict  # budget -> (RMS (3,) without, RMS (3,) with the joint residual), mm
     robot: str
     status: int | None
     repeats: int
@@ -143,6 +160,33 @@ class _Cell:
         return ok
 
 
+def joint_residual(q: np.ndarray, residual: np.ndarray):
+    """r(q): the residual (n, 3) mm at joints q (n, 6) rad interpolated over A1..A3 (deg) by a
+    smoothed thin-plate spline; call it with joints (m, 6) rad, get (m, 3) mm."""
+    from scipy.interpolate import RBFInterpolator
+
+    spline = RBFInterpolator(
+        np.degrees(q[:, :JOINT_AXES]),
+        residual,
+        kernel="thin_plate_spline",
+        smoothing=JOINT_SMOOTHING,
+    )
+    return lambda joints: spline(np.degrees(np.asarray(joints)[:, :JOINT_AXES]))
+
+
+def joint_residual_cv(
+    q: np.ndarray, residual: np.ndarray, folds: int = 5, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray]:
+    """k-fold over the poses: RMS per axis (3,) mm of the held-out residual without the joint
+    residual and after subtracting its prediction from the other folds."""
+    fold = np.random.default_rng(seed).permutation(len(q)) % folds
+    left = np.empty_like(residual)
+    for k in range(folds):
+        held = fold == k
+        left[held] = residual[held] - joint_residual(q[~held], residual[~held])(q[held])
+    return np.sqrt(np.mean(residual**2, axis=0)), np.sqrt(np.mean(left**2, axis=0))
+
+
 def _targets(cell, rng, lo, hi, abc, tilt_deg, n) -> tuple[np.ndarray, np.ndarray]:
     points, orient = np.zeros((0, 3)), np.zeros((0, 3))
     for _ in range(50):
@@ -204,8 +248,11 @@ def compare_methods(
         "tilted": _targets(cell, rng, *inner, abc, target_tilt_deg, n_targets),
     }
     rows: list[ComparisonRow] = []
+    joint_cv: dict = {}
+    target_q = {}
     for name, (points, orient) in target_sets.items():
         rows.append(_score(0, name, "uncorrected", 0, points - cell.land(points, orient)))
+        target_q[name] = cell.solve(points, orient).q  # the controller's joints at the target
 
     cand_p = rng.uniform(lo, hi, (candidates, 3))
     cand_abc = tilted_abc(rng, candidates, abc, tilt_deg)
@@ -235,7 +282,13 @@ def compare_methods(
         )
         rows_abc = np.repeat(poses_abc, repeats, axis=0)
         data = pose_set(robot, commanded, measured, abc_deg=rows_abc, status=status)
-        calibrated = identify(robot, data, compliance=compliance).robot
+        fit = identify(robot, data, compliance=compliance)
+        calibrated = fit.robot
+        pose_residual = np.zeros((data.poses, 3))
+        np.add.at(pose_residual, data.group, fit.residuals / repeats)
+        pose_q = data.q[np.unique(data.group, return_index=True)[1]]
+        joint_cv[budget] = joint_residual_cv(pose_q, pose_residual, seed=seed)
+        joint_layer = joint_residual(pose_q, pose_residual)
         residual = residual_grid(
             calibrated,
             simulate_measurements(
@@ -257,15 +310,18 @@ def compare_methods(
                         points - cell.land(command, orient),
                     )
                 )
-            for method, layer, extra in (
-                ("model", None, 0),
-                ("model + residual grid", residual, len(residual_vertices)),
+            # the arm lands at the model's position + r(q): aim the model at P - r(q)
+            aim = points - joint_layer(target_q[name])
+            for method, goal, layer, extra in (
+                ("model", points, None, 0),
+                ("model + residual grid", points, residual, len(residual_vertices)),
+                ("model + joint residual", aim, None, 0),
             ):
                 result = model_correct(
-                    calibrated, points, orient, status, layer, trilinear, controller_tool=tool
+                    calibrated, goal, orient, status, layer, trilinear, controller_tool=tool
                 )
                 if not result.ok.all():
                     raise InputError(f"model correction failed: {result.reason[result.failed[0]]}")
                 landed = cell.land(result.command, orient)
                 rows.append(_score(budget, name, method, budget + extra, points - landed))
-    return Comparison(rows, robot.name, status, repeats, n_targets)
+    return Comparison(rows, joint_cv, robot.name, status, repeats, n_targets)

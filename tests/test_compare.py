@@ -11,7 +11,13 @@ import numpy as np
 import pytest
 
 from accugrid.codegen.cli import main
-from accugrid.compensation.comparison import grid_counts, lattice
+from accugrid.compensation.comparison import (
+    METHODS,
+    grid_counts,
+    joint_residual,
+    joint_residual_cv,
+    lattice,
+)
 
 TINY = ["--budgets", "27", "--targets", "40", "--candidates", "300", "--repeats", "1"]
 
@@ -36,11 +42,7 @@ def values(row, kind):
 def test_every_method_leaves_less_than_the_uncorrected_error(tiny_run):
     rows = rows_of(tiny_run)
     methods = {(r["targets"], r["method"]) for r in rows}
-    assert methods == {
-        (t, m)
-        for t in ("grid orientation", "tilted")
-        for m in ("uncorrected", "grid idw", "grid trilinear", "model", "model + residual grid")
-    }
+    assert methods == {(t, m) for t in ("grid orientation", "tilted") for m in METHODS}
     for targets in ("grid orientation", "tilted"):
         mine = [r for r in rows if r["targets"] == targets]
         before = next(r for r in mine if r["method"] == "uncorrected")
@@ -87,3 +89,17 @@ def test_the_seed_grids_are_found_at_their_budgets():
     lo, hi = np.array([1200.0, -600.0, 1100.0]), np.array([2200.0, 600.0, 2100.0])
     assert grid_counts(lo, hi, 27).tolist() == [3, 3, 3]  # 500 x 600 x 500 mm
     assert grid_counts(lo, hi, 252).tolist() == [6, 7, 6]  # the seed's 200 mm grid
+
+
+def test_the_joint_residual_reproduces_a_residual_linear_in_a1_a3():
+    rng = np.random.default_rng(2)
+    q, new = rng.uniform(-1.0, 1.0, (40, 6)), rng.uniform(-0.8, 0.8, (10, 6))
+    slope = np.array([[0.1, -0.2, 0.05], [0.3, 0.0, -0.1], [-0.05, 0.2, 0.2]])  # mm per deg
+    linear = lambda joints: np.degrees(joints[:, :3]) @ slope  # noqa: E731
+    np.testing.assert_allclose(joint_residual(q, linear(q))(new), linear(new), atol=1e-6)
+    # ... and A4..A6 do not enter it
+    moved = new.copy()
+    moved[:, 3:] += 0.5
+    np.testing.assert_allclose(joint_residual(q, linear(q))(moved), linear(new), atol=1e-6)
+    without, with_layer = joint_residual_cv(q, linear(q))
+    assert (with_layer < 1e-6).all() and (without > 1.0).all()
