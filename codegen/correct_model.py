@@ -1,7 +1,8 @@
 """`accugrid correct --model CAL.yaml [--grid MEAS]`: correction by a calibrated robot model.
 
 Every point P (robot frame, mm) at its orientation gets the command P' that the calibrated arm,
-driven by the nominal controller in one KUKA Status, takes to P (``compensation.model_correction``,
+driven by the nominal controller in one KUKA Status (with the tool it had when the model was
+identified, the file's identification.controller_tool; the identified TCP is the arm's), takes to P (``compensation.model_correction``,
 iterated to 0.001 mm); with ``--grid`` the grid holds the residual after the model and is added.
 Orientation: a,b,c columns as given; i,j,k drill axes oriented along the axis nearest ``--abc``;
 points without orientation at ``--abc``. The output CSV is the one of ``accugrid correct``.
@@ -28,6 +29,7 @@ from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import Points, read_points
 from accugrid.compensation.model_correction import TOL_MM, model_correct, residual_grid
 from accugrid.compensation.settings import CorrectionSettings
+from accugrid.kinematics.calibrated import controller_tool
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, orient_along_axes, too_tilted
@@ -62,6 +64,7 @@ def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
     inputs = [args.points, args.grid, args.model if Path(args.model).is_file() else None]
     check_targets([args.output], inputs, args.force)
     calibrated = load_robot(args.model)
+    tool = controller_tool(args.model) if inputs[2] else None
     points = read_points(args.points)
     check_added_columns(points)
     abc = point_orientations(points, np.array(args.abc, dtype=float))
@@ -72,13 +75,17 @@ def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
     grid = None
     flags: list[list[str]] = [[] for _ in range(len(points))]
     if args.grid is not None:
-        grid = residual_grid(calibrated, args.grid, status, repeat_tol_mm=args.repeat_tol)
+        grid = residual_grid(
+            calibrated, args.grid, status, repeat_tol_mm=args.repeat_tol, controller_tool=tool
+        )
         found = grid.check(points.xyz, settings, rotations=abc_to_matrix(abc).reshape(-1, 3, 3))
         check_outside(points, grid, found.outside, settings.outside, flags)
         if found.angle is not None:  # the model holds at any orientation: flag, never refuse
             for i in np.flatnonzero(found.angle > args.orientation_tol):
                 flags[i].append(f"orientation {found.angle[i]:.1f} deg from residual grid")
-    result = model_correct(calibrated, points.xyz, abc, status, grid, settings)
+    result = model_correct(
+        calibrated, points.xyz, abc, status, grid, settings, controller_tool=tool
+    )
     if not result.ok.all():
         bad = result.failed
         named = "; ".join(f"{points.label(int(i))}: {result.reason[i]}" for i in bad[:_LISTED])
