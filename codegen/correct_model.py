@@ -3,7 +3,8 @@
 Every point P (robot frame, mm) at its orientation gets the command P' that the calibrated arm,
 driven by the nominal controller in one KUKA Status (with the tool it had when the model was
 identified, the file's identification.controller_tool; the identified TCP is the arm's), takes
-to P (``compensation.model_correction``, iterated to 0.001 mm); with ``--grid`` the grid holds the residual after the model and is added.
+to P (``compensation.model_correction``, iterated to 0.001 mm); with ``--grid`` the grid holds
+the residual after the model and is added.
 Orientation: a,b,c columns as given; i,j,k drill axes oriented along the axis nearest ``--abc``;
 points without orientation at ``--abc``. The output CSV is the one of ``accugrid correct``.
 Refused (exit 2, nothing written): a point the nominal controller cannot reach in the Status or
