@@ -94,6 +94,17 @@ class Cell:
     external_axes: tuple[float, ...] = field(default=(0.0,) * 6)
     sha256: str = ""
 
+    def grid_file(self, override: str | os.PathLike[str] | None = None, hint: str = "") -> Path:
+        """The measurement to correct with: ``override`` (--grid), else the cell's ``grid``;
+        InputError when there is neither (``hint`` completes the message)."""
+        if override is not None:
+            return Path(override)
+        if self.grid_path is None:
+            raise InputError(
+                f"no grid: name one in the cell file (grid:), give --grid{hint}", self.path
+            )
+        return self.grid_path
+
 
 def load_cell(path: str | os.PathLike[str]) -> Cell:
     """Read and validate a cell YAML file; InputError naming the key and line on any problem."""

@@ -61,13 +61,7 @@ def grid_path(args: argparse.Namespace, cell: Cell) -> Path | None:
         if args.grid is not None:
             raise InputError("--grid and --no-correction exclude each other")
         return None
-    path = Path(args.grid) if args.grid is not None else cell.grid_path
-    if path is None:
-        raise InputError(
-            "no grid: name one in the cell file (grid:), give --grid, or use --no-correction",
-            args.cell,
-        )
-    return path
+    return cell.grid_file(args.grid, ", or use --no-correction")
 
 
 def prepare(args: argparse.Namespace, command: str) -> Job:
