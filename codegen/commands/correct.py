@@ -38,7 +38,6 @@ from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.units import mm_text
 
 NAME = "correct"
-HELP = "corrected points CSV: P' = P + e, e interpolated from a measured error grid"
 
 ADDED = ["x_cmd", "y_cmd", "z_cmd", "ex", "ey", "ez", "flag"]
 DECIMALS = 4

@@ -30,7 +30,6 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import xyzabc_from_pose
 
 NAME = "fit-frame"
-HELP = "robot base frame (tracker_T_robot) from tracker points on base, A1 arc and flange holes"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

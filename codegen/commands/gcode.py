@@ -21,7 +21,6 @@ from accugrid.codegen.gcode.emit import render_gcode
 from accugrid.codegen.job import add_job_arguments, prepare, summary
 
 NAME = "gcode"
-HELP = "corrected RS274NGC (LinuxCNC) drilling program from a points CSV"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

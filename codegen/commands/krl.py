@@ -22,7 +22,6 @@ from accugrid.codegen.job import add_job_arguments, prepare, summary
 from accugrid.codegen.krl.emit import render_krl
 
 NAME = "krl"
-HELP = "corrected KUKA KRL drilling program (.src/.dat) from a points CSV"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

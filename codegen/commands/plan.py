@@ -46,7 +46,6 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.simulation import commanded_poses
 
 NAME = "plan"
-HELP = "measurement plans: grid, one cube's ISO 9283 test points, or the seed's step experiment"
 
 MAX_WAIT_SEC = 600.0
 

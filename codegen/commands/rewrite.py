@@ -49,7 +49,6 @@ from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
 from accugrid.kinematics.errors import InputError
 
 NAME = "rewrite"
-HELP = "correct the positions of an existing KRL or G-code program in place (pre-flight)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

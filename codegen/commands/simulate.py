@@ -29,7 +29,6 @@ from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.simulation import grid_status, reached_positions, simulate_measurements
 
 NAME = "simulate"
-HELP = "simulate a laser-tracker grid measurement of a robot (measurement CSV, seed Fig. 3)"
 
 FIG3_X = (1000.0, 2000.0)
 FIG3_Y = (-500.0, 500.0)

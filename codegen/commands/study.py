@@ -59,7 +59,6 @@ from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.simulation import commanded_poses, simulate_measurements
 
 NAME = "study"
-HELP = "grid-step study of the seed (Tables 4-5, Fig. 12): simulated or measured"
 
 OUTPUTS = ("table4.csv", "table5.csv", "fig12.png", "table5_hist.png", "report.md")
 
