@@ -22,6 +22,8 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.yamlfile import YamlDoc, load_yaml
 
+__all__ = ["ANGLE_MAX_DEG", "DISTANCE_MAX_MM", "FRAME_MAX_MM", "Cell", "load_cell"]
+
 _FRAME_KEYS = ("x", "y", "z", "a", "b", "c")
 # Bounds on every length and angle a program can carry (speeds, times and counts have their own)
 FRAME_MAX_MM = 1e6  # |x|, |y|, |z| of a frame, external axis positions

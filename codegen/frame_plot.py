@@ -12,6 +12,8 @@ from accugrid.kinematics.base_frame import RobotFrameFit
 from accugrid.kinematics.fitting import CircleFit
 from accugrid.kinematics.frames import invert, transform_points
 
+__all__ = ["plot_frame_fit"]
+
 
 def _circle_points(fit: CircleFit, n: int = 361) -> np.ndarray:
     """(n, 3) mm points on a fitted circle, in the frame of the fit."""

@@ -18,6 +18,8 @@ from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import load_robot
 
+__all__ = ["Job", "add_job_arguments", "grid_path", "prepare", "summary"]
+
 
 @dataclass
 class Job:

@@ -37,6 +37,8 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.units import mm_text
 
+__all__ = ["ADDED", "DECIMALS", "NAME", "add_arguments", "run", "settings_from"]
+
 NAME = "correct"
 
 ADDED = ["x_cmd", "y_cmd", "z_cmd", "ex", "ey", "ez", "flag"]

@@ -29,6 +29,8 @@ from accugrid.kinematics.digest import sha256_hex
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import xyzabc_from_pose
 
+__all__ = ["NAME", "add_arguments", "run"]
+
 NAME = "fit-frame"
 
 

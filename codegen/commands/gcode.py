@@ -20,6 +20,8 @@ from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.gcode.emit import render_gcode
 from accugrid.codegen.job import add_job_arguments, prepare, summary
 
+__all__ = ["NAME", "add_arguments", "run"]
+
 NAME = "gcode"
 
 

@@ -21,6 +21,8 @@ from accugrid.codegen.cell import load_cell
 from accugrid.codegen.job import add_job_arguments, prepare, summary
 from accugrid.codegen.krl.emit import render_krl
 
+__all__ = ["NAME", "add_arguments", "run"]
+
 NAME = "krl"
 
 

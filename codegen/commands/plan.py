@@ -45,6 +45,19 @@ from accugrid.kinematics.configuration import solve_in_one_status
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.simulation import commanded_poses
 
+__all__ = [
+    "MAX_WAIT_SEC",
+    "NAME",
+    "add_arguments",
+    "add_experiment_arguments",
+    "build_plan",
+    "parse_centres",
+    "parse_steps",
+    "reach",
+    "render_krl",
+    "run",
+]
+
 NAME = "plan"
 
 MAX_WAIT_SEC = 600.0

@@ -48,6 +48,8 @@ from accugrid.compensation import GridModel
 from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
 from accugrid.kinematics.errors import InputError
 
+__all__ = ["NAME", "add_arguments", "run"]
+
 NAME = "rewrite"
 
 

@@ -28,6 +28,18 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.simulation import grid_status, reached_positions, simulate_measurements
 
+__all__ = [
+    "FIG3_ABC",
+    "FIG3_X",
+    "FIG3_Y",
+    "FIG3_Z",
+    "NAME",
+    "add_arguments",
+    "fig3_field",
+    "grid_points",
+    "run",
+]
+
 NAME = "simulate"
 
 FIG3_X = (1000.0, 2000.0)

@@ -58,6 +58,23 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.simulation import commanded_poses, simulate_measurements
 
+__all__ = [
+    "NAME",
+    "OUTPUTS",
+    "STAT_HEADER",
+    "add_arguments",
+    "check_reach",
+    "csv_text",
+    "measured_validation",
+    "plot_fig12",
+    "plot_hist",
+    "run",
+    "simulated_measure",
+    "table4",
+    "table5",
+    "text_table",
+]
+
 NAME = "study"
 
 OUTPUTS = ("table4.csv", "table5.csv", "fig12.png", "table5_hist.png", "report.md")

@@ -25,6 +25,8 @@ from accugrid.codegen.program import STAGES, Program
 from accugrid.codegen.render import environment, fixed_texts, render, template_dir
 from accugrid.kinematics.errors import InputError
 
+__all__ = ["MAX_PARTS", "KrlHole", "KrlPosition", "render_krl"]
+
 MAX_PARTS = 999  # NAME_001..NAME_999 keeps names <= 24 characters with a 20-character NAME
 
 
