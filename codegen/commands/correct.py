@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cli_options import add_abc, add_status
 from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
 from accugrid.codegen.points import Points, read_points
 from accugrid.codegen.textsafe import fixed
@@ -48,7 +49,22 @@ _LISTED = 5  # how many points a message names
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("points", metavar="POINTS", help="points CSV, robot frame (mm, deg)")
-    parser.add_argument("--grid", required=True, metavar="MEAS", help="measurement CSV")
+    parser.add_argument(
+        "--grid",
+        metavar="MEAS",
+        help="measurement CSV (with --model: the residual grid after the model)",
+    )
+    parser.add_argument(
+        "--model",
+        metavar="CAL",
+        help="calibrated robot YAML (accugrid identify): correct by the model, any orientation",
+    )
+    add_status(
+        parser,
+        "with --model: the KUKA Status the program runs in (default: the IK default at the "
+        "first point)",
+    )
+    add_abc(parser, "with --model: orientation of points without a,b,c, reference for i,j,k axes")
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="CSV to write")
     parser.add_argument(
         "--method",
@@ -131,9 +147,35 @@ def run(args: argparse.Namespace) -> int:
     settings = settings_from(args)
     if not 0 <= args.orientation_tol <= args.orientation_limit:
         raise InputError("need 0 <= --orientation-tol <= --orientation-limit (deg)")
+    if args.model is not None:
+        from accugrid.codegen.correct_model import run_model
+
+        return run_model(args, settings)
+    if args.grid is None:
+        raise InputError("give --grid MEAS, --model CAL.yaml or both")
     check_targets([args.output], [args.points, args.grid], args.force)
     model = GridModel.from_measurements(args.grid, repeat_tol_mm=args.repeat_tol)
     points = read_points(args.points)
+    check_added_columns(points)
+    rotations = None if points.abc is None else abc_to_matrix(points.abc).reshape(-1, 3, 3)
+    found = model.check(points.xyz, settings, rotations=rotations, axes=points.axis)
+    flags: list[list[str]] = [[] for _ in range(len(points))]
+    check_outside(points, model, found.outside, settings.outside, flags)
+    check_orientation(points, model, found.angle, args, flags, "grid")
+    sources = grid_lines(Path(args.grid).name, model.source_sha256, model.step)
+    details = [f"method {args.method}, power {args.power:g}, iterations {args.iterations}"]
+    inputs = [args.points, args.grid]
+    length, worst = write_corrected(args, points, found.command, flags, sources, details, inputs)
+    print(model.describe())
+    iterations = f"{args.iterations} iteration{'s' if args.iterations != 1 else ''}"
+    power = f" power {args.power:g}" if args.method == "idw" else ""
+    print(f"corrected  {len(points)} point(s), {args.method}{power}, {iterations}")
+    print_corrections(points, length, worst, flags, args.output)
+    return 0
+
+
+def check_added_columns(points: Points) -> None:
+    """InputError when the points CSV already has a column that correct writes."""
     clash = [name for name in ADDED if points.table.has(name)]
     if clash:
         raise InputError(
@@ -141,36 +183,26 @@ def run(args: argparse.Namespace) -> int:
             points.path,
             1,
         )
-    rotations = None if points.abc is None else abc_to_matrix(points.abc).reshape(-1, 3, 3)
-    found = model.check(points.xyz, settings, rotations=rotations, axes=points.axis)
-    flags: list[list[str]] = [[] for _ in range(len(points))]
-    _check_outside(points, model, found.outside, settings.outside, flags)
-    _check_orientation(points, model, found.angle, args, flags)
-    length = found.length
+
+
+def refuse_too_long(points: Points, length: np.ndarray, limit_mm: float) -> int | None:
+    """Index of the longest correction (None without points); InputError naming that point when
+    it exceeds ``limit_mm`` (the whole job is refused)."""
     worst = int(np.argmax(length)) if len(points) else None
-    if found.too_long.size:
+    if worst is not None and length[worst] > limit_mm:
         raise InputError(
             f"{points.label(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
-            f"limit of {args.max_correction:g} mm; refusing the whole job (check the grid)",
+            f"limit of {limit_mm:g} mm; refusing the whole job (check the grid or model)",
             *points.table.where(worst),
         )
-    inputs = [
-        input_line("points", args.points, file_sha256(args.points)),
-        *grid_lines(Path(args.grid).name, model.source_sha256, model.step),
-    ]
-    details = [f"method {args.method}, power {args.power:g}, iterations {args.iterations}"]
-    where = "" if worst is None else f" at hole {points.ids[worst]}"
-    largest = 0.0 if worst is None else float(length[worst])
-    header = header_lines("correct", inputs, details, largest, where, [f"points {len(points)}"])
-    text = _corrected_csv(points, found.command, found.correction, flags, header)
-    write_files({args.output: text}, [args.points, args.grid], force=args.force)
-    _print_summary(model, points, args, length, worst, flags)
-    return 0
+    return worst
 
 
-def _check_outside(
+def check_outside(
     points: Points, model: GridModel, outside: np.ndarray, rule: str, flags: list[list[str]]
 ) -> None:
+    """Points outside the grid box (indices ``outside``): InputError for rule "error", else a
+    "clamped" flag each."""
     if not outside.size:
         return
     if rule == "error":
@@ -186,29 +218,32 @@ def _check_outside(
         flags[i].append("outside grid: clamped")
 
 
-def _check_orientation(
+def check_orientation(
     points: Points,
     model: GridModel,
     angle: np.ndarray | None,
     args: argparse.Namespace,
     flags: list[list[str]],
+    what: str,
 ) -> None:
+    """Angles (N,) deg from the grid's orientation: InputError beyond --orientation-limit
+    (unless --allow-orientation), a flag beyond --orientation-tol; ``what`` names the grid."""
     if angle is None:
         return
     beyond = np.flatnonzero(angle > args.orientation_limit)
     if beyond.size and not args.allow_orientation:
         i = int(beyond[0])
         raise InputError(
-            f"{beyond.size} point(s) more than {args.orientation_limit:g} deg from the grid's "
+            f"{beyond.size} point(s) more than {args.orientation_limit:g} deg from the {what}'s "
             f"orientation {mm_text(model.orientation_abc)} deg, first {points.label(i)} at "
             f"{angle[i]:.1f} deg: the grid does not hold there (--allow-orientation to go on)",
             *points.table.where(i),
         )
     for i in np.flatnonzero(angle > args.orientation_tol):
-        flags[i].append(f"orientation {angle[i]:.1f} deg from grid")
+        flags[i].append(f"orientation {angle[i]:.1f} deg from {what}")
 
 
-def _corrected_csv(
+def corrected_csv(
     points: Points,
     command: np.ndarray,
     correction: np.ndarray,
@@ -225,18 +260,34 @@ def _corrected_csv(
     return out.getvalue()
 
 
-def _print_summary(
-    model: GridModel,
-    points: Points,
+def write_corrected(
     args: argparse.Namespace,
-    length: np.ndarray,
-    worst: int | None,
+    points: Points,
+    command: np.ndarray,
     flags: list[list[str]],
+    sources: list[str],
+    details: list[str],
+    inputs: list,
+) -> tuple[np.ndarray, int | None]:
+    """Refuse the job when a correction exceeds --max-correction, else write the corrected CSV
+    (header: the points file, ``sources`` and ``details`` lines) atomically; returns the
+    correction lengths (N,) mm and the index of the longest (None without points)."""
+    correction = command - points.xyz
+    length = np.sqrt(np.einsum("ij,ij->i", correction, correction))
+    worst = refuse_too_long(points, length, args.max_correction)
+    where = "" if worst is None else f" at hole {points.ids[worst]}"
+    largest = 0.0 if worst is None else float(length[worst])
+    lines = [input_line("points", args.points, file_sha256(args.points)), *sources]
+    header = header_lines("correct", lines, details, largest, where, [f"points {len(points)}"])
+    text = corrected_csv(points, command, correction, flags, header)
+    write_files({args.output: text}, inputs, force=args.force)
+    return length, worst
+
+
+def print_corrections(
+    points: Points, length: np.ndarray, worst: int | None, flags: list[list[str]], output
 ) -> None:
-    print(model.describe())
-    iterations = f"{args.iterations} iteration{'s' if args.iterations != 1 else ''}"
-    power = f" power {args.power:g}" if args.method == "idw" else ""
-    print(f"corrected  {len(points)} point(s), {args.method}{power}, {iterations}")
+    """The summary lines every correct job ends with: largest correction, flagged points."""
     if worst is not None:
         print(
             f"largest correction {length[worst]:.4f} mm at {points.label(worst)}; "
@@ -248,4 +299,4 @@ def _print_summary(
         print(f"  {points.label(i)}: {'; '.join(flags[i])}")
     if len(flagged) > _LISTED:
         print(f"  ... and {len(flagged) - _LISTED} more (see the flag column)")
-    print(f"wrote {args.output}")
+    print(f"wrote {output}")
