@@ -43,10 +43,10 @@ __all__ = [
     "CrossValidation",
     "Identification",
     "PoseSet",
-    "cross_validate",
     "identification_jacobian",
     "identify",
     "parameter_names",
+    "parameter_units",
     "pose_set",
     "select_poses",
 ]
@@ -459,7 +459,7 @@ def identify(
         correction[:3, :3] = Rotation.from_rotvec(x[30:33]).as_matrix()
         correction[:3, 3] = x[27:30]
         tracker = base_T0 @ correction
-    cv = cross_validate(model, sub, data, target, folds) if folds else None
+    cv = _cross_validate(model, sub, data, target, folds) if folds else None
     arm = model.arm(x)
     calibrated = Robot(
         f"{robot.name}-calibrated",
@@ -516,7 +516,7 @@ def _fit(model: _Model, sub: _Subspace, q: np.ndarray, target: np.ndarray):
     return directions @ z, residuals, sigma
 
 
-def cross_validate(model: _Model, sub: _Subspace, data: PoseSet, target, folds: int):
+def _cross_validate(model: _Model, sub: _Subspace, data: PoseSet, target, folds: int):
     """k-fold over the distinct poses (repeats stay together), fitted in the identifiable
     subspace of all data: the held-out residuals' RMS and max per axis (``CrossValidation``)."""
     if folds < 2 or folds > data.poses:

@@ -407,6 +407,7 @@ def render_krl(
         "wait_input": args.wait_input,
         "moves": moves,
         "points": points,
+        "ptp_only": args.kind == "identify",  # reorienting between poses: PTP, not LIN
     }
     src = render(env, "measure.src.j2", **context)
     dat = render(env, "measure.dat.j2", **context)
@@ -436,7 +437,9 @@ def run(args: argparse.Namespace) -> int:
         *info,
         _orientation_text(plan) + f", robot {robot_name}, Status {config}",
         "largest correction 0.000 mm, measurement positions are not corrected",
-        f"{len(plan.points)} positions, first by PTP, then LIN, each followed by {wait}",
+        f"{len(plan.points)} positions, "
+        + ("each by PTP" if args.kind == "identify" else "first by PTP, then LIN")
+        + f", each followed by {wait}",
     ]
     src, dat = render_krl(plan, status, turn, name, header, args)
     paths = list(targets)
