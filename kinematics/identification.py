@@ -107,19 +107,6 @@ class PoseSet:
         """Number of distinct commanded poses."""
         return int(self.group.max()) + 1 if len(self.group) else 0
 
-    def subset(self, rows: np.ndarray) -> PoseSet:
-        """The rows ``rows`` (index array) with their groups renumbered."""
-        _, group = np.unique(self.group[rows], return_inverse=True)
-        return PoseSet(
-            self.q[rows],
-            self.measured[rows],
-            group,
-            self.commanded[rows],
-            self.rotations[rows],
-            tuple(self.labels[r] for r in rows),
-            self.path,
-        )
-
 
 def pose_set(
     robot: Robot,
@@ -320,7 +307,7 @@ class Identification:
     singular_values: np.ndarray  # (n,) of the column-scaled Jacobian, descending
     rank: int
     condition_number: float
-    o1: float  # Sun & Hollerbach O1 of the identifiable part
+    o1: float  # Sun & Hollerbach O1 = (σ1 … σL)^(1/L) / √m of the identifiable part, m rows
     residuals: np.ndarray  # (N, 3) measured − model, mm
     sigma_mm: float  # robust residual sigma per axis (MAD)
     outliers: list[str]  # labels of rows beyond OUTLIER_SIGMA
@@ -481,7 +468,7 @@ def identify(
         singular_values=sub.singular,
         rank=rank,
         condition_number=float(kept[0] / kept[-1]),
-        o1=float(np.exp(np.mean(np.log(kept))) / np.sqrt(data.poses)),
+        o1=float(np.exp(np.mean(np.log(kept))) / np.sqrt(rows)),  # m: measured rows
         residuals=residuals,
         sigma_mm=sigma,
         outliers=outliers,
