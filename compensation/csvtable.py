@@ -183,10 +183,8 @@ def parse_table(text: str, path: str = "<string>") -> Table:
     try:
         for record in reader:
             start_line, end_line = end_line + 1, reader.line_num
-            if not record or all(not cell.strip() for cell in record):
-                continue
-            if record[0].lstrip().startswith("#"):
-                continue
+            if not "".join(record).strip() or record[0].lstrip()[:1] == "#":
+                continue  # blank or comment
             if header is None:
                 header = [cell.strip() for cell in record]
                 _check_header(header, path, start_line)

@@ -33,7 +33,7 @@ import numpy as np
 from accugrid.kinematics.dh import PARAMETERS, flange_poses
 from accugrid.kinematics.error_model import error_jacobian
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import abc_to_matrix
+from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
 from accugrid.kinematics.joint_errors import JointErrors
 from accugrid.kinematics.robot import Robot
 
@@ -554,9 +554,10 @@ def _check_geometry(data: PoseSet) -> None:
             "directions",
             data.path,
         )
-    relative = np.einsum("ji,njk->nik", data.rotations[first[0]], data.rotations[first])
-    cos = np.clip((np.trace(relative, axis1=1, axis2=2) - 1) / 2, -1.0, 1.0)
-    if np.degrees(np.arccos(cos)).max() < ONE_ORIENTATION_DEG:
+    if (
+        rotation_angle_deg(data.rotations[first], data.rotations[first[0]]).max()
+        < ONE_ORIENTATION_DEG
+    ):
         raise InputError(
             f"all {len(first)} commanded poses have one orientation (within "
             f"{ONE_ORIENTATION_DEG:g} deg): the TCP offset cannot be told from the arm; "

@@ -7,10 +7,9 @@ import pytest
 
 from accugrid.codegen.cli import main
 from accugrid.compensation.csvtable import read_table
-from accugrid.compensation.orientation import rotation_angle_deg
 from accugrid.compensation.plans import identification_plan
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc, rotation_angle_deg
 from accugrid.kinematics.robot import load_robot
 
 TOOL = ["20", "-10", "250", "0", "0", "0"]
@@ -22,7 +21,8 @@ def test_plan_rows_are_reachable_within_the_tilt_and_region():
     plan, o1, usable = identification_plan(ROBOT, LO, HI, 30, 25.0, (0, 90, 0), 6, candidates=500)
     assert len(plan.points) == 30 and o1 > 0 and 30 <= usable <= 500
     assert np.all(plan.points >= np.array(LO) - 1e-9) and np.all(plan.points <= np.array(HI))
-    assert rotation_angle_deg(plan.abc_rows(), np.array([0.0, 90.0, 0.0])).max() <= 25.0 + 1e-6
+    angle = rotation_angle_deg(abc_to_matrix(plan.abc_rows()), abc_to_matrix([0.0, 90.0, 0.0]))
+    assert angle.max() <= 25.0 + 1e-6
     sol = ROBOT.ik(pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()])), status=6)
     assert sol.ok.all() and np.all(np.abs(np.degrees(sol.q[:, 4])) >= 10.0 - 1e-6)
     assert plan.extra["s"] == ["6"] * 30

@@ -21,17 +21,22 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+from pathlib import Path
 
 import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cli_options import add_abc, add_status
+from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
 from accugrid.codegen.points import Points, read_points
-from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.codegen.textsafe import fixed
 from accugrid.compensation.grid import MAX_CORRECTION_MM, GridModel
 from accugrid.compensation.measurements import REPEAT_TOL_MM
-from accugrid.compensation.orientation import rotation_angle_deg
+from accugrid.compensation.settings import CorrectionSettings
+from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
+from accugrid.kinematics.units import mm_text
 
 NAME = "correct"
 HELP = "corrected points CSV: P' = P + e, e interpolated from a measured error grid"
@@ -43,7 +48,22 @@ _LISTED = 5  # how many points a message names
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("points", metavar="POINTS", help="points CSV, robot frame (mm, deg)")
-    parser.add_argument("--grid", required=True, metavar="MEAS", help="measurement CSV")
+    parser.add_argument(
+        "--grid",
+        metavar="MEAS",
+        help="measurement CSV (with --model: the residual grid after the model)",
+    )
+    parser.add_argument(
+        "--model",
+        metavar="CAL",
+        help="calibrated robot YAML (accugrid identify): correct by the model, any orientation",
+    )
+    add_status(
+        parser,
+        "with --model: the KUKA Status the program runs in (default: the IK default at the "
+        "first point)",
+    )
+    add_abc(parser, "with --model: orientation of points without a,b,c, reference for i,j,k axes")
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="CSV to write")
     parser.add_argument(
         "--method",
@@ -109,14 +129,56 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="overwrite an existing output")
 
 
-def run(args: argparse.Namespace) -> int:
+def settings_from(args: argparse.Namespace) -> CorrectionSettings:
+    """The correction settings the options ask for."""
     if not args.max_correction > 0:
         raise InputError(f"--max-correction must be > 0 mm, got {args.max_correction}")
+    return CorrectionSettings(
+        method=args.method,
+        power=args.power,
+        iterations=args.iterations,
+        outside=args.outside,
+        max_correction_mm=args.max_correction,
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    settings = settings_from(args)
     if not 0 <= args.orientation_tol <= args.orientation_limit:
         raise InputError("need 0 <= --orientation-tol <= --orientation-limit (deg)")
+    if args.model is not None:
+        from accugrid.codegen.correct_model import run_model
+
+        return run_model(args, settings)
+    if args.grid is None:
+        raise InputError("give --grid MEAS, --model CAL.yaml or both")
     check_targets([args.output], [args.points, args.grid], args.force)
     model = GridModel.from_measurements(args.grid, repeat_tol_mm=args.repeat_tol)
     points = read_points(args.points)
+    check_added_columns(points)
+    rotations = None if points.abc is None else abc_to_matrix(points.abc).reshape(-1, 3, 3)
+    found = model.check(points.xyz, settings, rotations=rotations, axes=points.axis)
+    flags: list[list[str]] = [[] for _ in range(len(points))]
+    check_outside(points, model, found.outside, settings.outside, flags)
+    check_orientation(points, model, found.angle, args, flags, "grid")
+    length = found.length
+    worst = refuse_too_long(points, length, args.max_correction)
+    inputs = [
+        input_line("points", args.points, file_sha256(args.points)),
+        *grid_lines(Path(args.grid).name, model.source_sha256, model.step),
+    ]
+    details = [f"method {args.method}, power {args.power:g}, iterations {args.iterations}"]
+    where = "" if worst is None else f" at hole {points.ids[worst]}"
+    largest = 0.0 if worst is None else float(length[worst])
+    header = header_lines("correct", inputs, details, largest, where, [f"points {len(points)}"])
+    text = corrected_csv(points, found.command, found.correction, flags, header)
+    write_files({args.output: text}, [args.points, args.grid], force=args.force)
+    _print_summary(model, points, args, length, worst, flags)
+    return 0
+
+
+def check_added_columns(points: Points) -> None:
+    """InputError when the points CSV already has a column that correct writes."""
     clash = [name for name in ADDED if points.table.has(name)]
     if clash:
         raise InputError(
@@ -124,46 +186,34 @@ def run(args: argparse.Namespace) -> int:
             points.path,
             1,
         )
-    flags: list[list[str]] = [[] for _ in range(len(points))]
-    _check_outside(points, model, args.outside, flags)
-    _check_orientation(points, model, args, flags)
-    command = model.correct(
-        points.xyz,
-        iterations=args.iterations,
-        method=args.method,
-        power=args.power,
-        outside=args.outside,
-        max_correction_mm=None,
-    )
-    correction = command - points.xyz
-    length = np.linalg.norm(correction, axis=1)
+
+
+def refuse_too_long(points: Points, length: np.ndarray, limit_mm: float) -> int | None:
+    """Index of the longest correction (None without points); InputError naming that point when
+    it exceeds ``limit_mm`` (the whole job is refused)."""
     worst = int(np.argmax(length)) if len(points) else None
-    if worst is not None and length[worst] > args.max_correction:
+    if worst is not None and length[worst] > limit_mm:
         raise InputError(
             f"{points.label(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
-            f"limit of {args.max_correction:g} mm; refusing the whole job (check the grid)",
+            f"limit of {limit_mm:g} mm; refusing the whole job (check the grid or model)",
             *points.table.where(worst),
         )
-    header = (
-        f"accugrid correct: grid {args.grid} sha256 {model.source_sha256}, method "
-        f"{args.method}, power {args.power:g}, iterations {args.iterations}"
-    )
-    text = _corrected_csv(points, command, correction, flags, header)
-    write_files({args.output: text}, [args.points, args.grid], force=args.force)
-    _print_summary(model, points, args, length, worst, flags)
-    return 0
+    return worst
 
 
-def _check_outside(points: Points, model: GridModel, rule: str, flags: list[list[str]]) -> None:
-    outside = np.flatnonzero(~model.contains(points.xyz))
+def check_outside(
+    points: Points, model: GridModel, outside: np.ndarray, rule: str, flags: list[list[str]]
+) -> None:
+    """Points outside the grid box (indices ``outside``): InputError for rule "error", else a
+    "clamped" flag each."""
     if not outside.size:
         return
     if rule == "error":
         named = "; ".join(points.label(int(i)) for i in outside[:_LISTED])
         more = f" and {outside.size - _LISTED} more" if outside.size > _LISTED else ""
         raise InputError(
-            f"{outside.size} point(s) outside the grid box {_fmt(model.origin)}.."
-            f"{_fmt(model.upper)} mm (robot frame): {named}{more} (--outside clamp uses the "
+            f"{outside.size} point(s) outside the grid box {mm_text(model.origin)}.."
+            f"{mm_text(model.upper)} mm (robot frame): {named}{more} (--outside clamp uses the "
             "nearest cell)",
             *points.table.where(int(outside[0])),
         )
@@ -171,44 +221,40 @@ def _check_outside(points: Points, model: GridModel, rule: str, flags: list[list
         flags[i].append("outside grid: clamped")
 
 
-def orientation_difference_deg(points: Points, model: GridModel) -> np.ndarray | None:
-    """(N,) deg between each point's orientation and the grid's, or None if either lacks one."""
-    if model.orientation_abc is None or points.orientation is None or not len(points):
-        return None
-    if points.abc is not None:
-        return rotation_angle_deg(points.abc, model.orientation_abc)
-    tool_z = abc_to_matrix(model.orientation_abc)[:, 2]
-    return np.degrees(np.arccos(np.clip(points.axis @ tool_z, -1.0, 1.0)))
-
-
-def _check_orientation(
-    points: Points, model: GridModel, args: argparse.Namespace, flags: list[list[str]]
+def check_orientation(
+    points: Points,
+    model: GridModel,
+    angle: np.ndarray | None,
+    args: argparse.Namespace,
+    flags: list[list[str]],
+    what: str,
 ) -> None:
-    angle = orientation_difference_deg(points, model)
+    """Angles (N,) deg from the grid's orientation: InputError beyond --orientation-limit
+    (unless --allow-orientation), a flag beyond --orientation-tol; ``what`` names the grid."""
     if angle is None:
         return
     beyond = np.flatnonzero(angle > args.orientation_limit)
     if beyond.size and not args.allow_orientation:
         i = int(beyond[0])
         raise InputError(
-            f"{beyond.size} point(s) more than {args.orientation_limit:g} deg from the grid's "
-            f"orientation {_fmt(model.orientation_abc)} deg, first {points.label(i)} at "
+            f"{beyond.size} point(s) more than {args.orientation_limit:g} deg from the {what}'s "
+            f"orientation {mm_text(model.orientation_abc)} deg, first {points.label(i)} at "
             f"{angle[i]:.1f} deg: the grid does not hold there (--allow-orientation to go on)",
             *points.table.where(i),
         )
     for i in np.flatnonzero(angle > args.orientation_tol):
-        flags[i].append(f"orientation {angle[i]:.1f} deg from grid")
+        flags[i].append(f"orientation {angle[i]:.1f} deg from {what}")
 
 
-def _corrected_csv(
+def corrected_csv(
     points: Points,
     command: np.ndarray,
     correction: np.ndarray,
     flags: list[list[str]],
-    header: str,
+    header: list[str],
 ) -> str:
     out = io.StringIO()
-    out.write(f"# {comment_text(header, limit=400)}\n")
+    out.write(csv_comment(header))
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow([*points.table.header, *ADDED])
     for r, row in enumerate(points.table.rows):
@@ -241,7 +287,3 @@ def _print_summary(
     if len(flagged) > _LISTED:
         print(f"  ... and {len(flagged) - _LISTED} more (see the flag column)")
     print(f"wrote {args.output}")
-
-
-def _fmt(v: np.ndarray) -> str:
-    return "(" + ", ".join(f"{x:.3f}" for x in np.asarray(v, dtype=float)) + ")"

@@ -31,9 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen import __version__
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
+from accugrid.codegen.header import header_lines
 from accugrid.codegen.render import environment, render, template_dir
 from accugrid.codegen.textsafe import fixed, krl_identifier
 from accugrid.compensation.plans import (
@@ -46,6 +46,7 @@ from accugrid.compensation.plans import (
     grid_plan,
     identification_plan,
 )
+from accugrid.kinematics.configuration import solve_in_one_status
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 
@@ -291,16 +292,13 @@ def _identification_plan(args: argparse.Namespace) -> tuple[Plan, list[str]]:
     r = args.region
     lo, hi = (r[0], r[2], r[4]), (r[1], r[3], r[5])
     robot = robot_with_tool(args.robot, args.tool)
-    status = args.status
-    if status is None:  # the IK default at the region's centre, drilling orientation
-        centre = np.add(lo, hi) / 2
-        first = robot.ik(pose_from_xyzabc(np.concatenate([centre, args.abc])))
-        if not first.ok[0]:
-            raise InputError(
-                f"the region's centre is not reachable at A B C {' '.join(map(fixed, args.abc))}"
-                " deg: give --status"
-            )
-        status = int(first.status[0])
+    centre = pose_from_xyzabc(np.concatenate([np.add(lo, hi) / 2, args.abc]))
+    status = solve_in_one_status(robot, centre, args.status)[1]  # default: IK at the centre
+    if status is None:
+        raise InputError(
+            f"the region's centre is not reachable at A B C {' '.join(map(fixed, args.abc))} "
+            "deg: give --status"
+        )
     plan, o1, usable = identification_plan(
         robot,
         lo,
@@ -328,11 +326,7 @@ def reach(plan: Plan, args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray,
     be reachable in it. InputError naming the first position that is not."""
     robot = robot_with_tool(args.robot, args.tool)
     poses = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
-    status = args.status
-    if status is None:
-        first = robot.ik(poses[:1])
-        status = int(first.status[0]) if first.ok[0] else None
-    sol = robot.ik(poses, status=status)
+    sol, status = solve_in_one_status(robot, poses, args.status)
     if not sol.ok.all():
         bad = np.flatnonzero(~sol.ok)
         i = int(bad[0])
@@ -431,16 +425,19 @@ def run(args: argparse.Namespace) -> int:
         wait = f"WAIT FOR $IN[{args.wait_input}]"
     else:
         wait = f"WAIT SEC {fixed(args.wait_sec)}"
-    header = [
-        f"accugrid {__version__} plan {args.kind}",
+    details = [
         "inputs none, positions generated from the command-line settings",
         *info,
         _orientation_text(plan) + f", robot {robot_name}, Status {config}",
-        "largest correction 0.000 mm, measurement positions are not corrected",
-        f"{len(plan.points)} positions, "
-        + ("each by PTP" if args.kind == "identify" else "first by PTP, then LIN")
-        + f", each followed by {wait}",
     ]
+    moves = "each by PTP" if args.kind == "identify" else "first by PTP, then LIN"
+    closing = [f"{len(plan.points)} positions, {moves}, each followed by {wait}"]
+    header = header_lines(
+        f"plan {args.kind}",
+        details=details,
+        where=", measurement positions are not corrected",
+        closing=closing,
+    )
     src, dat = render_krl(plan, status, turn, name, header, args)
     paths = list(targets)
     write_files({paths[0]: plan.csv_text(), paths[1]: src, paths[2]: dat}, force=args.force)
