@@ -79,3 +79,62 @@ def test_plan_simulate_identify_round_trip(tmp_path, capsys):
         rng.uniform([-30, -100, 40, -90, 30, -90], [30, -60, 100, 90, 90, 90], (50, 6))
     )
     assert np.abs(cal.fk(q_new)[:, :3, 3] - paper.fk(q_new)[:, :3, 3]).max() < 0.01
+
+
+def test_simulate_poses_writes_logged_joints_that_identify_reads(tmp_path, capsys):
+    plan_dir = tmp_path / "plan"
+    assert main(["plan", "identify", "--count", "40", "--tool", *TOOL, "-o", str(plan_dir)]) == 0
+    sim = tmp_path / "sim.csv"
+    code = main(
+        [
+            "simulate",
+            "--poses",
+            str(plan_dir / "measure_identify.csv"),
+            "--robot",
+            "kr210-paper",
+            "--tool",
+            *TOOL,
+            "--repeats",
+            "2",
+            "-o",
+            str(sim),
+        ]
+    )
+    assert code == 0
+    table = read_table(sim)
+    assert len(table) == 80 and table.text("id")[:2] == ["I1", "I1"]
+    joints = np.radians(table.floats([f"a{i}" for i in range(1, 7)]))
+    # the logged joints are the controller's: the nominal FK gives the commanded position
+    commanded = table.floats(["x", "y", "z"])
+    np.testing.assert_allclose(ROBOT.fk(joints)[:, :3, 3], commanded, atol=0.01)
+    out = tmp_path / "cal.yaml"
+    assert main(["identify", str(sim), "--robot", "kr210", "--tool", *TOOL, "-o", str(out)]) == 0
+    paper = load_robot("kr210-paper").with_tool(ROBOT.flange_T_tool).true_robot()
+    q_new = np.radians(np.random.default_rng(1).uniform(-40, 40, (30, 6)) + [0, -80, 70, 0, 0, 0])
+    left = load_robot(out).true_robot().fk(q_new)[:, :3, 3] - paper.fk(q_new)[:, :3, 3]
+    assert np.abs(left).max() < 0.01  # noise-free data printed to 4 decimals
+
+
+def test_simulate_poses_excludes_a_grid(tmp_path, capsys):
+    plan = tmp_path / "plan.csv"
+    plan.write_text("x,y,z,a,b,c\n1500,0,1500,0,90,0\n")
+    code = main(
+        [
+            "simulate",
+            "--poses",
+            str(plan),
+            "--region",
+            "0",
+            "1",
+            "0",
+            "1",
+            "0",
+            "1",
+            "--step",
+            "1",
+            "-o",
+            str(tmp_path / "sim.csv"),
+        ]
+    )
+    assert code == 2 and "exclude each other" in capsys.readouterr().err
+    assert not (tmp_path / "sim.csv").exists()
