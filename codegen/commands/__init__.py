@@ -12,11 +12,15 @@ __all__ = ["COMMANDS"]
 COMMANDS: dict[str, tuple[str, str]] = {
     "correct": (
         "correct",
-        "corrected points CSV: P' = P + e, e interpolated from a measured error grid",
+        "corrected points CSV: P' = P + e from a measured error grid and/or a calibrated model",
     ),
     "fit-frame": (
         "fit_frame",
         "robot base frame (tracker_T_robot) from tracker points on base, A1 arc and flange holes",
+    ),
+    "identify": (
+        "identify",
+        "calibrated robot model (DH errors, TCP) from tracker measurements at scattered poses",
     ),
     "gcode": (
         "gcode",
@@ -28,7 +32,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "plan": (
         "plan",
-        "measurement plans: grid, one cube's ISO 9283 test points, or the seed's step experiment",
+        "measurement plans: grid, ISO 9283 cube, the seed's step experiment, identification poses",
     ),
     "rewrite": (
         "rewrite",
@@ -36,7 +40,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "simulate": (
         "simulate",
-        "simulate a laser-tracker grid measurement of a robot (measurement CSV, seed Fig. 3)",
+        "simulate a laser-tracker measurement of a robot: a grid (seed Fig. 3) or given poses",
     ),
     "study": (
         "study",
