@@ -41,7 +41,7 @@ def krl_pair(folder: Path) -> list[Path]:
     p = positions(N)
     dat = ["&ACCESS RVP", "DEFDAT big"]
     dat += [
-        f"DECL E6POS XP{i}={{X {x:.3f},Y {y:.3f},Z {z:.3f},A 0.000,B 90.000,C 0.000,"
+        f"DECL E6POS XP{i}={{X {x:.3f},Y {y:.3f},Z {z:.3f},A -90.000,B 0.000,C 180.000,"
         f"S 'B010',T 'B000010',E1 0.0,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}}"
         for i, (x, y, z) in enumerate(p)
     ]
@@ -56,7 +56,7 @@ def krl_inline(folder: Path, n: int = N) -> list[Path]:
     p = positions(n, 1)
     src = ["&ACCESS RVP", "DEF inline( )", "$BASE = BASE_DATA[1]"]
     src += [
-        f"LIN {{X {x:.3f},Y {y:.3f},Z {z:.3f},A 0.000,B 90.000,C 0.000}} C_DIS ; hole {i}"
+        f"LIN {{X {x:.3f},Y {y:.3f},Z {z:.3f},A -90.000,B 0.000,C 180.000}} C_DIS ; hole {i}"
         for i, (x, y, z) in enumerate(p)
     ]
     path = folder / f"inline{n}.src"

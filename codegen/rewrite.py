@@ -37,7 +37,7 @@ __all__ = [
     "check_orientation",
     "correct_points",
     "header_lines",
-    "warnings",
+    "warning_lines",
     "outside_reason",
     "report_csv",
     "strict_check",
@@ -149,7 +149,7 @@ def check_orientation(
     return keep
 
 
-def warnings(result: Result, opts: Options) -> list[str]:
+def warning_lines(result: Result, opts: Options) -> list[str]:
     """What the user must know although nothing failed: rounding that eats the tolerance,
     positions flagged for their orientation."""
     out = []

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 
 import pytest
 
@@ -74,3 +76,13 @@ def test_malformed(text, line, column):
     with pytest.raises(InputError) as err:
         parse_gcode(text, "bad.ngc")
     assert (err.value.line, err.value.column) == (line, column)
+
+
+def test_the_gcode_dialect_does_not_import_krl():
+    """A dialect is a unit: shared program text lives in codegen.program_text (issue 10)."""
+    code = (
+        "import sys, accugrid.codegen.gcode.rewrite; "
+        "print(sorted(m for m in sys.modules if m.startswith('accugrid.codegen.krl')))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "[]"

@@ -88,8 +88,14 @@ def test_example_structure_a_kr_c4_accepts():
     files = render_krl(program, ["accugrid test header"])
     assert sorted(files) == ["WING_PANEL.dat", "WING_PANEL.src"]
     src, dat = files["WING_PANEL.src"], files["WING_PANEL.dat"]
+    # only & lines above DEF/DEFDAT, as in every controller-written file (issue 11 item 8)
+    assert src.startswith(
+        "&ACCESS RVP\r\n&REL 1\r\nDEF WING_PANEL( )\r\n; accugrid test header\r\n"
+    )
+    assert dat.startswith(
+        "&ACCESS RVP\r\n&REL 1\r\nDEFDAT WING_PANEL\r\n; accugrid test header\r\n"
+    )
     for text in (src, dat):
-        assert text.startswith("&ACCESS RVP\r\n&REL 1\r\n; accugrid test header\r\n")
         assert "\n" not in text.replace("\r\n", "")
     s = statements(src)
     assert s[0] == "DEF WING_PANEL( )" and s[-1] == "END"

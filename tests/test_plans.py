@@ -141,8 +141,8 @@ def test_plan_cube_writes_csv_and_krl(tmp_path, capsys):
     assert raw.count(b"\r\n") == raw.count(b"\n")  # CRLF, like the drilling programs
     src = (out / "measure_cube.src").read_text()
     dat = (out / "measure_cube.dat").read_text()
-    assert src.startswith("&ACCESS RVP\n&REL 1\n; accugrid ")
-    assert "\nDEF measure_cube( )\n" in src and "BAS(#INITMOV,0)" in src
+    assert src.startswith("&ACCESS RVP\n&REL 1\nDEF measure_cube( )\n; accugrid ")
+    assert "BAS(#INITMOV,0)" in src
     assert src.rstrip().endswith("END") and "$BASE = $NULLFRAME" in src
     moves = re.findall(r"^(PTP|LIN) (XMP\d+) ; (\S+)$", src, flags=re.M)
     assert [m[0] for m in moves] == ["PTP"] + ["LIN"] * 33

@@ -42,7 +42,20 @@ CASES = {
         [],
         0,
     ),
+    "sample_program": (
+        ["krl/kukakrlmagic_sample_program.src", "krl/kukakrlmagic_sample_program.dat"],
+        ["--base", "0"],
+        0,  # tool and base frames, frames passed to a routine: nothing is a drilling position
+    ),
+    "cnc_struc": (
+        ["krl/chinamilling_CNC_LOOP.src", "krl/chinamilling_CNC1.dat"],
+        ["--base", "0", "--trust-calls"],
+        790,
+    ),
     "heatsink": (["gcode/norn93_1_heatsink_drill.gcode"], ["--decimals", "3"], 40),
+    "example3_inch": (["gcode/printhor_example3_inch.gcode"], [], 8),
+    "lagun_parameters": (["gcode/lagun_HEMA-P005.cnc"], [], 0),
+    "my100_inch": (["gcode/my100_MidLeftRightRail-Drill.125in.nc"], [], 91),
     "drill_practice": (["gcode/norn93_drill_practice.gcode"], [], 4),
     "vertical_slot": (["gcode/pygcode_vertical-slot.ngc"], [], 4),
 }

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import csv
 import math
+import os
+import stat
 
 import numpy as np
 import pytest
@@ -18,6 +20,7 @@ from rewrite_helpers import E_CONST, write_cell, write_grid
 from accugrid.codegen.cli import main
 from accugrid.codegen.gcode.parse import parse_gcode
 from accugrid.codegen.krl.parse import parse_krl
+from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 
 GRID_ABC = (0.0, 90.0, 0.0)  # the orientation the test grids are measured at (robot frame)
@@ -189,8 +192,6 @@ def test_parameter_assignments_are_read_and_parameter_words_reported(realworld, 
     ],
 )
 def test_malformed_parameters_are_located(text, column, message):
-    from accugrid.kinematics.errors import InputError
-
     with pytest.raises(InputError) as err:
         parse_gcode(text, "p.ngc")
     assert message in str(err.value) and err.value.column == column
@@ -211,6 +212,13 @@ def test_malformed_parameters_are_located(text, column, message):
 def test_g54_does_not_cancel_an_offset(offset, reason):
     moves = parse_gcode(f"G90 G0 X0 Y0 Z0\n{offset}\nG54\nG1 X5 Y5 Z5\n")
     assert reason in moves[-1].reason
+
+
+def test_g10_names_what_it_changes():
+    moves = parse_gcode("G90 G0 X0 Y0 Z0\nG10 L1 P1 Z0.0 R5.0\nG1 X5 Y5 Z5\n")
+    assert "G10 L1 (line 2) changes the tool table" in moves[-1].reason
+    moves = parse_gcode("G90 G0 X0 Y0 Z0\nG10 L20 P1 X0\nG1 X5 Y5 Z5\n")
+    assert "G10 L20 (line 2) changes the work offsets" in moves[-1].reason
 
 
 @pytest.mark.parametrize(
@@ -238,6 +246,7 @@ def test_what_cancels_an_offset(program, cleared):
         ("G33 Z-10 K1", "spindle-synchronized motion G33"),
         ("G0.5 X10", "unknown G-code G0.5"),
         ("G999 X10", "unknown G-code G999"),
+        ("G1 G999 X10", "unknown G-code G999"),  # whatever the order of the words
     ],
 )
 def test_unknown_motions_are_reported_not_corrected(tmp_path, cell, code, what):
@@ -268,3 +277,176 @@ def test_existing_output_folder_with_a_dot(tmp_path, cell):
     (p1,) = parse_krl((folder / "job.dat").read_text())
     want = np.array([1000.0, 0.0, 1000.0]) + E_CONST
     assert np.allclose([p1.x, p1.y, p1.z], want, atol=0.005)  # 2 decimals at least (item 4)
+
+
+# ---------------------------------------------------------------- item 2: what is a position
+
+R2 = abc_to_matrix(np.array([90.0, 0.0, 0.0]))  # BASE_DATA[2] below: rotated 90 deg about Z
+
+
+def test_sample_program_frames_are_never_corrected(realworld, tmp_path):
+    """kukaKRLmagic: a tool frame assigned to $TOOL, frames passed to a routine that assigns them
+    to $BASE: with --base 0 (which the old skip message advised) nothing may change."""
+    cell = write_cell(tmp_path, field="constant")
+    src = realworld / "krl" / "kukakrlmagic_sample_program.src"
+    dat = src.with_suffix(".dat")
+    out, rep = tmp_path / "out", tmp_path / "r.csv"
+    assert rewrite(src, dat, "--cell", cell, "-o", out, "--report", rep, "--base", "0") == 0
+    assert (out / src.name).read_bytes() == src.read_bytes()
+    rows = {r["name"]: r for r in report(rep)}
+    assert all(r["status"] != "corrected" for r in rows.values())
+    assert "assigned to $TOOL at line 152" in rows["tool_operation"]["reason"]
+    assert "not used by a motion" in rows["my_frame[1]"]["reason"]
+    assert not any("--base" in r["reason"] for r in rows.values())
+
+
+def test_frames_operands_and_constants_are_not_positions(tmp_path):
+    cell = write_cell(tmp_path, field="constant", base_data={2: (0, 0, 0, 90, 0, 0)})
+    src, dat = tmp_path / "j.src", tmp_path / "j.dat"
+    src.write_text(
+        "DEF j( )\nBAS(#BASE,0)\n$TOOL = TL1\n$BASE = BS1\nLIN XP1\n"
+        "LIN BF:{X 1,Y 0,Z 0,A 0,B 90,C 0}\nP9 = XP1:OFS\nEND\n"
+    )
+    dat.write_text(
+        "DEFDAT j\n"
+        "DECL FRAME TL1={X 1000.0,Y 0.0,Z 1000.0,A 0.0,B 90.0,C 0.0}\n"
+        "DECL FRAME BS1={X 1000.0,Y 0.0,Z 1000.0,A 0.0,B 90.0,C 0.0}\n"
+        "DECL FRAME BF={X 1000.0,Y 0.0,Z 1000.0,A 0.0,B 90.0,C 0.0}\n"
+        "DECL FRAME OFS={X 1000.0,Y 0.0,Z 1000.0,A 0.0,B 90.0,C 0.0}\n"
+        "DECL E6POS XP1={X 1000.0,Y 0.0,Z 1000.0,A 0.0,B 90.0,C 0.0}\n"
+        "ENDDAT\n"
+    )
+    rep = tmp_path / "r.csv"
+    assert rewrite(src, dat, "--cell", cell, "-o", tmp_path / "o", "--report", rep) == 0
+    rows = {r["name"]: r for r in report(rep) if r["file"] == "j.dat"}
+    assert "assigned to $TOOL at line 3" in rows["TL1"]["reason"]
+    assert "assigned to $BASE at line 4" in rows["BS1"]["reason"]
+    assert "an operand of ':' at line 6" in rows["BF"]["reason"]
+    assert "an operand of ':' at line 7" in rows["OFS"]["reason"]
+    # XP1 is a motion target and also the left operand of ':' (a frame) at line 7: never corrected
+    assert "an operand of ':' at line 7" in rows["XP1"]["reason"]
+    assert all(r["status"] == "skipped" for r in rows.values())
+
+
+def test_lone_dat_with_base_fdat_wins_and_only_pos(tmp_path):
+    cell = write_cell(tmp_path, field="constant", base_data={2: (0, 0, 0, 90, 0, 0)})
+    dat = tmp_path / "cfg.dat"
+    dat.write_text(
+        "DEFDAT cfg\n"
+        "DECL E6POS XP1={X 1000.000,Y 0.000,Z 1000.000,A 0.0,B 90.0,C 0.0}\n"
+        "DECL FDAT FP1={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE}\n"
+        "DECL E6POS XP2={X 1000.000,Y 0.000,Z 1000.000,A 0.0,B 90.0,C 0.0}\n"
+        "DECL FDAT FP2={TOOL_NO 1,BASE_NO 0,IPO_FRAME #TCP}\n"
+        "DECL E6POS XP3={X 1000.000,Y 0.000,Z 1000.000,A 0.0,B 90.0,C 0.0}\n"
+        "DECL FDAT FP3={TOOL_NO 5,BASE_NO 0,IPO_FRAME #BASE}\n"
+        "DECL E6POS XP4={X 1000.000,Y 0.000,Z 1000.000,A 0.0,B 90.0,C 0.0}\n"
+        "DECL CONST POS $NULLPOS={X 0.0,Y 0.0,Z 0.0,A 0.0,B 0.0,C 0.0}\n"
+        "DECL FRAME TOOL_CORR={X 1000.0,Y 0.0,Z 1000.0,A 0.0,B 0.0,C 0.0}\n"
+        "ENDDAT\n"
+    )
+    out, rep = tmp_path / "o.dat", tmp_path / "r.csv"
+    assert rewrite(dat, "--cell", cell, "-o", out, "--report", rep) == 0
+    assert out.read_bytes() == dat.read_bytes()  # without --base no motion says it is a position
+    assert "(give the .src, or --base N)" in report(rep)[0]["reason"]
+    assert rewrite(dat, "--cell", cell, "-o", out, "--report", rep, "--force", "--base", "0") == 0
+    rows = {r["name"]: r for r in report(rep)}
+    assert rows["XP1"]["status"] == "corrected"  # in BASE_DATA[2] (its FDAT), not --base 0
+    want = np.array([1000.0, 0.0, 1000.0]) + R2.T @ E_CONST
+    got = [float(rows["XP1"][k]) for k in ("x_new", "y_new", "z_new")]
+    assert np.allclose(got, want, atol=5e-4)
+    assert "IPO_FRAME #TCP" in rows["XP2"]["reason"] and rows["XP2"]["status"] == "skipped"
+    assert "TOOL_NO 5" in rows["XP3"]["reason"] and rows["XP3"]["status"] == "skipped"
+    assert rows["XP4"]["status"] == "corrected"  # no FDAT: --base 0
+    assert np.allclose(
+        [float(rows["XP4"][k]) for k in ("x_new", "y_new", "z_new")],
+        [1000.25, -0.125, 1000.375],
+        atol=5e-4,
+    )
+    assert "CONST" in rows["$NULLPOS"]["reason"]
+    assert "POS/E6POS only, this is FRAME" in rows["TOOL_CORR"]["reason"]
+
+
+# ---------------------------------------------------------------- item 3: STRUC positions
+
+
+def test_struc_toolpath_members_are_corrected(realworld, tmp_path):
+    """ChinaMilling CNC1: 790 points in gsCNC1[i].fCnC, run by LIN gsCNC1[counter].fCNC."""
+    cell = write_cell(tmp_path, field="constant")
+    src = realworld / "krl" / "chinamilling_CNC_LOOP.src"
+    dat = realworld / "krl" / "chinamilling_CNC1.dat"
+    rep = tmp_path / "r.csv"
+    assert rewrite(src, dat, "--cell", cell, "-o", tmp_path / "a", "--report", rep) == 0
+    rows = [r for r in report(rep) if r["file"] == dat.name]
+    assert len(rows) == 790 and {r["status"] for r in rows} == {"skipped"}
+    assert "after the call ChangeSpeed()" in rows[0]["reason"]  # the call may set $BASE
+    out = tmp_path / "b"
+    args = ("--report", rep, "--force", "--base", "0", "--trust-calls")
+    assert rewrite(src, dat, "--cell", cell, "-o", out, *args) == 0
+    rows = [r for r in report(rep) if r["file"] == dat.name]
+    assert [r["name"] for r in rows[:2]] == ["gsCNC1[1].fCnC", "gsCNC1[2].fCnC"]
+    assert {r["status"] for r in rows} == {"corrected"} and len(rows) == 790
+    x, y, z = np.array([331.0737, -29.9896, 13.0]) + E_CONST
+    first = (out / dat.name).read_text().splitlines()[5]
+    assert first == (
+        f"gsCNC1[1] = {{fCnC {{X {x:.4f}, Y {y:.4f}, Z {z:.4f}, A 0.000, B 0.000, C 0.000 }}, "
+        "grFeedrate 2000}"
+    )
+
+
+# ---------------------------------------------------------------- item 7: true reasons
+
+
+def test_reasons_for_local_declarations_and_trailing_clauses(tmp_path, cell):
+    src = tmp_path / "loc.src"
+    src.write_text(
+        "DEF loc( )\ndecl axis joint_pos_tgt\nFRAME lfStartMillingPos\nDECL FRAME lfCorner[4]\n"
+        "BAS(#BASE,1)\njoint_pos_tgt = GetJoints()\nPTP joint_pos_tgt\nLIN lfStartMillingPos\n"
+        "LIN lfCorner[2] C_DIS\nLIN Shift(3) C_VEL\nLIN XGONE\nEND\n"
+    )
+    rep = tmp_path / "r.csv"
+    assert rewrite(src, "--cell", cell, "-o", tmp_path / "o.src", "--report", rep) == 0
+    rows = {r["name"]: r["reason"] for r in report(rep)}
+    assert "declared (AXIS, loc.src:2)" in rows["joint_pos_tgt"]
+    assert "declared (FRAME, loc.src:3)" in rows["lfStartMillingPos"]
+    assert "declared (FRAME, loc.src:4)" in rows["lfCorner[2]"]
+    assert rows["Shift(3)"] == "target 'Shift(3)' is an expression"  # C_VEL is not part of it
+    assert rows["XGONE"] == "XGONE is not declared in the given files"
+
+
+def test_config_dat_fdats_and_positions_are_read(tmp_path, cell):
+    config = tmp_path / "config.dat"
+    config.write_text(
+        "DEFDAT $CONFIG\nDECL E6AXIS XHOME={A1 0.0,A2 -90.0,A3 90.0,A4 0.0,A5 0.0,A6 0.0}\n"
+        "DECL FDAT FHOME={TOOL_NO 1,BASE_NO 0,IPO_FRAME #BASE}\nENDDAT\n"
+    )
+    src = tmp_path / "h.src"
+    src.write_text(
+        "DEF h( )\n;FOLD PTP HOME\nFDAT_ACT=FHOME\nPTP XHOME\n;ENDFOLD\n"
+        "LIN {X 1000.0,Y 0.0,Z 1000.0,A 0.0,B 90.0,C 0.0}\nEND\n"
+    )
+    rep = tmp_path / "r.csv"
+    assert rewrite(src, "--cell", cell, "-o", tmp_path / "a.src", "--report", rep) == 0
+    rows = report(rep)
+    assert "FDAT FHOME (line 3) is not in the given files" in rows[0]["reason"]
+    assert rows[1]["reason"] == "XHOME is not declared in the given files"
+    args = ("--report", rep, "--force", "--config-dat", config)
+    assert rewrite(src, "--cell", cell, "-o", tmp_path / "b.src", *args) == 0
+    rows = report(rep)
+    assert rows[0]["status"] == "corrected"  # FHOME: BASE_NO 0, the robot frame
+    assert "joint-space target" in rows[1]["reason"]
+
+
+def test_outputs_are_readable_by_others_under_umask_022(tmp_path, cell):
+    """A transfer service must be able to read the programs (they were 0600 before)."""
+    src, dat = tmp_path / "job.src", tmp_path / "job.dat"
+    src.write_text(krl_src("LIN XP1"))
+    dat.write_text("DEFDAT job\nDECL E6POS XP1={X 1000.0,Y 0.0,Z 1000.0,A 0.0,B 90.0,C 0.0}\n")
+    old = os.umask(0o022)
+    try:
+        assert (
+            rewrite(src, dat, "--cell", cell, "-o", tmp_path / "o", "--report", tmp_path / "r") == 0
+        )
+    finally:
+        os.umask(old)
+    for path in (tmp_path / "o" / "job.src", tmp_path / "o" / "job.dat", tmp_path / "r"):
+        assert stat.S_IMODE(path.stat().st_mode) == 0o644

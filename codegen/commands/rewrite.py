@@ -2,17 +2,21 @@
 
 Every Cartesian position that can be placed in the robot frame is corrected with the grid
 (P' = P + e, robot frame, converted back to the program frame); only those X, Y, Z numbers change,
-with the input's decimal places. Every other byte (spacing, comments, line endings, encoding) is
-kept. Positions outside the grid (home, clearance, approach poses) stay as they are; anything
-that cannot be placed (frame arithmetic ':', a base from a variable or a call, EK(), AXIS/E6AXIS
-targets, $POS_ACT, G55-G59/G92 offsets, arcs) is left untouched. The report lists each position
-with its status and reason.
+with the input's decimal places but never coarser than 0.01 mm (0.001 in). Every other byte
+(spacing, comments, line endings, encoding) is kept. Positions outside the grid (home, clearance,
+approach poses) stay as they are; anything that cannot be placed (frame arithmetic ':', a base
+from a variable or a call, EK(), AXIS/E6AXIS targets, $POS_ACT, G55-G59/G92 offsets, arcs,
+unknown motions, parameter words) is left untouched, and so is a position more than
+--orientation-limit from the grid's orientation (flagged beyond --orientation-tol, as in
+accugrid correct). The report lists each position with its status and reason.
 
-KRL: PROGRAM is a .src or .dat; give the .dat beside it as the second argument. A .dat position
-takes the base of the motions that use it ($BASE = BASE_DATA[n], BAS(#BASE,n), FDAT BASE_NO);
-BASE_DATA values come from --config-dat or the cell file (base, base_data); base 0 is the robot
-frame. Without a .src (or where a routine starts without setting $BASE), --base N says which
-BASE_DATA the positions are in.
+KRL: PROGRAM is a .src or .dat; give the .dat beside it as the second argument. A stored position
+is corrected only if a motion uses it (never a frame given to $TOOL/$BASE/$LOAD, an operand of
+':' or a CONST) and takes the base of the motions that use it ($BASE = BASE_DATA[n],
+BAS(#BASE,n), FDAT BASE_NO); BASE_DATA values come from --config-dat or the cell file (base,
+base_data); base 0 is the robot frame. Where a routine starts without setting $BASE, and for the
+POS/E6POS of a .dat given alone, --base N says which BASE_DATA they are in (a position's own FDAT
+wins over it).
 G-code: positions are in the cell's program_frame (default: its base), G54 active; A, B, C
 words are the tool orientation and stay as written.
 
@@ -41,7 +45,7 @@ from accugrid.codegen.rewrite import (
     Options,
     header_lines,
     report_csv,
-    warnings,
+    warning_lines,
 )
 from accugrid.compensation import GridModel
 from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
@@ -212,7 +216,7 @@ def run(args: argparse.Namespace) -> int:
         files[Path(args.report)] = report_csv(result.rows).encode("utf-8")
     # a KRL pair: the .src (what a controller runs) replaced last
     write_files(files, all_inputs + [grid], args.force, main=[outputs[inputs[0]]])
-    for line in warnings(result, opts):
+    for line in warning_lines(result, opts):
         print(f"accugrid rewrite: warning: {line}", file=sys.stderr)
     counts = Counter(r.status for r in result.rows)
     largest, _ = result.largest()

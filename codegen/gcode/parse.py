@@ -48,7 +48,8 @@ CYCLES = frozenset(("73", "81", "82", "83", "84", "85", "86", "87", "88", "89"))
 MOTION_MODES = frozenset(("0", "1", "2", "3", "80")) | CYCLES
 INCH_MM = 25.4
 _ROTARY_SET = frozenset(ROTARY)
-_KEPT = frozenset(AXES + ROTARY + "R")  # letters whose Word a move needs
+_KEPT = frozenset(AXES + ROTARY + "RL")  # letters whose Word a move (or G10) needs
+_POSITION_LETTERS = frozenset(AXES + ROTARY + "R")
 _NONMODAL = frozenset("4 10 28 28.1 30 30.1 52 53 92 92.1 92.2 92.3".split())
 _PARAMETER_CODES = frozenset("4 10 28.1 30.1 52 92 92.1 92.2 92.3".split())
 # G-codes that neither move nor change where a programmed position lands (or whose effect is
@@ -160,8 +161,8 @@ class _Modal:
     def frame_reason(self) -> str:
         return self.flow or self.wcs or self.offset or self.table or self.transform or self.comp
 
-    def apply(self, g: str, lineno: int) -> None:
-        """One G-code of a block (its number as text: "1", "91.1")."""
+    def apply(self, g: str, lineno: int, l_word: Word | None) -> None:
+        """One G-code of a block (its number as text: "1", "91.1"); ``l_word``: the block's L."""
         if g in MOTION_MODES:
             self.motion, self.unknown_motion = g, ""
         elif g == "20" or g == "21":
@@ -181,7 +182,9 @@ class _Modal:
         elif g in ("92.1", "92.2"):
             self.offset = ""
         elif g == "10":
-            self.table = f"G10 (line {lineno}) changes the work offsets"
+            what = f"G10 L{l_word.literal}" if l_word is not None else "G10"
+            table = "work offsets" if l_word is None or l_word.value in (2, 20) else "tool table"
+            self.table = f"{what} (line {lineno}) changes the {table}"
         elif g in ("41", "42", "41.1", "42.1"):
             self.comp = f"cutter compensation G{g} (line {lineno}) offsets the path"
         elif g == "40":
@@ -204,6 +207,10 @@ def _blank_comments(line: str, path: str | None, lineno: int) -> str:
     """The line with ``( )`` comments and the ``;`` tail replaced by spaces (offsets kept)."""
     if "(" not in line and ";" not in line and ")" not in line:
         return line
+    if ";" not in line and line.count("(") == 1 and line.count(")") == 1:
+        start, end = line.find("("), line.find(")") + 1
+        if start < end:  # the common case: one ( ) comment
+            return line[:start] + " " * (end - start) + line[end:]
     parts: list[str] = []
     pos, n = 0, len(line)
     found = {c: line.find(c) for c in "(;)"}  # next of each, refreshed only once passed
@@ -235,7 +242,8 @@ def _gnum(value: float) -> str:
 
 
 def _skip_blank(line: str, i: int) -> int:
-    while i < len(line) and line[i] in " \t\r\f\v":
+    """The first index from ``i`` that is not whitespace (the same whitespace as ``\\s``)."""
+    while i < len(line) and line[i].isspace():
         i += 1
     return i
 
@@ -263,7 +271,7 @@ def _expression_end(line: str, i: int, path: str | None, lineno: int) -> int:
             raise InputError("unclosed '<' parameter name", path, lineno, i + 1)
         return close + 1
     m = _DIGITS_RE.match(line, i)
-    if m is None or line[i - 1] != "#":
+    if m is None:
         raise InputError("cannot read this parameter or expression", path, lineno, i + 1)
     return m.end()
 
@@ -353,8 +361,9 @@ class _Reader:
     def block(self, block: _Line, lineno: int, line_offset: int) -> None:
         state = self.state
         words = block.words
-        for g in block.gcodes:
-            state.apply(g, lineno)
+        l_word = words.get("L")
+        for g in sorted(block.gcodes, key=lambda g: g not in MOTION_MODES):
+            state.apply(g, lineno, l_word)  # a known motion first: an unknown code wins
         if "G" in block.exprs:
             state.flow = state.flow or (
                 f"G-code from an expression {block.exprs['G']} (line {lineno}): the modal state "
@@ -376,7 +385,7 @@ class _Reader:
         if nonmodal and nonmodal[0] in _PARAMETER_CODES:
             return  # the axis words are parameters, not a move
         axis_words = {k: words[k] for k in AXES if k in words}
-        moving = [k for k in block.exprs if k in _KEPT]
+        moving = [k for k in block.exprs if k in _POSITION_LETTERS]
         if not axis_words and not has_rotary and not moving:
             return
         if axis_words:
@@ -488,7 +497,7 @@ class _Reader:
 
 
 def _expression_reason(exprs: dict[str, str], lineno: int) -> str:
-    used = [text for k, text in exprs.items() if k in _KEPT]
+    used = [text for k, text in exprs.items() if k in _POSITION_LETTERS]
     if not used:
         return ""
     return f"{used[0]} uses a parameter or an expression (line {lineno}): not guessed"

@@ -366,6 +366,8 @@ def parse_aggregate(
             )
         elif m.group(3) is not None:
             numbers[key] = _bits(key, m.group(3), m.start(3), offset, path, lineno)
+        elif key in CARTESIAN_KEYS or key in JOINT_KEYS:
+            reason = reason or f"component {key} is {m.group(4).strip()!r}, not a number"
     return type_name, numbers, reason, end
 
 

@@ -239,11 +239,8 @@ class _Context:
         cartesian = pos.type in ("POS", "E6POS")
         in_dat = Path(pos.path or "").suffix.lower() == ".dat"
         if self.lone_dat and in_dat and cartesian:
-            if own is not None:
-                _, frame, reason = self.resolve(own)
-                return frame, reason
-            if self.initial is not None:
-                _, frame, reason = self.resolve(self.initial)
+            if self.initial is not None:  # --base N; the position's own FDAT wins over it
+                _, frame, reason = self.resolve(own if own is not None else self.initial)
                 return frame, reason
             return None, (
                 f"{pos.name} is not used by a motion in the given program, so its base is unknown "
