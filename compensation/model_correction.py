@@ -28,7 +28,14 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.robot import Robot
 
-__all__ = ["MAX_ITERATIONS", "TOL_MM", "ModelCorrection", "model_correct", "residual_grid"]
+__all__ = [
+    "MAX_ITERATIONS",
+    "TOL_MM",
+    "ModelCorrection",
+    "model_correct",
+    "reached_by_model",
+    "residual_grid",
+]
 
 TOL_MM = 1e-3  # default: |P - reach(P')| below 0.001 mm
 MAX_ITERATIONS = 12
