@@ -25,6 +25,7 @@ from accugrid.codegen.commands.correct import (
     check_max_correction,
     orientation_difference_deg,
 )
+from accugrid.codegen.header import file_sha256
 from accugrid.codegen.points import Points, orient_along_axes, read_points, too_tilted
 from accugrid.compensation.model_correction import TOL_MM, model_correct, residual_grid
 from accugrid.kinematics.errors import InputError
@@ -97,8 +98,11 @@ def run_model(args: argparse.Namespace) -> int:
         else f", residual grid {args.grid} sha256 {grid.source_sha256}, method {args.method}, "
         f"power {args.power:g}"
     )
+    model_file = Path(args.model)
+    model_sha = f" sha256 {file_sha256(model_file)}" if model_file.is_file() else " (built-in)"
     header = (
-        f"accugrid correct: model {args.model}, robot {calibrated.name}, Status {status}{residual}"
+        f"accugrid correct: model {args.model}{model_sha}, robot {calibrated.name}, "
+        f"Status {status}{residual}"
     )
     text = _corrected_csv(points, result.command, correction, flags, header)
     write_files({args.output: text}, inputs, force=args.force)
