@@ -33,6 +33,7 @@ sys.path.insert(0, str(ROOT))
 
 from accugrid.compensation.grid import GridModel  # noqa: E402
 from accugrid.compensation.model_correction import model_correct, residual_grid  # noqa: E402
+from accugrid.compensation.settings import CorrectionSettings  # noqa: E402
 from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, pose_from_xyzabc  # noqa: E402
 from accugrid.kinematics.identification import identify, pose_set, select_poses  # noqa: E402
 from accugrid.kinematics.joint_errors import JointErrors  # noqa: E402
@@ -175,7 +176,8 @@ def main_bench() -> None:
             print(row(name, n_grid, points - cell.land(command, abc)))
         only = model_correct(calibrated, points, abc, STATUS)
         print(row(f"{label}: model", n_model, points - cell.land(only.command, abc)))
-        both = model_correct(calibrated, points, abc, STATUS, residual, method="trilinear")
+        trilinear = CorrectionSettings(method="trilinear")
+        both = model_correct(calibrated, points, abc, STATUS, residual, trilinear)
         name = f"{label}: model + 27-vertex residual grid"
         print(row(name, n_both, points - cell.land(both.command, abc)))
 
