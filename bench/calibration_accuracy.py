@@ -151,7 +151,9 @@ def main_bench() -> None:
 
     # residual grid: 27 vertices at the seed orientation, 3 repeats
     residual_vertices = lattice(LO, HI, (3, 3, 3))
-    residual = residual_grid(calibrated, cell.measure(residual_vertices, SEED_ABC, 3, rng), STATUS)
+    tool = cell.controller.flange_T_tool  # the controller's TOOL_DATA: the nominal drill
+    measured = cell.measure(residual_vertices, SEED_ABC, 3, rng)
+    residual = residual_grid(calibrated, measured, STATUS, controller_tool=tool)
 
     print(
         f"identification: {POSES} poses x {POSE_REPEATS} (O1 {o1:.3g}), rank {result.rank}, "
@@ -174,10 +176,12 @@ def main_bench() -> None:
             command = grid.correct(points, method=method)
             name = f"{label}: 200 mm grid, {method}"
             print(row(name, n_grid, points - cell.land(command, abc)))
-        only = model_correct(calibrated, points, abc, STATUS)
+        only = model_correct(calibrated, points, abc, STATUS, controller_tool=tool)
         print(row(f"{label}: model", n_model, points - cell.land(only.command, abc)))
         trilinear = CorrectionSettings(method="trilinear")
-        both = model_correct(calibrated, points, abc, STATUS, residual, trilinear)
+        both = model_correct(
+            calibrated, points, abc, STATUS, residual, trilinear, controller_tool=tool
+        )
         name = f"{label}: model + 27-vertex residual grid"
         print(row(name, n_both, points - cell.land(both.command, abc)))
 
