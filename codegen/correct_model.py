@@ -89,7 +89,8 @@ def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
     abc = point_orientations(points, np.array(args.abc, dtype=float))
     status = args.status
     if status is None and len(points):
-        first = calibrated.ik(commanded_poses(points.xyz[:1], abc[0]))
+        controller = calibrated if tool is None else calibrated.with_tool(tool)
+        first = controller.ik(commanded_poses(points.xyz[:1], abc[0]))
         status = int(first.status[0]) if first.ok[0] else None
     grid = None
     flags: list[list[str]] = [[] for _ in range(len(points))]
