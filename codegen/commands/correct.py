@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import add_abc, add_status
+from accugrid.codegen.cli_options import add_abc, add_status, add_tool
 from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
 from accugrid.codegen.points import Points, read_points
 from accugrid.codegen.textsafe import fixed
@@ -65,6 +65,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "first point)",
     )
     add_abc(parser, "with --model: orientation of points without a,b,c, reference for i,j,k axes")
+    add_tool(
+        parser,
+        "with --model: the controller's TOOL_DATA, mm and deg (default: the model file's "
+        "identification.controller_tool, else its identified TCP)",
+    )
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="CSV to write")
     parser.add_argument(
         "--method",
