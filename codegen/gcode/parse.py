@@ -153,7 +153,7 @@ class _Modal:
     flow: str = ""  # control flow / unknown modal state: for the rest of the program
     wcs: str = ""  # G55-G59.3 (cleared by G54)
     offset: str = ""  # G92/G52/G92.3 (cleared by G92.1/G92.2)
-    table: str = ""  # G10 changed the work offsets: for the rest of the program
+    table: str = ""  # G10 changed the work offsets or tool table: for the rest of the program
     transform: str = ""  # G68/G51 (cleared by G69/G50)
     comp: str = ""  # cutter compensation G41/G42 (cleared by G40)
     unknown_motion: str = ""  # the motion mode is not one whose geometry is known
@@ -361,26 +361,17 @@ class _Reader:
     def block(self, block: _Line, lineno: int, line_offset: int) -> None:
         state = self.state
         words = block.words
-        l_word = words.get("L")
-        for g in sorted(block.gcodes, key=lambda g: g not in MOTION_MODES):
-            state.apply(g, lineno, l_word)  # a known motion first: an unknown code wins
+        gcodes = block.gcodes
+        if len(gcodes) > 1:  # a known motion first: an unknown code on the same line wins
+            gcodes = sorted(gcodes, key=lambda g: g not in MOTION_MODES)
+        for g in gcodes:
+            state.apply(g, lineno, words.get("L"))
         if "G" in block.exprs:
             state.flow = state.flow or (
                 f"G-code from an expression {block.exprs['G']} (line {lineno}): the modal state "
                 "is not known"
             )
-        has_rotary = not _ROTARY_SET.isdisjoint(words)
-        if has_rotary:  # a new dict: moves share the one in effect when they were read
-            state.rotary = dict(state.rotary)
-            for letter in ROTARY:
-                if letter in words:
-                    state.rotary[letter] = words[letter].value
-        if not _ROTARY_SET.isdisjoint(block.exprs):
-            has_rotary = True
-            state.rotary = dict(state.rotary)
-            for letter in ROTARY:
-                if letter in block.exprs:
-                    state.rotary[letter] = math.nan
+        has_rotary = self._rotary(block)
         nonmodal = [g for g in block.gcodes if g in _NONMODAL] if block.gcodes else []
         if nonmodal and nonmodal[0] in _PARAMETER_CODES:
             return  # the axis words are parameters, not a move
@@ -405,6 +396,21 @@ class _Reader:
             self._cycle(lineno, column, axis_words, words, block.exprs)
         else:
             self._straight(lineno, column, axis_words, block.exprs)
+
+    def _rotary(self, block: _Line) -> bool:
+        """Take the block's A/B/C/U/V/W (NaN when from an expression); True if it has any."""
+        written = not _ROTARY_SET.isdisjoint(block.words)
+        computed = not _ROTARY_SET.isdisjoint(block.exprs)
+        if not (written or computed):
+            return False
+        rotary = dict(self.state.rotary)  # a new dict: moves share the one in effect when read
+        for letter in ROTARY:
+            if letter in block.words:
+                rotary[letter] = block.words[letter].value
+            elif letter in block.exprs:
+                rotary[letter] = math.nan
+        self.state.rotary = rotary
+        return True
 
     def _move(self, lineno, column, motion, target, words) -> GcodeMove:
         s = self.state
