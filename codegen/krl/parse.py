@@ -4,10 +4,17 @@ and the base frame ($BASE) in effect wherever a motion uses one.
 Line-based and case-insensitive (KRL has one statement per line; ``;`` starts a comment, so
 inline-form FOLD lines are comments). It finds:
 
-- positions: ``DECL [GLOBAL] [CONST] E6POS|POS|FRAME|AXIS|E6AXIS name = {...}``, element or
-  variable assignments ``name[3] = {...}``, and aggregates inside motions (``PTP``, ``LIN``,
-  ``CIRC aux, target``, ``SPTP``, ``SLIN``, ``SCIRC``, ``SPL``, the ``_REL`` forms);
-- uses: motions that go to a named position (``PTP XP1``, ``LIN lfWorkPos[i]``);
+- positions: ``DECL [GLOBAL] [CONST] E6POS|POS|FRAME|AXIS|E6AXIS name = {...}`` (a CONST one
+  carries its reason), element or variable assignments ``name[3] = {...}``, the position members
+  of user STRUC values (``gsCNC1[3] = {fCnC {X ..}, grFeedrate 95}`` gives ``gsCNC1[3].fCnC``),
+  and aggregates inside motions (``PTP``, ``LIN``, ``CIRC aux, target``, ``SPTP``, ``SLIN``,
+  ``SCIRC``, ``SPL``, the ``_REL`` forms);
+- uses: motions that go to a named position (``PTP XP1``, ``LIN lfWorkPos[i]``,
+  ``LIN gsCNC1[i].fCNC``); the target ends before ``C_DIS``/``C_VEL``/``WITH``;
+- what is not a position: names used as frames (assigned to ``$TOOL``/``$BASE``/``$LOAD``/
+  ``TOOL_DATA``/``BASE_DATA``, operands of ``:``), every declared name with its type (so a
+  motion to a local variable is reported as such), FDATs (``BASE_NO``, ``TOOL_NO``,
+  ``IPO_FRAME``);
 - base frame context, followed in program order: ``$BASE = BASE_DATA[n]``, ``$BASE = {FRAME: ..}``,
   ``$BASE = $NULLFRAME``, ``BAS(#BASE, n)``, ``FDAT_ACT = Fname`` (``BASE_NO`` of the FDAT
   declaration), and for one spline motion ``WITH $BASE = SBASE(Fname.BASE_NO)``. What cannot be
@@ -16,6 +23,7 @@ inline-form FOLD lines are comments). It finds:
   a branch or loop that changes it.
 
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
+Every pattern is linear in its input (see the note above ``NUMBER``).
 """
 
 from __future__ import annotations
