@@ -36,6 +36,29 @@ from typing import NamedTuple
 from accugrid.codegen.program_text import check_text, decimals_of, split_lines
 from accugrid.kinematics.errors import InputError
 
+__all__ = [
+    "CARTESIAN_KEYS",
+    "JOINT_KEYS",
+    "MOTIONS",
+    "POSITION_TYPES",
+    "BaseRef",
+    "Declared",
+    "Fdat",
+    "FrameUse",
+    "KrlPosition",
+    "KrlScan",
+    "KrlUse",
+    "Number",
+    "code_part",
+    "match_brace",
+    "normalize_name",
+    "parse_aggregate",
+    "parse_krl",
+    "position_reason",
+    "scan_krl",
+    "wildcard",
+]
+
 MOTIONS = frozenset(
     "PTP LIN CIRC SPTP SLIN SCIRC SPL PTP_REL LIN_REL CIRC_REL SPTP_REL SLIN_REL SCIRC_REL".split()
 )
