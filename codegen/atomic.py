@@ -116,6 +116,7 @@ def _remove_dead_temps(folders: Iterable[Path]) -> None:
 
 
 def _alive(pid: int) -> bool:
+    """Whether another process ``pid`` runs (our own pid on a leftover means a reused pid)."""
     if pid == os.getpid():
         return False
     try:
@@ -249,7 +250,11 @@ def write_files(
                     raise InputError(f"cannot write: {exc.strerror or exc}", path) from None
             _sync(list(temps.values()))
             with _signals_held():
-                _swap(temps, main_paths, stale_paths)
+                try:
+                    _swap(temps, main_paths, stale_paths)
+                except OSError as exc:  # e.g. a folder made read-only meanwhile
+                    where = exc.filename or next(iter(paths))
+                    raise InputError(f"cannot replace: {exc.strerror or exc}", where) from None
     except _Stop as stop:
         raise SystemExit(128 + stop.signum) from None
     finally:

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.textsafe import comment_text, fixed, fixed_many
+from accugrid.compensation.csvtable import decimals_of
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import read_input_bytes
 
@@ -76,14 +77,6 @@ def check_text(text: str, path: str | os.PathLike[str] | None) -> None:
     if nul >= 0:
         line = text.count("\n", 0, nul) + 1
         raise InputError("binary data (NUL byte), not a program", path, line)
-
-
-def decimals_of(text: str) -> int:
-    """Digits after the decimal point in a number literal as written (0 without a point)."""
-    if "e" in text or "E" in text:
-        text = text.replace("E", "e").split("e")[0]
-    point = text.find(".")
-    return 0 if point < 0 else len(text) - point - 1
 
 
 def splice(text: str, edits: list[tuple[int, int, str]]) -> str:

@@ -22,7 +22,7 @@ import numpy as np
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import read_input_text
 
-__all__ = ["Table", "parse_number", "parse_table", "read_table"]
+__all__ = ["Table", "decimals_of", "parse_number", "parse_table", "read_table"]
 
 _DECIMAL = re.compile(
     r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|(?i:nan|inf|infinity))"
@@ -98,6 +98,12 @@ class Table:
         except ValueError as exc:
             raise InputError(str(exc), self.path, self.lines[r], i + 1) from None
 
+    def decimals(self, names: Sequence[str]) -> np.ndarray:
+        """Digits after the decimal point of each cell as written (N, len(names)) int."""
+        return np.array(
+            [[decimals_of(row[i]) for i in map(self.index, names)] for row in self.rows], dtype=int
+        ).reshape(len(self.rows), len(names))
+
     def check_bounds(
         self, values: np.ndarray, names: Sequence[str], limit: float, unit: str
     ) -> None:
@@ -114,6 +120,14 @@ class Table:
     def where(self, r: int, name: str | None = None) -> tuple[str, int, int | None]:
         """(path, line, column) of row r (0-based), for InputError(…, *table.where(r, name))."""
         return self.path, self.lines[r], None if name is None else self.index(name) + 1
+
+
+def decimals_of(text: str) -> int:
+    """Digits after the decimal point in a number literal as written (0 without a point)."""
+    if "e" in text or "E" in text:
+        text = text.replace("E", "e").split("e")[0]
+    point = text.find(".")
+    return 0 if point < 0 else len(text) - point - 1
 
 
 def _shorten(text: str, limit: int = 40) -> str:
@@ -169,10 +183,8 @@ def parse_table(text: str, path: str = "<string>") -> Table:
     try:
         for record in reader:
             start_line, end_line = end_line + 1, reader.line_num
-            if not record or all(not cell.strip() for cell in record):
-                continue
-            if record[0].lstrip().startswith("#"):
-                continue
+            if not "".join(record).strip() or record[0].lstrip()[:1] == "#":
+                continue  # blank or comment
             if header is None:
                 header = [cell.strip() for cell in record]
                 _check_header(header, path, start_line)

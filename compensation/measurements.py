@@ -23,6 +23,7 @@ COORD_TOL_MM = 1e-3  # two commanded coordinates closer than this are the same g
 REPEAT_TOL_MM = 0.5  # largest allowed distance of a repeat from the mean of its vertex
 ORIENTATION_TOL_DEG = 0.1  # every row must be commanded at the same a,b,c within this
 COORD_MAX_MM = 1e6  # positions beyond 1 km are refused at their cell (no robot reaches them)
+JOINT_MAX_DEG = 3600.0  # logged axis angles beyond ten turns are refused at their cell
 _SHOW = 5  # how many offending items an error message lists
 
 
@@ -31,6 +32,9 @@ class Measurements:
     """Rows of a measurement session: commanded and measured (N, 3) mm, a,b,c (N, 3) deg or None.
 
     ``path``/``lines`` locate each row for error messages (``path`` None for arrays).
+    ``joints``: the logged axis angles a1..a6 (N, 6) KUKA deg or None; ``joint_decimals`` (N, 6)
+    and ``position_decimals`` (N, 3) int: digits after the point as printed (for the round-off
+    the logged numbers carry); ``status``: column ``s`` (N,) int KUKA Status or None.
     """
 
     commanded: np.ndarray
@@ -39,6 +43,10 @@ class Measurements:
     path: str | None = None
     lines: np.ndarray | None = None
     sha256: str | None = None
+    joints: np.ndarray | None = None
+    joint_decimals: np.ndarray | None = None
+    position_decimals: np.ndarray | None = None
+    status: np.ndarray | None = None
 
     def where(self, row: int) -> str:
         """Human location of a row: 'line 12' for a file, 'row 3' (0-based) for arrays."""
@@ -63,7 +71,8 @@ class VertexGrid:
 
 
 def read_measurements(path: str | os.PathLike[str]) -> Measurements:
-    """Read a measurement CSV (DESIGN.md): x,y,z,x_meas,y_meas,z_meas required, a,b,c optional."""
+    """Read a measurement CSV (DESIGN.md): x,y,z,x_meas,y_meas,z_meas required; a,b,c, the
+    logged joints a1..a6 (all six or none) and the Status s optional."""
     path = os.fspath(path)
     raw, text = read_input_text(path)
     table = parse_table(text, path)
@@ -71,6 +80,13 @@ def read_measurements(path: str | os.PathLike[str]) -> Measurements:
     if not len(table):
         raise InputError("no measurement rows", path)
     abc = _abc_columns(table)
+    joint_names = [f"a{i}" for i in range(1, 7)]
+    joints = joint_decimals = None
+    if any(table.has(n) for n in joint_names):
+        table.require(joint_names)
+        joints = table.floats(joint_names)
+        table.check_bounds(joints, joint_names, JOINT_MAX_DEG, "deg")
+        joint_decimals = table.decimals(joint_names)
     columns = {}
     for names in (["x", "y", "z"], ["x_meas", "y_meas", "z_meas"]):
         columns[names[0]] = table.floats(names)
@@ -82,7 +98,25 @@ def read_measurements(path: str | os.PathLike[str]) -> Measurements:
         path=path,
         lines=np.asarray(table.lines),
         sha256=hashlib.sha256(raw).hexdigest(),
+        joints=joints,
+        joint_decimals=joint_decimals,
+        position_decimals=table.decimals(["x", "y", "z"]),
+        status=_status_column(table),
     )
+
+
+def _status_column(table: Table) -> np.ndarray | None:
+    """Column ``s`` as KUKA Status ints 0..7 (N,), or None; InputError at a bad cell."""
+    if not table.has("s"):
+        return None
+    values = table.floats(["s"])[:, 0]
+    bad = np.flatnonzero((values != np.round(values)) | (values < 0) | (values > 7))
+    if bad.size:
+        raise InputError(
+            f"column 's' must be a KUKA Status 0..7, got {values[bad[0]]:g}",
+            *table.where(int(bad[0]), "s"),
+        )
+    return values.astype(int)
 
 
 def _abc_columns(table: Table) -> np.ndarray | None:

@@ -30,8 +30,8 @@ __all__ = [
     "tracked_inputs",
 ]
 
-MAX_INPUT_BYTES = 512 * 2**20
-"""Largest CSV or program read (512 MiB holds several million holes)."""
+MAX_INPUT_BYTES = 256 * 2**20
+"""Largest CSV read (256 MiB holds about three million holes; programs have --max-mb)."""
 MAX_CONFIG_BYTES = 4 * 2**20
 """Largest YAML configuration read (a cell or robot file is a few KiB)."""
 MAX_FOLDER_FILES = 10_000

@@ -80,24 +80,36 @@ class JointErrors:
         c = np.array(compliance, dtype=float).reshape(6)
         return cls(compliance=c, masses=tuple(masses))
 
-    def gravity_torques(self, dh: DHTable, q: np.ndarray) -> np.ndarray:
-        """Static gravity torques τ (N, 6) N·m about the positive KUKA axes at joints q (N, 6) rad.
+    def gravity_torques(
+        self, dh: DHTable, q: np.ndarray, axes: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Static gravity torques τ (N, 6) N·m about the positive KUKA axes at joints q (N, 6) rad
+        (only on ``axes``, a (6,) bool mask, when given; zero elsewhere).
 
         This is also ∂δ/∂c: ∂δ_j/∂c_j = τ_j(q), ∂δ_j/∂c_i = 0 for i ≠ j."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
         tau = np.zeros((len(q), 6))
-        if not self.masses:
+        wanted = np.ones(6, bool) if axes is None else np.asarray(axes, bool)
+        masses = [m for m in self.masses if m.kg != 0.0]
+        if not masses or not wanted.any():
             return tau
-        frames = [np.broadcast_to(np.eye(4), (len(q), 4, 4))] + chain(dh, q)  # base_T_0 .. 6
-        weight = np.array([0.0, 0.0, -self.gravity_mps2])  # N per kg, base frame
-        for m in self.masses:
+        deepest = max(m.link for m in masses)
+        frames = [np.broadcast_to(np.eye(4), (len(q), 4, 4))] + chain(dh, q, links=deepest)
+        # first moments kg·mm of the masses on each link, base frame
+        first = np.zeros((deepest + 1, len(q), 3))
+        kg = np.zeros(deepest + 1)
+        for m in masses:
             link = frames[m.link]
-            p = link[:, :3, :3] @ np.asarray(m.at_mm, dtype=float) + link[:, :3, 3]  # (N, 3) mm
-            force = m.kg * weight
-            for j in range(m.link):  # joint j + 1 turns about z of frame j through its origin
-                lever_m = (p - frames[j][:, :3, 3]) * 1e-3
-                moment = np.cross(lever_m, force)
-                tau[:, j] += dh.sign[j] * np.einsum("ni,ni->n", moment, frames[j][:, :3, 2])
+            first[m.link] += m.kg * (link[:, :3, :3] @ np.asarray(m.at_mm, dtype=float))
+            first[m.link] += m.kg * link[:, :3, 3]
+            kg[m.link] += m.kg
+        for j in np.flatnonzero(wanted[:deepest]):  # joint j + 1 turns about z of frame j
+            # moment of the weights beyond joint j about frame j's origin: v × (0, 0, -g), with
+            # v = Σ kg (p - o_j) in kg·m
+            v = (first[j + 1 :].sum(axis=0) - kg[j + 1 :].sum() * frames[j][:, :3, 3]) * 1e-3
+            axis = frames[j][:, :3, 2]
+            moment_on_axis = self.gravity_mps2 * (v[:, 0] * axis[:, 1] - v[:, 1] * axis[:, 0])
+            tau[:, j] = dh.sign[j] * moment_on_axis
         return tau
 
     def delta(self, dh: DHTable, q: np.ndarray) -> np.ndarray:
@@ -105,7 +117,7 @@ class JointErrors:
         q = np.atleast_2d(np.asarray(q, dtype=float))
         out = np.zeros((len(q), 6))
         if np.any(self.compliance):
-            out += self.compliance * self.gravity_torques(dh, q)
+            out += self.compliance * self.gravity_torques(dh, q, self.compliance != 0)
         for h in self.harmonics:
             out[:, h.axis - 1] += h.amplitude_rad * np.sin(h.order * q[:, h.axis - 1] + h.phase_rad)
         return out

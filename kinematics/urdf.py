@@ -15,6 +15,13 @@ Pinocchio (no closed form): IK is damped least squares on the 6D pose error with
 
 from __future__ import annotations
 
+import contextlib
+import os
+import re
+import sys
+import tempfile
+import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -144,6 +151,24 @@ class UrdfRobot:
         return f"{self.model.names[i + 1]} outside limits {lo:g}..{hi:g} deg"
 
 
+@contextlib.contextmanager
+def _native_stderr() -> Iterator[list[str]]:
+    """Hold what native code (urdfdom, tinyxml) writes to file descriptor 2 while the block runs;
+    the text is in the yielded list's only item afterwards."""
+    said = [""]
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as held:
+        os.dup2(held.fileno(), 2)
+        try:
+            yield said
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            held.seek(0)
+            said[0] = held.read(64 * 1024).decode("utf-8", "replace")
+
+
 def urdf_robot_from_doc(doc: YamlDoc, folder: Path) -> UrdfRobot:
     """The UrdfRobot a robot YAML describes (keys: name, urdf, tip, optional tool, description)."""
     import pinocchio as pin
@@ -152,10 +177,20 @@ def urdf_robot_from_doc(doc: YamlDoc, folder: Path) -> UrdfRobot:
     if not path.is_file():
         raise doc.error(f"{doc.keyname('urdf')}: URDF file not found: {path}", "urdf")
     note_input(path)  # read by Pinocchio, an input all the same
-    try:
-        model = pin.buildModelFromUrdf(str(path))
-    except (RuntimeError, ValueError) as exc:
-        raise InputError(f"cannot read the URDF: {exc}".splitlines()[0], path) from None
+    with _native_stderr() as said:
+        try:
+            model = pin.buildModelFromUrdf(str(path))
+        except (RuntimeError, ValueError) as exc:
+            failure = f"cannot read the URDF: {exc}".splitlines()[0]
+        else:
+            failure = None
+    if failure is not None:  # the parser's own words (tinyxml) locate the problem
+        line = re.search(r"Line number=(\d+)", said[0])
+        detail = re.search(r"Error=(\w+)", said[0])
+        failure += f" ({detail.group(1)})" if detail else ""
+        raise InputError(failure, path, int(line.group(1)) if line else None)
+    if said[0].strip():  # warnings of a URDF that loaded: after our work, as library warnings
+        warnings.warn(f"{path}: {said[0].strip()}", stacklevel=2)
     if model.nq == 0:
         raise InputError("the URDF has no movable joint (a robot needs at least one)", path)
     tip_name = doc.string("tip")

@@ -193,3 +193,16 @@ def test_a_single_link_urdf_is_a_located_input_error(tmp_path):
     with pytest.raises(InputError, match="no movable joint") as info:
         load_robot(tmp_path / "robot.yaml")
     assert info.value.path == str(tmp_path / "one.urdf")
+
+
+def test_urdf_parser_output_does_not_precede_the_error(tmp_path, capfd):
+    """Item 8: tinyxml/urdfdom print to file descriptor 2 before our message; now their words
+    are in the one line, with the line they name."""
+    (tmp_path / "bad.urdf").write_text('<?xml version="1.0"?><robot name="x"><link name="a"/>\n')
+    (tmp_path / "robot.yaml").write_text("name: x\nurdf: bad.urdf\ntip: a\n")
+    argv = ["simulate", "--robot", str(tmp_path / "robot.yaml"), "--region", "0", "1", "0", "1"]
+    code = main([*argv, "0", "1", "--step", "1", "-o", str(tmp_path / "s.csv")])
+    err = capfd.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1 and err.startswith("accugrid simulate: error: ")
+    assert f"{tmp_path / 'bad.urdf'}:" in err and "cannot read the URDF" in err

@@ -14,6 +14,9 @@ correction longer than --max-correction, a point whose orientation differs from 
 more than --orientation-limit (unless --allow-orientation). The orientation difference is the
 angle of the relative rotation for a,b,c points, the angle between the drill axis and the grid
 tool's Z axis for i,j,k points.
+
+With --model CAL.yaml the points are corrected by a calibrated robot model at any orientation
+(--grid then optional: the residual after the model; see codegen/correct_model.py).
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ import io
 import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cli_options import add_abc, add_status
 from accugrid.codegen.points import Points, read_points
 from accugrid.codegen.textsafe import comment_text, fixed
 from accugrid.compensation.grid import MAX_CORRECTION_MM, GridModel
@@ -43,7 +47,22 @@ _LISTED = 5  # how many points a message names
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("points", metavar="POINTS", help="points CSV, robot frame (mm, deg)")
-    parser.add_argument("--grid", required=True, metavar="MEAS", help="measurement CSV")
+    parser.add_argument(
+        "--grid",
+        metavar="MEAS",
+        help="measurement CSV (with --model: the residual grid after the model)",
+    )
+    parser.add_argument(
+        "--model",
+        metavar="CAL",
+        help="calibrated robot YAML (accugrid identify): correct by the model, any orientation",
+    )
+    add_status(
+        parser,
+        "with --model: the KUKA Status the program runs in (default: the IK default at the "
+        "first point)",
+    )
+    add_abc(parser, "with --model: orientation of points without a,b,c, reference for i,j,k axes")
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="CSV to write")
     parser.add_argument(
         "--method",
@@ -110,6 +129,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.model is not None:
+        from accugrid.codegen.correct_model import run_model
+
+        return run_model(args)
+    if args.grid is None:
+        raise InputError("give --grid MEAS, --model CAL.yaml or both")
     if not args.max_correction > 0:
         raise InputError(f"--max-correction must be > 0 mm, got {args.max_correction}")
     if not 0 <= args.orientation_tol <= args.orientation_limit:
@@ -117,13 +142,7 @@ def run(args: argparse.Namespace) -> int:
     check_targets([args.output], [args.points, args.grid], args.force)
     model = GridModel.from_measurements(args.grid, repeat_tol_mm=args.repeat_tol)
     points = read_points(args.points)
-    clash = [name for name in ADDED if points.table.has(name)]
-    if clash:
-        raise InputError(
-            f"column(s) {', '.join(clash)} would be written by accugrid correct; rename them",
-            points.path,
-            1,
-        )
+    check_added_columns(points)
     flags: list[list[str]] = [[] for _ in range(len(points))]
     _check_outside(points, model, args.outside, flags)
     _check_orientation(points, model, args, flags)
@@ -135,15 +154,7 @@ def run(args: argparse.Namespace) -> int:
         outside=args.outside,
         max_correction_mm=None,
     )
-    correction = command - points.xyz
-    length = np.linalg.norm(correction, axis=1)
-    worst = int(np.argmax(length)) if len(points) else None
-    if worst is not None and length[worst] > args.max_correction:
-        raise InputError(
-            f"{points.label(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
-            f"limit of {args.max_correction:g} mm; refusing the whole job (check the grid)",
-            *points.table.where(worst),
-        )
+    correction, length, worst = check_max_correction(points, command, args.max_correction)
     header = (
         f"accugrid correct: grid {args.grid} sha256 {model.source_sha256}, method "
         f"{args.method}, power {args.power:g}, iterations {args.iterations}"
@@ -152,6 +163,34 @@ def run(args: argparse.Namespace) -> int:
     write_files({args.output: text}, [args.points, args.grid], force=args.force)
     _print_summary(model, points, args, length, worst, flags)
     return 0
+
+
+def check_added_columns(points: Points) -> None:
+    """InputError when the points CSV already has a column that correct writes."""
+    clash = [name for name in ADDED if points.table.has(name)]
+    if clash:
+        raise InputError(
+            f"column(s) {', '.join(clash)} would be written by accugrid correct; rename them",
+            points.path,
+            1,
+        )
+
+
+def check_max_correction(
+    points: Points, command: np.ndarray, limit_mm: float
+) -> tuple[np.ndarray, np.ndarray, int | None]:
+    """(correction P' - P (N, 3), its length (N,), index of the longest or None); InputError
+    naming the point when the longest exceeds ``limit_mm``."""
+    correction = command - points.xyz
+    length = np.linalg.norm(correction, axis=1)
+    worst = int(np.argmax(length)) if len(points) else None
+    if worst is not None and length[worst] > limit_mm:
+        raise InputError(
+            f"{points.label(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
+            f"limit of {limit_mm:g} mm; refusing the whole job (check the grid or model)",
+            *points.table.where(worst),
+        )
+    return correction, length, worst
 
 
 def _check_outside(points: Points, model: GridModel, rule: str, flags: list[list[str]]) -> None:

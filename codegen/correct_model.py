@@ -1,0 +1,122 @@
+"""`accugrid correct --model CAL.yaml [--grid MEAS]`: correction by a calibrated robot model.
+
+Every point P (robot frame, mm) at its orientation gets the command P' that the calibrated arm,
+driven by the nominal controller in one KUKA Status, takes to P (``compensation.model_correction``,
+iterated to 0.001 mm); with ``--grid`` the grid holds the residual after the model and is added.
+Orientation: a,b,c columns as given; i,j,k drill axes oriented along the axis nearest ``--abc``;
+points without orientation at ``--abc``. The output CSV is the one of ``accugrid correct``.
+Refused (exit 2, nothing written): a point the nominal controller cannot reach in the Status or
+that does not converge, points outside the residual grid (unless --outside clamp), any correction
+longer than --max-correction.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.commands.correct import (
+    _check_outside,
+    _corrected_csv,
+    check_added_columns,
+    check_max_correction,
+    orientation_difference_deg,
+)
+from accugrid.codegen.points import Points, orient_along_axes, read_points, too_tilted
+from accugrid.compensation.model_correction import TOL_MM, model_correct, residual_grid
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc
+from accugrid.kinematics.robot import load_robot
+from accugrid.kinematics.simulation import commanded_poses
+
+__all__ = ["point_orientations", "run_model"]
+
+_LISTED = 5
+
+
+def point_orientations(points: Points, reference_abc: np.ndarray) -> np.ndarray:
+    """KUKA A, B, C (N, 3) deg per point: its a,b,c; for i,j,k the rotation about the drill axis
+    nearest ``reference_abc`` (3,) deg; without orientation columns the reference itself."""
+    reference = abc_to_matrix(np.asarray(reference_abc, dtype=float))
+    if points.abc is not None:
+        return points.abc
+    if points.axis is None:
+        return np.tile(np.asarray(reference_abc, dtype=float), (len(points), 1))
+    tilted = np.flatnonzero(too_tilted(points.axis, reference))
+    if tilted.size:
+        i = int(tilted[0])
+        raise InputError(
+            f"{points.label(i)}: drill axis too far from the --abc tool Z axis to orient",
+            *points.table.where(i),
+        )
+    return matrix_to_abc(orient_along_axes(points.axis, reference))
+
+
+def run_model(args: argparse.Namespace) -> int:
+    """The whole ``correct --model`` job (arguments of ``accugrid correct``)."""
+    if not args.max_correction > 0:
+        raise InputError(f"--max-correction must be > 0 mm, got {args.max_correction}")
+    inputs = [args.points, args.grid, args.model if Path(args.model).is_file() else None]
+    check_targets([args.output], inputs, args.force)
+    calibrated = load_robot(args.model)
+    points = read_points(args.points)
+    check_added_columns(points)
+    abc = point_orientations(points, np.array(args.abc, dtype=float))
+    status = args.status
+    if status is None and len(points):
+        first = calibrated.ik(commanded_poses(points.xyz[:1], abc[0]))
+        status = int(first.status[0]) if first.ok[0] else None
+    grid = None
+    flags: list[list[str]] = [[] for _ in range(len(points))]
+    if args.grid is not None:
+        grid = residual_grid(calibrated, args.grid, status, repeat_tol_mm=args.repeat_tol)
+        _check_outside(points, grid, args.outside, flags)
+        angle = orientation_difference_deg(points, grid)
+        if angle is not None:
+            for i in np.flatnonzero(angle > args.orientation_tol):
+                flags[i].append(f"orientation {angle[i]:.1f} deg from residual grid")
+    result = model_correct(
+        calibrated, points.xyz, abc, status, grid, args.method, args.power, args.outside
+    )
+    if not result.ok.all():
+        bad = result.failed
+        named = "; ".join(f"{points.label(int(i))}: {result.reason[i]}" for i in bad[:_LISTED])
+        more = f" and {bad.size - _LISTED} more" if bad.size > _LISTED else ""
+        raise InputError(
+            f"{bad.size} point(s) not corrected by model {calibrated.name} in Status {status}: "
+            f"{named}{more}",
+            *points.table.where(int(bad[0])),
+        )
+    correction, length, worst = check_max_correction(points, result.command, args.max_correction)
+    residual = (
+        ""
+        if grid is None
+        else f", residual grid {args.grid} sha256 {grid.source_sha256}, method {args.method}, "
+        f"power {args.power:g}"
+    )
+    header = (
+        f"accugrid correct: model {args.model}, robot {calibrated.name}, Status {status}{residual}"
+    )
+    text = _corrected_csv(points, result.command, correction, flags, header)
+    write_files({args.output: text}, inputs, force=args.force)
+    if grid is not None:
+        print(grid.describe().replace("grid       ", "residual   ", 1))
+    print(f"model      {args.model} ({calibrated.name}), KUKA Status {status}")
+    print(
+        f"corrected  {len(points)} point(s) in {result.iterations} pass(es), largest miss "
+        f"{np.nanmax(result.miss_mm, initial=0.0):.6f} mm (tolerance {TOL_MM:g})"
+    )
+    if worst is not None:
+        print(
+            f"largest correction {length[worst]:.4f} mm at {points.label(worst)}; "
+            f"mean {length.mean():.4f} mm"
+        )
+    flagged = [i for i, f in enumerate(flags) if f]
+    print(f"flagged    {len(flagged)} point(s)")
+    for i in flagged[:_LISTED]:
+        print(f"  {points.label(i)}: {'; '.join(flags[i])}")
+    print(f"wrote {args.output}")
+    return 0

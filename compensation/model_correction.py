@@ -1,0 +1,165 @@
+"""Correction with a calibrated kinematic model, optionally plus a residual grid (issue 13 item 5).
+
+The robot's controller keeps its nominal model: commanded a TCP pose (position P', orientation R)
+in one KUKA Status it runs the nominal IK, and the real arm, which the calibrated model stands for
+(``calibrated.true_robot()``: identified DH errors, TCP, joint errors), reaches
+reach(P') = FK_cal(IK_nom(P', R, Status)). ``model_correct`` finds per target P (robot frame, mm)
+the command P' with reach(P') = P by the fixed-point iteration P'_(k+1) = P'_k + (P - reach(P'_k)),
+P'_0 = P. reach differs from the identity by millimetres over metres, so every step gains about
+three orders of magnitude; it stops when |P - reach(P')| < ``tol_mm``.
+
+With a residual grid (``residual_grid``: at every vertex the measured error minus the model's, so
+r = reach_model - M, mm) the arm is taken to reach reach(P') - r, and the iteration solves
+reach(P') = P + r(P). r is interpolated at the target, not at the moving command: the two differ
+by the correction (millimetres), over which r changes by micrometres, and IDW, which jumps across
+cell faces, would otherwise keep the iteration from settling next to a face. The orientation R
+stays as commanded: only positions are corrected.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from accugrid.compensation.grid import GridModel
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix
+from accugrid.kinematics.robot import Robot
+
+__all__ = ["MAX_ITERATIONS", "TOL_MM", "ModelCorrection", "model_correct", "residual_grid"]
+
+TOL_MM = 1e-3  # default: |P - reach(P')| below 0.001 mm
+MAX_ITERATIONS = 12
+
+
+@dataclass(frozen=True)
+class ModelCorrection:
+    """Result of ``model_correct`` for N targets."""
+
+    command: np.ndarray  # (N, 3) mm, P'; the target itself where not ok
+    ok: np.ndarray  # (N,) bool
+    reason: np.ndarray  # (N,) object: "" when ok, else why not
+    miss_mm: np.ndarray  # (N,) |P + r(P) - reach(P')| at the returned command, mm (NaN if none)
+    iterations: int  # passes over the points (each one nominal IK + calibrated FK)
+
+    @property
+    def failed(self) -> np.ndarray:
+        """Indices (M,) of the targets that are unreachable or did not converge."""
+        return np.flatnonzero(~self.ok)
+
+
+def reached_by_model(
+    calibrated: Robot, commands: np.ndarray, rotations: np.ndarray, status: int | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where the calibrated arm puts the TCP for commands (N, 3) mm at rotations (N, 3, 3) under
+    the nominal controller in KUKA ``status``: (positions (N, 3) mm, NaN where the nominal IK
+    fails; ok (N,); reason (N,))."""
+    poses = np.zeros((len(commands), 4, 4))
+    poses[:, :3, :3] = rotations
+    poses[:, :3, 3] = commands
+    poses[:, 3, 3] = 1.0
+    sol = calibrated.ik(poses, status=status)
+    true = calibrated.true_robot() or calibrated
+    out = np.full((len(commands), 3), np.nan)
+    if sol.ok.any():
+        out[sol.ok] = true.fk(sol.q[sol.ok])[:, :3, 3]
+    return out, sol.ok, sol.reason
+
+
+def model_correct(
+    calibrated: Robot,
+    points: np.ndarray,
+    abc_deg: np.ndarray,
+    status: int | None,
+    grid: GridModel | None = None,
+    method: str = "idw",
+    power: float = 1.0,
+    outside: str = "error",
+    tol_mm: float = TOL_MM,
+    max_iterations: int = MAX_ITERATIONS,
+) -> ModelCorrection:
+    """Commands P' (N, 3) mm for targets P (N, 3) mm (robot frame) at KUKA A, B, C ``abc_deg``
+    ((N, 3) or (3,) deg) in one KUKA ``status`` (None: the IK default per point).
+
+    ``grid``: a residual grid (``residual_grid``) added as r(P), interpolated by ``method`` /
+    ``power``, ``outside`` as in ``GridModel.predict``. Unreachable targets and targets that do
+    not converge within ``max_iterations`` are ``ok = False`` with the reason, vectorized over N.
+    """
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    n = len(points)
+    rotations = np.broadcast_to(abc_to_matrix(np.asarray(abc_deg, dtype=float)), (n, 3, 3))
+    if not tol_mm > 0 or int(max_iterations) < 1:
+        raise InputError("tolerance must be > 0 mm and iterations >= 1")
+    goals = points if grid is None else points + grid.predict(points, method, power, outside)
+    command = points.copy()
+    ok = np.zeros(n, bool)
+    miss_mm = np.full(n, np.nan)
+    reason = np.full(n, "", dtype=object)
+    active = np.arange(n)
+    passes = 0
+    while active.size and passes < max_iterations:
+        passes += 1
+        reach, reached, why = reached_by_model(
+            calibrated, command[active], rotations[active], status
+        )
+        reason[active[~reached]] = why[~reached]
+        active, reach = active[reached], reach[reached]
+        miss = goals[active] - reach
+        length = np.linalg.norm(miss, axis=1)
+        miss_mm[active] = length
+        done = length < tol_mm
+        ok[active[done]] = True
+        command[active[~done]] += miss[~done]
+        active = active[~done]
+    reason[active] = f"no convergence to {tol_mm:g} mm in {max_iterations} iterations"
+    command[~ok] = points[~ok]
+    return ModelCorrection(command, ok, reason, miss_mm, passes)
+
+
+def residual_grid(
+    calibrated: Robot,
+    measurements: str | os.PathLike[str] | tuple,
+    status: int | None,
+    abc_deg: np.ndarray | None = None,
+    repeat_tol_mm: float | None = None,
+) -> GridModel:
+    """The grid of what the calibrated model leaves: at each vertex P_v the measured error
+    P_v - M minus the model's P_v - reach(P_v), i.e. r = reach(P_v) - M (mm).
+
+    ``measurements``: a measurement CSV path or (commanded, measured[, abc]) arrays, as for
+    ``GridModel.from_measurements``; the vertices are reached at the measurement's a,b,c
+    (``abc_deg`` when the file has none) in KUKA ``status``. InputError naming the first vertex
+    the nominal controller cannot reach.
+    """
+    kwargs = {} if repeat_tol_mm is None else {"repeat_tol_mm": repeat_tol_mm}
+    measured = GridModel.from_measurements(measurements, **kwargs)
+    abc = measured.orientation_abc if measured.orientation_abc is not None else abc_deg
+    if abc is None:
+        raise InputError(
+            "a residual grid needs the orientation of its measurement (a,b,c columns)",
+            measured.source_path,
+        )
+    vertices = measured.vertices().reshape(-1, 3)
+    rotations = np.broadcast_to(abc_to_matrix(np.asarray(abc, dtype=float)), (len(vertices), 3, 3))
+    reach, ok, why = reached_by_model(calibrated, vertices, rotations, status)
+    if not ok.all():
+        i = int(np.flatnonzero(~ok)[0])
+        x, y, z = vertices[i]
+        raise InputError(
+            f"{(~ok).sum()} grid vertices cannot be reached by {calibrated.name}; first X {x:g} "
+            f"Y {y:g} Z {z:g} ({why[i]})",
+            measured.source_path,
+        )
+    model_error = (vertices - reach).reshape(measured.errors.shape)
+    return GridModel(
+        measured.origin,
+        measured.step,
+        measured.errors - model_error,
+        orientation_abc=np.asarray(abc, dtype=float),
+        source_sha256=measured.source_sha256,
+        source_path=measured.source_path,
+        repeats=measured.repeats,
+        spread_mm=measured.spread_mm,
+    )

@@ -1,0 +1,172 @@
+"""The calibrated robot file: a robot YAML (``kinematics.robot``) with the identified parameters.
+
+It holds the nominal model (``dh``, ``limits_deg``), the identified DH errors (``errors``: per row
+Δa mm, Δd mm, Δα rad, Δθ rad), the identified TCP (``tool``: x, y, z mm, a, b, c deg), with
+compliance the ``joint_errors`` section (compliance rad/N·m and the gravity model) and an
+``identification:`` summary that ``load_robot`` ignores. Loaded, its ``true_robot()`` is the
+calibrated arm. Numbers are written with full float precision (shortest round-trip form), so the
+reloaded model gives the same FK to the last bit of the DH values.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import yaml
+
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import xyzabc_from_pose
+from accugrid.kinematics.identification import Identification
+from accugrid.kinematics.joint_errors import JointErrors
+from accugrid.kinematics.robot import Robot
+
+__all__ = ["calibrated_yaml", "check_same_robot", "identification_summary"]
+
+_SAME_TOL = 1e-9  # mm / deg: nominal DH values closer than this are the same robot
+
+
+def _pose_dict(pose: np.ndarray) -> dict[str, float]:
+    return {k: float(v) for k, v in zip("xyzabc", xyzabc_from_pose(pose), strict=True)}
+
+
+def _axes(values: np.ndarray) -> dict[str, float]:
+    return {axis: float(v) for axis, v in zip("xyz", values, strict=True)}
+
+
+def identification_summary(
+    result: Identification,
+    nominal: Robot,
+    source: str | None = None,
+    sha256: str | None = None,
+) -> dict:
+    """The ``identification:`` section: plain data (mm, rad, deg as named) for the YAML."""
+    parameters = [
+        {
+            "name": name,
+            "value": float(value),
+            "std": float(std),
+            "unit": unit,
+            "identifiable": bool(ok),
+        }
+        for name, value, std, unit, ok in zip(
+            result.names, result.x, result.std, result.units, result.identifiable, strict=True
+        )
+    ]
+    summary: dict = {
+        "robot": nominal.name,
+        "measurements": {"file": source, "sha256": sha256},
+        "controller_tool": _pose_dict(nominal.flange_T_tool),
+        "poses": result.poses,
+        "rows": result.rows,
+        "identifiable_parameters": result.rank,
+        "unidentifiable_directions": list(result.unidentifiable_text),
+        "condition_number": float(result.condition_number),
+        "observability_o1": float(result.o1),
+        "residual_rms_mm": _axes(result.rms_mm),
+        "residual_max_mm": _axes(result.max_mm),
+        "robust_sigma_mm": float(result.sigma_mm),
+        "outliers": list(result.outliers),
+        "parameters": parameters,
+    }
+    if result.tracker_T_robot is not None:
+        summary["tracker_T_robot"] = _pose_dict(result.tracker_T_robot)
+    if result.cross_validation is not None:
+        cv = result.cross_validation
+        summary["cross_validation"] = {
+            "folds": cv.folds,
+            "predicted_rms_mm": _axes(cv.rms_mm),
+            "predicted_max_mm": _axes(cv.max_mm),
+        }
+    return summary
+
+
+def calibrated_yaml(robot: Robot, summary: dict | None = None, header: str = "") -> str:
+    """YAML text of ``robot`` (nominal DH, limits, tool, errors) plus the ``identification``
+    section; ``header``: comment lines put on top (without ``#``)."""
+    dh = robot.dh
+    doc: dict = {
+        "name": robot.name,
+        "description": robot.description,
+        "dh": [
+            {
+                "a_mm": float(dh.a[i]),
+                "alpha_deg": float(np.degrees(dh.alpha[i])),
+                "d_mm": float(dh.d[i]),
+                "theta_offset_deg": float(np.degrees(dh.theta_offset[i])),
+                "sign": int(dh.sign[i]),
+            }
+            for i in range(dh.n)
+        ],
+        "limits_deg": [[float(lo), float(hi)] for lo, hi in robot.joint_limits_deg],
+        "tool": _pose_dict(robot.flange_T_tool),
+    }
+    if robot.errors is not None:
+        keys = ("da_mm", "dd_mm", "dalpha_rad", "dtheta_rad")
+        doc["errors"] = [
+            {k: float(v) for k, v in zip(keys, row, strict=True)} for row in robot.errors
+        ]
+    if robot.joint_errors is not None:
+        doc["joint_errors"] = _joint_errors_dict(robot.joint_errors)
+    if summary is not None:
+        doc["identification"] = summary
+    text = yaml.safe_dump(doc, sort_keys=False, default_flow_style=None, width=100)
+    comments = "".join(f"# {line}\n" for line in header.splitlines())
+    return comments + text
+
+
+def _joint_errors_dict(moves: JointErrors) -> dict:
+    """The ``joint_errors:`` section ``load_robot`` reads (compliance, masses, harmonics,
+    thermal, gravity)."""
+    out: dict = {"compliance_rad_per_nm": [float(c) for c in moves.compliance]}
+    out["masses"] = [
+        {"link": m.link, "kg": float(m.kg), "at_mm": [float(v) for v in m.at_mm]}
+        for m in moves.masses
+    ]
+    if moves.harmonics:
+        out["harmonics"] = [
+            {
+                "axis": h.axis,
+                "order": h.order,
+                "amplitude_rad": float(h.amplitude_rad),
+                "phase_deg": float(np.degrees(h.phase_rad)),
+            }
+            for h in moves.harmonics
+        ]
+    if moves.thermal is not None:
+        out["thermal"] = {
+            "delta_t_k": float(moves.thermal.delta_t_k),
+            "expansion_per_k": float(moves.thermal.expansion_per_k),
+        }
+    out["gravity_mps2"] = float(moves.gravity_mps2)
+    return out
+
+
+def check_same_robot(model: Robot, robot: Robot, where: str | None = None) -> None:
+    """InputError unless ``model`` (e.g. a calibrated file) has ``robot``'s nominal DH and
+    joint limits (within 1e-9 mm/deg): a model identified on another robot type."""
+    a, b = model.dh, robot.dh
+    rows = [
+        ("a_mm", a.a, b.a),
+        ("d_mm", a.d, b.d),
+        ("alpha_deg", np.degrees(a.alpha), np.degrees(b.alpha)),
+        ("theta_offset_deg", np.degrees(a.theta_offset), np.degrees(b.theta_offset)),
+        ("sign", a.sign, b.sign),
+    ]
+    if a.n != b.n:
+        raise InputError(f"model {model.name} has {a.n} axes, robot {robot.name} {b.n}", where)
+    for key, mine, theirs in rows:
+        off = np.flatnonzero(np.abs(mine - theirs) > _SAME_TOL)
+        if off.size:
+            i = int(off[0])
+            raise InputError(
+                f"model {model.name} is of another robot than {robot.name}: dh[{i}].{key} "
+                f"{mine[i]:g} vs {theirs[i]:g}",
+                where,
+            )
+    off = np.argwhere(np.abs(model.joint_limits_deg - robot.joint_limits_deg) > _SAME_TOL)
+    if off.size:
+        i, j = off[0]
+        raise InputError(
+            f"model {model.name} is of another robot than {robot.name}: limits_deg[{i}][{j}] "
+            f"{model.joint_limits_deg[i, j]:g} vs {robot.joint_limits_deg[i, j]:g}",
+            where,
+        )
