@@ -42,6 +42,7 @@ _OWORD_RE = re.compile(
 )
 _OWORD_ANY_RE = re.compile(r"^[^\S\n]*+[Oo]", re.M)  # a line _OWORD_RE may match
 _LETTERS = frozenset(string.ascii_letters)
+_BOMS = ("\xef\xbb\xbf", "\ufeff")  # UTF-8 byte-order mark read as latin-1, or decoded
 AXES = "XYZ"
 ROTARY = "ABCUVW"
 CYCLES = frozenset(("73", "81", "82", "83", "84", "85", "86", "87", "88", "89"))
@@ -334,7 +335,11 @@ def _put(block: _Line, letter: str, number: str, at: int, end: int, offset: int,
     if (letter in words or letter in block.exprs) and letter != "M":
         raise InputError(f"word {letter} given twice", path, lineno, at + 1)
     if letter in _KEPT:
-        words[letter] = _new_word(Word, (letter, float(number), offset + at, offset + end, number))
+        value = float(number)
+        if value - value:  # inf - inf is NaN: a literal beyond the float range
+            shown = number if len(number) <= 20 else number[:20] + "..."
+            raise InputError(f"word {letter}{shown}: number out of range", path, lineno, at + 1)
+        words[letter] = _new_word(Word, (letter, value, offset + at, offset + end, number))
     else:  # N, F, S, M, T, ...: only seen (a second one is an error), never a position
         words[letter] = None
 
@@ -519,9 +524,12 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
     # needs those per-line checks
     owords = _OWORD_ANY_RE.search(text) is not None
     slashes = "/" in text
+    bom = next((b for b in _BOMS if text.startswith(b)), "")
     for lineno, raw in enumerate(split_lines(text), start=1):
         line_offset = offset
         offset += len(raw) + 1
+        if bom and lineno == 1:  # a byte-order mark is not a word (offsets stay as in the file)
+            raw = " " * len(bom) + raw[len(bom) :]
         stripped = raw.strip()
         if not stripped or stripped.startswith("%"):
             continue
