@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.textsafe import KRL_RESERVED
+from accugrid.compensation.interpolation import METHODS
+from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.yamlfile import YamlDoc, load_yaml
@@ -84,9 +86,8 @@ class Cell:
     allow_config_change: bool = False
     singular_a5_deg: float = 5.0
     reference_abc: tuple[float, float, float] = (0.0, 90.0, 0.0)
-    # correction
-    iterations: int = 1
-    power: float = 1.0
+    # correction (method, power, iterations; the safety limit is the default)
+    correction: CorrectionSettings = CorrectionSettings()
     # G-code
     spindle_rpm: float = 6000.0
     canned_cycles: bool = True
@@ -254,7 +255,10 @@ class _Reader:
             "configuration",
             {"status", "turn", "allow_change", "singular_a5", "reference"},
         )
-        co = self.mapping(top.get("correction"), "correction", {"iterations", "power"})
+        co = self.mapping(top.get("correction"), "correction", {"method", "iterations", "power"})
+        method = co.get("method", "idw")
+        if method not in METHODS:
+            raise self.error("correction.method", f"must be {' or '.join(METHODS)}, got {method!r}")
         gc = self.mapping(top.get("gcode"), "gcode", {"spindle_rpm", "canned_cycles"})
         ext = self.mapping(
             top.get("external_axes"), "external_axes", {f"e{i}" for i in range(1, 7)}
@@ -301,8 +305,11 @@ class _Reader:
             reference_abc=self.abc(
                 cf.get("reference"), "configuration.reference", (0.0, 90.0, 0.0)
             ),
-            iterations=self.integer(co, "iterations", "correction", 1, 1, 10),
-            power=self.number(co, "power", "correction", 1.0, 0.0, 10.0, True),
+            correction=CorrectionSettings(
+                method=method,
+                iterations=self.integer(co, "iterations", "correction", 1, 1, 10),
+                power=self.number(co, "power", "correction", 1.0, 0.0, 10.0, True),
+            ),
             spindle_rpm=self.number(gc, "spindle_rpm", "gcode", 6000.0, 0.0, 10**6, True),
             canned_cycles=self.boolean(gc, "canned_cycles", "gcode", True),
             external_axes=tuple(

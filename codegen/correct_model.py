@@ -19,16 +19,18 @@ import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.commands.correct import (
-    _check_outside,
-    _corrected_csv,
     check_added_columns,
-    check_max_correction,
-    orientation_difference_deg,
+    check_outside,
+    corrected_csv,
+    refuse_too_long,
 )
-from accugrid.codegen.points import Points, orient_along_axes, read_points, too_tilted
+from accugrid.codegen.header import grid_lines, header_lines, input_line
+from accugrid.codegen.points import Points, read_points
 from accugrid.compensation.model_correction import TOL_MM, model_correct, residual_grid
+from accugrid.compensation.settings import CorrectionSettings
+from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc
+from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, orient_along_axes, too_tilted
 from accugrid.kinematics.robot import load_robot
 from accugrid.kinematics.simulation import commanded_poses
 
@@ -55,10 +57,8 @@ def point_orientations(points: Points, reference_abc: np.ndarray) -> np.ndarray:
     return matrix_to_abc(orient_along_axes(points.axis, reference))
 
 
-def run_model(args: argparse.Namespace) -> int:
+def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
     """The whole ``correct --model`` job (arguments of ``accugrid correct``)."""
-    if not args.max_correction > 0:
-        raise InputError(f"--max-correction must be > 0 mm, got {args.max_correction}")
     inputs = [args.points, args.grid, args.model if Path(args.model).is_file() else None]
     check_targets([args.output], inputs, args.force)
     calibrated = load_robot(args.model)
@@ -73,14 +73,12 @@ def run_model(args: argparse.Namespace) -> int:
     flags: list[list[str]] = [[] for _ in range(len(points))]
     if args.grid is not None:
         grid = residual_grid(calibrated, args.grid, status, repeat_tol_mm=args.repeat_tol)
-        _check_outside(points, grid, args.outside, flags)
-        angle = orientation_difference_deg(points, grid)
-        if angle is not None:
-            for i in np.flatnonzero(angle > args.orientation_tol):
-                flags[i].append(f"orientation {angle[i]:.1f} deg from residual grid")
-    result = model_correct(
-        calibrated, points.xyz, abc, status, grid, args.method, args.power, args.outside
-    )
+        found = grid.check(points.xyz, settings, rotations=abc_to_matrix(abc).reshape(-1, 3, 3))
+        check_outside(points, grid, found.outside, settings.outside, flags)
+        if found.angle is not None:  # the model holds at any orientation: flag, never refuse
+            for i in np.flatnonzero(found.angle > args.orientation_tol):
+                flags[i].append(f"orientation {found.angle[i]:.1f} deg from residual grid")
+    result = model_correct(calibrated, points.xyz, abc, status, grid, settings)
     if not result.ok.all():
         bad = result.failed
         named = "; ".join(f"{points.label(int(i))}: {result.reason[i]}" for i in bad[:_LISTED])
@@ -90,17 +88,21 @@ def run_model(args: argparse.Namespace) -> int:
             f"{named}{more}",
             *points.table.where(int(bad[0])),
         )
-    correction, length, worst = check_max_correction(points, result.command, args.max_correction)
-    residual = (
-        ""
-        if grid is None
-        else f", residual grid {args.grid} sha256 {grid.source_sha256}, method {args.method}, "
-        f"power {args.power:g}"
-    )
-    header = (
-        f"accugrid correct: model {args.model}, robot {calibrated.name}, Status {status}{residual}"
-    )
-    text = _corrected_csv(points, result.command, correction, flags, header)
+    correction = result.command - points.xyz
+    length = np.linalg.norm(correction, axis=1)
+    worst = refuse_too_long(points, length, args.max_correction)
+    sources = [
+        input_line("points", args.points, file_sha256(args.points)),
+        input_line("model", args.model, file_sha256(args.model) if inputs[2] else "built-in"),
+    ]
+    details = [f"robot {calibrated.name}, KUKA Status {status}"]
+    if grid is not None:
+        sources += grid_lines(Path(args.grid).name, grid.source_sha256, grid.step)
+        details.append(f"residual grid: method {args.method}, power {args.power:g}")
+    where = "" if worst is None else f" at hole {points.ids[worst]}"
+    largest = 0.0 if worst is None else float(length[worst])
+    header = header_lines("correct", sources, details, largest, where, [f"points {len(points)}"])
+    text = corrected_csv(points, result.command, correction, flags, header)
     write_files({args.output: text}, inputs, force=args.force)
     if grid is not None:
         print(grid.describe().replace("grid       ", "residual   ", 1))

@@ -1,56 +1,57 @@
-"""The comment header every generated program starts with (DESIGN.md "Output safety").
+"""The comment header every output starts with (DESIGN.md "Output safety"): programs (``krl``,
+``gcode``, ``rewrite``, ``plan``) and the corrected-points CSV (``correct``).
 
-accugrid version, the SHA-256 of the points, grid and cell files, the grid step and the largest
-correction applied. Nothing time- or machine-dependent (no dates, no absolute paths), so the same
-inputs give byte-identical programs. Lines are plain text; the templates wrap them as comments
-through the ``comment`` filter.
+In this order: the accugrid version and command; each input file's name and SHA-256; the grid's
+name, SHA-256 and step; command-specific details; the largest correction applied; a closing
+count. Nothing time- or machine-dependent (no dates, no absolute paths), so the same inputs give
+byte-identical outputs. Lines are plain text; the templates wrap them as comments through the
+``comment`` filter, ``csv_comment`` for CSV files.
 """
 
 from __future__ import annotations
 
-import hashlib
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from accugrid.codegen import __version__
-from accugrid.codegen.textsafe import fixed
+from accugrid.codegen.textsafe import comment_text, fixed
+
+__all__ = ["csv_comment", "grid_lines", "header_lines", "input_line"]
 
 
-def file_sha256(path: str | os.PathLike[str]) -> str:
-    """SHA-256 (hex) of a file's bytes."""
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+def input_line(role: str, path: str | os.PathLike[str], sha256: str) -> str:
+    """``ROLE NAME sha256 HEX``: the file's name only, never its directory."""
+    return f"{role} {Path(path).name} sha256 {sha256}"
+
+
+def grid_lines(name: str, sha256: str | None, step_mm: np.ndarray) -> list[str]:
+    """The grid's name and SHA-256, and its step (3,) mm."""
+    step = " x ".join(fixed(s) for s in np.asarray(step_mm, dtype=float))
+    return [f"grid {name} sha256 {sha256}", f"grid step {step} mm"]
 
 
 def header_lines(
     command: str,
-    points_path: str | os.PathLike[str],
-    points_sha256: str,
-    cell_path: str | os.PathLike[str],
-    cell_sha256: str,
-    grid_path: str | os.PathLike[str] | None,
-    grid_sha256: str | None,
-    grid_step_mm: np.ndarray | None,
-    largest_mm: float,
-    largest_hole: str | None,
-    holes: int,
+    inputs: Sequence[str] = (),
+    details: Sequence[str] = (),
+    largest_mm: float = 0.0,
+    where: str = "",
+    closing: Sequence[str] = (),
 ) -> list[str]:
-    """The header as plain lines (file names only, never directories). ``grid_path`` None means
-    the program was made without correction."""
-    lines = [
+    """The header as plain lines: version and command, ``inputs`` (``input_line`` and
+    ``grid_lines``), ``details``, the largest correction (mm, ``where`` appended), ``closing``."""
+    return [
         f"accugrid {__version__} {command}",
-        f"points {Path(points_path).name} sha256 {points_sha256}",
-        f"cell {Path(cell_path).name} sha256 {cell_sha256}",
+        *inputs,
+        *details,
+        f"largest correction {fixed(largest_mm)} mm{where}",
+        *closing,
     ]
-    if grid_path is None:
-        lines += ["grid none (--no-correction): positions are not corrected"]
-    else:
-        step = " x ".join(fixed(s) for s in np.asarray(grid_step_mm, dtype=float))
-        lines += [
-            f"grid {Path(grid_path).name} sha256 {grid_sha256}",
-            f"grid step {step} mm",
-        ]
-    where = f" at hole {largest_hole}" if largest_hole is not None else ""
-    lines += [f"largest correction {fixed(largest_mm)} mm{where}", f"holes {holes}"]
-    return lines
+
+
+def csv_comment(lines: Sequence[str]) -> str:
+    """The header as CSV comment lines (``# ...``), sanitized, each ending in a newline."""
+    return "".join(f"# {comment_text(line, limit=400)}\n" for line in lines)

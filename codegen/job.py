@@ -10,10 +10,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from accugrid.codegen.cell import Cell, load_cell
-from accugrid.codegen.header import file_sha256, header_lines
+from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program import Program, build_program
 from accugrid.compensation import GridModel
+from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import load_robot
 
@@ -82,19 +83,15 @@ def prepare(args: argparse.Namespace, command: str) -> Job:
     for warning in program.warnings:
         print(f"accugrid {command}: warning: {warning}", file=sys.stderr)
     largest, hole = program.largest_correction()
-    header = header_lines(
-        command,
-        args.points,
-        file_sha256(args.points),
-        args.cell,
-        cell.sha256,
-        grid_file,
-        None if grid is None else grid.source_sha256,
-        None if grid is None else grid.step,
-        largest,
-        None if hole is None else points.ids[hole],
-        len(program),
-    )
+    inputs = [input_line("points", args.points, file_sha256(args.points))]
+    inputs.append(input_line("cell", args.cell, cell.sha256))
+    if grid is None:
+        details = ["grid none (--no-correction): positions are not corrected"]
+    else:
+        inputs += grid_lines(Path(grid_file).name, grid.source_sha256, grid.step)
+        details = []
+    where = f" at hole {points.ids[hole]}" if hole is not None else ""
+    header = header_lines(command, inputs, details, largest, where, [f"holes {len(program)}"])
     inputs = [Path(args.points), Path(args.cell)] + ([grid_file] if grid_file else [])
     return Job(program, header, inputs)
 

@@ -7,7 +7,8 @@ an empty cell meaning "the cell file's default"; other columns are carried throu
 Bounds: coordinates within +-``COORD_MAX_MM``, feed up to ``FEED_MAX_MM_S``, diameter and depth
 up to ``SIZE_MAX_MM``: a program never carries an absurd number.
 
-The rotation about a given drill axis (``i,j,k`` input) is chosen by ``orient_along_axes``.
+The rotation about a given drill axis (``i,j,k`` input) is chosen by
+``kinematics.frames.orient_along_axes``.
 """
 
 from __future__ import annotations
@@ -25,7 +26,6 @@ AXIS_MIN_LENGTH = 1e-9  # an i,j,k vector shorter than this has no direction
 COORD_MAX_MM = 1e6  # |x|, |y|, |z| beyond 1 km are refused (no cell is that large)
 FEED_MAX_MM_S = 2000.0  # same limit as the cell's speeds
 SIZE_MAX_MM = 1e4  # diameter and depth
-MAX_TILT_DEG = 150.0  # i,j,k axes further than this from the reference tool axis are refused
 
 
 @dataclass
@@ -140,33 +140,3 @@ def _optional_positive(table: Table, name: str, limit: float, unit: str) -> np.n
         raise InputError(f"{name} must be positive, got {values[r]:g}", *table.where(r, name))
     table.check_bounds(values[:, None], [name], limit, unit)
     return values
-
-
-def orient_along_axes(axis: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """Tool rotations (N, 3, 3) whose Z axis is each drill axis (N, 3, unit), nearest ``reference``.
-
-    The rule: each hole gets the reference orientation (3, 3) tilted by the smallest rotation that
-    turns the reference tool Z onto the hole's drill axis (Rodrigues' formula about
-    z_ref x axis). Of all rotations about the drill axis this is the one closest to the reference
-    (smallest relative rotation angle), it is a smooth function of the axis, so neighbouring holes
-    get neighbouring wrist angles, and it keeps the wrist where the reference puts it (the
-    orientation the grid was measured at, well inside the joint limits). The rule degenerates at
-    180 deg: callers refuse axes that ``too_tilted`` flags, naming the hole.
-    """
-    axis = np.asarray(axis, dtype=float)
-    z_ref = reference[:, 2]
-    cos = axis @ z_ref
-    v = np.cross(z_ref, axis)
-    # R_align = I + [v]x + [v]x^2 / (1 + cos); [v]x^2 = v v^T - |v|^2 I
-    vx = np.zeros((len(axis), 3, 3))
-    vx[:, 0, 1], vx[:, 0, 2], vx[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
-    vx[:, 1, 0], vx[:, 2, 0], vx[:, 2, 1] = v[:, 2], -v[:, 1], v[:, 0]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        scale = 1.0 / (1.0 + cos)
-    align = np.eye(3) + vx + (vx @ vx) * scale[:, None, None]
-    return align @ reference
-
-
-def too_tilted(axis: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """(N,) bool: drill axes (N, 3) too far from the reference tool Z for ``orient_along_axes``."""
-    return np.asarray(axis) @ reference[:, 2] < np.cos(np.radians(MAX_TILT_DEG))

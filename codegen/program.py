@@ -30,11 +30,20 @@ from types import SimpleNamespace
 import numpy as np
 
 from accugrid.codegen.cell import Cell
-from accugrid.codegen.points import MAX_TILT_DEG, Points, orient_along_axes, too_tilted
+from accugrid.codegen.points import Points
 from accugrid.codegen.textsafe import fixed
-from accugrid.compensation.grid import MAX_CORRECTION_MM
+from accugrid.compensation.grid import GridModel
+from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import abc_to_matrix, invert, matrix_to_abc
+from accugrid.kinematics.frames import (
+    MAX_TILT_DEG,
+    abc_to_matrix,
+    invert,
+    matrix_to_abc,
+    orient_along_axes,
+    too_tilted,
+)
+from accugrid.kinematics.units import mm_text
 
 STAGES = ("APP", "CLR", "BOT", "RET")
 GRID_ORIENTATION_TOL_DEG = 5.0  # the grid's errors hold near the orientation it was measured at
@@ -56,8 +65,7 @@ class Program:
     correction: np.ndarray  # (N, 3) mm, robot frame, e added to every stage of the hole
     feed_mm_s: np.ndarray  # (N,)
     depth_mm: np.ndarray  # (N,)
-    status: np.ndarray  # (N, 4) int, KUKA Status per pose (stage order STAGES)
-    turn: np.ndarray  # (N, 4) int, KUKA Turn per pose
+    configuration: Configuration  # (N, 4) per pose, stage order STAGES; emitters convert it
     warnings: list[str]
     corrected: bool
 
@@ -126,8 +134,7 @@ def build_program(points: Points, cell: Cell, robot, grid=None) -> Program:
     if grid is None:
         correction = np.zeros((n, 3))
     else:
-        correction = _correction(points, cell, grid, holes_robot)
-        warnings += _orientation_warnings(points, grid, base_rot @ rotations)
+        correction, warnings = _correction(points, cell, grid, holes_robot, base_rot @ rotations)
     positions = nominal + (correction @ base_rot)[:, None, :]  # e rotated into the BASE frame
     status, turn, ik_warnings = _configuration(points, cell, robot, positions, rotations)
     return Program(
@@ -139,8 +146,7 @@ def build_program(points: Points, cell: Cell, robot, grid=None) -> Program:
         correction=correction,
         feed_mm_s=feed,
         depth_mm=depth,
-        status=status,
-        turn=turn,
+        configuration=Configuration.from_kuka(status, turn),
         warnings=warnings + ik_warnings,
         corrected=grid is not None,
     )
@@ -163,46 +169,42 @@ def _rotations(points: Points, cell: Cell) -> np.ndarray:
     return orient_along_axes(points.axis, reference)
 
 
-def _correction(points: Points, cell: Cell, grid, holes_robot: np.ndarray) -> np.ndarray:
-    """e (N, 3) robot frame at every hole; InputError naming holes outside the grid or with a
-    correction above the safety limit."""
-    outside = np.flatnonzero(~grid.contains(holes_robot))
-    if outside.size:
+def _correction(
+    points: Points, cell: Cell, grid: GridModel, holes_robot: np.ndarray, rotations: np.ndarray
+) -> tuple[np.ndarray, list[str]]:
+    """e (N, 3) robot frame at every hole and the orientation warnings; InputError naming holes
+    outside the grid or with a correction above the safety limit. rotations (N, 3, 3) robot
+    frame."""
+    found = grid.check(holes_robot, cell.correction, rotations=rotations)
+    if found.outside.size:
+        outside = found.outside
         named = "; ".join(points.label(int(i)) for i in outside[:_LISTED])
         more = f" and {outside.size - _LISTED} more" if outside.size > _LISTED else ""
         raise InputError(
-            f"{outside.size} hole(s) outside the grid box {_fmt(grid.origin)}..{_fmt(grid.upper)} "
-            f"mm (robot frame): {named}{more}",
+            f"{outside.size} hole(s) outside the grid box {mm_text(grid.origin, 1)}.."
+            f"{mm_text(grid.upper, 1)} mm (robot frame): {named}{more}",
             *points.table.where(int(outside[0])),
         )
-    command = grid.correct(
-        holes_robot, iterations=cell.iterations, power=cell.power, max_correction_mm=None
-    )
-    correction = command - holes_robot
-    length = np.linalg.norm(correction, axis=1)
-    worst = int(np.argmax(length)) if len(length) else 0
-    if len(length) and length[worst] > MAX_CORRECTION_MM:
+    if found.too_long.size:
+        worst = int(np.argmax(found.length))
         raise InputError(
-            f"{points.name(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
-            f"limit of {MAX_CORRECTION_MM:g} mm; check the grid and the base frame",
+            f"{points.name(worst)}: correction of {found.length[worst]:.3f} mm exceeds the safety "
+            f"limit of {cell.correction.max_correction_mm:g} mm; check the grid and the base frame",
             *points.table.where(worst),
         )
-    return correction
+    return found.correction, _orientation_warnings(points, grid, found.angle)
 
 
-def _orientation_warnings(points: Points, grid, robot_rotations: np.ndarray) -> list[str]:
-    if grid.orientation_abc is None or not len(points):
+def _orientation_warnings(points: Points, grid: GridModel, angle: np.ndarray | None) -> list[str]:
+    if angle is None:
         return []
-    ref = abc_to_matrix(grid.orientation_abc)
-    trace = np.einsum("ij,nij->n", ref, robot_rotations)
-    angle = np.degrees(np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0)))
     far = np.flatnonzero(angle > GRID_ORIENTATION_TOL_DEG)
     if not far.size:
         return []
     i = int(far[np.argmax(angle[far])])
     return [
         f"{far.size} hole(s) more than {GRID_ORIENTATION_TOL_DEG:g} deg from the grid's "
-        f"measured orientation {_fmt(grid.orientation_abc)} deg (largest {angle[i]:.1f} deg "
+        f"measured orientation {mm_text(grid.orientation_abc, 1)} deg (largest {angle[i]:.1f} deg "
         f"at {points.label(i)}): their correction is less trustworthy"
     ]
 
@@ -322,7 +324,3 @@ def _fail(points, hole, stage, reason, cell, count=1, status=None, turn=None) ->
         f"{more}{hint}",
         *points.table.where(hole),
     )
-
-
-def _fmt(v: np.ndarray) -> str:
-    return "(" + ", ".join(f"{x:.1f}" for x in np.asarray(v, dtype=float)) + ")"

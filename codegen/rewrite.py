@@ -17,16 +17,17 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen import __version__
-from accugrid.codegen.header import file_sha256
+from accugrid.codegen.header import grid_lines, input_line
+from accugrid.codegen.header import header_lines as make_header
 from accugrid.codegen.program import GRID_ORIENTATION_TOL_DEG
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation import GridModel
-from accugrid.compensation.orientation import rotation_angle_deg
+from accugrid.compensation.settings import CorrectionSettings
 from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
+from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc
+from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
 
 __all__ = [
     "ORIENTATION_LIMIT_DEG",
@@ -57,8 +58,7 @@ class Options:
     model: GridModel
     base_data: dict[int, np.ndarray]  # BASE_DATA[n] -> robot_T_base
     robot_T_program: np.ndarray  # G-code program frame
-    iterations: int = 1
-    power: float = 1.0
+    correction: CorrectionSettings = CorrectionSettings()
     decimals: int | None = None  # None: the file's precision (see ``precision``)
     strict: bool = False
     base_override: int | None = None
@@ -114,9 +114,7 @@ def correct_points(points_robot: np.ndarray, opts: Options) -> tuple[np.ndarray,
         return np.zeros(0, bool), out
     inside = opts.model.contains(points_robot)
     if inside.any():
-        out[inside] = opts.model.correct(
-            points_robot[inside], iterations=opts.iterations, power=opts.power
-        )
+        out[inside] = opts.model.correct(points_robot[inside], opts.correction)
     return inside, out
 
 
@@ -134,8 +132,7 @@ def check_orientation(
     known = np.flatnonzero(np.isfinite(abc).all(axis=1))
     if ref is None or not known.size:
         return keep
-    robot_abc = matrix_to_abc(robot_rot[known] @ abc_to_matrix(abc[known]))
-    angle = rotation_angle_deg(robot_abc, ref)
+    angle = rotation_angle_deg(robot_rot[known] @ abc_to_matrix(abc[known]), abc_to_matrix(ref))
     grid = ", ".join(fixed(v) for v in ref)
     for i, a in zip(known.tolist(), angle.tolist(), strict=True):
         if a > opts.orientation_limit and not opts.allow_orientation:
@@ -196,18 +193,15 @@ def header_lines(result: Result, program: str, cell: str, opts: Options) -> list
     File names only (no directories, no dates), so the same inputs give the same bytes."""
     largest, where = result.largest()
     model = opts.model
-    step = " x ".join(fixed(s) for s in model.step)
     at = "" if where is None else f" at {where.name} line {where.line}"
     grid = Path(model.source_path).name if model.source_path else "arrays"
-    return [
-        f"accugrid {__version__} rewrite",
-        f"program {Path(program).name} sha256 {file_sha256(program)}",
-        f"cell {Path(cell).name} sha256 {file_sha256(cell)}",
-        f"grid {grid} sha256 {model.source_sha256}",
-        f"grid step {step} mm",
-        f"largest correction {fixed(largest)} mm{at}",
-        f"positions corrected {len(result.corrected)}",
+    inputs = [
+        input_line("program", program, file_sha256(program)),
+        input_line("cell", cell, file_sha256(cell)),
+        *grid_lines(grid, model.source_sha256, model.step),
     ]
+    closing = [f"positions corrected {len(result.corrected)}"]
+    return make_header("rewrite", inputs, (), largest, at, closing)
 
 
 def report_csv(rows: list[Row], decimals: int = 4) -> str:

@@ -11,17 +11,11 @@ term e(P) - e(P + e).
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.compensation.interpolation import (
-    MAX_POWER,
-    blend,
-    corner_indices,
-    idw_weights,
-    locate,
-    trilinear_weights,
-)
+from accugrid.compensation.interpolation import METHODS, CellInterpolator
 from accugrid.compensation.measurements import (
     COORD_TOL_MM,
     REPEAT_TOL_MM,
@@ -29,11 +23,21 @@ from accugrid.compensation.measurements import (
     measurements_from_arrays,
     read_measurements,
 )
+from accugrid.compensation.settings import MAX_CORRECTION_MM, OUTSIDE, CorrectionSettings
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix, axis_angle_deg, rotation_angle_deg
+from accugrid.kinematics.units import mm_text
 
-METHODS = ("idw", "trilinear")
-OUTSIDE = ("error", "clamp")
-MAX_CORRECTION_MM = 5.0  # default safety limit on the length of any one correction
+__all__ = [
+    "BOX_TOL_MM",
+    "MAX_CORRECTION_MM",
+    "METHODS",
+    "OUTSIDE",
+    "CorrectionSettings",
+    "GridCheck",
+    "GridModel",
+]
+
 BOX_TOL_MM = 1e-6  # a point this close outside the grid box still counts as inside
 _CHUNK = 65536  # points per block: keeps the (block, 8) temporaries in cache
 
@@ -130,62 +134,72 @@ class GridModel:
         outside="error": InputError naming the points outside the grid box; "clamp": such a
         point gets the error of the nearest point of the box (in the nearest cell).
         """
-        _check_options(method, power, outside)
-        points = _as_points(points)
-        lo, hi = self.origin[:, None], self.upper[:, None]
-        out = np.empty_like(points)
-        for start in range(0, len(points), _CHUNK):
-            block = np.ascontiguousarray(points[start : start + _CHUNK].T)  # (3, n)
-            if not (
-                (block.min(axis=1) >= self.origin).all() and (block.max(axis=1) <= self.upper).all()
-            ):
-                if outside == "error":
-                    self._refuse_outside(points)
-                np.clip(block, lo, hi, out=block)
-            out[start : start + _CHUNK] = self._predict_block(block, method, power).T
-        return out
+        settings = CorrectionSettings(method=method, power=power, outside=outside)
+        return self._predict(_as_points(points), settings, settings.outside)
 
-    def correct(
+    def check(
         self,
         points: np.ndarray,
-        iterations: int = 1,
-        method: str = "idw",
-        power: float = 1.0,
-        outside: str = "error",
-        max_correction_mm: float | None = MAX_CORRECTION_MM,
+        settings: CorrectionSettings | None = None,
+        rotations: np.ndarray | None = None,
+        axes: np.ndarray | None = None,
+    ) -> GridCheck:
+        """Correct targets P (N, 3) mm and report, without raising, what a job must look at:
+        the points outside the grid box (evaluated at the nearest box point), the corrections
+        longer than ``settings.max_correction_mm``, and, when the grid has an orientation, the
+        angle (N,) deg of each point's orientation from it: rotations (N, 3, 3) or drill axes
+        (N, 3, unit, compared with the grid tool's Z), robot frame."""
+        settings = settings or CorrectionSettings()
+        points = _as_points(points)
+        command = points + self._predict(points, settings, "clamp")
+        for _ in range(int(settings.iterations) - 1):
+            command = points + self._predict(command, settings, "clamp")
+        length = np.sqrt(np.einsum("ij,ij->i", command - points, command - points))
+        limit = settings.max_correction_mm
+        too_long = np.zeros(0, np.int64) if limit is None else np.flatnonzero(length > limit)
+        angle = None
+        if self.orientation_abc is not None and len(points):
+            reference = abc_to_matrix(self.orientation_abc)
+            if rotations is not None:
+                angle = rotation_angle_deg(rotations, reference)
+            elif axes is not None:
+                angle = axis_angle_deg(axes, reference[:, 2])
+        return GridCheck(
+            points, command, length, np.flatnonzero(~self.contains(points)), too_long, angle
+        )
+
+    def correct(
+        self, points: np.ndarray, settings: CorrectionSettings | None = None, **changes
     ) -> np.ndarray:
         """Corrected commands P' (N, 3) mm for targets P (N, 3) mm: P'_k = P + e(P'_(k-1)).
 
-        The outside rule applies to P; iterates that step out of the box (by at most one
+        ``settings`` (default ``CorrectionSettings()``) with ``changes`` to its fields. The
+        outside rule applies to P; iterates that step out of the box (by at most one
         correction) are evaluated at the nearest box point. InputError for the whole job when
         any correction |P' - P| exceeds ``max_correction_mm`` (None: no limit).
         """
-        _check_options(method, power, outside)
-        if int(iterations) != iterations or iterations < 1:
-            raise InputError(f"iterations must be a whole number >= 1, got {iterations}")
+        settings = (settings or CorrectionSettings()).but(**changes)
         points = _as_points(points)
-        command = points + self.predict(points, method, power, outside)
-        for _ in range(int(iterations) - 1):
-            command = points + self.predict(command, method, power, "clamp")
-        if max_correction_mm is not None and len(points):
-            delta = command - points
-            length2 = np.einsum("ij,ij->i", delta, delta)
-            worst = int(np.argmax(length2))
-            if length2[worst] > max_correction_mm**2:
-                raise InputError(
-                    f"correction of {np.sqrt(length2[worst]):.3f} mm at point {worst} "
-                    f"{_fmt(points[worst])} exceeds the safety limit of {max_correction_mm:g} mm; "
-                    "refusing the whole job (check the grid, or raise the limit)"
-                )
-        return command
+        if settings.outside == "error":
+            self._refuse_outside(points)
+        found = self.check(points, settings)
+        if found.too_long.size:
+            worst = int(np.argmax(found.length))
+            raise InputError(
+                f"correction of {found.length[worst]:.3f} mm at point {worst} "
+                f"{mm_text(points[worst])} exceeds the safety limit of "
+                f"{settings.max_correction_mm:g} mm; "
+                "refusing the whole job (check the grid, or raise the limit)"
+            )
+        return found.command
 
     def describe(self) -> str:
         """Multi-line summary: source, origin, step, counts, repeats, error range per axis."""
         e = self.errors.reshape(-1, 3)
         lines = [
             f"grid       {self.source_path or '(arrays)'}",
-            f"origin     {_fmt(self.origin)} mm, far corner {_fmt(self.upper)} mm",
-            f"step       {_fmt(self.step)} mm, vertices "
+            f"origin     {mm_text(self.origin)} mm, far corner {mm_text(self.upper)} mm",
+            f"step       {mm_text(self.step)} mm, vertices "
             + "x".join(str(int(c)) for c in self.counts)
             + f" = {int(np.prod(self.counts))}",
         ]
@@ -197,38 +211,58 @@ class GridModel:
         for axis, name in enumerate("xyz"):
             lines.append(f"error e{name}   {e[:, axis].min():+.4f} .. {e[:, axis].max():+.4f} mm")
         if self.orientation_abc is not None:
-            lines.append(f"orientation a,b,c {_fmt(self.orientation_abc)} deg")
+            lines.append(f"orientation a,b,c {mm_text(self.orientation_abc)} deg")
         return "\n".join(lines)
 
     def _refuse_outside(self, points: np.ndarray) -> None:
         """InputError naming the points (N, 3) outside the grid box, if any."""
         bad = np.flatnonzero(~self.contains(points))
         if bad.size:
-            listed = "; ".join(f"point {i} {_fmt(points[i])}" for i in bad[:5])
+            listed = "; ".join(f"point {i} {mm_text(points[i])}" for i in bad[:5])
             raise InputError(
-                f"{bad.size} point(s) outside the grid box {_fmt(self.origin)}.."
-                f"{_fmt(self.upper)} mm: {listed} (use outside='clamp' to use the nearest cell)"
+                f"{bad.size} point(s) outside the grid box {mm_text(self.origin)}.."
+                f"{mm_text(self.upper)} mm: {listed} (use outside='clamp' to use the nearest cell)"
             )
 
-    def _predict_block(self, points_t: np.ndarray, method: str, power: float) -> np.ndarray:
-        """Predicted error (3, n) at points (3, n) inside the box."""
-        cell, frac = locate(points_t, self.origin, self.step, self.counts)
-        if method == "idw":
-            weights = idw_weights(frac, self.step, power)
-        else:
-            weights = trilinear_weights(frac)
-        return blend(self._values, corner_indices(cell, self.counts), weights)
-
-
-def _check_options(method: str, power: float, outside: str) -> None:
-    if method not in METHODS:
-        raise InputError(f"unknown method '{method}' (choose {' or '.join(METHODS)})")
-    if outside not in OUTSIDE:
-        raise InputError(f"unknown outside rule '{outside}' (choose {' or '.join(OUTSIDE)})")
-    if not (0 < power <= MAX_POWER):
-        raise InputError(
-            f"the inverse-distance power must be > 0 and <= {MAX_POWER:g}, got {power}"
+    def _predict(
+        self, points: np.ndarray, settings: CorrectionSettings, outside: str
+    ) -> np.ndarray:
+        """Predicted error (N, 3) at points (N, 3), in cache-sized blocks."""
+        strategy = CellInterpolator(
+            self.origin, self.step, self.counts, self._values, settings.method, settings.power
         )
+        lo, hi = self.origin[:, None], self.upper[:, None]
+        out = np.empty_like(points)
+        for start in range(0, len(points), _CHUNK):
+            block = np.ascontiguousarray(points[start : start + _CHUNK].T)  # (3, n)
+            if not (
+                (block.min(axis=1) >= self.origin).all() and (block.max(axis=1) <= self.upper).all()
+            ):
+                if outside == "error":
+                    self._refuse_outside(points)
+                np.clip(block, lo, hi, out=block)
+            out[start : start + _CHUNK] = strategy.predict(block).T
+        return out
+
+
+@dataclass(frozen=True)
+class GridCheck:
+    """What ``GridModel.check`` found for targets P (N, 3) mm: commands P' (N, 3) mm, correction
+    lengths |P' - P| (N,) mm, index arrays of the points outside the grid box and of the
+    corrections above the safety limit, and the orientation angle (N,) deg from the grid's (None
+    when the grid or the points have no orientation)."""
+
+    points: np.ndarray
+    command: np.ndarray
+    length: np.ndarray
+    outside: np.ndarray
+    too_long: np.ndarray
+    angle: np.ndarray | None
+
+    @property
+    def correction(self) -> np.ndarray:
+        """P' - P (N, 3) mm."""
+        return self.command - self.points
 
 
 def _as_points(points: np.ndarray) -> np.ndarray:
@@ -239,7 +273,3 @@ def _as_points(points: np.ndarray) -> np.ndarray:
         row = int(np.flatnonzero(~np.isfinite(points).all(axis=1))[0])
         raise InputError(f"point {row} is not finite: {points[row].tolist()}")
     return points
-
-
-def _fmt(v: np.ndarray) -> str:
-    return "(" + ", ".join(f"{x:.3f}" for x in np.asarray(v, dtype=float)) + ")"

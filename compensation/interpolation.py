@@ -11,11 +11,35 @@ the last cell. ``frac`` is the local coordinate in the cell, 0..1 per axis insid
 - Trilinear: q_i = prod over axes of (f or 1 - f); continuous across faces.
 
 Arrays are axis-major for speed: points and frac (3, N), weights and corner indices (8, N).
+
+A method is a strategy in the registry ``METHODS`` (name -> ``Method``); ``method_named`` is the one
+place a name is checked. ``CellInterpolator`` is fitted from a grid's vertex values and predicts
+at points, like scipy's ``RegularGridInterpolator(method=...)``. A new method (a model-based one,
+say) is a weights function and one registry entry.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
+
 import numpy as np
+
+from accugrid.kinematics.errors import InputError
+
+__all__ = [
+    "CORNERS",
+    "MAX_POWER",
+    "METHODS",
+    "CellInterpolator",
+    "Method",
+    "blend",
+    "corner_indices",
+    "idw_weights",
+    "locate",
+    "method_named",
+    "trilinear_weights",
+]
 
 # corner bits (8, 3): bx, by, bz of corner c = 4 bx + 2 by + bz
 CORNERS = np.array([[c >> 2 & 1, c >> 1 & 1, c & 1] for c in range(8)])
@@ -59,8 +83,9 @@ def idw_weights(frac: np.ndarray, step: np.ndarray, power: float = 1.0) -> np.nd
     return inv
 
 
-def trilinear_weights(frac: np.ndarray) -> np.ndarray:
-    """Trilinear weights (8, N) of the cell corners for local coordinates frac (3, N)."""
+def trilinear_weights(frac: np.ndarray, step: np.ndarray | None = None, power: float = 1.0):
+    """Trilinear weights (8, N) of the cell corners for local coordinates frac (3, N); step and
+    power are not used (the signature of every method's weights)."""
     side = [(1.0 - frac[a], frac[a]) for a in range(3)]
     out = np.empty((8, frac.shape[1]))
     for c, (bx, by, bz) in enumerate(CORNERS):
@@ -84,3 +109,51 @@ def blend(values: np.ndarray, corners: np.ndarray, weights: np.ndarray) -> np.nd
         for c in range(8):
             out[axis] += weights[c] * values[axis].take(corners[c])
     return out
+
+
+@dataclass(frozen=True)
+class Method:
+    """An interpolation strategy: weights(frac (3, N), step (3,) mm, power) -> (8, N)."""
+
+    name: str
+    weights: Callable[[np.ndarray, np.ndarray, float], np.ndarray]
+    uses_power: bool
+
+
+METHODS = {
+    "idw": Method("idw", idw_weights, uses_power=True),
+    "trilinear": Method("trilinear", trilinear_weights, uses_power=False),
+}
+
+
+def method_named(name: str) -> Method:
+    """The registered method ``name``; InputError naming the choices otherwise."""
+    try:
+        return METHODS[name]
+    except (KeyError, TypeError):
+        raise InputError(f"unknown method '{name}' (choose {' or '.join(METHODS)})") from None
+
+
+class CellInterpolator:
+    """Vertex values (3, nx*ny*nz) of a regular grid (origin, step (3,) mm, counts (3,)) fitted
+    once; ``predict`` blends the 8 corners of each point's cell with ``method``'s weights."""
+
+    def __init__(
+        self,
+        origin: np.ndarray,
+        step: np.ndarray,
+        counts: np.ndarray,
+        values: np.ndarray,
+        method: str = "idw",
+        power: float = 1.0,
+    ) -> None:
+        self.origin, self.step, self.counts = origin, step, counts
+        self.values = values
+        self.method = method_named(method)
+        self.power = power
+
+    def predict(self, points_t: np.ndarray) -> np.ndarray:
+        """Interpolated values (3, n) at points (3, n) mm inside the grid box."""
+        cell, frac = locate(points_t, self.origin, self.step, self.counts)
+        weights = self.method.weights(frac, self.step, self.power)
+        return blend(self.values, corner_indices(cell, self.counts), weights)

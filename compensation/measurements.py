@@ -8,16 +8,17 @@ axis-aligned regular grid; anything else is an InputError that says what is wron
 
 from __future__ import annotations
 
-import hashlib
 import os
 from dataclasses import dataclass
 
 import numpy as np
 
 from accugrid.compensation.csvtable import Table, parse_table
-from accugrid.compensation.orientation import rotation_angle_deg
+from accugrid.kinematics.digest import sha256_hex
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
 from accugrid.kinematics.inputfile import read_input_text
+from accugrid.kinematics.units import mm_text
 
 COORD_TOL_MM = 1e-3  # two commanded coordinates closer than this are the same grid level
 REPEAT_TOL_MM = 0.5  # largest allowed distance of a repeat from the mean of its vertex
@@ -97,7 +98,7 @@ def read_measurements(path: str | os.PathLike[str]) -> Measurements:
         abc=abc,
         path=path,
         lines=np.asarray(table.lines),
-        sha256=hashlib.sha256(raw).hexdigest(),
+        sha256=sha256_hex(raw),
         joints=joints,
         joint_decimals=joint_decimals,
         position_decimals=table.decimals(["x", "y", "z"]),
@@ -169,10 +170,10 @@ def build_grid(
     missing = np.flatnonzero(repeats == 0)
     if missing.size:
         ijk = np.column_stack(np.unravel_index(missing[:_SHOW], tuple(counts)))
-        listed = "; ".join(_fmt(origin + v * step) for v in ijk)
+        listed = "; ".join(mm_text(origin + v * step, 4) for v in ijk)
         raise InputError(
             f"{missing.size} of {n_vertices} grid vertices not measured "
-            f"(grid {_fmt_counts(counts)} at step {_fmt(step)} mm), e.g. {listed}"
+            f"(grid {_fmt_counts(counts)} at step {mm_text(step, 4)} mm), e.g. {listed}"
             + _sparse_planes(meas, origin, step, counts, index, repeats > 0),
             meas.path,
         )
@@ -186,7 +187,7 @@ def build_grid(
         same = np.flatnonzero(flat == flat[worst])
         rows = ", ".join(meas.where(r) for r in same[:_SHOW])
         raise InputError(
-            f"repeated measurements of {_fmt(meas.commanded[worst])} disagree: one lies "
+            f"repeated measurements of {mm_text(meas.commanded[worst], 4)} disagree: one lies "
             f"{spread[worst]:.3f} mm from their mean (limit {repeat_tol_mm:g} mm; {rows})",
             meas.path,
             None if meas.lines is None else int(meas.lines[worst]),
@@ -289,21 +290,17 @@ def _common_orientation(meas: Measurements) -> np.ndarray | None:
     if meas.abc is None:
         return None
     reference = meas.abc[0]
-    angle = rotation_angle_deg(meas.abc, reference)
+    angle = rotation_angle_deg(abc_to_matrix(meas.abc), abc_to_matrix(reference))
     bad = int(np.argmax(angle))
     if angle[bad] > ORIENTATION_TOL_DEG:
         raise InputError(
             f"a grid holds for one TCP orientation, but this row's a,b,c "
-            f"{_fmt(meas.abc[bad])} deg differs by {angle[bad]:.3f} deg from the first row's "
-            f"{_fmt(reference)} deg (limit {ORIENTATION_TOL_DEG:g} deg)",
+            f"{mm_text(meas.abc[bad], 4)} deg differs by {angle[bad]:.3f} deg from the first row's "
+            f"{mm_text(reference, 4)} deg (limit {ORIENTATION_TOL_DEG:g} deg)",
             meas.path,
             None if meas.lines is None else int(meas.lines[bad]),
         )
     return reference.copy()
-
-
-def _fmt(v: np.ndarray) -> str:
-    return "(" + ", ".join(f"{x:.4f}" for x in np.asarray(v, dtype=float)) + ")"
 
 
 def _fmt_counts(counts: np.ndarray) -> str:

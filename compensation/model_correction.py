@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from accugrid.compensation.grid import GridModel
+from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.robot import Robot
@@ -74,25 +75,27 @@ def model_correct(
     abc_deg: np.ndarray,
     status: int | None,
     grid: GridModel | None = None,
-    method: str = "idw",
-    power: float = 1.0,
-    outside: str = "error",
+    settings: CorrectionSettings | None = None,
     tol_mm: float = TOL_MM,
     max_iterations: int = MAX_ITERATIONS,
 ) -> ModelCorrection:
     """Commands P' (N, 3) mm for targets P (N, 3) mm (robot frame) at KUKA A, B, C ``abc_deg``
     ((N, 3) or (3,) deg) in one KUKA ``status`` (None: the IK default per point).
 
-    ``grid``: a residual grid (``residual_grid``) added as r(P), interpolated by ``method`` /
-    ``power``, ``outside`` as in ``GridModel.predict``. Unreachable targets and targets that do
-    not converge within ``max_iterations`` are ``ok = False`` with the reason, vectorized over N.
+    ``grid``: a residual grid (``residual_grid``) added as r(P), interpolated with ``settings``
+    (method, power, outside rule; default ``CorrectionSettings()``). Unreachable targets and
+    targets that do not converge within ``max_iterations`` are ``ok = False`` with the reason,
+    vectorized over N.
     """
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     n = len(points)
     rotations = np.broadcast_to(abc_to_matrix(np.asarray(abc_deg, dtype=float)), (n, 3, 3))
     if not tol_mm > 0 or int(max_iterations) < 1:
         raise InputError("tolerance must be > 0 mm and iterations >= 1")
-    goals = points if grid is None else points + grid.predict(points, method, power, outside)
+    settings = settings or CorrectionSettings()
+    goals = points
+    if grid is not None:
+        goals = points + grid.predict(points, settings.method, settings.power, settings.outside)
     command = points.copy()
     ok = np.zeros(n, bool)
     miss_mm = np.full(n, np.nan)

@@ -44,6 +44,7 @@ from accugrid.compensation.cube_points import (
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.plans import grid_axes
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.units import mm_text
 
 Measure = Callable[[np.ndarray, int, int], np.ndarray]
 Progress = Callable[[Iterable, str, int], Iterable]
@@ -381,16 +382,12 @@ def read_experiment(path: str | os.PathLike[str]) -> Cubes:
         c, s, k = bad[0]
         raise InputError(
             f"{labels[k]} of centre {names[c]} step {steps[s]:g} mm is not where the plan puts "
-            f"it for the cube around P1 {_fmt_point(centres[c])}",
+            f"it for the cube around P1 {mm_text(centres[c])}",
             *table.where(int(idx[c, s, k, 0]), "x"),
         )
     expected.vertex_meas = measured[:, :, :8]
     expected.test_meas = measured[:, :, 8:]
     return expected
-
-
-def _fmt_point(p: np.ndarray) -> str:
-    return "(" + ", ".join(f"{v:.3f}" for v in p) + ")"
 
 
 @dataclass

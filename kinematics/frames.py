@@ -12,6 +12,7 @@ import numpy as np
 # |B| within this of 90 deg (rad) is gimbal lock: C is set to 0 and the rotation goes into A
 # (scipy's Rotation.as_euler uses the same threshold and rule; it is the tests' peer).
 GIMBAL_LOCK_RAD = 1e-7
+MAX_TILT_DEG = 150.0  # drill axes further than this from the reference tool axis are refused
 
 
 def abc_to_matrix(abc_deg: np.ndarray) -> np.ndarray:
@@ -90,3 +91,47 @@ def transform_points(a_T_b: np.ndarray, points_b: np.ndarray) -> np.ndarray:
 def rotate_vectors(a_T_b: np.ndarray, vectors_b: np.ndarray) -> np.ndarray:
     """Rotate direction vectors (N, 3) from frame b into frame a (translation ignored)."""
     return np.asarray(vectors_b, dtype=float) @ np.asarray(a_T_b, dtype=float)[:3, :3].T
+
+
+def rotation_angle_deg(rotations: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Angle (N,) deg (0..180) of the relative rotation between each rotation (N, 3, 3) and one
+    reference (3, 3): how far a TCP orientation is from another, e.g. the one a grid was measured
+    at."""
+    # trace(R_ref^T R) = sum of the element-wise product
+    trace = np.einsum("ij,nij->n", reference, rotations)
+    return np.degrees(np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0)))
+
+
+def axis_angle_deg(axes: np.ndarray, reference_axis: np.ndarray) -> np.ndarray:
+    """Angle (N,) deg between unit vectors (N, 3) and one unit vector (3,)."""
+    return np.degrees(np.arccos(np.clip(axes @ reference_axis, -1.0, 1.0)))
+
+
+def orient_along_axes(axis: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Tool rotations (N, 3, 3) whose Z axis is each drill axis (N, 3, unit), nearest ``reference``.
+
+    The rule: each hole gets the reference orientation (3, 3) tilted by the smallest rotation that
+    turns the reference tool Z onto the hole's drill axis (Rodrigues' formula about
+    z_ref x axis). Of all rotations about the drill axis this is the one closest to the reference
+    (smallest relative rotation angle), it is a smooth function of the axis, so neighbouring holes
+    get neighbouring wrist angles, and it keeps the wrist where the reference puts it (the
+    orientation the grid was measured at, well inside the joint limits). The rule degenerates at
+    180 deg: callers refuse axes that ``too_tilted`` flags, naming the hole.
+    """
+    axis = np.asarray(axis, dtype=float)
+    z_ref = reference[:, 2]
+    cos = axis @ z_ref
+    v = np.cross(z_ref, axis)
+    # R_align = I + [v]x + [v]x^2 / (1 + cos); [v]x^2 = v v^T - |v|^2 I
+    vx = np.zeros((len(axis), 3, 3))
+    vx[:, 0, 1], vx[:, 0, 2], vx[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
+    vx[:, 1, 0], vx[:, 2, 0], vx[:, 2, 1] = v[:, 2], -v[:, 1], v[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = 1.0 / (1.0 + cos)
+    align = np.eye(3) + vx + (vx @ vx) * scale[:, None, None]
+    return align @ reference
+
+
+def too_tilted(axis: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """(N,) bool: drill axes (N, 3) too far from the reference tool Z for ``orient_along_axes``."""
+    return np.asarray(axis) @ reference[:, 2] < np.cos(np.radians(MAX_TILT_DEG))

@@ -10,11 +10,8 @@ under gravity, transmission harmonics, thermal growth; ``kinematics.joint_errors
 
 Joint vectors are KUKA axis angles A1..A6 in radians, shape (N, 6); poses are (N, 4, 4) mm.
 
-KUKA Status and Turn (DESIGN.md, checked against the KUKA/Siemens/Beckhoff descriptions):
-Turn bit i is set when A(i+1) < 0. Status bit 0 is set when the wrist point has x < 0 in the A1
-frame (overhead area; the A1 frame is $ROBROOT turned with A1), bit 1 when A3 >= phi (phi: the A3
-angle at which the A2 axis, the A3 axis and the wrist point are in line, arm stretched; -1.957 deg
-for the KR 210, -atan(41/1200)), bit 2 when A5 < 0.
+KUKA Status and Turn, the branch selection of ``Robot.ik`` and ``IKSolution``:
+``kinematics.configuration``.
 """
 
 from __future__ import annotations
@@ -27,7 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.kinematics import ik as closed
-from accugrid.kinematics.dh import DHTable, chain, flange_poses
+from accugrid.kinematics.configuration import IKSolution, kuka_words, select
+from accugrid.kinematics.dh import DHTable, flange_poses
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import invert, pose_from_xyzabc
 from accugrid.kinematics.joint_errors import (
@@ -41,18 +39,6 @@ from accugrid.kinematics.yamlfile import YamlDoc, load_yaml
 
 BUILTIN = ("kr210", "kr210-paper", "kr210-realistic")
 _LIMIT_TOL = 1e-9
-HOME_RAD = np.radians([0.0, -90.0, 90.0, 0.0, 0.0, 0.0])  # KUKA home, the default IK reference
-
-
-@dataclass(frozen=True)
-class IKSolution:
-    """Result of ``Robot.ik`` for N poses (see the field comments for shapes)."""
-
-    q: np.ndarray  # (N, 6) rad, NaN rows where there is no solution
-    ok: np.ndarray  # (N,) bool
-    reason: np.ndarray  # (N,) object: "" when ok, else why not
-    status: np.ndarray  # (N,) int KUKA Status of q (-1 where there is no solution)
-    turn: np.ndarray  # (N,) int KUKA Turn of q (-1 where there is no solution)
 
 
 @dataclass(frozen=True)
@@ -143,7 +129,7 @@ class Robot:
             raise InputError(f"robot {self.name}: DH structure has no closed-form inverse")
         flange = poses @ invert(self.flange_T_tool)
         wrist = closed.wrist_points(self.dh, flange)
-        q, found, reach = self._pick(flange, wrist, status, reference)
+        q, found, reach = select(self, flange, wrist, status, reference)
         reason = np.full(n, "", dtype=object)
         reason[~found] = "unreachable"
         reason[~found & reach] = "no solution with the requested status"
@@ -161,111 +147,13 @@ class Robot:
             reason[outside[:, axis]] = f"A{axis + 1} outside limits {lo_deg:g}..{hi_deg:g} deg"
         ok = found & ~outside.any(axis=1)
         final = np.where(found[:, None], q, 0.0)  # after Turn: A3, A5 may have moved by 360 deg
-        s, t = _status(self, final, wrist), _turn(final)
+        s, t = kuka_words(self, final, wrist)
         return IKSolution(q, ok, reason, np.where(found, s, -1), np.where(found, t, -1))
-
-    def _pick(self, flange, wrist, status, reference) -> tuple[np.ndarray, ...]:
-        """The solution ``ik`` picks per flange pose (N, 4, 4), before Turn and limits: q (N, 6)
-        rad in (-pi, pi] (NaN where none), found (N,), any candidate reachable (N,).
-
-        Status bits 0 and 1 (shoulder, elbow) follow from the 4 arm solutions alone; where one
-        arm solution has the wanted bits, only its 2 wrists are solved. Poses where that does not
-        settle it (several arm solutions fit, or neither wrist has the wanted bit 2) take all 8
-        candidates, so the pick is the same as over all 8 in candidate order."""
-        n, dh = len(flange), self.dh
-        th1, th2, th3, reach = closed.arm_solutions(dh, flange)
-        arm = np.zeros((n, 4, 6))
-        arm[:, :, 0] = np.repeat(th1, 2, axis=1)
-        arm[:, :, 2] = th3.reshape(n, 4)
-        arm_q = closed.wrap(dh.axis_angles(arm)).reshape(-1, 6)
-        bits = _status(self, arm_q, np.repeat(wrist, 4, axis=0)).reshape(n, 4) & 3
-        want = 2 if status is None else np.broadcast_to(np.asarray(status, dtype=int), (n,))
-        fits = reach.reshape(n, 4) & (bits == np.bitwise_and(want, 3)[..., None])
-        one = fits.sum(axis=1) == 1
-        q = np.full((n, 6), np.nan)
-        found = np.zeros(n, bool)
-        rows = np.flatnonzero(one)
-        a = np.argmax(fits[rows], axis=1)
-        s, e = a // 2, a % 2
-        cand = closed.arm_wrists(
-            dh, flange[rows], th1[rows, s], th2[rows, s, e], th3[rows, s, e]
-        )  # (m, 2, 6)
-        if status is None:
-            ref = HOME_RAD if reference is None else np.asarray(reference, dtype=float)
-            ref = np.broadcast_to(ref, (n, 6))[rows, None]
-            pick = np.argmin((closed.wrap(cand - ref) ** 2).sum(axis=2), axis=1)
-            settled = np.ones(len(rows), bool)
-        else:
-            cand_status = _status(self, cand.reshape(-1, 6), np.repeat(wrist[rows], 2, axis=0))
-            match = self._status_match(cand.reshape(-1, 6), cand_status, want[rows].repeat(2))
-            match = match.reshape(-1, 2)
-            pick, settled = np.argmax(match, axis=1), match.any(axis=1)
-        done = rows[settled]
-        q[done] = cand[settled, pick[settled]]
-        found[done] = True
-        rest = np.flatnonzero(~one & fits.any(axis=1))
-        rest = np.concatenate([rest, rows[~settled]]) if status is not None else rest
-        if rest.size:
-            q[rest], found[rest] = self._pick_all(flange[rest], wrist[rest], want, rest, reference)
-        return q, found, reach.reshape(n, 4).any(axis=1)
-
-    def _pick_all(self, flange, wrist, want, rows, reference) -> tuple[np.ndarray, np.ndarray]:
-        """``_pick`` over all 8 candidates for poses ``rows``; want = 2 means the default."""
-        m = len(flange)
-        cand, reach = closed.all_solutions(self.dh, flange)
-        cand_status = _status(self, cand.reshape(-1, 6), np.repeat(wrist, 8, axis=0)).reshape(m, 8)
-        if np.ndim(want) == 0:
-            match = reach & ((cand_status & 3) == 2)
-            ref = HOME_RAD if reference is None else np.asarray(reference, dtype=float)
-            if ref.ndim == 2:
-                ref = ref[rows]
-            ref = np.broadcast_to(ref, (m, 6))[:, None]
-            distance = np.where(match, (closed.wrap(cand - ref) ** 2).sum(axis=2), np.inf)
-            pick = np.argmin(distance, axis=1)
-        else:
-            match = reach & self._status_match(
-                cand.reshape(-1, 6), cand_status.reshape(-1), want[rows].repeat(8)
-            ).reshape(m, 8)
-            pick = np.argmax(match, axis=1)
-        found = match.any(axis=1)
-        q = cand[np.arange(m), pick]
-        q[~found] = np.nan
-        return q, found
-
-    @staticmethod
-    def _status_match(q: np.ndarray, cand_status: np.ndarray, want: np.ndarray) -> np.ndarray:
-        """Candidates (M, 6) with the wanted Status; on the wrist singularity (A5 = 0) either
-        bit 2 fits."""
-        singular_wrist = np.abs(q[:, 4]) < 1e-12
-        return (cand_status == want) | (singular_wrist & ((cand_status & 3) == (want & 3)))
 
     def ik_all(self, robot_T_tcp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """All 8 solutions (N, 8, 6) rad in (-pi, pi] and their reachability mask (N, 8)."""
         poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
         return closed.all_solutions(self.dh, poses @ invert(self.flange_T_tool))
-
-
-def status_turn(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """KUKA Status and Turn (N,) int for joint vectors q (N, 6) rad (definitions: module doc)."""
-    q = np.atleast_2d(np.asarray(q, dtype=float))
-    base_T_3 = chain(robot.dh, q, links=3)[2]  # the wrist point is the origin of frame 4
-    dh, theta4 = robot.dh, robot.dh.theta(q)[:, 3]
-    offset = np.stack(
-        [dh.a[3] * np.cos(theta4), dh.a[3] * np.sin(theta4), np.full_like(theta4, dh.d[3])]
-    )
-    wrist = np.einsum("nij,jn->ni", base_T_3[:, :3, :3], offset) + base_T_3[:, :3, 3]
-    return _status(robot, q, wrist), _turn(q)
-
-
-def _status(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> np.ndarray:
-    """KUKA Status (N,) of joint vectors q (N, 6) rad whose wrist point is ``wrist`` (N, 3) mm."""
-    a1 = robot.dh.sign[0] * q[:, 0] + robot.dh.theta_offset[0]
-    x_a1 = wrist[:, 0] * np.cos(a1) + wrist[:, 1] * np.sin(a1)
-    return (x_a1 < 0).astype(int) + 2 * (q[:, 2] >= robot.phi_rad) + 4 * (q[:, 4] < 0)
-
-
-def _turn(q: np.ndarray) -> np.ndarray:
-    return ((q < 0) << np.arange(q.shape[1])).sum(axis=1)
 
 
 def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from accugrid.kinematics.configuration import IKSolution
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.ik import wrap
@@ -87,8 +88,6 @@ class UrdfRobot:
         """Damped-least-squares IK for poses (N, 4, 4) mm from ``reference`` ((n,) or (N, n) rad,
         default the middle of the joint limits): an ``IKSolution`` with status and turn -1."""
         import pinocchio as pin
-
-        from accugrid.kinematics.robot import IKSolution
 
         if status is not None or turn is not None:
             raise InputError(f"robot {self.name} (URDF) has no KUKA Status/Turn")

@@ -10,7 +10,6 @@ outside the float range. Each refusal is an InputError at the offending line and
 
 from __future__ import annotations
 
-import hashlib
 import math
 import os
 from dataclasses import dataclass
@@ -18,6 +17,7 @@ from typing import Any
 
 import yaml
 
+from accugrid.kinematics.digest import sha256_hex
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import MAX_CONFIG_BYTES, read_input_text
 
@@ -103,7 +103,7 @@ def _located(exc: yaml.YAMLError, text: str, path: str) -> InputError:
 def load_yaml(path: str | os.PathLike[str], limit: int = MAX_CONFIG_BYTES) -> YamlDoc:
     """Read and parse a YAML file (see the module docstring); InputError on any problem."""
     raw, text = read_input_text(path, limit)
-    return YamlDoc.parse(text, path, hashlib.sha256(raw).hexdigest())
+    return YamlDoc.parse(text, path, sha256_hex(raw))
 
 
 @dataclass(frozen=True)

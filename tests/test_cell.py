@@ -53,6 +53,13 @@ def test_defaults_and_relative_paths(tmp_path):
     assert cell.reference_abc == (0.0, 90.0, 0.0)
 
 
+def test_correction_section_is_one_settings_value(tmp_path):
+    text = MINIMAL + "correction: {method: trilinear, iterations: 3}\n"
+    settings = load_cell(write(tmp_path, text)).correction
+    assert (settings.method, settings.iterations, settings.power) == ("trilinear", 3, 1.0)
+    assert load_cell(write(tmp_path, MINIMAL)).correction.method == "idw"
+
+
 def test_program_frame_overrides_base(tmp_path):
     cell = load_cell(write(tmp_path, MINIMAL + "program_frame: {x: 1, y: 2, z: 3}\n"))
     np.testing.assert_allclose(cell.robot_T_program[:3, 3], [1, 2, 3])
@@ -86,6 +93,7 @@ def test_sha256_is_of_the_file_bytes(tmp_path):
         ("gcode: {canned_cycles: maybe}\n", "gcode.canned_cycles", 4),
         ("configuration: {reference: {a: 1, q: 2}}\n", "configuration.reference.q", 4),
         ("configuration:\n  reference: {b: x}\n", "configuration.reference.b", 5),
+        ("correction: {method: cubic}\n", "correction.method", 4),
     ],
 )
 def test_bad_keys_are_named(tmp_path, extra, key, line):

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 
 import numpy as np
 import pytest
 from conftest import EXAMPLES
 
+import accugrid
 from accugrid.codegen.cli import main
 from accugrid.codegen.commands.correct import ADDED
 from accugrid.compensation import GridModel
@@ -63,7 +65,13 @@ def test_constant_error_is_added_and_input_columns_are_untouched(tmp_path, capsy
     assert rows[1][:8] == ["H1", "1100.5", "-12", "1399.25", "countersink, 100 deg", "0", "90", "0"]
     assert rows[1][8:] == ["1100.6000", "-12.2000", "1399.5500", "0.1000", "-0.2000", "0.3000", ""]
     assert rows[2][8:14] == ["1400.1000", "199.8000", "1000.3000", "0.1000", "-0.2000", "0.3000"]
-    assert out.read_text().startswith("# accugrid correct: grid ")
+    head = [line for line in out.read_text().splitlines() if line.startswith("#")]
+    assert head[0] == f"# accugrid {accugrid.__version__} correct"
+    grid = tmp_path / "grid.csv"  # written by run()
+    grid_sha = hashlib.sha256(grid.read_bytes()).hexdigest()
+    assert f"# grid grid.csv sha256 {grid_sha}" in head
+    assert "# method idw, power 1, iterations 1" in head
+    assert any(line.startswith("# largest correction ") for line in head)
     summary = capsys.readouterr().out
     assert "corrected  2 point(s), idw power 1, 1 iteration" in summary
     assert "largest correction 0.3742 mm" in summary and "flagged    0 point(s)" in summary

@@ -13,14 +13,17 @@ from hypothesis.extra.numpy import arrays
 from accugrid.compensation import GridModel
 from accugrid.compensation.interpolation import (
     CORNERS,
+    METHODS,
     corner_indices,
     idw_weights,
     locate,
     trilinear_weights,
 )
+from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix
 
-METHODS = [("idw", 1.0), ("idw", 2.0), ("idw", 0.5), ("trilinear", 1.0)]
+METHOD_POWERS = [("idw", 1.0), ("idw", 2.0), ("idw", 0.5), ("trilinear", 1.0)]
 
 finite = st.floats(-5.0, 5.0, allow_nan=False, allow_infinity=False)
 
@@ -46,7 +49,7 @@ def inside_points(draw, model, n=20):
     return np.where(snap, model.origin + idx * model.step, points)
 
 
-@given(grids(), st.sampled_from(METHODS))
+@given(grids(), st.sampled_from(METHOD_POWERS))
 def test_exact_at_every_vertex(model, method):
     name, power = method
     vertices = model.vertices().reshape(-1, 3)
@@ -84,7 +87,7 @@ def test_idw_weights_are_seed_eq_12(frac, step, power):
     np.testing.assert_allclose(idw_weights(frac, step, power).T, expected, rtol=1e-9, atol=1e-15)
 
 
-@given(st.data(), grids(), st.sampled_from(METHODS))
+@given(st.data(), grids(), st.sampled_from(METHOD_POWERS))
 def test_prediction_within_its_cells_vertex_range(data, model, method):
     name, power = method
     points = data.draw(inside_points(model))
@@ -95,7 +98,7 @@ def test_prediction_within_its_cells_vertex_range(data, model, method):
     assert (predicted <= corner_errors.max(axis=0) + 1e-9).all()
 
 
-@given(st.data(), grids(), st.tuples(finite, finite, finite), st.sampled_from(METHODS))
+@given(st.data(), grids(), st.tuples(finite, finite, finite), st.sampled_from(METHOD_POWERS))
 def test_constant_field_reproduced(data, model, value, method):
     name, power = method
     constant = GridModel(model.origin, model.step, np.broadcast_to(value, model.errors.shape))
@@ -108,7 +111,7 @@ def test_constant_field_reproduced(data, model, value, method):
     st.data(),
     grids(),
     st.tuples(*[st.floats(-2000.0, 2000.0)] * 3),
-    st.sampled_from(METHODS),
+    st.sampled_from(METHOD_POWERS),
 )
 def test_translating_grid_and_points_together_changes_nothing(data, model, shift, method):
     name, power = method
@@ -237,6 +240,39 @@ def test_safety_limit_refuses_the_whole_job():
     with pytest.raises(InputError, match=r"6\.000 mm at point 1 .*safety limit of 5 mm"):
         model.correct(points)
     np.testing.assert_allclose(model.correct(points, max_correction_mm=7.0)[1], [8.0, 2.0, 2.0])
+
+
+def test_check_reports_outside_too_long_and_orientation_as_index_arrays():
+    errors = np.zeros((8, 3))
+    errors[7] = [6.0, 0.0, 0.0]  # 6 mm at vertex (2, 2, 2): above the default 5 mm limit
+    model = GridModel(np.zeros(3), np.full(3, 2.0), errors.reshape(2, 2, 2, 3), [0.0, 90.0, 0.0])
+    points = np.array([[0.0, 0.0, 0.0], [2.0, 2.0, 2.0], [3.0, 2.0, 2.0]])
+    tool_z = abc_to_matrix(np.array([0.0, 90.0, 0.0]))[:, 2]
+    tilted = abc_to_matrix(np.array([0.0, 60.0, 0.0]))[:, 2]  # 30 deg from the grid's tool Z
+    found = model.check(points, CorrectionSettings(), axes=np.stack([tool_z, tilted, tool_z]))
+    np.testing.assert_array_equal(found.outside, [2])
+    np.testing.assert_array_equal(found.too_long, [1, 2])  # the outside point is clamped to (2,2,2)
+    np.testing.assert_allclose(found.angle, [0.0, 30.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(found.correction[1], [6.0, 0.0, 0.0])
+    relaxed = model.check(points, CorrectionSettings(max_correction_mm=None))
+    assert relaxed.too_long.size == 0 and relaxed.angle is None
+    with pytest.raises(InputError, match="safety limit of 5 mm"):
+        model.correct(points[:2])  # correct honours its own limit
+    with pytest.raises(InputError, match="outside"):
+        model.correct(points, max_correction_mm=None)
+
+
+def test_settings_pass_the_method_through_and_the_registry_checks_names():
+    model = unit_cell(np.random.default_rng(2).normal(size=(8, 3)))
+    p = np.array([[0.3, 1.2, 1.9]])
+    settings = CorrectionSettings(method="trilinear", iterations=2, max_correction_mm=None)
+    once = p + model.predict(p, method="trilinear")
+    np.testing.assert_allclose(
+        model.correct(p, settings), p + model.predict(once, "trilinear", outside="clamp")
+    )
+    assert set(METHODS) == {"idw", "trilinear"}
+    with pytest.raises(InputError, match="unknown method 'cubic' \\(choose idw or trilinear\\)"):
+        CorrectionSettings(method="cubic")
 
 
 def test_correction_adds_the_predicted_error_and_iterates():

@@ -7,8 +7,9 @@ import pytest
 import yaml
 
 from accugrid.codegen.cli import main
+from accugrid.kinematics.configuration import status_turn
 from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
-from accugrid.kinematics.robot import load_robot, status_turn
+from accugrid.kinematics.robot import load_robot
 
 TOOL = ["20", "-10", "250", "0", "0", "0"]
 PAPER = load_robot("kr210-paper").with_tool(pose_from_xyzabc([20.0, -10.0, 250.0, 0, 0, 0]))

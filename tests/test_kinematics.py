@@ -14,10 +14,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from accugrid.kinematics.configuration import Configuration, status_turn
 from accugrid.kinematics.dh import chain
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc
-from accugrid.kinematics.robot import load_robot, status_turn
+from accugrid.kinematics.robot import load_robot
 
 ROBOTS = Path(__file__).resolve().parents[1] / "kinematics" / "robots"
 TOOL = pose_from_xyzabc([12.0, -30.0, 250.0, 10.0, 20.0, -5.0])
@@ -250,3 +251,17 @@ def test_robot_yaml_error_carries_the_line(tmp_path):
     with pytest.raises(InputError) as info:
         load_robot(path)
     assert info.value.line == 13  # the dh[3] row
+
+
+def test_neutral_configuration_names_the_branches_and_round_trips_kuka():
+    q = np.radians([[0, -90, 90, 0, 20, 0], [30.0, -135.0, -30.0, 0.0, -30.0, -5.0]])
+    config = Configuration.of_joints(robot(), q)
+    np.testing.assert_array_equal(config.shoulder, [False, True])  # second: behind the A1 axis
+    np.testing.assert_array_equal(config.elbow, [True, False])  # A3 = 90 >= phi; -30 < phi
+    np.testing.assert_array_equal(config.wrist, [False, True])  # A5 < 0
+    np.testing.assert_array_equal(config.negative, q < 0)
+    status, turn = config.to_kuka()
+    np.testing.assert_array_equal(status, [2, 5])
+    back = Configuration.from_kuka(status, turn)
+    for name in ("shoulder", "elbow", "wrist", "negative"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(config, name))

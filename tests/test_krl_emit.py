@@ -60,6 +60,7 @@ def check_round_trip(program, files):
     stages = ("APP", "CLR", "BOT") if same_ret else ("APP", "CLR", "BOT", "RET")
     assert len(parsed) == len(program) * len(stages)
     half = 0.5 * 10.0**-program.cell.decimals + 1e-9
+    status, turn = program.configuration.to_kuka()
     for i in range(len(program)):
         for k, stage in enumerate(stages):
             p = parsed[f"XH{i + 1}_{stage}"]
@@ -67,7 +68,7 @@ def check_round_trip(program, files):
             rot = abc_to_matrix(np.array([p.a, p.b, p.c]))
             # 0.0005 deg per printed angle bounds the rotation error
             np.testing.assert_allclose(rot, program.rotations[i], atol=3e-5)
-            assert (p.s, p.t) == (program.status[i, k], program.turn[i, k])
+            assert (p.s, p.t) == (status[i, k], turn[i, k])
             assert [p.values[f"E{n}"] for n in range(1, 7)] == [0.0] * 6
 
 

@@ -12,6 +12,7 @@ from hypothesis.extra.numpy import arrays
 
 from accugrid.codegen.cli import main
 from accugrid.compensation.model_correction import model_correct, residual_grid
+from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc
 from accugrid.kinematics.robot import load_robot
 
@@ -109,7 +110,9 @@ def test_model_plus_residual_grid_lands_exactly_when_the_residual_is_constant():
     rng = np.random.default_rng(3)
     targets = grid.origin + rng.uniform(0.05, 0.95, (20, 3)) * (grid.upper - grid.origin)
     for method in ("idw", "trilinear"):
-        result = model_correct(PAPER, targets, abc, STATUS, grid, method=method, tol_mm=1e-7)
+        result = model_correct(
+            PAPER, targets, abc, STATUS, grid, CorrectionSettings(method=method), tol_mm=1e-7
+        )
         assert result.ok.all()
         reached = drive(PAPER, result.command, abc, STATUS) + offset
         np.testing.assert_allclose(reached, targets, atol=1e-6, rtol=0)

@@ -7,9 +7,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from accugrid.codegen.points import orient_along_axes, parse_points, read_points, too_tilted
+from accugrid.codegen.points import parse_points, read_points
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import abc_to_matrix
+from accugrid.kinematics.frames import abc_to_matrix, orient_along_axes, too_tilted
 
 
 def test_parse_abc_with_extra_columns():

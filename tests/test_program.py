@@ -13,6 +13,7 @@ from program_helpers import cell, error_field, grid, panel_points, robot
 
 from accugrid.codegen.points import parse_points
 from accugrid.codegen.program import STAGES, build_program
+from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc, transform_points
 
@@ -73,7 +74,7 @@ def test_every_stage_gets_the_hole_correction():
 
 def test_correction_iterations_come_from_the_cell():
     pts = panel_points(ROWS)
-    c = dataclasses.replace(cell(), iterations=3)
+    c = dataclasses.replace(cell(), correction=CorrectionSettings(iterations=3))
     prog = build_program(pts, c, robot(), grid())
     hole_robot = transform_points(c.robot_T_base, pts.xyz)
     np.testing.assert_allclose(
@@ -86,11 +87,12 @@ def test_correction_iterations_come_from_the_cell():
 def test_ik_status_constant_and_fk_reproduces_every_pose():
     pts = panel_points(ROWS)
     prog = build_program(pts, cell(), robot(), grid())
-    assert prog.status.shape == (len(pts), 4)
-    assert len(set(prog.status.ravel().tolist())) == 1
+    status, turn = prog.configuration.to_kuka()
+    assert status.shape == (len(pts), 4)
+    assert len(set(status.ravel().tolist())) == 1
     for stage in range(4):
         poses = robot_poses(prog, stage)
-        sol = robot().ik(poses, status=prog.status[:, stage], turn=prog.turn[:, stage])
+        sol = robot().ik(poses, status=status[:, stage], turn=turn[:, stage])
         assert sol.ok.all()
         np.testing.assert_allclose(robot().fk(sol.q), poses, atol=1e-6)
     assert prog.warnings == []
@@ -122,7 +124,7 @@ def test_status_that_cannot_be_kept_is_an_error_unless_allowed():
     assert "configuration.allow_change" in info.value.message
     prog = build_program(pts, dataclasses.replace(c, allow_config_change=True), robot(), None)
     assert any("another Status than 0" in w for w in prog.warnings)
-    assert (prog.status != 0).all()
+    assert (prog.configuration.to_kuka()[0] != 0).all()
 
 
 def test_wrist_singularity_warning_names_the_hole():
@@ -190,7 +192,7 @@ def test_any_panel_point_set_keeps_axis_straight_and_status(xy):
     # all four positions on one line along the tool Z axis
     cross = np.cross(d, prog.rotations[:, None, :, 2])
     assert np.abs(cross).max() < 1e-9
-    assert len(set(prog.status.ravel().tolist())) == 1
+    assert len(set(prog.configuration.to_kuka()[0].ravel().tolist())) == 1
     np.testing.assert_allclose(
         prog.correction, error_field(transform_points(cell().robot_T_base, pts.xyz)), atol=0.2
     )

@@ -10,10 +10,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from accugrid.kinematics.configuration import status_turn
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.ik import wrap
-from accugrid.kinematics.robot import load_robot, status_turn
+from accugrid.kinematics.robot import load_robot
 from accugrid.kinematics.simulation import (
     commanded_joints,
     commanded_poses,

@@ -14,9 +14,6 @@ correction longer than --max-correction, a point whose orientation differs from 
 more than --orientation-limit (unless --allow-orientation). The orientation difference is the
 angle of the relative rotation for a,b,c points, the angle between the drill axis and the grid
 tool's Z axis for i,j,k points.
-
-With --model CAL.yaml the points are corrected by a calibrated robot model at any orientation
-(--grid then optional: the residual after the model; see codegen/correct_model.py).
 """
 
 from __future__ import annotations
@@ -24,18 +21,22 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+from pathlib import Path
 
 import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import add_abc, add_status
+from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
 from accugrid.codegen.points import Points, read_points
-from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.codegen.textsafe import fixed
 from accugrid.compensation.grid import MAX_CORRECTION_MM, GridModel
 from accugrid.compensation.measurements import REPEAT_TOL_MM
-from accugrid.compensation.orientation import rotation_angle_deg
+from accugrid.compensation.settings import CorrectionSettings
+from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
+from accugrid.kinematics.units import mm_text
 
 NAME = "correct"
 HELP = "corrected points CSV: P' = P + e, e interpolated from a measured error grid"
@@ -128,38 +129,49 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="overwrite an existing output")
 
 
+def settings_from(args: argparse.Namespace) -> CorrectionSettings:
+    """The correction settings the options ask for."""
+    if not args.max_correction > 0:
+        raise InputError(f"--max-correction must be > 0 mm, got {args.max_correction}")
+    return CorrectionSettings(
+        method=args.method,
+        power=args.power,
+        iterations=args.iterations,
+        outside=args.outside,
+        max_correction_mm=args.max_correction,
+    )
+
+
 def run(args: argparse.Namespace) -> int:
+    settings = settings_from(args)
+    if not 0 <= args.orientation_tol <= args.orientation_limit:
+        raise InputError("need 0 <= --orientation-tol <= --orientation-limit (deg)")
     if args.model is not None:
         from accugrid.codegen.correct_model import run_model
 
-        return run_model(args)
+        return run_model(args, settings)
     if args.grid is None:
         raise InputError("give --grid MEAS, --model CAL.yaml or both")
-    if not args.max_correction > 0:
-        raise InputError(f"--max-correction must be > 0 mm, got {args.max_correction}")
-    if not 0 <= args.orientation_tol <= args.orientation_limit:
-        raise InputError("need 0 <= --orientation-tol <= --orientation-limit (deg)")
     check_targets([args.output], [args.points, args.grid], args.force)
     model = GridModel.from_measurements(args.grid, repeat_tol_mm=args.repeat_tol)
     points = read_points(args.points)
     check_added_columns(points)
+    rotations = None if points.abc is None else abc_to_matrix(points.abc).reshape(-1, 3, 3)
+    found = model.check(points.xyz, settings, rotations=rotations, axes=points.axis)
     flags: list[list[str]] = [[] for _ in range(len(points))]
-    _check_outside(points, model, args.outside, flags)
-    _check_orientation(points, model, args, flags)
-    command = model.correct(
-        points.xyz,
-        iterations=args.iterations,
-        method=args.method,
-        power=args.power,
-        outside=args.outside,
-        max_correction_mm=None,
-    )
-    correction, length, worst = check_max_correction(points, command, args.max_correction)
-    header = (
-        f"accugrid correct: grid {args.grid} sha256 {model.source_sha256}, method "
-        f"{args.method}, power {args.power:g}, iterations {args.iterations}"
-    )
-    text = _corrected_csv(points, command, correction, flags, header)
+    check_outside(points, model, found.outside, settings.outside, flags)
+    check_orientation(points, model, found.angle, args, flags, "grid")
+    length = found.length
+    worst = refuse_too_long(points, length, args.max_correction)
+    inputs = [
+        input_line("points", args.points, file_sha256(args.points)),
+        *grid_lines(Path(args.grid).name, model.source_sha256, model.step),
+    ]
+    details = [f"method {args.method}, power {args.power:g}, iterations {args.iterations}"]
+    where = "" if worst is None else f" at hole {points.ids[worst]}"
+    largest = 0.0 if worst is None else float(length[worst])
+    header = header_lines("correct", inputs, details, largest, where, [f"points {len(points)}"])
+    text = corrected_csv(points, found.command, found.correction, flags, header)
     write_files({args.output: text}, [args.points, args.grid], force=args.force)
     _print_summary(model, points, args, length, worst, flags)
     return 0
@@ -176,13 +188,9 @@ def check_added_columns(points: Points) -> None:
         )
 
 
-def check_max_correction(
-    points: Points, command: np.ndarray, limit_mm: float
-) -> tuple[np.ndarray, np.ndarray, int | None]:
-    """(correction P' - P (N, 3), its length (N,), index of the longest or None); InputError
-    naming the point when the longest exceeds ``limit_mm``."""
-    correction = command - points.xyz
-    length = np.linalg.norm(correction, axis=1)
+def refuse_too_long(points: Points, length: np.ndarray, limit_mm: float) -> int | None:
+    """Index of the longest correction (None without points); InputError naming that point when
+    it exceeds ``limit_mm`` (the whole job is refused)."""
     worst = int(np.argmax(length)) if len(points) else None
     if worst is not None and length[worst] > limit_mm:
         raise InputError(
@@ -190,19 +198,22 @@ def check_max_correction(
             f"limit of {limit_mm:g} mm; refusing the whole job (check the grid or model)",
             *points.table.where(worst),
         )
-    return correction, length, worst
+    return worst
 
 
-def _check_outside(points: Points, model: GridModel, rule: str, flags: list[list[str]]) -> None:
-    outside = np.flatnonzero(~model.contains(points.xyz))
+def check_outside(
+    points: Points, model: GridModel, outside: np.ndarray, rule: str, flags: list[list[str]]
+) -> None:
+    """Points outside the grid box (indices ``outside``): InputError for rule "error", else a
+    "clamped" flag each."""
     if not outside.size:
         return
     if rule == "error":
         named = "; ".join(points.label(int(i)) for i in outside[:_LISTED])
         more = f" and {outside.size - _LISTED} more" if outside.size > _LISTED else ""
         raise InputError(
-            f"{outside.size} point(s) outside the grid box {_fmt(model.origin)}.."
-            f"{_fmt(model.upper)} mm (robot frame): {named}{more} (--outside clamp uses the "
+            f"{outside.size} point(s) outside the grid box {mm_text(model.origin)}.."
+            f"{mm_text(model.upper)} mm (robot frame): {named}{more} (--outside clamp uses the "
             "nearest cell)",
             *points.table.where(int(outside[0])),
         )
@@ -210,44 +221,40 @@ def _check_outside(points: Points, model: GridModel, rule: str, flags: list[list
         flags[i].append("outside grid: clamped")
 
 
-def orientation_difference_deg(points: Points, model: GridModel) -> np.ndarray | None:
-    """(N,) deg between each point's orientation and the grid's, or None if either lacks one."""
-    if model.orientation_abc is None or points.orientation is None or not len(points):
-        return None
-    if points.abc is not None:
-        return rotation_angle_deg(points.abc, model.orientation_abc)
-    tool_z = abc_to_matrix(model.orientation_abc)[:, 2]
-    return np.degrees(np.arccos(np.clip(points.axis @ tool_z, -1.0, 1.0)))
-
-
-def _check_orientation(
-    points: Points, model: GridModel, args: argparse.Namespace, flags: list[list[str]]
+def check_orientation(
+    points: Points,
+    model: GridModel,
+    angle: np.ndarray | None,
+    args: argparse.Namespace,
+    flags: list[list[str]],
+    what: str,
 ) -> None:
-    angle = orientation_difference_deg(points, model)
+    """Angles (N,) deg from the grid's orientation: InputError beyond --orientation-limit
+    (unless --allow-orientation), a flag beyond --orientation-tol; ``what`` names the grid."""
     if angle is None:
         return
     beyond = np.flatnonzero(angle > args.orientation_limit)
     if beyond.size and not args.allow_orientation:
         i = int(beyond[0])
         raise InputError(
-            f"{beyond.size} point(s) more than {args.orientation_limit:g} deg from the grid's "
-            f"orientation {_fmt(model.orientation_abc)} deg, first {points.label(i)} at "
+            f"{beyond.size} point(s) more than {args.orientation_limit:g} deg from the {what}'s "
+            f"orientation {mm_text(model.orientation_abc)} deg, first {points.label(i)} at "
             f"{angle[i]:.1f} deg: the grid does not hold there (--allow-orientation to go on)",
             *points.table.where(i),
         )
     for i in np.flatnonzero(angle > args.orientation_tol):
-        flags[i].append(f"orientation {angle[i]:.1f} deg from grid")
+        flags[i].append(f"orientation {angle[i]:.1f} deg from {what}")
 
 
-def _corrected_csv(
+def corrected_csv(
     points: Points,
     command: np.ndarray,
     correction: np.ndarray,
     flags: list[list[str]],
-    header: str,
+    header: list[str],
 ) -> str:
     out = io.StringIO()
-    out.write(f"# {comment_text(header, limit=400)}\n")
+    out.write(csv_comment(header))
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow([*points.table.header, *ADDED])
     for r, row in enumerate(points.table.rows):
@@ -280,7 +287,3 @@ def _print_summary(
     if len(flagged) > _LISTED:
         print(f"  ... and {len(flagged) - _LISTED} more (see the flag column)")
     print(f"wrote {args.output}")
-
-
-def _fmt(v: np.ndarray) -> str:
-    return "(" + ", ".join(f"{x:.3f}" for x in np.asarray(v, dtype=float)) + ")"

@@ -17,7 +17,6 @@ tracker_T_robot (x, y, z mm; a, b, c KUKA ABC deg; 4x4 matrix) and each fit's re
 from __future__ import annotations
 
 import argparse
-import hashlib
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +25,7 @@ from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.frame_file import frame_yaml
 from accugrid.compensation.csvtable import read_table
 from accugrid.kinematics.base_frame import SMR_RADIUS_MM, RobotFrameFit, fit_robot_frame
+from accugrid.kinematics.digest import sha256_hex
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import xyzabc_from_pose
 
@@ -88,10 +88,7 @@ def run(args: argparse.Namespace) -> int:
         smr_radius_mm=args.smr_radius,
         sources=(args.base_plane, args.a1_circle, args.flange_holes),
     )
-    digests = {
-        key: (Path(path).name, hashlib.sha256(loaded[key][1]).hexdigest())
-        for key, path in inputs.items()
-    }
+    digests = {key: (Path(path).name, sha256_hex(loaded[key][1])) for key, path in inputs.items()}
     outputs: dict[str, bytes | str] = {args.output: frame_yaml(fit, digests)}
     if args.plot:
         from accugrid.codegen.frame_plot import plot_frame_fit

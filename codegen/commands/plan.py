@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen import __version__
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
+from accugrid.codegen.header import header_lines
 from accugrid.codegen.render import environment, render, template_dir
 from accugrid.codegen.textsafe import fixed, krl_identifier
 from accugrid.compensation.plans import (
@@ -41,6 +41,7 @@ from accugrid.compensation.plans import (
     experiment_plan,
     grid_plan,
 )
+from accugrid.kinematics.configuration import solve_in_one_status
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.simulation import commanded_poses
 
@@ -262,11 +263,7 @@ def reach(plan: Plan, args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray,
     be reachable in it. InputError naming the first position that is not."""
     robot = robot_with_tool(args.robot, args.tool)
     poses = commanded_poses(plan.points, plan.abc)
-    status = args.status
-    if status is None:
-        first = robot.ik(poses[:1])
-        status = int(first.status[0]) if first.ok[0] else None
-    sol = robot.ik(poses, status=status)
+    sol, status = solve_in_one_status(robot, poses, args.status)
     if not sol.ok.all():
         bad = np.flatnonzero(~sol.ok)
         i = int(bad[0])
@@ -357,15 +354,19 @@ def run(args: argparse.Namespace) -> int:
         wait = f"WAIT FOR $IN[{args.wait_input}]"
     else:
         wait = f"WAIT SEC {fixed(args.wait_sec)}"
-    header = [
-        f"accugrid {__version__} plan {args.kind}",
+    details = [
         "inputs none, positions generated from the command-line settings",
         *info,
         f"orientation A B C {' '.join(fixed(v) for v in plan.abc)} deg, robot {robot_name}, "
         f"Status {config}",
-        "largest correction 0.000 mm, measurement positions are not corrected",
-        f"{len(plan.points)} positions, first by PTP, then LIN, each followed by {wait}",
     ]
+    closing = [f"{len(plan.points)} positions, first by PTP, then LIN, each followed by {wait}"]
+    header = header_lines(
+        f"plan {args.kind}",
+        details=details,
+        where=", measurement positions are not corrected",
+        closing=closing,
+    )
     src, dat = render_krl(plan, status, turn, name, header, args)
     paths = list(targets)
     write_files({paths[0]: plan.csv_text(), paths[1]: src, paths[2]: dat}, force=args.force)

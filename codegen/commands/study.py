@@ -53,9 +53,10 @@ from accugrid.compensation.study import (
     simulate_study,
     simulate_validation,
 )
+from accugrid.kinematics.configuration import solve_in_one_status
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import Robot
-from accugrid.kinematics.simulation import commanded_poses
+from accugrid.kinematics.simulation import commanded_poses, simulate_measurements
 
 NAME = "study"
 HELP = "grid-step study of the seed (Tables 4-5, Fig. 12): simulated or measured"
@@ -153,30 +154,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def simulated_measure(robot: Robot, abc: np.ndarray, status: int, args: argparse.Namespace):
-    """measure(points, repeats, stream) for compensation.study, seeded per stream.
-
-    Like kinematics.simulation.simulate_measurements (nominal IK, true FK, repeatability then
-    tracker noise), but every point is reached in one KUKA Status, as a KRL program that starts
-    with one PTP and continues with LIN keeps its configuration. (The IK default picks the wrist
-    solution with |A4| <= 90 deg point by point, which flips the wrist inside a cube near A5 = 0
-    and makes the simulated error field jump there.)
-    """
-    true = robot.true_robot() or robot
+    """measure(points, repeats, stream) for compensation.study: the measured rows of
+    ``kinematics.simulation.simulate_measurements`` seeded per stream, every point in the one
+    KUKA ``status`` (the IK default would flip the wrist inside a cube near A5 = 0 and make the
+    simulated error field jump there)."""
 
     def measure(points: np.ndarray, repeats: int, stream: int) -> np.ndarray:
-        points = np.asarray(points, dtype=float).reshape(-1, 3)
-        sol = robot.ik(commanded_poses(points, abc), status=status)
-        if not sol.ok.all():
-            i = int(np.flatnonzero(~sol.ok)[0])
-            x, y, z = points[i]
-            raise InputError(
-                f"{robot.name} cannot reach X {x:.3f} Y {y:.3f} Z {z:.3f} in Status {status} "
-                f"({sol.reason[i]})"
-            )
-        reached = np.repeat(true.fk(sol.q)[:, :3, 3], repeats, axis=0)
-        rng = np.random.default_rng(args.seed * 1000 + stream)
-        reached = reached + rng.normal(0.0, args.noise_repeat, reached.shape)
-        return reached + rng.normal(0.0, args.noise_tracker, reached.shape)
+        seed = args.seed * 1000 + stream
+        noise = (args.noise_tracker, args.noise_repeat)
+        return simulate_measurements(robot, points, abc, repeats, *noise, seed, status)[1]
 
     return measure
 
@@ -186,11 +172,11 @@ def check_reach(robot: Robot, names, centres, steps, abc, status) -> int:
     after checking that every cube point is reachable in it; InputError naming the first cube
     point that is not."""
     cubes = design(names, centres, steps)
-    if status is None:
-        first = robot.ik(commanded_poses(np.asarray(centres[:1], dtype=float), abc))
-        status = int(first.status[0]) if first.ok[0] else None
     points = np.concatenate([cubes.vertex_cmd, cubes.test_target], axis=2)  # (C, S, 17, 3)
-    sol = robot.ik(commanded_poses(points.reshape(-1, 3), abc), status=status)
+    first = commanded_poses(np.asarray(centres[:1], dtype=float), abc)[0]
+    sol, status = solve_in_one_status(
+        robot, commanded_poses(points.reshape(-1, 3), abc), status, first
+    )
     if sol.ok.all():
         return int(status)
     i = int(np.flatnonzero(~sol.ok)[0])

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import hashlib
 import io
 from pathlib import Path
 
@@ -25,6 +24,7 @@ from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.frame_file import load_frame
 from accugrid.codegen.textsafe import comment_text, fixed
 from accugrid.compensation.csvtable import Table, parse_table
+from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import invert, transform_points
 from accugrid.kinematics.inputfile import read_input_text
@@ -86,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     text = read_input_text(args.table)[1]
     table = parse_table(text, args.table)
     tracker_T_robot = load_frame(args.frame)
-    frame_sha = hashlib.sha256(Path(args.frame).read_bytes()).hexdigest()
+    frame_sha = file_sha256(args.frame)
     pose = tracker_T_robot if args.inverse else invert(tracker_T_robot)
     triples = _chosen(table, args.columns)
     columns = {table.index(n): n for triple in triples for n in triple}

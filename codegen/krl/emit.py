@@ -140,8 +140,9 @@ class _Records:
         self.names = [STAGES[k] for k in self.stages]
         self.pos = pos[:, self.stages]
         self.abc = fixed_texts(abc, self.decimals, distinct=True)
+        status, turn = program.configuration.to_kuka()
         self.st = fixed_texts(
-            np.stack([program.status[:, self.stages], program.turn[:, self.stages]], axis=2),
+            np.stack([status[:, self.stages], turn[:, self.stages]], axis=2),
             0,
             distinct=True,
         )

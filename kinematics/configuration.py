@@ -1,0 +1,221 @@
+"""Robot configuration: which of a pose's inverse-kinematics branches the arm is in.
+
+A ``Configuration`` is the robot-neutral value, computed from joint angles: per joint vector the
+shoulder (the wrist point behind the A1 axis: the overhead area), the elbow (A3 at or beyond
+phi, the A3 angle at which the A2 axis, the A3 axis and the wrist point are in line, arm
+stretched; -1.957 deg for the KR 210, -atan(41/1200)), the wrist (A5 < 0, flipped) and, per axis,
+whether the angle is negative (the sign of each axis' turn). Each controller's words come from it:
+``to_kuka`` gives the KUKA Status and Turn (DESIGN.md, checked against the KUKA/Siemens/Beckhoff
+descriptions: Status bit 0 shoulder, bit 1 elbow, bit 2 wrist; Turn bit i set when A(i+1) < 0).
+A Fanuc ``N U T, 0, 0, 0`` or an ABB confdata converter is one more method here.
+
+Branch selection (``select``: the one joint solution ``Robot.ik`` returns for a wanted Status, or
+the one nearest a reference) and the ``IKSolution`` record live here too, so the DH robot
+(``kinematics.robot``) and the URDF robot (``kinematics.urdf``) share them without importing each
+other.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from accugrid.kinematics import ik as closed
+from accugrid.kinematics.dh import chain
+
+if TYPE_CHECKING:
+    from accugrid.kinematics.robot import Robot
+
+__all__ = [
+    "HOME_RAD",
+    "Configuration",
+    "IKSolution",
+    "kuka_status",
+    "kuka_turn",
+    "kuka_words",
+    "select",
+    "solve_in_one_status",
+    "status_turn",
+]
+
+HOME_RAD = np.radians([0.0, -90.0, 90.0, 0.0, 0.0, 0.0])  # KUKA home, the default IK reference
+
+
+@dataclass(frozen=True)
+class IKSolution:
+    """Result of ``Robot.ik`` for N poses (see the field comments for shapes)."""
+
+    q: np.ndarray  # (N, 6) rad, NaN rows where there is no solution
+    ok: np.ndarray  # (N,) bool
+    reason: np.ndarray  # (N,) object: "" when ok, else why not
+    status: np.ndarray  # (N,) int KUKA Status of q (-1 where there is no solution)
+    turn: np.ndarray  # (N,) int KUKA Turn of q (-1 where there is no solution)
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """The configuration of joint vectors of any shape (...): shoulder, elbow, wrist (...) bool
+    (module doc) and negative (..., 6) bool, axis angle < 0."""
+
+    shoulder: np.ndarray
+    elbow: np.ndarray
+    wrist: np.ndarray
+    negative: np.ndarray
+
+    @classmethod
+    def of_joints(cls, robot: Robot, q: np.ndarray) -> Configuration:
+        """The configuration (N,) of joint vectors q (N, 6) rad of a DH robot."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        shoulder, elbow, wrist = _arm_bits(robot, q, _wrist_points(robot, q))
+        return cls(shoulder, elbow, wrist, q < 0)
+
+    @classmethod
+    def from_kuka(cls, status: np.ndarray, turn: np.ndarray) -> Configuration:
+        """The configuration of KUKA Status and Turn integers (same shape)."""
+        status, turn = np.asarray(status, dtype=int), np.asarray(turn, dtype=int)
+        negative = ((turn[..., None] >> np.arange(6)) & 1).astype(bool)
+        return cls(status & 1 == 1, status & 2 == 2, status & 4 == 4, negative)
+
+    def to_kuka(self) -> tuple[np.ndarray, np.ndarray]:
+        """KUKA Status and Turn integers (...) of this configuration."""
+        return (
+            kuka_status(self.shoulder, self.elbow, self.wrist),
+            kuka_turn(self.negative),
+        )
+
+
+def solve_in_one_status(
+    robot, poses: np.ndarray, status: int | None = None, first: np.ndarray | None = None
+) -> tuple[IKSolution, int | None]:
+    """IK of TCP poses (N, 4, 4) mm all in one KUKA Status, as a program that starts with one PTP
+    and continues with LIN keeps its configuration: ``status``, or the Status of the IK default
+    at ``first`` (a (4, 4) pose; default the first pose). Returns the solution (check ``ok``)
+    and the Status used (None when ``first`` is unreachable or the robot has no KUKA Status)."""
+    poses = np.asarray(poses, dtype=float).reshape(-1, 4, 4)
+    if status is None and len(poses):
+        start = robot.ik(poses[:1] if first is None else np.reshape(first, (1, 4, 4)))
+        status = int(start.status[0]) if start.ok[0] and start.status[0] >= 0 else None
+    return robot.ik(poses, status=status), status
+
+
+def kuka_status(shoulder: np.ndarray, elbow: np.ndarray, wrist: np.ndarray) -> np.ndarray:
+    """KUKA Status bits 0, 1, 2 from the shoulder, elbow and wrist flags (int array)."""
+    return np.asarray(shoulder).astype(int) + 2 * np.asarray(elbow) + 4 * np.asarray(wrist)
+
+
+def kuka_turn(negative: np.ndarray) -> np.ndarray:
+    """KUKA Turn (...) from per-axis negative flags (..., 6): bit i set when A(i+1) < 0."""
+    negative = np.asarray(negative)
+    return (negative.astype(int) << np.arange(negative.shape[-1])).sum(axis=-1)
+
+
+def status_turn(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """KUKA Status and Turn (N,) int for joint vectors q (N, 6) rad of a DH robot."""
+    return Configuration.of_joints(robot, q).to_kuka()
+
+
+def _wrist_points(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """Wrist points (N, 3) mm, robot frame, of joint vectors q (N, 6) rad."""
+    base_T_3 = chain(robot.dh, q, links=3)[2]  # the wrist point is the origin of frame 4
+    dh, theta4 = robot.dh, robot.dh.theta(q)[:, 3]
+    offset = np.stack(
+        [dh.a[3] * np.cos(theta4), dh.a[3] * np.sin(theta4), np.full_like(theta4, dh.d[3])]
+    )
+    return np.einsum("nij,jn->ni", base_T_3[:, :3, :3], offset) + base_T_3[:, :3, 3]
+
+
+def _arm_bits(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Shoulder, elbow, wrist flags (N,) of joint vectors q (N, 6) rad with wrist points (N, 3)."""
+    a1 = robot.dh.sign[0] * q[:, 0] + robot.dh.theta_offset[0]
+    x_a1 = wrist[:, 0] * np.cos(a1) + wrist[:, 1] * np.sin(a1)
+    return x_a1 < 0, q[:, 2] >= robot.phi_rad, q[:, 4] < 0
+
+
+def _status(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> np.ndarray:
+    """KUKA Status (N,) of joint vectors q (N, 6) rad whose wrist point is ``wrist`` (N, 3) mm."""
+    return kuka_status(*_arm_bits(robot, q, wrist))
+
+
+def kuka_words(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> tuple[np.ndarray, ...]:
+    """KUKA Status and Turn (N,) of joint vectors q (N, 6) rad whose wrist points ``wrist``
+    (N, 3) mm are known (saves the forward kinematics of ``status_turn``)."""
+    return _status(robot, q, wrist), kuka_turn(q < 0)
+
+
+def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, ...]:
+    """The solution ``Robot.ik`` picks per flange pose (N, 4, 4), before Turn and limits: q (N, 6)
+    rad in (-pi, pi] (NaN where none), found (N,), any candidate reachable (N,).
+
+    Status bits 0 and 1 (shoulder, elbow) follow from the 4 arm solutions alone; where one
+    arm solution has the wanted bits, only its 2 wrists are solved. Poses where that does not
+    settle it (several arm solutions fit, or neither wrist has the wanted bit 2) take all 8
+    candidates, so the pick is the same as over all 8 in candidate order."""
+    n, dh = len(flange), robot.dh
+    th1, th2, th3, reach = closed.arm_solutions(dh, flange)
+    arm = np.zeros((n, 4, 6))
+    arm[:, :, 0] = np.repeat(th1, 2, axis=1)
+    arm[:, :, 2] = th3.reshape(n, 4)
+    arm_q = closed.wrap(dh.axis_angles(arm)).reshape(-1, 6)
+    bits = _status(robot, arm_q, np.repeat(wrist, 4, axis=0)).reshape(n, 4) & 3
+    want = 2 if status is None else np.broadcast_to(np.asarray(status, dtype=int), (n,))
+    fits = reach.reshape(n, 4) & (bits == np.bitwise_and(want, 3)[..., None])
+    one = fits.sum(axis=1) == 1
+    q = np.full((n, 6), np.nan)
+    found = np.zeros(n, bool)
+    rows = np.flatnonzero(one)
+    a = np.argmax(fits[rows], axis=1)
+    s, e = a // 2, a % 2
+    cand = closed.arm_wrists(
+        dh, flange[rows], th1[rows, s], th2[rows, s, e], th3[rows, s, e]
+    )  # (m, 2, 6)
+    if status is None:
+        ref = HOME_RAD if reference is None else np.asarray(reference, dtype=float)
+        ref = np.broadcast_to(ref, (n, 6))[rows, None]
+        pick = np.argmin((closed.wrap(cand - ref) ** 2).sum(axis=2), axis=1)
+        settled = np.ones(len(rows), bool)
+    else:
+        cand_status = _status(robot, cand.reshape(-1, 6), np.repeat(wrist[rows], 2, axis=0))
+        match = _status_match(cand.reshape(-1, 6), cand_status, want[rows].repeat(2))
+        match = match.reshape(-1, 2)
+        pick, settled = np.argmax(match, axis=1), match.any(axis=1)
+    done = rows[settled]
+    q[done] = cand[settled, pick[settled]]
+    found[done] = True
+    rest = np.flatnonzero(~one & fits.any(axis=1))
+    rest = np.concatenate([rest, rows[~settled]]) if status is not None else rest
+    if rest.size:
+        q[rest], found[rest] = _select_all(robot, flange[rest], wrist[rest], want, rest, reference)
+    return q, found, reach.reshape(n, 4).any(axis=1)
+
+
+def _select_all(robot: Robot, flange, wrist, want, rows, reference):
+    """``select`` over all 8 candidates for poses ``rows``; want = 2 means the default."""
+    m = len(flange)
+    cand, reach = closed.all_solutions(robot.dh, flange)
+    cand_status = _status(robot, cand.reshape(-1, 6), np.repeat(wrist, 8, axis=0)).reshape(m, 8)
+    if np.ndim(want) == 0:
+        match = reach & ((cand_status & 3) == 2)
+        ref = HOME_RAD if reference is None else np.asarray(reference, dtype=float)
+        if ref.ndim == 2:
+            ref = ref[rows]
+        ref = np.broadcast_to(ref, (m, 6))[:, None]
+        distance = np.where(match, (closed.wrap(cand - ref) ** 2).sum(axis=2), np.inf)
+        pick = np.argmin(distance, axis=1)
+    else:
+        match = reach & _status_match(
+            cand.reshape(-1, 6), cand_status.reshape(-1), want[rows].repeat(8)
+        ).reshape(m, 8)
+        pick = np.argmax(match, axis=1)
+    found = match.any(axis=1)
+    q = cand[np.arange(m), pick]
+    q[~found] = np.nan
+    return q, found
+
+
+def _status_match(q: np.ndarray, cand_status: np.ndarray, want: np.ndarray) -> np.ndarray:
+    """Candidates (M, 6) with the wanted Status; on the wrist singularity (A5 = 0) either bit 2
+    fits."""
+    singular_wrist = np.abs(q[:, 4]) < 1e-12
+    return (cand_status == want) | (singular_wrist & ((cand_status & 3) == (want & 3)))
