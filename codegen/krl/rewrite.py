@@ -30,9 +30,8 @@ from accugrid.codegen.rewrite import (
     Options,
     Result,
     Row,
-    check_orientation,
     correct_points,
-    outside_reason,
+    rotations_of,
     strict_check,
 )
 from accugrid.kinematics.frames import pose_from_xyzabc
@@ -285,20 +284,13 @@ def _correct_krl(
     by_id = {id(f): f for _, _, f in placed}
     frames = np.array([by_id[k] for k in unique])[which]  # (N, 4, 4)
     abc = np.array([[_value(pos, k) for k in "ABC"] for pos, _, _ in placed]).reshape(-1, 3)
-    keep = check_orientation(frames[:, :3, :3], abc, [row for _, row, _ in placed], opts)
-    if not keep.all():
-        placed = [p for p, k in zip(placed, keep.tolist(), strict=True) if k]
-        frames = frames[keep]
-        if not placed:
-            return
     base_xyz = np.array([row.old for _, row, _ in placed])  # (N, 3) mm, base frame
     robot = np.einsum("nij,nj->ni", frames[:, :3, :3], base_xyz) + frames[:, :3, 3]
-    inside, corrected = correct_points(robot, opts)
+    rows = [row for _, row, _ in placed]
+    corrected = correct_points(robot, rows, opts, rotations_of(frames[:, :3, :3], abc))
+    inside = np.isfinite(corrected[:, 0])
     back = np.einsum("nji,nj->ni", frames[:, :3, :3], corrected - robot)  # R^T e
     targets = base_xyz + back
-    for i in np.flatnonzero(~inside).tolist():
-        row = placed[i][1]
-        row.status, row.reason = "outside", outside_reason(robot[i])
     for file in texts:
         idx = [i for i in np.flatnonzero(inside).tolist() if placed[i][1].file == file]
         if not idx:
