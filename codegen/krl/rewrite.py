@@ -1,7 +1,10 @@
 """Pre-flight rewrite of a KUKA KRL .src/.dat (see ``codegen.rewrite`` for what a rewrite is).
 
-KRL inline aggregates use the base in effect at that line (see ``codegen.krl.parse``); a position
-declared in a .dat takes the base of the motions that use it, and is corrected once however many
+KRL inline aggregates use the base in effect at that line (see ``codegen.krl.parse``). A stored
+position (declared or assigned with a literal) is corrected only if a motion uses it, or, in a
+.dat given alone with ``--base``, if it is a POS/E6POS; never a frame (``$TOOL``/``$BASE``/
+``$LOAD``/``TOOL_DATA``/``BASE_DATA`` value, ``:`` operand) or a CONST. It takes the base of the
+motions that use it (its own FDAT wins over ``--base``) and is corrected once however many
 motions use it. BASE_DATA[n] comes from ``--config-dat`` (if it defines n), else from the cell's
 ``base`` and ``base_data``; base 0 ($NULLFRAME, BAS(#BASE,0)) is the robot frame ($WORLD =
 $ROBROOT).
