@@ -101,3 +101,22 @@ def test_a_byte_order_mark_is_not_a_word():
         moves = parse_gcode(bom + body)
         assert [m.target for m in moves] == [m.target for m in plain]
         assert moves[0].words["X"].start == plain[0].words["X"].start + len(bom)
+
+
+@pytest.mark.parametrize(
+    ("line", "target"),
+    [
+        ("G0 X1 (a) Y2 (b; c) Z3 ; d (e\n", (1.0, 2.0, 3.0)),
+        ("G0 (a)(b)X1(c)Y2 Z3()\n", (1.0, 2.0, 3.0)),
+        ("G0 X1 Y2 Z3 (((nested opening)\n", (1.0, 2.0, 3.0)),
+    ],
+)
+def test_comments_anywhere_in_a_line(line, target):
+    (move,) = parse_gcode(line)
+    assert move.target == target
+
+
+def test_a_closing_parenthesis_without_an_opening_one_is_located():
+    with pytest.raises(InputError) as err:
+        parse_gcode("G0 X1 (a) Y2) Z3\n")
+    assert err.value.column == 13 and "')' without '('" in str(err.value)
