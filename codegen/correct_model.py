@@ -17,14 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.atomic import check_targets
 from accugrid.codegen.commands.correct import (
     check_added_columns,
     check_outside,
-    corrected_csv,
-    refuse_too_long,
+    print_corrections,
+    write_corrected,
 )
-from accugrid.codegen.header import grid_lines, header_lines, input_line
+from accugrid.codegen.header import grid_lines, input_line
 from accugrid.codegen.points import Points, read_points
 from accugrid.compensation.model_correction import TOL_MM, model_correct, residual_grid
 from accugrid.compensation.settings import CorrectionSettings
@@ -88,22 +88,12 @@ def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
             f"{named}{more}",
             *points.table.where(int(bad[0])),
         )
-    correction = result.command - points.xyz
-    length = np.linalg.norm(correction, axis=1)
-    worst = refuse_too_long(points, length, args.max_correction)
-    sources = [
-        input_line("points", args.points, file_sha256(args.points)),
-        input_line("model", args.model, file_sha256(args.model) if inputs[2] else "built-in"),
-    ]
+    sources = [input_line("model", args.model, file_sha256(args.model) if inputs[2] else "-")]
     details = [f"robot {calibrated.name}, KUKA Status {status}"]
     if grid is not None:
         sources += grid_lines(Path(args.grid).name, grid.source_sha256, grid.step)
         details.append(f"residual grid: method {args.method}, power {args.power:g}")
-    where = "" if worst is None else f" at hole {points.ids[worst]}"
-    largest = 0.0 if worst is None else float(length[worst])
-    header = header_lines("correct", sources, details, largest, where, [f"points {len(points)}"])
-    text = corrected_csv(points, result.command, correction, flags, header)
-    write_files({args.output: text}, inputs, force=args.force)
+    length, worst = write_corrected(args, points, result.command, flags, sources, details, inputs)
     if grid is not None:
         print(grid.describe().replace("grid       ", "residual   ", 1))
     print(f"model      {args.model} ({calibrated.name}), KUKA Status {status}")
@@ -111,14 +101,5 @@ def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
         f"corrected  {len(points)} point(s) in {result.iterations} pass(es), largest miss "
         f"{np.nanmax(result.miss_mm, initial=0.0):.6f} mm (tolerance {TOL_MM:g})"
     )
-    if worst is not None:
-        print(
-            f"largest correction {length[worst]:.4f} mm at {points.label(worst)}; "
-            f"mean {length.mean():.4f} mm"
-        )
-    flagged = [i for i, f in enumerate(flags) if f]
-    print(f"flagged    {len(flagged)} point(s)")
-    for i in flagged[:_LISTED]:
-        print(f"  {points.label(i)}: {'; '.join(flags[i])}")
-    print(f"wrote {args.output}")
+    print_corrections(points, length, worst, flags, args.output)
     return 0
