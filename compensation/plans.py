@@ -24,6 +24,27 @@ from accugrid.compensation.cube_points import (
 )
 from accugrid.kinematics.errors import InputError
 
+__all__ = [
+    "CUBE_LABELS",
+    "CUBE_ORDER",
+    "MAX_GRID_VERTICES",
+    "MEAS_COLUMNS",
+    "PLAN_COLUMNS",
+    "SEED_ABC",
+    "SEED_CENTRES",
+    "SEED_REGION",
+    "SEED_REPEATS",
+    "SEED_STEPS",
+    "Plan",
+    "check_vertex_count",
+    "cube_plan",
+    "experiment_plan",
+    "grid_axes",
+    "grid_plan",
+    "path_length",
+    "serpentine_order",
+]
+
 #: Seed Table 3: the five cube centres D-H (robot frame, mm); orientation ABC 0 90 0 for all.
 SEED_CENTRES: dict[str, tuple[float, float, float]] = {
     "D": (1700.0, 0.0, 1500.0),

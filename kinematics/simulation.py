@@ -11,7 +11,15 @@ import numpy as np
 
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
-from accugrid.kinematics.robot import Robot
+from accugrid.kinematics.model import RobotModel
+
+__all__ = [
+    "commanded_joints",
+    "commanded_poses",
+    "grid_status",
+    "reached_positions",
+    "simulate_measurements",
+]
 
 
 def commanded_poses(points: np.ndarray, abc_deg: np.ndarray) -> np.ndarray:
@@ -23,7 +31,7 @@ def commanded_poses(points: np.ndarray, abc_deg: np.ndarray) -> np.ndarray:
     return poses
 
 
-def grid_status(robot: Robot, points: np.ndarray, abc_deg: np.ndarray) -> int | None:
+def grid_status(robot: RobotModel, points: np.ndarray, abc_deg: np.ndarray) -> int | None:
     """The one KUKA Status a measurement run keeps: the IK default's Status at the first point.
 
     A real KUKA LIN program keeps one Status for every point; letting the default configuration
@@ -38,7 +46,7 @@ def grid_status(robot: Robot, points: np.ndarray, abc_deg: np.ndarray) -> int | 
 
 
 def commanded_joints(
-    robot: Robot, points: np.ndarray, abc_deg: np.ndarray, status: int | None = None
+    robot: RobotModel, points: np.ndarray, abc_deg: np.ndarray, status: int | None = None
 ) -> np.ndarray:
     """Nominal-model joints (N, 6) rad for the commanded positions in one KUKA Status (default:
     ``grid_status``); InputError if any point fails."""
@@ -53,7 +61,7 @@ def commanded_joints(
     return sol.q
 
 
-def _unreachable(robot: Robot, points: np.ndarray, abc_deg: np.ndarray, sol) -> None:
+def _unreachable(robot: RobotModel, points: np.ndarray, abc_deg: np.ndarray, sol) -> None:
     bad = np.flatnonzero(~sol.ok)
     first = bad[0]
     x, y, z = np.asarray(points, dtype=float).reshape(-1, 3)[first]
@@ -65,7 +73,7 @@ def _unreachable(robot: Robot, points: np.ndarray, abc_deg: np.ndarray, sol) -> 
 
 
 def reached_positions(
-    robot: Robot, points: np.ndarray, abc_deg: np.ndarray, status: int | None = None
+    robot: RobotModel, points: np.ndarray, abc_deg: np.ndarray, status: int | None = None
 ) -> np.ndarray:
     """Positions (N, 3) mm the true robot's TCP reaches when commanded to points (N, 3) at abc_deg.
 
@@ -80,7 +88,7 @@ def reached_positions(
 
 
 def simulate_measurements(
-    robot: Robot,
+    robot: RobotModel,
     points: np.ndarray,
     abc_deg: np.ndarray,
     repeats: int = 1,

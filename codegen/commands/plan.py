@@ -30,7 +30,7 @@ import numpy as np
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
 from accugrid.codegen.header import header_lines
-from accugrid.codegen.render import environment, render, template_dir
+from accugrid.codegen.krl.emit import MeasureSettings, render_measurement
 from accugrid.codegen.textsafe import fixed, krl_identifier
 from accugrid.compensation.plans import (
     SEED_CENTRES,
@@ -45,8 +45,20 @@ from accugrid.kinematics.configuration import solve_in_one_status
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.simulation import commanded_poses
 
+__all__ = [
+    "MAX_WAIT_SEC",
+    "NAME",
+    "add_arguments",
+    "add_experiment_arguments",
+    "build_plan",
+    "parse_centres",
+    "parse_steps",
+    "reach",
+    "render_krl",
+    "run",
+]
+
 NAME = "plan"
-HELP = "measurement plans: grid, one cube's ISO 9283 test points, or the seed's step experiment"
 
 MAX_WAIT_SEC = 600.0
 
@@ -284,7 +296,8 @@ def render_krl(
     header: list[str],
     args: argparse.Namespace,
 ) -> tuple[str, str]:
-    """(.src, .dat) texts: one E6POS per distinct position, one LIN + wait per plan row."""
+    """(.src, .dat) texts of the measurement program (``krl.emit.render_measurement``) after
+    checking the program options."""
     if args.wait_input is not None and not 1 <= args.wait_input <= 4096:
         raise InputError(f"--wait-input must be an input number 1..4096, got {args.wait_input}")
     if not 0 <= args.wait_sec <= MAX_WAIT_SEC:
@@ -298,49 +311,17 @@ def render_krl(
         low = 1 if option == "tool_number" else 0
         if not low <= value <= 32:
             raise InputError(f"--{option.replace('_', '-')} must be {low}..32, got {value}")
-    unique, index = np.unique(np.round(plan.points, 4), axis=0, return_inverse=True)
-    index = index.reshape(-1)
-    # number the distinct positions in order of first visit
-    first_visit = np.full(len(unique), len(plan.points))
-    np.minimum.at(first_visit, index, np.arange(len(plan.points)))
-    rank = np.empty(len(unique), dtype=int)
-    rank[np.argsort(first_visit)] = np.arange(len(unique))
-    names = [f"XMP{k + 1}" for k in range(len(unique))]
-    rows_of = first_visit[np.argsort(first_visit)]
-    a, b, c = plan.abc
-    points = [
-        {
-            "name": names[k],
-            "x": plan.points[r, 0],
-            "y": plan.points[r, 1],
-            "z": plan.points[r, 2],
-            "a": a,
-            "b": b,
-            "c": c,
-            "s": int(status[r]),
-            "t": int(turn[r]),
-        }
-        for k, r in enumerate(rows_of)
-    ]
-    moves = [
-        {"point": names[rank[index[r]]], "label": plan.ids[r]} for r in range(len(plan.points))
-    ]
-    env = environment(template_dir("krl", args.templates), newline="\r\n")
-    context = {
-        "name": name,
-        "header": header,
-        "tool": args.tool_number,
-        "base": args.base_number,
-        "ptp_percent": args.ptp_percent,
-        "vel_cp": args.vel,
-        "wait_sec": args.wait_sec,
-        "wait_input": args.wait_input,
-        "moves": moves,
-        "points": points,
-    }
-    src = render(env, "measure.src.j2", **context)
-    dat = render(env, "measure.dat.j2", **context)
-    return src, dat
+    settings = MeasureSettings(
+        tool=args.tool_number,
+        base=args.base_number,
+        ptp_percent=args.ptp_percent,
+        vel_cp=args.vel,
+        wait_sec=args.wait_sec,
+        wait_input=args.wait_input,
+    )
+    return render_measurement(
+        plan.points, plan.abc, plan.ids, status, turn, name, header, settings, args.templates
+    )
 
 
 def run(args: argparse.Namespace) -> int:

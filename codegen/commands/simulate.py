@@ -16,20 +16,31 @@ degrees.
 from __future__ import annotations
 
 import argparse
-import io
 
 import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
+from accugrid.codegen.plots import fig3_png
 from accugrid.codegen.textsafe import comment_text, fixed
 from accugrid.compensation.plans import check_vertex_count
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.simulation import grid_status, reached_positions, simulate_measurements
 
+__all__ = [
+    "FIG3_ABC",
+    "FIG3_X",
+    "FIG3_Y",
+    "FIG3_Z",
+    "NAME",
+    "add_arguments",
+    "fig3_field",
+    "grid_points",
+    "run",
+]
+
 NAME = "simulate"
-HELP = "simulate a laser-tracker grid measurement of a robot (measurement CSV, seed Fig. 3)"
 
 FIG3_X = (1000.0, 2000.0)
 FIG3_Y = (-500.0, 500.0)
@@ -95,7 +106,11 @@ def run(args: argparse.Namespace) -> int:
     if args.output:
         outputs[args.output] = _measurement_csv(robot, args)
     if args.plot:
-        outputs[args.plot] = _fig3_png(robot, args.status)
+        xs, ys, error = fig3_field(robot, status=args.status)
+        for k, axis in enumerate("XYZ"):
+            field = error[:, :, k]
+            print(f"  Fig. 3 D_{axis}: min {field.min():.3f}  max {field.max():.3f} mm")
+        outputs[args.plot] = fig3_png(robot.name, xs, ys, error, FIG3_Z, FIG3_ABC)
     write_files(outputs, inputs, force=args.force)
     for path in outputs:
         print(f"wrote {path}")
@@ -190,34 +205,6 @@ def fig3_field(
     points = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, FIG3_Z)])
     error = points - reached_positions(robot, points, FIG3_ABC, status)
     return xs, ys, error.reshape(samples, samples, 3)
-
-
-def _fig3_png(robot: Robot, status: int | None) -> bytes:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    xs, ys, error = fig3_field(robot, status=status)
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.6), constrained_layout=True)
-    for k, (ax, axis) in enumerate(zip(axes, "XYZ", strict=True)):
-        field = error[:, :, k].T  # rows = Y, columns = X
-        mesh = ax.contourf(xs, ys, field, levels=20, cmap="viridis")
-        ax.contour(xs, ys, field, levels=10, colors="k", linewidths=0.4)
-        fig.colorbar(mesh, ax=ax, label=f"D_{axis} (mm)")
-        ax.set_title(f"({'abc'[k]}) D_{axis}: {field.min():.2f} .. {field.max():.2f} mm")
-        ax.set_xlabel("X (mm)")
-        ax.set_ylabel("Y (mm)")
-        ax.set_aspect("equal")
-        print(f"  Fig. 3 D_{axis}: min {field.min():.3f}  max {field.max():.3f} mm")
-    fig.suptitle(
-        f"{robot.name}: TCP error e = P - M at Z {FIG3_Z:g} mm, A B C "
-        f"{' '.join(f'{v:g}' for v in FIG3_ABC)} deg (seed Fig. 3)"
-    )
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
-    plt.close(fig)
-    return buffer.getvalue()
 
 
 def _is_file(name: str) -> bool:
