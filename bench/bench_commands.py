@@ -99,28 +99,10 @@ def main(million: bool) -> None:
             label = f"{n:.0e}".replace("+0", "")
             holes = tmp / f"holes{n}.csv"
             holes.write_text(points_csv(n))
-            job = [str(holes), "--cell", str(CELL)]
-            krl_out, ngc_out = tmp / f"krl{n}", tmp / f"holes{n}.ngc"
-            rows.append(
-                job_row(
-                    f"accugrid krl, {label} holes",
-                    ["krl", *job, "-o", str(krl_out)],
-                    [holes, CELL, GRID],
-                    krl_out,
-                    tmp,
-                    repeats,
-                )
-            )
-            rows.append(
-                job_row(
-                    f"accugrid gcode, {label} holes",
-                    ["gcode", *job, "-o", str(ngc_out)],
-                    [holes, CELL, GRID],
-                    ngc_out,
-                    tmp,
-                    repeats,
-                )
-            )
+            for command, out in (("krl", tmp / f"krl{n}"), ("gcode", tmp / f"holes{n}.ngc")):
+                args = [command, str(holes), "--cell", str(CELL), "-o", str(out)]
+                name = f"accugrid {command}, {label} holes"
+                rows.append(job_row(name, args, [holes, CELL, GRID], out, tmp, repeats))
         pair_dir = tmp / "pair"
         pair_dir.mkdir()
         pair = krl_pair(pair_dir)

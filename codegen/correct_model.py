@@ -1,10 +1,8 @@
 """`accugrid correct --model CAL.yaml [--grid MEAS]`: correction by a calibrated robot model.
 
 Every point P (robot frame, mm) at its orientation gets the command P' that the calibrated arm,
-driven by the nominal controller in one KUKA Status (with the tool it had when the model was
-identified, the file's identification.controller_tool; the identified TCP is the arm's), takes
-to P (``compensation.model_correction``, iterated to 0.001 mm); with ``--grid`` the grid holds
-the residual after the model and is added.
+driven by the nominal controller in one KUKA Status, takes to P (``compensation.model_correction``,
+iterated to 0.001 mm); with ``--grid`` the grid holds the residual after the model and is added.
 Orientation: a,b,c columns as given; i,j,k drill axes oriented along the axis nearest ``--abc``;
 points without orientation at ``--abc``. The output CSV is the one of ``accugrid correct``.
 Refused (exit 2, nothing written): a point the nominal controller cannot reach in the Status or
@@ -19,25 +17,31 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.atomic import check_targets
 from accugrid.codegen.commands.correct import (
     check_added_columns,
     check_outside,
-    corrected_csv,
-    refuse_too_long,
+    print_corrections,
+    write_corrected,
 )
-from accugrid.codegen.header import grid_lines, header_lines, input_line
+from accugrid.codegen.header import grid_lines, input_line
 from accugrid.codegen.points import Points, read_points
 from accugrid.compensation.model_correction import TOL_MM, model_correct, residual_grid
 from accugrid.compensation.settings import CorrectionSettings
-from accugrid.kinematics.calibrated import controller_tool
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, orient_along_axes, too_tilted
+from accugrid.kinematics.frames import (
+    abc_to_matrix,
+    matrix_to_abc,
+    orient_along_axes,
+    pose_from_xyzabc,
+    too_tilted,
+)
 from accugrid.kinematics.robot import load_robot
 from accugrid.kinematics.simulation import commanded_poses
+from accugrid.kinematics.yamlfile import load_yaml
 
-__all__ = ["point_orientations", "run_model"]
+__all__ = ["controller_tool", "point_orientations", "run_model"]
 
 _LISTED = 5
 
@@ -60,18 +64,33 @@ def point_orientations(points: Points, reference_abc: np.ndarray) -> np.ndarray:
     return matrix_to_abc(orient_along_axes(points.axis, reference))
 
 
+def controller_tool(model: str, tool: list[float] | None) -> np.ndarray | None:
+    """The controller's flange_T_tool (4, 4) mm: ``--tool``, else the ``controller_tool`` the
+    calibrated file records (``identification:``, written by ``accugrid identify``), else None
+    (the model's identified TCP)."""
+    if tool is not None:
+        return pose_from_xyzabc(np.array(tool, dtype=float))
+    if not Path(model).is_file():
+        return None
+    doc = load_yaml(model)
+    if not doc.has("identification", "controller_tool"):
+        return None
+    return pose_from_xyzabc([doc.number("identification", "controller_tool", k) for k in "xyzabc"])
+
+
 def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
     """The whole ``correct --model`` job (arguments of ``accugrid correct``)."""
     inputs = [args.points, args.grid, args.model if Path(args.model).is_file() else None]
     check_targets([args.output], inputs, args.force)
     calibrated = load_robot(args.model)
-    tool = controller_tool(args.model) if inputs[2] else None
+    tool = controller_tool(args.model, args.tool)
     points = read_points(args.points)
     check_added_columns(points)
     abc = point_orientations(points, np.array(args.abc, dtype=float))
     status = args.status
     if status is None and len(points):
-        first = calibrated.ik(commanded_poses(points.xyz[:1], abc[0]))
+        controller = calibrated if tool is None else calibrated.with_tool(tool)
+        first = controller.ik(commanded_poses(points.xyz[:1], abc[0]))
         status = int(first.status[0]) if first.ok[0] else None
     grid = None
     flags: list[list[str]] = [[] for _ in range(len(points))]
@@ -96,22 +115,12 @@ def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
             f"{named}{more}",
             *points.table.where(int(bad[0])),
         )
-    correction = result.command - points.xyz
-    length = np.linalg.norm(correction, axis=1)
-    worst = refuse_too_long(points, length, args.max_correction)
-    sources = [
-        input_line("points", args.points, file_sha256(args.points)),
-        input_line("model", args.model, file_sha256(args.model) if inputs[2] else "built-in"),
-    ]
+    sources = [input_line("model", args.model, file_sha256(args.model) if inputs[2] else "-")]
     details = [f"robot {calibrated.name}, KUKA Status {status}"]
     if grid is not None:
         sources += grid_lines(Path(args.grid).name, grid.source_sha256, grid.step)
         details.append(f"residual grid: method {args.method}, power {args.power:g}")
-    where = "" if worst is None else f" at hole {points.ids[worst]}"
-    largest = 0.0 if worst is None else float(length[worst])
-    header = header_lines("correct", sources, details, largest, where, [f"points {len(points)}"])
-    text = corrected_csv(points, result.command, correction, flags, header)
-    write_files({args.output: text}, inputs, force=args.force)
+    length, worst = write_corrected(args, points, result.command, flags, sources, details, inputs)
     if grid is not None:
         print(grid.describe().replace("grid       ", "residual   ", 1))
     print(f"model      {args.model} ({calibrated.name}), KUKA Status {status}")
@@ -119,14 +128,5 @@ def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
         f"corrected  {len(points)} point(s) in {result.iterations} pass(es), largest miss "
         f"{np.nanmax(result.miss_mm, initial=0.0):.6f} mm (tolerance {TOL_MM:g})"
     )
-    if worst is not None:
-        print(
-            f"largest correction {length[worst]:.4f} mm at {points.label(worst)}; "
-            f"mean {length.mean():.4f} mm"
-        )
-    flagged = [i for i, f in enumerate(flags) if f]
-    print(f"flagged    {len(flagged)} point(s)")
-    for i in flagged[:_LISTED]:
-        print(f"  {points.label(i)}: {'; '.join(flags[i])}")
-    print(f"wrote {args.output}")
+    print_corrections(points, length, worst, flags, args.output)
     return 0

@@ -34,10 +34,14 @@ from accugrid.compensation.grid import GridModel
 from accugrid.compensation.model_correction import model_correct, residual_grid
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc
+from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, pose_from_xyzabc
 from accugrid.kinematics.identification import identify, pose_set, select_poses
 from accugrid.kinematics.robot import Robot
-from accugrid.kinematics.simulation import commanded_poses, simulate_measurements
+from accugrid.kinematics.simulation import (
+    commanded_poses,
+    simulate_measurements,
+    simulate_pose_measurements,
+)
 
 __all__ = [
     "METHODS",
@@ -132,6 +136,11 @@ def tilted_abc(rng: np.random.Generator, n: int, abc_deg, tilt_deg: float) -> np
     return matrix_to_abc(abc_to_matrix(np.asarray(abc_deg, dtype=float)) @ turn)
 
 
+def _poses(points: np.ndarray, abc: np.ndarray) -> np.ndarray:
+    """TCP poses (N, 4, 4) at positions (N, 3) mm and KUKA A, B, C (N, 3) deg."""
+    return pose_from_xyzabc(np.column_stack([points, np.broadcast_to(abc, np.shape(points))]))
+
+
 class _Cell:
     """The controller (``robot``, nominal model) and its arm (``robot.true_robot()``)."""
 
@@ -140,7 +149,7 @@ class _Cell:
         self.arm = robot.true_robot() or robot
 
     def solve(self, points: np.ndarray, abc: np.ndarray):
-        return self.robot.ik(commanded_poses(points, abc), status=self.status)
+        return self.robot.ik(_poses(points, abc), status=self.status)
 
     def land(self, commands: np.ndarray, abc: np.ndarray) -> np.ndarray:
         """Where the arm's TCP goes (N, 3) mm for commands (N, 3) at abc (N, 3), noise-free."""
@@ -277,9 +286,10 @@ def compare_methods(
             raise InputError(f"budget {budget} exceeds the {len(cand_q)} usable candidate poses")
         chosen, _ = select_poses(robot, cand_q, budget, compliance=compliance)
         poses_p, poses_abc = cand_p[chosen], cand_abc[chosen]
-        commanded, measured = simulate_measurements(
-            robot, poses_p, poses_abc, repeats, seed=step_seed + 1, status=status, **noise
+        _, measured = simulate_pose_measurements(
+            robot, _poses(poses_p, poses_abc), status, repeats, seed=step_seed + 1, **noise
         )
+        commanded = np.repeat(poses_p, repeats, axis=0)
         rows_abc = np.repeat(poses_abc, repeats, axis=0)
         data = pose_set(robot, commanded, measured, abc_deg=rows_abc, status=status)
         fit = identify(robot, data, compliance=compliance)

@@ -29,7 +29,14 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.robot import Robot
 
-__all__ = ["MAX_ITERATIONS", "TOL_MM", "ModelCorrection", "model_correct", "residual_grid"]
+__all__ = [
+    "MAX_ITERATIONS",
+    "TOL_MM",
+    "ModelCorrection",
+    "model_correct",
+    "reached_by_model",
+    "residual_grid",
+]
 
 TOL_MM = 1e-3  # default: |P - reach(P')| below 0.001 mm
 MAX_ITERATIONS = 12
@@ -60,8 +67,9 @@ def reached_by_model(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Where the calibrated arm puts the TCP for commands (N, 3) mm at rotations (N, 3, 3) under
     the nominal controller in KUKA ``status``: (positions (N, 3) mm, NaN where the nominal IK
-    fails; ok (N,); reason (N,)). ``controller_tool``: the flange_T_tool (4, 4) the controller
-    solves with (its TOOL_DATA; None: the calibrated TCP, i.e. TOOL_DATA set to it)."""
+    fails; ok (N,); reason (N,)). The controller solves with ``controller_tool`` (flange_T_tool
+    (4, 4) mm, its TOOL_DATA; default: the calibrated TCP, i.e. a controller given the
+    identified TCP); the arm's TCP is the calibrated one."""
     poses = np.zeros((len(commands), 4, 4))
     poses[:, :3, :3] = rotations
     poses[:, :3, 3] = commands
@@ -92,7 +100,7 @@ def model_correct(
     ``grid``: a residual grid (``residual_grid``) added as r(P), interpolated with ``settings``
     (method, power, outside rule; default ``CorrectionSettings()``). Unreachable targets and
     targets that do not converge within ``max_iterations`` are ``ok = False`` with the reason,
-    vectorized over N. ``controller_tool``: as ``reached_by_model``.
+    vectorized over N. ``controller_tool``: the controller's TOOL_DATA, as ``reached_by_model``.
     """
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     n = len(points)
@@ -141,8 +149,9 @@ def residual_grid(
 
     ``measurements``: a measurement CSV path or (commanded, measured[, abc]) arrays, as for
     ``GridModel.from_measurements``; the vertices are reached at the measurement's a,b,c
-    (``abc_deg`` when the file has none) in KUKA ``status``. InputError naming the first vertex
-    the nominal controller cannot reach. ``controller_tool``: as ``reached_by_model``.
+    (``abc_deg`` when the file has none) in KUKA ``status`` by a controller with
+    ``controller_tool`` (as ``reached_by_model``). InputError naming the first vertex the nominal
+    controller cannot reach.
     """
     kwargs = {} if repeat_tol_mm is None else {"repeat_tol_mm": repeat_tol_mm}
     measured = GridModel.from_measurements(measurements, **kwargs)

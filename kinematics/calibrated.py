@@ -19,7 +19,7 @@ from accugrid.kinematics.identification import Identification
 from accugrid.kinematics.joint_errors import JointErrors
 from accugrid.kinematics.robot import Robot
 
-__all__ = ["calibrated_yaml", "check_same_robot", "controller_tool", "identification_summary"]
+__all__ = ["calibrated_yaml", "check_same_robot", "identification_summary"]
 
 _SAME_TOL = 1e-9  # mm / deg: nominal DH values closer than this are the same robot
 
@@ -30,21 +30,6 @@ def _pose_dict(pose: np.ndarray) -> dict[str, float]:
 
 def _axes(values: np.ndarray) -> dict[str, float]:
     return {axis: float(v) for axis, v in zip("xyz", values, strict=True)}
-
-
-def controller_tool(path) -> np.ndarray | None:
-    """flange_T_tool (4, 4) the controller solved with when the model was identified (the
-    ``identification.controller_tool`` of a calibrated robot file, mm and deg), or None for a
-    robot file without it. The file's ``tool`` is the identified TCP, which the controller's
-    TOOL_DATA does not know."""
-    from accugrid.kinematics.frames import pose_from_xyzabc
-    from accugrid.kinematics.yamlfile import load_yaml
-
-    doc = load_yaml(path)
-    if not doc.has("identification", "controller_tool"):
-        return None
-    keys = ("identification", "controller_tool")
-    return pose_from_xyzabc([doc.number(*keys, k, default=0.0) for k in "xyzabc"])
 
 
 def identification_summary(

@@ -28,8 +28,9 @@ from accugrid.compensation.comparison import Comparison, ComparisonRow, compare_
 from accugrid.compensation.plans import SEED_REGION
 from accugrid.kinematics.errors import InputError
 
+__all__ = ["NAME", "add_arguments", "run", "table_text"]
+
 NAME = "compare"
-HELP = "grid only vs model vs model + residual grid against the number of measured points"
 
 DEFAULT_BUDGETS = (27, 60, 125, 252)
 DEFAULT_TOOL = (0.0, 0.0, 250.0, 0.0, 0.0, 0.0)

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import add_abc, add_status
+from accugrid.codegen.cli_options import add_abc, add_status, add_tool
 from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
 from accugrid.codegen.points import Points, read_points
 from accugrid.codegen.textsafe import fixed
@@ -38,8 +38,9 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.units import mm_text
 
+__all__ = ["ADDED", "DECIMALS", "NAME", "add_arguments", "run", "settings_from"]
+
 NAME = "correct"
-HELP = "corrected points CSV: P' = P + e, e interpolated from a measured error grid"
 
 ADDED = ["x_cmd", "y_cmd", "z_cmd", "ex", "ey", "ez", "flag"]
 DECIMALS = 4
@@ -64,6 +65,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "first point)",
     )
     add_abc(parser, "with --model: orientation of points without a,b,c, reference for i,j,k axes")
+    add_tool(
+        parser,
+        "with --model: the controller's TOOL_DATA, mm and deg (default: the model file's "
+        "identification.controller_tool, else its identified TCP)",
+    )
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="CSV to write")
     parser.add_argument(
         "--method",
@@ -161,19 +167,15 @@ def run(args: argparse.Namespace) -> int:
     flags: list[list[str]] = [[] for _ in range(len(points))]
     check_outside(points, model, found.outside, settings.outside, flags)
     check_orientation(points, model, found.angle, args, flags, "grid")
-    length = found.length
-    worst = refuse_too_long(points, length, args.max_correction)
-    inputs = [
-        input_line("points", args.points, file_sha256(args.points)),
-        *grid_lines(Path(args.grid).name, model.source_sha256, model.step),
-    ]
+    sources = grid_lines(Path(args.grid).name, model.source_sha256, model.step)
     details = [f"method {args.method}, power {args.power:g}, iterations {args.iterations}"]
-    where = "" if worst is None else f" at hole {points.ids[worst]}"
-    largest = 0.0 if worst is None else float(length[worst])
-    header = header_lines("correct", inputs, details, largest, where, [f"points {len(points)}"])
-    text = corrected_csv(points, found.command, found.correction, flags, header)
-    write_files({args.output: text}, [args.points, args.grid], force=args.force)
-    _print_summary(model, points, args, length, worst, flags)
+    inputs = [args.points, args.grid]
+    length, worst = write_corrected(args, points, found.command, flags, sources, details, inputs)
+    print(model.describe())
+    iterations = f"{args.iterations} iteration{'s' if args.iterations != 1 else ''}"
+    power = f" power {args.power:g}" if args.method == "idw" else ""
+    print(f"corrected  {len(points)} point(s), {args.method}{power}, {iterations}")
+    print_corrections(points, length, worst, flags, args.output)
     return 0
 
 
@@ -263,18 +265,34 @@ def corrected_csv(
     return out.getvalue()
 
 
-def _print_summary(
-    model: GridModel,
-    points: Points,
+def write_corrected(
     args: argparse.Namespace,
-    length: np.ndarray,
-    worst: int | None,
+    points: Points,
+    command: np.ndarray,
     flags: list[list[str]],
+    sources: list[str],
+    details: list[str],
+    inputs: list,
+) -> tuple[np.ndarray, int | None]:
+    """Refuse the job when a correction exceeds --max-correction, else write the corrected CSV
+    (header: the points file, ``sources`` and ``details`` lines) atomically; returns the
+    correction lengths (N,) mm and the index of the longest (None without points)."""
+    correction = command - points.xyz
+    length = np.sqrt(np.einsum("ij,ij->i", correction, correction))
+    worst = refuse_too_long(points, length, args.max_correction)
+    where = "" if worst is None else f" at hole {points.ids[worst]}"
+    largest = 0.0 if worst is None else float(length[worst])
+    lines = [input_line("points", args.points, file_sha256(args.points)), *sources]
+    header = header_lines("correct", lines, details, largest, where, [f"points {len(points)}"])
+    text = corrected_csv(points, command, correction, flags, header)
+    write_files({args.output: text}, inputs, force=args.force)
+    return length, worst
+
+
+def print_corrections(
+    points: Points, length: np.ndarray, worst: int | None, flags: list[list[str]], output
 ) -> None:
-    print(model.describe())
-    iterations = f"{args.iterations} iteration{'s' if args.iterations != 1 else ''}"
-    power = f" power {args.power:g}" if args.method == "idw" else ""
-    print(f"corrected  {len(points)} point(s), {args.method}{power}, {iterations}")
+    """The summary lines every correct job ends with: largest correction, flagged points."""
     if worst is not None:
         print(
             f"largest correction {length[worst]:.4f} mm at {points.label(worst)}; "
@@ -286,4 +304,4 @@ def _print_summary(
         print(f"  {points.label(i)}: {'; '.join(flags[i])}")
     if len(flagged) > _LISTED:
         print(f"  ... and {len(flagged) - _LISTED} more (see the flag column)")
-    print(f"wrote {args.output}")
+    print(f"wrote {output}")

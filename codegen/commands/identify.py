@@ -37,7 +37,6 @@ from accugrid.kinematics.identification import Identification, identify, pose_se
 from accugrid.kinematics.robot import Robot
 
 NAME = "identify"
-HELP = "calibrated robot model (DH errors, TCP) from tracker measurements at scattered poses"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -8,11 +8,10 @@ forward kinematics puts it. Optional Gaussian noise: robot repeatability and tra
 seeded. The result is a measurement CSV (id,x,y,z,a,b,c,x_meas,y_meas,z_meas; mm and deg) for
 `accugrid correct` & co.
 
---plan PLAN.csv simulates a session at the plan's commanded poses instead of a grid (x,y,z and
-a,b,c per row, as `accugrid plan` writes them; each row at its own orientation), all in one
-Status: --status, else the plan's column s (one value), else the IK default's at the first row.
-Its CSV also carries the joints the controller logs, a1..a6 (KUKA deg, 4 decimals), and s, for
-`accugrid identify`.
+--poses PLAN.csv instead measures the poses of a plan at any orientation (columns x,y,z,a,b,c,
+optional id and s, e.g. from `accugrid plan identify`): each in its Status (column s, else
+--status, else the IK default per pose), with the joints the controller reports (a1..a6, KUKA
+deg, 4 decimals) in the output, for `accugrid identify`.
 
 --plot FILE draws seed Fig. 3: the X, Y, Z components of the error e = P - M over the plane of
 seed Table 2 (X 1000..2000, Y -500..500, Z 1800 mm, A 0, B 90, C 0 deg). Lengths in mm, angles in
@@ -22,29 +21,40 @@ degrees.
 from __future__ import annotations
 
 import argparse
-import io
 from pathlib import Path
 
 import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
-from accugrid.codegen.points import Points, read_points
+from accugrid.codegen.plots import fig3_png
 from accugrid.codegen.textsafe import comment_text, fixed
-from accugrid.compensation.measurements import status_column
+from accugrid.compensation.csvtable import read_table
 from accugrid.compensation.plans import check_vertex_count
-from accugrid.kinematics.digest import file_sha256
+from accugrid.kinematics.configuration import status_turn
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.simulation import (
-    commanded_joints,
     grid_status,
     reached_positions,
     simulate_measurements,
+    simulate_pose_measurements,
 )
 
+__all__ = [
+    "FIG3_ABC",
+    "FIG3_X",
+    "FIG3_Y",
+    "FIG3_Z",
+    "NAME",
+    "add_arguments",
+    "fig3_field",
+    "grid_points",
+    "run",
+]
+
 NAME = "simulate"
-HELP = "simulate a laser-tracker grid measurement of a robot (measurement CSV, seed Fig. 3)"
 
 FIG3_X = (1000.0, 2000.0)
 FIG3_Y = (-500.0, 500.0)
@@ -67,10 +77,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--step", type=float, help="grid step, mm (needed with -o)")
     parser.add_argument(
-        "--plan",
+        "--poses",
         metavar="PLAN.csv",
-        help="simulate at the commanded poses of this plan/measurement CSV (x,y,z,a,b,c per row, "
-        "mm and deg) instead of a grid; writes the logged joints a1..a6 and s as well",
+        help="measure the poses of a plan (x,y,z,a,b,c[,id][,s]) instead of a grid",
     )
     add_abc(parser, "TCP orientation at every vertex")
     add_tool(parser, "tool on the flange (flange_T_tool), mm and deg (default: the flange itself)")
@@ -105,7 +114,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if not args.output and not args.plot:
         raise InputError("nothing to do: give -o CSV and/or --plot PNG")
-    inputs = ([args.robot] if _is_file(args.robot) else []) + ([args.plan] if args.plan else [])
+    inputs = ([args.robot] if _is_file(args.robot) else []) + ([args.poses] if args.poses else [])
     check_targets([t for t in (args.output, args.plot) if t], inputs, args.force)
     robot = robot_with_tool(args.robot, args.tool)
     if robot.true_robot() is None:
@@ -113,11 +122,16 @@ def run(args: argparse.Namespace) -> int:
             f"note: robot {robot.name} has no parameter errors; the simulated error is noise only"
         )
     outputs: dict[str, bytes | str] = {}
-    if args.output:
-        session = _plan_csv if args.plan else _measurement_csv
-        outputs[args.output] = session(robot, args)
+    if args.output and args.poses:
+        outputs[args.output] = _pose_measurement_csv(robot, args)
+    elif args.output:
+        outputs[args.output] = _measurement_csv(robot, args)
     if args.plot:
-        outputs[args.plot] = _fig3_png(robot, args.status)
+        xs, ys, error = fig3_field(robot, status=args.status)
+        for k, axis in enumerate("XYZ"):
+            field = error[:, :, k]
+            print(f"  Fig. 3 D_{axis}: min {field.min():.3f}  max {field.max():.3f} mm")
+        outputs[args.plot] = fig3_png(robot.name, xs, ys, error, FIG3_Z, FIG3_ABC)
     write_files(outputs, inputs, force=args.force)
     for path in outputs:
         print(f"wrote {path}")
@@ -183,76 +197,57 @@ def _measurement_csv(robot: Robot, args: argparse.Namespace) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _plan_csv(robot: Robot, args: argparse.Namespace) -> str:
-    """The measurement CSV of a simulated session at the poses of ``args.plan``."""
+def _pose_measurement_csv(robot: Robot, args: argparse.Namespace) -> str:
+    """The measurement CSV of the plan's poses, with the controller's joints a1..a6 and s."""
     if args.region is not None or args.step is not None:
-        raise InputError("--plan takes its poses from the plan: drop --region and --step")
-    plan = read_points(args.plan)
-    if plan.abc is None:
-        raise InputError("the plan needs each row's orientation: columns a,b,c (deg)", plan.path)
-    if len(plan) == 0:
-        raise InputError("the plan has no poses", plan.path)
-    status = _plan_status(plan, args.status)
-    if status is None:
-        status = grid_status(robot, plan.xyz, plan.abc)
-    if status is not None:
-        print(f"KUKA Status {status} (binary {status:03b}) for every pose")
-    commanded, measured = simulate_measurements(
-        robot,
-        plan.xyz,
-        plan.abc,
-        repeats=args.repeats,
-        noise_tracker_mm=args.noise_tracker,
-        noise_repeat_mm=args.noise_repeat,
-        seed=args.seed,
-        status=status,
-    )
-    joints_deg = np.degrees(commanded_joints(robot, plan.xyz, plan.abc, status))
-    error = plan.xyz - reached_positions(robot, plan.xyz, plan.abc, status)
-    _print_summary(robot, len(plan), args.repeats, error, commanded - measured, "plan poses")
+        raise InputError("--poses and --region/--step exclude each other")
+    table = read_table(args.poses)
+    table.require(["x", "y", "z", "a", "b", "c"])
+    if not len(table):
+        raise InputError("no poses in the plan", args.poses)
+    xyzabc = table.floats(["x", "y", "z", "a", "b", "c"])
+    ids = table.text("id") if table.has("id") else [f"P{i + 1}" for i in range(len(table))]
+    status = args.status
+    if table.has("s"):
+        status = table.floats(["s"])[:, 0].astype(int)
+    try:
+        q, measured = simulate_pose_measurements(
+            robot,
+            pose_from_xyzabc(xyzabc),
+            status,
+            repeats=args.repeats,
+            noise_tracker_mm=args.noise_tracker,
+            noise_repeat_mm=args.noise_repeat,
+            seed=args.seed,
+        )
+    except InputError as exc:
+        raise InputError(exc.message, args.poses) from None
+    status_of = status_turn(robot, q)[0]
     header = comment_text(
-        f"accugrid simulate: robot {robot.name}, plan {Path(args.plan).name} sha256 "
-        f"{file_sha256(args.plan)}, status {status}, repeats {args.repeats}, noise "
-        f"tracker {args.noise_tracker:g} mm, repeat {args.noise_repeat:g} mm, seed {args.seed}",
+        f"accugrid simulate: robot {robot.name}, poses of {Path(args.poses).name}, repeats "
+        f"{args.repeats}, noise tracker {args.noise_tracker:g} mm, repeat "
+        f"{args.noise_repeat:g} mm, seed {args.seed}",
         limit=400,
     )
-    joint_names = ",".join(f"a{k}" for k in range(1, 7))
-    lines = [f"# {header}", f"id,x,y,z,a,b,c,x_meas,y_meas,z_meas,{joint_names},s"]
-    rows = np.repeat(np.arange(len(plan)), args.repeats)
-    for row, cmd, meas in zip(rows, commanded, measured, strict=True):
-        cells = [plan.ids[row]]
-        cells += [fixed(v, 4) for v in (*cmd, *plan.abc[row], *meas, *joints_deg[row])]
-        lines.append(",".join(cells) + f",{'' if status is None else status}")
+    lines = [f"# {header}", "id,x,y,z,a,b,c,s,a1,a2,a3,a4,a5,a6,x_meas,y_meas,z_meas"]
+    rows = np.repeat(np.arange(len(table)), args.repeats)
+    joints = np.degrees(q)
+    for row, meas in zip(rows, measured, strict=True):
+        pose_text = ",".join(fixed(v, 4) for v in xyzabc[row])
+        joint_text = ",".join(fixed(v, 4) for v in joints[row])
+        meas_text = ",".join(fixed(v, 4) for v in meas)
+        ident = comment_text(ids[row], limit=40).replace(",", " ")
+        lines.append(f"{ident},{pose_text},{status_of[row]},{joint_text},{meas_text}")
+    print(f"{robot.name}: {len(table)} poses x {args.repeats} repeats = {len(rows)} rows")
     return "\n".join(lines) + "\n"
 
 
-def _plan_status(plan: Points, status: int | None) -> int | None:
-    """--status, else the plan's column s when it holds one Status; InputError when they differ."""
-    column = status_column(plan.table)
-    if column is None:
-        return status
-    values = np.unique(column)
-    if len(values) > 1 or (status is not None and values[0] != status):
-        found = ", ".join(str(v) for v in values)
-        wanted = "" if status is None else f" (--status {status})"
-        raise InputError(
-            f"one simulated session keeps one KUKA Status{wanted}; the plan's column s has {found}",
-            plan.path,
-        )
-    return int(values[0])
-
-
 def _print_summary(
-    robot: Robot,
-    n_points: int,
-    repeats: int,
-    error: np.ndarray,
-    measured_error: np.ndarray,
-    what: str = "grid points",
+    robot: Robot, n_points: int, repeats: int, error: np.ndarray, measured_error: np.ndarray
 ) -> None:
     norm = np.linalg.norm(error, axis=1)
     print(
-        f"{robot.name}: {n_points} {what} x {repeats} repeats = {n_points * repeats} rows; "
+        f"{robot.name}: {n_points} grid points x {repeats} repeats = {n_points * repeats} rows; "
         "error e = P - M (mm) without noise:"
     )
     for k, axis in enumerate("XYZ"):
@@ -278,33 +273,7 @@ def fig3_field(
     return xs, ys, error.reshape(samples, samples, 3)
 
 
-def _fig3_png(robot: Robot, status: int | None) -> bytes:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    xs, ys, error = fig3_field(robot, status=status)
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.6), constrained_layout=True)
-    for k, (ax, axis) in enumerate(zip(axes, "XYZ", strict=True)):
-        field = error[:, :, k].T  # rows = Y, columns = X
-        mesh = ax.contourf(xs, ys, field, levels=20, cmap="viridis")
-        ax.contour(xs, ys, field, levels=10, colors="k", linewidths=0.4)
-        fig.colorbar(mesh, ax=ax, label=f"D_{axis} (mm)")
-        ax.set_title(f"({'abc'[k]}) D_{axis}: {field.min():.2f} .. {field.max():.2f} mm")
-        ax.set_xlabel("X (mm)")
-        ax.set_ylabel("Y (mm)")
-        ax.set_aspect("equal")
-        print(f"  Fig. 3 D_{axis}: min {field.min():.3f}  max {field.max():.3f} mm")
-    fig.suptitle(
-        f"{robot.name}: TCP error e = P - M at Z {FIG3_Z:g} mm, A B C "
-        f"{' '.join(f'{v:g}' for v in FIG3_ABC)} deg (seed Fig. 3)"
-    )
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
-    plt.close(fig)
-    return buffer.getvalue()
-
-
 def _is_file(name: str) -> bool:
+    from pathlib import Path
+
     return Path(name).is_file()
