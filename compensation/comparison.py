@@ -8,9 +8,10 @@ Status, the true FK, seeded repeatability and tracker noise). For each budget N 
 
 - grid only: the regular grid over the region with at most N vertices and near-equal steps, at
   the grid orientation, P' = P + e(P) (IDW, seed Eq. 12-14; trilinear);
-- model only: N poses chosen D-optimally (``select_poses``) from candidates in the region tilted
-  up to ``tilt_deg`` from the grid orientation; ``identify`` (DH errors, TCP, A2/A3 compliance
-  when the robot has a gravity model); ``model_correct`` of each target at its own orientation;
+- model only: the N poses ``accugrid plan identify`` chooses (``identification_plan``: D-optimal
+  among random candidates in the region tilted up to ``tilt_deg`` from the grid orientation);
+  ``identify`` (DH errors, TCP, A2/A3 compliance when the robot has a gravity model);
+  ``model_correct`` of each target at its own orientation, the controller keeping its tool;
 - model + residual grid: that model plus a 27-vertex (3 x 3 x 3) residual grid measured at the
   grid orientation (``residual_grid``), trilinear;
 - model + joint residual: that model plus its residual at the N poses (measured − model, mean of
@@ -32,10 +33,11 @@ import numpy as np
 
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.model_correction import model_correct, residual_grid
+from accugrid.compensation.plans import identification_plan
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, pose_from_xyzabc
-from accugrid.kinematics.identification import identify, pose_set, select_poses
+from accugrid.kinematics.identification import identify, pose_set
 from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.simulation import (
     commanded_poses,
@@ -263,11 +265,6 @@ def compare_methods(
         rows.append(_score(0, name, "uncorrected", 0, points - cell.land(points, orient)))
         target_q[name] = cell.solve(points, orient).q  # the controller's joints at the target
 
-    cand_p = rng.uniform(lo, hi, (candidates, 3))
-    cand_abc = tilted_abc(rng, candidates, abc, tilt_deg)
-    sol = cell.solve(cand_p, cand_abc)
-    usable = np.flatnonzero(sol.ok & (np.abs(sol.q[:, 4]) > np.radians(10.0)))
-    cand_p, cand_abc, cand_q = cand_p[usable], cand_abc[usable], sol.q[usable]
     residual_vertices = lattice(lo, hi, np.array(RESIDUAL_COUNTS))
     trilinear = CorrectionSettings(method="trilinear", outside="clamp", max_correction_mm=None)
 
@@ -282,10 +279,10 @@ def compare_methods(
             )
         )
         say(f"budget {budget}: model from {budget} poses")
-        if budget > len(cand_q):
-            raise InputError(f"budget {budget} exceeds the {len(cand_q)} usable candidate poses")
-        chosen, _ = select_poses(robot, cand_q, budget, compliance=compliance)
-        poses_p, poses_abc = cand_p[chosen], cand_abc[chosen]
+        plan, _, _ = identification_plan(
+            robot, lo, hi, budget, tilt_deg, abc, status, candidates=candidates, seed=step_seed
+        )
+        poses_p, poses_abc = plan.points, plan.abc_rows()
         _, measured = simulate_pose_measurements(
             robot, _poses(poses_p, poses_abc), status, repeats, seed=step_seed + 1, **noise
         )
