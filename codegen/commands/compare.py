@@ -3,14 +3,14 @@ model + residual grid, held out on a simulated robot (issue 13 item 7; compensat
 
 For each budget N of measured points (--budgets): the grid over --region with at most N vertices
 at the grid orientation (--abc), corrected P' = P + e(P) by IDW and by trilinear interpolation;
-the model identified (DH errors, TCP, A2/A3 compliance when the robot has a gravity model) from N
-D-optimal poses (select_poses) among --candidates random poses tilted up to --tilt deg; the model
-plus a 27-vertex residual grid at the grid orientation (trilinear); the model plus its residual
-at the poses interpolated in joint space (A1-A3, thin-plate spline; its 5-fold
-cross-validation over the poses is printed). Every measurement is a
-simulated tracker session (one KUKA Status, --repeats per point, seeded noise). Scored on
---targets held-out targets at the grid orientation and --targets tilted up to --target-tilt deg:
-where the arm lands when commanded P' (noise-free), max |P - M| and std per axis, mm.
+the model identified (DH errors, TCP, A2/A3 compliance when the robot has a gravity model) from
+the N poses `plan identify` chooses (D-optimal among --candidates random poses tilted up to
+--tilt deg); the model plus a 27-vertex residual grid at the grid orientation (trilinear); the
+model plus its residual at the poses interpolated in joint space (A1-A3, thin-plate spline; its
+5-fold cross-validation over the poses is printed). Every measurement is a simulated tracker
+session (one KUKA Status, --repeats per point, seeded noise per budget). Scored on --targets
+held-out targets at the grid orientation and --targets tilted up to --target-tilt deg: where the
+arm lands when commanded P' (noise-free), max |P - M| and std per axis, mm.
 
 Output: the table on stdout, DIR/comparison.csv (one row per budget, target set and method) and
 DIR/comparison.png. Lengths in mm, angles in degrees.
@@ -132,6 +132,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--budgets: every budget must be at least 8 points")
     if args.targets < 1 or args.repeats < 1:
         raise InputError("--targets and --repeats must be at least 1")
+    if not 0.0 <= args.target_tilt <= 90.0:
+        raise InputError(f"--target-tilt must be 0..90 deg, got {args.target_tilt:g}")
     robot = robot_with_tool(args.simulate, args.tool if args.tool else DEFAULT_TOOL)
     if robot.true_robot() is None:
         raise InputError(f"robot {robot.name} has no errors: nothing to compare")
