@@ -30,6 +30,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "gcode",
         "corrected RS274NGC (LinuxCNC) drilling program from a points CSV",
     ),
+    "identify": (
+        "identify",
+        "calibrated robot model (DH errors, TCP) from tracker measurements at scattered poses",
+    ),
     "krl": (
         "krl",
         "corrected KUKA KRL drilling program (.src/.dat) from a points CSV",

@@ -36,6 +36,8 @@ from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification, identify, pose_set
 from accugrid.kinematics.robot import Robot
 
+__all__ = ["NAME", "add_arguments", "run"]
+
 NAME = "identify"
 
 
