@@ -22,10 +22,6 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "fit_frame",
         "robot base frame (tracker_T_robot) from tracker points on base, A1 arc and flange holes",
     ),
-    "identify": (
-        "identify",
-        "calibrated robot model (DH errors, TCP) from tracker measurements at scattered poses",
-    ),
     "gcode": (
         "gcode",
         "corrected RS274NGC (LinuxCNC) drilling program from a points CSV",
