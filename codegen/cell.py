@@ -90,6 +90,7 @@ class Cell:
     reference_abc: tuple[float, float, float] = (0.0, 90.0, 0.0)
     # correction (method, power, iterations; the safety limit is the default)
     correction: CorrectionSettings = CorrectionSettings()
+    model_path: Path | None = None  # correction.model: a calibrated robot YAML
     # G-code
     spindle_rpm: float = 6000.0
     canned_cycles: bool = True
@@ -268,7 +269,12 @@ class _Reader:
             "configuration",
             {"status", "turn", "allow_change", "singular_a5", "reference"},
         )
-        co = self.mapping(top.get("correction"), "correction", {"method", "iterations", "power"})
+        co = self.mapping(
+            top.get("correction"), "correction", {"method", "iterations", "power", "model"}
+        )
+        model = co.get("model")
+        if model is not None and (not isinstance(model, str) or not model.strip()):
+            raise self.error("correction.model", "must be a calibrated robot YAML path")
         method = co.get("method", "idw")
         if method not in METHODS:
             raise self.error("correction.method", f"must be {' or '.join(METHODS)}, got {method!r}")
@@ -323,6 +329,7 @@ class _Reader:
                 iterations=self.integer(co, "iterations", "correction", 1, 1, 10),
                 power=self.number(co, "power", "correction", 1.0, 0.0, 10.0, True),
             ),
+            model_path=None if model is None else self.path.parent / model,
             spindle_rpm=self.number(gc, "spindle_rpm", "gcode", 6000.0, 0.0, 10**6, True),
             canned_cycles=self.boolean(gc, "canned_cycles", "gcode", True),
             external_axes=tuple(

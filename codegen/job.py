@@ -9,16 +9,27 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from accugrid.codegen.cell import Cell, load_cell
 from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
-from accugrid.codegen.program import Program, build_program
+from accugrid.codegen.program import Program, build_program, program_status
 from accugrid.compensation import GridModel
+from accugrid.compensation.model_correction import residual_grid
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.robot import load_robot
+from accugrid.kinematics.robot import Robot, load_robot
 
-__all__ = ["Job", "add_job_arguments", "grid_path", "prepare", "summary"]
+__all__ = [
+    "Job",
+    "add_job_arguments",
+    "check_same_robot",
+    "grid_path",
+    "model_path",
+    "prepare",
+    "summary",
+]
 
 
 @dataclass
@@ -36,6 +47,12 @@ def add_job_arguments(parser: argparse.ArgumentParser) -> None:
         "--grid",
         metavar="MEAS",
         help="grid measurement CSV (robot frame, mm); overrides the cell file's grid",
+    )
+    parser.add_argument(
+        "--model",
+        metavar="CAL",
+        help="calibrated robot YAML (accugrid identify); overrides the cell's correction.model; "
+        "the grid then holds the residual after the model",
     )
     parser.add_argument(
         "--no-correction",
@@ -66,29 +83,72 @@ def grid_path(args: argparse.Namespace, cell: Cell) -> Path | None:
     return cell.grid_file(args.grid, ", or use --no-correction")
 
 
+def model_path(args: argparse.Namespace, cell: Cell) -> Path | None:
+    """The calibrated model to correct with: --model, else the cell's correction.model; None
+    without either or with --no-correction."""
+    model = getattr(args, "model", None)
+    if args.no_correction:
+        if model is not None:
+            raise InputError("--model and --no-correction exclude each other")
+        return None
+    return Path(model) if model is not None else cell.model_path
+
+
+def check_same_robot(model: Robot, robot: Robot, path: Path) -> None:
+    """InputError when the calibrated ``model`` (file ``path``) is not of ``robot``: its nominal
+    DH table must be the cell robot's."""
+    a, b = model.dh, robot.dh
+    same = all(
+        np.allclose(getattr(a, f), getattr(b, f), rtol=0.0, atol=1e-9)
+        for f in ("a", "d", "alpha", "theta_offset", "sign")
+    )
+    if not same:
+        raise InputError(
+            f"the model is of robot {model.name}, whose nominal DH table is not that of the "
+            f"cell's robot {robot.name}",
+            path,
+        )
+
+
 def prepare(args: argparse.Namespace, command: str) -> Job:
     """Read POINTS, CELL and the grid; build the program; print its warnings to stderr."""
     cell = load_cell(args.cell)
     if args.allow_config_change:
         cell = dataclasses.replace(cell, allow_config_change=True)
-    grid_file = grid_path(args, cell)
+    model_file = model_path(args, cell)
+    grid_file = grid_path(args, cell) if model_file is None or args.grid or cell.grid_path else None
     points = read_points(args.points)
-    grid = None if grid_file is None else GridModel.from_measurements(grid_file)
     robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
-    program = build_program(points, cell, robot, grid)
+    model = status = None
+    if model_file is not None:
+        model = load_robot(model_file)
+        check_same_robot(model, robot, model_file)
+        status = program_status(points, cell, robot) if len(points) else None
+    if grid_file is None:
+        grid = None
+    elif model is None:
+        grid = GridModel.from_measurements(grid_file)
+    else:
+        grid = residual_grid(model, grid_file, status, controller_tool=cell.flange_T_tool)
+    program = build_program(points, cell, robot, grid, model, status)
     for warning in program.warnings:
         print(f"accugrid {command}: warning: {warning}", file=sys.stderr)
     largest, hole = program.largest_correction()
     inputs = [input_line("points", args.points, file_sha256(args.points))]
     inputs.append(input_line("cell", args.cell, cell.sha256))
-    if grid is None:
-        details = ["grid none (--no-correction): positions are not corrected"]
-    else:
+    details = []
+    if model_file is not None:
+        inputs.append(input_line("model", model_file, file_sha256(model_file)))
+        details.append(f"model {model.name}, KUKA Status {status}")
+    if grid is not None:
         inputs += grid_lines(Path(grid_file).name, grid.source_sha256, grid.step)
-        details = []
+        if model is not None:
+            details.append("grid holds the residual after the model")
+    elif model is None:
+        details = ["grid none (--no-correction): positions are not corrected"]
     where = f" at hole {points.ids[hole]}" if hole is not None else ""
     header = header_lines(command, inputs, details, largest, where, [f"holes {len(program)}"])
-    inputs = [Path(args.points), Path(args.cell)] + ([grid_file] if grid_file else [])
+    inputs = [Path(args.points), Path(args.cell)] + [f for f in (grid_file, model_file) if f]
     return Job(program, header, inputs)
 
 

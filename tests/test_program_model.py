@@ -1,0 +1,121 @@
+"""Drilling programs corrected by a calibrated model (cell key correction.model, --model)."""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from accugrid.codegen.cli import main
+from accugrid.codegen.krl.parse import parse_krl
+from accugrid.kinematics.frames import abc_to_matrix
+from accugrid.kinematics.robot import load_robot
+
+ROOT = Path(__file__).resolve().parents[1]
+POINTS = ROOT / "examples" / "wing_panel_points.csv"
+REALISTIC = resources.files("accugrid.kinematics").joinpath("robots", "kr210-realistic.yaml")
+
+
+def _cell(tmp_path: Path) -> Path:
+    """The example cell on the nominal kr210, with 5 decimals and no grid."""
+    lines = []
+    for line in (ROOT / "examples" / "cell.yaml").read_text().splitlines():
+        if line.startswith("robot:"):
+            line = "robot: kr210"
+        elif line.startswith("grid:"):
+            continue
+        lines.append(line)
+    text = "\n".join(lines) + "\n"
+    text = text.replace("decimals: 3", "decimals: 5")
+    path = tmp_path / "cell.yaml"
+    path.write_text(text)
+    return path
+
+
+def _with_model(tmp_path: Path, model_name: str) -> Path:
+    """Cell file whose correction: section names ``model_name`` (relative to the cell)."""
+    cell = _cell(tmp_path)
+    text = cell.read_text().replace("\ncorrection:\n", f"\ncorrection:\n  model: {model_name}\n")
+    assert f"model: {model_name}" in text
+    cell.write_text(text)
+    return cell
+
+
+def _calibrated(path: Path, text: str | None = None) -> Path:
+    """kr210-realistic as a calibrated robot file whose identified TCP is the cell's tool."""
+    text = REALISTIC.read_text() if text is None else text
+    path.write_text(text + "tool: {x: 0, y: 0, z: 250, a: 0, b: 0, c: 0}\n")
+    return path
+
+
+def _targets_and_commands(dat: Path, cell_path: Path):
+    """Hole bottoms in the robot frame from the points file and the BOT E6POS of the .dat."""
+    from accugrid.codegen.cell import load_cell
+    from accugrid.codegen.points import read_points
+
+    cell = load_cell(cell_path)
+    positions = {p.name: p for p in parse_krl(dat.read_text(), dat)}
+    points = read_points(POINTS)
+    bots = [positions[f"XH{i + 1}_BOT"] for i in range(len(points))]
+    xyz = np.array([[p.x, p.y, p.z] for p in bots])
+    abc = np.array([[p.a, p.b, p.c] for p in bots])
+    status = {int(p.s) for p in bots}
+    rot = cell.robot_T_base[:3, :3]
+    command = xyz @ rot.T + cell.robot_T_base[:3, 3]
+    rotations = rot @ abc_to_matrix(abc).reshape(-1, 3, 3)
+    return cell, points, command, rotations, status
+
+
+def test_krl_with_a_model_lands_every_hole_bottom_on_its_target(tmp_path):
+    _calibrated(tmp_path / "cal.yaml")
+    cell_path = _with_model(tmp_path, "cal.yaml")
+    out = tmp_path / "krl"
+    assert main(["krl", str(POINTS), "--cell", str(cell_path), "-o", str(out)]) == 0
+    src = next(out.glob("*.src")).read_text()
+    assert "; model cal.yaml sha256 " in src
+    cell, points, command, rotations, status = _targets_and_commands(
+        next(out.glob("*.dat")), cell_path
+    )
+    assert len(status) == 1
+    # the nominal controller with the cell's tool, then the calibrated (true) arm
+    controller = load_robot("kr210").with_tool(cell.flange_T_tool)
+    arm = load_robot(tmp_path / "cal.yaml").true_robot()
+    poses = np.tile(np.eye(4), (len(command), 1, 1))
+    poses[:, :3, :3] = rotations
+    poses[:, :3, 3] = command
+    sol = controller.ik(poses, status=status.pop())
+    assert sol.ok.all()
+    reached = arm.fk(sol.q)[:, :3, 3]
+    axis = rotations[:, :, 2]
+    depth = np.where(np.isnan(points.depth), cell.depth_mm, points.depth)
+    base = points.xyz + depth[:, None] * (cell.robot_T_base[:3, :3].T @ axis.T).T
+    target = base @ cell.robot_T_base[:3, :3].T + cell.robot_T_base[:3, 3]
+    miss = np.linalg.norm(reached - target, axis=1)
+    assert miss.max() < 1e-3
+    # and the model really moved the commands (the arm's error is millimetres)
+    assert np.linalg.norm(command - target, axis=1).min() > 0.5
+
+
+def test_krl_refuses_a_model_of_another_robot(tmp_path, capsys):
+    text = REALISTIC.read_text().replace("a_mm: 350.0", "a_mm: 360.0", 1)
+    _calibrated(tmp_path / "other.yaml", text)
+    cell_path = _with_model(tmp_path, "other.yaml")
+    out = tmp_path / "krl"
+    assert main(["krl", str(POINTS), "--cell", str(cell_path), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "other.yaml" in err and "DH" in err and "\n" not in err
+    assert not out.exists()
+
+
+def test_gcode_model_option_corrects_a_cell_without_model(tmp_path):
+    cell_path = _cell(tmp_path)
+    plain = tmp_path / "plain"
+    argv = ["gcode", str(POINTS), "--cell", str(cell_path), "--no-correction", "-o"]
+    assert main([*argv, str(plain / "p.ngc")]) == 0
+    _calibrated(tmp_path / "cal.yaml")
+    model_out = tmp_path / "model" / "p.ngc"
+    argv = ["gcode", str(POINTS), "--cell", str(cell_path), "--model", str(tmp_path / "cal.yaml")]
+    assert main([*argv, "-o", str(model_out)]) == 0
+    assert "model cal.yaml sha256" in model_out.read_text()
+    assert model_out.read_text() != (plain / "p.ngc").read_text()
