@@ -23,11 +23,13 @@ from accugrid.codegen.program import GRID_ORIENTATION_TOL_DEG
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation import GridModel
+from accugrid.compensation.model_correction import model_correct
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import abc_to_matrix
+from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc
+from accugrid.kinematics.robot import Robot
 
 __all__ = [
     "ORIENTATION_LIMIT_DEG",
@@ -70,6 +72,12 @@ class Options:
     orientation_limit: float = ORIENTATION_LIMIT_DEG  # deg: skip beyond
     allow_orientation: bool = False  # correct (and flag) beyond the limit instead
     tolerance_mm: float = DEFAULT_TOLERANCE_MM  # warn when rounding leaves more than a tenth
+    calibrated: Robot | None = None  # a calibrated model: ``model`` is then its residual grid
+    status: int | None = None  # KUKA Status the model corrects in (None: IK default per point)
+    controller_tool: np.ndarray | None = None  # flange_T_tool (4, 4) mm of the controller
+    model_file: str | None = None  # the calibrated robot YAML (header)
+    reference_abc: tuple[float, float, float] | None = None  # robot-frame A,B,C deg the model
+    # assumes where a position has none (3-axis G-code): the cell's configuration.reference
 
 
 @dataclass(slots=True)
@@ -122,7 +130,9 @@ def correct_points(
     ``mark``, rows outside the grid get status "outside", rows beyond ``orientation_limit``
     (``accugrid correct``'s rule) stay "skipped" with the angle as the reason (unless
     ``allow_orientation``), rows beyond ``orientation_tol`` a ``flag:`` reason. InputError at the
-    row when a correction to be written is longer than the safety limit."""
+    row when a correction to be written is longer than the safety limit. With ``opts.calibrated``
+    the points with an orientation are corrected by ``model_correct`` plus the residual grid
+    (the model holds at any orientation: flagged, never skipped); the others stay NaN."""
     out = np.full_like(points_robot, np.nan)
     if not len(points_robot):
         return out
@@ -133,18 +143,66 @@ def correct_points(
         for i in found.outside.tolist():
             rows[i].status, rows[i].reason = "outside", outside_reason(points_robot[i])
         if found.angle is not None:
-            use &= ~_orientation(found.angle, rows, opts)
-    too_long = [i for i in found.too_long.tolist() if use[i]]
+            skip = _orientation(found.angle, rows, opts)
+            if opts.calibrated is None:
+                use &= ~skip
+    command, length = found.command, found.length
+    if opts.calibrated is not None:
+        command, length = _by_model(points_robot, rotations, rows, use, opts)
+        use &= ~np.isnan(command[:, 0])
+    limit = opts.correction.max_correction_mm
+    too_long = [] if limit is None else np.flatnonzero(use & (length > limit)).tolist()
     if too_long:
-        i = max(too_long, key=lambda k: found.length[k])
+        i = max(too_long, key=lambda k: length[k])
         raise InputError(
-            f"{rows[i].name}: correction of {found.length[i]:.3f} mm exceeds the safety limit of "
+            f"{rows[i].name}: correction of {length[i]:.3f} mm exceeds the safety limit of "
             f"{opts.correction.max_correction_mm:g} mm; refusing the whole job (check the grid)",
             rows[i].file,
             rows[i].line,
         )
-    out[use] = found.command[use]
+    out[use] = command[use]
     return out
+
+
+def _by_model(
+    points: np.ndarray, rotations: np.ndarray | None, rows: list[Row], use: np.ndarray, opts
+) -> tuple[np.ndarray, np.ndarray]:
+    """Model commands (N, 3) mm robot frame (NaN where not corrected) and their lengths (N,) mm
+    for the ``use`` rows with an orientation; InputError at the row the model cannot correct."""
+    command = np.full_like(points, np.nan)
+    if rotations is None:
+        rotations = np.full((len(points), 3, 3), np.nan)
+    oriented = ~np.isnan(rotations[:, 0, 0])
+    if opts.reference_abc is not None:
+        rotations = np.where(
+            oriented[:, None, None], rotations, abc_to_matrix(np.array(opts.reference_abc))
+        )
+        oriented[:] = True
+    for i in np.flatnonzero(use & ~oriented).tolist():
+        rows[i].reason = "no orientation (A, B, C) here: the model needs one; left as is"
+    todo = np.flatnonzero(use & oriented)
+    if todo.size:
+        result = model_correct(
+            opts.calibrated,
+            points[todo],
+            matrix_to_abc(rotations[todo]).reshape(-1, 3),
+            opts.status,
+            opts.model,
+            opts.correction,
+            controller_tool=opts.controller_tool,
+        )
+        if not result.ok.all():
+            j = int(result.failed[0])
+            row = rows[int(todo[j])]
+            raise InputError(
+                f"{row.name}: not corrected by model {opts.calibrated.name}: {result.reason[j]}"
+                + (f"; {result.failed.size - 1} more" if result.failed.size > 1 else ""),
+                row.file,
+                row.line,
+            )
+        command[todo] = result.command
+    length = np.linalg.norm(np.nan_to_num(command - points), axis=1)
+    return command, length
 
 
 def _orientation(angle: np.ndarray, rows: list[Row], opts: Options) -> np.ndarray:
@@ -224,6 +282,8 @@ def header_lines(result: Result, program: str, cell: str, opts: Options) -> list
         input_line("cell", cell, file_sha256(cell)),
         *grid_lines(grid, model.source_sha256, model.step),
     ]
+    if opts.model_file is not None:
+        inputs.insert(2, input_line("model", opts.model_file, file_sha256(opts.model_file)))
     closing = [f"positions corrected {len(result.corrected)}"]
     return make_header("rewrite", inputs, (), largest, at, closing)
 

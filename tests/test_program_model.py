@@ -119,3 +119,42 @@ def test_gcode_model_option_corrects_a_cell_without_model(tmp_path):
     assert main([*argv, "-o", str(model_out)]) == 0
     assert "model cal.yaml sha256" in model_out.read_text()
     assert model_out.read_text() != (plain / "p.ngc").read_text()
+
+
+def _krl_positions(path: Path) -> dict[str, np.ndarray]:
+    """X, Y, Z, A, B, C (6,) of every E6POS declared in a .dat, by name."""
+    return {
+        p.name: np.array([p.x, p.y, p.z, p.a, p.b, p.c])
+        for p in parse_krl(path.read_text(), path)
+        if p.type == "E6POS"
+    }
+
+
+def test_rewrite_with_a_model_makes_the_calibrated_arm_reach_the_original_targets(tmp_path):
+    cal = _calibrated(tmp_path / "cal.yaml")
+    grid = tmp_path / "residual.csv"
+    # the same arm measured without noise: the residual after the (exact) model is zero
+    simulate = ["simulate", "--robot", "kr210-realistic", "--region", "1200", "2200", "-500"]
+    simulate += ["500", "1100", "2100", "--step", "500", "--abc", "0", "90", "0", "--tool"]
+    assert main([*simulate, "0", "0", "250", "0", "0", "0", "-o", str(grid)]) == 0
+    cell_path = _with_model(tmp_path, "cal.yaml")
+    src, dat = ROOT / "examples" / "cam_drill.src", ROOT / "examples" / "cam_drill.dat"
+    out = tmp_path / "rw"
+    argv = ["rewrite", str(src), str(dat), "--cell", str(cell_path), "--grid", str(grid)]
+    assert main([*argv, "--decimals", "6", "-o", str(out)]) == 0
+    before, after = _krl_positions(dat), _krl_positions(out / "cam_drill.dat")
+    from accugrid.codegen.cell import load_cell
+
+    cell = load_cell(cell_path)
+    moved = [k for k in before if np.linalg.norm(after[k][:3] - before[k][:3]) > 0.5]
+    assert moved == ["XH1_APP", "XH1"]  # the .dat's two hole positions
+    rot, org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
+    target = np.array([before[k][:3] for k in moved]) @ rot.T + org
+    command = np.array([after[k][:3] for k in moved]) @ rot.T + org
+    poses = np.tile(np.eye(4), (len(moved), 1, 1))
+    poses[:, :3, :3] = rot @ abc_to_matrix(np.array([after[k][3:] for k in moved]))
+    poses[:, :3, 3] = command
+    sol = load_robot("kr210").with_tool(cell.flange_T_tool).ik(poses)
+    assert sol.ok.all()
+    reached = load_robot(cal).true_robot().fk(sol.q)[:, :3, 3]
+    assert np.linalg.norm(reached - target, axis=1).max() < 1e-3

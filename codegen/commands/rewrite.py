@@ -34,10 +34,13 @@ import sys
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
+
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cell import load_cell
 from accugrid.codegen.dialects import dialect_of
 from accugrid.codegen.gcode.rewrite import rewrite_gcode
+from accugrid.codegen.job import check_same_robot
 from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.program import GRID_ORIENTATION_TOL_DEG
 from accugrid.codegen.program_text import MAX_BYTES, add_header, read_program
@@ -49,8 +52,11 @@ from accugrid.codegen.rewrite import (
     warning_lines,
 )
 from accugrid.compensation import GridModel
+from accugrid.compensation.model_correction import residual_grid
 from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.robot import load_robot
+from accugrid.kinematics.simulation import grid_status
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -62,6 +68,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("dat", nargs="?", metavar="PROGRAM.dat", help="the .dat of a KRL .src")
     parser.add_argument("--cell", required=True, metavar="CELL.yaml", help="cell file (frames)")
     parser.add_argument("--grid", metavar="MEAS.csv", help="measurement CSV (overrides the cell)")
+    parser.add_argument(
+        "--model",
+        metavar="CAL.yaml",
+        help="calibrated robot (accugrid identify; overrides the cell's correction.model): "
+        "positions are corrected by the model at their orientation, the grid holds the residual",
+    )
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="output file or dir")
     parser.add_argument("--report", metavar="REPORT.csv", help="write the per-position report")
     parser.add_argument(
@@ -171,7 +183,23 @@ def run(args: argparse.Namespace) -> int:
 
     cell = load_cell(args.cell)
     grid = cell.grid_file(args.grid)
-    model = GridModel.from_measurements(grid)
+    model_file = Path(args.model) if args.model is not None else cell.model_path
+    calibrated = status = None
+    if model_file is None:
+        model = GridModel.from_measurements(grid)
+    else:
+        calibrated = load_robot(model_file)
+        nominal = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
+        check_same_robot(calibrated, nominal, model_file)
+        status = cell.status
+        if status is None:  # the Status the grid was measured in (one per measurement run)
+            measured = GridModel.from_measurements(grid)
+            abc = measured.orientation_abc
+            if abc is None:
+                abc = np.array(cell.reference_abc)
+            status = grid_status(nominal, measured.origin, abc)
+        model = residual_grid(calibrated, grid, status, controller_tool=cell.flange_T_tool)
+        all_inputs.append(model_file)
     max_bytes = int(args.max_mb * 2**20)
     opts = Options(
         model=model,
@@ -189,6 +217,11 @@ def run(args: argparse.Namespace) -> int:
         orientation_limit=args.orientation_limit,
         allow_orientation=args.allow_orientation,
         tolerance_mm=args.tolerance,
+        calibrated=calibrated,
+        status=status,
+        controller_tool=cell.flange_T_tool if calibrated is not None else None,
+        model_file=None if model_file is None else os.fspath(model_file),
+        reference_abc=cell.reference_abc if calibrated is not None else None,
     )
     texts = {os.fspath(p): read_program(p, max_bytes) for p in inputs}
     # The parsers build millions of small acyclic objects; the cycle collector would walk them
