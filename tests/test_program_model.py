@@ -158,3 +158,19 @@ def test_rewrite_with_a_model_makes_the_calibrated_arm_reach_the_original_target
     assert sol.ok.all()
     reached = load_robot(cal).true_robot().fk(sol.q)[:, :3, 3]
     assert np.linalg.norm(reached - target, axis=1).max() < 1e-3
+
+
+def test_krl_refuses_a_hole_the_model_cannot_correct_naming_it(tmp_path, capsys):
+    _calibrated(tmp_path / "cal.yaml")
+    cell_path = _with_model(tmp_path, "cal.yaml")
+    points = tmp_path / "points.csv"
+    points.write_text(
+        "id,x,y,z,i,j,k\n"
+        "H1,0,150,-10.345,0.071875,0,-0.997414\n"
+        "H2,0,150,-4000,0,0,-1\n"  # 4 m below the panel: out of the arm's reach
+    )
+    out = tmp_path / "krl"
+    assert main(["krl", str(points), "--cell", str(cell_path), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "points.csv:3" in err and "H2" in err and "\n" not in err
+    assert not out.exists()
