@@ -22,6 +22,8 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.yamlfile import YamlDoc, load_yaml
 
+__all__ = ["ANGLE_MAX_DEG", "DISTANCE_MAX_MM", "FRAME_MAX_MM", "Cell", "load_cell"]
+
 _FRAME_KEYS = ("x", "y", "z", "a", "b", "c")
 # Bounds on every length and angle a program can carry (speeds, times and counts have their own)
 FRAME_MAX_MM = 1e6  # |x|, |y|, |z| of a frame, external axis positions
@@ -94,6 +96,17 @@ class Cell:
     canned_cycles: bool = True
     external_axes: tuple[float, ...] = field(default=(0.0,) * 6)
     sha256: str = ""
+
+    def grid_file(self, override: str | os.PathLike[str] | None = None, hint: str = "") -> Path:
+        """The measurement to correct with: ``override`` (--grid), else the cell's ``grid``;
+        InputError when there is neither (``hint`` completes the message)."""
+        if override is not None:
+            return Path(override)
+        if self.grid_path is None:
+            raise InputError(
+                f"no grid: name one in the cell file (grid:), give --grid{hint}", self.path
+            )
+        return self.grid_path
 
 
 def load_cell(path: str | os.PathLike[str]) -> Cell:

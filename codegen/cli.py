@@ -1,8 +1,10 @@
 """The ``accugrid`` command line.
 
-Every module in ``codegen/commands/`` is one subcommand: it defines ``NAME``, ``HELP``,
-``add_arguments(parser)`` and ``run(args) -> int``. Exit codes (DESIGN.md): 0 success, 2 bad input
-or arguments (one line naming file, line and column, no traceback), 1 internal error.
+Every module in ``codegen/commands/`` is one subcommand: it defines ``NAME``,
+``add_arguments(parser)`` and ``run(args) -> int``; ``commands.COMMANDS`` lists them with their
+help. Only the module of the command that runs is imported (``accugrid --help`` imports none).
+Exit codes (DESIGN.md): 0 success, 2 bad input or arguments (one line naming file, line and
+column, no traceback), 1 internal error.
 """
 
 from __future__ import annotations
@@ -10,19 +12,24 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
-import pkgutil
 import sys
 import traceback
 import warnings
 
-from accugrid.codegen import __version__, commands
+from accugrid.codegen import __version__
+from accugrid.codegen.commands import COMMANDS
 from accugrid.kinematics.errors import InputError, printable
 from accugrid.kinematics.inputfile import track_inputs
 
 EXIT_OK, EXIT_INTERNAL, EXIT_INPUT = 0, 1, 2
 
 
-def build_parser() -> argparse.ArgumentParser:
+__all__ = ["EXIT_INPUT", "EXIT_INTERNAL", "EXIT_OK", "build_parser", "main"]
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser; only ``command``'s module is imported and its arguments added (the others
+    are listed with their help)."""
     parser = argparse.ArgumentParser(
         prog="accugrid",
         description="Grid-based TCP error compensation for robotic drilling. "
@@ -30,17 +37,25 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"accugrid {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
-        module = importlib.import_module(f"{commands.__name__}.{info.name}")
+    for name, (module_name, help_text) in COMMANDS.items():
+        if name != command:
+            sub.add_parser(name, help=help_text, add_help=False)
+            continue
+        module = importlib.import_module(f"accugrid.codegen.commands.{module_name}")
         cmd = sub.add_parser(
-            module.NAME,
-            help=module.HELP,
+            name,
+            help=help_text,
             description=module.__doc__,
             formatter_class=argparse.RawDescriptionHelpFormatter,
         )
         module.add_arguments(cmd)
         cmd.set_defaults(handler=module.run)
     return parser
+
+
+def _command(argv: list[str]) -> str | None:
+    """The subcommand named on the command line (the first word that is not an option)."""
+    return next((word for word in argv if not word.startswith("-")), None)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -50,7 +65,8 @@ def main(argv: list[str] | None = None) -> int:
     after an error so the one-line message stands alone. Every file the command reads is tracked
     as an input that no output may replace (``codegen.atomic``).
     """
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    args = build_parser(_command(argv)).parse_args(argv)
     with warnings.catch_warnings(record=True) as held, track_inputs():
         warnings.simplefilter("default")
         try:

@@ -15,6 +15,8 @@ from accugrid.compensation.plans import SEED_ABC
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import Robot, load_robot
 
+__all__ = ["add_abc", "add_status", "add_tool", "robot_with_tool"]
+
 
 def add_abc(parser: argparse.ArgumentParser, help_text: str) -> None:
     """``--abc A B C``: a fixed TCP orientation, KUKA ABC in deg (default: the seed's 0 90 0)."""

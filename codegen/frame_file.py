@@ -21,6 +21,8 @@ from accugrid.kinematics.fitting import CircleFit
 from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
 from accugrid.kinematics.yamlfile import load_yaml
 
+__all__ = ["KEYS", "MATRIX_TOL", "frame_yaml", "load_frame"]
+
 KEYS = ("x", "y", "z", "a", "b", "c")
 MATRIX_TOL = 1e-6
 """Largest difference accepted between ``matrix`` and the pose from x..c (rotation entries, and

@@ -22,6 +22,8 @@ from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import load_robot
 
+__all__ = ["Job", "add_job_arguments", "grid_path", "prepare", "summary"]
+
 
 @dataclass
 class Job:
@@ -82,15 +84,9 @@ def grid_path(args: argparse.Namespace, cell: Cell, model: Path | None = None) -
         if args.grid is not None:
             raise InputError("--grid and --no-correction exclude each other")
         return None
-    path = Path(args.grid) if args.grid is not None else cell.grid_path
-    if path is None and model is not None:
+    if args.grid is None and cell.grid_path is None and model is not None:
         return None
-    if path is None:
-        raise InputError(
-            "no grid: name one in the cell file (grid:), give --grid, or use --no-correction",
-            args.cell,
-        )
-    return path
+    return cell.grid_file(args.grid, ", or use --no-correction")
 
 
 def prepare(args: argparse.Namespace, command: str) -> Job:

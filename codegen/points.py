@@ -22,6 +22,16 @@ from accugrid.compensation.csvtable import Table, parse_table, read_table
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 
+__all__ = [
+    "AXIS_MIN_LENGTH",
+    "COORD_MAX_MM",
+    "FEED_MAX_MM_S",
+    "SIZE_MAX_MM",
+    "Points",
+    "parse_points",
+    "read_points",
+]
+
 AXIS_MIN_LENGTH = 1e-9  # an i,j,k vector shorter than this has no direction
 COORD_MAX_MM = 1e6  # |x|, |y|, |z| beyond 1 km are refused (no cell is that large)
 FEED_MAX_MM_S = 2000.0  # same limit as the cell's speeds

@@ -49,7 +49,18 @@ from accugrid.kinematics.frames import (
     orient_along_axes,
     too_tilted,
 )
+from accugrid.kinematics.model import RobotModel
+from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.units import mm_text
+
+__all__ = [
+    "GRID_ORIENTATION_TOL_DEG",
+    "IK_BLOCK",
+    "MAX_AXIS_JUMP_DEG",
+    "STAGES",
+    "Program",
+    "build_program",
+]
 
 STAGES = ("APP", "CLR", "BOT", "RET")
 GRID_ORIENTATION_TOL_DEG = 5.0  # the grid's errors hold near the orientation it was measured at
@@ -110,10 +121,16 @@ class Program:
         return pos, abc
 
 
-def build_program(points: Points, cell: Cell, robot, grid=None, model=None) -> Program:
-    """Corrected, IK-checked program for ``points`` in ``cell`` (``grid``: a GridModel or None for
-    no correction; ``robot``: a kinematics Robot with the cell's tool; ``model``: a calibrated
-    Robot, then ``grid`` is the residual grid after it or None)."""
+def build_program(
+    points: Points,
+    cell: Cell,
+    robot: RobotModel,
+    grid: GridModel | None = None,
+    model: Robot | None = None,
+) -> Program:
+    """Corrected, IK-checked program for ``points`` in ``cell`` (``grid``: None for no
+    correction; ``robot`` with the cell's tool; ``model``: a calibrated Robot, then ``grid`` is
+    the measured grid whose residual after the model is added, or None)."""
     n = len(points)
     if n == 0:
         raise InputError("no drilling points in the file", points.path)
@@ -209,8 +226,8 @@ def _correction(
 def _model_correction(
     points: Points,
     cell: Cell,
-    robot,
-    model,
+    robot: RobotModel,
+    model: Robot,
     grid: GridModel | None,
     holes_robot: np.ndarray,
     rotations: np.ndarray,
@@ -279,7 +296,7 @@ def _orientation_warnings(points: Points, grid: GridModel, angle: np.ndarray | N
 
 
 def _configuration(
-    points: Points, cell: Cell, robot, positions: np.ndarray, rotations: np.ndarray
+    points: Points, cell: Cell, robot: RobotModel, positions: np.ndarray, rotations: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """IK of every pose: Status and Turn (N, 4) per pose and the warnings."""
     n = len(points)
@@ -343,7 +360,7 @@ def _configuration(
     return pose_status, pose_turn, warnings
 
 
-def _ik_blocks(robot, poses: np.ndarray, status, turn) -> SimpleNamespace:
+def _ik_blocks(robot: RobotModel, poses: np.ndarray, status, turn) -> SimpleNamespace:
     """``robot.ik`` of poses (M, 4, 4) in blocks of ``IK_BLOCK``: the same result, with the IK's
     (M, 8, ...) temporaries bounded in memory."""
     parts = [

@@ -19,14 +19,12 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import read_input_bytes
 
 __all__ = [
-    "KRL_SUFFIXES",
     "MAX_BYTES",
     "MIN_PLACES_INCH",
     "MIN_PLACES_MM",
     "add_header",
     "check_text",
     "decimals_of",
-    "dialect",
     "formatted",
     "number_text",
     "number_texts",
@@ -37,7 +35,6 @@ __all__ = [
 ]
 
 MAX_BYTES = 64 * 2**20
-KRL_SUFFIXES = (".src", ".dat", ".sub")
 MIN_PLACES_MM = 2  # a corrected number is never coarser than 0.01 mm ...
 MIN_PLACES_INCH = 3  # ... or 0.001 in, unless the user asks (--decimals)
 _FRACTION_RE = re.compile(r"\.(\d*+)")
@@ -57,11 +54,6 @@ def read_program(path: str | os.PathLike[str], max_bytes: int = MAX_BYTES) -> st
         return read_input_bytes(path, max_bytes).decode("latin-1")
     except OSError as exc:
         raise InputError(f"cannot read: {exc.strerror or exc}", os.fspath(path)) from None
-
-
-def dialect(path: str | os.PathLike[str]) -> str:
-    """ "krl" for .src/.dat/.sub, else "gcode"."""
-    return "krl" if Path(path).suffix.lower() in KRL_SUFFIXES else "gcode"
 
 
 def split_lines(text: str) -> list[str]:

@@ -8,6 +8,8 @@ from typing import TypeVar
 
 from tqdm import tqdm
 
+__all__ = ["progress"]
+
 T = TypeVar("T")
 
 

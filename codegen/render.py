@@ -19,6 +19,8 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import note_input
 from accugrid.templates import TEMPLATE_DIR
 
+__all__ = ["environment", "fixed_texts", "render", "template_dir"]
+
 
 def template_dir(dialect: str, templates: str | os.PathLike[str] | None = None) -> Path:
     """Folder of a dialect's templates: the built-in one, or ``templates`` (a copy of the whole

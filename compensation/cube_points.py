@@ -34,6 +34,8 @@ import numpy as np
 
 from accugrid.kinematics.errors import InputError
 
+__all__ = ["DIAGONAL_FRACTION", "TEST_LABELS", "VERTEX_LABELS", "cube_test_points", "cube_vertices"]
+
 #: Fraction of the diagonal length between a diagonal end and its test point (ISO 9283 §7.2.1).
 DIAGONAL_FRACTION = 0.1
 

@@ -20,6 +20,18 @@ from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
 from accugrid.kinematics.inputfile import read_input_text
 from accugrid.kinematics.units import mm_text
 
+__all__ = [
+    "COORD_MAX_MM",
+    "COORD_TOL_MM",
+    "ORIENTATION_TOL_DEG",
+    "REPEAT_TOL_MM",
+    "Measurements",
+    "VertexGrid",
+    "build_grid",
+    "measurements_from_arrays",
+    "read_measurements",
+]
+
 COORD_TOL_MM = 1e-3  # two commanded coordinates closer than this are the same grid level
 REPEAT_TOL_MM = 0.5  # largest allowed distance of a repeat from the mean of its vertex
 ORIENTATION_TOL_DEG = 0.1  # every row must be commanded at the same a,b,c within this

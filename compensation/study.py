@@ -46,6 +46,31 @@ from accugrid.compensation.plans import grid_axes
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.units import mm_text
 
+__all__ = [
+    "AXES",
+    "DEFAULT_STD_FRACTION",
+    "DEFAULT_TOLERANCE_MM",
+    "REPEAT_RULES",
+    "Cubes",
+    "Decision",
+    "Measure",
+    "Progress",
+    "StudyResult",
+    "Summary",
+    "Validation",
+    "analyse",
+    "choose_step",
+    "crossing",
+    "design",
+    "fit_curve",
+    "measured_residuals",
+    "random_points",
+    "read_experiment",
+    "simulate_study",
+    "simulate_validation",
+    "summarize",
+]
+
 Measure = Callable[[np.ndarray, int, int], np.ndarray]
 Progress = Callable[[Iterable, str, int], Iterable]
 

@@ -2,3 +2,5 @@
 
 This is the lowest layer of accugrid; it imports nothing from ``compensation`` or ``codegen``.
 """
+
+__all__: list[str] = []

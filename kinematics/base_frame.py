@@ -29,6 +29,16 @@ from accugrid.kinematics.fitting import (
     intersect_line_plane,
 )
 
+__all__ = [
+    "MAX_AXIS_TILT_DEG",
+    "MIN_ARM_MM",
+    "MIN_HEIGHT_MM",
+    "PLANE_STRAY_MM",
+    "SMR_RADIUS_MM",
+    "RobotFrameFit",
+    "fit_robot_frame",
+]
+
 SMR_RADIUS_MM = 19.05
 """Default SMR radius: a 1.5-inch (38.1 mm) spherically mounted reflector."""
 

@@ -26,6 +26,7 @@ from accugrid.kinematics import ik as closed
 from accugrid.kinematics.dh import chain
 
 if TYPE_CHECKING:
+    from accugrid.kinematics.model import RobotModel
     from accugrid.kinematics.robot import Robot
 
 __all__ = [
@@ -87,7 +88,7 @@ class Configuration:
 
 
 def solve_in_one_status(
-    robot, poses: np.ndarray, status: int | None = None, first: np.ndarray | None = None
+    robot: RobotModel, poses: np.ndarray, status: int | None = None, first: np.ndarray | None = None
 ) -> tuple[IKSolution, int | None]:
     """IK of TCP poses (N, 4, 4) mm all in one KUKA Status, as a program that starts with one PTP
     and continues with LIN keeps its configuration: ``status``, or the Status of the IK default

@@ -11,6 +11,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+__all__ = ["PARAMETERS", "DHTable", "chain", "flange_poses", "link_derivatives", "link_matrices"]
+
 # Order of the four parameters of one link, used by the error vector and the error Jacobian.
 PARAMETERS = ("a", "d", "alpha", "theta")
 

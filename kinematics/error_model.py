@@ -15,6 +15,8 @@ from accugrid.kinematics.dh import chain, link_derivatives
 from accugrid.kinematics.frames import invert
 from accugrid.kinematics.robot import Robot
 
+__all__ = ["error_jacobian", "predicted_error"]
+
 
 def error_jacobian(robot: Robot, q: np.ndarray) -> np.ndarray:
     """∂(TCP position, orientation)/∂(24 DH parameter errors): (N, 6, 24) for q (N, 6) rad."""

@@ -14,6 +14,16 @@ import numpy as np
 
 from accugrid.kinematics.errors import InputError
 
+__all__ = [
+    "COLLINEAR_RATIO",
+    "MIN_ARC_DEG",
+    "CircleFit",
+    "PlaneFit",
+    "fit_circle",
+    "fit_plane",
+    "intersect_line_plane",
+]
+
 MIN_ARC_DEG = 30.0
 """Shortest arc a circle fit accepts. The centre and normal errors of a circle fit grow roughly
 as 1/arc²: for the A1 circle of a KR 210 (radius 1.8 m, 24 points, 0.02 mm tracker noise) the

@@ -9,6 +9,22 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = [
+    "GIMBAL_LOCK_RAD",
+    "MAX_TILT_DEG",
+    "abc_to_matrix",
+    "axis_angle_deg",
+    "invert",
+    "matrix_to_abc",
+    "orient_along_axes",
+    "pose_from_xyzabc",
+    "rotate_vectors",
+    "rotation_angle_deg",
+    "too_tilted",
+    "transform_points",
+    "xyzabc_from_pose",
+]
+
 # |B| within this of 90 deg (rad) is gimbal lock: C is set to 0 and the rotation goes into A
 # (scipy's Rotation.as_euler uses the same threshold and rule; it is the tests' peer).
 GIMBAL_LOCK_RAD = 1e-7

@@ -12,6 +12,16 @@ import numpy as np
 
 from accugrid.kinematics.dh import DHTable, link_matrices
 
+__all__ = [
+    "all_solutions",
+    "arm_solutions",
+    "arm_wrists",
+    "closed_form_supported",
+    "wrap",
+    "wrist_angles",
+    "wrist_points",
+]
+
 _TOL = 1e-9
 
 

@@ -37,6 +37,8 @@ from accugrid.kinematics.joint_errors import (
 )
 from accugrid.kinematics.yamlfile import YamlDoc, load_yaml
 
+__all__ = ["BUILTIN", "Robot", "load_robot"]
+
 BUILTIN = ("kr210", "kr210-paper", "kr210-realistic")
 _LIMIT_TOL = 1e-9
 

@@ -22,6 +22,17 @@ import numpy as np
 
 from accugrid.kinematics.frames import transform_points
 
+__all__ = [
+    "FLANGE_CENTER_MM",
+    "HOLE_CIRCLE_DIAMETER_MM",
+    "HOLE_DIAMETER_MM",
+    "N_HOLES",
+    "TrackerPoints",
+    "flange_hole_points",
+    "simulate_tracker_points",
+    "smr_seat_height",
+]
+
 FLANGE_CENTER_MM = np.array([1765.0, 0.0, 1784.0])
 HOLE_CIRCLE_DIAMETER_MM = 160.0
 HOLE_DIAMETER_MM = 10.0

@@ -34,6 +34,8 @@ from accugrid.kinematics.ik import wrap
 from accugrid.kinematics.inputfile import note_input
 from accugrid.kinematics.yamlfile import YamlDoc
 
+__all__ = ["UrdfRobot", "urdf_robot_from_doc"]
+
 _MM = 1000.0
 _DAMPING = 1e-6  # squared damping of the least-squares step (dimensionless, metres and rad)
 _TOLERANCE = 1e-12  # |6D error| in metres / rad at which a solution is accepted

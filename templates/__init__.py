@@ -6,4 +6,6 @@ CLI's ``--templates`` at a copy of this folder.
 
 from pathlib import Path
 
+__all__ = ["TEMPLATE_DIR"]
+
 TEMPLATE_DIR = Path(__file__).resolve().parent

@@ -287,6 +287,10 @@ def test_round_trip_with_the_generator(tmp_path, dialect):
         )
         pairs = [(corrected / f, rewritten / f) for f in files]
     else:
+        # G-code files by suffix (codegen.dialects)
+        nominal, corrected, rewritten = (
+            p.with_suffix(".ngc") for p in (nominal, corrected, rewritten)
+        )
         assert (
             main(["gcode", str(points), "--cell", str(cell), "--no-correction", "-o", str(nominal)])
             == 0

@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.model import RobotModel
 from accugrid.kinematics.robot import load_robot
 
 # A 6R arm with lengths in metres: Z, Y, Y joints to a wrist, then Z, Y, Z (spherical wrist).
@@ -132,3 +133,8 @@ def test_simulation_of_a_urdf_robot_reaches_the_commanded_points(tiny):
 
     points = np.array([[500.0, 0.0, 700.0], [550.0, 50.0, 750.0], [500.0, -60.0, 800.0]])
     np.testing.assert_allclose(reached_positions(tiny, points, [0, 90, 0]), points, atol=1e-6)
+
+
+def test_dh_and_urdf_robots_are_robot_models(tiny):
+    assert isinstance(load_robot("kr210"), RobotModel)
+    assert isinstance(tiny, RobotModel)

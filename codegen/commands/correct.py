@@ -38,8 +38,9 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.units import mm_text
 
+__all__ = ["ADDED", "DECIMALS", "NAME", "add_arguments", "run", "settings_from"]
+
 NAME = "correct"
-HELP = "corrected points CSV: P' = P + e, e interpolated from a measured error grid"
 
 ADDED = ["x_cmd", "y_cmd", "z_cmd", "ex", "ey", "ez", "flag"]
 DECIMALS = 4

@@ -29,8 +29,9 @@ from accugrid.kinematics.digest import sha256_hex
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import xyzabc_from_pose
 
+__all__ = ["NAME", "add_arguments", "run"]
+
 NAME = "fit-frame"
-HELP = "robot base frame (tracker_T_robot) from tracker points on base, A1 arc and flange holes"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -91,10 +92,10 @@ def run(args: argparse.Namespace) -> int:
     digests = {key: (Path(path).name, sha256_hex(loaded[key][1])) for key, path in inputs.items()}
     outputs: dict[str, bytes | str] = {args.output: frame_yaml(fit, digests)}
     if args.plot:
-        from accugrid.codegen.frame_plot import plot_frame_fit
+        from accugrid.codegen.plots import frame_fit_png
 
         points = {key: value[0] for key, value in loaded.items()}
-        outputs[args.plot] = plot_frame_fit(fit, points)
+        outputs[args.plot] = frame_fit_png(fit, points)
     write_files(outputs, inputs.values(), args.force)
     print(_summary(args.output, fit))
     return 0

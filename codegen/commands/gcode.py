@@ -20,8 +20,9 @@ from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.gcode.emit import render_gcode
 from accugrid.codegen.job import add_job_arguments, prepare, summary
 
+__all__ = ["NAME", "add_arguments", "run"]
+
 NAME = "gcode"
-HELP = "corrected RS274NGC (LinuxCNC) drilling program from a points CSV"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

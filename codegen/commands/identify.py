@@ -36,8 +36,9 @@ from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification, identify, pose_set
 from accugrid.kinematics.robot import Robot
 
+__all__ = ["NAME", "add_arguments", "run"]
+
 NAME = "identify"
-HELP = "calibrated robot model (DH errors, TCP) from tracker measurements at scattered poses"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

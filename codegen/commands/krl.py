@@ -21,8 +21,9 @@ from accugrid.codegen.cell import load_cell
 from accugrid.codegen.job import add_job_arguments, prepare, summary
 from accugrid.codegen.krl.emit import render_krl
 
+__all__ = ["NAME", "add_arguments", "run"]
+
 NAME = "krl"
-HELP = "corrected KUKA KRL drilling program (.src/.dat) from a points CSV"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

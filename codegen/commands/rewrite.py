@@ -36,10 +36,11 @@ from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cell import load_cell
+from accugrid.codegen.dialects import dialect_of
 from accugrid.codegen.gcode.rewrite import rewrite_gcode
 from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.program import GRID_ORIENTATION_TOL_DEG
-from accugrid.codegen.program_text import MAX_BYTES, add_header, dialect, read_program
+from accugrid.codegen.program_text import MAX_BYTES, add_header, read_program
 from accugrid.codegen.rewrite import (
     ORIENTATION_LIMIT_DEG,
     Options,
@@ -51,8 +52,9 @@ from accugrid.compensation import GridModel
 from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
 from accugrid.kinematics.errors import InputError
 
+__all__ = ["NAME", "add_arguments", "run"]
+
 NAME = "rewrite"
-HELP = "correct the positions of an existing KRL or G-code program in place (pre-flight)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -147,7 +149,7 @@ def _outputs(inputs: list[Path], output: str) -> dict[Path, Path]:
 
 def run(args: argparse.Namespace) -> int:
     inputs = [Path(args.program)] + ([Path(args.dat)] if args.dat else [])
-    kinds = {dialect(p) for p in inputs}
+    kinds = {dialect_of(p) for p in inputs}
     if len(inputs) == 2 and (
         kinds != {"krl"} or inputs[0].suffix.lower() == inputs[1].suffix.lower()
     ):
@@ -168,9 +170,7 @@ def run(args: argparse.Namespace) -> int:
     check_targets(targets, all_inputs, args.force)
 
     cell = load_cell(args.cell)
-    grid = args.grid or cell.grid_path
-    if grid is None:
-        raise InputError("no grid: give --grid or set grid in the cell file", args.cell)
+    grid = cell.grid_file(args.grid)
     model = GridModel.from_measurements(grid)
     max_bytes = int(args.max_mb * 2**20)
     opts = Options(
@@ -209,7 +209,7 @@ def run(args: argparse.Namespace) -> int:
         text = result.texts[os.fspath(path)]
         if args.header:
             lines = header_lines(result, os.fspath(path), args.cell, opts)
-            text = add_header(text, lines, dialect(path))
+            text = add_header(text, lines, dialect_of(path))
         files[outputs[path]] = text.encode("latin-1")
     if args.report:
         files[Path(args.report)] = report_csv(result.rows).encode("utf-8")

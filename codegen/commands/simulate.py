@@ -8,6 +8,11 @@ forward kinematics puts it. Optional Gaussian noise: robot repeatability and tra
 seeded. The result is a measurement CSV (id,x,y,z,a,b,c,x_meas,y_meas,z_meas; mm and deg) for
 `accugrid correct` & co.
 
+--poses PLAN.csv instead measures the poses of a plan at any orientation (columns x,y,z,a,b,c,
+optional id and s, e.g. from `accugrid plan identify`): each in its Status (column s, else
+--status, else the IK default per pose), with the joints the controller reports (a1..a6, KUKA
+deg, 4 decimals) in the output, for `accugrid identify`.
+
 --plot FILE draws seed Fig. 3: the X, Y, Z components of the error e = P - M over the plane of
 seed Table 2 (X 1000..2000, Y -500..500, Z 1800 mm, A 0, B 90, C 0 deg). Lengths in mm, angles in
 degrees.
@@ -16,20 +21,40 @@ degrees.
 from __future__ import annotations
 
 import argparse
-import io
+from pathlib import Path
 
 import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
+from accugrid.codegen.plots import fig3_png
 from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.compensation.csvtable import read_table
 from accugrid.compensation.plans import check_vertex_count
+from accugrid.kinematics.configuration import status_turn
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import Robot
-from accugrid.kinematics.simulation import grid_status, reached_positions, simulate_measurements
+from accugrid.kinematics.simulation import (
+    grid_status,
+    reached_positions,
+    simulate_measurements,
+    simulate_pose_measurements,
+)
+
+__all__ = [
+    "FIG3_ABC",
+    "FIG3_X",
+    "FIG3_Y",
+    "FIG3_Z",
+    "NAME",
+    "add_arguments",
+    "fig3_field",
+    "grid_points",
+    "run",
+]
 
 NAME = "simulate"
-HELP = "simulate a laser-tracker grid measurement of a robot (measurement CSV, seed Fig. 3)"
 
 FIG3_X = (1000.0, 2000.0)
 FIG3_Y = (-500.0, 500.0)
@@ -51,6 +76,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="grid box in the robot frame, mm (needed with -o)",
     )
     parser.add_argument("--step", type=float, help="grid step, mm (needed with -o)")
+    parser.add_argument(
+        "--poses",
+        metavar="PLAN.csv",
+        help="measure the poses of a plan (x,y,z,a,b,c[,id][,s]) instead of a grid",
+    )
     add_abc(parser, "TCP orientation at every vertex")
     add_tool(parser, "tool on the flange (flange_T_tool), mm and deg (default: the flange itself)")
     add_status(
@@ -84,7 +114,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if not args.output and not args.plot:
         raise InputError("nothing to do: give -o CSV and/or --plot PNG")
-    inputs = [args.robot] if _is_file(args.robot) else []
+    inputs = ([args.robot] if _is_file(args.robot) else []) + ([args.poses] if args.poses else [])
     check_targets([t for t in (args.output, args.plot) if t], inputs, args.force)
     robot = robot_with_tool(args.robot, args.tool)
     if robot.true_robot() is None:
@@ -92,10 +122,16 @@ def run(args: argparse.Namespace) -> int:
             f"note: robot {robot.name} has no parameter errors; the simulated error is noise only"
         )
     outputs: dict[str, bytes | str] = {}
-    if args.output:
+    if args.output and args.poses:
+        outputs[args.output] = _pose_measurement_csv(robot, args)
+    elif args.output:
         outputs[args.output] = _measurement_csv(robot, args)
     if args.plot:
-        outputs[args.plot] = _fig3_png(robot, args.status)
+        xs, ys, error = fig3_field(robot, status=args.status)
+        for k, axis in enumerate("XYZ"):
+            field = error[:, :, k]
+            print(f"  Fig. 3 D_{axis}: min {field.min():.3f}  max {field.max():.3f} mm")
+        outputs[args.plot] = fig3_png(robot.name, xs, ys, error, FIG3_Z, FIG3_ABC)
     write_files(outputs, inputs, force=args.force)
     for path in outputs:
         print(f"wrote {path}")
@@ -161,6 +197,51 @@ def _measurement_csv(robot: Robot, args: argparse.Namespace) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _pose_measurement_csv(robot: Robot, args: argparse.Namespace) -> str:
+    """The measurement CSV of the plan's poses, with the controller's joints a1..a6 and s."""
+    if args.region is not None or args.step is not None:
+        raise InputError("--poses and --region/--step exclude each other")
+    table = read_table(args.poses)
+    table.require(["x", "y", "z", "a", "b", "c"])
+    if not len(table):
+        raise InputError("no poses in the plan", args.poses)
+    xyzabc = table.floats(["x", "y", "z", "a", "b", "c"])
+    ids = table.text("id") if table.has("id") else [f"P{i + 1}" for i in range(len(table))]
+    status = args.status
+    if table.has("s"):
+        status = table.floats(["s"])[:, 0].astype(int)
+    try:
+        q, measured = simulate_pose_measurements(
+            robot,
+            pose_from_xyzabc(xyzabc),
+            status,
+            repeats=args.repeats,
+            noise_tracker_mm=args.noise_tracker,
+            noise_repeat_mm=args.noise_repeat,
+            seed=args.seed,
+        )
+    except InputError as exc:
+        raise InputError(exc.message, args.poses) from None
+    status_of = status_turn(robot, q)[0]
+    header = comment_text(
+        f"accugrid simulate: robot {robot.name}, poses of {Path(args.poses).name}, repeats "
+        f"{args.repeats}, noise tracker {args.noise_tracker:g} mm, repeat "
+        f"{args.noise_repeat:g} mm, seed {args.seed}",
+        limit=400,
+    )
+    lines = [f"# {header}", "id,x,y,z,a,b,c,s,a1,a2,a3,a4,a5,a6,x_meas,y_meas,z_meas"]
+    rows = np.repeat(np.arange(len(table)), args.repeats)
+    joints = np.degrees(q)
+    for row, meas in zip(rows, measured, strict=True):
+        pose_text = ",".join(fixed(v, 4) for v in xyzabc[row])
+        joint_text = ",".join(fixed(v, 4) for v in joints[row])
+        meas_text = ",".join(fixed(v, 4) for v in meas)
+        ident = comment_text(ids[row], limit=40).replace(",", " ")
+        lines.append(f"{ident},{pose_text},{status_of[row]},{joint_text},{meas_text}")
+    print(f"{robot.name}: {len(table)} poses x {args.repeats} repeats = {len(rows)} rows")
+    return "\n".join(lines) + "\n"
+
+
 def _print_summary(
     robot: Robot, n_points: int, repeats: int, error: np.ndarray, measured_error: np.ndarray
 ) -> None:
@@ -190,34 +271,6 @@ def fig3_field(
     points = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, FIG3_Z)])
     error = points - reached_positions(robot, points, FIG3_ABC, status)
     return xs, ys, error.reshape(samples, samples, 3)
-
-
-def _fig3_png(robot: Robot, status: int | None) -> bytes:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    xs, ys, error = fig3_field(robot, status=status)
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.6), constrained_layout=True)
-    for k, (ax, axis) in enumerate(zip(axes, "XYZ", strict=True)):
-        field = error[:, :, k].T  # rows = Y, columns = X
-        mesh = ax.contourf(xs, ys, field, levels=20, cmap="viridis")
-        ax.contour(xs, ys, field, levels=10, colors="k", linewidths=0.4)
-        fig.colorbar(mesh, ax=ax, label=f"D_{axis} (mm)")
-        ax.set_title(f"({'abc'[k]}) D_{axis}: {field.min():.2f} .. {field.max():.2f} mm")
-        ax.set_xlabel("X (mm)")
-        ax.set_ylabel("Y (mm)")
-        ax.set_aspect("equal")
-        print(f"  Fig. 3 D_{axis}: min {field.min():.3f}  max {field.max():.3f} mm")
-    fig.suptitle(
-        f"{robot.name}: TCP error e = P - M at Z {FIG3_Z:g} mm, A B C "
-        f"{' '.join(f'{v:g}' for v in FIG3_ABC)} deg (seed Fig. 3)"
-    )
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
-    plt.close(fig)
-    return buffer.getvalue()
 
 
 def _is_file(name: str) -> bool:

@@ -25,7 +25,6 @@ angles in degrees.
 from __future__ import annotations
 
 import argparse
-import io
 import time
 from pathlib import Path
 
@@ -34,6 +33,7 @@ import numpy as np
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
 from accugrid.codegen.commands.plan import add_experiment_arguments, parse_centres, parse_steps
+from accugrid.codegen.plots import fig12_png, hist_png
 from accugrid.codegen.progress import progress
 from accugrid.compensation.csvtable import read_table
 from accugrid.compensation.grid import GridModel
@@ -58,8 +58,22 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.simulation import commanded_poses, simulate_measurements
 
+__all__ = [
+    "NAME",
+    "OUTPUTS",
+    "STAT_HEADER",
+    "add_arguments",
+    "check_reach",
+    "csv_text",
+    "measured_validation",
+    "run",
+    "simulated_measure",
+    "table4",
+    "table5",
+    "text_table",
+]
+
 NAME = "study"
-HELP = "grid-step study of the seed (Tables 4-5, Fig. 12): simulated or measured"
 
 OUTPUTS = ("table4.csv", "table5.csv", "fig12.png", "table5_hist.png", "report.md")
 
@@ -245,73 +259,6 @@ def csv_text(header: list[str], rows: list[list[str]]) -> str:
     return "\n".join([",".join(names)] + [",".join(r) for r in rows]) + "\n"
 
 
-def _png(fig) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110, metadata={"Software": None})
-    return buf.getvalue()
-
-
-def plot_fig12(result: StudyResult) -> bytes:
-    """Seed Fig. 12: max/min error against step per axis, cubic curves, tolerance band."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    tol = result.tolerance_mm
-    steps = result.steps
-    dense = np.linspace(steps.min(), steps.max(), 300)
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), sharey=True)
-    for a, ax in enumerate(axes):
-        ax.axhspan(-tol, tol, color="tab:green", alpha=0.08, label=f"±{tol:g} mm")
-        ax.axhline(tol, color="tab:green", lw=0.8)
-        ax.axhline(-tol, color="tab:green", lw=0.8)
-        ax.plot(steps, [r.max[a] for r in result.table], "o", color="tab:red", label="max")
-        ax.plot(steps, [r.min[a] for r in result.table], "s", color="tab:blue", label="min")
-        ax.plot(dense, result.max_curves[a](dense), "-", color="tab:red", lw=1)
-        ax.plot(dense, result.min_curves[a](dense), "-", color="tab:blue", lw=1)
-        th = result.decision.thresholds[a]
-        if np.isfinite(th):
-            ax.axvline(th, color="gray", ls=":", label=f"threshold {th:.0f} mm")
-        if result.decision.step is not None:
-            ax.axvline(result.decision.step, color="black", ls="--", label="chosen step")
-        ax.set_title(f"{AXES[a]} after compensation")
-        ax.set_xlabel("grid step (mm)")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="best", framealpha=0.6)
-    axes[0].set_ylabel("remaining error (mm)")
-    fig.tight_layout()
-    data = _png(fig)
-    plt.close(fig)
-    return data
-
-
-def plot_hist(validation: Validation) -> bytes:
-    """Table 5 before/after histograms per axis (all samples)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    before = validation.before.reshape(-1, 3)
-    after = validation.after.reshape(-1, 3)
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
-    for a, ax in enumerate(axes):
-        lo = min(before[:, a].min(), after[:, a].min())
-        hi = max(before[:, a].max(), after[:, a].max())
-        bins = np.linspace(lo, hi, 40)
-        ax.hist(before[:, a], bins=bins, alpha=0.6, label="before", color="tab:orange")
-        ax.hist(after[:, a], bins=bins, alpha=0.6, label="after", color="tab:blue")
-        ax.set_title(f"{AXES[a]} error at validation points")
-        ax.set_xlabel("error (mm)")
-        ax.legend(fontsize=8)
-    axes[0].set_ylabel("samples")
-    fig.tight_layout()
-    data = _png(fig)
-    plt.close(fig)
-    return data
-
-
 def _md_table(header: list[str], rows: list[list[str]]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
@@ -380,7 +327,7 @@ def run(args: argparse.Namespace) -> int:
     for reason in result.decision.reasons:
         print(reason)
     files: dict[Path, str | bytes] = {out / "table4.csv": csv_text(h4, r4)}
-    files[out / "fig12.png"] = plot_fig12(result)
+    files[out / "fig12.png"] = fig12_png(result)
     report = [
         "# Grid-step study (accugrid study)",
         "",
@@ -414,7 +361,7 @@ def run(args: argparse.Namespace) -> int:
         )
         print(text_table(h5, r5))
         files[out / "table5.csv"] = csv_text(h5, r5)
-        files[out / "table5_hist.png"] = plot_hist(validation)
+        files[out / "table5_hist.png"] = hist_png(validation)
         report += [
             f"{len(validation.points)} random points; grid step {steps_used} mm{chosen}, "
             f"{int(np.prod(validation.model.counts))} vertices.",

@@ -29,8 +29,9 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import invert, transform_points
 from accugrid.kinematics.inputfile import read_input_text
 
+__all__ = ["DECIMALS", "NAME", "TRIPLES", "add_arguments", "run"]
+
 NAME = "transform"
-HELP = "map tracker-frame x,y,z / x_meas,y_meas,z_meas columns into the robot frame"
 
 TRIPLES = {"xyz": ("x", "y", "z"), "meas": ("x_meas", "y_meas", "z_meas")}
 DECIMALS = 4

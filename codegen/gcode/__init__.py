@@ -1,1 +1,3 @@
 """The G-code dialect (RS274/NGC as LinuxCNC reads it): emitter and parser."""
+
+__all__: list[str] = []

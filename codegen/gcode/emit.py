@@ -24,6 +24,8 @@ import numpy as np
 from accugrid.codegen.program import Program
 from accugrid.codegen.render import environment, fixed_texts, render, template_dir
 
+__all__ = ["GcodeHole", "canned", "render_gcode"]
+
 
 class GcodeHole(NamedTuple):
     """One hole; coordinates (X, Y, Z), A B C and the feed already formatted by ``fixed``."""

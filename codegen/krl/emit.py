@@ -1,4 +1,5 @@
-"""KUKA KRL for a Program: ``NAME.src`` (motion) and ``NAME.dat`` (the E6POS of every hole).
+"""KUKA KRL for a Program: ``NAME.src`` (motion) and ``NAME.dat`` (the E6POS of every hole); and
+the laser-tracker measurement program of a plan (``render_measurement``, the same convention).
 
 Templates ``program.src.j2`` and ``program.dat.j2`` (``templates/krl/``), rendered with CRLF line
 ends as the controller's own files have. Position names are ``XH<n>_APP|CLR|BOT|RET`` (n = hole
@@ -17,6 +18,7 @@ per module follow from the rendered lines per hole of the template in use.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -24,6 +26,16 @@ import numpy as np
 from accugrid.codegen.program import STAGES, Program
 from accugrid.codegen.render import environment, fixed_texts, render, template_dir
 from accugrid.kinematics.errors import InputError
+
+__all__ = [
+    "MAX_PARTS",
+    "KrlHole",
+    "KrlPosition",
+    "MeasureMove",
+    "MeasureSettings",
+    "render_krl",
+    "render_measurement",
+]
 
 MAX_PARTS = 999  # NAME_001..NAME_999 keeps names <= 24 characters with a 20-character NAME
 
@@ -51,6 +63,77 @@ class KrlPosition(NamedTuple):
     c: str
     s: str
     t: str
+
+
+class MeasureMove(NamedTuple):
+    """One row of a measurement program: the E6POS name and the plan row id (comment text)."""
+
+    point: str
+    label: str
+
+
+@dataclass(frozen=True)
+class MeasureSettings:
+    """TOOL_DATA and BASE_DATA numbers (base 0: the robot frame), PTP %, $VEL.CP m/s, and the
+    wait after each position: ``wait_input`` ($IN number) or ``wait_sec`` s."""
+
+    tool: int
+    base: int
+    ptp_percent: float
+    vel_cp: float
+    wait_sec: float
+    wait_input: int | None
+    ptp_only: bool = False  # every move PTP (poses that reorient), else PTP to the first, then LIN
+
+
+def render_measurement(
+    points: np.ndarray,
+    abc: np.ndarray,
+    ids: list[str],
+    status: np.ndarray,
+    turn: np.ndarray,
+    name: str,
+    header: list[str],
+    settings: MeasureSettings,
+    templates=None,
+) -> tuple[str, str]:
+    """(.src, .dat) of a laser-tracker measurement program (``measure.src.j2``,
+    ``measure.dat.j2``): positions (N, 3) mm at KUKA A,B,C ((3,) or (N, 3) deg) with Status and
+    Turn (N,); one E6POS ``XMP<k>`` per distinct pose (0.0001 mm / deg) in order of first visit,
+    then a PTP to the first row and LIN (or PTP with ``settings.ptp_only``) to every other, each
+    followed by the wait. Numbers are formatted here (mm and deg with 3 decimals, S and T as
+    integers)."""
+    points = np.asarray(points, dtype=float)
+    abc = np.broadcast_to(np.asarray(abc, dtype=float), points.shape)
+    key = np.round(np.column_stack([points, abc]), 4)
+    unique, index = np.unique(key, axis=0, return_inverse=True)
+    index = index.reshape(-1)
+    first_visit = np.full(len(unique), len(points))
+    np.minimum.at(first_visit, index, np.arange(len(points)))
+    order = np.argsort(first_visit)
+    rank = np.empty(len(unique), dtype=int)
+    rank[order] = np.arange(len(unique))
+    rows = first_visit[order]
+    names = [f"XMP{k + 1}" for k in range(len(unique))]
+    pose = fixed_texts(np.column_stack([points[rows], abc[rows]]), 3)
+    st = fixed_texts(np.stack([status[rows], turn[rows]], axis=1), 0)
+    positions = [KrlPosition(names[k], *pose[k], *st[k]) for k in range(len(rows))]
+    moves = [MeasureMove(names[rank[index[r]]], ids[r]) for r in range(len(points))]
+    env = environment(template_dir("krl", templates), newline="\r\n")
+    context = {
+        "name": name,
+        "header": header,
+        "tool": settings.tool,
+        "base": settings.base,
+        "ptp_percent": settings.ptp_percent,
+        "vel_cp": settings.vel_cp,
+        "wait_sec": settings.wait_sec,
+        "wait_input": settings.wait_input,
+        "moves": moves,
+        "points": positions,
+        "ptp_only": settings.ptp_only,
+    }
+    return render(env, "measure.src.j2", **context), render(env, "measure.dat.j2", **context)
 
 
 def render_krl(program: Program, header: list[str], templates=None) -> dict[str, str]:

@@ -1,0 +1,37 @@
+"""The dialect registry: a program's dialect comes from its suffix, unknown suffixes are refused."""
+
+from __future__ import annotations
+
+import pytest
+
+from accugrid.codegen.cli import main
+from accugrid.codegen.dialects import DIALECTS, dialect_of
+from accugrid.kinematics.errors import InputError
+
+
+@pytest.mark.parametrize(
+    ("name", "dialect"),
+    [("a.src", "krl"), ("B.DAT", "krl"), ("x.sub", "krl"), ("p.ngc", "gcode"), ("p.NC", "gcode")],
+)
+def test_suffix_names_the_dialect(name, dialect):
+    assert dialect_of(name) == dialect
+
+
+def test_no_suffix_is_claimed_twice():
+    suffixes = [s for d in DIALECTS.values() for s in d.suffixes]
+    assert len(suffixes) == len(set(suffixes))
+
+
+@pytest.mark.parametrize("name", ["notes.txt", "program", "drill.mod"])
+def test_unknown_suffix_is_refused_not_taken_for_gcode(name):
+    with pytest.raises(InputError, match="unknown program type"):
+        dialect_of(name)
+
+
+def test_rewrite_refuses_an_unknown_suffix(tmp_path, capsys):
+    program = tmp_path / "drill.mod"
+    program.write_text("MODULE drill\nENDMODULE\n")
+    out = tmp_path / "out.mod"
+    code = main(["rewrite", str(program), "--cell", "examples/cell.yaml", "-o", str(out)])
+    assert code == 2 and not out.exists()
+    assert "unknown program type '.mod'" in capsys.readouterr().err
