@@ -54,6 +54,7 @@ class Cell:
     path: Path
     robot_name: str
     grid_path: Path | None
+    model_path: Path | None  # correction.model: a calibrated robot YAML (accugrid identify)
     tool_number: int
     flange_T_tool: np.ndarray
     base_number: int
@@ -268,7 +269,13 @@ class _Reader:
             "configuration",
             {"status", "turn", "allow_change", "singular_a5", "reference"},
         )
-        co = self.mapping(top.get("correction"), "correction", {"method", "iterations", "power"})
+        co = self.mapping(
+            top.get("correction"), "correction", {"method", "iterations", "power", "model"}
+        )
+        model = co.get("model")
+        if model is not None and (not isinstance(model, str) or not model.strip()):
+            raise self.error("correction.model", "must be a calibrated robot YAML path")
+        model_path = None if model is None else self.path.parent / model
         method = co.get("method", "idw")
         if method not in METHODS:
             raise self.error("correction.method", f"must be {' or '.join(METHODS)}, got {method!r}")
@@ -287,6 +294,7 @@ class _Reader:
             path=self.path,
             robot_name=robot,
             grid_path=grid_path,
+            model_path=model_path,
             tool_number=tool_number,
             flange_T_tool=flange_T_tool,
             base_number=base_number,

@@ -30,11 +30,18 @@ from accugrid.compensation.model_correction import TOL_MM, model_correct, residu
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, orient_along_axes, too_tilted
+from accugrid.kinematics.frames import (
+    abc_to_matrix,
+    matrix_to_abc,
+    orient_along_axes,
+    pose_from_xyzabc,
+    too_tilted,
+)
 from accugrid.kinematics.robot import load_robot
 from accugrid.kinematics.simulation import commanded_poses
+from accugrid.kinematics.yamlfile import load_yaml
 
-__all__ = ["point_orientations", "run_model"]
+__all__ = ["controller_tool", "point_orientations", "run_model"]
 
 _LISTED = 5
 
@@ -57,28 +64,48 @@ def point_orientations(points: Points, reference_abc: np.ndarray) -> np.ndarray:
     return matrix_to_abc(orient_along_axes(points.axis, reference))
 
 
+def controller_tool(model: str, tool: list[float] | None) -> np.ndarray | None:
+    """The controller's flange_T_tool (4, 4) mm: ``--tool``, else the ``controller_tool`` the
+    calibrated file records (``identification:``, written by ``accugrid identify``), else None
+    (the model's identified TCP)."""
+    if tool is not None:
+        return pose_from_xyzabc(np.array(tool, dtype=float))
+    if not Path(model).is_file():
+        return None
+    doc = load_yaml(model)
+    if not doc.has("identification", "controller_tool"):
+        return None
+    return pose_from_xyzabc([doc.number("identification", "controller_tool", k) for k in "xyzabc"])
+
+
 def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
     """The whole ``correct --model`` job (arguments of ``accugrid correct``)."""
     inputs = [args.points, args.grid, args.model if Path(args.model).is_file() else None]
     check_targets([args.output], inputs, args.force)
     calibrated = load_robot(args.model)
+    tool = controller_tool(args.model, args.tool)
     points = read_points(args.points)
     check_added_columns(points)
     abc = point_orientations(points, np.array(args.abc, dtype=float))
     status = args.status
     if status is None and len(points):
-        first = calibrated.ik(commanded_poses(points.xyz[:1], abc[0]))
+        controller = calibrated if tool is None else calibrated.with_tool(tool)
+        first = controller.ik(commanded_poses(points.xyz[:1], abc[0]))
         status = int(first.status[0]) if first.ok[0] else None
     grid = None
     flags: list[list[str]] = [[] for _ in range(len(points))]
     if args.grid is not None:
-        grid = residual_grid(calibrated, args.grid, status, repeat_tol_mm=args.repeat_tol)
+        grid = residual_grid(
+            calibrated, args.grid, status, repeat_tol_mm=args.repeat_tol, controller_tool=tool
+        )
         found = grid.check(points.xyz, settings, rotations=abc_to_matrix(abc).reshape(-1, 3, 3))
         check_outside(points, grid, found.outside, settings.outside, flags)
         if found.angle is not None:  # the model holds at any orientation: flag, never refuse
             for i in np.flatnonzero(found.angle > args.orientation_tol):
                 flags[i].append(f"orientation {found.angle[i]:.1f} deg from residual grid")
-    result = model_correct(calibrated, points.xyz, abc, status, grid, settings)
+    result = model_correct(
+        calibrated, points.xyz, abc, status, grid, settings, controller_tool=tool
+    )
     if not result.ok.all():
         bad = result.failed
         named = "; ".join(f"{points.label(int(i))}: {result.reason[i]}" for i in bad[:_LISTED])

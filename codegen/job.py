@@ -5,15 +5,19 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 from accugrid.codegen.cell import Cell, load_cell
 from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program import Program, build_program
 from accugrid.compensation import GridModel
+from accugrid.kinematics.calibrated import check_same_robot
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import load_robot
@@ -38,6 +42,12 @@ def add_job_arguments(parser: argparse.ArgumentParser) -> None:
         help="grid measurement CSV (robot frame, mm); overrides the cell file's grid",
     )
     parser.add_argument(
+        "--model",
+        metavar="CAL",
+        help="calibrated robot YAML (accugrid identify): correct by the model, the grid (if any) "
+        "then holds its residual; overrides the cell file's correction.model",
+    )
+    parser.add_argument(
         "--no-correction",
         action="store_true",
         help="write the nominal (uncorrected) program; no grid is read",
@@ -57,11 +67,24 @@ def add_job_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 
-def grid_path(args: argparse.Namespace, cell: Cell) -> Path | None:
-    """The measurement to correct with: --grid, else the cell's; None with --no-correction."""
+def model_path(args: argparse.Namespace, cell: Cell) -> Path | None:
+    """The calibrated model to correct with: --model, else the cell's correction.model; None
+    with --no-correction."""
+    if args.no_correction:
+        if args.model is not None:
+            raise InputError("--model and --no-correction exclude each other")
+        return None
+    return Path(args.model) if args.model is not None else cell.model_path
+
+
+def grid_path(args: argparse.Namespace, cell: Cell, model: Path | None = None) -> Path | None:
+    """The measurement to correct with: --grid, else the cell's; None with --no-correction, and
+    None without one when a ``model`` corrects (the grid is then only its residual)."""
     if args.no_correction:
         if args.grid is not None:
             raise InputError("--grid and --no-correction exclude each other")
+        return None
+    if args.grid is None and cell.grid_path is None and model is not None:
         return None
     return cell.grid_file(args.grid, ", or use --no-correction")
 
@@ -71,24 +94,37 @@ def prepare(args: argparse.Namespace, command: str) -> Job:
     cell = load_cell(args.cell)
     if args.allow_config_change:
         cell = dataclasses.replace(cell, allow_config_change=True)
-    grid_file = grid_path(args, cell)
+    model_file = model_path(args, cell)
+    grid_file = grid_path(args, cell, model_file)
     points = read_points(args.points)
     grid = None if grid_file is None else GridModel.from_measurements(grid_file)
     robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
-    program = build_program(points, cell, robot, grid)
+    model = None
+    if model_file is not None:
+        model = load_robot(model_file)
+        check_same_robot(model, robot, os.fspath(model_file))
+        if np.array_equal(model.flange_T_tool, np.eye(4)):  # no TCP in the file: the cell's
+            model = model.with_tool(cell.flange_T_tool)
+    program = build_program(points, cell, robot, grid, model)
     for warning in program.warnings:
         print(f"accugrid {command}: warning: {warning}", file=sys.stderr)
     largest, hole = program.largest_correction()
     inputs = [input_line("points", args.points, file_sha256(args.points))]
     inputs.append(input_line("cell", args.cell, cell.sha256))
-    if grid is None:
+    details = []
+    if model_file is not None:
+        sha = file_sha256(model_file) if model_file.is_file() else "built-in"
+        inputs.append(input_line("model", model_file, sha))
+        residual = "" if grid is None else " and the residual grid"
+        details.append(f"corrected by model {model.name}{residual}")
+    if grid is None and model is None:
         details = ["grid none (--no-correction): positions are not corrected"]
-    else:
+    elif grid is not None:
         inputs += grid_lines(Path(grid_file).name, grid.source_sha256, grid.step)
-        details = []
     where = f" at hole {points.ids[hole]}" if hole is not None else ""
     header = header_lines(command, inputs, details, largest, where, [f"holes {len(program)}"])
     inputs = [Path(args.points), Path(args.cell)] + ([grid_file] if grid_file else [])
+    inputs += [model_file] if model_file is not None and model_file.is_file() else []
     return Job(program, header, inputs)
 
 

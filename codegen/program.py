@@ -15,6 +15,11 @@ weighting over the 8 vertices of a cell jumps where the positions straddle a cel
 the example grid's Y = 0 plane). One vector per hole keeps the axis straight and the hole where
 the grid says. Orientation is not corrected.
 
+With a calibrated model (``correction.model``, ``--model``) the vector is P' - P of
+``compensation.model_correction`` at the hole point and its own orientation (the controller's
+IK with the cell's tool in the program's Status, the calibrated arm's FK), plus the grid as the
+residual after the model when one is given.
+
 Every corrected pose goes through IK: unreachable or out-of-limit poses are InputErrors naming
 the hole; |A5| below ``configuration.singular_a5`` is a warning. The KUKA Status/Turn is the
 cell's, or the first hole's IK solution, and stays the same for the whole program unless
@@ -33,6 +38,7 @@ from accugrid.codegen.cell import Cell
 from accugrid.codegen.points import Points
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation.grid import GridModel
+from accugrid.compensation.model_correction import model_correct, residual_grid
 from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import (
@@ -44,6 +50,7 @@ from accugrid.kinematics.frames import (
     too_tilted,
 )
 from accugrid.kinematics.model import RobotModel
+from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.units import mm_text
 
 __all__ = [
@@ -115,10 +122,15 @@ class Program:
 
 
 def build_program(
-    points: Points, cell: Cell, robot: RobotModel, grid: GridModel | None = None
+    points: Points,
+    cell: Cell,
+    robot: RobotModel,
+    grid: GridModel | None = None,
+    model: Robot | None = None,
 ) -> Program:
     """Corrected, IK-checked program for ``points`` in ``cell`` (``grid``: None for no
-    correction; ``robot`` with the cell's tool)."""
+    correction; ``robot`` with the cell's tool; ``model``: a calibrated Robot, then ``grid`` is
+    the measured grid whose residual after the model is added, or None)."""
     n = len(points)
     if n == 0:
         raise InputError("no drilling points in the file", points.path)
@@ -143,7 +155,11 @@ def build_program(
     base_rot = cell.robot_T_base[:3, :3]
     holes_robot = points.xyz @ base_rot.T + cell.robot_T_base[:3, 3]
     warnings: list[str] = []
-    if grid is None:
+    if model is not None:
+        correction, warnings = _model_correction(
+            points, cell, robot, model, grid, holes_robot, base_rot @ rotations
+        )
+    elif grid is None:
         correction = np.zeros((n, 3))
     else:
         correction, warnings = _correction(points, cell, grid, holes_robot, base_rot @ rotations)
@@ -160,7 +176,7 @@ def build_program(
         depth_mm=depth,
         configuration=Configuration.from_kuka(status, turn),
         warnings=warnings + ik_warnings,
-        corrected=grid is not None,
+        corrected=grid is not None or model is not None,
     )
 
 
@@ -205,6 +221,64 @@ def _correction(
             *points.table.where(worst),
         )
     return found.correction, _orientation_warnings(points, grid, found.angle)
+
+
+def _model_correction(
+    points: Points,
+    cell: Cell,
+    robot: RobotModel,
+    model: Robot,
+    grid: GridModel | None,
+    holes_robot: np.ndarray,
+    rotations: np.ndarray,
+) -> tuple[np.ndarray, list[str]]:
+    """P' - P (N, 3) robot frame by the calibrated ``model`` (+ the residual of the measured
+    ``grid`` after the model) and the warnings; InputError naming holes the controller cannot
+    reach or that do not converge, and as ``_correction`` for the residual grid. rotations
+    (N, 3, 3) robot frame."""
+    status = cell.status
+    if status is None:
+        first = robot.ik(_poses(holes_robot[:1], rotations[:1]), turn=cell.turn)
+        status = int(first.status[0]) if first.ok[0] else None
+    warnings: list[str] = []
+    if grid is not None:
+        grid = residual_grid(model, grid, status, controller_tool=cell.flange_T_tool)
+        warnings = _correction(points, cell, grid, holes_robot, rotations)[1]
+    result = model_correct(
+        model,
+        holes_robot,
+        matrix_to_abc(rotations),
+        status,
+        grid,
+        cell.correction,
+        controller_tool=cell.flange_T_tool,
+    )
+    if not result.ok.all():
+        bad = result.failed
+        i = int(bad[0])
+        more = f"; {bad.size - 1} more hole(s)" if bad.size > 1 else ""
+        raise InputError(
+            f"{points.name(i)}: not corrected by model {model.name} in Status {status}: "
+            f"{result.reason[i]}{more}",
+            *points.table.where(i),
+        )
+    correction = result.command - holes_robot
+    length = np.linalg.norm(correction, axis=1)
+    limit = cell.correction.max_correction_mm
+    if limit is not None and (length > limit).any():
+        worst = int(np.argmax(length))
+        raise InputError(
+            f"{points.name(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
+            f"limit of {limit:g} mm; check the model and the base frame",
+            *points.table.where(worst),
+        )
+    return correction, warnings
+
+
+def _poses(positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
+    poses = np.tile(np.eye(4), (len(positions), 1, 1))
+    poses[:, :3, :3], poses[:, :3, 3] = rotations, positions
+    return poses
 
 
 def _orientation_warnings(points: Points, grid: GridModel, angle: np.ndarray | None) -> list[str]:

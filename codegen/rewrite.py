@@ -27,7 +27,7 @@ from accugrid.compensation.settings import CorrectionSettings
 from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
+from accugrid.kinematics.frames import abc_to_matrix
 
 __all__ = [
     "ORIENTATION_LIMIT_DEG",
@@ -35,12 +35,12 @@ __all__ = [
     "Options",
     "Result",
     "Row",
-    "check_orientation",
     "correct_points",
     "header_lines",
     "warning_lines",
     "outside_reason",
     "report_csv",
+    "rotations_of",
     "strict_check",
 ]
 
@@ -107,43 +107,67 @@ class Result:
         return best, where
 
 
-def correct_points(points_robot: np.ndarray, opts: Options) -> tuple[np.ndarray, np.ndarray]:
-    """(inside (N,) bool, corrected robot-frame points (N,3); NaN rows outside)."""
+def correct_points(
+    points_robot: np.ndarray,
+    rows: list[Row],
+    opts: Options,
+    rotations: np.ndarray | None = None,
+    mark: bool = True,
+) -> np.ndarray:
+    """Correct robot-frame points (N, 3) mm with one ``GridModel.check``; (N, 3) commands, NaN
+    rows where a point is not corrected.
+
+    ``rows`` (N,): the report row of each point (an error names its file and line).
+    ``rotations`` (N, 3, 3): each point's orientation, robot frame (NaN rows: none). With
+    ``mark``, rows outside the grid get status "outside", rows beyond ``orientation_limit``
+    (``accugrid correct``'s rule) stay "skipped" with the angle as the reason (unless
+    ``allow_orientation``), rows beyond ``orientation_tol`` a ``flag:`` reason. InputError at the
+    row when a correction to be written is longer than the safety limit."""
     out = np.full_like(points_robot, np.nan)
     if not len(points_robot):
-        return np.zeros(0, bool), out
-    inside = opts.model.contains(points_robot)
-    if inside.any():
-        out[inside] = opts.model.correct(points_robot[inside], opts.correction)
-    return inside, out
+        return out
+    found = opts.model.check(points_robot, opts.correction, rotations=rotations)
+    use = np.ones(len(points_robot), bool)
+    use[found.outside] = False
+    if mark:
+        for i in found.outside.tolist():
+            rows[i].status, rows[i].reason = "outside", outside_reason(points_robot[i])
+        if found.angle is not None:
+            use &= ~_orientation(found.angle, rows, opts)
+    too_long = [i for i in found.too_long.tolist() if use[i]]
+    if too_long:
+        i = max(too_long, key=lambda k: found.length[k])
+        raise InputError(
+            f"{rows[i].name}: correction of {found.length[i]:.3f} mm exceeds the safety limit of "
+            f"{opts.correction.max_correction_mm:g} mm; refusing the whole job (check the grid)",
+            rows[i].file,
+            rows[i].line,
+        )
+    out[use] = found.command[use]
+    return out
 
 
-def check_orientation(
-    robot_rot: np.ndarray, abc: np.ndarray, rows: list[Row], opts: Options
-) -> np.ndarray:
-    """Compare each position's orientation with the grid's (``accugrid correct``'s rule).
-
-    ``robot_rot`` (N, 3, 3): the frame each position is written in (robot_T_base rotation);
-    ``abc`` (N, 3) deg: its A, B, C as written (NaN rows: no orientation, not checked). A row
-    beyond ``orientation_limit`` is skipped with the reason (unless ``allow_orientation``), one
-    beyond ``orientation_tol`` flagged in its reason. Returns the (N,) bool of rows to correct."""
-    keep = np.ones(len(rows), bool)
-    ref = opts.model.orientation_abc
-    known = np.flatnonzero(np.isfinite(abc).all(axis=1))
-    if ref is None or not known.size:
-        return keep
-    angle = rotation_angle_deg(robot_rot[known] @ abc_to_matrix(abc[known]), abc_to_matrix(ref))
-    grid = ", ".join(fixed(v) for v in ref)
-    for i, a in zip(known.tolist(), angle.tolist(), strict=True):
+def _orientation(angle: np.ndarray, rows: list[Row], opts: Options) -> np.ndarray:
+    """Rows (N,) beyond the orientation limit (reasons set), flags for those beyond the tol."""
+    grid = ", ".join(fixed(v) for v in opts.model.orientation_abc)
+    skip = np.zeros(len(rows), bool)
+    for i in np.flatnonzero(angle > opts.orientation_tol).tolist():
+        a = float(angle[i])
         if a > opts.orientation_limit and not opts.allow_orientation:
-            keep[i] = False
+            skip[i] = True
             rows[i].reason = (
                 f"orientation {a:.1f} deg from the grid's ({grid}), more than "
                 f"--orientation-limit {opts.orientation_limit:g}: the grid does not hold there"
             )
-        elif a > opts.orientation_tol:
+        else:
             rows[i].reason = f"flag: orientation {a:.1f} deg from the grid's ({grid})"
-    return keep
+    return skip
+
+
+def rotations_of(frames: np.ndarray, abc: np.ndarray) -> np.ndarray:
+    """Robot-frame orientations (N, 3, 3) of A, B, C (N, 3) deg written in frames (N, 3, 3) or
+    one (3, 3); NaN rows where a position gives no orientation."""
+    return frames @ abc_to_matrix(abc)
 
 
 def warning_lines(result: Result, opts: Options) -> list[str]:

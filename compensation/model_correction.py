@@ -29,7 +29,14 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.robot import Robot
 
-__all__ = ["MAX_ITERATIONS", "TOL_MM", "ModelCorrection", "model_correct", "residual_grid"]
+__all__ = [
+    "MAX_ITERATIONS",
+    "TOL_MM",
+    "ModelCorrection",
+    "model_correct",
+    "reached_by_model",
+    "residual_grid",
+]
 
 TOL_MM = 1e-3  # default: |P - reach(P')| below 0.001 mm
 MAX_ITERATIONS = 12
@@ -52,16 +59,23 @@ class ModelCorrection:
 
 
 def reached_by_model(
-    calibrated: Robot, commands: np.ndarray, rotations: np.ndarray, status: int | None
+    calibrated: Robot,
+    commands: np.ndarray,
+    rotations: np.ndarray,
+    status: int | None,
+    controller_tool: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Where the calibrated arm puts the TCP for commands (N, 3) mm at rotations (N, 3, 3) under
     the nominal controller in KUKA ``status``: (positions (N, 3) mm, NaN where the nominal IK
-    fails; ok (N,); reason (N,))."""
+    fails; ok (N,); reason (N,)). The controller solves with ``controller_tool`` (flange_T_tool
+    (4, 4) mm, its TOOL_DATA; default: the calibrated TCP, i.e. a controller given the
+    identified TCP); the arm's TCP is the calibrated one."""
     poses = np.zeros((len(commands), 4, 4))
     poses[:, :3, :3] = rotations
     poses[:, :3, 3] = commands
     poses[:, 3, 3] = 1.0
-    sol = calibrated.ik(poses, status=status)
+    controller = calibrated if controller_tool is None else calibrated.with_tool(controller_tool)
+    sol = controller.ik(poses, status=status)
     true = calibrated.true_robot() or calibrated
     out = np.full((len(commands), 3), np.nan)
     if sol.ok.any():
@@ -78,6 +92,7 @@ def model_correct(
     settings: CorrectionSettings | None = None,
     tol_mm: float = TOL_MM,
     max_iterations: int = MAX_ITERATIONS,
+    controller_tool: np.ndarray | None = None,
 ) -> ModelCorrection:
     """Commands P' (N, 3) mm for targets P (N, 3) mm (robot frame) at KUKA A, B, C ``abc_deg``
     ((N, 3) or (3,) deg) in one KUKA ``status`` (None: the IK default per point).
@@ -85,7 +100,7 @@ def model_correct(
     ``grid``: a residual grid (``residual_grid``) added as r(P), interpolated with ``settings``
     (method, power, outside rule; default ``CorrectionSettings()``). Unreachable targets and
     targets that do not converge within ``max_iterations`` are ``ok = False`` with the reason,
-    vectorized over N.
+    vectorized over N. ``controller_tool``: the controller's TOOL_DATA, as ``reached_by_model``.
     """
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     n = len(points)
@@ -105,7 +120,7 @@ def model_correct(
     while active.size and passes < max_iterations:
         passes += 1
         reach, reached, why = reached_by_model(
-            calibrated, command[active], rotations[active], status
+            calibrated, command[active], rotations[active], status, controller_tool
         )
         reason[active[~reached]] = why[~reached]
         active, reach = active[reached], reach[reached]
@@ -123,21 +138,26 @@ def model_correct(
 
 def residual_grid(
     calibrated: Robot,
-    measurements: str | os.PathLike[str] | tuple,
+    measurements: str | os.PathLike[str] | tuple | GridModel,
     status: int | None,
     abc_deg: np.ndarray | None = None,
     repeat_tol_mm: float | None = None,
+    controller_tool: np.ndarray | None = None,
 ) -> GridModel:
     """The grid of what the calibrated model leaves: at each vertex P_v the measured error
     P_v - M minus the model's P_v - reach(P_v), i.e. r = reach(P_v) - M (mm).
 
     ``measurements``: a measurement CSV path or (commanded, measured[, abc]) arrays, as for
-    ``GridModel.from_measurements``; the vertices are reached at the measurement's a,b,c
-    (``abc_deg`` when the file has none) in KUKA ``status``. InputError naming the first vertex
-    the nominal controller cannot reach.
+    ``GridModel.from_measurements``, or the measured GridModel itself; the vertices are reached
+    at the measurement's a,b,c (``abc_deg`` when it has none) in KUKA ``status`` by a controller
+    with ``controller_tool`` (as ``reached_by_model``). InputError naming the first vertex the
+    nominal controller cannot reach.
     """
-    kwargs = {} if repeat_tol_mm is None else {"repeat_tol_mm": repeat_tol_mm}
-    measured = GridModel.from_measurements(measurements, **kwargs)
+    if isinstance(measurements, GridModel):
+        measured = measurements
+    else:
+        kwargs = {} if repeat_tol_mm is None else {"repeat_tol_mm": repeat_tol_mm}
+        measured = GridModel.from_measurements(measurements, **kwargs)
     abc = measured.orientation_abc if measured.orientation_abc is not None else abc_deg
     if abc is None:
         raise InputError(
@@ -146,7 +166,7 @@ def residual_grid(
         )
     vertices = measured.vertices().reshape(-1, 3)
     rotations = np.broadcast_to(abc_to_matrix(np.asarray(abc, dtype=float)), (len(vertices), 3, 3))
-    reach, ok, why = reached_by_model(calibrated, vertices, rotations, status)
+    reach, ok, why = reached_by_model(calibrated, vertices, rotations, status, controller_tool)
     if not ok.all():
         i = int(np.flatnonzero(~ok)[0])
         x, y, z = vertices[i]

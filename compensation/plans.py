@@ -5,9 +5,13 @@
   (N - 1) * step, the shortest possible for N vertices spaced one step apart.
 - Experiment plan (seed Sec. 4.2 / 5): for every centre and every step, the cube's 8 vertices
   C1..C8 and its 9 test points P1..P9 (compensation.cube_points), measured ``repeats`` times.
+- Identification plan: the poses of a kinematic identification, chosen D-optimally
+  (``kinematics.identification.select_poses``) from random candidates in a region at
+  orientations within a tilt of the drilling orientation, reachable in one Status.
 
-A plan is a list of commanded positions (robot frame, mm) at one fixed orientation (KUKA ABC deg)
-with an id per row and, for experiments, the centre name, step, label and repeat of each row.
+A plan is a list of commanded positions (robot frame, mm) at one fixed orientation (KUKA ABC deg;
+an identification plan has one per row) with an id per row and, for experiments, the centre
+name, step, label and repeat of each row.
 """
 
 from __future__ import annotations
@@ -62,13 +66,15 @@ SEED_REPEATS = 5
 SEED_REGION = ((1200.0, -600.0, 1100.0), (2200.0, 600.0, 2100.0))
 
 PLAN_COLUMNS = ("id", "x", "y", "z", "a", "b", "c")
+MIN_A5_DEG = 10.0  # identification poses keep |A5| at least this far from the wrist singularity
 MEAS_COLUMNS = ("x_meas", "y_meas", "z_meas")
 
 
 @dataclass
 class Plan:
-    """Commanded positions in measuring order: points (N, 3) mm, abc (3,) deg, ids (N,) and
-    optional extra columns (name -> N strings) written between c and x_meas."""
+    """Commanded positions in measuring order: points (N, 3) mm, abc (3,) deg (or (N, 3), one
+    per row), ids (N,) and optional extra columns (name -> N strings) written between c and
+    x_meas."""
 
     points: np.ndarray
     abc: np.ndarray
@@ -79,16 +85,20 @@ class Plan:
         """Straight-line travel between consecutive positions, mm."""
         return path_length(self.points)
 
+    def abc_rows(self) -> np.ndarray:
+        """The orientation of every row, (N, 3) KUKA deg."""
+        return np.broadcast_to(np.asarray(self.abc, dtype=float), (len(self.points), 3))
+
     def csv_text(self) -> str:
         """The plan as CSV: id,x,y,z,a,b,c, extra columns, then empty x_meas,y_meas,z_meas for
         the operator to fill in. Numbers with 4 decimals (DESIGN.md measurement format)."""
         header = list(PLAN_COLUMNS) + list(self.extra) + list(MEAS_COLUMNS)
-        abc = ",".join(f"{v:.4f}" for v in self.abc)
         xyz = [f"{x:.4f},{y:.4f},{z:.4f}" for x, y, z in self.points]
+        abc = [f"{a:.4f},{b:.4f},{c:.4f}" for a, b, c in self.abc_rows()]
         lines = [",".join(header)]
         for i, ident in enumerate(self.ids):
             extra = "".join("," + col[i] for col in self.extra.values())
-            lines.append(f"{ident},{xyz[i]},{abc}{extra},,,")
+            lines.append(f"{ident},{xyz[i]},{abc[i]}{extra},,,")
         return "\n".join(lines) + "\n"
 
 
@@ -172,20 +182,25 @@ def _abc(abc) -> np.ndarray:
     return abc
 
 
+def _nearest_neighbour_order(points: np.ndarray) -> np.ndarray:
+    """A short visiting order of points (N, 3): from the first, always the nearest unvisited."""
+    order, left = [0], np.ones(len(points), dtype=bool)
+    left[0] = False
+    for _ in range(len(points) - 1):
+        distance = np.linalg.norm(points - points[order[-1]], axis=1)
+        distance[~left] = np.inf
+        order.append(int(np.argmin(distance)))
+        left[order[-1]] = False
+    return np.array(order)
+
+
 def _cube_order() -> np.ndarray:
     """A short visiting order of the 17 points of a cube (C1..C8 then P1..P9 as indices 0..16):
     nearest-neighbour tour from C1 on the unit cube; the same for every cube (shapes scale)."""
     pts = np.concatenate(
         [cube_vertices(np.zeros((1, 3)), 1.0)[0], cube_test_points(np.zeros((1, 3)), 1.0)[0]]
     )
-    order, left = [0], set(range(1, len(pts)))
-    while left:
-        cand = np.array(sorted(left))
-        dist = np.linalg.norm(pts[cand] - pts[order[-1]], axis=1)
-        nxt = int(cand[np.argmin(dist)])
-        order.append(nxt)
-        left.remove(nxt)
-    return np.array(order)
+    return _nearest_neighbour_order(pts)
 
 
 CUBE_LABELS = VERTEX_LABELS + TEST_LABELS
@@ -251,3 +266,68 @@ def experiment_plan(
 def cube_plan(centre, step_mm: float, repeats: int, abc, name: str = "CUBE") -> Plan:
     """One cube's 8 vertices and 9 test points (an experiment with one centre and one step)."""
     return experiment_plan({name: tuple(np.asarray(centre, dtype=float))}, [step_mm], repeats, abc)
+
+
+def identification_plan(
+    robot,
+    lo,
+    hi,
+    count: int,
+    tilt_deg: float,
+    abc,
+    status: int,
+    candidates: int = 2000,
+    repeats: int = 1,
+    seed: int = 0,
+    min_a5_deg: float = MIN_A5_DEG,
+) -> tuple[Plan, float, int]:
+    """``count`` poses for ``accugrid identify``: ``candidates`` random positions in the box
+    lo..hi (mm) at random orientations within ``tilt_deg`` (rotation angle) of ``abc`` (deg),
+    kept where the nominal IK in KUKA ``status`` is within the joint limits and |A5| >=
+    ``min_a5_deg`` (away from the wrist singularity), then the D-optimal ``count`` of them,
+    visited in a nearest-neighbour order, ``repeats`` rounds. Column ``s`` holds the Status.
+    Returns (plan, O1 of the chosen set, number of usable candidates)."""
+    from scipy.spatial.transform import Rotation
+
+    from accugrid.kinematics.frames import xyzabc_from_pose
+    from accugrid.kinematics.identification import select_poses
+
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    if not np.all(lo < hi):
+        raise InputError("the region's minimum must be below its maximum on every axis")
+    if not 0.0 <= tilt_deg <= 90.0:
+        raise InputError(f"--tilt must be 0..90 deg, got {tilt_deg:g}")
+    if repeats < 1 or candidates < count:
+        raise InputError(f"need repeats >= 1 and candidates >= count, got {repeats}, {candidates}")
+    rng = np.random.default_rng(seed)
+    points = lo + rng.random((candidates, 3)) * (hi - lo)
+    direction = rng.normal(size=(candidates, 3))
+    direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+    angle = np.radians(tilt_deg) * np.cbrt(rng.random(candidates))  # uniform in the ball
+    tilt = Rotation.from_rotvec(direction * angle[:, None])
+    rotation = Rotation.from_euler("ZYX", _abc(abc), degrees=True) * tilt  # about tool axes
+    poses = np.tile(np.eye(4), (candidates, 1, 1))
+    poses[:, :3, :3], poses[:, :3, 3] = rotation.as_matrix(), points
+    sol = robot.ik(poses, status=status)
+    usable = np.flatnonzero(sol.ok & (np.abs(sol.q[:, 4]) >= np.radians(min_a5_deg)))
+    if len(usable) < count:
+        raise InputError(
+            f"only {len(usable)} of {candidates} candidate poses are reachable in Status "
+            f"{status} with |A5| >= {min_a5_deg:g} deg; need {count}: move or enlarge the "
+            "region, change the tilt or lower the count"
+        )
+    chosen, o1 = select_poses(robot, sol.q[usable], count)
+    rows = usable[chosen][_nearest_neighbour_order(points[usable[chosen]])]
+    xyzabc = xyzabc_from_pose(poses[rows])
+    ids = [
+        f"I{k + 1}" + (f"_R{r + 1}" if repeats > 1 else "")
+        for r in range(repeats)
+        for k in range(count)
+    ]
+    plan = Plan(
+        np.tile(xyzabc[:, :3], (repeats, 1)),
+        np.tile(xyzabc[:, 3:], (repeats, 1)),
+        ids,
+        {"s": [str(int(status))] * (count * repeats)},
+    )
+    return plan, o1, len(usable)

@@ -33,7 +33,7 @@ import numpy as np
 from accugrid.kinematics.dh import PARAMETERS, flange_poses
 from accugrid.kinematics.error_model import error_jacobian
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import abc_to_matrix
+from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
 from accugrid.kinematics.joint_errors import JointErrors
 from accugrid.kinematics.robot import Robot
 
@@ -43,10 +43,10 @@ __all__ = [
     "CrossValidation",
     "Identification",
     "PoseSet",
-    "cross_validate",
     "identification_jacobian",
     "identify",
     "parameter_names",
+    "parameter_units",
     "pose_set",
     "select_poses",
 ]
@@ -106,19 +106,6 @@ class PoseSet:
     def poses(self) -> int:
         """Number of distinct commanded poses."""
         return int(self.group.max()) + 1 if len(self.group) else 0
-
-    def subset(self, rows: np.ndarray) -> PoseSet:
-        """The rows ``rows`` (index array) with their groups renumbered."""
-        _, group = np.unique(self.group[rows], return_inverse=True)
-        return PoseSet(
-            self.q[rows],
-            self.measured[rows],
-            group,
-            self.commanded[rows],
-            self.rotations[rows],
-            tuple(self.labels[r] for r in rows),
-            self.path,
-        )
 
 
 def pose_set(
@@ -320,7 +307,7 @@ class Identification:
     singular_values: np.ndarray  # (n,) of the column-scaled Jacobian, descending
     rank: int
     condition_number: float
-    o1: float  # Sun & Hollerbach O1 of the identifiable part
+    o1: float  # Sun & Hollerbach O1 = (σ1 … σL)^(1/L) / √m of the identifiable part, m rows
     residuals: np.ndarray  # (N, 3) measured − model, mm
     sigma_mm: float  # robust residual sigma per axis (MAD)
     outliers: list[str]  # labels of rows beyond OUTLIER_SIGMA
@@ -459,7 +446,7 @@ def identify(
         correction[:3, :3] = Rotation.from_rotvec(x[30:33]).as_matrix()
         correction[:3, 3] = x[27:30]
         tracker = base_T0 @ correction
-    cv = cross_validate(model, sub, data, target, folds) if folds else None
+    cv = _cross_validate(model, sub, data, target, folds) if folds else None
     arm = model.arm(x)
     calibrated = Robot(
         f"{robot.name}-calibrated",
@@ -481,7 +468,7 @@ def identify(
         singular_values=sub.singular,
         rank=rank,
         condition_number=float(kept[0] / kept[-1]),
-        o1=float(np.exp(np.mean(np.log(kept))) / np.sqrt(data.poses)),
+        o1=float(np.exp(np.mean(np.log(kept))) / np.sqrt(rows)),  # m: measured rows
         residuals=residuals,
         sigma_mm=sigma,
         outliers=outliers,
@@ -516,7 +503,7 @@ def _fit(model: _Model, sub: _Subspace, q: np.ndarray, target: np.ndarray):
     return directions @ z, residuals, sigma
 
 
-def cross_validate(model: _Model, sub: _Subspace, data: PoseSet, target, folds: int):
+def _cross_validate(model: _Model, sub: _Subspace, data: PoseSet, target, folds: int):
     """k-fold over the distinct poses (repeats stay together), fitted in the identifiable
     subspace of all data: the held-out residuals' RMS and max per axis (``CrossValidation``)."""
     if folds < 2 or folds > data.poses:
@@ -567,9 +554,10 @@ def _check_geometry(data: PoseSet) -> None:
             "directions",
             data.path,
         )
-    relative = np.einsum("ji,njk->nik", data.rotations[first[0]], data.rotations[first])
-    cos = np.clip((np.trace(relative, axis1=1, axis2=2) - 1) / 2, -1.0, 1.0)
-    if np.degrees(np.arccos(cos)).max() < ONE_ORIENTATION_DEG:
+    if (
+        rotation_angle_deg(data.rotations[first], data.rotations[first[0]]).max()
+        < ONE_ORIENTATION_DEG
+    ):
         raise InputError(
             f"all {len(first)} commanded poses have one orientation (within "
             f"{ONE_ORIENTATION_DEG:g} deg): the TCP offset cannot be told from the arm; "

@@ -19,6 +19,7 @@ __all__ = [
     "grid_status",
     "reached_positions",
     "simulate_measurements",
+    "simulate_pose_measurements",
 ]
 
 
@@ -104,15 +105,54 @@ def simulate_measurements(
     ``noise_tracker_mm`` per axis), drawn in that order from ``numpy.random.default_rng(seed)``.
     ``status``: as ``reached_positions`` (one KUKA Status for all points).
     """
+    _check_session(repeats, noise_tracker_mm, noise_repeat_mm)
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    reached = reached_positions(robot, points, abc_deg, status)
+    commanded = np.repeat(points, repeats, axis=0)
+    return commanded, _measured(reached, repeats, noise_tracker_mm, noise_repeat_mm, seed)
+
+
+def _check_session(repeats: int, noise_tracker_mm: float, noise_repeat_mm: float) -> None:
     if repeats < 1:
         raise InputError(f"repeats must be at least 1, got {repeats}")
     if noise_tracker_mm < 0 or noise_repeat_mm < 0:
         raise InputError("noise must not be negative")
-    points = np.asarray(points, dtype=float).reshape(-1, 3)
-    reached = reached_positions(robot, points, abc_deg, status)
-    commanded = np.repeat(points, repeats, axis=0)
+
+
+def _measured(
+    reached: np.ndarray, repeats: int, noise_tracker_mm: float, noise_repeat_mm: float, seed: int
+) -> np.ndarray:
+    """Reached positions (N, 3) mm, each repeated ``repeats`` times in consecutive rows, plus
+    repeatability then tracker noise from ``numpy.random.default_rng(seed)``."""
     measured = np.repeat(reached, repeats, axis=0)
     rng = np.random.default_rng(seed)
     measured = measured + rng.normal(0.0, noise_repeat_mm, measured.shape)
-    measured = measured + rng.normal(0.0, noise_tracker_mm, measured.shape)
-    return commanded, measured
+    return measured + rng.normal(0.0, noise_tracker_mm, measured.shape)
+
+
+def simulate_pose_measurements(
+    robot: RobotModel,
+    poses: np.ndarray,
+    status: int | np.ndarray | None = None,
+    repeats: int = 1,
+    noise_tracker_mm: float = 0.0,
+    noise_repeat_mm: float = 0.0,
+    seed: int = 0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """A simulated tracker session at TCP poses (N, 4, 4) mm of any orientation (identification
+    poses): the controller's joints (N, 6) rad (nominal IK in ``status``: one int, (N,) ints or
+    None for the IK default per pose) and the measured positions (N * repeats, 3) mm, noise as
+    ``simulate_measurements``. InputError naming the first pose (0-based) the IK cannot reach."""
+    _check_session(repeats, noise_tracker_mm, noise_repeat_mm)
+    poses = np.asarray(poses, dtype=float).reshape(-1, 4, 4)
+    sol = robot.ik(poses, status=status)
+    bad = np.flatnonzero(~sol.ok)
+    if bad.size:
+        raise InputError(
+            f"{bad.size} of {len(poses)} poses cannot be reached by {robot.name}"
+            + ("" if status is None else " in their Status")
+            + f"; first: pose {bad[0]} ({sol.reason[bad[0]]})"
+        )
+    true = robot.true_robot() or robot
+    reached = true.fk(sol.q)[:, :3, 3]
+    return sol.q, _measured(reached, repeats, noise_tracker_mm, noise_repeat_mm, seed)

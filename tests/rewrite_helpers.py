@@ -18,6 +18,8 @@ def error_field(points: np.ndarray, field: str) -> np.ndarray:
     """e(P) (N, 3) mm."""
     if field == "constant":
         return np.tile(E_CONST, (len(points), 1))
+    if field == "too_long":  # beyond the default 5 mm safety limit
+        return np.tile([6.0, 0.0, 0.0], (len(points), 1))
     x, y, z = points.T
     return np.stack([0.2 + 1e-4 * x, -0.1 + 2e-4 * z, 0.3 - 1e-4 * y], axis=1)
 

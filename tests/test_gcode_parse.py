@@ -86,3 +86,37 @@ def test_the_gcode_dialect_does_not_import_krl():
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "[]"
+
+
+def test_a_number_beyond_the_float_range_is_located():
+    with pytest.raises(InputError) as err:
+        parse_gcode("G0 X1 Y1 Z1\nG1 X" + "9" * 320 + " Y1\n", "big.ngc")
+    assert (err.value.line, err.value.column) == (2, 5) and "out of range" in str(err.value)
+
+
+def test_a_byte_order_mark_is_not_a_word():
+    body = "G21 G90\nG0 X1 Y2 Z3\n"
+    plain = parse_gcode(body)
+    for bom in ("\xef\xbb\xbf", "\ufeff"):  # as latin-1 (rewrite reads bytes), or decoded
+        moves = parse_gcode(bom + body)
+        assert [m.target for m in moves] == [m.target for m in plain]
+        assert moves[0].words["X"].start == plain[0].words["X"].start + len(bom)
+
+
+@pytest.mark.parametrize(
+    ("line", "target"),
+    [
+        ("G0 X1 (a) Y2 (b; c) Z3 ; d (e\n", (1.0, 2.0, 3.0)),
+        ("G0 (a)(b)X1(c)Y2 Z3()\n", (1.0, 2.0, 3.0)),
+        ("G0 X1 Y2 Z3 (((nested opening)\n", (1.0, 2.0, 3.0)),
+    ],
+)
+def test_comments_anywhere_in_a_line(line, target):
+    (move,) = parse_gcode(line)
+    assert move.target == target
+
+
+def test_a_closing_parenthesis_without_an_opening_one_is_located():
+    with pytest.raises(InputError) as err:
+        parse_gcode("G0 X1 (a) Y2) Z3\n")
+    assert err.value.column == 13 and "')' without '('" in str(err.value)

@@ -74,7 +74,8 @@ def test_any_regular_grid_is_found_whatever_the_row_order(rnd, repeats, counts, 
     rnd.shuffle(order)
     model = GridModel.from_measurements((commanded[order], measured[order]))
     np.testing.assert_array_equal(model.counts, counts)
-    np.testing.assert_allclose(model.step, step, atol=2e-4)
+    # a level's centre is off by at most the jitter, so a step between two levels by twice it
+    np.testing.assert_allclose(model.step, step, atol=4e-4)
     np.testing.assert_allclose(model.origin, origin, atol=2e-4)
     np.testing.assert_allclose(model.errors.reshape(-1, 3), error, atol=1e-9)
     assert model.orientation_abc is None and model.source_sha256 is None

@@ -2,9 +2,7 @@
 G-code readers, run as whole `accugrid` processes.
 
 The readers must be linear in their input: each case runs in a subprocess with a generous
-timeout that only guards against a hang (nothing here measures speed). Cases that still fail in
-the readers (owned by the rewrite work) are marked xfail with the reason, so they turn into
-passes when fixed.
+timeout that only guards against a hang (nothing here measures speed).
 """
 
 from __future__ import annotations
@@ -33,8 +31,6 @@ CASES = {
         "DEF A()\nBAS(#BASE," + "9" * 5000 + ")\n" + KRL_BODY + "END\n",
     ),
 }
-_DIGITS = "int() of 5000 digits in the KRL reader: internal error (exit 1)"
-OPEN = {"krl_bas_digits": _DIGITS, "krl_base_data_digits": _DIGITS}
 
 
 def rewrite(tmp_path, name: str, text: str, *extra: str) -> subprocess.CompletedProcess:
@@ -52,10 +48,7 @@ def rewrite(tmp_path, name: str, text: str, *extra: str) -> subprocess.Completed
     )
 
 
-@pytest.mark.parametrize(
-    "case",
-    [pytest.param(k, marks=pytest.mark.xfail(reason=OPEN[k])) if k in OPEN else k for k in CASES],
-)
+@pytest.mark.parametrize("case", sorted(CASES))
 def test_hostile_programs_end_in_success_or_a_located_error(tmp_path, case):
     name, text = CASES[case]
     proc = rewrite(tmp_path, name, text)
@@ -65,7 +58,6 @@ def test_hostile_programs_end_in_success_or_a_located_error(tmp_path, case):
         assert f"{tmp_path / name}:" in line
 
 
-@pytest.mark.xfail(reason="item 14: the G-code reader reads the BOM as a word (rewrite's reader)")
 def test_a_gcode_file_with_a_bom_reads_like_one_without(tmp_path):
     body = "G21 G90\nG0 X1700 Y300 Z1000\n"
     for sub in ("plain", "bom"):
@@ -75,7 +67,6 @@ def test_a_gcode_file_with_a_bom_reads_like_one_without(tmp_path):
     assert plain.returncode == with_bom.returncode == 0, with_bom.stderr
 
 
-@pytest.mark.xfail(reason="item 9: GridModel says 'point N is not finite' without file and line")
 def test_a_non_finite_program_position_is_located(tmp_path):
     proc = rewrite(tmp_path, "a.ngc", "G21 G90\nG0 X10 Y10 Z5\nG1 X" + "9" * 320 + " Y1 Z1\n")
     assert proc.returncode == 2

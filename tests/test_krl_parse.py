@@ -229,3 +229,17 @@ def test_spline_inline_form_sets_its_own_base():
     assert scan.positions[0].base.number == 4
     assert "lbase" in scan.positions[1].base.reason
     assert "inherited" in scan.positions[2].base.reason  # WITH applies to its motion only
+
+
+def test_huge_literals_are_located_or_reported():
+    """Issue 12 item 6: 5,000 digits ended in an internal error (int() limit, float overflow)."""
+    with pytest.raises(InputError) as err:
+        scan_krl("DEF a( )\nLIN {X " + "9" * 400 + ",Y 1,Z 1}\nEND\n", "a.src")
+    assert (err.value.line, err.value.column) == (2, 8) and "out of range" in str(err.value)
+    scan = scan_krl(
+        "DEF a( )\nBAS(#BASE," + "9" * 5000 + ")\nLIN {X 1,Y 2,Z 3}\n"
+        "$BASE = BASE_DATA[" + "9" * 5000 + "]\nLIN {X 1,Y 2,Z 3}\nEND\n"
+    )
+    first, second = scan.positions
+    assert first.base.kind == "unknown" and "not a number" in first.base.reason
+    assert second.base.kind == "unknown" and "not a BASE_DATA number" in second.base.reason

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import io
+from pathlib import Path
 
 import numpy as np
 from hypothesis import given
@@ -13,7 +14,7 @@ from hypothesis.extra.numpy import arrays
 from accugrid.codegen.cli import main
 from accugrid.compensation.model_correction import model_correct, residual_grid
 from accugrid.compensation.settings import CorrectionSettings
-from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc
+from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
 
 CALIBRATED = load_robot("kr210-realistic")  # its true robot stands for the calibrated arm
@@ -188,3 +189,31 @@ def test_correct_cli_residual_grid_of_a_perfect_model_changes_nothing(tmp_path, 
     b = np.array([[float(r[k]) for k in keys] for r in _rows(both)])
     np.testing.assert_allclose(a, b, atol=3e-4, rtol=0)
     assert "orientation 11.2 deg from residual grid" in _rows(both)[1]["flag"]
+
+
+def test_correct_cli_drives_with_the_controllers_tool_not_the_identified_tcp(tmp_path, capsys):
+    # A calibrated file as identify writes it: the identified TCP in 'tool', the TOOL_DATA the
+    # controller used in identification.controller_tool. The controller solves with its own
+    # tool; the arm's TCP is the identified one.
+    robots = Path(__file__).resolve().parents[1] / "kinematics" / "robots"
+    text = (robots / "kr210-paper.yaml").read_text()
+    text += "tool: {x: 0.5, y: -0.3, z: 250.4, a: 0.0, b: 0.0, c: 0.0}\n"
+    text += "identification:\n  controller_tool: {x: 0.0, y: 0.0, z: 250.0, a: 0, b: 0, c: 0}\n"
+    model = tmp_path / "cal.yaml"
+    model.write_text(text)
+    points = tmp_path / "points.csv"
+    points.write_text("id,x,y,z,a,b,c\nH1,1500,100,1400,0,90,0\nH2,1800,-200,1300,10,80,0\n")
+    out = tmp_path / "out.csv"
+    argv = ["correct", str(points), "--model", str(model), "--status", "6", "-o", str(out)]
+    assert main(argv) == 0
+    rows = _rows(out)
+    command = np.array([[float(r[k]) for k in ("x_cmd", "y_cmd", "z_cmd")] for r in rows])
+    target = np.array([[float(r[k]) for k in "xyz"] for r in rows])
+    abc = np.array([[float(r[k]) for k in "abc"] for r in rows])
+    calibrated = load_robot(model)
+    controller = calibrated.with_tool(pose_from_xyzabc([0.0, 0.0, 250.0, 0.0, 0.0, 0.0]))
+    poses = np.tile(np.eye(4), (2, 1, 1))
+    poses[:, :3, :3], poses[:, :3, 3] = abc_to_matrix(abc), command
+    sol = controller.ik(poses, status=6)
+    landed = calibrated.true_robot().fk(sol.q)[:, :3, 3]
+    np.testing.assert_allclose(landed, target, atol=3e-4, rtol=0)

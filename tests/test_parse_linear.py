@@ -128,3 +128,30 @@ def test_gcode_fast_and_word_by_word_readers_agree(words, gcodes, lower):
     assert fast == slow
     for word in (w for w in fast.words.values() if w is not None):
         assert line[word.start - 7 : word.end - 7] == word.literal
+
+
+KEYS = ["X", "Y", "Z", "A", "B", "C", "E1", "S", "T"]
+
+
+@given(
+    items=st.lists(
+        st.tuples(
+            st.sampled_from(KEYS),
+            NUMBERS,
+            st.sampled_from(["", " ", "  "]),  # before the key
+            st.sampled_from([" ", "  ", "\t"]),  # between key and value
+            st.sampled_from(["", " "]),  # before the comma
+        ),
+        min_size=1,
+        max_size=9,
+        unique_by=lambda item: item[0],
+    )
+)
+def test_krl_flat_and_item_by_item_aggregate_readers_agree(items):
+    """A flat aggregate is read in one regex pass, one with a string or a nested aggregate item
+    by item: the same components must give the same numbers and spans either way."""
+    body = ",".join(f"{lead}{k}{gap}{v}{trail}" for k, v, lead, gap, trail in items)
+    flat = scan_krl("DECL E6POS P={" + body + "}\n").positions[0]
+    mixed = scan_krl("DECL E6POS P={" + body + ', NOTE "x"}\n').positions[0]
+    assert flat.numbers == mixed.numbers
+    assert {k: float(v) for k, v, *_ in items} == flat.values

@@ -450,3 +450,19 @@ def test_outputs_are_readable_by_others_under_umask_022(tmp_path, cell):
         os.umask(old)
     for path in (tmp_path / "o" / "job.src", tmp_path / "o" / "job.dat", tmp_path / "r"):
         assert stat.S_IMODE(path.stat().st_mode) == 0o644
+
+
+def test_a_correction_beyond_the_safety_limit_names_its_file_and_line(tmp_path, capsys):
+    """Issue 12 item 9: the refusal said 'correction ... at point 4' without file and line."""
+    cell = write_cell(tmp_path, field="too_long")
+    src = tmp_path / "far.src"
+    src.write_text(krl_src("LIN {X 1000.0,Y 0.0,Z 1000.0,A 0.0,B 90.0,C 0.0}"))
+    out = tmp_path / "o.src"
+    assert rewrite(src, "--cell", cell, "-o", out) == 2
+    err = capsys.readouterr().err.strip()
+    assert f"{src}:3:" in err and "exceeds the safety limit of 5 mm" in err
+    assert not out.exists()
+    ngc = tmp_path / "far.ngc"
+    ngc.write_text("G90\nG0 X1000 Y0 Z1000\n")
+    assert rewrite(ngc, "--cell", cell, "-o", tmp_path / "o.ngc") == 2
+    assert f"{ngc}:2:" in capsys.readouterr().err

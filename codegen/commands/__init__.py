@@ -10,9 +10,13 @@ __all__ = ["COMMANDS"]
 
 # NAME -> (module in this package, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
+    "compare": (
+        "compare",
+        "grid only vs model vs model + residual grid against the number of measured points",
+    ),
     "correct": (
         "correct",
-        "corrected points CSV: P' = P + e, e interpolated from a measured error grid",
+        "corrected points CSV: P' = P + e from a measured error grid and/or a calibrated model",
     ),
     "fit-frame": (
         "fit_frame",
@@ -32,7 +36,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "plan": (
         "plan",
-        "measurement plans: grid, one cube's ISO 9283 test points, or the seed's step experiment",
+        "measurement plans: grid, ISO 9283 cube, the seed's step experiment, identification poses",
     ),
     "rewrite": (
         "rewrite",
@@ -40,7 +44,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "simulate": (
         "simulate",
-        "simulate a laser-tracker grid measurement of a robot (measurement CSV, seed Fig. 3)",
+        "simulate a laser-tracker measurement of a robot: a grid (seed Fig. 3) or given poses",
     ),
     "study": (
         "study",

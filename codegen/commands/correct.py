@@ -22,7 +22,7 @@ import argparse
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets
-from accugrid.codegen.cli_options import add_abc, add_status
+from accugrid.codegen.cli_options import add_abc, add_status, add_tool
 from accugrid.codegen.corrected import (
     check_added_columns,
     check_orientation,
@@ -61,6 +61,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "first point)",
     )
     add_abc(parser, "with --model: orientation of points without a,b,c, reference for i,j,k axes")
+    add_tool(
+        parser,
+        "with --model: the controller's TOOL_DATA, mm and deg (default: the model file's "
+        "identification.controller_tool, else its identified TCP)",
+    )
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="CSV to write")
     parser.add_argument(
         "--method",

@@ -8,6 +8,10 @@
   experiment  the seed's step experiment (Sec. 4.2, 5): for every centre and step, the cube's 8
               vertices and 9 test points, --repeats rounds each (default: seed Table 3 centres
               D-H, steps 20..500 mm every 60, 5 repeats, A B C = 0 90 0).
+  identify    --count poses for `accugrid identify`: from --candidates random positions in
+              --region at orientations within --tilt deg of --abc, reachable in the Status with
+              |A5| >= 10 deg, the D-optimal set (greedy, most observable DH errors and TCP),
+              visited in nearest-neighbour order; a,b,c per row and column s (the Status).
 
 Outputs in DIR: NAME.csv (id,x,y,z,a,b,c[,centre,step,label,repeat],x_meas,y_meas,z_meas with
 the measured columns empty for the operator) and the KUKA KRL program NAME.src/NAME.dat that
@@ -40,10 +44,11 @@ from accugrid.compensation.plans import (
     cube_plan,
     experiment_plan,
     grid_plan,
+    identification_plan,
 )
 from accugrid.kinematics.configuration import solve_in_one_status
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.simulation import commanded_poses
+from accugrid.kinematics.frames import pose_from_xyzabc
 
 __all__ = [
     "MAX_WAIT_SEC",
@@ -66,16 +71,7 @@ MAX_WAIT_SEC = 600.0
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="kind", metavar="KIND", required=True)
     grid = sub.add_parser("grid", help="grid vertices over a region, serpentine order")
-    grid.add_argument(
-        "--region",
-        nargs=6,
-        type=float,
-        metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
-        default=[SEED_REGION[0][0], SEED_REGION[1][0], SEED_REGION[0][1], SEED_REGION[1][1]]
-        + [SEED_REGION[0][2], SEED_REGION[1][2]],
-        help="box in the robot frame, mm (default: the seed's 1000 x 1200 x 1000 mm region "
-        "placed at X 1200..2200, Y -600..600, Z 1100..2100)",
-    )
+    _add_region(grid)
     grid.add_argument(
         "--step",
         type=float,
@@ -101,8 +97,41 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     exp = sub.add_parser("experiment", help="the seed's step experiment (Sec. 4.2, 5)")
     add_experiment_arguments(exp)
-    for p in (grid, cube, exp):
+    ident = sub.add_parser("identify", help="D-optimal poses for a kinematic identification")
+    _add_region(ident)
+    ident.add_argument(
+        "--count", type=int, required=True, metavar="N", help="number of poses to measure"
+    )
+    ident.add_argument(
+        "--tilt",
+        type=float,
+        default=30.0,
+        metavar="DEG",
+        help="largest rotation from --abc, deg (default: 30)",
+    )
+    ident.add_argument(
+        "--candidates",
+        type=int,
+        default=2000,
+        help="random candidate poses to choose from (default: 2000)",
+    )
+    ident.add_argument("--repeats", type=int, default=1, help="rounds over the poses (default: 1)")
+    ident.add_argument("--seed", type=int, default=0, help="seed of the candidates (default: 0)")
+    for p in (grid, cube, exp, ident):
         _common(p)
+
+
+def _add_region(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--region",
+        nargs=6,
+        type=float,
+        metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
+        default=[SEED_REGION[0][0], SEED_REGION[1][0], SEED_REGION[0][1], SEED_REGION[1][1]]
+        + [SEED_REGION[0][2], SEED_REGION[1][2]],
+        help="box in the robot frame, mm (default: the seed's 1000 x 1200 x 1000 mm region "
+        "placed at X 1200..2200, Y -600..600, Z 1100..2100)",
+    )
 
 
 def add_experiment_arguments(parser: argparse.ArgumentParser) -> None:
@@ -255,6 +284,8 @@ def build_plan(args: argparse.Namespace) -> tuple[Plan, list[str]]:
                 [f"{i}_R{r + 1}" for r in range(args.repeats) for i in plan.ids],
             )
         return plan, info
+    if args.kind == "identify":
+        return _identification_plan(args)
     if args.kind == "cube":
         plan = cube_plan(args.centre, args.step, args.repeats, args.abc)
         return plan, [f"cube plan: 8 vertices + 9 test points x {args.repeats} repeats"]
@@ -269,12 +300,44 @@ def build_plan(args: argparse.Namespace) -> tuple[Plan, list[str]]:
     return plan, info
 
 
+def _identification_plan(args: argparse.Namespace) -> tuple[Plan, list[str]]:
+    r = args.region
+    lo, hi = (r[0], r[2], r[4]), (r[1], r[3], r[5])
+    robot = robot_with_tool(args.robot, args.tool)
+    centre = pose_from_xyzabc(np.concatenate([np.add(lo, hi) / 2, args.abc]))
+    status = solve_in_one_status(robot, centre, args.status)[1]  # default: IK at the centre
+    if status is None:
+        raise InputError(
+            f"the region's centre is not reachable at A B C {' '.join(map(fixed, args.abc))} "
+            "deg: give --status"
+        )
+    plan, o1, usable = identification_plan(
+        robot,
+        lo,
+        hi,
+        args.count,
+        args.tilt,
+        args.abc,
+        status,
+        candidates=args.candidates,
+        repeats=args.repeats,
+        seed=args.seed,
+    )
+    info = [
+        f"identification plan: {args.count} poses x {args.repeats} repeats chosen D-optimally "
+        f"from {usable} of {args.candidates} candidates (Status {status}, tilt up to "
+        f"{args.tilt:g} deg, |A5| >= 10 deg); observability O1 {o1:.4f}",
+        f"path {plan.path_length():.1f} mm",
+    ]
+    return plan, info
+
+
 def reach(plan: Plan, args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray, str, int]:
     """KUKA S and T (N,) of every position in one Status (--status, or the IK default at the
     first position): LIN moves keep the configuration of the first PTP, so the whole plan must
     be reachable in it. InputError naming the first position that is not."""
     robot = robot_with_tool(args.robot, args.tool)
-    poses = commanded_poses(plan.points, plan.abc)
+    poses = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
     sol, status = solve_in_one_status(robot, poses, args.status)
     if not sol.ok.all():
         bad = np.flatnonzero(~sol.ok)
@@ -318,10 +381,25 @@ def render_krl(
         vel_cp=args.vel,
         wait_sec=args.wait_sec,
         wait_input=args.wait_input,
+        ptp_only=args.kind == "identify",  # reorienting between poses: PTP, not LIN
     )
     return render_measurement(
-        plan.points, plan.abc, plan.ids, status, turn, name, header, settings, args.templates
+        plan.points,
+        plan.abc_rows(),
+        plan.ids,
+        status,
+        turn,
+        name,
+        header,
+        settings,
+        args.templates,
     )
+
+
+def _orientation_text(plan: Plan) -> str:
+    if np.ndim(plan.abc) == 1:
+        return f"orientation A B C {' '.join(fixed(v) for v in plan.abc)} deg"
+    return "orientation A B C per position (see the .dat)"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -338,10 +416,10 @@ def run(args: argparse.Namespace) -> int:
     details = [
         "inputs none, positions generated from the command-line settings",
         *info,
-        f"orientation A B C {' '.join(fixed(v) for v in plan.abc)} deg, robot {robot_name}, "
-        f"Status {config}",
+        _orientation_text(plan) + f", robot {robot_name}, Status {config}",
     ]
-    closing = [f"{len(plan.points)} positions, first by PTP, then LIN, each followed by {wait}"]
+    moves = "each by PTP" if args.kind == "identify" else "first by PTP, then LIN"
+    closing = [f"{len(plan.points)} positions, {moves}, each followed by {wait}"]
     header = header_lines(
         f"plan {args.kind}",
         details=details,

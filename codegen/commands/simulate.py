@@ -8,6 +8,11 @@ forward kinematics puts it. Optional Gaussian noise: robot repeatability and tra
 seeded. The result is a measurement CSV (id,x,y,z,a,b,c,x_meas,y_meas,z_meas; mm and deg) for
 `accugrid correct` & co.
 
+--poses PLAN.csv instead measures the poses of a plan at any orientation (columns x,y,z,a,b,c,
+optional id and s, e.g. from `accugrid plan identify`): each in its Status (column s, else
+--status, else the IK default per pose), with the joints the controller reports (a1..a6, KUKA
+deg, 4 decimals) in the output, for `accugrid identify`.
+
 --plot FILE draws seed Fig. 3: the X, Y, Z components of the error e = P - M over the plane of
 seed Table 2 (X 1000..2000, Y -500..500, Z 1800 mm, A 0, B 90, C 0 deg). Lengths in mm, angles in
 degrees.
@@ -16,6 +21,7 @@ degrees.
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import numpy as np
 
@@ -23,10 +29,18 @@ from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
 from accugrid.codegen.plots import fig3_png
 from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.compensation.csvtable import read_table
 from accugrid.compensation.plans import check_vertex_count
+from accugrid.kinematics.configuration import status_turn
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import Robot
-from accugrid.kinematics.simulation import grid_status, reached_positions, simulate_measurements
+from accugrid.kinematics.simulation import (
+    grid_status,
+    reached_positions,
+    simulate_measurements,
+    simulate_pose_measurements,
+)
 
 __all__ = [
     "FIG3_ABC",
@@ -62,6 +76,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="grid box in the robot frame, mm (needed with -o)",
     )
     parser.add_argument("--step", type=float, help="grid step, mm (needed with -o)")
+    parser.add_argument(
+        "--poses",
+        metavar="PLAN.csv",
+        help="measure the poses of a plan (x,y,z,a,b,c[,id][,s]) instead of a grid",
+    )
     add_abc(parser, "TCP orientation at every vertex")
     add_tool(parser, "tool on the flange (flange_T_tool), mm and deg (default: the flange itself)")
     add_status(
@@ -95,7 +114,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if not args.output and not args.plot:
         raise InputError("nothing to do: give -o CSV and/or --plot PNG")
-    inputs = [args.robot] if _is_file(args.robot) else []
+    inputs = ([args.robot] if _is_file(args.robot) else []) + ([args.poses] if args.poses else [])
     check_targets([t for t in (args.output, args.plot) if t], inputs, args.force)
     robot = robot_with_tool(args.robot, args.tool)
     if robot.true_robot() is None:
@@ -103,7 +122,9 @@ def run(args: argparse.Namespace) -> int:
             f"note: robot {robot.name} has no parameter errors; the simulated error is noise only"
         )
     outputs: dict[str, bytes | str] = {}
-    if args.output:
+    if args.output and args.poses:
+        outputs[args.output] = _pose_measurement_csv(robot, args)
+    elif args.output:
         outputs[args.output] = _measurement_csv(robot, args)
     if args.plot:
         xs, ys, error = fig3_field(robot, status=args.status)
@@ -173,6 +194,51 @@ def _measurement_csv(robot: Robot, args: argparse.Namespace) -> str:
         cmd_text = ",".join(fixed(v, 4) for v in cmd)
         meas_text = ",".join(fixed(v, 4) for v in meas)
         lines.append(f"P{ident},{cmd_text},{abc},{meas_text}")
+    return "\n".join(lines) + "\n"
+
+
+def _pose_measurement_csv(robot: Robot, args: argparse.Namespace) -> str:
+    """The measurement CSV of the plan's poses, with the controller's joints a1..a6 and s."""
+    if args.region is not None or args.step is not None:
+        raise InputError("--poses and --region/--step exclude each other")
+    table = read_table(args.poses)
+    table.require(["x", "y", "z", "a", "b", "c"])
+    if not len(table):
+        raise InputError("no poses in the plan", args.poses)
+    xyzabc = table.floats(["x", "y", "z", "a", "b", "c"])
+    ids = table.text("id") if table.has("id") else [f"P{i + 1}" for i in range(len(table))]
+    status = args.status
+    if table.has("s"):
+        status = table.floats(["s"])[:, 0].astype(int)
+    try:
+        q, measured = simulate_pose_measurements(
+            robot,
+            pose_from_xyzabc(xyzabc),
+            status,
+            repeats=args.repeats,
+            noise_tracker_mm=args.noise_tracker,
+            noise_repeat_mm=args.noise_repeat,
+            seed=args.seed,
+        )
+    except InputError as exc:
+        raise InputError(exc.message, args.poses) from None
+    status_of = status_turn(robot, q)[0]
+    header = comment_text(
+        f"accugrid simulate: robot {robot.name}, poses of {Path(args.poses).name}, repeats "
+        f"{args.repeats}, noise tracker {args.noise_tracker:g} mm, repeat "
+        f"{args.noise_repeat:g} mm, seed {args.seed}",
+        limit=400,
+    )
+    lines = [f"# {header}", "id,x,y,z,a,b,c,s,a1,a2,a3,a4,a5,a6,x_meas,y_meas,z_meas"]
+    rows = np.repeat(np.arange(len(table)), args.repeats)
+    joints = np.degrees(q)
+    for row, meas in zip(rows, measured, strict=True):
+        pose_text = ",".join(fixed(v, 4) for v in xyzabc[row])
+        joint_text = ",".join(fixed(v, 4) for v in joints[row])
+        meas_text = ",".join(fixed(v, 4) for v in meas)
+        ident = comment_text(ids[row], limit=40).replace(",", " ")
+        lines.append(f"{ident},{pose_text},{status_of[row]},{joint_text},{meas_text}")
+    print(f"{robot.name}: {len(table)} poses x {args.repeats} repeats = {len(rows)} rows")
     return "\n".join(lines) + "\n"
 
 

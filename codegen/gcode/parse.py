@@ -42,6 +42,7 @@ _OWORD_RE = re.compile(
 )
 _OWORD_ANY_RE = re.compile(r"^[^\S\n]*+[Oo]", re.M)  # a line _OWORD_RE may match
 _LETTERS = frozenset(string.ascii_letters)
+_BOMS = ("\xef\xbb\xbf", "\ufeff")  # UTF-8 byte-order mark read as latin-1, or decoded
 AXES = "XYZ"
 ROTARY = "ABCUVW"
 CYCLES = frozenset(("73", "81", "82", "83", "84", "85", "86", "87", "88", "89"))
@@ -153,7 +154,7 @@ class _Modal:
     flow: str = ""  # control flow / unknown modal state: for the rest of the program
     wcs: str = ""  # G55-G59.3 (cleared by G54)
     offset: str = ""  # G92/G52/G92.3 (cleared by G92.1/G92.2)
-    table: str = ""  # G10 changed the work offsets: for the rest of the program
+    table: str = ""  # G10 changed the work offsets or tool table: for the rest of the program
     transform: str = ""  # G68/G51 (cleared by G69/G50)
     comp: str = ""  # cutter compensation G41/G42 (cleared by G40)
     unknown_motion: str = ""  # the motion mode is not one whose geometry is known
@@ -334,7 +335,11 @@ def _put(block: _Line, letter: str, number: str, at: int, end: int, offset: int,
     if (letter in words or letter in block.exprs) and letter != "M":
         raise InputError(f"word {letter} given twice", path, lineno, at + 1)
     if letter in _KEPT:
-        words[letter] = _new_word(Word, (letter, float(number), offset + at, offset + end, number))
+        value = float(number)
+        if value - value:  # inf - inf is NaN: a literal beyond the float range
+            shown = number if len(number) <= 20 else number[:20] + "..."
+            raise InputError(f"word {letter}{shown}: number out of range", path, lineno, at + 1)
+        words[letter] = _new_word(Word, (letter, value, offset + at, offset + end, number))
     else:  # N, F, S, M, T, ...: only seen (a second one is an error), never a position
         words[letter] = None
 
@@ -361,26 +366,17 @@ class _Reader:
     def block(self, block: _Line, lineno: int, line_offset: int) -> None:
         state = self.state
         words = block.words
-        l_word = words.get("L")
-        for g in sorted(block.gcodes, key=lambda g: g not in MOTION_MODES):
-            state.apply(g, lineno, l_word)  # a known motion first: an unknown code wins
+        gcodes = block.gcodes
+        if len(gcodes) > 1:  # a known motion first: an unknown code on the same line wins
+            gcodes = sorted(gcodes, key=lambda g: g not in MOTION_MODES)
+        for g in gcodes:
+            state.apply(g, lineno, words.get("L"))
         if "G" in block.exprs:
             state.flow = state.flow or (
                 f"G-code from an expression {block.exprs['G']} (line {lineno}): the modal state "
                 "is not known"
             )
-        has_rotary = not _ROTARY_SET.isdisjoint(words)
-        if has_rotary:  # a new dict: moves share the one in effect when they were read
-            state.rotary = dict(state.rotary)
-            for letter in ROTARY:
-                if letter in words:
-                    state.rotary[letter] = words[letter].value
-        if not _ROTARY_SET.isdisjoint(block.exprs):
-            has_rotary = True
-            state.rotary = dict(state.rotary)
-            for letter in ROTARY:
-                if letter in block.exprs:
-                    state.rotary[letter] = math.nan
+        has_rotary = self._rotary(block)
         nonmodal = [g for g in block.gcodes if g in _NONMODAL] if block.gcodes else []
         if nonmodal and nonmodal[0] in _PARAMETER_CODES:
             return  # the axis words are parameters, not a move
@@ -405,6 +401,21 @@ class _Reader:
             self._cycle(lineno, column, axis_words, words, block.exprs)
         else:
             self._straight(lineno, column, axis_words, block.exprs)
+
+    def _rotary(self, block: _Line) -> bool:
+        """Take the block's A/B/C/U/V/W (NaN when from an expression); True if it has any."""
+        written = not _ROTARY_SET.isdisjoint(block.words)
+        computed = not _ROTARY_SET.isdisjoint(block.exprs)
+        if not (written or computed):
+            return False
+        rotary = dict(self.state.rotary)  # a new dict: moves share the one in effect when read
+        for letter in ROTARY:
+            if letter in block.words:
+                rotary[letter] = block.words[letter].value
+            elif letter in block.exprs:
+                rotary[letter] = math.nan
+        self.state.rotary = rotary
+        return True
 
     def _move(self, lineno, column, motion, target, words) -> GcodeMove:
         s = self.state
@@ -513,9 +524,12 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
     # needs those per-line checks
     owords = _OWORD_ANY_RE.search(text) is not None
     slashes = "/" in text
+    bom = next((b for b in _BOMS if text.startswith(b)), "")
     for lineno, raw in enumerate(split_lines(text), start=1):
         line_offset = offset
         offset += len(raw) + 1
+        if bom and lineno == 1:  # a byte-order mark is not a word (offsets stay as in the file)
+            raw = " " * len(bom) + raw[len(bom) :]
         stripped = raw.strip()
         if not stripped or stripped.startswith("%"):
             continue

@@ -27,9 +27,8 @@ from accugrid.codegen.rewrite import (
     Options,
     Result,
     Row,
-    check_orientation,
     correct_points,
-    outside_reason,
+    rotations_of,
     strict_check,
 )
 
@@ -44,24 +43,18 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
         row.old = m.target
     _protect_arc_starts(moves, rows)
     todo = [i for i, r in enumerate(rows) if not r.reason]
-    if todo:
-        abc = np.array([[moves[i].rotary.get(k, math.nan) for k in "ABC"] for i in todo])
-        rot = np.broadcast_to(opts.robot_T_program[:3, :3], (len(todo), 3, 3))
-        keep = check_orientation(rot, abc, [rows[i] for i in todo], opts)
-        todo = [i for i, k in zip(todo, keep.tolist(), strict=True) if k]
     desired = np.array([m.target for m in moves], dtype=float).reshape(-1, 3)
     if todo:
         prog = desired[todo]
         t = opts.robot_T_program
         robot = prog @ t[:3, :3].T + t[:3, 3]
-        inside, corrected = correct_points(robot, opts)
+        abc = np.array([[moves[i].rotary.get(k, math.nan) for k in "ABC"] for i in todo])
+        todo_rows = [rows[i] for i in todo]
+        corrected = correct_points(robot, todo_rows, opts, rotations_of(t[:3, :3], abc))
         back = (corrected - robot) @ t[:3, :3]  # R^T e, row-wise
-        for j, i in enumerate(todo):
-            if inside[j]:
-                rows[i].status = "corrected"
-                desired[i] = prog[j] + back[j]
-            else:
-                rows[i].status, rows[i].reason = "outside", outside_reason(robot[j])
+        for j in np.flatnonzero(np.isfinite(corrected[:, 0])).tolist():
+            todo_rows[j].status = "corrected"
+            desired[todo[j]] = prog[j] + back[j]
     r_planes = _corrected_r_planes(moves, rows, opts)
     edits = _gcode_edits(text, moves, rows, desired, r_planes, opts)
     strict_check(rows, opts)
@@ -99,11 +92,9 @@ def _corrected_r_planes(moves: list[GcodeMove], rows: list[Row], opts: Options) 
         pts = np.array([[moves[i].target[0], moves[i].target[1], moves[i].r_mm] for i in idx])
         t = opts.robot_T_program
         robot = pts @ t[:3, :3].T + t[:3, 3]
-        inside, corrected = correct_points(robot, opts)
+        corrected = correct_points(robot, [rows[i] for i in idx], opts, mark=False)
         back = (corrected - robot) @ t[:3, :3]
-        for j, i in enumerate(idx):
-            if inside[j]:
-                out[i] = pts[j, 2] + back[j, 2]
+        out[idx] = pts[:, 2] + back[:, 2]  # NaN where the R point is outside: R kept
     return out
 
 

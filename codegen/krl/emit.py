@@ -83,6 +83,7 @@ class MeasureSettings:
     vel_cp: float
     wait_sec: float
     wait_input: int | None
+    ptp_only: bool = False  # every move PTP (poses that reorient), else PTP to the first, then LIN
 
 
 def render_measurement(
@@ -97,12 +98,15 @@ def render_measurement(
     templates=None,
 ) -> tuple[str, str]:
     """(.src, .dat) of a laser-tracker measurement program (``measure.src.j2``,
-    ``measure.dat.j2``): positions (N, 3) mm at one KUKA A,B,C (3,) deg with Status and Turn
-    (N,); one E6POS ``XMP<k>`` per distinct position (0.0001 mm) in order of first visit, then a
-    PTP to the first row, LIN to every other, each followed by the wait. Numbers are formatted
-    here (mm and deg with 3 decimals, S and T as integers)."""
+    ``measure.dat.j2``): positions (N, 3) mm at KUKA A,B,C ((3,) or (N, 3) deg) with Status and
+    Turn (N,); one E6POS ``XMP<k>`` per distinct pose (0.0001 mm / deg) in order of first visit,
+    then a PTP to the first row and LIN (or PTP with ``settings.ptp_only``) to every other, each
+    followed by the wait. Numbers are formatted here (mm and deg with 3 decimals, S and T as
+    integers)."""
     points = np.asarray(points, dtype=float)
-    unique, index = np.unique(np.round(points, 4), axis=0, return_inverse=True)
+    abc = np.broadcast_to(np.asarray(abc, dtype=float), points.shape)
+    key = np.round(np.column_stack([points, abc]), 4)
+    unique, index = np.unique(key, axis=0, return_inverse=True)
     index = index.reshape(-1)
     first_visit = np.full(len(unique), len(points))
     np.minimum.at(first_visit, index, np.arange(len(points)))
@@ -111,10 +115,9 @@ def render_measurement(
     rank[order] = np.arange(len(unique))
     rows = first_visit[order]
     names = [f"XMP{k + 1}" for k in range(len(unique))]
-    xyz = fixed_texts(points[rows], 3)
-    a, b, c = fixed_texts(np.asarray(abc, dtype=float), 3)
+    pose = fixed_texts(np.column_stack([points[rows], abc[rows]]), 3)
     st = fixed_texts(np.stack([status[rows], turn[rows]], axis=1), 0)
-    positions = [KrlPosition(names[k], *xyz[k], a, b, c, *st[k]) for k in range(len(rows))]
+    positions = [KrlPosition(names[k], *pose[k], *st[k]) for k in range(len(rows))]
     moves = [MeasureMove(names[rank[index[r]]], ids[r]) for r in range(len(points))]
     env = environment(template_dir("krl", templates), newline="\r\n")
     context = {
@@ -128,6 +131,7 @@ def render_measurement(
         "wait_input": settings.wait_input,
         "moves": moves,
         "points": positions,
+        "ptp_only": settings.ptp_only,
     }
     return render(env, "measure.src.j2", **context), render(env, "measure.dat.j2", **context)
 

@@ -4,10 +4,17 @@ and the base frame ($BASE) in effect wherever a motion uses one.
 Line-based and case-insensitive (KRL has one statement per line; ``;`` starts a comment, so
 inline-form FOLD lines are comments). It finds:
 
-- positions: ``DECL [GLOBAL] [CONST] E6POS|POS|FRAME|AXIS|E6AXIS name = {...}``, element or
-  variable assignments ``name[3] = {...}``, and aggregates inside motions (``PTP``, ``LIN``,
-  ``CIRC aux, target``, ``SPTP``, ``SLIN``, ``SCIRC``, ``SPL``, the ``_REL`` forms);
-- uses: motions that go to a named position (``PTP XP1``, ``LIN lfWorkPos[i]``);
+- positions: ``DECL [GLOBAL] [CONST] E6POS|POS|FRAME|AXIS|E6AXIS name = {...}`` (a CONST one
+  carries its reason), element or variable assignments ``name[3] = {...}``, the position members
+  of user STRUC values (``gsCNC1[3] = {fCnC {X ..}, grFeedrate 95}`` gives ``gsCNC1[3].fCnC``),
+  and aggregates inside motions (``PTP``, ``LIN``, ``CIRC aux, target``, ``SPTP``, ``SLIN``,
+  ``SCIRC``, ``SPL``, the ``_REL`` forms);
+- uses: motions that go to a named position (``PTP XP1``, ``LIN lfWorkPos[i]``,
+  ``LIN gsCNC1[i].fCNC``); the target ends before ``C_DIS``/``C_VEL``/``WITH``;
+- what is not a position: names used as frames (assigned to ``$TOOL``/``$BASE``/``$LOAD``/
+  ``TOOL_DATA``/``BASE_DATA``, operands of ``:``), every declared name with its type (so a
+  motion to a local variable is reported as such), FDATs (``BASE_NO``, ``TOOL_NO``,
+  ``IPO_FRAME``);
 - base frame context, followed in program order: ``$BASE = BASE_DATA[n]``, ``$BASE = {FRAME: ..}``,
   ``$BASE = $NULLFRAME``, ``BAS(#BASE, n)``, ``FDAT_ACT = Fname`` (``BASE_NO`` of the FDAT
   declaration), and for one spline motion ``WITH $BASE = SBASE(Fname.BASE_NO)``. What cannot be
@@ -16,6 +23,7 @@ inline-form FOLD lines are comments). It finds:
   a branch or loop that changes it.
 
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
+Every pattern is linear in its input (see the note above ``NUMBER``).
 """
 
 from __future__ import annotations
@@ -27,6 +35,29 @@ from typing import NamedTuple
 
 from accugrid.codegen.program_text import check_text, decimals_of, split_lines
 from accugrid.kinematics.errors import InputError
+
+__all__ = [
+    "CARTESIAN_KEYS",
+    "JOINT_KEYS",
+    "MOTIONS",
+    "POSITION_TYPES",
+    "BaseRef",
+    "Declared",
+    "Fdat",
+    "FrameUse",
+    "KrlPosition",
+    "KrlScan",
+    "KrlUse",
+    "Number",
+    "code_part",
+    "match_brace",
+    "normalize_name",
+    "parse_aggregate",
+    "parse_krl",
+    "position_reason",
+    "scan_krl",
+    "wildcard",
+]
 
 MOTIONS = frozenset(
     "PTP LIN CIRC SPTP SLIN SCIRC SPL PTP_REL LIN_REL CIRC_REL SPTP_REL SLIN_REL SCIRC_REL".split()
@@ -328,8 +359,11 @@ def parse_aggregate(
                 raise InputError(f"component {key} given twice", path, lineno, vstart + 1)
             if number:
                 cursor = vstart + len(number)
+                value = float(number)
+                if value - value:  # inf - inf is NaN: a literal beyond the float range
+                    _out_of_range(key, number, path, lineno, vstart)
                 numbers[key] = _new_number(
-                    Number, (key, float(number), offset + vstart, offset + cursor, number)
+                    Number, (key, value, offset + vstart, offset + cursor, number)
                 )
             elif bits:
                 cursor = vstart + len(bits)
@@ -357,6 +391,8 @@ def parse_aggregate(
         if key in numbers:
             raise InputError(f"component {key} given twice", path, lineno, m.start(2) + 1)
         if m.group(2) is not None:
+            if float(m.group(2)) - float(m.group(2)):
+                _out_of_range(key, m.group(2), path, lineno, m.start(2))
             numbers[key] = Number(
                 key,
                 float(m.group(2)),
@@ -369,6 +405,16 @@ def parse_aggregate(
         elif key in CARTESIAN_KEYS or key in JOINT_KEYS:
             reason = reason or f"component {key} is {m.group(4).strip()!r}, not a number"
     return type_name, numbers, reason, end
+
+
+def _out_of_range(key: str, number: str, path: str | None, lineno: int, at: int) -> None:
+    shown = number if len(number) <= 20 else number[:20] + "..."
+    raise InputError(f"component {key} {shown}: number out of range", path, lineno, at + 1)
+
+
+def _small_int(digits: str) -> int | None:
+    """A base or BASE_DATA number as written (ASCII digits), None when it has over 6 digits."""
+    return int(digits) if len(digits) <= 6 else None
 
 
 def _refuse_item(code: str, start: int, stop: int, path: str | None, lineno: int) -> None:
@@ -662,8 +708,9 @@ def _bas(code: str, pos: int, lineno: int, flow: _Flow) -> None:
         return
     arg = inner[1:].strip()
     n = _INT_RE.match(arg)
-    if n:
-        flow.set(BaseRef("number", lineno, number=int(n.group(1))))
+    number = _small_int(n.group(1)) if n else None
+    if number is not None:
+        flow.set(BaseRef("number", lineno, number=number))
     else:
         flow.set(BaseRef("unknown", lineno, reason=f"BAS(#BASE, {arg}): not a number"))
 
@@ -871,11 +918,12 @@ def _assignment(
         return
     if target == "BASE_DATA" and not member:
         n = _INDEX_RE.fullmatch(index)
-        if n and value.startswith("{") and ":" not in value.replace("FRAME:", ""):
+        number = _small_int(n.group(1)) if n else None
+        if number is not None and value.startswith("{") and ":" not in value.replace("FRAME:", ""):
             prefix, numbers, reason, _ = parse_aggregate(code, value_at, off, scan.path, lineno)
             if not reason and all(k in numbers for k in "XYZABC"):
                 xyzabc = tuple(numbers[k].value for k in "XYZABC")
-                scan.base_data[int(n.group(1))] = (xyzabc, lineno)
+                scan.base_data[number] = (xyzabc, lineno)
         return
     if target in _FRAME_TARGETS:
         return
@@ -920,8 +968,17 @@ def _base_value(code: str, at: int, off: int, lineno: int, scan: KrlScan) -> Bas
         return BaseRef("literal", lineno, xyzabc=(0.0,) * 6)
     n = _BASE_DATA_RE.match(value)
     if n:
-        return BaseRef("number", lineno, number=int(n.group(1)))
+        return _base_data_ref(n.group(1), lineno, "$BASE = ")
     return BaseRef("unknown", lineno, reason=f"$BASE = {value}: set from a variable")
+
+
+def _base_data_ref(digits: str, lineno: int, what: str) -> BaseRef:
+    number = _small_int(digits)
+    if number is None:
+        return BaseRef(
+            "unknown", lineno, reason=f"{what}BASE_DATA[{digits[:8]}...]: not a BASE_DATA number"
+        )
+    return BaseRef("number", lineno, number=number)
 
 
 _SBASE_RE = re.compile(r"SBASE\s*+\(\s*+([A-Za-z_]\w*+)\s*+\.\s*+BASE_NO\s*+\)$", re.I)
@@ -943,7 +1000,7 @@ def _with_base(code: str, lineno: int) -> BaseRef | None:
         return BaseRef("fdat", lineno, fdat=sbase.group(1).upper())
     n = _BASE_DATA_RE.match(value)
     if n:
-        return BaseRef("number", lineno, number=int(n.group(1)))
+        return _base_data_ref(n.group(1), lineno, "WITH $BASE = ")
     return BaseRef("unknown", lineno, reason=f"WITH $BASE = {value}: not a BASE_DATA number")
 
 

@@ -1,7 +1,10 @@
 """Pre-flight rewrite of a KUKA KRL .src/.dat (see ``codegen.rewrite`` for what a rewrite is).
 
-KRL inline aggregates use the base in effect at that line (see ``codegen.krl.parse``); a position
-declared in a .dat takes the base of the motions that use it, and is corrected once however many
+KRL inline aggregates use the base in effect at that line (see ``codegen.krl.parse``). A stored
+position (declared or assigned with a literal) is corrected only if a motion uses it, or, in a
+.dat given alone with ``--base``, if it is a POS/E6POS; never a frame (``$TOOL``/``$BASE``/
+``$LOAD``/``TOOL_DATA``/``BASE_DATA`` value, ``:`` operand) or a CONST. It takes the base of the
+motions that use it (its own FDAT wins over ``--base``) and is corrected once however many
 motions use it. BASE_DATA[n] comes from ``--config-dat`` (if it defines n), else from the cell's
 ``base`` and ``base_data``; base 0 ($NULLFRAME, BAS(#BASE,0)) is the robot frame ($WORLD =
 $ROBROOT).
@@ -30,9 +33,8 @@ from accugrid.codegen.rewrite import (
     Options,
     Result,
     Row,
-    check_orientation,
     correct_points,
-    outside_reason,
+    rotations_of,
     strict_check,
 )
 from accugrid.kinematics.frames import pose_from_xyzabc
@@ -285,20 +287,13 @@ def _correct_krl(
     by_id = {id(f): f for _, _, f in placed}
     frames = np.array([by_id[k] for k in unique])[which]  # (N, 4, 4)
     abc = np.array([[_value(pos, k) for k in "ABC"] for pos, _, _ in placed]).reshape(-1, 3)
-    keep = check_orientation(frames[:, :3, :3], abc, [row for _, row, _ in placed], opts)
-    if not keep.all():
-        placed = [p for p, k in zip(placed, keep.tolist(), strict=True) if k]
-        frames = frames[keep]
-        if not placed:
-            return
     base_xyz = np.array([row.old for _, row, _ in placed])  # (N, 3) mm, base frame
     robot = np.einsum("nij,nj->ni", frames[:, :3, :3], base_xyz) + frames[:, :3, 3]
-    inside, corrected = correct_points(robot, opts)
+    rows = [row for _, row, _ in placed]
+    corrected = correct_points(robot, rows, opts, rotations_of(frames[:, :3, :3], abc))
+    inside = np.isfinite(corrected[:, 0])
     back = np.einsum("nji,nj->ni", frames[:, :3, :3], corrected - robot)  # R^T e
     targets = base_xyz + back
-    for i in np.flatnonzero(~inside).tolist():
-        row = placed[i][1]
-        row.status, row.reason = "outside", outside_reason(robot[i])
     for file in texts:
         idx = [i for i in np.flatnonzero(inside).tolist() if placed[i][1].file == file]
         if not idx:

@@ -1,0 +1,218 @@
+"""Which correction, from how many measured points: grid only (IDW, trilinear), model only and
+model + residual grid, held out on a simulated robot (issue 13 item 7; compensation.comparison).
+
+For each budget N of measured points (--budgets): the grid over --region with at most N vertices
+at the grid orientation (--abc), corrected P' = P + e(P) by IDW and by trilinear interpolation;
+the model identified (DH errors, TCP, A2/A3 compliance when the robot has a gravity model) from
+the N poses `plan identify` chooses (D-optimal among --candidates random poses tilted up to
+--tilt deg); the model plus a 27-vertex residual grid at the grid orientation (trilinear); the
+model plus its residual at the poses interpolated in joint space (A1-A3, thin-plate spline; its
+5-fold cross-validation over the poses is printed). Every measurement is a simulated tracker
+session (one KUKA Status, --repeats per point, seeded noise per budget). Scored on --targets
+held-out targets at the grid orientation and --targets tilted up to --target-tilt deg: where the
+arm lands when commanded P' (noise-free), max |P - M| and std per axis, mm.
+
+Output: the table on stdout, DIR/comparison.csv (one row per budget, target set and method) and
+DIR/comparison.png. Lengths in mm, angles in degrees.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
+from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.compensation.comparison import Comparison, ComparisonRow, compare_methods
+from accugrid.compensation.plans import SEED_REGION
+from accugrid.kinematics.errors import InputError
+
+__all__ = ["NAME", "add_arguments", "run", "table_text"]
+
+NAME = "compare"
+
+DEFAULT_BUDGETS = (27, 60, 125, 252)
+DEFAULT_TOOL = (0.0, 0.0, 250.0, 0.0, 0.0, 0.0)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--simulate",
+        default="kr210-realistic",
+        metavar="ROBOT",
+        help="simulated robot: built-in or robot YAML whose true robot is the real arm "
+        "(default: kr210-realistic)",
+    )
+    parser.add_argument(
+        "--region",
+        nargs=6,
+        type=float,
+        default=[v for pair in zip(*SEED_REGION, strict=True) for v in pair],
+        metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
+        help="measured region in the robot frame, mm (default: the seed's 1200 2200 -600 600 "
+        "1100 2100)",
+    )
+    parser.add_argument(
+        "--budgets",
+        nargs="+",
+        type=int,
+        default=list(DEFAULT_BUDGETS),
+        metavar="N",
+        help="measured-point budgets (distinct poses or vertices; default: 27 60 125 252)",
+    )
+    add_abc(parser, "grid orientation (grids, residual grid, untilted targets)")
+    add_tool(
+        parser,
+        "tool on the flange (the controller's TOOL_DATA), mm and deg (default: 0 0 250 0 0 0)",
+    )
+    add_status(parser, "KUKA Status 0..7 of every pose (default: the IK default's at the centre)")
+    parser.add_argument(
+        "--tilt",
+        type=float,
+        default=25.0,
+        metavar="DEG",
+        help="identification poses tilted up to this from --abc (default: 25)",
+    )
+    parser.add_argument(
+        "--target-tilt",
+        type=float,
+        default=25.0,
+        metavar="DEG",
+        help="tilted held-out targets up to this from --abc (default: 25)",
+    )
+    parser.add_argument(
+        "--targets",
+        type=int,
+        default=200,
+        metavar="N",
+        help="held-out targets per set (default: 200)",
+    )
+    parser.add_argument(
+        "--candidates",
+        type=int,
+        default=1500,
+        metavar="N",
+        help="random candidate poses the model's poses are chosen from (default: 1500)",
+    )
+    parser.add_argument(
+        "--repeats", type=int, default=3, help="measurements per point (default: 3)"
+    )
+    parser.add_argument(
+        "--noise-tracker",
+        type=float,
+        default=0.02,
+        metavar="MM",
+        help="tracker noise, Gaussian sigma per axis, mm (default: 0.02)",
+    )
+    parser.add_argument(
+        "--noise-repeat",
+        type=float,
+        default=0.03,
+        metavar="MM",
+        help="robot repeatability, sigma per axis and visit, mm (default: 0.03)",
+    )
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    parser.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="DIR",
+        help="folder for comparison.csv and comparison.png",
+    )
+    parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
+
+
+def run(args: argparse.Namespace) -> int:
+    out = Path(args.output)
+    paths = [str(out / "comparison.csv"), str(out / "comparison.png")]
+    inputs = [args.simulate] if Path(args.simulate).is_file() else []
+    check_targets(paths, inputs, args.force)
+    if not args.budgets or min(args.budgets) < 8:
+        raise InputError("--budgets: every budget must be at least 8 points")
+    if args.targets < 1 or args.repeats < 1:
+        raise InputError("--targets and --repeats must be at least 1")
+    if not 0.0 <= args.target_tilt <= 90.0:
+        raise InputError(f"--target-tilt must be 0..90 deg, got {args.target_tilt:g}")
+    robot = robot_with_tool(args.simulate, args.tool if args.tool else DEFAULT_TOOL)
+    if robot.true_robot() is None:
+        raise InputError(f"robot {robot.name} has no errors: nothing to compare")
+    lo, hi = args.region[0::2], args.region[1::2]
+    result = compare_methods(
+        robot,
+        lo,
+        hi,
+        sorted(set(args.budgets)),
+        abc_deg=args.abc,
+        status=args.status,
+        tilt_deg=args.tilt,
+        target_tilt_deg=args.target_tilt,
+        n_targets=args.targets,
+        candidates=args.candidates,
+        repeats=args.repeats,
+        noise_tracker_mm=args.noise_tracker,
+        noise_repeat_mm=args.noise_repeat,
+        seed=args.seed,
+    )
+    from accugrid.codegen.plots import comparison_png
+
+    print(_summary_line(result, args))
+    print(table_text(result))
+    for budget, (without, with_layer) in result.joint_cv.items():
+        print(
+            f"joint residual, 5-fold cross-validation over the {budget} poses: held-out RMS "
+            f"X Y Z {' '.join(fixed(v, 3) for v in without)} mm without, "
+            f"{' '.join(fixed(v, 3) for v in with_layer)} mm with"
+        )
+    out.mkdir(parents=True, exist_ok=True)
+    write_files(
+        {paths[0]: _csv_text(result, args), paths[1]: comparison_png(result)},
+        inputs,
+        force=args.force,
+    )
+    for path in paths:
+        print(f"wrote {path}")
+    return 0
+
+
+def _summary_line(result: Comparison, args: argparse.Namespace) -> str:
+    return (
+        f"{result.robot}: region {' '.join(f'{v:g}' for v in args.region)} mm, grid orientation "
+        f"A B C {' '.join(f'{v:g}' for v in args.abc)}, KUKA Status {result.status}, "
+        f"{args.repeats} repeats, noise tracker {args.noise_tracker:g} repeat "
+        f"{args.noise_repeat:g} mm, seed {args.seed}; model poses tilted up to {args.tilt:g} "
+        f"deg; {result.n_targets} held-out targets per set (tilted: up to "
+        f"{args.target_tilt:g} deg); where the arm lands, noise-free, mm"
+    )
+
+
+def _cells(row: ComparisonRow) -> list[str]:
+    return [fixed(v, 3) for v in (*row.max_mm, *row.std_mm)]
+
+
+def table_text(result: Comparison) -> str:
+    """The rows as a Markdown table (budget 0: uncorrected)."""
+    lines = [
+        "| targets | budget | method | points | max X | max Y | max Z | std X | std Y | std Z |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for targets in dict.fromkeys(r.targets for r in result.rows):
+        for r in (r for r in result.rows if r.targets == targets):
+            budget = "-" if r.method == "uncorrected" else str(r.budget)
+            lines.append(
+                f"| {targets} | {budget} | {r.method} | {r.points} | "
+                + " | ".join(_cells(r))
+                + " |"
+            )
+    return "\n".join(lines)
+
+
+def _csv_text(result: Comparison, args: argparse.Namespace) -> str:
+    header = comment_text(f"accugrid compare: {_summary_line(result, args)}", limit=600)
+    lines = [
+        f"# {header}",
+        "targets,budget,method,points,max_x,max_y,max_z,std_x,std_y,std_z",
+    ]
+    for r in result.rows:
+        lines.append(f"{r.targets},{r.budget},{r.method},{r.points}," + ",".join(_cells(r)))
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,105 @@
+"""`accugrid compare` (compensation.comparison): grid only vs model vs model + residual grid on a
+simulated kr210-realistic, on a tiny run. Invariants, not copied numbers: every correction
+leaves less than the uncorrected error, and on tilted targets the model (which holds at any
+orientation) beats the grid measured at one orientation."""
+
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+import pytest
+
+from accugrid.codegen.cli import main
+from accugrid.compensation.comparison import (
+    METHODS,
+    grid_counts,
+    joint_residual,
+    joint_residual_cv,
+    lattice,
+)
+
+TINY = ["--budgets", "27", "--targets", "40", "--candidates", "300", "--repeats", "1"]
+
+
+@pytest.fixture(scope="module")
+def tiny_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("compare")
+    assert main(["compare", *TINY, "-o", str(out)]) == 0
+    return out
+
+
+def rows_of(out):
+    lines = (out / "comparison.csv").read_text().splitlines()
+    assert lines[0].startswith("# accugrid compare: kr210-realistic")
+    return list(csv.DictReader(lines[1:]))
+
+
+def values(row, kind):
+    return np.array([float(row[f"{kind}_{axis}"]) for axis in "xyz"])
+
+
+def test_every_method_leaves_less_than_the_uncorrected_error(tiny_run):
+    rows = rows_of(tiny_run)
+    methods = {(r["targets"], r["method"]) for r in rows}
+    assert methods == {(t, m) for t in ("grid orientation", "tilted") for m in METHODS}
+    for targets in ("grid orientation", "tilted"):
+        mine = [r for r in rows if r["targets"] == targets]
+        before = next(r for r in mine if r["method"] == "uncorrected")
+        for r in mine:
+            if r is not before:
+                assert (values(r, "max") < values(before, "max")).all(), r["method"]
+                assert (values(r, "std") < values(before, "std")).all(), r["method"]
+
+
+def test_on_tilted_targets_the_model_beats_the_grid(tiny_run):
+    tilted = {r["method"]: r for r in rows_of(tiny_run) if r["targets"] == "tilted"}
+    model = np.linalg.norm(values(tilted["model"], "std"))
+    for grid in ("grid idw", "grid trilinear"):
+        assert model < np.linalg.norm(values(tilted[grid], "std")), grid
+
+
+def test_the_points_column_counts_what_was_measured(tiny_run):
+    rows = [r for r in rows_of(tiny_run) if r["budget"] == "27"]
+    points = {r["targets"] + r["method"]: int(r["points"]) for r in rows}
+    assert points["tiltedgrid idw"] == 27 and points["tiltedmodel"] == 27
+    assert points["tiltedmodel + residual grid"] == 27 + 27
+    assert (tiny_run / "comparison.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("budget", [8, 27, 60, 125, 252, 1000])
+def test_grid_counts_stay_within_the_budget(budget):
+    lo, hi = np.array([1200.0, -600.0, 1100.0]), np.array([2200.0, 600.0, 2100.0])
+    counts = grid_counts(lo, hi, budget)
+    assert (counts >= 2).all() and np.prod(counts) <= budget
+    vertices = lattice(lo, hi, counts)
+    assert len(vertices) == np.prod(counts)
+    np.testing.assert_allclose(vertices.min(axis=0), lo)
+    np.testing.assert_allclose(vertices.max(axis=0), hi)
+
+
+def test_a_budget_below_a_grid_is_refused_and_nothing_written(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    assert main(["compare", "--budgets", "5", "-o", str(out)]) == 2
+    assert "at least 8" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_the_seed_grids_are_found_at_their_budgets():
+    lo, hi = np.array([1200.0, -600.0, 1100.0]), np.array([2200.0, 600.0, 2100.0])
+    assert grid_counts(lo, hi, 27).tolist() == [3, 3, 3]  # 500 x 600 x 500 mm
+    assert grid_counts(lo, hi, 252).tolist() == [6, 7, 6]  # the seed's 200 mm grid
+
+
+def test_the_joint_residual_reproduces_a_residual_linear_in_a1_a3():
+    rng = np.random.default_rng(2)
+    q, new = rng.uniform(-1.0, 1.0, (40, 6)), rng.uniform(-0.8, 0.8, (10, 6))
+    slope = np.array([[0.1, -0.2, 0.05], [0.3, 0.0, -0.1], [-0.05, 0.2, 0.2]])  # mm per deg
+    linear = lambda joints: np.degrees(joints[:, :3]) @ slope  # noqa: E731
+    np.testing.assert_allclose(joint_residual(q, linear(q))(new), linear(new), atol=1e-6)
+    # ... and A4..A6 do not enter it
+    moved = new.copy()
+    moved[:, 3:] += 0.5
+    np.testing.assert_allclose(joint_residual(q, linear(q))(moved), linear(new), atol=1e-6)
+    without, with_layer = joint_residual_cv(q, linear(q))
+    assert (with_layer < 1e-6).all() and (without > 1.0).all()
