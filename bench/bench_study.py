@@ -15,9 +15,14 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from accugrid.codegen.commands.study import check_reach, simulated_measure  # noqa: E402
 from accugrid.compensation.plans import SEED_ABC, SEED_CENTRES, SEED_REGION, SEED_STEPS  # noqa: E402
-from accugrid.compensation.study import analyse, simulate_study, simulate_validation  # noqa: E402
+from accugrid.compensation.study import (  # noqa: E402  # noqa: E402
+    analyse,
+    check_reach,
+    simulate_study,
+    simulate_validation,
+    simulated_measure,
+)
 from accugrid.kinematics.robot import load_robot  # noqa: E402
 from accugrid.kinematics.simulation import simulate_measurements  # noqa: E402
 from bench.timing import measure, table  # noqa: E402
@@ -39,7 +44,7 @@ def main_bench() -> None:
         return job
 
     status = check_reach(robot, names, xyz, steps, abc, None)
-    fixed = simulated_measure(robot, abc, status, args)
+    fixed = simulated_measure(robot, abc, status, args.seed, args.noise_tracker, args.noise_repeat)
 
     def per_point(points, repeats, stream):
         return simulate_measurements(robot, points, abc, repeats, 0.02, 0.03, stream)[1]

@@ -54,6 +54,7 @@ class Cell:
     path: Path
     robot_name: str
     grid_path: Path | None
+    model_path: Path | None  # correction.model: a calibrated robot YAML (accugrid identify)
     tool_number: int
     flange_T_tool: np.ndarray
     base_number: int
@@ -90,7 +91,6 @@ class Cell:
     reference_abc: tuple[float, float, float] = (0.0, 90.0, 0.0)
     # correction (method, power, iterations; the safety limit is the default)
     correction: CorrectionSettings = CorrectionSettings()
-    model_path: Path | None = None  # correction.model: a calibrated robot YAML
     # G-code
     spindle_rpm: float = 6000.0
     canned_cycles: bool = True
@@ -275,6 +275,7 @@ class _Reader:
         model = co.get("model")
         if model is not None and (not isinstance(model, str) or not model.strip()):
             raise self.error("correction.model", "must be a calibrated robot YAML path")
+        model_path = None if model is None else self.path.parent / model
         method = co.get("method", "idw")
         if method not in METHODS:
             raise self.error("correction.method", f"must be {' or '.join(METHODS)}, got {method!r}")
@@ -293,6 +294,7 @@ class _Reader:
             path=self.path,
             robot_name=robot,
             grid_path=grid_path,
+            model_path=model_path,
             tool_number=tool_number,
             flange_T_tool=flange_T_tool,
             base_number=base_number,
@@ -329,7 +331,6 @@ class _Reader:
                 iterations=self.integer(co, "iterations", "correction", 1, 1, 10),
                 power=self.number(co, "power", "correction", 1.0, 0.0, 10.0, True),
             ),
-            model_path=None if model is None else self.path.parent / model,
             spindle_rpm=self.number(gc, "spindle_rpm", "gcode", 6000.0, 0.0, 10**6, True),
             canned_cycles=self.boolean(gc, "canned_cycles", "gcode", True),
             external_axes=tuple(

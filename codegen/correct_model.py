@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.atomic import check_targets
-from accugrid.codegen.commands.correct import (
+from accugrid.codegen.corrected import (
     check_added_columns,
     check_outside,
     print_corrections,

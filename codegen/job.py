@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,22 +15,14 @@ import numpy as np
 from accugrid.codegen.cell import Cell, load_cell
 from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
-from accugrid.codegen.program import Program, build_program, program_status
+from accugrid.codegen.program import Program, build_program
 from accugrid.compensation import GridModel
-from accugrid.compensation.model_correction import residual_grid
+from accugrid.kinematics.calibrated import check_same_robot
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.robot import Robot, load_robot
+from accugrid.kinematics.robot import load_robot
 
-__all__ = [
-    "Job",
-    "add_job_arguments",
-    "check_same_robot",
-    "grid_path",
-    "model_path",
-    "prepare",
-    "summary",
-]
+__all__ = ["Job", "add_job_arguments", "grid_path", "prepare", "summary"]
 
 
 @dataclass
@@ -51,8 +44,8 @@ def add_job_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--model",
         metavar="CAL",
-        help="calibrated robot YAML (accugrid identify); overrides the cell's correction.model; "
-        "the grid then holds the residual after the model",
+        help="calibrated robot YAML (accugrid identify): correct by the model, the grid (if any) "
+        "then holds its residual; overrides the cell file's correction.model",
     )
     parser.add_argument(
         "--no-correction",
@@ -74,40 +67,26 @@ def add_job_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 
-def grid_path(args: argparse.Namespace, cell: Cell) -> Path | None:
-    """The measurement to correct with: --grid, else the cell's; None with --no-correction."""
+def model_path(args: argparse.Namespace, cell: Cell) -> Path | None:
+    """The calibrated model to correct with: --model, else the cell's correction.model; None
+    with --no-correction."""
+    if args.no_correction:
+        if args.model is not None:
+            raise InputError("--model and --no-correction exclude each other")
+        return None
+    return Path(args.model) if args.model is not None else cell.model_path
+
+
+def grid_path(args: argparse.Namespace, cell: Cell, model: Path | None = None) -> Path | None:
+    """The measurement to correct with: --grid, else the cell's; None with --no-correction, and
+    None without one when a ``model`` corrects (the grid is then only its residual)."""
     if args.no_correction:
         if args.grid is not None:
             raise InputError("--grid and --no-correction exclude each other")
         return None
-    return cell.grid_file(args.grid, ", or use --no-correction")
-
-
-def model_path(args: argparse.Namespace, cell: Cell) -> Path | None:
-    """The calibrated model to correct with: --model, else the cell's correction.model; None
-    without either or with --no-correction."""
-    model = getattr(args, "model", None)
-    if args.no_correction:
-        if model is not None:
-            raise InputError("--model and --no-correction exclude each other")
+    if args.grid is None and cell.grid_path is None and model is not None:
         return None
-    return Path(model) if model is not None else cell.model_path
-
-
-def check_same_robot(model: Robot, robot: Robot, path: Path) -> None:
-    """InputError when the calibrated ``model`` (file ``path``) is not of ``robot``: its nominal
-    DH table must be the cell robot's."""
-    a, b = model.dh, robot.dh
-    same = all(
-        np.allclose(getattr(a, f), getattr(b, f), rtol=0.0, atol=1e-9)
-        for f in ("a", "d", "alpha", "theta_offset", "sign")
-    )
-    if not same:
-        raise InputError(
-            f"the model is of robot {model.name}, whose nominal DH table is not that of the "
-            f"cell's robot {robot.name}",
-            path,
-        )
+    return cell.grid_file(args.grid, ", or use --no-correction")
 
 
 def prepare(args: argparse.Namespace, command: str) -> Job:
@@ -116,21 +95,17 @@ def prepare(args: argparse.Namespace, command: str) -> Job:
     if args.allow_config_change:
         cell = dataclasses.replace(cell, allow_config_change=True)
     model_file = model_path(args, cell)
-    grid_file = grid_path(args, cell) if model_file is None or args.grid or cell.grid_path else None
+    grid_file = grid_path(args, cell, model_file)
     points = read_points(args.points)
+    grid = None if grid_file is None else GridModel.from_measurements(grid_file)
     robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
-    model = status = None
+    model = None
     if model_file is not None:
         model = load_robot(model_file)
-        check_same_robot(model, robot, model_file)
-        status = program_status(points, cell, robot) if len(points) else None
-    if grid_file is None:
-        grid = None
-    elif model is None:
-        grid = GridModel.from_measurements(grid_file)
-    else:
-        grid = residual_grid(model, grid_file, status, controller_tool=cell.flange_T_tool)
-    program = build_program(points, cell, robot, grid, model, status)
+        check_same_robot(model, robot, os.fspath(model_file))
+        if np.array_equal(model.flange_T_tool, np.eye(4)):  # no TCP in the file: the cell's
+            model = model.with_tool(cell.flange_T_tool)
+    program = build_program(points, cell, robot, grid, model)
     for warning in program.warnings:
         print(f"accugrid {command}: warning: {warning}", file=sys.stderr)
     largest, hole = program.largest_correction()
@@ -138,17 +113,18 @@ def prepare(args: argparse.Namespace, command: str) -> Job:
     inputs.append(input_line("cell", args.cell, cell.sha256))
     details = []
     if model_file is not None:
-        inputs.append(input_line("model", model_file, file_sha256(model_file)))
-        details.append(f"model {model.name}, KUKA Status {status}")
-    if grid is not None:
-        inputs += grid_lines(Path(grid_file).name, grid.source_sha256, grid.step)
-        if model is not None:
-            details.append("grid holds the residual after the model")
-    elif model is None:
+        sha = file_sha256(model_file) if model_file.is_file() else "built-in"
+        inputs.append(input_line("model", model_file, sha))
+        residual = "" if grid is None else " and the residual grid"
+        details.append(f"corrected by model {model.name}{residual}")
+    if grid is None and model is None:
         details = ["grid none (--no-correction): positions are not corrected"]
+    elif grid is not None:
+        inputs += grid_lines(Path(grid_file).name, grid.source_sha256, grid.step)
     where = f" at hole {points.ids[hole]}" if hole is not None else ""
     header = header_lines(command, inputs, details, largest, where, [f"holes {len(program)}"])
-    inputs = [Path(args.points), Path(args.cell)] + [f for f in (grid_file, model_file) if f]
+    inputs = [Path(args.points), Path(args.cell)] + ([grid_file] if grid_file else [])
+    inputs += [model_file] if model_file is not None and model_file.is_file() else []
     return Job(program, header, inputs)
 
 

@@ -15,6 +15,11 @@ weighting over the 8 vertices of a cell jumps where the positions straddle a cel
 the example grid's Y = 0 plane). One vector per hole keeps the axis straight and the hole where
 the grid says. Orientation is not corrected.
 
+With a calibrated model (``correction.model``, ``--model``) the vector is P' - P of
+``compensation.model_correction`` at the hole point and its own orientation (the controller's
+IK with the cell's tool in the program's Status, the calibrated arm's FK), plus the grid as the
+residual after the model when one is given.
+
 Every corrected pose goes through IK: unreachable or out-of-limit poses are InputErrors naming
 the hole; |A5| below ``configuration.singular_a5`` is a warning. The KUKA Status/Turn is the
 cell's, or the first hole's IK solution, and stays the same for the whole program unless
@@ -33,7 +38,7 @@ from accugrid.codegen.cell import Cell
 from accugrid.codegen.points import Points
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation.grid import GridModel
-from accugrid.compensation.model_correction import model_correct
+from accugrid.compensation.model_correction import model_correct, residual_grid
 from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import (
@@ -55,7 +60,6 @@ __all__ = [
     "STAGES",
     "Program",
     "build_program",
-    "program_status",
 ]
 
 STAGES = ("APP", "CLR", "BOT", "RET")
@@ -123,12 +127,10 @@ def build_program(
     robot: RobotModel,
     grid: GridModel | None = None,
     model: Robot | None = None,
-    status: int | None = None,
 ) -> Program:
     """Corrected, IK-checked program for ``points`` in ``cell`` (``grid``: None for no
-    correction; ``robot`` with the cell's tool). With a calibrated ``model`` every position is
-    corrected by ``model_correct`` in KUKA ``status`` (``program_status``), ``grid`` then being
-    the residual grid; ``correction`` holds each hole's BOT command minus its target."""
+    correction; ``robot`` with the cell's tool; ``model``: a calibrated Robot, then ``grid`` is
+    the measured grid whose residual after the model is added, or None)."""
     n = len(points)
     if n == 0:
         raise InputError("no drilling points in the file", points.path)
@@ -154,15 +156,14 @@ def build_program(
     holes_robot = points.xyz @ base_rot.T + cell.robot_T_base[:3, 3]
     warnings: list[str] = []
     if model is not None:
-        positions, correction, warnings = _model_positions(
-            points, cell, grid, model, status, nominal, base_rot @ rotations
+        correction, warnings = _model_correction(
+            points, cell, robot, model, grid, holes_robot, base_rot @ rotations
         )
     elif grid is None:
         correction = np.zeros((n, 3))
     else:
         correction, warnings = _correction(points, cell, grid, holes_robot, base_rot @ rotations)
-    if model is None:
-        positions = nominal + (correction @ base_rot)[:, None, :]  # e rotated into BASE frame
+    positions = nominal + (correction @ base_rot)[:, None, :]  # e rotated into the BASE frame
     status, turn, ik_warnings = _configuration(points, cell, robot, positions, rotations)
     return Program(
         cell=cell,
@@ -177,76 +178,6 @@ def build_program(
         warnings=warnings + ik_warnings,
         corrected=grid is not None or model is not None,
     )
-
-
-def program_status(points: Points, cell: Cell, robot: RobotModel) -> int:
-    """The program's KUKA Status: the cell's, else the nominal IK's for the first hole's APP
-    pose (robot with the cell's tool); InputError naming the hole when it is unreachable."""
-    if cell.status is not None:
-        return cell.status
-    rotation = _rotations(points, cell)[0]  # BASE frame
-    pose = np.eye(4)
-    pose[:3, :3] = cell.robot_T_base[:3, :3] @ rotation
-    start = points.xyz[0] - cell.approach_mm * rotation[:, 2]
-    pose[:3, 3] = cell.robot_T_base[:3, :3] @ start + cell.robot_T_base[:3, 3]
-    first = robot.ik(pose[None], turn=cell.turn)
-    if not first.ok[0]:
-        _fail(points, 0, 0, first.reason[0], cell)
-    return int(first.status[0])
-
-
-def _model_positions(
-    points: Points,
-    cell: Cell,
-    grid: GridModel | None,
-    model: Robot,
-    status: int | None,
-    nominal: np.ndarray,
-    rotations: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """Model-corrected positions (N, 4, 3) BASE frame, each hole's BOT correction (N, 3) robot
-    frame and the warnings. nominal (N, 4, 3) BASE frame; rotations (N, 3, 3) robot frame.
-    InputError naming the hole that the model cannot correct or that leaves the residual grid."""
-    n = len(points)
-    base_rot, base_org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
-    targets = (nominal @ base_rot.T + base_org).reshape(-1, 3)
-    abc = np.repeat(matrix_to_abc(rotations).reshape(-1, 3), len(STAGES), axis=0)
-    warnings: list[str] = []
-    if grid is not None:
-        found = grid.check(targets[2 :: len(STAGES)], cell.correction, rotations=rotations)
-        if found.outside.size:
-            i = int(found.outside[0])
-            raise InputError(
-                f"{found.outside.size} hole(s) outside the residual grid box "
-                f"{mm_text(grid.origin, 1)}..{mm_text(grid.upper, 1)} mm (robot frame), first "
-                f"{points.label(i)}",
-                *points.table.where(i),
-            )
-        warnings = _orientation_warnings(points, grid, found.angle)
-    result = model_correct(
-        model, targets, abc, status, grid, cell.correction, controller_tool=cell.flange_T_tool
-    )
-    if not result.ok.all():
-        bad = result.failed
-        hole, stage = divmod(int(bad[0]), len(STAGES))
-        raise InputError(
-            f"{points.name(hole)}: the {STAGES[stage]} pose is not corrected by model "
-            f"{model.name} in Status {status}: {result.reason[bad[0]]}"
-            + (f"; {bad.size - 1} more pose(s) fail" if bad.size > 1 else ""),
-            *points.table.where(hole),
-        )
-    shift = (result.command - targets).reshape(n, len(STAGES), 3)
-    limit = cell.correction.max_correction_mm
-    length = np.linalg.norm(shift, axis=2).max(axis=1)
-    if limit is not None and (length > limit).any():
-        worst = int(np.argmax(length))
-        raise InputError(
-            f"{points.name(worst)}: model correction of {length[worst]:.3f} mm exceeds the safety "
-            f"limit of {limit:g} mm; check the model, the tool and the base frame",
-            *points.table.where(worst),
-        )
-    positions = nominal + shift @ base_rot  # robot-frame shifts rotated into the BASE frame
-    return positions, shift[:, 2], warnings
 
 
 def _rotations(points: Points, cell: Cell) -> np.ndarray:
@@ -290,6 +221,64 @@ def _correction(
             *points.table.where(worst),
         )
     return found.correction, _orientation_warnings(points, grid, found.angle)
+
+
+def _model_correction(
+    points: Points,
+    cell: Cell,
+    robot: RobotModel,
+    model: Robot,
+    grid: GridModel | None,
+    holes_robot: np.ndarray,
+    rotations: np.ndarray,
+) -> tuple[np.ndarray, list[str]]:
+    """P' - P (N, 3) robot frame by the calibrated ``model`` (+ the residual of the measured
+    ``grid`` after the model) and the warnings; InputError naming holes the controller cannot
+    reach or that do not converge, and as ``_correction`` for the residual grid. rotations
+    (N, 3, 3) robot frame."""
+    status = cell.status
+    if status is None:
+        first = robot.ik(_poses(holes_robot[:1], rotations[:1]), turn=cell.turn)
+        status = int(first.status[0]) if first.ok[0] else None
+    warnings: list[str] = []
+    if grid is not None:
+        grid = residual_grid(model, grid, status, controller_tool=cell.flange_T_tool)
+        warnings = _correction(points, cell, grid, holes_robot, rotations)[1]
+    result = model_correct(
+        model,
+        holes_robot,
+        matrix_to_abc(rotations),
+        status,
+        grid,
+        cell.correction,
+        controller_tool=cell.flange_T_tool,
+    )
+    if not result.ok.all():
+        bad = result.failed
+        i = int(bad[0])
+        more = f"; {bad.size - 1} more hole(s)" if bad.size > 1 else ""
+        raise InputError(
+            f"{points.name(i)}: not corrected by model {model.name} in Status {status}: "
+            f"{result.reason[i]}{more}",
+            *points.table.where(i),
+        )
+    correction = result.command - holes_robot
+    length = np.linalg.norm(correction, axis=1)
+    limit = cell.correction.max_correction_mm
+    if limit is not None and (length > limit).any():
+        worst = int(np.argmax(length))
+        raise InputError(
+            f"{points.name(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
+            f"limit of {limit:g} mm; check the model and the base frame",
+            *points.table.where(worst),
+        )
+    return correction, warnings
+
+
+def _poses(positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
+    poses = np.tile(np.eye(4), (len(positions), 1, 1))
+    poses[:, :3, :3], poses[:, :3, 3] = rotations, positions
+    return poses
 
 
 def _orientation_warnings(points: Points, grid: GridModel, angle: np.ndarray | None) -> list[str]:

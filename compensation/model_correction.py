@@ -138,7 +138,7 @@ def model_correct(
 
 def residual_grid(
     calibrated: Robot,
-    measurements: str | os.PathLike[str] | tuple,
+    measurements: str | os.PathLike[str] | tuple | GridModel,
     status: int | None,
     abc_deg: np.ndarray | None = None,
     repeat_tol_mm: float | None = None,
@@ -148,13 +148,16 @@ def residual_grid(
     P_v - M minus the model's P_v - reach(P_v), i.e. r = reach(P_v) - M (mm).
 
     ``measurements``: a measurement CSV path or (commanded, measured[, abc]) arrays, as for
-    ``GridModel.from_measurements``; the vertices are reached at the measurement's a,b,c
-    (``abc_deg`` when the file has none) in KUKA ``status`` by a controller with
-    ``controller_tool`` (as ``reached_by_model``). InputError naming the first vertex the nominal
-    controller cannot reach.
+    ``GridModel.from_measurements``, or the measured GridModel itself; the vertices are reached
+    at the measurement's a,b,c (``abc_deg`` when it has none) in KUKA ``status`` by a controller
+    with ``controller_tool`` (as ``reached_by_model``). InputError naming the first vertex the
+    nominal controller cannot reach.
     """
-    kwargs = {} if repeat_tol_mm is None else {"repeat_tol_mm": repeat_tol_mm}
-    measured = GridModel.from_measurements(measurements, **kwargs)
+    if isinstance(measurements, GridModel):
+        measured = measurements
+    else:
+        kwargs = {} if repeat_tol_mm is None else {"repeat_tol_mm": repeat_tol_mm}
+        measured = GridModel.from_measurements(measurements, **kwargs)
     abc = measured.orientation_abc if measured.orientation_abc is not None else abc_deg
     if abc is None:
         raise InputError(

@@ -43,7 +43,10 @@ from accugrid.compensation.cube_points import (
 )
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.plans import grid_axes
+from accugrid.kinematics.configuration import solve_in_one_status
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.model import RobotModel
+from accugrid.kinematics.simulation import commanded_poses, simulate_measurements
 from accugrid.kinematics.units import mm_text
 
 __all__ = [
@@ -59,14 +62,17 @@ __all__ = [
     "Summary",
     "Validation",
     "analyse",
+    "check_reach",
     "choose_step",
     "crossing",
     "design",
     "fit_curve",
     "measured_residuals",
+    "measured_validation",
     "random_points",
     "read_experiment",
     "simulate_study",
+    "simulated_measure",
     "simulate_validation",
     "summarize",
 ]
@@ -454,3 +460,66 @@ def simulate_validation(
     command = model.correct(points)
     after = points[:, None, :] - measure(command, repeats, 4).reshape(-1, repeats, 3)
     return Validation(step_mm, points, before, after, model)
+
+
+def simulated_measure(
+    robot: RobotModel,
+    abc: np.ndarray,
+    status: int | None,
+    seed: int,
+    noise_tracker_mm: float,
+    noise_repeat_mm: float,
+) -> Measure:
+    """measure(points, repeats, stream): the measured rows of
+    ``kinematics.simulation.simulate_measurements`` seeded ``seed * 1000 + stream``, every point
+    in the one KUKA ``status`` (the IK default would flip the wrist inside a cube near A5 = 0 and
+    make the simulated error field jump there)."""
+    noise = (noise_tracker_mm, noise_repeat_mm)
+
+    def measure(points: np.ndarray, repeats: int, stream: int) -> np.ndarray:
+        stream_seed = seed * 1000 + stream
+        return simulate_measurements(robot, points, abc, repeats, *noise, stream_seed, status)[1]
+
+    return measure
+
+
+def check_reach(robot: RobotModel, names, centres, steps, abc, status) -> int:
+    """The KUKA Status of the whole study (``status``, or the IK default at the first centre)
+    after checking that every cube point is reachable in it; InputError naming the first cube
+    point that is not."""
+    cubes = design(names, centres, steps)
+    points = np.concatenate([cubes.vertex_cmd, cubes.test_target], axis=2)  # (C, S, 17, 3)
+    first = commanded_poses(np.asarray(centres[:1], dtype=float), abc)[0]
+    sol, status = solve_in_one_status(
+        robot, commanded_poses(points.reshape(-1, 3), abc), status, first
+    )
+    if sol.ok.all():
+        return int(status)
+    i = int(np.flatnonzero(~sol.ok)[0])
+    c, s, k = np.unravel_index(i, points.shape[:3])
+    label = f"C{k + 1}" if k < 8 else f"P{k - 7}"
+    x, y, z = points[c, s, k]
+    raise InputError(
+        f"cube of centre {names[c]} at step {steps[s]:g} mm is outside the reach of "
+        f"{robot.name}: {label} X {x:.3f} Y {y:.3f} Z {z:.3f} ({sol.reason[i]}"
+        f"{'' if status is None else f', Status {status}'}); move the centre or drop the step"
+    )
+
+
+def measured_validation(grid_path: str, points_path: str) -> Validation:
+    """Table 5 from measurements: errors before (P - M) and after (P - M - e_pred(P))."""
+    model = GridModel.from_measurements(grid_path)
+    table = read_table(points_path)
+    table.require(["x", "y", "z", "x_meas", "y_meas", "z_meas"])
+    if not len(table):
+        raise InputError("no validation points", table.path, 1)
+    points = table.floats(["x", "y", "z"])
+    measured = table.floats(["x_meas", "y_meas", "z_meas"])
+    outside = np.flatnonzero(~model.contains(points))
+    if outside.size:
+        raise InputError(
+            f"{outside.size} validation points lie outside the grid", *table.where(int(outside[0]))
+        )
+    before = (points - measured)[:, None, :]
+    after = before - model.predict(points)[:, None, :]
+    return Validation(float(model.step.max()), points, before, after, model)

@@ -12,7 +12,7 @@ from conftest import EXAMPLES
 
 import accugrid
 from accugrid.codegen.cli import main
-from accugrid.codegen.commands.correct import ADDED
+from accugrid.codegen.corrected import ADDED
 from accugrid.compensation import GridModel
 
 SHIFT = np.array([0.1, -0.2, 0.3])  # a constant error e = P - M of the synthetic grid

@@ -2,175 +2,69 @@
 
 from __future__ import annotations
 
-from importlib import resources
-from pathlib import Path
-
 import numpy as np
+import pytest
+from program_helpers import CELL, POINTS, cell, robot
 
+from accugrid.codegen.cell import load_cell
 from accugrid.codegen.cli import main
-from accugrid.codegen.krl.parse import parse_krl
-from accugrid.kinematics.frames import abc_to_matrix
+from accugrid.codegen.points import read_points
+from accugrid.codegen.program import build_program
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import transform_points
 from accugrid.kinematics.robot import load_robot
 
-ROOT = Path(__file__).resolve().parents[1]
-POINTS = ROOT / "examples" / "wing_panel_points.csv"
-REALISTIC = resources.files("accugrid.kinematics").joinpath("robots", "kr210-realistic.yaml")
+
+def test_every_hole_point_lands_when_the_calibrated_arm_drives_the_program():
+    points = read_points(POINTS)
+    model = load_robot("kr210-realistic").with_tool(cell().flange_T_tool)
+    program = build_program(points, cell(), robot(), model=model)
+    assert program.corrected
+    holes = transform_points(cell().robot_T_base, points.xyz)  # robot frame
+    command = holes + program.correction
+    poses = np.tile(np.eye(4), (len(holes), 1, 1))
+    poses[:, :3, :3] = cell().robot_T_base[:3, :3] @ program.rotations
+    poses[:, :3, 3] = command
+    status = int(program.configuration.to_kuka()[0][0, 0])
+    sol = robot().ik(poses, status=status)  # the controller: nominal model, the cell's tool
+    assert sol.ok.all()
+    landed = model.true_robot().fk(sol.q)[:, :3, 3]
+    np.testing.assert_allclose(landed, holes, atol=1e-3, rtol=0)
+    # the same vector moves every stage of a hole
+    stages = program.positions - program.nominal
+    np.testing.assert_allclose(stages, stages[:, :1].repeat(4, axis=1), atol=1e-9)
 
 
-def _cell(tmp_path: Path) -> Path:
-    """The example cell on the nominal kr210, with 5 decimals and no grid."""
-    lines = []
-    for line in (ROOT / "examples" / "cell.yaml").read_text().splitlines():
-        if line.startswith("robot:"):
-            line = "robot: kr210"
-        elif line.startswith("grid:"):
-            continue
-        lines.append(line)
-    text = "\n".join(lines) + "\n"
-    text = text.replace("decimals: 3", "decimals: 5")
+def test_cell_correction_model_is_a_path_next_to_the_cell(tmp_path):
+    text = CELL.read_text().replace("correction:", "correction:\n  model: cal/robot-cal.yaml", 1)
+    assert text != CELL.read_text()
     path = tmp_path / "cell.yaml"
     path.write_text(text)
-    return path
+    assert load_cell(path).model_path == tmp_path / "cal" / "robot-cal.yaml"
+    path.write_text(text.replace("model: cal/robot-cal.yaml", "model: 3"))
+    with pytest.raises(
+        InputError, match=r"cell.yaml:70: correction.model: must be a calibrated robot YAML"
+    ):
+        load_cell(path)
 
 
-def _with_model(tmp_path: Path, model_name: str) -> Path:
-    """Cell file whose correction: section names ``model_name`` (relative to the cell)."""
-    cell = _cell(tmp_path)
-    text = cell.read_text().replace("\ncorrection:\n", f"\ncorrection:\n  model: {model_name}\n")
-    assert f"model: {model_name}" in text
-    cell.write_text(text)
-    return cell
-
-
-def _calibrated(path: Path, text: str | None = None) -> Path:
-    """kr210-realistic as a calibrated robot file whose identified TCP is the cell's tool."""
-    text = REALISTIC.read_text() if text is None else text
-    path.write_text(text + "tool: {x: 0, y: 0, z: 250, a: 0, b: 0, c: 0}\n")
-    return path
-
-
-def _targets_and_commands(dat: Path, cell_path: Path):
-    """Hole bottoms in the robot frame from the points file and the BOT E6POS of the .dat."""
-    from accugrid.codegen.cell import load_cell
-    from accugrid.codegen.points import read_points
-
-    cell = load_cell(cell_path)
-    positions = {p.name: p for p in parse_krl(dat.read_text(), dat)}
-    points = read_points(POINTS)
-    bots = [positions[f"XH{i + 1}_BOT"] for i in range(len(points))]
-    xyz = np.array([[p.x, p.y, p.z] for p in bots])
-    abc = np.array([[p.a, p.b, p.c] for p in bots])
-    status = {int(p.s) for p in bots}
-    rot = cell.robot_T_base[:3, :3]
-    command = xyz @ rot.T + cell.robot_T_base[:3, 3]
-    rotations = rot @ abc_to_matrix(abc).reshape(-1, 3, 3)
-    return cell, points, command, rotations, status
-
-
-def test_krl_with_a_model_lands_every_hole_bottom_on_its_target(tmp_path):
-    _calibrated(tmp_path / "cal.yaml")
-    cell_path = _with_model(tmp_path, "cal.yaml")
+def test_krl_with_a_model_names_it_in_the_header_and_refuses_no_correction(tmp_path, capsys):
     out = tmp_path / "krl"
-    assert main(["krl", str(POINTS), "--cell", str(cell_path), "-o", str(out)]) == 0
+    argv = ["krl", str(POINTS), "--cell", str(CELL), "--model", "kr210-realistic", "-o", str(out)]
+    assert main(argv) == 0
     src = next(out.glob("*.src")).read_text()
-    assert "; model cal.yaml sha256 " in src
-    cell, points, command, rotations, status = _targets_and_commands(
-        next(out.glob("*.dat")), cell_path
-    )
-    assert len(status) == 1
-    # the nominal controller with the cell's tool, then the calibrated (true) arm
-    controller = load_robot("kr210").with_tool(cell.flange_T_tool)
-    arm = load_robot(tmp_path / "cal.yaml").true_robot()
-    poses = np.tile(np.eye(4), (len(command), 1, 1))
-    poses[:, :3, :3] = rotations
-    poses[:, :3, 3] = command
-    sol = controller.ik(poses, status=status.pop())
-    assert sol.ok.all()
-    reached = arm.fk(sol.q)[:, :3, 3]
-    axis = rotations[:, :, 2]
-    depth = np.where(np.isnan(points.depth), cell.depth_mm, points.depth)
-    base = points.xyz + depth[:, None] * (cell.robot_T_base[:3, :3].T @ axis.T).T
-    target = base @ cell.robot_T_base[:3, :3].T + cell.robot_T_base[:3, 3]
-    miss = np.linalg.norm(reached - target, axis=1)
-    assert miss.max() < 1e-3
-    # and the model really moved the commands (the arm's error is millimetres)
-    assert np.linalg.norm(command - target, axis=1).min() > 0.5
+    assert "; model kr210-realistic sha256 built-in" in src
+    assert "corrected by model kr210-realistic and the residual grid" in src
+    assert main([*argv[:-2], "--no-correction", "-o", str(tmp_path / "k2")]) == 2
+    assert "--model and --no-correction exclude each other" in capsys.readouterr().err
 
 
-def test_krl_refuses_a_model_of_another_robot(tmp_path, capsys):
-    text = REALISTIC.read_text().replace("a_mm: 350.0", "a_mm: 360.0", 1)
-    _calibrated(tmp_path / "other.yaml", text)
-    cell_path = _with_model(tmp_path, "other.yaml")
-    out = tmp_path / "krl"
-    assert main(["krl", str(POINTS), "--cell", str(cell_path), "-o", str(out)]) == 2
-    err = capsys.readouterr().err.strip()
-    assert "other.yaml" in err and "DH" in err and "\n" not in err
-    assert not out.exists()
-
-
-def test_gcode_model_option_corrects_a_cell_without_model(tmp_path):
-    cell_path = _cell(tmp_path)
-    plain = tmp_path / "plain"
-    argv = ["gcode", str(POINTS), "--cell", str(cell_path), "--no-correction", "-o"]
-    assert main([*argv, str(plain / "p.ngc")]) == 0
-    _calibrated(tmp_path / "cal.yaml")
-    model_out = tmp_path / "model" / "p.ngc"
-    argv = ["gcode", str(POINTS), "--cell", str(cell_path), "--model", str(tmp_path / "cal.yaml")]
-    assert main([*argv, "-o", str(model_out)]) == 0
-    assert "model cal.yaml sha256" in model_out.read_text()
-    assert model_out.read_text() != (plain / "p.ngc").read_text()
-
-
-def _krl_positions(path: Path) -> dict[str, np.ndarray]:
-    """X, Y, Z, A, B, C (6,) of every E6POS declared in a .dat, by name."""
-    return {
-        p.name: np.array([p.x, p.y, p.z, p.a, p.b, p.c])
-        for p in parse_krl(path.read_text(), path)
-        if p.type == "E6POS"
-    }
-
-
-def test_rewrite_with_a_model_makes_the_calibrated_arm_reach_the_original_targets(tmp_path):
-    cal = _calibrated(tmp_path / "cal.yaml")
-    grid = tmp_path / "residual.csv"
-    # the same arm measured without noise: the residual after the (exact) model is zero
-    simulate = ["simulate", "--robot", "kr210-realistic", "--region", "1200", "2200", "-500"]
-    simulate += ["500", "1100", "2100", "--step", "500", "--abc", "0", "90", "0", "--tool"]
-    assert main([*simulate, "0", "0", "250", "0", "0", "0", "-o", str(grid)]) == 0
-    cell_path = _with_model(tmp_path, "cal.yaml")
-    src, dat = ROOT / "examples" / "cam_drill.src", ROOT / "examples" / "cam_drill.dat"
-    out = tmp_path / "rw"
-    argv = ["rewrite", str(src), str(dat), "--cell", str(cell_path), "--grid", str(grid)]
-    assert main([*argv, "--decimals", "6", "-o", str(out)]) == 0
-    before, after = _krl_positions(dat), _krl_positions(out / "cam_drill.dat")
-    from accugrid.codegen.cell import load_cell
-
-    cell = load_cell(cell_path)
-    moved = [k for k in before if np.linalg.norm(after[k][:3] - before[k][:3]) > 0.5]
-    assert moved == ["XH1_APP", "XH1"]  # the .dat's two hole positions
-    rot, org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
-    target = np.array([before[k][:3] for k in moved]) @ rot.T + org
-    command = np.array([after[k][:3] for k in moved]) @ rot.T + org
-    poses = np.tile(np.eye(4), (len(moved), 1, 1))
-    poses[:, :3, :3] = rot @ abc_to_matrix(np.array([after[k][3:] for k in moved]))
-    poses[:, :3, 3] = command
-    sol = load_robot("kr210").with_tool(cell.flange_T_tool).ik(poses)
-    assert sol.ok.all()
-    reached = load_robot(cal).true_robot().fk(sol.q)[:, :3, 3]
-    assert np.linalg.norm(reached - target, axis=1).max() < 1e-3
-
-
-def test_krl_refuses_a_hole_the_model_cannot_correct_naming_it(tmp_path, capsys):
-    _calibrated(tmp_path / "cal.yaml")
-    cell_path = _with_model(tmp_path, "cal.yaml")
-    points = tmp_path / "points.csv"
-    points.write_text(
-        "id,x,y,z,i,j,k\n"
-        "H1,0,150,-10.345,0.071875,0,-0.997414\n"
-        "H2,0,150,-4000,0,0,-1\n"  # 4 m below the panel: out of the arm's reach
-    )
-    out = tmp_path / "krl"
-    assert main(["krl", str(points), "--cell", str(cell_path), "-o", str(out)]) == 2
-    err = capsys.readouterr().err.strip()
-    assert "points.csv:3" in err and "H2" in err and "\n" not in err
+def test_a_model_of_another_robot_is_refused(tmp_path, capsys):
+    other = tmp_path / "other.yaml"
+    text = (CELL.parent.parent / "kinematics" / "robots" / "kr210.yaml").read_text()
+    other.write_text(text.replace("a_mm: 1150.0", "a_mm: 1100.0", 1))
+    out = tmp_path / "o.ngc"
+    argv = ["gcode", str(POINTS), "--cell", str(CELL), "--model", str(other), "-o", str(out)]
+    assert main(argv) == 2
+    assert "is of another robot" in capsys.readouterr().err
     assert not out.exists()

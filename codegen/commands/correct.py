@@ -19,32 +19,28 @@ tool's Z axis for i,j,k points.
 from __future__ import annotations
 
 import argparse
-import csv
-import io
 from pathlib import Path
 
-import numpy as np
-
-from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.atomic import check_targets
 from accugrid.codegen.cli_options import add_abc, add_status, add_tool
-from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
-from accugrid.codegen.points import Points, read_points
-from accugrid.codegen.textsafe import fixed
+from accugrid.codegen.corrected import (
+    check_added_columns,
+    check_orientation,
+    check_outside,
+    print_corrections,
+    write_corrected,
+)
+from accugrid.codegen.header import grid_lines
+from accugrid.codegen.points import read_points
 from accugrid.compensation.grid import MAX_CORRECTION_MM, GridModel
 from accugrid.compensation.measurements import REPEAT_TOL_MM
 from accugrid.compensation.settings import CorrectionSettings
-from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
-from accugrid.kinematics.units import mm_text
 
-__all__ = ["ADDED", "DECIMALS", "NAME", "add_arguments", "run", "settings_from"]
+__all__ = ["NAME", "add_arguments", "run", "settings_from"]
 
 NAME = "correct"
-
-ADDED = ["x_cmd", "y_cmd", "z_cmd", "ex", "ey", "ez", "flag"]
-DECIMALS = 4
-_LISTED = 5  # how many points a message names
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -177,131 +173,3 @@ def run(args: argparse.Namespace) -> int:
     print(f"corrected  {len(points)} point(s), {args.method}{power}, {iterations}")
     print_corrections(points, length, worst, flags, args.output)
     return 0
-
-
-def check_added_columns(points: Points) -> None:
-    """InputError when the points CSV already has a column that correct writes."""
-    clash = [name for name in ADDED if points.table.has(name)]
-    if clash:
-        raise InputError(
-            f"column(s) {', '.join(clash)} would be written by accugrid correct; rename them",
-            points.path,
-            1,
-        )
-
-
-def refuse_too_long(points: Points, length: np.ndarray, limit_mm: float) -> int | None:
-    """Index of the longest correction (None without points); InputError naming that point when
-    it exceeds ``limit_mm`` (the whole job is refused)."""
-    worst = int(np.argmax(length)) if len(points) else None
-    if worst is not None and length[worst] > limit_mm:
-        raise InputError(
-            f"{points.label(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
-            f"limit of {limit_mm:g} mm; refusing the whole job (check the grid or model)",
-            *points.table.where(worst),
-        )
-    return worst
-
-
-def check_outside(
-    points: Points, model: GridModel, outside: np.ndarray, rule: str, flags: list[list[str]]
-) -> None:
-    """Points outside the grid box (indices ``outside``): InputError for rule "error", else a
-    "clamped" flag each."""
-    if not outside.size:
-        return
-    if rule == "error":
-        named = "; ".join(points.label(int(i)) for i in outside[:_LISTED])
-        more = f" and {outside.size - _LISTED} more" if outside.size > _LISTED else ""
-        raise InputError(
-            f"{outside.size} point(s) outside the grid box {mm_text(model.origin)}.."
-            f"{mm_text(model.upper)} mm (robot frame): {named}{more} (--outside clamp uses the "
-            "nearest cell)",
-            *points.table.where(int(outside[0])),
-        )
-    for i in outside:
-        flags[i].append("outside grid: clamped")
-
-
-def check_orientation(
-    points: Points,
-    model: GridModel,
-    angle: np.ndarray | None,
-    args: argparse.Namespace,
-    flags: list[list[str]],
-    what: str,
-) -> None:
-    """Angles (N,) deg from the grid's orientation: InputError beyond --orientation-limit
-    (unless --allow-orientation), a flag beyond --orientation-tol; ``what`` names the grid."""
-    if angle is None:
-        return
-    beyond = np.flatnonzero(angle > args.orientation_limit)
-    if beyond.size and not args.allow_orientation:
-        i = int(beyond[0])
-        raise InputError(
-            f"{beyond.size} point(s) more than {args.orientation_limit:g} deg from the {what}'s "
-            f"orientation {mm_text(model.orientation_abc)} deg, first {points.label(i)} at "
-            f"{angle[i]:.1f} deg: the grid does not hold there (--allow-orientation to go on)",
-            *points.table.where(i),
-        )
-    for i in np.flatnonzero(angle > args.orientation_tol):
-        flags[i].append(f"orientation {angle[i]:.1f} deg from {what}")
-
-
-def corrected_csv(
-    points: Points,
-    command: np.ndarray,
-    correction: np.ndarray,
-    flags: list[list[str]],
-    header: list[str],
-) -> str:
-    out = io.StringIO()
-    out.write(csv_comment(header))
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow([*points.table.header, *ADDED])
-    for r, row in enumerate(points.table.rows):
-        numbers = [fixed(v, DECIMALS) for v in (*command[r], *correction[r])]
-        writer.writerow([*row, *numbers, "; ".join(flags[r])])
-    return out.getvalue()
-
-
-def write_corrected(
-    args: argparse.Namespace,
-    points: Points,
-    command: np.ndarray,
-    flags: list[list[str]],
-    sources: list[str],
-    details: list[str],
-    inputs: list,
-) -> tuple[np.ndarray, int | None]:
-    """Refuse the job when a correction exceeds --max-correction, else write the corrected CSV
-    (header: the points file, ``sources`` and ``details`` lines) atomically; returns the
-    correction lengths (N,) mm and the index of the longest (None without points)."""
-    correction = command - points.xyz
-    length = np.sqrt(np.einsum("ij,ij->i", correction, correction))
-    worst = refuse_too_long(points, length, args.max_correction)
-    where = "" if worst is None else f" at hole {points.ids[worst]}"
-    largest = 0.0 if worst is None else float(length[worst])
-    lines = [input_line("points", args.points, file_sha256(args.points)), *sources]
-    header = header_lines("correct", lines, details, largest, where, [f"points {len(points)}"])
-    text = corrected_csv(points, command, correction, flags, header)
-    write_files({args.output: text}, inputs, force=args.force)
-    return length, worst
-
-
-def print_corrections(
-    points: Points, length: np.ndarray, worst: int | None, flags: list[list[str]], output
-) -> None:
-    """The summary lines every correct job ends with: largest correction, flagged points."""
-    if worst is not None:
-        print(
-            f"largest correction {length[worst]:.4f} mm at {points.label(worst)}; "
-            f"mean {length.mean():.4f} mm"
-        )
-    flagged = [i for i, f in enumerate(flags) if f]
-    print(f"flagged    {len(flagged)} point(s)")
-    for i in flagged[:_LISTED]:
-        print(f"  {points.label(i)}: {'; '.join(flags[i])}")
-    if len(flagged) > _LISTED:
-        print(f"  ... and {len(flagged) - _LISTED} more (see the flag column)")
-    print(f"wrote {output}")

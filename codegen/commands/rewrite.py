@@ -40,7 +40,6 @@ from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cell import load_cell
 from accugrid.codegen.dialects import dialect_of
 from accugrid.codegen.gcode.rewrite import rewrite_gcode
-from accugrid.codegen.job import check_same_robot
 from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.program import GRID_ORIENTATION_TOL_DEG
 from accugrid.codegen.program_text import MAX_BYTES, add_header, read_program
@@ -54,6 +53,7 @@ from accugrid.codegen.rewrite import (
 from accugrid.compensation import GridModel
 from accugrid.compensation.model_correction import residual_grid
 from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
+from accugrid.kinematics.calibrated import check_same_robot
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import load_robot
 from accugrid.kinematics.simulation import grid_status
@@ -190,7 +190,9 @@ def run(args: argparse.Namespace) -> int:
     else:
         calibrated = load_robot(model_file)
         nominal = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
-        check_same_robot(calibrated, nominal, model_file)
+        check_same_robot(calibrated, nominal, os.fspath(model_file))
+        if np.array_equal(calibrated.flange_T_tool, np.eye(4)):  # no TCP in the file: the cell's
+            calibrated = calibrated.with_tool(cell.flange_T_tool)
         status = cell.status
         if status is None:  # the Status the grid was measured in (one per measurement run)
             measured = GridModel.from_measurements(grid)

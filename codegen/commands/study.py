@@ -35,43 +35,24 @@ from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_wi
 from accugrid.codegen.commands.plan import add_experiment_arguments, parse_centres, parse_steps
 from accugrid.codegen.plots import fig12_png, hist_png
 from accugrid.codegen.progress import progress
-from accugrid.compensation.csvtable import read_table
-from accugrid.compensation.grid import GridModel
+from accugrid.codegen.study_report import csv_text, md_table, table4, table5, text_table
 from accugrid.compensation.plans import SEED_REGION
 from accugrid.compensation.study import (
-    AXES,
     DEFAULT_STD_FRACTION,
     DEFAULT_TOLERANCE_MM,
     REPEAT_RULES,
-    StudyResult,
-    Summary,
-    Validation,
     analyse,
-    design,
+    check_reach,
     measured_residuals,
+    measured_validation,
     read_experiment,
     simulate_study,
     simulate_validation,
+    simulated_measure,
 )
-from accugrid.kinematics.configuration import solve_in_one_status
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.robot import Robot
-from accugrid.kinematics.simulation import commanded_poses, simulate_measurements
 
-__all__ = [
-    "NAME",
-    "OUTPUTS",
-    "STAT_HEADER",
-    "add_arguments",
-    "check_reach",
-    "csv_text",
-    "measured_validation",
-    "run",
-    "simulated_measure",
-    "table4",
-    "table5",
-    "text_table",
-]
+__all__ = ["NAME", "OUTPUTS", "add_arguments", "run"]
 
 NAME = "study"
 
@@ -167,101 +148,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 
-def simulated_measure(robot: Robot, abc: np.ndarray, status: int, args: argparse.Namespace):
-    """measure(points, repeats, stream) for compensation.study: the measured rows of
-    ``kinematics.simulation.simulate_measurements`` seeded per stream, every point in the one
-    KUKA ``status`` (the IK default would flip the wrist inside a cube near A5 = 0 and make the
-    simulated error field jump there)."""
-
-    def measure(points: np.ndarray, repeats: int, stream: int) -> np.ndarray:
-        seed = args.seed * 1000 + stream
-        noise = (args.noise_tracker, args.noise_repeat)
-        return simulate_measurements(robot, points, abc, repeats, *noise, seed, status)[1]
-
-    return measure
-
-
-def check_reach(robot: Robot, names, centres, steps, abc, status) -> int:
-    """The KUKA Status of the whole study (``status``, or the IK default at the first centre)
-    after checking that every cube point is reachable in it; InputError naming the first cube
-    point that is not."""
-    cubes = design(names, centres, steps)
-    points = np.concatenate([cubes.vertex_cmd, cubes.test_target], axis=2)  # (C, S, 17, 3)
-    first = commanded_poses(np.asarray(centres[:1], dtype=float), abc)[0]
-    sol, status = solve_in_one_status(
-        robot, commanded_poses(points.reshape(-1, 3), abc), status, first
-    )
-    if sol.ok.all():
-        return int(status)
-    i = int(np.flatnonzero(~sol.ok)[0])
-    c, s, k = np.unravel_index(i, points.shape[:3])
-    label = f"C{k + 1}" if k < 8 else f"P{k - 7}"
-    x, y, z = points[c, s, k]
-    raise InputError(
-        f"cube of centre {names[c]} at step {steps[s]:g} mm is outside the reach of "
-        f"{robot.name}: {label} X {x:.3f} Y {y:.3f} Z {z:.3f} ({sol.reason[i]}"
-        f"{'' if status is None else f', Status {status}'}); move the centre or drop the step"
-    )
-
-
 def _region(args) -> tuple[np.ndarray, np.ndarray]:
     r = args.region
     return np.array([r[0], r[2], r[4]]), np.array([r[1], r[3], r[5]])
-
-
-def measured_validation(grid_path: str, points_path: str) -> Validation:
-    """Table 5 from measurements: errors before (P - M) and after (P - M - e_pred(P))."""
-    model = GridModel.from_measurements(grid_path)
-    table = read_table(points_path)
-    table.require(["x", "y", "z", "x_meas", "y_meas", "z_meas"])
-    if not len(table):
-        raise InputError("no validation points", table.path, 1)
-    points = table.floats(["x", "y", "z"])
-    measured = table.floats(["x_meas", "y_meas", "z_meas"])
-    outside = np.flatnonzero(~model.contains(points))
-    if outside.size:
-        raise InputError(
-            f"{outside.size} validation points lie outside the grid", *table.where(int(outside[0]))
-        )
-    before = (points - measured)[:, None, :]
-    after = before - model.predict(points)[:, None, :]
-    return Validation(float(model.step.max()), points, before, after, model)
-
-
-def _fmt(v: float) -> str:
-    return f"{v:.3f}"
-
-
-def text_table(header: list[str], rows: list[list[str]]) -> str:
-    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(header)]
-    line = lambda cells: "  ".join(c.rjust(w) for c, w in zip(cells, widths, strict=True))  # noqa: E731
-    return "\n".join([line(header), line(["-" * w for w in widths])] + [line(r) for r in rows])
-
-
-STAT_HEADER = [f"{k} {a}" for k in ("max", "min", "std") for a in AXES]
-
-
-def _stat_cells(row: Summary) -> list[str]:
-    return [_fmt(v) for v in (*row.max, *row.min, *row.std)]
-
-
-def table4(result: StudyResult) -> tuple[list[str], list[list[str]]]:
-    rows = [[f"{s:g}", *_stat_cells(r)] for s, r in zip(result.steps, result.table, strict=True)]
-    return ["step mm", *STAT_HEADER], rows
-
-
-def table5(before: Summary, after: Summary) -> tuple[list[str], list[list[str]]]:
-    return ["", *STAT_HEADER], [["before", *_stat_cells(before)], ["after", *_stat_cells(after)]]
-
-
-def csv_text(header: list[str], rows: list[list[str]]) -> str:
-    names = [h.replace(" mm", "_mm").replace(" ", "_").lower() or "calibration" for h in header]
-    return "\n".join([",".join(names)] + [",".join(r) for r in rows]) + "\n"
-
-
-def _md_table(header: list[str], rows: list[list[str]]) -> str:
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
 
 
 def run(args: argparse.Namespace) -> int:
@@ -281,7 +170,9 @@ def run(args: argparse.Namespace) -> int:
         names, xyz = list(centres), np.array(list(centres.values()), dtype=float)
         steps = parse_steps(args.steps)
         status = check_reach(robot, names, xyz, steps, abc, args.status)
-        measure = simulated_measure(robot, abc, status, args)
+        measure = simulated_measure(
+            robot, abc, status, args.seed, args.noise_tracker, args.noise_repeat
+        )
         cubes, residuals = simulate_study(measure, names, xyz, steps, args.repeats, progress)
         settings += [
             f"simulated robot {robot.name}, A B C {' '.join(f'{v:g}' for v in abc)} deg, "
@@ -338,7 +229,7 @@ def run(args: argparse.Namespace) -> int:
         "",
         "## Table 4: remaining error after compensation (mm)",
         "",
-        _md_table(h4, r4),
+        md_table(h4, r4),
         "",
         "## Decision (seed Sec. 4.4)",
         "",
@@ -366,7 +257,7 @@ def run(args: argparse.Namespace) -> int:
             f"{len(validation.points)} random points; grid step {steps_used} mm{chosen}, "
             f"{int(np.prod(validation.model.counts))} vertices.",
             "",
-            _md_table(h5, r5),
+            md_table(h5, r5),
             "",
             "![Table 5 histograms](table5_hist.png)",
         ]
