@@ -24,12 +24,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from accugrid.compensation.comparison import tilted_abc  # noqa: E402
 from accugrid.compensation.model_correction import (  # noqa: E402
     model_correct,
     reached_by_model,
     residual_grid,
 )
-from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc  # noqa: E402
+from accugrid.kinematics.frames import abc_to_matrix  # noqa: E402
 from accugrid.kinematics.joint_errors import JointErrors  # noqa: E402
 from accugrid.kinematics.robot import load_robot  # noqa: E402
 from bench.timing import measure, table  # noqa: E402
@@ -38,19 +39,6 @@ N = 100_000
 STATUS = 6
 REPEATS = 3
 TILT_DEG = 25.0
-
-
-def tilted_orientations(rng: np.random.Generator, n: int) -> np.ndarray:
-    """A B C (n, 3) deg: 0 90 0 turned about a random horizontal-or-vertical axis by 0..25 deg."""
-    axis = rng.normal(size=(n, 3))
-    axis /= np.linalg.norm(axis, axis=1)[:, None]
-    angle = np.radians(rng.uniform(0.0, TILT_DEG, n))
-    k = np.zeros((n, 3, 3))
-    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -axis[:, 2], axis[:, 1], -axis[:, 0]
-    k[:, 1, 0], k[:, 2, 0], k[:, 2, 1] = axis[:, 2], -axis[:, 1], axis[:, 0]
-    s, c = np.sin(angle)[:, None, None], np.cos(angle)[:, None, None]
-    turn = np.eye(3) + s * k + (1 - c) * (k @ k)
-    return matrix_to_abc(turn @ abc_to_matrix(np.array([0.0, 90.0, 0.0])))
 
 
 def main_bench() -> None:
@@ -62,7 +50,7 @@ def main_bench() -> None:
     )
     rng = np.random.default_rng(0)
     points = rng.uniform([1300, -500, 1200], [2100, 500, 2000], size=(N, 3))
-    abc = tilted_orientations(rng, N)
+    abc = tilted_abc(rng, N, (0.0, 90.0, 0.0), TILT_DEG)
     rotations = abc_to_matrix(abc)
     seed_abc = np.array([0.0, 90.0, 0.0])
     axes = [np.linspace(1300, 2100, 3), np.linspace(-500, 500, 3), np.linspace(1200, 2000, 3)]

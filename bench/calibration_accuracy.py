@@ -31,10 +31,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from accugrid.compensation.comparison import tilted_abc  # noqa: E402
 from accugrid.compensation.grid import GridModel  # noqa: E402
 from accugrid.compensation.model_correction import model_correct, residual_grid  # noqa: E402
 from accugrid.compensation.settings import CorrectionSettings  # noqa: E402
-from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, pose_from_xyzabc  # noqa: E402
+from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc  # noqa: E402
 from accugrid.kinematics.identification import identify, pose_set, select_poses  # noqa: E402
 from accugrid.kinematics.joint_errors import JointErrors  # noqa: E402
 from accugrid.kinematics.robot import load_robot  # noqa: E402
@@ -48,18 +49,6 @@ TOOL_ERROR = np.array([0.4, -0.3, 0.6])
 TILT_DEG = 25.0
 POSES, POSE_REPEATS, CANDIDATES = 60, 3, 1500
 TARGETS = 200
-
-
-def tilted(rng: np.random.Generator, n: int) -> np.ndarray:
-    """A B C (n, 3) deg: the seed orientation turned about a random axis by 0..TILT_DEG."""
-    axis = rng.normal(size=(n, 3))
-    axis /= np.linalg.norm(axis, axis=1)[:, None]
-    angle = np.radians(rng.uniform(0.0, TILT_DEG, n))
-    k = np.zeros((n, 3, 3))
-    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -axis[:, 2], axis[:, 1], -axis[:, 0]
-    k[:, 1, 0], k[:, 2, 0], k[:, 2, 1] = axis[:, 2], -axis[:, 1], axis[:, 0]
-    s, c = np.sin(angle)[:, None, None], np.cos(angle)[:, None, None]
-    return matrix_to_abc((np.eye(3) + s * k + (1 - c) * (k @ k)) @ abc_to_matrix(SEED_ABC))
 
 
 class Cell:
@@ -111,7 +100,11 @@ def reachable_targets(cell: Cell, rng, tilt: bool) -> tuple[np.ndarray, np.ndarr
     points, abc = np.zeros((0, 3)), np.zeros((0, 3))
     while len(points) < TARGETS:
         p = rng.uniform(LO + 50.0, HI - 50.0, (TARGETS, 3))
-        a = tilted(rng, TARGETS) if tilt else np.tile(SEED_ABC, (TARGETS, 1))
+        a = (
+            tilted_abc(rng, TARGETS, SEED_ABC, TILT_DEG)
+            if tilt
+            else np.tile(SEED_ABC, (TARGETS, 1))
+        )
         ok = np.ones(TARGETS, bool)
         for shift in ([0, 0, 0], [5, 5, 5], [-5, -5, -5]):
             ok &= cell.joints(p + np.array(shift, float), a)[1]
@@ -136,7 +129,7 @@ def main_bench() -> None:
 
     # model: D-optimal poses from tilted candidates, 3 repeats, identified with compliance
     cand_p = rng.uniform(LO, HI, (CANDIDATES, 3))
-    cand_abc = tilted(rng, CANDIDATES)
+    cand_abc = tilted_abc(rng, CANDIDATES, SEED_ABC, TILT_DEG)
     q, ok = cell.joints(cand_p, cand_abc)
     cand_p, cand_abc, q = cand_p[ok], cand_abc[ok], q[ok]
     chosen, o1 = select_poses(cell.nominal, q, POSES, compliance=True)
