@@ -8,10 +8,13 @@ error (in a user's ``--templates`` copy) is an InputError naming the template fi
 
 from __future__ import annotations
 
+import contextlib
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import jinja2
+import jinja2.meta
 import numpy as np
 
 from accugrid.codegen.textsafe import comment_text, fixed, fixed_many, krl_identifier
@@ -19,7 +22,7 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import note_input
 from accugrid.templates import TEMPLATE_DIR
 
-__all__ = ["environment", "fixed_texts", "render", "template_dir"]
+__all__ = ["environment", "fixed_texts", "render", "template_dir", "template_uses"]
 
 
 def template_dir(dialect: str, templates: str | os.PathLike[str] | None = None) -> Path:
@@ -53,8 +56,26 @@ def environment(folder: Path, newline: str = "\n") -> jinja2.Environment:
 
 def render(env: jinja2.Environment, template: str, /, **context: object) -> str:
     """Render ``template``; template and undefined-variable errors become InputErrors."""
-    try:
+    with _template_errors(env, template):
         return env.get_template(template).render(**context)
+
+
+def template_uses(env: jinja2.Environment, template: str) -> frozenset[str] | None:
+    """Context variables ``template`` refers to, so that costly ones are built only when used;
+    None (assume all) when it includes, imports or extends another template."""
+    with _template_errors(env, template):
+        source = env.loader.get_source(env, template)[0]
+        tree = env.parse(source)
+    if any(True for _ in jinja2.meta.find_referenced_templates(tree)):
+        return None
+    return frozenset(jinja2.meta.find_undeclared_variables(tree))
+
+
+@contextlib.contextmanager
+def _template_errors(env: jinja2.Environment, template: str) -> Iterator[None]:
+    """Template and undefined-variable errors as InputErrors naming the template."""
+    try:
+        yield
     except jinja2.TemplateNotFound as exc:
         folder = env.loader.searchpath[0] if isinstance(env.loader, jinja2.FileSystemLoader) else ""
         raise InputError(f"template '{exc.name}' not found", folder) from None

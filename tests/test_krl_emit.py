@@ -186,6 +186,36 @@ def test_user_templates_and_strict_undefined(tmp_path):
     assert info.value.line == 1
 
 
+# The built-in KRL templates as they were before the per-hole lines moved into Python: a user's
+# copy that loops over `holes` and `positions` in Jinja must keep working, with the same bytes.
+LOOPING = ROOT / "tests" / "looping_templates" / "krl"
+
+
+@pytest.mark.parametrize(
+    "change, rows, ids",
+    [
+        ({}, ROWS, None),
+        ({"lines_per_file": 80}, ROWS, None),
+        (
+            {"travel_motion": "lin", "clamp_output": 2, "external_axes": (100.0, 0, 0, 0, 0, -5.5)},
+            ROWS[:4],
+            None,
+        ),
+        ({"retract_mm": 7.5}, ROWS[: len(NASTY)], NASTY),
+    ],
+)
+def test_user_template_looping_per_hole_gives_the_same_bytes(tmp_path, change, rows, ids):
+    program = program_for(rows, ids, c=dataclasses.replace(cell(), **change))
+    copy = tmp_path / "krl"
+    shutil.copytree(ROOT / "templates" / "krl", copy)
+    for name in ("program.src.j2", "program.dat.j2"):
+        shutil.copyfile(LOOPING / name, copy / name)
+    looped = render_krl(program, ["h1", "h2"], copy)
+    assert looped == render_krl(program, ["h1", "h2"])
+    assert "hole_lines" not in (copy / "program.src.j2").read_text()
+    assert "position_lines" not in (copy / "program.dat.j2").read_text()
+
+
 def run_cli(*args):
     return main(["krl", str(POINTS), "--cell", str(CELL), *map(str, args)])
 

@@ -6,7 +6,10 @@ ends as the controller's own files have. Position names are ``XH<n>_APP|CLR|BOT|
 number in the file, so always valid and unique, at most 24 characters); the hole id goes into a
 comment. Numbers go through ``fixed`` only: per-hole numbers are formatted once in Python (mm and
 deg with ``program.decimals``, $VEL.CP in m/s with 4 decimals, S and T as integers) and reach the
-template as text; the template formats its scalar settings with the ``fixed`` filter.
+template as text; the template formats its scalar settings with the ``fixed`` filter. Jinja renders
+the frame of each file; the per-hole lines come finished from one %-template per hole or position
+(``hole_lines``, ``position_lines``), while the records ``holes`` and ``positions`` stay available
+to a user template that loops over them (each is built only if the template refers to it).
 
 Splitting: when a job would make a ``.src`` or ``.dat`` longer than ``program.lines_per_file``,
 the holes go into numbered modules ``NAME_001``, ``NAME_002``, ... (each its own ``.src``/``.dat``
@@ -24,7 +27,8 @@ from typing import NamedTuple
 import numpy as np
 
 from accugrid.codegen.program import STAGES, Program
-from accugrid.codegen.render import environment, fixed_texts, render, template_dir
+from accugrid.codegen.render import environment, fixed_texts, render, template_dir, template_uses
+from accugrid.codegen.textsafe import comment_text, fixed
 from accugrid.kinematics.errors import InputError
 
 __all__ = [
@@ -159,12 +163,22 @@ def render_krl(program: Program, header: list[str], templates=None) -> dict[str,
         "ext": cell.external_axes,
     }
 
+    src_uses = template_uses(env, "program.src.j2")
+    dat_uses = template_uses(env, "program.dat.j2")
+
     def files(name: str, role: str, lo: int, hi: int, calls=()) -> tuple[str, str]:
-        holes, positions = records.slice(lo, hi)
         src = render(
-            env, "program.src.j2", name=name, role=role, holes=holes, calls=list(calls), **common
+            env,
+            "program.src.j2",
+            name=name,
+            role=role,
+            calls=list(calls),
+            **records.context(lo, hi, src_uses),
+            **common,
         )
-        dat = render(env, "program.dat.j2", name=name, positions=positions, **common)
+        dat = render(
+            env, "program.dat.j2", name=name, **records.context(lo, hi, dat_uses), **common
+        )
         return src, dat
 
     name, limit, n = cell.program_name, cell.lines_per_file, len(program)
@@ -213,7 +227,9 @@ def _capacity(files, name: str, role: str, limit: int) -> int:
 class _Records:
     """Template records of a program, numbers formatted by ``fixed`` (mm and deg with the cell's
     decimals, $VEL.CP m/s with 4, S and T as integers); angles, S, T and feeds, which repeat,
-    once per distinct value for the whole program."""
+    once per distinct value for the whole program. Per hole, either records (``holes``,
+    ``positions``: for templates that loop over them) or the finished CRLF lines (``hole_lines``,
+    ``position_lines``: what the built-in templates print), whichever the template uses."""
 
     def __init__(self, program: Program, pos: np.ndarray, abc: np.ndarray) -> None:
         self.program = program
@@ -230,30 +246,97 @@ class _Records:
             distinct=True,
         )
         self.feed = fixed_texts(program.feed_mm_s / 1000.0, 4, distinct=True)
+        ext = "".join(
+            f",E{k + 1} {fixed(v, cell.decimals)}" for k, v in enumerate(cell.external_axes)
+        )
+        self.position_line = (
+            "DECL E6POS %s={X %s,Y %s,Z %s,A %s,B %s,C %s,S %s,T %s" + _literal(ext) + "}\r\n"
+        )
+        self.hole_block = _hole_block(cell)
 
-    def slice(self, lo: int, hi: int) -> tuple[list[KrlHole], list[KrlPosition]]:
-        """Records of holes lo..hi-1."""
+    def context(self, lo: int, hi: int, uses: frozenset[str] | None) -> dict[str, object]:
+        """Template variables of holes lo..hi-1 that ``uses`` names (None: all)."""
+        wanted = {"holes", "positions", "hole_lines", "position_lines"}
+        if uses is not None:
+            wanted &= uses
+        out: dict[str, object] = {}
+        names = self._names(lo, hi)
+        if wanted & {"positions", "position_lines"}:
+            table = self._positions(lo, hi, names)
+            if "positions" in wanted:
+                out["positions"] = list(map(KrlPosition._make, table.tolist()))
+            if "position_lines" in wanted:
+                out["position_lines"] = (self.position_line * len(table)) % tuple(
+                    table.ravel().tolist()
+                )
+        if wanted & {"holes", "hole_lines"}:
+            table = self._holes(lo, hi, names)
+            if "holes" in wanted:
+                out["holes"] = list(map(KrlHole._make, table.tolist()))
+            if "hole_lines" in wanted:
+                fields = table[:, [0, 1, 2, 5, 3, 4]]  # in the order the lines print them
+                fields[:, 0] = list(map(comment_text, fields[:, 0].tolist()))
+                out["hole_lines"] = (self.hole_block * len(fields)) % tuple(fields.ravel().tolist())
+        return out
+
+    def _names(self, lo: int, hi: int) -> list[str]:
+        """Position names of holes lo..hi-1, hole by hole, stage by stage."""
+        return [f"XH{i}_{s}" for i in range(lo + 1, hi + 1) for s in self.names]
+
+    def _positions(self, lo: int, hi: int, names: list[str]) -> np.ndarray:
+        """(n * stages, 9) object array of KrlPosition fields."""
         n, k = hi - lo, len(self.stages)
-        names = [f"XH{i}_{s}" for i in range(lo + 1, hi + 1) for s in self.names]
         table = np.empty((n, k, 9), dtype=object)
         table[:, :, 0] = np.array(names, dtype=object).reshape(n, k)
         table[:, :, 1:4] = fixed_texts(self.pos[lo:hi], self.decimals)
         table[:, :, 4:7] = self.abc[lo:hi, None, :]
         table[:, :, 7:9] = self.st[lo:hi]
-        positions = list(map(KrlPosition._make, table.reshape(n * k, 9).tolist()))
-        ret = names[3::4] if k == 4 else names[0::3]
-        holes = list(
-            map(
-                KrlHole,
-                self.program.labels(lo, hi),
-                names[0::k],
-                names[1::k],
-                names[2::k],
-                ret,
-                self.feed[lo:hi].tolist(),
-            )
-        )
-        return holes, positions
+        return table.reshape(n * k, 9)
+
+    def _holes(self, lo: int, hi: int, names: list[str]) -> np.ndarray:
+        """(n, 6) object array of KrlHole fields (label as given, not yet a comment)."""
+        k = len(self.stages)
+        table = np.empty((hi - lo, 6), dtype=object)
+        table[:, 0] = self.program.labels(lo, hi)
+        table[:, 1] = names[0::k]
+        table[:, 2] = names[1::k]
+        table[:, 3] = names[2::k]
+        table[:, 4] = names[3::4] if k == 4 else names[0::3]
+        table[:, 5] = self.feed[lo:hi]
+        return table
+
+
+def _hole_block(cell) -> str:
+    """The .src lines of one hole as a %-template over (comment label, app, clr, feed, bot, ret),
+    with the cell's settings filled in; CRLF line ends."""
+    approach = f"$VEL.CP = {fixed(cell.approach_mm_s / 1000.0, 4)}"
+    if cell.travel_motion == "ptp":
+        travel = ["PTP %s C_PTP"]
+    else:
+        travel = [_literal(f"$VEL.CP = {fixed(cell.travel_mm_s / 1000.0, 4)}"), "LIN %s C_DIS"]
+    clamp = unclamp = []
+    if cell.clamp_output is not None:
+        clamp = [_literal(f"$OUT_C[{fixed(cell.clamp_output, 0)}] = TRUE ; clamp")]
+        unclamp = [_literal(f"$OUT[{fixed(cell.clamp_output, 0)}] = FALSE ; unclamp")]
+    lines = [
+        "; hole %s",
+        *travel,
+        _literal(approach),
+        "LIN %s",
+        *clamp,
+        "$VEL.CP = %s",
+        "LIN %s",
+        _literal(f"WAIT SEC {fixed(cell.dwell_s, 3)}"),
+        *unclamp,
+        _literal(approach),
+        "LIN %s C_DIS",
+    ]
+    return "\r\n".join(lines) + "\r\n"
+
+
+def _literal(text: str) -> str:
+    """``text`` as literal text of a %-template."""
+    return text.replace("%", "%%")
 
 
 def _lines(text: str) -> int:
