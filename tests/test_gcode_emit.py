@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import dataclasses
 import re
+import shutil
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from program_helpers import CELL, POINTS, cell, grid, panel_points, robot
+from program_helpers import CELL, POINTS, ROOT, cell, grid, panel_points, robot
 
 from accugrid.codegen.cli import main
 from accugrid.codegen.gcode.emit import render_gcode
@@ -148,6 +149,31 @@ def test_abc_points_keep_their_orientation():
     text = "id,x,y,z,a,b,c\nK1,100,300,0,-90,0,175\nK2,125,300,0,-80,5,178\n"
     program = build_program(parse_points(text, "k.csv"), cell(), robot(), grid())
     check_round_trip(program, render_gcode(program, ["h"]))
+
+
+# The built-in template as it was before the per-hole lines moved into Python: a user's copy that
+# loops over `holes` in Jinja must keep working, with the same bytes.
+LOOPING = ROOT / "tests" / "looping_templates" / "gcode" / "program.ngc.j2"
+
+
+@pytest.mark.parametrize(
+    "change, ids",
+    [
+        ({}, None),
+        ({"peck_mm": 2.0, "retract_mm": 50.0}, None),
+        ({"dwell_s": 0.0, "retract_mm": 50.0}, [f"{n}{i}" for i in range(15) for n in NASTY]),
+        ({"canned_cycles": False}, None),
+        ({"canned_cycles": False, "dwell_s": 0.0, "retract_mm": 50.0}, None),
+    ],
+)
+def test_user_template_looping_per_hole_gives_the_same_bytes(tmp_path, change, ids):
+    program = program_for(
+        ROWS, ids[: len(ROWS)] if ids else None, dataclasses.replace(cell(), **change)
+    )
+    shutil.copyfile(LOOPING, tmp_path / "program.ngc.j2")
+    assert "hole_lines" not in LOOPING.read_text()
+    looped = render_gcode(program, ["h1", "h2"], tmp_path)
+    assert looped == render_gcode(program, ["h1", "h2"])
 
 
 def run_cli(*args):

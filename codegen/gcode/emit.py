@@ -12,7 +12,10 @@ drill axis: ``G1`` to the clearance point at approach speed, ``G1`` to the botto
 
 Numbers go through ``fixed`` only: per-hole numbers are formatted once in Python
 (``program.decimals`` for mm and deg, 1 decimal for F) and reach the template as text; the
-template formats its scalar settings with the ``fixed`` filter.
+template formats its scalar settings with the ``fixed`` filter. Jinja renders the frame of the
+file; the built-in template prints ``hole_lines``, every hole's lines from one %-template per kind
+of hole, while the records ``holes`` stay available to a user template that loops over them (built
+only if the template refers to them).
 """
 
 from __future__ import annotations
@@ -21,8 +24,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from accugrid.codegen.cell import Cell
 from accugrid.codegen.program import Program
-from accugrid.codegen.render import environment, fixed_texts, render, template_dir
+from accugrid.codegen.render import environment, fixed_texts, render, template_dir, template_uses
+from accugrid.codegen.textsafe import comment_text, fixed
 
 __all__ = ["GcodeHole", "canned", "render_gcode"]
 
@@ -64,26 +69,77 @@ def render_gcode(program: Program, header: list[str], templates=None) -> str:
     text[~same_ret, 3] = fixed_texts(pos[~same_ret, 3], d)
     cycle = canned(text, pos[:, :, 2]) if cell.canned_cycles else np.zeros(len(pos), bool)
     retract_move = text[:, 3, 2] != text[:, 0, 2]
-    coords = [list(map(tuple, hole)) for hole in text.tolist()]
-    holes = list(
-        map(
-            GcodeHole,
-            program.labels(),
-            *zip(*coords, strict=True),
-            map(tuple, fixed_texts(abc, d, distinct=True).tolist()),
-            fixed_texts(program.feed_mm_s * 60.0, 1, distinct=True).tolist(),
-            cycle.tolist(),
-            retract_move.tolist(),
+    labels = program.labels()
+    abc_text = fixed_texts(abc, d, distinct=True)
+    feed = fixed_texts(program.feed_mm_s * 60.0, 1, distinct=True)
+    uses = template_uses(env, "program.ngc.j2")
+    holes: dict[str, object] = {}
+    if uses is None or "holes" in uses:
+        coords = [list(map(tuple, hole)) for hole in text.tolist()]
+        holes["holes"] = list(
+            map(
+                GcodeHole,
+                labels,
+                *zip(*coords, strict=True),
+                map(tuple, abc_text.tolist()),
+                feed.tolist(),
+                cycle.tolist(),
+                retract_move.tolist(),
+            )
         )
-    )
+    if uses is None or "hole_lines" in uses:
+        table = np.empty((len(pos), 17), dtype=object)
+        table[:, 0] = [comment_text(f"hole {label}") for label in labels]
+        table[:, 1:4] = text[:, 0]
+        table[:, 4:7] = abc_text
+        table[:, 7:16] = text[:, 1:].reshape(-1, 9)
+        table[:, 16] = feed
+        lines = np.empty(len(pos), dtype=object)
+        for mask, (template, columns) in zip(
+            (cycle & retract_move, cycle & ~retract_move, ~cycle),
+            _hole_templates(cell),
+            strict=True,
+        ):
+            rows = table[mask][:, columns].tolist()
+            lines[mask] = [template % tuple(row) for row in rows]
+        holes["hole_lines"] = "".join(lines.tolist())
     return render(
         env,
         "program.ngc.j2",
         header=header,
-        holes=holes,
+        **holes,
         decimals=cell.decimals,
         spindle_rpm=cell.spindle_rpm,
         approach_mm_min=cell.approach_mm_s * 60.0,
         dwell=cell.dwell_s,
         peck=cell.peck_mm,
     )
+
+
+def _hole_templates(cell: Cell) -> list[tuple[str, list[int]]]:
+    """%-templates of one hole's lines, each with the columns it prints, for a canned cycle with a
+    retract move, a canned cycle without, and explicit moves. Columns: 0 comment, 1-3 APP X Y Z,
+    4-6 A B C, 7-9 CLR, 10-12 BOT, 13-15 RET, 16 feed."""
+    start = ("(%s)\nG0 X%s Y%s Z%s A%s B%s C%s\n", [0, 1, 2, 3, 4, 5, 6])
+    wait = f"P{fixed(cell.dwell_s, 3)}"
+    if cell.peck_mm > 0:
+        cycle = f"G98 G83 X%s Y%s Z%s R%s Q{fixed(cell.peck_mm, cell.decimals)} F%s\nG80\n"
+    elif cell.dwell_s > 0:
+        cycle = f"G98 G82 X%s Y%s Z%s R%s {wait} F%s\nG80\n"
+    else:
+        cycle = "G98 G81 X%s Y%s Z%s R%s F%s\nG80\n"
+    cycle_columns = [10, 11, 12, 9, 16]
+    approach = f" F{fixed(cell.approach_mm_s * 60.0, 1)}\n"
+    explicit = (
+        "G1 X%s Y%s Z%s"
+        + approach
+        + "G1 X%s Y%s Z%s F%s\n"
+        + (f"G4 {wait}\n" if cell.dwell_s > 0 else "")
+        + "G1 X%s Y%s Z%s"
+        + approach
+    )
+    return [
+        (start[0] + cycle + "G0 Z%s\n", start[1] + cycle_columns + [15]),
+        (start[0] + cycle, start[1] + cycle_columns),
+        (start[0] + explicit, start[1] + [7, 8, 9, 10, 11, 12, 16, 13, 14, 15]),
+    ]
