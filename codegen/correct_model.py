@@ -26,7 +26,8 @@ from accugrid.codegen.corrected import (
 )
 from accugrid.codegen.header import grid_lines, input_line
 from accugrid.codegen.points import Points, read_points
-from accugrid.compensation.model_correction import TOL_MM, model_correct, residual_grid
+from accugrid.compensation.corrector import Corrector
+from accugrid.compensation.model_correction import TOL_MM
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
@@ -38,7 +39,6 @@ from accugrid.kinematics.frames import (
     too_tilted,
 )
 from accugrid.kinematics.robot import load_robot
-from accugrid.kinematics.simulation import commanded_poses
 from accugrid.kinematics.yamlfile import load_yaml
 
 __all__ = ["controller_tool", "point_orientations", "run_model"]
@@ -87,25 +87,18 @@ def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
     points = read_points(args.points)
     check_added_columns(points)
     abc = point_orientations(points, np.array(args.abc, dtype=float))
-    status = args.status
-    if status is None and len(points):
-        controller = calibrated if tool is None else calibrated.with_tool(tool)
-        first = controller.ik(commanded_poses(points.xyz[:1], abc[0]))
-        status = int(first.status[0]) if first.ok[0] else None
-    grid = None
+    corrector = Corrector.build(
+        settings, args.grid, calibrated, args.status, tool, args.repeat_tol, points.xyz, abc
+    )
+    grid, status = corrector.grid, corrector.status
     flags: list[list[str]] = [[] for _ in range(len(points))]
-    if args.grid is not None:
-        grid = residual_grid(
-            calibrated, args.grid, status, repeat_tol_mm=args.repeat_tol, controller_tool=tool
-        )
-        found = grid.check(points.xyz, settings, rotations=abc_to_matrix(abc).reshape(-1, 3, 3))
+    if grid is not None:
+        found = corrector.check(points.xyz, abc_to_matrix(abc).reshape(-1, 3, 3))
         check_outside(points, grid, found.outside, settings.outside, flags)
         if found.angle is not None:  # the model holds at any orientation: flag, never refuse
             for i in np.flatnonzero(found.angle > args.orientation_tol):
                 flags[i].append(f"orientation {found.angle[i]:.1f} deg from residual grid")
-    result = model_correct(
-        calibrated, points.xyz, abc, status, grid, settings, controller_tool=tool
-    )
+    result = corrector.correct(points.xyz, abc)
     if not result.ok.all():
         bad = result.failed
         named = "; ".join(f"{points.label(int(i))}: {result.reason[i]}" for i in bad[:_LISTED])

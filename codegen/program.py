@@ -16,14 +16,16 @@ the example grid's Y = 0 plane). One vector per hole keeps the axis straight and
 the grid says. Orientation is not corrected.
 
 With a calibrated model (``correction.model``, ``--model``) the vector is P' - P of
-``compensation.model_correction`` at the hole point and its own orientation (the controller's
-IK with the cell's tool in the program's Status, the calibrated arm's FK), plus the grid as the
-residual after the model when one is given.
+``compensation.corrector`` at the hole point and its own orientation (the controller's IK with
+the cell's tool in the program's Status, the calibrated arm's FK), plus the grid as the residual
+after the model when one is given.
 
 Every corrected pose goes through IK: unreachable or out-of-limit poses are InputErrors naming
 the hole; |A5| below ``configuration.singular_a5`` is a warning. The KUKA Status/Turn is the
-cell's, or the first hole's IK solution, and stays the same for the whole program unless
-``configuration.allow_change`` lets a hole that cannot reach it take its own.
+cell's; else, with a model, the one it corrected in (``Corrector``: the grid's measurement
+Status, or the first hole's IK default); else the first pose's IK solution; it stays the same
+for the whole program unless ``configuration.allow_change`` lets a hole that cannot reach it
+take its own.
 """
 
 from __future__ import annotations
@@ -37,8 +39,8 @@ import numpy as np
 from accugrid.codegen.cell import Cell
 from accugrid.codegen.points import Points
 from accugrid.codegen.textsafe import fixed
+from accugrid.compensation.corrector import Corrector
 from accugrid.compensation.grid import GridModel
-from accugrid.compensation.model_correction import model_correct, residual_grid
 from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import (
@@ -155,16 +157,17 @@ def build_program(
     base_rot = cell.robot_T_base[:3, :3]
     holes_robot = points.xyz @ base_rot.T + cell.robot_T_base[:3, 3]
     warnings: list[str] = []
+    status = cell.status
     if model is not None:
-        correction, warnings = _model_correction(
-            points, cell, robot, model, grid, holes_robot, base_rot @ rotations
+        correction, warnings, status = _model_correction(
+            points, cell, model, grid, holes_robot, base_rot @ rotations
         )
     elif grid is None:
         correction = np.zeros((n, 3))
     else:
         correction, warnings = _correction(points, cell, grid, holes_robot, base_rot @ rotations)
     positions = nominal + (correction @ base_rot)[:, None, :]  # e rotated into the BASE frame
-    status, turn, ik_warnings = _configuration(points, cell, robot, positions, rotations)
+    status, turn, ik_warnings = _configuration(points, cell, robot, positions, rotations, status)
     return Program(
         cell=cell,
         points=points,
@@ -226,33 +229,32 @@ def _correction(
 def _model_correction(
     points: Points,
     cell: Cell,
-    robot: RobotModel,
     model: Robot,
     grid: GridModel | None,
     holes_robot: np.ndarray,
     rotations: np.ndarray,
-) -> tuple[np.ndarray, list[str]]:
+) -> tuple[np.ndarray, list[str], int | None]:
     """P' - P (N, 3) robot frame by the calibrated ``model`` (+ the residual of the measured
-    ``grid`` after the model) and the warnings; InputError naming holes the controller cannot
+    ``grid`` after the model), the warnings and the KUKA Status corrected in (``Corrector``'s
+    rule), which the program then runs in; InputError naming holes the controller cannot
     reach or that do not converge, and as ``_correction`` for the residual grid. rotations
     (N, 3, 3) robot frame."""
-    status = cell.status
-    if status is None:
-        first = robot.ik(_poses(holes_robot[:1], rotations[:1]), turn=cell.turn)
-        status = int(first.status[0]) if first.ok[0] else None
-    warnings: list[str] = []
-    if grid is not None:
-        grid = residual_grid(model, grid, status, controller_tool=cell.flange_T_tool)
-        warnings = _correction(points, cell, grid, holes_robot, rotations)[1]
-    result = model_correct(
-        model,
-        holes_robot,
-        matrix_to_abc(rotations),
-        status,
-        grid,
+    abc = matrix_to_abc(rotations)
+    corrector = Corrector.build(
         cell.correction,
-        controller_tool=cell.flange_T_tool,
+        grid,
+        model,
+        cell.status,
+        cell.flange_T_tool,
+        points=holes_robot,
+        abc_deg=abc,
+        turn=cell.turn,
     )
+    status = corrector.status
+    warnings: list[str] = []
+    if corrector.grid is not None:
+        warnings = _correction(points, cell, corrector.grid, holes_robot, rotations)[1]
+    result = corrector.correct(holes_robot, abc)
     if not result.ok.all():
         bad = result.failed
         i = int(bad[0])
@@ -262,23 +264,16 @@ def _model_correction(
             f"{result.reason[i]}{more}",
             *points.table.where(i),
         )
-    correction = result.command - holes_robot
-    length = np.linalg.norm(correction, axis=1)
-    limit = cell.correction.max_correction_mm
-    if limit is not None and (length > limit).any():
+    length, over = corrector.too_long(holes_robot, result.command)
+    if over.any():
         worst = int(np.argmax(length))
         raise InputError(
             f"{points.name(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
-            f"limit of {limit:g} mm; check the model and the base frame",
+            f"limit of {cell.correction.max_correction_mm:g} mm; check the model and the base "
+            "frame",
             *points.table.where(worst),
         )
-    return correction, warnings
-
-
-def _poses(positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
-    poses = np.tile(np.eye(4), (len(positions), 1, 1))
-    poses[:, :3, :3], poses[:, :3, 3] = rotations, positions
-    return poses
+    return result.command - holes_robot, warnings, status
 
 
 def _orientation_warnings(points: Points, grid: GridModel, angle: np.ndarray | None) -> list[str]:
@@ -296,9 +291,15 @@ def _orientation_warnings(points: Points, grid: GridModel, angle: np.ndarray | N
 
 
 def _configuration(
-    points: Points, cell: Cell, robot: RobotModel, positions: np.ndarray, rotations: np.ndarray
+    points: Points,
+    cell: Cell,
+    robot: RobotModel,
+    positions: np.ndarray,
+    rotations: np.ndarray,
+    status: int | None,
 ) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """IK of every pose: Status and Turn (N, 4) per pose and the warnings."""
+    """IK of every pose in KUKA ``status`` (None: the first pose's IK default): Status and Turn
+    (N, 4) per pose and the warnings."""
     n = len(points)
     if n == 0:
         return np.zeros((0, 4), int), np.zeros((0, 4), int), []
@@ -308,7 +309,6 @@ def _configuration(
     base_rot, base_org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
     poses[:, :, :3, 3] = positions[:, :stages] @ base_rot.T + base_org
     flat = poses.reshape(-1, 4, 4)
-    status = cell.status
     if status is None:
         first = robot.ik(flat[:1], turn=cell.turn)
         if not first.ok[0]:

@@ -23,7 +23,7 @@ from accugrid.codegen.program import GRID_ORIENTATION_TOL_DEG
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation import GridModel
-from accugrid.compensation.model_correction import model_correct
+from accugrid.compensation.corrector import Corrector
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
 from accugrid.kinematics.digest import file_sha256
@@ -72,12 +72,15 @@ class Options:
     orientation_limit: float = ORIENTATION_LIMIT_DEG  # deg: skip beyond
     allow_orientation: bool = False  # correct (and flag) beyond the limit instead
     tolerance_mm: float = DEFAULT_TOLERANCE_MM  # warn when rounding leaves more than a tenth
-    calibrated: Robot | None = None  # a calibrated model: ``model`` is then its residual grid
-    status: int | None = None  # KUKA Status the model corrects in (None: IK default per point)
-    controller_tool: np.ndarray | None = None  # flange_T_tool (4, 4) mm of the controller
+    corrector: Corrector | None = None  # with a calibrated model: ``model`` is its residual grid
     model_file: str | None = None  # the calibrated robot YAML (header)
     reference_abc: tuple[float, float, float] | None = None  # robot-frame A,B,C deg the model
     # assumes where a position has none (3-axis G-code): the cell's configuration.reference
+
+    @property
+    def calibrated(self) -> Robot | None:
+        """The calibrated model the corrector uses, None for the grid alone."""
+        return None if self.corrector is None else self.corrector.calibrated
 
 
 @dataclass(slots=True)
@@ -131,7 +134,7 @@ def correct_points(
     (``accugrid correct``'s rule) stay "skipped" with the angle as the reason (unless
     ``allow_orientation``), rows beyond ``orientation_tol`` a ``flag:`` reason. InputError at the
     row when a correction to be written is longer than the safety limit. With ``opts.calibrated``
-    the points with an orientation are corrected by ``model_correct`` plus the residual grid
+    the points with an orientation are corrected by ``opts.corrector`` (model plus residual grid)
     (the model holds at any orientation: flagged, never skipped); the others stay NaN."""
     out = np.full_like(points_robot, np.nan)
     if not len(points_robot):
@@ -182,15 +185,7 @@ def _by_model(
         rows[i].reason = "no orientation (A, B, C) here: the model needs one; left as is"
     todo = np.flatnonzero(use & oriented)
     if todo.size:
-        result = model_correct(
-            opts.calibrated,
-            points[todo],
-            matrix_to_abc(rotations[todo]).reshape(-1, 3),
-            opts.status,
-            opts.model,
-            opts.correction,
-            controller_tool=opts.controller_tool,
-        )
+        result = opts.corrector.correct(points[todo], matrix_to_abc(rotations[todo]).reshape(-1, 3))
         if not result.ok.all():
             j = int(result.failed[0])
             row = rows[int(todo[j])]
@@ -201,8 +196,7 @@ def _by_model(
                 row.line,
             )
         command[todo] = result.command
-    length = np.linalg.norm(np.nan_to_num(command - points), axis=1)
-    return command, length
+    return command, opts.corrector.too_long(points, command)[0]
 
 
 def _orientation(angle: np.ndarray, rows: list[Row], opts: Options) -> np.ndarray:

@@ -12,6 +12,8 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from accugrid.codegen.cli import main
+from accugrid.compensation.corrector import Corrector
+from accugrid.compensation.grid import GridModel
 from accugrid.compensation.model_correction import model_correct, residual_grid
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, pose_from_xyzabc
@@ -217,3 +219,76 @@ def test_correct_cli_drives_with_the_controllers_tool_not_the_identified_tcp(tmp
     sol = controller.ik(poses, status=6)
     landed = calibrated.true_robot().fk(sol.q)[:, :3, 3]
     np.testing.assert_allclose(landed, target, atol=3e-4, rtol=0)
+
+
+# The one correction decision (compensation.corrector): grid alone, model, model + residual.
+
+
+def _box_targets(grid: GridModel, seed: int, n: int = 20) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return grid.origin + rng.uniform(0.05, 0.95, (n, 3)) * (grid.upper - grid.origin)
+
+
+def _measured_grid(robot, offset: float | np.ndarray = 0.0) -> GridModel:
+    """Noise-free measurement of the 27 vertices in STATUS at A 0 B 90 C 0 (+ ``offset`` mm)."""
+    abc = np.array([0.0, 90.0, 0.0])
+    vertices = _vertices()
+    measured = drive(robot, vertices, abc, STATUS) + offset
+    return GridModel.from_measurements((vertices, measured, np.tile(abc, (len(vertices), 1))))
+
+
+def test_corrector_model_only_lands_on_the_targets_in_the_first_points_status():
+    targets = _box_targets(_measured_grid(CALIBRATED), seed=5)
+    abc = np.tile([0.0, 90.0, 0.0], (len(targets), 1))
+    corrector = Corrector.build(CorrectionSettings(), None, CALIBRATED, points=targets, abc_deg=abc)
+    assert corrector.grid is None and corrector.status == STATUS
+    result = corrector.correct(targets, abc)
+    assert result.ok.all() and (result.reason == "").all()
+    reached = drive(CALIBRATED, result.command, abc, STATUS)
+    assert np.linalg.norm(reached - targets, axis=1).max() < 1e-3
+    assert np.linalg.norm(result.command - targets, axis=1).min() > 0.5  # it did correct
+
+
+def test_corrector_model_plus_residual_grid_lands_on_the_targets():
+    # The real arm: the model kr210-paper moved by a constant offset the model does not know.
+    offset = np.array([0.3, -0.2, 0.5])
+    grid = _measured_grid(PAPER, offset)
+    corrector = Corrector.build(CorrectionSettings(method="trilinear"), grid, PAPER)
+    assert corrector.status == STATUS  # the grid's measurement Status
+    np.testing.assert_allclose(
+        corrector.grid.errors.reshape(-1, 3), np.tile(-offset, (27, 1)), atol=1e-9
+    )
+    targets = _box_targets(grid, seed=7)
+    abc = np.tile([0.0, 90.0, 0.0], (len(targets), 1))
+    result = corrector.correct(targets, abc)
+    assert result.ok.all()
+    reached = drive(PAPER, result.command, abc, STATUS) + offset
+    assert np.linalg.norm(reached - targets, axis=1).max() < 1e-3
+
+
+def test_corrector_keeps_a_given_status_and_reports_unreachable_targets():
+    corrector = Corrector.build(CorrectionSettings(), None, CALIBRATED, status=STATUS)
+    assert corrector.status == STATUS
+    targets = np.array([[1500.0, 0.0, 1500.0], [5000.0, 0.0, 1500.0]])
+    result = corrector.correct(targets, np.tile([0.0, 90.0, 0.0], (2, 1)))
+    assert result.ok.tolist() == [True, False]
+    assert result.reason[1] == "unreachable"
+
+
+def test_corrector_without_a_model_is_the_grid_correction():
+    grid = _measured_grid(CALIBRATED)  # the realistic arm's error field
+    settings = CorrectionSettings(method="trilinear")
+    corrector = Corrector.build(settings, grid)
+    assert corrector.calibrated is None and corrector.grid is grid
+    targets = _box_targets(grid, seed=9)
+    result = corrector.correct(targets, np.tile([0.0, 90.0, 0.0], (len(targets), 1)))
+    assert result.ok.all()
+    np.testing.assert_array_equal(result.command, grid.correct(targets, settings))
+
+
+def test_corrector_too_long_masks_corrections_above_the_safety_limit():
+    corrector = Corrector(CorrectionSettings(max_correction_mm=1.0), None)
+    command = np.array([[0.6, 0.8, 0.0], [3.0, 4.0, 0.0], [np.nan, np.nan, np.nan]])
+    length, over = corrector.too_long(np.zeros((3, 3)), command)
+    np.testing.assert_allclose(length, [1.0, 5.0, 0.0])
+    assert over.tolist() == [False, True, False]

@@ -57,8 +57,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_status(
         parser,
-        "with --model: the KUKA Status the program runs in (default: the IK default at the "
-        "first point)",
+        "with --model: the KUKA Status the program runs in (default: the Status the --grid "
+        "was measured in, without --grid the IK default at the first point)",
     )
     add_abc(parser, "with --model: orientation of points without a,b,c, reference for i,j,k axes")
     add_tool(

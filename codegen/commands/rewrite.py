@@ -50,13 +50,11 @@ from accugrid.codegen.rewrite import (
     report_csv,
     warning_lines,
 )
-from accugrid.compensation import GridModel
-from accugrid.compensation.model_correction import residual_grid
+from accugrid.compensation.corrector import Corrector
 from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
 from accugrid.kinematics.calibrated import check_same_robot
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import load_robot
-from accugrid.kinematics.simulation import grid_status
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -184,27 +182,25 @@ def run(args: argparse.Namespace) -> int:
     cell = load_cell(args.cell)
     grid = cell.grid_file(args.grid)
     model_file = Path(args.model) if args.model is not None else cell.model_path
-    calibrated = status = None
-    if model_file is None:
-        model = GridModel.from_measurements(grid)
-    else:
+    calibrated = None
+    if model_file is not None:
         calibrated = load_robot(model_file)
         nominal = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
         check_same_robot(calibrated, nominal, os.fspath(model_file))
         if np.array_equal(calibrated.flange_T_tool, np.eye(4)):  # no TCP in the file: the cell's
             calibrated = calibrated.with_tool(cell.flange_T_tool)
-        status = cell.status
-        if status is None:  # the Status the grid was measured in (one per measurement run)
-            measured = GridModel.from_measurements(grid)
-            abc = measured.orientation_abc
-            if abc is None:
-                abc = np.array(cell.reference_abc)
-            status = grid_status(nominal, measured.origin, abc)
-        model = residual_grid(calibrated, grid, status, controller_tool=cell.flange_T_tool)
         all_inputs.append(model_file)
+    # with a model: residual grid in the Status the grid was measured in (wrist flips otherwise)
+    corrector = Corrector.build(
+        cell.correction,
+        grid,
+        calibrated,
+        cell.status,
+        cell.flange_T_tool if calibrated is not None else None,
+    )
     max_bytes = int(args.max_mb * 2**20)
     opts = Options(
-        model=model,
+        model=corrector.grid,
         base_data=cell.base_data,
         robot_T_program=cell.robot_T_program,
         correction=cell.correction,
@@ -219,9 +215,7 @@ def run(args: argparse.Namespace) -> int:
         orientation_limit=args.orientation_limit,
         allow_orientation=args.allow_orientation,
         tolerance_mm=args.tolerance,
-        calibrated=calibrated,
-        status=status,
-        controller_tool=cell.flange_T_tool if calibrated is not None else None,
+        corrector=corrector,
         model_file=None if model_file is None else os.fspath(model_file),
         reference_abc=cell.reference_abc if calibrated is not None else None,
     )
