@@ -29,6 +29,7 @@ from accugrid.compensation.cube_points import (
 from accugrid.kinematics.errors import InputError
 
 __all__ = [
+    "grid_vertices",
     "CUBE_LABELS",
     "CUBE_ORDER",
     "MAX_GRID_VERTICES",
@@ -123,6 +124,26 @@ def check_vertex_count(counts, step_mm: float) -> None:
             f"grid step {step_mm:g} mm would make {total:.3g} vertices, more than "
             f"{MAX_GRID_VERTICES:,}: use a larger step"
         )
+
+
+def grid_vertices(region: list[float], step_mm: float) -> tuple[np.ndarray, list[str]]:
+    """Vertices (N, 3) mm of the grid from each ``region`` (xmin, xmax, ymin, ymax, zmin, zmax)
+    minimum in ``step_mm`` up to the maximum (x outermost, z innermost; a measurement grid, as
+    ``accugrid simulate`` measures it), and notes for axes whose maximum is not on the step."""
+    if step_mm is None or not step_mm > 0:
+        raise InputError(f"--step must be positive, got {step_mm}")
+    check_vertex_count(np.floor(np.ptp(np.reshape(region, (3, 2)), axis=1) / step_mm) + 1, step_mm)
+    axes, notes = [], []
+    for name, lo, hi in zip("XYZ", region[0::2], region[1::2], strict=True):
+        if not lo < hi:
+            raise InputError(f"--region: {name} minimum {lo:g} must be below maximum {hi:g}")
+        count = int(np.floor((hi - lo) / step_mm + 1e-9)) + 1
+        values = lo + step_mm * np.arange(count)
+        if hi - values[-1] > 1e-6:
+            notes.append(f"{name} stops at {values[-1]:g} (region maximum {hi:g} is off the step)")
+        axes.append(values)
+    mesh = np.meshgrid(*axes, indexing="ij")
+    return np.column_stack([m.ravel() for m in mesh]), notes
 
 
 def grid_axes(lo, hi, step_mm: float) -> list[np.ndarray]:

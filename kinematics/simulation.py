@@ -14,13 +14,24 @@ from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.model import RobotModel
 
 __all__ = [
+    "FIG3_ABC",
+    "FIG3_X",
+    "FIG3_Y",
+    "FIG3_Z",
     "commanded_joints",
+    "fig3_field",
     "commanded_poses",
     "grid_status",
     "reached_positions",
     "simulate_measurements",
     "simulate_pose_measurements",
 ]
+
+# The plane of seed Fig. 3 / Table 2: X, Y ranges and Z (mm), the TCP orientation (KUKA deg)
+FIG3_X = (1000.0, 2000.0)
+FIG3_Y = (-500.0, 500.0)
+FIG3_Z = 1800.0
+FIG3_ABC = (0.0, 90.0, 0.0)
 
 
 def commanded_poses(points: np.ndarray, abc_deg: np.ndarray) -> np.ndarray:
@@ -156,3 +167,16 @@ def simulate_pose_measurements(
     true = robot.true_robot() or robot
     reached = true.fk(sol.q)[:, :3, 3]
     return sol.q, _measured(reached, repeats, noise_tracker_mm, noise_repeat_mm, seed)
+
+
+def fig3_field(
+    robot: RobotModel, samples: int = 51, status: int | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The seed Fig. 3 plane: X (s,), Y (s,) mm and the error e = P - M (s, s, 3) mm, in one
+    KUKA Status (default: the IK default's at the plane's first point, X 1000 Y -500)."""
+    xs = np.linspace(*FIG3_X, samples)
+    ys = np.linspace(*FIG3_Y, samples)
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    points = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, FIG3_Z)])
+    error = points - reached_positions(robot, points, FIG3_ABC, status)
+    return xs, ys, error.reshape(samples, samples, 3)
