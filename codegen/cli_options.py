@@ -11,11 +11,20 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from accugrid.compensation.plans import SEED_ABC
+from accugrid.compensation.plans import SEED_ABC, SEED_CENTRES, SEED_REPEATS
+from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import Robot, load_robot
 
-__all__ = ["add_abc", "add_status", "add_tool", "robot_with_tool"]
+__all__ = [
+    "add_abc",
+    "add_experiment_arguments",
+    "add_status",
+    "add_tool",
+    "parse_centres",
+    "parse_steps",
+    "robot_with_tool",
+]
 
 
 def add_abc(parser: argparse.ArgumentParser, help_text: str) -> None:
@@ -52,3 +61,61 @@ def robot_with_tool(name: str, tool: Sequence[float] | None) -> Robot:
     if tool is not None:
         robot = robot.with_tool(pose_from_xyzabc(np.array(tool, dtype=float)))
     return robot
+
+
+def add_experiment_arguments(parser: argparse.ArgumentParser) -> None:
+    """--centre/--steps/--repeats as shared by `plan experiment` and `study`."""
+    parser.add_argument(
+        "--centre",
+        nargs=4,
+        action="append",
+        metavar=("NAME", "X", "Y", "Z"),
+        help="a cube centre, mm; repeat for more (default: seed Table 3, D 1700 0 1500, "
+        "E 2000 -350 1800, F 1400 350 1900, G 1400 -350 1400, H 2000 350 1400)",
+    )
+    parser.add_argument(
+        "--steps",
+        default="20:500:60",
+        help="cube steps in mm: FIRST:LAST:INCREMENT or a comma list (default: 20:500:60)",
+    )
+    parser.add_argument(
+        "--repeats",
+        type=int,
+        default=SEED_REPEATS,
+        help=f"measurements of every point (default: {SEED_REPEATS})",
+    )
+
+
+def parse_steps(text: str) -> np.ndarray:
+    """Steps in mm from "FIRST:LAST:INCREMENT" (inclusive) or "S1,S2,..."."""
+    try:
+        if ":" in text:
+            first, last, inc = (float(v) for v in text.split(":"))
+            if inc <= 0 or last < first:
+                raise ValueError
+            steps = np.arange(first, last + 1e-9 * max(1.0, abs(last)), inc)
+        else:
+            steps = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise InputError(
+            f"--steps {text!r}: use FIRST:LAST:INCREMENT (increment > 0) or a comma list of mm"
+        ) from None
+    if not np.all(np.isfinite(steps)) or np.any(steps <= 0):
+        raise InputError(f"--steps {text!r}: steps must be finite and > 0 mm")
+    return steps
+
+
+def parse_centres(items: list[list[str]] | None) -> dict[str, tuple[float, float, float]]:
+    """--centre NAME X Y Z options (None: the seed's D-H)."""
+    if not items:
+        return dict(SEED_CENTRES)
+    centres: dict[str, tuple[float, float, float]] = {}
+    for name, *xyz in items:
+        try:
+            point = tuple(float(v) for v in xyz)
+        except ValueError:
+            raise InputError(f"--centre {name}: X Y Z must be numbers (mm), got {xyz}") from None
+        if name in centres:
+            raise InputError(f"--centre {name} given twice")
+        centres[name] = point
+    return centres

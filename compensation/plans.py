@@ -26,10 +26,14 @@ from accugrid.compensation.cube_points import (
     cube_test_points,
     cube_vertices,
 )
+from accugrid.kinematics.configuration import solve_in_one_status
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.model import RobotModel
 
 __all__ = [
     "grid_vertices",
+    "reach_in_one_status",
     "CUBE_LABELS",
     "CUBE_ORDER",
     "MAX_GRID_VERTICES",
@@ -352,3 +356,23 @@ def identification_plan(
         {"s": [str(int(status))] * (count * repeats)},
     )
     return plan, o1, len(usable)
+
+
+def reach_in_one_status(
+    plan: Plan, robot: RobotModel, status: int | None = None
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """KUKA S and T (N,) of every plan position and the Status used (``status``, or the IK
+    default at the first position): LIN moves keep the configuration of the first PTP, so the
+    whole plan must be reachable in it. InputError naming the first position that is not."""
+    poses = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
+    sol, status = solve_in_one_status(robot, poses, status)
+    if not sol.ok.all():
+        bad = np.flatnonzero(~sol.ok)
+        i = int(bad[0])
+        x, y, z = plan.points[i]
+        raise InputError(
+            f"{len(bad)} of {len(plan.points)} plan positions cannot be reached by {robot.name}"
+            f"{'' if status is None else f' in Status {status}'}; first: {plan.ids[i]} "
+            f"X {x:.3f} Y {y:.3f} Z {z:.3f} ({sol.reason[i]})"
+        )
+    return sol.status, sol.turn, int(status)

@@ -29,43 +29,22 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
-from accugrid.codegen.header import header_lines
-from accugrid.codegen.krl.emit import MeasureSettings, render_measurement
-from accugrid.codegen.textsafe import fixed, krl_identifier
-from accugrid.compensation.plans import (
-    SEED_CENTRES,
-    SEED_REGION,
-    SEED_REPEATS,
-    Plan,
-    cube_plan,
-    experiment_plan,
-    grid_plan,
-    identification_plan,
+from accugrid.codegen.cli_options import (
+    add_abc,
+    add_experiment_arguments,
+    add_status,
+    add_tool,
+    parse_centres,
+    parse_steps,
+    robot_with_tool,
 )
-from accugrid.kinematics.configuration import solve_in_one_status
-from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.codegen.measure_program import PlanRequest, plan_files, plan_targets
+from accugrid.compensation.plans import SEED_REGION, SEED_REPEATS
 
-__all__ = [
-    "MAX_WAIT_SEC",
-    "NAME",
-    "add_arguments",
-    "add_experiment_arguments",
-    "build_plan",
-    "parse_centres",
-    "parse_steps",
-    "reach",
-    "render_krl",
-    "run",
-]
+__all__ = ["NAME", "add_arguments", "run"]
 
 NAME = "plan"
-
-MAX_WAIT_SEC = 600.0
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -134,29 +113,6 @@ def _add_region(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def add_experiment_arguments(parser: argparse.ArgumentParser) -> None:
-    """--centre/--steps/--repeats as shared by `plan experiment` and `study`."""
-    parser.add_argument(
-        "--centre",
-        nargs=4,
-        action="append",
-        metavar=("NAME", "X", "Y", "Z"),
-        help="a cube centre, mm; repeat for more (default: seed Table 3, D 1700 0 1500, "
-        "E 2000 -350 1800, F 1400 350 1900, G 1400 -350 1400, H 2000 350 1400)",
-    )
-    parser.add_argument(
-        "--steps",
-        default="20:500:60",
-        help="cube steps in mm: FIRST:LAST:INCREMENT or a comma list (default: 20:500:60)",
-    )
-    parser.add_argument(
-        "--repeats",
-        type=int,
-        default=SEED_REPEATS,
-        help=f"measurements of every point (default: {SEED_REPEATS})",
-    )
-
-
 def _common(parser: argparse.ArgumentParser) -> None:
     add_abc(parser, "fixed TCP orientation")
     parser.add_argument(
@@ -222,214 +178,36 @@ def _common(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def parse_steps(text: str) -> np.ndarray:
-    """Steps in mm from "FIRST:LAST:INCREMENT" (inclusive) or "S1,S2,..."."""
-    try:
-        if ":" in text:
-            first, last, inc = (float(v) for v in text.split(":"))
-            if inc <= 0 or last < first:
-                raise ValueError
-            steps = np.arange(first, last + 1e-9 * max(1.0, abs(last)), inc)
-        else:
-            steps = np.array([float(v) for v in text.split(",")])
-    except ValueError:
-        raise InputError(
-            f"--steps {text!r}: use FIRST:LAST:INCREMENT (increment > 0) or a comma list of mm"
-        ) from None
-    if not np.all(np.isfinite(steps)) or np.any(steps <= 0):
-        raise InputError(f"--steps {text!r}: steps must be finite and > 0 mm")
-    return steps
-
-
-def parse_centres(items: list[list[str]] | None) -> dict[str, tuple[float, float, float]]:
-    """--centre NAME X Y Z options (None: the seed's D-H)."""
-    if not items:
-        return dict(SEED_CENTRES)
-    centres: dict[str, tuple[float, float, float]] = {}
-    for name, *xyz in items:
-        try:
-            point = tuple(float(v) for v in xyz)
-        except ValueError:
-            raise InputError(f"--centre {name}: X Y Z must be numbers (mm), got {xyz}") from None
-        if name in centres:
-            raise InputError(f"--centre {name} given twice")
-        centres[name] = point
-    return centres
-
-
-def build_plan(args: argparse.Namespace) -> tuple[Plan, list[str]]:
-    """The plan of the chosen kind and lines describing it."""
-    if args.kind == "grid":
-        r = args.region
-        lo, hi = (r[0], r[2], r[4]), (r[1], r[3], r[5])
-        plan = grid_plan(lo, hi, args.step, args.abc)
-        naive = grid_plan(lo, hi, args.step, args.abc, order="naive")
-        if args.order == "naive":
-            plan = naive
-        if int(args.repeats) < 1:
-            raise InputError(f"--repeats must be >= 1, got {args.repeats}")
-        steps = np.unique(np.round(np.diff(np.unique(plan.points[:, 0])), 6))
-        info = [
-            f"grid plan: {len(plan.points)} vertices, {args.order} order",
-            f"path {plan.path_length():.1f} mm (serpentine "
-            f"{grid_plan(lo, hi, args.step, args.abc).path_length():.1f} mm, naive raster "
-            f"{naive.path_length():.1f} mm)",
-        ]
-        if len(steps) and abs(steps[0] - args.step) > 1e-6:
-            info.append(f"note: step shrunk to partition the region exactly, X {steps[0]:.3f} mm")
-        if args.repeats > 1:
-            plan = Plan(
-                np.tile(plan.points, (args.repeats, 1)),
-                plan.abc,
-                [f"{i}_R{r + 1}" for r in range(args.repeats) for i in plan.ids],
-            )
-        return plan, info
-    if args.kind == "identify":
-        return _identification_plan(args)
-    if args.kind == "cube":
-        plan = cube_plan(args.centre, args.step, args.repeats, args.abc)
-        return plan, [f"cube plan: 8 vertices + 9 test points x {args.repeats} repeats"]
-    centres = parse_centres(args.centre)
-    steps = parse_steps(args.steps)
-    plan = experiment_plan(centres, steps, args.repeats, args.abc)
-    info = [
-        f"experiment plan: {len(centres)} centres x {len(steps)} steps x 17 points x "
-        f"{args.repeats} repeats = {len(plan.points)} rows",
-        f"steps {', '.join(f'{s:g}' for s in steps)} mm, path {plan.path_length():.1f} mm",
-    ]
-    return plan, info
-
-
-def _identification_plan(args: argparse.Namespace) -> tuple[Plan, list[str]]:
-    r = args.region
-    lo, hi = (r[0], r[2], r[4]), (r[1], r[3], r[5])
-    robot = robot_with_tool(args.robot, args.tool)
-    centre = pose_from_xyzabc(np.concatenate([np.add(lo, hi) / 2, args.abc]))
-    status = solve_in_one_status(robot, centre, args.status)[1]  # default: IK at the centre
-    if status is None:
-        raise InputError(
-            f"the region's centre is not reachable at A B C {' '.join(map(fixed, args.abc))} "
-            "deg: give --status"
-        )
-    plan, o1, usable = identification_plan(
-        robot,
-        lo,
-        hi,
-        args.count,
-        args.tilt,
-        args.abc,
-        status,
-        candidates=args.candidates,
+def run(args: argparse.Namespace) -> int:
+    check_targets(plan_targets(args.output, args.kind, args.name), force=args.force)
+    kind = args.kind
+    request = PlanRequest(
+        kind=kind,
+        robot=robot_with_tool(args.robot, args.tool),
+        abc=tuple(args.abc),
+        status=args.status,
+        region=tuple(args.region) if kind in ("grid", "identify") else None,
+        step_mm=args.step if kind in ("grid", "cube") else None,
+        order=args.order if kind == "grid" else "serpentine",
         repeats=args.repeats,
-        seed=args.seed,
-    )
-    info = [
-        f"identification plan: {args.count} poses x {args.repeats} repeats chosen D-optimally "
-        f"from {usable} of {args.candidates} candidates (Status {status}, tilt up to "
-        f"{args.tilt:g} deg, |A5| >= 10 deg); observability O1 {o1:.4f}",
-        f"path {plan.path_length():.1f} mm",
-    ]
-    return plan, info
-
-
-def reach(plan: Plan, args: argparse.Namespace) -> tuple[np.ndarray, np.ndarray, str, int]:
-    """KUKA S and T (N,) of every position in one Status (--status, or the IK default at the
-    first position): LIN moves keep the configuration of the first PTP, so the whole plan must
-    be reachable in it. InputError naming the first position that is not."""
-    robot = robot_with_tool(args.robot, args.tool)
-    poses = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
-    sol, status = solve_in_one_status(robot, poses, args.status)
-    if not sol.ok.all():
-        bad = np.flatnonzero(~sol.ok)
-        i = int(bad[0])
-        x, y, z = plan.points[i]
-        raise InputError(
-            f"{len(bad)} of {len(plan.points)} plan positions cannot be reached by {robot.name}"
-            f"{'' if status is None else f' in Status {status}'}; first: {plan.ids[i]} "
-            f"X {x:.3f} Y {y:.3f} Z {z:.3f} ({sol.reason[i]})"
-        )
-    return sol.status, sol.turn, robot.name, int(status)
-
-
-def render_krl(
-    plan: Plan,
-    status: np.ndarray,
-    turn: np.ndarray,
-    name: str,
-    header: list[str],
-    args: argparse.Namespace,
-) -> tuple[str, str]:
-    """(.src, .dat) texts of the measurement program (``krl.emit.render_measurement``) after
-    checking the program options."""
-    if args.wait_input is not None and not 1 <= args.wait_input <= 4096:
-        raise InputError(f"--wait-input must be an input number 1..4096, got {args.wait_input}")
-    if not 0 <= args.wait_sec <= MAX_WAIT_SEC:
-        raise InputError(f"--wait-sec must be 0..{MAX_WAIT_SEC:g} s, got {args.wait_sec:g}")
-    if not 1 <= args.ptp_percent <= 100:
-        raise InputError(f"--ptp-percent must be 1..100, got {args.ptp_percent}")
-    if not 0 < args.vel <= 2.0:
-        raise InputError(f"--vel must be in (0, 2] m/s, got {args.vel:g}")
-    for option in ("tool_number", "base_number"):
-        value = getattr(args, option)
-        low = 1 if option == "tool_number" else 0
-        if not low <= value <= 32:
-            raise InputError(f"--{option.replace('_', '-')} must be {low}..32, got {value}")
-    settings = MeasureSettings(
-        tool=args.tool_number,
-        base=args.base_number,
+        centre=tuple(args.centre) if kind == "cube" else None,
+        centres=parse_centres(args.centre) if kind == "experiment" else None,
+        steps=parse_steps(args.steps) if kind == "experiment" else None,
+        count=args.count if kind == "identify" else 0,
+        tilt_deg=args.tilt if kind == "identify" else 0.0,
+        candidates=args.candidates if kind == "identify" else 0,
+        seed=args.seed if kind == "identify" else 0,
+        name=args.name,
+        tool_number=args.tool_number,
+        base_number=args.base_number,
         ptp_percent=args.ptp_percent,
-        vel_cp=args.vel,
+        vel_m_s=args.vel,
         wait_sec=args.wait_sec,
         wait_input=args.wait_input,
-        ptp_only=args.kind == "identify",  # reorienting between poses: PTP, not LIN
+        templates=args.templates,
     )
-    return render_measurement(
-        plan.points,
-        plan.abc_rows(),
-        plan.ids,
-        status,
-        turn,
-        name,
-        header,
-        settings,
-        args.templates,
-    )
-
-
-def _orientation_text(plan: Plan) -> str:
-    if np.ndim(plan.abc) == 1:
-        return f"orientation A B C {' '.join(fixed(v) for v in plan.abc)} deg"
-    return "orientation A B C per position (see the .dat)"
-
-
-def run(args: argparse.Namespace) -> int:
-    plan, info = build_plan(args)
-    name = krl_identifier(args.name or f"measure_{args.kind}", prefix="M")
-    out = Path(args.output)
-    targets = {out / f"{name.lower()}.{ext}": None for ext in ("csv", "src", "dat")}
-    check_targets(targets, force=args.force)
-    status, turn, robot_name, config = reach(plan, args)
-    if args.wait_input is not None:
-        wait = f"WAIT FOR $IN[{args.wait_input}]"
-    else:
-        wait = f"WAIT SEC {fixed(args.wait_sec)}"
-    details = [
-        "inputs none, positions generated from the command-line settings",
-        *info,
-        _orientation_text(plan) + f", robot {robot_name}, Status {config}",
-    ]
-    moves = "each by PTP" if args.kind == "identify" else "first by PTP, then LIN"
-    closing = [f"{len(plan.points)} positions, {moves}, each followed by {wait}"]
-    header = header_lines(
-        f"plan {args.kind}",
-        details=details,
-        where=", measurement positions are not corrected",
-        closing=closing,
-    )
-    src, dat = render_krl(plan, status, turn, name, header, args)
-    paths = list(targets)
-    write_files({paths[0]: plan.csv_text(), paths[1]: src, paths[2]: dat}, force=args.force)
-    for line in info:
+    job = plan_files(request, args.output)
+    write_files(job.files, force=args.force)
+    for line in job.lines:
         print(line)
-    print(f"wrote {', '.join(str(p) for p in paths)}")
     return 0

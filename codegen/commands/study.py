@@ -31,8 +31,15 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
-from accugrid.codegen.commands.plan import add_experiment_arguments, parse_centres, parse_steps
+from accugrid.codegen.cli_options import (
+    add_abc,
+    add_experiment_arguments,
+    add_status,
+    add_tool,
+    parse_centres,
+    parse_steps,
+    robot_with_tool,
+)
 from accugrid.codegen.plots import fig12_png, hist_png
 from accugrid.codegen.progress import progress
 from accugrid.codegen.study_report import csv_text, md_table, table4, table5, text_table
