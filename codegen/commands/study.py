@@ -25,10 +25,7 @@ angles in degrees.
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
-
-import numpy as np
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import (
@@ -40,30 +37,14 @@ from accugrid.codegen.cli_options import (
     parse_steps,
     robot_with_tool,
 )
-from accugrid.codegen.plots import fig12_png, hist_png
 from accugrid.codegen.progress import progress
-from accugrid.codegen.study_report import csv_text, md_table, table4, table5, text_table
+from accugrid.codegen.study_report import OUTPUTS, StudyRequest, study_files
 from accugrid.compensation.plans import SEED_REGION
-from accugrid.compensation.study import (
-    DEFAULT_STD_FRACTION,
-    DEFAULT_TOLERANCE_MM,
-    REPEAT_RULES,
-    analyse,
-    check_reach,
-    measured_residuals,
-    measured_validation,
-    read_experiment,
-    simulate_study,
-    simulate_validation,
-    simulated_measure,
-)
-from accugrid.kinematics.errors import InputError
+from accugrid.compensation.study import DEFAULT_STD_FRACTION, DEFAULT_TOLERANCE_MM, REPEAT_RULES
 
-__all__ = ["NAME", "OUTPUTS", "add_arguments", "run"]
+__all__ = ["NAME", "add_arguments", "run"]
 
 NAME = "study"
-
-OUTPUTS = ("table4.csv", "table5.csv", "fig12.png", "table5_hist.png", "report.md")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -155,126 +136,32 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 
-def _region(args) -> tuple[np.ndarray, np.ndarray]:
-    r = args.region
-    return np.array([r[0], r[2], r[4]]), np.array([r[1], r[3], r[5]])
-
-
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
-    targets = [out / name for name in OUTPUTS]
     inputs = [p for p in [args.measured, *(args.validate or [])] if p]
-    check_targets(targets, inputs=inputs, force=args.force)
-    if args.validate and not args.measured:
-        raise InputError("--validate goes with --measured (simulation validates by itself)")
-    lo, hi = _region(args)
-    started = time.perf_counter()
-    settings: list[str] = []
-    if args.simulate:
-        robot = robot_with_tool(args.simulate, args.tool)
-        abc = np.array(args.abc, dtype=float)
-        centres = parse_centres(args.centre)
-        names, xyz = list(centres), np.array(list(centres.values()), dtype=float)
-        steps = parse_steps(args.steps)
-        status = check_reach(robot, names, xyz, steps, abc, args.status)
-        measure = simulated_measure(
-            robot, abc, status, args.seed, args.noise_tracker, args.noise_repeat
-        )
-        cubes, residuals = simulate_study(measure, names, xyz, steps, args.repeats, progress)
-        settings += [
-            f"simulated robot {robot.name}, A B C {' '.join(f'{v:g}' for v in abc)} deg, "
-            f"KUKA Status {status} throughout",
-            f"noise: tracker {args.noise_tracker:g} mm, repeatability {args.noise_repeat:g} mm "
-            f"(sigma per axis), seed {args.seed}",
-        ]
-    else:
-        cubes = read_experiment(args.measured)
-        residuals = measured_residuals(cubes, progress)
-        settings.append(f"measured plan {Path(args.measured).name} (test points uncorrected)")
-    result = analyse(cubes, residuals, args.tolerance, args.std_fraction, args.repeat_rule)
-    settings += [
-        "centres "
-        + ", ".join(
-            f"{n} ({', '.join(f'{v:g}' for v in c)})"
-            for n, c in zip(cubes.names, cubes.centres, strict=True)
-        ),
-        f"steps {', '.join(f'{s:g}' for s in cubes.steps)} mm, {cubes.repeats} repeats, "
-        f"tolerance +-{args.tolerance:g} mm, std fraction {args.std_fraction:g}, "
-        f"repeat rule {args.repeat_rule}",
-    ]
-    validation = None
-    step = result.decision.step
-    if args.validation_step is not None:
-        if not args.simulate:
-            raise InputError("--validation-step goes with --simulate")
-        if not args.validation_step > 0:
-            raise InputError(f"--validation-step must be > 0 mm, got {args.validation_step:g}")
-        step = args.validation_step
-    if step is not None and args.simulate:
-        validation = simulate_validation(
-            measure, lo, hi, step, args.repeats, args.validation_points, seed=args.seed
-        )
-    elif step is not None and args.validate:
-        validation = measured_validation(*args.validate)
-    elapsed = time.perf_counter() - started
-
-    h4, r4 = table4(result)
-    print("Table 4: remaining error after compensation per cube step (mm)")
-    print(text_table(h4, r4))
-    print()
-    for reason in result.decision.reasons:
-        print(reason)
-    files: dict[Path, str | bytes] = {out / "table4.csv": csv_text(h4, r4)}
-    files[out / "fig12.png"] = fig12_png(result)
-    report = [
-        "# Grid-step study (accugrid study)",
-        "",
-        *[f"- {s}" for s in settings],
-        f"- validation region X {lo[0]:g}..{hi[0]:g}, Y {lo[1]:g}..{hi[1]:g}, "
-        f"Z {lo[2]:g}..{hi[2]:g} mm",
-        f"- study time {elapsed:.2f} s",
-        "",
-        "## Table 4: remaining error after compensation (mm)",
-        "",
-        md_table(h4, r4),
-        "",
-        "## Decision (seed Sec. 4.4)",
-        "",
-        *[f"- {r}" for r in result.decision.reasons],
-        "",
-        "![Fig. 12: error-step curves](fig12.png)",
-        "",
-        "## Table 5: validation at the chosen step (mm)",
-        "",
-    ]
-    if validation is not None:
-        before, after = validation.table(args.repeat_rule)
-        h5, r5 = table5(before, after)
-        steps_used = " x ".join(f"{s:.3f}" for s in validation.model.step)
-        print()
-        chosen = "" if step == result.decision.step else " (--validation-step, not the chosen)"
-        print(
-            f"Table 5: {len(validation.points)} random points, grid step {steps_used} mm{chosen} "
-            f"({int(np.prod(validation.model.counts))} vertices)"
-        )
-        print(text_table(h5, r5))
-        files[out / "table5.csv"] = csv_text(h5, r5)
-        files[out / "table5_hist.png"] = hist_png(validation)
-        report += [
-            f"{len(validation.points)} random points; grid step {steps_used} mm{chosen}, "
-            f"{int(np.prod(validation.model.counts))} vertices.",
-            "",
-            md_table(h5, r5),
-            "",
-            "![Table 5 histograms](table5_hist.png)",
-        ]
-    else:
-        why = "no step chosen" if step is None else "no --validate files given"
-        print(f"\nTable 5: not computed ({why})")
-        files[out / "table5.csv"] = "calibration\n"
-        report.append(f"Not computed ({why}).")
-        files.pop(out / "table5_hist.png", None)
-    files[out / "report.md"] = "\n".join(report) + "\n"
-    written = write_files(files, inputs=inputs, force=args.force)
-    print(f"\nstudy time {elapsed:.2f} s; wrote {', '.join(str(p) for p in written)}")
+    check_targets([out / name for name in OUTPUTS], inputs=inputs, force=args.force)
+    simulated = args.simulate is not None
+    request = StudyRequest(
+        robot=robot_with_tool(args.simulate, args.tool) if simulated else None,
+        measured=args.measured,
+        centres=parse_centres(args.centre) if simulated else None,
+        steps=parse_steps(args.steps) if simulated else None,
+        repeats=args.repeats,
+        abc=tuple(args.abc),
+        status=args.status,
+        noise_tracker_mm=args.noise_tracker,
+        noise_repeat_mm=args.noise_repeat,
+        seed=args.seed,
+        region=tuple(args.region),
+        tolerance_mm=args.tolerance,
+        std_fraction=args.std_fraction,
+        repeat_rule=args.repeat_rule,
+        validation_points=args.validation_points,
+        validation_step_mm=args.validation_step,
+        validate=None if args.validate is None else tuple(args.validate),
+    )
+    job = study_files(request, out, progress)
+    write_files(job.files, inputs=job.inputs, force=args.force)
+    for line in job.lines:
+        print(line)
     return 0
