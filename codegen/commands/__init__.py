@@ -1,6 +1,9 @@
 """One module per ``accugrid`` subcommand (see ``codegen.cli``): ``NAME``,
-``add_arguments(parser)`` and ``run(args) -> int``, each argument parsing, the domain calls, the
-writes and the printed summary.
+``add_arguments(parser)`` and ``run(args) -> int``. A command parses its arguments, refuses
+existing outputs (``atomic.check_targets``), calls one domain function (e.g.
+``corrected.correct_points``, ``measure_program.plan_files``), which returns the job's files
+and the lines to print (``atomic.JobFiles``), writes them as one job (``atomic.write_files``)
+and prints the lines.
 
 ``COMMANDS`` names them with their one-line help, so the parser (and ``accugrid --help``) is
 built without importing any command module; only the command that runs is imported.
