@@ -13,15 +13,19 @@ one frozen record per concern, each built and validated in one place:
   configuration changes, wrist-singularity margin, reference orientation);
 - ``cell.correction`` (``compensation.settings.CorrectionSettings``): ``correction:`` (method,
   power, iterations); ``correction.model`` is ``cell.model_path``, beside ``cell.grid_path``;
-- ``cell.krl`` (``codegen.krl.section.KrlSection``) and ``cell.gcode``
-  (``codegen.gcode.section.GcodeSection``): what only that dialect reads. A dialect's record
-  and reader live in its folder and declare the YAML keys they read (``KEYS``); a key may be
-  read by several records (``program.decimals`` by both dialects), any other key is an error.
+- ``cell.dialects[name]`` for every dialect of ``codegen.dialects.DIALECTS``, e.g. ``cell.krl``
+  (``codegen.krl.section.KrlSection``) and ``cell.gcode`` (``codegen.gcode.section.GcodeSection``):
+  what only that dialect reads. Each dialect's ``section.py`` holds its record and declares
+  the YAML keys it reads (``KEYS``) and its reader (``read_section(reader, robot_T_base)``), so
+  a new dialect brings its cell section in its own folder; a key may be read by several records
+  (``program.decimals`` by both dialects), any key no record reads is an error.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -29,12 +33,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from accugrid.codegen.cellfile import DISTANCE_MAX_MM, CellReader, SectionKeys
+from accugrid.codegen.dialects import DIALECTS
 from accugrid.compensation.interpolation import METHODS
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.yamlfile import load_yaml
 
-if TYPE_CHECKING:  # imported when a cell is read: importing one dialect must not load another
+if TYPE_CHECKING:  # read through DIALECTS: importing one dialect must not load another
     from accugrid.codegen.gcode.section import GcodeSection
     from accugrid.codegen.krl.section import KrlSection
 
@@ -91,9 +96,18 @@ class Cell:
     drilling: DrillingSection
     configuration: ConfigurationSection
     correction: CorrectionSettings
-    krl: KrlSection
-    gcode: GcodeSection
+    dialects: Mapping[str, object]  # dialect name -> its section record
     sha256: str = ""
+
+    @property
+    def krl(self) -> KrlSection:
+        """What the KUKA KRL emitter reads."""
+        return self.dialects["krl"]
+
+    @property
+    def gcode(self) -> GcodeSection:
+        """What the G-code emitter and rewrite read."""
+        return self.dialects["gcode"]
 
     def grid_file(self, override: str | os.PathLike[str] | None = None, hint: str = "") -> Path:
         """The measurement to correct with: ``override`` (--grid), else the cell's ``grid``;
@@ -128,12 +142,11 @@ def _sections(*declared: SectionKeys) -> dict[str, frozenset[str]]:
 
 def load_cell(path: str | os.PathLike[str]) -> Cell:
     """Read and validate a cell YAML file; InputError naming the key and line on any problem."""
-    from accugrid.codegen.gcode import section as gcode
-    from accugrid.codegen.krl import section as krl
-
+    sections = {name: _section_module(name) for name in DIALECTS}
     path = Path(path)
     doc = load_yaml(path)
-    r = CellReader(path, doc, _TOP_KEYS, _sections(_KEYS, krl.KEYS, gcode.KEYS))
+    keys = _sections(_KEYS, *(module.KEYS for module in sections.values()))
+    r = CellReader(path, doc, _TOP_KEYS, keys)
     if not r.top:
         raise InputError("empty cell file", os.fspath(path))
     robot = r.top.get("robot")
@@ -157,10 +170,14 @@ def load_cell(path: str | os.PathLike[str]) -> Cell:
         drilling=_drilling(r),
         configuration=_configuration(r),
         correction=_correction(r),
-        krl=krl.read_krl_section(r),
-        gcode=gcode.read_gcode_section(r, robot_T_base),
+        dialects={n: module.read_section(r, robot_T_base) for n, module in sections.items()},
         sha256=doc.sha256,
     )
+
+
+def _section_module(dialect: str):
+    """``accugrid.codegen.<dialect>.section``: KEYS and read_section of the dialect's record."""
+    return importlib.import_module(f"accugrid.codegen.{dialect}.section")
 
 
 def _base_data(r: CellReader, base_number: int, robot_T_base: np.ndarray) -> dict:

@@ -1,7 +1,8 @@
 """The program dialects accugrid reads and writes, by name and file suffix.
 
-A dialect is a unit: ``codegen/<name>/`` (emit, parse, rewrite), ``templates/<name>/`` and a
-command. Adding one (ABB RAPID, say) is one more registry entry here. A file whose suffix no
+A dialect is a unit: ``codegen/<name>/`` (emit, parse, rewrite, and section: its record of
+the cell file, ``cell.dialects[name]``), ``templates/<name>/`` and a command. Adding one (ABB
+RAPID, say) is one more registry entry here. A file whose suffix no
 dialect claims is refused instead of being guessed.
 """
 

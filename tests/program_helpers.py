@@ -55,7 +55,8 @@ def cell_with(c: Cell | None = None, **sections: dict) -> Cell:
     ``cell_with(drilling={"peck_mm": 2.0}, gcode={"canned_cycles": False})``."""
     c = cell() if c is None else c
     changed = {k: dataclasses.replace(getattr(c, k), **v) for k, v in sections.items()}
-    return dataclasses.replace(c, **changed)
+    dialects = {k: changed.pop(k, v) for k, v in c.dialects.items()}
+    return dataclasses.replace(c, dialects=dialects, **changed)
 
 
 @lru_cache(maxsize=1)

@@ -1,7 +1,7 @@
 """The G-code section of the cell: what only the G-code emitter and rewrite read (``cell.gcode``).
 
 The YAML keys stay where the cell file has them (``gcode:``, ``program.decimals``,
-``program_frame:``); ``KEYS`` declares them for the cell reader, and ``read_gcode_section``
+``program_frame:``); ``KEYS`` declares them for the cell reader, and ``read_section``
 builds and validates the record in one place.
 """
 
@@ -13,7 +13,7 @@ import numpy as np
 
 from accugrid.codegen.cellfile import FRAME_KEYS, CellReader, SectionKeys
 
-__all__ = ["KEYS", "GcodeSection", "read_gcode_section"]
+__all__ = ["KEYS", "GcodeSection", "read_section"]
 
 KEYS: SectionKeys = {
     "gcode": frozenset({"spindle_rpm", "canned_cycles"}),
@@ -34,7 +34,7 @@ class GcodeSection:
     canned_cycles: bool = True
 
 
-def read_gcode_section(r: CellReader, robot_T_base: np.ndarray) -> GcodeSection:
+def read_section(r: CellReader, robot_T_base: np.ndarray) -> GcodeSection:
     """The G-code record of the cell ``r`` reads (``robot_T_base``: the default program frame);
     InputError naming the key and line."""
     frame = r.top.get("program_frame")

@@ -2,17 +2,19 @@
 
 The YAML keys stay where the cell file has them (``program:``, ``speeds.ptp_percent``,
 ``drilling.travel_motion``/``apo_*``, ``outputs:``, ``external_axes:``); ``KEYS`` declares them
-for the cell reader, and ``read_krl_section`` builds and validates the record in one place.
+for the cell reader, and ``read_section`` builds and validates the record in one place.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from accugrid.codegen.cellfile import DISTANCE_MAX_MM, FRAME_MAX_MM, CellReader, SectionKeys
 from accugrid.codegen.textsafe import KRL_RESERVED
 
-__all__ = ["KEYS", "KrlSection", "read_krl_section"]
+__all__ = ["KEYS", "KrlSection", "read_section"]
 
 EXTERNAL_AXES = tuple(f"e{i}" for i in range(1, 7))
 KEYS: SectionKeys = {
@@ -45,8 +47,9 @@ class KrlSection:
     external_axes: tuple[float, ...] = (0.0,) * 6
 
 
-def read_krl_section(r: CellReader) -> KrlSection:
-    """The KRL record of the cell ``r`` reads; InputError naming the key and line."""
+def read_section(r: CellReader, robot_T_base: np.ndarray) -> KrlSection:
+    """The KRL record of the cell ``r`` reads (``robot_T_base``, the cell's base frame, is not
+    needed: positions are written in it); InputError naming the key and line."""
     name = r.value("program", "name", "ACCUGRID")
     if not isinstance(name, str) or not _is_krl_name(name) or len(name) > 20:
         raise r.error(
