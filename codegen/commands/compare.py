@@ -7,7 +7,8 @@ the model identified (DH errors, TCP, A2/A3 compliance when the robot has a grav
 the N poses `plan identify` chooses (D-optimal among --candidates random poses tilted up to
 --tilt deg); the model plus a 27-vertex residual grid at the grid orientation (trilinear); the
 model plus its residual at the poses interpolated in joint space (A1-A3, thin-plate spline; its
-5-fold cross-validation over the poses is printed). Every measurement is a simulated tracker
+5-fold cross-validation over the poses is printed); with --harmonics a model that also identifies
+those reducer harmonics, alone and with the residual grid. Every measurement is a simulated tracker
 session (one KUKA Status, --repeats per point, seeded noise per budget). Scored on --targets
 held-out targets at the grid orientation and --targets tilted up to --target-tilt deg: where the
 arm lands when commanded P' (noise-free), max |P - M| and std per axis, mm.
@@ -22,11 +23,18 @@ import argparse
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
+from accugrid.codegen.cli_options import (
+    add_abc,
+    add_harmonics,
+    add_status,
+    add_tool,
+    robot_with_tool,
+)
 from accugrid.codegen.textsafe import comment_text, fixed
 from accugrid.compensation.comparison import Comparison, ComparisonRow, compare_methods
 from accugrid.compensation.plans import SEED_REGION
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.identification import harmonic_terms
 
 __all__ = ["NAME", "add_arguments", "run", "table_text"]
 
@@ -112,6 +120,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="MM",
         help="robot repeatability, sigma per axis and visit, mm (default: 0.03)",
     )
+    add_harmonics(
+        parser,
+        "also compare a model with these reducer harmonics identified (budgets of at least "
+        "its parameter count)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     parser.add_argument(
         "-o",
@@ -153,6 +166,8 @@ def run(args: argparse.Namespace) -> int:
         noise_tracker_mm=args.noise_tracker,
         noise_repeat_mm=args.noise_repeat,
         seed=args.seed,
+        progress=None,
+        harmonics=harmonic_terms(pair for pairs in args.harmonics for pair in pairs),
     )
     from accugrid.codegen.plots import comparison_png
 
@@ -164,6 +179,8 @@ def run(args: argparse.Namespace) -> int:
             f"X Y Z {' '.join(fixed(v, 3) for v in without)} mm without, "
             f"{' '.join(fixed(v, 3) for v in with_layer)} mm with"
         )
+    for line in result.skipped:
+        print(f"skipped {line}")
     out.mkdir(parents=True, exist_ok=True)
     write_files(
         {paths[0]: _csv_text(result, args), paths[1]: comparison_png(result)},
