@@ -103,6 +103,7 @@ class Comparison:
     repeats: int
     n_targets: int
     skipped: tuple[str, ...] = ()  # "budget N: method: why" for rows a budget cannot have
+    settings: str = ""  # what was simulated, one line (region, orientation, noise, seed, tilts)
 
     def row(self, budget: int, targets: str, method: str) -> ComparisonRow:
         """The row of that budget, target set and method."""
@@ -347,7 +348,17 @@ def compare_methods(
                     raise InputError(f"model correction failed: {result.reason[result.failed[0]]}")
                 landed = cell.land(result.command, orient)
                 rows.append(_score(budget, name, method, budget + extra, points - landed))
-    return Comparison(rows, joint_cv, robot.name, status, repeats, n_targets, tuple(skipped))
+    region = " ".join(f"{v:g}" for pair in zip(lo, hi, strict=True) for v in pair)
+    settings = (
+        f"{robot.name}: region {region} mm, "
+        f"grid orientation A B C {' '.join(f'{v:g}' for v in abc)}, KUKA Status {status}, "
+        f"{repeats} repeats, noise tracker {noise_tracker_mm:g} repeat {noise_repeat_mm:g} mm, "
+        f"seed {seed}; model poses tilted up to {tilt_deg:g} deg; {n_targets} held-out targets "
+        f"per set (tilted: up to {target_tilt_deg:g} deg); where the arm lands, noise-free, mm"
+    )
+    return Comparison(
+        rows, joint_cv, robot.name, status, repeats, n_targets, tuple(skipped), settings
+    )
 
 
 def _calibrate(cell, lo, hi, budget, abc, seed, compliance, harmonics, options):

@@ -30,13 +30,13 @@ from accugrid.codegen.cli_options import (
     add_tool,
     robot_with_tool,
 )
-from accugrid.codegen.textsafe import comment_text, fixed
-from accugrid.compensation.comparison import Comparison, ComparisonRow, compare_methods
+from accugrid.codegen.comparison_report import csv_text, report_text
+from accugrid.compensation.comparison import compare_methods
 from accugrid.compensation.plans import SEED_REGION
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.identification import harmonic_terms
 
-__all__ = ["NAME", "add_arguments", "run", "table_text"]
+__all__ = ["NAME", "add_arguments", "run"]
 
 NAME = "compare"
 
@@ -171,65 +171,11 @@ def run(args: argparse.Namespace) -> int:
     )
     from accugrid.codegen.plots import comparison_png
 
-    print(_summary_line(result, args))
-    print(table_text(result))
-    for budget, (without, with_layer) in result.joint_cv.items():
-        print(
-            f"joint residual, 5-fold cross-validation over the {budget} poses: held-out RMS "
-            f"X Y Z {' '.join(fixed(v, 3) for v in without)} mm without, "
-            f"{' '.join(fixed(v, 3) for v in with_layer)} mm with"
-        )
-    for line in result.skipped:
-        print(f"skipped {line}")
     out.mkdir(parents=True, exist_ok=True)
     write_files(
-        {paths[0]: _csv_text(result, args), paths[1]: comparison_png(result)},
-        inputs,
-        force=args.force,
+        {paths[0]: csv_text(result), paths[1]: comparison_png(result)}, inputs, force=args.force
     )
+    print(report_text(result))
     for path in paths:
         print(f"wrote {path}")
     return 0
-
-
-def _summary_line(result: Comparison, args: argparse.Namespace) -> str:
-    return (
-        f"{result.robot}: region {' '.join(f'{v:g}' for v in args.region)} mm, grid orientation "
-        f"A B C {' '.join(f'{v:g}' for v in args.abc)}, KUKA Status {result.status}, "
-        f"{args.repeats} repeats, noise tracker {args.noise_tracker:g} repeat "
-        f"{args.noise_repeat:g} mm, seed {args.seed}; model poses tilted up to {args.tilt:g} "
-        f"deg; {result.n_targets} held-out targets per set (tilted: up to "
-        f"{args.target_tilt:g} deg); where the arm lands, noise-free, mm"
-    )
-
-
-def _cells(row: ComparisonRow) -> list[str]:
-    return [fixed(v, 3) for v in (*row.max_mm, *row.std_mm)]
-
-
-def table_text(result: Comparison) -> str:
-    """The rows as a Markdown table (budget 0: uncorrected)."""
-    lines = [
-        "| targets | budget | method | points | max X | max Y | max Z | std X | std Y | std Z |",
-        "|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for targets in dict.fromkeys(r.targets for r in result.rows):
-        for r in (r for r in result.rows if r.targets == targets):
-            budget = "-" if r.method == "uncorrected" else str(r.budget)
-            lines.append(
-                f"| {targets} | {budget} | {r.method} | {r.points} | "
-                + " | ".join(_cells(r))
-                + " |"
-            )
-    return "\n".join(lines)
-
-
-def _csv_text(result: Comparison, args: argparse.Namespace) -> str:
-    header = comment_text(f"accugrid compare: {_summary_line(result, args)}", limit=600)
-    lines = [
-        f"# {header}",
-        "targets,budget,method,points,max_x,max_y,max_z,std_x,std_y,std_z",
-    ]
-    for r in result.rows:
-        lines.append(f"{r.targets},{r.budget},{r.method},{r.points}," + ",".join(_cells(r)))
-    return "\n".join(lines) + "\n"
