@@ -58,3 +58,7 @@ accugrid simulate --robot kr210-realistic --region 1200 2200 -500 500 1100 2100 
 accugrid correct examples/wing_panel_robot.csv --model out/model/calibrated.yaml \
     --grid out/model/residual_27.csv --method trilinear -o out/model/wing_panel_corrected.csv \
     --force
+# The same model + residual grid in the drilling program: every hole corrected at its own
+# orientation (the cell's tool and Status), header naming the model and its SHA-256.
+accugrid krl examples/wing_panel_points.csv --cell examples/cell.yaml \
+    --model out/model/calibrated.yaml --grid out/model/residual_27.csv -o out/model/krl --force
