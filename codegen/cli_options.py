@@ -13,6 +13,7 @@ import numpy as np
 
 from accugrid.compensation.plans import SEED_ABC
 from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.joint_errors import MAX_ORDER
 from accugrid.kinematics.robot import Robot, load_robot
 
 __all__ = ["add_abc", "add_harmonics", "add_status", "add_tool", "robot_with_tool"]
@@ -71,8 +72,8 @@ def _axis_orders(text: str) -> list[tuple[int, int]]:
         raise argparse.ArgumentTypeError(
             f"'{text}' is not AXIS:ORDERS such as A2:1,7,160"
         ) from None
-    if not 1 <= number <= 6 or any(k < 1 for _, k in pairs):
-        raise argparse.ArgumentTypeError(f"'{text}': axis A1..A6 and orders >= 1 only")
+    if not 1 <= number <= 6 or any(not 1 <= k <= MAX_ORDER for _, k in pairs):
+        raise argparse.ArgumentTypeError(f"'{text}': axis A1..A6 and orders 1..{MAX_ORDER} only")
     return pairs
 
 

@@ -38,7 +38,7 @@ from accugrid.kinematics.dh import PARAMETERS, flange_poses
 from accugrid.kinematics.error_model import error_jacobian
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
-from accugrid.kinematics.joint_errors import Harmonic, JointErrors
+from accugrid.kinematics.joint_errors import MAX_ORDER, Harmonic, JointErrors
 from accugrid.kinematics.robot import Robot
 
 __all__ = [
@@ -101,12 +101,14 @@ def parameter_units(
 
 
 def harmonic_terms(spec: Sequence[tuple[int, int]]) -> Terms:
-    """The (axis 1..6, order >= 1) reducer harmonics to identify, checked, duplicates dropped,
-    in the given order. InputError for an axis or order out of range."""
+    """The (axis 1..6, order 1..MAX_ORDER) reducer harmonics to identify, checked, duplicates
+    dropped, in the given order. InputError for an axis or order out of range."""
     terms: list[tuple[int, int]] = []
     for axis, order in spec:
-        if not 1 <= int(axis) <= 6 or int(order) < 1:
-            raise InputError(f"harmonic A{axis} order {order}: axis 1..6 and order >= 1 only")
+        if not 1 <= int(axis) <= 6 or not 1 <= int(order) <= MAX_ORDER:
+            raise InputError(
+                f"harmonic A{axis} order {order}: axis 1..6 and order 1..{MAX_ORDER} only"
+            )
         if (int(axis), int(order)) not in terms:
             terms.append((int(axis), int(order)))
     return tuple(terms)

@@ -30,6 +30,7 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import invert, pose_from_xyzabc
 from accugrid.kinematics.joint_errors import (
     GRAVITY_MPS2,
+    MAX_ORDER,
     Harmonic,
     JointErrors,
     PointMass,
@@ -257,7 +258,7 @@ def _joint_errors_from_doc(doc: YamlDoc) -> JointErrors:
             harmonics.append(
                 Harmonic(
                     _whole(doc, 1, 6, *k, "axis"),
-                    _whole(doc, 0, 100000, *k, "order"),
+                    _whole(doc, 0, MAX_ORDER, *k, "order"),
                     doc.number(*k, "amplitude_rad"),
                     np.radians(doc.number(*k, "phase_deg", default=0.0)),
                 )

@@ -507,5 +507,7 @@ def test_harmonic_terms_are_checked():
     assert harmonic_terms([(2, 7), (2, 7), (3, 1)]) == ((2, 7), (3, 1))
     with pytest.raises(InputError, match="axis 1..6"):
         harmonic_terms([(7, 1)])
-    with pytest.raises(InputError, match="order >= 1"):
+    with pytest.raises(InputError, match="order 1..100000"):
         harmonic_terms([(2, 0)])
+    with pytest.raises(InputError, match="order 1..100000"):
+        harmonic_terms([(2, 100_001)])
