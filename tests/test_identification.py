@@ -455,15 +455,7 @@ def harmonic_arm(amplitudes: np.ndarray, phases: np.ndarray) -> tuple[Robot, np.
 def test_noise_free_harmonics_of_known_orders_are_recovered(amplitudes, phases):
     true, coefficients = harmonic_arm(amplitudes, phases)
     nominal = REALISTIC.with_tool(TOOL)
-    q = random_joints(90, 31)
-    commanded = nominal.fk(q)
-    data = pose_set(
-        nominal,
-        commanded[:, :3, 3],
-        true.fk(q)[:, :3, 3],
-        matrix_to_abc(commanded[:, :3, :3]),
-        np.degrees(q),
-    )
+    data = measured_set(true, random_joints(90, 31))  # kr210-realistic's DH is kr210's
     result = identify(nominal, data, compliance=True, harmonics=HARMONIC_TERMS)
     assert result.names[-2:] == ["harmonic_a5_k2_sin", "harmonic_a5_k2_cos"]
     assert result.units[-12:] == ["rad"] * 12
@@ -482,15 +474,7 @@ def test_noise_free_harmonics_of_known_orders_are_recovered(amplitudes, phases):
 def test_identified_harmonics_survive_the_calibrated_yaml(tmp_path):
     true, _ = harmonic_arm(np.full(6, 1e-4), np.linspace(-3.0, 3.0, 6))
     nominal = REALISTIC.with_tool(TOOL)
-    q = random_joints(90, 33)
-    commanded = nominal.fk(q)
-    data = pose_set(
-        nominal,
-        commanded[:, :3, 3],
-        true.fk(q)[:, :3, 3],
-        matrix_to_abc(commanded[:, :3, :3]),
-        np.degrees(q),
-    )
+    data = measured_set(true, random_joints(90, 33))
     result = identify(nominal, data, compliance=True, harmonics=HARMONIC_TERMS)
     path = tmp_path / "cal.yaml"
     path.write_text(calibrated_yaml(result.robot))
