@@ -88,7 +88,7 @@ def main() -> None:
     size = sum(len(t) for t in files.values()) / 2**20
     print(
         f"{HOLES} holes; KRL: {len(files)} files, {size:.1f} MiB; lines_per_file "
-        f"{cell.lines_per_file}"
+        f"{cell.krl.lines_per_file}"
     )
     print(table(rows, ("stage", "best s", "peak MiB")))
 

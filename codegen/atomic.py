@@ -28,12 +28,13 @@ import secrets
 import signal
 import stat
 from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import file_identities, tracked_inputs
 
-__all__ = ["check_targets", "write_files"]
+__all__ = ["JobFiles", "check_targets", "write_files"]
 
 _TMP_SUFFIX = ".accugrid.tmp"
 _SIGNALS = tuple(
@@ -41,6 +42,17 @@ _SIGNALS = tuple(
 )
 
 PathLike = str | os.PathLike[str]
+
+
+@dataclass
+class JobFiles:
+    """What a command's domain call hands back: the files of the job (path -> text or bytes,
+    written together by ``write_files``), the inputs they must never replace, and the lines
+    the command prints once they are written."""
+
+    files: dict[PathLike, bytes | str]
+    inputs: list[PathLike | None] = field(default_factory=list)
+    lines: list[str] = field(default_factory=list)
 
 
 def _input_identities(inputs: Iterable[PathLike | None]) -> set[tuple[int, int]]:

@@ -1,55 +1,83 @@
-"""The cell file: robot, grid, tool, base frames and the drilling process, as YAML.
+"""The cell file: robot, grid, tool, base frames, and one typed record per concern, as YAML.
 
 Read with ``kinematics.yamlfile.load_yaml``; every key is validated and an error names the key
 (``tool.z``) with its file line. Paths in the file are relative to the file. Lengths mm, angles
 deg, speeds mm/s, times s. The commented reference is ``examples/cell.yaml``.
+
+``Cell`` holds what the cell is made of (robot, grid and model files, tool and base frames) and
+one frozen record per concern, each built and validated in one place:
+
+- ``cell.drilling`` (``DrillingSection``): the dialect-neutral process, from ``drilling:`` and
+  ``speeds:`` (distances along the drill axis, dwell, peck, travel/approach/feed speeds);
+- ``cell.configuration`` (``ConfigurationSection``): ``configuration:`` (Status/Turn to require,
+  configuration changes, wrist-singularity margin, reference orientation);
+- ``cell.correction`` (``compensation.settings.CorrectionSettings``): ``correction:`` (method,
+  power, iterations); ``correction.model`` is ``cell.model_path``, beside ``cell.grid_path``;
+- ``cell.krl`` (``codegen.krl.section.KrlSection``) and ``cell.gcode``
+  (``codegen.gcode.section.GcodeSection``): what only that dialect reads. A dialect's record
+  and reader live in its folder and declare the YAML keys they read (``KEYS``); a key may be
+  read by several records (``program.decimals`` by both dialects), any other key is an error.
 """
 
 from __future__ import annotations
 
-import math
 import os
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from accugrid.codegen.textsafe import KRL_RESERVED
+from accugrid.codegen.cellfile import DISTANCE_MAX_MM, CellReader, SectionKeys
 from accugrid.compensation.interpolation import METHODS
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import pose_from_xyzabc
-from accugrid.kinematics.yamlfile import YamlDoc, load_yaml
+from accugrid.kinematics.yamlfile import load_yaml
 
-__all__ = ["ANGLE_MAX_DEG", "DISTANCE_MAX_MM", "FRAME_MAX_MM", "Cell", "load_cell"]
+if TYPE_CHECKING:  # imported when a cell is read: importing one dialect must not load another
+    from accugrid.codegen.gcode.section import GcodeSection
+    from accugrid.codegen.krl.section import KrlSection
 
-_FRAME_KEYS = ("x", "y", "z", "a", "b", "c")
-# Bounds on every length and angle a program can carry (speeds, times and counts have their own)
-FRAME_MAX_MM = 1e6  # |x|, |y|, |z| of a frame, external axis positions
-ANGLE_MAX_DEG = 360.0  # |a|, |b|, |c|
-DISTANCE_MAX_MM = 1e4  # approach, clearance, retract, depth, peck, apo_cdis
-_TOP_KEYS = {
-    "robot",
-    "grid",
-    "tool",
-    "base",
-    "base_data",
-    "program_frame",
-    "program",
-    "speeds",
-    "drilling",
-    "outputs",
-    "configuration",
-    "correction",
-    "gcode",
-    "external_axes",
-}
+__all__ = ["Cell", "ConfigurationSection", "DrillingSection", "load_cell"]
+
+
+@dataclass(frozen=True)
+class DrillingSection:
+    """The drilling process every dialect follows. Distances from the hole along the drill axis
+    (mm): approach point, clearance (where the feed starts, < approach), retract point, depth
+    (when the points have none); dwell at the bottom (s); peck depth (mm, 0 = none); speeds
+    (mm/s): travel between holes, approach and retract, feed (when the points have none)."""
+
+    approach_mm: float = 30.0
+    clearance_mm: float = 2.0
+    retract_mm: float = 30.0
+    depth_mm: float = 10.0
+    dwell_s: float = 0.5
+    peck_mm: float = 0.0
+    travel_mm_s: float = 500.0
+    approach_mm_s: float = 50.0
+    feed_mm_s: float = 5.0
+
+
+@dataclass(frozen=True)
+class ConfigurationSection:
+    """How the robot reaches the holes: KUKA Status (0..7) and Turn (0..63) to require (None:
+    the first hole's IK solution), whether a hole may take another Status/Turn, |A5| (deg)
+    below which a hole is reported near the wrist singularity, and the reference tool
+    orientation (robot frame, KUKA A, B, C deg) that holes given as i,j,k are tilted from."""
+
+    status: int | None = None
+    turn: int | None = None
+    allow_change: bool = False
+    singular_a5_deg: float = 5.0
+    reference_abc: tuple[float, float, float] = (0.0, 90.0, 0.0)
 
 
 @dataclass(frozen=True)
 class Cell:
-    """A validated cell file. Poses are (4, 4) homogeneous transforms in mm."""
+    """A validated cell file. Poses are (4, 4) homogeneous transforms in mm: ``flange_T_tool``
+    (the TCP, TOOL_DATA ``tool_number``), ``robot_T_base`` (the points' frame, BASE_DATA
+    ``base_number``) and ``base_data`` (BASE_DATA number -> robot_T_frame, the base included)."""
 
     path: Path
     robot_name: str
@@ -60,41 +88,11 @@ class Cell:
     base_number: int
     robot_T_base: np.ndarray
     base_data: dict[int, np.ndarray]
-    robot_T_program: np.ndarray
-    # program
-    program_name: str = "ACCUGRID"
-    lines_per_file: int = 5000
-    decimals: int = 3
-    # speeds (mm/s) and motion
-    travel_mm_s: float = 500.0
-    approach_mm_s: float = 50.0
-    feed_mm_s: float = 5.0
-    ptp_percent: float = 50.0
-    travel_motion: str = "ptp"
-    apo_cdis_mm: float = 5.0
-    apo_ptp_percent: float = 50.0
-    # drilling (mm along the drill axis, s)
-    approach_mm: float = 30.0
-    clearance_mm: float = 2.0
-    retract_mm: float = 30.0
-    depth_mm: float = 10.0
-    dwell_s: float = 0.5
-    peck_mm: float = 0.0
-    # outputs
-    spindle_output: int = 1
-    clamp_output: int | None = None
-    # robot configuration
-    status: int | None = None
-    turn: int | None = None
-    allow_config_change: bool = False
-    singular_a5_deg: float = 5.0
-    reference_abc: tuple[float, float, float] = (0.0, 90.0, 0.0)
-    # correction (method, power, iterations; the safety limit is the default)
-    correction: CorrectionSettings = CorrectionSettings()
-    # G-code
-    spindle_rpm: float = 6000.0
-    canned_cycles: bool = True
-    external_axes: tuple[float, ...] = field(default=(0.0,) * 6)
+    drilling: DrillingSection
+    configuration: ConfigurationSection
+    correction: CorrectionSettings
+    krl: KrlSection
+    gcode: GcodeSection
     sha256: str = ""
 
     def grid_file(self, override: str | os.PathLike[str] | None = None, hint: str = "") -> Path:
@@ -109,242 +107,112 @@ class Cell:
         return self.grid_path
 
 
+# The YAML keys the neutral records read, by section (the dialects declare theirs)
+_KEYS: SectionKeys = {
+    "speeds": frozenset({"travel", "approach", "feed"}),
+    "drilling": frozenset({"approach", "clearance", "retract", "depth", "dwell", "peck"}),
+    "configuration": frozenset({"status", "turn", "allow_change", "singular_a5", "reference"}),
+    "correction": frozenset({"method", "iterations", "power", "model"}),
+}
+_TOP_KEYS = {"robot", "grid", "tool", "base", "base_data"}
+
+
+def _sections(*declared: SectionKeys) -> dict[str, frozenset[str]]:
+    """Every YAML section with the union of the keys its readers declare."""
+    out: dict[str, frozenset[str]] = {}
+    for keys in declared:
+        for section, names in keys.items():
+            out[section] = out.get(section, frozenset()) | names
+    return out
+
+
 def load_cell(path: str | os.PathLike[str]) -> Cell:
     """Read and validate a cell YAML file; InputError naming the key and line on any problem."""
+    from accugrid.codegen.gcode import section as gcode
+    from accugrid.codegen.krl import section as krl
+
     path = Path(path)
     doc = load_yaml(path)
-    return _Reader(path, doc).cell(doc.data, doc.sha256)
+    r = CellReader(path, doc, _TOP_KEYS, _sections(_KEYS, krl.KEYS, gcode.KEYS))
+    if not r.top:
+        raise InputError("empty cell file", os.fspath(path))
+    robot = r.top.get("robot")
+    if not isinstance(robot, str) or not robot.strip():
+        raise r.error("robot", "is required: a built-in robot name or a robot YAML path")
+    if robot.endswith((".yaml", ".yml")):
+        robot = os.fspath(path.parent / robot)
+    grid_path = r.file_path("", "grid", "a file path")
+    tool_number, flange_T_tool = r.frame(r.top.get("tool"), "tool", True)
+    base_number, robot_T_base = r.frame(r.top.get("base"), "base", True)
+    return Cell(
+        path=path,
+        robot_name=robot,
+        grid_path=grid_path,
+        model_path=r.file_path("correction", "model", "a calibrated robot YAML path"),
+        tool_number=tool_number,
+        flange_T_tool=flange_T_tool,
+        base_number=base_number,
+        robot_T_base=robot_T_base,
+        base_data=_base_data(r, base_number, robot_T_base),
+        drilling=_drilling(r),
+        configuration=_configuration(r),
+        correction=_correction(r),
+        krl=krl.read_krl_section(r),
+        gcode=gcode.read_gcode_section(r, robot_T_base),
+        sha256=doc.sha256,
+    )
 
 
-class _Reader:
-    """Validation with key paths and YAML lines for the messages."""
+def _base_data(r: CellReader, base_number: int, robot_T_base: np.ndarray) -> dict:
+    base_data = {base_number: robot_T_base}
+    for n, frame in r.mapping(r.top.get("base_data"), "base_data", None).items():
+        try:
+            number = int(n)
+        except ValueError:
+            raise r.error(f"base_data.{n}", "key must be a BASE_DATA number") from None
+        if not 1 <= number <= 32:
+            raise r.error(f"base_data.{n}", "BASE_DATA number must be 1..32")
+        if number == base_number:
+            raise r.error(f"base_data.{n}", "repeats base.number; define it in base")
+        base_data[number] = r.frame(frame, f"base_data.{n}", False)[1]
+    return base_data
 
-    def __init__(self, path: Path, doc: YamlDoc) -> None:
-        self.path = path
-        self.doc = doc
 
-    def error(self, key: str, message: str) -> InputError:
-        return InputError(f"{key}: {message}", os.fspath(self.path), self.doc.line(*key.split(".")))
-
-    # -- typed getters -------------------------------------------------------------------
-    def mapping(self, data: object, key: str, allowed: set[str] | None = None) -> dict:
-        if data is None:
-            return {}
-        if not isinstance(data, Mapping):
-            raise self.error(key, f"must be a mapping, got {type(data).__name__}")
-        if allowed is not None:
-            for k in data:
-                if str(k) not in allowed:
-                    raise self.error(
-                        f"{key}.{k}" if key else str(k),
-                        f"unknown key (allowed: {', '.join(sorted(allowed))})",
-                    )
-        return {str(k): v for k, v in data.items()}
-
-    def number(
-        self,
-        data: dict,
-        name: str,
-        key: str,
-        default: float | None,
-        lo=None,
-        hi=None,
-        strict_lo=False,
-    ) -> float:
-        full = f"{key}.{name}" if key else name
-        value = data.get(name, default)
-        if value is None:
-            raise self.error(full, "is required")
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.error(full, f"must be a number, got {value!r}")
-        value = float(value)
-        if not math.isfinite(value):
-            raise self.error(full, "must be a finite number")
-        if lo is not None and (value <= lo if strict_lo else value < lo):
-            raise self.error(full, f"must be {'>' if strict_lo else '>='} {lo:g}, got {value:g}")
-        if hi is not None and value > hi:
-            raise self.error(full, f"must be <= {hi:g}, got {value:g}")
-        return value
-
-    def integer(self, data: dict, name: str, key: str, default, lo=None, hi=None, optional=False):
-        full = f"{key}.{name}" if key else name
-        value = data.get(name, default)
-        if value is None:
-            if optional:
-                return None
-            raise self.error(full, "is required")
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise self.error(full, f"must be an integer, got {value!r}")
-        if (lo is not None and value < lo) or (hi is not None and value > hi):
-            raise self.error(full, f"must be between {lo} and {hi}, got {value}")
-        return value
-
-    def boolean(self, data: dict, name: str, key: str, default: bool) -> bool:
-        value = data.get(name, default)
-        if not isinstance(value, bool):
-            raise self.error(f"{key}.{name}", f"must be true or false, got {value!r}")
-        return value
-
-    def frame(self, data: object, key: str, numbered: bool) -> tuple[int | None, np.ndarray]:
-        allowed = set(_FRAME_KEYS) | ({"number"} if numbered else set())
-        d = self.mapping(data, key, allowed)
-        if not d:
-            raise self.error(key, "is required (x, y, z in mm; a, b, c in deg)")
-        number = self.integer(d, "number", key, None, 1, 32) if numbered else None
-        xyzabc = [self.number(d, k, key, 0.0, -FRAME_MAX_MM, FRAME_MAX_MM) for k in "xyz"]
-        xyzabc += [self.number(d, k, key, 0.0, -ANGLE_MAX_DEG, ANGLE_MAX_DEG) for k in "abc"]
-        return number, pose_from_xyzabc(np.array(xyzabc))
-
-    def abc(self, data: object, key: str, default: tuple) -> tuple[float, float, float]:
-        if data is None:
-            return default
-        d = self.mapping(data, key, {"a", "b", "c"})
-        return tuple(self.number(d, k, key, 0.0, -ANGLE_MAX_DEG, ANGLE_MAX_DEG) for k in "abc")
-
-    # -- the file ------------------------------------------------------------------------
-    def cell(self, data: object, sha256: str) -> Cell:
-        top = self.mapping(data, "", _TOP_KEYS)
-        if not top:
-            raise InputError("empty cell file", os.fspath(self.path))
-        robot = top.get("robot")
-        if not isinstance(robot, str) or not robot.strip():
-            raise self.error("robot", "is required: a built-in robot name or a robot YAML path")
-        if robot.endswith((".yaml", ".yml")):
-            robot = os.fspath(self.path.parent / robot)
-        grid = top.get("grid")
-        if grid is not None and (not isinstance(grid, str) or not grid.strip()):
-            raise self.error("grid", "must be a file path")
-        grid_path = None if grid is None else self.path.parent / grid
-        tool_number, flange_T_tool = self.frame(top.get("tool"), "tool", True)
-        base_number, robot_T_base = self.frame(top.get("base"), "base", True)
-        base_data = {base_number: robot_T_base}
-        for n, frame in self.mapping(top.get("base_data"), "base_data").items():
-            try:
-                number = int(n)
-            except ValueError:
-                raise self.error(f"base_data.{n}", "key must be a BASE_DATA number") from None
-            if not 1 <= number <= 32:
-                raise self.error(f"base_data.{n}", "BASE_DATA number must be 1..32")
-            if number == base_number:
-                raise self.error(f"base_data.{n}", "repeats base.number; define it in base")
-            base_data[number] = self.frame(frame, f"base_data.{n}", False)[1]
-        if top.get("program_frame") is None:
-            robot_T_program = robot_T_base
-        else:
-            robot_T_program = self.frame(top["program_frame"], "program_frame", False)[1]
-
-        prog = self.mapping(top.get("program"), "program", {"name", "lines_per_file", "decimals"})
-        name = prog.get("name", "ACCUGRID")
-        if not isinstance(name, str) or not _is_krl_name(name) or len(name) > 20:
-            raise self.error(
-                "program.name",
-                "must be a KRL name: a letter or _, then letters, digits or _, at most 20 "
-                f"characters (4 are kept for the sub-program suffix), not a KRL keyword, got "
-                f"{name!r}",
-            )
-        sp = self.mapping(
-            top.get("speeds"), "speeds", {"travel", "approach", "feed", "ptp_percent"}
+def _drilling(r: CellReader) -> DrillingSection:
+    approach = r.number("drilling", "approach", 30.0, 0.0, DISTANCE_MAX_MM, True)
+    clearance = r.number("drilling", "clearance", 2.0, 0.0, DISTANCE_MAX_MM)
+    if clearance >= approach:
+        raise r.error(
+            "drilling.clearance",
+            f"must be smaller than drilling.approach ({approach:g} mm), got {clearance:g}",
         )
-        dr = self.mapping(
-            top.get("drilling"),
-            "drilling",
-            {
-                "approach",
-                "clearance",
-                "retract",
-                "depth",
-                "dwell",
-                "peck",
-                "travel_motion",
-                "apo_cdis",
-                "apo_ptp_percent",
-            },
-        )
-        motion = dr.get("travel_motion", "ptp")
-        if motion not in ("ptp", "lin"):
-            raise self.error("drilling.travel_motion", f"must be ptp or lin, got {motion!r}")
-        out = self.mapping(top.get("outputs"), "outputs", {"spindle", "clamp"})
-        cf = self.mapping(
-            top.get("configuration"),
-            "configuration",
-            {"status", "turn", "allow_change", "singular_a5", "reference"},
-        )
-        co = self.mapping(
-            top.get("correction"), "correction", {"method", "iterations", "power", "model"}
-        )
-        model = co.get("model")
-        if model is not None and (not isinstance(model, str) or not model.strip()):
-            raise self.error("correction.model", "must be a calibrated robot YAML path")
-        model_path = None if model is None else self.path.parent / model
-        method = co.get("method", "idw")
-        if method not in METHODS:
-            raise self.error("correction.method", f"must be {' or '.join(METHODS)}, got {method!r}")
-        gc = self.mapping(top.get("gcode"), "gcode", {"spindle_rpm", "canned_cycles"})
-        ext = self.mapping(
-            top.get("external_axes"), "external_axes", {f"e{i}" for i in range(1, 7)}
-        )
-        approach = self.number(dr, "approach", "drilling", 30.0, 0.0, DISTANCE_MAX_MM, True)
-        clearance = self.number(dr, "clearance", "drilling", 2.0, 0.0, DISTANCE_MAX_MM)
-        if clearance >= approach:
-            raise self.error(
-                "drilling.clearance",
-                f"must be smaller than drilling.approach ({approach:g} mm), got {clearance:g}",
-            )
-        return Cell(
-            path=self.path,
-            robot_name=robot,
-            grid_path=grid_path,
-            model_path=model_path,
-            tool_number=tool_number,
-            flange_T_tool=flange_T_tool,
-            base_number=base_number,
-            robot_T_base=robot_T_base,
-            base_data=base_data,
-            robot_T_program=robot_T_program,
-            program_name=name,
-            lines_per_file=self.integer(prog, "lines_per_file", "program", 5000, 50, 10**7),
-            decimals=self.integer(prog, "decimals", "program", 3, 1, 6),
-            travel_mm_s=self.number(sp, "travel", "speeds", 500.0, 0.0, 2000.0, True),
-            approach_mm_s=self.number(sp, "approach", "speeds", 50.0, 0.0, 2000.0, True),
-            feed_mm_s=self.number(sp, "feed", "speeds", 5.0, 0.0, 2000.0, True),
-            ptp_percent=self.number(sp, "ptp_percent", "speeds", 50.0, 0.0, 100.0, True),
-            travel_motion=motion,
-            apo_cdis_mm=self.number(dr, "apo_cdis", "drilling", 5.0, 0.0, DISTANCE_MAX_MM),
-            apo_ptp_percent=self.number(dr, "apo_ptp_percent", "drilling", 50.0, 0.0, 100.0),
-            approach_mm=approach,
-            clearance_mm=clearance,
-            retract_mm=self.number(dr, "retract", "drilling", approach, 0.0, DISTANCE_MAX_MM, True),
-            depth_mm=self.number(dr, "depth", "drilling", 10.0, 0.0, DISTANCE_MAX_MM, True),
-            dwell_s=self.number(dr, "dwell", "drilling", 0.5, 0.0, 60.0),
-            peck_mm=self.number(dr, "peck", "drilling", 0.0, 0.0, DISTANCE_MAX_MM),
-            spindle_output=self.integer(out, "spindle", "outputs", 1, 1, 4096),
-            clamp_output=self.integer(out, "clamp", "outputs", None, 1, 4096, optional=True),
-            status=self.integer(cf, "status", "configuration", None, 0, 7, optional=True),
-            turn=self.integer(cf, "turn", "configuration", None, 0, 63, optional=True),
-            allow_config_change=self.boolean(cf, "allow_change", "configuration", False),
-            singular_a5_deg=self.number(cf, "singular_a5", "configuration", 5.0, 0.0, 90.0),
-            reference_abc=self.abc(
-                cf.get("reference"), "configuration.reference", (0.0, 90.0, 0.0)
-            ),
-            correction=CorrectionSettings(
-                method=method,
-                iterations=self.integer(co, "iterations", "correction", 1, 1, 10),
-                power=self.number(co, "power", "correction", 1.0, 0.0, 10.0, True),
-            ),
-            spindle_rpm=self.number(gc, "spindle_rpm", "gcode", 6000.0, 0.0, 10**6, True),
-            canned_cycles=self.boolean(gc, "canned_cycles", "gcode", True),
-            external_axes=tuple(
-                self.number(ext, f"e{i}", "external_axes", 0.0, -FRAME_MAX_MM, FRAME_MAX_MM)
-                for i in range(1, 7)
-            ),
-            sha256=sha256,
-        )
+    return DrillingSection(
+        approach_mm=approach,
+        clearance_mm=clearance,
+        retract_mm=r.number("drilling", "retract", approach, 0.0, DISTANCE_MAX_MM, True),
+        depth_mm=r.number("drilling", "depth", 10.0, 0.0, DISTANCE_MAX_MM, True),
+        dwell_s=r.number("drilling", "dwell", 0.5, 0.0, 60.0),
+        peck_mm=r.number("drilling", "peck", 0.0, 0.0, DISTANCE_MAX_MM),
+        travel_mm_s=r.number("speeds", "travel", 500.0, 0.0, 2000.0, True),
+        approach_mm_s=r.number("speeds", "approach", 50.0, 0.0, 2000.0, True),
+        feed_mm_s=r.number("speeds", "feed", 5.0, 0.0, 2000.0, True),
+    )
 
 
-def _is_krl_name(name: str) -> bool:
-    return (
-        bool(name)
-        and name.upper() not in KRL_RESERVED
-        and (name[0].isascii() and (name[0].isalpha() or name[0] == "_"))
-        and all(ch.isascii() and (ch.isalnum() or ch == "_") for ch in name)
+def _configuration(r: CellReader) -> ConfigurationSection:
+    key = "configuration"
+    return ConfigurationSection(
+        status=r.integer(key, "status", None, 0, 7, optional=True),
+        turn=r.integer(key, "turn", None, 0, 63, optional=True),
+        allow_change=r.boolean(key, "allow_change", False),
+        singular_a5_deg=r.number(key, "singular_a5", 5.0, 0.0, 90.0),
+        reference_abc=r.abc(r.value(key, "reference"), f"{key}.reference", (0.0, 90.0, 0.0)),
+    )
+
+
+def _correction(r: CellReader) -> CorrectionSettings:
+    return CorrectionSettings(
+        method=r.choice("correction", "method", "idw", METHODS),
+        iterations=r.integer("correction", "iterations", 1, 1, 10),
+        power=r.number("correction", "power", 1.0, 0.0, 10.0, True),
     )

@@ -12,23 +12,21 @@ longer than --max-correction.
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen.atomic import check_targets
+from accugrid.codegen.atomic import JobFiles
 from accugrid.codegen.corrected import (
+    CorrectRequest,
     check_added_columns,
     check_outside,
-    print_corrections,
-    write_corrected,
+    corrected_file,
 )
 from accugrid.codegen.header import grid_lines, input_line
 from accugrid.codegen.points import Points, read_points
 from accugrid.compensation.corrector import Corrector
 from accugrid.compensation.model_correction import TOL_MM
-from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import (
@@ -41,7 +39,7 @@ from accugrid.kinematics.frames import (
 from accugrid.kinematics.robot import load_robot
 from accugrid.kinematics.yamlfile import load_yaml
 
-__all__ = ["controller_tool", "point_orientations", "run_model"]
+__all__ = ["controller_tool", "correct_by_model", "point_orientations"]
 
 _LISTED = 5
 
@@ -78,17 +76,25 @@ def controller_tool(model: str, tool: list[float] | None) -> np.ndarray | None:
     return pose_from_xyzabc([doc.number("identification", "controller_tool", k) for k in "xyzabc"])
 
 
-def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
-    """The whole ``correct --model`` job (arguments of ``accugrid correct``)."""
-    inputs = [args.points, args.grid, args.model if Path(args.model).is_file() else None]
-    check_targets([args.output], inputs, args.force)
-    calibrated = load_robot(args.model)
-    tool = controller_tool(args.model, args.tool)
-    points = read_points(args.points)
+def correct_by_model(request: CorrectRequest) -> JobFiles:
+    """The ``correct`` job with a model (``correct_points`` dispatches here): the corrected CSV
+    and the printed summary; InputError naming the first point not corrected."""
+    settings, model_file = request.settings, request.model
+    is_file = Path(model_file).is_file()
+    calibrated = load_robot(model_file)
+    tool = controller_tool(model_file, request.tool)
+    points = read_points(request.points)
     check_added_columns(points)
-    abc = point_orientations(points, np.array(args.abc, dtype=float))
+    abc = point_orientations(points, np.array(request.abc, dtype=float))
     corrector = Corrector.build(
-        settings, args.grid, calibrated, args.status, tool, args.repeat_tol, points.xyz, abc
+        settings,
+        request.grid,
+        calibrated,
+        request.status,
+        tool,
+        request.repeat_tol_mm,
+        points.xyz,
+        abc,
     )
     grid, status = corrector.grid, corrector.status
     flags: list[list[str]] = [[] for _ in range(len(points))]
@@ -96,7 +102,7 @@ def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
         found = corrector.check(points.xyz, abc_to_matrix(abc).reshape(-1, 3, 3))
         check_outside(points, grid, found.outside, settings.outside, flags)
         if found.angle is not None:  # the model holds at any orientation: flag, never refuse
-            for i in np.flatnonzero(found.angle > args.orientation_tol):
+            for i in np.flatnonzero(found.angle > request.orientation_tol_deg):
                 flags[i].append(f"orientation {found.angle[i]:.1f} deg from residual grid")
     result = corrector.correct(points.xyz, abc)
     if not result.ok.all():
@@ -108,18 +114,16 @@ def run_model(args: argparse.Namespace, settings: CorrectionSettings) -> int:
             f"{named}{more}",
             *points.table.where(int(bad[0])),
         )
-    sources = [input_line("model", args.model, file_sha256(args.model) if inputs[2] else "-")]
+    sources = [input_line("model", model_file, file_sha256(model_file) if is_file else "-")]
     details = [f"robot {calibrated.name}, KUKA Status {status}"]
+    lines = []
     if grid is not None:
-        sources += grid_lines(Path(args.grid).name, grid.source_sha256, grid.step)
-        details.append(f"residual grid: method {args.method}, power {args.power:g}")
-    length, worst = write_corrected(args, points, result.command, flags, sources, details, inputs)
-    if grid is not None:
-        print(grid.describe().replace("grid       ", "residual   ", 1))
-    print(f"model      {args.model} ({calibrated.name}), KUKA Status {status}")
-    print(
+        sources += grid_lines(Path(request.grid).name, grid.source_sha256, grid.step)
+        details.append(f"residual grid: method {settings.method}, power {settings.power:g}")
+        lines.append(grid.describe().replace("grid       ", "residual   ", 1))
+    lines += [
+        f"model      {model_file} ({calibrated.name}), KUKA Status {status}",
         f"corrected  {len(points)} point(s) in {result.iterations} pass(es), largest miss "
-        f"{np.nanmax(result.miss_mm, initial=0.0):.6f} mm (tolerance {TOL_MM:g})"
-    )
-    print_corrections(points, length, worst, flags, args.output)
-    return 0
+        f"{np.nanmax(result.miss_mm, initial=0.0):.6f} mm (tolerance {TOL_MM:g})",
+    ]
+    return corrected_file(request, points, result.command, flags, sources, details, lines)

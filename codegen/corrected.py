@@ -1,35 +1,41 @@
-"""The corrected-points CSV (DESIGN.md "Corrected points") and the checks both ``accugrid correct``
-jobs (grid and model) share: every input column untouched, then x_cmd,y_cmd,z_cmd (the command,
-mm), ex,ey,ez (the correction applied, P' - P, mm; 4 decimals) and flag (why a point deserves a
-look); the job is refused whole when a correction exceeds the safety limit."""
+"""``accugrid correct`` (``correct_points``): the corrected-points CSV (DESIGN.md "Corrected
+points") and the checks both jobs (grid here, model in ``correct_model``) share: every input
+column untouched, then x_cmd,y_cmd,z_cmd (the command, mm), ex,ey,ez (the correction applied,
+P' - P, mm; 4 decimals) and flag (why a point deserves a look); the job is refused whole when a
+correction exceeds the safety limit."""
 
 from __future__ import annotations
 
-import argparse
 import csv
 import io
+from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen.atomic import write_files
-from accugrid.codegen.header import csv_comment, header_lines, input_line
-from accugrid.codegen.points import Points
+from accugrid.codegen.atomic import JobFiles
+from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
+from accugrid.codegen.points import Points, read_points
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation.grid import GridModel
+from accugrid.compensation.measurements import REPEAT_TOL_MM
+from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.units import mm_text
 
 __all__ = [
     "ADDED",
     "DECIMALS",
+    "CorrectRequest",
     "check_added_columns",
     "check_orientation",
     "check_outside",
+    "correct_points",
     "corrected_csv",
-    "print_corrections",
+    "corrected_file",
     "refuse_too_long",
-    "write_corrected",
 ]
 
 ADDED = ["x_cmd", "y_cmd", "z_cmd", "ex", "ey", "ez", "flag"]
@@ -85,24 +91,25 @@ def check_orientation(
     points: Points,
     model: GridModel,
     angle: np.ndarray | None,
-    args: argparse.Namespace,
+    request: CorrectRequest,
     flags: list[list[str]],
     what: str,
 ) -> None:
-    """Angles (N,) deg from the grid's orientation: InputError beyond --orientation-limit
-    (unless --allow-orientation), a flag beyond --orientation-tol; ``what`` names the grid."""
+    """Angles (N,) deg from the grid's orientation: InputError beyond the request's
+    orientation limit (unless it allows any), a flag beyond its tolerance; ``what`` names the
+    grid."""
     if angle is None:
         return
-    beyond = np.flatnonzero(angle > args.orientation_limit)
-    if beyond.size and not args.allow_orientation:
+    beyond = np.flatnonzero(angle > request.orientation_limit_deg)
+    if beyond.size and not request.allow_orientation:
         i = int(beyond[0])
         raise InputError(
-            f"{beyond.size} point(s) more than {args.orientation_limit:g} deg from the {what}'s "
-            f"orientation {mm_text(model.orientation_abc)} deg, first {points.label(i)} at "
-            f"{angle[i]:.1f} deg: the grid does not hold there (--allow-orientation to go on)",
+            f"{beyond.size} point(s) more than {request.orientation_limit_deg:g} deg from the "
+            f"{what}'s orientation {mm_text(model.orientation_abc)} deg, first {points.label(i)} "
+            f"at {angle[i]:.1f} deg: the grid does not hold there (--allow-orientation to go on)",
             *points.table.where(i),
         )
-    for i in np.flatnonzero(angle > args.orientation_tol):
+    for i in np.flatnonzero(angle > request.orientation_tol_deg):
         flags[i].append(f"orientation {angle[i]:.1f} deg from {what}")
 
 
@@ -123,43 +130,92 @@ def corrected_csv(
     return out.getvalue()
 
 
-def write_corrected(
-    args: argparse.Namespace,
+def corrected_file(
+    request: CorrectRequest,
     points: Points,
     command: np.ndarray,
     flags: list[list[str]],
     sources: list[str],
     details: list[str],
-    inputs: list,
-) -> tuple[np.ndarray, int | None]:
-    """Refuse the job when a correction exceeds --max-correction, else write the corrected CSV
-    (header: the points file, ``sources`` and ``details`` lines) atomically; returns the
-    correction lengths (N,) mm and the index of the longest (None without points)."""
+    lines: list[str],
+) -> JobFiles:
+    """Refuse the job when a correction exceeds the safety limit, else the corrected CSV
+    (header: the points file, ``sources`` and ``details`` lines) to write, with ``lines`` and
+    the summary every correct job ends with (largest correction, flagged points) to print."""
     correction = command - points.xyz
     length = np.sqrt(np.einsum("ij,ij->i", correction, correction))
-    worst = refuse_too_long(points, length, args.max_correction)
+    worst = refuse_too_long(points, length, request.settings.max_correction_mm)
     where = "" if worst is None else f" at hole {points.ids[worst]}"
     largest = 0.0 if worst is None else float(length[worst])
-    lines = [input_line("points", args.points, file_sha256(args.points)), *sources]
-    header = header_lines("correct", lines, details, largest, where, [f"points {len(points)}"])
+    inputs = [input_line("points", request.points, file_sha256(request.points)), *sources]
+    header = header_lines("correct", inputs, details, largest, where, [f"points {len(points)}"])
     text = corrected_csv(points, command, correction, flags, header)
-    write_files({args.output: text}, inputs, force=args.force)
-    return length, worst
-
-
-def print_corrections(
-    points: Points, length: np.ndarray, worst: int | None, flags: list[list[str]], output
-) -> None:
-    """The summary lines every correct job ends with: largest correction, flagged points."""
     if worst is not None:
-        print(
+        lines.append(
             f"largest correction {length[worst]:.4f} mm at {points.label(worst)}; "
             f"mean {length.mean():.4f} mm"
         )
     flagged = [i for i, f in enumerate(flags) if f]
-    print(f"flagged    {len(flagged)} point(s)")
-    for i in flagged[:_LISTED]:
-        print(f"  {points.label(i)}: {'; '.join(flags[i])}")
+    lines.append(f"flagged    {len(flagged)} point(s)")
+    lines += [f"  {points.label(i)}: {'; '.join(flags[i])}" for i in flagged[:_LISTED]]
     if len(flagged) > _LISTED:
-        print(f"  ... and {len(flagged) - _LISTED} more (see the flag column)")
-    print(f"wrote {output}")
+        lines.append(f"  ... and {len(flagged) - _LISTED} more (see the flag column)")
+    lines.append(f"wrote {request.output}")
+    model = request.model if request.model and Path(request.model).is_file() else None
+    return JobFiles({request.output: text}, [request.points, request.grid, model], lines)
+
+
+@dataclass(frozen=True)
+class CorrectRequest:
+    """One ``accugrid correct`` job: POINTS (robot frame) to OUTPUT, by a grid measurement
+    and/or a calibrated model (paths), with the correction ``settings``. Orientation: flag
+    beyond ``orientation_tol_deg``, refuse beyond ``orientation_limit_deg`` (grid only) unless
+    ``allow_orientation``; ``repeat_tol_mm`` merges repeated grid vertices. With a model:
+    ``status`` (KUKA, None: the default rule), ``abc`` (KUKA deg, orientation of points without
+    one, reference for i,j,k), ``tool`` (the controller's x, y, z, a, b, c; None: the file's)."""
+
+    points: str
+    output: str
+    grid: str | None
+    model: str | None
+    settings: CorrectionSettings
+    orientation_tol_deg: float = 5.0
+    orientation_limit_deg: float = 15.0
+    allow_orientation: bool = False
+    repeat_tol_mm: float = REPEAT_TOL_MM
+    status: int | None = None
+    abc: tuple[float, float, float] = (0.0, 90.0, 0.0)
+    tool: tuple[float, ...] | None = None
+
+
+def correct_points(request: CorrectRequest) -> JobFiles:
+    """The whole ``accugrid correct`` job: the corrected-points CSV and the printed summary.
+    InputError (nothing to write) on bad input, points outside the grid (outside "error"), a
+    correction beyond the safety limit, or an orientation beyond the limit."""
+    if not 0 <= request.orientation_tol_deg <= request.orientation_limit_deg:
+        raise InputError("need 0 <= --orientation-tol <= --orientation-limit (deg)")
+    if request.model is not None:
+        from accugrid.codegen.correct_model import correct_by_model  # only when asked: slower
+
+        return correct_by_model(request)
+    if request.grid is None:
+        raise InputError("give --grid MEAS, --model CAL.yaml or both")
+    settings = request.settings
+    model = GridModel.from_measurements(request.grid, repeat_tol_mm=request.repeat_tol_mm)
+    points = read_points(request.points)
+    check_added_columns(points)
+    rotations = None if points.abc is None else abc_to_matrix(points.abc).reshape(-1, 3, 3)
+    found = model.check(points.xyz, settings, rotations=rotations, axes=points.axis)
+    flags: list[list[str]] = [[] for _ in range(len(points))]
+    check_outside(points, model, found.outside, settings.outside, flags)
+    check_orientation(points, model, found.angle, request, flags, "grid")
+    sources = grid_lines(Path(request.grid).name, model.source_sha256, model.step)
+    method, power, its = settings.method, settings.power, settings.iterations
+    details = [f"method {method}, power {power:g}, iterations {its}"]
+    iterations = f"{its} iteration{'s' if its != 1 else ''}"
+    power_text = f" power {power:g}" if method == "idw" else ""
+    lines = [
+        model.describe(),
+        f"corrected  {len(points)} point(s), {method}{power_text}, {iterations}",
+    ]
+    return corrected_file(request, points, found.command, flags, sources, details, lines)

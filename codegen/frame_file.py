@@ -1,4 +1,5 @@
-"""The robot-frame YAML file written by ``accugrid fit-frame`` and read by ``accugrid transform``.
+"""The robot-frame YAML file written by ``accugrid fit-frame`` and read by ``accugrid transform``,
+and the transform of a CSV's tracker-frame columns with it.
 
 The frame is ``tracker_T_robot``: keys ``x, y, z`` (mm) and ``a, b, c`` (KUKA ABC, deg) define it;
 the optional ``matrix`` (4×4) is a convenience copy and must agree with them. The fit residuals
@@ -7,23 +8,41 @@ and checks are informational and ignored when reading.
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 import os
 from collections.abc import Mapping
+from pathlib import Path
 
 import numpy as np
 
 from accugrid.codegen import __version__
-from accugrid.codegen.textsafe import fixed
-from accugrid.kinematics.base_frame import RobotFrameFit
+from accugrid.codegen.atomic import JobFiles
+from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.compensation.csvtable import Table, parse_table, read_table
+from accugrid.kinematics.base_frame import SMR_RADIUS_MM, RobotFrameFit, fit_robot_frame
+from accugrid.kinematics.digest import file_sha256, sha256_hex
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.fitting import CircleFit
-from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
+from accugrid.kinematics.frames import invert, pose_from_xyzabc, transform_points, xyzabc_from_pose
+from accugrid.kinematics.inputfile import read_input_text
 from accugrid.kinematics.yamlfile import load_yaml
 
-__all__ = ["KEYS", "MATRIX_TOL", "frame_yaml", "load_frame"]
+__all__ = [
+    "DECIMALS",
+    "KEYS",
+    "MATRIX_TOL",
+    "TRIPLES",
+    "fit_frame_files",
+    "frame_yaml",
+    "load_frame",
+    "transform_csv",
+]
 
 KEYS = ("x", "y", "z", "a", "b", "c")
+TRIPLES = {"xyz": ("x", "y", "z"), "meas": ("x_meas", "y_meas", "z_meas")}  # transform columns
+DECIMALS = 4  # of a transformed number, mm
 MATRIX_TOL = 1e-6
 """Largest difference accepted between ``matrix`` and the pose from x..c (rotation entries, and
 translation in mm scaled by 1/1000, i.e. 1 µm)."""
@@ -128,3 +147,145 @@ def _check_matrix(matrix: object, pose: np.ndarray, fail) -> None:
             f"{worst:.2e}); edit both or delete the matrix",
             *where,
         )
+
+
+def transform_csv(
+    table_path: str | os.PathLike[str],
+    frame_path: str | os.PathLike[str],
+    output: str | os.PathLike[str],
+    columns: str | None = None,
+    inverse: bool = False,
+) -> JobFiles:
+    """``accugrid transform``: the CSV at ``table_path`` with one or both triples x,y,z and
+    x_meas,y_meas,z_meas (``columns`` "xyz", "meas", "both"; None: "meas" when the file has
+    them, else "xyz") mapped from the tracker frame into the robot frame of ``frame_path``
+    (tracker_T_robot; ``inverse``: back), mm, 4 decimals; every other cell, comment and blank
+    line as it was, a comment naming the frame file first. InputError on a bad file."""
+    text = read_input_text(table_path)[1]
+    table = parse_table(text, table_path)
+    tracker_T_robot = load_frame(frame_path)
+    pose = tracker_T_robot if inverse else invert(tracker_T_robot)
+    triples = _chosen(table, columns)
+    names = [n for triple in triples for n in triple]
+    mapped = {}
+    for triple in triples:
+        values = _mapped(table, triple, pose)
+        for k, name in enumerate(triple):
+            mapped[table.index(name)] = values[:, k]
+    direction = (
+        "from the robot frame into the tracker frame"
+        if inverse
+        else "from the tracker frame into the robot frame"
+    )
+    note = (
+        f"accugrid transform: {','.join(names)} mapped {direction} with "
+        f"{Path(frame_path).name} sha256 {file_sha256(frame_path)}"
+    )
+    body = _rewrite(text, table, mapped)
+    return JobFiles(
+        {output: f"# {comment_text(note, limit=400)}\n{body}"},
+        [table_path, frame_path],
+        [f"{output}: {len(table)} row(s), {note}"],
+    )
+
+
+def _chosen(table: Table, choice: str | None) -> list[tuple[str, str, str]]:
+    """The column triples to map, each checked to be complete in the header."""
+    if choice is None:
+        choice = "meas" if any(table.has(n) for n in TRIPLES["meas"]) else "xyz"
+    keys = ["xyz", "meas"] if choice == "both" else [choice]
+    triples = [TRIPLES[k] for k in keys]
+    for triple in triples:
+        table.require(triple)
+    return triples
+
+
+def _mapped(table: Table, triple: tuple[str, str, str], pose: np.ndarray) -> np.ndarray:
+    """(N, 3) mapped values of one triple; NaN rows where all three cells are empty."""
+    values = table.floats(list(triple), allow_empty=True)
+    empty = np.isnan(values)
+    partial = np.flatnonzero(empty.any(axis=1) & ~empty.all(axis=1))
+    if partial.size:
+        r = int(partial[0])
+        name = triple[int(np.flatnonzero(empty[r])[0])]
+        raise InputError(
+            f"empty cell in column '{name}' while the rest of {','.join(triple)} is filled",
+            *table.where(r, name),
+        )
+    return transform_points(pose, values)
+
+
+def _rewrite(text: str, table: Table, mapped: dict[int, np.ndarray]) -> str:
+    """The CSV text with the mapped cells replaced; every other line kept as it was."""
+    lines = text.splitlines(keepends=True)
+    row_at = {line: r for r, line in enumerate(table.lines)}
+    reader = csv.reader(lines, strict=True)
+    out: list[str] = []
+    end = 0
+    for record in reader:
+        start, end = end, reader.line_num
+        r = row_at.get(start + 1)
+        if r is None:
+            out.extend(lines[start:end])
+            continue
+        cells = list(record)
+        for i, values in mapped.items():
+            if not np.isnan(values[r]):
+                cells[i] = fixed(values[r], DECIMALS)
+        ending = lines[end - 1][len(lines[end - 1].rstrip("\r\n")) :] or "\n"
+        buffer = io.StringIO()
+        csv.writer(buffer, lineterminator=ending).writerow(cells)
+        out.append(buffer.getvalue())
+    return "".join(out)
+
+
+def fit_frame_files(
+    base_plane: str,
+    a1_circle: str,
+    flange_holes: str,
+    output: str,
+    plot: str | None = None,
+    smr_radius_mm: float = SMR_RADIUS_MM,
+) -> JobFiles:
+    """``accugrid fit-frame``: the robot-frame YAML (``frame_yaml``) at ``output`` fitted from
+    three tracker CSVs (x,y,z mm: mounting surface, flange while A1 turns, flange holes at
+    mechanical zero; seed Sec. 4.1), and with ``plot`` a PNG of the fit. InputError on a bad
+    file or a fit that is refused."""
+    if plot and Path(plot).resolve() == Path(output).resolve():
+        raise InputError("--plot and -o name the same file", plot)
+    if not (np.isfinite(smr_radius_mm) and smr_radius_mm >= 0.0):
+        raise InputError(f"--smr-radius must be a number >= 0 mm, got {smr_radius_mm}")
+    inputs = {"base_plane": base_plane, "a1_circle": a1_circle, "flange_holes": flange_holes}
+    loaded = {key: _tracker_points(path) for key, path in inputs.items()}
+    fit = fit_robot_frame(
+        loaded["base_plane"][0],
+        loaded["a1_circle"][0],
+        loaded["flange_holes"][0],
+        smr_radius_mm=smr_radius_mm,
+        sources=(base_plane, a1_circle, flange_holes),
+    )
+    digests = {key: (Path(path).name, sha256_hex(loaded[key][1])) for key, path in inputs.items()}
+    files: dict[str, bytes | str] = {output: frame_yaml(fit, digests)}
+    if plot:
+        from accugrid.codegen.plots import frame_fit_png
+
+        files[plot] = frame_fit_png(fit, {key: value[0] for key, value in loaded.items()})
+    return JobFiles(files, list(inputs.values()), [_fit_summary(output, fit)])
+
+
+def _tracker_points(path: str) -> tuple[np.ndarray, bytes]:
+    """The x,y,z columns (N, 3) mm of a tracker CSV and the file's bytes (for its SHA-256)."""
+    table = read_table(path)
+    table.require(["x", "y", "z"])
+    return table.floats(["x", "y", "z"]), Path(path).read_bytes()
+
+
+def _fit_summary(path: str, fit: RobotFrameFit) -> str:
+    x, y, z, a, b, c = xyzabc_from_pose(fit.tracker_T_robot)
+    return (
+        f"{path}: tracker_T_robot x {x:.3f} y {y:.3f} z {z:.3f} mm, a {a:.4f} b {b:.4f} "
+        f"c {c:.4f} deg; residual RMS/max mm: plane {fit.plane.rms_mm:.4f}/{fit.plane.max_mm:.4f}, "
+        f"A1 circle {fit.a1_circle.rms_mm:.4f}/{fit.a1_circle.max_mm:.4f} "
+        f"({fit.a1_circle.arc_deg:.1f} deg of arc), "
+        f"flange holes {fit.flange_holes.rms_mm:.4f}/{fit.flange_holes.max_mm:.4f}"
+    )

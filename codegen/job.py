@@ -93,7 +93,8 @@ def prepare(args: argparse.Namespace, command: str) -> Job:
     """Read POINTS, CELL and the grid; build the program; print its warnings to stderr."""
     cell = load_cell(args.cell)
     if args.allow_config_change:
-        cell = dataclasses.replace(cell, allow_config_change=True)
+        configuration = dataclasses.replace(cell.configuration, allow_change=True)
+        cell = dataclasses.replace(cell, configuration=configuration)
     model_file = model_path(args, cell)
     grid_file = grid_path(args, cell, model_file)
     points = read_points(args.points)

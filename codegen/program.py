@@ -115,7 +115,7 @@ class Program:
 
     def in_frame(self, robot_T_frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Positions (N, 4, 3) mm and KUKA A,B,C (N, 3) deg in another frame given in the robot
-        frame (e.g. ``cell.robot_T_program`` for G-code)."""
+        frame (e.g. ``cell.gcode.robot_T_program`` for G-code)."""
         frame_T_base = invert(robot_T_frame) @ self.cell.robot_T_base
         rot = frame_T_base[:3, :3]
         pos = self.positions @ rot.T + frame_T_base[:3, 3]
@@ -142,14 +142,14 @@ def build_program(
         )
     rotations = _rotations(points, cell)
     axis = rotations[:, :, 2]
-    depth = np.where(np.isnan(points.depth), cell.depth_mm, points.depth)
-    feed = np.where(np.isnan(points.feed), cell.feed_mm_s, points.feed)
+    depth = np.where(np.isnan(points.depth), cell.drilling.depth_mm, points.depth)
+    feed = np.where(np.isnan(points.feed), cell.drilling.feed_mm_s, points.feed)
     offsets = np.stack(
         [
-            np.full(n, -cell.approach_mm),
-            np.full(n, -cell.clearance_mm),
+            np.full(n, -cell.drilling.approach_mm),
+            np.full(n, -cell.drilling.clearance_mm),
             depth,
-            np.full(n, -cell.retract_mm),
+            np.full(n, -cell.drilling.retract_mm),
         ],
         axis=1,
     )
@@ -157,7 +157,7 @@ def build_program(
     base_rot = cell.robot_T_base[:3, :3]
     holes_robot = points.xyz @ base_rot.T + cell.robot_T_base[:3, 3]
     warnings: list[str] = []
-    status = cell.status
+    status = cell.configuration.status
     if model is not None:
         correction, warnings, status = _model_correction(
             points, cell, model, grid, holes_robot, base_rot @ rotations
@@ -188,7 +188,9 @@ def _rotations(points: Points, cell: Cell) -> np.ndarray:
     ``orient_along_axes`` around the cell's reference orientation (a robot-frame A,B,C)."""
     if points.abc is not None:
         return abc_to_matrix(points.abc).reshape(-1, 3, 3)
-    reference = cell.robot_T_base[:3, :3].T @ abc_to_matrix(np.array(cell.reference_abc))
+    reference = cell.robot_T_base[:3, :3].T @ abc_to_matrix(
+        np.array(cell.configuration.reference_abc)
+    )
     bad = np.flatnonzero(too_tilted(points.axis, reference))
     if bad.size:
         raise InputError(
@@ -244,11 +246,11 @@ def _model_correction(
         cell.correction,
         grid,
         model,
-        cell.status,
+        cell.configuration.status,
         cell.flange_T_tool,
         points=holes_robot,
         abc_deg=abc,
-        turn=cell.turn,
+        turn=cell.configuration.turn,
     )
     status = corrector.status
     warnings: list[str] = []
@@ -303,25 +305,25 @@ def _configuration(
     n = len(points)
     if n == 0:
         return np.zeros((0, 4), int), np.zeros((0, 4), int), []
-    stages = len(STAGES) - (1 if cell.retract_mm == cell.approach_mm else 0)
+    stages = len(STAGES) - (1 if cell.drilling.retract_mm == cell.drilling.approach_mm else 0)
     poses = np.tile(np.eye(4), (n, stages, 1, 1))
     poses[:, :, :3, :3] = (cell.robot_T_base[:3, :3] @ rotations)[:, None]
     base_rot, base_org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
     poses[:, :, :3, 3] = positions[:, :stages] @ base_rot.T + base_org
     flat = poses.reshape(-1, 4, 4)
     if status is None:
-        first = robot.ik(flat[:1], turn=cell.turn)
+        first = robot.ik(flat[:1], turn=cell.configuration.turn)
         if not first.ok[0]:
             _fail(points, 0, 0, first.reason[0], cell)
         status = int(first.status[0])
-    sol = _ik_blocks(robot, flat, status, cell.turn)
+    sol = _ik_blocks(robot, flat, status, cell.configuration.turn)
     ok = sol.ok.reshape(n, stages)
     q = sol.q.reshape(n, stages, 6)
     pose_status = sol.status.reshape(n, stages).astype(int)
     pose_turn = sol.turn.reshape(n, stages).astype(int)
     warnings: list[str] = []
     failed = np.flatnonzero(~ok.all(axis=1))
-    if failed.size and cell.allow_config_change:
+    if failed.size and cell.configuration.allow_change:
         # a failing hole takes the default configuration of its approach pose for all its poses
         own = robot.ik(poses[failed, 0])
         retry = robot.ik(
@@ -343,16 +345,16 @@ def _configuration(
         hole = int(failed[0])
         stage = int(np.flatnonzero(~ok[hole])[0])
         reason = sol.reason.reshape(n, stages)[hole, stage] or "no solution"
-        _fail(points, hole, stage, reason, cell, failed.size, status, cell.turn)
+        _fail(points, hole, stage, reason, cell, failed.size, status, cell.configuration.turn)
     warnings += _branch_jumps(points, cell, q)
     a5 = np.degrees(np.abs(q[:, :, 4])).min(axis=1)
-    near = np.flatnonzero(a5 < cell.singular_a5_deg)
+    near = np.flatnonzero(a5 < cell.configuration.singular_a5_deg)
     if near.size:
         named = ", ".join(f"{points.label(int(i))} |A5| {a5[i]:.1f} deg" for i in near[:_LISTED])
         more = f" and {near.size - _LISTED} more" if near.size > _LISTED else ""
         warnings.append(
-            f"{near.size} hole(s) within {cell.singular_a5_deg:g} deg of the wrist singularity "
-            f"(A5 = 0): {named}{more}"
+            f"{near.size} hole(s) within {cell.configuration.singular_a5_deg:g} deg of the wrist "
+            f"singularity (A5 = 0): {named}{more}"
         )
     if stages == 3:  # RET is the APP position
         pose_status = np.concatenate([pose_status, pose_status[:, :1]], axis=1)
@@ -388,7 +390,7 @@ def _branch_jumps(points: Points, cell: Cell, q: np.ndarray) -> list[str]:
         f"{points.name(hole)}: an axis turns {jump[bad[0]]:.0f} deg from the previous pose "
         f"(more than {MAX_AXIS_JUMP_DEG:g} deg: the robot changes configuration on the way)"
     )
-    if not cell.allow_config_change:
+    if not cell.configuration.allow_change:
         raise InputError(
             message + "; reorder the holes or set configuration.allow_change",
             *points.table.where(hole),
@@ -401,7 +403,7 @@ def _fail(points, hole, stage, reason, cell, count=1, status=None, turn=None) ->
     config += "" if turn is None else f" Turn {turn}"
     hint = (
         ""
-        if status is None or cell.allow_config_change
+        if status is None or cell.configuration.allow_change
         else " (configuration.allow_change lets a hole take another Status)"
     )
     more = f"; {count - 1} more hole(s) fail" if count > 1 else ""

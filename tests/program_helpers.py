@@ -4,6 +4,7 @@ with a known smooth error field, and point sets on the example panel."""
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 from functools import lru_cache
 from pathlib import Path
@@ -47,6 +48,14 @@ def grid() -> GridModel:
 @lru_cache(maxsize=1)
 def cell() -> Cell:
     return load_cell(CELL)
+
+
+def cell_with(c: Cell | None = None, **sections: dict) -> Cell:
+    """The example cell (or ``c``) with fields of its section records changed, e.g.
+    ``cell_with(drilling={"peck_mm": 2.0}, gcode={"canned_cycles": False})``."""
+    c = cell() if c is None else c
+    changed = {k: dataclasses.replace(getattr(c, k), **v) for k, v in sections.items()}
+    return dataclasses.replace(c, **changed)
 
 
 @lru_cache(maxsize=1)

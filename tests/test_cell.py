@@ -39,7 +39,7 @@ def test_example_cell_frames():
     )
     np.testing.assert_allclose(cell.flange_T_tool[:3, 3], [0, 0, 250])
     assert cell.base_data[1] is cell.robot_T_base
-    np.testing.assert_array_equal(cell.robot_T_program, cell.robot_T_base)
+    np.testing.assert_array_equal(cell.gcode.robot_T_program, cell.robot_T_base)
 
 
 def test_defaults_and_relative_paths(tmp_path):
@@ -47,10 +47,10 @@ def test_defaults_and_relative_paths(tmp_path):
     assert cell.grid_path == tmp_path / "sub" / "m.csv"
     assert sorted(cell.base_data) == [2, 5]
     np.testing.assert_allclose(cell.base_data[5][:3, 3], [10, 0, 0])
-    assert cell.retract_mm == cell.approach_mm
-    assert cell.program_name == "ACCUGRID" and cell.decimals == 3
-    assert cell.status is None and not cell.allow_config_change
-    assert cell.reference_abc == (0.0, 90.0, 0.0)
+    assert cell.drilling.retract_mm == cell.drilling.approach_mm
+    assert cell.krl.name == "ACCUGRID" and cell.krl.decimals == 3 == cell.gcode.decimals
+    assert cell.configuration.status is None and not cell.configuration.allow_change
+    assert cell.configuration.reference_abc == (0.0, 90.0, 0.0)
 
 
 def test_correction_section_is_one_settings_value(tmp_path):
@@ -62,7 +62,7 @@ def test_correction_section_is_one_settings_value(tmp_path):
 
 def test_program_frame_overrides_base(tmp_path):
     cell = load_cell(write(tmp_path, MINIMAL + "program_frame: {x: 1, y: 2, z: 3}\n"))
-    np.testing.assert_allclose(cell.robot_T_program[:3, 3], [1, 2, 3])
+    np.testing.assert_allclose(cell.gcode.robot_T_program[:3, 3], [1, 2, 3])
     np.testing.assert_allclose(cell.robot_T_base[:3, 3], [1500, 0, 1000])
 
 
@@ -94,6 +94,19 @@ def test_sha256_is_of_the_file_bytes(tmp_path):
         ("configuration: {reference: {a: 1, q: 2}}\n", "configuration.reference.q", 4),
         ("configuration:\n  reference: {b: x}\n", "configuration.reference.b", 5),
         ("correction: {method: cubic}\n", "correction.method", 4),
+        ("correction: {model: ''}\n", "correction.model", 4),
+        ("speeds: {ptp_percent: 0}\n", "speeds.ptp_percent", 4),
+        ("drilling: {apo_cdis: -1}\n", "drilling.apo_cdis", 4),
+        ("program: {decimals: 9}\n", "program.decimals", 4),
+        ("outputs: {clamp: 0}\n", "outputs.clamp", 4),
+        ("external_axes: {e7: 1}\n", "external_axes.e7", 4),
+        ("external_axes:\n  e2: 1e9\n", "external_axes.e2", 5),
+        ("gcode: {spindle_rpm: 0}\n", "gcode.spindle_rpm", 4),
+        ("gcode: {decimals: 4}\n", "gcode.decimals", 4),
+        ("program_frame: {number: 1}\n", "program_frame.number", 4),
+        ("configuration: {singular_a5: 91}\n", "configuration.singular_a5", 4),
+        ("drilling: {dwell: 61}\n", "drilling.dwell", 4),
+        ("speeds: [1, 2]\n", "speeds", 4),
     ],
 )
 def test_bad_keys_are_named(tmp_path, extra, key, line):
@@ -125,3 +138,51 @@ def test_missing_and_malformed(tmp_path, text, needle):
 def test_missing_file(tmp_path):
     with pytest.raises(InputError, match="cannot read"):
         load_cell(tmp_path / "nope.yaml")
+
+
+EVERY_KEY = """\
+speeds: {travel: 400, approach: 40, feed: 4, ptp_percent: 30}
+drilling: {approach: 20, clearance: 3, retract: 25, depth: 7, dwell: 0.2, peck: 1.5,
+           travel_motion: lin, apo_cdis: 2, apo_ptp_percent: 40}
+program: {name: PANEL_7, lines_per_file: 900, decimals: 4}
+outputs: {spindle: 3, clamp: 4}
+external_axes: {e1: 100, e6: -5.5}
+configuration: {status: 6, turn: 2, allow_change: true, singular_a5: 8,
+                reference: {a: 1, b: 89, c: 2}}
+correction: {method: trilinear, iterations: 2, power: 2, model: cal.yaml}
+gcode: {spindle_rpm: 9000, canned_cycles: false}
+program_frame: {x: 5}
+"""
+
+
+def test_every_key_lands_in_its_section_record(tmp_path):
+    """Each section record carries the values of the YAML keys it declares, written by hand
+    above; ``program.decimals`` is read by both dialects."""
+    cell = load_cell(write(tmp_path, MINIMAL + EVERY_KEY))
+    d = cell.drilling
+    assert (d.approach_mm, d.clearance_mm, d.retract_mm, d.depth_mm) == (20, 3, 25, 7)
+    assert (d.dwell_s, d.peck_mm) == (0.2, 1.5)
+    assert (d.travel_mm_s, d.approach_mm_s, d.feed_mm_s) == (400, 40, 4)
+    k = cell.krl
+    assert (k.name, k.lines_per_file, k.decimals, k.travel_motion) == ("PANEL_7", 900, 4, "lin")
+    assert (k.ptp_percent, k.apo_cdis_mm, k.apo_ptp_percent) == (30, 2, 40)
+    assert (k.spindle_output, k.clamp_output) == (3, 4)
+    assert k.external_axes == (100, 0, 0, 0, 0, -5.5)
+    g = cell.gcode
+    assert (g.decimals, g.spindle_rpm, g.canned_cycles) == (4, 9000, False)
+    np.testing.assert_allclose(g.robot_T_program[:3, 3], [5, 0, 0])
+    f = cell.configuration
+    assert (f.status, f.turn, f.allow_change, f.singular_a5_deg) == (6, 2, True, 8)
+    assert f.reference_abc == (1, 89, 2)
+    c = cell.correction
+    assert (c.method, c.iterations, c.power) == ("trilinear", 2, 2)
+    assert cell.model_path == tmp_path / "cal.yaml"
+
+
+def test_section_records_are_frozen():
+    import dataclasses
+
+    cell = load_cell(EXAMPLE)
+    for record in (cell, cell.drilling, cell.configuration, cell.correction, cell.krl, cell.gcode):
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            record.sha256 = "x"

@@ -3,7 +3,6 @@ only where the drill axis is the program's -Z, harmless user text, and `accugrid
 
 from __future__ import annotations
 
-import dataclasses
 import re
 import shutil
 
@@ -11,7 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from program_helpers import CELL, POINTS, ROOT, cell, grid, panel_points, robot
+from program_helpers import CELL, POINTS, ROOT, cell, cell_with, grid, panel_points, robot
 
 from accugrid.codegen.cli import main
 from accugrid.codegen.gcode.emit import render_gcode
@@ -56,10 +55,10 @@ def expected_points(program, frame):
 
 
 def check_round_trip(program, text, frame=None):
-    frame = program.cell.robot_T_program if frame is None else frame
+    frame = program.cell.gcode.robot_T_program if frame is None else frame
     pts = visited(parse_gcode(text, "p.ngc"))
     pos, rot = expected_points(program, frame)
-    half = 0.5 * 10.0**-program.cell.decimals + 1e-9
+    half = 0.5 * 10.0**-program.cell.gcode.decimals + 1e-9
     at = 0
     for i in range(len(program)):
         for k in range(4):
@@ -104,15 +103,15 @@ def test_example_structure_and_canned_cycles():
 
 def test_canned_cycle_options():
     xy = [[287.5, 175.0]]
-    c = dataclasses.replace(cell(), peck_mm=2.0)
+    c = cell_with(drilling={"peck_mm": 2.0})
     text = render_gcode(program_for(xy, c=c), ["h"])
     assert re.search(r"^G98 G83 .* Q2\.000 ", text, re.M)
-    c = dataclasses.replace(cell(), dwell_s=0.0)
+    c = cell_with(drilling={"dwell_s": 0.0})
     assert re.search(r"^G98 G81 ", render_gcode(program_for(xy, c=c), ["h"]), re.M)
-    c = dataclasses.replace(cell(), canned_cycles=False)
+    c = cell_with(gcode={"canned_cycles": False})
     text = render_gcode(program_for(xy, c=c), ["h"])
     assert "G8" not in text.replace("G80", "") and "G4 P0.500" in text
-    c = dataclasses.replace(cell(), retract_mm=50.0)
+    c = cell_with(drilling={"retract_mm": 50.0})
     program = program_for(xy, c=c)
     text = render_gcode(program, ["h"])
     assert re.search(r"^G80\nG0 Z", text, re.M)
@@ -121,7 +120,7 @@ def test_canned_cycle_options():
 
 def test_program_frame_differs_from_base():
     frame = pose_from_xyzabc(np.array([1700.0, 100.0, 1200.0, 180.0, -90.0, 0.0]))
-    c = dataclasses.replace(cell(), robot_T_program=frame)
+    c = cell_with(gcode={"robot_T_program": frame})
     program = program_for(ROWS[:6], c=c)
     check_round_trip(program, render_gcode(program, ["h"]), frame)
 
@@ -160,16 +159,23 @@ LOOPING = ROOT / "tests" / "looping_templates" / "gcode" / "program.ngc.j2"
     "change, ids",
     [
         ({}, None),
-        ({"peck_mm": 2.0, "retract_mm": 50.0}, None),
-        ({"dwell_s": 0.0, "retract_mm": 50.0}, [f"{n}{i}" for i in range(15) for n in NASTY]),
-        ({"canned_cycles": False}, None),
-        ({"canned_cycles": False, "dwell_s": 0.0, "retract_mm": 50.0}, None),
+        ({"drilling": {"peck_mm": 2.0, "retract_mm": 50.0}}, None),
+        (
+            {"drilling": {"dwell_s": 0.0, "retract_mm": 50.0}},
+            [f"{n}{i}" for i in range(15) for n in NASTY],
+        ),
+        ({"gcode": {"canned_cycles": False}}, None),
+        (
+            {
+                "gcode": {"canned_cycles": False},
+                "drilling": {"dwell_s": 0.0, "retract_mm": 50.0},
+            },
+            None,
+        ),
     ],
 )
 def test_user_template_looping_per_hole_gives_the_same_bytes(tmp_path, change, ids):
-    program = program_for(
-        ROWS, ids[: len(ROWS)] if ids else None, dataclasses.replace(cell(), **change)
-    )
+    program = program_for(ROWS, ids[: len(ROWS)] if ids else None, cell_with(**change))
     shutil.copyfile(LOOPING, tmp_path / "program.ngc.j2")
     assert "hole_lines" not in LOOPING.read_text()
     looped = render_gcode(program, ["h1", "h2"], tmp_path)

@@ -9,7 +9,6 @@ installed and CI is not set; on CI a missing rs274 is a failure.
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import re
 import shutil
@@ -17,7 +16,7 @@ import subprocess
 
 import numpy as np
 import pytest
-from program_helpers import cell, grid, panel_points, robot
+from program_helpers import cell, cell_with, grid, panel_points, robot
 
 from accugrid.codegen.gcode.emit import render_gcode
 from accugrid.codegen.program import build_program
@@ -83,20 +82,26 @@ def test_example_program_through_rs274(rs274, tmp_path):
     moves, out = canonical(rs274, tmp_path, text)
     assert "DWELL(0.5000)" in out and "START_SPINDLE_CLOCKWISE" in out
     assert len(moves) >= 4 * len(program) - 1
-    check_against_program(moves, program, cell().robot_T_program)
+    check_against_program(moves, program, cell().gcode.robot_T_program)
 
 
 @pytest.mark.parametrize(
     "change",
     [
-        {"peck_mm": 2.5},
-        {"dwell_s": 0.0, "retract_mm": 45.0},
-        {"canned_cycles": False, "decimals": 4},
-        {"robot_T_program": pose_from_xyzabc(np.array([1700.0, 100.0, 1200.0, 180.0, -90.0, 0.0]))},
+        {"drilling": {"peck_mm": 2.5}},
+        {"drilling": {"dwell_s": 0.0, "retract_mm": 45.0}},
+        {"gcode": {"canned_cycles": False, "decimals": 4}},
+        {
+            "gcode": {
+                "robot_T_program": pose_from_xyzabc(
+                    np.array([1700.0, 100.0, 1200.0, 180.0, -90.0, 0.0])
+                )
+            }
+        },
     ],
 )
 def test_variants_through_rs274(rs274, tmp_path, change):
-    c = dataclasses.replace(cell(), **change)
+    c = cell_with(**change)
     program = build_program(panel_points(ROWS[20:30]), c, robot(), grid())
     moves, _ = canonical(rs274, tmp_path, render_gcode(program, ["variant"]))
-    check_against_program(moves, program, c.robot_T_program)
+    check_against_program(moves, program, c.gcode.robot_T_program)

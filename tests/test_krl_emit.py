@@ -3,7 +3,6 @@ accepts, harmless user text, splitting into sub-programs, and the `accugrid krl`
 
 from __future__ import annotations
 
-import dataclasses
 import re
 import shutil
 
@@ -11,7 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from program_helpers import CELL, POINTS, ROOT, cell, grid, panel_points, robot
+from program_helpers import CELL, POINTS, ROOT, cell, cell_with, grid, panel_points, robot
 
 from accugrid.codegen.cli import main
 from accugrid.codegen.krl.emit import render_krl
@@ -56,10 +55,10 @@ def statements(text):
 
 def check_round_trip(program, files):
     parsed = decls(files)
-    same_ret = program.cell.retract_mm == program.cell.approach_mm
+    same_ret = program.cell.drilling.retract_mm == program.cell.drilling.approach_mm
     stages = ("APP", "CLR", "BOT") if same_ret else ("APP", "CLR", "BOT", "RET")
     assert len(parsed) == len(program) * len(stages)
-    half = 0.5 * 10.0**-program.cell.decimals + 1e-9
+    half = 0.5 * 10.0**-program.cell.krl.decimals + 1e-9
     status, turn = program.configuration.to_kuka()
     for i in range(len(program)):
         for k, stage in enumerate(stages):
@@ -134,7 +133,7 @@ def test_labels_cannot_inject_statements():
 
 
 def test_split_into_sub_programs():
-    c = dataclasses.replace(cell(), lines_per_file=80)
+    c = cell_with(krl={"lines_per_file": 80})
     program = program_for(ROWS, c=c)
     files = render_krl(program, ["h1", "h2"])
     parts = sorted(f[:-4] for f in files if f.endswith(".src") and f != "WING_PANEL.src")
@@ -195,17 +194,23 @@ LOOPING = ROOT / "tests" / "looping_templates" / "krl"
     "change, rows, ids",
     [
         ({}, ROWS, None),
-        ({"lines_per_file": 80}, ROWS, None),
+        ({"krl": {"lines_per_file": 80}}, ROWS, None),
         (
-            {"travel_motion": "lin", "clamp_output": 2, "external_axes": (100.0, 0, 0, 0, 0, -5.5)},
+            {
+                "krl": {
+                    "travel_motion": "lin",
+                    "clamp_output": 2,
+                    "external_axes": (100.0, 0, 0, 0, 0, -5.5),
+                }
+            },
             ROWS[:4],
             None,
         ),
-        ({"retract_mm": 7.5}, ROWS[: len(NASTY)], NASTY),
+        ({"drilling": {"retract_mm": 7.5}}, ROWS[: len(NASTY)], NASTY),
     ],
 )
 def test_user_template_looping_per_hole_gives_the_same_bytes(tmp_path, change, rows, ids):
-    program = program_for(rows, ids, c=dataclasses.replace(cell(), **change))
+    program = program_for(rows, ids, c=cell_with(**change))
     copy = tmp_path / "krl"
     shutil.copytree(ROOT / "templates" / "krl", copy)
     for name in ("program.src.j2", "program.dat.j2"):
@@ -259,8 +264,12 @@ def test_command_bad_points_write_nothing(tmp_path, capsys):
 
 
 def test_lin_travel_clamp_and_external_axes():
-    c = dataclasses.replace(
-        cell(), travel_motion="lin", clamp_output=2, external_axes=(100.0, 0, 0, 0, 0, -5.5)
+    c = cell_with(
+        krl={
+            "travel_motion": "lin",
+            "clamp_output": 2,
+            "external_axes": (100.0, 0, 0, 0, 0, -5.5),
+        }
     )
     program = program_for(ROWS[:3], c=c)
     files = render_krl(program, ["h"])

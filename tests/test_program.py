@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
-from program_helpers import cell, error_field, grid, panel_points, robot
+from program_helpers import cell, cell_with, error_field, grid, panel_points, robot
 
 from accugrid.codegen.points import parse_points
 from accugrid.codegen.program import STAGES, build_program
@@ -36,10 +36,10 @@ def test_nominal_positions_lie_on_the_drill_axis():
     axis = prog.rotations[:, :, 2]
     np.testing.assert_allclose(axis, pts.axis, atol=1e-12)
     expected = {
-        "APP": pts.xyz - c.approach_mm * axis,
-        "CLR": pts.xyz - c.clearance_mm * axis,
+        "APP": pts.xyz - c.drilling.approach_mm * axis,
+        "CLR": pts.xyz - c.drilling.clearance_mm * axis,
         "BOT": pts.xyz + 7.0 * axis,  # depth column
-        "RET": pts.xyz - c.retract_mm * axis,
+        "RET": pts.xyz - c.drilling.retract_mm * axis,
     }
     for k, stage in enumerate(STAGES):
         np.testing.assert_allclose(prog.nominal[:, k], expected[stage], atol=1e-9)
@@ -118,11 +118,11 @@ def test_hole_outside_the_grid_is_named():
 
 def test_status_that_cannot_be_kept_is_an_error_unless_allowed():
     pts = panel_points(ROWS[:3])
-    c = dataclasses.replace(cell(), status=0)  # elbow below the A2-A3 line: A2 beyond its limit
+    c = cell_with(configuration={"status": 0})  # elbow below the A2-A3 line: A2 beyond its limit
     with pytest.raises(InputError, match="with Status 0: A2 outside limits") as info:
         build_program(pts, c, robot(), None)
     assert "configuration.allow_change" in info.value.message
-    prog = build_program(pts, dataclasses.replace(c, allow_config_change=True), robot(), None)
+    prog = build_program(pts, cell_with(c, configuration={"allow_change": True}), robot(), None)
     assert any("another Status than 0" in w for w in prog.warnings)
     assert (prog.configuration.to_kuka()[0] != 0).all()
 
@@ -137,7 +137,7 @@ def test_wrist_singularity_warning_names_the_hole():
 
     # the hole point is the pose + approach along the tool axis (the APP stage is the pose)
     x = xyzabc_from_pose(base_T_tcp)
-    hole = x[:3] + c.approach_mm * base_T_tcp[:3, 2]
+    hole = x[:3] + c.drilling.approach_mm * base_T_tcp[:3, 2]
     text = "id,x,y,z,a,b,c\nSING-1," + ",".join(f"{v:.6f}" for v in [*hole, *x[3:]]) + "\n"
     prog = build_program(parse_points(text, "s.csv"), c, r, None)
     assert len(prog.warnings) == 1

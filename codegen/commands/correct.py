@@ -21,24 +21,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from accugrid.codegen.atomic import check_targets
+from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import add_abc, add_status, add_tool
-from accugrid.codegen.corrected import (
-    check_added_columns,
-    check_orientation,
-    check_outside,
-    print_corrections,
-    write_corrected,
-)
-from accugrid.codegen.header import grid_lines
-from accugrid.codegen.points import read_points
-from accugrid.compensation.grid import MAX_CORRECTION_MM, GridModel
+from accugrid.codegen.corrected import CorrectRequest, correct_points
+from accugrid.compensation.grid import MAX_CORRECTION_MM
 from accugrid.compensation.measurements import REPEAT_TOL_MM
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import abc_to_matrix
 
-__all__ = ["NAME", "add_arguments", "run", "settings_from"]
+__all__ = ["NAME", "add_arguments", "run"]
 
 NAME = "correct"
 
@@ -131,45 +122,34 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="overwrite an existing output")
 
 
-def settings_from(args: argparse.Namespace) -> CorrectionSettings:
-    """The correction settings the options ask for."""
+def run(args: argparse.Namespace) -> int:
     if not args.max_correction > 0:
         raise InputError(f"--max-correction must be > 0 mm, got {args.max_correction}")
-    return CorrectionSettings(
+    settings = CorrectionSettings(
         method=args.method,
         power=args.power,
         iterations=args.iterations,
         outside=args.outside,
         max_correction_mm=args.max_correction,
     )
-
-
-def run(args: argparse.Namespace) -> int:
-    settings = settings_from(args)
-    if not 0 <= args.orientation_tol <= args.orientation_limit:
-        raise InputError("need 0 <= --orientation-tol <= --orientation-limit (deg)")
-    if args.model is not None:
-        from accugrid.codegen.correct_model import run_model
-
-        return run_model(args, settings)
-    if args.grid is None:
-        raise InputError("give --grid MEAS, --model CAL.yaml or both")
-    check_targets([args.output], [args.points, args.grid], args.force)
-    model = GridModel.from_measurements(args.grid, repeat_tol_mm=args.repeat_tol)
-    points = read_points(args.points)
-    check_added_columns(points)
-    rotations = None if points.abc is None else abc_to_matrix(points.abc).reshape(-1, 3, 3)
-    found = model.check(points.xyz, settings, rotations=rotations, axes=points.axis)
-    flags: list[list[str]] = [[] for _ in range(len(points))]
-    check_outside(points, model, found.outside, settings.outside, flags)
-    check_orientation(points, model, found.angle, args, flags, "grid")
-    sources = grid_lines(Path(args.grid).name, model.source_sha256, model.step)
-    details = [f"method {args.method}, power {args.power:g}, iterations {args.iterations}"]
-    inputs = [args.points, args.grid]
-    length, worst = write_corrected(args, points, found.command, flags, sources, details, inputs)
-    print(model.describe())
-    iterations = f"{args.iterations} iteration{'s' if args.iterations != 1 else ''}"
-    power = f" power {args.power:g}" if args.method == "idw" else ""
-    print(f"corrected  {len(points)} point(s), {args.method}{power}, {iterations}")
-    print_corrections(points, length, worst, flags, args.output)
+    request = CorrectRequest(
+        points=args.points,
+        output=args.output,
+        grid=args.grid,
+        model=args.model,
+        settings=settings,
+        orientation_tol_deg=args.orientation_tol,
+        orientation_limit_deg=args.orientation_limit,
+        allow_orientation=args.allow_orientation,
+        repeat_tol_mm=args.repeat_tol,
+        status=args.status,
+        abc=tuple(args.abc),
+        tool=None if args.tool is None else tuple(args.tool),
+    )
+    model_file = args.model if args.model and Path(args.model).is_file() else None
+    check_targets([args.output], [args.points, args.grid, model_file], args.force)
+    job = correct_points(request)
+    write_files(job.files, job.inputs, args.force)
+    for line in job.lines:
+        print(line)
     return 0

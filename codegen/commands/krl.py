@@ -35,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
-    name = load_cell(args.cell).program_name  # refuse existing outputs before the work
+    name = load_cell(args.cell).krl.name  # refuse existing outputs before the work
     inputs = [args.points, args.cell] + ([args.grid] if args.grid else [])
     check_targets([out / f"{name}.src", out / f"{name}.dat"], inputs, args.force)
     job = prepare(args, NAME)

@@ -195,14 +195,14 @@ def run(args: argparse.Namespace) -> int:
         cell.correction,
         grid,
         calibrated,
-        cell.status,
+        cell.configuration.status,
         cell.flange_T_tool if calibrated is not None else None,
     )
     max_bytes = int(args.max_mb * 2**20)
     opts = Options(
         model=corrector.grid,
         base_data=cell.base_data,
-        robot_T_program=cell.robot_T_program,
+        robot_T_program=cell.gcode.robot_T_program,
         correction=cell.correction,
         decimals=args.decimals,
         strict=args.strict,
@@ -217,7 +217,7 @@ def run(args: argparse.Namespace) -> int:
         tolerance_mm=args.tolerance,
         corrector=corrector,
         model_file=None if model_file is None else os.fspath(model_file),
-        reference_abc=cell.reference_abc if calibrated is not None else None,
+        reference_abc=cell.configuration.reference_abc if calibrated is not None else None,
     )
     texts = {os.fspath(p): read_program(p, max_bytes) for p in inputs}
     # The parsers build millions of small acyclic objects; the cycle collector would walk them

@@ -1,6 +1,6 @@
 """RS274NGC (LinuxCNC dialect) for a Program: one ``.ngc`` from ``templates/gcode/program.ngc.j2``.
 
-Positions are the TCP in the program frame (``cell.robot_T_program``, default the BASE frame), mm;
+Positions are the TCP in the program frame (``cell.gcode.robot_T_program``, default BASE), mm;
 orientation as A B C words = the KUKA A, B, C of the tool in that frame, deg (stated in the file
 header). Per hole: ``G0`` to the approach point with A B C; where the drill axis is the program's
 -Z (all four positions of the hole share X and Y at the printed precision) and
@@ -59,15 +59,15 @@ def render_gcode(program: Program, header: list[str], templates=None) -> str:
     """The ``.ngc`` text of the job."""
     cell = program.cell
     env = environment(template_dir("gcode", templates))
-    pos, abc = program.in_frame(cell.robot_T_program)
-    d = cell.decimals
+    pos, abc = program.in_frame(cell.gcode.robot_T_program)
+    d = cell.gcode.decimals
     # RET is usually the APP position (same distance): format it once
     same_ret = (pos[:, 3] == pos[:, 0]).all(axis=1)
     text = np.empty(pos.shape, dtype=object)
     text[:, :3] = fixed_texts(pos[:, :3], d)
     text[:, 3] = text[:, 0]
     text[~same_ret, 3] = fixed_texts(pos[~same_ret, 3], d)
-    cycle = canned(text, pos[:, :, 2]) if cell.canned_cycles else np.zeros(len(pos), bool)
+    cycle = canned(text, pos[:, :, 2]) if cell.gcode.canned_cycles else np.zeros(len(pos), bool)
     retract_move = text[:, 3, 2] != text[:, 0, 2]
     labels = program.labels()
     abc_text = fixed_texts(abc, d, distinct=True)
@@ -108,11 +108,11 @@ def render_gcode(program: Program, header: list[str], templates=None) -> str:
         "program.ngc.j2",
         header=header,
         **holes,
-        decimals=cell.decimals,
-        spindle_rpm=cell.spindle_rpm,
-        approach_mm_min=cell.approach_mm_s * 60.0,
-        dwell=cell.dwell_s,
-        peck=cell.peck_mm,
+        decimals=cell.gcode.decimals,
+        spindle_rpm=cell.gcode.spindle_rpm,
+        approach_mm_min=cell.drilling.approach_mm_s * 60.0,
+        dwell=cell.drilling.dwell_s,
+        peck=cell.drilling.peck_mm,
     )
 
 
@@ -121,20 +121,21 @@ def _hole_templates(cell: Cell) -> list[tuple[str, list[int]]]:
     retract move, a canned cycle without, and explicit moves. Columns: 0 comment, 1-3 APP X Y Z,
     4-6 A B C, 7-9 CLR, 10-12 BOT, 13-15 RET, 16 feed."""
     start = ("(%s)\nG0 X%s Y%s Z%s A%s B%s C%s\n", [0, 1, 2, 3, 4, 5, 6])
-    wait = f"P{fixed(cell.dwell_s, 3)}"
-    if cell.peck_mm > 0:
-        cycle = f"G98 G83 X%s Y%s Z%s R%s Q{fixed(cell.peck_mm, cell.decimals)} F%s\nG80\n"
-    elif cell.dwell_s > 0:
+    wait = f"P{fixed(cell.drilling.dwell_s, 3)}"
+    if cell.drilling.peck_mm > 0:
+        peck = fixed(cell.drilling.peck_mm, cell.gcode.decimals)
+        cycle = f"G98 G83 X%s Y%s Z%s R%s Q{peck} F%s\nG80\n"
+    elif cell.drilling.dwell_s > 0:
         cycle = f"G98 G82 X%s Y%s Z%s R%s {wait} F%s\nG80\n"
     else:
         cycle = "G98 G81 X%s Y%s Z%s R%s F%s\nG80\n"
     cycle_columns = [10, 11, 12, 9, 16]
-    approach = f" F{fixed(cell.approach_mm_s * 60.0, 1)}\n"
+    approach = f" F{fixed(cell.drilling.approach_mm_s * 60.0, 1)}\n"
     explicit = (
         "G1 X%s Y%s Z%s"
         + approach
         + "G1 X%s Y%s Z%s F%s\n"
-        + (f"G4 {wait}\n" if cell.dwell_s > 0 else "")
+        + (f"G4 {wait}\n" if cell.drilling.dwell_s > 0 else "")
         + "G1 X%s Y%s Z%s"
         + approach
     )

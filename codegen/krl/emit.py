@@ -148,19 +148,19 @@ def render_krl(program: Program, header: list[str], templates=None) -> dict[str,
     records = _Records(program, pos, abc)
     common = {
         "header": header,
-        "decimals": cell.decimals,
+        "decimals": cell.krl.decimals,
         "base": cell.base_number,
         "tool": cell.tool_number,
-        "ptp_percent": cell.ptp_percent,
-        "apo_cdis": cell.apo_cdis_mm,
-        "apo_cptp": cell.apo_ptp_percent,
-        "spindle": cell.spindle_output,
-        "clamp": cell.clamp_output,
-        "travel": cell.travel_motion,
-        "travel_m_s": cell.travel_mm_s / 1000.0,
-        "approach_m_s": cell.approach_mm_s / 1000.0,
-        "dwell": cell.dwell_s,
-        "ext": cell.external_axes,
+        "ptp_percent": cell.krl.ptp_percent,
+        "apo_cdis": cell.krl.apo_cdis_mm,
+        "apo_cptp": cell.krl.apo_ptp_percent,
+        "spindle": cell.krl.spindle_output,
+        "clamp": cell.krl.clamp_output,
+        "travel": cell.krl.travel_motion,
+        "travel_m_s": cell.drilling.travel_mm_s / 1000.0,
+        "approach_m_s": cell.drilling.approach_mm_s / 1000.0,
+        "dwell": cell.drilling.dwell_s,
+        "ext": cell.krl.external_axes,
     }
 
     src_uses = template_uses(env, "program.src.j2")
@@ -181,7 +181,7 @@ def render_krl(program: Program, header: list[str], templates=None) -> dict[str,
         )
         return src, dat
 
-    name, limit, n = cell.program_name, cell.lines_per_file, len(program)
+    name, limit, n = cell.krl.name, cell.krl.lines_per_file, len(program)
     if n < 2 or n <= _capacity(files, name, "single", limit):
         out = dict(zip((f"{name}.src", f"{name}.dat"), files(name, "single", 0, n), strict=True))
     else:
@@ -234,8 +234,10 @@ class _Records:
     def __init__(self, program: Program, pos: np.ndarray, abc: np.ndarray) -> None:
         self.program = program
         cell = program.cell
-        self.decimals = cell.decimals
-        self.stages = [0, 1, 2] if cell.retract_mm == cell.approach_mm else [0, 1, 2, 3]
+        self.decimals = cell.krl.decimals
+        self.stages = (
+            [0, 1, 2] if cell.drilling.retract_mm == cell.drilling.approach_mm else [0, 1, 2, 3]
+        )
         self.names = [STAGES[k] for k in self.stages]
         self.pos = pos[:, self.stages]
         self.abc = fixed_texts(abc, self.decimals, distinct=True)
@@ -247,7 +249,7 @@ class _Records:
         )
         self.feed = fixed_texts(program.feed_mm_s / 1000.0, 4, distinct=True)
         ext = "".join(
-            f",E{k + 1} {fixed(v, cell.decimals)}" for k, v in enumerate(cell.external_axes)
+            f",E{k + 1} {fixed(v, cell.krl.decimals)}" for k, v in enumerate(cell.krl.external_axes)
         )
         self.position_line = (
             "DECL E6POS %s={X %s,Y %s,Z %s,A %s,B %s,C %s,S %s,T %s" + _literal(ext) + "}\r\n"
@@ -309,15 +311,18 @@ class _Records:
 def _hole_block(cell) -> str:
     """The .src lines of one hole as a %-template over (comment label, app, clr, feed, bot, ret),
     with the cell's settings filled in; CRLF line ends."""
-    approach = f"$VEL.CP = {fixed(cell.approach_mm_s / 1000.0, 4)}"
-    if cell.travel_motion == "ptp":
+    approach = f"$VEL.CP = {fixed(cell.drilling.approach_mm_s / 1000.0, 4)}"
+    if cell.krl.travel_motion == "ptp":
         travel = ["PTP %s C_PTP"]
     else:
-        travel = [_literal(f"$VEL.CP = {fixed(cell.travel_mm_s / 1000.0, 4)}"), "LIN %s C_DIS"]
+        travel = [
+            _literal(f"$VEL.CP = {fixed(cell.drilling.travel_mm_s / 1000.0, 4)}"),
+            "LIN %s C_DIS",
+        ]
     clamp = unclamp = []
-    if cell.clamp_output is not None:
-        clamp = [_literal(f"$OUT_C[{fixed(cell.clamp_output, 0)}] = TRUE ; clamp")]
-        unclamp = [_literal(f"$OUT[{fixed(cell.clamp_output, 0)}] = FALSE ; unclamp")]
+    if cell.krl.clamp_output is not None:
+        clamp = [_literal(f"$OUT_C[{fixed(cell.krl.clamp_output, 0)}] = TRUE ; clamp")]
+        unclamp = [_literal(f"$OUT[{fixed(cell.krl.clamp_output, 0)}] = FALSE ; unclamp")]
     lines = [
         "; hole %s",
         *travel,
@@ -326,7 +331,7 @@ def _hole_block(cell) -> str:
         *clamp,
         "$VEL.CP = %s",
         "LIN %s",
-        _literal(f"WAIT SEC {fixed(cell.dwell_s, 3)}"),
+        _literal(f"WAIT SEC {fixed(cell.drilling.dwell_s, 3)}"),
         *unclamp,
         _literal(approach),
         "LIN %s C_DIS",
