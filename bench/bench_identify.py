@@ -9,7 +9,8 @@ same way, and the model's own prediction error (calibrated − true FK) at those
 
 kr210-realistic (Table 1 + compliance + reducer harmonics): 60 poses x 3 repeats in the seed's
 region at orientations tilted up to 40 deg from A 0 B 90 C 0 (IK in one Status), identified with
---compliance; the error left on 200 targets tilted up to 25 deg (model prediction − true FK,
+--compliance and with --compliance --harmonics (kr210-realistic's reducer orders); the error
+left on 200 targets tilted up to 25 deg (model prediction − true FK,
 what a model correction leaves to first order) beside the uncorrected error.
 
 Pose choice: 60 poses in the seed's region within 30 deg of A 0 B 90 C 0, chosen D-optimally
@@ -143,18 +144,28 @@ def realistic() -> None:
     targets = tilted_poses(nominal, 200, 25.0, 5, status)
     reached = true.fk(targets)[:, :3, 3]
     raw = nominal.fk(targets)[:, :3, 3] - reached
-    rows = [("uncorrected", per_axis(np.abs(raw).max(0)), per_axis(raw.std(0)))]
-    for label, compliance in (("geometric model", False), ("geometric + compliance", True)):
-        result = identify(nominal, data, compliance=compliance, folds=5)
+    rows = [("uncorrected", per_axis(np.abs(raw).max(0)), per_axis(raw.std(0)), "", "")]
+    harmonics = tuple((h.axis, h.order) for h in robot.joint_errors.harmonics)
+    for label, kwargs in (
+        ("geometric model", {}),
+        ("geometric + compliance", {"compliance": True}),
+        ("geometric + compliance + harmonics", {"compliance": True, "harmonics": harmonics}),
+    ):
+        seconds, _ = measure(lambda kwargs=kwargs: identify(nominal, data, **kwargs))
+        result = identify(nominal, data, folds=5, **kwargs)
         left = result.robot.true_robot().fk(targets)[:, :3, 3] - reached
-        rows.append((label, per_axis(np.abs(left).max(0)), per_axis(left.std(0))))
+        count = f"{result.rank} of {len(result.x)}"
+        time_ms = f"{seconds * 1000:.0f} ms"
+        rows.append((label, per_axis(np.abs(left).max(0)), per_axis(left.std(0)), count, time_ms))
         cv = result.cross_validation
-        rows.append(("  its 5-fold CV (with noise)", per_axis(cv.max_mm), per_axis(cv.rms_mm)))
+        cells = per_axis(cv.max_mm), per_axis(cv.rms_mm)
+        rows.append(("  its 5-fold CV (with noise)", *cells, "", ""))
     print(
         f"\nkr210-realistic: 60 poses x 3 repeats tilted up to 40 deg (Status {status}), noise "
         "0.02 mm; error on 200 targets tilted up to 25 deg (model - true)"
     )
-    print(table(rows, ("kr210-realistic, mm", "max |.| X Y Z", "std X Y Z")))
+    columns = ("kr210-realistic, mm", "max |.| X Y Z", "std X Y Z", "parameters", "fit time")
+    print(table(rows, columns))
 
 
 def pose_choice() -> None:

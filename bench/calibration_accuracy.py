@@ -12,6 +12,10 @@ FK, repeatability 0.03 mm and tracker noise 0.02 mm (sigma per axis), as ``accug
   compliance; ``model_correct`` of each target at its own orientation.
 - model + residual grid: the model above plus a 27-vertex (3 x 3 x 3) grid over the region at
   A 0 B 90 C 0, 3 repeats, of what the model leaves (``residual_grid``), trilinear.
+- model + harmonics: as "model only" (its own 60 D-optimal poses x 3) with the reducer harmonics
+  identified too, at the orders kr210-realistic's reducers have (``identify --harmonics``: the
+  orders are known from the reducers' data sheets; amplitudes and phases are fitted), alone and
+  with the same 27-vertex residual grid.
 
 Held out: 200 random targets inside the region (50 mm margin) at A 0 B 90 C 0, and 200 at
 orientations tilted 0-25 deg. The table shows where the real arm lands when commanded P'
@@ -49,6 +53,9 @@ TOOL_ERROR = np.array([0.4, -0.3, 0.6])
 TILT_DEG = 25.0
 POSES, POSE_REPEATS, CANDIDATES = 60, 3, 1500
 TARGETS = 200
+
+
+HARMONICS = tuple((h.axis, h.order) for h in load_robot("kr210-realistic").joint_errors.harmonics)
 
 
 class Cell:
@@ -132,29 +139,29 @@ def main_bench() -> None:
     cand_abc = tilted_abc(rng, CANDIDATES, SEED_ABC, TILT_DEG)
     q, ok = cell.joints(cand_p, cand_abc)
     cand_p, cand_abc, q = cand_p[ok], cand_abc[ok], q[ok]
-    chosen, o1 = select_poses(cell.nominal, q, POSES, compliance=True)
-    commanded, measured, abc_rows = cell.measure(
-        cand_p[chosen], cand_abc[chosen], POSE_REPEATS, rng
-    )
-    started = time.perf_counter()
-    data = pose_set(cell.nominal, commanded, measured, abc_deg=abc_rows, status=STATUS)
-    result = identify(cell.nominal, data, compliance=True, folds=5)
-    identify_s = time.perf_counter() - started
-    calibrated = result.robot
-
-    # residual grid: 27 vertices at the seed orientation, 3 repeats
     residual_vertices = lattice(LO, HI, (3, 3, 3))
     tool = cell.controller.flange_T_tool  # the controller's TOOL_DATA: the nominal drill
-    measured = cell.measure(residual_vertices, SEED_ABC, 3, rng)
-    residual = residual_grid(calibrated, measured, STATUS, controller_tool=tool)
-
-    print(
-        f"identification: {POSES} poses x {POSE_REPEATS} (O1 {o1:.3g}), rank {result.rank}, "
-        f"condition {result.condition_number:.3g}, {identify_s:.2f} s; residual RMS "
-        f"{', '.join(f'{v:.3f}' for v in result.rms_mm)} mm; cross-validation RMS "
-        f"{', '.join(f'{v:.3f}' for v in result.cross_validation.rms_mm)}, max "
-        f"{', '.join(f'{v:.3f}' for v in result.cross_validation.max_mm)} mm"
-    )
+    residual_session = cell.measure(residual_vertices, SEED_ABC, 3, rng)
+    models = {}
+    for name, harmonics in (("model", ()), ("model + harmonics", HARMONICS)):
+        chosen, o1 = select_poses(cell.nominal, q, POSES, compliance=True, harmonics=harmonics)
+        commanded, measured, abc_rows = cell.measure(
+            cand_p[chosen], cand_abc[chosen], POSE_REPEATS, rng
+        )
+        started = time.perf_counter()
+        data = pose_set(cell.nominal, commanded, measured, abc_deg=abc_rows, status=STATUS)
+        result = identify(cell.nominal, data, compliance=True, folds=5, harmonics=harmonics)
+        identify_s = time.perf_counter() - started
+        residual = residual_grid(result.robot, residual_session, STATUS, controller_tool=tool)
+        models[name] = (result.robot, residual)
+        print(
+            f"{name}: {POSES} poses x {POSE_REPEATS} (O1 {o1:.3g}), rank {result.rank} of "
+            f"{len(result.x)}, condition {result.condition_number:.3g}, identify + 5-fold CV "
+            f"{identify_s:.2f} s; residual RMS {', '.join(f'{v:.3f}' for v in result.rms_mm)} "
+            f"mm; cross-validation RMS "
+            f"{', '.join(f'{v:.3f}' for v in result.cross_validation.rms_mm)}, max "
+            f"{', '.join(f'{v:.3f}' for v in result.cross_validation.max_mm)} mm"
+        )
     print()
     header = "| targets, method | measured points | max X | max Y | max Z | std X | std Y | std Z |"
     print(header)
@@ -169,14 +176,15 @@ def main_bench() -> None:
             command = grid.correct(points, method=method)
             name = f"{label}: 200 mm grid, {method}"
             print(row(name, n_grid, points - cell.land(command, abc)))
-        only = model_correct(calibrated, points, abc, STATUS, controller_tool=tool)
-        print(row(f"{label}: model", n_model, points - cell.land(only.command, abc)))
         trilinear = CorrectionSettings(method="trilinear")
-        both = model_correct(
-            calibrated, points, abc, STATUS, residual, trilinear, controller_tool=tool
-        )
-        name = f"{label}: model + 27-vertex residual grid"
-        print(row(name, n_both, points - cell.land(both.command, abc)))
+        for name, (calibrated, residual) in models.items():
+            only = model_correct(calibrated, points, abc, STATUS, controller_tool=tool)
+            print(row(f"{label}: {name}", n_model, points - cell.land(only.command, abc)))
+            both = model_correct(
+                calibrated, points, abc, STATUS, residual, trilinear, controller_tool=tool
+            )
+            name = f"{label}: {name} + 27-vertex residual grid"
+            print(row(name, n_both, points - cell.land(both.command, abc)))
 
 
 if __name__ == "__main__":

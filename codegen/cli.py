@@ -77,6 +77,10 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt:
             print(f"accugrid {args.command}: interrupted", file=sys.stderr)
             return EXIT_INTERNAL
+        except BrokenPipeError:  # the reader of stdout left (`accugrid ... | head`)
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no 2nd error at exit
+            print(f"accugrid {args.command}: standard output closed early", file=sys.stderr)
+            return EXIT_INTERNAL
         except Exception as exc:  # noqa: BLE001 - the last line of defence: exit 1, no traceback
             if os.environ.get("ACCUGRID_DEBUG"):
                 traceback.print_exc()

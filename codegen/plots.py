@@ -217,7 +217,6 @@ def comparison_png(result: Comparison) -> bytes:
     the measured-point budget, one line pair per method; a row per target set."""
     plt = _pyplot()
     methods = [m for m in dict.fromkeys(r.method for r in result.rows) if m != "uncorrected"]
-    budgets = sorted({r.budget for r in result.rows if r.budget})
     fig, axes = plt.subplots(2, 3, figsize=(12, 6.4), sharex=True, constrained_layout=True)
     colours = plt.get_cmap("tab10").colors
     for i, targets in enumerate(TARGET_SETS):
@@ -225,11 +224,12 @@ def comparison_png(result: Comparison) -> bytes:
         for k, axis in enumerate("XYZ"):
             ax = axes[i, k]
             for colour, method in zip(colours, methods, strict=False):
-                rows = [result.row(b, targets, method) for b in budgets]
+                rows = [r for r in result.rows if (r.targets, r.method) == (targets, method)]
+                at = [r.budget for r in rows]  # a budget too small for a model has no row
                 peak = [r.max_mm[k] for r in rows]
                 std = [r.std_mm[k] for r in rows]
-                ax.plot(budgets, peak, "o-", color=colour, label=f"{method}, max")
-                ax.plot(budgets, std, "s--", color=colour, ms=3, lw=0.8, label=f"{method}, std")
+                ax.plot(at, peak, "o-", color=colour, label=f"{method}, max")
+                ax.plot(at, std, "s--", color=colour, ms=3, lw=0.8, label=f"{method}, std")
             ax.set_title(
                 f"{targets}: {axis} (uncorrected max {before.max_mm[k]:.2f} mm)", fontsize=9
             )

@@ -14,6 +14,9 @@ Status, the true FK, seeded repeatability and tracker noise). For each budget N 
   ``model_correct`` of each target at its own orientation, the controller keeping its tool;
 - model + residual grid: that model plus a 27-vertex (3 x 3 x 3) residual grid measured at the
   grid orientation (``residual_grid``), trilinear;
+- model + harmonics (with ``harmonics``, budgets that can identify it): the same with the reducer
+  harmonics of the given (axis, order) terms identified too, from N poses chosen for that model;
+  and that model + the residual grid;
 - model + joint residual: that model plus its residual at the N poses (measured − model, mean of
   the repeats) interpolated in joint space (A1-A3, deg; thin-plate spline, smoothing
   ``JOINT_SMOOTHING``) at each target's joints: no extra points. Non-geometric errors (reducer
@@ -66,6 +69,8 @@ METHODS = (
     "model",
     "model + residual grid",
     "model + joint residual",
+    "model + harmonics",
+    "model + harmonics + residual grid",
 )
 JOINT_AXES = 3  # the joint residual is interpolated over A1..A3
 JOINT_SMOOTHING = 1.0  # thin-plate spline smoothing (scipy RBFInterpolator), deg-scaled data
@@ -97,6 +102,8 @@ class Comparison:
     status: int | None
     repeats: int
     n_targets: int
+    skipped: tuple[str, ...] = ()  # "budget N: method: why" for rows a budget cannot have
+    settings: str = ""  # what was simulated, one line (region, orientation, noise, seed, tilts)
 
     def row(self, budget: int, targets: str, method: str) -> ComparisonRow:
         """The row of that budget, target set and method."""
@@ -233,10 +240,13 @@ def compare_methods(
     margin_mm: float = 50.0,
     seed: int = 0,
     progress=None,
+    harmonics: tuple[tuple[int, int], ...] = (),
 ) -> Comparison:
     """Run the comparison (module docstring) for each budget in ``budgets`` over the box lo..hi
     (3,) mm; ``status`` None: the IK default's at the box centre. ``progress``: called with a
-    text before each step (or None). InputError for budgets that cannot identify the model."""
+    text before each step (or None); ``harmonics``: (axis, order) reducer terms of the
+    "model + harmonics" rows (none: no such rows). InputError for budgets that cannot identify
+    the model."""
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     abc = np.asarray(abc_deg, dtype=float).reshape(3)
     if not np.all(hi - lo > 2 * margin_mm):
@@ -260,7 +270,9 @@ def compare_methods(
     }
     rows: list[ComparisonRow] = []
     joint_cv: dict = {}
+    skipped: list[str] = []
     target_q = {}
+    options = dict(tilt_deg=tilt_deg, candidates=candidates, repeats=repeats, noise=noise)
     for name, (points, orient) in target_sets.items():
         rows.append(_score(0, name, "uncorrected", 0, points - cell.land(points, orient)))
         target_q[name] = cell.solve(points, orient).q  # the controller's joints at the target
@@ -279,32 +291,29 @@ def compare_methods(
             )
         )
         say(f"budget {budget}: model from {budget} poses")
-        plan, _, _ = identification_plan(
-            robot, lo, hi, budget, tilt_deg, abc, status, candidates=candidates, seed=step_seed
-        )
-        poses_p, poses_abc = plan.points, plan.abc_rows()
-        _, measured = simulate_pose_measurements(
-            robot, _poses(poses_p, poses_abc), status, repeats, seed=step_seed + 1, **noise
-        )
-        commanded = np.repeat(poses_p, repeats, axis=0)
-        rows_abc = np.repeat(poses_abc, repeats, axis=0)
-        data = pose_set(robot, commanded, measured, abc_deg=rows_abc, status=status)
-        fit = identify(robot, data, compliance=compliance)
+        data, fit = _calibrate(cell, lo, hi, budget, abc, step_seed, compliance, (), options)
         calibrated = fit.robot
         pose_residual = np.zeros((data.poses, 3))
         np.add.at(pose_residual, data.group, fit.residuals / repeats)
         pose_q = data.q[np.unique(data.group, return_index=True)[1]]
         joint_cv[budget] = joint_residual_cv(pose_q, pose_residual, seed=seed)
         joint_layer = joint_residual(pose_q, pose_residual)
-        residual = residual_grid(
-            calibrated,
-            simulate_measurements(
-                robot, residual_vertices, abc, repeats, seed=step_seed + 2, status=status, **noise
-            ),
-            status,
-            abc_deg=abc,
-            controller_tool=tool,
+        models = {"model": calibrated}
+        if harmonics:
+            say(f"budget {budget}: model + harmonics from {budget} poses")
+            try:
+                models["model + harmonics"] = _calibrate(
+                    cell, lo, hi, budget, abc, step_seed, compliance, harmonics, options
+                )[1].robot
+            except InputError as error:  # too few poses for the extra parameters
+                skipped.append(f"budget {budget}: model + harmonics: {error.message}")
+        residual_session = simulate_measurements(
+            robot, residual_vertices, abc, repeats, seed=step_seed + 2, status=status, **noise
         )
+        residuals = {  # each model's residual grid from the one 27-vertex session
+            name: residual_grid(model, residual_session, status, abc_deg=abc, controller_tool=tool)
+            for name, model in models.items()
+        }
         for name, (points, orient) in target_sets.items():
             for method in ("idw", "trilinear"):
                 command = grid.correct(points, trilinear.but(method=method))
@@ -319,16 +328,61 @@ def compare_methods(
                 )
             # the arm lands at the model's position + r(q): aim the model at P - r(q)
             aim = points - joint_layer(target_q[name])
-            for method, goal, layer, extra in (
-                ("model", points, None, 0),
-                ("model + residual grid", points, residual, len(residual_vertices)),
-                ("model + joint residual", aim, None, 0),
-            ):
+            runs = [
+                ("model", "model", points, False),
+                ("model + residual grid", "model", points, True),
+                ("model + joint residual", "model", aim, False),
+            ]
+            if "model + harmonics" in models:
+                runs += [
+                    ("model + harmonics", "model + harmonics", points, False),
+                    ("model + harmonics + residual grid", "model + harmonics", points, True),
+                ]
+            for method, model, goal, with_grid in runs:
+                layer = residuals[model] if with_grid else None
+                extra = len(residual_vertices) if with_grid else 0
                 result = model_correct(
-                    calibrated, goal, orient, status, layer, trilinear, controller_tool=tool
+                    models[model], goal, orient, status, layer, trilinear, controller_tool=tool
                 )
                 if not result.ok.all():
                     raise InputError(f"model correction failed: {result.reason[result.failed[0]]}")
                 landed = cell.land(result.command, orient)
                 rows.append(_score(budget, name, method, budget + extra, points - landed))
-    return Comparison(rows, joint_cv, robot.name, status, repeats, n_targets)
+    region = " ".join(f"{v:g}" for pair in zip(lo, hi, strict=True) for v in pair)
+    settings = (
+        f"{robot.name}: region {region} mm, "
+        f"grid orientation A B C {' '.join(f'{v:g}' for v in abc)}, KUKA Status {status}, "
+        f"{repeats} repeats, noise tracker {noise_tracker_mm:g} repeat {noise_repeat_mm:g} mm, "
+        f"seed {seed}; model poses tilted up to {tilt_deg:g} deg; {n_targets} held-out targets "
+        f"per set (tilted: up to {target_tilt_deg:g} deg); where the arm lands, noise-free, mm"
+    )
+    return Comparison(
+        rows, joint_cv, robot.name, status, repeats, n_targets, tuple(skipped), settings
+    )
+
+
+def _calibrate(cell, lo, hi, budget, abc, seed, compliance, harmonics, options):
+    """The ``budget`` poses ``plan identify`` chooses for this model, a simulated tracker session
+    there and the identification: (PoseSet, Identification)."""
+    robot, status, repeats = cell.robot, cell.status, options["repeats"]
+    plan, _, _ = identification_plan(
+        robot,
+        lo,
+        hi,
+        budget,
+        options["tilt_deg"],
+        abc,
+        status,
+        candidates=options["candidates"],
+        seed=seed,
+        compliance=compliance,
+        harmonics=harmonics,
+    )
+    poses_p, poses_abc = plan.points, plan.abc_rows()
+    _, measured = simulate_pose_measurements(
+        robot, _poses(poses_p, poses_abc), status, repeats, seed=seed + 1, **options["noise"]
+    )
+    commanded = np.repeat(poses_p, repeats, axis=0)
+    rows_abc = np.repeat(poses_abc, repeats, axis=0)
+    data = pose_set(robot, commanded, measured, abc_deg=rows_abc, status=status)
+    return data, identify(robot, data, compliance=compliance, harmonics=harmonics)

@@ -31,6 +31,8 @@ from accugrid.kinematics.robot import Robot
 
 __all__ = [
     "MAX_ITERATIONS",
+    "SETUP_FACTOR",
+    "SETUP_FLOOR_MM",
     "TOL_MM",
     "ModelCorrection",
     "model_correct",
@@ -40,6 +42,8 @@ __all__ = [
 
 TOL_MM = 1e-3  # default: |P - reach(P')| below 0.001 mm
 MAX_ITERATIONS = 12
+SETUP_FACTOR = 2.0  # a residual grid's mean offset beyond this x the validated max: refused
+SETUP_FLOOR_MM = 0.2  # ... and beyond this, mm
 
 
 @dataclass(frozen=True)
@@ -151,7 +155,9 @@ def residual_grid(
     ``GridModel.from_measurements``, or the measured GridModel itself; the vertices are reached
     at the measurement's a,b,c (``abc_deg`` when it has none) in KUKA ``status`` by a controller
     with ``controller_tool`` (as ``reached_by_model``). InputError naming the first vertex the
-    nominal controller cannot reach.
+    nominal controller cannot reach, and for a grid whose mean residual is beyond what the
+    model's identification validated (``Robot.validated_max_mm``): measured with another tool
+    or base than the model.
     """
     if isinstance(measurements, GridModel):
         measured = measurements
@@ -176,6 +182,7 @@ def residual_grid(
             measured.source_path,
         )
     model_error = (vertices - reach).reshape(measured.errors.shape)
+    _check_same_set_up(calibrated, measured.errors - model_error, measured.source_path)
     return GridModel(
         measured.origin,
         measured.step,
@@ -186,3 +193,22 @@ def residual_grid(
         repeats=measured.repeats,
         spread_mm=measured.spread_mm,
     )
+
+
+def _check_same_set_up(calibrated: Robot, residual: np.ndarray, path: str | None) -> None:
+    """InputError when the residual grid (..., 3) mm is offset on average by more than
+    ``SETUP_FACTOR`` x the model's validated max error (at least ``SETUP_FLOOR_MM``) on an axis:
+    a common offset is what another tool or base frame puts into every vertex."""
+    if calibrated.validated_max_mm is None:
+        return
+    offset = residual.reshape(-1, 3).mean(axis=0)
+    limit = np.maximum(SETUP_FACTOR * calibrated.validated_max_mm, SETUP_FLOOR_MM)
+    if np.any(np.abs(offset) > limit):
+        raise InputError(
+            "the residual grid is offset from the model by "
+            f"({', '.join(f'{v:.3f}' for v in offset)}) mm on average, beyond "
+            f"{SETUP_FACTOR:g} x the error its identification validated "
+            f"({', '.join(f'{v:.3f}' for v in calibrated.validated_max_mm)} mm): was it "
+            "measured with another tool or base than the model's measurements?",
+            path,
+        )

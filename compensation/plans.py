@@ -305,12 +305,15 @@ def identification_plan(
     repeats: int = 1,
     seed: int = 0,
     min_a5_deg: float = MIN_A5_DEG,
+    compliance: bool = False,
+    harmonics: tuple[tuple[int, int], ...] = (),
 ) -> tuple[Plan, float, int]:
     """``count`` poses for ``accugrid identify``: ``candidates`` random positions in the box
     lo..hi (mm) at random orientations within ``tilt_deg`` (rotation angle) of ``abc`` (deg),
     kept where the nominal IK in KUKA ``status`` is within the joint limits and |A5| >=
     ``min_a5_deg`` (away from the wrist singularity), then the D-optimal ``count`` of them,
     visited in a nearest-neighbour order, ``repeats`` rounds. Column ``s`` holds the Status.
+    ``compliance``, ``harmonics``: the model to be identified (``identification.identify``).
     Returns (plan, O1 of the chosen set, number of usable candidates)."""
     from scipy.spatial.transform import Rotation
 
@@ -341,7 +344,9 @@ def identification_plan(
             f"{status} with |A5| >= {min_a5_deg:g} deg; need {count}: move or enlarge the "
             "region, change the tilt or lower the count"
         )
-    chosen, o1 = select_poses(robot, sol.q[usable], count)
+    chosen, o1 = select_poses(
+        robot, sol.q[usable], count, compliance=compliance, harmonics=harmonics
+    )
     rows = usable[chosen][_nearest_neighbour_order(points[usable[chosen]])]
     xyzabc = xyzabc_from_pose(poses[rows])
     ids = [

@@ -41,18 +41,24 @@ diff examples/cam_drill.dat out/rewrite/cam_drill.dat || true
 # Model-based calibration (issue 13) on kr210-realistic (seed Table 1 errors + compliance under
 # gravity + reducer harmonics): 60 D-optimal poses tilted up to 25 deg (CSV skeleton + KRL
 # measurement program) -> a simulated tracker session at those poses, 3 repeats, with the joints
-# the controller logs -> the calibrated model (DH errors, TCP, A2/A3 compliance) -> the wing
-# panel holes corrected by the model plus a 27-vertex residual grid measured on the same robot.
+# the controller logs -> the calibrated model (DH errors, TCP, A2/A3 compliance, the reducer
+# harmonics of the orders kr210-realistic's reducers have) -> the wing panel holes corrected by
+# the model plus a 27-vertex residual grid measured on the same robot.
 accugrid plan identify --robot kr210-realistic --tool 0 0 250 0 0 0 --count 60 --tilt 25 \
     --name IDENT -o out/model --force
 accugrid simulate --robot kr210-realistic --poses out/model/ident.csv --tool 0 0 250 0 0 0 \
     --repeats 3 --noise-tracker 0.02 --noise-repeat 0.03 --seed 2 \
     -o out/model/ident_measured.csv --force
 accugrid identify out/model/ident_measured.csv --robot kr210-realistic --tool 0 0 250 0 0 0 \
-    --compliance -o out/model/calibrated.yaml --force
+    --compliance --harmonics A1:1,40,150 A2:1,7,160 A3:1,7,160 A4:2 A5:2 A6:2 \
+    -o out/model/calibrated.yaml --force
 accugrid simulate --robot kr210-realistic --region 1200 2200 -500 500 1100 2100 --step 500 \
     --abc 0 90 0 --tool 0 0 250 0 0 0 --repeats 3 --noise-tracker 0.02 --noise-repeat 0.03 \
     --seed 3 -o out/model/residual_27.csv --force
 accugrid correct examples/wing_panel_robot.csv --model out/model/calibrated.yaml \
     --grid out/model/residual_27.csv --method trilinear -o out/model/wing_panel_corrected.csv \
     --force
+# The same model + residual grid in the drilling program: every hole corrected at its own
+# orientation (the cell's tool and Status), header naming the model and its SHA-256.
+accugrid krl examples/wing_panel_points.csv --cell examples/cell.yaml \
+    --model out/model/calibrated.yaml --grid out/model/residual_27.csv -o out/model/krl --force

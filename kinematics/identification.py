@@ -5,9 +5,12 @@ The parameter vector x (n,) starts with the 24 DH errors of seed Eq. 2, link-maj
 flange frame (Δx, Δy, Δz mm, added to the tool's translation); with ``base_frame`` then the
 correction of the tracker frame: translation (mm) and rotation vector (rad) of
 ``T0⁻¹ · tracker_T_robot``, where T0 is the rigid fit of the commanded to the measured positions;
-with ``compliance`` last the compliance of A2 and A3 (rad/N·m): the arm reaches FK(q + δ) with
-δ_j = c_j · τ_j(q), τ the gravity torque of the robot's lumped masses (``kinematics.joint_errors``,
-the same model the calibrated robot's ``true_robot`` applies).
+with ``compliance`` the compliance of A2 and A3 (rad/N·m): the arm reaches FK(q + δ) with
+δ_j = c_j · τ_j(q), τ the gravity torque of the robot's lumped masses; with ``harmonics`` last, per
+(axis, order) term, the sine and cosine coefficients s, c (rad) of a reducer transmission error
+δ_axis += s · sin(order · A_axis) + c · cos(order · A_axis) (``kinematics.joint_errors``, the same
+model the calibrated robot's ``true_robot`` applies; the orders come from the reducers' data
+sheets or a one-axis spectrum, the coefficients from the fit).
 
 Residuals are positions only: the measured TCP position (in the robot frame, or ``T0⁻¹ ·``
 tracker coordinates with ``base_frame``) minus the model's TCP position at the pose's joints, in
@@ -26,6 +29,7 @@ lose more (all poses in one orientation, ...) are refused.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -34,7 +38,7 @@ from accugrid.kinematics.dh import PARAMETERS, flange_poses
 from accugrid.kinematics.error_model import error_jacobian
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
-from accugrid.kinematics.joint_errors import JointErrors
+from accugrid.kinematics.joint_errors import MAX_ORDER, Harmonic, JointErrors
 from accugrid.kinematics.robot import Robot
 
 __all__ = [
@@ -44,6 +48,7 @@ __all__ = [
     "Identification",
     "PoseSet",
     "identification_jacobian",
+    "harmonic_terms",
     "identify",
     "parameter_names",
     "parameter_units",
@@ -65,24 +70,48 @@ _GROUP_MM, _GROUP_DEG = 1e-3, 1e-3  # rows this close in commanded pose are repe
 _SHOW = 5
 _LENGTH = {"a": "mm", "d": "mm", "alpha": "rad", "theta": "rad"}
 
+Terms = tuple[tuple[int, int], ...]  # reducer harmonics to identify: (axis 1..6, order)
 
-def parameter_names(base_frame: bool = False, compliance: bool = False) -> list[str]:
+
+def parameter_names(
+    base_frame: bool = False, compliance: bool = False, harmonics: Terms = ()
+) -> list[str]:
     """Names of the parameters in x order: ``da1 dd1 dalpha1 dtheta1 ... tool_x tool_y tool_z``
-    [``base_x base_y base_z base_rx base_ry base_rz``] [``compliance_a2 compliance_a3``]."""
+    [``base_x base_y base_z base_rx base_ry base_rz``] [``compliance_a2 compliance_a3``]
+    [``harmonic_a2_k7_sin harmonic_a2_k7_cos`` ... per (axis, order) of ``harmonics``]."""
     names = [f"d{p}{i}" for i in range(1, 7) for p in PARAMETERS]
     names += ["tool_x", "tool_y", "tool_z"]
     if base_frame:
         names += ["base_x", "base_y", "base_z", "base_rx", "base_ry", "base_rz"]
     if compliance:
         names += [f"compliance_a{axis + 1}" for axis in COMPLIANT_AXES]
+    for axis, order in harmonics:
+        names += [f"harmonic_a{axis}_k{order}_{part}" for part in ("sin", "cos")]
     return names
 
 
-def parameter_units(base_frame: bool = False, compliance: bool = False) -> list[str]:
+def parameter_units(
+    base_frame: bool = False, compliance: bool = False, harmonics: Terms = ()
+) -> list[str]:
     """Unit of each parameter in x order: 'mm', 'rad' or 'rad/Nm'."""
     units = [_LENGTH[p] for _ in range(6) for p in PARAMETERS] + ["mm"] * 3
     units += ["mm"] * 3 + ["rad"] * 3 if base_frame else []
-    return units + (["rad/Nm"] * len(COMPLIANT_AXES) if compliance else [])
+    units += ["rad/Nm"] * len(COMPLIANT_AXES) if compliance else []
+    return units + ["rad"] * (2 * len(harmonics))
+
+
+def harmonic_terms(spec: Sequence[tuple[int, int]]) -> Terms:
+    """The (axis 1..6, order 1..MAX_ORDER) reducer harmonics to identify, checked, duplicates
+    dropped, in the given order. InputError for an axis or order out of range."""
+    terms: list[tuple[int, int]] = []
+    for axis, order in spec:
+        if not 1 <= int(axis) <= 6 or not 1 <= int(order) <= MAX_ORDER:
+            raise InputError(
+                f"harmonic A{axis} order {order}: axis 1..6 and order 1..{MAX_ORDER} only"
+            )
+        if (int(axis), int(order)) not in terms:
+            terms.append((int(axis), int(order)))
+    return tuple(terms)
 
 
 @dataclass(frozen=True)
@@ -191,10 +220,11 @@ def identification_jacobian(
     x: np.ndarray | None = None,
     base_frame: bool = False,
     compliance: bool = False,
+    harmonics: Terms = (),
 ) -> np.ndarray:
     """∂(model TCP position)/∂x: (N, 3, n) mm per parameter unit at joints q (N, 6) rad and
     parameters x (n,) (default 0, the nominal model), for pose planning and ``identify``."""
-    model = _Model(robot, base_frame, np.eye(4), compliance)
+    model = _Model(robot, base_frame, np.eye(4), compliance, harmonics)
     x = np.zeros(model.n) if x is None else np.asarray(x, dtype=float)
     return model.jacobian(x, np.atleast_2d(np.asarray(q, dtype=float)))
 
@@ -214,28 +244,42 @@ class _Model:
     """The measured-position model of a parameter vector x (layout: module docstring)."""
 
     def __init__(
-        self, robot: Robot, base_frame: bool, base_T0: np.ndarray, compliance: bool = False
+        self,
+        robot: Robot,
+        base_frame: bool,
+        base_T0: np.ndarray,
+        compliance: bool = False,
+        harmonics: Terms = (),
     ) -> None:
         self.robot, self.base_frame, self.base_T0 = robot, base_frame, base_T0
-        self.gravity = (
-            JointErrors.from_compliance(np.zeros(6), _masses(robot)) if compliance else None
-        )
+        self.masses = _masses(robot) if compliance else ()
+        self.compliance, self.harmonics = compliance, tuple(harmonics)
         self.i_comp = 27 + (6 if base_frame else 0)
-        self.n = self.i_comp + (len(COMPLIANT_AXES) if compliance else 0)
+        self.i_harm = self.i_comp + (len(COMPLIANT_AXES) if compliance else 0)
+        self.n = self.i_harm + 2 * len(self.harmonics)
+
+    def joint_errors(self, x: np.ndarray) -> JointErrors | None:
+        """The compliance and reducer harmonics of x as ``JointErrors`` (None without either)."""
+        if not self.compliance and not self.harmonics:
+            return None
+        c = np.zeros(6)
+        if self.compliance:
+            c[list(COMPLIANT_AXES)] = x[self.i_comp : self.i_harm]
+        terms = []
+        for k, (axis, order) in enumerate(self.harmonics):
+            s, co = x[self.i_harm + 2 * k : self.i_harm + 2 * k + 2]
+            # s·sin(kA) + c·cos(kA) = A·sin(kA + φ) with A = |(s, c)|, φ = atan2(c, s)
+            terms.append(Harmonic(axis, order, float(np.hypot(s, co)), float(np.arctan2(co, s))))
+        return JointErrors(compliance=c, masses=tuple(self.masses), harmonics=tuple(terms))
 
     def arm(self, x: np.ndarray) -> Robot:
-        """The nominal robot with the DH errors, TCP offset and compliance of x applied, as a
-        robot without errors (its ``fk`` is the calibrated arm's)."""
+        """The nominal robot with the DH errors, TCP offset, compliance and harmonics of x
+        applied, as a robot without errors (its ``fk`` is the calibrated arm's)."""
         r = self.robot
         tool = r.flange_T_tool.copy()
         tool[:3, 3] += x[24:27]
-        moves = None
-        if self.gravity is not None:
-            c = np.zeros(6)
-            c[list(COMPLIANT_AXES)] = x[self.i_comp : self.i_comp + len(COMPLIANT_AXES)]
-            moves = JointErrors.from_compliance(c, self.gravity.masses)
         dh = r.dh.with_errors(x[:24].reshape(6, 4))
-        return Robot(r.name, dh, r.joint_limits_deg, tool, fk_joint_errors=moves)
+        return Robot(r.name, dh, r.joint_limits_deg, tool, fk_joint_errors=self.joint_errors(x))
 
     def _base(self, x: np.ndarray) -> np.ndarray:
         from scipy.spatial.transform import Rotation
@@ -251,7 +295,8 @@ class _Model:
 
     def jacobian(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
         """(N, 3, n) derivatives of ``positions`` (the compliance columns hold the gravity
-        torques fixed, which is exact in c; their change with the DH errors is ignored)."""
+        torques fixed, which is exact in c; their change with the DH errors is ignored; the
+        harmonic columns are exact: δ is linear in s, c)."""
         arm = self.arm(x)
         moved = q
         if arm.fk_joint_errors is not None:
@@ -261,11 +306,16 @@ class _Model:
         jac[:, :, :24] = error_jacobian(static, moved)[:, :3]
         flange = flange_poses(arm.dh, moved)
         jac[:, :, 24:27] = flange[:, :3, :3]
-        if self.gravity is not None:
-            torque = self.gravity.gravity_torques(arm.dh, q)  # (N, 6) N·m = ∂δ/∂c
+        if self.compliance:
+            torque = arm.fk_joint_errors.gravity_torques(arm.dh, q)  # (N, 6) N·m = ∂δ/∂c
             for k, axis in enumerate(COMPLIANT_AXES):  # ∂p/∂A = sign · ∂p/∂θ (Δθ column)
                 column = jac[:, :, 4 * axis + 3] * arm.dh.sign[axis]
                 jac[:, :, self.i_comp + k] = column * torque[:, axis, None]
+        for k, (axis, order) in enumerate(self.harmonics):
+            column = jac[:, :, 4 * (axis - 1) + 3] * arm.dh.sign[axis - 1]
+            angle = order * q[:, axis - 1, None]
+            jac[:, :, self.i_harm + 2 * k] = column * np.sin(angle)
+            jac[:, :, self.i_harm + 2 * k + 1] = column * np.cos(angle)
         if self.base_frame:
             from scipy.spatial.transform import Rotation
 
@@ -364,6 +414,7 @@ def select_poses(
     count: int,
     base_frame: bool = False,
     compliance: bool = False,
+    harmonics: Terms = (),
 ) -> tuple[np.ndarray, float]:
     """Greedy D-optimal choice of ``count`` of the candidate joints q (M, 6) rad: each step adds
     the candidate that most increases det(JᵀJ) of the column-scaled identification Jacobian in
@@ -372,7 +423,7 @@ def select_poses(
     q = np.atleast_2d(np.asarray(q, dtype=float))
     if not 1 <= count <= len(q):
         raise InputError(f"cannot choose {count} poses from {len(q)} candidates")
-    model = _Model(robot, base_frame, np.eye(4), compliance)
+    model = _Model(robot, base_frame, np.eye(4), compliance, harmonics)
     reference = _subspace(model.jacobian(np.zeros(model.n), _reference_joints(robot)), RTOL)
     rank = reference.basis.shape[1]
     if count * 3 < rank:
@@ -407,20 +458,22 @@ def identify(
     compliance: bool = False,
     folds: int = 0,
     rtol: float = RTOL,
+    harmonics: Terms = (),
 ) -> Identification:
     """Identify the DH errors and TCP offset (and the tracker frame) from ``data``.
 
     ``robot``: the nominal model with the nominal tool (its own ``errors`` and joint errors
     are not used). ``compliance``: also the compliance of A2, A3 (rad/N·m) under the gravity
-    torques of the robot's ``joint_errors.masses``. ``folds`` >= 2 also runs k-fold
-    cross-validation over the distinct poses. InputError for too few poses, poses in one plane
-    or one orientation, or data that leave more directions unidentifiable than the robot's
+    torques of the robot's ``joint_errors.masses``. ``harmonics``: also the sine and cosine
+    coefficients (rad) of these (axis 1..6, order) reducer harmonics. ``folds`` >= 2 also runs
+    k-fold cross-validation over the distinct poses. InputError for too few poses, poses in one
+    plane or one orientation, or data that leave more directions unidentifiable than the robot's
     structural ones.
     """
     base_T0 = _rigid_fit(data.commanded, data.measured) if base_frame else np.eye(4)
     target = _in_robot_frame(base_T0, data.measured)
-    model = _Model(robot, base_frame, base_T0, compliance)
-    names = parameter_names(base_frame, compliance)
+    model = _Model(robot, base_frame, base_T0, compliance, harmonics)
+    names = parameter_names(base_frame, compliance, harmonics)
     x0 = np.zeros(model.n)
     sub = _subspace(model.jacobian(x0, data.q), rtol)
     reference = _subspace(model.jacobian(x0, _reference_joints(robot)), rtol)
@@ -456,11 +509,12 @@ def identify(
         x[:24].reshape(6, 4).copy(),
         f"{robot.name} calibrated by accugrid identify from {data.poses} poses",
         arm.fk_joint_errors,
+        validated_max_mm=np.abs(residuals).max(axis=0) if cv is None else cv.max_mm,
     )
     return Identification(
         robot=calibrated,
         names=names,
-        units=parameter_units(base_frame, compliance),
+        units=parameter_units(base_frame, compliance, harmonics),
         x=x,
         std=std,
         identifiable=identifiable,

@@ -22,9 +22,10 @@ import numpy as np
 
 from accugrid.kinematics.dh import DHTable, chain
 
-__all__ = ["GRAVITY_MPS2", "Harmonic", "JointErrors", "PointMass", "Thermal"]
+__all__ = ["GRAVITY_MPS2", "MAX_ORDER", "Harmonic", "JointErrors", "PointMass", "Thermal"]
 
 GRAVITY_MPS2 = 9.80665
+MAX_ORDER = 100_000  # highest harmonic order accepted (a motor-side stage is a few hundred)
 
 
 @dataclass(frozen=True)

@@ -30,6 +30,7 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import invert, pose_from_xyzabc
 from accugrid.kinematics.joint_errors import (
     GRAVITY_MPS2,
+    MAX_ORDER,
     Harmonic,
     JointErrors,
     PointMass,
@@ -55,6 +56,9 @@ class Robot:
     description: str = ""
     joint_errors: JointErrors | None = None  # non-geometric errors of the true robot
     fk_joint_errors: JointErrors | None = None  # δ(q) this robot's own ``fk`` adds (true robots)
+    # (3,) mm per axis: the largest held-out error its identification predicts (a calibrated
+    # file's cross-validated max, else its fit residual max); None: the model makes no claim
+    validated_max_mm: np.ndarray | None = None
 
     def with_tool(self, flange_T_tool: np.ndarray) -> Robot:
         """The same robot with another tool (4, 4) mm."""
@@ -214,7 +218,17 @@ def _robot_from_doc(doc: YamlDoc) -> Robot:
     table = DHTable(a=a, d=d, alpha=alpha, theta_offset=offset, sign=sign)
     description = doc.string("description", default="")
     joint_errors = _joint_errors_from_doc(doc) if doc.has("joint_errors") else None
-    return Robot(name, table, limits, tool, errors, description, joint_errors)
+    robot = Robot(name, table, limits, tool, errors, description, joint_errors)
+    return replace(robot, validated_max_mm=_validated_max(doc))
+
+
+def _validated_max(doc: YamlDoc) -> np.ndarray | None:
+    """(3,) mm from a calibrated file's ``identification:`` section (module ``calibrated``):
+    the cross-validated held-out max per axis, else the fit's residual max; None without."""
+    for key in (("cross_validation", "predicted_max_mm"), ("residual_max_mm",)):
+        if doc.has("identification", *key):
+            return np.array([doc.number("identification", *key, axis) for axis in "xyz"])
+    return None
 
 
 def _joint_errors_from_doc(doc: YamlDoc) -> JointErrors:
@@ -244,7 +258,7 @@ def _joint_errors_from_doc(doc: YamlDoc) -> JointErrors:
             harmonics.append(
                 Harmonic(
                     _whole(doc, 1, 6, *k, "axis"),
-                    _whole(doc, 0, 100000, *k, "order"),
+                    _whole(doc, 0, MAX_ORDER, *k, "order"),
                     doc.number(*k, "amplitude_rad"),
                     np.radians(doc.number(*k, "phase_deg", default=0.0)),
                 )

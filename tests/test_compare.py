@@ -42,7 +42,8 @@ def values(row, kind):
 def test_every_method_leaves_less_than_the_uncorrected_error(tiny_run):
     rows = rows_of(tiny_run)
     methods = {(r["targets"], r["method"]) for r in rows}
-    assert methods == {(t, m) for t in ("grid orientation", "tilted") for m in METHODS}
+    plain = [m for m in METHODS if "harmonics" not in m]  # no --harmonics: no such rows
+    assert methods == {(t, m) for t in ("grid orientation", "tilted") for m in plain}
     for targets in ("grid orientation", "tilted"):
         mine = [r for r in rows if r["targets"] == targets]
         before = next(r for r in mine if r["method"] == "uncorrected")
@@ -103,3 +104,30 @@ def test_the_joint_residual_reproduces_a_residual_linear_in_a1_a3():
     np.testing.assert_allclose(joint_residual(q, linear(q))(moved), linear(new), atol=1e-6)
     without, with_layer = joint_residual_cv(q, linear(q))
     assert (with_layer < 1e-6).all() and (without > 1.0).all()
+
+
+def test_a_model_with_the_order_7_harmonics_beats_the_plain_model(tmp_path, capsys):
+    # kr210-realistic's largest reducer terms are order 7 on A2 and A3 (1.8e-4, 8e-5 rad)
+    assert main(["compare", *TINY, "--harmonics", "A2:7", "A3:7", "-o", str(tmp_path)]) == 0
+    tilted = {r["method"]: r for r in rows_of(tmp_path) if r["targets"] == "tilted"}
+    assert int(tilted["model + harmonics + residual grid"]["points"]) == 27 + 27
+    plain = np.linalg.norm(values(tilted["model"], "std"))
+    assert np.linalg.norm(values(tilted["model + harmonics"], "std")) < 0.8 * plain
+    assert "skipped" not in capsys.readouterr().out
+
+
+def test_a_budget_too_small_for_the_harmonic_model_skips_its_rows(tmp_path, capsys):
+    every = ["A1:1,40,150", "A2:1,7,160", "A3:1,7,160", "A4:2", "A5:2", "A6:2"]
+    assert main(["compare", *TINY, "--harmonics", *every, "-o", str(tmp_path)]) == 0
+    assert not any("harmonics" in r["method"] for r in rows_of(tmp_path))
+    out = capsys.readouterr().out
+    assert "skipped budget 27: model + harmonics: 27 distinct poses for" in out
+
+
+def test_harmonics_must_name_an_axis_and_orders(tmp_path, capsys):
+    for bad in ("A7:1", "A2:0", "A2:100001", "2:7", "A2:x"):
+        with pytest.raises(SystemExit) as stop:
+            main(["compare", "--harmonics", bad, "-o", str(tmp_path)])
+        assert stop.value.code == 2
+        assert "--harmonics" in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())

@@ -7,7 +7,8 @@ the model identified (DH errors, TCP, A2/A3 compliance when the robot has a grav
 the N poses `plan identify` chooses (D-optimal among --candidates random poses tilted up to
 --tilt deg); the model plus a 27-vertex residual grid at the grid orientation (trilinear); the
 model plus its residual at the poses interpolated in joint space (A1-A3, thin-plate spline; its
-5-fold cross-validation over the poses is printed). Every measurement is a simulated tracker
+5-fold cross-validation over the poses is printed); with --harmonics a model that also identifies
+those reducer harmonics, alone and with the residual grid. Every measurement is a simulated tracker
 session (one KUKA Status, --repeats per point, seeded noise per budget). Scored on --targets
 held-out targets at the grid orientation and --targets tilted up to --target-tilt deg: where the
 arm lands when commanded P' (noise-free), max |P - M| and std per axis, mm.
@@ -22,13 +23,20 @@ import argparse
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
-from accugrid.codegen.textsafe import comment_text, fixed
-from accugrid.compensation.comparison import Comparison, ComparisonRow, compare_methods
+from accugrid.codegen.cli_options import (
+    add_abc,
+    add_harmonics,
+    add_status,
+    add_tool,
+    robot_with_tool,
+)
+from accugrid.codegen.comparison_report import csv_text, report_text
+from accugrid.compensation.comparison import compare_methods
 from accugrid.compensation.plans import SEED_REGION
 from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.identification import harmonic_terms
 
-__all__ = ["NAME", "add_arguments", "run", "table_text"]
+__all__ = ["NAME", "add_arguments", "run"]
 
 NAME = "compare"
 
@@ -112,6 +120,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="MM",
         help="robot repeatability, sigma per axis and visit, mm (default: 0.03)",
     )
+    add_harmonics(
+        parser,
+        "also compare a model with these reducer harmonics identified (budgets of at least "
+        "its parameter count)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     parser.add_argument(
         "-o",
@@ -153,66 +166,16 @@ def run(args: argparse.Namespace) -> int:
         noise_tracker_mm=args.noise_tracker,
         noise_repeat_mm=args.noise_repeat,
         seed=args.seed,
+        progress=None,
+        harmonics=harmonic_terms(pair for pairs in args.harmonics for pair in pairs),
     )
     from accugrid.codegen.plots import comparison_png
 
-    print(_summary_line(result, args))
-    print(table_text(result))
-    for budget, (without, with_layer) in result.joint_cv.items():
-        print(
-            f"joint residual, 5-fold cross-validation over the {budget} poses: held-out RMS "
-            f"X Y Z {' '.join(fixed(v, 3) for v in without)} mm without, "
-            f"{' '.join(fixed(v, 3) for v in with_layer)} mm with"
-        )
     out.mkdir(parents=True, exist_ok=True)
     write_files(
-        {paths[0]: _csv_text(result, args), paths[1]: comparison_png(result)},
-        inputs,
-        force=args.force,
+        {paths[0]: csv_text(result), paths[1]: comparison_png(result)}, inputs, force=args.force
     )
+    print(report_text(result))
     for path in paths:
         print(f"wrote {path}")
     return 0
-
-
-def _summary_line(result: Comparison, args: argparse.Namespace) -> str:
-    return (
-        f"{result.robot}: region {' '.join(f'{v:g}' for v in args.region)} mm, grid orientation "
-        f"A B C {' '.join(f'{v:g}' for v in args.abc)}, KUKA Status {result.status}, "
-        f"{args.repeats} repeats, noise tracker {args.noise_tracker:g} repeat "
-        f"{args.noise_repeat:g} mm, seed {args.seed}; model poses tilted up to {args.tilt:g} "
-        f"deg; {result.n_targets} held-out targets per set (tilted: up to "
-        f"{args.target_tilt:g} deg); where the arm lands, noise-free, mm"
-    )
-
-
-def _cells(row: ComparisonRow) -> list[str]:
-    return [fixed(v, 3) for v in (*row.max_mm, *row.std_mm)]
-
-
-def table_text(result: Comparison) -> str:
-    """The rows as a Markdown table (budget 0: uncorrected)."""
-    lines = [
-        "| targets | budget | method | points | max X | max Y | max Z | std X | std Y | std Z |",
-        "|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for targets in dict.fromkeys(r.targets for r in result.rows):
-        for r in (r for r in result.rows if r.targets == targets):
-            budget = "-" if r.method == "uncorrected" else str(r.budget)
-            lines.append(
-                f"| {targets} | {budget} | {r.method} | {r.points} | "
-                + " | ".join(_cells(r))
-                + " |"
-            )
-    return "\n".join(lines)
-
-
-def _csv_text(result: Comparison, args: argparse.Namespace) -> str:
-    header = comment_text(f"accugrid compare: {_summary_line(result, args)}", limit=600)
-    lines = [
-        f"# {header}",
-        "targets,budget,method,points,max_x,max_y,max_z,std_x,std_y,std_z",
-    ]
-    for r in result.rows:
-        lines.append(f"{r.targets},{r.budget},{r.method},{r.points}," + ",".join(_cells(r)))
-    return "\n".join(lines) + "\n"

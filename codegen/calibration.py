@@ -1,0 +1,140 @@
+"""`accugrid identify` as one call: a measurement CSV in, the calibrated robot files and the
+report text out (``kinematics.identification`` does the fit, ``kinematics.calibrated`` the YAML).
+
+Lengths in mm, angles in rad where named, else deg; the measurement CSV is DESIGN.md's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from accugrid import __version__
+from accugrid.compensation.measurements import read_measurements
+from accugrid.kinematics.calibrated import calibrated_yaml, identification_summary
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.frames import xyzabc_from_pose
+from accugrid.kinematics.identification import Identification, Terms, identify, pose_set
+from accugrid.kinematics.robot import Robot
+
+__all__ = ["Calibration", "IdentifyOptions", "calibrate"]
+
+
+@dataclass(frozen=True)
+class IdentifyOptions:
+    """What to identify besides the DH errors and TCP, and how to validate it."""
+
+    status: int | None = None  # KUKA Status of rows without logged joints or column s
+    base_frame: bool = False  # the tracker-to-robot frame
+    compliance: bool = False  # A2/A3 compliance under gravity
+    harmonics: Terms = ()  # (axis 1..6, order) reducer harmonics
+    folds: int = 5  # k-fold cross-validation (0: none)
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """The identification, the output texts by path and the report printed for the user."""
+
+    result: Identification
+    files: dict[str, str]
+    report: str
+
+
+def calibrate(
+    measurements: str | Path,
+    robot: Robot,
+    options: IdentifyOptions,
+    output: str,
+    urdf: str | None = None,
+) -> Calibration:
+    """Identify ``robot`` (nominal model with the measurement tool) from the measurement CSV and
+    render the calibrated robot YAML for ``output`` (and its URDF for ``urdf``)."""
+    if options.folds < 0 or options.folds == 1:
+        raise InputError(f"--folds must be 0 (none) or at least 2, got {options.folds}")
+    meas = read_measurements(measurements)
+    status = meas.status if meas.status is not None else options.status
+    data = pose_set(
+        robot,
+        meas.commanded,
+        meas.measured,
+        abc_deg=meas.abc,
+        joints_deg=meas.joints,
+        status=status,
+        joint_decimals=meas.joint_decimals,
+        position_decimals=meas.position_decimals,
+        labels=[meas.where(r) for r in range(len(meas.commanded))],
+        path=meas.path,
+    )
+    result = identify(
+        robot,
+        data,
+        base_frame=options.base_frame,
+        compliance=options.compliance,
+        folds=options.folds,
+        harmonics=options.harmonics,
+    )
+    source = Path(measurements).name
+    summary = identification_summary(result, robot, source, meas.sha256)
+    header = f"accugrid {__version__} identify: {robot.name} calibrated from {source}"
+    files = {output: calibrated_yaml(result.robot, summary, header)}
+    report = _report(output, robot, result)
+    if urdf:
+        from accugrid.kinematics.urdf_export import urdf_text
+
+        files[urdf] = urdf_text(result.robot)
+        joint_terms = options.compliance or options.harmonics
+        extra = " (geometric part only: URDF has no joint errors)" if joint_terms else ""
+        report += f"\nwrote {urdf}{extra}"
+    return Calibration(result, files, report)
+
+
+def _per_axis(label: str, rms: np.ndarray, peak: np.ndarray) -> str:
+    cells = "  ".join(
+        f"{axis} rms {r:.4f} max {m:.4f}" for axis, r, m in zip("XYZ", rms, peak, strict=True)
+    )
+    return f"  {label}: {cells}"
+
+
+def _report(path: str, robot: Robot, result: Identification) -> str:
+    """The lines ``accugrid identify`` prints: fit quality, validation, parameters."""
+    lines = [
+        f"{path}: {robot.name} calibrated from {result.poses} poses ({result.rows} rows); "
+        f"{result.rank} of {len(result.x)} parameters identifiable, condition number "
+        f"{result.condition_number:.1f}, observability O1 {result.o1:.4f}"
+    ]
+    if result.unidentifiable_text:
+        lines.append("  unidentifiable (held at 0): " + "; ".join(result.unidentifiable_text))
+    lines.append(_per_axis("residual (measured - model), mm", result.rms_mm, result.max_mm))
+    if result.cross_validation is not None:
+        cv = result.cross_validation
+        lines.append(
+            _per_axis(f"{cv.folds}-fold cross-validation, held-out poses, mm", cv.rms_mm, cv.max_mm)
+        )
+    if result.outliers:
+        shown = ", ".join(result.outliers[:10]) + (" ..." if len(result.outliers) > 10 else "")
+        lines.append(
+            f"  {len(result.outliers)} outlier rows (beyond 3 x {result.sigma_mm:.4f} mm): {shown}"
+        )
+    if result.tracker_T_robot is not None:
+        x, y, z, a, b, c = xyzabc_from_pose(result.tracker_T_robot)
+        lines.append(
+            f"  tracker_T_robot x {x:.3f} y {y:.3f} z {z:.3f} mm, a {a:.4f} b {b:.4f} c {c:.4f} deg"
+        )
+    lines.append("  identified parameters (value +- std):")
+    cells = [
+        f"{name} {value:+.4g} +- {std:.2g} {unit}"
+        for name, value, std, unit, ok in zip(
+            result.names, result.x, result.std, result.units, result.identifiable, strict=True
+        )
+        if ok
+    ]
+    lines += ["    " + " | ".join(cells[i : i + 4]) for i in range(0, len(cells), 4)]
+    tied = [n for n, ok in zip(result.names, result.identifiable, strict=True) if not ok]
+    if tied:
+        lines.append(
+            "  determined only in the combinations above (minimum-norm values in the file): "
+            + ", ".join(tied)
+        )
+    return "\n".join(lines)
