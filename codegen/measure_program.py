@@ -76,9 +76,14 @@ class PlanRequest:
     templates: Path | None = None
 
 
+def _program_name(kind: str, name: str | None) -> str:
+    """The KRL module name: ``name`` (default measure_KIND) made a KRL identifier."""
+    return krl_identifier(name or f"measure_{kind}", prefix="M")
+
+
 def plan_targets(output: str | Path, kind: str, name: str | None) -> list[Path]:
     """The files of the job in folder ``output``: NAME.csv, NAME.src, NAME.dat (lower case)."""
-    name = krl_identifier(name or f"measure_{kind}", prefix="M")
+    name = _program_name(kind, name)
     return [Path(output) / f"{name.lower()}.{ext}" for ext in ("csv", "src", "dat")]
 
 
@@ -87,7 +92,7 @@ def plan_files(request: PlanRequest, output: str | Path) -> JobFiles:
     print (the plan's description, what was written). InputError on bad settings or a
     position the robot cannot reach in the plan's Status."""
     plan, info = _build(request)
-    name = krl_identifier(request.name or f"measure_{request.kind}", prefix="M")
+    name = _program_name(request.kind, request.name)
     paths = plan_targets(output, request.kind, request.name)
     status, turn, config = reach_in_one_status(plan, request.robot, request.status)
     if request.wait_input is not None:

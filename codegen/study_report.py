@@ -5,7 +5,6 @@ and the Table 5 histograms. Errors in mm with 3 decimals."""
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -13,18 +12,20 @@ import numpy as np
 
 from accugrid.codegen.atomic import JobFiles
 from accugrid.codegen.plots import fig12_png, hist_png
-from accugrid.compensation.plans import SEED_REPEATS
+from accugrid.compensation.plans import SEED_REGION, SEED_REPEATS
 from accugrid.compensation.study import (
     AXES,
     DEFAULT_STD_FRACTION,
     DEFAULT_TOLERANCE_MM,
     REPEAT_RULES,
+    Progress,
     StudyResult,
     Summary,
     analyse,
     check_reach,
     measured_residuals,
     measured_validation,
+    no_progress,
     read_experiment,
     simulate_study,
     simulate_validation,
@@ -105,7 +106,7 @@ class StudyRequest:
     noise_tracker_mm: float = 0.02
     noise_repeat_mm: float = 0.03
     seed: int = 0
-    region: tuple[float, ...] = ()
+    region: tuple[float, ...] = tuple(np.ravel(np.transpose(SEED_REGION)).tolist())
     tolerance_mm: float = DEFAULT_TOLERANCE_MM
     std_fraction: float = DEFAULT_STD_FRACTION
     repeat_rule: str = REPEAT_RULES[0]
@@ -117,7 +118,7 @@ class StudyRequest:
 def study_files(
     r: StudyRequest,
     output: str | Path,
-    progress: Callable = lambda items, desc, total=None: items,
+    progress: Progress = no_progress,
 ) -> JobFiles:
     """The study's files in folder ``output`` (``OUTPUTS``: Table 4 and 5 CSVs, Fig. 12, the
     Table 5 histograms, the Markdown report) and the lines to print (the tables, the decision,

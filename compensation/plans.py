@@ -32,8 +32,6 @@ from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.model import RobotModel
 
 __all__ = [
-    "grid_vertices",
-    "reach_in_one_status",
     "CUBE_LABELS",
     "CUBE_ORDER",
     "MAX_GRID_VERTICES",
@@ -50,7 +48,9 @@ __all__ = [
     "experiment_plan",
     "grid_axes",
     "grid_plan",
+    "grid_vertices",
     "path_length",
+    "reach_in_one_status",
     "serpentine_order",
 ]
 

@@ -58,6 +58,7 @@ __all__ = [
     "Decision",
     "Measure",
     "Progress",
+    "Progress",
     "StudyResult",
     "Summary",
     "Validation",
@@ -69,11 +70,12 @@ __all__ = [
     "fit_curve",
     "measured_residuals",
     "measured_validation",
+    "no_progress",
     "random_points",
     "read_experiment",
     "simulate_study",
-    "simulated_measure",
     "simulate_validation",
+    "simulated_measure",
     "summarize",
 ]
 
@@ -88,7 +90,8 @@ DEFAULT_STD_FRACTION = 0.5
 AXES = "XYZ"
 
 
-def _no_progress(items: Iterable, desc: str, total: int) -> Iterable:
+def no_progress(items: Iterable, desc: str, total: int) -> Iterable:
+    """The ``Progress`` that shows nothing: ``items`` as they are."""
     return items
 
 
@@ -113,7 +116,7 @@ class Cubes:
     def repeats(self) -> int:
         return self.vertex_meas.shape[3]
 
-    def models(self, progress: Progress = _no_progress) -> list[GridModel]:
+    def models(self, progress: Progress = no_progress) -> list[GridModel]:
         """One GridModel per cube, in (centre, step) order (C*S,)."""
         n_c, n_s, _, n_r, _ = self.vertex_meas.shape
         cmd = np.repeat(self.vertex_cmd.reshape(n_c * n_s, 8, 1, 3), n_r, axis=2)
@@ -317,7 +320,7 @@ def simulate_study(
     centres: np.ndarray,
     steps: np.ndarray,
     repeats: int,
-    progress: Progress = _no_progress,
+    progress: Progress = no_progress,
 ) -> tuple[Cubes, np.ndarray]:
     """Run the experiment on a simulated robot: measure the vertices, build the cube models,
     command the corrected test points and measure them. Returns the cubes and the residuals
@@ -337,7 +340,7 @@ def simulate_study(
     return cubes, residuals
 
 
-def measured_residuals(cubes: Cubes, progress: Progress = _no_progress) -> np.ndarray:
+def measured_residuals(cubes: Cubes, progress: Progress = no_progress) -> np.ndarray:
     """Residuals (C, S, 9, R, 3) mm of a measured experiment whose test points were measured
     without correction: (P - M) - e_pred(P), the first-order effect of commanding P + e_pred."""
     n_c, n_s = len(cubes.centres), len(cubes.steps)
