@@ -186,3 +186,19 @@ def test_section_records_are_frozen():
     for record in (cell, cell.drilling, cell.configuration, cell.correction, cell.krl, cell.gcode):
         with pytest.raises(dataclasses.FrozenInstanceError):
             record.sha256 = "x"
+
+
+def test_every_dialect_brings_its_own_section():
+    """A dialect's cell record comes from its own folder through the registry (issue 10)."""
+    import importlib
+
+    from accugrid.codegen.dialects import DIALECTS
+
+    cell = load_cell(EXAMPLE)
+    assert set(cell.dialects) == set(DIALECTS)
+    for name in DIALECTS:
+        module = importlib.import_module(f"accugrid.codegen.{name}.section")
+        assert type(cell.dialects[name]).__module__ == module.__name__
+        assert module.KEYS and all(isinstance(v, frozenset) for v in module.KEYS.values())
+    assert cell.krl is cell.dialects["krl"] and cell.gcode is cell.dialects["gcode"]
+    assert (cell.krl.name, cell.krl.decimals, cell.gcode.spindle_rpm) == ("WING_PANEL", 3, 6000)
