@@ -45,7 +45,8 @@ class PlanRequest:
     ("serpentine" or "naive"), ``repeats`` rounds; cube: ``centre`` (3,) mm, ``step_mm``,
     ``repeats``; experiment: ``centres`` (name -> (3,) mm), ``steps`` (mm), ``repeats``;
     identify: ``region``, ``count`` poses within ``tilt_deg`` of ``abc`` D-optimal among
-    ``candidates`` random ones (``seed``), ``repeats`` rounds.
+    ``candidates`` random ones (``seed``), ``repeats`` rounds, D-optimal for the model
+    ``identify`` will fit (``compliance``, ``harmonics`` as (axis, order) pairs).
     Program: ``name`` (default measure_KIND), TOOL_DATA ``tool_number``, BASE_DATA
     ``base_number`` (0: the robot frame), first-PTP ``ptp_percent``, LIN ``vel_m_s``, and after
     each position ``wait_input`` ($IN number) or ``wait_sec`` s; ``templates``: a folder with
@@ -66,6 +67,8 @@ class PlanRequest:
     tilt_deg: float = 30.0
     candidates: int = 2000
     seed: int = 0
+    compliance: bool = False
+    harmonics: tuple[tuple[int, int], ...] = ()
     name: str | None = None
     tool_number: int = 1
     base_number: int = 0
@@ -183,9 +186,13 @@ def _identification_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
         candidates=r.candidates,
         repeats=r.repeats,
         seed=r.seed,
+        compliance=r.compliance,
+        harmonics=r.harmonics,
     )
+    model = "DH errors, TCP" + (", compliance" if r.compliance else "")
+    model += f", {len(r.harmonics)} harmonics" if r.harmonics else ""
     info = [
-        f"identification plan: {r.count} poses x {r.repeats} repeats chosen D-optimally "
+        f"identification plan ({model}): {r.count} poses x {r.repeats} repeats chosen D-optimally "
         f"from {usable} of {r.candidates} candidates (Status {status}, tilt up to "
         f"{r.tilt_deg:g} deg, |A5| >= 10 deg); observability O1 {o1:.4f}",
         f"path {plan.path_length():.1f} mm",

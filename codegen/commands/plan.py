@@ -33,6 +33,7 @@ from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import (
     add_abc,
     add_experiment_arguments,
+    add_harmonics,
     add_status,
     add_tool,
     parse_centres,
@@ -41,6 +42,7 @@ from accugrid.codegen.cli_options import (
 )
 from accugrid.codegen.measure_program import PlanRequest, plan_files, plan_targets
 from accugrid.compensation.plans import SEED_REGION, SEED_REPEATS
+from accugrid.kinematics.identification import harmonic_terms
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -96,6 +98,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     ident.add_argument("--repeats", type=int, default=1, help="rounds over the poses (default: 1)")
     ident.add_argument("--seed", type=int, default=0, help="seed of the candidates (default: 0)")
+    ident.add_argument(
+        "--compliance",
+        action="store_true",
+        help="choose the poses for `identify --compliance` too (the robot's gravity model)",
+    )
+    add_harmonics(ident, "choose the poses for `identify --harmonics` with these terms too")
     for p in (grid, cube, exp, ident):
         _common(p)
 
@@ -197,6 +205,10 @@ def run(args: argparse.Namespace) -> int:
         tilt_deg=args.tilt if kind == "identify" else 0.0,
         candidates=args.candidates if kind == "identify" else 0,
         seed=args.seed if kind == "identify" else 0,
+        compliance=kind == "identify" and args.compliance,
+        harmonics=harmonic_terms(pair for pairs in args.harmonics for pair in pairs)
+        if kind == "identify"
+        else (),
         name=args.name,
         tool_number=args.tool_number,
         base_number=args.base_number,
