@@ -31,14 +31,13 @@ take its own.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 from types import SimpleNamespace
 
 import numpy as np
 
 from accugrid.codegen.cell import Cell
 from accugrid.codegen.points import Points
-from accugrid.codegen.textsafe import fixed
+from accugrid.codegen.textsafe import fixed_texts
 from accugrid.compensation.corrector import Corrector
 from accugrid.compensation.grid import GridModel
 from accugrid.kinematics.configuration import Configuration
@@ -101,17 +100,17 @@ class Program:
 
     def labels(self, lo: int = 0, hi: int | None = None) -> list[str]:
         """Comment text of holes lo..hi-1: id, depth and diameter (templates sanitize it)."""
-        pts = self.points
         hi = len(self) if hi is None else hi
-        number = lru_cache(maxsize=1024)(fixed)  # depths and diameters repeat
-        depth, dia = self.depth_mm[lo:hi].tolist(), pts.diameter[lo:hi].tolist()
-        out = []
-        for j, i in enumerate(range(lo, hi)):
-            text = f"{pts.ids[i]} depth {number(depth[j])}"
-            if dia[j] == dia[j]:  # not NaN
-                text += f" dia {number(dia[j])}"
-            out.append(text)
-        return out
+        ids = self.points.ids[lo:hi]
+        depth = fixed_texts(self.depth_mm[lo:hi], 3, distinct=True).tolist()
+        dia = self.points.diameter[lo:hi]
+        given = ~np.isnan(dia)
+        if not given.any():
+            return [f"{i} depth {d}" for i, d in zip(ids, depth, strict=True)]
+        dia_text = np.full(hi - lo, "", dtype=object)
+        dia_text[given] = fixed_texts(dia[given], 3, distinct=True)
+        dia_text[given] = [" dia " + t for t in dia_text[given]]
+        return [f"{i} depth {d}{t}" for i, d, t in zip(ids, depth, dia_text.tolist(), strict=True)]
 
     def in_frame(self, robot_T_frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Positions (N, 4, 3) mm and KUKA A,B,C (N, 3) deg in another frame given in the robot

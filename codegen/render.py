@@ -15,14 +15,13 @@ from pathlib import Path
 
 import jinja2
 import jinja2.meta
-import numpy as np
 
-from accugrid.codegen.textsafe import comment_text, fixed, fixed_many, krl_identifier
+from accugrid.codegen.textsafe import comment_text, fixed, krl_identifier
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import note_input
 from accugrid.templates import TEMPLATE_DIR
 
-__all__ = ["environment", "fixed_texts", "render", "template_dir", "template_uses"]
+__all__ = ["environment", "render", "template_dir", "template_uses"]
 
 
 def template_dir(dialect: str, templates: str | os.PathLike[str] | None = None) -> Path:
@@ -85,14 +84,3 @@ def _template_errors(env: jinja2.Environment, template: str) -> Iterator[None]:
         ) from None
     except jinja2.UndefinedError as exc:
         raise InputError(f"template uses an undefined value: {exc.message}", template) from None
-
-
-def fixed_texts(values: np.ndarray, decimals: int, distinct: bool = False) -> np.ndarray:
-    """``fixed(v, decimals)`` of every value (via ``fixed_many``), as an object array of the same
-    shape. ``distinct``: format each distinct value once (where values repeat, e.g. angles)."""
-    values = np.asarray(values, dtype=float)
-    if not distinct:
-        return np.array(fixed_many(values.ravel(), decimals), dtype=object).reshape(values.shape)
-    unique, inverse = np.unique(values.ravel(), return_inverse=True)
-    texts = np.array(fixed_many(unique, decimals), dtype=object)
-    return texts[inverse.ravel()].reshape(values.shape)

@@ -26,8 +26,8 @@ import numpy as np
 
 from accugrid.codegen.cell import Cell
 from accugrid.codegen.program import Program
-from accugrid.codegen.render import environment, fixed_texts, render, template_dir, template_uses
-from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.codegen.render import environment, render, template_dir, template_uses
+from accugrid.codegen.textsafe import comment_texts, fixed, fixed_texts
 
 __all__ = ["GcodeHole", "canned", "render_gcode"]
 
@@ -89,7 +89,7 @@ def render_gcode(program: Program, header: list[str], templates=None) -> str:
         )
     if uses is None or "hole_lines" in uses:
         table = np.empty((len(pos), 17), dtype=object)
-        table[:, 0] = [comment_text(f"hole {label}") for label in labels]
+        table[:, 0] = comment_texts(labels, prefix="hole ")
         table[:, 1:4] = text[:, 0]
         table[:, 4:7] = abc_text
         table[:, 7:16] = text[:, 1:].reshape(-1, 9)

@@ -27,8 +27,8 @@ from typing import NamedTuple
 import numpy as np
 
 from accugrid.codegen.program import STAGES, Program
-from accugrid.codegen.render import environment, fixed_texts, render, template_dir, template_uses
-from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.codegen.render import environment, render, template_dir, template_uses
+from accugrid.codegen.textsafe import comment_texts, fixed, fixed_format, fixed_ready, fixed_texts
 from accugrid.kinematics.errors import InputError
 
 __all__ = [
@@ -246,13 +246,18 @@ class _Records:
             distinct=True,
         )
         self.feed = fixed_texts(program.feed_mm_s / 1000.0, 4, distinct=True)
-        ext = "".join(
-            f",E{k + 1} {fixed(v, cell.decimals)}" for k, v in enumerate(cell.external_axes)
+        ext = _literal(
+            "".join(
+                f",E{k + 1} {fixed(v, cell.decimals)}" for k, v in enumerate(cell.external_axes)
+            )
         )
-        self.position_line = (
-            "DECL E6POS %s={X %s,Y %s,Z %s,A %s,B %s,C %s,S %s,T %s" + _literal(ext) + "}\r\n"
+        mm = fixed_format(self.decimals)
+        self.position_block = "".join(
+            f"DECL E6POS XH%d_{s}={{X {mm},Y {mm},Z {mm},A %s,B %s,C %s,S %s,T %s{ext}}}\r\n"
+            for s in self.names
         )
-        self.hole_block = _hole_block(cell)
+        self.hole_block = _hole_block(cell, self.names)
+        self._named: tuple = (None, None, [])
 
     def context(self, lo: int, hi: int, uses: frozenset[str] | None) -> dict[str, object]:
         """Template variables of holes lo..hi-1 that ``uses`` names (None: all)."""
@@ -260,60 +265,58 @@ class _Records:
         if uses is not None:
             wanted &= uses
         out: dict[str, object] = {}
-        names = self._names(lo, hi)
-        if wanted & {"positions", "position_lines"}:
-            table = self._positions(lo, hi, names)
-            if "positions" in wanted:
-                out["positions"] = list(map(KrlPosition._make, table.tolist()))
-            if "position_lines" in wanted:
-                out["position_lines"] = (self.position_line * len(table)) % tuple(
-                    table.ravel().tolist()
-                )
-        if wanted & {"holes", "hole_lines"}:
-            table = self._holes(lo, hi, names)
-            if "holes" in wanted:
-                out["holes"] = list(map(KrlHole._make, table.tolist()))
-            if "hole_lines" in wanted:
-                fields = table[:, [0, 1, 2, 5, 3, 4]]  # in the order the lines print them
-                fields[:, 0] = list(map(comment_text, fields[:, 0].tolist()))
-                out["hole_lines"] = (self.hole_block * len(fields)) % tuple(fields.ravel().tolist())
+        n, k = hi - lo, len(self.stages)
+        number = np.arange(lo + 1, hi + 1, dtype=object)
+        if "positions" in wanted:
+            table = np.empty((n, k, 9), dtype=object)
+            for j, column in enumerate(self._names(lo, hi)):
+                table[:, j, 0] = column
+            table[:, :, 1:4] = fixed_texts(self.pos[lo:hi], self.decimals)
+            table[:, :, 4:7] = self.abc[lo:hi, None, :]
+            table[:, :, 7:9] = self.st[lo:hi]
+            out["positions"] = list(map(KrlPosition._make, table.reshape(n * k, 9).tolist()))
+        if "position_lines" in wanted:
+            table = np.empty((n, k, 9), dtype=object)
+            table[:, :, 0] = number[:, None]
+            table[:, :, 1:4] = fixed_ready(self.pos[lo:hi], self.decimals)
+            table[:, :, 4:7] = self.abc[lo:hi, None, :]
+            table[:, :, 7:9] = self.st[lo:hi]
+            out["position_lines"] = (self.position_block * n) % tuple(table.ravel().tolist())
+        labels = self.program.labels(lo, hi) if wanted & {"holes", "hole_lines"} else []
+        if "holes" in wanted:
+            names = self._names(lo, hi)
+            retract = names[3] if k == 4 else names[0]
+            out["holes"] = list(
+                map(KrlHole, labels, *names[:3], retract, self.feed[lo:hi].tolist())
+            )
+        if "hole_lines" in wanted:
+            table = np.empty((n, 6), dtype=object)  # in the order the lines print them
+            table[:, 0] = comment_texts(labels)
+            table[:, [1, 2, 4, 5]] = number[:, None]
+            table[:, 3] = self.feed[lo:hi]
+            out["hole_lines"] = (self.hole_block * n) % tuple(table.ravel().tolist())
         return out
 
-    def _names(self, lo: int, hi: int) -> list[str]:
-        """Position names of holes lo..hi-1, hole by hole, stage by stage."""
-        return [f"XH{i}_{s}" for i in range(lo + 1, hi + 1) for s in self.names]
-
-    def _positions(self, lo: int, hi: int, names: list[str]) -> np.ndarray:
-        """(n * stages, 9) object array of KrlPosition fields."""
-        n, k = hi - lo, len(self.stages)
-        table = np.empty((n, k, 9), dtype=object)
-        table[:, :, 0] = np.array(names, dtype=object).reshape(n, k)
-        table[:, :, 1:4] = fixed_texts(self.pos[lo:hi], self.decimals)
-        table[:, :, 4:7] = self.abc[lo:hi, None, :]
-        table[:, :, 7:9] = self.st[lo:hi]
-        return table.reshape(n * k, 9)
-
-    def _holes(self, lo: int, hi: int, names: list[str]) -> np.ndarray:
-        """(n, 6) object array of KrlHole fields (label as given, not yet a comment)."""
-        k = len(self.stages)
-        table = np.empty((hi - lo, 6), dtype=object)
-        table[:, 0] = self.program.labels(lo, hi)
-        table[:, 1] = names[0::k]
-        table[:, 2] = names[1::k]
-        table[:, 3] = names[2::k]
-        table[:, 4] = names[3::4] if k == 4 else names[0::3]
-        table[:, 5] = self.feed[lo:hi]
-        return table
+    def _names(self, lo: int, hi: int) -> list[list[str]]:
+        """Position names of holes lo..hi-1, one list per stage (made once for the .src and the
+        .dat of a file)."""
+        if self._named[:2] != (lo, hi):
+            numbers = range(lo + 1, hi + 1)
+            self._named = (lo, hi, [list(map(f"XH{{}}_{s}".format, numbers)) for s in self.names])
+        return self._named[2]
 
 
-def _hole_block(cell) -> str:
-    """The .src lines of one hole as a %-template over (comment label, app, clr, feed, bot, ret),
-    with the cell's settings filled in; CRLF line ends."""
+def _hole_block(cell, stages: list[str]) -> str:
+    """The .src lines of one hole as a %-template over (comment label, hole number, hole number,
+    feed, hole number, hole number), with the cell's settings filled in; CRLF line ends."""
     approach = f"$VEL.CP = {fixed(cell.approach_mm_s / 1000.0, 4)}"
     if cell.travel_motion == "ptp":
-        travel = ["PTP %s C_PTP"]
+        travel = ["PTP XH%d_APP C_PTP"]
     else:
-        travel = [_literal(f"$VEL.CP = {fixed(cell.travel_mm_s / 1000.0, 4)}"), "LIN %s C_DIS"]
+        travel = [
+            _literal(f"$VEL.CP = {fixed(cell.travel_mm_s / 1000.0, 4)}"),
+            "LIN XH%d_APP C_DIS",
+        ]
     clamp = unclamp = []
     if cell.clamp_output is not None:
         clamp = [_literal(f"$OUT_C[{fixed(cell.clamp_output, 0)}] = TRUE ; clamp")]
@@ -322,14 +325,14 @@ def _hole_block(cell) -> str:
         "; hole %s",
         *travel,
         _literal(approach),
-        "LIN %s",
+        "LIN XH%d_CLR",
         *clamp,
         "$VEL.CP = %s",
-        "LIN %s",
+        "LIN XH%d_BOT",
         _literal(f"WAIT SEC {fixed(cell.dwell_s, 3)}"),
         *unclamp,
         _literal(approach),
-        "LIN %s C_DIS",
+        f"LIN XH%d_{stages[3] if len(stages) == 4 else stages[0]} C_DIS",
     ]
     return "\r\n".join(lines) + "\r\n"
 
