@@ -217,13 +217,15 @@ def write_files(
     stale: Iterable[PathLike] = (),
 ) -> list[Path]:
     """Write every file of a job atomically; text is encoded as UTF-8 with newlines untouched.
+    Each file's text is taken from ``contents`` when it is written, in order, so a mapping that
+    renders on demand (``krl.emit.KrlFiles``) never holds the whole job.
 
     ``main``: targets among ``contents`` renamed last, in order (the entry point last), after
     their old versions and the ``stale`` files (leftovers of an earlier job of the same name,
     deleted unless rewritten) are removed. Returns the written paths. On an error or signal
     before the renames the targets are left as they were and no temporary remains.
     """
-    paths = {Path(t): data for t, data in contents.items()}
+    paths = {Path(t): t for t in contents}  # the text is fetched as it is written
     main_paths = [Path(p) for p in main]
     stale_paths = [Path(p) for p in stale if Path(p) not in paths]
     input_ids = _input_identities(inputs)
@@ -241,8 +243,10 @@ def write_files(
     temps: dict[Path, str] = {}
     try:
         with _signals_end_write():
-            for path, data in paths.items():
+            for path, key in paths.items():
+                data = contents[key]
                 payload = data.encode("utf-8") if isinstance(data, str) else data
+                del data
                 temps[path] = _temp_name(path)  # known before it exists: always cleaned
                 try:
                     _write_temp(temps[path], payload)

@@ -21,27 +21,42 @@ per module follow from the rendered lines per hole of the template in use.
 
 from __future__ import annotations
 
+import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
+from accugrid.codegen.cell import Cell
+from accugrid.codegen.points import Points
 from accugrid.codegen.program import STAGES, Program
 from accugrid.codegen.render import environment, render, template_dir, template_uses
-from accugrid.codegen.textsafe import comment_texts, fixed, fixed_format, fixed_ready, fixed_texts
+from accugrid.codegen.textsafe import (
+    KRL_NAME_MAX,
+    comment_texts,
+    fixed,
+    fixed_format,
+    fixed_ready,
+    fixed_texts,
+)
+from accugrid.compensation.csvtable import Table
+from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
 
 __all__ = [
-    "MAX_PARTS",
+    "MODULE_DIGITS",
+    "KrlFiles",
     "KrlHole",
     "KrlPosition",
     "MeasureMove",
     "MeasureSettings",
+    "module_names",
     "render_krl",
     "render_measurement",
 ]
 
-MAX_PARTS = 999  # NAME_001..NAME_999 keeps names <= 24 characters with a 20-character NAME
+MODULE_DIGITS = 3  # NAME_001..NAME_999; a job of more modules numbers them with more digits
 
 
 class KrlHole(NamedTuple):
@@ -140,12 +155,76 @@ def render_measurement(
     return render(env, "measure.src.j2", **context), render(env, "measure.dat.j2", **context)
 
 
-def render_krl(program: Program, header: list[str], templates=None) -> dict[str, str]:
-    """File name -> text for the job (``NAME.src``, ``NAME.dat`` and any ``NAME_nnn`` pairs)."""
-    env = environment(template_dir("krl", templates), newline="\r\n")
+def render_krl(program: Program, header: list[str], templates=None) -> KrlFiles:
+    """File name -> text for the job (``NAME.src``, ``NAME.dat`` and any ``NAME_nnn`` pairs), as
+    a mapping that renders each file pair when it is asked for (see ``KrlFiles``)."""
     cell = program.cell
-    pos, abc = program.in_frame(cell.robot_T_base)
-    records = _Records(program, pos, abc)
+    files = _file_renderer(cell, header, _Records(program), templates)
+    return KrlFiles(files, *_modules(files, cell, len(program)), len(program), cell)
+
+
+def module_names(cell: Cell, holes: int, header: list[str], templates=None) -> list[str]:
+    """The modules a job of ``holes`` holes is split into (``NAME_001``, ...; [] for one file
+    pair), known before any correction or IK: InputError (naming the cell file) when they cannot
+    be named or called within ``program.lines_per_file``, so such a job is refused before the
+    heavy work. ``header``: a header with as many lines as the job's will have. The lines per
+    hole come from rendering a 1- and a 2-hole placeholder program with the same templates."""
+    records = _Records(_placeholder(cell))
+    return _modules(_file_renderer(cell, header, records, templates), cell, holes)[0]
+
+
+class KrlFiles(Mapping):
+    """The files of a KRL job by name, modules first (``NAME_001.src``, ``NAME_001.dat``, ...),
+    then the main program (``NAME.src``, ``NAME.dat``). A file pair is rendered when one of its
+    files is asked for and only the last pair is kept, so that writing a million-hole job in
+    order holds one module's text at a time; each file is checked against
+    ``program.lines_per_file`` as it is rendered."""
+
+    def __init__(self, files, modules: list[str], per_part: int, holes: int, cell: Cell) -> None:
+        self._files, self._modules, self._holes, self._cell = files, modules, holes, cell
+        self._per_part = per_part
+        name = cell.program_name
+        self._pairs = [*modules, name] if modules else [name]
+        self._index = {
+            f"{m}{ext}": k for k, m in enumerate(self._pairs) for ext in (".src", ".dat")
+        }
+        self._last: tuple[int, dict[str, str]] | None = None
+
+    def __iter__(self):
+        return iter(self._index)
+
+    def __len__(self) -> int:
+        return len(self._index)
+
+    def __getitem__(self, file: str) -> str:
+        k = self._index[file]
+        if self._last is None or self._last[0] != k:
+            self._last = (k, self._render(k))
+        return self._last[1][file]
+
+    def _render(self, k: int) -> dict[str, str]:
+        name, modules, per = self._pairs[k], self._modules, self._per_part
+        if not modules:
+            pair = self._files(name, "single", 0, self._holes)
+        elif k < len(modules):
+            pair = self._files(name, "part", k * per, min(self._holes, (k + 1) * per))
+        else:
+            pair = self._files(name, "main", 0, 0, modules)
+        out = dict(zip((f"{name}.src", f"{name}.dat"), pair, strict=True))
+        limit = self._cell.lines_per_file
+        for file, text in out.items():
+            if _lines(text) > limit:
+                raise InputError(
+                    f"{file} would have {_lines(text)} lines, more than program.lines_per_file "
+                    f"({limit}); the main program's calls or a template's lines do not fit",
+                    self._cell.path,
+                )
+        return out
+
+
+def _file_renderer(cell: Cell, header: list[str], records: _Records, templates):
+    """files(name, role, lo, hi, calls=()) -> (.src, .dat) text of holes lo..hi-1."""
+    env = environment(template_dir("krl", templates), newline="\r\n")
     common = {
         "header": header,
         "decimals": cell.decimals,
@@ -162,7 +241,6 @@ def render_krl(program: Program, header: list[str], templates=None) -> dict[str,
         "dwell": cell.dwell_s,
         "ext": cell.external_axes,
     }
-
     src_uses = template_uses(env, "program.src.j2")
     dat_uses = template_uses(env, "program.dat.j2")
 
@@ -181,33 +259,37 @@ def render_krl(program: Program, header: list[str], templates=None) -> dict[str,
         )
         return src, dat
 
-    name, limit, n = cell.program_name, cell.lines_per_file, len(program)
+    return files
+
+
+def _modules(files, cell: Cell, n: int) -> tuple[list[str], int]:
+    """Names of the modules a job of n holes is split into ([]: one file pair) and the holes per
+    module. Modules are
+    numbered NAME_001.. (more digits past 999 modules, as long as the name stays a KRL name of
+    at most 24 characters); InputError when they cannot be named or the main program cannot
+    call them all within the line limit."""
+    name, limit = cell.program_name, cell.lines_per_file
     if n < 2 or n <= _capacity(files, name, "single", limit):
-        out = dict(zip((f"{name}.src", f"{name}.dat"), files(name, "single", 0, n), strict=True))
-    else:
-        per_part = _capacity(files, f"{name}_001", "part", limit)
-        parts = -(-n // per_part)
-        if parts > MAX_PARTS:
-            raise InputError(
-                f"{n} holes need {parts} sub-programs of {per_part} holes, more than "
-                f"{MAX_PARTS}: raise program.lines_per_file",
-                cell.path,
-            )
-        out = {}
-        calls = [f"{name}_{k + 1:03d}" for k in range(parts)]
-        for k, part in enumerate(calls):
-            out[f"{part}.src"], out[f"{part}.dat"] = files(
-                part, "part", k * per_part, min(n, (k + 1) * per_part)
-            )
-        out[f"{name}.src"], out[f"{name}.dat"] = files(name, "main", 0, 0, calls)
-    for file, text in out.items():
-        if _lines(text) > limit:
-            raise InputError(
-                f"{file} would have {_lines(text)} lines, more than program.lines_per_file "
-                f"({limit}); the main program's calls or a template's lines do not fit",
-                cell.path,
-            )
-    return out
+        return [], n
+    per_part = _capacity(files, f"{name}_001", "part", limit)
+    parts = -(-n // per_part)
+    digits = max(MODULE_DIGITS, len(str(parts)))
+    if len(name) + 1 + digits > KRL_NAME_MAX:
+        raise InputError(
+            f"{n} holes need {parts} modules of {per_part} holes; their names "
+            f"{name}_{1:0{digits}d}.. would be longer than {KRL_NAME_MAX} characters: shorten "
+            "program.name or raise program.lines_per_file",
+            cell.path,
+        )
+    modules = [f"{name}_{k + 1:0{digits}d}" for k in range(parts)]
+    main = max(map(_lines, files(name, "main", 0, 0, modules)))
+    if main > limit:
+        raise InputError(
+            f"{n} holes need {parts} modules of {per_part} holes; the main program calling them "
+            f"would have {main} lines, more than program.lines_per_file ({limit}): raise it",
+            cell.path,
+        )
+    return modules, per_part
 
 
 def _capacity(files, name: str, role: str, limit: int) -> int:
@@ -224,28 +306,55 @@ def _capacity(files, name: str, role: str, limit: int) -> int:
     return int(per_part)
 
 
+def _placeholder(cell: Cell) -> Program:
+    """A 2-hole program of the cell with placeholder numbers, for counting rendered lines."""
+    zeros = np.zeros((2, 4, 3))
+    table = Table(os.fspath(cell.path), ["x", "y", "z"], [["0", "0", "0"]] * 2, [2, 3])
+    points = Points(
+        path=table.path,
+        table=table,
+        ids=["1", "2"],
+        xyz=zeros[:, 0],
+        abc=None,
+        axis=np.tile([0.0, 0.0, 1.0], (2, 1)),
+        diameter=np.full(2, np.nan),
+        depth=np.full(2, np.nan),
+        feed=np.full(2, np.nan),
+    )
+    return Program(
+        cell=cell,
+        points=points,
+        nominal=zeros,
+        positions=zeros,
+        rotations=np.tile(np.eye(3), (2, 1, 1)),
+        correction=zeros[:, 0],
+        feed_mm_s=np.full(2, cell.feed_mm_s),
+        depth_mm=np.full(2, cell.depth_mm),
+        configuration=Configuration.from_kuka(np.zeros((2, 4), int), np.zeros((2, 4), int)),
+        warnings=[],
+        corrected=False,
+    )
+
+
 class _Records:
     """Template records of a program, numbers formatted by ``fixed`` (mm and deg with the cell's
-    decimals, $VEL.CP m/s with 4, S and T as integers); angles, S, T and feeds, which repeat,
-    once per distinct value for the whole program. Per hole, either records (``holes``,
+    decimals, $VEL.CP m/s with 4, S and T as integers), made file by file (a million-hole job
+    never holds them all); angles, S, T and feeds, which repeat, once per distinct value in a
+    file. Per hole, either records (``holes``,
     ``positions``: for templates that loop over them) or the finished CRLF lines (``hole_lines``,
     ``position_lines``: what the built-in templates print), whichever the template uses."""
 
-    def __init__(self, program: Program, pos: np.ndarray, abc: np.ndarray) -> None:
+    def __init__(self, program: Program) -> None:
         self.program = program
         cell = program.cell
         self.decimals = cell.decimals
         self.stages = [0, 1, 2] if cell.retract_mm == cell.approach_mm else [0, 1, 2, 3]
         self.names = [STAGES[k] for k in self.stages]
-        self.pos = pos[:, self.stages]
-        self.abc = fixed_texts(abc, self.decimals, distinct=True)
-        status, turn = program.configuration.to_kuka()
-        self.st = fixed_texts(
-            np.stack([status[:, self.stages], turn[:, self.stages]], axis=2),
-            0,
-            distinct=True,
+        status, turn = program.configuration.to_kuka()  # Status 0..7, Turn 0..63
+        self.status_turn = np.stack([status[:, self.stages], turn[:, self.stages]], axis=2).astype(
+            np.int16
         )
-        self.feed = fixed_texts(program.feed_mm_s / 1000.0, 4, distinct=True)
+        self._numbers_of: tuple = (None, None, ())
         ext = _literal(
             "".join(
                 f",E{k + 1} {fixed(v, cell.decimals)}" for k, v in enumerate(cell.external_axes)
@@ -266,36 +375,51 @@ class _Records:
             wanted &= uses
         out: dict[str, object] = {}
         n, k = hi - lo, len(self.stages)
+        pos, abc, st, feed = self._numbers(lo, hi)
         number = np.arange(lo + 1, hi + 1, dtype=object)
         if "positions" in wanted:
             table = np.empty((n, k, 9), dtype=object)
             for j, column in enumerate(self._names(lo, hi)):
                 table[:, j, 0] = column
-            table[:, :, 1:4] = fixed_texts(self.pos[lo:hi], self.decimals)
-            table[:, :, 4:7] = self.abc[lo:hi, None, :]
-            table[:, :, 7:9] = self.st[lo:hi]
+            table[:, :, 1:4] = fixed_texts(pos, self.decimals)
+            table[:, :, 4:7] = abc[:, None, :]
+            table[:, :, 7:9] = st
             out["positions"] = list(map(KrlPosition._make, table.reshape(n * k, 9).tolist()))
         if "position_lines" in wanted:
             table = np.empty((n, k, 9), dtype=object)
             table[:, :, 0] = number[:, None]
-            table[:, :, 1:4] = fixed_ready(self.pos[lo:hi], self.decimals)
-            table[:, :, 4:7] = self.abc[lo:hi, None, :]
-            table[:, :, 7:9] = self.st[lo:hi]
+            table[:, :, 1:4] = fixed_ready(pos, self.decimals)
+            table[:, :, 4:7] = abc[:, None, :]
+            table[:, :, 7:9] = st
             out["position_lines"] = (self.position_block * n) % tuple(table.ravel().tolist())
         labels = self.program.labels(lo, hi) if wanted & {"holes", "hole_lines"} else []
         if "holes" in wanted:
             names = self._names(lo, hi)
             retract = names[3] if k == 4 else names[0]
-            out["holes"] = list(
-                map(KrlHole, labels, *names[:3], retract, self.feed[lo:hi].tolist())
-            )
+            out["holes"] = list(map(KrlHole, labels, *names[:3], retract, feed.tolist()))
         if "hole_lines" in wanted:
             table = np.empty((n, 6), dtype=object)  # in the order the lines print them
             table[:, 0] = comment_texts(labels)
             table[:, [1, 2, 4, 5]] = number[:, None]
-            table[:, 3] = self.feed[lo:hi]
+            table[:, 3] = feed
             out["hole_lines"] = (self.hole_block * n) % tuple(table.ravel().tolist())
         return out
+
+    def _numbers(self, lo: int, hi: int) -> tuple[np.ndarray, ...]:
+        """Of holes lo..hi-1 (the .src and the .dat of a file in turn: made once): positions
+        (n, stages, 3) mm in the BASE frame, and as ``fixed`` text A,B,C (n, 3), S and T
+        (n, stages, 2), $VEL.CP of the feed in m/s (n,); repeating values formatted once."""
+        if self._numbers_of[:2] != (lo, hi):
+            program = self.program
+            pos, abc = program.in_frame(program.cell.robot_T_base, lo, hi)
+            numbers = (
+                pos[:, self.stages],
+                fixed_texts(abc, self.decimals, distinct=True),
+                fixed_texts(self.status_turn[lo:hi], 0, distinct=True),
+                fixed_texts(program.feed_mm_s[lo:hi] / 1000.0, 4, distinct=True),
+            )
+            self._numbers_of = (lo, hi, numbers)
+        return self._numbers_of[2]
 
     def _names(self, lo: int, hi: int) -> list[list[str]]:
         """Position names of holes lo..hi-1, one list per stage (made once for the .src and the
