@@ -387,8 +387,8 @@ def _ik_blocks(robot: RobotModel, poses, holes: int, stages: int, status, turn) 
         q=np.empty((m, 6)),
         ok=np.empty(m, bool),
         reason=np.empty(m, object),
-        status=np.empty(m, int),
-        turn=np.empty(m, int),
+        status=np.empty(m, np.int16),  # -1..7
+        turn=np.empty(m, np.int16),  # -1..63
     )
     for i in range(0, holes, per):
         sol = robot.ik(poses(slice(i, i + per)).reshape(-1, 4, 4), status=status, turn=turn)

@@ -51,14 +51,14 @@ class Table:
         path: str,
         header: list[str],
         rows: list[list[str]] | None = None,
-        lines: list[int] | None = None,
+        lines: Sequence[int] | None = None,
         cells: _Cells | None = None,
     ) -> None:
         self.path = path
         self.header = header
         self._rows = rows
         self._cells = cells
-        self.lines = [] if lines is None else lines
+        self.lines = _Lines([] if lines is None else lines)
         self._index = {name.strip().lower(): i for i, name in enumerate(self.header)}
 
     @property
@@ -196,6 +196,30 @@ def _fast_column(cells: list[str], allow_empty: bool) -> np.ndarray | None:
     except ValueError:
         return None
     return None if np.isinf(column).any() else column
+
+
+class _Lines(Sequence):
+    """The file line of each row (a list, or a range for a file without comment rows: no
+    million-int list); equal to a list of the same lines."""
+
+    def __init__(self, lines: Sequence[int]) -> None:
+        self._lines = lines
+
+    def __len__(self) -> int:
+        return len(self._lines)
+
+    def __iter__(self):
+        return iter(self._lines)
+
+    def __getitem__(self, r):
+        found = self._lines[r]
+        return list(found) if isinstance(r, slice) else found
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Sequence) and list(self._lines) == list(other)
+
+    def __repr__(self) -> str:
+        return repr(list(self._lines))
 
 
 class _Cells:
@@ -344,7 +368,7 @@ def _parse_simple(text: str, path: str) -> Table | None:
     cells = _Cells(body.encode("ascii"), len(header))
     if not cells.rows_ok():
         return None
-    return Table(path, header, None, list(range(line + 1, line + 1 + len(cells))), cells)
+    return Table(path, header, None, range(line + 1, line + 1 + len(cells)), cells)
 
 
 def read_table(path: str | os.PathLike[str]) -> Table:

@@ -76,7 +76,9 @@ class Configuration:
     def from_kuka(cls, status: np.ndarray, turn: np.ndarray) -> Configuration:
         """The configuration of KUKA Status and Turn integers (same shape)."""
         status, turn = np.asarray(status, dtype=int), np.asarray(turn, dtype=int)
-        negative = ((turn[..., None] >> np.arange(6)) & 1).astype(bool)
+        negative = np.empty((*turn.shape, 6), dtype=bool)  # bit i of Turn, axis by axis
+        for i in range(6):
+            negative[..., i] = (turn >> i) & 1 == 1
         return cls(status & 1 == 1, status & 2 == 2, status & 4 == 4, negative)
 
     def to_kuka(self) -> tuple[np.ndarray, np.ndarray]:
@@ -109,7 +111,10 @@ def kuka_status(shoulder: np.ndarray, elbow: np.ndarray, wrist: np.ndarray) -> n
 def kuka_turn(negative: np.ndarray) -> np.ndarray:
     """KUKA Turn (...) from per-axis negative flags (..., 6): bit i set when A(i+1) < 0."""
     negative = np.asarray(negative)
-    return (negative.astype(int) << np.arange(negative.shape[-1])).sum(axis=-1)
+    turn = np.zeros(negative.shape[:-1], dtype=int)
+    for i in range(negative.shape[-1]):  # axis by axis: no (..., 6) integer temporaries
+        turn |= negative[..., i].astype(int) << i
+    return turn
 
 
 def status_turn(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
