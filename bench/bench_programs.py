@@ -54,6 +54,20 @@ def points_csv(n: int = HOLES) -> str:
     return "id,x,y,z,i,j,k,diameter,depth\n" + "\n".join(rows) + "\n"
 
 
+def robot_points_csv(n: int = HOLES) -> str:
+    """The holes of ``points_csv(n)`` in the ROBOT frame (through the example cell's base), for
+    ``accugrid correct``: x,y,z with 4 decimals, drill axis i,j,k with 6."""
+    cell = load_cell(ROOT / "examples" / "cell.yaml")
+    rot, org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
+    holes = np.loadtxt(io.StringIO(points_csv(n)), delimiter=",", skiprows=1, usecols=range(1, 7))
+    xyz, axis = holes[:, :3] @ rot.T + org, holes[:, 3:] @ rot.T
+    rows = [  # test data, not a program: plain formatting is fine here
+        f"B{h + 1:06d},{a:.4f},{b:.4f},{c:.4f},{d:.6f},{e:.6f},{f:.6f},4.83,6"
+        for h, (a, b, c, d, e, f) in enumerate(np.column_stack([xyz, axis]).tolist())
+    ]
+    return "id,x,y,z,i,j,k,diameter,depth\n" + "\n".join(rows) + "\n"
+
+
 def main() -> None:
     cell = load_cell(ROOT / "examples" / "cell.yaml")
     grid = GridModel.from_measurements(ROOT / "examples" / "grid_200mm.csv")

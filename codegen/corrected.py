@@ -8,13 +8,14 @@ from __future__ import annotations
 import argparse
 import csv
 import io
+import re
 
 import numpy as np
 
 from accugrid.codegen.atomic import write_files
 from accugrid.codegen.header import csv_comment, header_lines, input_line
 from accugrid.codegen.points import Points
-from accugrid.codegen.textsafe import fixed
+from accugrid.codegen.textsafe import fixed_format, fixed_ready, fixed_texts
 from accugrid.compensation.grid import GridModel
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
@@ -117,10 +118,24 @@ def corrected_csv(
     out.write(csv_comment(header))
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow([*points.table.header, *ADDED])
-    for r, row in enumerate(points.table.rows):
-        numbers = [fixed(v, DECIMALS) for v in (*command[r], *correction[r])]
-        writer.writerow([*row, *numbers, "; ".join(flags[r])])
+    flag = ["; ".join(f) for f in flags]
+    rows = points.table.plain_rows()
+    if rows is not None and not _NEEDS_QUOTES.search("".join(flag)):  # every row in one pass
+        table = np.empty((len(rows), 8), dtype=object)
+        table[:, 0] = rows
+        table[:, 1:7] = fixed_ready(np.column_stack([command, correction]), DECIMALS)
+        table[:, 7] = flag
+        number = fixed_format(DECIMALS)
+        line = f"%s,{number},{number},{number},{number},{number},{number},%s\n"
+        out.write((line * len(rows)) % tuple(table.ravel().tolist()))
+        return out.getvalue()
+    numbers = fixed_texts(np.column_stack([command, correction]), DECIMALS).tolist()
+    for row, texts, text in zip(points.table.rows, numbers, flag, strict=True):
+        writer.writerow([*row, *texts, text])
     return out.getvalue()
+
+
+_NEEDS_QUOTES = re.compile(r'[,"\r\n]')  # what csv.writer would quote
 
 
 def write_corrected(

@@ -155,7 +155,8 @@ def build_program(
         ],
         axis=1,
     )
-    nominal = points.xyz[:, None, :] + offsets[:, :, None] * axis[:, None, :]
+    nominal = np.multiply(offsets[:, :, None], axis[:, None, :])
+    nominal += points.xyz[:, None, :]  # = xyz + offset * axis, without a second (N, 4, 3)
     base_rot = cell.robot_T_base[:3, :3]
     holes_robot = points.xyz @ base_rot.T + cell.robot_T_base[:3, 3]
     warnings: list[str] = []

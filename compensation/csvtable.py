@@ -71,6 +71,11 @@ class Table:
     def __len__(self) -> int:
         return len(self.lines)
 
+    def plain_rows(self) -> list[str] | None:
+        """Each row's text as read, cells joined by commas, when no cell needs quoting (a file
+        the fast reader took): what ``csv.writer`` writes for the row; None otherwise."""
+        return None if self._cells is None else self._cells.data.decode("ascii").split("\n")
+
     def has(self, name: str) -> bool:
         return name.lower() in self._index
 

@@ -46,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
     module = re.compile(rf"{re.escape(name)}_[0-9]{{3,}}\.(src|dat)")
     stale = [p for p in out.glob(f"{name}_*") if module.fullmatch(p.name)]
     written = write_files(
-        {out / f: text for f, text in files.items()},
+        files.at(out),
         job.inputs,
         args.force,
         main=[out / f"{name}.dat", out / f"{name}.src"],

@@ -24,6 +24,7 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -201,6 +202,22 @@ class KrlFiles(Mapping):
         if self._last is None or self._last[0] != k:
             self._last = (k, self._render(k))
         return self._last[1][file]
+
+    def at(self, folder: Path) -> Mapping:
+        """The same files keyed by their path in ``folder``, still rendered as asked for."""
+        files = self
+
+        class InFolder(Mapping):
+            def __iter__(self):
+                return (folder / name for name in files)
+
+            def __len__(self) -> int:
+                return len(files)
+
+            def __getitem__(self, path: Path) -> str:
+                return files[Path(path).relative_to(folder).as_posix()]
+
+        return InFolder()
 
     def _render(self, k: int) -> dict[str, str]:
         name, modules, per = self._pairs[k], self._modules, self._per_part
