@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from program_helpers import CELL, POINTS, ROOT, cell, grid, panel_points, robot
 
 from accugrid.codegen.cli import main
-from accugrid.codegen.krl.emit import module_names, render_krl
+from accugrid.codegen.krl.emit import MeasureSettings, module_names, render_krl, render_measurement
 from accugrid.codegen.krl.parse import parse_krl
 from accugrid.codegen.program import build_program
 from accugrid.kinematics.errors import InputError
@@ -326,3 +326,24 @@ def test_a_job_the_modules_cannot_hold_is_refused_before_the_correction(tmp_path
     err = capsys.readouterr().err
     assert "the main program calling them would have" in err and "outside" not in err
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "settings_",
+    [
+        MeasureSettings(tool=1, base=0, ptp_percent=30, vel_cp=0.2, wait_sec=1.5, wait_input=None),
+        MeasureSettings(1, 2, 50, 0.25, 0.0, 7, ptp_only=True),
+    ],
+)
+def test_measurement_lines_are_what_the_looping_templates_made(tmp_path, settings_):
+    """The measurement program's per-row lines come formatted from Python; a user template that
+    loops over `moves` and `points` (the former built-in ones) gives the same bytes."""
+    rng = np.random.default_rng(3)
+    points = np.round(rng.uniform([1500, -200, 1300], [1900, 200, 1700], (40, 3)), 2)
+    points[20:] = points[:20]  # repeated poses share one E6POS
+    ids = [f"P{i}" for i in range(20)] + ["x;(y)%"] * 20
+    status, turn = np.full(40, 6), rng.integers(0, 64, 40)
+    looping = LOOPING
+    args = (points, [0.0, 90.0, 0.0], ids, status, turn, "measure_it", ["h1"], settings_)
+    assert "moves" in (looping / "measure.src.j2").read_text()
+    assert render_measurement(*args, looping) == render_measurement(*args)

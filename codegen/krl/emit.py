@@ -134,13 +134,27 @@ def render_measurement(
     rank = np.empty(len(unique), dtype=int)
     rank[order] = np.arange(len(unique))
     rows = first_visit[order]
-    names = [f"XMP{k + 1}" for k in range(len(unique))]
-    pose = fixed_texts(np.column_stack([points[rows], abc[rows]]), 3)
-    st = fixed_texts(np.stack([status[rows], turn[rows]], axis=1), 0)
-    positions = [KrlPosition(names[k], *pose[k], *st[k]) for k in range(len(rows))]
-    moves = [MeasureMove(names[rank[index[r]]], ids[r]) for r in range(len(points))]
+    names = np.array([f"XMP{k + 1}" for k in range(len(unique))], dtype=object)
+    table = np.empty((len(rows), 9), dtype=object)  # KrlPosition fields
+    table[:, 0] = names
+    table[:, 1:7] = fixed_texts(np.column_stack([points[rows], abc[rows]]), 3)
+    table[:, 7:9] = fixed_texts(np.stack([status[rows], turn[rows]], axis=1), 0)
+    targets = names[rank[index]].tolist()  # the E6POS of every row
     env = environment(template_dir("krl", templates), newline="\r\n")
-    context = {
+    src_uses = template_uses(env, "measure.src.j2")
+    dat_uses = template_uses(env, "measure.dat.j2")
+    uses = None if src_uses is None or dat_uses is None else src_uses | dat_uses
+    context: dict[str, object] = {}
+    if uses is None or "points" in uses:
+        context["points"] = list(map(KrlPosition._make, table.tolist()))
+    if uses is None or "moves" in uses:
+        context["moves"] = list(map(MeasureMove, targets, ids))
+    if uses is None or "point_lines" in uses:
+        line = "DECL E6POS %s={X %s,Y %s,Z %s,A %s,B %s,C %s,S %s,T %s" + _ZERO_E + "}\r\n"
+        context["point_lines"] = (line * len(table)) % tuple(table.ravel().tolist())
+    if uses is None or "move_lines" in uses:
+        context["move_lines"] = _move_lines(targets, ids, settings)
+    context |= {
         "name": name,
         "header": header,
         "tool": settings.tool,
@@ -149,11 +163,26 @@ def render_measurement(
         "vel_cp": settings.vel_cp,
         "wait_sec": settings.wait_sec,
         "wait_input": settings.wait_input,
-        "moves": moves,
-        "points": positions,
         "ptp_only": settings.ptp_only,
     }
     return render(env, "measure.src.j2", **context), render(env, "measure.dat.j2", **context)
+
+
+_ZERO_E = ",E1 0.000,E2 0.000,E3 0.000,E4 0.000,E5 0.000,E6 0.000"  # no external axes
+
+
+def _move_lines(targets: list[str], ids: list[str], settings: MeasureSettings) -> str:
+    """The .src lines of every row of a measurement program: PTP to the first (every one with
+    ``ptp_only``), LIN to the others, each with the row id as a comment, then the wait."""
+    if settings.wait_input is not None:
+        wait = f"WAIT FOR $IN[{fixed(settings.wait_input, 0)}] ; tracker done\r\n"
+    else:
+        wait = f"WAIT SEC {fixed(settings.wait_sec, 3)} ; tracker measures\r\n"
+    motion = np.full(len(targets), "PTP" if settings.ptp_only else "LIN", dtype=object)
+    motion[:1] = "PTP"
+    table = np.empty((len(targets), 3), dtype=object)
+    table[:, 0], table[:, 1], table[:, 2] = motion, targets, comment_texts(list(map(str, ids)))
+    return (("%s %s ; %s\r\n" + _literal(wait)) * len(targets)) % tuple(table.ravel().tolist())
 
 
 def render_krl(program: Program, header: list[str], templates=None) -> KrlFiles:
