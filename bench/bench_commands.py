@@ -19,13 +19,15 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.bench_programs import points_csv  # noqa: E402
+from bench.bench_programs import points_csv, robot_points_csv  # noqa: E402
 from bench.bench_rewrite import gcode, krl_pair  # noqa: E402
 from bench.timing import table  # noqa: E402
 
 CELL = ROOT / "examples" / "cell.yaml"
 GRID = ROOT / "examples" / "grid_200mm.csv"
-ACCUGRID = str(Path(sys.executable).with_name("accugrid"))
+# the accugrid executable timed: this environment's, or ACCUGRID_BENCH_EXE (e.g. a wrapper that
+# runs a checkout of an earlier commit, for a before/after table measured on the same machine)
+ACCUGRID = os.environ.get("ACCUGRID_BENCH_EXE") or str(Path(sys.executable).with_name("accugrid"))
 
 # The floor process: read every input file whole, write the given files with as many bytes.
 FLOOR_IO = """
@@ -103,6 +105,12 @@ def main(million: bool) -> None:
                 args = [command, str(holes), "--cell", str(CELL), "-o", str(out)]
                 name = f"accugrid {command}, {label} holes"
                 rows.append(job_row(name, args, [holes, CELL, GRID], out, tmp, repeats))
+            robot_holes = tmp / f"robot{n}.csv"
+            robot_holes.write_text(robot_points_csv(n))
+            out = tmp / f"corrected{n}.csv"
+            args = ["correct", str(robot_holes), "--grid", str(GRID), "-o", str(out)]
+            name = f"accugrid correct, {label} points"
+            rows.append(job_row(name, args, [robot_holes, GRID], out, tmp, repeats))
         pair_dir = tmp / "pair"
         pair_dir.mkdir()
         pair = krl_pair(pair_dir)

@@ -18,7 +18,6 @@ from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program import Program, build_program
 from accugrid.compensation import GridModel
-from accugrid.kinematics.calibrated import check_same_robot
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import load_robot
@@ -109,6 +108,8 @@ def prepare(
     robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
     model = None
     if model_file is not None:
+        from accugrid.kinematics.calibrated import check_same_robot  # model jobs only
+
         model = load_robot(model_file)
         check_same_robot(model, robot, os.fspath(model_file))
         if np.array_equal(model.flange_T_tool, np.eye(4)):  # no TCP in the file: the cell's

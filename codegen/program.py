@@ -38,7 +38,6 @@ import numpy as np
 from accugrid.codegen.cell import Cell
 from accugrid.codegen.points import Points
 from accugrid.codegen.textsafe import fixed_texts
-from accugrid.compensation.corrector import Corrector
 from accugrid.compensation.grid import GridModel
 from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
@@ -245,6 +244,8 @@ def _model_correction(
     rule), which the program then runs in; InputError naming holes the controller cannot
     reach or that do not converge, and as ``_correction`` for the residual grid. rotations
     (N, 3, 3) robot frame."""
+    from accugrid.compensation.corrector import Corrector  # model jobs only: costly imports
+
     abc = matrix_to_abc(rotations)
     corrector = Corrector.build(
         cell.correction,

@@ -216,6 +216,9 @@ class _Lines(Sequence):
     def __iter__(self):
         return iter(self._lines)
 
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        return np.asarray(self._lines, dtype=dtype)
+
     def __getitem__(self, r):
         found = self._lines[r]
         return list(found) if isinstance(r, slice) else found
