@@ -91,7 +91,7 @@ def main() -> None:
     stages = [
         ("parse points CSV", lambda: parse_points(text, "bench.csv")),
         ("correction + IK (program model)", lambda: build_program(points, cell, robot, grid)),
-        ("render KRL (.src/.dat)", lambda: render_krl(program, header)),
+        ("render KRL (.src/.dat)", lambda: sum(map(len, render_krl(program, header).values()))),
         ("render G-code (.ngc)", lambda: render_gcode(program, header)),
         ("accugrid krl (read, correct, IK, render, write)", krl_job),
         ("accugrid gcode (read, correct, IK, render, write)", gcode_job),

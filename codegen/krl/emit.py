@@ -5,8 +5,9 @@ Templates ``program.src.j2`` and ``program.dat.j2`` (``templates/krl/``), render
 ends as the controller's own files have. Position names are ``XH<n>_APP|CLR|BOT|RET`` (n = hole
 number in the file, so always valid and unique, at most 24 characters); the hole id goes into a
 comment. Numbers go through ``fixed`` only: per-hole numbers are formatted once in Python (mm and
-deg with ``program.decimals``, $VEL.CP in m/s with 4 decimals, S and T as integers) and reach the
-template as text; the template formats its scalar settings with the ``fixed`` filter. Jinja renders
+deg with ``program.decimals``, $VEL.CP in m/s with 4 decimals, S and T as integers; positions by
+the %-template itself from ``fixed_ready`` values, the same text) and reach the template as text;
+the template formats its scalar settings with the ``fixed`` filter. Jinja renders
 the frame of each file; the per-hole lines come finished from one %-template per hole or position
 (``hole_lines``, ``position_lines``), while the records ``holes`` and ``positions`` stay available
 to a user template that loops over them (each is built only if the template refers to it).
@@ -16,7 +17,13 @@ the holes go into numbered modules ``NAME_001``, ``NAME_002``, ... (each its own
 pair with local declarations, like any module the KR C4 loads) and ``NAME.src`` becomes the main
 program: INI, base, tool, speeds and the spindle, then one call per module. A module is a global
 subprogram on the KR C4, so the main program calls it by name without a declaration. The holes
-per module follow from the rendered lines per hole of the template in use.
+per module follow from the rendered lines per hole of the template in use. Past 999 modules (a
+million holes at 5,000 lines per file) they are numbered with as many digits as needed, as long
+as the name stays a KRL name (at most 24 characters); a job whose modules cannot be named, or
+whose main program cannot call them all within the line limit, is refused after reading the
+points and before correction and IK (``module_names``). Files are rendered pair by pair as they
+are written (``KrlFiles``). A KR C4 holds only a few MiB of programs in its memory at once, so
+a job of many modules is run a batch of modules at a time (copied in turn, or loaded on demand).
 """
 
 from __future__ import annotations
