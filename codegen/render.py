@@ -9,6 +9,7 @@ error (in a user's ``--templates`` copy) is an InputError naming the template fi
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 from collections.abc import Iterator
 from pathlib import Path
@@ -36,10 +37,17 @@ def template_dir(dialect: str, templates: str | os.PathLike[str] | None = None) 
 
 
 def environment(folder: Path, newline: str = "\n") -> jinja2.Environment:
-    """A strict environment loading from ``folder``; ``newline`` is the output line ending."""
+    """A strict environment loading from ``folder``; ``newline`` is the output line ending.
+    One per folder and line ending in a process, so each template is compiled once (Jinja
+    reloads a template whose file changed)."""
     note_input(folder)  # templates are inputs: no output may replace them
+    return _environment(os.fspath(folder), newline)
+
+
+@functools.lru_cache(maxsize=16)
+def _environment(folder: str, newline: str) -> jinja2.Environment:
     env = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(os.fspath(folder)),
+        loader=jinja2.FileSystemLoader(folder),
         undefined=jinja2.StrictUndefined,
         autoescape=False,
         trim_blocks=True,
