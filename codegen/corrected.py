@@ -9,6 +9,7 @@ import argparse
 import csv
 import io
 import re
+from collections.abc import Iterator
 
 import numpy as np
 
@@ -23,6 +24,7 @@ from accugrid.kinematics.units import mm_text
 
 __all__ = [
     "ADDED",
+    "BLOCK",
     "DECIMALS",
     "check_added_columns",
     "check_orientation",
@@ -113,28 +115,36 @@ def corrected_csv(
     correction: np.ndarray,
     flags: list[list[str]],
     header: list[str],
-) -> str:
+) -> Iterator[str]:
+    """The corrected CSV text in pieces (comment header and column names, then blocks of
+    ``BLOCK`` rows), for writing a million points without holding the text whole."""
     out = io.StringIO()
     out.write(csv_comment(header))
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow([*points.table.header, *ADDED])
+    csv.writer(out, lineterminator="\n").writerow([*points.table.header, *ADDED])
+    yield out.getvalue()
     flag = ["; ".join(f) for f in flags]
-    rows = points.table.plain_rows()
-    if rows is not None and not _NEEDS_QUOTES.search("".join(flag)):  # every row in one pass
-        table = np.empty((len(rows), 8), dtype=object)
-        table[:, 0] = rows
-        table[:, 1:7] = fixed_ready(np.column_stack([command, correction]), DECIMALS)
-        table[:, 7] = flag
-        number = fixed_format(DECIMALS)
-        line = f"%s,{number},{number},{number},{number},{number},{number},%s\n"
-        out.write((line * len(rows)) % tuple(table.ravel().tolist()))
-        return out.getvalue()
-    numbers = fixed_texts(np.column_stack([command, correction]), DECIMALS).tolist()
-    for row, texts, text in zip(points.table.rows, numbers, flag, strict=True):
-        writer.writerow([*row, *texts, text])
-    return out.getvalue()
+    numbers = np.column_stack([command, correction])
+    plain = points.table.plain_rows(0, 0) is not None and not _NEEDS_QUOTES.search("".join(flag))
+    number = fixed_format(DECIMALS)
+    line = f"%s,{number},{number},{number},{number},{number},{number},%s\n"
+    for lo in range(0, len(points), BLOCK):
+        hi = min(lo + BLOCK, len(points))
+        if plain:  # every row of the block in one %-template pass over the rows as read
+            table = np.empty((hi - lo, 8), dtype=object)
+            table[:, 0] = points.table.plain_rows(lo, hi)
+            table[:, 1:7] = fixed_ready(numbers[lo:hi], DECIMALS)
+            table[:, 7] = flag[lo:hi]
+            yield (line * (hi - lo)) % tuple(table.ravel().tolist())
+            continue
+        out = io.StringIO()
+        writer = csv.writer(out, lineterminator="\n")
+        texts = fixed_texts(numbers[lo:hi], DECIMALS).tolist()
+        for row, text, note in zip(points.table.rows[lo:hi], texts, flag[lo:hi], strict=True):
+            writer.writerow([*row, *text, note])
+        yield out.getvalue()
 
 
+BLOCK = 65536  # rows formatted at a time
 _NEEDS_QUOTES = re.compile(r'[,"\r\n]')  # what csv.writer would quote
 
 

@@ -71,10 +71,17 @@ class Table:
     def __len__(self) -> int:
         return len(self.lines)
 
-    def plain_rows(self) -> list[str] | None:
-        """Each row's text as read, cells joined by commas, when no cell needs quoting (a file
-        the fast reader took): what ``csv.writer`` writes for the row; None otherwise."""
-        return None if self._cells is None else self._cells.data.decode("ascii").split("\n")
+    def plain_rows(self, lo: int = 0, hi: int | None = None) -> list[str] | None:
+        """The text of rows lo..hi-1 as read, cells joined by commas, when no cell needs quoting
+        (a file the fast reader took): what ``csv.writer`` writes for each row; None otherwise."""
+        if self._cells is None:
+            return None
+        hi = len(self) if hi is None else hi
+        if hi <= lo:
+            return []
+        width, bounds = self._cells.width, self._cells.bounds
+        text = self._cells.data[int(bounds[lo * width]) + 1 : int(bounds[hi * width])]
+        return text.decode("ascii").split("\n")
 
     def has(self, name: str) -> bool:
         return name.lower() in self._index
