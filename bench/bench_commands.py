@@ -19,25 +19,30 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.bench_programs import points_csv  # noqa: E402
+from bench.bench_programs import points_csv, robot_points_csv  # noqa: E402
 from bench.bench_rewrite import gcode, krl_pair  # noqa: E402
 from bench.timing import table  # noqa: E402
 
 CELL = ROOT / "examples" / "cell.yaml"
 GRID = ROOT / "examples" / "grid_200mm.csv"
-ACCUGRID = str(Path(sys.executable).with_name("accugrid"))
+# the accugrid executable timed: this environment's, or ACCUGRID_BENCH_EXE (e.g. a wrapper that
+# runs a checkout of an earlier commit, for a before/after table measured on the same machine)
+ACCUGRID = os.environ.get("ACCUGRID_BENCH_EXE") or str(Path(sys.executable).with_name("accugrid"))
 
-# The floor process: read every input file whole, write the given files with as many bytes.
+# The floor process: read every input file whole, write the given files with as many bytes. The
+# files are listed in a manifest (a million-hole KRL job has thousands of them): "<" input path,
+# or output size and path, one per line.
 FLOOR_IO = """
 import sys
-inputs, outputs = sys.argv[1].split("|"), sys.argv[2].split("|")
-sizes = [int(s) for s in sys.argv[3].split("|")]
-for path in inputs:
-    with open(path, "rb") as f:
-        f.read()
-for path, size in zip(outputs, sizes):
-    with open(path, "wb") as f:
-        f.write(b"x" * size)
+with open(sys.argv[1]) as manifest:
+    entries = [line.rstrip("\\n").split("\\t") for line in manifest]
+for entry in entries:
+    if entry[0] == "<":
+        with open(entry[1], "rb") as f:
+            f.read()
+    else:
+        with open(entry[1], "wb") as f:
+            f.write(b"x" * int(entry[0]))
 """
 
 
@@ -65,10 +70,11 @@ def outputs_of(target: Path) -> list[Path]:
 def io_floor(inputs: list[Path], written: list[Path], scratch: Path, repeats: int):
     """The floor of a job that read ``inputs`` and wrote ``written`` (same count and sizes)."""
     scratch.mkdir(exist_ok=True)
-    outs = [str(scratch / f"f{i}") for i in range(len(written))]
-    sizes = [str(p.stat().st_size) for p in written]
-    argv = [sys.executable, "-c", FLOOR_IO, "|".join(map(str, inputs)), "|".join(outs)]
-    return median_run([*argv, "|".join(sizes)], repeats)
+    manifest = scratch.parent / "floor_manifest.txt"
+    lines = [f"<\t{p}" for p in inputs]
+    lines += [f"{p.stat().st_size}\t{scratch / f'f{i}'}" for i, p in enumerate(written)]
+    manifest.write_text("\n".join(lines) + "\n")
+    return median_run([sys.executable, "-c", FLOOR_IO, str(manifest)], repeats)
 
 
 def job_row(name, args, inputs, target, tmp, repeats):
@@ -103,6 +109,12 @@ def main(million: bool) -> None:
                 args = [command, str(holes), "--cell", str(CELL), "-o", str(out)]
                 name = f"accugrid {command}, {label} holes"
                 rows.append(job_row(name, args, [holes, CELL, GRID], out, tmp, repeats))
+            robot_holes = tmp / f"robot{n}.csv"
+            robot_holes.write_text(robot_points_csv(n))
+            out = tmp / f"corrected{n}.csv"
+            args = ["correct", str(robot_holes), "--grid", str(GRID), "-o", str(out)]
+            name = f"accugrid correct, {label} points"
+            rows.append(job_row(name, args, [robot_holes, GRID], out, tmp, repeats))
         pair_dir = tmp / "pair"
         pair_dir.mkdir()
         pair = krl_pair(pair_dir)

@@ -35,17 +35,35 @@ RADIUS_MM = 4000.0
 
 
 def points_csv(n: int = HOLES) -> str:
-    """Points CSV text: n holes, 400 per row at 1.5 mm pitch, rows 1.5 mm apart from base y 100
-    (all within 5 deg of the grid's orientation, so no warnings)."""
+    """Points CSV text: n holes on the skin patch X -12.5..586, Y 100..475 mm (BASE frame): 400
+    per row at 1.5 mm pitch, rows 1.5 mm apart, for n <= 100,000; a larger n fills the same patch
+    with sqrt(n / 1e5) times as many columns and rows (a 1e6 job stays inside the grid, all holes
+    within 5 deg of the grid's orientation, so no warnings)."""
+    scale = max(1.0, np.sqrt(n / HOLES))
+    cols, pitch = round(400 * scale), 1.5 / scale
     k = np.arange(n)
-    x = -12.5 + 1.5 * (k % 400)
-    y = 100.0 + 1.5 * (k // 400)
+    x = -12.5 + pitch * (k % cols)
+    y = 100.0 + pitch * (k // cols)
     z = np.sqrt(RADIUS_MM**2 - (x - 287.5) ** 2) - RADIUS_MM
     i, kk = -(x - 287.5) / RADIUS_MM, -(z + RADIUS_MM) / RADIUS_MM
     # test data, not a program: plain formatting is fine here
     rows = [
-        f"B{n + 1:06d},{a:.3f},{b:.3f},{c:.4f},{d:.6f},0,{e:.6f},4.83,6"
-        for n, (a, b, c, d, e) in enumerate(zip(x, y, z, i, kk, strict=True))
+        f"B{h + 1:06d},{a:.3f},{b:.3f},{c:.4f},{d:.6f},0,{e:.6f},4.83,6"
+        for h, (a, b, c, d, e) in enumerate(zip(x, y, z, i, kk, strict=True))
+    ]
+    return "id,x,y,z,i,j,k,diameter,depth\n" + "\n".join(rows) + "\n"
+
+
+def robot_points_csv(n: int = HOLES) -> str:
+    """The holes of ``points_csv(n)`` in the ROBOT frame (through the example cell's base), for
+    ``accugrid correct``: x,y,z with 4 decimals, drill axis i,j,k with 6."""
+    cell = load_cell(ROOT / "examples" / "cell.yaml")
+    rot, org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
+    holes = np.loadtxt(io.StringIO(points_csv(n)), delimiter=",", skiprows=1, usecols=range(1, 7))
+    xyz, axis = holes[:, :3] @ rot.T + org, holes[:, 3:] @ rot.T
+    rows = [  # test data, not a program: plain formatting is fine here
+        f"B{h + 1:06d},{a:.4f},{b:.4f},{c:.4f},{d:.6f},{e:.6f},{f:.6f},4.83,6"
+        for h, (a, b, c, d, e, f) in enumerate(np.column_stack([xyz, axis]).tolist())
     ]
     return "id,x,y,z,i,j,k,diameter,depth\n" + "\n".join(rows) + "\n"
 
@@ -73,7 +91,7 @@ def main() -> None:
     stages = [
         ("parse points CSV", lambda: parse_points(text, "bench.csv")),
         ("correction + IK (program model)", lambda: build_program(points, cell, robot, grid)),
-        ("render KRL (.src/.dat)", lambda: render_krl(program, header)),
+        ("render KRL (.src/.dat)", lambda: sum(map(len, render_krl(program, header).values()))),
         ("render G-code (.ngc)", lambda: render_gcode(program, header)),
         ("accugrid krl (read, correct, IK, render, write)", krl_job),
         ("accugrid gcode (read, correct, IK, render, write)", gcode_job),

@@ -188,12 +188,15 @@ def _temp_name(path: Path) -> str:
     )
 
 
-def _write_temp(tmp: str, payload: bytes) -> None:
+def _write_temp(tmp: str, data: bytes | str | Iterable[bytes | str]) -> None:
+    """Create ``tmp`` with the data: bytes, text (UTF-8), or an iterable of either, written in
+    turn (a job's text in pieces)."""
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies
     try:
-        view = memoryview(payload)
-        while view:
-            view = view[os.write(fd, view) :]
+        for part in [data] if isinstance(data, (bytes, str)) else data:
+            view = memoryview(part.encode("utf-8") if isinstance(part, str) else part)
+            while view:
+                view = view[os.write(fd, view) :]
     finally:
         os.close(fd)
 
@@ -222,20 +225,23 @@ def _sync_folders(folders: set[Path]) -> None:
 
 
 def write_files(
-    contents: Mapping[PathLike, bytes | str],
+    contents: Mapping[PathLike, bytes | str | Iterable[bytes | str]],
     inputs: Iterable[PathLike | None] = (),
     force: bool = False,
     main: Iterable[PathLike] = (),
     stale: Iterable[PathLike] = (),
 ) -> list[Path]:
     """Write every file of a job atomically; text is encoded as UTF-8 with newlines untouched.
+    Each file's text is taken from ``contents`` when it is written, in order, and may come in
+    pieces (an iterable of text), so a mapping that renders on demand (``krl.emit.KrlFiles``)
+    or a text made block by block (``gcode.emit.gcode_text``) never holds the whole job.
 
     ``main``: targets among ``contents`` renamed last, in order (the entry point last), after
     their old versions and the ``stale`` files (leftovers of an earlier job of the same name,
     deleted unless rewritten) are removed. Returns the written paths. On an error or signal
     before the renames the targets are left as they were and no temporary remains.
     """
-    paths = {Path(t): data for t, data in contents.items()}
+    paths = {Path(t): t for t in contents}  # the text is fetched as it is written
     main_paths = [Path(p) for p in main]
     stale_paths = [Path(p) for p in stale if Path(p) not in paths]
     input_ids = _input_identities(inputs)
@@ -253,11 +259,10 @@ def write_files(
     temps: dict[Path, str] = {}
     try:
         with _signals_end_write():
-            for path, data in paths.items():
-                payload = data.encode("utf-8") if isinstance(data, str) else data
+            for path, key in paths.items():
                 temps[path] = _temp_name(path)  # known before it exists: always cleaned
                 try:
-                    _write_temp(temps[path], payload)
+                    _write_temp(temps[path], contents[key])
                 except OSError as exc:
                     raise InputError(f"cannot write: {exc.strerror or exc}", path) from None
             _sync(list(temps.values()))

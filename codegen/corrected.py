@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import csv
 import io
+import re
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,7 +18,7 @@ import numpy as np
 from accugrid.codegen.atomic import JobFiles
 from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
 from accugrid.codegen.points import Points, read_points
-from accugrid.codegen.textsafe import fixed
+from accugrid.codegen.textsafe import fixed_format, fixed_ready, fixed_texts
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.measurements import REPEAT_TOL_MM
 from accugrid.compensation.settings import CorrectionSettings
@@ -27,6 +29,7 @@ from accugrid.kinematics.units import mm_text
 
 __all__ = [
     "ADDED",
+    "BLOCK",
     "DECIMALS",
     "CorrectRequest",
     "check_added_columns",
@@ -119,15 +122,37 @@ def corrected_csv(
     correction: np.ndarray,
     flags: list[list[str]],
     header: list[str],
-) -> str:
+) -> Iterator[str]:
+    """The corrected CSV text in pieces (comment header and column names, then blocks of
+    ``BLOCK`` rows), for writing a million points without holding the text whole."""
     out = io.StringIO()
     out.write(csv_comment(header))
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow([*points.table.header, *ADDED])
-    for r, row in enumerate(points.table.rows):
-        numbers = [fixed(v, DECIMALS) for v in (*command[r], *correction[r])]
-        writer.writerow([*row, *numbers, "; ".join(flags[r])])
-    return out.getvalue()
+    csv.writer(out, lineterminator="\n").writerow([*points.table.header, *ADDED])
+    yield out.getvalue()
+    flag = ["; ".join(f) for f in flags]
+    numbers = np.column_stack([command, correction])
+    plain = points.table.plain_rows(0, 0) is not None and not _NEEDS_QUOTES.search("".join(flag))
+    number = fixed_format(DECIMALS)
+    line = f"%s,{number},{number},{number},{number},{number},{number},%s\n"
+    for lo in range(0, len(points), BLOCK):
+        hi = min(lo + BLOCK, len(points))
+        if plain:  # every row of the block in one %-template pass over the rows as read
+            table = np.empty((hi - lo, 8), dtype=object)
+            table[:, 0] = points.table.plain_rows(lo, hi)
+            table[:, 1:7] = fixed_ready(numbers[lo:hi], DECIMALS)
+            table[:, 7] = flag[lo:hi]
+            yield (line * (hi - lo)) % tuple(table.ravel().tolist())
+            continue
+        out = io.StringIO()
+        writer = csv.writer(out, lineterminator="\n")
+        texts = fixed_texts(numbers[lo:hi], DECIMALS).tolist()
+        for row, text, note in zip(points.table.rows[lo:hi], texts, flag[lo:hi], strict=True):
+            writer.writerow([*row, *text, note])
+        yield out.getvalue()
+
+
+BLOCK = 65536  # rows formatted at a time
+_NEEDS_QUOTES = re.compile(r'[,"\r\n]')  # what csv.writer would quote
 
 
 def corrected_file(

@@ -7,6 +7,7 @@ import argparse
 import dataclasses
 import os
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,7 +18,6 @@ from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program import Program, build_program
 from accugrid.compensation import GridModel
-from accugrid.kinematics.calibrated import check_same_robot
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import load_robot
@@ -89,8 +89,15 @@ def grid_path(args: argparse.Namespace, cell: Cell, model: Path | None = None) -
     return cell.grid_file(args.grid, ", or use --no-correction")
 
 
-def prepare(args: argparse.Namespace, command: str) -> Job:
-    """Read POINTS, CELL and the grid; build the program; print its warnings to stderr."""
+def prepare(
+    args: argparse.Namespace,
+    command: str,
+    check: Callable[[int, list[str]], None] | None = None,
+) -> Job:
+    """Read POINTS, CELL and the grid; build the program; print its warnings to stderr.
+    ``check(holes, header)``, when given, runs after reading and before the correction and IK
+    (the heavy work), with a header of as many lines as the job's: a dialect refuses there what
+    it could not write."""
     cell = load_cell(args.cell)
     if args.allow_config_change:
         configuration = dataclasses.replace(cell.configuration, allow_change=True)
@@ -102,14 +109,12 @@ def prepare(args: argparse.Namespace, command: str) -> Job:
     robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
     model = None
     if model_file is not None:
+        from accugrid.kinematics.calibrated import check_same_robot  # model jobs only
+
         model = load_robot(model_file)
         check_same_robot(model, robot, os.fspath(model_file))
         if np.array_equal(model.flange_T_tool, np.eye(4)):  # no TCP in the file: the cell's
             model = model.with_tool(cell.flange_T_tool)
-    program = build_program(points, cell, robot, grid, model)
-    for warning in program.warnings:
-        print(f"accugrid {command}: warning: {warning}", file=sys.stderr)
-    largest, hole = program.largest_correction()
     inputs = [input_line("points", args.points, file_sha256(args.points))]
     inputs.append(input_line("cell", args.cell, cell.sha256))
     details = []
@@ -122,8 +127,15 @@ def prepare(args: argparse.Namespace, command: str) -> Job:
         details = ["grid none (--no-correction): positions are not corrected"]
     elif grid is not None:
         inputs += grid_lines(Path(grid_file).name, grid.source_sha256, grid.step)
+    closing = [f"holes {len(points)}"]
+    if check is not None:
+        check(len(points), header_lines(command, inputs, details, 0.0, "", closing))
+    program = build_program(points, cell, robot, grid, model)
+    for warning in program.warnings:
+        print(f"accugrid {command}: warning: {warning}", file=sys.stderr)
+    largest, hole = program.largest_correction()
     where = f" at hole {points.ids[hole]}" if hole is not None else ""
-    header = header_lines(command, inputs, details, largest, where, [f"holes {len(program)}"])
+    header = header_lines(command, inputs, details, largest, where, closing)
     inputs = [Path(args.points), Path(args.cell)] + ([grid_file] if grid_file else [])
     inputs += [model_file] if model_file is not None and model_file.is_file() else []
     return Job(program, header, inputs)

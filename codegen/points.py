@@ -126,7 +126,10 @@ def _points(table: Table) -> Points:
 def _ids(table: Table) -> list[str]:
     if not table.has("id"):
         return [str(r + 1) for r in range(len(table))]
-    ids = [t.strip() for t in table.text("id")]
+    ids = list(map(str.strip, table.text("id")))
+    distinct = set(ids)
+    if len(distinct) == len(ids) and "" not in distinct:
+        return ids
     first: dict[str, int] = {}
     for r, name in enumerate(ids):
         if not name:

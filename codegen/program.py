@@ -31,15 +31,13 @@ take its own.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 from types import SimpleNamespace
 
 import numpy as np
 
 from accugrid.codegen.cell import Cell
 from accugrid.codegen.points import Points
-from accugrid.codegen.textsafe import fixed
-from accugrid.compensation.corrector import Corrector
+from accugrid.codegen.textsafe import fixed_texts
 from accugrid.compensation.grid import GridModel
 from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
@@ -101,25 +99,28 @@ class Program:
 
     def labels(self, lo: int = 0, hi: int | None = None) -> list[str]:
         """Comment text of holes lo..hi-1: id, depth and diameter (templates sanitize it)."""
-        pts = self.points
         hi = len(self) if hi is None else hi
-        number = lru_cache(maxsize=1024)(fixed)  # depths and diameters repeat
-        depth, dia = self.depth_mm[lo:hi].tolist(), pts.diameter[lo:hi].tolist()
-        out = []
-        for j, i in enumerate(range(lo, hi)):
-            text = f"{pts.ids[i]} depth {number(depth[j])}"
-            if dia[j] == dia[j]:  # not NaN
-                text += f" dia {number(dia[j])}"
-            out.append(text)
-        return out
+        ids = self.points.ids[lo:hi]
+        depth = fixed_texts(self.depth_mm[lo:hi], 3, distinct=True).tolist()
+        dia = self.points.diameter[lo:hi]
+        given = ~np.isnan(dia)
+        if not given.any():
+            return [f"{i} depth {d}" for i, d in zip(ids, depth, strict=True)]
+        dia_text = np.full(hi - lo, "", dtype=object)
+        dia_text[given] = fixed_texts(dia[given], 3, distinct=True)
+        dia_text[given] = [" dia " + t for t in dia_text[given]]
+        return [f"{i} depth {d}{t}" for i, d, t in zip(ids, depth, dia_text.tolist(), strict=True)]
 
-    def in_frame(self, robot_T_frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Positions (N, 4, 3) mm and KUKA A,B,C (N, 3) deg in another frame given in the robot
-        frame (e.g. ``cell.gcode.robot_T_program`` for G-code)."""
+    def in_frame(
+        self, robot_T_frame: np.ndarray, lo: int = 0, hi: int | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (n, 4, 3) mm and KUKA A,B,C (n, 3) deg of holes lo..hi-1 in another frame
+        given in the robot frame (e.g. ``cell.gcode.robot_T_program`` for G-code)."""
         frame_T_base = invert(robot_T_frame) @ self.cell.robot_T_base
         rot = frame_T_base[:3, :3]
-        pos = self.positions @ rot.T + frame_T_base[:3, 3]
-        abc = matrix_to_abc(rot @ self.rotations) if len(self) else np.zeros((0, 3))
+        pos = self.positions[lo:hi] @ rot.T + frame_T_base[:3, 3]
+        rotations = self.rotations[lo:hi]
+        abc = matrix_to_abc(rot @ rotations) if len(rotations) else np.zeros((0, 3))
         return pos, abc
 
 
@@ -153,7 +154,8 @@ def build_program(
         ],
         axis=1,
     )
-    nominal = points.xyz[:, None, :] + offsets[:, :, None] * axis[:, None, :]
+    nominal = np.multiply(offsets[:, :, None], axis[:, None, :])
+    nominal += points.xyz[:, None, :]  # = xyz + offset * axis, without a second (N, 4, 3)
     base_rot = cell.robot_T_base[:3, :3]
     holes_robot = points.xyz @ base_rot.T + cell.robot_T_base[:3, 3]
     warnings: list[str] = []
@@ -188,6 +190,7 @@ def _rotations(points: Points, cell: Cell) -> np.ndarray:
     ``orient_along_axes`` around the cell's reference orientation (a robot-frame A,B,C)."""
     if points.abc is not None:
         return abc_to_matrix(points.abc).reshape(-1, 3, 3)
+    n = len(points)
     reference = cell.robot_T_base[:3, :3].T @ abc_to_matrix(
         np.array(cell.configuration.reference_abc)
     )
@@ -199,7 +202,9 @@ def _rotations(points: Points, cell: Cell) -> np.ndarray:
             "or turn the reference",
             *points.table.where(int(bad[0]), "i"),
         )
-    return orient_along_axes(points.axis, reference)
+    return np.concatenate(  # in blocks: the rule's (N, 3, 3) temporaries stay small
+        [orient_along_axes(points.axis[i : i + IK_BLOCK], reference) for i in range(0, n, IK_BLOCK)]
+    )
 
 
 def _correction(
@@ -241,6 +246,8 @@ def _model_correction(
     rule), which the program then runs in; InputError naming holes the controller cannot
     reach or that do not converge, and as ``_correction`` for the residual grid. rotations
     (N, 3, 3) robot frame."""
+    from accugrid.compensation.corrector import Corrector  # model jobs only: costly imports
+
     abc = matrix_to_abc(rotations)
     corrector = Corrector.build(
         cell.correction,
@@ -306,17 +313,17 @@ def _configuration(
     if n == 0:
         return np.zeros((0, 4), int), np.zeros((0, 4), int), []
     stages = len(STAGES) - (1 if cell.drilling.retract_mm == cell.drilling.approach_mm else 0)
-    poses = np.tile(np.eye(4), (n, stages, 1, 1))
-    poses[:, :, :3, :3] = (cell.robot_T_base[:3, :3] @ rotations)[:, None]
-    base_rot, base_org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
-    poses[:, :, :3, 3] = positions[:, :stages] @ base_rot.T + base_org
-    flat = poses.reshape(-1, 4, 4)
+
+    def poses(holes) -> np.ndarray:
+        """Robot-frame TCP poses (len(holes), stages, 4, 4) of some holes (index or slice)."""
+        return _poses(cell, positions[holes, :stages], rotations[holes])
+
     if status is None:
-        first = robot.ik(flat[:1], turn=cell.configuration.turn)
+        first = robot.ik(poses(slice(0, 1))[0, :1], turn=cell.configuration.turn)
         if not first.ok[0]:
             _fail(points, 0, 0, first.reason[0], cell)
         status = int(first.status[0])
-    sol = _ik_blocks(robot, flat, status, cell.configuration.turn)
+    sol = _ik_blocks(robot, poses, n, stages, status, cell.configuration.turn)
     ok = sol.ok.reshape(n, stages)
     q = sol.q.reshape(n, stages, 6)
     pose_status = sol.status.reshape(n, stages).astype(int)
@@ -325,9 +332,10 @@ def _configuration(
     failed = np.flatnonzero(~ok.all(axis=1))
     if failed.size and cell.configuration.allow_change:
         # a failing hole takes the default configuration of its approach pose for all its poses
-        own = robot.ik(poses[failed, 0])
+        failed_poses = poses(failed)
+        own = robot.ik(failed_poses[:, 0])
         retry = robot.ik(
-            poses[failed].reshape(-1, 4, 4),
+            failed_poses.reshape(-1, 4, 4),
             status=np.repeat(np.where(own.ok, own.status, 0), stages),
         )
         ok[failed] = retry.ok.reshape(-1, stages) & own.ok[:, None]
@@ -362,26 +370,46 @@ def _configuration(
     return pose_status, pose_turn, warnings
 
 
-def _ik_blocks(robot: RobotModel, poses: np.ndarray, status, turn) -> SimpleNamespace:
-    """``robot.ik`` of poses (M, 4, 4) in blocks of ``IK_BLOCK``: the same result, with the IK's
-    (M, 8, ...) temporaries bounded in memory."""
-    parts = [
-        robot.ik(poses[i : i + IK_BLOCK], status=status, turn=turn)
-        for i in range(0, len(poses), IK_BLOCK)
-    ]
-    return SimpleNamespace(
-        **{
-            f: np.concatenate([getattr(s, f) for s in parts])
-            for f in ("q", "ok", "reason", "status", "turn")
-        }
+def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
+    """Robot-frame TCP poses (H, S, 4, 4) of positions (H, S, 3) mm and rotations (H, 3, 3)
+    in the BASE frame."""
+    base_rot, base_org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
+    out = np.zeros((*positions.shape[:2], 4, 4))
+    out[:, :, :3, :3] = (base_rot @ rotations)[:, None]
+    out[:, :, :3, 3] = positions @ base_rot.T + base_org
+    out[:, :, 3, 3] = 1.0
+    return out
+
+
+def _ik_blocks(robot: RobotModel, poses, holes: int, stages: int, status, turn) -> SimpleNamespace:
+    """``robot.ik`` of the poses (holes * stages, 4, 4) that ``poses(slice)`` makes, in blocks of
+    about ``IK_BLOCK`` poses: the same result, with the poses and the IK's (M, 8, ...)
+    temporaries bounded in memory."""
+    per = max(IK_BLOCK // stages, 1)
+    m = holes * stages
+    out = SimpleNamespace(
+        q=np.empty((m, 6)),
+        ok=np.empty(m, bool),
+        reason=np.empty(m, object),
+        status=np.empty(m, np.int16),  # -1..7
+        turn=np.empty(m, np.int16),  # -1..63
     )
+    for i in range(0, holes, per):
+        sol = robot.ik(poses(slice(i, i + per)).reshape(-1, 4, 4), status=status, turn=turn)
+        at = slice(i * stages, i * stages + len(sol.ok))
+        for field, values in vars(out).items():
+            values[at] = getattr(sol, field)
+    return out
 
 
 def _branch_jumps(points: Points, cell: Cell, q: np.ndarray) -> list[str]:
     """An axis turning more than ``MAX_AXIS_JUMP_DEG`` between consecutive poses (a wrist flip or
     a change of branch): InputError naming the hole, or a warning with allow_change."""
     seq = q.reshape(-1, 6)
-    jump = np.degrees(np.abs(np.diff(seq, axis=0))).max(axis=1)
+    jump = np.empty(max(len(seq) - 1, 0))
+    for i in range(0, len(jump), IK_BLOCK):  # in blocks: no (M, 6) temporaries
+        step = np.diff(seq[i : i + IK_BLOCK + 1], axis=0)
+        jump[i : i + IK_BLOCK] = np.degrees(np.abs(step, out=step).max(axis=1))  # same maximum
     bad = np.flatnonzero(jump > MAX_AXIS_JUMP_DEG)
     if not bad.size:
         return []

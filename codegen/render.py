@@ -9,20 +9,20 @@ error (in a user's ``--templates`` copy) is an InputError naming the template fi
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 from collections.abc import Iterator
 from pathlib import Path
 
 import jinja2
 import jinja2.meta
-import numpy as np
 
-from accugrid.codegen.textsafe import comment_text, fixed, fixed_many, krl_identifier
+from accugrid.codegen.textsafe import comment_text, fixed, krl_identifier
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import note_input
 from accugrid.templates import TEMPLATE_DIR
 
-__all__ = ["environment", "fixed_texts", "render", "template_dir", "template_uses"]
+__all__ = ["environment", "render", "template_dir", "template_uses"]
 
 
 def template_dir(dialect: str, templates: str | os.PathLike[str] | None = None) -> Path:
@@ -37,10 +37,17 @@ def template_dir(dialect: str, templates: str | os.PathLike[str] | None = None) 
 
 
 def environment(folder: Path, newline: str = "\n") -> jinja2.Environment:
-    """A strict environment loading from ``folder``; ``newline`` is the output line ending."""
+    """A strict environment loading from ``folder``; ``newline`` is the output line ending.
+    One per folder and line ending in a process, so each template is compiled once (Jinja
+    reloads a template whose file changed)."""
     note_input(folder)  # templates are inputs: no output may replace them
+    return _environment(os.fspath(folder), newline)
+
+
+@functools.lru_cache(maxsize=16)
+def _environment(folder: str, newline: str) -> jinja2.Environment:
     env = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(os.fspath(folder)),
+        loader=jinja2.FileSystemLoader(folder),
         undefined=jinja2.StrictUndefined,
         autoescape=False,
         trim_blocks=True,
@@ -85,14 +92,3 @@ def _template_errors(env: jinja2.Environment, template: str) -> Iterator[None]:
         ) from None
     except jinja2.UndefinedError as exc:
         raise InputError(f"template uses an undefined value: {exc.message}", template) from None
-
-
-def fixed_texts(values: np.ndarray, decimals: int, distinct: bool = False) -> np.ndarray:
-    """``fixed(v, decimals)`` of every value (via ``fixed_many``), as an object array of the same
-    shape. ``distinct``: format each distinct value once (where values repeat, e.g. angles)."""
-    values = np.asarray(values, dtype=float)
-    if not distinct:
-        return np.array(fixed_many(values.ravel(), decimals), dtype=object).reshape(values.shape)
-    unique, inverse = np.unique(values.ravel(), return_inverse=True)
-    texts = np.array(fixed_many(unique, decimals), dtype=object)
-    return texts[inverse.ravel()].reshape(values.shape)

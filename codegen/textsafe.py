@@ -20,8 +20,12 @@ __all__ = [
     "KRL_NAME_MAX",
     "KRL_RESERVED",
     "comment_text",
+    "comment_texts",
     "fixed",
+    "fixed_format",
     "fixed_many",
+    "fixed_ready",
+    "fixed_texts",
     "krl_identifier",
 ]
 
@@ -56,24 +60,53 @@ def fixed(value: float, decimals: int = 3) -> str:
     return text
 
 
+def fixed_ready(values: np.ndarray, places: int) -> np.ndarray:
+    """The values (any shape) to print with ``"%.{places}f"`` (``fixed_format``) so that each
+    text is ``fixed(v, places)``: a copy whose values that would print as ``-0.000`` are +0.0.
+    Lets a %-template format numbers itself in one pass with the finished lines.
+
+    Raises ValueError for NaN or infinity, like ``fixed``.
+    """
+    values = np.array(values, dtype=float, order="C")
+    if not np.isfinite(values).all():
+        bad = values[~np.isfinite(values)][0]
+        raise ValueError(f"refusing to write a non-finite number ({bad}) into a program")
+    small = np.flatnonzero(np.signbit(values) & (values > -(10.0**-places)))
+    if small.size:
+        flat = values.reshape(-1)
+        texts = ((f"%.{places}f\n" * small.size) % tuple(flat[small].tolist())).split("\n")
+        zero = np.array(texts[:-1]) == "-" + fixed(0.0, places)
+        flat[small[zero]] = 0.0
+    return values
+
+
+def fixed_format(places: int) -> str:
+    """The %-conversion that prints a ``fixed_ready`` value as ``fixed`` does."""
+    return f"%.{places}f"
+
+
 def fixed_many(values: np.ndarray, places: int) -> list[str]:
     """``fixed(v, places)`` of every value (N,), formatted in one pass (for 100k-number programs).
 
     Raises ValueError for NaN or infinity, like ``fixed``.
     """
-    values = np.asarray(values, dtype=float)
-    if not len(values):
+    ready = fixed_ready(values, places)
+    if not len(ready):
         return []
-    if not np.isfinite(values).all():
-        bad = values[~np.isfinite(values)][0]
-        raise ValueError(f"refusing to write a non-finite number ({bad}) into a program")
-    texts = ((f"%.{places}f\n" * len(values)) % tuple(values.tolist())).split("\n")
+    texts = (((fixed_format(places) + "\n") * len(ready)) % tuple(ready.tolist())).split("\n")
     texts.pop()
-    negative_zero = "-" + fixed(0.0, places)
-    for i in np.flatnonzero(np.abs(values) < 10.0**-places).tolist():
-        if texts[i] == negative_zero:
-            texts[i] = texts[i][1:]
     return texts
+
+
+def fixed_texts(values: np.ndarray, decimals: int, distinct: bool = False) -> np.ndarray:
+    """``fixed(v, decimals)`` of every value (via ``fixed_many``), as an object array of the same
+    shape. ``distinct``: format each distinct value once (where values repeat, e.g. angles)."""
+    values = np.asarray(values, dtype=float)
+    if not distinct:
+        return np.array(fixed_many(values.ravel(), decimals), dtype=object).reshape(values.shape)
+    unique, inverse = np.unique(values.ravel(), return_inverse=True)
+    texts = np.array(fixed_many(unique, decimals), dtype=object)
+    return texts[inverse.ravel()].reshape(values.shape)
 
 
 def comment_text(text: str, limit: int = COMMENT_MAX) -> str:
@@ -86,6 +119,16 @@ def comment_text(text: str, limit: int = COMMENT_MAX) -> str:
     folded = unicodedata.normalize("NFKD", str(text)).encode("ascii", "ignore").decode("ascii")
     cleaned = _NOT_SAFE.sub("_", folded).strip()
     return cleaned[:limit]
+
+
+def comment_texts(texts: list[str], limit: int = COMMENT_MAX, prefix: str = "") -> list[str]:
+    """``comment_text(prefix + t, limit)`` of every text, for 100k-hole programs: when every text
+    is already safe (the usual ids), only the cut to ``limit`` is left to do."""
+    if prefix:
+        texts = [prefix + t for t in texts]
+    if _NOT_SAFE.search("".join(texts)) or any(t[:1] == " " or t[-1:] == " " for t in texts):
+        return [comment_text(t, limit) for t in texts]
+    return texts if max(map(len, texts), default=0) <= limit else [t[:limit] for t in texts]
 
 
 def krl_identifier(text: str, prefix: str = "P", limit: int = KRL_NAME_MAX) -> str:

@@ -15,7 +15,6 @@ import math
 import os
 import re
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -29,22 +28,60 @@ _DECIMAL = re.compile(
 )  # nan and inf pass here to be refused as "not a finite number"
 _NOT_DECIMAL_CHAR = re.compile(r"[_nNiI\x1c-\x1f]")  # what float() takes beyond ASCII decimals
 _BLANKS = " \t\n\r\x0b\x0c"  # around a number: ASCII blanks only (float() takes more)
+_CHUNK = 1 << 16  # rows cut from the byte buffer at a time (bounds the temporaries)
+# bytes a number cell of the fast reader may hold: ASCII digits, sign, point, exponent, blanks
+_NUMBER_BYTE = np.zeros(256, dtype=bool)
+_NUMBER_BYTE[np.frombuffer(b"0123456789+-.eE" + _BLANKS.encode(), dtype=np.uint8)] = True
+_BLANK_BYTE = np.zeros(256, dtype=bool)
+_BLANK_BYTE[np.frombuffer(_BLANKS.encode(), dtype=np.uint8)] = True
+# what a data line of the fast reader may not start with (a blank or comment line starts so)
+_ODD_START = np.zeros(256, dtype=bool)
+_ODD_START[np.frombuffer(b"#,\n" + _BLANKS.encode() + bytes(range(0x1C, 0x20)), np.uint8)] = True
 
 
-@dataclass
 class Table:
-    """A parsed CSV: header names as written, raw cells and the file line of each row."""
+    """A parsed CSV: header names as written, the cells and the file line of each row.
 
-    path: str
-    header: list[str]
-    rows: list[list[str]]
-    lines: list[int] = field(default_factory=list)
+    Cells live either in ``rows`` (lists of strings, from the csv module) or, for the common file
+    (ASCII, no quotes), in one byte buffer with the offsets of its separators (``_Cells``), from
+    which a column is cut only when asked for; ``rows`` is then built on first use."""
 
-    def __post_init__(self) -> None:
+    def __init__(
+        self,
+        path: str,
+        header: list[str],
+        rows: list[list[str]] | None = None,
+        lines: Sequence[int] | None = None,
+        cells: _Cells | None = None,
+    ) -> None:
+        self.path = path
+        self.header = header
+        self._rows = rows
+        self._cells = cells
+        self.lines = _Lines([] if lines is None else lines)
         self._index = {name.strip().lower(): i for i, name in enumerate(self.header)}
 
+    @property
+    def rows(self) -> list[list[str]]:
+        """The cells of every row, as strings."""
+        if self._rows is None:
+            self._rows = self._cells.rows() if self._cells is not None else []
+        return self._rows
+
     def __len__(self) -> int:
-        return len(self.rows)
+        return len(self.lines)
+
+    def plain_rows(self, lo: int = 0, hi: int | None = None) -> list[str] | None:
+        """The text of rows lo..hi-1 as read, cells joined by commas, when no cell needs quoting
+        (a file the fast reader took): what ``csv.writer`` writes for each row; None otherwise."""
+        if self._cells is None:
+            return None
+        hi = len(self) if hi is None else hi
+        if hi <= lo:
+            return []
+        width, bounds = self._cells.width, self._cells.bounds
+        text = self._cells.data[int(bounds[lo * width]) + 1 : int(bounds[hi * width])]
+        return text.decode("ascii").split("\n")
 
     def has(self, name: str) -> bool:
         return name.lower() in self._index
@@ -70,7 +107,11 @@ class Table:
 
     def text(self, name: str) -> list[str]:
         """The raw cells of one column, as strings."""
-        i = self.index(name)
+        return self._column(self.index(name))
+
+    def _column(self, i: int) -> list[str]:
+        if self._rows is None and self._cells is not None:
+            return self._cells.text(i)
         return [row[i] for row in self.rows]
 
     def floats(self, names: Sequence[str], allow_empty: bool = False) -> np.ndarray:
@@ -81,11 +122,16 @@ class Table:
         ``allow_empty`` and an error otherwise.
         """
         cols = [self.index(n) for n in names]
-        out = np.empty((len(self.rows), len(cols)))
+        out = np.empty((len(self), len(cols)))
         for c, i in enumerate(cols):
-            cells = [row[i] for row in self.rows]
-            column = _fast_column(cells, allow_empty)
+            column = None
+            if self._cells is not None:
+                column = self._cells.floats(i, allow_empty)
+            if column is None:
+                cells = self._column(i)
+                column = _fast_column(cells, allow_empty)
             if column is None:  # slow path: find the first bad cell and say where it is
+                cells = self._column(i)
                 column = [self._number(cell, r, i, allow_empty) for r, cell in enumerate(cells)]
             out[:, c] = column
         return out
@@ -100,9 +146,8 @@ class Table:
 
     def decimals(self, names: Sequence[str]) -> np.ndarray:
         """Digits after the decimal point of each cell as written (N, len(names)) int."""
-        return np.array(
-            [[decimals_of(row[i]) for i in map(self.index, names)] for row in self.rows], dtype=int
-        ).reshape(len(self.rows), len(names))
+        columns = [list(map(decimals_of, self._column(self.index(n)))) for n in names]
+        return np.array(columns, dtype=int).reshape(len(names), len(self)).T
 
     def check_bounds(
         self, values: np.ndarray, names: Sequence[str], limit: float, unit: str
@@ -165,6 +210,182 @@ def _fast_column(cells: list[str], allow_empty: bool) -> np.ndarray | None:
     return None if np.isinf(column).any() else column
 
 
+class _Lines(Sequence):
+    """The file line of each row (a list, or a range for a file without comment rows: no
+    million-int list); equal to a list of the same lines."""
+
+    def __init__(self, lines: Sequence[int]) -> None:
+        self._lines = lines
+
+    def __len__(self) -> int:
+        return len(self._lines)
+
+    def __iter__(self):
+        return iter(self._lines)
+
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        return np.asarray(self._lines, dtype=dtype)
+
+    def __getitem__(self, r):
+        found = self._lines[r]
+        return list(found) if isinstance(r, slice) else found
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Sequence) and list(self._lines) == list(other)
+
+    def __repr__(self) -> str:
+        return repr(list(self._lines))
+
+
+class _Cells:
+    """The data rows of a simple CSV (ASCII, no quotes) as one byte buffer and the offsets of its
+    separators: every row has ``width`` fields, field j of the buffer (row-major) spans
+    ``data[bounds[j] + 1 : bounds[j + 1]]``. Columns are cut on demand, rows in chunks."""
+
+    def __init__(self, data: bytes, width: int) -> None:
+        self.data = data
+        self.width = width
+        buf = np.frombuffer(data, dtype=np.uint8)
+        seps = np.flatnonzero((buf == 44) | (buf == 10))
+        self.bounds = np.concatenate([[-1], seps, [len(data)]]).astype(
+            np.int32 if len(data) < 2**31 - 1 else np.int64
+        )
+
+    def rows_ok(self) -> bool:
+        """Whether every line has ``width`` fields and starts like a data row."""
+        buf = np.frombuffer(self.data, dtype=np.uint8)
+        ends = self.bounds[self.width :: self.width]
+        if len(self.bounds) - 1 != len(ends) * self.width or not (buf[ends[:-1]] == 10).all():
+            return False
+        starts = self.bounds[: -1 : self.width] + 1
+        return not _ODD_START[buf[np.minimum(starts, len(buf) - 1)]].any() and bool(
+            (ends > starts).all()
+        )
+
+    def __len__(self) -> int:
+        return (len(self.bounds) - 1) // self.width
+
+    def _span(self, i: int, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
+        """Start and end offsets of column i's cells in rows lo..hi-1."""
+        j = np.arange(lo, hi) * self.width + i
+        return self.bounds[j] + 1, self.bounds[j + 1]
+
+    def _bytes(self, i: int, lo: int, hi: int) -> np.ndarray:
+        """Column i of rows lo..hi-1 as a fixed-width bytes array (padded with NUL)."""
+        start, end = self._span(i, lo, hi)
+        length = end - start
+        w = max(int(length.max(initial=0)), 1)
+        at = start[:, None] + np.arange(w)
+        cut = np.frombuffer(self.data, dtype=np.uint8)[np.minimum(at, len(self.data) - 1)]
+        cut[at >= end[:, None]] = 0
+        return cut.view(f"S{w}").reshape(-1)
+
+    def text(self, i: int) -> list[str]:
+        if not len(self):
+            return []
+        chunks = range(0, len(self), _CHUNK)
+        cut = np.concatenate([self._bytes(i, lo, min(lo + _CHUNK, len(self))) for lo in chunks])
+        return b"\n".join(cut.tolist()).decode("ascii").split("\n")
+
+    def rows(self) -> list[list[str]]:
+        return [line.split(",") for line in self.data.decode("ascii").split("\n")]
+
+    def floats(self, i: int, allow_empty: bool) -> np.ndarray | None:
+        """Column i as floats when every cell is an ASCII decimal (``parse_number``; empty: NaN
+        with ``allow_empty``); None when any is not (the caller then locates it)."""
+        out = np.empty(len(self))
+        for lo in range(0, len(self), _CHUNK):
+            hi = min(lo + _CHUNK, len(self))
+            cells = self._bytes(i, lo, hi)
+            raw = cells.view(np.uint8).reshape(hi - lo, -1)
+            if not (_NUMBER_BYTE[raw] | (raw == 0)).all():
+                return None  # 1_000, nan, inf: the cell-by-cell path decides
+            empty = (_BLANK_BYTE[raw] | (raw == 0)).all(axis=1)
+            if empty.any():
+                if not allow_empty:
+                    return None
+                out[lo:hi][empty] = np.nan
+                cells, raw = cells[~empty], raw[~empty]
+            values, done = _plain_decimals(raw)
+            try:
+                values[~done] = cells[~done].astype(float)  # exponents, blanks, long mantissas
+            except ValueError:
+                return None
+            if np.isinf(values).any():
+                return None
+            out[lo:hi][~empty] = values
+        return out
+
+
+_POW10 = 10.0 ** np.arange(16)  # exact in float64
+
+
+def _plain_decimals(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Values (m,) of the cells ``raw`` (m, w) bytes, NUL-padded, that are plain decimals (an
+    optional sign, at most 15 digits, at most one point, nothing else), and which cells those
+    are (m,) bool; the other values are undefined. Exact: the digits as an integer m < 2**53
+    divided by 10**k (both exact in float64) is the correctly rounded quotient, which is what
+    ``float`` gives for the literal. Cells of one layout (length, point position, sign) are
+    done together, digit column by digit column."""
+    signed = (raw[:, 0] == 45) | (raw[:, 0] == 43)
+    length = (raw != 0).sum(axis=1)
+    point = raw == 46
+    at = np.where(point.any(axis=1), point.argmax(axis=1), length)
+    key = (length.astype(np.int64) << 16) | (at.astype(np.int64) << 1) | signed
+    values = np.empty(len(raw))
+    done = np.zeros(len(raw), dtype=bool)
+    for k in np.unique(key).tolist():
+        size, p, sign = k >> 16, (k >> 1) & 0x7FFF, k & 1
+        digits = [c for c in range(sign, size) if c != p]
+        if not digits or len(digits) > 15:
+            continue
+        rows = np.flatnonzero(key == k)
+        sub = raw[rows]
+        mantissa = np.zeros(len(rows))
+        ok = np.ones(len(rows), dtype=bool)
+        for e, c in enumerate(reversed(digits)):
+            digit = sub[:, c] - np.uint8(48)
+            ok &= digit < 10
+            mantissa += digit * _POW10[e]
+        value = mantissa / _POW10[max(size - 1 - p, 0)]
+        if sign:
+            value = np.where(sub[:, 0] == 45, -value, value)
+        values[rows[ok]] = value[ok]
+        done[rows[ok]] = True
+    return values, done
+
+
+def _parse_simple(text: str, path: str) -> Table | None:
+    """The common file read fast: ASCII, no quotes, no NUL, lines ending in LF or CRLF, one
+    header and then rows that each have as many fields (no blank or comment lines among them).
+    None for anything else: ``parse_table``'s csv reader then reads (or refuses) it."""
+    if not text.isascii() or '"' in text or "\x00" in text:
+        return None
+    if "\r" in text:
+        if text.count("\r") != text.count("\r\n"):
+            return None
+        text = text.replace("\r\n", "\n")
+    pos, line = 0, 0
+    while True:  # comment and blank lines before the header
+        end = text.find("\n", pos)
+        first = text[pos:] if end < 0 else text[pos:end]
+        line += 1
+        if first.replace(",", "").strip() and first.lstrip()[:1] != "#":
+            break
+        if end < 0:
+            return None
+        pos = end + 1
+    header = [cell.strip() for cell in first.split(",")]
+    _check_header(header, path, line)
+    body = "" if end < 0 else text[end + 1 :].rstrip("\n")
+    if not body:
+        return Table(path, header, [], [])
+    cells = _Cells(body.encode("ascii"), len(header))
+    if not cells.rows_ok():
+        return None
+    return Table(path, header, None, range(line + 1, line + 1 + len(cells)), cells)
+
+
 def read_table(path: str | os.PathLike[str]) -> Table:
     """Read a CSV file into a Table; InputError for unreadable, empty, ragged or non-UTF-8 files,
     and for anything the guarded reader refuses (``kinematics.inputfile``)."""
@@ -174,6 +395,12 @@ def read_table(path: str | os.PathLike[str]) -> Table:
 
 def parse_table(text: str, path: str = "<string>") -> Table:
     """Parse CSV text (see module docstring); ``path`` is used in error messages only."""
+    simple = _parse_simple(text, path)
+    return simple if simple is not None else _parse_csv(text, path)
+
+
+def _parse_csv(text: str, path: str) -> Table:
+    """Any file of the module docstring's format, through the csv module."""
     # Lines end only at CR, LF or CRLF: VT, FF, NEL and U+2028 inside a field are data.
     reader = csv.reader(io.StringIO(text, newline=""), strict=True)
     header: list[str] | None = None

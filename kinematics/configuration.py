@@ -76,7 +76,9 @@ class Configuration:
     def from_kuka(cls, status: np.ndarray, turn: np.ndarray) -> Configuration:
         """The configuration of KUKA Status and Turn integers (same shape)."""
         status, turn = np.asarray(status, dtype=int), np.asarray(turn, dtype=int)
-        negative = ((turn[..., None] >> np.arange(6)) & 1).astype(bool)
+        negative = np.empty((*turn.shape, 6), dtype=bool)  # bit i of Turn, axis by axis
+        for i in range(6):
+            negative[..., i] = (turn >> i) & 1 == 1
         return cls(status & 1 == 1, status & 2 == 2, status & 4 == 4, negative)
 
     def to_kuka(self) -> tuple[np.ndarray, np.ndarray]:
@@ -109,7 +111,10 @@ def kuka_status(shoulder: np.ndarray, elbow: np.ndarray, wrist: np.ndarray) -> n
 def kuka_turn(negative: np.ndarray) -> np.ndarray:
     """KUKA Turn (...) from per-axis negative flags (..., 6): bit i set when A(i+1) < 0."""
     negative = np.asarray(negative)
-    return (negative.astype(int) << np.arange(negative.shape[-1])).sum(axis=-1)
+    turn = np.zeros(negative.shape[:-1], dtype=int)
+    for i in range(negative.shape[-1]):  # axis by axis: no (..., 6) integer temporaries
+        turn |= negative[..., i].astype(int) << i
+    return turn
 
 
 def status_turn(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -134,6 +139,18 @@ def _arm_bits(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> tuple[np.ndarra
     return x_a1 < 0, q[:, 2] >= robot.phi_rad, q[:, 4] < 0
 
 
+def _arm_status(robot: Robot, th1: np.ndarray, th3: np.ndarray, wrist: np.ndarray) -> np.ndarray:
+    """KUKA Status bits 0 and 1 (N, K) of K arm solutions per pose: DH angles th1, th3 (N, K)
+    rad, wrist points (N, 3) mm. The numbers of ``_status`` on the arm's joint vectors (A1 and
+    A3 wrapped as ``wrap(axis_angles)`` does), without the other four axes."""
+    dh = robot.dh
+    a1 = closed.wrap((th1 - dh.theta_offset[0]) * dh.sign[0])
+    a3 = closed.wrap((th3 - dh.theta_offset[2]) * dh.sign[2])
+    dh_a1 = dh.sign[0] * a1 + dh.theta_offset[0]
+    x_a1 = wrist[:, None, 0] * np.cos(dh_a1) + wrist[:, None, 1] * np.sin(dh_a1)
+    return kuka_status(x_a1 < 0, a3 >= robot.phi_rad, False)
+
+
 def _status(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> np.ndarray:
     """KUKA Status (N,) of joint vectors q (N, 6) rad whose wrist point is ``wrist`` (N, 3) mm."""
     return kuka_status(*_arm_bits(robot, q, wrist))
@@ -155,11 +172,7 @@ def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, 
     candidates, so the pick is the same as over all 8 in candidate order."""
     n, dh = len(flange), robot.dh
     th1, th2, th3, reach = closed.arm_solutions(dh, flange)
-    arm = np.zeros((n, 4, 6))
-    arm[:, :, 0] = np.repeat(th1, 2, axis=1)
-    arm[:, :, 2] = th3.reshape(n, 4)
-    arm_q = closed.wrap(dh.axis_angles(arm)).reshape(-1, 6)
-    bits = _status(robot, arm_q, np.repeat(wrist, 4, axis=0)).reshape(n, 4) & 3
+    bits = _arm_status(robot, np.repeat(th1, 2, axis=1), th3.reshape(n, 4), wrist)
     want = 2 if status is None else np.broadcast_to(np.asarray(status, dtype=int), (n,))
     fits = reach.reshape(n, 4) & (bits == np.bitwise_and(want, 3)[..., None])
     one = fits.sum(axis=1) == 1

@@ -53,9 +53,16 @@ class DHTable:
 
 def link_matrices(theta: np.ndarray, d: float, a: float, alpha: float) -> np.ndarray:
     """Seed Eq. 2 for one row over N angles: theta (N,) rad -> A_i (N, 4, 4)."""
+    out = np.zeros((len(theta), 4, 4))
+    out[:, 3, 3] = 1.0
+    return _fill_link(out, theta, d, a, alpha)
+
+
+def _fill_link(out: np.ndarray, theta: np.ndarray, d: float, a: float, alpha: float) -> np.ndarray:
+    """Write seed Eq. 2 into ``out`` (N, 4, 4), whose entries (2, 0) and row 3 are already
+    0, 0, 0, 0, 1; returns ``out``."""
     ct, st = np.cos(theta), np.sin(theta)
     ca, sa = np.cos(alpha), np.sin(alpha)
-    out = np.zeros((len(theta), 4, 4))
     out[:, 0, 0] = ct
     out[:, 0, 1] = -st * ca
     out[:, 0, 2] = st * sa
@@ -67,7 +74,6 @@ def link_matrices(theta: np.ndarray, d: float, a: float, alpha: float) -> np.nda
     out[:, 2, 1] = sa
     out[:, 2, 2] = ca
     out[:, 2, 3] = d
-    out[:, 3, 3] = 1.0
     return out
 
 
@@ -87,13 +93,17 @@ def chain(table: DHTable, q: np.ndarray, links: int | None = None) -> list[np.nd
 def flange_poses(table: DHTable, q: np.ndarray) -> np.ndarray:
     """Flange poses base_T_flange (N, 4, 4) mm for joint vectors q (N, n) rad.
 
-    Like ``chain(table, q)[-1]`` without keeping the n - 1 intermediate (N, 4, 4) frames."""
+    Like ``chain(table, q)[-1]`` without keeping the n - 1 intermediate (N, 4, 4) frames: three
+    (N, 4, 4) buffers in all, the link matrices written in place and the products alternating
+    between two (the same numbers as ``chain``)."""
     theta = table.theta(np.atleast_2d(q))
     pose = link_matrices(theta[:, 0], table.d[0], table.a[0], table.alpha[0])
+    link, spare = np.zeros_like(pose), np.empty_like(pose)
+    link[:, 3, 3] = 1.0
     for i in range(1, table.n):
-        np.matmul(
-            pose, link_matrices(theta[:, i], table.d[i], table.a[i], table.alpha[i]), out=pose
-        )
+        _fill_link(link, theta[:, i], table.d[i], table.a[i], table.alpha[i])
+        np.matmul(pose, link, out=spare)
+        pose, spare = spare, pose
     return pose
 
 

@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from program_helpers import CELL, POINTS, ROOT, cell, cell_with, grid, panel_points, robot
 
 from accugrid.codegen.cli import main
+from accugrid.codegen.gcode import emit
 from accugrid.codegen.gcode.emit import render_gcode
 from accugrid.codegen.gcode.parse import parse_gcode
 from accugrid.codegen.points import parse_points
@@ -180,6 +181,23 @@ def test_user_template_looping_per_hole_gives_the_same_bytes(tmp_path, change, i
     assert "hole_lines" not in LOOPING.read_text()
     looped = render_gcode(program, ["h1", "h2"], tmp_path)
     assert looped == render_gcode(program, ["h1", "h2"])
+
+
+def test_hole_lines_in_blocks_are_the_hole_lines_whole(tmp_path, monkeypatch):
+    """Blocks of 7 holes, the lines printed twice, or measured by a user template: the same text
+    as one block (the block-by-block writer only streams what it can)."""
+    program = program_for(ROWS)
+    whole = render_gcode(program, ["h"])
+    builtin = (ROOT / "templates" / "gcode" / "program.ngc.j2").read_text()
+    monkeypatch.setattr(emit, "BLOCK", 7)
+    assert "".join(emit.gcode_text(program, ["h"])) == whole
+    twice = builtin.replace("{{ hole_lines -}}", "{{ hole_lines -}}\n{{ hole_lines -}}")
+    (tmp_path / "program.ngc.j2").write_text(twice)
+    head, _, tail = whole.partition("M5\n")
+    lines = head.split("G17 G21 G90 G94\n")[1].split("\n", 1)[1]
+    assert render_gcode(program, ["h"], tmp_path) == head + lines + "M5\n" + tail
+    (tmp_path / "program.ngc.j2").write_text(builtin.replace("hole_lines -", "hole_lines|length -"))
+    assert f"{len(lines)}M5" in render_gcode(program, ["h"], tmp_path)
 
 
 def run_cli(*args):

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from program_helpers import CELL, POINTS, ROOT, cell, cell_with, grid, panel_points, robot
 
 from accugrid.codegen.cli import main
-from accugrid.codegen.krl.emit import render_krl
+from accugrid.codegen.krl.emit import MeasureSettings, module_names, render_krl, render_measurement
 from accugrid.codegen.krl.parse import parse_krl
 from accugrid.codegen.program import build_program
 from accugrid.kinematics.errors import InputError
@@ -295,3 +295,64 @@ def test_command_allow_config_change(tmp_path, capsys):
     assert "hole 'WP-R1-001'" in err and "with Status 0" in err
     assert main([*args, "--allow-config-change"]) == 0
     assert "warning: 72 hole(s) take another Status than 0" in capsys.readouterr().err
+
+
+def test_a_million_hole_job_numbers_its_modules_past_999():
+    """The example cell (5,000 lines per file) splits 1e6 holes into more than 999 modules:
+    numbered with four digits, valid KRL names, all called from the main program."""
+    header = ["h"] * 6
+    names = module_names(cell(), 1_000_000, header)
+    assert len(names) > 999 and names[0] == "WING_PANEL_0001"
+    assert names[-1] == f"WING_PANEL_{len(names):04d}"
+    assert all(len(n) <= 24 and NAME_RE.match(n) for n in names)
+    assert module_names(cell(), 100_000, header)[:2] == ["WING_PANEL_001", "WING_PANEL_002"]
+
+
+@pytest.mark.parametrize(
+    ("name", "holes", "lines", "message"),
+    [
+        ("ABCDEFGHIJKLMNOPQRST", 1_000_000, 5000, "longer than 24 characters"),
+        ("WING_PANEL", 10**8, 5000, "the main program calling them would have"),
+    ],
+)
+def test_modules_that_cannot_be_named_or_called_are_refused(name, holes, lines, message):
+    c = dataclasses.replace(cell(), program_name=name, lines_per_file=lines)
+    with pytest.raises(InputError, match=message):
+        module_names(c, holes, ["h"])
+
+
+def test_a_job_the_modules_cannot_hold_is_refused_before_the_correction(tmp_path, capsys):
+    """200 holes far outside the grid in a cell of 50 lines per file: the module layout is
+    refused (before the correction and IK, which would refuse the holes)."""
+    text = CELL.read_text().replace("lines_per_file: 5000", "lines_per_file: 50")
+    (tmp_path / "cell.yaml").write_text(text)
+    (tmp_path / "grid_200mm.csv").write_bytes((CELL.parent / "grid_200mm.csv").read_bytes())
+    rows = "".join(f"H{i},{i},9000,0,0,0,-1\n" for i in range(200))
+    (tmp_path / "p.csv").write_text("id,x,y,z,i,j,k\n" + rows)
+    out = tmp_path / "o"
+    argv = ["krl", str(tmp_path / "p.csv"), "--cell", str(tmp_path / "cell.yaml"), "-o", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "the main program calling them would have" in err and "outside" not in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "settings_",
+    [
+        MeasureSettings(tool=1, base=0, ptp_percent=30, vel_cp=0.2, wait_sec=1.5, wait_input=None),
+        MeasureSettings(1, 2, 50, 0.25, 0.0, 7, ptp_only=True),
+    ],
+)
+def test_measurement_lines_are_what_the_looping_templates_made(tmp_path, settings_):
+    """The measurement program's per-row lines come formatted from Python; a user template that
+    loops over `moves` and `points` (the former built-in ones) gives the same bytes."""
+    rng = np.random.default_rng(3)
+    points = np.round(rng.uniform([1500, -200, 1300], [1900, 200, 1700], (40, 3)), 2)
+    points[20:] = points[:20]  # repeated poses share one E6POS
+    ids = [f"P{i}" for i in range(20)] + ["x;(y)%"] * 20
+    status, turn = np.full(40, 6), rng.integers(0, 64, 40)
+    looping = LOOPING
+    args = (points, [0.0, 90.0, 0.0], ids, status, turn, "measure_it", ["h1"], settings_)
+    assert "moves" in (looping / "measure.src.j2").read_text()
+    assert render_measurement(*args, looping) == render_measurement(*args)

@@ -17,7 +17,7 @@ import argparse
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.gcode.emit import render_gcode
+from accugrid.codegen.gcode.emit import gcode_text
 from accugrid.codegen.job import add_job_arguments, prepare, summary
 
 __all__ = ["NAME", "add_arguments", "run"]
@@ -34,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     check_targets([out], [args.points, args.cell] + ([args.grid] if args.grid else []), args.force)
     job = prepare(args, NAME)
-    text = render_gcode(job.program, job.header, args.templates)
+    text = gcode_text(job.program, job.header, args.templates)
     written = write_files({out: text}, job.inputs, args.force)
     print(summary(job, written))
     return 0

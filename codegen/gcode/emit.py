@@ -20,16 +20,18 @@ only if the template refers to them).
 
 from __future__ import annotations
 
+import re
+from collections.abc import Iterator
 from typing import NamedTuple
 
 import numpy as np
 
 from accugrid.codegen.cell import Cell
 from accugrid.codegen.program import Program
-from accugrid.codegen.render import environment, fixed_texts, render, template_dir, template_uses
-from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.codegen.render import environment, render, template_dir, template_uses
+from accugrid.codegen.textsafe import comment_texts, fixed, fixed_texts
 
-__all__ = ["GcodeHole", "canned", "render_gcode"]
+__all__ = ["BLOCK", "GcodeHole", "canned", "gcode_text", "render_gcode"]
 
 
 class GcodeHole(NamedTuple):
@@ -57,9 +59,63 @@ def canned(text: np.ndarray, z: np.ndarray) -> np.ndarray:
 
 def render_gcode(program: Program, header: list[str], templates=None) -> str:
     """The ``.ngc`` text of the job."""
+    return "".join(gcode_text(program, header, templates))
+
+
+def gcode_text(program: Program, header: list[str], templates=None) -> Iterator[str]:
+    """The ``.ngc`` text of the job in pieces, for writing a million-hole job without holding it
+    whole: where the template prints ``hole_lines`` as it is (``{{ hole_lines }}``), the frame
+    is rendered (now: template errors are raised here, the templates noted as inputs) around a
+    marker, and the hole lines follow in blocks of ``BLOCK`` holes as the pieces are taken."""
     cell = program.cell
     env = environment(template_dir("gcode", templates))
-    pos, abc = program.in_frame(cell.gcode.robot_T_program)
+    uses = template_uses(env, "program.ngc.j2")
+    context = {
+        "header": header,
+        "decimals": cell.gcode.decimals,
+        "spindle_rpm": cell.gcode.spindle_rpm,
+        "approach_mm_min": cell.drilling.approach_mm_s * 60.0,
+        "dwell": cell.drilling.dwell_s,
+        "peck": cell.drilling.peck_mm,
+    }
+    if uses is None or "holes" in uses:  # a template that loops over the holes: all at once
+        blocks = [_block(program, lo, True) for lo in range(0, len(program), BLOCK)]
+        context["holes"] = [hole for records, _ in blocks for hole in records]
+        context["hole_lines"] = "".join(lines for _, lines in blocks)
+        return iter([render(env, "program.ngc.j2", **context)])
+    if "hole_lines" not in uses:
+        return iter([render(env, "program.ngc.j2", **context)])
+    source = env.loader.get_source(env, "program.ngc.j2")[0]
+    if len(_PRINTED.findall(source)) != source.count("hole_lines"):  # filtered, cut, measured
+        context["hole_lines"] = "".join(_hole_lines(program))
+        return iter([render(env, "program.ngc.j2", **context)])
+    frame = render(env, "program.ngc.j2", hole_lines=_MARKER, **context).split(_MARKER)
+    return _around(frame, program)
+
+
+def _around(frame: list[str], program: Program) -> Iterator[str]:
+    """The pieces of the frame with the hole lines between them."""
+    yield frame[0]
+    for piece in frame[1:]:
+        yield from _hole_lines(program)
+        yield piece
+
+
+BLOCK = 16384  # holes formatted at a time
+_MARKER = "\x00accugrid hole lines\x00"  # no text of a program holds a NUL
+_PRINTED = re.compile(r"\{\{-?\s*hole_lines\s*-?\}\}")
+
+
+def _hole_lines(program: Program) -> Iterator[str]:
+    for lo in range(0, len(program), BLOCK):
+        yield _block(program, lo, False)[1]
+
+
+def _block(program: Program, lo: int, records: bool) -> tuple[list[GcodeHole], str]:
+    """Holes lo..lo+BLOCK-1: their ``GcodeHole`` records (when ``records``) and lines."""
+    cell = program.cell
+    hi = min(lo + BLOCK, len(program))
+    pos, abc = program.in_frame(cell.gcode.robot_T_program, lo, hi)
     d = cell.gcode.decimals
     # RET is usually the APP position (same distance): format it once
     same_ret = (pos[:, 3] == pos[:, 0]).all(axis=1)
@@ -69,14 +125,13 @@ def render_gcode(program: Program, header: list[str], templates=None) -> str:
     text[~same_ret, 3] = fixed_texts(pos[~same_ret, 3], d)
     cycle = canned(text, pos[:, :, 2]) if cell.gcode.canned_cycles else np.zeros(len(pos), bool)
     retract_move = text[:, 3, 2] != text[:, 0, 2]
-    labels = program.labels()
+    labels = program.labels(lo, hi)
     abc_text = fixed_texts(abc, d, distinct=True)
-    feed = fixed_texts(program.feed_mm_s * 60.0, 1, distinct=True)
-    uses = template_uses(env, "program.ngc.j2")
-    holes: dict[str, object] = {}
-    if uses is None or "holes" in uses:
+    feed = fixed_texts(program.feed_mm_s[lo:hi] * 60.0, 1, distinct=True)
+    holes = []
+    if records:
         coords = [list(map(tuple, hole)) for hole in text.tolist()]
-        holes["holes"] = list(
+        holes = list(
             map(
                 GcodeHole,
                 labels,
@@ -87,33 +142,21 @@ def render_gcode(program: Program, header: list[str], templates=None) -> str:
                 retract_move.tolist(),
             )
         )
-    if uses is None or "hole_lines" in uses:
-        table = np.empty((len(pos), 17), dtype=object)
-        table[:, 0] = [comment_text(f"hole {label}") for label in labels]
-        table[:, 1:4] = text[:, 0]
-        table[:, 4:7] = abc_text
-        table[:, 7:16] = text[:, 1:].reshape(-1, 9)
-        table[:, 16] = feed
-        lines = np.empty(len(pos), dtype=object)
-        for mask, (template, columns) in zip(
-            (cycle & retract_move, cycle & ~retract_move, ~cycle),
-            _hole_templates(cell),
-            strict=True,
-        ):
-            rows = table[mask][:, columns].tolist()
-            lines[mask] = [template % tuple(row) for row in rows]
-        holes["hole_lines"] = "".join(lines.tolist())
-    return render(
-        env,
-        "program.ngc.j2",
-        header=header,
-        **holes,
-        decimals=cell.gcode.decimals,
-        spindle_rpm=cell.gcode.spindle_rpm,
-        approach_mm_min=cell.drilling.approach_mm_s * 60.0,
-        dwell=cell.drilling.dwell_s,
-        peck=cell.drilling.peck_mm,
-    )
+    table = np.empty((len(pos), 17), dtype=object)
+    table[:, 0] = comment_texts(labels, prefix="hole ")
+    table[:, 1:4] = text[:, 0]
+    table[:, 4:7] = abc_text
+    table[:, 7:16] = text[:, 1:].reshape(-1, 9)
+    table[:, 16] = feed
+    lines = np.empty(len(pos), dtype=object)
+    for mask, (template, columns) in zip(
+        (cycle & retract_move, cycle & ~retract_move, ~cycle),
+        _hole_templates(cell),
+        strict=True,
+    ):
+        rows = table[mask][:, columns].tolist()
+        lines[mask] = [template % tuple(row) for row in rows]
+    return holes, "".join(lines.tolist())
 
 
 def _hole_templates(cell: Cell) -> list[tuple[str, list[int]]]:

@@ -5,8 +5,9 @@ Templates ``program.src.j2`` and ``program.dat.j2`` (``templates/krl/``), render
 ends as the controller's own files have. Position names are ``XH<n>_APP|CLR|BOT|RET`` (n = hole
 number in the file, so always valid and unique, at most 24 characters); the hole id goes into a
 comment. Numbers go through ``fixed`` only: per-hole numbers are formatted once in Python (mm and
-deg with ``program.decimals``, $VEL.CP in m/s with 4 decimals, S and T as integers) and reach the
-template as text; the template formats its scalar settings with the ``fixed`` filter. Jinja renders
+deg with ``program.decimals``, $VEL.CP in m/s with 4 decimals, S and T as integers; positions by
+the %-template itself from ``fixed_ready`` values, the same text) and reach the template as text;
+the template formats its scalar settings with the ``fixed`` filter. Jinja renders
 the frame of each file; the per-hole lines come finished from one %-template per hole or position
 (``hole_lines``, ``position_lines``), while the records ``holes`` and ``positions`` stay available
 to a user template that loops over them (each is built only if the template refers to it).
@@ -16,32 +17,54 @@ the holes go into numbered modules ``NAME_001``, ``NAME_002``, ... (each its own
 pair with local declarations, like any module the KR C4 loads) and ``NAME.src`` becomes the main
 program: INI, base, tool, speeds and the spindle, then one call per module. A module is a global
 subprogram on the KR C4, so the main program calls it by name without a declaration. The holes
-per module follow from the rendered lines per hole of the template in use.
+per module follow from the rendered lines per hole of the template in use. Past 999 modules (a
+million holes at 5,000 lines per file) they are numbered with as many digits as needed, as long
+as the name stays a KRL name (at most 24 characters); a job whose modules cannot be named, or
+whose main program cannot call them all within the line limit, is refused after reading the
+points and before correction and IK (``module_names``). Files are rendered pair by pair as they
+are written (``KrlFiles``). A KR C4 holds only a few MiB of programs in its memory at once, so
+a job of many modules is run a batch of modules at a time (copied in turn, or loaded on demand).
 """
 
 from __future__ import annotations
 
+import os
+from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
+from accugrid.codegen.cell import Cell
+from accugrid.codegen.points import Points
 from accugrid.codegen.program import STAGES, Program
-from accugrid.codegen.render import environment, fixed_texts, render, template_dir, template_uses
-from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.codegen.render import environment, render, template_dir, template_uses
+from accugrid.codegen.textsafe import (
+    KRL_NAME_MAX,
+    comment_texts,
+    fixed,
+    fixed_format,
+    fixed_ready,
+    fixed_texts,
+)
+from accugrid.compensation.csvtable import Table
+from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
 
 __all__ = [
-    "MAX_PARTS",
+    "MODULE_DIGITS",
+    "KrlFiles",
     "KrlHole",
     "KrlPosition",
     "MeasureMove",
     "MeasureSettings",
+    "module_names",
     "render_krl",
     "render_measurement",
 ]
 
-MAX_PARTS = 999  # NAME_001..NAME_999 keeps names <= 24 characters with a 20-character NAME
+MODULE_DIGITS = 3  # NAME_001..NAME_999; a job of more modules numbers them with more digits
 
 
 class KrlHole(NamedTuple):
@@ -118,13 +141,27 @@ def render_measurement(
     rank = np.empty(len(unique), dtype=int)
     rank[order] = np.arange(len(unique))
     rows = first_visit[order]
-    names = [f"XMP{k + 1}" for k in range(len(unique))]
-    pose = fixed_texts(np.column_stack([points[rows], abc[rows]]), 3)
-    st = fixed_texts(np.stack([status[rows], turn[rows]], axis=1), 0)
-    positions = [KrlPosition(names[k], *pose[k], *st[k]) for k in range(len(rows))]
-    moves = [MeasureMove(names[rank[index[r]]], ids[r]) for r in range(len(points))]
+    names = np.array([f"XMP{k + 1}" for k in range(len(unique))], dtype=object)
+    table = np.empty((len(rows), 9), dtype=object)  # KrlPosition fields
+    table[:, 0] = names
+    table[:, 1:7] = fixed_texts(np.column_stack([points[rows], abc[rows]]), 3)
+    table[:, 7:9] = fixed_texts(np.stack([status[rows], turn[rows]], axis=1), 0)
+    targets = names[rank[index]].tolist()  # the E6POS of every row
     env = environment(template_dir("krl", templates), newline="\r\n")
-    context = {
+    src_uses = template_uses(env, "measure.src.j2")
+    dat_uses = template_uses(env, "measure.dat.j2")
+    uses = None if src_uses is None or dat_uses is None else src_uses | dat_uses
+    context: dict[str, object] = {}
+    if uses is None or "points" in uses:
+        context["points"] = list(map(KrlPosition._make, table.tolist()))
+    if uses is None or "moves" in uses:
+        context["moves"] = list(map(MeasureMove, targets, ids))
+    if uses is None or "point_lines" in uses:
+        line = "DECL E6POS %s={X %s,Y %s,Z %s,A %s,B %s,C %s,S %s,T %s" + _ZERO_E + "}\r\n"
+        context["point_lines"] = (line * len(table)) % tuple(table.ravel().tolist())
+    if uses is None or "move_lines" in uses:
+        context["move_lines"] = _move_lines(targets, ids, settings)
+    context |= {
         "name": name,
         "header": header,
         "tool": settings.tool,
@@ -133,19 +170,114 @@ def render_measurement(
         "vel_cp": settings.vel_cp,
         "wait_sec": settings.wait_sec,
         "wait_input": settings.wait_input,
-        "moves": moves,
-        "points": positions,
         "ptp_only": settings.ptp_only,
     }
     return render(env, "measure.src.j2", **context), render(env, "measure.dat.j2", **context)
 
 
-def render_krl(program: Program, header: list[str], templates=None) -> dict[str, str]:
-    """File name -> text for the job (``NAME.src``, ``NAME.dat`` and any ``NAME_nnn`` pairs)."""
-    env = environment(template_dir("krl", templates), newline="\r\n")
+_ZERO_E = ",E1 0.000,E2 0.000,E3 0.000,E4 0.000,E5 0.000,E6 0.000"  # no external axes
+
+
+def _move_lines(targets: list[str], ids: list[str], settings: MeasureSettings) -> str:
+    """The .src lines of every row of a measurement program: PTP to the first (every one with
+    ``ptp_only``), LIN to the others, each with the row id as a comment, then the wait."""
+    if settings.wait_input is not None:
+        wait = f"WAIT FOR $IN[{fixed(settings.wait_input, 0)}] ; tracker done\r\n"
+    else:
+        wait = f"WAIT SEC {fixed(settings.wait_sec, 3)} ; tracker measures\r\n"
+    motion = np.full(len(targets), "PTP" if settings.ptp_only else "LIN", dtype=object)
+    motion[:1] = "PTP"
+    table = np.empty((len(targets), 3), dtype=object)
+    table[:, 0], table[:, 1], table[:, 2] = motion, targets, comment_texts(list(map(str, ids)))
+    return (("%s %s ; %s\r\n" + _literal(wait)) * len(targets)) % tuple(table.ravel().tolist())
+
+
+def render_krl(program: Program, header: list[str], templates=None) -> KrlFiles:
+    """File name -> text for the job (``NAME.src``, ``NAME.dat`` and any ``NAME_nnn`` pairs), as
+    a mapping that renders each file pair when it is asked for (see ``KrlFiles``)."""
     cell = program.cell
-    pos, abc = program.in_frame(cell.robot_T_base)
-    records = _Records(program, pos, abc)
+    files = _file_renderer(cell, header, _Records(program), templates)
+    return KrlFiles(files, *_modules(files, cell, len(program)), len(program), cell)
+
+
+def module_names(cell: Cell, holes: int, header: list[str], templates=None) -> list[str]:
+    """The modules a job of ``holes`` holes is split into (``NAME_001``, ...; [] for one file
+    pair), known before any correction or IK: InputError (naming the cell file) when they cannot
+    be named or called within ``program.lines_per_file``, so such a job is refused before the
+    heavy work. ``header``: a header with as many lines as the job's will have. The lines per
+    hole come from rendering a 1- and a 2-hole placeholder program with the same templates."""
+    records = _Records(_placeholder(cell))
+    return _modules(_file_renderer(cell, header, records, templates), cell, holes)[0]
+
+
+class KrlFiles(Mapping):
+    """The files of a KRL job by name, modules first (``NAME_001.src``, ``NAME_001.dat``, ...),
+    then the main program (``NAME.src``, ``NAME.dat``). A file pair is rendered when one of its
+    files is asked for and only the last pair is kept, so that writing a million-hole job in
+    order holds one module's text at a time; each file is checked against
+    ``program.lines_per_file`` as it is rendered."""
+
+    def __init__(self, files, modules: list[str], per_part: int, holes: int, cell: Cell) -> None:
+        self._files, self._modules, self._holes, self._cell = files, modules, holes, cell
+        self._per_part = per_part
+        name = cell.krl.name
+        self._pairs = [*modules, name] if modules else [name]
+        self._index = {
+            f"{m}{ext}": k for k, m in enumerate(self._pairs) for ext in (".src", ".dat")
+        }
+        self._last: tuple[int, dict[str, str]] | None = None
+
+    def __iter__(self):
+        return iter(self._index)
+
+    def __len__(self) -> int:
+        return len(self._index)
+
+    def __getitem__(self, file: str) -> str:
+        k = self._index[file]
+        if self._last is None or self._last[0] != k:
+            self._last = (k, self._render(k))
+        return self._last[1][file]
+
+    def at(self, folder: Path) -> Mapping:
+        """The same files keyed by their path in ``folder``, still rendered as asked for."""
+        files = self
+
+        class InFolder(Mapping):
+            def __iter__(self):
+                return (folder / name for name in files)
+
+            def __len__(self) -> int:
+                return len(files)
+
+            def __getitem__(self, path: Path) -> str:
+                return files[Path(path).relative_to(folder).as_posix()]
+
+        return InFolder()
+
+    def _render(self, k: int) -> dict[str, str]:
+        name, modules, per = self._pairs[k], self._modules, self._per_part
+        if not modules:
+            pair = self._files(name, "single", 0, self._holes)
+        elif k < len(modules):
+            pair = self._files(name, "part", k * per, min(self._holes, (k + 1) * per))
+        else:
+            pair = self._files(name, "main", 0, 0, modules)
+        out = dict(zip((f"{name}.src", f"{name}.dat"), pair, strict=True))
+        limit = self._cell.krl.lines_per_file
+        for file, text in out.items():
+            if _lines(text) > limit:
+                raise InputError(
+                    f"{file} would have {_lines(text)} lines, more than program.lines_per_file "
+                    f"({limit}); the main program's calls or a template's lines do not fit",
+                    self._cell.path,
+                )
+        return out
+
+
+def _file_renderer(cell: Cell, header: list[str], records: _Records, templates):
+    """files(name, role, lo, hi, calls=()) -> (.src, .dat) text of holes lo..hi-1."""
+    env = environment(template_dir("krl", templates), newline="\r\n")
     common = {
         "header": header,
         "decimals": cell.krl.decimals,
@@ -162,7 +294,6 @@ def render_krl(program: Program, header: list[str], templates=None) -> dict[str,
         "dwell": cell.drilling.dwell_s,
         "ext": cell.krl.external_axes,
     }
-
     src_uses = template_uses(env, "program.src.j2")
     dat_uses = template_uses(env, "program.dat.j2")
 
@@ -181,33 +312,37 @@ def render_krl(program: Program, header: list[str], templates=None) -> dict[str,
         )
         return src, dat
 
-    name, limit, n = cell.krl.name, cell.krl.lines_per_file, len(program)
+    return files
+
+
+def _modules(files, cell: Cell, n: int) -> tuple[list[str], int]:
+    """Names of the modules a job of n holes is split into ([]: one file pair) and the holes per
+    module. Modules are
+    numbered NAME_001.. (more digits past 999 modules, as long as the name stays a KRL name of
+    at most 24 characters); InputError when they cannot be named or the main program cannot
+    call them all within the line limit."""
+    name, limit = cell.krl.name, cell.krl.lines_per_file
     if n < 2 or n <= _capacity(files, name, "single", limit):
-        out = dict(zip((f"{name}.src", f"{name}.dat"), files(name, "single", 0, n), strict=True))
-    else:
-        per_part = _capacity(files, f"{name}_001", "part", limit)
-        parts = -(-n // per_part)
-        if parts > MAX_PARTS:
-            raise InputError(
-                f"{n} holes need {parts} sub-programs of {per_part} holes, more than "
-                f"{MAX_PARTS}: raise program.lines_per_file",
-                cell.path,
-            )
-        out = {}
-        calls = [f"{name}_{k + 1:03d}" for k in range(parts)]
-        for k, part in enumerate(calls):
-            out[f"{part}.src"], out[f"{part}.dat"] = files(
-                part, "part", k * per_part, min(n, (k + 1) * per_part)
-            )
-        out[f"{name}.src"], out[f"{name}.dat"] = files(name, "main", 0, 0, calls)
-    for file, text in out.items():
-        if _lines(text) > limit:
-            raise InputError(
-                f"{file} would have {_lines(text)} lines, more than program.lines_per_file "
-                f"({limit}); the main program's calls or a template's lines do not fit",
-                cell.path,
-            )
-    return out
+        return [], n
+    per_part = _capacity(files, f"{name}_001", "part", limit)
+    parts = -(-n // per_part)
+    digits = max(MODULE_DIGITS, len(str(parts)))
+    if len(name) + 1 + digits > KRL_NAME_MAX:
+        raise InputError(
+            f"{n} holes need {parts} modules of {per_part} holes; their names "
+            f"{name}_{1:0{digits}d}.. would be longer than {KRL_NAME_MAX} characters: shorten "
+            "program.name or raise program.lines_per_file",
+            cell.path,
+        )
+    modules = [f"{name}_{k + 1:0{digits}d}" for k in range(parts)]
+    main = max(map(_lines, files(name, "main", 0, 0, modules)))
+    if main > limit:
+        raise InputError(
+            f"{n} holes need {parts} modules of {per_part} holes; the main program calling them "
+            f"would have {main} lines, more than program.lines_per_file ({limit}): raise it",
+            cell.path,
+        )
+    return modules, per_part
 
 
 def _capacity(files, name: str, role: str, limit: int) -> int:
@@ -224,14 +359,45 @@ def _capacity(files, name: str, role: str, limit: int) -> int:
     return int(per_part)
 
 
+def _placeholder(cell: Cell) -> Program:
+    """A 2-hole program of the cell with placeholder numbers, for counting rendered lines."""
+    zeros = np.zeros((2, 4, 3))
+    table = Table(os.fspath(cell.path), ["x", "y", "z"], [["0", "0", "0"]] * 2, [2, 3])
+    points = Points(
+        path=table.path,
+        table=table,
+        ids=["1", "2"],
+        xyz=zeros[:, 0],
+        abc=None,
+        axis=np.tile([0.0, 0.0, 1.0], (2, 1)),
+        diameter=np.full(2, np.nan),
+        depth=np.full(2, np.nan),
+        feed=np.full(2, np.nan),
+    )
+    return Program(
+        cell=cell,
+        points=points,
+        nominal=zeros,
+        positions=zeros,
+        rotations=np.tile(np.eye(3), (2, 1, 1)),
+        correction=zeros[:, 0],
+        feed_mm_s=np.full(2, cell.drilling.feed_mm_s),
+        depth_mm=np.full(2, cell.drilling.depth_mm),
+        configuration=Configuration.from_kuka(np.zeros((2, 4), int), np.zeros((2, 4), int)),
+        warnings=[],
+        corrected=False,
+    )
+
+
 class _Records:
     """Template records of a program, numbers formatted by ``fixed`` (mm and deg with the cell's
-    decimals, $VEL.CP m/s with 4, S and T as integers); angles, S, T and feeds, which repeat,
-    once per distinct value for the whole program. Per hole, either records (``holes``,
+    decimals, $VEL.CP m/s with 4, S and T as integers), made file by file (a million-hole job
+    never holds them all); angles, S, T and feeds, which repeat, once per distinct value in a
+    file. Per hole, either records (``holes``,
     ``positions``: for templates that loop over them) or the finished CRLF lines (``hole_lines``,
     ``position_lines``: what the built-in templates print), whichever the template uses."""
 
-    def __init__(self, program: Program, pos: np.ndarray, abc: np.ndarray) -> None:
+    def __init__(self, program: Program) -> None:
         self.program = program
         cell = program.cell
         self.decimals = cell.krl.decimals
@@ -239,22 +405,24 @@ class _Records:
             [0, 1, 2] if cell.drilling.retract_mm == cell.drilling.approach_mm else [0, 1, 2, 3]
         )
         self.names = [STAGES[k] for k in self.stages]
-        self.pos = pos[:, self.stages]
-        self.abc = fixed_texts(abc, self.decimals, distinct=True)
-        status, turn = program.configuration.to_kuka()
-        self.st = fixed_texts(
-            np.stack([status[:, self.stages], turn[:, self.stages]], axis=2),
-            0,
-            distinct=True,
+        status, turn = program.configuration.to_kuka()  # Status 0..7, Turn 0..63
+        self.status_turn = np.stack([status[:, self.stages], turn[:, self.stages]], axis=2).astype(
+            np.int16
         )
-        self.feed = fixed_texts(program.feed_mm_s / 1000.0, 4, distinct=True)
-        ext = "".join(
-            f",E{k + 1} {fixed(v, cell.krl.decimals)}" for k, v in enumerate(cell.krl.external_axes)
+        self._numbers_of: tuple = (None, None, ())
+        ext = _literal(
+            "".join(
+                f",E{k + 1} {fixed(v, cell.krl.decimals)}"
+                for k, v in enumerate(cell.krl.external_axes)
+            )
         )
-        self.position_line = (
-            "DECL E6POS %s={X %s,Y %s,Z %s,A %s,B %s,C %s,S %s,T %s" + _literal(ext) + "}\r\n"
+        mm = fixed_format(self.decimals)
+        self.position_block = "".join(
+            f"DECL E6POS XH%d_{s}={{X {mm},Y {mm},Z {mm},A %s,B %s,C %s,S %s,T %s{ext}}}\r\n"
+            for s in self.names
         )
-        self.hole_block = _hole_block(cell)
+        self.hole_block = _hole_block(cell, self.names)
+        self._named: tuple = (None, None, [])
 
     def context(self, lo: int, hi: int, uses: frozenset[str] | None) -> dict[str, object]:
         """Template variables of holes lo..hi-1 that ``uses`` names (None: all)."""
@@ -262,62 +430,72 @@ class _Records:
         if uses is not None:
             wanted &= uses
         out: dict[str, object] = {}
-        names = self._names(lo, hi)
-        if wanted & {"positions", "position_lines"}:
-            table = self._positions(lo, hi, names)
-            if "positions" in wanted:
-                out["positions"] = list(map(KrlPosition._make, table.tolist()))
-            if "position_lines" in wanted:
-                out["position_lines"] = (self.position_line * len(table)) % tuple(
-                    table.ravel().tolist()
-                )
-        if wanted & {"holes", "hole_lines"}:
-            table = self._holes(lo, hi, names)
-            if "holes" in wanted:
-                out["holes"] = list(map(KrlHole._make, table.tolist()))
-            if "hole_lines" in wanted:
-                fields = table[:, [0, 1, 2, 5, 3, 4]]  # in the order the lines print them
-                fields[:, 0] = list(map(comment_text, fields[:, 0].tolist()))
-                out["hole_lines"] = (self.hole_block * len(fields)) % tuple(fields.ravel().tolist())
+        n, k = hi - lo, len(self.stages)
+        pos, abc, st, feed = self._numbers(lo, hi)
+        number = np.arange(lo + 1, hi + 1, dtype=object)
+        if "positions" in wanted:
+            table = np.empty((n, k, 9), dtype=object)
+            for j, column in enumerate(self._names(lo, hi)):
+                table[:, j, 0] = column
+            table[:, :, 1:4] = fixed_texts(pos, self.decimals)
+            table[:, :, 4:7] = abc[:, None, :]
+            table[:, :, 7:9] = st
+            out["positions"] = list(map(KrlPosition._make, table.reshape(n * k, 9).tolist()))
+        if "position_lines" in wanted:
+            table = np.empty((n, k, 9), dtype=object)
+            table[:, :, 0] = number[:, None]
+            table[:, :, 1:4] = fixed_ready(pos, self.decimals)
+            table[:, :, 4:7] = abc[:, None, :]
+            table[:, :, 7:9] = st
+            out["position_lines"] = (self.position_block * n) % tuple(table.ravel().tolist())
+        labels = self.program.labels(lo, hi) if wanted & {"holes", "hole_lines"} else []
+        if "holes" in wanted:
+            names = self._names(lo, hi)
+            retract = names[3] if k == 4 else names[0]
+            out["holes"] = list(map(KrlHole, labels, *names[:3], retract, feed.tolist()))
+        if "hole_lines" in wanted:
+            table = np.empty((n, 6), dtype=object)  # in the order the lines print them
+            table[:, 0] = comment_texts(labels)
+            table[:, [1, 2, 4, 5]] = number[:, None]
+            table[:, 3] = feed
+            out["hole_lines"] = (self.hole_block * n) % tuple(table.ravel().tolist())
         return out
 
-    def _names(self, lo: int, hi: int) -> list[str]:
-        """Position names of holes lo..hi-1, hole by hole, stage by stage."""
-        return [f"XH{i}_{s}" for i in range(lo + 1, hi + 1) for s in self.names]
+    def _numbers(self, lo: int, hi: int) -> tuple[np.ndarray, ...]:
+        """Of holes lo..hi-1 (the .src and the .dat of a file in turn: made once): positions
+        (n, stages, 3) mm in the BASE frame, and as ``fixed`` text A,B,C (n, 3), S and T
+        (n, stages, 2), $VEL.CP of the feed in m/s (n,); repeating values formatted once."""
+        if self._numbers_of[:2] != (lo, hi):
+            program = self.program
+            pos, abc = program.in_frame(program.cell.robot_T_base, lo, hi)
+            numbers = (
+                pos[:, self.stages],
+                fixed_texts(abc, self.decimals, distinct=True),
+                fixed_texts(self.status_turn[lo:hi], 0, distinct=True),
+                fixed_texts(program.feed_mm_s[lo:hi] / 1000.0, 4, distinct=True),
+            )
+            self._numbers_of = (lo, hi, numbers)
+        return self._numbers_of[2]
 
-    def _positions(self, lo: int, hi: int, names: list[str]) -> np.ndarray:
-        """(n * stages, 9) object array of KrlPosition fields."""
-        n, k = hi - lo, len(self.stages)
-        table = np.empty((n, k, 9), dtype=object)
-        table[:, :, 0] = np.array(names, dtype=object).reshape(n, k)
-        table[:, :, 1:4] = fixed_texts(self.pos[lo:hi], self.decimals)
-        table[:, :, 4:7] = self.abc[lo:hi, None, :]
-        table[:, :, 7:9] = self.st[lo:hi]
-        return table.reshape(n * k, 9)
-
-    def _holes(self, lo: int, hi: int, names: list[str]) -> np.ndarray:
-        """(n, 6) object array of KrlHole fields (label as given, not yet a comment)."""
-        k = len(self.stages)
-        table = np.empty((hi - lo, 6), dtype=object)
-        table[:, 0] = self.program.labels(lo, hi)
-        table[:, 1] = names[0::k]
-        table[:, 2] = names[1::k]
-        table[:, 3] = names[2::k]
-        table[:, 4] = names[3::4] if k == 4 else names[0::3]
-        table[:, 5] = self.feed[lo:hi]
-        return table
+    def _names(self, lo: int, hi: int) -> list[list[str]]:
+        """Position names of holes lo..hi-1, one list per stage (made once for the .src and the
+        .dat of a file)."""
+        if self._named[:2] != (lo, hi):
+            numbers = range(lo + 1, hi + 1)
+            self._named = (lo, hi, [list(map(f"XH{{}}_{s}".format, numbers)) for s in self.names])
+        return self._named[2]
 
 
-def _hole_block(cell) -> str:
-    """The .src lines of one hole as a %-template over (comment label, app, clr, feed, bot, ret),
-    with the cell's settings filled in; CRLF line ends."""
+def _hole_block(cell, stages: list[str]) -> str:
+    """The .src lines of one hole as a %-template over (comment label, hole number, hole number,
+    feed, hole number, hole number), with the cell's settings filled in; CRLF line ends."""
     approach = f"$VEL.CP = {fixed(cell.drilling.approach_mm_s / 1000.0, 4)}"
     if cell.krl.travel_motion == "ptp":
-        travel = ["PTP %s C_PTP"]
+        travel = ["PTP XH%d_APP C_PTP"]
     else:
         travel = [
             _literal(f"$VEL.CP = {fixed(cell.drilling.travel_mm_s / 1000.0, 4)}"),
-            "LIN %s C_DIS",
+            "LIN XH%d_APP C_DIS",
         ]
     clamp = unclamp = []
     if cell.krl.clamp_output is not None:
@@ -327,14 +505,14 @@ def _hole_block(cell) -> str:
         "; hole %s",
         *travel,
         _literal(approach),
-        "LIN %s",
+        "LIN XH%d_CLR",
         *clamp,
         "$VEL.CP = %s",
-        "LIN %s",
+        "LIN XH%d_BOT",
         _literal(f"WAIT SEC {fixed(cell.drilling.dwell_s, 3)}"),
         *unclamp,
         _literal(approach),
-        "LIN %s C_DIS",
+        f"LIN XH%d_{stages[3] if len(stages) == 4 else stages[0]} C_DIS",
     ]
     return "\r\n".join(lines) + "\r\n"
 

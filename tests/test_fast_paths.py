@@ -1,0 +1,118 @@
+"""The fast paths of the readers and writers against the slow, obvious ones they replace: the
+byte-buffer CSV reader against the csv module, the vectorized decimal parser against ``float``,
+``fixed_ready`` against ``fixed``, ``comment_texts`` against ``comment_text``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from accugrid.codegen.textsafe import (
+    comment_text,
+    comment_texts,
+    fixed,
+    fixed_format,
+    fixed_ready,
+)
+from accugrid.compensation.csvtable import _parse_csv, _parse_simple, parse_number, parse_table
+from accugrid.kinematics.errors import InputError
+
+_CELL = st.one_of(
+    st.text(st.sampled_from(list("0123456789.+-eE _#abcXYZ\t")), max_size=8),
+    st.sampled_from(["nan", "inf", "1_0", "1e999", " 7 ", "-0", ".5", "5."]),
+)
+
+
+def _table_text(header, rows, ending, lead):
+    lines = [*lead, ",".join(header), *(",".join(r) for r in rows)]
+    return ending.join(lines) + ending
+
+
+def _same(fast, slow, columns):
+    assert fast.header == slow.header and fast.lines == slow.lines and fast.rows == slow.rows
+    for name in columns:
+        assert fast.text(name) == slow.text(name)
+        for allow_empty in (False, True):
+            try:
+                expected = slow.floats([name], allow_empty)
+            except InputError as exc:
+                with pytest.raises(InputError) as info:
+                    fast.floats([name], allow_empty)
+                assert str(info.value) == str(exc)
+                continue
+            np.testing.assert_array_equal(fast.floats([name], allow_empty), expected)
+
+
+@given(
+    st.integers(1, 4).flatmap(
+        lambda width: st.tuples(
+            st.just([f"c{i}" for i in range(width)]),
+            st.lists(st.lists(_CELL, min_size=width, max_size=width), max_size=6),
+        )
+    ),
+    st.sampled_from(["\n", "\r\n"]),
+    st.lists(st.sampled_from(["# note", "", ",", "  "]), max_size=2),
+)
+def test_the_byte_buffer_reader_reads_what_the_csv_module_reads(table, ending, lead):
+    """Any unquoted ASCII table: the same header, lines, cells, numbers and errors, whichever
+    reader takes it (the fast one hands odd files to the csv module)."""
+    header, rows = table
+    text = _table_text(header, rows, ending, lead)
+    slow = _parse_csv(text, "t.csv")
+    fast = _parse_simple(text, "t.csv")
+    if fast is None:  # odd file (blank or comment rows, leading blanks): the csv module's
+        fast = parse_table(text, "t.csv")
+    _same(fast, slow, header)
+
+
+@given(
+    st.lists(
+        st.tuples(st.sampled_from(["", "-", "+"]), st.integers(0, 10**16), st.integers(0, 17)),
+        min_size=1,
+        max_size=40,
+    )
+)
+def test_plain_decimals_are_exactly_what_float_reads(numbers):
+    cells = []
+    for sign, digits, point in numbers:
+        text = str(digits)
+        point = min(point, len(text))
+        cells.append(sign + text[: len(text) - point] + "." + text[len(text) - point :])
+    table = parse_table("v\n" + "\n".join(cells) + "\n", "t.csv")
+    values = table.floats(["v"])[:, 0]
+    expected = [parse_number(c) for c in cells]
+    np.testing.assert_array_equal(values, expected)
+    assert (np.signbit(values) == np.signbit(expected)).all()  # -0.0 stays -0.0
+
+
+@given(
+    st.lists(st.floats(allow_nan=False, allow_infinity=False, width=64), max_size=30),
+    st.integers(0, 6),
+)
+def test_fixed_ready_prints_what_fixed_prints(values, places):
+    ready = fixed_ready(np.array(values), places)
+    assert [fixed_format(places) % v for v in ready.tolist()] == [fixed(v, places) for v in values]
+
+
+def test_fixed_ready_keeps_the_shape_and_refuses_nan():
+    values = np.array([[-0.0004, 1.0], [-0.0, 2.5]])[:, [1, 0]]  # not C-contiguous
+    assert [fixed_format(3) % v for v in fixed_ready(values, 3).ravel()] == [
+        "1.000",
+        "0.000",
+        "2.500",
+        "0.000",
+    ]
+    with pytest.raises(ValueError):
+        fixed_ready(np.array([1.0, np.nan]), 3)
+
+
+@given(st.lists(st.text(max_size=80), max_size=20), st.sampled_from(["", "hole "]))
+def test_comment_texts_is_comment_text_of_each(texts, prefix):
+    assert comment_texts(texts, prefix=prefix) == [comment_text(prefix + t) for t in texts]
+
+
+def test_comment_texts_of_safe_ids_cuts_at_the_limit():
+    ids = ["B000001 depth 6.000", "X" * 70]
+    assert comment_texts(ids) == [ids[0], "X" * 60]
