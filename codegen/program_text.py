@@ -32,6 +32,7 @@ __all__ = [
     "read_program",
     "splice",
     "split_lines",
+    "Splicer",
 ]
 
 MAX_BYTES = 64 * 2**20
@@ -76,13 +77,37 @@ def splice(text: str, edits: list[tuple[int, int, str]]) -> str:
     if not edits:
         return text
     edits.sort()
-    parts, last = [], 0
-    for start, end, new in edits:
-        parts.append(text[last:start])
-        parts.append(new)
-        last = end
-    parts.append(text[last:])
-    return "".join(parts)
+    out = Splicer(text)
+    out.add(*map(list, zip(*edits, strict=True)))
+    return out.finish()
+
+
+class Splicer:
+    """``text`` with spans replaced, built a block of edits at a time (each block after the
+    previous one, sorted, non-overlapping), so a million edits never exist as one list."""
+
+    def __init__(self, text: str) -> None:
+        self.text = text
+        self.parts: list[str] = []
+        self.last = 0
+
+    def add(self, starts, ends, news) -> None:
+        """Replace ``text[starts[k]:ends[k]]`` by ``news[k]`` (lists of equal length)."""
+        if not len(starts):
+            return
+        gaps = map(self.text.__getitem__, map(slice, [self.last, *ends[:-1]], starts))
+        pieces: list[str] = [""] * (2 * len(starts))
+        pieces[0::2] = gaps
+        pieces[1::2] = news
+        self.parts.append("".join(pieces))
+        self.last = ends[-1]
+
+    def finish(self) -> str:
+        """The text with every edit made."""
+        if not self.parts:
+            return self.text
+        self.parts.append(self.text[self.last :])
+        return "".join(self.parts)
 
 
 def precision(literals, minimum: int = 0) -> int:

@@ -31,7 +31,6 @@ import argparse
 import gc
 import os
 import sys
-from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -44,7 +43,10 @@ from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.program import GRID_ORIENTATION_TOL_DEG
 from accugrid.codegen.program_text import MAX_BYTES, add_header, read_program
 from accugrid.codegen.rewrite import (
+    CORRECTED,
     ORIENTATION_LIMIT_DEG,
+    OUTSIDE,
+    SKIPPED,
     Options,
     header_lines,
     report_csv,
@@ -246,11 +248,11 @@ def run(args: argparse.Namespace) -> int:
     write_files(files, all_inputs + [grid], args.force, main=[outputs[inputs[0]]])
     for line in warning_lines(result, opts):
         print(f"accugrid rewrite: warning: {line}", file=sys.stderr)
-    counts = Counter(r.status for r in result.rows)
+    rows = result.rows
     largest, _ = result.largest()
     print(
-        f"rewrite: {counts['corrected']} corrected (largest {largest:.3f} mm), "
-        f"{counts['outside']} outside the grid, {counts['skipped']} skipped -> "
+        f"rewrite: {rows.count(CORRECTED)} corrected (largest {largest:.3f} mm), "
+        f"{rows.count(OUTSIDE)} outside the grid, {rows.count(SKIPPED)} skipped -> "
         + ", ".join(os.fspath(p) for p in outputs.values())
     )
     return 0
