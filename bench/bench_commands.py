@@ -103,20 +103,24 @@ def main(million: bool) -> None:
                 args = [command, str(holes), "--cell", str(CELL), "-o", str(out)]
                 name = f"accugrid {command}, {label} holes"
                 rows.append(job_row(name, args, [holes, CELL, GRID], out, tmp, repeats))
-        pair_dir = tmp / "pair"
-        pair_dir.mkdir()
-        pair = krl_pair(pair_dir)
-        out = tmp / "rewritten"
-        args = ["rewrite", *map(str, pair), "--cell", str(CELL), "-o", str(out)]
-        rows.append(
-            job_row("accugrid rewrite, 1e5 KRL pair", args, [*pair, CELL, GRID], out, tmp, 3)
-        )
-        (ngc,) = gcode(pair_dir)
-        out_ngc = tmp / "rewritten.ngc"
-        args = ["rewrite", str(ngc), "--cell", str(CELL), "-o", str(out_ngc)]
-        rows.append(
-            job_row("accugrid rewrite, 1e5 G-code", args, [ngc, CELL, GRID], out_ngc, tmp, 3)
-        )
+        for n, repeats in sizes:  # rewrite: a KRL .src/.dat pair and a G-code file of n
+            label = f"{n:.0e}".replace("+0", "")
+            folder = tmp / f"rewrite{n}"
+            folder.mkdir()
+            pair = krl_pair(folder, n)
+            out = tmp / f"rewritten{n}"
+            args = ["rewrite", *map(str, pair), "--cell", str(CELL), "-o", str(out)]
+            args += ["--max-mb", "512"]  # a 1e6-position .dat is 138 MiB (default limit 64)
+            name = f"accugrid rewrite, {label} KRL pair"
+            rows.append(job_row(name, args, [*pair, CELL, GRID], out, tmp, repeats))
+            (ngc,) = gcode(folder, n)
+            out_ngc = tmp / f"rewritten{n}.ngc"
+            args = ["rewrite", str(ngc), "--cell", str(CELL), "-o", str(out_ngc)]
+            args += ["--max-mb", "512"]
+            name = f"accugrid rewrite, {label} G-code"
+            rows.append(job_row(name, args, [ngc, CELL, GRID], out_ngc, tmp, repeats))
+            for path in [*pair, ngc]:
+                path.unlink()
     print(
         table(
             [

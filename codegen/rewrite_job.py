@@ -139,7 +139,7 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     del texts
     files: dict[Path, bytes] = {}
     for path, target in req.outputs.items():
-        text = result.texts[os.fspath(path)]
+        text = result.texts.pop(os.fspath(path))  # one copy of an output at a time
         if req.header:
             lines = header_lines(result, os.fspath(path), os.fspath(req.cell), opts)
             text = add_header(text, lines, dialect_of(path))

@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 import os
 import re
+import sys
 from dataclasses import dataclass, field
 from itertools import compress
 from typing import NamedTuple
@@ -785,7 +786,7 @@ _PLAIN_RE = re.compile(
     r"|^([^\n]*+)$",
     re.M,
 )
-_CHUNK = 1 << 20  # characters per whole-text pass (bounds the per-line tuples held at once)
+_CHUNK = 1 << 18  # characters per whole-text pass (bounds the per-line tuples held at once)
 _NOT_IN_TAIL = frozenset("X Y Z A B C".split()) | _JOINTS
 
 
@@ -913,7 +914,7 @@ def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _
     ze = zo + _lengths(z, mask)
     span = (np.stack([xo, xe, yo, ye, zo, ze], axis=1) + line_at[:, None]).reshape(-1, 3, 2)
     agg_decl = is_decl[aggs]
-    agg_type = list(compress(type_, mask))
+    agg_type = list(map(sys.intern, compress(type_, mask)))  # one str per type, not per row
     agg_name = [n or m for n, m in zip(compress(name, mask), compress(motion, mask), strict=True)]
     external = {}
     if any(moving is not None for _, moving in info.values()):
@@ -925,7 +926,7 @@ def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _
     tmask = (plain & has_target).tolist()
     t_text = list(compress(target, tmask))
     t_column = _lengths(head, tmask) + 1
-    t_motion = list(compress(motion, tmask))
+    t_motion = list(map(sys.intern, compress(motion, tmask)))
     decl_blocks = scan._fast_decls
     rows = flow.rows
 
@@ -972,7 +973,9 @@ def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _
                 column=t_column[ua:ub],
                 base=np.full(ub - ua, rows.base_id(flow.state)),
                 motion=t_motion[ua:ub],
-                name=list(map(str.upper, texts)),  # plain names: normalize_name is upper()
+                name=[  # plain names: normalize_name is upper(); the text itself when upper case
+                    u if u != t else t for u, t in zip(map(str.upper, texts), texts, strict=True)
+                ],
                 text=texts,
                 reason=[""] * (ub - ua),
             )

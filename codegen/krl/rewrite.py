@@ -43,7 +43,7 @@ from accugrid.kinematics.frames import pose_from_xyzabc
 
 __all__ = ["rewrite_krl"]
 
-_BLOCK = 1 << 16  # positions per block of corrected numbers formatted and spliced at once
+_BLOCK = 1 << 14  # positions per block of corrected numbers formatted and spliced at once
 
 
 def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = None) -> Result:
@@ -82,8 +82,16 @@ def _places(scan: KrlScan) -> int:
     """The file's precision (``program_text.precision`` of its X, Y, Z literals)."""
     span = scan.table.span.reshape(-1, 2)
     span = span[span[:, 0] >= 0]
-    literals = map(scan.text.__getitem__, map(slice, span[:, 0].tolist(), span[:, 1].tolist()))
-    return precision(literals, MIN_PLACES_MM)
+    if not len(span):
+        return precision((), MIN_PLACES_MM)
+    found = 0
+    for a in range(0, len(span), 3 * _BLOCK):  # a block of literals at a time
+        block = span[a : a + 3 * _BLOCK]
+        literals = map(
+            scan.text.__getitem__, map(slice, block[:, 0].tolist(), block[:, 1].tolist())
+        )
+        found = max(found, precision(literals))
+    return max(found, MIN_PLACES_MM)
 
 
 def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple[Rows, np.ndarray]:
@@ -179,11 +187,13 @@ class _Context:
                 self.assigned.setdefault(key, (where, line))
         # stored positions: key of each table row ("" for motions), first row of each key
         self.keys: list[list[str]] = []
-        self.named: dict[str, tuple[int, int]] = {}
+        self.named: set[str] = set()
         self.twice: set[str] = set()
-        for s, scan in enumerate(scans):
+        for scan in scans:
             t = scan.table
-            keys = list(map(str.upper, t.name))  # normalize_name of a plain name
+            keys = [  # normalize_name of a plain name; the name itself when it is upper case
+                k if k != n else n for k, n in zip(map(str.upper, t.name), t.name, strict=True)
+            ]
             for i in np.flatnonzero(t.kind == MOTION).tolist():
                 keys[i] = ""
             for i, plain in enumerate(map(str.isidentifier, t.name)):
@@ -192,11 +202,8 @@ class _Context:
             self.keys.append(keys)
             first = dict(zip(reversed(keys), range(len(keys) - 1, -1, -1), strict=True))
             first.pop("", None)
-            for key, i in first.items():
-                if key in self.named:
-                    self.twice.add(key)
-                else:
-                    self.named[key] = (s, i)
+            self.twice.update(self.named.intersection(first))
+            self.named.update(first)
             if len(first) < len(keys) - keys.count(""):
                 self.twice.update(k for i, k in enumerate(keys) if k and first[k] != i)
         self.wild_named = {wildcard(key) for key in self.named if "[" in key}
@@ -204,10 +211,9 @@ class _Context:
         if config is not None:
             for p in config.positions:
                 self.config_named[p.key] = p
-        # motions to a name that may be a stored position, all files: file, row, line, base id
+        # motions to a name that may be a stored position, all files: file, line, base id
         where = [np.full(len(scan.use_table), s) for s, scan in enumerate(scans)]
         self.use_scan = np.concatenate(where or [np.zeros(0, np.int64)])
-        self.use_row = np.concatenate([np.arange(len(w)) for w in where] or [self.use_scan])
         self.use_line = np.concatenate([scan.use_table.line for scan in scans] or [self.use_scan])
         self.use_base = np.concatenate([scan.use_table.base for scan in scans] or [self.use_scan])
         names = [n for scan in scans for n in scan.use_table.name]
