@@ -955,7 +955,9 @@ def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _
                 reason=[""] * (pb - pa),
             )
             decls = agg_decl[pa:pb]
-            if decls.any():
+            if decls.all():  # the same lists as the table's
+                decl_blocks.append((names, types, lineno + aggs[pa:pb]))
+            elif decls.any():
                 where = np.flatnonzero(decls).tolist()
                 decl_blocks.append(
                     (

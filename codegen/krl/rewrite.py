@@ -27,7 +27,7 @@ from accugrid.codegen.krl.parse import (
     scan_krl,
     wildcard,
 )
-from accugrid.codegen.krl.tables import MOTION
+from accugrid.codegen.krl.tables import MOTION, PositionTable
 from accugrid.codegen.program_text import MIN_PLACES_MM, Splicer, precision
 from accugrid.codegen.rewrite import (
     CORRECTED,
@@ -66,30 +66,34 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
     parts += [_use_rows(ctx, scan) for scan in scans]
     rows = Rows.concat(parts)
     starts = np.cumsum([0] + [len(p) for p in parts[: len(scans)]])
+    del parts
     out = dict(texts)
     todo = [np.flatnonzero(which >= 0) for which in placed]
     if any(t.size for t in todo):
-        targets = _correct(scans, todo, placed, ctx.frames, rows, starts, opts)
-        for s, scan in enumerate(scans):
+        frames = ctx.frames
+        files = [(scan.path, scan.text, scan.table) for scan in scans]
+        del scans, ctx, config  # the uses and names are done with: memory for what follows
+        targets = _correct(
+            [table for _, _, table in files], todo, placed, frames, rows, starts, opts
+        )
+        for s, (path, text, table) in enumerate(files):
             if todo[s].size:
-                places = opts.decimals if opts.decimals is not None else _places(scan)
-                out[scan.path] = _splice(scan, todo[s], targets[s], rows, starts[s], places)
+                places = opts.decimals if opts.decimals is not None else _places(text, table)
+                out[path] = _splice(text, table, todo[s], targets[s], rows, starts[s], places)
     strict_check(rows, opts)
     return Result(out, rows)
 
 
-def _places(scan: KrlScan) -> int:
+def _places(text: str, table: PositionTable) -> int:
     """The file's precision (``program_text.precision`` of its X, Y, Z literals)."""
-    span = scan.table.span.reshape(-1, 2)
+    span = table.span.reshape(-1, 2)
     span = span[span[:, 0] >= 0]
     if not len(span):
         return precision((), MIN_PLACES_MM)
     found = 0
     for a in range(0, len(span), 3 * _BLOCK):  # a block of literals at a time
         block = span[a : a + 3 * _BLOCK]
-        literals = map(
-            scan.text.__getitem__, map(slice, block[:, 0].tolist(), block[:, 1].tolist())
-        )
+        literals = map(text.__getitem__, map(slice, block[:, 0].tolist(), block[:, 1].tolist()))
         found = max(found, precision(literals))
     return max(found, MIN_PLACES_MM)
 
@@ -427,7 +431,7 @@ class _Context:
 
 
 def _correct(
-    scans: list[KrlScan],
+    tables: list[PositionTable],
     todo: list[np.ndarray],
     placed: list[np.ndarray],
     frames: list[np.ndarray],
@@ -442,8 +446,8 @@ def _correct(
     targets (n, 3) mm base frame (NaN rows: not corrected)."""
     stack = np.array(frames)
     which = np.concatenate([placed[s][t] for s, t in enumerate(todo)])
-    base_xyz = np.concatenate([scan.table.xyz[t] for scan, t in zip(scans, todo, strict=True)])
-    abc = np.concatenate([scan.table.abc[t] for scan, t in zip(scans, todo, strict=True)])
+    base_xyz = np.concatenate([table.xyz[t] for table, t in zip(tables, todo, strict=True)])
+    abc = np.concatenate([table.abc[t] for table, t in zip(tables, todo, strict=True)])
     at = np.concatenate([starts[s] + t for s, t in enumerate(todo)])
     n = len(which)
     robot = np.empty((n, 3))
@@ -468,7 +472,8 @@ def _correct(
 
 
 def _splice(
-    scan: KrlScan,
+    text: str,
+    t: PositionTable,
     todo: np.ndarray,
     targets: np.ndarray,
     rows: Rows,
@@ -480,9 +485,8 @@ def _splice(
 
     ``todo`` (n,): placed table rows, ``targets`` (n, 3) mm base frame, NaN rows where not
     corrected."""
-    t = scan.table
     inside = np.flatnonzero(np.isfinite(targets[:, 0]))
-    out = Splicer(scan.text)
+    out = Splicer(text)
     for a in range(0, len(inside), _BLOCK):
         k = inside[a : a + _BLOCK]
         goal = targets[k]

@@ -83,16 +83,23 @@ class Columns:
     def finish(self) -> dict[str, object]:
         """Every column whole: numeric ones as arrays (count, *shape), the others as lists."""
         self._flush()
-        out: dict[str, object] = {}
-        for key, (dtype, shape) in self._numeric.items():
-            parts = [np.asarray(b[key], dtype=dtype).reshape(-1, *shape) for b in self._blocks]
-            out[key] = np.concatenate(parts) if parts else np.zeros((0, *shape), dtype=dtype)
-        for key in self._objects:
-            column: list = []
-            for b in self._blocks:
-                column.extend(b[key])
-            out[key] = column
-        self._blocks = []
+        out: dict[str, object] = {
+            key: np.empty((self.count, *shape), dtype=dtype)
+            for key, (dtype, shape) in self._numeric.items()
+        }
+        out.update({key: [] for key in self._objects})
+        blocks, self._blocks, at = self._blocks, [], 0
+        blocks.reverse()
+        while blocks:  # a block at a time, each dropped once copied (one copy of a column)
+            block = blocks.pop()
+            size = 0
+            for key, (dtype, shape) in self._numeric.items():
+                part = np.asarray(block[key], dtype=dtype).reshape(-1, *shape)
+                size = len(part)
+                out[key][at : at + size] = part
+            for key in self._objects:
+                out[key].extend(block[key])
+            at += size
         return out
 
 
@@ -100,9 +107,10 @@ class Columns:
 class PositionTable:
     """Aggregates of one file (N rows). Offsets are character offsets into the file's text.
 
-    line, column (of the ``{``), kind (DECL/ASSIGN/MOTION), agg (offset of the ``{``), base (index
-    into ``bases``; -1 for stored positions): (N,) int64. xyz, abc (N, 3) float mm/deg as written,
-    NaN where not given; span (N, 3, 2) int64 start/end of the X, Y, Z literals (-1: not given).
+    line, column (of the ``{``), base (index into ``bases``; -1 for stored positions): (N,) int32;
+    kind (DECL/ASSIGN/MOTION) (N,) int8; agg (offset of the ``{``) (N,) int64. xyz, abc (N, 3)
+    float mm/deg as written, NaN where not given; span (N, 3, 2) int64 start/end of the X, Y, Z
+    literals (-1: not given).
     type, name, reason: lists of str. external: row -> (key, value) of the first non-zero E1..E6."""
 
     line: np.ndarray
@@ -125,7 +133,7 @@ class PositionTable:
 @dataclass
 class UseTable:
     """Motions to a named target of one file (M rows): line, column, base (index into
-    ``bases``) (M,) int64; motion, name (normalized), text (as written), reason: lists of str."""
+    ``bases``) (M,) int32; motion, name (normalized), text (as written), reason: lists of str."""
 
     line: np.ndarray
     column: np.ndarray
@@ -143,11 +151,11 @@ def position_columns() -> Columns:
     """Empty columns of a ``PositionTable``."""
     return Columns(
         {
-            "line": ("int64", ()),
-            "column": ("int64", ()),
+            "line": ("int32", ()),
+            "column": ("int32", ()),
             "kind": ("int8", ()),
             "agg": ("int64", ()),
-            "base": ("int64", ()),
+            "base": ("int32", ()),
             "xyz": ("float64", (3,)),
             "abc": ("float64", (3,)),
             "span": ("int64", (3, 2)),
@@ -159,6 +167,6 @@ def position_columns() -> Columns:
 def use_columns() -> Columns:
     """Empty columns of a ``UseTable``."""
     return Columns(
-        {"line": ("int64", ()), "column": ("int64", ()), "base": ("int64", ())},
+        {"line": ("int32", ()), "column": ("int32", ()), "base": ("int32", ())},
         ("motion", "name", "text", "reason"),
     )
