@@ -72,23 +72,24 @@ def check_text(text: str, path: str | os.PathLike[str] | None) -> None:
         raise InputError("binary data (NUL byte), not a program", path, line)
 
 
-def splice(text: str, edits: list[tuple[int, int, str]]) -> str:
-    """Replace ``text[start:end]`` by each new string (non-overlapping edits, any order)."""
-    if not edits:
-        return text
+def splice(text: str, edits: list[tuple[int, int, str]]) -> bytearray:
+    """``text`` as latin-1 bytes with ``text[start:end]`` replaced by each new string
+    (non-overlapping edits, any order)."""
     edits.sort()
     out = Splicer(text)
-    out.add(*map(list, zip(*edits, strict=True)))
+    if edits:
+        out.add(*map(list, zip(*edits, strict=True)))
     return out.finish()
 
 
 class Splicer:
-    """``text`` with spans replaced, built a block of edits at a time (each block after the
-    previous one, sorted, non-overlapping), so a million edits never exist as one list."""
+    """``text`` (latin-1) with spans replaced, as bytes built a block of edits at a time (each
+    block after the previous one, sorted, non-overlapping): a million edits never exist as one
+    list, and the new program exists once, as bytes (the program text is latin-1)."""
 
     def __init__(self, text: str) -> None:
         self.text = text
-        self.parts: list[str] = []
+        self.out = bytearray()
         self.last = 0
 
     def add(self, starts, ends, news) -> None:
@@ -99,15 +100,14 @@ class Splicer:
         pieces: list[str] = [""] * (2 * len(starts))
         pieces[0::2] = gaps
         pieces[1::2] = news
-        self.parts.append("".join(pieces))
+        self.out += "".join(pieces).encode("latin-1")
         self.last = ends[-1]
 
-    def finish(self) -> str:
-        """The text with every edit made."""
-        if not self.parts:
-            return self.text
-        self.parts.append(self.text[self.last :])
-        return "".join(self.parts)
+    def finish(self) -> bytearray:
+        """The new program's bytes, every edit made."""
+        self.out += self.text[self.last :].encode("latin-1")
+        self.last = len(self.text)
+        return self.out
 
 
 def precision(literals, minimum: int = 0) -> int:

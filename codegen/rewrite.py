@@ -183,10 +183,16 @@ class Rows:
 
 @dataclass
 class Result:
-    """Rewritten texts by input path (latin-1 str), the report rows and the largest correction."""
+    """The rewritten programs by input path (their latin-1 bytes), the report rows and the
+    largest correction."""
 
-    texts: dict[str, str]
+    data: dict[str, bytes | bytearray]
     rows: Rows
+
+    @property
+    def texts(self) -> dict[str, str]:
+        """The rewritten programs as text (decoded on each call)."""
+        return {path: data.decode("latin-1") for path, data in self.data.items()}
 
     @property
     def corrected(self) -> list[Row]:

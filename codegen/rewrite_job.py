@@ -64,7 +64,7 @@ class RewriteJob:
     """A rewrite done: the bytes of each output, the files read (never overwritten), the
     result (texts and report rows) and the warnings to print."""
 
-    files: dict[Path, bytes]
+    files: dict[Path, bytes | bytearray]
     read: list[Path]
     result: Result
     warnings: list[str]
@@ -137,13 +137,13 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
         if collecting:
             gc.enable()
     del texts
-    files: dict[Path, bytes] = {}
+    files: dict[Path, bytes | bytearray] = {}
     for path, target in req.outputs.items():
-        text = result.texts.pop(os.fspath(path))  # one copy of an output at a time
+        data = result.data.pop(os.fspath(path))  # the new program exists once, as bytes
         if req.header:
             lines = header_lines(result, os.fspath(path), os.fspath(req.cell), opts)
-            text = add_header(text, lines, dialect_of(path))
-        files[target] = text.encode("latin-1")
+            data = add_header(data.decode("latin-1"), lines, dialect_of(path)).encode("latin-1")
+        files[target] = data
     if req.report is not None:
         files[req.report] = report_csv(result.rows).encode("utf-8")
     return RewriteJob(files, [*read, grid], result, warning_lines(result, opts))

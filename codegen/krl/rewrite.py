@@ -67,7 +67,7 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
     rows = Rows.concat(parts)
     starts = np.cumsum([0] + [len(p) for p in parts[: len(scans)]])
     del parts
-    out = dict(texts)
+    out: dict[str, bytes | bytearray | None] = dict.fromkeys(texts)
     todo = [np.flatnonzero(which >= 0) for which in placed]
     if any(t.size for t in todo):
         frames = ctx.frames
@@ -80,6 +80,9 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
             if todo[s].size:
                 places = opts.decimals if opts.decimals is not None else _places(text, table)
                 out[path] = _splice(text, table, todo[s], targets[s], rows, starts[s], places)
+    for path, text in texts.items():
+        if out[path] is None:
+            out[path] = text.encode("latin-1")  # nothing corrected in it
     strict_check(rows, opts)
     return Result(out, rows)
 
@@ -479,8 +482,8 @@ def _splice(
     rows: Rows,
     first_row: int,
     places: int,
-) -> str:
-    """The file's text with the X, Y, Z of its corrected positions replaced (``places``
+) -> bytearray:
+    """The file's bytes with the X, Y, Z of its corrected positions replaced (``places``
     decimals); their rows (``first_row`` + table row) updated.
 
     ``todo`` (n,): placed table rows, ``targets`` (n, 3) mm base frame, NaN rows where not
