@@ -3,7 +3,8 @@ and, in the same run, a floor: a bare Python process that imports what the row n
 same input files and writes the same number of files and bytes. Ratio = command / floor.
 
 Medians of 5 runs (3 for the 1e5 jobs, 1 for the 1e6 jobs); peak RSS of the process from
-wait4. `python bench/bench_commands.py --million` adds the 1e6 rows (minutes, GiB).
+wait4. `python bench/bench_commands.py --million` adds the 1e6 rows (minutes, GiB);
+`--only=rewrite` (any word of the command column) runs only the rows that name it.
 """
 
 from __future__ import annotations
@@ -77,33 +78,38 @@ def job_row(name, args, inputs, target, tmp, repeats):
     return name, seconds, peak, "same I/O in Python", floor
 
 
-def main(million: bool) -> None:
+def main(million: bool, only: str = "") -> None:
     rows = []
     with tempfile.TemporaryDirectory(prefix="accugrid-bench-") as folder:
         tmp = Path(folder)
         one = tmp / "one.csv"
         one.write_text("x,y,z\n1700,0,1500\n")
-        seconds, peak = median_run([ACCUGRID, "--help"], 5)
-        floor, _ = median_run([sys.executable, "-c", "import numpy"], 5)
-        rows.append(("accugrid --help", seconds, peak, "import numpy", floor))
-        seconds, peak = median_run(
-            [ACCUGRID, "correct", str(one), "--grid", str(GRID), "-o", str(tmp / "c1.csv")]
-            + ["--force"],
-            5,
-        )
-        floor, _ = median_run([sys.executable, "-c", "import numpy, scipy.spatial"], 5)
-        rows.append(("accugrid correct, 1 point", seconds, peak, "import numpy, scipy", floor))
+        if only in "accugrid --help":
+            seconds, peak = median_run([ACCUGRID, "--help"], 5)
+            floor, _ = median_run([sys.executable, "-c", "import numpy"], 5)
+            rows.append(("accugrid --help", seconds, peak, "import numpy", floor))
+        if only in "accugrid correct, 1 point":
+            seconds, peak = median_run(
+                [ACCUGRID, "correct", str(one), "--grid", str(GRID), "-o", str(tmp / "c1.csv")]
+                + ["--force"],
+                5,
+            )
+            floor, _ = median_run([sys.executable, "-c", "import numpy, scipy.spatial"], 5)
+            rows.append(("accugrid correct, 1 point", seconds, peak, "import numpy, scipy", floor))
 
         sizes = [(100_000, 3)] + ([(1_000_000, 1)] if million else [])
-        for n, repeats in sizes:
+        for n, repeats in sizes if only in "accugrid krl gcode holes" else ():
             label = f"{n:.0e}".replace("+0", "")
             holes = tmp / f"holes{n}.csv"
             holes.write_text(points_csv(n))
             for command, out in (("krl", tmp / f"krl{n}"), ("gcode", tmp / f"holes{n}.ngc")):
+                if only not in f"accugrid {command} holes":
+                    continue
                 args = [command, str(holes), "--cell", str(CELL), "-o", str(out)]
                 name = f"accugrid {command}, {label} holes"
                 rows.append(job_row(name, args, [holes, CELL, GRID], out, tmp, repeats))
-        for n, repeats in sizes:  # rewrite: a KRL .src/.dat pair and a G-code file of n
+        for n, repeats in sizes if only in "accugrid rewrite KRL pair G-code" else ():
+            # rewrite: a KRL .src/.dat pair and a G-code file of n positions
             label = f"{n:.0e}".replace("+0", "")
             folder = tmp / f"rewrite{n}"
             folder.mkdir()
@@ -133,4 +139,5 @@ def main(million: bool) -> None:
 
 
 if __name__ == "__main__":
-    main("--million" in sys.argv[1:])
+    flags = sys.argv[1:]
+    main("--million" in flags, next((f[7:] for f in flags if f.startswith("--only=")), ""))
