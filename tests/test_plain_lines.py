@@ -140,17 +140,20 @@ def test_krl_whole_text_scanner_reads_as_the_statement_reader(lines):
 
 @given(
     n=st.sampled_from(["", "N10 ", "N7  "]),
-    g=st.sampled_from(["", "G0 ", "G1 ", "G00 ", "G01 ", "G10 ", "G0\t"]),
+    g=st.sampled_from(
+        ["", "G0 ", "G1 ", "G00 ", "G01 ", "G10 ", "G0\t", "G99 G81 ", "G98 G83 ", "G73 ", "G98 "]
+    ),
     xyz=st.tuples(NUMBER, NUMBER, NUMBER),
+    r=st.sampled_from(["", " R5", " R-2.5", "  R.5", " R9e9"]),
     f=st.sampled_from(["", " F300", " F1.5", "  F20"]),
     comment=st.sampled_from(["", " (move 1)", "(x)", " (a;b)", " (a(b)"]),
     lead=GAP,
     cr=st.booleans(),
 )
-def test_gcode_plain_line_reads_as_the_general_reader(n, g, xyz, f, comment, lead, cr):
+def test_gcode_plain_line_reads_as_the_general_reader(n, g, xyz, r, f, comment, lead, cr):
     """A line the one-match reader takes gives the words, G-codes and spans of the general one."""
     x, y, z = xyz
-    line = f"{lead}{n}{g}X{x} Y{y} Z{z}{f}{comment}" + ("\r" if cr else "")
+    line = f"{lead}{n}{g}X{x} Y{y} Z{z}{r}{f}{comment}" + ("\r" if cr else "")
     plain = _plain_line(line, 11)
     if plain is None:
         return

@@ -34,10 +34,13 @@ _NUMBER = r"[-+]?+(?:\d++(?:\.\d*+)?+|\.\d++)"
 _NUMBER_RE = re.compile(_NUMBER)
 _WORD_RE = re.compile(r"([A-Za-z])\s*+(" + _NUMBER + ")")
 _LINE_RE = re.compile(r"(?:\s*+[A-Za-z]\s*+" + _NUMBER + r")*+\s*+")
-# The common CAM line, read in one match: [N..] [G0|G1] X.. Y.. Z.. [F..] [(comment)]
+# The common CAM line, read in one match: [N..] [G98|G99] [G0|G1|G73|G81..G89] X.. Y.. Z.. [R..]
+# [F..] [(comment)]
 _PLAIN_RE = re.compile(
-    r"[ \t]*+(N\d++[ \t]++)?+(?:G(0?+[01]|0)[ \t]++)?+X(" + _NUMBER + r")[ \t]++Y(" + _NUMBER + r")"
-    r"[ \t]++Z(" + _NUMBER + r")([ \t]++F" + _NUMBER + r")?+[ \t]*+(?:\([^()\n;]*+\)[ \t]*+)?+\r?+"
+    r"[ \t]*+(N\d++[ \t]++)?+(?:G(9[89])[ \t]++)?+(?:G(0?+[01]|0|8[1-9]|73)[ \t]++)?+"
+    r"X(" + _NUMBER + r")[ \t]++Y(" + _NUMBER + r")[ \t]++Z(" + _NUMBER + r")"
+    r"(?:[ \t]++R(" + _NUMBER + r"))?+([ \t]++F" + _NUMBER + r")?+[ \t]*+"
+    r"(?:\([^()\n;]*+\)[ \t]*+)?+\r?+"
 )
 _DIGITS_RE = re.compile(r"\d++")
 _OWORD_RE = re.compile(
@@ -354,17 +357,22 @@ def _plain_line(line: str, offset: int) -> _Line | None:
     m = _PLAIN_RE.fullmatch(line)
     if m is None:
         return None
-    n, g, x, y, z, f = m.groups()
-    xv, yv, zv = float(x), float(y), float(z)
-    if xv - xv or yv - yv or zv - zv:  # beyond the float range: _put says where
+    n, retract, g, x, y, z, r, f = m.groups()
+    xv, yv, zv, rv = float(x), float(y), float(z), float(r or 0)
+    if xv - xv or yv - yv or zv - zv or rv - rv:  # beyond the float range: _put says where
         return None
     words: dict[str, Word | None] = {"N": None} if n else {}
-    words["X"] = _new_word(Word, ("X", xv, offset + m.start(3), offset + m.end(3), x))
-    words["Y"] = _new_word(Word, ("Y", yv, offset + m.start(4), offset + m.end(4), y))
-    words["Z"] = _new_word(Word, ("Z", zv, offset + m.start(5), offset + m.end(5), z))
+    words["X"] = _new_word(Word, ("X", xv, offset + m.start(4), offset + m.end(4), x))
+    words["Y"] = _new_word(Word, ("Y", yv, offset + m.start(5), offset + m.end(5), y))
+    words["Z"] = _new_word(Word, ("Z", zv, offset + m.start(6), offset + m.end(6), z))
+    if r:
+        words["R"] = _new_word(Word, ("R", rv, offset + m.start(7), offset + m.end(7), r))
     if f:
         words["F"] = None
-    return _Line(words, [g[-1]] if g else [], {})
+    gcodes = [retract] if retract else []
+    if g:
+        gcodes.append(g if len(g) == 2 and g[0] != "0" else g[-1])  # "01" -> "1", "81" -> "81"
+    return _Line(words, gcodes, {})
 
 
 def _fast_line(line: str, offset: int, path: str | None, lineno: int) -> _Line | None:
