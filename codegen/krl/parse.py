@@ -585,8 +585,9 @@ class _Rows:
 
     def __init__(self, scan: KrlScan) -> None:
         self.scan = scan
-        self.positions = position_columns()
-        self.uses = use_columns()
+        lines = scan.text.count("\n") + 1  # about one row a line at most, in most programs
+        self.positions = position_columns(lines)
+        self.uses = use_columns(lines)
         self.external: dict[int, tuple[str, float]] = {}
         self._ids: dict[int, int] = {}
         self.ops: list[tuple] = []  # ("swap", marks, start, changed) | ("label", marks)

@@ -34,72 +34,84 @@ KIND_NAMES = ("decl", "assign", "motion")
 class Columns:
     """Named columns filled row by row or block by block, then ``finish``-ed to arrays.
 
-    ``numeric``: column -> (dtype, shape of one row); the other columns are Python lists."""
+    ``numeric``: column -> (dtype, shape of one row), kept in arrays of ``capacity`` rows (grown
+    when full; pages never written are never resident, so a generous capacity costs nothing);
+    the other columns are Python lists."""
 
-    def __init__(self, numeric: dict[str, tuple[str, tuple[int, ...]]], objects: tuple[str, ...]):
+    def __init__(
+        self,
+        numeric: dict[str, tuple[str, tuple[int, ...]]],
+        objects: tuple[str, ...],
+        capacity: int = 1024,
+    ):
         self._numeric = numeric
-        self._objects = objects
-        self._blocks: list[dict[str, object]] = []
-        self._rows: dict[str, list] = {k: [] for k in (*numeric, *objects)}
+        self._arrays = {
+            key: np.empty((max(capacity, 1), *shape), dtype=dtype)
+            for key, (dtype, shape) in numeric.items()
+        }
+        self._lists: dict[str, list] = {key: [] for key in objects}
+        self._rows: dict[str, list] = {key: [] for key in numeric}  # added, not yet in arrays
+        self._stored = 0  # rows in the arrays
         self.count = 0
 
     def add(self, **row) -> int:
         """Append one row (every column given); its index."""
-        for key, value in row.items():
-            self._rows[key].append(value)
+        for key, values in self._rows.items():
+            values.append(row[key])
+        for key, values in self._lists.items():
+            values.append(row[key])
         self.count += 1
         return self.count - 1
 
     def pop(self) -> None:
         """Drop the row ``add`` appended last."""
-        for values in self._rows.values():
+        for values in (*self._rows.values(), *self._lists.values()):
             values.pop()
         self.count -= 1
 
     def set(self, index: int, key: str, value) -> None:
-        """Change a column of a row ``add`` appended (not yet part of a block)."""
-        pending = self.count - len(self._rows[key])
-        self._rows[key][index - pending] = value
+        """Change a column of a row ``add`` appended (numeric: not yet followed by a block)."""
+        if key in self._lists:
+            self._lists[key][index] = value
+        else:
+            self._rows[key][index - self._stored] = value
 
     def extend(self, size: int, **block) -> None:
         """Append ``size`` rows: each column an array (numeric) or a sequence (objects)."""
         if not size:
             return
         self._flush()
-        self._blocks.append(block)
+        self._store(size, block)
+        for key, values in self._lists.items():
+            values.extend(block[key])
         self.count += size
+
+    def _store(self, size: int, block: dict[str, object]) -> None:
+        need = self._stored + size
+        for key, array in self._arrays.items():
+            if need > len(array):  # full: grow (the rows so far copied once)
+                grown = np.empty((max(need, 2 * len(array)), *array.shape[1:]), array.dtype)
+                grown[: self._stored] = array[: self._stored]
+                self._arrays[key] = array = grown
+            array[self._stored : need] = block[key]
+        self._stored = need
 
     def _flush(self) -> None:
         rows = self._rows
-        if rows and rows[next(iter(rows))]:
-            block: dict[str, object] = {}
-            for key, (dtype, shape) in self._numeric.items():
-                block[key] = np.array(rows[key], dtype=dtype).reshape(-1, *shape)
-            for key in self._objects:
-                block[key] = rows[key]
-            self._blocks.append(block)
-            self._rows = {k: [] for k in rows}
+        size = len(next(iter(rows.values()))) if rows else 0
+        if size:
+            block = {
+                key: np.array(rows[key], dtype=dtype).reshape(-1, *shape)
+                for key, (dtype, shape) in self._numeric.items()
+            }
+            self._store(size, block)
+            self._rows = {key: [] for key in rows}
 
     def finish(self) -> dict[str, object]:
         """Every column whole: numeric ones as arrays (count, *shape), the others as lists."""
         self._flush()
-        out: dict[str, object] = {
-            key: np.empty((self.count, *shape), dtype=dtype)
-            for key, (dtype, shape) in self._numeric.items()
-        }
-        out.update({key: [] for key in self._objects})
-        blocks, self._blocks, at = self._blocks, [], 0
-        blocks.reverse()
-        while blocks:  # a block at a time, each dropped once copied (one copy of a column)
-            block = blocks.pop()
-            size = 0
-            for key, (dtype, shape) in self._numeric.items():
-                part = np.asarray(block[key], dtype=dtype).reshape(-1, *shape)
-                size = len(part)
-                out[key][at : at + size] = part
-            for key in self._objects:
-                out[key].extend(block[key])
-            at += size
+        out: dict[str, object] = {key: a[: self.count] for key, a in self._arrays.items()}
+        out.update(self._lists)
         return out
 
 
@@ -147,8 +159,8 @@ class UseTable:
         return len(self.line)
 
 
-def position_columns() -> Columns:
-    """Empty columns of a ``PositionTable``."""
+def position_columns(capacity: int = 1024) -> Columns:
+    """Empty columns of a ``PositionTable`` (room for ``capacity`` rows before growing)."""
     return Columns(
         {
             "line": ("int32", ()),
@@ -161,12 +173,14 @@ def position_columns() -> Columns:
             "span": ("int64", (3, 2)),
         },
         ("type", "name", "reason"),
+        capacity,
     )
 
 
-def use_columns() -> Columns:
-    """Empty columns of a ``UseTable``."""
+def use_columns(capacity: int = 1024) -> Columns:
+    """Empty columns of a ``UseTable`` (room for ``capacity`` rows before growing)."""
     return Columns(
         {"line": ("int32", ()), "column": ("int32", ()), "base": ("int32", ())},
         ("motion", "name", "text", "reason"),
+        capacity,
     )
