@@ -3,7 +3,8 @@ and, in the same run, a floor: a bare Python process that imports what the row n
 same input files and writes the same number of files and bytes. Ratio = command / floor.
 
 Medians of 5 runs (3 for the 1e5 jobs, 1 for the 1e6 jobs); peak RSS of the process from
-wait4. `python bench/bench_commands.py --million` adds the 1e6 rows (minutes, GiB).
+wait4. `python bench/bench_commands.py --million` adds the 1e6 rows (minutes, GiB);
+`--only=rewrite` (any word of the command column) runs only the rows that name it.
 """
 
 from __future__ import annotations
@@ -83,52 +84,63 @@ def job_row(name, args, inputs, target, tmp, repeats):
     return name, seconds, peak, "same I/O in Python", floor
 
 
-def main(million: bool) -> None:
+def main(million: bool, only: str = "") -> None:
     rows = []
     with tempfile.TemporaryDirectory(prefix="accugrid-bench-") as folder:
         tmp = Path(folder)
         one = tmp / "one.csv"
         one.write_text("x,y,z\n1700,0,1500\n")
-        seconds, peak = median_run([ACCUGRID, "--help"], 5)
-        floor, _ = median_run([sys.executable, "-c", "import numpy"], 5)
-        rows.append(("accugrid --help", seconds, peak, "import numpy", floor))
-        seconds, peak = median_run(
-            [ACCUGRID, "correct", str(one), "--grid", str(GRID), "-o", str(tmp / "c1.csv")]
-            + ["--force"],
-            5,
-        )
-        floor, _ = median_run([sys.executable, "-c", "import numpy, scipy.spatial"], 5)
-        rows.append(("accugrid correct, 1 point", seconds, peak, "import numpy, scipy", floor))
+        if only in "accugrid --help":
+            seconds, peak = median_run([ACCUGRID, "--help"], 5)
+            floor, _ = median_run([sys.executable, "-c", "import numpy"], 5)
+            rows.append(("accugrid --help", seconds, peak, "import numpy", floor))
+        if only in "accugrid correct, 1 point":
+            seconds, peak = median_run(
+                [ACCUGRID, "correct", str(one), "--grid", str(GRID), "-o", str(tmp / "c1.csv")]
+                + ["--force"],
+                5,
+            )
+            floor, _ = median_run([sys.executable, "-c", "import numpy, scipy.spatial"], 5)
+            rows.append(("accugrid correct, 1 point", seconds, peak, "import numpy, scipy", floor))
 
         sizes = [(100_000, 3)] + ([(1_000_000, 1)] if million else [])
-        for n, repeats in sizes:
+        for n, repeats in sizes if only in "accugrid krl gcode holes" else ():
             label = f"{n:.0e}".replace("+0", "")
             holes = tmp / f"holes{n}.csv"
             holes.write_text(points_csv(n))
             for command, out in (("krl", tmp / f"krl{n}"), ("gcode", tmp / f"holes{n}.ngc")):
+                if only not in f"accugrid {command} holes":
+                    continue
                 args = [command, str(holes), "--cell", str(CELL), "-o", str(out)]
                 name = f"accugrid {command}, {label} holes"
                 rows.append(job_row(name, args, [holes, CELL, GRID], out, tmp, repeats))
+            if only not in "accugrid correct points":
+                continue
             robot_holes = tmp / f"robot{n}.csv"
             robot_holes.write_text(robot_points_csv(n))
             out = tmp / f"corrected{n}.csv"
             args = ["correct", str(robot_holes), "--grid", str(GRID), "-o", str(out)]
             name = f"accugrid correct, {label} points"
             rows.append(job_row(name, args, [robot_holes, GRID], out, tmp, repeats))
-        pair_dir = tmp / "pair"
-        pair_dir.mkdir()
-        pair = krl_pair(pair_dir)
-        out = tmp / "rewritten"
-        args = ["rewrite", *map(str, pair), "--cell", str(CELL), "-o", str(out)]
-        rows.append(
-            job_row("accugrid rewrite, 1e5 KRL pair", args, [*pair, CELL, GRID], out, tmp, 3)
-        )
-        (ngc,) = gcode(pair_dir)
-        out_ngc = tmp / "rewritten.ngc"
-        args = ["rewrite", str(ngc), "--cell", str(CELL), "-o", str(out_ngc)]
-        rows.append(
-            job_row("accugrid rewrite, 1e5 G-code", args, [ngc, CELL, GRID], out_ngc, tmp, 3)
-        )
+        for n, repeats in sizes if only in "accugrid rewrite KRL pair G-code" else ():
+            # rewrite: a KRL .src/.dat pair and a G-code file of n positions
+            label = f"{n:.0e}".replace("+0", "")
+            folder = tmp / f"rewrite{n}"
+            folder.mkdir()
+            pair = krl_pair(folder, n)
+            out = tmp / f"rewritten{n}"
+            args = ["rewrite", *map(str, pair), "--cell", str(CELL), "-o", str(out)]
+            args += ["--max-mb", "512"]  # a 1e6-position .dat is 138 MiB (default limit 64)
+            name = f"accugrid rewrite, {label} KRL pair"
+            rows.append(job_row(name, args, [*pair, CELL, GRID], out, tmp, repeats))
+            (ngc,) = gcode(folder, n)
+            out_ngc = tmp / f"rewritten{n}.ngc"
+            args = ["rewrite", str(ngc), "--cell", str(CELL), "-o", str(out_ngc)]
+            args += ["--max-mb", "512"]
+            name = f"accugrid rewrite, {label} G-code"
+            rows.append(job_row(name, args, [ngc, CELL, GRID], out_ngc, tmp, repeats))
+            for path in [*pair, ngc]:
+                path.unlink()
     print(
         table(
             [
@@ -141,4 +153,5 @@ def main(million: bool) -> None:
 
 
 if __name__ == "__main__":
-    main("--million" in sys.argv[1:])
+    flags = sys.argv[1:]
+    main("--million" in flags, next((f[7:] for f in flags if f.startswith("--only=")), ""))

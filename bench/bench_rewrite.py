@@ -37,8 +37,8 @@ def positions(n: int, seed: int = 0) -> np.ndarray:
     return transform_points(invert(cell.robot_T_base), robot)
 
 
-def krl_pair(folder: Path) -> list[Path]:
-    p = positions(N)
+def krl_pair(folder: Path, n: int = N) -> list[Path]:
+    p = positions(n)
     dat = ["&ACCESS RVP", "DEFDAT big"]
     dat += [
         f"DECL E6POS XP{i}={{X {x:.3f},Y {y:.3f},Z {z:.3f},A -90.000,B 0.000,C 180.000,"
@@ -46,7 +46,7 @@ def krl_pair(folder: Path) -> list[Path]:
         for i, (x, y, z) in enumerate(p)
     ]
     src = ["&ACCESS RVP", "DEF big( )", "BAS (#BASE,1)"]
-    src += [f"LIN XP{i} C_DIS" for i in range(N)] + ["END"]
+    src += [f"LIN XP{i} C_DIS" for i in range(n)] + ["END"]
     (folder / "big.dat").write_text("\r\n".join(dat + ["ENDDAT"]) + "\r\n")
     (folder / "big.src").write_text("\r\n".join(src) + "\r\n")
     return [folder / "big.src", folder / "big.dat"]
@@ -64,10 +64,10 @@ def krl_inline(folder: Path, n: int = N) -> list[Path]:
     return [path]
 
 
-def gcode(folder: Path) -> list[Path]:
-    p = positions(N, 2)
+def gcode(folder: Path, n: int = N) -> list[Path]:
+    p = positions(n, 2)
     lines = ["%", "G21 G17 G90 G54", "G0 X0.000 Y300.000 Z400.000"]
-    for i, (x, y, z) in enumerate(p[: N - 3]):
+    for i, (x, y, z) in enumerate(p[: n - 3]):
         if i % 4 == 3:
             lines.append(f"N{i} G99 G81 X{x:.3f} Y{y:.3f} Z{z:.3f} R{z + 20:.3f} F300")
         else:

@@ -188,12 +188,12 @@ def _temp_name(path: Path) -> str:
     )
 
 
-def _write_temp(tmp: str, data: bytes | str | Iterable[bytes | str]) -> None:
-    """Create ``tmp`` with the data: bytes, text (UTF-8), or an iterable of either, written in
-    turn (a job's text in pieces)."""
+def _write_temp(tmp: str, data: bytes | bytearray | str | Iterable[bytes | str]) -> None:
+    """Create ``tmp`` with the data: bytes (or a bytearray), text (UTF-8), or an iterable of
+    either, written in turn (a job's text in pieces)."""
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies
     try:
-        for part in [data] if isinstance(data, (bytes, str)) else data:
+        for part in [data] if isinstance(data, (bytes, bytearray, str)) else data:
             view = memoryview(part.encode("utf-8") if isinstance(part, str) else part)
             while view:
                 view = view[os.write(fd, view) :]

@@ -32,6 +32,7 @@ __all__ = [
     "read_program",
     "splice",
     "split_lines",
+    "Splicer",
 ]
 
 MAX_BYTES = 64 * 2**20
@@ -71,18 +72,42 @@ def check_text(text: str, path: str | os.PathLike[str] | None) -> None:
         raise InputError("binary data (NUL byte), not a program", path, line)
 
 
-def splice(text: str, edits: list[tuple[int, int, str]]) -> str:
-    """Replace ``text[start:end]`` by each new string (non-overlapping edits, any order)."""
-    if not edits:
-        return text
+def splice(text: str, edits: list[tuple[int, int, str]]) -> bytearray:
+    """``text`` as latin-1 bytes with ``text[start:end]`` replaced by each new string
+    (non-overlapping edits, any order)."""
     edits.sort()
-    parts, last = [], 0
-    for start, end, new in edits:
-        parts.append(text[last:start])
-        parts.append(new)
-        last = end
-    parts.append(text[last:])
-    return "".join(parts)
+    out = Splicer(text)
+    if edits:
+        out.add(*map(list, zip(*edits, strict=True)))
+    return out.finish()
+
+
+class Splicer:
+    """``text`` (latin-1) with spans replaced, as bytes built a block of edits at a time (each
+    block after the previous one, sorted, non-overlapping): a million edits never exist as one
+    list, and the new program exists once, as bytes (the program text is latin-1)."""
+
+    def __init__(self, text: str) -> None:
+        self.text = text
+        self.out = bytearray()
+        self.last = 0
+
+    def add(self, starts, ends, news) -> None:
+        """Replace ``text[starts[k]:ends[k]]`` by ``news[k]`` (lists of equal length)."""
+        if not len(starts):
+            return
+        gaps = map(self.text.__getitem__, map(slice, [self.last, *ends[:-1]], starts))
+        pieces: list[str] = [""] * (2 * len(starts))
+        pieces[0::2] = gaps
+        pieces[1::2] = news
+        self.out += "".join(pieces).encode("latin-1")
+        self.last = ends[-1]
+
+    def finish(self) -> bytearray:
+        """The new program's bytes, every edit made."""
+        self.out += self.text[self.last :].encode("latin-1")
+        self.last = len(self.text)
+        return self.out
 
 
 def precision(literals, minimum: int = 0) -> int:

@@ -37,6 +37,11 @@ __all__ = [
     "Options",
     "Result",
     "Row",
+    "Rows",
+    "CORRECTED",
+    "OUTSIDE",
+    "SKIPPED",
+    "STATUSES",
     "correct_points",
     "header_lines",
     "warning_lines",
@@ -98,29 +103,120 @@ class Row:
     rounding_mm: float = math.nan  # how far rounding to the written decimals leaves it (mm)
 
 
+STATUSES = ("skipped", "corrected", "outside")
+SKIPPED, CORRECTED, OUTSIDE = 0, 1, 2
+
+
+class Rows:
+    """The report rows (N), column by column: ``files`` (distinct paths) and ``file`` (N,) index
+    into it, ``line`` (N,) int, ``name`` and ``reason`` lists of str, ``status`` (N,) codes of
+    ``STATUSES``, ``old`` and ``new`` (N, 3) mm (NaN: none), ``residual_mm`` and ``rounding_mm``
+    (N,) mm. Iterating gives ``Row`` objects (copies)."""
+
+    def __init__(
+        self,
+        files: list[str],
+        file: np.ndarray,
+        line: np.ndarray,
+        name: list[str],
+        reason: list[str],
+        old: np.ndarray,
+    ) -> None:
+        n = len(line)
+        self.files = files
+        self.file = np.asarray(file, dtype=np.int64).reshape(n)
+        self.line = np.asarray(line, dtype=np.int64).reshape(n)
+        self.name = name
+        self.reason = reason
+        self.status = np.zeros(n, np.int8)
+        self.old = np.asarray(old, dtype=float).reshape(n, 3)
+        self.new = np.full((n, 3), math.nan)
+        self.residual_mm = np.full(n, math.nan)
+        self.rounding_mm = np.full(n, math.nan)
+
+    @classmethod
+    def concat(cls, parts: list[Rows]) -> Rows:
+        """The rows of each part, in order."""
+        files = sorted({f for p in parts for f in p.files})
+        index = {f: i for i, f in enumerate(files)}
+        out = cls(
+            files,
+            np.concatenate(
+                [np.array([index[f] for f in p.files], np.int64)[p.file] for p in parts]
+                or [np.zeros(0, np.int64)]
+            ),
+            np.concatenate([p.line for p in parts] or [np.zeros(0, np.int64)]),
+            [n for p in parts for n in p.name],
+            [r for p in parts for r in p.reason],
+            np.concatenate([p.old for p in parts] or [np.zeros((0, 3))]),
+        )
+        for key in ("status", "new", "residual_mm", "rounding_mm"):
+            setattr(out, key, np.concatenate([getattr(p, key) for p in parts] or [out.status]))
+        return out
+
+    def __len__(self) -> int:
+        return len(self.line)
+
+    def __getitem__(self, i: int) -> Row:
+        return Row(
+            self.files[self.file[i]],
+            int(self.line[i]),
+            self.name[i],
+            STATUSES[self.status[i]],
+            self.reason[i],
+            tuple(self.old[i].tolist()),
+            tuple(self.new[i].tolist()),
+            float(self.residual_mm[i]),
+            float(self.rounding_mm[i]),
+        )
+
+    def __iter__(self):
+        return (self[i] for i in range(len(self)))
+
+    def where(self, i: int) -> tuple[str, int]:
+        """(file, line) of row ``i``, for an error message."""
+        return self.files[self.file[i]], int(self.line[i])
+
+    def count(self, status: int) -> int:
+        return int(np.count_nonzero(self.status == status))
+
+
 @dataclass
 class Result:
-    """Rewritten texts by input path (latin-1 str), the report rows and the largest correction."""
+    """The rewritten programs by input path (their latin-1 bytes), the report rows and the
+    largest correction."""
 
-    texts: dict[str, str]
-    rows: list[Row]
+    data: dict[str, bytes | bytearray]
+    rows: Rows
+
+    @property
+    def texts(self) -> dict[str, str]:
+        """The rewritten programs as text (decoded on each call)."""
+        return {path: data.decode("latin-1") for path, data in self.data.items()}
 
     @property
     def corrected(self) -> list[Row]:
-        return [r for r in self.rows if r.status == "corrected"]
+        return [self.rows[i] for i in np.flatnonzero(self.rows.status == CORRECTED).tolist()]
 
     def largest(self) -> tuple[float, Row | None]:
+        """The longest correction written (mm) and its row (the first of equals)."""
+        rows = self.rows
+        idx = np.flatnonzero(rows.status == CORRECTED)
+        if not idx.size:
+            return 0.0, None
+        approx = np.linalg.norm(rows.new[idx] - rows.old[idx], axis=1)
         best, where = 0.0, None
-        for row in self.corrected:
-            d = math.dist(row.new, row.old)
+        for i in idx[approx >= approx.max() * (1 - 1e-9)].tolist():  # exact as math.dist
+            d = math.dist(rows.new[i].tolist(), rows.old[i].tolist())
             if d > best:
-                best, where = d, row
-        return best, where
+                best, where = d, i
+        return best, None if where is None else rows[where]
 
 
 def correct_points(
     points_robot: np.ndarray,
-    rows: list[Row],
+    rows: Rows,
+    at: np.ndarray,
     opts: Options,
     rotations: np.ndarray | None = None,
     mark: bool = True,
@@ -128,7 +224,7 @@ def correct_points(
     """Correct robot-frame points (N, 3) mm with one ``GridModel.check``; (N, 3) commands, NaN
     rows where a point is not corrected.
 
-    ``rows`` (N,): the report row of each point (an error names its file and line).
+    ``at`` (N,): the report row of each point in ``rows`` (an error names its file and line).
     ``rotations`` (N, 3, 3): each point's orientation, robot frame (NaN rows: none). With
     ``mark``, rows outside the grid get status "outside", rows beyond ``orientation_limit``
     (``accugrid correct``'s rule) stay "skipped" with the angle as the reason (unless
@@ -144,31 +240,36 @@ def correct_points(
     use[found.outside] = False
     if mark:
         for i in found.outside.tolist():
-            rows[i].status, rows[i].reason = "outside", outside_reason(points_robot[i])
+            rows.status[at[i]] = OUTSIDE
+            rows.reason[at[i]] = outside_reason(points_robot[i])
         if found.angle is not None:
-            skip = _orientation(found.angle, rows, opts)
+            skip = _orientation(found.angle, rows, at, opts)
             if opts.calibrated is None:
                 use &= ~skip
     command, length = found.command, found.length
     if opts.calibrated is not None:
-        command, length = _by_model(points_robot, rotations, rows, use, opts)
+        command, length = _by_model(points_robot, rotations, rows, at, use, opts)
         use &= ~np.isnan(command[:, 0])
     limit = opts.correction.max_correction_mm
     too_long = [] if limit is None else np.flatnonzero(use & (length > limit)).tolist()
     if too_long:
         i = max(too_long, key=lambda k: length[k])
         raise InputError(
-            f"{rows[i].name}: correction of {length[i]:.3f} mm exceeds the safety limit of "
+            f"{rows.name[at[i]]}: correction of {length[i]:.3f} mm exceeds the safety limit of "
             f"{opts.correction.max_correction_mm:g} mm; refusing the whole job (check the grid)",
-            rows[i].file,
-            rows[i].line,
+            *rows.where(at[i]),
         )
     out[use] = command[use]
     return out
 
 
 def _by_model(
-    points: np.ndarray, rotations: np.ndarray | None, rows: list[Row], use: np.ndarray, opts
+    points: np.ndarray,
+    rotations: np.ndarray | None,
+    rows: Rows,
+    at: np.ndarray,
+    use: np.ndarray,
+    opts,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Model commands (N, 3) mm robot frame (NaN where not corrected) and their lengths (N,) mm
     for the ``use`` rows with an orientation; InputError at the row the model cannot correct."""
@@ -182,37 +283,38 @@ def _by_model(
         )
         oriented[:] = True
     for i in np.flatnonzero(use & ~oriented).tolist():
-        rows[i].reason = "no orientation (A, B, C) here: the model needs one; left as is"
+        rows.reason[at[i]] = "no orientation (A, B, C) here: the model needs one; left as is"
     todo = np.flatnonzero(use & oriented)
     if todo.size:
         result = opts.corrector.correct(points[todo], matrix_to_abc(rotations[todo]).reshape(-1, 3))
         if not result.ok.all():
             j = int(result.failed[0])
-            row = rows[int(todo[j])]
+            k = at[int(todo[j])]
             raise InputError(
-                f"{row.name}: not corrected by model {opts.calibrated.name}: {result.reason[j]}"
+                f"{rows.name[k]}: not corrected by model {opts.calibrated.name}: "
+                f"{result.reason[j]}"
                 + (f"; {result.failed.size - 1} more" if result.failed.size > 1 else ""),
-                row.file,
-                row.line,
+                *rows.where(k),
             )
         command[todo] = result.command
     return command, opts.corrector.too_long(points, command)[0]
 
 
-def _orientation(angle: np.ndarray, rows: list[Row], opts: Options) -> np.ndarray:
-    """Rows (N,) beyond the orientation limit (reasons set), flags for those beyond the tol."""
+def _orientation(angle: np.ndarray, rows: Rows, at: np.ndarray, opts: Options) -> np.ndarray:
+    """Points (N,) beyond the orientation limit (reasons set in their rows ``at``), flags for
+    those beyond the tol."""
     grid = ", ".join(fixed(v) for v in opts.model.orientation_abc)
-    skip = np.zeros(len(rows), bool)
+    skip = np.zeros(len(angle), bool)
     for i in np.flatnonzero(angle > opts.orientation_tol).tolist():
         a = float(angle[i])
         if a > opts.orientation_limit and not opts.allow_orientation:
             skip[i] = True
-            rows[i].reason = (
+            rows.reason[at[i]] = (
                 f"orientation {a:.1f} deg from the grid's ({grid}), more than "
                 f"--orientation-limit {opts.orientation_limit:g}: the grid does not hold there"
             )
         else:
-            rows[i].reason = f"flag: orientation {a:.1f} deg from the grid's ({grid})"
+            rows.reason[at[i]] = f"flag: orientation {a:.1f} deg from the grid's ({grid})"
     return skip
 
 
@@ -226,21 +328,26 @@ def warning_lines(result: Result, opts: Options) -> list[str]:
     """What the user must know although nothing failed: rounding that eats the tolerance,
     positions flagged for their orientation."""
     out = []
-    rounded = [r for r in result.corrected if r.rounding_mm > opts.tolerance_mm / 10]
-    if rounded:
-        worst = max(rounded, key=lambda r: r.rounding_mm)
+    rows = result.rows
+    corrected = np.flatnonzero(rows.status == CORRECTED)
+    rounding = rows.rounding_mm[corrected]
+    rounded = corrected[rounding > opts.tolerance_mm / 10]
+    if rounded.size:
+        worst = int(rounded[np.argmax(rows.rounding_mm[rounded])])
+        file, line = rows.where(worst)
         out.append(
-            f"rounding to the written decimals leaves {len(rounded)} position(s) more than a "
+            f"rounding to the written decimals leaves {rounded.size} position(s) more than a "
             f"tenth of the tolerance ({opts.tolerance_mm:g} mm) off, up to "
-            f"{worst.rounding_mm:.3f} mm ({Path(worst.file).name} line {worst.line}): give "
+            f"{rows.rounding_mm[worst]:.3f} mm ({Path(file).name} line {line}): give "
             "more --decimals"
         )
-    flagged = [r for r in result.corrected if r.reason.startswith("flag: orientation")]
+    flagged = [i for i in corrected.tolist() if rows.reason[i].startswith("flag: orientation")]
     if flagged:
+        file, line = rows.where(flagged[0])
         out.append(
             f"{len(flagged)} corrected position(s) more than --orientation-tol "
             f"{opts.orientation_tol:g} deg from the grid's orientation (see the report), first "
-            f"{Path(flagged[0].file).name} line {flagged[0].line}"
+            f"{Path(file).name} line {line}"
         )
     return out
 
@@ -250,16 +357,15 @@ def outside_reason(robot_xyz: np.ndarray) -> str:
     return f"outside the grid (robot frame {x}, {y}, {z} mm): left as is"
 
 
-def strict_check(rows: list[Row], opts: Options) -> None:
+def strict_check(rows: Rows, opts: Options) -> None:
     if opts.strict:
-        outside = [r for r in rows if r.status == "outside"]
-        if outside:
-            r = outside[0]
+        outside = np.flatnonzero(rows.status == OUTSIDE)
+        if outside.size:
+            i = int(outside[0])
             raise InputError(
-                f"{len(outside)} position(s) outside the grid (--strict); first: {r.name}: "
-                f"{r.reason}",
-                r.file,
-                r.line,
+                f"{outside.size} position(s) outside the grid (--strict); first: {rows.name[i]}: "
+                f"{rows.reason[i]}",
+                *rows.where(i),
             )
 
 
@@ -278,26 +384,35 @@ def header_lines(result: Result, program: str, cell: str, opts: Options) -> list
     ]
     if opts.model_file is not None:
         inputs.insert(2, input_line("model", opts.model_file, file_sha256(opts.model_file)))
-    closing = [f"positions corrected {len(result.corrected)}"]
+    closing = [f"positions corrected {result.rows.count(CORRECTED)}"]
     return make_header("rewrite", inputs, (), largest, at, closing)
 
 
-def report_csv(rows: list[Row], decimals: int = 4) -> str:
+def report_csv(rows: Rows, decimals: int = 4) -> str:
     """The report as CSV text (DESIGN.md style: header row, mm, ``decimals`` places)."""
     corrected = ",".join([f"%.{decimals}f"] * 11)  # x..z, x_new..z_new, dx..dz, length, residual
     old_only = ",".join([f"%.{decimals}f"] * 3) + ",,,,,,,,"
-    names: dict[str, str] = {}
+    files = [_csv(Path(f).name) for f in rows.files]
     out = [REPORT_COLUMNS]
-    for r in rows:
-        file = names.get(r.file) or names.setdefault(r.file, _csv(Path(r.file).name))
-        head = f"{file},{r.line},{_csv(r.name)},{r.status},{_csv(r.reason)},"
-        if r.status == "corrected":
-            (x, y, z), (u, v, w) = r.old, r.new
+    for file, line, name, status, reason, old, new, residual in zip(
+        rows.file.tolist(),
+        rows.line.tolist(),
+        rows.name,
+        rows.status.tolist(),
+        rows.reason,
+        rows.old.tolist(),
+        rows.new.tolist(),
+        rows.residual_mm.tolist(),
+        strict=True,
+    ):
+        head = f"{files[file]},{line},{_csv(name)},{STATUSES[status]},{_csv(reason)},"
+        if status == CORRECTED:
+            (x, y, z), (u, v, w) = old, new
             dx, dy, dz = u - x, v - y, w - z
             length = math.sqrt(dx * dx + dy * dy + dz * dz)
-            numbers = corrected % (x, y, z, u, v, w, dx, dy, dz, length, r.residual_mm)
-        elif r.old[0] == r.old[0] and r.old[1] == r.old[1] and r.old[2] == r.old[2]:
-            numbers = old_only % r.old
+            numbers = corrected % (x, y, z, u, v, w, dx, dy, dz, length, residual)
+        elif old[0] == old[0] and old[1] == old[1] and old[2] == old[2]:
+            numbers = old_only % tuple(old)
         else:
             numbers = ",,,,,,,,,,"
         out.append(head + numbers.replace("-0.0000,", "0.0000,").replace("nan", ""))

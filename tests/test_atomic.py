@@ -299,3 +299,18 @@ def test_a_krl_job_over_a_longer_one_leaves_only_the_new_modules(cell_dir, capsy
     main_src = (cell_dir / "krl" / "WING_PANEL.src").read_text()
     modules = {p[:-4] for p in short_job if p != "WING_PANEL.src" and p != "WING_PANEL.dat"}
     assert modules and all(m in main_src for m in modules)
+
+
+def test_a_file_may_come_as_text_bytes_a_bytearray_or_pieces(tmp_path):
+    # the rewrite builds its programs as bytearrays, krl/gcode render text in pieces
+    contents = {
+        tmp_path / "text.txt": "naïve\n",
+        tmp_path / "bytes.bin": b"\x00\xff",
+        tmp_path / "array.bin": bytearray(b"LIN P1\r\n"),
+        tmp_path / "pieces.txt": iter(["a", b"b", "c\n"]),
+    }
+    write_files(contents)
+    assert (tmp_path / "text.txt").read_bytes() == "naïve\n".encode()
+    assert (tmp_path / "bytes.bin").read_bytes() == b"\x00\xff"
+    assert (tmp_path / "array.bin").read_bytes() == b"LIN P1\r\n"
+    assert (tmp_path / "pieces.txt").read_bytes() == b"abc\n"

@@ -316,7 +316,7 @@ def test_a_million_hole_job_numbers_its_modules_past_999():
     ],
 )
 def test_modules_that_cannot_be_named_or_called_are_refused(name, holes, lines, message):
-    c = dataclasses.replace(cell(), program_name=name, lines_per_file=lines)
+    c = cell_with(krl={"name": name, "lines_per_file": lines})
     with pytest.raises(InputError, match=message):
         module_names(c, holes, ["h"])
 

@@ -28,33 +28,18 @@ Output: for one file, -o is the output file (or an existing directory). For a .s
 from __future__ import annotations
 
 import argparse
-import gc
 import os
 import sys
-from collections import Counter
 from pathlib import Path
 
-import numpy as np
-
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cell import load_cell
 from accugrid.codegen.dialects import dialect_of
-from accugrid.codegen.gcode.rewrite import rewrite_gcode
-from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.program import GRID_ORIENTATION_TOL_DEG
-from accugrid.codegen.program_text import MAX_BYTES, add_header, read_program
-from accugrid.codegen.rewrite import (
-    ORIENTATION_LIMIT_DEG,
-    Options,
-    header_lines,
-    report_csv,
-    warning_lines,
-)
-from accugrid.compensation.corrector import Corrector
+from accugrid.codegen.program_text import MAX_BYTES
+from accugrid.codegen.rewrite import ORIENTATION_LIMIT_DEG
+from accugrid.codegen.rewrite_job import RewriteRequest, rewrite_job
 from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
-from accugrid.kinematics.calibrated import check_same_robot
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.robot import load_robot
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -176,81 +161,32 @@ def run(args: argparse.Namespace) -> int:
     targets = list(outputs.values()) + ([Path(args.report)] if args.report else [])
     if len(set(map(os.path.abspath, targets))) != len(targets):
         raise InputError("two outputs would have the same name", args.output)
-    all_inputs = inputs + [Path(args.cell)] + ([Path(args.config_dat)] if args.config_dat else [])
-    check_targets(targets, all_inputs, args.force)
-
-    cell = load_cell(args.cell)
-    grid = cell.grid_file(args.grid)
-    model_file = Path(args.model) if args.model is not None else cell.model_path
-    calibrated = None
-    if model_file is not None:
-        calibrated = load_robot(model_file)
-        nominal = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
-        check_same_robot(calibrated, nominal, os.fspath(model_file))
-        if np.array_equal(calibrated.flange_T_tool, np.eye(4)):  # no TCP in the file: the cell's
-            calibrated = calibrated.with_tool(cell.flange_T_tool)
-        all_inputs.append(model_file)
-    # with a model: residual grid in the Status the grid was measured in (wrist flips otherwise)
-    corrector = Corrector.build(
-        cell.correction,
-        grid,
-        calibrated,
-        cell.configuration.status,
-        cell.flange_T_tool if calibrated is not None else None,
+    read = inputs + [Path(args.cell)] + ([Path(args.config_dat)] if args.config_dat else [])
+    check_targets(targets, read, args.force)
+    job = rewrite_job(
+        RewriteRequest(
+            outputs=outputs,
+            cell=args.cell,
+            grid=args.grid,
+            model=args.model,
+            report=Path(args.report) if args.report else None,
+            config_dat=Path(args.config_dat) if args.config_dat else None,
+            header=args.header,
+            decimals=args.decimals,
+            strict=args.strict,
+            base=args.base,
+            trust_calls=args.trust_calls,
+            ignore_external_axes=args.ignore_external_axes,
+            max_bytes=int(args.max_mb * 2**20),
+            orientation_tol=args.orientation_tol,
+            orientation_limit=args.orientation_limit,
+            allow_orientation=args.allow_orientation,
+            tolerance_mm=args.tolerance,
+        )
     )
-    max_bytes = int(args.max_mb * 2**20)
-    opts = Options(
-        model=corrector.grid,
-        base_data=cell.base_data,
-        robot_T_program=cell.gcode.robot_T_program,
-        correction=cell.correction,
-        decimals=args.decimals,
-        strict=args.strict,
-        base_override=args.base,
-        tool_number=cell.tool_number,
-        trust_calls=args.trust_calls,
-        ignore_external_axes=args.ignore_external_axes,
-        max_bytes=max_bytes,
-        orientation_tol=args.orientation_tol,
-        orientation_limit=args.orientation_limit,
-        allow_orientation=args.allow_orientation,
-        tolerance_mm=args.tolerance,
-        corrector=corrector,
-        model_file=None if model_file is None else os.fspath(model_file),
-        reference_abc=cell.configuration.reference_abc if calibrated is not None else None,
-    )
-    texts = {os.fspath(p): read_program(p, max_bytes) for p in inputs}
-    # The parsers build millions of small acyclic objects; the cycle collector would walk them
-    # again and again while they are built (15 % of a 100k-position rewrite), for nothing.
-    collecting = gc.isenabled()
-    gc.disable()
-    try:
-        if kinds == {"krl"}:
-            config = read_program(args.config_dat, max_bytes) if args.config_dat else None
-            result = rewrite_krl(texts, opts, config)
-        else:
-            result = rewrite_gcode(os.fspath(inputs[0]), texts[os.fspath(inputs[0])], opts)
-    finally:
-        if collecting:
-            gc.enable()
-    files: dict[Path, bytes] = {}
-    for path in inputs:
-        text = result.texts[os.fspath(path)]
-        if args.header:
-            lines = header_lines(result, os.fspath(path), args.cell, opts)
-            text = add_header(text, lines, dialect_of(path))
-        files[outputs[path]] = text.encode("latin-1")
-    if args.report:
-        files[Path(args.report)] = report_csv(result.rows).encode("utf-8")
     # a KRL pair: the .src (what a controller runs) replaced last
-    write_files(files, all_inputs + [grid], args.force, main=[outputs[inputs[0]]])
-    for line in warning_lines(result, opts):
+    write_files(job.files, job.read, args.force, main=[outputs[inputs[0]]])
+    for line in job.warnings:
         print(f"accugrid rewrite: warning: {line}", file=sys.stderr)
-    counts = Counter(r.status for r in result.rows)
-    largest, _ = result.largest()
-    print(
-        f"rewrite: {counts['corrected']} corrected (largest {largest:.3f} mm), "
-        f"{counts['outside']} outside the grid, {counts['skipped']} skipped -> "
-        + ", ".join(os.fspath(p) for p in outputs.values())
-    )
+    print(job.summary() + " -> " + ", ".join(os.fspath(p) for p in outputs.values()))
     return 0

@@ -34,6 +34,14 @@ _NUMBER = r"[-+]?+(?:\d++(?:\.\d*+)?+|\.\d++)"
 _NUMBER_RE = re.compile(_NUMBER)
 _WORD_RE = re.compile(r"([A-Za-z])\s*+(" + _NUMBER + ")")
 _LINE_RE = re.compile(r"(?:\s*+[A-Za-z]\s*+" + _NUMBER + r")*+\s*+")
+# The common CAM line, read in one match: [N..] [G98|G99] [G0|G1|G73|G81..G89] X.. Y.. Z.. [R..]
+# [F..] [(comment)]
+_PLAIN_RE = re.compile(
+    r"[ \t]*+(N\d++[ \t]++)?+(?:G(9[89])[ \t]++)?+(?:G(0?+[01]|0|8[1-9]|73)[ \t]++)?+"
+    r"X(" + _NUMBER + r")[ \t]++Y(" + _NUMBER + r")[ \t]++Z(" + _NUMBER + r")"
+    r"(?:[ \t]++R(" + _NUMBER + r"))?+([ \t]++F" + _NUMBER + r")?+[ \t]*+"
+    r"(?:\([^()\n;]*+\)[ \t]*+)?+\r?+"
+)
 _DIGITS_RE = re.compile(r"\d++")
 _OWORD_RE = re.compile(
     r"\s*+[Oo]\s*+(?:\d++|<[^>]*+>)\s*+(sub|endsub|if|elseif|else|endif|while|endwhile|do|call|"
@@ -344,6 +352,29 @@ def _put(block: _Line, letter: str, number: str, at: int, end: int, offset: int,
         words[letter] = None
 
 
+def _plain_line(line: str, offset: int) -> _Line | None:
+    """A line ``_PLAIN_RE`` reads whole, as ``_fast_line`` would read it; None otherwise."""
+    m = _PLAIN_RE.fullmatch(line)
+    if m is None:
+        return None
+    n, retract, g, x, y, z, r, f = m.groups()
+    xv, yv, zv, rv = float(x), float(y), float(z), float(r or 0)
+    if xv - xv or yv - yv or zv - zv or rv - rv:  # beyond the float range: _put says where
+        return None
+    words: dict[str, Word | None] = {"N": None} if n else {}
+    words["X"] = _new_word(Word, ("X", xv, offset + m.start(4), offset + m.end(4), x))
+    words["Y"] = _new_word(Word, ("Y", yv, offset + m.start(5), offset + m.end(5), y))
+    words["Z"] = _new_word(Word, ("Z", zv, offset + m.start(6), offset + m.end(6), z))
+    if r:
+        words["R"] = _new_word(Word, ("R", rv, offset + m.start(7), offset + m.end(7), r))
+    if f:
+        words["F"] = None
+    gcodes = [retract] if retract else []
+    if g:
+        gcodes.append(g if len(g) == 2 and g[0] != "0" else g[-1])  # "01" -> "1", "81" -> "81"
+    return _Line(words, gcodes, {})
+
+
 def _fast_line(line: str, offset: int, path: str | None, lineno: int) -> _Line | None:
     """A block of plain words read in one regex pass; None when it needs ``_scan``."""
     if _LINE_RE.fullmatch(line) is None:
@@ -536,6 +567,10 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
         if owords and _OWORD_RE.match(raw):
             state = reader.state
             state.flow = state.flow or f"O-word control flow from line {lineno}"
+            continue
+        block = _plain_line(raw, line_offset) if not (bom and lineno == 1) else None
+        if block is not None:
+            reader.block(block, lineno, line_offset)
             continue
         line = _blank_comments(raw, path, lineno)
         if slashes and line.lstrip().startswith("/"):

@@ -24,9 +24,10 @@ from accugrid.codegen.program_text import (
     splice,
 )
 from accugrid.codegen.rewrite import (
+    CORRECTED,
     Options,
     Result,
-    Row,
+    Rows,
     correct_points,
     rotations_of,
     strict_check,
@@ -38,22 +39,27 @@ __all__ = ["rewrite_gcode"]
 def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
     """Rewrite one RS274NGC program."""
     moves = parse_gcode(text, path)
-    rows = [Row(path, m.line, m.motion, "skipped", m.reason) for m in moves]
-    for m, row in zip(moves, rows, strict=True):
-        row.old = m.target
+    rows = Rows(
+        [path],
+        np.zeros(len(moves), np.int64),
+        [m.line for m in moves],
+        [m.motion for m in moves],
+        [m.reason for m in moves],
+        np.array([m.target for m in moves], dtype=float).reshape(-1, 3),
+    )
     _protect_arc_starts(moves, rows)
-    todo = [i for i, r in enumerate(rows) if not r.reason]
+    todo = [i for i, r in enumerate(rows.reason) if not r]
     desired = np.array([m.target for m in moves], dtype=float).reshape(-1, 3)
     if todo:
         prog = desired[todo]
         t = opts.robot_T_program
         robot = prog @ t[:3, :3].T + t[:3, 3]
         abc = np.array([[moves[i].rotary.get(k, math.nan) for k in "ABC"] for i in todo])
-        todo_rows = [rows[i] for i in todo]
-        corrected = correct_points(robot, todo_rows, opts, rotations_of(t[:3, :3], abc))
+        at = np.array(todo)
+        corrected = correct_points(robot, rows, at, opts, rotations_of(t[:3, :3], abc))
         back = (corrected - robot) @ t[:3, :3]  # R^T e, row-wise
         for j in np.flatnonzero(np.isfinite(corrected[:, 0])).tolist():
-            todo_rows[j].status = "corrected"
+            rows.status[at[j]] = CORRECTED
             desired[todo[j]] = prog[j] + back[j]
     r_planes = _corrected_r_planes(moves, rows, opts)
     edits = _gcode_edits(text, moves, rows, desired, r_planes, opts)
@@ -61,38 +67,38 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
     return Result({path: splice(text, edits)}, rows)
 
 
-def _protect_arc_starts(moves: list[GcodeMove], rows: list[Row]) -> None:
+def _protect_arc_starts(moves: list[GcodeMove], rows: Rows) -> None:
     """An arc keeps its start point: the moves that set it are not corrected either."""
+    reasons = rows.reason
     for i, m in enumerate(moves):
         if not m.is_arc:
             continue
         if m.incremental:
             for j in range(i):
-                rows[j].reason = rows[j].reason or (
+                reasons[j] = reasons[j] or (
                     f"precedes the incremental arc at line {m.line}, whose start must not move"
                 )
             continue
         why = f"sets the start of the arc at line {m.line}, which is not corrected"
         for j in m.setters:
-            if j is not None and not rows[j].reason:
-                rows[j].reason = why
+            if j is not None and not reasons[j]:
+                reasons[j] = why
 
 
-def _corrected_r_planes(moves: list[GcodeMove], rows: list[Row], opts: Options) -> np.ndarray:
+def _corrected_r_planes(moves: list[GcodeMove], rows: Rows, opts: Options) -> np.ndarray:
     """(N,) corrected R plane (mm) of each corrected cycle that writes R; NaN: keep R.
 
     The R point is (X, Y, R) of the hole; only its Z correction can be written."""
     out = np.full(len(moves), np.nan)
+    status = rows.status.tolist()
     idx = [
-        i
-        for i, (m, r) in enumerate(zip(moves, rows, strict=True))
-        if m.is_cycle and "R" in m.words and r.status == "corrected"
+        i for i, m in enumerate(moves) if m.is_cycle and "R" in m.words and status[i] == CORRECTED
     ]
     if idx:
         pts = np.array([[moves[i].target[0], moves[i].target[1], moves[i].r_mm] for i in idx])
         t = opts.robot_T_program
         robot = pts @ t[:3, :3].T + t[:3, 3]
-        corrected = correct_points(robot, [rows[i] for i in idx], opts, mark=False)
+        corrected = correct_points(robot, rows, np.array(idx), opts, mark=False)
         back = (corrected - robot) @ t[:3, :3]
         out[idx] = pts[:, 2] + back[:, 2]  # NaN where the R point is outside: R kept
     return out
@@ -101,7 +107,7 @@ def _corrected_r_planes(moves: list[GcodeMove], rows: list[Row], opts: Options) 
 def _gcode_edits(
     text: str,
     moves: list[GcodeMove],
-    rows: list[Row],
+    rows: Rows,
     desired: np.ndarray,
     r_planes: np.ndarray,
     opts: Options,
@@ -114,20 +120,21 @@ def _gcode_edits(
     edits: list[tuple[int, int, str]] = []
     scales = np.array([m.scale for m in moves]).reshape(-1, 1)
     places = _places(moves, scales[:, 0], opts)
-    corrected = np.array([r.status == "corrected" for r in rows]).reshape(-1, 1)
+    corrected = (rows.status == CORRECTED).reshape(-1, 1)
     absolute = formatted(
         np.where(corrected, desired / scales, np.nan).ravel(), np.repeat(places, 3)
     )
     r_texts = formatted(r_planes / scales[:, 0], places)
-    reached_rows: list[tuple[Row, list[float]]] = []
+    reached_rows: list[tuple[int, list[float]]] = []
     reached_at: list[int] = []  # the move of each reached_rows entry
     cmd = [math.nan] * 3
     cycle_z = r_cmd = math.nan
-    for n, (move, row) in enumerate(zip(moves, rows, strict=True)):
+    status = rows.status.tolist()
+    for n, move in enumerate(moves):
         if move.motion in ("G28", "G30", "G53"):
             cmd = [math.nan] * 3
             continue
-        changed = row.status == "corrected"
+        changed = status[n] == CORRECTED
         incremental = move.incremental and not move.is_cycle
         end = list(cmd)
         for i, k in enumerate("XYZ"):
@@ -171,7 +178,7 @@ def _gcode_edits(
         else:
             reached = end
         if changed:
-            reached_rows.append((row, reached))
+            reached_rows.append((n, reached))
             reached_at.append(n)
         cmd = end
     if reached_rows:
@@ -180,8 +187,10 @@ def _gcode_edits(
         residual = np.linalg.norm(off, axis=1).tolist()
         wrote = np.array([[k in moves[n].words for k in "XYZ"] for n in reached_at])
         rounding = np.where(wrote, off, 0.0).max(axis=1).tolist()
-        for (row, new), res, rnd in zip(reached_rows, residual, rounding, strict=True):
-            row.new, row.residual_mm, row.rounding_mm = tuple(new), res, rnd
+        at = np.array(reached_at)
+        rows.new[at] = reached
+        rows.residual_mm[at] = residual
+        rows.rounding_mm[at] = rounding
     return edits
 
 

@@ -24,15 +24,36 @@ inline-form FOLD lines are comments). It finds:
 
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
 Every pattern is linear in its input (see the note above ``NUMBER``).
+
+Reading is whole-text first: one regex pass over a block of lines picks out the plain lines
+(declarations and motions with a flat aggregate or to a name, ``_PLAIN_RE``), whose numbers are
+converted a column at a time; every other line goes through the statement reader. Plain lines
+change no state, so a run of them takes the base in effect. What is read is kept in columns
+(``codegen.krl.tables``); ``KrlScan.positions`` and ``KrlScan.uses`` build objects on demand.
 """
 
 from __future__ import annotations
 
+import math
 import os
 import re
+import sys
 from dataclasses import dataclass, field
+from itertools import compress
 from typing import NamedTuple
 
+import numpy as np
+
+from accugrid.codegen.krl.tables import (
+    ASSIGN,
+    DECL,
+    KIND_NAMES,
+    MOTION,
+    PositionTable,
+    UseTable,
+    position_columns,
+    use_columns,
+)
 from accugrid.codegen.program_text import check_text, decimals_of, split_lines
 from accugrid.kinematics.errors import InputError
 
@@ -251,18 +272,92 @@ class FrameUse(NamedTuple):
 
 @dataclass
 class KrlScan:
-    """Everything read from one file."""
+    """Everything read from one file. Positions and uses are kept column by column
+    (``table``, ``use_table``, their bases in ``bases``); ``positions`` and ``uses`` give them as
+    objects (built on first use: for small programs and tests)."""
 
     path: str | None
-    positions: list[KrlPosition] = field(default_factory=list)
-    uses: list[KrlUse] = field(default_factory=list)
+    text: str = ""
+    table: PositionTable = field(default=None, repr=False)  # type: ignore[assignment]
+    use_table: UseTable = field(default=None, repr=False)  # type: ignore[assignment]
+    bases: list[BaseRef] = field(default_factory=list)  # table.base / use_table.base -> BaseRef
     fdats: dict[str, Fdat] = field(default_factory=dict)  # FDAT name (upper case) -> its values
     base_data: dict[int, tuple[tuple[float, ...], int]] = field(default_factory=dict)
     # BASE_DATA[n] = {..} in this file -> (xyzabc, line)
     assigned: dict[str, int] = field(default_factory=dict)
     # names given a non-literal value at run time -> first line
-    declared: dict[str, Declared] = field(default_factory=dict)  # variable (upper case, no index)
     frame_uses: dict[str, FrameUse] = field(default_factory=dict)  # normalized name -> first use
+    _declared: dict[str, Declared] = field(default_factory=dict, repr=False)  # statement reader
+    _fast_decls: list[tuple[list, list, np.ndarray]] = field(default_factory=list, repr=False)
+    # (names, types, lines) of each block of plain declarations the whole-text scanner read
+    _fast_index: dict[str, Declared] = field(default_factory=dict, repr=False)
+    _fast_indexed: int = field(default=0, repr=False)
+    _positions: list[KrlPosition] | None = field(default=None, repr=False)
+    _rows: _Rows | None = field(default=None, repr=False)  # while reading
+    _uses: list[KrlUse] | None = field(default=None, repr=False)
+
+    def declared_get(self, key: str) -> Declared | None:
+        """The first declaration of variable ``key`` (upper case, no index) read so far."""
+        for names, types, lines in self._fast_decls[self._fast_indexed :]:
+            index = self._fast_index
+            for name, type_name, line in zip(names, types, lines.tolist(), strict=True):
+                index.setdefault(name.upper(), Declared(type_name, line))
+        self._fast_indexed = len(self._fast_decls)
+        slow, fast = self._declared.get(key), self._fast_index.get(key)
+        if slow is None or (fast is not None and fast.line < slow.line):
+            return fast
+        return slow
+
+    @property
+    def declared(self) -> dict[str, Declared]:
+        """Every declared variable (upper case, no index) -> its first declaration."""
+        keys = set(self._declared)
+        for names, _, _ in self._fast_decls:
+            keys.update(map(str.upper, names))
+        return {k: self.declared_get(k) for k in sorted(keys)}
+
+    @property
+    def positions(self) -> list[KrlPosition]:
+        """The position aggregates as objects, in file order."""
+        if self._positions is None:
+            t, path, bases = self.table, self.path, self.bases
+            self._positions = [
+                KrlPosition(
+                    path,
+                    line,
+                    column,
+                    KIND_NAMES[kind],
+                    t.type[i],
+                    t.name[i],
+                    parse_aggregate(self.text, agg, 0, path, line)[1],
+                    bases[base] if base >= 0 else None,
+                    t.reason[i],
+                )
+                for i, (line, column, kind, agg, base) in enumerate(
+                    zip(
+                        t.line.tolist(),
+                        t.column.tolist(),
+                        t.kind.tolist(),
+                        t.agg.tolist(),
+                        t.base.tolist(),
+                        strict=True,
+                    )
+                )
+            ]
+        return self._positions
+
+    @property
+    def uses(self) -> list[KrlUse]:
+        """The motions to a named target as objects, in file order."""
+        if self._uses is None:
+            u, path, bases = self.use_table, self.path, self.bases
+            self._uses = [
+                KrlUse(path, line, column, u.motion[i], u.name[i], u.text[i], bases[b], u.reason[i])
+                for i, (line, column, b) in enumerate(
+                    zip(u.line.tolist(), u.column.tolist(), u.base.tolist(), strict=True)
+                )
+            ]
+        return self._uses
 
 
 def normalize_name(name: str) -> str:
@@ -484,29 +579,119 @@ def position_reason(type_name: str, numbers: dict[str, Number]) -> str:
     return ""
 
 
+class _Rows:
+    """The rows being read into a scan's tables, the BaseRef index of ``scan.bases`` and the
+    base changes to apply to ranges of rows once the file is read."""
+
+    def __init__(self, scan: KrlScan) -> None:
+        self.scan = scan
+        lines = scan.text.count("\n") + 1  # about one row a line at most, in most programs
+        self.positions = position_columns(lines)
+        self.uses = use_columns(lines)
+        self.external: dict[int, tuple[str, float]] = {}
+        self._ids: dict[int, int] = {}
+        self.ops: list[tuple] = []  # ("swap", marks, start, changed) | ("label", marks)
+
+    def base_id(self, base: BaseRef | None) -> int:
+        if base is None:
+            return -1
+        found = self._ids.get(id(base))
+        if found is None:
+            found = self._ids[id(base)] = len(self.scan.bases)
+            self.scan.bases.append(base)
+        return found
+
+    def mark(self) -> tuple[int, int]:
+        return self.positions.count, self.uses.count
+
+    def add_position(
+        self, lineno, column, kind, agg, base, numbers: dict[str, Number], type_name, name, reason
+    ) -> int:
+        nan = math.nan
+        xyz, abc, span = [nan, nan, nan], [nan, nan, nan], [-1] * 6
+        for i, k in enumerate("XYZ"):
+            n = numbers.get(k)
+            if n is not None:
+                xyz[i], span[2 * i], span[2 * i + 1] = n.value, n.start, n.end
+        for i, k in enumerate("ABC"):
+            n = numbers.get(k)
+            if n is not None:
+                abc[i] = n.value
+        index = self.positions.add(
+            line=lineno,
+            column=column,
+            kind=kind,
+            agg=agg,
+            base=self.base_id(base),
+            xyz=xyz,
+            abc=abc,
+            span=span,
+            type=type_name,
+            name=name,
+            reason=reason,
+        )
+        for k in _EXTERNAL_AXES:
+            n = numbers.get(k)
+            if n is not None and n.value != 0.0:
+                self.external[index] = (k, n.value)
+                break
+        return index
+
+    def pop_position(self) -> None:
+        self.positions.pop()
+        self.external.pop(self.positions.count, None)
+
+    def finish(self) -> None:
+        """The tables of ``scan``, with the base changes applied in the order they were made."""
+        scan = self.scan
+        p = self.positions.finish()
+        u = self.uses.finish()
+        for op in self.ops:
+            (pa, ua), (pb, ub) = op[1]
+            for column, lo, hi in ((p["base"], pa, pb), (u["base"], ua, ub)):
+                part = column[lo:hi]
+                if op[0] == "swap":
+                    part[part == self.base_id(op[2])] = self.base_id(op[3])
+                    continue
+                for old in np.unique(part[part >= 0]).tolist():
+                    ref = scan.bases[old]
+                    if ref.label:
+                        changed = BaseRef(
+                            "unknown",
+                            ref.line,
+                            reason=f"after jump target {ref.label}: $BASE depends on the path "
+                            "taken to it",
+                        )
+                        part[part == old] = self.base_id(changed)
+        scan.table = PositionTable(external=self.external, **p)
+        scan.use_table = UseTable(**u)
+        scan._rows = None
+
+
 @dataclass(slots=True)
 class _Block:
-    """An open IF/SWITCH/loop: the base when it opened, at the end of each branch so far, and the
-    positions and uses recorded inside it."""
+    """An open IF/SWITCH/loop: the base when it opened, at the end of each branch so far, and
+    where its rows start."""
 
     keyword: str
     line: int
     start: BaseRef
+    mark: tuple[int, int]
     ends: list[BaseRef] = field(default_factory=list)
-    records: list[KrlPosition | KrlUse] = field(default_factory=list)
     has_else: bool = False
 
 
 class _Flow:
     """$BASE through a routine: conditionals, loops, jump targets and calls."""
 
-    def __init__(self, initial: BaseRef, trust_calls: bool) -> None:
+    def __init__(self, initial: BaseRef, trust_calls: bool, rows: _Rows) -> None:
         self.initial = initial
         self.trust_calls = trust_calls
+        self.rows = rows
         self.state = initial
         self.blocks: list[_Block] = []
         self.sets_base = False
-        self.records: list[KrlPosition | KrlUse] = []
+        self.since = rows.mark()  # where the routine's rows start
 
     def start_routine(self, name: str, line: int) -> None:
         self.finish_routine()
@@ -520,29 +705,21 @@ class _Flow:
             self.state = self.initial
         self.blocks = []
         self.sets_base = False
-        self.records = []
+        self.since = self.rows.mark()
 
     def finish_routine(self) -> None:
         """A jump target makes the base path-dependent when the routine sets the base anywhere."""
-        if not self.sets_base:
-            return
-        for rec in self.records:
-            if rec.base is not None and rec.base.label:
-                rec.base = BaseRef(
-                    "unknown",
-                    rec.base.line,
-                    reason=f"after jump target {rec.base.label}: $BASE depends on the path "
-                    "taken to it",
-                )
+        if self.sets_base:
+            self.rows.ops.append(("label", (self.since, self.rows.mark())))
+
+    def end_routine(self) -> None:
+        self.finish_routine()
+        self.sets_base = False
+        self.since = self.rows.mark()
 
     def set(self, base: BaseRef) -> None:
         self.state = base
         self.sets_base = True
-
-    def record(self, rec: KrlPosition | KrlUse) -> None:
-        self.records.append(rec)
-        for block in self.blocks:
-            block.records.append(rec)
 
     def label(self, name: str, line: int) -> None:
         s = self.state
@@ -559,7 +736,7 @@ class _Flow:
             )
 
     def open(self, keyword: str, line: int) -> None:
-        self.blocks.append(_Block(keyword, line, self.state))
+        self.blocks.append(_Block(keyword, line, self.state, self.rows.mark()))
 
     def branch(self) -> None:
         if self.blocks:
@@ -589,9 +766,7 @@ class _Flow:
             return
         if self.state is not start:  # a loop body that changes the base
             changed = BaseRef("unknown", line, reason=f"$BASE changes inside the loop {where}")
-            for rec in block.records:
-                if rec.base is start:
-                    rec.base = changed
+            self.rows.ops.append(("swap", (block.mark, self.rows.mark()), start, changed))
             if block.keyword != "REPEAT":
                 self.state = changed
 
@@ -599,6 +774,44 @@ class _Flow:
 _OPENERS = {"IF", "SWITCH", "FOR", "WHILE", "LOOP", "REPEAT"}
 _CLOSERS = {"ENDIF", "ENDSWITCH", "ENDFOR", "ENDWHILE", "ENDLOOP", "UNTIL"}
 _BRANCHES = {"ELSE", "CASE", "DEFAULT"}
+_EXTERNAL_AXES = ("E1", "E2", "E3", "E4", "E5", "E6")
+
+# The whole-text scanner: one match per line. Plain lines (a declaration of an E6POS/POS/FRAME
+# with a flat X,Y,Z[,A,B,C][, more] aggregate, a LIN/PTP/SLIN/SPTP to a name or to such an
+# aggregate, with an approximation clause and a comment without quotes) give their parts in
+# groups; any other line is the last group, for the statement reader. Plain lines change no state,
+# so a run of them takes the base in effect, and their numbers are converted column by column.
+_N = NUMBER
+_PLAIN_RE = re.compile(
+    r"^([ \t]*+(?:DECL[ \t]++(E6POS|POS|FRAME)[ \t]++([A-Za-z_]\w*+)[ \t]*+=[ \t]*+"
+    r"|(LIN|PTP|SLIN|SPTP)[ \t]++))(?:([A-Za-z_]\w*+)(?=[ \t\r;]|$))?+"
+    r"(?:(\{[ \t]*+X[ \t]++)(" + _N + r")([ \t]*+,[ \t]*+Y[ \t]++)(" + _N + r")"
+    r"([ \t]*+,[ \t]*+Z[ \t]++)(" + _N + r")"
+    r"(?:[ \t]*+,[ \t]*+A[ \t]++(" + _N + r")[ \t]*+,[ \t]*+B[ \t]++(" + _N + r")"
+    r"[ \t]*+,[ \t]*+C[ \t]++(" + _N + r"))?+((?:[ \t]*+,[^{}\n\";]*+)?+)[ \t]*+\})?+"
+    r"(?:[ \t]++C_(?:DIS|PTP|VEL|ORI))?+[ \t\r]*+(?:;[^\"\n]*+)?+$"
+    r"|^([^\n]*+)$",
+    re.M,
+)
+_CHUNK = 1 << 18  # characters per whole-text pass (bounds the per-line tuples held at once)
+_NOT_IN_TAIL = frozenset("X Y Z A B C".split()) | _JOINTS
+
+
+def _tail_info(tail: str) -> tuple[bool, tuple[str, float] | None]:
+    """Whether the components after X..C of a plain aggregate (``,S 'B010',E1 0``) read as the
+    statement reader would read them without a reason, and its first moving external axis."""
+    if not tail:
+        return True, None
+    try:
+        _, numbers, reason, _ = parse_aggregate("{" + tail.lstrip(" \t")[1:] + "}", 0, 0, None, 0)
+    except InputError:
+        return False, None
+    if reason or not _NOT_IN_TAIL.isdisjoint(numbers):
+        return False, None
+    for k in _EXTERNAL_AXES:
+        if k in numbers and numbers[k].value != 0.0:
+            return True, (k, numbers[k].value)
+    return True, None
 
 
 def scan_krl(
@@ -615,21 +828,176 @@ def scan_krl(
     """
     path = None if path is None else os.fspath(path)
     check_text(text, path)
-    scan = KrlScan(path)
-    flow = _Flow(initial_base or BaseRef("unknown", 0, reason="no $BASE set"), trust_calls)
-    offset = 0
-    for lineno, line in enumerate(split_lines(text), start=1):
-        line_offset = offset
-        offset += len(line) + 1
-        code = code_part(line, path, lineno)
-        if not code or code.isspace() or code.lstrip()[:1] == "&":
-            continue
-        if code.count("{") != code.count("}"):
-            col = code.find("{") if code.count("{") > code.count("}") else code.find("}")
-            raise InputError("unbalanced braces", path, lineno, col + 1)
-        _statement(code, line_offset, lineno, scan, flow)
+    scan = KrlScan(path, text)
+    rows = scan._rows = _Rows(scan)
+    flow = _Flow(initial_base or BaseRef("unknown", 0, reason="no $BASE set"), trust_calls, rows)
+    if "\n" not in text:  # one line, or lone CR line endings: line by line
+        offset = 0
+        for lineno, line in enumerate(split_lines(text), start=1):
+            _line(line, offset, lineno, scan, flow)
+            offset += len(line) + 1
+    else:
+        start, lineno = 0, 1
+        while start <= len(text):
+            stop = text.find("\n", min(start + _CHUNK, len(text)))
+            stop = len(text) if stop < 0 else stop + 1
+            lineno = _chunk(text, start, stop, lineno, scan, flow)
+            start = stop
+            if stop == len(text):
+                break
     flow.finish_routine()
+    rows.finish()
     return scan
+
+
+def _line(line: str, offset: int, lineno: int, scan: KrlScan, flow: _Flow) -> None:
+    """One line of any kind (``offset``: of its first character in the text)."""
+    code = code_part(line, scan.path, lineno)
+    if not code or code.isspace() or code.lstrip()[:1] == "&":
+        return
+    if code.count("{") != code.count("}"):
+        col = code.find("{") if code.count("{") > code.count("}") else code.find("}")
+        raise InputError("unbalanced braces", scan.path, lineno, col + 1)
+    _statement(code, offset, lineno, scan, flow)
+
+
+def _lengths(column, mask: list[bool]) -> np.ndarray:
+    return np.fromiter(map(len, compress(column, mask)), np.int64)
+
+
+def _floats(column, mask: list[bool]) -> np.ndarray:
+    return np.fromiter(map(float, compress(column, mask)), float)
+
+
+def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _Flow) -> int:
+    """Read the lines of ``text[start:stop]`` (whole lines); the number of the next line."""
+    chunk = text[start:stop]
+    matches = _PLAIN_RE.findall(chunk)
+    count = chunk.count("\n") + (0 if chunk.endswith("\n") and stop < len(text) else 1)
+    del matches[count:]
+    if not count:
+        return lineno
+    (head, type_, name, motion, target, agg, x, sxy, y, syz, z, a, b, c, tail, _) = zip(
+        *matches, strict=True
+    )
+    del matches
+    newlines = np.flatnonzero(np.frombuffer(chunk.encode("latin-1", "replace"), np.uint8) == 10)
+    starts = np.concatenate(([0], newlines + 1))[:count]
+    ends = np.append(newlines, len(chunk))[:count]
+    is_decl = np.fromiter(map(bool, type_), bool, count)
+    has_agg = np.fromiter(map(bool, agg), bool, count)
+    has_target = np.fromiter(map(bool, target), bool, count)
+    is_motion = np.fromiter(map(bool, motion), bool, count)
+    plain = (is_decl & has_agg) | (is_motion & (has_agg ^ has_target))
+    info = {}
+    if has_agg.any():  # components after X..C: each distinct tail read once
+        info = {t: _tail_info(t) for t in set(compress(tail, has_agg.tolist()))}
+        if not all(ok for ok, _ in info.values()):
+            plain &= np.fromiter((info.get(t, (True,))[0] for t in tail), bool, count)
+    aggs = np.flatnonzero(plain & has_agg)
+    mask = (plain & has_agg).tolist()
+    xyz = np.stack([_floats(x, mask), _floats(y, mask), _floats(z, mask)], axis=1)
+    has_abc = np.fromiter(map(bool, compress(a, mask)), bool, len(aggs))
+    abc = np.full((len(aggs), 3), np.nan)
+    if has_abc.any():
+        abc_mask = plain & has_agg
+        abc_mask[aggs[~has_abc]] = False
+        abc_mask = abc_mask.tolist()
+        abc[has_abc] = np.stack(
+            [_floats(a, abc_mask), _floats(b, abc_mask), _floats(c, abc_mask)], 1
+        )
+    finite = np.isfinite(xyz).all(axis=1) & (np.isfinite(abc) | np.isnan(abc)).all(axis=1)
+    if not finite.all():  # a literal beyond the float range: the statement reader says where
+        plain[aggs[~finite]] = False
+        aggs, xyz, abc = aggs[finite], xyz[finite], abc[finite]
+        mask = (plain & has_agg).tolist()
+    at = _lengths(head, mask)  # the "{"
+    line_at = start + starts[aggs]
+    xo = at + _lengths(agg, mask)
+    xe = xo + _lengths(x, mask)
+    yo = xe + _lengths(sxy, mask)
+    ye = yo + _lengths(y, mask)
+    zo = ye + _lengths(syz, mask)
+    ze = zo + _lengths(z, mask)
+    span = (np.stack([xo, xe, yo, ye, zo, ze], axis=1) + line_at[:, None]).reshape(-1, 3, 2)
+    agg_decl = is_decl[aggs]
+    agg_type = list(map(sys.intern, compress(type_, mask)))  # one str per type, not per row
+    agg_name = [n or m for n, m in zip(compress(name, mask), compress(motion, mask), strict=True)]
+    external = {}
+    if any(moving is not None for _, moving in info.values()):
+        for k, t in enumerate(compress(tail, mask)):
+            if t and info[t][1] is not None:
+                external[k] = info[t][1]
+    moving_rows = np.array(sorted(external), dtype=np.int64)
+    targets = np.flatnonzero(plain & has_target)
+    tmask = (plain & has_target).tolist()
+    t_text = list(compress(target, tmask))
+    t_column = _lengths(head, tmask) + 1
+    t_motion = list(map(sys.intern, compress(motion, tmask)))
+    decl_blocks = scan._fast_decls
+    rows = flow.rows
+
+    def flush(lo: int, hi: int) -> None:
+        """The plain lines lo..hi-1 of the chunk, under the base in effect."""
+        pa, pb = np.searchsorted(aggs, (lo, hi))
+        if pb > pa:
+            base = np.where(agg_decl[pa:pb], -1, rows.base_id(flow.state))
+            ka, kb = np.searchsorted(moving_rows, (pa, pb))
+            for k in moving_rows[ka:kb].tolist():
+                rows.external[rows.positions.count + k - pa] = external[k]
+            names = agg_name[pa:pb]
+            types = agg_type[pa:pb]
+            rows.positions.extend(
+                pb - pa,
+                line=lineno + aggs[pa:pb],
+                column=at[pa:pb] + 1,
+                kind=np.where(agg_decl[pa:pb], DECL, MOTION),
+                agg=line_at[pa:pb] + at[pa:pb],
+                base=base,
+                xyz=xyz[pa:pb],
+                abc=abc[pa:pb],
+                span=span[pa:pb],
+                type=types,
+                name=names,
+                reason=[""] * (pb - pa),
+            )
+            decls = agg_decl[pa:pb]
+            if decls.all():  # the same lists as the table's
+                decl_blocks.append((names, types, lineno + aggs[pa:pb]))
+            elif decls.any():
+                where = np.flatnonzero(decls).tolist()
+                decl_blocks.append(
+                    (
+                        [names[k] for k in where],
+                        [types[k] for k in where],
+                        lineno + aggs[pa:pb][decls],
+                    )
+                )
+        ua, ub = np.searchsorted(targets, (lo, hi))
+        if ub > ua:
+            texts = t_text[ua:ub]
+            rows.uses.extend(
+                ub - ua,
+                line=lineno + targets[ua:ub],
+                column=t_column[ua:ub],
+                base=np.full(ub - ua, rows.base_id(flow.state)),
+                motion=t_motion[ua:ub],
+                name=[  # plain names: normalize_name is upper(); the text itself when upper case
+                    u if u != t else t for u, t in zip(map(str.upper, texts), texts, strict=True)
+                ],
+                text=texts,
+                reason=[""] * (ub - ua),
+            )
+
+    last = 0
+    for i in np.flatnonzero(~plain).tolist():
+        if i > last:
+            flush(last, i)
+        _line(chunk[starts[i] : ends[i]], start + int(starts[i]), lineno + i, scan, flow)
+        last = i + 1
+    if count > last:
+        flush(last, count)
+    return lineno + count
 
 
 def parse_krl(text: str, path: str | os.PathLike[str] | None = None) -> list[KrlPosition]:
@@ -657,9 +1025,7 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
             flow.start_routine(routine.group(2), lineno)
         return
     if word in ("END", "ENDFCT", "DEFDAT", "ENDDAT"):
-        flow.finish_routine()
-        flow.sets_base = False
-        flow.records = []
+        flow.end_routine()
         return
     if word in _OPENERS:
         flow.open(word, lineno)
@@ -728,7 +1094,7 @@ def _declare(code: str, pos: int, lineno: int, scan: KrlScan) -> tuple[re.Match,
             if more:
                 names.append(more.group())
     for name in names:
-        scan.declared.setdefault(name.upper(), Declared(type_name, lineno))
+        scan._declared.setdefault(name.upper(), Declared(type_name, lineno))
     return m, type_name
 
 
@@ -751,11 +1117,14 @@ def _decl(code: str, pos: int, off: int, lineno: int, scan: KrlScan) -> None:
         return
     full = name + (m.group(4) or "")
     if type_name not in POSITION_TYPES:
-        _struc_positions(code, value_at, off, lineno, scan, "decl", full)
+        _struc_positions(code, value_at, off, lineno, scan, DECL, full)
         return
-    pos, _ = _add_position(code, value_at, off, lineno, scan, "decl", type_name, full, None)
-    if m.group(1) and not pos.reason:
-        pos.reason = f"{full} is declared CONST: a constant, not a taught position"
+    row, _, reason, _ = _add_position(
+        code, value_at, off, lineno, scan, DECL, type_name, full, None
+    )
+    if m.group(1) and not reason:
+        reason = f"{full} is declared CONST: a constant, not a taught position"
+        scan._rows.positions.set(row, "reason", reason)
 
 
 def _fdat_values(code: str, at: int, path: str | None, lineno: int) -> Fdat:
@@ -787,24 +1156,26 @@ def _add_position(
     off: int,
     lineno: int,
     scan: KrlScan,
-    kind: str,
+    kind: int,
     type_name: str,
     name: str,
     base: BaseRef | None,
-) -> tuple[KrlPosition, int]:
+) -> tuple[int, dict[str, Number], str, int]:
+    """Add the aggregate at ``code[at]`` as a position: (its row, its numbers, reason, end)."""
     prefix, numbers, reason, end = parse_aggregate(code, at, off, scan.path, lineno)
     type_name = type_name or prefix
     reason = reason or position_reason(type_name, numbers)
-    pos = KrlPosition(scan.path, lineno, at + 1, kind, type_name, name, numbers, base, reason)
-    scan.positions.append(pos)
-    return pos, end
+    row = scan._rows.add_position(
+        lineno, at + 1, kind, off + at, base, numbers, type_name, name, reason
+    )
+    return row, numbers, reason, end
 
 
 _MAX_NESTING = 8
 
 
 def _struc_positions(
-    code: str, at: int, off: int, lineno: int, scan: KrlScan, kind: str, name: str, depth: int = 0
+    code: str, at: int, off: int, lineno: int, scan: KrlScan, kind: int, name: str, depth: int = 0
 ) -> None:
     """The position members of a user STRUC value ``{fCNC {X ..}, grFeedrate 95}`` at
     ``code[at]``, named ``name.member`` (``gsCNC1[3].fCnC``); other members are not positions."""
@@ -830,9 +1201,9 @@ def _struc_positions(
         if "{" in code[value_at + 1 : inner_end]:
             _struc_positions(code, value_at, off, lineno, scan, kind, full, depth + 1)
             continue
-        pos, _ = _add_position(code, value_at, off, lineno, scan, kind, "", full, None)
-        if not set(pos.numbers) & (CARTESIAN_KEYS | JOINT_KEYS):
-            scan.positions.pop()  # an aggregate of some other structure type
+        _, numbers, _, _ = _add_position(code, value_at, off, lineno, scan, kind, "", full, None)
+        if not set(numbers) & (CARTESIAN_KEYS | JOINT_KEYS):
+            scan._rows.pop_position()  # an aggregate of some other structure type
 
 
 def _colon_operands(text: str) -> list[str]:
@@ -931,17 +1302,17 @@ def _assignment(
     if not member and code[value_at : value_at + 1] == "{":
         end = match_brace(code, value_at, scan.path, lineno)
         if not code[end:].strip():
-            declared = scan.declared.get(target)
+            declared = scan.declared_get(target)
             type_name = declared.type if declared else ""
             nested = "{" in code[value_at + 1 : end - 1]
             if nested or type_name and type_name not in POSITION_TYPES:
-                _struc_positions(code, value_at, off, lineno, scan, "assign", name)
+                _struc_positions(code, value_at, off, lineno, scan, ASSIGN, name)
                 return
-            pos, _ = _add_position(
-                code, value_at, off, lineno, scan, "assign", type_name, name, None
+            _, numbers, _, _ = _add_position(
+                code, value_at, off, lineno, scan, ASSIGN, type_name, name, None
             )
-            if not pos.numbers or not set(pos.numbers) & (CARTESIAN_KEYS | JOINT_KEYS):
-                scan.positions.pop()  # an aggregate of some other structure type
+            if not numbers or not set(numbers) & (CARTESIAN_KEYS | JOINT_KEYS):
+                scan._rows.pop_position()  # an aggregate of some other structure type
             return
     key = normalize_name(name)  # a member assigned changes the variable
     scan.assigned.setdefault(key, lineno)
@@ -1064,9 +1435,9 @@ def _motion(
                     why = f"frame arithmetic ':' in {target_text}: computed at run time"
                 else:
                     why = ""
-                pos, _ = _add_position(code, s, off, lineno, scan, "motion", "", word, base)
-                pos.reason = why or pos.reason
-                flow.record(pos)
+                row, _, _, _ = _add_position(code, s, off, lineno, scan, MOTION, "", word, base)
+                if why:
+                    scan._rows.positions.set(row, "reason", why)
             else:
                 operand = code[s:e].strip()
                 name = normalize_name(operand) if kind == "name" else ""
@@ -1087,6 +1458,12 @@ def _motion(
                     )
                 else:
                     why = ""
-                use = KrlUse(scan.path, lineno, s + 1, word, name, operand, base, why)
-                scan.uses.append(use)
-                flow.record(use)
+                flow.rows.uses.add(
+                    line=lineno,
+                    column=s + 1,
+                    base=flow.rows.base_id(base),
+                    motion=word,
+                    name=name,
+                    text=operand,
+                    reason=why,
+                )

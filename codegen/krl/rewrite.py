@@ -12,7 +12,7 @@ $ROBROOT).
 
 from __future__ import annotations
 
-import math
+from itertools import repeat
 from pathlib import Path
 
 import numpy as np
@@ -22,27 +22,28 @@ from accugrid.codegen.krl.parse import (
     Declared,
     Fdat,
     FrameUse,
-    KrlPosition,
     KrlScan,
-    KrlUse,
+    normalize_name,
     scan_krl,
     wildcard,
 )
-from accugrid.codegen.program_text import MIN_PLACES_MM, number_texts, precision, splice
+from accugrid.codegen.krl.tables import MOTION, PositionTable
+from accugrid.codegen.program_text import MIN_PLACES_MM, Splicer, precision
 from accugrid.codegen.rewrite import (
+    CORRECTED,
     Options,
     Result,
-    Row,
+    Rows,
     correct_points,
     rotations_of,
     strict_check,
 )
+from accugrid.codegen.textsafe import fixed_many
 from accugrid.kinematics.frames import pose_from_xyzabc
 
 __all__ = ["rewrite_krl"]
 
-_EXTERNAL_AXES = ("E1", "E2", "E3", "E4", "E5", "E6")
-_EXTERNAL = frozenset(_EXTERNAL_AXES)
+_BLOCK = 1 << 14  # positions per block of corrected numbers formatted and spliced at once
 
 
 def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = None) -> Result:
@@ -57,55 +58,106 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
     ]
     config = scan_krl(config_dat, "$config.dat") if config_dat is not None else None
     ctx = _Context(scans, config, initial, opts)
-    rows: list[Row] = []
-    placed: list[tuple[KrlPosition, Row, np.ndarray]] = []
-    for scan in scans:
-        path = scan.path or ""
-        for pos in scan.positions:
-            row = Row(path, pos.line, pos.name, "skipped")
-            nums = pos.numbers
-            if "X" in nums and "Y" in nums and "Z" in nums:
-                row.old = (nums["X"].value, nums["Y"].value, nums["Z"].value)
-            rows.append(row)
-            reason = pos.reason or _external_axis_reason(pos, opts)
-            frame = None
-            if not reason and pos.kind == "motion":
-                _, frame, reason = ctx.resolve(pos.base)
-            elif not reason:
-                frame, reason = ctx.stored_frame(pos)
-            if reason:
-                row.reason = reason
-                continue
-            placed.append((pos, row, frame))
-    for scan in scans:
-        for use in scan.uses:
-            reason = use.reason or ctx.unmatched_reason(use)
-            if reason:
-                rows.append(Row(scan.path or "", use.line, use.text, "skipped", reason))
-    edits: dict[str, list[tuple[int, int, str]]] = {p: [] for p in texts}
-    places_of = {
-        scan.path: precision(
-            (p.numbers[k].literal for p in scan.positions for k in "XYZ" if k in p.numbers),
-            MIN_PLACES_MM,
+    parts, placed = [], []
+    for s, scan in enumerate(scans):
+        rows, frames = _position_rows(ctx, s, scan, opts)
+        parts.append(rows)
+        placed.append(frames)
+    parts += [_use_rows(ctx, scan) for scan in scans]
+    rows = Rows.concat(parts)
+    starts = np.cumsum([0] + [len(p) for p in parts[: len(scans)]])
+    del parts
+    out: dict[str, bytes | bytearray | None] = dict.fromkeys(texts)
+    todo = [np.flatnonzero(which >= 0) for which in placed]
+    if any(t.size for t in todo):
+        frames = ctx.frames
+        files = [(scan.path, scan.text, scan.table) for scan in scans]
+        del scans, ctx, config  # the uses and names are done with: memory for what follows
+        targets = _correct(
+            [table for _, _, table in files], todo, placed, frames, rows, starts, opts
         )
-        for scan in scans
-    }
-    if placed:
-        _correct_krl(placed, texts, edits, places_of, opts)
+        for s, (path, text, table) in enumerate(files):
+            if todo[s].size:
+                places = opts.decimals if opts.decimals is not None else _places(text, table)
+                out[path] = _splice(text, table, todo[s], targets[s], rows, starts[s], places)
+    for path, text in texts.items():
+        if out[path] is None:
+            out[path] = text.encode("latin-1")  # nothing corrected in it
     strict_check(rows, opts)
-    return Result({p: splice(t, edits[p]) for p, t in texts.items()}, rows)
+    return Result(out, rows)
 
 
-def _external_axis_reason(pos: KrlPosition, opts: Options) -> str:
-    nums = pos.numbers
-    if opts.ignore_external_axes or _EXTERNAL.isdisjoint(nums):
-        return ""
-    moving = [k for k in _EXTERNAL_AXES if k in nums and nums[k].value != 0.0]
-    if not moving:
-        return ""
-    return (
-        f"external axis {moving[0]} = {nums[moving[0]].value:g}: the robot frame depends on "
-        "external kinematics (--ignore-external-axes if not)"
+def _places(text: str, table: PositionTable) -> int:
+    """The file's precision (``program_text.precision`` of its X, Y, Z literals)."""
+    span = table.span.reshape(-1, 2)
+    span = span[span[:, 0] >= 0]
+    if not len(span):
+        return precision((), MIN_PLACES_MM)
+    found = 0
+    for a in range(0, len(span), 3 * _BLOCK):  # a block of literals at a time
+        block = span[a : a + 3 * _BLOCK]
+        literals = map(text.__getitem__, map(slice, block[:, 0].tolist(), block[:, 1].tolist()))
+        found = max(found, precision(literals))
+    return max(found, MIN_PLACES_MM)
+
+
+def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple[Rows, np.ndarray]:
+    """The report rows of a file's positions, and for each the index of its robot_T_base in
+    ``ctx.frames`` (-1: not placed, the row says why)."""
+    t = scan.table
+    n = len(t)
+    complete = ~np.isnan(t.xyz).any(axis=1)
+    old = np.where(complete[:, None], t.xyz, np.nan)
+    reasons = list(t.reason)
+    if t.external and not opts.ignore_external_axes:
+        for i, (key, value) in t.external.items():
+            reasons[i] = reasons[i] or (
+                f"external axis {key} = {value:g}: the robot frame depends on external "
+                "kinematics (--ignore-external-axes if not)"
+            )
+    frame = np.full(n, -1, np.int64)
+    open_ = np.fromiter(map(bool, reasons), bool, n) == 0
+    motion = open_ & (t.kind == MOTION)
+    for b in np.unique(t.base[motion]).tolist():
+        at = np.flatnonzero(motion & (t.base == b))
+        _, f, reason = ctx.resolve(scan.bases[b])
+        if reason:
+            for i in at.tolist():
+                reasons[i] = reason
+        else:
+            frame[at] = ctx.frame_id(f)
+    stored = np.flatnonzero(open_ & (t.kind != MOTION))
+    if stored.size:
+        quick, found, why = ctx.quick_frames(s, stored)
+        frame[stored[quick]] = found[quick]
+        for k, reason in why.items():
+            reasons[stored[k]] = reason
+        for i in stored[~quick].tolist():
+            f, reason = ctx.stored_frame(s, i)
+            if reason:
+                reasons[i] = reason
+            else:
+                frame[i] = ctx.frame_id(f)
+    rows = Rows([scan.path or ""], np.zeros(n, np.int64), t.line, t.name, reasons, old)
+    return rows, frame
+
+
+def _use_rows(ctx: _Context, scan: KrlScan) -> Rows:
+    """Report rows of the motions to a name that correct nothing (with the reason)."""
+    u = scan.use_table
+    lines, names, reasons = [], [], []
+    stored = map(ctx.named.__contains__, u.name)
+    for i in [
+        i for i, (hit, why) in enumerate(zip(stored, u.reason, strict=True)) if why or not hit
+    ]:
+        reason = u.reason[i] or ctx.unmatched_reason(u.name[i], u.text[i])
+        if reason:
+            lines.append(int(u.line[i]))
+            names.append(u.text[i])
+            reasons.append(reason)
+    n = len(lines)
+    return Rows(
+        [scan.path or ""], np.zeros(n, np.int64), lines, names, reasons, np.full((n, 3), np.nan)
     )
 
 
@@ -123,39 +175,77 @@ class _Context:
     ) -> None:
         self.opts = opts
         self.initial = initial
-        every = scans + ([config] if config is not None else [])
+        self.scans = scans
+        self.every = scans + ([config] if config is not None else [])
         self.base_data = dict(opts.base_data)
         if config is not None:
             for n, (xyzabc, _) in config.base_data.items():
                 self.base_data[n] = pose_from_xyzabc(np.array(xyzabc))
         self.fdats: dict[str, Fdat] = {}
-        self.declared: dict[str, tuple[str, Declared]] = {}
         self.frame_uses: dict[str, tuple[str, FrameUse]] = {}
         self.assigned: dict[str, tuple[str, int]] = {}
-        for scan in reversed(every):  # the given files win over $config.dat
+        for scan in reversed(self.every):  # the given files win over $config.dat
             self.fdats.update(scan.fdats)
-        for scan in every:
+        for scan in self.every:
             where = scan.path or ""
-            for key, declared in scan.declared.items():
-                self.declared.setdefault(key, (where, declared))
             for key, use in scan.frame_uses.items():
                 self.frame_uses.setdefault(key, (where, use))
             for key, line in scan.assigned.items():
                 self.assigned.setdefault(key, (where, line))
-        self.named: dict[str, list[KrlPosition]] = {}
+        # stored positions: key of each table row ("" for motions), first row of each key
+        self.keys: list[list[str]] = []
+        self.named: set[str] = set()
+        self.twice: set[str] = set()
         for scan in scans:
-            for pos in scan.positions:
-                if pos.kind != "motion":
-                    self.named.setdefault(pos.key, []).append(pos)
-        self.wild_named = {wildcard(key) for key in self.named}
-        self.config_named = {p.key: p for p in config.positions} if config is not None else {}
-        self.uses: dict[str, list[KrlUse]] = {}
-        for scan in scans:
-            for use in scan.uses:
-                if not use.reason and use.name:
-                    self.uses.setdefault(use.name, []).append(use)
+            t = scan.table
+            keys = [  # normalize_name of a plain name; the name itself when it is upper case
+                k if k != n else n for k, n in zip(map(str.upper, t.name), t.name, strict=True)
+            ]
+            for i in np.flatnonzero(t.kind == MOTION).tolist():
+                keys[i] = ""
+            for i, plain in enumerate(map(str.isidentifier, t.name)):
+                if not plain and keys[i]:
+                    keys[i] = normalize_name(t.name[i])
+            self.keys.append(keys)
+            first = dict(zip(reversed(keys), range(len(keys) - 1, -1, -1), strict=True))
+            first.pop("", None)
+            self.twice.update(self.named.intersection(first))
+            self.named.update(first)
+            if len(first) < len(keys) - keys.count(""):
+                self.twice.update(k for i, k in enumerate(keys) if k and first[k] != i)
+        self.wild_named = {wildcard(key) for key in self.named if "[" in key}
+        self.config_named = {}
+        if config is not None:
+            for p in config.positions:
+                self.config_named[p.key] = p
+        # motions to a name that may be a stored position, all files: file, line, base id
+        where = [np.full(len(scan.use_table), s) for s, scan in enumerate(scans)]
+        self.use_scan = np.concatenate(where or [np.zeros(0, np.int64)])
+        self.use_line = np.concatenate([scan.use_table.line for scan in scans] or [self.use_scan])
+        self.use_base = np.concatenate([scan.use_table.base for scan in scans] or [self.use_scan])
+        names = [n for scan in scans for n in scan.use_table.name]
+        reasons = [r for scan in scans for r in scan.use_table.reason]
+        if reasons.count("") < len(reasons) or "" in names:  # not a stored position's name
+            names = [n if not r else "" for n, r in zip(names, reasons, strict=True)]
+        self.use_of = dict(zip(reversed(names), range(len(names) - 1, -1, -1), strict=True))
+        self.use_of.pop("", None)
+        self.used_twice: set[str] = set()
+        if len(self.use_of) < len(names) - names.count(""):
+            self.used_twice = {n for i, n in enumerate(names) if n and self.use_of[n] != i}
+        self._uses: dict[str, list[tuple[int, int]]] | None = None
         self.lone_dat = all(Path(s.path or "").suffix.lower() == ".dat" for s in scans)
         self._resolved: dict[BaseRef, tuple[object, np.ndarray | None, str]] = {}
+        self.frames: list[np.ndarray] = []
+        self._frame_ids: dict[int, int] = {}
+        self._blocked = set(self.frame_uses) | set(self.assigned)
+
+    def frame_id(self, frame: np.ndarray) -> int:
+        """Index of ``frame`` (one of the resolved frames) in ``frames``."""
+        found = self._frame_ids.get(id(frame))
+        if found is None:
+            found = self._frame_ids[id(frame)] = len(self.frames)
+            self.frames.append(frame)
+        return found
 
     def resolve(self, base: BaseRef) -> tuple[object, np.ndarray | None, str]:
         """(identity key, robot_T_base or None, reason), once per distinct base."""
@@ -195,127 +285,224 @@ class _Context:
             )
         return ""
 
-    def _own_fdat(self, pos: KrlPosition) -> BaseRef | None:
+    def _own_fdat(self, key: str, line: int) -> BaseRef | None:
         """The base of a position's own FDAT (``XP1`` -> ``FP1``), None when it has none."""
-        key = pos.key
         if not key.startswith("X") or "[" in key or "." in key:
             return None
         name = "F" + key[1:]
-        return BaseRef("fdat", pos.line, fdat=name) if name in self.fdats else None
+        return BaseRef("fdat", line, fdat=name) if name in self.fdats else None
 
-    def stored_frame(self, pos: KrlPosition) -> tuple[np.ndarray | None, str]:
+    def quick_frames(
+        self, s: int, rows: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, dict[int, str]]:
+        """``stored_frame`` of the plain stored positions among table rows ``rows`` (n,) of file
+        s: a plain name, defined once, used by one motion, no FDAT of its own, not a frame nor
+        assigned at run time; ``stored_frame`` says for the others.
+
+        Returns which rows are plain (n,) bool, the index of each one's frame in ``frames``
+        (n,) (-1: none), and the reason of those whose motion is under a base that cannot be
+        placed (k -> reason)."""
+        keys = [self.keys[s][i] for i in rows.tolist()]
+        n = len(keys)
+        blocked = self.twice | self.used_twice | self._blocked
+        plain = np.fromiter(map(str.isidentifier, keys), bool, n)
+        if blocked:
+            plain &= ~np.fromiter(map(blocked.__contains__, keys), bool, n)
+        if self.fdats:  # XP1 with an FDAT FP1 has a base of its own
+            plain &= ~np.array([k[:1] == "X" and "F" + k[1:] in self.fdats for k in keys], bool)
+        at = np.fromiter(map(self.use_of.get, keys, repeat(-1)), np.int64, n)
+        plain &= at >= 0
+        found = np.full(n, -1, np.int64)
+        why: dict[int, str] = {}
+        uses = at[plain]
+        pairs = self.use_scan[uses] * (1 << 32) + self.use_base[uses]
+        unique, inverse = np.unique(pairs, return_inverse=True)
+        ids = np.full(len(unique), -1, np.int64)
+        reasons = {}
+        for j, pair in enumerate(unique.tolist()):
+            scan = self.scans[pair >> 32]
+            _, frame, reason = self.resolve(scan.bases[pair & 0xFFFFFFFF])
+            if reason:
+                reasons[j] = reason
+            else:
+                ids[j] = self.frame_id(frame)
+        found[plain] = ids[inverse.reshape(-1)]
+        if reasons:
+            inverse = inverse.reshape(-1).tolist()
+            for k, use, j in zip(
+                np.flatnonzero(plain).tolist(), uses.tolist(), inverse, strict=True
+            ):
+                if j in reasons:
+                    why[k] = f"used at line {self.use_line[use]} where the {reasons[j]}"
+        return plain, found, why
+
+    def uses(self, key: str) -> list[tuple[int, BaseRef]]:
+        """(line, base) of every motion to ``key`` that may be a stored position, in order."""
+        if self._uses is None:
+            self._uses = {}
+            for s, scan in enumerate(self.scans):
+                u = scan.use_table
+                for i, (name, reason) in enumerate(zip(u.name, u.reason, strict=True)):
+                    if not reason and name:
+                        self._uses.setdefault(name, []).append((s, i))
+        out = []
+        for s, i in self._uses.get(key, []):
+            scan = self.scans[s]
+            out.append((int(scan.use_table.line[i]), scan.bases[scan.use_table.base[i]]))
+        return out
+
+    def stored_frame(self, s: int, i: int) -> tuple[np.ndarray | None, str]:
         """robot_T_base of a declared or assigned position, or why it is not corrected."""
-        key = pos.key
-        if len(self.named.get(key, ())) > 1:
-            lines = ", ".join(str(p.line) for p in self.named[key])
-            return None, f"{pos.name} is defined more than once (lines {lines})"
+        t = self.scans[s].table
+        key, name, line = self.keys[s][i], t.name[i], int(t.line[i])
+        if key in self.twice:
+            lines = [
+                int(self.scans[k].table.line[j])
+                for k in range(len(self.scans))
+                for j, other in enumerate(self.keys[k])
+                if other == key
+            ]
+            return None, f"{name} is defined more than once (lines {', '.join(map(str, lines))})"
         wild = wildcard(key)
         variables = (key, wild, key.split(".")[0], wild.split(".")[0])
         for k in variables:
             if k in self.frame_uses:
                 where, use = self.frame_uses[k]
-                return None, f"{pos.name} is {use.reason} ({Path(where).name})"
+                return None, f"{name} is {use.reason} ({Path(where).name})"
         for k in variables:
             if k in self.assigned:
-                where, line = self.assigned[k]
-                return None, f"{pos.name} is assigned at run time ({Path(where).name}:{line})"
-        found = self.uses.get(key, []) + (self.uses.get(wild, []) if wild != key else [])
-        own = self._own_fdat(pos)
+                where, at = self.assigned[k]
+                return None, f"{name} is assigned at run time ({Path(where).name}:{at})"
+        found = self.uses(key) + (self.uses(wild) if wild != key else [])
+        own = self._own_fdat(key, line)
         if not found:
-            return self._unused(pos, own)
+            return self._unused(s, i, own)
         keys, frame = {}, None
-        for use in found:
-            base = own if own is not None and use.base is self.initial else use.base
+        for use_line, use_base in found:
+            base = own if own is not None and use_base is self.initial else use_base
             ident, frame_i, reason = self.resolve(base)
             if reason:
-                return None, f"used at line {use.line} where the {reason}"
-            keys.setdefault(ident, use.line)
+                return None, f"used at line {use_line} where the {reason}"
+            keys.setdefault(ident, use_line)
             frame = frame_i
         if len(keys) > 1:
-            lines = ", ".join(str(line) for line in keys.values())
-            return None, f"{pos.name} is used under different bases (lines {lines})"
+            lines = ", ".join(str(at) for at in keys.values())
+            return None, f"{name} is used under different bases (lines {lines})"
         return frame, ""
 
-    def _unused(self, pos: KrlPosition, own: BaseRef | None) -> tuple[np.ndarray | None, str]:
+    def _unused(self, s: int, i: int, own: BaseRef | None) -> tuple[np.ndarray | None, str]:
         """A stored position no motion uses: a position only in a .dat given alone with --base."""
-        cartesian = pos.type in ("POS", "E6POS")
-        in_dat = Path(pos.path or "").suffix.lower() == ".dat"
+        scan = self.scans[s]
+        type_name, name = scan.table.type[i], scan.table.name[i]
+        cartesian = type_name in ("POS", "E6POS")
+        in_dat = Path(scan.path or "").suffix.lower() == ".dat"
         if self.lone_dat and in_dat and cartesian:
             if self.initial is not None:  # --base N; the position's own FDAT wins over it
                 _, frame, reason = self.resolve(own if own is not None else self.initial)
                 return frame, reason
             return None, (
-                f"{pos.name} is not used by a motion in the given program, so its base is unknown "
+                f"{name} is not used by a motion in the given program, so its base is unknown "
                 "(give the .src, or --base N)"
             )
-        why = f"{pos.name} is not used by a motion in the given files: not a drilling position"
+        why = f"{name} is not used by a motion in the given files: not a drilling position"
         if self.lone_dat and in_dat and self.initial is not None:
-            why += f" (--base N applies to POS/E6POS only, this is {pos.type or 'untyped'})"
+            why += f" (--base N applies to POS/E6POS only, this is {type_name or 'untyped'})"
         return None, why
 
-    def unmatched_reason(self, use: KrlUse) -> str:
+    def declared(self, variable: str) -> tuple[str, Declared] | None:
+        for scan in self.every:
+            found = scan.declared_get(variable)
+            if found is not None:
+                return scan.path or "", found
+        return None
+
+    def unmatched_reason(self, name: str, text: str) -> str:
         """Why a motion to a name corrects nothing ("" when the name is a stored position)."""
-        if use.name in self.named or use.name in self.wild_named:
+        if name in self.named or name in self.wild_named:
             return ""
-        stored = self.config_named.get(use.name)
+        stored = self.config_named.get(name)
         if stored is not None:
-            return stored.reason or f"{use.text} is in --config-dat, which is read, not rewritten"
-        variable = use.name.split("[")[0].split(".")[0]
-        found = self.declared.get(variable)
+            return stored.reason or f"{text} is in --config-dat, which is read, not rewritten"
+        found = self.declared(name.split("[")[0].split(".")[0])
         if found is not None:
             where, declared = found
             return (
-                f"{use.text} is declared ({declared.type}, {Path(where).name}:{declared.line}) "
+                f"{text} is declared ({declared.type}, {Path(where).name}:{declared.line}) "
                 "but given no literal value in the given files: it is set at run time"
             )
-        return f"{use.text} is not declared in the given files"
+        return f"{text} is not declared in the given files"
 
 
-def _correct_krl(
-    placed: list[tuple[KrlPosition, Row, np.ndarray]],
-    texts: dict[str, str],
-    edits: dict[str, list[tuple[int, int, str]]],
-    places_of: dict[str, int],
+def _correct(
+    tables: list[PositionTable],
+    todo: list[np.ndarray],
+    placed: list[np.ndarray],
+    frames: list[np.ndarray],
+    rows: Rows,
+    starts: np.ndarray,
     opts: Options,
-) -> None:
-    """Correct the placed positions at once: rows updated, X, Y, Z edits added per file.
+) -> list[np.ndarray]:
+    """Correct every placed position of every file at once (one ``correct_points``).
 
-    ``placed``: (position, its row, robot_T_base (4, 4)) for N positions; frames are shared
-    objects, so the N frames come from a few distinct ones."""
-    unique: dict[int, int] = {}
-    which = np.array([unique.setdefault(id(f), len(unique)) for _, _, f in placed])
-    by_id = {id(f): f for _, _, f in placed}
-    frames = np.array([by_id[k] for k in unique])[which]  # (N, 4, 4)
-    abc = np.array([[_value(pos, k) for k in "ABC"] for pos, _, _ in placed]).reshape(-1, 3)
-    base_xyz = np.array([row.old for _, row, _ in placed])  # (N, 3) mm, base frame
-    robot = np.einsum("nij,nj->ni", frames[:, :3, :3], base_xyz) + frames[:, :3, 3]
-    rows = [row for _, row, _ in placed]
-    corrected = correct_points(robot, rows, opts, rotations_of(frames[:, :3, :3], abc))
-    inside = np.isfinite(corrected[:, 0])
-    back = np.einsum("nji,nj->ni", frames[:, :3, :3], corrected - robot)  # R^T e
-    targets = base_xyz + back
-    for file in texts:
-        idx = [i for i in np.flatnonzero(inside).tolist() if placed[i][1].file == file]
-        if not idx:
-            continue
-        text = texts[file]
-        places = opts.decimals if opts.decimals is not None else places_of[file]
-        numbers = [pos.numbers[k] for i in idx for pos in (placed[i][0],) for k in "XYZ"]
-        olds = [text[n.start : n.end] for n in numbers]
-        news = number_texts(olds, base_xyz[idx].ravel(), targets[idx].ravel(), places)
+    ``todo[s]``: placed table rows of file s, ``placed[s][todo[s]]`` the index of each one's
+    robot_T_base in ``frames``, ``starts[s]``: its first report row. Per file: the corrected
+    targets (n, 3) mm base frame (NaN rows: not corrected)."""
+    stack = np.array(frames)
+    which = np.concatenate([placed[s][t] for s, t in enumerate(todo)])
+    base_xyz = np.concatenate([table.xyz[t] for table, t in zip(tables, todo, strict=True)])
+    abc = np.concatenate([table.abc[t] for table, t in zip(tables, todo, strict=True)])
+    at = np.concatenate([starts[s] + t for s, t in enumerate(todo)])
+    n = len(which)
+    robot = np.empty((n, 3))
+    rotations = np.empty((n, 3, 3))
+    for a in range(0, n, _BLOCK):  # (N, 4, 4) frames a block at a time
+        f = stack[which[a : a + _BLOCK]]
+        robot[a : a + _BLOCK] = (
+            np.einsum("nij,nj->ni", f[:, :3, :3], base_xyz[a : a + _BLOCK]) + f[:, :3, 3]
+        )
+        rotations[a : a + _BLOCK] = rotations_of(f[:, :3, :3], abc[a : a + _BLOCK])
+    corrected = correct_points(robot, rows, at, opts, rotations)
+    del rotations
+    targets = np.full((n, 3), np.nan)
+    for a in range(0, n, _BLOCK):
+        f = stack[which[a : a + _BLOCK]]
+        e = corrected[a : a + _BLOCK] - robot[a : a + _BLOCK]
+        targets[a : a + _BLOCK] = base_xyz[a : a + _BLOCK] + np.einsum(
+            "nji,nj->ni", f[:, :3, :3], e
+        )  # R^T e
+    bounds = np.cumsum([0] + [t.size for t in todo])
+    return [targets[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
+def _splice(
+    text: str,
+    t: PositionTable,
+    todo: np.ndarray,
+    targets: np.ndarray,
+    rows: Rows,
+    first_row: int,
+    places: int,
+) -> bytearray:
+    """The file's bytes with the X, Y, Z of its corrected positions replaced (``places``
+    decimals); their rows (``first_row`` + table row) updated.
+
+    ``todo`` (n,): placed table rows, ``targets`` (n, 3) mm base frame, NaN rows where not
+    corrected."""
+    inside = np.flatnonzero(np.isfinite(targets[:, 0]))
+    out = Splicer(text)
+    for a in range(0, len(inside), _BLOCK):
+        k = inside[a : a + _BLOCK]
+        goal = targets[k]
+        old = t.xyz[todo[k]]
+        news = fixed_many(goal.ravel(), places)
         written = np.array(list(map(float, news))).reshape(-1, 3)
-        residual = np.linalg.norm(written - targets[idx], axis=1).tolist()
-        for i, new, res in zip(idx, written.tolist(), residual, strict=True):
-            row = placed[i][1]
-            row.status, row.new, row.residual_mm = "corrected", tuple(new), res
-            row.rounding_mm = res
-        edits[file] += [
-            (n.start, n.end, new)
-            for n, old, new in zip(numbers, olds, news, strict=True)
-            if new != old
-        ]
-
-
-def _value(pos: KrlPosition, key: str) -> float:
-    number = pos.numbers.get(key)
-    return math.nan if number is None else number.value
+        residual = np.linalg.norm(written - goal, axis=1)
+        at = first_row + todo[k]
+        rows.status[at] = CORRECTED
+        rows.new[at] = written
+        rows.residual_mm[at] = residual
+        rows.rounding_mm[at] = residual
+        spans = t.span[todo[k]].reshape(-1, 2)
+        changed = np.flatnonzero(written.ravel() != old.ravel()).tolist()
+        out.add(spans[changed, 0].tolist(), spans[changed, 1].tolist(), [news[c] for c in changed])
+    return out.finish()
