@@ -1,5 +1,6 @@
 """What ``accugrid krl`` and ``accugrid gcode`` share: read the inputs, build the corrected
-program, make the header, report warnings. The dialect commands only render and write."""
+program, make the header, report warnings. Each dialect's ``job.py`` renders the files into the
+``Job``; the commands write them."""
 
 from __future__ import annotations
 
@@ -7,8 +8,8 @@ import argparse
 import dataclasses
 import os
 import sys
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -27,9 +28,17 @@ __all__ = ["Job", "add_job_arguments", "grid_path", "prepare", "summary"]
 
 @dataclass
 class Job:
+    """A drilling-program job: the corrected program, its header lines, the files it read
+    (never overwritten) and, once a dialect rendered it, what to write: ``files`` (text or text
+    in pieces, by path, fetched as written), ``main`` (among them, renamed last, in order) and
+    ``stale`` (an earlier job's files to remove)."""
+
     program: Program
     header: list[str]
-    inputs: list[Path]  # never overwritten
+    inputs: list[Path]
+    files: Mapping[Path, object] = field(default_factory=dict)
+    main: list[Path] = field(default_factory=list)
+    stale: list[Path] = field(default_factory=list)
 
 
 def add_job_arguments(parser: argparse.ArgumentParser) -> None:

@@ -17,8 +17,8 @@ import argparse
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.gcode.emit import gcode_text
-from accugrid.codegen.job import add_job_arguments, prepare, summary
+from accugrid.codegen.gcode.job import gcode_job
+from accugrid.codegen.job import add_job_arguments, summary
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -33,8 +33,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     check_targets([out], [args.points, args.cell] + ([args.grid] if args.grid else []), args.force)
-    job = prepare(args, NAME)
-    text = gcode_text(job.program, job.header, args.templates)
-    written = write_files({out: text}, job.inputs, args.force)
+    job = gcode_job(args, out)
+    written = write_files(job.files, job.inputs, args.force)
     print(summary(job, written))
     return 0

@@ -14,13 +14,11 @@ nothing written.
 from __future__ import annotations
 
 import argparse
-import re
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cell import load_cell
-from accugrid.codegen.job import add_job_arguments, prepare, summary
-from accugrid.codegen.krl.emit import module_names, render_krl
+from accugrid.codegen.job import add_job_arguments, summary
+from accugrid.codegen.krl.job import krl_job, krl_targets
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -36,21 +34,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
-    cell = load_cell(args.cell)
-    name = cell.krl.name  # refuse existing outputs before the work
     inputs = [args.points, args.cell] + ([args.grid] if args.grid else [])
-    check_targets([out / f"{name}.src", out / f"{name}.dat"], inputs, args.force)
-    job = prepare(args, NAME, lambda n, header: module_names(cell, n, header, args.templates))
-    files = render_krl(job.program, job.header, args.templates)
-    # NAME.src last (NAME.dat before it); modules of an earlier job of this name go
-    module = re.compile(rf"{re.escape(name)}_[0-9]{{3,}}\.(src|dat)")
-    stale = [p for p in out.glob(f"{name}_*") if module.fullmatch(p.name)]
-    written = write_files(
-        files.at(out),
-        job.inputs,
-        args.force,
-        main=[out / f"{name}.dat", out / f"{name}.src"],
-        stale=stale,
-    )
+    check_targets(krl_targets(args.cell, out), inputs, args.force)
+    job = krl_job(args, out)
+    written = write_files(job.files, job.inputs, args.force, main=job.main, stale=job.stale)
     print(summary(job, written))
     return 0

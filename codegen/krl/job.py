@@ -1,0 +1,36 @@
+"""`accugrid krl` as one call: the corrected program (``codegen.job.prepare``) rendered as a KRL
+``.src``/``.dat`` pair, split into modules NAME_001.. when long (``krl.emit``)."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import re
+from pathlib import Path
+
+from accugrid.codegen.cell import load_cell
+from accugrid.codegen.job import Job, prepare
+from accugrid.codegen.krl.emit import module_names, render_krl
+
+__all__ = ["krl_job", "krl_targets"]
+
+
+def krl_targets(cell_path: str, out: Path) -> list[Path]:
+    """The job's main files in folder ``out``: NAME.dat, NAME.src (NAME: the cell's program.name),
+    to refuse existing outputs before any work."""
+    name = load_cell(cell_path).krl.name
+    return [out / f"{name}.dat", out / f"{name}.src"]
+
+
+def krl_job(args: argparse.Namespace, out: Path) -> Job:
+    """The whole job of ``accugrid krl`` arguments into folder ``out``: modules that cannot be
+    named or called are refused before the correction; NAME.src is written last (NAME.dat
+    before it) and the modules of an earlier job of this name are stale."""
+    cell = load_cell(args.cell)
+    name = cell.krl.name
+    job = prepare(args, "krl", lambda n, header: module_names(cell, n, header, args.templates))
+    files = render_krl(job.program, job.header, args.templates)
+    module = re.compile(rf"{re.escape(name)}_[0-9]{{3,}}\.(src|dat)")
+    stale = [p for p in out.glob(f"{name}_*") if module.fullmatch(p.name)]
+    main = [out / f"{name}.dat", out / f"{name}.src"]
+    return dataclasses.replace(job, files=files.at(out), main=main, stale=stale)
