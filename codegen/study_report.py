@@ -12,6 +12,7 @@ import numpy as np
 
 from accugrid.codegen.atomic import JobFiles
 from accugrid.codegen.plots import fig12_png, hist_png
+from accugrid.codegen.textsafe import fixed
 from accugrid.compensation.plans import SEED_REGION, SEED_REPEATS
 from accugrid.compensation.study import (
     AXES,
@@ -49,10 +50,6 @@ __all__ = [
 OUTPUTS = ("table4.csv", "table5.csv", "fig12.png", "table5_hist.png", "report.md")
 
 
-def _fmt(v: float) -> str:
-    return f"{v:.3f}"
-
-
 def text_table(header: list[str], rows: list[list[str]]) -> str:
     widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(header)]
     line = lambda cells: "  ".join(c.rjust(w) for c, w in zip(cells, widths, strict=True))  # noqa: E731
@@ -63,7 +60,7 @@ STAT_HEADER = [f"{k} {a}" for k in ("max", "min", "std") for a in AXES]
 
 
 def _stat_cells(row: Summary) -> list[str]:
-    return [_fmt(v) for v in (*row.max, *row.min, *row.std)]
+    return [fixed(v, 3) for v in (*row.max, *row.min, *row.std)]
 
 
 def table4(result: StudyResult) -> tuple[list[str], list[list[str]]]:
