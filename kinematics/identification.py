@@ -43,6 +43,7 @@ from accugrid.kinematics.robot import Robot
 
 __all__ = [
     "COMPLIANT_AXES",
+    "MAX_HARMONICS",
     "RTOL",
     "CrossValidation",
     "Identification",
@@ -58,6 +59,7 @@ __all__ = [
 
 COMPLIANT_AXES = (1, 2)  # A2, A3 (0-based): the axes that carry the arm against gravity
 RTOL = 1e-7  # singular value / largest below this: unidentifiable direction (scaled Jacobian)
+MAX_HARMONICS = 60  # reducer harmonic terms (axis, order) one identification takes at most
 OUTLIER_SIGMA = 3.0  # a row is an outlier when an axis residual is beyond this many robust sigmas
 OUTLIER_FLOOR_MM = 1e-3  # ... and beyond this (below any tracker's resolution)
 PLANE_RATIO = 0.02  # positions whose thinnest principal spread is below this share: one plane
@@ -102,7 +104,8 @@ def parameter_units(
 
 def harmonic_terms(spec: Sequence[tuple[int, int]]) -> Terms:
     """The (axis 1..6, order 1..MAX_ORDER) reducer harmonics to identify, checked, duplicates
-    dropped, in the given order. InputError for an axis or order out of range."""
+    dropped, in the given order. InputError for an axis or order out of range, or more than
+    MAX_HARMONICS terms (each costs two parameters and a pose and a half of data)."""
     terms: list[tuple[int, int]] = []
     for axis, order in spec:
         if not 1 <= int(axis) <= 6 or not 1 <= int(order) <= MAX_ORDER:
@@ -111,6 +114,8 @@ def harmonic_terms(spec: Sequence[tuple[int, int]]) -> Terms:
             )
         if (int(axis), int(order)) not in terms:
             terms.append((int(axis), int(order)))
+        if len(terms) > MAX_HARMONICS:
+            raise InputError(f"more than {MAX_HARMONICS} harmonic terms to identify")
     return tuple(terms)
 
 

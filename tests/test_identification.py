@@ -495,3 +495,5 @@ def test_harmonic_terms_are_checked():
         harmonic_terms([(2, 0)])
     with pytest.raises(InputError, match="order 1..100000"):
         harmonic_terms([(2, 100_001)])
+    with pytest.raises(InputError, match="more than 60 harmonic terms"):
+        harmonic_terms((2, k) for k in range(1, 1_000_000))  # refused at the 61st
