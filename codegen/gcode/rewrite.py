@@ -59,8 +59,9 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
         robot = prog @ t[:3, :3].T + t[:3, 3]
         abc = np.array([[r.get(k, math.nan) for k in "ABC"] for r in moves.rotaries])
         at = np.array(todo)
-        abc = abc.reshape(-1, 3)[moves.rotary_index[at]]
-        corrected = correct_points(robot, rows, at, opts, rotations_of(t[:3, :3], abc))
+        # each distinct A/B/C once (a program has few), then one row per point
+        rotations = rotations_of(t[:3, :3], abc.reshape(-1, 3))[moves.rotary_index[at]]
+        corrected = correct_points(robot, rows, at, opts, rotations)
         back = (corrected - robot) @ t[:3, :3]  # R^T e, row-wise
         done = np.flatnonzero(np.isfinite(corrected[:, 0]))
         rows.status[at[done]] = CORRECTED
@@ -231,9 +232,20 @@ def _places(moves: GcodeMoves, opts: Options) -> np.ndarray:
     but never coarser than 0.01 mm (0.001 in under G20)."""
     if opts.decimals is not None:
         return np.full(len(moves), opts.decimals)
-    xyz = moves.word_start[:, :3] >= 0
-    spans = zip(
-        moves.word_start[:, :3][xyz].tolist(), moves.word_end[:, :3][xyz].tolist(), strict=True
-    )
-    found = precision(moves.text[s:e] for s, e in spans)
+    found = [
+        precision(moves.text[s:e] for s, e in zip(starts, ends, strict=True))
+        for starts, ends in _word_spans(moves)
+    ]
+    found = max(found) if found else precision(())
     return np.where(moves.scale == 1.0, max(found, MIN_PLACES_MM), max(found, MIN_PLACES_INCH))
+
+
+def _word_spans(moves: GcodeMoves):
+    """(starts, ends) lists of the X, Y, Z numbers written, a block of moves at a time (only
+    blocks that write any)."""
+    for first in range(0, len(moves), _BLOCK):
+        starts = moves.word_start[first : first + _BLOCK, :3]
+        written = starts >= 0
+        if written.any():
+            ends = moves.word_end[first : first + _BLOCK, :3]
+            yield starts[written].tolist(), ends[written].tolist()
