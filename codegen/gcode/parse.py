@@ -180,25 +180,44 @@ class GcodeMoves:
         if not self.rotaries or move.rotary is not self.rotaries[-1]:
             self.rotaries.append(move.rotary)
         self._rotary.append(len(self.rotaries) - 1)
-        words = move.words
-        spans = [words[k] if k in words else None for k in WORD_LETTERS]
+        get = move.words.get
+        x, y, z, r = get("X"), get("Y"), get("Z"), get("R")
+        s0, s1, s2 = move.setters
+        start, target, end = move.start, move.target, move.end
         self._ints.extend(
             (
                 move.line,
                 move.column,
-                *(-1 if j is None else j for j in move.setters),
-                *(-1 if w is None else w.start for w in spans),
-                *(-1 if w is None else w.end for w in spans),
+                -1 if s0 is None else s0,
+                -1 if s1 is None else s1,
+                -1 if s2 is None else s2,
+                -1 if x is None else x.start,
+                -1 if y is None else y.start,
+                -1 if z is None else z.start,
+                -1 if r is None else r.start,
+                -1 if x is None else x.end,
+                -1 if y is None else y.end,
+                -1 if z is None else z.end,
+                -1 if r is None else r.end,
             )
         )
         self._floats.extend(
             (
-                *move.start,
-                *move.target,
-                *move.end,
+                start[0],
+                start[1],
+                start[2],
+                target[0],
+                target[1],
+                target[2],
+                end[0],
+                end[1],
+                end[2],
                 move.scale,
                 move.r_mm,
-                *(math.nan if w is None else w.value for w in spans),
+                math.nan if x is None else x.value,
+                math.nan if y is None else y.value,
+                math.nan if z is None else z.value,
+                math.nan if r is None else r.value,
             )
         )
         self._flags.append(move.incremental + 2 * move.is_cycle)
