@@ -175,19 +175,20 @@ class GcodeMoves:
     def __len__(self) -> int:
         return len(self.motion)
 
-    def append(self, move: GcodeMove) -> None:
-        """Store one move (read by ``_Reader``) as a row."""
-        if not self.rotaries or move.rotary is not self.rotaries[-1]:
-            self.rotaries.append(move.rotary)
+    def add(self, line, column, motion, start, target, words, reason, end, state, cycle) -> None:
+        """Store one move as a row: ``start``, ``target``, ``end`` 3 mm each; ``words`` letter ->
+        Word; ``state``: the ``_Modal`` it was read in (pos and setters before the move)."""
+        rotary = state.rotary
+        if not self.rotaries or rotary is not self.rotaries[-1]:
+            self.rotaries.append(rotary)
         self._rotary.append(len(self.rotaries) - 1)
-        get = move.words.get
+        get = words.get
         x, y, z, r = get("X"), get("Y"), get("Z"), get("R")
-        s0, s1, s2 = move.setters
-        start, target, end = move.start, move.target, move.end
+        s0, s1, s2 = state.setter
         self._ints.extend(
             (
-                move.line,
-                move.column,
+                line,
+                column,
                 -1 if s0 is None else s0,
                 -1 if s1 is None else s1,
                 -1 if s2 is None else s2,
@@ -212,19 +213,20 @@ class GcodeMoves:
                 end[0],
                 end[1],
                 end[2],
-                move.scale,
-                move.r_mm,
+                state.scale,
+                state.cycle_r if cycle else math.nan,
                 math.nan if x is None else x.value,
                 math.nan if y is None else y.value,
                 math.nan if z is None else z.value,
                 math.nan if r is None else r.value,
             )
         )
-        self._flags.append(move.incremental + 2 * move.is_cycle)
+        self._flags.append(state.incremental + 2 * cycle)
         names = self._names
-        self.motion.append(names.setdefault(move.motion, move.motion))
-        self.retract.append(names.setdefault(move.retract, move.retract))
-        self.reason.append(move.reason)
+        retract = state.retract if cycle else ""
+        self.motion.append(names.setdefault(motion, motion))
+        self.retract.append(names.setdefault(retract, retract))
+        self.reason.append(reason)
 
     def finish(self) -> GcodeMoves:
         """Expose the columns as arrays (views of the stored rows)."""
@@ -560,7 +562,7 @@ class _Reader:
         if nonmodal:  # G28/G30 (via a point) or G53 (machine coordinates)
             name = "G" + nonmodal[0]
             self._add(
-                self._move(lineno, column, name, _NAN3, axis_words),
+                (lineno, column, name, _NAN3, axis_words),
                 f"{name}: a machine-coordinate or home move",
                 [math.nan] * 3,
                 AXES,
@@ -586,37 +588,20 @@ class _Reader:
         self.state.rotary = rotary
         return True
 
-    def _move(self, lineno, column, motion, target, words) -> GcodeMove:
-        s = self.state
-        return GcodeMove(
-            self.path,
-            lineno,
-            column,
-            motion,
-            tuple(s.pos),
-            target,
-            words,
-            s.incremental,
-            s.scale,
-            "",
-            s.rotary,
-            tuple(s.setter),
-        )
-
-    def _add(self, move: GcodeMove, reason: str, end: list[float], written) -> None:
-        """Append ``move`` with its reason (or "not known" for a NaN target), ending at ``end``."""
-        t = move.target
+    def _add(self, move: tuple, reason: str, end: list[float], written, cycle=False) -> None:
+        """Store ``move`` (line, column, motion, target, words) with its reason (or "not known"
+        for a NaN target), ending at ``end``; ``cycle``: a canned-cycle hole."""
+        t = move[3]
         if not reason and (t[0] != t[0] or t[1] != t[1] or t[2] != t[2]):  # NaN: unknown
             missing = ",".join(k for i, k in enumerate(AXES) if math.isnan(t[i]))
             reason = f"{missing} not known here (no absolute value since the start)"
-        move.reason = reason
-        move.end = tuple(end)
+        state = self.state
         index = len(self.moves)
+        self.moves.add(*move[:3], state.pos, t, move[4], reason, end, state, cycle)
         for i, k in enumerate(AXES):
             if k in written:
-                self.state.setter[i] = index
-        self.state.pos = end
-        self.moves.append(move)
+                state.setter[i] = index
+        state.pos = end
 
     def _straight(self, lineno, column, axis_words, exprs) -> None:
         s = self.state
@@ -628,7 +613,7 @@ class _Reader:
                 target[i] = s.pos[i] + value if s.incremental else value
             elif k in exprs:
                 target[i] = math.nan
-        move = self._move(lineno, column, "G" + s.motion, tuple(target), axis_words)
+        move = (lineno, column, "G" + s.motion, tuple(target), axis_words)
         reason = _expression_reason(exprs, lineno) or s.frame_reason() or s.unknown_motion
         if s.motion == "80":
             reason = reason or "axis words with G80 (no motion mode)"
@@ -659,11 +644,7 @@ class _Reader:
             move_words["R"] = words["R"]
         elif "R" in exprs:
             s.cycle_r = math.nan
-        move = self._move(lineno, column, "G" + s.motion, (target[0], target[1], s.cycle_z), {})
-        move.words = move_words
-        move.is_cycle = True
-        move.retract = s.retract
-        move.r_mm = s.cycle_r
+        move = (lineno, column, "G" + s.motion, (target[0], target[1], s.cycle_z), move_words)
         reason = _expression_reason(exprs, lineno) or s.frame_reason()
         if s.incremental:
             reason = reason or "canned cycle in G91 (incremental cycle words)"
@@ -673,7 +654,7 @@ class _Reader:
             reason = reason or "canned cycle without an R plane or Z depth"
         clear = s.cycle_r if s.retract == "G99" else max(s.pos[2], s.cycle_r)
         end = [target[0], target[1], clear if not s.incremental else math.nan]
-        self._add(move, reason, end, set(axis_words) | set(exprs) | {"Z"})
+        self._add(move, reason, end, set(axis_words) | set(exprs) | {"Z"}, cycle=True)
 
 
 def _expression_reason(exprs: dict[str, str], lineno: int) -> str:
