@@ -22,13 +22,27 @@ import math
 import os
 import re
 import string
+from array import array
 from dataclasses import dataclass, field
 from typing import NamedTuple
+
+import numpy as np
 
 from accugrid.codegen.program_text import check_text, decimals_of, split_lines
 from accugrid.kinematics.errors import InputError
 
-__all__ = ["AXES", "CYCLES", "INCH_MM", "ROTARY", "GcodeMove", "Word", "parse_gcode"]
+__all__ = [
+    "AXES",
+    "CYCLES",
+    "INCH_MM",
+    "ROTARY",
+    "WORD_LETTERS",
+    "GcodeMove",
+    "GcodeMoves",
+    "Word",
+    "gcode_moves",
+    "parse_gcode",
+]
 
 _NUMBER = r"[-+]?+(?:\d++(?:\.\d*+)?+|\.\d++)"
 _NUMBER_RE = re.compile(_NUMBER)
@@ -84,6 +98,7 @@ _WCS = frozenset(("55", "56", "57", "58", "59", "59.1", "59.2", "59.3"))
 _G_NAMES = {float(g): g for g in (str(i) for i in range(100))}
 _new_word = tuple.__new__  # a Word without the NamedTuple constructor's Python frame
 _NAN3 = (math.nan, math.nan, math.nan)
+WORD_LETTERS = "XYZR"  # the words a move keeps, in the order its ``words`` dict lists them
 
 
 class Word(NamedTuple):
@@ -131,6 +146,131 @@ class GcodeMove:
     @property
     def is_arc(self) -> bool:
         return self.motion in ("G2", "G3")
+
+
+class GcodeMoves:
+    """The moves of one program, column by column: compact arrays instead of an object per move
+    (a million-move program in a few hundred bytes per move); ``move(i)`` builds one
+    ``GcodeMove`` on demand.
+
+    After ``finish``: ``line``, ``column`` (N,) int; ``start``, ``target``, ``end`` (N, 3) mm in
+    the program frame (NaN where unknown); ``scale`` and ``r_mm`` (N,) mm; ``incremental`` and
+    ``is_cycle`` (N,) bool; ``setters`` (N, 3) int (-1: none); ``word_start``, ``word_end`` (N, 4)
+    text offsets of the X, Y, Z, R numbers (-1: not written) and ``word_value`` (N, 4) their
+    values in program units; ``rotary_index`` (N,) int into ``rotaries`` (the distinct rotary
+    dicts, each once); ``motion``, ``reason``, ``retract`` lists of str."""
+
+    def __init__(self, path: str | None, text: str) -> None:
+        self.path, self.text = path, text
+        self._ints = array("q")  # per move: line, column, 3 setters, 4 word starts, 4 word ends
+        self._floats = array("d")  # per move: start, target, end (9), scale, r_mm, 4 values
+        self._flags = array("b")  # per move: incremental + 2 * is_cycle
+        self._rotary = array("q")
+        self.rotaries: list[dict[str, float]] = []
+        self.motion: list[str] = []
+        self.reason: list[str] = []
+        self.retract: list[str] = []
+        self._names: dict[str, str] = {}  # one str object per distinct motion and retract
+
+    def __len__(self) -> int:
+        return len(self.motion)
+
+    def add(self, line, column, motion, start, target, words, reason, end, state, cycle) -> None:
+        """Store one move as a row: ``start``, ``target``, ``end`` 3 mm each; ``words`` letter ->
+        Word; ``state``: the ``_Modal`` it was read in (pos and setters before the move)."""
+        rotary = state.rotary
+        if not self.rotaries or rotary is not self.rotaries[-1]:
+            self.rotaries.append(rotary)
+        self._rotary.append(len(self.rotaries) - 1)
+        get = words.get
+        x, y, z, r = get("X"), get("Y"), get("Z"), get("R")
+        s0, s1, s2 = state.setter
+        self._ints.extend(
+            (
+                line,
+                column,
+                -1 if s0 is None else s0,
+                -1 if s1 is None else s1,
+                -1 if s2 is None else s2,
+                -1 if x is None else x.start,
+                -1 if y is None else y.start,
+                -1 if z is None else z.start,
+                -1 if r is None else r.start,
+                -1 if x is None else x.end,
+                -1 if y is None else y.end,
+                -1 if z is None else z.end,
+                -1 if r is None else r.end,
+            )
+        )
+        self._floats.extend(
+            (
+                start[0],
+                start[1],
+                start[2],
+                target[0],
+                target[1],
+                target[2],
+                end[0],
+                end[1],
+                end[2],
+                state.scale,
+                state.cycle_r if cycle else math.nan,
+                math.nan if x is None else x.value,
+                math.nan if y is None else y.value,
+                math.nan if z is None else z.value,
+                math.nan if r is None else r.value,
+            )
+        )
+        self._flags.append(state.incremental + 2 * cycle)
+        names = self._names
+        retract = state.retract if cycle else ""
+        self.motion.append(names.setdefault(motion, motion))
+        self.retract.append(names.setdefault(retract, retract))
+        self.reason.append(reason)
+
+    def finish(self) -> GcodeMoves:
+        """Expose the columns as arrays (views of the stored rows)."""
+        n = len(self)
+        ints = np.frombuffer(self._ints, dtype=np.int64).reshape(n, 13)
+        floats = np.frombuffer(self._floats, dtype=float).reshape(n, 15)
+        flags = np.frombuffer(self._flags, dtype=np.int8)
+        self.line, self.column, self.setters = ints[:, 0], ints[:, 1], ints[:, 2:5]
+        self.word_start, self.word_end = ints[:, 5:9], ints[:, 9:13]
+        self.start, self.target, self.end = floats[:, 0:3], floats[:, 3:6], floats[:, 6:9]
+        self.scale, self.r_mm, self.word_value = floats[:, 9], floats[:, 10], floats[:, 11:15]
+        self.incremental, self.is_cycle = (flags & 1) != 0, (flags & 2) != 0
+        self.rotary_index = np.frombuffer(self._rotary, dtype=np.int64)
+        return self
+
+    def move(self, i: int) -> GcodeMove:
+        """Move ``i`` as a ``GcodeMove`` (as the reader built it)."""
+        ints = self._ints[13 * i : 13 * i + 13].tolist()
+        floats = self._floats[15 * i : 15 * i + 15].tolist()
+        words = {}
+        for k, letter in enumerate(WORD_LETTERS):
+            start, end = ints[5 + k], ints[9 + k]
+            if start >= 0:
+                literal = self.text[start:end]
+                words[letter] = _new_word(Word, (letter, floats[11 + k], start, end, literal))
+        flags = self._flags[i]
+        return GcodeMove(
+            self.path,
+            ints[0],
+            ints[1],
+            self.motion[i],
+            tuple(floats[0:3]),
+            tuple(floats[3:6]),
+            words,
+            bool(flags & 1),
+            floats[9],
+            self.reason[i],
+            self.rotaries[self._rotary[i]],
+            tuple(None if j < 0 else j for j in ints[2:5]),
+            self.retract[i],
+            floats[10],
+            tuple(floats[6:9]),
+            bool(flags & 2),
+        )
 
 
 class _Line(NamedTuple):
@@ -389,10 +529,10 @@ def _fast_line(line: str, offset: int, path: str | None, lineno: int) -> _Line |
 class _Reader:
     """Reads one program: ``moves`` in order, the modal state in ``state``."""
 
-    def __init__(self, path: str | None) -> None:
+    def __init__(self, path: str | None, text: str) -> None:
         self.path = path
         self.state = _Modal()
-        self.moves: list[GcodeMove] = []
+        self.moves = GcodeMoves(path, text)
 
     def block(self, block: _Line, lineno: int, line_offset: int) -> None:
         state = self.state
@@ -422,7 +562,7 @@ class _Reader:
         if nonmodal:  # G28/G30 (via a point) or G53 (machine coordinates)
             name = "G" + nonmodal[0]
             self._add(
-                self._move(lineno, column, name, _NAN3, axis_words),
+                (lineno, column, name, _NAN3, axis_words),
                 f"{name}: a machine-coordinate or home move",
                 [math.nan] * 3,
                 AXES,
@@ -448,37 +588,20 @@ class _Reader:
         self.state.rotary = rotary
         return True
 
-    def _move(self, lineno, column, motion, target, words) -> GcodeMove:
-        s = self.state
-        return GcodeMove(
-            self.path,
-            lineno,
-            column,
-            motion,
-            tuple(s.pos),
-            target,
-            words,
-            s.incremental,
-            s.scale,
-            "",
-            s.rotary,
-            tuple(s.setter),
-        )
-
-    def _add(self, move: GcodeMove, reason: str, end: list[float], written) -> None:
-        """Append ``move`` with its reason (or "not known" for a NaN target), ending at ``end``."""
-        t = move.target
+    def _add(self, move: tuple, reason: str, end: list[float], written, cycle=False) -> None:
+        """Store ``move`` (line, column, motion, target, words) with its reason (or "not known"
+        for a NaN target), ending at ``end``; ``cycle``: a canned-cycle hole."""
+        t = move[3]
         if not reason and (t[0] != t[0] or t[1] != t[1] or t[2] != t[2]):  # NaN: unknown
             missing = ",".join(k for i, k in enumerate(AXES) if math.isnan(t[i]))
             reason = f"{missing} not known here (no absolute value since the start)"
-        move.reason = reason
-        move.end = tuple(end)
+        state = self.state
         index = len(self.moves)
+        self.moves.add(*move[:3], state.pos, t, move[4], reason, end, state, cycle)
         for i, k in enumerate(AXES):
             if k in written:
-                self.state.setter[i] = index
-        self.state.pos = end
-        self.moves.append(move)
+                state.setter[i] = index
+        state.pos = end
 
     def _straight(self, lineno, column, axis_words, exprs) -> None:
         s = self.state
@@ -490,7 +613,7 @@ class _Reader:
                 target[i] = s.pos[i] + value if s.incremental else value
             elif k in exprs:
                 target[i] = math.nan
-        move = self._move(lineno, column, "G" + s.motion, tuple(target), axis_words)
+        move = (lineno, column, "G" + s.motion, tuple(target), axis_words)
         reason = _expression_reason(exprs, lineno) or s.frame_reason() or s.unknown_motion
         if s.motion == "80":
             reason = reason or "axis words with G80 (no motion mode)"
@@ -521,11 +644,7 @@ class _Reader:
             move_words["R"] = words["R"]
         elif "R" in exprs:
             s.cycle_r = math.nan
-        move = self._move(lineno, column, "G" + s.motion, (target[0], target[1], s.cycle_z), {})
-        move.words = move_words
-        move.is_cycle = True
-        move.retract = s.retract
-        move.r_mm = s.cycle_r
+        move = (lineno, column, "G" + s.motion, (target[0], target[1], s.cycle_z), move_words)
         reason = _expression_reason(exprs, lineno) or s.frame_reason()
         if s.incremental:
             reason = reason or "canned cycle in G91 (incremental cycle words)"
@@ -535,7 +654,7 @@ class _Reader:
             reason = reason or "canned cycle without an R plane or Z depth"
         clear = s.cycle_r if s.retract == "G99" else max(s.pos[2], s.cycle_r)
         end = [target[0], target[1], clear if not s.incremental else math.nan]
-        self._add(move, reason, end, set(axis_words) | set(exprs) | {"Z"})
+        self._add(move, reason, end, set(axis_words) | set(exprs) | {"Z"}, cycle=True)
 
 
 def _expression_reason(exprs: dict[str, str], lineno: int) -> str:
@@ -547,9 +666,15 @@ def _expression_reason(exprs: dict[str, str], lineno: int) -> str:
 
 def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[GcodeMove]:
     """Every move of an RS274NGC program, in order (see the module docstring for the rules)."""
+    moves = gcode_moves(text, path)
+    return [moves.move(i) for i in range(len(moves))]
+
+
+def gcode_moves(text: str, path: str | os.PathLike[str] | None = None) -> GcodeMoves:
+    """The moves of ``parse_gcode`` as columns."""
     path = None if path is None else os.fspath(path)
     check_text(text, path)
-    reader = _Reader(path)
+    reader = _Reader(path, text)
     offset = 0
     # whole-text checks first: most programs have no O-words or block deletes, and then no line
     # needs those per-line checks
@@ -579,4 +704,4 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
         if block is None:
             block = _scan(line, line_offset, path, lineno)
         reader.block(block, lineno, line_offset)
-    return reader.moves
+    return reader.moves.finish()

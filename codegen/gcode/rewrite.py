@@ -11,17 +11,18 @@ lands where it should. Arcs are not corrected, nor the moves that set an arc's s
 from __future__ import annotations
 
 import math
+from array import array
 
 import numpy as np
 
-from accugrid.codegen.gcode.parse import GcodeMove, parse_gcode
+from accugrid.codegen.gcode.parse import GcodeMoves, gcode_moves
 from accugrid.codegen.program_text import (
     MIN_PLACES_INCH,
     MIN_PLACES_MM,
+    Splicer,
     formatted,
     number_text,
     precision,
-    splice,
 )
 from accugrid.codegen.rewrite import (
     CORRECTED,
@@ -35,70 +36,72 @@ from accugrid.codegen.rewrite import (
 
 __all__ = ["rewrite_gcode"]
 
+_BLOCK = 1 << 14  # moves per block of corrected numbers formatted and spliced at once
+
 
 def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
     """Rewrite one RS274NGC program."""
-    moves = parse_gcode(text, path)
+    moves = gcode_moves(text, path)
     rows = Rows(
         [path],
         np.zeros(len(moves), np.int64),
-        [m.line for m in moves],
-        [m.motion for m in moves],
-        [m.reason for m in moves],
-        np.array([m.target for m in moves], dtype=float).reshape(-1, 3),
+        moves.line,
+        list(moves.motion),
+        list(moves.reason),
+        moves.target.copy(),
     )
     _protect_arc_starts(moves, rows)
     todo = [i for i, r in enumerate(rows.reason) if not r]
-    desired = np.array([m.target for m in moves], dtype=float).reshape(-1, 3)
+    desired = moves.target.copy()
     if todo:
         prog = desired[todo]
         t = opts.robot_T_program
         robot = prog @ t[:3, :3].T + t[:3, 3]
-        abc = np.array([[moves[i].rotary.get(k, math.nan) for k in "ABC"] for i in todo])
+        abc = np.array([[r.get(k, math.nan) for k in "ABC"] for r in moves.rotaries])
         at = np.array(todo)
-        corrected = correct_points(robot, rows, at, opts, rotations_of(t[:3, :3], abc))
+        # each distinct A/B/C once (a program has few), then one row per point
+        rotations = rotations_of(t[:3, :3], abc.reshape(-1, 3))[moves.rotary_index[at]]
+        corrected = correct_points(robot, rows, at, opts, rotations)
         back = (corrected - robot) @ t[:3, :3]  # R^T e, row-wise
-        for j in np.flatnonzero(np.isfinite(corrected[:, 0])).tolist():
-            rows.status[at[j]] = CORRECTED
-            desired[todo[j]] = prog[j] + back[j]
+        done = np.flatnonzero(np.isfinite(corrected[:, 0]))
+        rows.status[at[done]] = CORRECTED
+        desired[at[done]] = prog[done] + back[done]
     r_planes = _corrected_r_planes(moves, rows, opts)
-    edits = _gcode_edits(text, moves, rows, desired, r_planes, opts)
+    out = _gcode_edits(text, moves, rows, desired, r_planes, opts)
     strict_check(rows, opts)
-    return Result({path: splice(text, edits)}, rows)
+    return Result({path: out}, rows)
 
 
-def _protect_arc_starts(moves: list[GcodeMove], rows: Rows) -> None:
+def _protect_arc_starts(moves: GcodeMoves, rows: Rows) -> None:
     """An arc keeps its start point: the moves that set it are not corrected either."""
     reasons = rows.reason
-    for i, m in enumerate(moves):
-        if not m.is_arc:
-            continue
-        if m.incremental:
+    arcs = [i for i, m in enumerate(moves.motion) if m == "G2" or m == "G3"]
+    for i in arcs:
+        line = int(moves.line[i])
+        if moves.incremental[i]:
             for j in range(i):
                 reasons[j] = reasons[j] or (
-                    f"precedes the incremental arc at line {m.line}, whose start must not move"
+                    f"precedes the incremental arc at line {line}, whose start must not move"
                 )
             continue
-        why = f"sets the start of the arc at line {m.line}, which is not corrected"
-        for j in m.setters:
-            if j is not None and not reasons[j]:
+        why = f"sets the start of the arc at line {line}, which is not corrected"
+        for j in moves.setters[i].tolist():
+            if j >= 0 and not reasons[j]:
                 reasons[j] = why
 
 
-def _corrected_r_planes(moves: list[GcodeMove], rows: Rows, opts: Options) -> np.ndarray:
+def _corrected_r_planes(moves: GcodeMoves, rows: Rows, opts: Options) -> np.ndarray:
     """(N,) corrected R plane (mm) of each corrected cycle that writes R; NaN: keep R.
 
     The R point is (X, Y, R) of the hole; only its Z correction can be written."""
     out = np.full(len(moves), np.nan)
-    status = rows.status.tolist()
-    idx = [
-        i for i, m in enumerate(moves) if m.is_cycle and "R" in m.words and status[i] == CORRECTED
-    ]
-    if idx:
-        pts = np.array([[moves[i].target[0], moves[i].target[1], moves[i].r_mm] for i in idx])
+    wrote_r = moves.is_cycle & (moves.word_start[:, 3] >= 0) & (rows.status == CORRECTED)
+    idx = np.flatnonzero(wrote_r)
+    if len(idx):
+        pts = np.column_stack([moves.target[idx, 0], moves.target[idx, 1], moves.r_mm[idx]])
         t = opts.robot_T_program
         robot = pts @ t[:3, :3].T + t[:3, 3]
-        corrected = correct_points(robot, rows, np.array(idx), opts, mark=False)
+        corrected = correct_points(robot, rows, idx, opts, mark=False)
         back = (corrected - robot) @ t[:3, :3]
         out[idx] = pts[:, 2] + back[:, 2]  # NaN where the R point is outside: R kept
     return out
@@ -106,98 +109,143 @@ def _corrected_r_planes(moves: list[GcodeMove], rows: Rows, opts: Options) -> np
 
 def _gcode_edits(
     text: str,
-    moves: list[GcodeMove],
+    moves: GcodeMoves,
     rows: Rows,
     desired: np.ndarray,
     r_planes: np.ndarray,
     opts: Options,
-) -> list[tuple[int, int, str]]:
-    """Walk the program with the commanded (rewritten) position; new word numbers.
+) -> bytearray:
+    """Walk the program with the commanded (rewritten) position; the new program's bytes.
 
     ``desired`` (N, 3) mm: where each move should land (program frame); ``r_planes`` (N,) mm:
-    corrected R planes (NaN: keep). Absolute words are formatted in one pass beforehand; only
-    increments (which depend on what was written before) are formatted on the way."""
-    edits: list[tuple[int, int, str]] = []
-    scales = np.array([m.scale for m in moves]).reshape(-1, 1)
-    places = _places(moves, scales[:, 0], opts)
+    corrected R planes (NaN: keep). Absolute words are formatted a block of moves at a time;
+    only increments (which depend on what was written before) are formatted on the way."""
+    out = Splicer(text)
+    scales = moves.scale.reshape(-1, 1)
+    places = _places(moves, opts)
     corrected = (rows.status == CORRECTED).reshape(-1, 1)
-    absolute = formatted(
-        np.where(corrected, desired / scales, np.nan).ravel(), np.repeat(places, 3)
-    )
-    r_texts = formatted(r_planes / scales[:, 0], places)
-    reached_rows: list[tuple[int, list[float]]] = []
-    reached_at: list[int] = []  # the move of each reached_rows entry
+    reached_rows = array("d")  # where each corrected move reaches, 3 per move
+    reached_at = array("q")  # the move of each
     cmd = [math.nan] * 3
     cycle_z = r_cmd = math.nan
-    status = rows.status.tolist()
-    for n, move in enumerate(moves):
-        if move.motion in ("G28", "G30", "G53"):
-            cmd = [math.nan] * 3
-            continue
-        changed = status[n] == CORRECTED
-        incremental = move.incremental and not move.is_cycle
-        end = list(cmd)
-        for i, k in enumerate("XYZ"):
-            word = move.words.get(k)
-            if word is None:
+    for first in range(0, len(moves), _BLOCK):
+        block = slice(first, first + _BLOCK)
+        absolute = formatted(
+            np.where(corrected[block], desired[block] / scales[block], np.nan).ravel(),
+            np.repeat(places[block], 3),
+        )
+        r_texts = formatted(r_planes[block] / scales[block, 0], places[block])
+        edits: list[tuple[int, int, str]] = []
+        columns = zip(
+            moves.motion[block],
+            corrected[block, 0].tolist(),
+            moves.incremental[block].tolist(),
+            moves.is_cycle[block].tolist(),
+            moves.scale[block].tolist(),
+            moves.word_start[block].tolist(),
+            moves.word_end[block].tolist(),
+            moves.word_value[block].tolist(),
+            desired[block].tolist(),
+            moves.r_mm[block].tolist(),
+            moves.retract[block],
+            strict=True,
+        )
+        for b, (
+            motion,
+            changed,
+            inc,
+            is_cycle,
+            scale,
+            starts,
+            ends,
+            values,
+            goals,
+            r_mm,
+            retract,
+        ) in enumerate(columns):
+            if motion in ("G28", "G30", "G53"):
+                cmd = [math.nan] * 3
                 continue
-            old_text = new_text = word.literal
-            if incremental:
-                goal = float(desired[n, i])
-                if not (math.isnan(cmd[i]) or math.isnan(goal)):
-                    value = (goal - cmd[i]) / move.scale
-                    new_text = number_text(old_text, word.value, value, int(places[n]))
-            elif changed and absolute[3 * n + i] is not None:
-                new_text = absolute[3 * n + i]
-                if float(new_text) == word.value:
-                    new_text = old_text
-            if new_text != old_text:
-                edits.append((word.start, word.end, new_text))
-            written = float(new_text) * move.scale
-            if move.is_cycle and i == 2:
-                cycle_z = written
-            elif incremental:
-                end[i] = cmd[i] + written
+            incremental = inc and not is_cycle
+            end = list(cmd)
+            for i in range(3):
+                start = starts[i]
+                if start < 0:
+                    continue
+                old_text = new_text = text[start : ends[i]]
+                if incremental:
+                    goal = goals[i]
+                    if not (math.isnan(cmd[i]) or math.isnan(goal)):
+                        value = (goal - cmd[i]) / scale
+                        new_text = number_text(old_text, values[i], value, int(places[first + b]))
+                elif changed and absolute[3 * b + i] is not None:
+                    new_text = absolute[3 * b + i]
+                    if float(new_text) == values[i]:
+                        new_text = old_text
+                if new_text != old_text:
+                    edits.append((start, ends[i], new_text))
+                written = float(new_text) * scale
+                if is_cycle and i == 2:
+                    cycle_z = written
+                elif incremental:
+                    end[i] = cmd[i] + written
+                else:
+                    end[i] = written
+            if is_cycle and starts[3] >= 0:
+                new_text = text[starts[3] : ends[3]]
+                if r_texts[b] is not None and float(r_texts[b]) != values[3]:
+                    new_text = r_texts[b]
+                    edits.append((starts[3], ends[3], new_text))
+                r_cmd = float(new_text) * scale
+            if is_cycle:
+                reached = [end[0], end[1], cycle_z]
+                if inc or math.isnan(r_mm):
+                    end = [end[0], end[1], math.nan]
+                elif retract == "G99":
+                    end = [end[0], end[1], r_cmd]
+                else:
+                    end = [end[0], end[1], max(cmd[2], r_cmd)]
             else:
-                end[i] = written
-        if move.is_cycle and "R" in move.words:
-            word = move.words["R"]
-            new_text = word.literal
-            if r_texts[n] is not None and float(r_texts[n]) != word.value:
-                new_text = r_texts[n]
-                edits.append((word.start, word.end, new_text))
-            r_cmd = float(new_text) * move.scale
-        if move.is_cycle:
-            reached = [end[0], end[1], cycle_z]
-            if move.incremental or math.isnan(move.r_mm):
-                end = [end[0], end[1], math.nan]
-            elif move.retract == "G99":
-                end = [end[0], end[1], r_cmd]
-            else:
-                end = [end[0], end[1], max(cmd[2], r_cmd)]
-        else:
-            reached = end
-        if changed:
-            reached_rows.append((n, reached))
-            reached_at.append(n)
-        cmd = end
-    if reached_rows:
-        reached = np.array([new for _, new in reached_rows])
-        off = np.abs(reached - desired[reached_at])
-        residual = np.linalg.norm(off, axis=1).tolist()
-        wrote = np.array([[k in moves[n].words for k in "XYZ"] for n in reached_at])
-        rounding = np.where(wrote, off, 0.0).max(axis=1).tolist()
-        at = np.array(reached_at)
+                reached = end
+            if changed:
+                reached_rows.extend(reached)
+                reached_at.append(first + b)
+            cmd = end
+        edits.sort()
+        if edits:
+            out.add(*map(list, zip(*edits, strict=True)))
+    if reached_at:
+        at = np.frombuffer(reached_at, dtype=np.int64)
+        reached = np.frombuffer(reached_rows, dtype=float).reshape(-1, 3)
+        off = np.abs(reached - desired[at])
+        residual = np.linalg.norm(off, axis=1)
+        wrote = moves.word_start[at, :3] >= 0
+        rounding = np.where(wrote, off, 0.0).max(axis=1)
         rows.new[at] = reached
         rows.residual_mm[at] = residual
         rows.rounding_mm[at] = rounding
-    return edits
+    return out.finish()
 
 
-def _places(moves: list[GcodeMove], scales: np.ndarray, opts: Options) -> np.ndarray:
+def _places(moves: GcodeMoves, opts: Options) -> np.ndarray:
     """Decimals of each move's corrected numbers (N,): ``--decimals``, else the file's precision
     but never coarser than 0.01 mm (0.001 in under G20)."""
     if opts.decimals is not None:
         return np.full(len(moves), opts.decimals)
-    found = precision(w.literal for m in moves for k, w in m.words.items() if k in "XYZ")
-    return np.where(scales == 1.0, max(found, MIN_PLACES_MM), max(found, MIN_PLACES_INCH))
+    found = [
+        precision(moves.text[s:e] for s, e in zip(starts, ends, strict=True))
+        for starts, ends in _word_spans(moves)
+    ]
+    found = max(found) if found else precision(())
+    return np.where(moves.scale == 1.0, max(found, MIN_PLACES_MM), max(found, MIN_PLACES_INCH))
+
+
+def _word_spans(moves: GcodeMoves):
+    """(starts, ends) lists of the X, Y, Z numbers written, a block of moves at a time (only
+    blocks that write any)."""
+    for first in range(0, len(moves), _BLOCK):
+        starts = moves.word_start[first : first + _BLOCK, :3]
+        written = starts >= 0
+        if written.any():
+            ends = moves.word_end[first : first + _BLOCK, :3]
+            yield starts[written].tolist(), ends[written].tolist()
