@@ -8,14 +8,17 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from accugrid.compensation.plans import SEED_ABC, SEED_CENTRES, SEED_REPEATS
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
-from accugrid.kinematics.joint_errors import MAX_ORDER
 from accugrid.kinematics.robot import Robot, load_robot
+
+if TYPE_CHECKING:
+    from accugrid.kinematics.identification import Terms
 
 __all__ = [
     "add_abc",
@@ -23,6 +26,7 @@ __all__ = [
     "add_harmonics",
     "add_status",
     "add_tool",
+    "harmonics_of",
     "parse_centres",
     "parse_steps",
     "robot_with_tool",
@@ -58,8 +62,8 @@ def add_status(parser: argparse.ArgumentParser, help_text: str) -> None:
 
 
 def add_harmonics(parser: argparse.ArgumentParser, help_text: str) -> None:
-    """``--harmonics A2:1,7,160 A3:7 ...``: reducer harmonic orders per axis, parsed into a list
-    of (axis 1..6, order) pairs (default: none)."""
+    """``--harmonics A2:1,7,160 A3:7 ...``: reducer harmonic orders per axis, each word parsed
+    into (axis 1..6, order) pairs (default: none); ``harmonics_of`` gives the terms."""
     parser.add_argument(
         "--harmonics",
         nargs="+",
@@ -70,21 +74,31 @@ def add_harmonics(parser: argparse.ArgumentParser, help_text: str) -> None:
     )
 
 
-def _axis_orders(text: str) -> list[tuple[int, int]]:
-    """'A2:1,7,160' -> [(2, 1), (2, 7), (2, 160)]; argparse turns the ValueError into exit 2."""
+def harmonics_of(args: argparse.Namespace) -> Terms:
+    """The reducer harmonic terms of ``--harmonics``, all words together, checked once more as
+    a whole (duplicates dropped, at most ``MAX_HARMONICS``)."""
+    from accugrid.kinematics.identification import harmonic_terms  # only the model commands
+
+    return harmonic_terms(pair for pairs in args.harmonics for pair in pairs)
+
+
+def _axis_orders(text: str) -> Terms:
+    """'A2:1,7,160' -> ((2, 1), (2, 7), (2, 160)), ranges checked by ``harmonic_terms``;
+    argparse turns the ArgumentTypeError into exit 2."""
+    from accugrid.kinematics.identification import harmonic_terms
+
     axis, sep, orders = text.strip().upper().partition(":")
     try:
         if not sep or not axis.startswith("A"):
             raise ValueError
         number = int(axis[1:])
-        pairs = [(number, int(k)) for k in orders.split(",")]
+        return harmonic_terms((number, int(k)) for k in orders.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"'{text}' is not AXIS:ORDERS such as A2:1,7,160"
         ) from None
-    if not 1 <= number <= 6 or any(not 1 <= k <= MAX_ORDER for _, k in pairs):
-        raise argparse.ArgumentTypeError(f"'{text}': axis A1..A6 and orders 1..{MAX_ORDER} only")
-    return pairs
+    except InputError as error:
+        raise argparse.ArgumentTypeError(f"'{text}': {error.message}") from None
 
 
 def robot_with_tool(name: str, tool: Sequence[float] | None) -> Robot:

@@ -28,13 +28,13 @@ from accugrid.codegen.cli_options import (
     add_harmonics,
     add_status,
     add_tool,
+    harmonics_of,
     robot_with_tool,
 )
 from accugrid.codegen.comparison_report import csv_text, report_text
 from accugrid.compensation.comparison import compare_methods
 from accugrid.compensation.plans import SEED_REGION
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.identification import harmonic_terms
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -166,8 +166,7 @@ def run(args: argparse.Namespace) -> int:
         noise_tracker_mm=args.noise_tracker,
         noise_repeat_mm=args.noise_repeat,
         seed=args.seed,
-        progress=None,
-        harmonics=harmonic_terms(pair for pairs in args.harmonics for pair in pairs),
+        harmonics=harmonics_of(args),
     )
     from accugrid.codegen.plots import comparison_png
 

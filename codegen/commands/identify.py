@@ -27,9 +27,14 @@ from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.calibration import IdentifyOptions, calibrate
-from accugrid.codegen.cli_options import add_harmonics, add_status, add_tool, robot_with_tool
+from accugrid.codegen.cli_options import (
+    add_harmonics,
+    add_status,
+    add_tool,
+    harmonics_of,
+    robot_with_tool,
+)
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.identification import harmonic_terms
 from accugrid.kinematics.robot import Robot
 
 __all__ = ["NAME", "add_arguments", "run"]
@@ -94,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
         status=args.status,
         base_frame=args.base_frame,
         compliance=args.compliance,
-        harmonics=harmonic_terms(pair for pairs in args.harmonics for pair in pairs),
+        harmonics=harmonics_of(args),
         folds=args.folds,
     )
     calibration = calibrate(args.measurements, robot, options, args.output, args.urdf)

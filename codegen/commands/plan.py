@@ -36,13 +36,13 @@ from accugrid.codegen.cli_options import (
     add_harmonics,
     add_status,
     add_tool,
+    harmonics_of,
     parse_centres,
     parse_steps,
     robot_with_tool,
 )
 from accugrid.codegen.measure_program import PlanRequest, plan_files, plan_targets
 from accugrid.compensation.plans import SEED_REGION, SEED_REPEATS
-from accugrid.kinematics.identification import harmonic_terms
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -206,9 +206,7 @@ def run(args: argparse.Namespace) -> int:
         candidates=args.candidates if kind == "identify" else 0,
         seed=args.seed if kind == "identify" else 0,
         compliance=kind == "identify" and args.compliance,
-        harmonics=harmonic_terms(pair for pairs in args.harmonics for pair in pairs)
-        if kind == "identify"
-        else (),
+        harmonics=harmonics_of(args) if kind == "identify" else (),
         name=args.name,
         tool_number=args.tool_number,
         base_number=args.base_number,
