@@ -93,12 +93,12 @@ def _axis_orders(text: str) -> Terms:
             raise ValueError
         number = int(axis[1:])
         return harmonic_terms((number, int(k)) for k in orders.split(","))
+    except InputError as error:  # a ValueError too: first
+        raise argparse.ArgumentTypeError(f"'{text}': {error.message}") from None
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"'{text}' is not AXIS:ORDERS such as A2:1,7,160"
         ) from None
-    except InputError as error:
-        raise argparse.ArgumentTypeError(f"'{text}': {error.message}") from None
 
 
 def robot_with_tool(name: str, tool: Sequence[float] | None) -> Robot:

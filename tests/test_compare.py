@@ -125,9 +125,16 @@ def test_a_budget_too_small_for_the_harmonic_model_skips_its_rows(tmp_path, caps
 
 
 def test_harmonics_must_name_an_axis_and_orders(tmp_path, capsys):
-    for bad in ("A7:1", "A2:0", "A2:100001", "2:7", "A2:x"):
+    for bad, why in (
+        ("A7:1", "axis 1..6"),
+        ("A2:0", "order 1..100000"),
+        ("A2:100001", "order 1..100000"),
+        ("2:7", "is not AXIS:ORDERS"),
+        ("A2:x", "is not AXIS:ORDERS"),
+    ):
         with pytest.raises(SystemExit) as stop:
             main(["compare", "--harmonics", bad, "-o", str(tmp_path)])
         assert stop.value.code == 2
-        assert "--harmonics" in capsys.readouterr().err
+        err = capsys.readouterr().err
+        assert "--harmonics" in err and why in err
     assert not any(tmp_path.iterdir())
