@@ -101,10 +101,10 @@ def grid_path(args: argparse.Namespace, cell: Cell, model: Path | None = None) -
 def prepare(
     args: argparse.Namespace,
     command: str,
-    check: Callable[[int, list[str]], None] | None = None,
+    check: Callable[[Cell, int, list[str]], None] | None = None,
 ) -> Job:
     """Read POINTS, CELL and the grid; build the program; print its warnings to stderr.
-    ``check(holes, header)``, when given, runs after reading and before the correction and IK
+    ``check(cell, holes, header)``, when given, runs after reading and before the correction and IK
     (the heavy work), with a header of as many lines as the job's: a dialect refuses there what
     it could not write."""
     cell = load_cell(args.cell)
@@ -138,7 +138,7 @@ def prepare(
         inputs += grid_lines(Path(grid_file).name, grid.source_sha256, grid.step)
     closing = [f"holes {len(points)}"]
     if check is not None:
-        check(len(points), header_lines(command, inputs, details, 0.0, "", closing))
+        check(cell, len(points), header_lines(command, inputs, details, 0.0, "", closing))
     program = build_program(points, cell, robot, grid, model)
     for warning in program.warnings:
         print(f"accugrid {command}: warning: {warning}", file=sys.stderr)

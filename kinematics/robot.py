@@ -218,8 +218,10 @@ def _robot_from_doc(doc: YamlDoc) -> Robot:
     table = DHTable(a=a, d=d, alpha=alpha, theta_offset=offset, sign=sign)
     description = doc.string("description", default="")
     joint_errors = _joint_errors_from_doc(doc) if doc.has("joint_errors") else None
-    robot = Robot(name, table, limits, tool, errors, description, joint_errors)
-    return replace(robot, validated_max_mm=_validated_max(doc))
+    validated = _validated_max(doc)
+    return Robot(
+        name, table, limits, tool, errors, description, joint_errors, validated_max_mm=validated
+    )
 
 
 def _validated_max(doc: YamlDoc) -> np.ndarray | None:

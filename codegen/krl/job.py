@@ -26,9 +26,10 @@ def krl_job(args: argparse.Namespace, out: Path) -> Job:
     """The whole job of ``accugrid krl`` arguments into folder ``out``: modules that cannot be
     named or called are refused before the correction; NAME.src is written last (NAME.dat
     before it) and the modules of an earlier job of this name are stale."""
-    cell = load_cell(args.cell)
-    name = cell.krl.name
-    job = prepare(args, "krl", lambda n, header: module_names(cell, n, header, args.templates))
+    job = prepare(
+        args, "krl", lambda cell, n, header: module_names(cell, n, header, args.templates)
+    )
+    name = job.program.cell.krl.name
     files = render_krl(job.program, job.header, args.templates)
     module = re.compile(rf"{re.escape(name)}_[0-9]{{3,}}\.(src|dat)")
     stale = [p for p in out.glob(f"{name}_*") if module.fullmatch(p.name)]
