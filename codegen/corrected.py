@@ -16,9 +16,10 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.atomic import JobFiles
+from accugrid.codegen.fixedtext import fixed_rows
 from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
 from accugrid.codegen.points import Points, read_points
-from accugrid.codegen.textsafe import fixed_format, fixed_ready, fixed_texts
+from accugrid.codegen.textsafe import fixed_texts
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.measurements import REPEAT_TOL_MM
 from accugrid.compensation.settings import CorrectionSettings
@@ -132,16 +133,14 @@ def corrected_csv(
     flag = ["; ".join(f) for f in flags]
     numbers = np.column_stack([command, correction])
     plain = points.table.plain_rows(0, 0) is not None and not _NEEDS_QUOTES.search("".join(flag))
-    number = fixed_format(DECIMALS)
-    line = f"%s,{number},{number},{number},{number},{number},{number},%s\n"
     for lo in range(0, len(points), BLOCK):
         hi = min(lo + BLOCK, len(points))
         if plain:  # every row of the block in one %-template pass over the rows as read
-            table = np.empty((hi - lo, 8), dtype=object)
+            table = np.empty((hi - lo, 3), dtype=object)
             table[:, 0] = points.table.plain_rows(lo, hi)
-            table[:, 1:7] = fixed_ready(numbers[lo:hi], DECIMALS)
-            table[:, 7] = flag[lo:hi]
-            yield (line * (hi - lo)) % tuple(table.ravel().tolist())
+            table[:, 1] = fixed_rows(numbers[lo:hi], DECIMALS)
+            table[:, 2] = flag[lo:hi]
+            yield ("%s,%s,%s\n" * (hi - lo)) % tuple(table.ravel().tolist())
             continue
         out = io.StringIO()
         writer = csv.writer(out, lineterminator="\n")
