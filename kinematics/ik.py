@@ -42,8 +42,23 @@ def wrap(angle: np.ndarray) -> np.ndarray:
 
 def wrist_points(table: DHTable, flange: np.ndarray) -> np.ndarray:
     """Wrist point (intersection of axes 4, 5, 6) (N, 3) mm for flange poses (N, 4, 4)."""
-    rot = flange[:, :3, :3] @ _rot_x(-table.alpha[5])
-    return flange[:, :3, 3] - table.a[5] * rot[:, :, 0] - table.d[5] * rot[:, :, 2]
+    x, _, z = _r6_columns(table, flange, (0, 2))
+    return flange[:, :3, 3] - table.a[5] * x - table.d[5] * z
+
+
+def _r6_columns(table: DHTable, flange: np.ndarray, which=(0, 1, 2)) -> list[np.ndarray | None]:
+    """Columns ``which`` of R6 = flange rotation · Rot(X, -alpha_6) (N, 3) each (None for the
+    others): the products and sums of the (N, 3, 3) matrix product, without it."""
+    rot = flange[:, :3, :3]
+    c, s = np.cos(-table.alpha[5]), np.sin(-table.alpha[5])
+    return [
+        rot[:, :, 0] if j == 0 else rot[:, :, 1] * (c if j == 1 else -s) + rot[:, :, 2] * (
+            s if j == 1 else c
+        )
+        if j in which
+        else None
+        for j in range(3)
+    ]
 
 
 def all_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -56,8 +71,8 @@ def all_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, np.nd
     flange = np.asarray(flange, dtype=float).reshape(-1, 4, 4)
     n = len(flange)
     th1, th2, th3, reach = arm_solutions(table, flange)
-    r6 = flange[:, :3, :3] @ _rot_x(-table.alpha[5])
-    c = _shoulder_c(table, th1.reshape(-1), np.repeat(r6, 2, axis=0)).reshape(n, 2, 1, 3, 3)
+    r6 = [np.repeat(column, 2, axis=0) for column in _r6_columns(table, flange)]
+    c = _shoulder_c(table, th1.reshape(-1), r6).reshape(n, 2, 1, 3, 3)
     arm = np.stack([np.repeat(th1[:, :, None], 2, axis=2), th2, th3], axis=-1).reshape(n * 4, 3)
     q = _joints(table, arm, *(w.reshape(-1) for w in wrist_angles(table, c, th2 + th3)))
     q = q.reshape(n, 8, 6)
@@ -66,11 +81,13 @@ def all_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, np.nd
     return q, ok
 
 
-def arm_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, ...]:
+def arm_solutions(
+    table: DHTable, flange: np.ndarray, pw: np.ndarray | None = None
+) -> tuple[np.ndarray, ...]:
     """DH angles of the 4 arm solutions for flange poses (N, 4, 4) mm: theta_1 (N, 2 shoulder),
     theta_2 and theta_3 (N, 2 shoulder, 2 elbow) rad, and (N, 2, 2) whether the wrist point is
-    reachable (NaN angles where not)."""
-    pw = wrist_points(table, flange)
+    reachable (NaN angles where not). ``pw``: the wrist points (N, 3) mm when already known."""
+    pw = wrist_points(table, flange) if pw is None else pw
     # Shoulder: the arm plane contains the A1 axis, so theta_1 points at the wrist or away.
     toward = np.arctan2(pw[:, 1], pw[:, 0])
     th1 = np.stack([toward, toward + np.pi], axis=1)  # (N, 2)
@@ -85,10 +102,12 @@ def arm_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, ...]:
     l3, beta = np.hypot(bx, by), np.arctan2(by, bx)
     cos_g = (px**2 + py**2 - a2**2 - l3**2) / (2 * a2 * l3)  # (N, 2)
     reach = np.abs(cos_g) <= 1 + _TOL
-    gamma_abs = np.arccos(np.clip(cos_g, -1.0, 1.0))
-    gamma = np.stack([gamma_abs, -gamma_abs], axis=2)  # (N, 2 shoulder, 2 elbow)
-    th3 = gamma - beta
-    th2 = np.arctan2(py, px)[:, :, None] - np.arctan2(l3 * np.sin(gamma), a2 + l3 * np.cos(gamma))
+    gamma = np.arccos(np.clip(cos_g, -1.0, 1.0))  # elbow angle >= 0; the other elbow: -gamma
+    th3 = np.stack([gamma - beta, -gamma - beta], axis=2)  # (N, 2 shoulder, 2 elbow)
+    # sin and atan2 are odd, cos even: the -gamma elbow's terms are the +gamma ones negated
+    lean = np.arctan2(l3 * np.sin(gamma), a2 + l3 * np.cos(gamma))
+    toward_wrist = np.arctan2(py, px)
+    th2 = np.stack([toward_wrist - lean, toward_wrist + lean], axis=2)
     return th1, th2, th3, np.repeat(reach[:, :, None], 2, axis=2)
 
 
@@ -98,15 +117,22 @@ def arm_wrists(
     """The 2 wrist solutions of one arm solution per pose: flange poses (M, 4, 4) mm, DH angles
     th1, th2, th3 (M,) rad -> KUKA joint angles (M, 2, 6) rad wrapped into (-pi, pi]; the same
     numbers ``all_solutions`` gives for that arm solution."""
-    r6 = flange[:, :3, :3] @ _rot_x(-table.alpha[5])
-    wrist = wrist_angles(table, _shoulder_c(table, th1, r6), th2 + th3)
+    wrist = wrist_angles(table, _shoulder_c(table, th1, _r6_columns(table, flange)), th2 + th3)
     return _joints(table, np.stack([th1, th2, th3], axis=-1), *wrist).reshape(-1, 2, 6)
 
 
-def _shoulder_c(table: DHTable, th1: np.ndarray, r6: np.ndarray) -> np.ndarray:
-    """C = (Rz(th1) Rx(al1))^T R6 (M, 3, 3) for th1 (M,) and R6 (M, 3, 3)."""
-    shoulder = link_matrices(th1, 0.0, 0.0, table.alpha[0])[:, :3, :3]
-    return np.swapaxes(shoulder, 1, 2) @ r6
+def _shoulder_c(table: DHTable, th1: np.ndarray, r6: list[np.ndarray]) -> np.ndarray:
+    """C = (Rz(th1) Rx(al1))^T R6 (M, 3, 3) for th1 (M,) and the columns of R6 (M, 3) each:
+    row i of C is sum_k S[k, i] R6[k, :] with S = Rz(th1) Rx(al1), written out."""
+    ct, st = np.cos(th1)[:, None], np.sin(th1)[:, None]
+    ca, sa = np.cos(table.alpha[0]), np.sin(table.alpha[0])
+    rot = np.stack(r6, axis=2)  # (M, 3, 3)
+    r0, r1, r2 = rot[:, 0], rot[:, 1], rot[:, 2]
+    c = np.empty_like(rot)
+    c[:, 0] = ct * r0 + st * r1  # S[:, 0] = (ct, st, 0)
+    c[:, 1] = (-st * ca) * r0 + (ct * ca) * r1 + sa * r2
+    c[:, 2] = (st * sa) * r0 + (-ct * sa) * r1 + ca * r2
+    return c
 
 
 def wrist_angles(table: DHTable, c: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -116,26 +142,28 @@ def wrist_angles(table: DHTable, c: np.ndarray, phi: np.ndarray) -> tuple[np.nda
     Rz(th1) Rx(al1) Rz(th2 + th3) Rx(al3) (alpha_2 = 0). With C = (Rz(th1) Rx(al1))^T R6
     (..., 3, 3), W = B^T C for B = Rz(phi) Rx(al3), phi = th2 + th3, written out entry by entry.
     """
-    cphi, sphi = np.cos(phi)[..., None], np.sin(phi)[..., None]
+    cphi, sphi = np.cos(phi), np.sin(phi)
     ca3, sa3 = np.cos(table.alpha[2]), np.sin(table.alpha[2])
-    c0, c1, c2 = c[..., 0, :], c[..., 1, :], c[..., 2, :]  # rows of C
-    w0 = cphi * c0 + sphi * c1  # rows of W
-    w1 = ca3 * (cphi * c1 - sphi * c0) + sa3 * c2
-    w2 = sa3 * (sphi * c0 - cphi * c1) + ca3 * c2
+    # entry (i, j) of W from column j of C's rows: only the entries the angles need
+    w0 = [cphi * c[..., 0, j] + sphi * c[..., 1, j] for j in (0, 2)]  # W[0, 0], W[0, 2]
+    w1 = [  # W[1, 0], W[1, 2]
+        ca3 * (cphi * c[..., 1, j] - sphi * c[..., 0, j]) + sa3 * c[..., 2, j] for j in (0, 2)
+    ]
+    w2 = [sa3 * (sphi * c[..., 0, j] - cphi * c[..., 1, j]) + ca3 * c[..., 2, j] for j in range(3)]
     s4, s5 = np.sign(np.sin(table.alpha[3])), np.sign(np.sin(table.alpha[4]))
-    wx, wy, wz = w0[..., 2], w1[..., 2], w2[..., 2]
-    singular = np.hypot(wx, wy) < 1e-12
-    th5 = np.arctan2(np.hypot(wx, wy), -s4 * s5 * wz)
-    # On the wrist singularity (A5 = 0) only A4 + A6 matters: put it all into A6.
-    th4 = np.where(singular, 0.0, np.arctan2(s5 * wy, s5 * wx))
-    # Row 3 of W is s4 * (sin th5 cos th6, -sin th5 sin th6, -s5 cos th5) with th5 >= 0; on the
-    # singularity W = Rx(alpha4 + alpha5) Rz(th6).
-    turned = np.cos(table.alpha[3] + table.alpha[4])
-    th6 = np.where(
-        singular,
-        np.arctan2(turned * w1[..., 0], w0[..., 0]),
-        np.arctan2(-s4 * w2[..., 1], s4 * w2[..., 0]),
-    )
+    wx, wy, wz = w0[1], w1[1], w2[2]
+    across = np.hypot(wx, wy)
+    singular = across < 1e-12
+    th5 = np.arctan2(across, -s4 * s5 * wz)
+    # Row 3 of W is s4 * (sin th5 cos th6, -sin th5 sin th6, -s5 cos th5) with th5 >= 0.
+    th4 = np.arctan2(s5 * wy, s5 * wx)
+    th6 = np.arctan2(-s4 * w2[1], s4 * w2[0])
+    if singular.any():
+        # On the wrist singularity (A5 = 0) only A4 + A6 matters: put it all into A6; there
+        # W = Rx(alpha4 + alpha5) Rz(th6).
+        turned = np.cos(table.alpha[3] + table.alpha[4])
+        th4 = np.where(singular, 0.0, th4)
+        th6 = np.where(singular, np.arctan2(turned * w1[0], w0[0]), th6)
     return th4, th5, th6
 
 
@@ -151,8 +179,3 @@ def _joints(
     theta[:, :3] = np.repeat(arm, 2, axis=0)
     theta[:, 3], theta[:, 4], theta[:, 5] = th4, th5, th6
     return wrap(table.axis_angles(theta))
-
-
-def _rot_x(angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
