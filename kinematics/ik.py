@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from accugrid.kinematics.dh import DHTable, link_matrices
+from accugrid.kinematics.dh import DHTable
 
 __all__ = [
     "all_solutions",
@@ -52,9 +52,9 @@ def _r6_columns(table: DHTable, flange: np.ndarray, which=(0, 1, 2)) -> list[np.
     rot = flange[:, :3, :3]
     c, s = np.cos(-table.alpha[5]), np.sin(-table.alpha[5])
     return [
-        rot[:, :, 0] if j == 0 else rot[:, :, 1] * (c if j == 1 else -s) + rot[:, :, 2] * (
-            s if j == 1 else c
-        )
+        rot[:, :, 0]
+        if j == 0
+        else rot[:, :, 1] * (c if j == 1 else -s) + rot[:, :, 2] * (s if j == 1 else c)
         if j in which
         else None
         for j in range(3)
@@ -91,9 +91,10 @@ def arm_solutions(
     # Shoulder: the arm plane contains the A1 axis, so theta_1 points at the wrist or away.
     toward = np.arctan2(pw[:, 1], pw[:, 0])
     th1 = np.stack([toward, toward + np.pi], axis=1)  # (N, 2)
-    c1, s1 = np.cos(th1), np.sin(th1)
-    # Wrist point in frame 1 (after Rot(X, alpha_1)): planar two-link problem in its x-y plane.
-    radial = c1 * pw[:, None, 0] + s1 * pw[:, None, 1] - table.a[0]
+    # Wrist point in frame 1 (after Rot(X, alpha_1)): planar two-link problem in its x-y plane;
+    # along the arm plane the wrist point lies at +r (toward it) or -r from the A1 axis.
+    r = np.hypot(pw[:, 0], pw[:, 1])
+    radial = np.stack([r, -r], axis=1) - table.a[0]
     height = pw[:, None, 2] - table.d[0]
     sa1 = np.sin(table.alpha[0])
     px, py = radial, sa1 * height
