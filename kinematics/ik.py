@@ -42,22 +42,19 @@ def wrap(angle: np.ndarray) -> np.ndarray:
 
 def wrist_points(table: DHTable, flange: np.ndarray) -> np.ndarray:
     """Wrist point (intersection of axes 4, 5, 6) (N, 3) mm for flange poses (N, 4, 4)."""
-    x, _, z = _r6_columns(table, flange, (0, 2))
-    return flange[:, :3, 3] - table.a[5] * x - table.d[5] * z
+    rot = flange[:, :3, :3]
+    c, s = np.cos(-table.alpha[5]), np.sin(-table.alpha[5])
+    z = rot[:, :, 1] * -s + rot[:, :, 2] * c  # column 2 of R6 = rot · Rot(X, -alpha_6)
+    return flange[:, :3, 3] - table.a[5] * rot[:, :, 0] - table.d[5] * z
 
 
-def _r6_columns(table: DHTable, flange: np.ndarray, which=(0, 1, 2)) -> list[np.ndarray | None]:
-    """Columns ``which`` of R6 = flange rotation · Rot(X, -alpha_6) (N, 3) each (None for the
-    others): the products and sums of the (N, 3, 3) matrix product, without it."""
+def _r6(table: DHTable, flange: np.ndarray) -> list[list[np.ndarray]]:
+    """R6 = flange rotation · Rot(X, -alpha_6) entry by entry: [k][j] (N,) for row k, column j."""
     rot = flange[:, :3, :3]
     c, s = np.cos(-table.alpha[5]), np.sin(-table.alpha[5])
     return [
-        rot[:, :, 0]
-        if j == 0
-        else rot[:, :, 1] * (c if j == 1 else -s) + rot[:, :, 2] * (s if j == 1 else c)
-        if j in which
-        else None
-        for j in range(3)
+        [rot[:, k, 0], rot[:, k, 1] * c + rot[:, k, 2] * s, rot[:, k, 1] * -s + rot[:, k, 2] * c]
+        for k in range(3)
     ]
 
 
@@ -71,10 +68,10 @@ def all_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, np.nd
     flange = np.asarray(flange, dtype=float).reshape(-1, 4, 4)
     n = len(flange)
     th1, th2, th3, reach = arm_solutions(table, flange)
-    r6 = [np.repeat(column, 2, axis=0) for column in _r6_columns(table, flange)]
-    c = _shoulder_c(table, th1.reshape(-1), r6).reshape(n, 2, 1, 3, 3)
+    r6 = [[entry[:, None, None] for entry in row] for row in _r6(table, flange)]
+    wrist = wrist_angles(table, th1[:, :, None], r6, th2 + th3)  # (N, 2, 2) each
     arm = np.stack([np.repeat(th1[:, :, None], 2, axis=2), th2, th3], axis=-1).reshape(n * 4, 3)
-    q = _joints(table, arm, *(w.reshape(-1) for w in wrist_angles(table, c, th2 + th3)))
+    q = _joints(table, arm, *(w.reshape(-1) for w in wrist))
     q = q.reshape(n, 8, 6)
     ok = np.repeat(reach.reshape(n, 4), 2, axis=1)
     q[~ok] = np.nan
@@ -118,53 +115,51 @@ def arm_wrists(
     """The 2 wrist solutions of one arm solution per pose: flange poses (M, 4, 4) mm, DH angles
     th1, th2, th3 (M,) rad -> KUKA joint angles (M, 2, 6) rad wrapped into (-pi, pi]; the same
     numbers ``all_solutions`` gives for that arm solution."""
-    wrist = wrist_angles(table, _shoulder_c(table, th1, _r6_columns(table, flange)), th2 + th3)
+    wrist = wrist_angles(table, th1, _r6(table, flange), th2 + th3)
     return _joints(table, np.stack([th1, th2, th3], axis=-1), *wrist).reshape(-1, 2, 6)
 
 
-def _shoulder_c(table: DHTable, th1: np.ndarray, r6: list[np.ndarray]) -> np.ndarray:
-    """C = (Rz(th1) Rx(al1))^T R6 (M, 3, 3) for th1 (M,) and the columns of R6 (M, 3) each:
-    row i of C is sum_k S[k, i] R6[k, :] with S = Rz(th1) Rx(al1), written out."""
-    ct, st = np.cos(th1)[:, None], np.sin(th1)[:, None]
-    ca, sa = np.cos(table.alpha[0]), np.sin(table.alpha[0])
-    rot = np.stack(r6, axis=2)  # (M, 3, 3)
-    r0, r1, r2 = rot[:, 0], rot[:, 1], rot[:, 2]
-    c = np.empty_like(rot)
-    c[:, 0] = ct * r0 + st * r1  # S[:, 0] = (ct, st, 0)
-    c[:, 1] = (-st * ca) * r0 + (ct * ca) * r1 + sa * r2
-    c[:, 2] = (st * sa) * r0 + (-ct * sa) * r1 + ca * r2
-    return c
+def wrist_angles(
+    table: DHTable, th1: np.ndarray, r6: list[list[np.ndarray]], phi: np.ndarray
+) -> tuple[np.ndarray, ...]:
+    """DH theta_4, theta_5 (>= 0), theta_6 rad of the first wrist solution, for DH th1 and
+    phi = th2 + th3 rad and R6 entries ``r6[k][j]`` (all broadcast together).
 
-
-def wrist_angles(table: DHTable, c: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, ...]:
-    """DH theta_4, theta_5 (>= 0), theta_6 (shape of ``phi``) rad of the first wrist solution.
-
-    W = (base_R_3)^T R6 = Rz(th4) Rx(al4) Rz(th5) Rx(al5) Rz(th6), where base_R_3 =
-    Rz(th1) Rx(al1) Rz(th2 + th3) Rx(al3) (alpha_2 = 0). With C = (Rz(th1) Rx(al1))^T R6
-    (..., 3, 3), W = B^T C for B = Rz(phi) Rx(al3), phi = th2 + th3, written out entry by entry.
+    W = (base_R_3)^T R6 = Rz(th4) Rx(al4) Rz(th5) Rx(al5) Rz(th6), with base_R_3 =
+    Rz(th1) Rx(al1) Rz(phi) Rx(al3) (alpha_2 = 0), entry W[i, j] = column i of base_R_3 dot
+    column j of R6, written out for the entries the angles need.
     """
+    c1, s1 = np.cos(th1), np.sin(th1)
     cphi, sphi = np.cos(phi), np.sin(phi)
+    ca1, sa1 = np.cos(table.alpha[0]), np.sin(table.alpha[0])
     ca3, sa3 = np.cos(table.alpha[2]), np.sin(table.alpha[2])
-    # entry (i, j) of W from column j of C's rows: only the entries the angles need
-    w0 = [cphi * c[..., 0, j] + sphi * c[..., 1, j] for j in (0, 2)]  # W[0, 0], W[0, 2]
-    w1 = [  # W[1, 0], W[1, 2]
-        ca3 * (cphi * c[..., 1, j] - sphi * c[..., 0, j]) + sa3 * c[..., 2, j] for j in (0, 2)
-    ]
-    w2 = [sa3 * (sphi * c[..., 0, j] - cphi * c[..., 1, j]) + ca3 * c[..., 2, j] for j in range(3)]
+    # columns of S = Rz(th1) Rx(al1) (row 2 of column 0 is 0), then of base_R_3 = S Rz(phi) Rx(al3)
+    s0 = (c1, s1)
+    s1_ = (-s1 * ca1, c1 * ca1, sa1)
+    s2 = (s1 * sa1, -c1 * sa1, ca1)
+    m0 = [cphi * s0[k] + sphi * s1_[k] for k in range(2)] + [sphi * s1_[2]]
+    m1 = [ca3 * (cphi * s1_[k] - sphi * s0[k]) + sa3 * s2[k] for k in range(2)]
+    m1.append(ca3 * cphi * s1_[2] + sa3 * s2[2])
+    m2 = [sa3 * (sphi * s0[k] - cphi * s1_[k]) + ca3 * s2[k] for k in range(2)]
+    m2.append(ca3 * s2[2] - sa3 * cphi * s1_[2])
+
+    def w(m: list[np.ndarray], j: int) -> np.ndarray:  # W[i, j] for column i = m of base_R_3
+        return m[0] * r6[0][j] + m[1] * r6[1][j] + m[2] * r6[2][j]
+
     s4, s5 = np.sign(np.sin(table.alpha[3])), np.sign(np.sin(table.alpha[4]))
-    wx, wy, wz = w0[1], w1[1], w2[2]
+    wx, wy, wz = w(m0, 2), w(m1, 2), w(m2, 2)
     across = np.hypot(wx, wy)
     singular = across < 1e-12
     th5 = np.arctan2(across, -s4 * s5 * wz)
     # Row 3 of W is s4 * (sin th5 cos th6, -sin th5 sin th6, -s5 cos th5) with th5 >= 0.
     th4 = np.arctan2(s5 * wy, s5 * wx)
-    th6 = np.arctan2(-s4 * w2[1], s4 * w2[0])
+    th6 = np.arctan2(-s4 * w(m2, 1), s4 * w(m2, 0))
     if singular.any():
         # On the wrist singularity (A5 = 0) only A4 + A6 matters: put it all into A6; there
         # W = Rx(alpha4 + alpha5) Rz(th6).
         turned = np.cos(table.alpha[3] + table.alpha[4])
         th4 = np.where(singular, 0.0, th4)
-        th6 = np.where(singular, np.arctan2(turned * w1[0], w0[0]), th6)
+        th6 = np.where(singular, np.arctan2(turned * w(m1, 0), w(m0, 0)), th6)
     return th4, th5, th6
 
 
