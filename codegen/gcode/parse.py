@@ -24,6 +24,7 @@ import re
 import string
 from array import array
 from dataclasses import dataclass, field
+from itertools import compress
 from typing import NamedTuple
 
 import numpy as np
@@ -41,6 +42,7 @@ __all__ = [
     "GcodeMoves",
     "Word",
     "gcode_moves",
+    "modal_fill",
     "parse_gcode",
 ]
 
@@ -56,6 +58,17 @@ _PLAIN_RE = re.compile(
     r"(?:[ \t]++R(" + _NUMBER + r"))?+([ \t]++F" + _NUMBER + r")?+[ \t]*+"
     r"(?:\([^()\n;]*+\)[ \t]*+)?+\r?+"
 )
+# The whole-text scanner: one match per line. A plain line (``_PLAIN_RE`` with single spaces
+# before Y, Z and R) gives its head (up to X, with its G98/G99 and motion codes as one group) and
+# its X, Y, Z, R numbers; any other line matches the last branch with every group empty.
+_ROW_RE = re.compile(
+    r"^(?:([ \t]*+(?:N\d++[ \t]++)?+((?:G9[89][ \t]++)?+(?:G(?:0?+[01]|0|8[1-9]|73)[ \t]++)?+)X)"
+    r"(" + _NUMBER + r") Y(" + _NUMBER + r") Z(" + _NUMBER + r")(?: R(" + _NUMBER + r"))?+"
+    r"(?:[ \t]++F" + _NUMBER + r")?+[ \t]*+(?:\([^()\n;]*+\)[ \t]*+)?+\r?+$|[^\n]*+)",
+    re.M,
+)
+_CODES_RE = re.compile(r"(?:G(9[89])[ \t]++)?+(?:G(\d++)[ \t]++)?+")
+_CHUNK = 1 << 18  # characters per whole-text pass (bounds the per-line tuples held at once)
 _DIGITS_RE = re.compile(r"\d++")
 _OWORD_RE = re.compile(
     r"\s*+[Oo]\s*+(?:\d++|<[^>]*+>)\s*+(sub|endsub|if|elseif|else|endif|while|endwhile|do|call|"
@@ -69,6 +82,8 @@ AXES = "XYZ"
 ROTARY = "ABCUVW"
 CYCLES = frozenset(("73", "81", "82", "83", "84", "85", "86", "87", "88", "89"))
 MOTION_MODES = frozenset(("0", "1", "2", "3", "80")) | CYCLES
+_BULK_MOTIONS = CYCLES | {"0", "1"}  # the motion modes a run of plain lines is taken in
+_MOTION_NAMES = {int(g): "G" + g for g in _BULK_MOTIONS}
 INCH_MM = 25.4
 _ROTARY_SET = frozenset(ROTARY)
 _KEPT = frozenset(AXES + ROTARY + "RL")  # letters whose Word a move (or G10) needs
@@ -227,6 +242,22 @@ class GcodeMoves:
         self.motion.append(names.setdefault(motion, motion))
         self.retract.append(names.setdefault(retract, retract))
         self.reason.append(reason)
+
+    def extend(self, ints, floats, cycle, rotary, motion, retract, reason) -> None:
+        """Store rows in bulk, as ``add`` stores one: ``ints`` (M, 13) and ``floats`` (M, 15) in
+        the row layout, ``cycle`` (M,) bool (no row is incremental), ``rotary`` the dict in
+        effect for all, ``motion``/``retract``/``reason`` M strings each."""
+        if not self.rotaries or rotary is not self.rotaries[-1]:
+            self.rotaries.append(rotary)
+        m = len(motion)
+        self._rotary.frombytes(np.full(m, len(self.rotaries) - 1, np.int64).tobytes())
+        self._ints.frombytes(np.ascontiguousarray(ints, np.int64).tobytes())
+        self._floats.frombytes(np.ascontiguousarray(floats, float).tobytes())
+        self._flags.frombytes((2 * np.asarray(cycle, np.int8)).tobytes())
+        names = self._names
+        self.motion += [names.setdefault(k, k) for k in motion]
+        self.retract += [names.setdefault(k, k) for k in retract]
+        self.reason += reason
 
     def finish(self) -> GcodeMoves:
         """Expose the columns as arrays (views of the stored rows)."""
@@ -526,6 +557,40 @@ def _fast_line(line: str, offset: int, path: str | None, lineno: int) -> _Line |
     return block
 
 
+def _plain_codes(codes: str) -> tuple[int, int]:
+    """(retract, motion) of a plain line's G-codes as numbers (``"G99 G81 "`` -> (99, 81)); 0
+    and -1 where the line has none."""
+    m = _CODES_RE.fullmatch(codes)
+    return int(m[1] or 0), int(m[2]) if m[2] else -1
+
+
+class _PlainRun(NamedTuple):
+    """Consecutive plain lines of a chunk: ``lineno`` of the first; per line ``begin`` (its text
+    offset), ``widths`` (M, 5) of the head (up to X) and of the X, Y, Z, R numbers (0: no R),
+    ``values`` (M, 4) X, Y, Z, R in program units (NaN: no R), ``retract`` 98/99 (0: not
+    written) and ``motion`` (-1: not written)."""
+
+    lineno: int
+    begin: np.ndarray
+    widths: np.ndarray
+    values: np.ndarray
+    retract: np.ndarray
+    motion: np.ndarray
+
+    def part(self, first: int) -> _PlainRun:
+        """The run from its line ``first`` on."""
+        if not first:
+            return self
+        return _PlainRun(self.lineno + first, *(column[first:] for column in self[1:]))
+
+
+def modal_fill(values: np.ndarray, written: np.ndarray, before) -> np.ndarray:
+    """A modal value per line: ``values`` (M,) where ``written`` (M,) bool, else the last one
+    written before (``before`` until the first)."""
+    last = np.maximum.accumulate(np.where(written, np.arange(len(values)), -1))
+    return np.where(last >= 0, values[np.maximum(last, 0)], before)
+
+
 class _Reader:
     """Reads one program: ``moves`` in order, the modal state in ``state``."""
 
@@ -533,6 +598,121 @@ class _Reader:
         self.path = path
         self.state = _Modal()
         self.moves = GcodeMoves(path, text)
+        # whole-text checks first: most programs have no O-words or block deletes, and then no
+        # line needs those per-line checks
+        self.owords = _OWORD_ANY_RE.search(text) is not None
+        self.slashes = "/" in text
+        self.bom = next((b for b in _BOMS if text.startswith(b)), "")
+
+    def line(self, raw: str, lineno: int, line_offset: int) -> None:
+        """Read one line (without its ending) that starts at text offset ``line_offset``."""
+        bom = self.bom and lineno == 1
+        if bom:  # a byte-order mark is not a word (offsets stay as in the file)
+            raw = " " * len(self.bom) + raw[len(self.bom) :]
+        stripped = raw.strip()
+        if not stripped or stripped.startswith("%"):
+            return
+        if self.owords and _OWORD_RE.match(raw):
+            state = self.state
+            state.flow = state.flow or f"O-word control flow from line {lineno}"
+            return
+        block = _plain_line(raw, line_offset) if not bom else None
+        if block is not None:
+            self.block(block, lineno, line_offset)
+            return
+        line = _blank_comments(raw, self.path, lineno)
+        if self.slashes and line.lstrip().startswith("/"):
+            line = line.replace("/", " ", 1)
+        block = _fast_line(line, line_offset, self.path, lineno)
+        if block is None:
+            block = _scan(line, line_offset, self.path, lineno)
+        self.block(block, lineno, line_offset)
+
+    def plain_run(self, run: _PlainRun) -> tuple[int, int]:
+        """Take the plain lines of ``run`` in bulk, as ``block`` would take them one by one, as
+        far as the modal state allows: (lines taken, lines after them to read one by one).
+
+        Plain lines set only the motion mode and G98/G99, and write X, Y, Z (and R) absolute
+        numbers; taken in bulk under G90 with a motion mode of G0, G1 or a canned cycle (in
+        G17), every other state read by ``block``."""
+        s, m = self.state, len(run.begin)
+        if s.incremental:
+            return 0, m
+        if run.motion[0] < 0 and s.motion not in _BULK_MOTIONS:  # until a line sets a known one
+            written = np.flatnonzero(run.motion >= 0)
+            return 0, int(written[0]) if len(written) else m
+        before = int(s.motion) if s.motion in _BULK_MOTIONS else -1
+        motion = modal_fill(run.motion, run.motion >= 0, before)
+        cycle = motion >= 73
+        if s.plane != "17" and cycle.any():
+            return 0, m
+        retract = modal_fill(run.retract, run.retract > 0, int(s.retract[1:]))
+        v = run.values
+        target = v[:, :3] * s.scale
+        wrote_r = cycle & ~np.isnan(v[:, 3])
+        r_mm = modal_fill(v[:, 3] * s.scale, wrote_r, s.cycle_r)  # the R plane in effect
+        end = target.copy()
+        g99 = cycle & (retract == 99)
+        end[g99, 2] = r_mm[g99]
+        g98 = np.flatnonzero(cycle & (retract == 98)).tolist()
+        if g98:  # G98 returns to the higher of where the hole started and R: one by one
+            z, r = end[:, 2].tolist(), r_mm.tolist()
+            for k in g98:
+                before = z[k - 1] if k else s.pos[2]
+                z[k] = r[k] if r[k] > before else before
+            end[:, 2] = z
+        start = np.vstack([np.array(s.pos, float)[None], end[:-1]])
+        first = len(self.moves)
+        setters = np.repeat(np.arange(first - 1, first + m - 1)[:, None], 3, axis=1)
+        setters[0] = [-1 if j is None else j for j in s.setter]
+        w = run.widths
+        x_at = run.begin + w[:, 0]
+        y_at = x_at + w[:, 1] + 2
+        z_at = y_at + w[:, 2] + 2
+        r_at = np.where(wrote_r, z_at + w[:, 3] + 2, -1)
+        ints = np.column_stack(
+            [
+                np.arange(run.lineno, run.lineno + m),
+                w[:, 0] + 1,
+                setters,
+                x_at,
+                y_at,
+                z_at,
+                r_at,
+                x_at + w[:, 1],
+                y_at + w[:, 2],
+                z_at + w[:, 3],
+                np.where(wrote_r, r_at + w[:, 4], -1),
+            ]
+        )
+        floats = np.column_stack(
+            [
+                start,
+                target,
+                end,
+                np.full(m, s.scale),
+                np.where(cycle, r_mm, np.nan),
+                v[:, :3],
+                np.where(wrote_r, v[:, 3], np.nan),
+            ]
+        )
+        reason = [s.frame_reason()] * m
+        if not reason[0]:
+            missing = np.flatnonzero(cycle & np.isnan(r_mm)).tolist()
+            for k in missing:
+                reason[k] = "canned cycle without an R plane or Z depth"
+        names = [_MOTION_NAMES[k] for k in motion.tolist()]
+        retracts = np.where(cycle, np.where(retract == 99, "G99", "G98"), "").tolist()
+        self.moves.extend(ints, floats, cycle, s.rotary, names, retracts, reason)
+        last = motion[-1]
+        s.motion, s.unknown_motion = str(last), ""
+        s.retract = f"G{retract[-1]}"
+        if cycle.any():
+            s.cycle_z = float(target[np.flatnonzero(cycle)[-1], 2])
+        s.cycle_r = float(r_mm[-1])
+        s.pos = end[-1].tolist()
+        s.setter = [first + m - 1] * 3
+        return m, 0
 
     def block(self, block: _Line, lineno: int, line_offset: int) -> None:
         state = self.state
@@ -671,37 +851,84 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
 
 
 def gcode_moves(text: str, path: str | os.PathLike[str] | None = None) -> GcodeMoves:
-    """The moves of ``parse_gcode`` as columns."""
+    """The moves of ``parse_gcode`` as columns.
+
+    Text with ``\\n`` line endings is read a chunk of lines at a time by one whole-text match
+    (``_ROW_RE``): runs of plain lines are taken in bulk (``_Reader.plain_run``), every other line
+    by the line reader. Text without ``\\n`` (one line, or lone ``\\r`` endings) is read line by
+    line; both ways give the same moves (tests/test_plain_lines.py)."""
     path = None if path is None else os.fspath(path)
     check_text(text, path)
     reader = _Reader(path, text)
-    offset = 0
-    # whole-text checks first: most programs have no O-words or block deletes, and then no line
-    # needs those per-line checks
-    owords = _OWORD_ANY_RE.search(text) is not None
-    slashes = "/" in text
-    bom = next((b for b in _BOMS if text.startswith(b)), "")
-    for lineno, raw in enumerate(split_lines(text), start=1):
-        line_offset = offset
-        offset += len(raw) + 1
-        if bom and lineno == 1:  # a byte-order mark is not a word (offsets stay as in the file)
-            raw = " " * len(bom) + raw[len(bom) :]
-        stripped = raw.strip()
-        if not stripped or stripped.startswith("%"):
-            continue
-        if owords and _OWORD_RE.match(raw):
-            state = reader.state
-            state.flow = state.flow or f"O-word control flow from line {lineno}"
-            continue
-        block = _plain_line(raw, line_offset) if not (bom and lineno == 1) else None
-        if block is not None:
-            reader.block(block, lineno, line_offset)
-            continue
-        line = _blank_comments(raw, path, lineno)
-        if slashes and line.lstrip().startswith("/"):
-            line = line.replace("/", " ", 1)
-        block = _fast_line(line, line_offset, path, lineno)
-        if block is None:
-            block = _scan(line, line_offset, path, lineno)
-        reader.block(block, lineno, line_offset)
-    return reader.moves.finish()
+    if "\n" not in text:
+        offset = 0
+        for lineno, raw in enumerate(split_lines(text), start=1):
+            reader.line(raw, lineno, offset)
+            offset += len(raw) + 1
+        return reader.moves.finish()
+    start, lineno = 0, 1
+    while True:
+        stop = text.find("\n", min(start + _CHUNK, len(text)))
+        stop = len(text) if stop < 0 else stop + 1
+        lineno = _chunk(text, start, stop, lineno, reader)
+        if stop == len(text):
+            return reader.moves.finish()
+        start = stop
+
+
+def _chunk(text: str, start: int, stop: int, lineno: int, reader: _Reader) -> int:
+    """Read the whole lines of ``text[start:stop]`` (line ``lineno`` first); the next line's
+    number."""
+    chunk = text[start:stop]
+    matches = _ROW_RE.findall(chunk)
+    count = chunk.count("\n") + (0 if chunk.endswith("\n") and stop < len(text) else 1)
+    del matches[count:]
+    head, gs, x, y, z, r = zip(*matches, strict=True)
+    del matches
+    newlines = np.flatnonzero(np.frombuffer(chunk.encode("latin-1", "replace"), np.uint8) == 10)
+    begins = (np.concatenate(([0], newlines + 1))[:count] + start).tolist()
+    ends = (np.append(newlines, len(chunk))[:count] + start).tolist()
+    plain = np.fromiter(map(bool, x), bool, count)
+    at = np.flatnonzero(plain)
+    if len(at):
+        mask = plain.tolist()
+        values = np.full((len(at), 4), np.nan)
+        for k, column in enumerate((x, y, z)):
+            values[:, k] = np.fromiter(map(float, compress(column, mask)), float, len(at))
+        has_r = np.fromiter(map(bool, compress(r, mask)), bool, len(at))
+        values[has_r, 3] = list(map(float, filter(None, compress(r, mask))))
+        finite = np.isfinite(values[:, :3]).all(axis=1) & ~np.isinf(values[:, 3])
+        widths = np.stack(
+            [
+                np.fromiter(map(len, compress(c, mask)), np.int64, len(at))
+                for c in (head, x, y, z, r)
+            ],
+            axis=1,
+        )
+        codes = {g: _plain_codes(g) for g in set(compress(gs, mask))}
+        retract, motion = zip(*map(codes.__getitem__, compress(gs, mask)), strict=True)
+        plain[at[~finite]] = False  # a literal beyond the float range: the line reader says where
+    runs = np.flatnonzero(np.diff(plain, prepend=False, append=False)).reshape(-1, 2)
+    done = 0
+    for lo, hi in runs.tolist():
+        for k in range(done, lo):
+            reader.line(text[begins[k] : ends[k]], lineno + k, begins[k])
+        a, b = np.searchsorted(at, (lo, hi))
+        run = _PlainRun(
+            lineno + lo,
+            np.array(begins[lo:hi]),
+            widths[a:b],
+            values[a:b],
+            np.array(retract[a:b]),
+            np.array(motion[a:b]),
+        )
+        k = lo
+        while k < hi:
+            fast, slow = reader.plain_run(run.part(k - lo))
+            for j in range(k + fast, k + fast + slow):
+                reader.line(text[begins[j] : ends[j]], lineno + j, begins[j])
+            k += fast + slow
+        done = hi
+    for k in range(done, count):
+        reader.line(text[begins[k] : ends[k]], lineno + k, begins[k])
+    return lineno + count

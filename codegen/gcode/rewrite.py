@@ -15,7 +15,7 @@ from array import array
 
 import numpy as np
 
-from accugrid.codegen.gcode.parse import GcodeMoves, gcode_moves
+from accugrid.codegen.gcode.parse import GcodeMoves, gcode_moves, modal_fill
 from accugrid.codegen.program_text import (
     MIN_PLACES_INCH,
     MIN_PLACES_MM,
@@ -33,6 +33,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
     strict_check,
 )
+from accugrid.codegen.textsafe import fixed_many
 
 __all__ = ["rewrite_gcode"]
 
@@ -107,6 +108,19 @@ def _corrected_r_planes(moves: GcodeMoves, rows: Rows, opts: Options) -> np.ndar
     return out
 
 
+class _Commanded:
+    """The walk's state between moves: ``cmd`` where the rewritten program leaves the tool (mm,
+    NaN: unknown), the sticky cycle depth ``cycle_z`` and R plane ``r_cmd`` as written (mm), and
+    where each corrected move reaches (``reached_rows``, 3 per move, of the moves ``reached_at``).
+    """
+
+    def __init__(self) -> None:
+        self.cmd = [math.nan] * 3
+        self.cycle_z = self.r_cmd = math.nan
+        self.reached_rows = array("d")
+        self.reached_at = array("q")
+
+
 def _gcode_edits(
     text: str,
     moves: GcodeMoves,
@@ -118,105 +132,26 @@ def _gcode_edits(
     """Walk the program with the commanded (rewritten) position; the new program's bytes.
 
     ``desired`` (N, 3) mm: where each move should land (program frame); ``r_planes`` (N,) mm:
-    corrected R planes (NaN: keep). Absolute words are formatted a block of moves at a time;
-    only increments (which depend on what was written before) are formatted on the way."""
+    corrected R planes (NaN: keep). A block of moves that are all absolute and write X, Y and Z
+    is done in bulk (``_plain_block``); any other block move by move (``_walk_block``), where
+    increments (which depend on what was written before) are formatted on the way."""
     out = Splicer(text)
-    scales = moves.scale.reshape(-1, 1)
     places = _places(moves, opts)
-    corrected = (rows.status == CORRECTED).reshape(-1, 1)
-    reached_rows = array("d")  # where each corrected move reaches, 3 per move
-    reached_at = array("q")  # the move of each
-    cmd = [math.nan] * 3
-    cycle_z = r_cmd = math.nan
+    corrected = rows.status == CORRECTED
+    walk = _Commanded()
     for first in range(0, len(moves), _BLOCK):
         block = slice(first, first + _BLOCK)
-        absolute = formatted(
-            np.where(corrected[block], desired[block] / scales[block], np.nan).ravel(),
-            np.repeat(places[block], 3),
+        plain = (
+            not moves.incremental[block].any()
+            and (moves.word_start[block, :3] >= 0).all()
+            and _RESETS.isdisjoint(moves.motion[block])
         )
-        r_texts = formatted(r_planes[block] / scales[block, 0], places[block])
-        edits: list[tuple[int, int, str]] = []
-        columns = zip(
-            moves.motion[block],
-            corrected[block, 0].tolist(),
-            moves.incremental[block].tolist(),
-            moves.is_cycle[block].tolist(),
-            moves.scale[block].tolist(),
-            moves.word_start[block].tolist(),
-            moves.word_end[block].tolist(),
-            moves.word_value[block].tolist(),
-            desired[block].tolist(),
-            moves.r_mm[block].tolist(),
-            moves.retract[block],
-            strict=True,
-        )
-        for b, (
-            motion,
-            changed,
-            inc,
-            is_cycle,
-            scale,
-            starts,
-            ends,
-            values,
-            goals,
-            r_mm,
-            retract,
-        ) in enumerate(columns):
-            if motion in ("G28", "G30", "G53"):
-                cmd = [math.nan] * 3
-                continue
-            incremental = inc and not is_cycle
-            end = list(cmd)
-            for i in range(3):
-                start = starts[i]
-                if start < 0:
-                    continue
-                old_text = new_text = text[start : ends[i]]
-                if incremental:
-                    goal = goals[i]
-                    if not (math.isnan(cmd[i]) or math.isnan(goal)):
-                        value = (goal - cmd[i]) / scale
-                        new_text = number_text(old_text, values[i], value, int(places[first + b]))
-                elif changed and absolute[3 * b + i] is not None:
-                    new_text = absolute[3 * b + i]
-                    if float(new_text) == values[i]:
-                        new_text = old_text
-                if new_text != old_text:
-                    edits.append((start, ends[i], new_text))
-                written = float(new_text) * scale
-                if is_cycle and i == 2:
-                    cycle_z = written
-                elif incremental:
-                    end[i] = cmd[i] + written
-                else:
-                    end[i] = written
-            if is_cycle and starts[3] >= 0:
-                new_text = text[starts[3] : ends[3]]
-                if r_texts[b] is not None and float(r_texts[b]) != values[3]:
-                    new_text = r_texts[b]
-                    edits.append((starts[3], ends[3], new_text))
-                r_cmd = float(new_text) * scale
-            if is_cycle:
-                reached = [end[0], end[1], cycle_z]
-                if inc or math.isnan(r_mm):
-                    end = [end[0], end[1], math.nan]
-                elif retract == "G99":
-                    end = [end[0], end[1], r_cmd]
-                else:
-                    end = [end[0], end[1], max(cmd[2], r_cmd)]
-            else:
-                reached = end
-            if changed:
-                reached_rows.extend(reached)
-                reached_at.append(first + b)
-            cmd = end
-        edits.sort()
-        if edits:
-            out.add(*map(list, zip(*edits, strict=True)))
-    if reached_at:
-        at = np.frombuffer(reached_at, dtype=np.int64)
-        reached = np.frombuffer(reached_rows, dtype=float).reshape(-1, 3)
+        step = _plain_block if plain else _walk_block
+        edits = step(text, moves, block, corrected, desired, r_planes, places, walk)
+        out.add(*edits)
+    if walk.reached_at:
+        at = np.frombuffer(walk.reached_at, dtype=np.int64)
+        reached = np.frombuffer(walk.reached_rows, dtype=float).reshape(-1, 3)
         off = np.abs(reached - desired[at])
         residual = np.linalg.norm(off, axis=1)
         wrote = moves.word_start[at, :3] >= 0
@@ -227,13 +162,159 @@ def _gcode_edits(
     return out.finish()
 
 
+_RESETS = frozenset(("G28", "G30", "G53"))  # moves after which the position is not known
+
+
+def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
+    """The edits (starts, ends, new texts; sorted lists) of the moves ``block`` (a slice), move
+    by move, carrying ``walk`` (a ``_Commanded``) on."""
+    first = block.start
+    scales = moves.scale.reshape(-1, 1)
+    absolute = formatted(
+        np.where(corrected[block, None], desired[block] / scales[block], np.nan).ravel(),
+        np.repeat(places[block], 3),
+    )
+    r_texts = formatted(r_planes[block] / scales[block, 0], places[block])
+    edits: list[tuple[int, int, str]] = []
+    columns = zip(
+        moves.motion[block],
+        corrected[block].tolist(),
+        moves.incremental[block].tolist(),
+        moves.is_cycle[block].tolist(),
+        moves.scale[block].tolist(),
+        moves.word_start[block].tolist(),
+        moves.word_end[block].tolist(),
+        moves.word_value[block].tolist(),
+        desired[block].tolist(),
+        moves.r_mm[block].tolist(),
+        moves.retract[block],
+        strict=True,
+    )
+    cmd, cycle_z, r_cmd = walk.cmd, walk.cycle_z, walk.r_cmd
+    for b, (
+        motion,
+        changed,
+        inc,
+        is_cycle,
+        scale,
+        starts,
+        ends,
+        values,
+        goals,
+        r_mm,
+        retract,
+    ) in enumerate(columns):
+        if motion in _RESETS:
+            cmd = [math.nan] * 3
+            continue
+        incremental = inc and not is_cycle
+        end = list(cmd)
+        for i in range(3):
+            start = starts[i]
+            if start < 0:
+                continue
+            old_text = new_text = text[start : ends[i]]
+            if incremental:
+                goal = goals[i]
+                if not (math.isnan(cmd[i]) or math.isnan(goal)):
+                    value = (goal - cmd[i]) / scale
+                    new_text = number_text(old_text, values[i], value, int(places[first + b]))
+            elif changed and absolute[3 * b + i] is not None:
+                new_text = absolute[3 * b + i]
+                if float(new_text) == values[i]:
+                    new_text = old_text
+            if new_text != old_text:
+                edits.append((start, ends[i], new_text))
+            written = float(new_text) * scale
+            if is_cycle and i == 2:
+                cycle_z = written
+            elif incremental:
+                end[i] = cmd[i] + written
+            else:
+                end[i] = written
+        if is_cycle and starts[3] >= 0:
+            new_text = text[starts[3] : ends[3]]
+            if r_texts[b] is not None and float(r_texts[b]) != values[3]:
+                new_text = r_texts[b]
+                edits.append((starts[3], ends[3], new_text))
+            r_cmd = float(new_text) * scale
+        if is_cycle:
+            reached = [end[0], end[1], cycle_z]
+            if inc or math.isnan(r_mm):
+                end = [end[0], end[1], math.nan]
+            elif retract == "G99":
+                end = [end[0], end[1], r_cmd]
+            else:
+                end = [end[0], end[1], max(cmd[2], r_cmd)]
+        else:
+            reached = end
+        if changed:
+            walk.reached_rows.extend(reached)
+            walk.reached_at.append(first + b)
+        cmd = end
+    walk.cmd, walk.cycle_z, walk.r_cmd = cmd, cycle_z, r_cmd
+    edits.sort()
+    return tuple(map(list, zip(*edits, strict=True))) if edits else ([], [], [])
+
+
+def _plain_block(text, moves, block, corrected, desired, r_planes, places, walk):
+    """``_walk_block`` in bulk for a block whose moves are all absolute and write X, Y and Z
+    (none resets the position): every number is formatted and compared at once, and only the
+    G98 retract heights (each the higher of the previous end and R) are carried one by one."""
+    n = len(moves.motion[block])
+    scale = moves.scale[block]
+    values = moves.word_value[block]
+    cycle = moves.is_cycle[block]
+    wrote_r = cycle & (moves.word_start[block, 3] >= 0)
+    goal = np.full((n, 4), np.nan)  # the corrected numbers in program units (NaN: keep)
+    goal[:, :3] = np.where(corrected[block, None], desired[block] / scale[:, None], np.nan)
+    goal[:, 3] = np.where(wrote_r, r_planes[block] / scale, np.nan)
+    goal = goal.ravel()
+    new = np.full(4 * n, np.nan)  # the value each new text reads as
+    texts = np.empty(4 * n, dtype=object)
+    place = np.repeat(places[block], 4)
+    for p in np.unique(place).tolist():
+        idx = np.flatnonzero(np.isfinite(goal) & (place == p))
+        found = fixed_many(goal[idx], p)
+        texts[idx] = found
+        new[idx] = np.fromiter(map(float, found), float, len(idx))
+    edit = np.isfinite(new) & (new != values.ravel())
+    written = np.where(edit, new, values.ravel()).reshape(n, 4) * scale[:, None]
+    r_cmd = modal_fill(written[:, 3], wrote_r, walk.r_cmd)
+    end = written[:, :3].copy()
+    r_mm = moves.r_mm[block]
+    g99 = np.asarray(moves.retract[block]) == "G99"
+    end[cycle, 2] = np.where(np.isnan(r_mm[cycle]), np.nan, r_cmd[cycle])
+    g98 = np.flatnonzero(cycle & ~g99 & ~np.isnan(r_mm)).tolist()
+    if g98:  # G98 returns to the higher of where the hole started and R: one by one
+        z, r = end[:, 2].tolist(), r_cmd.tolist()
+        for k in g98:
+            before = z[k - 1] if k else walk.cmd[2]
+            z[k] = max(before, r[k])
+        end[:, 2] = z
+    changed = np.flatnonzero(corrected[block])
+    if len(changed):  # a cycle reaches its hole bottom, a straight move its end
+        reached = np.where(cycle[changed, None], written[changed, :3], end[changed])
+        walk.reached_rows.frombytes(np.ascontiguousarray(reached).tobytes())
+        walk.reached_at.frombytes((block.start + changed).astype(np.int64).tobytes())
+    walk.cmd = end[-1].tolist()
+    if cycle.any():
+        walk.cycle_z = float(written[np.flatnonzero(cycle)[-1], 2])
+    walk.r_cmd = float(r_cmd[-1])
+    at = np.flatnonzero(edit)
+    starts = moves.word_start[block].ravel()[at]
+    order = np.argsort(starts, kind="stable")
+    at = at[order]
+    return starts[order].tolist(), moves.word_end[block].ravel()[at].tolist(), texts[at].tolist()
+
+
 def _places(moves: GcodeMoves, opts: Options) -> np.ndarray:
     """Decimals of each move's corrected numbers (N,): ``--decimals``, else the file's precision
     but never coarser than 0.01 mm (0.001 in under G20)."""
     if opts.decimals is not None:
         return np.full(len(moves), opts.decimals)
     found = [
-        precision(moves.text[s:e] for s, e in zip(starts, ends, strict=True))
+        precision(map(moves.text.__getitem__, map(slice, starts, ends)))
         for starts, ends in _word_spans(moves)
     ]
     found = max(found) if found else precision(())

@@ -1,0 +1,181 @@
+"""The G-code reader's and rewriter's bulk paths agree with the line-by-line ones.
+
+Reader: ``gcode_moves`` reads a text with ``\\n`` endings by the whole-text scanner (runs of plain
+lines in bulk, every other line by the line reader, ``_Reader.line``); reading every line with
+``_Reader.line`` must give the same moves, column by column. Rewriter: ``_plain_block`` (a block of
+absolute X/Y/Z moves in bulk) must make the edits and leave the walk's state as ``_walk_block``,
+the move-by-move walk, does.
+"""
+
+from __future__ import annotations
+
+from unittest import mock
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from accugrid.codegen.gcode import parse
+from accugrid.codegen.gcode.parse import gcode_moves
+from accugrid.codegen.gcode.rewrite import _Commanded, _plain_block, _walk_block
+from accugrid.codegen.program_text import split_lines
+from accugrid.kinematics.errors import InputError
+
+NUMBER = st.one_of(
+    st.floats(-900, 900, allow_nan=False).map(lambda v: f"{v:.3f}"),
+    st.sampled_from(["0", "-0.0", "1.", ".5", "+2", "12", "007", "9" * 400]),
+)
+CODES = st.sampled_from(
+    ["", "G0 ", "G1 ", "G00 ", "G01 ", "G99 G81 ", "G98 G83 ", "G73 ", "G98 ", "G99 ", "G82 "]
+)
+MODAL = st.sampled_from(
+    [
+        "G90",
+        "G91",
+        "G20",
+        "G21",
+        "G80",
+        "G18",
+        "G17",
+        "G55",
+        "G54",
+        "G2 X1 Y2 I3 J4",
+        "G3 X1 Y2 I3 J4",
+        "G28",
+        "G92 X0",
+        "G92.1",
+        "G38.2 Z-5",
+        "M6 T2",
+        "#1 = 5",
+        "G1 X#1 Y2 Z3",
+        "(comment)",
+        "",
+        "  ",
+        "%",
+        "G53 Z0",
+        "G0 Z500",
+        "X5 Y6",
+        "A30 X1 Y2 Z3",
+        "G41 D1",
+        "G40",
+        "O100 sub",
+        "/G1 X1 Y2 Z3",
+        "G1 X1 Y2 Z3 (a(b)",
+    ]
+)
+
+
+@st.composite
+def plain_lines(draw) -> str:
+    """A line the whole-text scanner takes (or nearly: odd spacing sends it to the line reader)."""
+    n = draw(st.sampled_from(["", "N10 ", "N7  "]))
+    x, y, z = draw(NUMBER), draw(NUMBER), draw(NUMBER)
+    gap = draw(st.sampled_from([" ", " ", " ", "  ", "\t"]))
+    r = draw(st.sampled_from(["", "", f" R{draw(NUMBER)}", "  R1"]))
+    tail = draw(st.sampled_from(["", " F300", " (move 1)", " F3000 (m)", "\t", " ;x", "\r"]))
+    lead = draw(st.sampled_from(["", "", " "]))
+    return f"{lead}{n}{draw(CODES)}X{x}{gap}Y{y} Z{z}{r}{tail}"
+
+
+PROGRAMS = st.lists(st.one_of(plain_lines(), plain_lines(), plain_lines(), MODAL), max_size=60)
+COLUMNS = (
+    "line column start target end scale r_mm incremental is_cycle setters word_start word_end "
+    "word_value rotary_index"
+).split()
+
+
+def _read(text: str, bulk: bool):
+    try:
+        if bulk:
+            return gcode_moves(text, "p.ngc")
+        reader, offset = parse._Reader("p.ngc", text), 0
+        for lineno, raw in enumerate(split_lines(text), start=1):
+            reader.line(raw, lineno, offset)
+            offset += len(raw) + 1
+        return reader.moves.finish()
+    except InputError as exc:
+        return str(exc)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    lines=PROGRAMS,
+    chunk=st.sampled_from([1, 40, 1 << 18]),
+    final=st.booleans(),
+    bom=st.sampled_from(["", "", "\xef\xbb\xbf"]),
+)
+def test_bulk_reader_reads_as_the_line_reader(lines, chunk, final, bom):
+    """The same moves (or the same error) by the whole-text scanner, in chunks of any size, and
+    line by line."""
+    text = bom + "\n".join(lines) + ("\n" if final else "")
+    with mock.patch.object(parse, "_CHUNK", chunk):
+        bulk = _read(text, True)
+    one_by_one = _read(text, False)
+    if isinstance(bulk, str) or isinstance(one_by_one, str):
+        assert bulk == one_by_one
+        return
+    assert len(bulk) == len(one_by_one)
+    for name in COLUMNS:
+        a, b = getattr(bulk, name), getattr(one_by_one, name)
+        assert np.array_equal(a, b, equal_nan=True), name
+    assert bulk.motion == one_by_one.motion
+    assert bulk.reason == one_by_one.reason
+    assert bulk.retract == one_by_one.retract
+    assert bulk.rotaries == one_by_one.rotaries
+
+
+def test_bulk_reader_takes_plain_runs():
+    """A program of plain lines is read in bulk: the line reader is not called for them."""
+    text = "G21 G90\nG99 G81 X1 Y2 Z-3 R2 F300\nG1 X4 Y5 Z6 (m)\nN3 X7 Y8 Z9\n"
+    with mock.patch.object(parse._Reader, "line", autospec=True, wraps=parse._Reader.line) as line:
+        moves = gcode_moves(text)
+    assert [c.args[2] for c in line.call_args_list] == [1, 5]  # "G21 G90" and the empty last
+    assert moves.motion == ["G81", "G1", "G1"]
+    assert moves.target.tolist() == [[1, 2, -3], [4, 5, 6], [7, 8, 9]]
+    assert moves.end.tolist() == [[1, 2, 2], [4, 5, 6], [7, 8, 9]]  # G99: back to R
+
+
+@st.composite
+def cases(draw):
+    """A program of plain lines in G90 (every block of it takes the bulk path), what is
+    corrected, where to, and the corrected R planes."""
+    lines = draw(st.lists(plain_lines(), min_size=1, max_size=40))
+    head = draw(st.sampled_from(["G21", "G20", "G21 G99", "G21 G81 X0 Y0 Z0 R5"]))
+    text = head + "\n" + "\n".join(lines) + "\n"
+    try:
+        moves = gcode_moves(text)
+    except InputError:
+        return None
+    n = len(moves)
+    corrected = np.array(draw(st.lists(st.booleans(), min_size=n, max_size=n)), dtype=bool)
+    shift = draw(st.sampled_from([0.0, 1e-4, 0.0123, -2.5]))
+    desired = moves.target + shift
+    r_planes = np.where(corrected, moves.r_mm + shift / 2, np.nan)
+    places = np.full(n, draw(st.sampled_from([2, 3, 4])))
+    return text, moves, corrected, desired, r_planes, places
+
+
+def _walked(step, case):
+    text, moves, corrected, desired, r_planes, places = case
+    walk = _Commanded()
+    walk.cmd, walk.r_cmd = [1.0, 2.0, 50.0], 7.0  # as a previous block may leave it
+    edits = step(text, moves, slice(0, len(moves)), corrected, desired, r_planes, places, walk)
+    reached = np.frombuffer(walk.reached_rows, float).reshape(-1, 3)
+    carried = np.array([*walk.cmd, walk.cycle_z, walk.r_cmd])
+    return edits, carried, reached, walk.reached_at.tolist()
+
+
+@settings(max_examples=300, deadline=None)
+@given(case=cases())
+def test_plain_block_walks_as_the_move_by_move_walk(case):
+    """Same edits, same commanded end, cycle depth, R plane and reached points."""
+    if case is None:
+        return
+    moves = case[1]
+    if moves.incremental.any() or not (moves.word_start[:, :3] >= 0).all():
+        return  # a block _gcode_edits walks move by move
+    bulk, slow = _walked(_plain_block, case), _walked(_walk_block, case)
+    assert bulk[0] == slow[0]
+    assert np.array_equal(bulk[1], slow[1], equal_nan=True)
+    assert np.array_equal(bulk[2], slow[2], equal_nan=True)
+    assert bulk[3] == slow[3]
