@@ -4,7 +4,8 @@ Reader: ``gcode_moves`` reads a text with ``\\n`` endings by the whole-text scan
 lines in bulk, every other line by the line reader, ``_Reader.line``); reading every line with
 ``_Reader.line`` must give the same moves, column by column. Rewriter: ``_plain_block`` (a block of
 absolute X/Y/Z moves in bulk) must make the edits and leave the walk's state as ``_walk_block``,
-the move-by-move walk, does.
+the move-by-move walk, does. Numbers: ``literal_values`` reads every literal as ``float`` does,
+and the file's precision read from the word spans is ``precision`` of the literals.
 """
 
 from __future__ import annotations
@@ -16,9 +17,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from accugrid.codegen.gcode import parse
+from accugrid.codegen.gcode.numbers import literal_values
 from accugrid.codegen.gcode.parse import gcode_moves
-from accugrid.codegen.gcode.rewrite import _Commanded, _plain_block, _walk_block
-from accugrid.codegen.program_text import split_lines
+from accugrid.codegen.gcode.rewrite import _Commanded, _file_precision, _plain_block, _walk_block
+from accugrid.codegen.program_text import precision, split_lines
 from accugrid.kinematics.errors import InputError
 
 NUMBER = st.one_of(
@@ -179,3 +181,29 @@ def test_plain_block_walks_as_the_move_by_move_walk(case):
     assert np.array_equal(bulk[1], slow[1], equal_nan=True)
     assert np.array_equal(bulk[2], slow[2], equal_nan=True)
     assert bulk[3] == slow[3]
+
+
+@given(st.lists(st.one_of(NUMBER, st.text("0123456789", min_size=1, max_size=30)), max_size=30))
+def test_literal_values_are_float_of_each_literal(literals):
+    """Every literal's value, sign of zero included, is ``float`` of its text."""
+    text = " ".join(literals).encode("latin-1")
+    starts = np.cumsum([0] + [len(t) + 1 for t in literals[:-1]]).astype(np.int64)
+    ends = starts + [len(t) for t in literals]
+    values = literal_values(text, starts[: len(literals)], ends)
+    expected = np.array([float(t) for t in literals])
+    assert np.array_equal(values, expected)
+    assert np.array_equal(np.signbit(values), np.signbit(expected))
+
+
+@given(st.lists(plain_lines(), min_size=0, max_size=20))
+def test_file_precision_is_the_precision_of_the_literals(lines):
+    """The precision read from the spans is ``precision`` of the X, Y, Z literals written."""
+    try:
+        moves = gcode_moves("G21\n" + "\n".join(lines))
+    except InputError:
+        return
+    starts, ends = moves.word_start[:, :3], moves.word_end[:, :3]
+    literals = [
+        moves.text[s:e] for s, e in zip(starts.ravel(), ends.ravel(), strict=True) if s >= 0
+    ]
+    assert _file_precision(moves) == precision(literals)

@@ -24,11 +24,11 @@ import re
 import string
 from array import array
 from dataclasses import dataclass, field
-from itertools import compress
 from typing import NamedTuple
 
 import numpy as np
 
+from accugrid.codegen.gcode.numbers import NUMBER_BYTES, literal_values
 from accugrid.codegen.program_text import check_text, decimals_of, split_lines
 from accugrid.kinematics.errors import InputError
 
@@ -59,23 +59,37 @@ _PLAIN_RE = re.compile(
     r"(?:\([^()\n;]*+\)[ \t]*+)?+\r?+"
 )
 # The whole-text scanner: one match per line. A plain line (``_PLAIN_RE`` with single spaces
-# before Y, Z and R) gives its head (up to X, with its G98/G99 and motion codes as one group) and
-# its X, Y, Z, R numbers; any other line matches the last branch with every group empty.
+# before Y, Z and R) gives its G98/G99 and motion codes and the "X" after them (one group, so
+# findall gives one str per line, never empty); any other line matches the last branch with the
+# group empty. Where the numbers are is found from the bytes: the head before X has no "X", and
+# each number ends at the first byte that is not in one.
 _ROW_RE = re.compile(
-    r"^(?:([ \t]*+(?:N\d++[ \t]++)?+((?:G9[89][ \t]++)?+(?:G(?:0?+[01]|0|8[1-9]|73)[ \t]++)?+)X)"
-    r"(" + _NUMBER + r") Y(" + _NUMBER + r") Z(" + _NUMBER + r")(?: R(" + _NUMBER + r"))?+"
+    r"^(?:[ \t]*+(?:N\d++[ \t]++)?+((?:G9[89][ \t]++)?+(?:G(?:0?+[01]|0|8[1-9]|73)[ \t]++)?+X)"
+    + _NUMBER
+    + " Y"
+    + _NUMBER
+    + " Z"
+    + _NUMBER
+    + "(?: R"
+    + _NUMBER
+    + r")?+"
     r"(?:[ \t]++F" + _NUMBER + r")?+[ \t]*+(?:\([^()\n;]*+\)[ \t]*+)?+\r?+$|[^\n]*+)",
     re.M,
 )
-_CODES_RE = re.compile(r"(?:G(9[89])[ \t]++)?+(?:G(\d++)[ \t]++)?+")
-_CHUNK = 1 << 18  # characters per whole-text pass (bounds the per-line tuples held at once)
+_CODES_RE = re.compile(r"(?:G(9[89])[ \t]++)?+(?:G(\d++)[ \t]++)?+X")
+_NOT_IN_NUMBER = np.ones(256, bool)
+_NOT_IN_NUMBER[list(NUMBER_BYTES)] = False
+_CHUNK = 1 << 20  # characters per whole-text pass (bounds the per-line tuples held at once)
 _DIGITS_RE = re.compile(r"\d++")
 _OWORD_RE = re.compile(
     r"\s*+[Oo]\s*+(?:\d++|<[^>]*+>)\s*+(sub|endsub|if|elseif|else|endif|while|endwhile|do|call|"
     r"return|repeat|endrepeat|break|continue)\b",
     re.I,
 )
-_OWORD_ANY_RE = re.compile(r"^[^\S\n]*+[Oo]", re.M)  # a line _OWORD_RE may match
+# a line _OWORD_RE may match: the first, or one after a "\n" (searched for as a literal, which
+# is faster than ^ in MULTILINE mode)
+_OWORD_FIRST_RE = re.compile(r"[^\S\n]*+[Oo]")
+_OWORD_NEXT_RE = re.compile(r"\n[^\S\n]*+[Oo]")
 _LETTERS = frozenset(string.ascii_letters)
 _BOMS = ("\xef\xbb\xbf", "\ufeff")  # UTF-8 byte-order mark read as latin-1, or decoded
 AXES = "XYZ"
@@ -83,7 +97,9 @@ ROTARY = "ABCUVW"
 CYCLES = frozenset(("73", "81", "82", "83", "84", "85", "86", "87", "88", "89"))
 MOTION_MODES = frozenset(("0", "1", "2", "3", "80")) | CYCLES
 _BULK_MOTIONS = CYCLES | {"0", "1"}  # the motion modes a run of plain lines is taken in
-_MOTION_NAMES = {int(g): "G" + g for g in _BULK_MOTIONS}
+_MOTION_NAMES = np.array(["G" + str(g) for g in range(100)], dtype=object)  # code -> name
+_RETRACT_NAMES = np.full(100, "", dtype=object)  # code -> a cycle's retract ("": not a cycle)
+_RETRACT_NAMES[[98, 99]] = "G98", "G99"
 INCH_MM = 25.4
 _ROTARY_SET = frozenset(ROTARY)
 _KEPT = frozenset(AXES + ROTARY + "RL")  # letters whose Word a move (or G10) needs
@@ -255,8 +271,9 @@ class GcodeMoves:
         self._floats.frombytes(np.ascontiguousarray(floats, float).tobytes())
         self._flags.frombytes((2 * np.asarray(cycle, np.int8)).tobytes())
         names = self._names
-        self.motion += [names.setdefault(k, k) for k in motion]
-        self.retract += [names.setdefault(k, k) for k in retract]
+        same = {k: names.setdefault(k, k) for k in {*motion, *retract}}  # one str per name
+        self.motion += map(same.__getitem__, motion)
+        self.retract += map(same.__getitem__, retract)
         self.reason += reason
 
     def finish(self) -> GcodeMoves:
@@ -557,22 +574,25 @@ def _fast_line(line: str, offset: int, path: str | None, lineno: int) -> _Line |
     return block
 
 
-def _plain_codes(codes: str) -> tuple[int, int]:
-    """(retract, motion) of a plain line's G-codes as numbers (``"G99 G81 "`` -> (99, 81)); 0
-    and -1 where the line has none."""
+def _plain_codes(codes: str) -> int:
+    """A plain line's G-codes and X (``"G99 G81 X"``) as ``1000 * retract + motion + 2``: retract
+    98, 99 or 0 (none), motion -1 where the line sets none; a line that is not plain (``""``)
+    gives motion -2."""
     m = _CODES_RE.fullmatch(codes)
-    return int(m[1] or 0), int(m[2]) if m[2] else -1
+    if m is None:
+        return 0
+    return 1000 * int(m[1] or 0) + (int(m[2]) if m[2] else -1) + 2
 
 
 class _PlainRun(NamedTuple):
     """Consecutive plain lines of a chunk: ``lineno`` of the first; per line ``begin`` (its text
-    offset), ``widths`` (M, 5) of the head (up to X) and of the X, Y, Z, R numbers (0: no R),
+    offset), ``spans`` (M, 4, 2) text offsets (start, end) of the X, Y, Z, R numbers (-1: no R),
     ``values`` (M, 4) X, Y, Z, R in program units (NaN: no R), ``retract`` 98/99 (0: not
     written) and ``motion`` (-1: not written)."""
 
     lineno: int
     begin: np.ndarray
-    widths: np.ndarray
+    spans: np.ndarray
     values: np.ndarray
     retract: np.ndarray
     motion: np.ndarray
@@ -600,7 +620,7 @@ class _Reader:
         self.moves = GcodeMoves(path, text)
         # whole-text checks first: most programs have no O-words or block deletes, and then no
         # line needs those per-line checks
-        self.owords = _OWORD_ANY_RE.search(text) is not None
+        self.owords = bool(_OWORD_FIRST_RE.match(text) or _OWORD_NEXT_RE.search(text))
         self.slashes = "/" in text
         self.bom = next((b for b in _BOMS if text.startswith(b)), "")
 
@@ -665,24 +685,15 @@ class _Reader:
         first = len(self.moves)
         setters = np.repeat(np.arange(first - 1, first + m - 1)[:, None], 3, axis=1)
         setters[0] = [-1 if j is None else j for j in s.setter]
-        w = run.widths
-        x_at = run.begin + w[:, 0]
-        y_at = x_at + w[:, 1] + 2
-        z_at = y_at + w[:, 2] + 2
-        r_at = np.where(wrote_r, z_at + w[:, 3] + 2, -1)
+        starts, ends = run.spans[:, :, 0].copy(), run.spans[:, :, 1].copy()
+        starts[~wrote_r, 3] = ends[~wrote_r, 3] = -1  # R is a word of cycles only
         ints = np.column_stack(
             [
                 np.arange(run.lineno, run.lineno + m),
-                w[:, 0] + 1,
+                starts[:, 0] - run.begin + 1,
                 setters,
-                x_at,
-                y_at,
-                z_at,
-                r_at,
-                x_at + w[:, 1],
-                y_at + w[:, 2],
-                z_at + w[:, 3],
-                np.where(wrote_r, r_at + w[:, 4], -1),
+                starts,
+                ends,
             ]
         )
         floats = np.column_stack(
@@ -701,8 +712,8 @@ class _Reader:
             missing = np.flatnonzero(cycle & np.isnan(r_mm)).tolist()
             for k in missing:
                 reason[k] = "canned cycle without an R plane or Z depth"
-        names = [_MOTION_NAMES[k] for k in motion.tolist()]
-        retracts = np.where(cycle, np.where(retract == 99, "G99", "G98"), "").tolist()
+        names = _MOTION_NAMES[motion].tolist()
+        retracts = _RETRACT_NAMES[np.where(cycle, retract, 0)].tolist()
         self.moves.extend(ints, floats, cycle, s.rotary, names, retracts, reason)
         last = motion[-1]
         s.motion, s.unknown_motion = str(last), ""
@@ -883,31 +894,37 @@ def _chunk(text: str, start: int, stop: int, lineno: int, reader: _Reader) -> in
     matches = _ROW_RE.findall(chunk)
     count = chunk.count("\n") + (0 if chunk.endswith("\n") and stop < len(text) else 1)
     del matches[count:]
-    head, gs, x, y, z, r = zip(*matches, strict=True)
+    codes = {g: _plain_codes(g) for g in set(matches)}  # each distinct head once
+    retract = np.fromiter(map(codes.__getitem__, matches), np.int64, count) // 1000
+    motion = np.fromiter(map(codes.__getitem__, matches), np.int64, count) % 1000 - 2
     del matches
-    newlines = np.flatnonzero(np.frombuffer(chunk.encode("latin-1", "replace"), np.uint8) == 10)
-    begins = (np.concatenate(([0], newlines + 1))[:count] + start).tolist()
-    ends = (np.append(newlines, len(chunk))[:count] + start).tolist()
-    plain = np.fromiter(map(bool, x), bool, count)
+    buf = np.frombuffer(chunk.encode("latin-1", "replace"), np.uint8)
+    newlines = np.flatnonzero(buf == 10)
+    begins = np.concatenate(([0], newlines + 1))[:count]
+    ends = np.append(newlines, len(chunk))[:count]
+    plain = motion > -2
     at = np.flatnonzero(plain)
     if len(at):
-        mask = plain.tolist()
+        exes = np.flatnonzero(buf == ord("X"))
+        stops = np.append(np.flatnonzero(_NOT_IN_NUMBER[buf]), len(buf))
+        spans = np.full((len(at), 4, 2), -1)
+        spans[:, 0, 0] = exes[np.searchsorted(exes, begins[at])] + 1
+        for k in range(3):
+            spans[:, k, 1] = stops[np.searchsorted(stops, spans[:, k, 0])]
+            if k < 2:
+                spans[:, k + 1, 0] = spans[:, k, 1] + 2  # after " Y", " Z"
+        after = np.minimum(spans[:, 2, 1][:, None] + (0, 1), len(buf) - 1)
+        has_r = (spans[:, 2, 1] + 1 < len(buf)) & (buf[after] == (32, ord("R"))).all(axis=1)
+        spans[has_r, 3, 0] = spans[has_r, 2, 1] + 2
+        spans[has_r, 3, 1] = stops[np.searchsorted(stops, spans[has_r, 3, 0])]
         values = np.full((len(at), 4), np.nan)
-        for k, column in enumerate((x, y, z)):
-            values[:, k] = np.fromiter(map(float, compress(column, mask)), float, len(at))
-        has_r = np.fromiter(map(bool, compress(r, mask)), bool, len(at))
-        values[has_r, 3] = list(map(float, filter(None, compress(r, mask))))
+        written = spans[:, :, 0] >= 0
+        values[written] = literal_values(buf, spans[:, :, 0][written], spans[:, :, 1][written])
         finite = np.isfinite(values[:, :3]).all(axis=1) & ~np.isinf(values[:, 3])
-        widths = np.stack(
-            [
-                np.fromiter(map(len, compress(c, mask)), np.int64, len(at))
-                for c in (head, x, y, z, r)
-            ],
-            axis=1,
-        )
-        codes = {g: _plain_codes(g) for g in set(compress(gs, mask))}
-        retract, motion = zip(*map(codes.__getitem__, compress(gs, mask)), strict=True)
+        spans[written] += start
+        retract, motion = retract[at], motion[at]
         plain[at[~finite]] = False  # a literal beyond the float range: the line reader says where
+    begins, ends = (begins + start).tolist(), (ends + start).tolist()
     runs = np.flatnonzero(np.diff(plain, prepend=False, append=False)).reshape(-1, 2)
     done = 0
     for lo, hi in runs.tolist():
@@ -917,10 +934,10 @@ def _chunk(text: str, start: int, stop: int, lineno: int, reader: _Reader) -> in
         run = _PlainRun(
             lineno + lo,
             np.array(begins[lo:hi]),
-            widths[a:b],
+            spans[a:b],
             values[a:b],
-            np.array(retract[a:b]),
-            np.array(motion[a:b]),
+            retract[a:b],
+            motion[a:b],
         )
         k = lo
         while k < hi:

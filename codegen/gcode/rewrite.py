@@ -15,6 +15,7 @@ from array import array
 
 import numpy as np
 
+from accugrid.codegen.gcode.numbers import literal_values
 from accugrid.codegen.gcode.parse import GcodeMoves, gcode_moves, modal_fill
 from accugrid.codegen.program_text import (
     MIN_PLACES_INCH,
@@ -33,7 +34,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
     strict_check,
 )
-from accugrid.codegen.textsafe import fixed_many
+from accugrid.codegen.textsafe import fixed_format, fixed_ready
 
 __all__ = ["rewrite_gcode"]
 
@@ -52,14 +53,13 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
         moves.target.copy(),
     )
     _protect_arc_starts(moves, rows)
-    todo = [i for i, r in enumerate(rows.reason) if not r]
+    at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))  # no reason
     desired = moves.target.copy()
-    if todo:
-        prog = desired[todo]
+    if len(at):
+        prog = desired[at]
         t = opts.robot_T_program
         robot = prog @ t[:3, :3].T + t[:3, 3]
         abc = np.array([[r.get(k, math.nan) for k in "ABC"] for r in moves.rotaries])
-        at = np.array(todo)
         # each distinct A/B/C once (a program has few), then one row per point
         rotations = rotations_of(t[:3, :3], abc.reshape(-1, 3))[moves.rotary_index[at]]
         corrected = correct_points(robot, rows, at, opts, rotations)
@@ -76,6 +76,8 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
 def _protect_arc_starts(moves: GcodeMoves, rows: Rows) -> None:
     """An arc keeps its start point: the moves that set it are not corrected either."""
     reasons = rows.reason
+    if "G2" not in moves.motion and "G3" not in moves.motion:
+        return
     arcs = [i for i, m in enumerate(moves.motion) if m == "G2" or m == "G3"]
     for i in arcs:
         line = int(moves.line[i])
@@ -275,9 +277,14 @@ def _plain_block(text, moves, block, corrected, desired, r_planes, places, walk)
     place = np.repeat(places[block], 4)
     for p in np.unique(place).tolist():
         idx = np.flatnonzero(np.isfinite(goal) & (place == p))
-        found = fixed_many(goal[idx], p)
-        texts[idx] = found
-        new[idx] = np.fromiter(map(float, found), float, len(idx))
+        if not len(idx):
+            continue
+        # the texts fixed_many gives, made as one string: their values are read from its bytes
+        lines = ((fixed_format(p) + "\n") * len(idx)) % tuple(fixed_ready(goal[idx], p).tolist())
+        buf = np.frombuffer(lines.encode("latin-1"), np.uint8)
+        ends = np.flatnonzero(buf == 10)
+        new[idx] = literal_values(buf, np.append(0, ends[:-1] + 1), ends)
+        texts[idx] = np.array(lines.split("\n")[:-1], dtype=object)
     edit = np.isfinite(new) & (new != values.ravel())
     written = np.where(edit, new, values.ravel()).reshape(n, 4) * scale[:, None]
     r_cmd = modal_fill(written[:, 3], wrote_r, walk.r_cmd)
@@ -313,20 +320,22 @@ def _places(moves: GcodeMoves, opts: Options) -> np.ndarray:
     but never coarser than 0.01 mm (0.001 in under G20)."""
     if opts.decimals is not None:
         return np.full(len(moves), opts.decimals)
-    found = [
-        precision(map(moves.text.__getitem__, map(slice, starts, ends)))
-        for starts, ends in _word_spans(moves)
-    ]
-    found = max(found) if found else precision(())
+    found = _file_precision(moves)
     return np.where(moves.scale == 1.0, max(found, MIN_PLACES_MM), max(found, MIN_PLACES_INCH))
 
 
-def _word_spans(moves: GcodeMoves):
-    """(starts, ends) lists of the X, Y, Z numbers written, a block of moves at a time (only
-    blocks that write any)."""
-    for first in range(0, len(moves), _BLOCK):
-        starts = moves.word_start[first : first + _BLOCK, :3]
-        written = starts >= 0
-        if written.any():
-            ends = moves.word_end[first : first + _BLOCK, :3]
-            yield starts[written].tolist(), ends[written].tolist()
+def _file_precision(moves: GcodeMoves) -> int:
+    """``precision`` of the X, Y, Z literals written, from their spans: a G-code literal has no
+    exponent, so its decimals are the digits after its point (if it has one)."""
+    starts = moves.word_start[:, :3]
+    written = starts >= 0
+    if not written.any():
+        return precision(())
+    starts, ends = starts[written], moves.word_end[:, :3][written]
+    text = np.frombuffer(moves.text.encode("latin-1", "replace"), np.uint8)
+    points = np.flatnonzero(text == ord("."))
+    if not len(points):
+        return 0
+    first = np.minimum(np.searchsorted(points, starts), len(points) - 1)
+    inside = (points[first] >= starts) & (points[first] < ends)
+    return int(np.where(inside, ends - points[first] - 1, 0).max())
