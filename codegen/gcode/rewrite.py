@@ -325,17 +325,19 @@ def _places(moves: GcodeMoves, opts: Options) -> np.ndarray:
 
 
 def _file_precision(moves: GcodeMoves) -> int:
-    """``precision`` of the X, Y, Z literals written, from their spans: a G-code literal has no
-    exponent, so its decimals are the digits after its point (if it has one)."""
-    starts = moves.word_start[:, :3]
-    written = starts >= 0
-    if not written.any():
-        return precision(())
-    starts, ends = starts[written], moves.word_end[:, :3][written]
-    text = np.frombuffer(moves.text.encode("latin-1", "replace"), np.uint8)
-    points = np.flatnonzero(text == ord("."))
-    if not len(points):
-        return 0
-    first = np.minimum(np.searchsorted(points, starts), len(points) - 1)
-    inside = (points[first] >= starts) & (points[first] < ends)
-    return int(np.where(inside, ends - points[first] - 1, 0).max())
+    """``precision`` of the X, Y, Z literals written, from their spans (a block of moves at a
+    time): a G-code literal has no exponent, so its decimals are the digits after its point (if
+    it has one)."""
+    found = []
+    for first in range(0, len(moves), _BLOCK):
+        starts = moves.word_start[first : first + _BLOCK, :3]
+        written = starts >= 0
+        if not written.any():
+            continue
+        starts, ends = starts[written], moves.word_end[first : first + _BLOCK, :3][written]
+        lo, hi = int(starts.min()), int(ends.max())
+        text = np.frombuffer(moves.text[lo:hi].encode("latin-1", "replace"), np.uint8)
+        points = np.append(np.flatnonzero(text == ord(".")) + lo, hi)  # hi: no point after
+        point = points[np.searchsorted(points, starts)]
+        found.append(int(np.where(point < ends, ends - point - 1, 0).max()))
+    return max(found) if found else precision(())
