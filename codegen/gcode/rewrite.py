@@ -290,7 +290,7 @@ def _plain_block(text, moves, block, corrected, desired, r_planes, places, walk)
     r_cmd = modal_fill(written[:, 3], wrote_r, walk.r_cmd)
     end = written[:, :3].copy()
     r_mm = moves.r_mm[block]
-    g99 = np.asarray(moves.retract[block]) == "G99"
+    g99 = np.fromiter(map("G99".__eq__, moves.retract[block]), bool, n)
     end[cycle, 2] = np.where(np.isnan(r_mm[cycle]), np.nan, r_cmd[cycle])
     g98 = np.flatnonzero(cycle & ~g99 & ~np.isnan(r_mm)).tolist()
     if g98:  # G98 returns to the higher of where the hole started and R: one by one
