@@ -134,7 +134,7 @@ def _gcode_edits(
     """Walk the program with the commanded (rewritten) position; the new program's bytes.
 
     ``desired`` (N, 3) mm: where each move should land (program frame); ``r_planes`` (N,) mm:
-    corrected R planes (NaN: keep). A block of moves that are all absolute and write X, Y and Z
+    corrected R planes (NaN: keep). A block of moves that are all absolute (none a G28/G30/G53)
     is done in bulk (``_plain_block``); any other block move by move (``_walk_block``), where
     increments (which depend on what was written before) are formatted on the way."""
     out = Splicer(text)
@@ -143,11 +143,7 @@ def _gcode_edits(
     walk = _Commanded()
     for first in range(0, len(moves), _BLOCK):
         block = slice(first, first + _BLOCK)
-        plain = (
-            not moves.incremental[block].any()
-            and (moves.word_start[block, :3] >= 0).all()
-            and _RESETS.isdisjoint(moves.motion[block])
-        )
+        plain = not moves.incremental[block].any() and _RESETS.isdisjoint(moves.motion[block])
         step = _plain_block if plain else _walk_block
         edits = step(text, moves, block, corrected, desired, r_planes, places, walk)
         out.add(*edits)
@@ -260,16 +256,19 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
 
 
 def _plain_block(text, moves, block, corrected, desired, r_planes, places, walk):
-    """``_walk_block`` in bulk for a block whose moves are all absolute and write X, Y and Z
-    (none resets the position): every number is formatted and compared at once, and only the
-    G98 retract heights (each the higher of the previous end and R) are carried one by one."""
+    """``_walk_block`` in bulk for a block whose moves are all absolute (none resets the
+    position): every number is formatted and compared at once, X and Y carried forward where a
+    move does not write them, and only the Z ends that depend on the previous one (a G98 retract,
+    the higher of the previous end and R; a straight move without Z) are carried one by one."""
     n = len(moves.motion[block])
     scale = moves.scale[block]
     values = moves.word_value[block]
     cycle = moves.is_cycle[block]
-    wrote_r = cycle & (moves.word_start[block, 3] >= 0)
+    wrote = moves.word_start[block] >= 0  # (n, 4) X, Y, Z, R written
+    wrote_r = cycle & wrote[:, 3]
     goal = np.full((n, 4), np.nan)  # the corrected numbers in program units (NaN: keep)
-    goal[:, :3] = np.where(corrected[block, None], desired[block] / scale[:, None], np.nan)
+    fix = corrected[block, None] & wrote[:, :3]
+    goal[:, :3] = np.where(fix, desired[block] / scale[:, None], np.nan)
     goal[:, 3] = np.where(wrote_r, r_planes[block] / scale, np.nan)
     goal = goal.ravel()
     new = np.full(4 * n, np.nan)  # the value each new text reads as
@@ -286,28 +285,32 @@ def _plain_block(text, moves, block, corrected, desired, r_planes, places, walk)
         new[idx] = literal_values(buf, np.append(0, ends[:-1] + 1), ends)
         texts[idx] = np.array(lines.split("\n")[:-1], dtype=object)
     edit = np.isfinite(new) & (new != values.ravel())
-    written = np.where(edit, new, values.ravel()).reshape(n, 4) * scale[:, None]
+    written = np.where(edit, new, values.ravel()).reshape(n, 4) * scale[:, None]  # NaN: none
     r_cmd = modal_fill(written[:, 3], wrote_r, walk.r_cmd)
-    end = written[:, :3].copy()
+    cycle_z = modal_fill(written[:, 2], cycle & wrote[:, 2], walk.cycle_z)
+    end = np.empty((n, 3))
+    for i in range(2):  # X, Y: as written, else where the previous move left them
+        end[:, i] = modal_fill(written[:, i], wrote[:, i], walk.cmd[i])
+    # Z: a straight move's as written; a cycle's retract: nothing known without an R plane,
+    # R under G99, the higher of the previous end and R under G98
     r_mm = moves.r_mm[block]
     g99 = np.fromiter(map("G99".__eq__, moves.retract[block]), bool, n)
-    end[cycle, 2] = np.where(np.isnan(r_mm[cycle]), np.nan, r_cmd[cycle])
-    g98 = np.flatnonzero(cycle & ~g99 & ~np.isnan(r_mm)).tolist()
-    if g98:  # G98 returns to the higher of where the hole started and R: one by one
-        z, r = end[:, 2].tolist(), r_cmd.tolist()
-        for k in g98:
+    end[:, 2] = np.where(cycle, np.where(np.isnan(r_mm), np.nan, r_cmd), written[:, 2])
+    carried = np.flatnonzero((cycle & ~g99 & ~np.isnan(r_mm)) | ~(cycle | wrote[:, 2])).tolist()
+    if carried:  # those that depend on the previous end: one by one
+        z, r, hole = end[:, 2].tolist(), r_cmd.tolist(), cycle.tolist()
+        for k in carried:
             before = z[k - 1] if k else walk.cmd[2]
-            z[k] = max(before, r[k])
+            z[k] = max(before, r[k]) if hole[k] else before
         end[:, 2] = z
     changed = np.flatnonzero(corrected[block])
     if len(changed):  # a cycle reaches its hole bottom, a straight move its end
-        reached = np.where(cycle[changed, None], written[changed, :3], end[changed])
+        hole = np.column_stack([end[changed, :2], cycle_z[changed]])
+        reached = np.where(cycle[changed, None], hole, end[changed])
         walk.reached_rows.frombytes(np.ascontiguousarray(reached).tobytes())
         walk.reached_at.frombytes((block.start + changed).astype(np.int64).tobytes())
     walk.cmd = end[-1].tolist()
-    if cycle.any():
-        walk.cycle_z = float(written[np.flatnonzero(cycle)[-1], 2])
-    walk.r_cmd = float(r_cmd[-1])
+    walk.cycle_z, walk.r_cmd = float(cycle_z[-1]), float(r_cmd[-1])
     at = np.flatnonzero(edit)
     starts = moves.word_start[block].ravel()[at]
     order = np.argsort(starts, kind="stable")
