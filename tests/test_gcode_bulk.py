@@ -79,7 +79,20 @@ def plain_lines(draw) -> str:
     return f"{lead}{n}{draw(CODES)}X{x}{gap}Y{y} Z{z}{r}{tail}"
 
 
-PROGRAMS = st.lists(st.one_of(plain_lines(), plain_lines(), plain_lines(), MODAL), max_size=60)
+@st.composite
+def partial_lines(draw) -> str:
+    """A plain line that writes one or two of X, Y, Z (or a near miss)."""
+    words = [f"{k}{draw(NUMBER)}" for k in "XYZ" if draw(st.booleans())]
+    if draw(st.booleans()):
+        words.append(f"R{draw(NUMBER)}")
+    gap = draw(st.sampled_from([" ", " ", " ", "  ", ""]))
+    tail = draw(st.sampled_from(["", " F300", " (move X1 Y2)", " (R)", "\r", " ;X1"]))
+    return f"{draw(st.sampled_from(['', 'N5 ']))}{draw(CODES)}{gap.join(words)}{tail}"
+
+
+PROGRAMS = st.lists(
+    st.one_of(plain_lines(), plain_lines(), partial_lines(), partial_lines(), MODAL), max_size=60
+)
 COLUMNS = (
     "line column start target end scale r_mm incremental is_cycle setters word_start word_end "
     "word_value rotary_index"
@@ -128,13 +141,15 @@ def test_bulk_reader_reads_as_the_line_reader(lines, chunk, final, bom):
 
 def test_bulk_reader_takes_plain_runs():
     """A program of plain lines is read in bulk: the line reader is not called for them."""
-    text = "G21 G90\nG99 G81 X1 Y2 Z-3 R2 F300\nG1 X4 Y5 Z6 (m)\nN3 X7 Y8 Z9\n"
+    text = "G21 G90\nG99 G81 X1 Y2 Z-3 R2 F300\nX4 Y5\nG1 X4 Y5 Z6 (m)\nN3 X7 Y8 Z9\nG0 Z50\n"
     with mock.patch.object(parse._Reader, "line", autospec=True, wraps=parse._Reader.line) as line:
         moves = gcode_moves(text)
-    assert [c.args[2] for c in line.call_args_list] == [1, 5]  # "G21 G90" and the empty last
-    assert moves.motion == ["G81", "G1", "G1"]
-    assert moves.target.tolist() == [[1, 2, -3], [4, 5, 6], [7, 8, 9]]
-    assert moves.end.tolist() == [[1, 2, 2], [4, 5, 6], [7, 8, 9]]  # G99: back to R
+    assert [c.args[2] for c in line.call_args_list] == [1, 7]  # "G21 G90" and the empty last
+    assert moves.motion == ["G81", "G81", "G1", "G1", "G0"]
+    assert moves.target.tolist() == [[1, 2, -3], [4, 5, -3], [4, 5, 6], [7, 8, 9], [7, 8, 50]]
+    assert moves.end.tolist() == [[1, 2, 2], [4, 5, 2], [4, 5, 6], [7, 8, 9], [7, 8, 50]]
+    assert moves.setters.tolist() == [[-1, -1, -1], [0, 0, 0], [1, 1, 1], [2, 2, 2], [3, 3, 3]]
+    assert moves.word_start[4].tolist() == [-1, -1, text.index("Z50") + 1, -1]
 
 
 PARTIAL = st.one_of(

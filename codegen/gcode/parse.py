@@ -58,25 +58,22 @@ _PLAIN_RE = re.compile(
     r"(?:[ \t]++R(" + _NUMBER + r"))?+([ \t]++F" + _NUMBER + r")?+[ \t]*+"
     r"(?:\([^()\n;]*+\)[ \t]*+)?+\r?+"
 )
-# The whole-text scanner: one match per line. A plain line (``_PLAIN_RE`` with single spaces
-# before Y, Z and R) gives its G98/G99 and motion codes and the "X" after them (one group, so
-# findall gives one str per line, never empty); any other line matches the last branch with the
-# group empty. Where the numbers are is found from the bytes: the head before X has no "X", and
-# each number ends at the first byte that is not in one.
+# The whole-text scanner: one match per line. A plain line is ``[N..] [G98|G99] [G0|G1|G73|G81..
+# G89] X.. Y.. Z.. [R..] [F..] [(comment)]`` where any one or two of X, Y, Z may be left out, with
+# single spaces between the position words. Its G-codes and first letter are one group (so findall
+# gives one str per line, never empty for a plain line); any other line matches the last branch
+# with the group empty. Where the numbers are is found from the bytes: before the comment the
+# letters X, Y, Z, R appear only as words, and each number ends at the first byte that is not in
+# one.
 _ROW_RE = re.compile(
-    r"^(?:[ \t]*+(?:N\d++[ \t]++)?+((?:G9[89][ \t]++)?+(?:G(?:0?+[01]|0|8[1-9]|73)[ \t]++)?+X)"
-    + _NUMBER
-    + " Y"
-    + _NUMBER
-    + " Z"
-    + _NUMBER
-    + "(?: R"
-    + _NUMBER
-    + r")?+"
-    r"(?:[ \t]++F" + _NUMBER + r")?+[ \t]*+(?:\([^()\n;]*+\)[ \t]*+)?+\r?+$|[^\n]*+)",
+    r"^(?:[ \t]*+(?:N\d++[ \t]++)?+((?:G9[89][ \t]++)?+(?:G(?:0?+[01]|0|8[1-9]|73)[ \t]++)?+[XYZ])"
+    r"(?:(?<=X)" + _NUMBER + "(?: Y" + _NUMBER + ")?+(?: Z" + _NUMBER + ")?+"
+    r"|(?<=Y)" + _NUMBER + "(?: Z" + _NUMBER + ")?+|(?<=Z)" + _NUMBER + ")"
+    r"(?: R" + _NUMBER + r")?+(?:[ \t]++F" + _NUMBER + r")?+[ \t]*+(?:\([^()\n;]*+\)[ \t]*+)?+"
+    r"\r?+$|[^\n]*+)",
     re.M,
 )
-_CODES_RE = re.compile(r"(?:G(9[89])[ \t]++)?+(?:G(\d++)[ \t]++)?+X")
+_CODES_RE = re.compile(r"(?:G(9[89])[ \t]++)?+(?:G(\d++)[ \t]++)?+[XYZ]")
 _NOT_IN_NUMBER = np.ones(256, bool)
 _NOT_IN_NUMBER[list(NUMBER_BYTES)] = False
 _CHUNK = 1 << 20  # characters per whole-text pass (bounds the per-line tuples held at once)
@@ -575,9 +572,9 @@ def _fast_line(line: str, offset: int, path: str | None, lineno: int) -> _Line |
 
 
 def _plain_codes(codes: str) -> int:
-    """A plain line's G-codes and X (``"G99 G81 X"``) as ``1000 * retract + motion + 2``: retract
-    98, 99 or 0 (none), motion -1 where the line sets none; a line that is not plain (``""``)
-    gives motion -2."""
+    """A plain line's G-codes and first letter (``"G99 G81 X"``) as ``1000 * retract + motion +
+    2``: retract 98, 99 or 0 (none), motion -1 where the line sets none; a line that is not plain
+    (``""``) gives motion -2."""
     m = _CODES_RE.fullmatch(codes)
     if m is None:
         return 0
@@ -652,9 +649,9 @@ class _Reader:
         """Take the plain lines of ``run`` in bulk, as ``block`` would take them one by one, as
         far as the modal state allows: (lines taken, lines after them to read one by one).
 
-        Plain lines set only the motion mode and G98/G99, and write X, Y, Z (and R) absolute
-        numbers; taken in bulk under G90 with a motion mode of G0, G1 or a canned cycle (in
-        G17), every other state read by ``block``."""
+        Plain lines set only the motion mode and G98/G99, and write some of X, Y, Z (and R) as
+        absolute numbers; taken in bulk under G90 with a motion mode of G0, G1 or a canned cycle
+        (in G17), every other state read by ``block``."""
         s, m = self.state, len(run.begin)
         if s.incremental:
             return 0, m
@@ -667,62 +664,70 @@ class _Reader:
         if s.plane != "17" and cycle.any():
             return 0, m
         retract = modal_fill(run.retract, run.retract > 0, int(s.retract[1:]))
-        v = run.values
-        target = v[:, :3] * s.scale
-        wrote_r = cycle & ~np.isnan(v[:, 3])
-        r_mm = modal_fill(v[:, 3] * s.scale, wrote_r, s.cycle_r)  # the R plane in effect
-        end = target.copy()
-        g99 = cycle & (retract == 99)
-        end[g99, 2] = r_mm[g99]
-        g98 = np.flatnonzero(cycle & (retract == 98)).tolist()
-        if g98:  # G98 returns to the higher of where the hole started and R: one by one
-            z, r = end[:, 2].tolist(), r_mm.tolist()
-            for k in g98:
+        v, first = run.values * s.scale, len(self.moves)
+        wrote = run.spans[:, :, 0] >= 0  # (m, 4) X, Y, Z, R written
+        wrote_r = cycle & wrote[:, 3]  # R is a word of cycles only
+        r_mm = modal_fill(v[:, 3], wrote_r, s.cycle_r)  # the R plane in effect
+        cycle_z = modal_fill(v[:, 2], cycle & wrote[:, 2], s.cycle_z)  # the depth in effect
+        end = np.empty((m, 3))
+        for i in range(2):  # X, Y: as written, else where the previous move left them
+            end[:, i] = modal_fill(v[:, i], wrote[:, i], s.pos[i])
+        # Z: a straight move's as written, a cycle's retract (R under G99, the higher of where
+        # the hole started and R under G98), else where the previous move left it
+        end[:, 2] = np.where(cycle, r_mm, v[:, 2])
+        carried = np.flatnonzero((cycle & (retract == 98)) | ~(cycle | wrote[:, 2])).tolist()
+        if carried:  # those that depend on the previous end: one by one
+            z, r, hole = end[:, 2].tolist(), r_mm.tolist(), cycle.tolist()
+            for k in carried:
                 before = z[k - 1] if k else s.pos[2]
-                z[k] = r[k] if r[k] > before else before
+                z[k] = (r[k] if r[k] > before else before) if hole[k] else before
             end[:, 2] = z
         start = np.vstack([np.array(s.pos, float)[None], end[:-1]])
-        first = len(self.moves)
-        setters = np.repeat(np.arange(first - 1, first + m - 1)[:, None], 3, axis=1)
-        setters[0] = [-1 if j is None else j for j in s.setter]
+        target = np.column_stack([end[:, :2], np.where(cycle, cycle_z, end[:, 2])])
+        # the move that last set each coordinate, before each move (a cycle always sets Z)
+        index = np.arange(first, first + m)
+        after = [
+            modal_fill(index, wrote[:, i] | (cycle if i == 2 else False), j)
+            for i, j in enumerate(-1 if j is None else j for j in s.setter)
+        ]
+        setters = np.vstack([[-1 if j is None else j for j in s.setter], np.stack(after, 1)[:-1]])
         starts, ends = run.spans[:, :, 0].copy(), run.spans[:, :, 1].copy()
-        starts[~wrote_r, 3] = ends[~wrote_r, 3] = -1  # R is a word of cycles only
+        starts[~wrote_r, 3] = ends[~wrote_r, 3] = -1
+        column = np.where(
+            wrote[:, 0], starts[:, 0], np.where(wrote[:, 1], starts[:, 1], starts[:, 2])
+        )
         ints = np.column_stack(
             [
                 np.arange(run.lineno, run.lineno + m),
-                starts[:, 0] - run.begin + 1,
+                column - run.begin + 1,
                 setters,
                 starts,
                 ends,
             ]
         )
+        values = np.where(wrote, run.values, np.nan)
+        values[:, 3] = np.where(wrote_r, values[:, 3], np.nan)
         floats = np.column_stack(
-            [
-                start,
-                target,
-                end,
-                np.full(m, s.scale),
-                np.where(cycle, r_mm, np.nan),
-                v[:, :3],
-                np.where(wrote_r, v[:, 3], np.nan),
-            ]
+            [start, target, end, np.full(m, s.scale), np.where(cycle, r_mm, np.nan), values]
         )
         reason = [s.frame_reason()] * m
         if not reason[0]:
-            missing = np.flatnonzero(cycle & np.isnan(r_mm)).tolist()
+            missing = np.flatnonzero(cycle & (np.isnan(r_mm) | np.isnan(cycle_z))).tolist()
             for k in missing:
                 reason[k] = "canned cycle without an R plane or Z depth"
+            unknown = np.isnan(target)
+            for k in np.flatnonzero(unknown.any(axis=1)).tolist():
+                if not reason[k]:
+                    axes = ",".join(a for a, u in zip(AXES, unknown[k].tolist(), strict=True) if u)
+                    reason[k] = f"{axes} not known here (no absolute value since the start)"
         names = _MOTION_NAMES[motion].tolist()
         retracts = _RETRACT_NAMES[np.where(cycle, retract, 0)].tolist()
         self.moves.extend(ints, floats, cycle, s.rotary, names, retracts, reason)
-        last = motion[-1]
-        s.motion, s.unknown_motion = str(last), ""
+        s.motion, s.unknown_motion = str(motion[-1]), ""
         s.retract = f"G{retract[-1]}"
-        if cycle.any():
-            s.cycle_z = float(target[np.flatnonzero(cycle)[-1], 2])
-        s.cycle_r = float(r_mm[-1])
+        s.cycle_z, s.cycle_r = float(cycle_z[-1]), float(r_mm[-1])
         s.pos = end[-1].tolist()
-        s.setter = [first + m - 1] * 3
+        s.setter = [None if j < 0 else j for j in (int(a[-1]) for a in after)]
         return m, 0
 
     def block(self, block: _Line, lineno: int, line_offset: int) -> None:
@@ -905,22 +910,20 @@ def _chunk(text: str, start: int, stop: int, lineno: int, reader: _Reader) -> in
     plain = motion > -2
     at = np.flatnonzero(plain)
     if len(at):
-        exes = np.flatnonzero(buf == ord("X"))
         stops = np.append(np.flatnonzero(_NOT_IN_NUMBER[buf]), len(buf))
+        opens = np.append(np.flatnonzero(buf == ord("(")), len(buf))
+        words_end = np.minimum(opens[np.searchsorted(opens, begins[at])], ends[at])
         spans = np.full((len(at), 4, 2), -1)
-        spans[:, 0, 0] = exes[np.searchsorted(exes, begins[at])] + 1
-        for k in range(3):
-            spans[:, k, 1] = stops[np.searchsorted(stops, spans[:, k, 0])]
-            if k < 2:
-                spans[:, k + 1, 0] = spans[:, k, 1] + 2  # after " Y", " Z"
-        after = np.minimum(spans[:, 2, 1][:, None] + (0, 1), len(buf) - 1)
-        has_r = (spans[:, 2, 1] + 1 < len(buf)) & (buf[after] == (32, ord("R"))).all(axis=1)
-        spans[has_r, 3, 0] = spans[has_r, 2, 1] + 2
-        spans[has_r, 3, 1] = stops[np.searchsorted(stops, spans[has_r, 3, 0])]
+        for k, letter in enumerate(b"XYZR"):
+            found = np.append(np.flatnonzero(buf == letter), len(buf))
+            where = found[np.searchsorted(found, begins[at])] + 1  # the number after the letter
+            has = where <= words_end
+            spans[has, k, 0] = where[has]
+            spans[has, k, 1] = stops[np.searchsorted(stops, where[has])]
         values = np.full((len(at), 4), np.nan)
         written = spans[:, :, 0] >= 0
         values[written] = literal_values(buf, spans[:, :, 0][written], spans[:, :, 1][written])
-        finite = np.isfinite(values[:, :3]).all(axis=1) & ~np.isinf(values[:, 3])
+        finite = ~np.isinf(values).any(axis=1)
         spans[written] += start
         retract, motion = retract[at], motion[at]
         plain[at[~finite]] = False  # a literal beyond the float range: the line reader says where
