@@ -2,8 +2,8 @@
 
 Reader: ``gcode_moves`` reads a text with ``\\n`` endings by the whole-text scanner (runs of plain
 lines in bulk, every other line by the line reader, ``_Reader.line``); reading every line with
-``_Reader.line`` must give the same moves, column by column. Rewriter: ``_plain_block`` (a block of
-absolute X/Y/Z moves in bulk) must make the edits and leave the walk's state as ``_walk_block``,
+``_Reader.line`` must give the same moves, column by column. Rewriter: ``_bulk_block`` (a block of
+absolute moves in bulk) must make the edits and leave the walk's state as ``_walk_block``,
 the move-by-move walk, does. Numbers: ``literal_values`` reads every literal as ``float`` does,
 and the file's precision read from the word spans is ``precision`` of the literals.
 """
@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 from accugrid.codegen.gcode import parse
 from accugrid.codegen.gcode.numbers import literal_values
 from accugrid.codegen.gcode.parse import gcode_moves
-from accugrid.codegen.gcode.rewrite import _Commanded, _file_precision, _plain_block, _walk_block
+from accugrid.codegen.gcode.rewrite import _bulk_block, _Commanded, _file_precision, _walk_block
 from accugrid.codegen.program_text import precision, split_lines
 from accugrid.kinematics.errors import InputError
 
@@ -197,14 +197,14 @@ def _walked(step, case):
 
 @settings(max_examples=300, deadline=None)
 @given(case=cases())
-def test_plain_block_walks_as_the_move_by_move_walk(case):
+def test_bulk_walk_walks_as_the_move_by_move_walk(case):
     """Same edits, same commanded end, cycle depth, R plane and reached points."""
     if case is None:
         return
     moves = case[1]
     if not len(moves) or moves.incremental.any() or {"G28", "G30", "G53"} & set(moves.motion):
         return  # no block, or one _gcode_edits walks move by move
-    bulk, slow = _walked(_plain_block, case), _walked(_walk_block, case)
+    bulk, slow = _walked(_bulk_block, case), _walked(_walk_block, case)
     assert bulk[0] == slow[0]
     assert np.array_equal(bulk[1], slow[1], equal_nan=True)
     assert np.array_equal(bulk[2], slow[2], equal_nan=True)

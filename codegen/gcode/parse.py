@@ -583,9 +583,9 @@ def _plain_codes(codes: str) -> int:
 
 class _PlainRun(NamedTuple):
     """Consecutive plain lines of a chunk: ``lineno`` of the first; per line ``begin`` (its text
-    offset), ``spans`` (M, 4, 2) text offsets (start, end) of the X, Y, Z, R numbers (-1: no R),
-    ``values`` (M, 4) X, Y, Z, R in program units (NaN: no R), ``retract`` 98/99 (0: not
-    written) and ``motion`` (-1: not written)."""
+    offset), ``spans`` (M, 4, 2) text offsets (start, end) of the X, Y, Z, R numbers and
+    ``values`` (M, 4) their values in program units (-1 and NaN: not written), ``retract`` 98/99
+    (0: not written) and ``motion`` (-1: not written)."""
 
     lineno: int
     begin: np.ndarray
@@ -871,8 +871,9 @@ def gcode_moves(text: str, path: str | os.PathLike[str] | None = None) -> GcodeM
 
     Text with ``\\n`` line endings is read a chunk of lines at a time by one whole-text match
     (``_ROW_RE``): runs of plain lines are taken in bulk (``_Reader.plain_run``), every other line
-    by the line reader. Text without ``\\n`` (one line, or lone ``\\r`` endings) is read line by
-    line; both ways give the same moves (tests/test_plain_lines.py)."""
+    by the line reader (``_Reader.line``). Text without ``\\n`` (one line, or lone ``\\r``
+    endings) is read by the line reader alone. Both give what the line reader gives for every
+    line (tests/test_gcode_bulk.py)."""
     path = None if path is None else os.fspath(path)
     check_text(text, path)
     reader = _Reader(path, text)

@@ -135,7 +135,7 @@ def _gcode_edits(
 
     ``desired`` (N, 3) mm: where each move should land (program frame); ``r_planes`` (N,) mm:
     corrected R planes (NaN: keep). A block of moves that are all absolute (none a G28/G30/G53)
-    is done in bulk (``_plain_block``); any other block move by move (``_walk_block``), where
+    is done in bulk (``_bulk_block``); any other block move by move (``_walk_block``), where
     increments (which depend on what was written before) are formatted on the way."""
     out = Splicer(text)
     places = _places(moves, opts)
@@ -143,8 +143,8 @@ def _gcode_edits(
     walk = _Commanded()
     for first in range(0, len(moves), _BLOCK):
         block = slice(first, first + _BLOCK)
-        plain = not moves.incremental[block].any() and _RESETS.isdisjoint(moves.motion[block])
-        step = _plain_block if plain else _walk_block
+        bulk = not moves.incremental[block].any() and _RESETS.isdisjoint(moves.motion[block])
+        step = _bulk_block if bulk else _walk_block
         edits = step(text, moves, block, corrected, desired, r_planes, places, walk)
         out.add(*edits)
     if walk.reached_at:
@@ -255,7 +255,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     return tuple(map(list, zip(*edits, strict=True))) if edits else ([], [], [])
 
 
-def _plain_block(text, moves, block, corrected, desired, r_planes, places, walk):
+def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     """``_walk_block`` in bulk for a block whose moves are all absolute (none resets the
     position): every number is formatted and compared at once, X and Y carried forward where a
     move does not write them, and only the Z ends that depend on the previous one (a G98 retract,
