@@ -901,8 +901,8 @@ def _chunk(text: str, start: int, stop: int, lineno: int, reader: _Reader) -> in
     count = chunk.count("\n") + (0 if chunk.endswith("\n") and stop < len(text) else 1)
     del matches[count:]
     codes = {g: _plain_codes(g) for g in set(matches)}  # each distinct head once
-    retract = np.fromiter(map(codes.__getitem__, matches), np.int64, count) // 1000
-    motion = np.fromiter(map(codes.__getitem__, matches), np.int64, count) % 1000 - 2
+    packed = np.fromiter(map(codes.__getitem__, matches), np.int64, count)
+    retract, motion = packed // 1000, packed % 1000 - 2
     del matches
     buf = np.frombuffer(chunk.encode("latin-1", "replace"), np.uint8)
     newlines = np.flatnonzero(buf == 10)
