@@ -4,23 +4,27 @@ Reader: ``gcode_moves`` reads a text with ``\\n`` endings by the whole-text scan
 lines in bulk, every other line by the line reader, ``_Reader.line``); reading every line with
 ``_Reader.line`` must give the same moves, column by column. Rewriter: ``_bulk_block`` (a block of
 absolute moves in bulk) must make the edits and leave the walk's state as ``_walk_block``,
-the move-by-move walk, does. Numbers: ``literal_values`` reads every literal as ``float`` does,
-and the file's precision read from the word spans is ``precision`` of the literals.
+the move-by-move walk, does, and the whole walk (stretches of absolute moves in bulk between the
+others) must write what walking every move writes. Numbers: ``literal_values`` reads every
+literal as ``float`` does, and the file's precision read from the word spans is ``precision`` of
+the literals.
 """
 
 from __future__ import annotations
 
+from types import SimpleNamespace
 from unittest import mock
 
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from accugrid.codegen.gcode import parse
+from accugrid.codegen.gcode import parse, rewrite
 from accugrid.codegen.gcode.numbers import literal_values
 from accugrid.codegen.gcode.parse import gcode_moves
 from accugrid.codegen.gcode.rewrite import _bulk_block, _Commanded, _file_precision, _walk_block
 from accugrid.codegen.program_text import precision, split_lines
+from accugrid.codegen.rewrite import CORRECTED, Rows
 from accugrid.kinematics.errors import InputError
 
 NUMBER = st.one_of(
@@ -235,3 +239,40 @@ def test_file_precision_is_the_precision_of_the_literals(lines):
         moves.text[s:e] for s, e in zip(starts.ravel(), ends.ravel(), strict=True) if s >= 0
     ]
     assert _file_precision(moves) == precision(literals)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    lines=PROGRAMS,
+    data=st.data(),
+    min_bulk=st.sampled_from([1, 3, 256]),
+    decimals=st.sampled_from([None, 4]),
+)
+def test_edits_in_stretches_are_the_move_by_move_edits(lines, data, min_bulk, decimals):
+    """The whole walk, stretches of absolute moves in bulk between G91 moves and G28/G53 resets,
+    writes the same bytes and reports the same reached points as walking every move."""
+    text = "\n".join(lines) + "\n"
+    try:
+        moves = gcode_moves(text)
+    except InputError:
+        return
+    n = len(moves)
+    status = data.draw(st.lists(st.booleans(), min_size=n, max_size=n))
+    shift = data.draw(st.sampled_from([1e-4, 0.0123, -2.5]))
+    desired, r_planes = moves.target + shift, moves.r_mm + shift / 2
+    opts = SimpleNamespace(decimals=decimals)
+    results = []
+    for whole in (False, True):
+        rows = Rows(["p"], np.zeros(n, np.int64), moves.line, [], [], moves.target)
+        rows.status[np.array(status, bool)] = CORRECTED
+        stretches = (lambda m, b: [(b, _walk_block)]) if whole else rewrite._stretches
+        with (
+            mock.patch.object(rewrite, "_stretches", stretches),
+            mock.patch.object(rewrite, "_MIN_BULK", min_bulk),
+        ):
+            out = rewrite._gcode_edits(text, moves, rows, desired, r_planes, opts)
+        results.append((bytes(out), rows.new, rows.residual_mm, rows.rounding_mm))
+    (a, *columns_a), (b, *columns_b) = results
+    assert a == b
+    for x, y in zip(columns_a, columns_b, strict=True):
+        assert np.array_equal(x, y, equal_nan=True)

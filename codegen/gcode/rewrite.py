@@ -134,19 +134,16 @@ def _gcode_edits(
     """Walk the program with the commanded (rewritten) position; the new program's bytes.
 
     ``desired`` (N, 3) mm: where each move should land (program frame); ``r_planes`` (N,) mm:
-    corrected R planes (NaN: keep). A block of moves that are all absolute (none a G28/G30/G53)
-    is done in bulk (``_bulk_block``); any other block move by move (``_walk_block``), where
-    increments (which depend on what was written before) are formatted on the way."""
+    corrected R planes (NaN: keep). Stretches of absolute moves (none a G28/G30/G53) are done
+    in bulk (``_bulk_block``), the rest move by move (``_walk_block``), where increments (which
+    depend on what was written before) are formatted on the way."""
     out = Splicer(text)
     places = _places(moves, opts)
     corrected = rows.status == CORRECTED
     walk = _Commanded()
     for first in range(0, len(moves), _BLOCK):
-        block = slice(first, first + _BLOCK)
-        bulk = not moves.incremental[block].any() and _RESETS.isdisjoint(moves.motion[block])
-        step = _bulk_block if bulk else _walk_block
-        edits = step(text, moves, block, corrected, desired, r_planes, places, walk)
-        out.add(*edits)
+        for part, step in _stretches(moves, slice(first, first + _BLOCK)):
+            out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
     if walk.reached_at:
         at = np.frombuffer(walk.reached_at, dtype=np.int64)
         reached = np.frombuffer(walk.reached_rows, dtype=float).reshape(-1, 3)
@@ -161,6 +158,26 @@ def _gcode_edits(
 
 
 _RESETS = frozenset(("G28", "G30", "G53"))  # moves after which the position is not known
+_MIN_BULK = 256  # moves: a shorter stretch of absolute moves is walked with its neighbours
+
+
+def _stretches(moves: GcodeMoves, block: slice):
+    """(slice, step) of each stretch of the moves ``block``, in order: ``_bulk_block`` for runs
+    of at least ``_MIN_BULK`` absolute moves that do not reset the position, ``_walk_block`` for
+    the moves between them."""
+    n = len(moves.motion[block])
+    walked = moves.incremental[block] | np.fromiter(
+        map(_RESETS.__contains__, moves.motion[block]), bool, n
+    )
+    runs = np.flatnonzero(np.diff(walked, prepend=True, append=True)).reshape(-1, 2)
+    done = 0
+    for lo, hi in runs[runs[:, 1] - runs[:, 0] >= min(_MIN_BULK, n)].tolist():
+        if lo > done:
+            yield slice(block.start + done, block.start + lo), _walk_block
+        yield slice(block.start + lo, block.start + hi), _bulk_block
+        done = hi
+    if done < n:
+        yield slice(block.start + done, block.start + n), _walk_block
 
 
 def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
