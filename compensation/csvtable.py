@@ -18,6 +18,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
+from accugrid.kinematics.decimals import read_decimals
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import read_input_text
 
@@ -295,7 +296,7 @@ class _Cells:
         for lo in range(0, len(self), _CHUNK):
             hi = min(lo + _CHUNK, len(self))
             start, end = self._span(i, lo, hi)
-            values, done = _plain_decimals(self.buf, start, end)
+            values, _, done = read_decimals(self.buf, start, end)
             rest = np.flatnonzero(~done)  # exponents, blanks, long mantissas, empty, bad
             if rest.size:
                 cells = self._bytes(start[rest], end[rest])
@@ -316,49 +317,6 @@ class _Cells:
                     return None
             out[lo:hi] = values
         return out
-
-
-_POW10 = 10.0 ** np.arange(16)  # exact in float64
-_MAX_DIGITS = 15  # a mantissa of at most 15 digits is an integer < 2**53: exact in float64
-
-
-def _plain_decimals(
-    buf: np.ndarray, start: np.ndarray, end: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Values (m,) of the cells ``buf[start:end]`` (``buf`` uint8, ``start``, ``end`` (m,))
-    that are plain decimals (an optional sign, 1 to 15 digits, at most one point, nothing
-    else), and which cells those are (m,) bool; the other values are undefined. Exact: the
-    digits as an integer m < 2**53 divided by 10**k (both exact in float64) is the correctly
-    rounded quotient, which is what ``float`` gives for the literal. The digits are gathered
-    left to right, the c-th byte of every cell at a time (int64, which wraps silently for the
-    long cells refused anyway)."""
-    m = len(start)
-    mantissa = np.zeros(m, dtype=np.int64)
-    count = np.zeros(m, dtype=np.int64)  # digits
-    decimals = np.zeros(m, dtype=np.int64)  # digits after the point
-    points = np.zeros(m, dtype=np.int64)
-    odd = np.zeros(m, dtype=bool)  # a byte that is no digit or point
-    negative = np.zeros(m, dtype=bool)
-    for c in range(int((end - start).max(initial=0))):
-        at = start + c
-        inside = at < end
-        byte = buf.take(at, mode="clip")  # beyond the buffer: clipped, and not inside
-        digit = byte - np.uint8(48)  # wraps around for anything below "0"
-        is_digit = (digit < 10) & inside
-        mantissa = np.where(is_digit, mantissa * 10 + digit, mantissa)
-        count += is_digit
-        decimals += is_digit & (points > 0)
-        point = (byte == 46) & inside
-        points += point
-        other = inside & ~(is_digit | point)
-        if c == 0:
-            negative = other & (byte == 45)
-            other &= ~negative & (byte != 43)  # a sign leads
-        odd |= other
-    done = ~odd & (points <= 1) & (count >= 1) & (count <= _MAX_DIGITS)
-    values = mantissa / _POW10[np.minimum(decimals, _MAX_DIGITS)]
-    np.negative(values, out=values, where=negative)
-    return values, done
 
 
 def _parse_simple(text: str, path: str) -> Table | None:
