@@ -126,7 +126,10 @@ def comment_texts(texts: list[str], limit: int = COMMENT_MAX, prefix: str = "") 
     is already safe (the usual ids), only the cut to ``limit`` is left to do."""
     if prefix:
         texts = [prefix + t for t in texts]
-    if _NOT_SAFE.search("".join(texts)) or any(t[:1] == " " or t[-1:] == " " for t in texts):
+    if _NOT_SAFE.search("".join(texts)):
+        return [comment_text(t, limit) for t in texts]
+    joined = "\n".join(texts)  # no text holds a line break now: each starts after one
+    if joined[:1] == " " or joined[-1:] == " " or "\n " in joined or " \n" in joined:
         return [comment_text(t, limit) for t in texts]
     return texts if max(map(len, texts), default=0) <= limit else [t[:limit] for t in texts]
 

@@ -148,14 +148,17 @@ def _block(program: Program, lo: int, records: bool) -> tuple[list[GcodeHole], s
     table[:, 4:7] = abc_text
     table[:, 7:16] = text[:, 1:].reshape(-1, 9)
     table[:, 16] = feed
+    kinds = (cycle & retract_move, cycle & ~retract_move, ~cycle)
+    templates = _hole_templates(cell)
+    for mask, (template, columns) in zip(kinds, templates, strict=True):
+        if mask.all():  # every hole of the block alike (the usual): its lines in one pass
+            return holes, (template * len(table)) % tuple(table[:, columns].ravel().tolist())
     lines = np.empty(len(pos), dtype=object)
-    for mask, (template, columns) in zip(
-        (cycle & retract_move, cycle & ~retract_move, ~cycle),
-        _hole_templates(cell),
-        strict=True,
-    ):
-        rows = table[mask][:, columns].tolist()
-        lines[mask] = [template % tuple(row) for row in rows]
+    for mask, (template, columns) in zip(kinds, templates, strict=True):
+        count = int(np.count_nonzero(mask))
+        if count:  # each kind in one pass, then every hole's lines in place (NUL: no text has it)
+            text = ((template + "\0") * count) % tuple(table[mask][:, columns].ravel().tolist())
+            lines[mask] = text.split("\0")[:-1]
     return holes, "".join(lines.tolist())
 
 
