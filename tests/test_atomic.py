@@ -314,3 +314,68 @@ def test_a_file_may_come_as_text_bytes_a_bytearray_or_pieces(tmp_path):
     assert (tmp_path / "bytes.bin").read_bytes() == b"\x00\xff"
     assert (tmp_path / "array.bin").read_bytes() == b"LIN P1\r\n"
     assert (tmp_path / "pieces.txt").read_bytes() == b"abc\n"
+
+
+# ---------------------------------------------------------------- a job into a new folder
+
+
+def test_a_job_into_a_new_folder_appears_whole_with_the_umask(tmp_path, monkeypatch):
+    """Several files into a folder that does not exist: written in a temporary folder that one
+    rename puts in place (no rename per file), with the umask's permissions like any folder."""
+    folder = tmp_path / "deep" / "krl"
+    files = job("JOB", 3, "new")
+    renames = []
+    for name in ("rename", "replace"):
+        real = getattr(os, name)
+        monkeypatch.setattr(
+            atomic.os, name, lambda a, b, real=real: renames.append(b) or real(a, b)
+        )
+    old = os.umask(0o027)
+    try:
+        written = write_job(folder, files, "JOB")
+    finally:
+        os.umask(old)
+    assert renames == [folder]
+    assert snapshot(folder) == files and len(written) == len(files)
+    assert stat.S_IMODE(folder.stat().st_mode) == 0o750
+    assert stat.S_IMODE((folder / "JOB.src").stat().st_mode) == 0o640
+    assert sorted(p.name for p in (tmp_path / "deep").iterdir()) == ["krl"]
+
+
+def test_a_failure_while_writing_a_new_folder_leaves_nothing(tmp_path, monkeypatch):
+    real = atomic._write_temp
+    calls = []
+
+    def failing(tmp, payload):
+        calls.append(tmp)
+        if len(calls) == 3:
+            raise OSError(28, "No space left on device")
+        real(tmp, payload)
+
+    monkeypatch.setattr(atomic, "_write_temp", failing)
+    with pytest.raises(InputError, match="No space left"):
+        write_job(tmp_path / "krl", job("JOB", 2, "new"), "JOB")
+    assert len(calls) == 3 and list(tmp_path.iterdir()) == []
+
+
+def test_a_temporary_folder_of_a_dead_process_is_removed(tmp_path):
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True
+    )
+    leftover = tmp_path / f".krl.{int(dead.stdout)}.deadbeef.accugrid.tmp"
+    leftover.mkdir()
+    (leftover / "JOB_001.src").write_text("half")
+    write_job(tmp_path / "krl", job("JOB", 1, "new"), "JOB")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["krl"]
+
+
+def test_sigterm_while_writing_a_new_folder_removes_the_temporary_folder(tmp_path):
+    script = SIGTERM_SCRIPT.replace("{sys.argv[1]}/F_", "{sys.argv[1]}/new/F_")
+    proc = subprocess.Popen(
+        [sys.executable, "-c", script, str(tmp_path)], stdout=subprocess.PIPE, text=True
+    )
+    for _ in range(3):
+        proc.stdout.readline()
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(timeout=60) == 128 + signal.SIGTERM
+    assert list(tmp_path.iterdir()) == []
