@@ -450,14 +450,14 @@ class _Records:
             table[:, :, 1:4] = numbers.ready
             table[:, :, 4] = numbers.orientation
             out["position_lines"] = (self.position_block * n) % tuple(table.ravel().tolist())
-        labels = self.program.labels(lo, hi) if wanted & {"holes", "hole_lines"} else []
         if "holes" in wanted:
             names = self._names(lo, hi)
             retract = names[3] if k == 4 else names[0]
+            labels = numbers.labels.tolist()
             out["holes"] = list(map(KrlHole, labels, *names[:3], retract, numbers.feed.tolist()))
         if "hole_lines" in wanted:
             table = np.empty((n, 6), dtype=object)  # in the order the lines print them
-            table[:, 0] = comment_texts(labels)
+            table[:, 0] = numbers.comments
             table[:, [1, 2, 4, 5]] = number[:, None]
             table[:, 3] = numbers.feed
             out["hole_lines"] = (self.hole_block * n) % tuple(table.ravel().tolist())
@@ -467,8 +467,9 @@ class _Records:
         """The numbers of holes lo..hi-1, sliced from those of the block that holds them (made
         when a file first asks past the last block): positions ``pos`` (n, stages, 3) mm in the
         BASE frame and the same ``fixed_ready``; as ``fixed`` text A,B,C ``abc`` (n, 3), S and
-        T ``status_turn`` (n, stages, 2), $VEL.CP ``feed`` of the feed in m/s (n,); and
-        ``orientation`` (n, stages), the text ``A a,B b,C c,S s,T t`` of each position."""
+        T ``status_turn`` (n, stages, 2), $VEL.CP ``feed`` of the feed in m/s (n,);
+        ``orientation`` (n, stages), the text ``A a,B b,C c,S s,T t`` of each position; the
+        hole ``labels`` (n,) and the same as safe comment text, ``comments``."""
         start, end, block = self._block
         if block is None or not start <= lo <= hi <= end:
             start, end = lo, max(hi, min(lo + BLOCK, len(self.program)))
@@ -498,7 +499,10 @@ class _Records:
         table[:, 3:] = st_text[hole, stage]
         texts = ("A %s,B %s,C %s,S %s,T %s\n" * len(first)) % tuple(table.ravel().tolist())
         orientation = np.array(texts.split("\n")[:-1], dtype=object)[inverse.reshape(key.shape)]
+        labels = program.labels(lo, hi)
         return SimpleNamespace(
+            labels=np.array(labels, dtype=object),
+            comments=np.array(comment_texts(labels), dtype=object),
             pos=pos,
             ready=fixed_ready(pos, self.decimals),
             abc=abc_text,
