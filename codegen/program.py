@@ -162,20 +162,16 @@ def build_program(
     holes_robot = points.xyz @ base_rot.T + cell.robot_T_base[:3, 3]
     warnings: list[str] = []
     status = cell.configuration.status
-    robot_rotations = base_rot @ rotations  # (N, 3, 3) tool orientation in the robot frame
     if model is not None:
         correction, warnings, status = _model_correction(
-            points, cell, model, grid, holes_robot, robot_rotations
+            points, cell, model, grid, holes_robot, base_rot @ rotations
         )
     elif grid is None:
         correction = np.zeros((n, 3))
     else:
-        correction, warnings = _correction(points, cell, grid, holes_robot, robot_rotations)
+        correction, warnings = _correction(points, cell, grid, holes_robot, base_rot @ rotations)
     positions = nominal + (correction @ base_rot)[:, None, :]  # e rotated into the BASE frame
-    status, turn, ik_warnings = _configuration(
-        points, cell, robot, positions, robot_rotations, status
-    )
-    del robot_rotations
+    status, turn, ik_warnings = _configuration(points, cell, robot, positions, rotations, status)
     return Program(
         cell=cell,
         points=points,
@@ -313,8 +309,7 @@ def _configuration(
     rotations: np.ndarray,
     status: int | None,
 ) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """IK of every pose (``positions`` (N, 4, 3) mm in the BASE frame, ``rotations`` (N, 3, 3)
-    in the robot frame) in KUKA ``status`` (None: the first pose's IK default): Status and Turn
+    """IK of every pose in KUKA ``status`` (None: the first pose's IK default): Status and Turn
     (N, 4) per pose and the warnings."""
     n = len(points)
     if n == 0:
@@ -378,11 +373,11 @@ def _configuration(
 
 
 def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
-    """Robot-frame TCP poses (H, S, 4, 4) of positions (H, S, 3) mm in the BASE frame and
-    rotations (H, 3, 3) in the robot frame."""
+    """Robot-frame TCP poses (H, S, 4, 4) of positions (H, S, 3) mm and rotations (H, 3, 3)
+    in the BASE frame."""
     base_rot, base_org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
     out = np.empty((*positions.shape[:2], 4, 4))
-    out[:, :, :3, :3] = rotations[:, None]
+    out[:, :, :3, :3] = (base_rot @ rotations)[:, None]
     out[:, :, :3, 3] = positions @ base_rot.T + base_org
     out[:, :, 3] = (0.0, 0.0, 0.0, 1.0)
     return out
