@@ -1,7 +1,7 @@
 """The only way numbers and user text reach a robot program (DESIGN.md, "Output safety").
 
 - ``fixed`` (and ``fixed_many``, the same for an array): the one fixed-point formatter; never
-  ``str(float)`` or ``%g`` in a program.
+  ``str(float)`` or ``%g`` in a program. ``fixed_same``: whether two numbers print the same.
 - ``comment_text``: user text made harmless inside a one-line comment of any dialect.
 - ``krl_identifier``: a valid KRL name ([A-Za-z_][A-Za-z0-9_]*, at most 24 characters, not a
   reserved word: ``KRL_RESERVED``).
@@ -25,6 +25,7 @@ __all__ = [
     "fixed_format",
     "fixed_many",
     "fixed_ready",
+    "fixed_same",
     "fixed_texts",
     "krl_identifier",
 ]
@@ -96,6 +97,19 @@ def fixed_many(values: np.ndarray, places: int) -> list[str]:
     texts = (((fixed_format(places) + "\n") * len(ready)) % tuple(ready.tolist())).split("\n")
     texts.pop()
     return texts
+
+
+def fixed_same(a: np.ndarray, b: np.ndarray, places: int) -> np.ndarray:
+    """Whether ``fixed(a, places) == fixed(b, places)``, elementwise (shapes broadcast), without
+    formatting where the numbers decide it: equal values print the same, values more than one
+    unit of the last place apart never do (each text is within half a unit of its value); only
+    the pairs closer than that, but not equal, are formatted and compared."""
+    a, b = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
+    same = a == b
+    unsure = ~same & (np.abs(a - b) <= 10.0**-places * (1.0 + 1e-9))  # margin: float rounding
+    if unsure.any():
+        same[unsure] = np.array(fixed_many(a[unsure], places)) == fixed_many(b[unsure], places)
+    return same
 
 
 def fixed_texts(values: np.ndarray, decimals: int, distinct: bool = False) -> np.ndarray:
