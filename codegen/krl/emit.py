@@ -46,6 +46,7 @@ from accugrid.codegen.textsafe import (
     comment_texts,
     fixed,
     fixed_format,
+    fixed_many,
     fixed_ready,
     fixed_texts,
 )
@@ -483,15 +484,16 @@ class _Records:
         pos, abc = program.in_frame(program.cell.robot_T_base, lo, hi)
         pos = pos[:, self.stages]
         status_turn = self.status_turn[lo:hi]
-        abc_text = fixed_texts(abc, self.decimals, distinct=True)
+        values, ranks = np.unique(abc, return_inverse=True)  # the distinct A, B, C values
+        ranks = ranks.reshape(abc.shape)
+        abc_text = np.array(fixed_many(values, self.decimals), dtype=object)[ranks]
         st_text = fixed_texts(status_turn, 0, distinct=True)
-        # one text per distinct (A, B, C, S, T) of the block's positions
-        rows = np.ascontiguousarray(abc)
-        _, hole_rank = np.unique(rows.view(f"V{rows.itemsize * 3}"), return_inverse=True)
-        words = status_turn.astype(np.int64)
-        _, st_rank = np.unique(words[:, :, 0] * 65536 + words[:, :, 1], return_inverse=True)
-        st_rank = st_rank.reshape(words.shape[:2])
-        key = hole_rank.reshape(-1, 1) * (int(st_rank.max(initial=0)) + 1) + st_rank
+        # one text per distinct (A, B, C, S, T) of the block's positions, from integer keys
+        ab = _dense(ranks[:, 0] * len(values) + ranks[:, 1])
+        hole_rank = _dense(ab * len(values) + ranks[:, 2])
+        words = status_turn.astype(np.int64) + 32768
+        st_rank = _dense(words[:, :, 0] * 65536 + words[:, :, 1])
+        key = hole_rank[:, None] * (int(st_rank.max(initial=0)) + 1) + st_rank
         _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
         hole, stage = np.divmod(first, len(self.stages))
         table = np.empty((len(first), 5), dtype=object)
@@ -518,6 +520,11 @@ class _Records:
             numbers = range(lo + 1, hi + 1)
             self._named = (lo, hi, [list(map(f"XH{{}}_{s}".format, numbers)) for s in self.names])
         return self._named[2]
+
+
+def _dense(keys: np.ndarray) -> np.ndarray:
+    """The rank of every integer key among the distinct keys (same shape): 0, 1, ..."""
+    return np.unique(keys, return_inverse=True)[1].reshape(keys.shape)
 
 
 def _hole_block(cell, stages: list[str]) -> str:
