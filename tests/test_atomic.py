@@ -147,9 +147,8 @@ def test_permissions_follow_the_umask(tmp_path):
     assert stat.S_IMODE(path.stat().st_mode) == 0o644
 
 
-def test_a_failure_while_writing_leaves_targets_and_no_temporaries(tmp_path, monkeypatch):
-    old = {tmp_path / f"J_{k}.src": f"old {k}" for k in range(4)}
-    write_files(old)
+def fail_third_write(monkeypatch) -> list:
+    """Make the third temporary file of a write fail with ENOSPC; returns the attempts."""
     real = atomic._write_temp
     calls = []
 
@@ -160,6 +159,13 @@ def test_a_failure_while_writing_leaves_targets_and_no_temporaries(tmp_path, mon
         real(tmp, payload)
 
     monkeypatch.setattr(atomic, "_write_temp", failing)
+    return calls
+
+
+def test_a_failure_while_writing_leaves_targets_and_no_temporaries(tmp_path, monkeypatch):
+    old = {tmp_path / f"J_{k}.src": f"old {k}" for k in range(4)}
+    write_files(old)
+    fail_third_write(monkeypatch)
     with pytest.raises(InputError, match="No space left"):
         write_files({p: "new" for p in old}, force=True)
     assert {p: p.read_text() for p in old} == old
@@ -274,9 +280,12 @@ atomic.write_files({f"{sys.argv[1]}/F_{k}.src": "new" for k in range(50)}, force
 """
 
 
-def test_sigterm_while_writing_removes_the_temporaries(tmp_path):
+@pytest.mark.parametrize("folder", ["", "new"])  # an existing folder, one made by the write
+def test_sigterm_while_writing_removes_the_temporaries(tmp_path, folder):
     proc = subprocess.Popen(
-        [sys.executable, "-c", SIGTERM_SCRIPT, str(tmp_path)], stdout=subprocess.PIPE, text=True
+        [sys.executable, "-c", SIGTERM_SCRIPT, str(tmp_path / folder)],
+        stdout=subprocess.PIPE,
+        text=True,
     )
     for _ in range(3):
         proc.stdout.readline()
@@ -343,16 +352,7 @@ def test_a_job_into_a_new_folder_appears_whole_with_the_umask(tmp_path, monkeypa
 
 
 def test_a_failure_while_writing_a_new_folder_leaves_nothing(tmp_path, monkeypatch):
-    real = atomic._write_temp
-    calls = []
-
-    def failing(tmp, payload):
-        calls.append(tmp)
-        if len(calls) == 3:
-            raise OSError(28, "No space left on device")
-        real(tmp, payload)
-
-    monkeypatch.setattr(atomic, "_write_temp", failing)
+    calls = fail_third_write(monkeypatch)
     with pytest.raises(InputError, match="No space left"):
         write_job(tmp_path / "krl", job("JOB", 2, "new"), "JOB")
     assert len(calls) == 3 and list(tmp_path.iterdir()) == []
@@ -367,15 +367,3 @@ def test_a_temporary_folder_of_a_dead_process_is_removed(tmp_path):
     (leftover / "JOB_001.src").write_text("half")
     write_job(tmp_path / "krl", job("JOB", 1, "new"), "JOB")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["krl"]
-
-
-def test_sigterm_while_writing_a_new_folder_removes_the_temporary_folder(tmp_path):
-    script = SIGTERM_SCRIPT.replace("{sys.argv[1]}/F_", "{sys.argv[1]}/new/F_")
-    proc = subprocess.Popen(
-        [sys.executable, "-c", script, str(tmp_path)], stdout=subprocess.PIPE, text=True
-    )
-    for _ in range(3):
-        proc.stdout.readline()
-    proc.send_signal(signal.SIGTERM)
-    assert proc.wait(timeout=60) == 128 + signal.SIGTERM
-    assert list(tmp_path.iterdir()) == []
