@@ -43,7 +43,9 @@ KRL_RESERVED = frozenset(
 """KRL keywords and type names (KUKA System Software 8 manual): never a name we write."""
 COMMENT_MAX = 60
 
-_NOT_SAFE = re.compile(r"[^A-Za-z0-9 _.,:+\-=/#@]")
+_SAFE = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789 _.,:+-=/#@"
+_NOT_SAFE = re.compile(f"[^{re.escape(_SAFE)}]")
+_SAFE_BYTES = (_SAFE + "\n").encode()  # and the line break that comment_texts joins with
 _NOT_IDENT = re.compile(r"[^A-Za-z0-9_]")
 
 
@@ -140,10 +142,16 @@ def comment_texts(texts: list[str], limit: int = COMMENT_MAX, prefix: str = "") 
     is already safe (the usual ids), only the cut to ``limit`` is left to do."""
     if prefix:
         texts = [prefix + t for t in texts]
-    if _NOT_SAFE.search("".join(texts)):
-        return [comment_text(t, limit) for t in texts]
-    joined = "\n".join(texts)  # no text holds a line break now: each starts after one
-    if joined[:1] == " " or joined[-1:] == " " or "\n " in joined or " \n" in joined:
+    joined = "\n".join(texts)
+    if (
+        not joined.isascii()  # a character to fold
+        or joined.encode("ascii").translate(None, _SAFE_BYTES)  # one to replace
+        or joined.count("\n") >= len(texts)  # a line break inside a text
+        or joined[:1] == " "  # a space to strip
+        or joined[-1:] == " "
+        or "\n " in joined
+        or " \n" in joined
+    ):
         return [comment_text(t, limit) for t in texts]
     return texts if max(map(len, texts), default=0) <= limit else [t[:limit] for t in texts]
 

@@ -443,7 +443,7 @@ class _Records:
                 table[:, j, 0] = column
             table[:, :, 1:4] = fixed_texts(numbers.pos, self.decimals)
             table[:, :, 4:7] = numbers.abc[:, None, :]
-            table[:, :, 7:9] = numbers.status_turn
+            table[:, :, 7:9] = fixed_texts(numbers.status_turn, 0, distinct=True)
             out["positions"] = list(map(KrlPosition._make, table.reshape(n * k, 9).tolist()))
         if "position_lines" in wanted:
             table = np.empty((n, k, 5), dtype=object)
@@ -467,8 +467,8 @@ class _Records:
     def _numbers(self, lo: int, hi: int) -> SimpleNamespace:
         """The numbers of holes lo..hi-1, sliced from those of the block that holds them (made
         when a file first asks past the last block): positions ``pos`` (n, stages, 3) mm in the
-        BASE frame and the same ``fixed_ready``; as ``fixed`` text A,B,C ``abc`` (n, 3), S and
-        T ``status_turn`` (n, stages, 2), $VEL.CP ``feed`` of the feed in m/s (n,);
+        BASE frame and the same ``fixed_ready``; as ``fixed`` text A,B,C ``abc`` (n, 3) and the
+        $VEL.CP ``feed`` of the feed in m/s (n,); S and T ``status_turn`` (n, stages, 2);
         ``orientation`` (n, stages), the text ``A a,B b,C c,S s,T t`` of each position; the
         hole ``labels`` (n,) and the same as safe comment text, ``comments``."""
         start, end, block = self._block
@@ -487,18 +487,16 @@ class _Records:
         values, ranks = np.unique(abc, return_inverse=True)  # the distinct A, B, C values
         ranks = ranks.reshape(abc.shape)
         abc_text = np.array(fixed_many(values, self.decimals), dtype=object)[ranks]
-        st_text = fixed_texts(status_turn, 0, distinct=True)
         # one text per distinct (A, B, C, S, T) of the block's positions, from integer keys
         ab = _dense(ranks[:, 0] * len(values) + ranks[:, 1])
-        hole_rank = _dense(ab * len(values) + ranks[:, 2])
-        words = status_turn.astype(np.int64) + 32768
-        st_rank = _dense(words[:, :, 0] * 65536 + words[:, :, 1])
-        key = hole_rank[:, None] * (int(st_rank.max(initial=0)) + 1) + st_rank
+        hole_rank = _dense(ab * len(values) + ranks[:, 2])  # 0..n-1
+        words = status_turn.astype(np.int64) + 32768  # int16: 0..65535
+        key = (hole_rank[:, None] << 32) + (words[:, :, 0] << 16) + words[:, :, 1]
         _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
         hole, stage = np.divmod(first, len(self.stages))
         table = np.empty((len(first), 5), dtype=object)
         table[:, :3] = abc_text[hole]
-        table[:, 3:] = st_text[hole, stage]
+        table[:, 3:] = fixed_texts(status_turn[hole, stage], 0, distinct=True)
         texts = ("A %s,B %s,C %s,S %s,T %s\n" * len(first)) % tuple(table.ravel().tolist())
         orientation = np.array(texts.split("\n")[:-1], dtype=object)[inverse.reshape(key.shape)]
         labels = program.labels(lo, hi)
@@ -508,7 +506,7 @@ class _Records:
             pos=pos,
             ready=fixed_ready(pos, self.decimals),
             abc=abc_text,
-            status_turn=st_text,
+            status_turn=status_turn,
             feed=fixed_texts(program.feed_mm_s[lo:hi] / 1000.0, 4, distinct=True),
             orientation=orientation,
         )
