@@ -28,7 +28,6 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
-import secrets
 import signal
 import stat
 from collections.abc import Iterable, Iterator, Mapping
@@ -199,8 +198,9 @@ def _signals_held() -> Iterator[None]:
 
 
 def _temp_name(path: Path) -> str:
+    # os.urandom(4).hex() is secrets.token_hex(4), without importing secrets (hmac, random)
     return os.path.join(
-        path.parent, f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}{_TMP_SUFFIX}"
+        path.parent, f".{path.name}.{os.getpid()}.{os.urandom(4).hex()}{_TMP_SUFFIX}"
     )
 
 
