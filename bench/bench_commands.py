@@ -122,7 +122,7 @@ def main(million: bool, only: str = "") -> None:
             rows.append(("accugrid correct, 1 point", seconds, peak, "import numpy, scipy", floor))
 
         sizes = [(100_000, 3)] + ([(1_000_000, 1)] if million else [])
-        for n, repeats in sizes if only in "accugrid krl gcode holes" else ():
+        for n, repeats in sizes if only in "accugrid krl gcode holes correct points" else ():
             label = f"{n:.0e}".replace("+0", "")
             holes = tmp / f"holes{n}.csv"
             holes.write_text(points_csv(n))
