@@ -142,6 +142,18 @@ def test_comment_texts_is_comment_text_of_each(texts, prefix):
     assert comment_texts(texts, prefix=prefix) == [comment_text(prefix + t) for t in texts]
 
 
+@given(
+    st.lists(st.text(alphabet="Az09 _.#\n", max_size=70), max_size=20),
+    st.sampled_from(["", "hole "]),
+    st.sampled_from(["", ";", "é", "\n", " "]),
+)
+def test_comment_texts_near_the_fast_path_is_comment_text_of_each(texts, prefix, odd):
+    """Safe characters and line breaks, and at most one odd character: the bulk check must still
+    catch a line break inside a text, a space at either end, an unsafe or a non-ASCII one."""
+    texts = texts + [f"X{odd}Y"] if odd else texts
+    assert comment_texts(texts, prefix=prefix) == [comment_text(prefix + t) for t in texts]
+
+
 def test_comment_texts_of_safe_ids_cuts_at_the_limit():
     ids = ["B000001 depth 6.000", "X" * 70]
     assert comment_texts(ids) == [ids[0], "X" * 60]
