@@ -17,10 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.atomic import JobFiles
-from accugrid.codegen.fixedtext import fixed_rows
 from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
 from accugrid.codegen.points import Points, read_points
-from accugrid.codegen.textsafe import fixed_texts
+from accugrid.codegen.textsafe import fixed_rows, fixed_texts
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.measurements import REPEAT_TOL_MM
 from accugrid.compensation.settings import CorrectionSettings

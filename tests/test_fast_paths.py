@@ -9,13 +9,14 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from accugrid.codegen.fixedtext import fixed_rows
 from accugrid.codegen.textsafe import (
     comment_text,
     comment_texts,
     fixed,
+    fixed_bytes,
     fixed_format,
     fixed_ready,
+    fixed_rows,
 )
 from accugrid.compensation.csvtable import _parse_csv, _parse_simple, parse_number, parse_table
 from accugrid.kinematics.errors import InputError
@@ -116,6 +117,14 @@ def test_fixed_rows_print_what_fixed_prints(rows, places):
     expected = [",".join(fixed(v, places) for v in row) for row in rows]
     assert fixed_rows(np.array(rows), places) == expected
     assert fixed_rows(np.array(rows), places, ";") == [e.replace(",", ";") for e in expected]
+
+
+@given(st.lists(_NUMBER, min_size=1, max_size=40), st.integers(0, 15))
+def test_fixed_bytes_print_what_fixed_prints_and_give_its_value(values, places):
+    cells, printed = fixed_bytes(np.array(values), places)
+    texts = [fixed(v, places) for v in values]
+    assert [bytes(row).lstrip(b"\0").decode() for row in cells] == texts
+    assert printed.tolist() == [float(t) for t in texts]
 
 
 def test_fixed_rows_refuse_nan_and_bad_separators():
