@@ -27,8 +27,9 @@ from accugrid.codegen.krl.parse import (
     scan_krl,
     wildcard,
 )
+from accugrid.codegen.krl.splice import literals, splice_bytes
 from accugrid.codegen.krl.tables import MOTION, PositionTable
-from accugrid.codegen.program_text import MIN_PLACES_MM, Splicer, precision
+from accugrid.codegen.program_text import MIN_PLACES_MM, precision
 from accugrid.codegen.rewrite import (
     CORRECTED,
     Options,
@@ -38,12 +39,11 @@ from accugrid.codegen.rewrite import (
     rotations_of,
     strict_check,
 )
-from accugrid.codegen.textsafe import fixed_many
 from accugrid.kinematics.frames import pose_from_xyzabc
 
 __all__ = ["rewrite_krl"]
 
-_BLOCK = 1 << 14  # positions per block of corrected numbers formatted and spliced at once
+_BLOCK = 1 << 16  # positions per block of corrected numbers formatted at once
 
 
 def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = None) -> Result:
@@ -78,7 +78,7 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
         )
         for s, (path, text, table) in enumerate(files):
             if todo[s].size:
-                places = opts.decimals if opts.decimals is not None else _places(text, table)
+                places = opts.decimals if opts.decimals is not None else _places(table)
                 out[path] = _splice(text, table, todo[s], targets[s], rows, starts[s], places)
     for path, text in texts.items():
         if out[path] is None:
@@ -87,18 +87,12 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
     return Result(out, rows)
 
 
-def _places(text: str, table: PositionTable) -> int:
+def _places(table: PositionTable) -> int:
     """The file's precision (``program_text.precision`` of its X, Y, Z literals)."""
-    span = table.span.reshape(-1, 2)
-    span = span[span[:, 0] >= 0]
-    if not len(span):
+    given = table.places[table.places >= 0]
+    if not given.size:
         return precision((), MIN_PLACES_MM)
-    found = 0
-    for a in range(0, len(span), 3 * _BLOCK):  # a block of literals at a time
-        block = span[a : a + 3 * _BLOCK]
-        literals = map(text.__getitem__, map(slice, block[:, 0].tolist(), block[:, 1].tolist()))
-        found = max(found, precision(literals))
-    return max(found, MIN_PLACES_MM)
+    return max(int(given.max()), MIN_PLACES_MM)
 
 
 def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple[Rows, np.ndarray]:
@@ -484,25 +478,36 @@ def _splice(
     places: int,
 ) -> bytearray:
     """The file's bytes with the X, Y, Z of its corrected positions replaced (``places``
-    decimals); their rows (``first_row`` + table row) updated.
+    decimals; a number whose value does not change keeps its literal); their rows
+    (``first_row`` + table row) updated.
 
     ``todo`` (n,): placed table rows, ``targets`` (n, 3) mm base frame, NaN rows where not
     corrected."""
     inside = np.flatnonzero(np.isfinite(targets[:, 0]))
-    out = Splicer(text)
+    starts, ends, pieces, lengths = [], [], [], []
     for a in range(0, len(inside), _BLOCK):
         k = inside[a : a + _BLOCK]
         goal = targets[k]
-        old = t.xyz[todo[k]]
-        news = fixed_many(goal.ravel(), places)
-        written = np.array(list(map(float, news))).reshape(-1, 3)
+        new, length, written = literals(goal.ravel(), places)
+        written = written.reshape(-1, 3)
         residual = np.linalg.norm(written - goal, axis=1)
         at = first_row + todo[k]
         rows.status[at] = CORRECTED
         rows.new[at] = written
         rows.residual_mm[at] = residual
         rows.rounding_mm[at] = residual
-        spans = t.span[todo[k]].reshape(-1, 2)
-        changed = np.flatnonzero(written.ravel() != old.ravel()).tolist()
-        out.add(spans[changed, 0].tolist(), spans[changed, 1].tolist(), [news[c] for c in changed])
-    return out.finish()
+        changed = written.ravel() != t.xyz[todo[k]].ravel()
+        spans = t.span[todo[k]].reshape(-1, 2)[changed]
+        starts.append(spans[:, 0])
+        ends.append(spans[:, 1])
+        pieces.append(new[np.repeat(changed, length)])
+        lengths.append(length[changed])
+    if not starts:
+        return bytearray(text.encode("latin-1"))
+    return splice_bytes(
+        text.encode("latin-1"),
+        np.concatenate(starts),
+        np.concatenate(ends),
+        np.concatenate(pieces),
+        np.concatenate(lengths),
+    )
