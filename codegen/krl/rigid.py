@@ -205,8 +205,11 @@ def distinct(buf: np.ndarray, span: np.ndarray, text: str) -> tuple[list[str], n
 def _digits(buf: np.ndarray, end: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The integer (k,) uint64 written by the ``count`` (k,) (0 to 8) bytes before each offset
     ``end`` (k,), and whether they are all ASCII digits (k,)."""
-    word = (_word(buf, end - 8) & _KEEP[count]) | _FILL[count]
-    ok = ((word & _HIGH) == _ZEROS) & (((word + _SIX) & _HIGH) == _ZEROS) & (end >= 8)
+    word = _word(buf, end - 8)
+    near = np.flatnonzero(end < 8)  # the first bytes of the text: read at 0, moved up
+    word[near] <<= (8 * (8 - end[near])).astype(np.uint64)
+    word = (word & _KEEP[count]) | _FILL[count]
+    ok = ((word & _HIGH) == _ZEROS) & (((word + _SIX) & _HIGH) == _ZEROS)
     v = word - _ZEROS
     v = (v * np.uint64(10) + (v >> np.uint64(8))) & np.uint64(0x00FF00FF00FF00FF)
     v = (v * np.uint64(100) + (v >> np.uint64(16))) & np.uint64(0x0000FFFF0000FFFF)
