@@ -15,8 +15,6 @@ import numpy as np
 
 from accugrid.codegen.cell import load_cell
 from accugrid.codegen.dialects import dialect_of
-from accugrid.codegen.gcode.rewrite import rewrite_gcode
-from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.program_text import add_header, read_program
 from accugrid.codegen.rewrite import (
     CORRECTED,
@@ -128,10 +126,14 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     collecting = gc.isenabled()
     gc.disable()
     try:
-        if dialect_of(inputs[0]) == "krl":
+        if dialect_of(inputs[0]) == "krl":  # each dialect's reader imported when it is needed
+            from accugrid.codegen.krl.rewrite import rewrite_krl
+
             config = read_program(req.config_dat, req.max_bytes) if req.config_dat else None
             result = rewrite_krl(texts, opts, config)
         else:
+            from accugrid.codegen.gcode.rewrite import rewrite_gcode
+
             result = rewrite_gcode(os.fspath(inputs[0]), texts[os.fspath(inputs[0])], opts)
     finally:
         if collecting:

@@ -584,9 +584,8 @@ class _Rows:
     """The rows being read into a scan's tables, the BaseRef index of ``scan.bases`` and the
     base changes to apply to ranges of rows once the file is read."""
 
-    def __init__(self, scan: KrlScan) -> None:
-        self.scan = scan
-        lines = scan.text.count("\n") + 1  # about one row a line at most, in most programs
+    def __init__(self, scan: KrlScan, lines: int) -> None:
+        self.scan = scan  # ``lines``: of the text; about one row a line at most, in most programs
         self.positions = position_columns(lines)
         self.uses = use_columns(lines)
         self.external: dict[int, tuple[str, float]] = {}
@@ -832,7 +831,9 @@ def scan_krl(
     path = None if path is None else os.fspath(path)
     check_text(text, path)
     scan = KrlScan(path, text)
-    rows = scan._rows = _Rows(scan)
+    buf = text_bytes(text) if "\n" in text else None
+    lines = text.count("\n") if buf is None else np.count_nonzero(buf[: len(text)] == 10)
+    rows = scan._rows = _Rows(scan, int(lines) + 1)
     flow = _Flow(initial_base or BaseRef("unknown", 0, reason="no $BASE set"), trust_calls, rows)
     if "\n" not in text:  # one line, or lone CR line endings: line by line
         offset = 0
@@ -840,7 +841,6 @@ def scan_krl(
             _line(line, offset, lineno, scan, flow)
             offset += len(line) + 1
     else:
-        buf = text_bytes(text)
         start, lineno = 0, 1
         while start <= len(text):
             stop = text.find("\n", min(start + _CHUNK, len(text)))

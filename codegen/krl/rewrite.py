@@ -139,11 +139,12 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
 def _use_rows(ctx: _Context, scan: KrlScan) -> Rows:
     """Report rows of the motions to a name that correct nothing (with the reason)."""
     u = scan.use_table
+    n = len(u)
+    check = ~np.fromiter(map(ctx.named.__contains__, u.name), bool, n)
+    if any(u.reason):
+        check |= np.fromiter(map(bool, u.reason), bool, n)
     lines, names, reasons = [], [], []
-    stored = map(ctx.named.__contains__, u.name)
-    for i in [
-        i for i, (hit, why) in enumerate(zip(stored, u.reason, strict=True)) if why or not hit
-    ]:
+    for i in np.flatnonzero(check).tolist():
         reason = u.reason[i] or ctx.unmatched_reason(u.name[i], u.text[i])
         if reason:
             lines.append(int(u.line[i]))
@@ -186,28 +187,39 @@ class _Context:
                 self.frame_uses.setdefault(key, (where, use))
             for key, line in scan.assigned.items():
                 self.assigned.setdefault(key, (where, line))
-        # stored positions: key of each table row ("" for motions), first row of each key
+        # stored positions: key of each table row ("" for motions), whether it is a plain name
         self.keys: list[list[str]] = []
+        self.plain: list[np.ndarray] = []
         self.named: set[str] = set()
         self.twice: set[str] = set()
         for scan in scans:
             t = scan.table
-            keys = [  # normalize_name of a plain name; the name itself when it is upper case
-                k if k != n else n for k, n in zip(map(str.upper, t.name), t.name, strict=True)
-            ]
+            n = len(t)
+            keys = _upper(t.name)
             for i in np.flatnonzero(t.kind == MOTION).tolist():
                 keys[i] = ""
-            for i, plain in enumerate(map(str.isidentifier, t.name)):
-                if not plain and keys[i]:
+            plain = np.fromiter(map(str.isidentifier, t.name), bool, n)
+            for i in np.flatnonzero(~plain).tolist():
+                if keys[i]:
                     keys[i] = normalize_name(t.name[i])
             self.keys.append(keys)
-            first = dict(zip(reversed(keys), range(len(keys) - 1, -1, -1), strict=True))
-            first.pop("", None)
-            self.twice.update(self.named.intersection(first))
-            self.named.update(first)
-            if len(first) < len(keys) - keys.count(""):
-                self.twice.update(k for i, k in enumerate(keys) if k and first[k] != i)
-        self.wild_named = {wildcard(key) for key in self.named if "[" in key}
+            self.plain.append(plain)
+            found = set(keys)
+            found.discard("")
+            self.twice.update(self.named.intersection(found))
+            self.named.update(found)
+            if len(found) < n - keys.count(""):
+                seen: set[str] = set()
+                for k in keys:
+                    if k in seen:
+                        self.twice.add(k)
+                    seen.add(k)
+                self.twice.discard("")
+        self.wild_named = (
+            {wildcard(key) for key in self.named if "[" in key}
+            if "[" in "".join(self.named)
+            else set()
+        )
         self.config_named = {}
         if config is not None:
             for p in config.positions:
@@ -296,10 +308,12 @@ class _Context:
         Returns which rows are plain (n,) bool, the index of each one's frame in ``frames``
         (n,) (-1: none), and the reason of those whose motion is under a base that cannot be
         placed (k -> reason)."""
-        keys = [self.keys[s][i] for i in rows.tolist()]
+        keys = self.keys[s]
+        if len(rows) != len(keys):
+            keys = [keys[i] for i in rows.tolist()]
         n = len(keys)
         blocked = self.twice | self.used_twice | self._blocked
-        plain = np.fromiter(map(str.isidentifier, keys), bool, n)
+        plain = self.plain[s][rows] & np.fromiter(map(bool, keys), bool, n)
         if blocked:
             plain &= ~np.fromiter(map(blocked.__contains__, keys), bool, n)
         if self.fdats:  # XP1 with an FDAT FP1 has a base of its own
@@ -425,6 +439,15 @@ class _Context:
                 "but given no literal value in the given files: it is set at run time"
             )
         return f"{text} is not declared in the given files"
+
+
+def _upper(names: list[str]) -> list[str]:
+    """``normalize_name`` of plain names (a new list): upper case, the same str where a name is
+    upper case already."""
+    joined = "".join(names)
+    if joined.upper() == joined:
+        return list(names)
+    return [k if k != n else n for k, n in zip(map(str.upper, names), names, strict=True)]
 
 
 def _correct(

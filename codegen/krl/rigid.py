@@ -9,7 +9,8 @@ spaces shown and an optional CR before the LF:
 - ``LIN|PTP|SLIN|SPTP name[ C_DIS|C_PTP|C_VEL|C_ORI]``
 
 ``name`` is ASCII (``[A-Za-z_][A-Za-z0-9_]*``, at most 32 characters); every number a plain
-decimal: an optional sign, at most 8 digits before and 8 after an optional point, 1 to 15 in all.
+decimal: an optional sign, at most 8 digits before and 7 after an optional point, 1 to 15 in
+all.
 Such a number is read exactly: its digits as an integer below 2**53 divided by a power of ten,
 both exact in float64, is the correctly rounded quotient, what ``float`` gives. ``tail`` is empty
 or starts with a comma; the caller decides on each distinct tail (``distinct``). A line in these
@@ -57,6 +58,8 @@ _SIX = np.uint64(0x0606060606060606)
 # the last L bytes of a word kept (the digits), the others made "0": by L = 0..8
 _KEEP = np.array([((1 << (8 * n)) - 1) << (8 * (8 - n)) for n in range(9)], np.uint64)
 _FILL = _ZEROS & ~_KEEP
+_POINTS = np.uint64(0x2E2E2E2E2E2E2E2E)  # "........"
+_LOW7 = np.uint64(0x7F7F7F7F7F7F7F7F)
 
 
 def text_bytes(text: str) -> np.ndarray | None:
@@ -155,13 +158,15 @@ def _following(positions: np.ndarray, at: np.ndarray, count: int) -> np.ndarray:
 
 
 def strings(buf: np.ndarray, at: np.ndarray, length: np.ndarray) -> list[str]:
-    """``text[at[i] : at[i] + length[i]]`` of every i (1 <= length <= PAD, no NUL or LF)."""
+    """``text[at[i] : at[i] + length[i]]`` of every i (1 <= length < PAD, no LF)."""
     if not len(at):
         return []
-    width = int(length.max())
+    width = int(length.max()) + 1
     cut = _windows(buf, at, width)
-    cut[np.arange(width) >= length[:, None]] = 0
-    return b"\n".join(cut.view(f"S{width}").ravel().tolist()).decode("latin-1").split("\n")
+    column = np.arange(width)
+    cut[column == length[:, None]] = 10  # each string and a LF, one after another
+    joined = cut[column <= length[:, None]].tobytes().decode("latin-1")
+    return joined.split("\n")[:-1]
 
 
 def _same(buf: np.ndarray, at: np.ndarray, first: int, size: int) -> np.ndarray:
@@ -202,12 +207,9 @@ def distinct(buf: np.ndarray, span: np.ndarray, text: str) -> tuple[list[str], n
     return list(index), which
 
 
-def _digits(buf: np.ndarray, end: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The integer (k,) uint64 written by the ``count`` (k,) (0 to 8) bytes before each offset
-    ``end`` (k,), and whether they are all ASCII digits (k,)."""
-    word = _word(buf, end - 8)
-    near = np.flatnonzero(end < 8)  # the first bytes of the text: read at 0, moved up
-    word[near] <<= (8 * (8 - end[near])).astype(np.uint64)
+def _whole(word: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The integer (k,) uint64 the last ``count`` (k,) (0 to 8) bytes of each word (k,) write,
+    and whether they are all ASCII digits (k,)."""
     word = (word & _KEEP[count]) | _FILL[count]
     ok = ((word & _HIGH) == _ZEROS) & (((word + _SIX) & _HIGH) == _ZEROS)
     v = word - _ZEROS
@@ -217,27 +219,36 @@ def _digits(buf: np.ndarray, end: np.ndarray, count: np.ndarray) -> tuple[np.nda
     return v, ok
 
 
+def _ending(buf: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """The 8 bytes before each offset ``end`` (k,) as words (k,) (the last byte highest)."""
+    word = _word(buf, end - 8)
+    near = np.flatnonzero(end < 8)  # the first bytes of the text: read at 0, moved up
+    word[near] <<= (8 * (8 - end[near])).astype(np.uint64)
+    return word
+
+
 def plain_decimals(
-    buf: np.ndarray, start: np.ndarray, end: np.ndarray, points: np.ndarray
+    buf: np.ndarray, start: np.ndarray, end: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The number literals ``text[start[i]:end[i]]`` (k,) that are plain decimals (see the
     module docstring) read exactly: values (k,) float, decimals (k,) and which literals are
-    plain decimals (k,) bool (the others' values undefined). ``buf``: ``text_bytes(text)``;
-    ``points``: the offsets of every ``.`` from the first start on, sorted."""
+    plain decimals (k,) bool (the others' values undefined). ``buf``: ``text_bytes(text)``.
+
+    The point is found in the literal's last 8 bytes (one word: the byte equal to ``.``), so the
+    decimals are at most 7."""
     first = _at(buf, start)
     signed = (first == 45) | (first == 43)
-    digits_at = start + signed
-    point, second = _following(points, digits_at, 2).T
-    has_point = point < end
-    point = np.where(has_point, point, end)
-    before = point - digits_at
-    after = np.where(has_point, end - point - 1, 0)
-    ok = (end > start) & (before <= 8) & (after <= 8) & (before + after >= 1)
-    ok &= before + after <= 15
-    ok &= ~has_point | (second >= end)  # one point at most
-    before, after = np.clip(before, 0, 8), np.clip(after, 0, 8)
-    whole, whole_ok = _digits(buf, point, before)
-    part, part_ok = _digits(buf, end, after)
+    size = end - start - signed  # digits and point
+    last = _ending(buf, end)
+    x = last ^ _POINTS
+    dots = ~(((x & _LOW7) + _LOW7) | x | _LOW7) & _KEEP[np.clip(size, 0, 8)]  # 0x80 at a "."
+    has_point = dots != 0
+    top = np.frexp(dots.astype(np.float64))[1]  # highest set bit + 1: 8 * (byte + 1)
+    after = np.where(has_point, 8 - top // 8, 0)
+    before = size - after - has_point
+    ok = (before <= 8) & (before + after >= 1) & (before + after <= 15)
+    part, part_ok = _whole(last, after)
+    whole, whole_ok = _whole(_ending(buf, end - after - has_point), np.clip(before, 0, 8))
     ok &= whole_ok & part_ok
     value = (whole * _POW10[after] + part) / _POW10[after]  # exact: integers below 2**53
     return np.where(first == 45, -value, value), after, ok
@@ -298,7 +309,6 @@ def _declarations(buf, lo, hi, lines, name_at, ends, kind):
     part = buf[lo:hi]
     braces = np.flatnonzero(part == 123) + lo
     commas = np.flatnonzero(part == 44) + lo
-    points = np.flatnonzero(part == 46) + lo
     brace = _following(braces, name_at, 1)[:, 0]
     size = brace - 1 - name_at
     good = (brace >= name_at) & (brace < ends) & _is(buf, brace - 1, b"={X ")
@@ -312,7 +322,7 @@ def _declarations(buf, lo, hi, lines, name_at, ends, kind):
     good[abc_rows] &= _is(buf, end[abc_rows, 3], b",B ") & _is(buf, end[abc_rows, 4], b",C ")
     tail_at = np.where(abc, end[:, 5], end[:, 2])
     good &= (_at(buf, ends - 1) == 125) & ((_at(buf, tail_at) == 44) | (tail_at == ends - 1))
-    values, places, plain = plain_decimals(buf, at.ravel(), end.ravel(), points)
+    values, places, plain = plain_decimals(buf, at.ravel(), end.ravel())
     values, plain = values.reshape(k, 6), plain.reshape(k, 6)
     good &= plain[:, :3].all(axis=1) & (plain[:, 3:].all(axis=1) | ~abc)
     xyz = values[:, :3]
