@@ -86,12 +86,13 @@ def test_splice_bytes_is_slicing(text, edits, every_byte):
     ends = np.array([b for _, b, _ in cuts], np.int64)
     new = np.frombuffer("".join(n for _, _, n in cuts).encode(), np.uint8)
     lengths = np.array([len(n) for _, _, n in cuts], np.int64)
-    runs = splice._RUNS
+    runs, edits = splice._RUNS, splice._EDITS
     try:
         splice._RUNS = 0 if every_byte else runs  # the path for many length changes too
-        got = splice.splice_bytes(text.encode("latin-1"), starts, ends, new, lengths)
+        splice._EDITS = 3  # a few edits at a time
+        got = splice.splice_bytes(text, starts, ends, new, lengths)
     finally:
-        splice._RUNS = runs
+        splice._RUNS, splice._EDITS = runs, edits
     assert bytes(got) == expected
 
 

@@ -831,9 +831,7 @@ def scan_krl(
     path = None if path is None else os.fspath(path)
     check_text(text, path)
     scan = KrlScan(path, text)
-    buf = text_bytes(text) if "\n" in text else None
-    lines = text.count("\n") if buf is None else np.count_nonzero(buf[: len(text)] == 10)
-    rows = scan._rows = _Rows(scan, int(lines) + 1)
+    rows = scan._rows = _Rows(scan, text.count("\n") + 1)
     flow = _Flow(initial_base or BaseRef("unknown", 0, reason="no $BASE set"), trust_calls, rows)
     if "\n" not in text:  # one line, or lone CR line endings: line by line
         offset = 0
@@ -845,7 +843,7 @@ def scan_krl(
         while start <= len(text):
             stop = text.find("\n", min(start + _CHUNK, len(text)))
             stop = len(text) if stop < 0 else stop + 1
-            lineno = _chunk(text, buf, start, stop, lineno, scan, flow)
+            lineno = _chunk(text, start, stop, lineno, scan, flow)
             start = stop
             if stop == len(text):
                 break
@@ -1081,39 +1079,35 @@ def _merged(a: _Plain, b: _Plain) -> _Plain:
     )
 
 
-def _chunk(
-    text: str,
-    buf: np.ndarray | None,
-    start: int,
-    stop: int,
-    lineno: int,
-    scan: KrlScan,
-    flow: _Flow,
-) -> int:
+def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _Flow) -> int:
     """Read the lines of ``text[start:stop]`` (whole lines); the number of the next line.
-    ``buf``: ``rigid.text_bytes(text)`` (None: the regex reader alone)."""
-    part = buf[start:stop] if buf is not None else None
-    if part is None:
-        part = np.frombuffer(text[start:stop].encode("latin-1", "replace"), np.uint8)
-    newlines = np.flatnonzero(part == 10)
+
+    Offsets are read in the chunk (``part``) and moved to the text's when the rows are added."""
+    part = text[start:stop]
+    buf = text_bytes(part)  # None (beyond latin-1): the regex reader alone
+    data = buf[: len(part)] if buf is not None else None
+    if data is None:
+        data = np.frombuffer(part.encode("latin-1", "replace"), np.uint8)
+    newlines = np.flatnonzero(data == 10)
     count = len(newlines) + (stop == len(text))
     if not count:
         return lineno
-    starts = np.concatenate(([0], newlines + 1))[:count] + start
-    ends = np.append(newlines, stop - start)[:count] + start
+    starts = np.concatenate(([0], newlines + 1))[:count]
+    ends = np.append(newlines, len(part))[:count]
     rest = np.arange(count)
     if buf is not None:
         bare = ends - ((buf[np.maximum(ends - 1, 0)] == 13) & (ends > starts))
-        rigid = _rigid_plain(buf, text, starts, bare, count)
+        rigid = _rigid_plain(buf, part, starts, bare, count)
         rest = np.flatnonzero(~rigid.plain)
     if len(rest) == count:
-        found = _regex_plain(text[start:stop], rest, starts, count)
+        found = _regex_plain(part, rest, starts, count)
     elif len(rest):
         cut = zip(starts[rest].tolist(), ends[rest].tolist(), strict=True)
-        lines = "\n".join([text[a:b] for a, b in cut])
+        lines = "\n".join([part[a:b] for a, b in cut])
         found = _merged(rigid, _regex_plain(lines, rest, starts[rest], count))
     else:
         found = rigid
+    del buf, data
     plain = found.plain
     aggs, targets = found.line, found.use_line
     moving_rows = np.array(sorted(found.external), dtype=np.int64)
@@ -1136,11 +1130,11 @@ def _chunk(
                 line=lineno + aggs[pa:pb],
                 column=found.column[pa:pb],
                 kind=np.where(decls, DECL, MOTION),
-                agg=found.brace[pa:pb],
+                agg=found.brace[pa:pb] + start,
                 base=base,
                 xyz=found.xyz[pa:pb],
                 abc=found.abc[pa:pb],
-                span=found.span[pa:pb],
+                span=found.span[pa:pb] + start,
                 places=found.places[pa:pb],
                 type=types,
                 name=names,
@@ -1175,7 +1169,7 @@ def _chunk(
     for i in np.flatnonzero(~plain).tolist():
         if i > last:
             flush(last, i)
-        _line(text[starts[i] : ends[i]], int(starts[i]), lineno + i, scan, flow)
+        _line(part[starts[i] : ends[i]], start + int(starts[i]), lineno + i, scan, flow)
         last = i + 1
     if count > last:
         flush(last, count)

@@ -528,7 +528,7 @@ def _splice(
     if not starts:
         return bytearray(text.encode("latin-1"))
     return splice_bytes(
-        text.encode("latin-1"),
+        text,
         np.concatenate(starts),
         np.concatenate(ends),
         np.concatenate(pieces),

@@ -12,7 +12,8 @@ from accugrid.codegen.textsafe import fixed_format, fixed_ready
 
 __all__ = ["literals", "splice_bytes"]
 
-_RUNS = 4096  # at most this many length-changing edits: copy the text between them whole
+_EDITS = 1 << 16  # edits spliced at a time (bounds the index arrays and the text encoded)
+_RUNS = 1024  # at most this many length-changing edits in them: copy the text between whole
 
 
 def literals(values: np.ndarray, places: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -73,8 +74,8 @@ def _digits(size: np.ndarray, negative: np.ndarray, places: int) -> tuple[np.nda
     width = max(len(str(int(size.max()))), places + 1)  # digit columns
     floors = [size] + [np.floor(size / 10.0**k) for k in range(1, width + 1)]
     point = 1 if places else 0
-    columns = np.empty((1 + width + point, n), np.uint8)  # one text a column: sign, digits, .
-    columns[0] = 45
+    chars = np.empty((1 + width + point, n), np.uint8)  # one text a column: sign, digits, point
+    chars[0] = 45
     shown = np.empty((1 + width + point, n), bool)
     shown[0] = negative
     whole = np.ones(n, np.int64)  # digits before the point: at least one
@@ -83,29 +84,59 @@ def _digits(size: np.ndarray, negative: np.ndarray, places: int) -> tuple[np.nda
     row = 1
     for k in range(width - 1, -1, -1):
         if k == places - 1:
-            columns[row] = 46
+            chars[row] = 46
             shown[row] = True
             row += 1
-        columns[row] = floors[k] - 10.0 * floors[k + 1] + 48.0
+        chars[row] = (floors[k] - 10.0 * floors[k + 1] + 48.0).astype(np.uint8)
         shown[row] = k < places + whole
         row += 1
     lengths = shown.sum(axis=0)
-    return columns.T[shown.T], lengths
+    shown = np.ascontiguousarray(shown.T)  # text by text (compacting contiguous rows is fast)
+    return np.ascontiguousarray(chars.T)[shown], lengths
 
 
 def splice_bytes(
-    data: bytes, starts: np.ndarray, ends: np.ndarray, new: np.ndarray, lengths: np.ndarray
+    text: str, starts: np.ndarray, ends: np.ndarray, new: np.ndarray, lengths: np.ndarray
 ) -> bytearray:
-    """``data`` with ``data[starts[k]:ends[k]]`` replaced by the k-th new piece for every k:
-    ``new`` (uint8) holds the pieces one after another, ``lengths`` (m,) their lengths. The
-    spans (m,) are sorted and do not overlap."""
-    if not len(starts):
-        return bytearray(data)
-    source = np.frombuffer(data, np.uint8)
+    """``text`` (latin-1) as bytes with ``text[starts[k]:ends[k]]`` replaced by the k-th new
+    piece for every k: ``new`` (uint8) holds the pieces one after another, ``lengths`` (m,) their
+    lengths. The spans (m,) are sorted and do not overlap. Done _EDITS edits at a time: the text
+    is encoded a part at a time, the new program exists once."""
+    delta = lengths - (ends - starts)
+    out = bytearray(len(text) + int(delta.sum()))
+    target = np.frombuffer(out, np.uint8)
+    offset = np.concatenate(([0], np.cumsum(lengths)))  # of each piece in ``new``
+    lo = shift = 0  # text copied up to lo; the output is ahead by shift there
+    for a in range(0, len(starts), _EDITS):
+        b = min(a + _EDITS, len(starts))
+        hi = int(ends[b - 1])
+        change = int(delta[a:b].sum())
+        _splice_part(
+            np.frombuffer(text[lo:hi].encode("latin-1"), np.uint8),
+            target[lo + shift : hi + shift + change],
+            starts[a:b] - lo,
+            ends[a:b] - lo,
+            new[offset[a] : offset[b]],
+            lengths[a:b],
+        )
+        lo, shift = hi, shift + change
+    for at in range(lo, len(text), _EDITS * 64):  # the rest of the text, as it is
+        part = text[at : at + _EDITS * 64].encode("latin-1")
+        target[at + shift : at + shift + len(part)] = np.frombuffer(part, np.uint8)
+    return out
+
+
+def _splice_part(
+    source: np.ndarray,
+    target: np.ndarray,
+    starts: np.ndarray,
+    ends: np.ndarray,
+    new: np.ndarray,
+    lengths: np.ndarray,
+) -> None:
+    """``target`` = ``source`` with the edits of ``splice_bytes`` made (offsets in source)."""
     delta = lengths - (ends - starts)
     shift = np.concatenate(([0], np.cumsum(delta)))  # of the text after edit k: shift[k + 1]
-    out = bytearray(len(data) + int(shift[-1]))
-    target = np.frombuffer(out, np.uint8)
     first = starts + shift[:-1]  # where each new piece goes
     into = np.repeat(first - np.concatenate(([0], np.cumsum(lengths)[:-1])), lengths)
     into += np.arange(len(new))
@@ -129,4 +160,3 @@ def splice_bytes(
         free[into] = False
         target[free] = source[kept]
     target[into] = new
-    return out
