@@ -75,7 +75,7 @@ def test_plain_decimals_read_exactly_what_float_reads(literals):
     st.lists(st.tuples(st.integers(0, 80), st.integers(0, 4), st.text("xyz-.9", max_size=6))),
     st.booleans(),
 )
-def test_splice_bytes_is_slicing(text, edits, every_byte):
+def test_byte_splicer_is_slicing(text, edits, every_byte):
     cuts, last = [], 0
     for at, size, new in sorted(edits):
         if at >= last and at + size <= len(text):
@@ -90,7 +90,10 @@ def test_splice_bytes_is_slicing(text, edits, every_byte):
     try:
         splice._RUNS = 0 if every_byte else runs  # the path for many length changes too
         splice._EDITS = 3  # a few edits at a time
-        got = splice.splice_bytes(text, starts, ends, new, lengths)
+        out, cut = splice.ByteSplicer(text), len(cuts) // 2  # two blocks of edits
+        out.add(starts[:cut], ends[:cut], new[: lengths[:cut].sum()], lengths[:cut])
+        out.add(starts[cut:], ends[cut:], new[lengths[:cut].sum() :], lengths[cut:])
+        got = out.finish()
     finally:
         splice._RUNS, splice._EDITS = runs, edits
     assert bytes(got) == expected

@@ -27,7 +27,7 @@ from accugrid.codegen.krl.parse import (
     scan_krl,
     wildcard,
 )
-from accugrid.codegen.krl.splice import literals, splice_bytes
+from accugrid.codegen.krl.splice import ByteSplicer, literals
 from accugrid.codegen.krl.tables import MOTION, PositionTable
 from accugrid.codegen.program_text import MIN_PLACES_MM, precision
 from accugrid.codegen.rewrite import (
@@ -507,7 +507,7 @@ def _splice(
     ``todo`` (n,): placed table rows, ``targets`` (n, 3) mm base frame, NaN rows where not
     corrected."""
     inside = np.flatnonzero(np.isfinite(targets[:, 0]))
-    starts, ends, pieces, lengths = [], [], [], []
+    out = ByteSplicer(text)
     for a in range(0, len(inside), _BLOCK):
         k = inside[a : a + _BLOCK]
         goal = targets[k]
@@ -521,16 +521,5 @@ def _splice(
         rows.rounding_mm[at] = residual
         changed = written.ravel() != t.xyz[todo[k]].ravel()
         spans = t.span[todo[k]].reshape(-1, 2)[changed]
-        starts.append(spans[:, 0])
-        ends.append(spans[:, 1])
-        pieces.append(new[np.repeat(changed, length)])
-        lengths.append(length[changed])
-    if not starts:
-        return bytearray(text.encode("latin-1"))
-    return splice_bytes(
-        text,
-        np.concatenate(starts),
-        np.concatenate(ends),
-        np.concatenate(pieces),
-        np.concatenate(lengths),
-    )
+        out.add(spans[:, 0], spans[:, 1], new[np.repeat(changed, length)], length[changed])
+    return out.finish()

@@ -1,6 +1,6 @@
 """Many number literals of a program replaced at once, as bytes (the output of the KRL rewrite,
 ``codegen.krl.rewrite``): the new literals formatted in one pass and read back exactly
-(``literals``), then copied into the program's bytes with array operations (``splice_bytes``),
+(``literals``), then copied into the program's bytes with array operations (``ByteSplicer``),
 never a Python string per literal.
 """
 
@@ -10,7 +10,7 @@ import numpy as np
 
 from accugrid.codegen.textsafe import fixed_format, fixed_ready
 
-__all__ = ["literals", "splice_bytes"]
+__all__ = ["ByteSplicer", "literals"]
 
 _EDITS = 1 << 16  # edits spliced at a time (bounds the index arrays and the text encoded)
 _RUNS = 1024  # at most this many length-changing edits in them: copy the text between whole
@@ -95,35 +95,42 @@ def _digits(size: np.ndarray, negative: np.ndarray, places: int) -> tuple[np.nda
     return np.ascontiguousarray(chars.T)[shown], lengths
 
 
-def splice_bytes(
-    text: str, starts: np.ndarray, ends: np.ndarray, new: np.ndarray, lengths: np.ndarray
-) -> bytearray:
-    """``text`` (latin-1) as bytes with ``text[starts[k]:ends[k]]`` replaced by the k-th new
-    piece for every k: ``new`` (uint8) holds the pieces one after another, ``lengths`` (m,) their
-    lengths. The spans (m,) are sorted and do not overlap. Done _EDITS edits at a time: the text
-    is encoded a part at a time, the new program exists once."""
-    delta = lengths - (ends - starts)
-    out = bytearray(len(text) + int(delta.sum()))
-    target = np.frombuffer(out, np.uint8)
-    offset = np.concatenate(([0], np.cumsum(lengths)))  # of each piece in ``new``
-    lo = shift = 0  # text copied up to lo; the output is ahead by shift there
-    for a in range(0, len(starts), _EDITS):
-        b = min(a + _EDITS, len(starts))
-        hi = int(ends[b - 1])
-        change = int(delta[a:b].sum())
-        _splice_part(
-            np.frombuffer(text[lo:hi].encode("latin-1"), np.uint8),
-            target[lo + shift : hi + shift + change],
-            starts[a:b] - lo,
-            ends[a:b] - lo,
-            new[offset[a] : offset[b]],
-            lengths[a:b],
-        )
-        lo, shift = hi, shift + change
-    for at in range(lo, len(text), _EDITS * 64):  # the rest of the text, as it is
-        part = text[at : at + _EDITS * 64].encode("latin-1")
-        target[at + shift : at + shift + len(part)] = np.frombuffer(part, np.uint8)
-    return out
+class ByteSplicer:
+    """``text`` (latin-1) as bytes with spans replaced, built a block of edits at a time (each
+    block after the previous one, sorted, non-overlapping): the text is encoded a part at a time
+    and the new program exists once, as bytes."""
+
+    def __init__(self, text: str) -> None:
+        self.text = text
+        self.out = bytearray()
+        self.last = 0  # text copied up to here
+
+    def add(
+        self, starts: np.ndarray, ends: np.ndarray, new: np.ndarray, lengths: np.ndarray
+    ) -> None:
+        """Replace ``text[starts[k]:ends[k]]`` by the k-th new piece for every k: ``new``
+        (uint8) holds the pieces one after another, ``lengths`` (m,) their lengths."""
+        for a in range(0, len(starts), _EDITS):
+            b = min(a + _EDITS, len(starts))
+            lo, hi = self.last, int(ends[b - 1])
+            offset = np.concatenate(([0], np.cumsum(lengths[a:b])))
+            source = np.frombuffer(self.text[lo:hi].encode("latin-1"), np.uint8)
+            part = np.empty(
+                len(source) + int(offset[-1] - (ends[a:b] - starts[a:b]).sum()), np.uint8
+            )
+            _splice_part(
+                source, part, starts[a:b] - lo, ends[a:b] - lo, new[: offset[-1]], lengths[a:b]
+            )
+            new = new[offset[-1] :]
+            self.out += memoryview(part)
+            self.last = hi
+
+    def finish(self) -> bytearray:
+        """The new program's bytes, every edit made."""
+        for at in range(self.last, len(self.text), _EDITS * 64):  # the rest, as it is
+            self.out += self.text[at : at + _EDITS * 64].encode("latin-1")
+        self.last = len(self.text)
+        return self.out
 
 
 def _splice_part(
@@ -134,7 +141,7 @@ def _splice_part(
     new: np.ndarray,
     lengths: np.ndarray,
 ) -> None:
-    """``target`` = ``source`` with the edits of ``splice_bytes`` made (offsets in source)."""
+    """``target`` = ``source`` with the edits of ``ByteSplicer.add`` made (offsets in source)."""
     delta = lengths - (ends - starts)
     shift = np.concatenate(([0], np.cumsum(delta)))  # of the text after edit k: shift[k + 1]
     first = starts + shift[:-1]  # where each new piece goes
