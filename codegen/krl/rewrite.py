@@ -12,7 +12,7 @@ $ROBROOT).
 
 from __future__ import annotations
 
-from itertools import repeat
+from itertools import chain, repeat
 from pathlib import Path
 
 import numpy as np
@@ -110,7 +110,7 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
                 "kinematics (--ignore-external-axes if not)"
             )
     frame = np.full(n, -1, np.int64)
-    open_ = np.fromiter(map(bool, reasons), bool, n) == 0
+    open_ = np.fromiter(map(bool, reasons), bool, n) == 0 if any(reasons) else np.ones(n, bool)
     motion = open_ & (t.kind == MOTION)
     for b in np.unique(t.base[motion]).tolist():
         at = np.flatnonzero(motion & (t.base == b))
@@ -229,9 +229,9 @@ class _Context:
         self.use_scan = np.concatenate(where or [np.zeros(0, np.int64)])
         self.use_line = np.concatenate([scan.use_table.line for scan in scans] or [self.use_scan])
         self.use_base = np.concatenate([scan.use_table.base for scan in scans] or [self.use_scan])
-        names = [n for scan in scans for n in scan.use_table.name]
-        reasons = [r for scan in scans for r in scan.use_table.reason]
-        if reasons.count("") < len(reasons) or "" in names:  # not a stored position's name
+        names = list(chain.from_iterable(scan.use_table.name for scan in scans))
+        reasons = list(chain.from_iterable(scan.use_table.reason for scan in scans))
+        if any(reasons) or "" in names:  # not a stored position's name
             names = [n if not r else "" for n, r in zip(names, reasons, strict=True)]
         self.use_of = dict(zip(reversed(names), range(len(names) - 1, -1, -1), strict=True))
         self.use_of.pop("", None)
@@ -313,7 +313,7 @@ class _Context:
             keys = [keys[i] for i in rows.tolist()]
         n = len(keys)
         blocked = self.twice | self.used_twice | self._blocked
-        plain = self.plain[s][rows] & np.fromiter(map(bool, keys), bool, n)
+        plain = self.plain[s][rows]  # (stored rows: never a motion's empty key)
         if blocked:
             plain &= ~np.fromiter(map(blocked.__contains__, keys), bool, n)
         if self.fdats:  # XP1 with an FDAT FP1 has a base of its own
