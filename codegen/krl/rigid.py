@@ -291,6 +291,30 @@ def _name_ok(buf: np.ndarray, at: np.ndarray, size: np.ndarray) -> np.ndarray:
     return ok & (_WORD[rows] | (np.arange(width) >= size[:, None])).all(axis=1)
 
 
+def _literals(
+    buf: np.ndarray, at: np.ndarray, end: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``plain_decimals`` of the literals at ``at[i, j]:end[i, j]`` (k, 6): values, decimals and
+    which are plain, (k, 6) each. An A, B or C literal written as the first row's (the tool
+    orientation, mostly one for the whole file) is read once."""
+    k = len(at)
+    again = np.ones((k, 6), bool)
+    for j in (3, 4, 5):
+        size = end[:, j] - at[:, j]
+        word = _ending(buf, end[:, j]) & _KEEP[np.clip(size, 0, 8)]
+        again[1:, j] = ~((size[1:] == size[0]) & (size[0] <= 8) & (word[1:] == word[0]))
+    read = np.flatnonzero(again.ravel())
+    values, places, plain = np.empty(6 * k), np.empty(6 * k, np.int64), np.empty(6 * k, bool)
+    values[read], places[read], plain[read] = plain_decimals(
+        buf, at.ravel()[read], end.ravel()[read]
+    )
+    values, places, plain = values.reshape(k, 6), places.reshape(k, 6), plain.reshape(k, 6)
+    for j in (3, 4, 5):
+        same = ~again[:, j]
+        values[same, j], places[same, j], plain[same, j] = values[0, j], places[0, j], plain[0, j]
+    return values, places, plain
+
+
 def _declarations(buf, lo, hi, lines, name_at, ends, kind):
     k = len(lines)
     if not k:
@@ -322,8 +346,7 @@ def _declarations(buf, lo, hi, lines, name_at, ends, kind):
     good[abc_rows] &= _is(buf, end[abc_rows, 3], b",B ") & _is(buf, end[abc_rows, 4], b",C ")
     tail_at = np.where(abc, end[:, 5], end[:, 2])
     good &= (_at(buf, ends - 1) == 125) & ((_at(buf, tail_at) == 44) | (tail_at == ends - 1))
-    values, places, plain = plain_decimals(buf, at.ravel(), end.ravel())
-    values, plain = values.reshape(k, 6), plain.reshape(k, 6)
+    values, places, plain = _literals(buf, at, end)
     good &= plain[:, :3].all(axis=1) & (plain[:, 3:].all(axis=1) | ~abc)
     xyz = values[:, :3]
     abc = np.where(abc[:, None], values[:, 3:], np.nan)
@@ -336,7 +359,7 @@ def _declarations(buf, lo, hi, lines, name_at, ends, kind):
         span[keep],
         np.ascontiguousarray(xyz[keep]),
         abc[keep],
-        places.reshape(k, 6)[keep, :3].max(axis=1).astype(np.int16),
+        places[keep, :3].max(axis=1).astype(np.int16),
         types,
         strings(buf, name_at[keep], size[keep]),
         np.stack([tail_at[keep], ends[keep] - 1], axis=1),
