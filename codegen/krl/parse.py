@@ -25,11 +25,14 @@ inline-form FOLD lines are comments). It finds:
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
 Every pattern is linear in its input (see the note above ``NUMBER``).
 
-Reading is whole-text first: one regex pass over a block of lines picks out the plain lines
-(declarations and motions with a flat aggregate or to a name, ``_PLAIN_RE``), whose numbers are
-converted a column at a time; every other line goes through the statement reader. Plain lines
-change no state, so a run of them takes the base in effect. What is read is kept in columns
-(``codegen.krl.tables``); ``KrlScan.positions`` and ``KrlScan.uses`` build objects on demand.
+Reading is whole-text first, a block of lines (``_CHUNK``) at a time, in three lanes: lines in
+the exact layout a controller writes (``codegen.krl.rigid``: array operations on the bytes, no
+regex), then one regex pass over the other lines picks out the plain ones (declarations and
+motions with a flat aggregate or to a name, ``_PLAIN_RE``, numbers converted a column at a
+time), and every other line goes through the statement reader. A rigid line is a plain line
+read the same way (``tests/test_krl_fast_paths.py``), and plain lines change no state, so a run
+of them takes the base in effect. What is read is kept in columns (``codegen.krl.tables``);
+``KrlScan.positions`` and ``KrlScan.uses`` build objects on demand.
 """
 
 from __future__ import annotations
