@@ -4,13 +4,19 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench lint format clean
+.PHONY: demo test bench bytecode lint format clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test,plot,lint]'
+	$(MAKE) --no-print-directory bytecode
 	touch $(STAMP)
+
+# The editable install imports from these folders; with PYTHONDONTWRITEBYTECODE set (as on
+# these machines) every command would compile them again: write their bytecode once.
+bytecode:
+	$(BIN)/python -m compileall -q __init__.py codegen compensation kinematics
 
 demo: $(STAMP)
 	PATH=$(CURDIR)/$(BIN):$$PATH sh examples/demo.sh
@@ -18,7 +24,7 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
 
-bench: $(STAMP)
+bench: $(STAMP) bytecode
 	$(BIN)/python bench/run.py $(ARGS)
 
 lint: $(STAMP)

@@ -25,6 +25,24 @@ from bench.bench_rewrite import gcode, krl_pair  # noqa: E402
 from bench.timing import table  # noqa: E402
 
 CELL = ROOT / "examples" / "cell.yaml"
+# Issue 14's measurements of the code before the speed work (wall s, peak RSS MiB; "-" where
+# the issue has none), printed beside each row's new numbers, and the issue's target per row.
+BEFORE = {
+    "accugrid --help": ("0.75", "-"),
+    "accugrid correct, 1 point": ("0.75", "-"),
+    "accugrid krl, 1e5 holes": ("5.0", "284"),
+    "accugrid krl, 1e6 holes": ("68", "2150"),
+    "accugrid gcode, 1e5 holes": ("7.6", "-"),
+    "accugrid rewrite, 1e5 KRL pair": ("8.1", "802"),
+    "accugrid rewrite, 1e6 KRL pair": ("83", "7475"),
+}
+TARGET = {
+    "accugrid --help": "<= 1.5x",
+    "accugrid correct, 1 point": "<= 1.2x",
+    "1e5": "<= 1.0 s, <= 8x",
+    "accugrid correct, 1e5 points": "<= 0.5 s, <= 8x",
+    "1e6": "linear, <= 977 MiB",
+}
 GRID = ROOT / "examples" / "grid_200mm.csv"
 # the accugrid executable timed: this environment's, or ACCUGRID_BENCH_EXE (e.g. a wrapper that
 # runs a checkout of an earlier commit, for a before/after table measured on the same machine)
@@ -104,7 +122,7 @@ def main(million: bool, only: str = "") -> None:
             rows.append(("accugrid correct, 1 point", seconds, peak, "import numpy, scipy", floor))
 
         sizes = [(100_000, 3)] + ([(1_000_000, 1)] if million else [])
-        for n, repeats in sizes if only in "accugrid krl gcode holes" else ():
+        for n, repeats in sizes if only in "accugrid krl gcode holes correct points" else ():
             label = f"{n:.0e}".replace("+0", "")
             holes = tmp / f"holes{n}.csv"
             holes.write_text(points_csv(n))
@@ -144,12 +162,19 @@ def main(million: bool, only: str = "") -> None:
     print(
         table(
             [
-                (name, f"{s:.2f}", f"{peak:.0f}", floor_name, f"{floor:.2f}", f"{s / floor:.1f}x")
+                (name, *BEFORE.get(name, ("-", "-")), f"{s:.2f}", f"{peak:.0f}", floor_name)
+                + (f"{floor:.2f}", f"{s / floor:.1f}x", target_of(name))
                 for name, s, peak, floor_name, floor in rows
             ],
-            ("command", "median s", "peak RSS MiB", "floor", "floor s", "ratio"),
+            ("command", "issue s", "issue MiB", "median s", "peak RSS MiB", "floor", "floor s")
+            + ("ratio", "target"),
         )
     )
+
+
+def target_of(name: str) -> str:
+    """The issue's target for a row: by its name, else by its size."""
+    return TARGET.get(name) or next(t for size, t in TARGET.items() if size in name)
 
 
 if __name__ == "__main__":

@@ -14,9 +14,13 @@ data durable, then the temporaries are renamed over the targets. The ``main`` fi
 last; the entry point (the last of them, e.g. ``NAME.src`` of a KRL job) is removed before any
 rename, and ``stale`` files (modules of an earlier job with the same name) are removed before
 the main files are renamed: a job killed at any moment (even by SIGKILL) never leaves its entry
-point beside a mix of old and new files. SIGTERM, SIGHUP and SIGINT are held during the
-renames; before them they end the write with the temporaries removed (exit 128 + signal).
-Temporaries a killed process left behind are removed by the next write into the same folder.
+point beside a mix of old and new files. A job of several files into a folder that does not
+exist yet is written into a temporary folder beside it (same naming), synced, and renamed once
+into place: the folder appears whole, with one rename instead of one per file. SIGTERM, SIGHUP
+and SIGINT are held during the renames; before them they end the write with the temporaries
+removed (exit 128 + signal).
+Temporaries (files and folders) a killed process left behind are removed by the next write
+into the same folder.
 """
 
 from __future__ import annotations
@@ -24,7 +28,6 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
-import secrets
 import signal
 import stat
 from collections.abc import Iterable, Iterator, Mapping
@@ -123,8 +126,20 @@ def _remove_dead_temps(folders: Iterable[Path]) -> None:
             parts = entry.name[: -len(_TMP_SUFFIX)].rsplit(".", 2)
             if len(parts) != 3 or not parts[1].isdigit() or _alive(int(parts[1])):
                 continue
-            with contextlib.suppress(OSError):
-                os.unlink(entry.path)
+            _remove(entry.path)
+
+
+def _remove(path: str) -> None:
+    """Delete a temporary file or folder (with its files), if it is still there."""
+    try:
+        if stat.S_ISDIR(os.lstat(path).st_mode):
+            for name in os.listdir(path):
+                os.unlink(os.path.join(path, name))
+            os.rmdir(path)
+        else:
+            os.unlink(path)
+    except OSError:
+        pass
 
 
 def _alive(pid: int) -> bool:
@@ -183,8 +198,9 @@ def _signals_held() -> Iterator[None]:
 
 
 def _temp_name(path: Path) -> str:
+    # os.urandom(4).hex() is secrets.token_hex(4), without importing secrets (hmac, random)
     return os.path.join(
-        path.parent, f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}{_TMP_SUFFIX}"
+        path.parent, f".{path.name}.{os.getpid()}.{os.urandom(4).hex()}{_TMP_SUFFIX}"
     )
 
 
@@ -248,13 +264,20 @@ def write_files(
     for path in list(paths) + stale_paths:
         _check_one(path, input_ids, force)
     folders = {p.parent for p in paths}
-    for folder in sorted(folders):
+    new_folder = next(iter(folders)) if len(folders) == 1 and len(paths) > 1 else None
+    if new_folder is not None and os.path.lexists(new_folder):
+        new_folder = None
+    for folder in sorted({new_folder.parent} if new_folder is not None else folders):
         try:
             folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise InputError(
                 f"cannot create the output folder: {exc.strerror or exc}", os.fspath(folder)
             ) from None
+    if new_folder is not None:
+        _write_new_folder(new_folder, paths, contents)
+        _sync_folders({new_folder, new_folder.parent})
+        return list(paths)
     _remove_dead_temps(folders)
     temps: dict[Path, str] = {}
     try:
@@ -280,6 +303,32 @@ def write_files(
                 os.unlink(tmp)
     _sync_folders(folders)
     return list(paths)
+
+
+def _write_new_folder(folder: Path, paths: dict[Path, PathLike], contents: Mapping) -> None:
+    """Write the files ``paths`` (all in ``folder``, which does not exist) into a temporary
+    folder beside it, sync, and rename that folder to ``folder``; on an error or signal before
+    the rename, nothing of it remains."""
+    _remove_dead_temps([folder.parent])
+    tmp = _temp_name(folder)  # known before it exists: always cleaned
+    try:
+        with _signals_end_write():
+            try:
+                os.mkdir(tmp, 0o777)  # the umask applies
+                for path, key in paths.items():
+                    _write_temp(os.path.join(tmp, path.name), contents[key])
+            except OSError as exc:
+                raise InputError(f"cannot write: {exc.strerror or exc}", folder) from None
+            _sync([os.path.join(tmp, path.name) for path in paths])
+            with _signals_held():
+                try:
+                    os.rename(tmp, folder)  # refused if a non-empty folder appeared meanwhile
+                except OSError as exc:
+                    raise InputError(f"cannot create: {exc.strerror or exc}", folder) from None
+    except _Stop as stop:
+        raise SystemExit(128 + stop.signum) from None
+    finally:
+        _remove(tmp)
 
 
 def _swap(temps: dict[Path, str], main: list[Path], stale: list[Path]) -> None:

@@ -14,11 +14,10 @@ import numpy as np
 
 from accugrid.compensation.plans import SEED_ABC, SEED_CENTRES, SEED_REPEATS
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import pose_from_xyzabc
-from accugrid.kinematics.robot import Robot, load_robot
 
 if TYPE_CHECKING:
     from accugrid.kinematics.identification import Terms
+    from accugrid.kinematics.robot import Robot
 
 __all__ = [
     "add_abc",
@@ -103,6 +102,9 @@ def _axis_orders(text: str) -> Terms:
 
 def robot_with_tool(name: str, tool: Sequence[float] | None) -> Robot:
     """``load_robot(name)`` carrying the ``--tool`` pose (mm, deg) when one was given."""
+    from accugrid.kinematics.frames import pose_from_xyzabc
+    from accugrid.kinematics.robot import load_robot  # only the commands that drive a robot
+
     robot = load_robot(name)
     if tool is not None:
         robot = robot.with_tool(pose_from_xyzabc(np.array(tool, dtype=float)))

@@ -12,6 +12,7 @@ longer than --max-correction.
 
 from __future__ import annotations
 
+from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,7 @@ import numpy as np
 from accugrid.codegen.atomic import JobFiles
 from accugrid.codegen.corrected import (
     CorrectRequest,
+    Flags,
     check_added_columns,
     check_outside,
     corrected_file,
@@ -97,13 +99,13 @@ def correct_by_model(request: CorrectRequest) -> JobFiles:
         abc,
     )
     grid, status = corrector.grid, corrector.status
-    flags: list[list[str]] = [[] for _ in range(len(points))]
+    flags: Flags = defaultdict(list)
     if grid is not None:
         found = corrector.check(points.xyz, abc_to_matrix(abc).reshape(-1, 3, 3))
         check_outside(points, grid, found.outside, settings.outside, flags)
         if found.angle is not None:  # the model holds at any orientation: flag, never refuse
             for i in np.flatnonzero(found.angle > request.orientation_tol_deg):
-                flags[i].append(f"orientation {found.angle[i]:.1f} deg from residual grid")
+                flags[int(i)].append(f"orientation {found.angle[i]:.1f} deg from residual grid")
     result = corrector.correct(points.xyz, abc)
     if not result.ok.all():
         bad = result.failed

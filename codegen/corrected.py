@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import io
 import re
+from collections import defaultdict
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,9 +17,10 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.atomic import JobFiles
+from accugrid.codegen.fixedtext import fixed_rows
 from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
 from accugrid.codegen.points import Points, read_points
-from accugrid.codegen.textsafe import fixed_format, fixed_ready, fixed_texts
+from accugrid.codegen.textsafe import fixed_texts
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.measurements import REPEAT_TOL_MM
 from accugrid.compensation.settings import CorrectionSettings
@@ -32,6 +34,7 @@ __all__ = [
     "BLOCK",
     "DECIMALS",
     "CorrectRequest",
+    "Flags",
     "check_added_columns",
     "check_orientation",
     "check_outside",
@@ -40,6 +43,10 @@ __all__ = [
     "corrected_file",
     "refuse_too_long",
 ]
+
+Flags = dict[int, list[str]]
+"""Why points deserve a look: the reasons of each flagged point, by its row index (others absent;
+a ``defaultdict(list)``, so ``flags[i].append(reason)`` flags point i)."""
 
 ADDED = ["x_cmd", "y_cmd", "z_cmd", "ex", "ey", "ez", "flag"]
 DECIMALS = 4
@@ -71,7 +78,7 @@ def refuse_too_long(points: Points, length: np.ndarray, limit_mm: float) -> int 
 
 
 def check_outside(
-    points: Points, model: GridModel, outside: np.ndarray, rule: str, flags: list[list[str]]
+    points: Points, model: GridModel, outside: np.ndarray, rule: str, flags: Flags
 ) -> None:
     """Points outside the grid box (indices ``outside``): InputError for rule "error", else a
     "clamped" flag each."""
@@ -87,7 +94,7 @@ def check_outside(
             *points.table.where(int(outside[0])),
         )
     for i in outside:
-        flags[i].append("outside grid: clamped")
+        flags[int(i)].append("outside grid: clamped")
 
 
 def check_orientation(
@@ -95,7 +102,7 @@ def check_orientation(
     model: GridModel,
     angle: np.ndarray | None,
     request: CorrectRequest,
-    flags: list[list[str]],
+    flags: Flags,
     what: str,
 ) -> None:
     """Angles (N,) deg from the grid's orientation: InputError beyond the request's
@@ -113,14 +120,14 @@ def check_orientation(
             *points.table.where(i),
         )
     for i in np.flatnonzero(angle > request.orientation_tol_deg):
-        flags[i].append(f"orientation {angle[i]:.1f} deg from {what}")
+        flags[int(i)].append(f"orientation {angle[i]:.1f} deg from {what}")
 
 
 def corrected_csv(
     points: Points,
     command: np.ndarray,
     correction: np.ndarray,
-    flags: list[list[str]],
+    flags: Flags,
     header: list[str],
 ) -> Iterator[str]:
     """The corrected CSV text in pieces (comment header and column names, then blocks of
@@ -129,19 +136,21 @@ def corrected_csv(
     out.write(csv_comment(header))
     csv.writer(out, lineterminator="\n").writerow([*points.table.header, *ADDED])
     yield out.getvalue()
-    flag = ["; ".join(f) for f in flags]
+    flag = [""] * len(points)
+    for i, reasons in flags.items():
+        flag[i] = "; ".join(reasons)
     numbers = np.column_stack([command, correction])
-    plain = points.table.plain_rows(0, 0) is not None and not _NEEDS_QUOTES.search("".join(flag))
-    number = fixed_format(DECIMALS)
-    line = f"%s,{number},{number},{number},{number},{number},{number},%s\n"
+    plain = points.table.plain_rows(0, 0) is not None and not _NEEDS_QUOTES.search(
+        "".join(flag[i] for i in flags)
+    )
     for lo in range(0, len(points), BLOCK):
         hi = min(lo + BLOCK, len(points))
         if plain:  # every row of the block in one %-template pass over the rows as read
-            table = np.empty((hi - lo, 8), dtype=object)
+            table = np.empty((hi - lo, 3), dtype=object)
             table[:, 0] = points.table.plain_rows(lo, hi)
-            table[:, 1:7] = fixed_ready(numbers[lo:hi], DECIMALS)
-            table[:, 7] = flag[lo:hi]
-            yield (line * (hi - lo)) % tuple(table.ravel().tolist())
+            table[:, 1] = fixed_rows(numbers[lo:hi], DECIMALS)
+            table[:, 2] = flag[lo:hi]
+            yield ("%s,%s,%s\n" * (hi - lo)) % tuple(table.ravel().tolist())
             continue
         out = io.StringIO()
         writer = csv.writer(out, lineterminator="\n")
@@ -159,7 +168,7 @@ def corrected_file(
     request: CorrectRequest,
     points: Points,
     command: np.ndarray,
-    flags: list[list[str]],
+    flags: Flags,
     sources: list[str],
     details: list[str],
     lines: list[str],
@@ -180,7 +189,7 @@ def corrected_file(
             f"largest correction {length[worst]:.4f} mm at {points.label(worst)}; "
             f"mean {length.mean():.4f} mm"
         )
-    flagged = [i for i, f in enumerate(flags) if f]
+    flagged = sorted(i for i, reasons in flags.items() if reasons)
     lines.append(f"flagged    {len(flagged)} point(s)")
     lines += [f"  {points.label(i)}: {'; '.join(flags[i])}" for i in flagged[:_LISTED]]
     if len(flagged) > _LISTED:
@@ -231,7 +240,7 @@ def correct_points(request: CorrectRequest) -> JobFiles:
     check_added_columns(points)
     rotations = None if points.abc is None else abc_to_matrix(points.abc).reshape(-1, 3, 3)
     found = model.check(points.xyz, settings, rotations=rotations, axes=points.axis)
-    flags: list[list[str]] = [[] for _ in range(len(points))]
+    flags: Flags = defaultdict(list)
     check_outside(points, model, found.outside, settings.outside, flags)
     check_orientation(points, model, found.angle, request, flags, "grid")
     sources = grid_lines(Path(request.grid).name, model.source_sha256, model.step)

@@ -101,15 +101,17 @@ class Program:
         """Comment text of holes lo..hi-1: id, depth and diameter (templates sanitize it)."""
         hi = len(self) if hi is None else hi
         ids = self.points.ids[lo:hi]
-        depth = fixed_texts(self.depth_mm[lo:hi], 3, distinct=True).tolist()
         dia = self.points.diameter[lo:hi]
         given = ~np.isnan(dia)
-        if not given.any():
-            return [f"{i} depth {d}" for i, d in zip(ids, depth, strict=True)]
-        dia_text = np.full(hi - lo, "", dtype=object)
-        dia_text[given] = fixed_texts(dia[given], 3, distinct=True)
-        dia_text[given] = [" dia " + t for t in dia_text[given]]
-        return [f"{i} depth {d}{t}" for i, d, t in zip(ids, depth, dia_text.tolist(), strict=True)]
+        table = np.empty((hi - lo, 3), dtype=object)
+        table[:, 0] = ids
+        table[:, 1] = fixed_texts(self.depth_mm[lo:hi], 3, distinct=True)
+        table[given, 2] = fixed_texts(dia[given], 3, distinct=True)
+        if given.all() != given.any() or "\n" in "".join(ids):  # some diameters, or a line break
+            return [f"{i} depth {d}" + ("" if t is None else f" dia {t}") for i, d, t in table]
+        line, columns = ("%s depth %s dia %s\n", 3) if given.all() else ("%s depth %s\n", 2)
+        texts = (line * len(table)) % tuple(table[:, :columns].ravel().tolist())
+        return texts.split("\n")[:-1]
 
     def in_frame(
         self, robot_T_frame: np.ndarray, lo: int = 0, hi: int | None = None
@@ -374,10 +376,10 @@ def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarr
     """Robot-frame TCP poses (H, S, 4, 4) of positions (H, S, 3) mm and rotations (H, 3, 3)
     in the BASE frame."""
     base_rot, base_org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
-    out = np.zeros((*positions.shape[:2], 4, 4))
+    out = np.empty((*positions.shape[:2], 4, 4))
     out[:, :, :3, :3] = (base_rot @ rotations)[:, None]
     out[:, :, :3, 3] = positions @ base_rot.T + base_org
-    out[:, :, 3, 3] = 1.0
+    out[:, :, 3] = (0.0, 0.0, 0.0, 1.0)
     return out
 
 

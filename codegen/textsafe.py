@@ -1,7 +1,7 @@
 """The only way numbers and user text reach a robot program (DESIGN.md, "Output safety").
 
 - ``fixed`` (and ``fixed_many``, the same for an array): the one fixed-point formatter; never
-  ``str(float)`` or ``%g`` in a program.
+  ``str(float)`` or ``%g`` in a program. ``fixed_same``: whether two numbers print the same.
 - ``comment_text``: user text made harmless inside a one-line comment of any dialect.
 - ``krl_identifier``: a valid KRL name ([A-Za-z_][A-Za-z0-9_]*, at most 24 characters, not a
   reserved word: ``KRL_RESERVED``).
@@ -25,6 +25,7 @@ __all__ = [
     "fixed_format",
     "fixed_many",
     "fixed_ready",
+    "fixed_same",
     "fixed_texts",
     "krl_identifier",
 ]
@@ -42,7 +43,9 @@ KRL_RESERVED = frozenset(
 """KRL keywords and type names (KUKA System Software 8 manual): never a name we write."""
 COMMENT_MAX = 60
 
-_NOT_SAFE = re.compile(r"[^A-Za-z0-9 _.,:+\-=/#@]")
+_SAFE = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789 _.,:+-=/#@"
+_NOT_SAFE = re.compile(f"[^{re.escape(_SAFE)}]")
+_SAFE_BYTES = (_SAFE + "\n").encode()  # and the line break that comment_texts joins with
 _NOT_IDENT = re.compile(r"[^A-Za-z0-9_]")
 
 
@@ -98,6 +101,19 @@ def fixed_many(values: np.ndarray, places: int) -> list[str]:
     return texts
 
 
+def fixed_same(a: np.ndarray, b: np.ndarray, places: int) -> np.ndarray:
+    """Whether ``fixed(a, places) == fixed(b, places)``, elementwise (shapes broadcast), without
+    formatting where the numbers decide it: equal values print the same, values more than one
+    unit of the last place apart never do (each text is within half a unit of its value); only
+    the pairs closer than that, but not equal, are formatted and compared."""
+    a, b = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
+    same = a == b
+    unsure = ~same & (np.abs(a - b) <= 10.0**-places * (1.0 + 1e-9))  # margin: float rounding
+    if unsure.any():
+        same[unsure] = np.array(fixed_many(a[unsure], places)) == fixed_many(b[unsure], places)
+    return same
+
+
 def fixed_texts(values: np.ndarray, decimals: int, distinct: bool = False) -> np.ndarray:
     """``fixed(v, decimals)`` of every value (via ``fixed_many``), as an object array of the same
     shape. ``distinct``: format each distinct value once (where values repeat, e.g. angles)."""
@@ -126,7 +142,16 @@ def comment_texts(texts: list[str], limit: int = COMMENT_MAX, prefix: str = "") 
     is already safe (the usual ids), only the cut to ``limit`` is left to do."""
     if prefix:
         texts = [prefix + t for t in texts]
-    if _NOT_SAFE.search("".join(texts)) or any(t[:1] == " " or t[-1:] == " " for t in texts):
+    joined = "\n".join(texts)
+    if (
+        not joined.isascii()  # a character to fold
+        or joined.encode("ascii").translate(None, _SAFE_BYTES)  # one to replace
+        or joined.count("\n") >= len(texts)  # a line break inside a text
+        or joined[:1] == " "  # a space to strip
+        or joined[-1:] == " "
+        or "\n " in joined
+        or " \n" in joined
+    ):
         return [comment_text(t, limit) for t in texts]
     return texts if max(map(len, texts), default=0) <= limit else [t[:limit] for t in texts]
 

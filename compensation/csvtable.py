@@ -18,6 +18,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
+from accugrid.kinematics.decimals import read_decimals
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import read_input_text
 
@@ -245,7 +246,7 @@ class _Cells:
     def __init__(self, data: bytes, width: int) -> None:
         self.data = data
         self.width = width
-        buf = np.frombuffer(data, dtype=np.uint8)
+        self.buf = buf = np.frombuffer(data, dtype=np.uint8)
         seps = np.flatnonzero((buf == 44) | (buf == 10))
         self.bounds = np.concatenate([[-1], seps, [len(data)]]).astype(
             np.int32 if len(data) < 2**31 - 1 else np.int64
@@ -253,7 +254,7 @@ class _Cells:
 
     def rows_ok(self) -> bool:
         """Whether every line has ``width`` fields and starts like a data row."""
-        buf = np.frombuffer(self.data, dtype=np.uint8)
+        buf = self.buf
         ends = self.bounds[self.width :: self.width]
         if len(self.bounds) - 1 != len(ends) * self.width or not (buf[ends[:-1]] == 10).all():
             return False
@@ -270,13 +271,11 @@ class _Cells:
         j = np.arange(lo, hi) * self.width + i
         return self.bounds[j] + 1, self.bounds[j + 1]
 
-    def _bytes(self, i: int, lo: int, hi: int) -> np.ndarray:
-        """Column i of rows lo..hi-1 as a fixed-width bytes array (padded with NUL)."""
-        start, end = self._span(i, lo, hi)
-        length = end - start
-        w = max(int(length.max(initial=0)), 1)
-        at = start[:, None] + np.arange(w)
-        cut = np.frombuffer(self.data, dtype=np.uint8)[np.minimum(at, len(self.data) - 1)]
+    def _bytes(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+        """The cells spanning ``data[start:end]`` as a fixed-width bytes array (NUL-padded)."""
+        w = max(int((end - start).max(initial=0)), 1)
+        at = start[:, None] + np.arange(w, dtype=start.dtype)
+        cut = self.buf.take(at, mode="clip")  # beyond the buffer: clipped, then cleared
         cut[at >= end[:, None]] = 0
         return cut.view(f"S{w}").reshape(-1)
 
@@ -284,8 +283,8 @@ class _Cells:
         if not len(self):
             return []
         chunks = range(0, len(self), _CHUNK)
-        cut = np.concatenate([self._bytes(i, lo, min(lo + _CHUNK, len(self))) for lo in chunks])
-        return b"\n".join(cut.tolist()).decode("ascii").split("\n")
+        cuts = [self._bytes(*self._span(i, lo, min(lo + _CHUNK, len(self)))) for lo in chunks]
+        return b"\n".join(np.concatenate(cuts).tolist()).decode("ascii").split("\n")
 
     def rows(self) -> list[list[str]]:
         return [line.split(",") for line in self.data.decode("ascii").split("\n")]
@@ -296,63 +295,28 @@ class _Cells:
         out = np.empty(len(self))
         for lo in range(0, len(self), _CHUNK):
             hi = min(lo + _CHUNK, len(self))
-            cells = self._bytes(i, lo, hi)
-            raw = cells.view(np.uint8).reshape(hi - lo, -1)
-            if not (_NUMBER_BYTE[raw] | (raw == 0)).all():
-                return None  # 1_000, nan, inf: the cell-by-cell path decides
-            empty = (_BLANK_BYTE[raw] | (raw == 0)).all(axis=1)
-            if empty.any():
-                if not allow_empty:
+            start, end = self._span(i, lo, hi)
+            values, _, done = read_decimals(self.buf, start, end)
+            rest = np.flatnonzero(~done)  # exponents, blanks, long mantissas, empty, bad
+            if rest.size:
+                cells = self._bytes(start[rest], end[rest])
+                raw = cells.view(np.uint8).reshape(rest.size, -1)
+                if not (_NUMBER_BYTE[raw] | (raw == 0)).all():
+                    return None  # 1_000, nan, inf: the cell-by-cell path decides
+                empty = (_BLANK_BYTE[raw] | (raw == 0)).all(axis=1)
+                if empty.any():
+                    if not allow_empty:
+                        return None
+                    values[rest[empty]] = np.nan
+                    rest, cells = rest[~empty], cells[~empty]
+                try:
+                    values[rest] = cells.astype(float)
+                except ValueError:
                     return None
-                out[lo:hi][empty] = np.nan
-                cells, raw = cells[~empty], raw[~empty]
-            values, done = _plain_decimals(raw)
-            try:
-                values[~done] = cells[~done].astype(float)  # exponents, blanks, long mantissas
-            except ValueError:
-                return None
-            if np.isinf(values).any():
-                return None
-            out[lo:hi][~empty] = values
+                if np.isinf(values[rest]).any():
+                    return None
+            out[lo:hi] = values
         return out
-
-
-_POW10 = 10.0 ** np.arange(16)  # exact in float64
-
-
-def _plain_decimals(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Values (m,) of the cells ``raw`` (m, w) bytes, NUL-padded, that are plain decimals (an
-    optional sign, at most 15 digits, at most one point, nothing else), and which cells those
-    are (m,) bool; the other values are undefined. Exact: the digits as an integer m < 2**53
-    divided by 10**k (both exact in float64) is the correctly rounded quotient, which is what
-    ``float`` gives for the literal. Cells of one layout (length, point position, sign) are
-    done together, digit column by digit column."""
-    signed = (raw[:, 0] == 45) | (raw[:, 0] == 43)
-    length = (raw != 0).sum(axis=1)
-    point = raw == 46
-    at = np.where(point.any(axis=1), point.argmax(axis=1), length)
-    key = (length.astype(np.int64) << 16) | (at.astype(np.int64) << 1) | signed
-    values = np.empty(len(raw))
-    done = np.zeros(len(raw), dtype=bool)
-    for k in np.unique(key).tolist():
-        size, p, sign = k >> 16, (k >> 1) & 0x7FFF, k & 1
-        digits = [c for c in range(sign, size) if c != p]
-        if not digits or len(digits) > 15:
-            continue
-        rows = np.flatnonzero(key == k)
-        sub = raw[rows]
-        mantissa = np.zeros(len(rows))
-        ok = np.ones(len(rows), dtype=bool)
-        for e, c in enumerate(reversed(digits)):
-            digit = sub[:, c] - np.uint8(48)
-            ok &= digit < 10
-            mantissa += digit * _POW10[e]
-        value = mantissa / _POW10[max(size - 1 - p, 0)]
-        if sign:
-            value = np.where(sub[:, 0] == 45, -value, value)
-        values[rows[ok]] = value[ok]
-        done[rows[ok]] = True
-    return values, done
 
 
 def _parse_simple(text: str, path: str) -> Table | None:

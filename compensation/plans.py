@@ -17,6 +17,7 @@ name, step, label and repeat of each row.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -26,10 +27,11 @@ from accugrid.compensation.cube_points import (
     cube_test_points,
     cube_vertices,
 )
-from accugrid.kinematics.configuration import solve_in_one_status
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
-from accugrid.kinematics.model import RobotModel
+
+if TYPE_CHECKING:
+    from accugrid.kinematics.model import RobotModel
 
 __all__ = [
     "CUBE_LABELS",
@@ -370,6 +372,8 @@ def reach_in_one_status(
     default at the first position): LIN moves keep the configuration of the first PTP, so the
     whole plan must be reachable in it. InputError naming the first position that is not."""
     poses = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
+    from accugrid.kinematics.configuration import solve_in_one_status  # IK: only when asked
+
     sol, status = solve_in_one_status(robot, poses, status)
     if not sol.ok.all():
         bad = np.flatnonzero(~sol.ok)

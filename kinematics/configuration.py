@@ -140,15 +140,16 @@ def _arm_bits(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> tuple[np.ndarra
 
 
 def _arm_status(robot: Robot, th1: np.ndarray, th3: np.ndarray, wrist: np.ndarray) -> np.ndarray:
-    """KUKA Status bits 0 and 1 (N, K) of K arm solutions per pose: DH angles th1, th3 (N, K)
-    rad, wrist points (N, 3) mm. The numbers of ``_status`` on the arm's joint vectors (A1 and
-    A3 wrapped as ``wrap(axis_angles)`` does), without the other four axes."""
+    """KUKA Status bits 0 and 1 (N, 2, 2) of the 4 arm solutions per pose: DH angles th1 (N, 2
+    shoulder), th3 (N, 2 shoulder, 2 elbow) rad, wrist points (N, 3) mm. The numbers of
+    ``_status`` on the arm's joint vectors (A1 and A3 wrapped as ``wrap(axis_angles)`` does),
+    without the other four axes; the shoulder bit once per shoulder solution."""
     dh = robot.dh
     a1 = closed.wrap((th1 - dh.theta_offset[0]) * dh.sign[0])
     a3 = closed.wrap((th3 - dh.theta_offset[2]) * dh.sign[2])
     dh_a1 = dh.sign[0] * a1 + dh.theta_offset[0]
     x_a1 = wrist[:, None, 0] * np.cos(dh_a1) + wrist[:, None, 1] * np.sin(dh_a1)
-    return kuka_status(x_a1 < 0, a3 >= robot.phi_rad, False)
+    return kuka_status((x_a1 < 0)[:, :, None], a3 >= robot.phi_rad, False)
 
 
 def _status(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> np.ndarray:
@@ -171,8 +172,8 @@ def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, 
     settle it (several arm solutions fit, or neither wrist has the wanted bit 2) take all 8
     candidates, so the pick is the same as over all 8 in candidate order."""
     n, dh = len(flange), robot.dh
-    th1, th2, th3, reach = closed.arm_solutions(dh, flange)
-    bits = _arm_status(robot, np.repeat(th1, 2, axis=1), th3.reshape(n, 4), wrist)
+    th1, th2, th3, reach = closed.arm_solutions(dh, flange, wrist)
+    bits = _arm_status(robot, th1, th3, wrist).reshape(n, 4)
     want = 2 if status is None else np.broadcast_to(np.asarray(status, dtype=int), (n,))
     fits = reach.reshape(n, 4) & (bits == np.bitwise_and(want, 3)[..., None])
     one = fits.sum(axis=1) == 1

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from accugrid.kinematics.dh import DHTable, link_matrices
+from accugrid.kinematics.dh import DHTable
 
 __all__ = [
     "all_solutions",
@@ -42,8 +42,20 @@ def wrap(angle: np.ndarray) -> np.ndarray:
 
 def wrist_points(table: DHTable, flange: np.ndarray) -> np.ndarray:
     """Wrist point (intersection of axes 4, 5, 6) (N, 3) mm for flange poses (N, 4, 4)."""
-    rot = flange[:, :3, :3] @ _rot_x(-table.alpha[5])
-    return flange[:, :3, 3] - table.a[5] * rot[:, :, 0] - table.d[5] * rot[:, :, 2]
+    rot = flange[:, :3, :3]
+    c, s = np.cos(-table.alpha[5]), np.sin(-table.alpha[5])
+    z = rot[:, :, 1] * -s + rot[:, :, 2] * c  # column 2 of R6 = rot · Rot(X, -alpha_6)
+    return flange[:, :3, 3] - table.a[5] * rot[:, :, 0] - table.d[5] * z
+
+
+def _r6(table: DHTable, flange: np.ndarray) -> list[list[np.ndarray]]:
+    """R6 = flange rotation · Rot(X, -alpha_6) entry by entry: [k][j] (N,) for row k, column j."""
+    rot = flange[:, :3, :3]
+    c, s = np.cos(-table.alpha[5]), np.sin(-table.alpha[5])
+    return [
+        [rot[:, k, 0], rot[:, k, 1] * c + rot[:, k, 2] * s, rot[:, k, 1] * -s + rot[:, k, 2] * c]
+        for k in range(3)
+    ]
 
 
 def all_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -56,27 +68,30 @@ def all_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, np.nd
     flange = np.asarray(flange, dtype=float).reshape(-1, 4, 4)
     n = len(flange)
     th1, th2, th3, reach = arm_solutions(table, flange)
-    r6 = flange[:, :3, :3] @ _rot_x(-table.alpha[5])
-    c = _shoulder_c(table, th1.reshape(-1), np.repeat(r6, 2, axis=0)).reshape(n, 2, 1, 3, 3)
+    r6 = [[entry[:, None, None] for entry in row] for row in _r6(table, flange)]
+    wrist = wrist_angles(table, th1[:, :, None], r6, th2 + th3)  # (N, 2, 2) each
     arm = np.stack([np.repeat(th1[:, :, None], 2, axis=2), th2, th3], axis=-1).reshape(n * 4, 3)
-    q = _joints(table, arm, *(w.reshape(-1) for w in wrist_angles(table, c, th2 + th3)))
+    q = _joints(table, arm, *(w.reshape(-1) for w in wrist))
     q = q.reshape(n, 8, 6)
     ok = np.repeat(reach.reshape(n, 4), 2, axis=1)
     q[~ok] = np.nan
     return q, ok
 
 
-def arm_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, ...]:
+def arm_solutions(
+    table: DHTable, flange: np.ndarray, pw: np.ndarray | None = None
+) -> tuple[np.ndarray, ...]:
     """DH angles of the 4 arm solutions for flange poses (N, 4, 4) mm: theta_1 (N, 2 shoulder),
     theta_2 and theta_3 (N, 2 shoulder, 2 elbow) rad, and (N, 2, 2) whether the wrist point is
-    reachable (NaN angles where not)."""
-    pw = wrist_points(table, flange)
+    reachable (NaN angles where not). ``pw``: the wrist points (N, 3) mm when already known."""
+    pw = wrist_points(table, flange) if pw is None else pw
     # Shoulder: the arm plane contains the A1 axis, so theta_1 points at the wrist or away.
     toward = np.arctan2(pw[:, 1], pw[:, 0])
     th1 = np.stack([toward, toward + np.pi], axis=1)  # (N, 2)
-    c1, s1 = np.cos(th1), np.sin(th1)
-    # Wrist point in frame 1 (after Rot(X, alpha_1)): planar two-link problem in its x-y plane.
-    radial = c1 * pw[:, None, 0] + s1 * pw[:, None, 1] - table.a[0]
+    # Wrist point in frame 1 (after Rot(X, alpha_1)): planar two-link problem in its x-y plane;
+    # along the arm plane the wrist point lies at +r (toward it) or -r from the A1 axis.
+    r = np.hypot(pw[:, 0], pw[:, 1])
+    radial = np.stack([r, -r], axis=1) - table.a[0]
     height = pw[:, None, 2] - table.d[0]
     sa1 = np.sin(table.alpha[0])
     px, py = radial, sa1 * height
@@ -85,10 +100,12 @@ def arm_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, ...]:
     l3, beta = np.hypot(bx, by), np.arctan2(by, bx)
     cos_g = (px**2 + py**2 - a2**2 - l3**2) / (2 * a2 * l3)  # (N, 2)
     reach = np.abs(cos_g) <= 1 + _TOL
-    gamma_abs = np.arccos(np.clip(cos_g, -1.0, 1.0))
-    gamma = np.stack([gamma_abs, -gamma_abs], axis=2)  # (N, 2 shoulder, 2 elbow)
-    th3 = gamma - beta
-    th2 = np.arctan2(py, px)[:, :, None] - np.arctan2(l3 * np.sin(gamma), a2 + l3 * np.cos(gamma))
+    gamma = np.arccos(np.clip(cos_g, -1.0, 1.0))  # elbow angle >= 0; the other elbow: -gamma
+    th3 = np.stack([gamma - beta, -gamma - beta], axis=2)  # (N, 2 shoulder, 2 elbow)
+    # sin and atan2 are odd, cos even: the -gamma elbow's terms are the +gamma ones negated
+    lean = np.arctan2(l3 * np.sin(gamma), a2 + l3 * np.cos(gamma))
+    toward_wrist = np.arctan2(py, px)
+    th2 = np.stack([toward_wrist - lean, toward_wrist + lean], axis=2)
     return th1, th2, th3, np.repeat(reach[:, :, None], 2, axis=2)
 
 
@@ -98,44 +115,51 @@ def arm_wrists(
     """The 2 wrist solutions of one arm solution per pose: flange poses (M, 4, 4) mm, DH angles
     th1, th2, th3 (M,) rad -> KUKA joint angles (M, 2, 6) rad wrapped into (-pi, pi]; the same
     numbers ``all_solutions`` gives for that arm solution."""
-    r6 = flange[:, :3, :3] @ _rot_x(-table.alpha[5])
-    wrist = wrist_angles(table, _shoulder_c(table, th1, r6), th2 + th3)
+    wrist = wrist_angles(table, th1, _r6(table, flange), th2 + th3)
     return _joints(table, np.stack([th1, th2, th3], axis=-1), *wrist).reshape(-1, 2, 6)
 
 
-def _shoulder_c(table: DHTable, th1: np.ndarray, r6: np.ndarray) -> np.ndarray:
-    """C = (Rz(th1) Rx(al1))^T R6 (M, 3, 3) for th1 (M,) and R6 (M, 3, 3)."""
-    shoulder = link_matrices(th1, 0.0, 0.0, table.alpha[0])[:, :3, :3]
-    return np.swapaxes(shoulder, 1, 2) @ r6
+def wrist_angles(
+    table: DHTable, th1: np.ndarray, r6: list[list[np.ndarray]], phi: np.ndarray
+) -> tuple[np.ndarray, ...]:
+    """DH theta_4, theta_5 (>= 0), theta_6 rad of the first wrist solution, for DH th1 and
+    phi = th2 + th3 rad and R6 entries ``r6[k][j]`` (all broadcast together).
 
-
-def wrist_angles(table: DHTable, c: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, ...]:
-    """DH theta_4, theta_5 (>= 0), theta_6 (shape of ``phi``) rad of the first wrist solution.
-
-    W = (base_R_3)^T R6 = Rz(th4) Rx(al4) Rz(th5) Rx(al5) Rz(th6), where base_R_3 =
-    Rz(th1) Rx(al1) Rz(th2 + th3) Rx(al3) (alpha_2 = 0). With C = (Rz(th1) Rx(al1))^T R6
-    (..., 3, 3), W = B^T C for B = Rz(phi) Rx(al3), phi = th2 + th3, written out entry by entry.
+    W = (base_R_3)^T R6 = Rz(th4) Rx(al4) Rz(th5) Rx(al5) Rz(th6), with base_R_3 =
+    Rz(th1) Rx(al1) Rz(phi) Rx(al3) (alpha_2 = 0), entry W[i, j] = column i of base_R_3 dot
+    column j of R6, written out for the entries the angles need.
     """
-    cphi, sphi = np.cos(phi)[..., None], np.sin(phi)[..., None]
+    c1, s1 = np.cos(th1), np.sin(th1)
+    cphi, sphi = np.cos(phi), np.sin(phi)
+    ca1, sa1 = np.cos(table.alpha[0]), np.sin(table.alpha[0])
     ca3, sa3 = np.cos(table.alpha[2]), np.sin(table.alpha[2])
-    c0, c1, c2 = c[..., 0, :], c[..., 1, :], c[..., 2, :]  # rows of C
-    w0 = cphi * c0 + sphi * c1  # rows of W
-    w1 = ca3 * (cphi * c1 - sphi * c0) + sa3 * c2
-    w2 = sa3 * (sphi * c0 - cphi * c1) + ca3 * c2
+    # columns of S = Rz(th1) Rx(al1) (row 2 of column 0 is 0), then of base_R_3 = S Rz(phi) Rx(al3)
+    s0 = (c1, s1)
+    s1_ = (-s1 * ca1, c1 * ca1, sa1)
+    s2 = (s1 * sa1, -c1 * sa1, ca1)
+    m0 = [cphi * s0[k] + sphi * s1_[k] for k in range(2)] + [sphi * s1_[2]]
+    m1 = [ca3 * (cphi * s1_[k] - sphi * s0[k]) + sa3 * s2[k] for k in range(2)]
+    m1.append(ca3 * cphi * s1_[2] + sa3 * s2[2])
+    m2 = [sa3 * (sphi * s0[k] - cphi * s1_[k]) + ca3 * s2[k] for k in range(2)]
+    m2.append(ca3 * s2[2] - sa3 * cphi * s1_[2])
+
+    def w(m: list[np.ndarray], j: int) -> np.ndarray:  # W[i, j] for column i = m of base_R_3
+        return m[0] * r6[0][j] + m[1] * r6[1][j] + m[2] * r6[2][j]
+
     s4, s5 = np.sign(np.sin(table.alpha[3])), np.sign(np.sin(table.alpha[4]))
-    wx, wy, wz = w0[..., 2], w1[..., 2], w2[..., 2]
-    singular = np.hypot(wx, wy) < 1e-12
-    th5 = np.arctan2(np.hypot(wx, wy), -s4 * s5 * wz)
-    # On the wrist singularity (A5 = 0) only A4 + A6 matters: put it all into A6.
-    th4 = np.where(singular, 0.0, np.arctan2(s5 * wy, s5 * wx))
-    # Row 3 of W is s4 * (sin th5 cos th6, -sin th5 sin th6, -s5 cos th5) with th5 >= 0; on the
-    # singularity W = Rx(alpha4 + alpha5) Rz(th6).
-    turned = np.cos(table.alpha[3] + table.alpha[4])
-    th6 = np.where(
-        singular,
-        np.arctan2(turned * w1[..., 0], w0[..., 0]),
-        np.arctan2(-s4 * w2[..., 1], s4 * w2[..., 0]),
-    )
+    wx, wy, wz = w(m0, 2), w(m1, 2), w(m2, 2)
+    across = np.hypot(wx, wy)
+    singular = across < 1e-12
+    th5 = np.arctan2(across, -s4 * s5 * wz)
+    # Row 3 of W is s4 * (sin th5 cos th6, -sin th5 sin th6, -s5 cos th5) with th5 >= 0.
+    th4 = np.arctan2(s5 * wy, s5 * wx)
+    th6 = np.arctan2(-s4 * w(m2, 1), s4 * w(m2, 0))
+    if singular.any():
+        # On the wrist singularity (A5 = 0) only A4 + A6 matters: put it all into A6; there
+        # W = Rx(alpha4 + alpha5) Rz(th6).
+        turned = np.cos(table.alpha[3] + table.alpha[4])
+        th4 = np.where(singular, 0.0, th4)
+        th6 = np.where(singular, np.arctan2(turned * w(m1, 0), w(m0, 0)), th6)
     return th4, th5, th6
 
 
@@ -151,8 +175,3 @@ def _joints(
     theta[:, :3] = np.repeat(arm, 2, axis=0)
     theta[:, 3], theta[:, 4], theta[:, 5] = th4, th5, th6
     return wrap(table.axis_angles(theta))
-
-
-def _rot_x(angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])

@@ -147,9 +147,8 @@ def test_permissions_follow_the_umask(tmp_path):
     assert stat.S_IMODE(path.stat().st_mode) == 0o644
 
 
-def test_a_failure_while_writing_leaves_targets_and_no_temporaries(tmp_path, monkeypatch):
-    old = {tmp_path / f"J_{k}.src": f"old {k}" for k in range(4)}
-    write_files(old)
+def fail_third_write(monkeypatch) -> list:
+    """Make the third temporary file of a write fail with ENOSPC; returns the attempts."""
     real = atomic._write_temp
     calls = []
 
@@ -160,6 +159,13 @@ def test_a_failure_while_writing_leaves_targets_and_no_temporaries(tmp_path, mon
         real(tmp, payload)
 
     monkeypatch.setattr(atomic, "_write_temp", failing)
+    return calls
+
+
+def test_a_failure_while_writing_leaves_targets_and_no_temporaries(tmp_path, monkeypatch):
+    old = {tmp_path / f"J_{k}.src": f"old {k}" for k in range(4)}
+    write_files(old)
+    fail_third_write(monkeypatch)
     with pytest.raises(InputError, match="No space left"):
         write_files({p: "new" for p in old}, force=True)
     assert {p: p.read_text() for p in old} == old
@@ -274,9 +280,12 @@ atomic.write_files({f"{sys.argv[1]}/F_{k}.src": "new" for k in range(50)}, force
 """
 
 
-def test_sigterm_while_writing_removes_the_temporaries(tmp_path):
+@pytest.mark.parametrize("folder", ["", "new"])  # an existing folder, one made by the write
+def test_sigterm_while_writing_removes_the_temporaries(tmp_path, folder):
     proc = subprocess.Popen(
-        [sys.executable, "-c", SIGTERM_SCRIPT, str(tmp_path)], stdout=subprocess.PIPE, text=True
+        [sys.executable, "-c", SIGTERM_SCRIPT, str(tmp_path / folder)],
+        stdout=subprocess.PIPE,
+        text=True,
     )
     for _ in range(3):
         proc.stdout.readline()
@@ -314,3 +323,47 @@ def test_a_file_may_come_as_text_bytes_a_bytearray_or_pieces(tmp_path):
     assert (tmp_path / "bytes.bin").read_bytes() == b"\x00\xff"
     assert (tmp_path / "array.bin").read_bytes() == b"LIN P1\r\n"
     assert (tmp_path / "pieces.txt").read_bytes() == b"abc\n"
+
+
+# ---------------------------------------------------------------- a job into a new folder
+
+
+def test_a_job_into_a_new_folder_appears_whole_with_the_umask(tmp_path, monkeypatch):
+    """Several files into a folder that does not exist: written in a temporary folder that one
+    rename puts in place (no rename per file), with the umask's permissions like any folder."""
+    folder = tmp_path / "deep" / "krl"
+    files = job("JOB", 3, "new")
+    renames = []
+    for name in ("rename", "replace"):
+        real = getattr(os, name)
+        monkeypatch.setattr(
+            atomic.os, name, lambda a, b, real=real: renames.append(b) or real(a, b)
+        )
+    old = os.umask(0o027)
+    try:
+        written = write_job(folder, files, "JOB")
+    finally:
+        os.umask(old)
+    assert renames == [folder]
+    assert snapshot(folder) == files and len(written) == len(files)
+    assert stat.S_IMODE(folder.stat().st_mode) == 0o750
+    assert stat.S_IMODE((folder / "JOB.src").stat().st_mode) == 0o640
+    assert sorted(p.name for p in (tmp_path / "deep").iterdir()) == ["krl"]
+
+
+def test_a_failure_while_writing_a_new_folder_leaves_nothing(tmp_path, monkeypatch):
+    calls = fail_third_write(monkeypatch)
+    with pytest.raises(InputError, match="No space left"):
+        write_job(tmp_path / "krl", job("JOB", 2, "new"), "JOB")
+    assert len(calls) == 3 and list(tmp_path.iterdir()) == []
+
+
+def test_a_temporary_folder_of_a_dead_process_is_removed(tmp_path):
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True
+    )
+    leftover = tmp_path / f".krl.{int(dead.stdout)}.deadbeef.accugrid.tmp"
+    leftover.mkdir()
+    (leftover / "JOB_001.src").write_text("half")
+    write_job(tmp_path / "krl", job("JOB", 1, "new"), "JOB")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["krl"]

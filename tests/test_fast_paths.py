@@ -1,6 +1,6 @@
 """The fast paths of the readers and writers against the slow, obvious ones they replace: the
 byte-buffer CSV reader against the csv module, the vectorized decimal parser against ``float``,
-``fixed_ready`` against ``fixed``, ``comment_texts`` against ``comment_text``."""
+``fixed_ready`` and ``fixed_rows`` against ``fixed``, ``comment_texts`` against ``comment_text``."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from accugrid.codegen.fixedtext import fixed_rows
 from accugrid.codegen.textsafe import (
     comment_text,
     comment_texts,
@@ -96,6 +97,34 @@ def test_fixed_ready_prints_what_fixed_prints(values, places):
     assert [fixed_format(places) % v for v in ready.tolist()] == [fixed(v, places) for v in values]
 
 
+_NUMBER = st.one_of(
+    st.floats(allow_nan=False, allow_infinity=False, width=64),
+    st.floats(-1e7, 1e7),
+    st.integers(-(10**12), 10**12).map(lambda i: (i + 0.5) / 10**4),  # halves at 4 places
+    st.integers(-(2**40), 2**40).map(lambda i: i / 2**10),  # exact binary ties
+    st.sampled_from([0.0, -0.0, -0.00004, -0.00005, 9.99995, -9.99995, 2.5, 1e15, 5e-324]),
+)
+
+
+@given(
+    st.integers(1, 4).flatmap(
+        lambda k: st.lists(st.lists(_NUMBER, min_size=k, max_size=k), min_size=1, max_size=12)
+    ),
+    st.integers(0, 9),
+)
+def test_fixed_rows_print_what_fixed_prints(rows, places):
+    expected = [",".join(fixed(v, places) for v in row) for row in rows]
+    assert fixed_rows(np.array(rows), places) == expected
+    assert fixed_rows(np.array(rows), places, ";") == [e.replace(",", ";") for e in expected]
+
+
+def test_fixed_rows_refuse_nan_and_bad_separators():
+    with pytest.raises(ValueError, match="non-finite"):
+        fixed_rows(np.array([[1.0, np.inf]]), 3)
+    with pytest.raises(ValueError, match="separator"):
+        fixed_rows(np.array([[1.0]]), 3, "\n")
+
+
 def test_fixed_ready_keeps_the_shape_and_refuses_nan():
     values = np.array([[-0.0004, 1.0], [-0.0, 2.5]])[:, [1, 0]]  # not C-contiguous
     assert [fixed_format(3) % v for v in fixed_ready(values, 3).ravel()] == [
@@ -110,6 +139,18 @@ def test_fixed_ready_keeps_the_shape_and_refuses_nan():
 
 @given(st.lists(st.text(max_size=80), max_size=20), st.sampled_from(["", "hole "]))
 def test_comment_texts_is_comment_text_of_each(texts, prefix):
+    assert comment_texts(texts, prefix=prefix) == [comment_text(prefix + t) for t in texts]
+
+
+@given(
+    st.lists(st.text(alphabet="Az09 _.#\n", max_size=70), max_size=20),
+    st.sampled_from(["", "hole "]),
+    st.sampled_from(["", ";", "é", "\n", " "]),
+)
+def test_comment_texts_near_the_fast_path_is_comment_text_of_each(texts, prefix, odd):
+    """Safe characters and line breaks, and at most one odd character: the bulk check must still
+    catch a line break inside a text, a space at either end, an unsafe or a non-ASCII one."""
+    texts = texts + [f"X{odd}Y"] if odd else texts
     assert comment_texts(texts, prefix=prefix) == [comment_text(prefix + t) for t in texts]
 
 

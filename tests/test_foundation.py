@@ -9,7 +9,13 @@ from hypothesis import strategies as st
 
 from accugrid.codegen.atomic import write_files
 from accugrid.codegen.cli import main
-from accugrid.codegen.textsafe import comment_text, fixed, fixed_many, krl_identifier
+from accugrid.codegen.textsafe import (
+    comment_text,
+    fixed,
+    fixed_many,
+    fixed_same,
+    krl_identifier,
+)
 from accugrid.compensation.csvtable import parse_table
 from accugrid.kinematics import frames
 from accugrid.kinematics.errors import InputError
@@ -146,6 +152,32 @@ def test_cli_version_and_unknown_command(capsys):
 )
 def test_fixed_many_equals_fixed(values, decimals):
     assert fixed_many(np.array(values), decimals) == [fixed(v, decimals) for v in values]
+
+
+@given(
+    st.lists(
+        st.tuples(
+            st.floats(-1e4, 1e4) | st.sampled_from([0.0, -0.0, 0.0625, -0.0625, 2.5, 1.0005]),
+            # the second number: equal, within a unit of the last place (ties among them), or far
+            st.sampled_from([0.0, 1e-12, -1e-12, 5e-4, -5e-4, 1e-3, -1e-3, 0.05, 0.5, 1.0])
+            | st.floats(-2e-3, 2e-3),
+        ),
+        max_size=40,
+    ),
+    st.integers(0, 4),
+)
+def test_fixed_same_is_whether_the_texts_are_equal(pairs, decimals):
+    a = np.array([p[0] for p in pairs])
+    b = a + np.array([p[1] * 10.0 ** (3 - decimals) for p in pairs])
+    expected = [fixed(x, decimals) == fixed(y, decimals) for x, y in zip(a, b, strict=True)]
+    assert fixed_same(a, b, decimals).tolist() == expected
+
+
+def test_fixed_same_broadcasts_and_formats_only_the_close_pairs():
+    a = np.array([[1.0, 1.0004], [-0.0004, 7.0]])
+    b = np.array([1.0, 1.0006])  # one row: compared with both rows of a
+    assert fixed_same(a, b, 3).tolist() == [[True, False], [False, False]]
+    assert fixed_same(np.array([-0.0004, 0.0004]), 0.0, 3).tolist() == [True, True]  # "0.000"
 
 
 def test_fixed_many_refuses_nan():

@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from program_helpers import CELL, POINTS, ROOT, cell, cell_with, grid, panel_points, robot
 
 from accugrid.codegen.cli import main
+from accugrid.codegen.krl import emit
 from accugrid.codegen.krl.emit import MeasureSettings, module_names, render_krl, render_measurement
 from accugrid.codegen.krl.parse import parse_krl
 from accugrid.codegen.program import build_program
@@ -130,6 +131,18 @@ def test_labels_cannot_inject_statements():
             assert len(ln) < 400
             if ln.startswith("; hole"):
                 assert not re.search(r"[;(%&\"{}]", ln[1:])
+
+
+@pytest.mark.parametrize("block", [1, 5, 11])
+def test_files_do_not_depend_on_the_block_of_numbers(monkeypatch, block):
+    """Numbers are made a block of holes at a time and sliced per module: modules that straddle
+    blocks (8 holes per module here), and blocks smaller than a module, give the same files."""
+    c = cell_with(krl={"lines_per_file": 80})
+    program = program_for(ROWS, c=c)
+    whole = dict(render_krl(program, ["h1", "h2"]))
+    monkeypatch.setattr(emit, "BLOCK", block)
+    assert dict(render_krl(program, ["h1", "h2"])) == whole
+    assert dict(render_krl(program, ["h1", "h2"], LOOPING)) == whole  # the records, sliced too
 
 
 def test_split_into_sub_programs():

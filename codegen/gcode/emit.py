@@ -11,7 +11,8 @@ drill axis: ``G1`` to the clearance point at approach speed, ``G1`` to the botto
 ``G4`` dwell, ``G1`` back to the retract point at approach speed. Feeds are mm/min (``G94``).
 
 Numbers go through ``fixed`` only: per-hole numbers are formatted once in Python
-(``program.decimals`` for mm and deg, 1 decimal for F) and reach the template as text; the
+(``program.decimals`` for mm and deg, 1 decimal for F; positions by the %-template of the hole
+lines itself from ``fixed_ready`` values, the same text) and reach the template as text; the
 template formats its scalar settings with the ``fixed`` filter. Jinja renders the frame of the
 file; the built-in template prints ``hole_lines``, every hole's lines from one %-template per kind
 of hole, while the records ``holes`` stay available to a user template that loops over them (built
@@ -29,7 +30,14 @@ import numpy as np
 from accugrid.codegen.cell import Cell
 from accugrid.codegen.program import Program
 from accugrid.codegen.render import environment, render, template_dir, template_uses
-from accugrid.codegen.textsafe import comment_texts, fixed, fixed_texts
+from accugrid.codegen.textsafe import (
+    comment_texts,
+    fixed,
+    fixed_format,
+    fixed_ready,
+    fixed_same,
+    fixed_texts,
+)
 
 __all__ = ["BLOCK", "GcodeHole", "canned", "gcode_text", "render_gcode"]
 
@@ -48,12 +56,13 @@ class GcodeHole(NamedTuple):
     retract_move: bool
 
 
-def canned(text: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """Holes (N,) that allow a canned cycle, from their formatted positions ``text`` (N, 4, 3)
-    (APP, CLR, BOT, RET) and heights ``z`` (N, 4): the same printed X and Y, and Z going down from
-    approach over clearance to the bottom (the drill axis is the program's -Z), with the retract
-    above the clearance."""
-    same_xy = (text[:, :, :2] == text[:, :1, :2]).all(axis=(1, 2))
+def canned(pos: np.ndarray, decimals: int) -> np.ndarray:
+    """Holes (N,) that allow a canned cycle, from their positions ``pos`` (N, 4, 3) mm (APP, CLR,
+    BOT, RET) printed with ``decimals``: the same printed X and Y, and Z going down from approach
+    over clearance to the bottom (the drill axis is the program's -Z), with the retract above the
+    clearance."""
+    same_xy = fixed_same(pos[:, :, :2], pos[:, :1, :2], decimals).all(axis=(1, 2))
+    z = pos[:, :, 2]
     return same_xy & (z[:, 0] > z[:, 1]) & (z[:, 1] > z[:, 2]) & (z[:, 3] > z[:, 1])
 
 
@@ -117,20 +126,14 @@ def _block(program: Program, lo: int, records: bool) -> tuple[list[GcodeHole], s
     hi = min(lo + BLOCK, len(program))
     pos, abc = program.in_frame(cell.gcode.robot_T_program, lo, hi)
     d = cell.gcode.decimals
-    # RET is usually the APP position (same distance): format it once
-    same_ret = (pos[:, 3] == pos[:, 0]).all(axis=1)
-    text = np.empty(pos.shape, dtype=object)
-    text[:, :3] = fixed_texts(pos[:, :3], d)
-    text[:, 3] = text[:, 0]
-    text[~same_ret, 3] = fixed_texts(pos[~same_ret, 3], d)
-    cycle = canned(text, pos[:, :, 2]) if cell.gcode.canned_cycles else np.zeros(len(pos), bool)
-    retract_move = text[:, 3, 2] != text[:, 0, 2]
+    cycle = canned(pos, d) if cell.gcode.canned_cycles else np.zeros(len(pos), bool)
+    retract_move = ~fixed_same(pos[:, 3, 2], pos[:, 0, 2], d)
     labels = program.labels(lo, hi)
     abc_text = fixed_texts(abc, d, distinct=True)
     feed = fixed_texts(program.feed_mm_s[lo:hi] * 60.0, 1, distinct=True)
     holes = []
     if records:
-        coords = [list(map(tuple, hole)) for hole in text.tolist()]
+        coords = [list(map(tuple, hole)) for hole in fixed_texts(pos, d).tolist()]
         holes = list(
             map(
                 GcodeHole,
@@ -142,48 +145,52 @@ def _block(program: Program, lo: int, records: bool) -> tuple[list[GcodeHole], s
                 retract_move.tolist(),
             )
         )
+    ready = fixed_ready(pos, d)  # positions print in the %-template itself (fixed_format)
     table = np.empty((len(pos), 17), dtype=object)
     table[:, 0] = comment_texts(labels, prefix="hole ")
-    table[:, 1:4] = text[:, 0]
+    table[:, 1:4] = ready[:, 0]
     table[:, 4:7] = abc_text
-    table[:, 7:16] = text[:, 1:].reshape(-1, 9)
+    table[:, 7:16] = ready[:, 1:].reshape(-1, 9)
     table[:, 16] = feed
+    kinds = (cycle & retract_move, cycle & ~retract_move, ~cycle)
+    templates = _hole_templates(cell)
+    for mask, (template, columns) in zip(kinds, templates, strict=True):
+        if mask.all():  # every hole of the block alike (the usual): its lines in one pass
+            return holes, (template * len(table)) % tuple(table[:, columns].ravel().tolist())
     lines = np.empty(len(pos), dtype=object)
-    for mask, (template, columns) in zip(
-        (cycle & retract_move, cycle & ~retract_move, ~cycle),
-        _hole_templates(cell),
-        strict=True,
-    ):
-        rows = table[mask][:, columns].tolist()
-        lines[mask] = [template % tuple(row) for row in rows]
+    for mask, (template, columns) in zip(kinds, templates, strict=True):
+        count = int(np.count_nonzero(mask))
+        if count:  # each kind in one pass, then every hole's lines in place (NUL: no text has it)
+            text = ((template + "\0") * count) % tuple(table[mask][:, columns].ravel().tolist())
+            lines[mask] = text.split("\0")[:-1]
     return holes, "".join(lines.tolist())
 
 
 def _hole_templates(cell: Cell) -> list[tuple[str, list[int]]]:
     """%-templates of one hole's lines, each with the columns it prints, for a canned cycle with a
     retract move, a canned cycle without, and explicit moves. Columns: 0 comment, 1-3 APP X Y Z,
-    4-6 A B C, 7-9 CLR, 10-12 BOT, 13-15 RET, 16 feed."""
-    start = ("(%s)\nG0 X%s Y%s Z%s A%s B%s C%s\n", [0, 1, 2, 3, 4, 5, 6])
+    4-6 A B C, 7-9 CLR, 10-12 BOT, 13-15 RET (positions: ``fixed_ready`` values, printed with
+    ``fixed_format``), 16 feed."""
+    mm = fixed_format(cell.gcode.decimals)
+    xyz = f"X{mm} Y{mm} Z{mm}"
+    start = (f"(%s)\nG0 {xyz} A%s B%s C%s\n", [0, 1, 2, 3, 4, 5, 6])
     wait = f"P{fixed(cell.drilling.dwell_s, 3)}"
     if cell.drilling.peck_mm > 0:
         peck = fixed(cell.drilling.peck_mm, cell.gcode.decimals)
-        cycle = f"G98 G83 X%s Y%s Z%s R%s Q{peck} F%s\nG80\n"
+        cycle = f"G98 G83 {xyz} R{mm} Q{peck} F%s\nG80\n"
     elif cell.drilling.dwell_s > 0:
-        cycle = f"G98 G82 X%s Y%s Z%s R%s {wait} F%s\nG80\n"
+        cycle = f"G98 G82 {xyz} R{mm} {wait} F%s\nG80\n"
     else:
-        cycle = "G98 G81 X%s Y%s Z%s R%s F%s\nG80\n"
+        cycle = f"G98 G81 {xyz} R{mm} F%s\nG80\n"
     cycle_columns = [10, 11, 12, 9, 16]
     approach = f" F{fixed(cell.drilling.approach_mm_s * 60.0, 1)}\n"
     explicit = (
-        "G1 X%s Y%s Z%s"
-        + approach
-        + "G1 X%s Y%s Z%s F%s\n"
+        f"G1 {xyz}{approach}G1 {xyz} F%s\n"
         + (f"G4 {wait}\n" if cell.drilling.dwell_s > 0 else "")
-        + "G1 X%s Y%s Z%s"
-        + approach
+        + f"G1 {xyz}{approach}"
     )
     return [
-        (start[0] + cycle + "G0 Z%s\n", start[1] + cycle_columns + [15]),
+        (start[0] + cycle + f"G0 Z{mm}\n", start[1] + cycle_columns + [15]),
         (start[0] + cycle, start[1] + cycle_columns),
         (start[0] + explicit, start[1] + [7, 8, 9, 10, 11, 12, 16, 13, 14, 15]),
     ]

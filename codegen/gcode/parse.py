@@ -28,6 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from accugrid.codegen.gcode.numbers import NUMBER_BYTES, literal_values
 from accugrid.codegen.program_text import check_text, decimals_of, split_lines
 from accugrid.kinematics.errors import InputError
 
@@ -41,6 +42,7 @@ __all__ = [
     "GcodeMoves",
     "Word",
     "gcode_moves",
+    "modal_fill",
     "parse_gcode",
 ]
 
@@ -56,19 +58,45 @@ _PLAIN_RE = re.compile(
     r"(?:[ \t]++R(" + _NUMBER + r"))?+([ \t]++F" + _NUMBER + r")?+[ \t]*+"
     r"(?:\([^()\n;]*+\)[ \t]*+)?+\r?+"
 )
+# The whole-text scanner: one match per line. A plain line is ``[N..] [G98|G99] [G0|G1|G73|G81..
+# G89] X.. Y.. Z.. [R..] [F..] [(comment)]`` where any one or two of X, Y, Z may be left out, with
+# single spaces between the position words. Its G-codes and first letter are one group (so findall
+# gives one str per line, never empty for a plain line); any other line matches the last branch
+# with the group empty. Where the numbers are is found from the bytes: before the comment the
+# letters X, Y, Z, R appear only as words, and each number ends at the first byte that is not in
+# one.
+_ROW_RE = re.compile(
+    r"^(?:[ \t]*+(?:N\d++[ \t]++)?+((?:G9[89][ \t]++)?+(?:G(?:0?+[01]|0|8[1-9]|73)[ \t]++)?+[XYZ])"
+    r"(?:(?<=X)" + _NUMBER + "(?: Y" + _NUMBER + ")?+(?: Z" + _NUMBER + ")?+"
+    r"|(?<=Y)" + _NUMBER + "(?: Z" + _NUMBER + ")?+|(?<=Z)" + _NUMBER + ")"
+    r"(?: R" + _NUMBER + r")?+(?:[ \t]++F" + _NUMBER + r")?+[ \t]*+(?:\([^()\n;]*+\)[ \t]*+)?+"
+    r"\r?+$|[^\n]*+)",
+    re.M,
+)
+_CODES_RE = re.compile(r"(?:G(9[89])[ \t]++)?+(?:G(\d++)[ \t]++)?+[XYZ]")
+_NOT_IN_NUMBER = np.ones(256, bool)
+_NOT_IN_NUMBER[list(NUMBER_BYTES)] = False
+_CHUNK = 1 << 20  # characters per whole-text pass (bounds the per-line tuples held at once)
 _DIGITS_RE = re.compile(r"\d++")
 _OWORD_RE = re.compile(
     r"\s*+[Oo]\s*+(?:\d++|<[^>]*+>)\s*+(sub|endsub|if|elseif|else|endif|while|endwhile|do|call|"
     r"return|repeat|endrepeat|break|continue)\b",
     re.I,
 )
-_OWORD_ANY_RE = re.compile(r"^[^\S\n]*+[Oo]", re.M)  # a line _OWORD_RE may match
+# a line _OWORD_RE may match: the first, or one after a "\n" (searched for as a literal, which
+# is faster than ^ in MULTILINE mode)
+_OWORD_FIRST_RE = re.compile(r"[^\S\n]*+[Oo]")
+_OWORD_NEXT_RE = re.compile(r"\n[^\S\n]*+[Oo]")
 _LETTERS = frozenset(string.ascii_letters)
 _BOMS = ("\xef\xbb\xbf", "\ufeff")  # UTF-8 byte-order mark read as latin-1, or decoded
 AXES = "XYZ"
 ROTARY = "ABCUVW"
 CYCLES = frozenset(("73", "81", "82", "83", "84", "85", "86", "87", "88", "89"))
 MOTION_MODES = frozenset(("0", "1", "2", "3", "80")) | CYCLES
+_BULK_MOTIONS = CYCLES | {"0", "1"}  # the motion modes a run of plain lines is taken in
+_MOTION_NAMES = np.array(["G" + str(g) for g in range(100)], dtype=object)  # code -> name
+_RETRACT_NAMES = np.full(100, "", dtype=object)  # code -> a cycle's retract ("": not a cycle)
+_RETRACT_NAMES[[98, 99]] = "G98", "G99"
 INCH_MM = 25.4
 _ROTARY_SET = frozenset(ROTARY)
 _KEPT = frozenset(AXES + ROTARY + "RL")  # letters whose Word a move (or G10) needs
@@ -227,6 +255,23 @@ class GcodeMoves:
         self.motion.append(names.setdefault(motion, motion))
         self.retract.append(names.setdefault(retract, retract))
         self.reason.append(reason)
+
+    def extend(self, ints, floats, cycle, rotary, motion, retract, reason) -> None:
+        """Store rows in bulk, as ``add`` stores one: ``ints`` (M, 13) and ``floats`` (M, 15) in
+        the row layout, ``cycle`` (M,) bool (no row is incremental), ``rotary`` the dict in
+        effect for all, ``motion``/``retract``/``reason`` M strings each."""
+        if not self.rotaries or rotary is not self.rotaries[-1]:
+            self.rotaries.append(rotary)
+        m = len(motion)
+        self._rotary.frombytes(np.full(m, len(self.rotaries) - 1, np.int64).tobytes())
+        self._ints.frombytes(np.ascontiguousarray(ints, np.int64).tobytes())
+        self._floats.frombytes(np.ascontiguousarray(floats, float).tobytes())
+        self._flags.frombytes((2 * np.asarray(cycle, np.int8)).tobytes())
+        names = self._names
+        same = {k: names.setdefault(k, k) for k in {*motion, *retract}}  # one str per name
+        self.motion += map(same.__getitem__, motion)
+        self.retract += map(same.__getitem__, retract)
+        self.reason += reason
 
     def finish(self) -> GcodeMoves:
         """Expose the columns as arrays (views of the stored rows)."""
@@ -526,6 +571,43 @@ def _fast_line(line: str, offset: int, path: str | None, lineno: int) -> _Line |
     return block
 
 
+def _plain_codes(codes: str) -> int:
+    """A plain line's G-codes and first letter (``"G99 G81 X"``) as ``1000 * retract + motion +
+    2``: retract 98, 99 or 0 (none), motion -1 where the line sets none; a line that is not plain
+    (``""``) gives motion -2."""
+    m = _CODES_RE.fullmatch(codes)
+    if m is None:
+        return 0
+    return 1000 * int(m[1] or 0) + (int(m[2]) if m[2] else -1) + 2
+
+
+class _PlainRun(NamedTuple):
+    """Consecutive plain lines of a chunk: ``lineno`` of the first; per line ``begin`` (its text
+    offset), ``spans`` (M, 4, 2) text offsets (start, end) of the X, Y, Z, R numbers and
+    ``values`` (M, 4) their values in program units (-1 and NaN: not written), ``retract`` 98/99
+    (0: not written) and ``motion`` (-1: not written)."""
+
+    lineno: int
+    begin: np.ndarray
+    spans: np.ndarray
+    values: np.ndarray
+    retract: np.ndarray
+    motion: np.ndarray
+
+    def part(self, first: int) -> _PlainRun:
+        """The run from its line ``first`` on."""
+        if not first:
+            return self
+        return _PlainRun(self.lineno + first, *(column[first:] for column in self[1:]))
+
+
+def modal_fill(values: np.ndarray, written: np.ndarray, before) -> np.ndarray:
+    """A modal value per line: ``values`` (M,) where ``written`` (M,) bool, else the last one
+    written before (``before`` until the first)."""
+    last = np.maximum.accumulate(np.where(written, np.arange(len(values)), -1))
+    return np.where(last >= 0, values[np.maximum(last, 0)], before)
+
+
 class _Reader:
     """Reads one program: ``moves`` in order, the modal state in ``state``."""
 
@@ -533,6 +615,120 @@ class _Reader:
         self.path = path
         self.state = _Modal()
         self.moves = GcodeMoves(path, text)
+        # whole-text checks first: most programs have no O-words or block deletes, and then no
+        # line needs those per-line checks
+        self.owords = bool(_OWORD_FIRST_RE.match(text) or _OWORD_NEXT_RE.search(text))
+        self.slashes = "/" in text
+        self.bom = next((b for b in _BOMS if text.startswith(b)), "")
+
+    def line(self, raw: str, lineno: int, line_offset: int) -> None:
+        """Read one line (without its ending) that starts at text offset ``line_offset``."""
+        bom = self.bom and lineno == 1
+        if bom:  # a byte-order mark is not a word (offsets stay as in the file)
+            raw = " " * len(self.bom) + raw[len(self.bom) :]
+        stripped = raw.strip()
+        if not stripped or stripped.startswith("%"):
+            return
+        if self.owords and _OWORD_RE.match(raw):
+            state = self.state
+            state.flow = state.flow or f"O-word control flow from line {lineno}"
+            return
+        block = _plain_line(raw, line_offset) if not bom else None
+        if block is not None:
+            self.block(block, lineno, line_offset)
+            return
+        line = _blank_comments(raw, self.path, lineno)
+        if self.slashes and line.lstrip().startswith("/"):
+            line = line.replace("/", " ", 1)
+        block = _fast_line(line, line_offset, self.path, lineno)
+        if block is None:
+            block = _scan(line, line_offset, self.path, lineno)
+        self.block(block, lineno, line_offset)
+
+    def plain_run(self, run: _PlainRun) -> tuple[int, int]:
+        """Take the plain lines of ``run`` in bulk, as ``block`` would take them one by one, as
+        far as the modal state allows: (lines taken, lines after them to read one by one).
+
+        Plain lines set only the motion mode and G98/G99, and write some of X, Y, Z (and R) as
+        absolute numbers; taken in bulk under G90 with a motion mode of G0, G1 or a canned cycle
+        (in G17), every other state read by ``block``."""
+        s, m = self.state, len(run.begin)
+        if s.incremental:
+            return 0, m
+        if run.motion[0] < 0 and s.motion not in _BULK_MOTIONS:  # until a line sets a known one
+            written = np.flatnonzero(run.motion >= 0)
+            return 0, int(written[0]) if len(written) else m
+        before = int(s.motion) if s.motion in _BULK_MOTIONS else -1
+        motion = modal_fill(run.motion, run.motion >= 0, before)
+        cycle = motion >= 73
+        if s.plane != "17" and cycle.any():
+            return 0, m
+        retract = modal_fill(run.retract, run.retract > 0, int(s.retract[1:]))
+        v, first = run.values * s.scale, len(self.moves)
+        wrote = run.spans[:, :, 0] >= 0  # (m, 4) X, Y, Z, R written
+        wrote_r = cycle & wrote[:, 3]  # R is a word of cycles only
+        r_mm = modal_fill(v[:, 3], wrote_r, s.cycle_r)  # the R plane in effect
+        cycle_z = modal_fill(v[:, 2], cycle & wrote[:, 2], s.cycle_z)  # the depth in effect
+        end = np.empty((m, 3))
+        for i in range(2):  # X, Y: as written, else where the previous move left them
+            end[:, i] = modal_fill(v[:, i], wrote[:, i], s.pos[i])
+        # Z: a straight move's as written, a cycle's retract (R under G99, the higher of where
+        # the hole started and R under G98), else where the previous move left it
+        end[:, 2] = np.where(cycle, r_mm, v[:, 2])
+        carried = np.flatnonzero((cycle & (retract == 98)) | ~(cycle | wrote[:, 2])).tolist()
+        if carried:  # those that depend on the previous end: one by one
+            z, r, hole = end[:, 2].tolist(), r_mm.tolist(), cycle.tolist()
+            for k in carried:
+                before = z[k - 1] if k else s.pos[2]
+                z[k] = (r[k] if r[k] > before else before) if hole[k] else before
+            end[:, 2] = z
+        start = np.vstack([np.array(s.pos, float)[None], end[:-1]])
+        target = np.column_stack([end[:, :2], np.where(cycle, cycle_z, end[:, 2])])
+        # the move that last set each coordinate, before each move (a cycle always sets Z)
+        index = np.arange(first, first + m)
+        after = [
+            modal_fill(index, wrote[:, i] | (cycle if i == 2 else False), j)
+            for i, j in enumerate(-1 if j is None else j for j in s.setter)
+        ]
+        setters = np.vstack([[-1 if j is None else j for j in s.setter], np.stack(after, 1)[:-1]])
+        starts, ends = run.spans[:, :, 0].copy(), run.spans[:, :, 1].copy()
+        starts[~wrote_r, 3] = ends[~wrote_r, 3] = -1
+        column = np.where(
+            wrote[:, 0], starts[:, 0], np.where(wrote[:, 1], starts[:, 1], starts[:, 2])
+        )
+        ints = np.column_stack(
+            [
+                np.arange(run.lineno, run.lineno + m),
+                column - run.begin + 1,
+                setters,
+                starts,
+                ends,
+            ]
+        )
+        values = np.where(wrote, run.values, np.nan)
+        values[:, 3] = np.where(wrote_r, values[:, 3], np.nan)
+        floats = np.column_stack(
+            [start, target, end, np.full(m, s.scale), np.where(cycle, r_mm, np.nan), values]
+        )
+        reason = [s.frame_reason()] * m
+        if not reason[0]:
+            missing = np.flatnonzero(cycle & (np.isnan(r_mm) | np.isnan(cycle_z))).tolist()
+            for k in missing:
+                reason[k] = "canned cycle without an R plane or Z depth"
+            unknown = np.isnan(target)
+            for k in np.flatnonzero(unknown.any(axis=1)).tolist():
+                if not reason[k]:
+                    axes = ",".join(a for a, u in zip(AXES, unknown[k].tolist(), strict=True) if u)
+                    reason[k] = f"{axes} not known here (no absolute value since the start)"
+        names = _MOTION_NAMES[motion].tolist()
+        retracts = _RETRACT_NAMES[np.where(cycle, retract, 0)].tolist()
+        self.moves.extend(ints, floats, cycle, s.rotary, names, retracts, reason)
+        s.motion, s.unknown_motion = str(motion[-1]), ""
+        s.retract = f"G{retract[-1]}"
+        s.cycle_z, s.cycle_r = float(cycle_z[-1]), float(r_mm[-1])
+        s.pos = end[-1].tolist()
+        s.setter = [None if j < 0 else j for j in (int(a[-1]) for a in after)]
+        return m, 0
 
     def block(self, block: _Line, lineno: int, line_offset: int) -> None:
         state = self.state
@@ -671,37 +867,89 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
 
 
 def gcode_moves(text: str, path: str | os.PathLike[str] | None = None) -> GcodeMoves:
-    """The moves of ``parse_gcode`` as columns."""
+    """The moves of ``parse_gcode`` as columns.
+
+    Text with ``\\n`` line endings is read a chunk of lines at a time by one whole-text match
+    (``_ROW_RE``): runs of plain lines are taken in bulk (``_Reader.plain_run``), every other line
+    by the line reader (``_Reader.line``). Text without ``\\n`` (one line, or lone ``\\r``
+    endings) is read by the line reader alone. Both give what the line reader gives for every
+    line (tests/test_gcode_bulk.py)."""
     path = None if path is None else os.fspath(path)
     check_text(text, path)
     reader = _Reader(path, text)
-    offset = 0
-    # whole-text checks first: most programs have no O-words or block deletes, and then no line
-    # needs those per-line checks
-    owords = _OWORD_ANY_RE.search(text) is not None
-    slashes = "/" in text
-    bom = next((b for b in _BOMS if text.startswith(b)), "")
-    for lineno, raw in enumerate(split_lines(text), start=1):
-        line_offset = offset
-        offset += len(raw) + 1
-        if bom and lineno == 1:  # a byte-order mark is not a word (offsets stay as in the file)
-            raw = " " * len(bom) + raw[len(bom) :]
-        stripped = raw.strip()
-        if not stripped or stripped.startswith("%"):
-            continue
-        if owords and _OWORD_RE.match(raw):
-            state = reader.state
-            state.flow = state.flow or f"O-word control flow from line {lineno}"
-            continue
-        block = _plain_line(raw, line_offset) if not (bom and lineno == 1) else None
-        if block is not None:
-            reader.block(block, lineno, line_offset)
-            continue
-        line = _blank_comments(raw, path, lineno)
-        if slashes and line.lstrip().startswith("/"):
-            line = line.replace("/", " ", 1)
-        block = _fast_line(line, line_offset, path, lineno)
-        if block is None:
-            block = _scan(line, line_offset, path, lineno)
-        reader.block(block, lineno, line_offset)
-    return reader.moves.finish()
+    if "\n" not in text:
+        offset = 0
+        for lineno, raw in enumerate(split_lines(text), start=1):
+            reader.line(raw, lineno, offset)
+            offset += len(raw) + 1
+        return reader.moves.finish()
+    start, lineno = 0, 1
+    while True:
+        stop = text.find("\n", min(start + _CHUNK, len(text)))
+        stop = len(text) if stop < 0 else stop + 1
+        lineno = _chunk(text, start, stop, lineno, reader)
+        if stop == len(text):
+            return reader.moves.finish()
+        start = stop
+
+
+def _chunk(text: str, start: int, stop: int, lineno: int, reader: _Reader) -> int:
+    """Read the whole lines of ``text[start:stop]`` (line ``lineno`` first); the next line's
+    number."""
+    chunk = text[start:stop]
+    matches = _ROW_RE.findall(chunk)
+    count = chunk.count("\n") + (0 if chunk.endswith("\n") and stop < len(text) else 1)
+    del matches[count:]
+    codes = {g: _plain_codes(g) for g in set(matches)}  # each distinct head once
+    packed = np.fromiter(map(codes.__getitem__, matches), np.int64, count)
+    retract, motion = packed // 1000, packed % 1000 - 2
+    del matches
+    buf = np.frombuffer(chunk.encode("latin-1", "replace"), np.uint8)
+    newlines = np.flatnonzero(buf == 10)
+    begins = np.concatenate(([0], newlines + 1))[:count]
+    ends = np.append(newlines, len(chunk))[:count]
+    plain = motion > -2
+    at = np.flatnonzero(plain)
+    if len(at):
+        stops = np.append(np.flatnonzero(_NOT_IN_NUMBER[buf]), len(buf))
+        opens = np.append(np.flatnonzero(buf == ord("(")), len(buf))
+        words_end = np.minimum(opens[np.searchsorted(opens, begins[at])], ends[at])
+        spans = np.full((len(at), 4, 2), -1)
+        for k, letter in enumerate(b"XYZR"):
+            found = np.append(np.flatnonzero(buf == letter), len(buf))
+            where = found[np.searchsorted(found, begins[at])] + 1  # the number after the letter
+            has = where <= words_end
+            spans[has, k, 0] = where[has]
+            spans[has, k, 1] = stops[np.searchsorted(stops, where[has])]
+        values = np.full((len(at), 4), np.nan)
+        written = spans[:, :, 0] >= 0
+        values[written] = literal_values(buf, spans[:, :, 0][written], spans[:, :, 1][written])
+        finite = ~np.isinf(values).any(axis=1)
+        spans[written] += start
+        retract, motion = retract[at], motion[at]
+        plain[at[~finite]] = False  # a literal beyond the float range: the line reader says where
+    begins, ends = (begins + start).tolist(), (ends + start).tolist()
+    runs = np.flatnonzero(np.diff(plain, prepend=False, append=False)).reshape(-1, 2)
+    done = 0
+    for lo, hi in runs.tolist():
+        for k in range(done, lo):
+            reader.line(text[begins[k] : ends[k]], lineno + k, begins[k])
+        a, b = np.searchsorted(at, (lo, hi))
+        run = _PlainRun(
+            lineno + lo,
+            np.array(begins[lo:hi]),
+            spans[a:b],
+            values[a:b],
+            retract[a:b],
+            motion[a:b],
+        )
+        k = lo
+        while k < hi:
+            fast, slow = reader.plain_run(run.part(k - lo))
+            for j in range(k + fast, k + fast + slow):
+                reader.line(text[begins[j] : ends[j]], lineno + j, begins[j])
+            k += fast + slow
+        done = hi
+    for k in range(done, count):
+        reader.line(text[begins[k] : ends[k]], lineno + k, begins[k])
+    return lineno + count

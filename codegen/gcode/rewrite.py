@@ -15,7 +15,8 @@ from array import array
 
 import numpy as np
 
-from accugrid.codegen.gcode.parse import GcodeMoves, gcode_moves
+from accugrid.codegen.gcode.numbers import literal_values
+from accugrid.codegen.gcode.parse import GcodeMoves, gcode_moves, modal_fill
 from accugrid.codegen.program_text import (
     MIN_PLACES_INCH,
     MIN_PLACES_MM,
@@ -33,6 +34,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
     strict_check,
 )
+from accugrid.codegen.textsafe import fixed_format, fixed_ready
 
 __all__ = ["rewrite_gcode"]
 
@@ -51,14 +53,13 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
         moves.target.copy(),
     )
     _protect_arc_starts(moves, rows)
-    todo = [i for i, r in enumerate(rows.reason) if not r]
+    at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))  # no reason
     desired = moves.target.copy()
-    if todo:
-        prog = desired[todo]
+    if len(at):
+        prog = desired[at]
         t = opts.robot_T_program
         robot = prog @ t[:3, :3].T + t[:3, 3]
         abc = np.array([[r.get(k, math.nan) for k in "ABC"] for r in moves.rotaries])
-        at = np.array(todo)
         # each distinct A/B/C once (a program has few), then one row per point
         rotations = rotations_of(t[:3, :3], abc.reshape(-1, 3))[moves.rotary_index[at]]
         corrected = correct_points(robot, rows, at, opts, rotations)
@@ -75,6 +76,8 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
 def _protect_arc_starts(moves: GcodeMoves, rows: Rows) -> None:
     """An arc keeps its start point: the moves that set it are not corrected either."""
     reasons = rows.reason
+    if "G2" not in moves.motion and "G3" not in moves.motion:
+        return
     arcs = [i for i, m in enumerate(moves.motion) if m == "G2" or m == "G3"]
     for i in arcs:
         line = int(moves.line[i])
@@ -107,6 +110,19 @@ def _corrected_r_planes(moves: GcodeMoves, rows: Rows, opts: Options) -> np.ndar
     return out
 
 
+class _Commanded:
+    """The walk's state between moves: ``cmd`` where the rewritten program leaves the tool (mm,
+    NaN: unknown), the sticky cycle depth ``cycle_z`` and R plane ``r_cmd`` as written (mm), and
+    where each corrected move reaches (``reached_rows``, 3 per move, of the moves ``reached_at``).
+    """
+
+    def __init__(self) -> None:
+        self.cmd = [math.nan] * 3
+        self.cycle_z = self.r_cmd = math.nan
+        self.reached_rows = array("d")
+        self.reached_at = array("q")
+
+
 def _gcode_edits(
     text: str,
     moves: GcodeMoves,
@@ -118,105 +134,19 @@ def _gcode_edits(
     """Walk the program with the commanded (rewritten) position; the new program's bytes.
 
     ``desired`` (N, 3) mm: where each move should land (program frame); ``r_planes`` (N,) mm:
-    corrected R planes (NaN: keep). Absolute words are formatted a block of moves at a time;
-    only increments (which depend on what was written before) are formatted on the way."""
+    corrected R planes (NaN: keep). Stretches of absolute moves (none a G28/G30/G53) are done
+    in bulk (``_bulk_block``), the rest move by move (``_walk_block``), where increments (which
+    depend on what was written before) are formatted on the way."""
     out = Splicer(text)
-    scales = moves.scale.reshape(-1, 1)
     places = _places(moves, opts)
-    corrected = (rows.status == CORRECTED).reshape(-1, 1)
-    reached_rows = array("d")  # where each corrected move reaches, 3 per move
-    reached_at = array("q")  # the move of each
-    cmd = [math.nan] * 3
-    cycle_z = r_cmd = math.nan
+    corrected = rows.status == CORRECTED
+    walk = _Commanded()
     for first in range(0, len(moves), _BLOCK):
-        block = slice(first, first + _BLOCK)
-        absolute = formatted(
-            np.where(corrected[block], desired[block] / scales[block], np.nan).ravel(),
-            np.repeat(places[block], 3),
-        )
-        r_texts = formatted(r_planes[block] / scales[block, 0], places[block])
-        edits: list[tuple[int, int, str]] = []
-        columns = zip(
-            moves.motion[block],
-            corrected[block, 0].tolist(),
-            moves.incremental[block].tolist(),
-            moves.is_cycle[block].tolist(),
-            moves.scale[block].tolist(),
-            moves.word_start[block].tolist(),
-            moves.word_end[block].tolist(),
-            moves.word_value[block].tolist(),
-            desired[block].tolist(),
-            moves.r_mm[block].tolist(),
-            moves.retract[block],
-            strict=True,
-        )
-        for b, (
-            motion,
-            changed,
-            inc,
-            is_cycle,
-            scale,
-            starts,
-            ends,
-            values,
-            goals,
-            r_mm,
-            retract,
-        ) in enumerate(columns):
-            if motion in ("G28", "G30", "G53"):
-                cmd = [math.nan] * 3
-                continue
-            incremental = inc and not is_cycle
-            end = list(cmd)
-            for i in range(3):
-                start = starts[i]
-                if start < 0:
-                    continue
-                old_text = new_text = text[start : ends[i]]
-                if incremental:
-                    goal = goals[i]
-                    if not (math.isnan(cmd[i]) or math.isnan(goal)):
-                        value = (goal - cmd[i]) / scale
-                        new_text = number_text(old_text, values[i], value, int(places[first + b]))
-                elif changed and absolute[3 * b + i] is not None:
-                    new_text = absolute[3 * b + i]
-                    if float(new_text) == values[i]:
-                        new_text = old_text
-                if new_text != old_text:
-                    edits.append((start, ends[i], new_text))
-                written = float(new_text) * scale
-                if is_cycle and i == 2:
-                    cycle_z = written
-                elif incremental:
-                    end[i] = cmd[i] + written
-                else:
-                    end[i] = written
-            if is_cycle and starts[3] >= 0:
-                new_text = text[starts[3] : ends[3]]
-                if r_texts[b] is not None and float(r_texts[b]) != values[3]:
-                    new_text = r_texts[b]
-                    edits.append((starts[3], ends[3], new_text))
-                r_cmd = float(new_text) * scale
-            if is_cycle:
-                reached = [end[0], end[1], cycle_z]
-                if inc or math.isnan(r_mm):
-                    end = [end[0], end[1], math.nan]
-                elif retract == "G99":
-                    end = [end[0], end[1], r_cmd]
-                else:
-                    end = [end[0], end[1], max(cmd[2], r_cmd)]
-            else:
-                reached = end
-            if changed:
-                reached_rows.extend(reached)
-                reached_at.append(first + b)
-            cmd = end
-        edits.sort()
-        if edits:
-            out.add(*map(list, zip(*edits, strict=True)))
-    if reached_at:
-        at = np.frombuffer(reached_at, dtype=np.int64)
-        reached = np.frombuffer(reached_rows, dtype=float).reshape(-1, 3)
+        for part, step in _stretches(moves, slice(first, first + _BLOCK)):
+            out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
+    if walk.reached_at:
+        at = np.frombuffer(walk.reached_at, dtype=np.int64)
+        reached = np.frombuffer(walk.reached_rows, dtype=float).reshape(-1, 3)
         off = np.abs(reached - desired[at])
         residual = np.linalg.norm(off, axis=1)
         wrote = moves.word_start[at, :3] >= 0
@@ -227,25 +157,207 @@ def _gcode_edits(
     return out.finish()
 
 
+_RESETS = frozenset(("G28", "G30", "G53"))  # moves after which the position is not known
+_MIN_BULK = 256  # moves: a shorter stretch of absolute moves is walked with its neighbours
+
+
+def _stretches(moves: GcodeMoves, block: slice):
+    """(slice, step) of each stretch of the moves ``block``, in order: ``_bulk_block`` for runs
+    of at least ``_MIN_BULK`` absolute moves that do not reset the position, ``_walk_block`` for
+    the moves between them."""
+    n = len(moves.motion[block])
+    walked = moves.incremental[block] | np.fromiter(
+        map(_RESETS.__contains__, moves.motion[block]), bool, n
+    )
+    runs = np.flatnonzero(np.diff(walked, prepend=True, append=True)).reshape(-1, 2)
+    done = 0
+    for lo, hi in runs[runs[:, 1] - runs[:, 0] >= min(_MIN_BULK, n)].tolist():
+        if lo > done:
+            yield slice(block.start + done, block.start + lo), _walk_block
+        yield slice(block.start + lo, block.start + hi), _bulk_block
+        done = hi
+    if done < n:
+        yield slice(block.start + done, block.start + n), _walk_block
+
+
+def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
+    """The edits (starts, ends, new texts; sorted lists) of the moves ``block`` (a slice), move
+    by move, carrying ``walk`` (a ``_Commanded``) on."""
+    first = block.start
+    scales = moves.scale.reshape(-1, 1)
+    absolute = formatted(
+        np.where(corrected[block, None], desired[block] / scales[block], np.nan).ravel(),
+        np.repeat(places[block], 3),
+    )
+    r_texts = formatted(r_planes[block] / scales[block, 0], places[block])
+    edits: list[tuple[int, int, str]] = []
+    columns = zip(
+        moves.motion[block],
+        corrected[block].tolist(),
+        moves.incremental[block].tolist(),
+        moves.is_cycle[block].tolist(),
+        moves.scale[block].tolist(),
+        moves.word_start[block].tolist(),
+        moves.word_end[block].tolist(),
+        moves.word_value[block].tolist(),
+        desired[block].tolist(),
+        moves.r_mm[block].tolist(),
+        moves.retract[block],
+        strict=True,
+    )
+    cmd, cycle_z, r_cmd = walk.cmd, walk.cycle_z, walk.r_cmd
+    for b, (
+        motion,
+        changed,
+        inc,
+        is_cycle,
+        scale,
+        starts,
+        ends,
+        values,
+        goals,
+        r_mm,
+        retract,
+    ) in enumerate(columns):
+        if motion in _RESETS:
+            cmd = [math.nan] * 3
+            continue
+        incremental = inc and not is_cycle
+        end = list(cmd)
+        for i in range(3):
+            start = starts[i]
+            if start < 0:
+                continue
+            old_text = new_text = text[start : ends[i]]
+            if incremental:
+                goal = goals[i]
+                if not (math.isnan(cmd[i]) or math.isnan(goal)):
+                    value = (goal - cmd[i]) / scale
+                    new_text = number_text(old_text, values[i], value, int(places[first + b]))
+            elif changed and absolute[3 * b + i] is not None:
+                new_text = absolute[3 * b + i]
+                if float(new_text) == values[i]:
+                    new_text = old_text
+            if new_text != old_text:
+                edits.append((start, ends[i], new_text))
+            written = float(new_text) * scale
+            if is_cycle and i == 2:
+                cycle_z = written
+            elif incremental:
+                end[i] = cmd[i] + written
+            else:
+                end[i] = written
+        if is_cycle and starts[3] >= 0:
+            new_text = text[starts[3] : ends[3]]
+            if r_texts[b] is not None and float(r_texts[b]) != values[3]:
+                new_text = r_texts[b]
+                edits.append((starts[3], ends[3], new_text))
+            r_cmd = float(new_text) * scale
+        if is_cycle:
+            reached = [end[0], end[1], cycle_z]
+            if inc or math.isnan(r_mm):
+                end = [end[0], end[1], math.nan]
+            elif retract == "G99":
+                end = [end[0], end[1], r_cmd]
+            else:
+                end = [end[0], end[1], max(cmd[2], r_cmd)]
+        else:
+            reached = end
+        if changed:
+            walk.reached_rows.extend(reached)
+            walk.reached_at.append(first + b)
+        cmd = end
+    walk.cmd, walk.cycle_z, walk.r_cmd = cmd, cycle_z, r_cmd
+    edits.sort()
+    return tuple(map(list, zip(*edits, strict=True))) if edits else ([], [], [])
+
+
+def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
+    """``_walk_block`` in bulk for a block whose moves are all absolute (none resets the
+    position): every number is formatted and compared at once, X and Y carried forward where a
+    move does not write them, and only the Z ends that depend on the previous one (a G98 retract,
+    the higher of the previous end and R; a straight move without Z) are carried one by one."""
+    n = len(moves.motion[block])
+    scale = moves.scale[block]
+    values = moves.word_value[block]
+    cycle = moves.is_cycle[block]
+    wrote = moves.word_start[block] >= 0  # (n, 4) X, Y, Z, R written
+    wrote_r = cycle & wrote[:, 3]
+    goal = np.full((n, 4), np.nan)  # the corrected numbers in program units (NaN: keep)
+    fix = corrected[block, None] & wrote[:, :3]
+    goal[:, :3] = np.where(fix, desired[block] / scale[:, None], np.nan)
+    goal[:, 3] = np.where(wrote_r, r_planes[block] / scale, np.nan)
+    goal = goal.ravel()
+    new = np.full(4 * n, np.nan)  # the value each new text reads as
+    texts = np.empty(4 * n, dtype=object)
+    place = np.repeat(places[block], 4)
+    for p in np.unique(place).tolist():
+        idx = np.flatnonzero(np.isfinite(goal) & (place == p))
+        if not len(idx):
+            continue
+        # the texts fixed_many gives, made as one string: their values are read from its bytes
+        lines = ((fixed_format(p) + "\n") * len(idx)) % tuple(fixed_ready(goal[idx], p).tolist())
+        buf = np.frombuffer(lines.encode("latin-1"), np.uint8)
+        ends = np.flatnonzero(buf == 10)
+        new[idx] = literal_values(buf, np.append(0, ends[:-1] + 1), ends)
+        texts[idx] = np.array(lines.split("\n")[:-1], dtype=object)
+    edit = np.isfinite(new) & (new != values.ravel())
+    written = np.where(edit, new, values.ravel()).reshape(n, 4) * scale[:, None]  # NaN: none
+    r_cmd = modal_fill(written[:, 3], wrote_r, walk.r_cmd)
+    cycle_z = modal_fill(written[:, 2], cycle & wrote[:, 2], walk.cycle_z)
+    end = np.empty((n, 3))
+    for i in range(2):  # X, Y: as written, else where the previous move left them
+        end[:, i] = modal_fill(written[:, i], wrote[:, i], walk.cmd[i])
+    # Z: a straight move's as written; a cycle's retract: nothing known without an R plane,
+    # R under G99, the higher of the previous end and R under G98
+    r_mm = moves.r_mm[block]
+    g99 = np.fromiter(map("G99".__eq__, moves.retract[block]), bool, n)
+    end[:, 2] = np.where(cycle, np.where(np.isnan(r_mm), np.nan, r_cmd), written[:, 2])
+    carried = np.flatnonzero((cycle & ~g99 & ~np.isnan(r_mm)) | ~(cycle | wrote[:, 2])).tolist()
+    if carried:  # those that depend on the previous end: one by one
+        z, r, hole = end[:, 2].tolist(), r_cmd.tolist(), cycle.tolist()
+        for k in carried:
+            before = z[k - 1] if k else walk.cmd[2]
+            z[k] = max(before, r[k]) if hole[k] else before
+        end[:, 2] = z
+    changed = np.flatnonzero(corrected[block])
+    if len(changed):  # a cycle reaches its hole bottom, a straight move its end
+        hole = np.column_stack([end[changed, :2], cycle_z[changed]])
+        reached = np.where(cycle[changed, None], hole, end[changed])
+        walk.reached_rows.frombytes(np.ascontiguousarray(reached).tobytes())
+        walk.reached_at.frombytes((block.start + changed).astype(np.int64).tobytes())
+    walk.cmd = end[-1].tolist()
+    walk.cycle_z, walk.r_cmd = float(cycle_z[-1]), float(r_cmd[-1])
+    at = np.flatnonzero(edit)
+    starts = moves.word_start[block].ravel()[at]
+    order = np.argsort(starts, kind="stable")
+    at = at[order]
+    return starts[order].tolist(), moves.word_end[block].ravel()[at].tolist(), texts[at].tolist()
+
+
 def _places(moves: GcodeMoves, opts: Options) -> np.ndarray:
     """Decimals of each move's corrected numbers (N,): ``--decimals``, else the file's precision
     but never coarser than 0.01 mm (0.001 in under G20)."""
     if opts.decimals is not None:
         return np.full(len(moves), opts.decimals)
-    found = [
-        precision(moves.text[s:e] for s, e in zip(starts, ends, strict=True))
-        for starts, ends in _word_spans(moves)
-    ]
-    found = max(found) if found else precision(())
+    found = _file_precision(moves)
     return np.where(moves.scale == 1.0, max(found, MIN_PLACES_MM), max(found, MIN_PLACES_INCH))
 
 
-def _word_spans(moves: GcodeMoves):
-    """(starts, ends) lists of the X, Y, Z numbers written, a block of moves at a time (only
-    blocks that write any)."""
+def _file_precision(moves: GcodeMoves) -> int:
+    """``precision`` of the X, Y, Z literals written, from their spans (a block of moves at a
+    time): a G-code literal has no exponent, so its decimals are the digits after its point (if
+    it has one)."""
+    found = []
     for first in range(0, len(moves), _BLOCK):
         starts = moves.word_start[first : first + _BLOCK, :3]
         written = starts >= 0
-        if written.any():
-            ends = moves.word_end[first : first + _BLOCK, :3]
-            yield starts[written].tolist(), ends[written].tolist()
+        if not written.any():
+            continue
+        starts, ends = starts[written], moves.word_end[first : first + _BLOCK, :3][written]
+        lo, hi = int(starts.min()), int(ends.max())
+        text = np.frombuffer(moves.text[lo:hi].encode("latin-1", "replace"), np.uint8)
+        points = np.append(np.flatnonzero(text == ord(".")) + lo, hi)  # hi: no point after
+        point = points[np.searchsorted(points, starts)]
+        found.append(int(np.where(point < ends, ends - point - 1, 0).max()))
+    return max(found) if found else precision(())

@@ -32,6 +32,7 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 from typing import NamedTuple
 
 import numpy as np
@@ -45,6 +46,7 @@ from accugrid.codegen.textsafe import (
     comment_texts,
     fixed,
     fixed_format,
+    fixed_many,
     fixed_ready,
     fixed_texts,
 )
@@ -53,6 +55,7 @@ from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
 
 __all__ = [
+    "BLOCK",
     "MODULE_DIGITS",
     "KrlFiles",
     "KrlHole",
@@ -64,6 +67,7 @@ __all__ = [
     "render_measurement",
 ]
 
+BLOCK = 16384  # holes whose numbers are made at a time
 MODULE_DIGITS = 3  # NAME_001..NAME_999; a job of more modules numbers them with more digits
 
 
@@ -391,11 +395,12 @@ def _placeholder(cell: Cell) -> Program:
 
 class _Records:
     """Template records of a program, numbers formatted by ``fixed`` (mm and deg with the cell's
-    decimals, $VEL.CP m/s with 4, S and T as integers), made file by file (a million-hole job
-    never holds them all); angles, S, T and feeds, which repeat, once per distinct value in a
-    file. Per hole, either records (``holes``,
+    decimals, $VEL.CP m/s with 4, S and T as integers). Per hole, either records (``holes``,
     ``positions``: for templates that loop over them) or the finished CRLF lines (``hole_lines``,
-    ``position_lines``: what the built-in templates print), whichever the template uses."""
+    ``position_lines``: what the built-in templates print), whichever the template uses, made
+    file by file (a million-hole job never holds them all) from the numbers of a block of
+    ``BLOCK`` holes made at once (``_numbers``); angles, S, T and feeds, which repeat, are
+    formatted once per distinct value of a block."""
 
     def __init__(self, program: Program) -> None:
         self.program = program
@@ -409,7 +414,7 @@ class _Records:
         self.status_turn = np.stack([status[:, self.stages], turn[:, self.stages]], axis=2).astype(
             np.int16
         )
-        self._numbers_of: tuple = (None, None, ())
+        self._block: tuple = (0, 0, None)
         ext = _literal(
             "".join(
                 f",E{k + 1} {fixed(v, cell.krl.decimals)}"
@@ -418,8 +423,7 @@ class _Records:
         )
         mm = fixed_format(self.decimals)
         self.position_block = "".join(
-            f"DECL E6POS XH%d_{s}={{X {mm},Y {mm},Z {mm},A %s,B %s,C %s,S %s,T %s{ext}}}\r\n"
-            for s in self.names
+            f"DECL E6POS XH%d_{s}={{X {mm},Y {mm},Z {mm},%s{ext}}}\r\n" for s in self.names
         )
         self.hole_block = _hole_block(cell, self.names)
         self._named: tuple = (None, None, [])
@@ -431,51 +435,81 @@ class _Records:
             wanted &= uses
         out: dict[str, object] = {}
         n, k = hi - lo, len(self.stages)
-        pos, abc, st, feed = self._numbers(lo, hi)
+        numbers = self._numbers(lo, hi)
         number = np.arange(lo + 1, hi + 1, dtype=object)
         if "positions" in wanted:
             table = np.empty((n, k, 9), dtype=object)
             for j, column in enumerate(self._names(lo, hi)):
                 table[:, j, 0] = column
-            table[:, :, 1:4] = fixed_texts(pos, self.decimals)
-            table[:, :, 4:7] = abc[:, None, :]
-            table[:, :, 7:9] = st
+            table[:, :, 1:4] = fixed_texts(numbers.pos, self.decimals)
+            table[:, :, 4:7] = numbers.abc[:, None, :]
+            table[:, :, 7:9] = fixed_texts(numbers.status_turn, 0, distinct=True)
             out["positions"] = list(map(KrlPosition._make, table.reshape(n * k, 9).tolist()))
         if "position_lines" in wanted:
-            table = np.empty((n, k, 9), dtype=object)
+            table = np.empty((n, k, 5), dtype=object)
             table[:, :, 0] = number[:, None]
-            table[:, :, 1:4] = fixed_ready(pos, self.decimals)
-            table[:, :, 4:7] = abc[:, None, :]
-            table[:, :, 7:9] = st
+            table[:, :, 1:4] = numbers.ready
+            table[:, :, 4] = numbers.orientation
             out["position_lines"] = (self.position_block * n) % tuple(table.ravel().tolist())
-        labels = self.program.labels(lo, hi) if wanted & {"holes", "hole_lines"} else []
         if "holes" in wanted:
             names = self._names(lo, hi)
             retract = names[3] if k == 4 else names[0]
-            out["holes"] = list(map(KrlHole, labels, *names[:3], retract, feed.tolist()))
+            labels = numbers.labels.tolist()
+            out["holes"] = list(map(KrlHole, labels, *names[:3], retract, numbers.feed.tolist()))
         if "hole_lines" in wanted:
             table = np.empty((n, 6), dtype=object)  # in the order the lines print them
-            table[:, 0] = comment_texts(labels)
+            table[:, 0] = numbers.comments
             table[:, [1, 2, 4, 5]] = number[:, None]
-            table[:, 3] = feed
+            table[:, 3] = numbers.feed
             out["hole_lines"] = (self.hole_block * n) % tuple(table.ravel().tolist())
         return out
 
-    def _numbers(self, lo: int, hi: int) -> tuple[np.ndarray, ...]:
-        """Of holes lo..hi-1 (the .src and the .dat of a file in turn: made once): positions
-        (n, stages, 3) mm in the BASE frame, and as ``fixed`` text A,B,C (n, 3), S and T
-        (n, stages, 2), $VEL.CP of the feed in m/s (n,); repeating values formatted once."""
-        if self._numbers_of[:2] != (lo, hi):
-            program = self.program
-            pos, abc = program.in_frame(program.cell.robot_T_base, lo, hi)
-            numbers = (
-                pos[:, self.stages],
-                fixed_texts(abc, self.decimals, distinct=True),
-                fixed_texts(self.status_turn[lo:hi], 0, distinct=True),
-                fixed_texts(program.feed_mm_s[lo:hi] / 1000.0, 4, distinct=True),
-            )
-            self._numbers_of = (lo, hi, numbers)
-        return self._numbers_of[2]
+    def _numbers(self, lo: int, hi: int) -> SimpleNamespace:
+        """The numbers of holes lo..hi-1, sliced from those of the block that holds them (made
+        when a file first asks past the last block): positions ``pos`` (n, stages, 3) mm in the
+        BASE frame and the same ``fixed_ready``; as ``fixed`` text A,B,C ``abc`` (n, 3) and the
+        $VEL.CP ``feed`` of the feed in m/s (n,); S and T ``status_turn`` (n, stages, 2);
+        ``orientation`` (n, stages), the text ``A a,B b,C c,S s,T t`` of each position; the
+        hole ``labels`` (n,) and the same as safe comment text, ``comments``."""
+        start, end, block = self._block
+        if block is None or not start <= lo <= hi <= end:
+            start, end = lo, max(hi, min(lo + BLOCK, len(self.program)))
+            block = self._make_block(start, end)
+            self._block = (start, end, block)
+        part = slice(lo - start, hi - start)
+        return SimpleNamespace(**{key: value[part] for key, value in vars(block).items()})
+
+    def _make_block(self, lo: int, hi: int) -> SimpleNamespace:
+        program = self.program
+        pos, abc = program.in_frame(program.cell.robot_T_base, lo, hi)
+        pos = pos[:, self.stages]
+        status_turn = self.status_turn[lo:hi]
+        values, ranks = np.unique(abc, return_inverse=True)  # the distinct A, B, C values
+        ranks = ranks.reshape(abc.shape)
+        abc_text = np.array(fixed_many(values, self.decimals), dtype=object)[ranks]
+        # one text per distinct (A, B, C, S, T) of the block's positions, from integer keys
+        ab = _dense(ranks[:, 0] * len(values) + ranks[:, 1])
+        hole_rank = _dense(ab * len(values) + ranks[:, 2])  # 0..n-1
+        words = status_turn.astype(np.int64) + 32768  # int16: 0..65535
+        key = (hole_rank[:, None] << 32) + (words[:, :, 0] << 16) + words[:, :, 1]
+        _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+        hole, stage = np.divmod(first, len(self.stages))
+        table = np.empty((len(first), 5), dtype=object)
+        table[:, :3] = abc_text[hole]
+        table[:, 3:] = fixed_texts(status_turn[hole, stage], 0, distinct=True)
+        texts = ("A %s,B %s,C %s,S %s,T %s\n" * len(first)) % tuple(table.ravel().tolist())
+        orientation = np.array(texts.split("\n")[:-1], dtype=object)[inverse.reshape(key.shape)]
+        labels = program.labels(lo, hi)
+        return SimpleNamespace(
+            labels=np.array(labels, dtype=object),
+            comments=np.array(comment_texts(labels), dtype=object),
+            pos=pos,
+            ready=fixed_ready(pos, self.decimals),
+            abc=abc_text,
+            status_turn=status_turn,
+            feed=fixed_texts(program.feed_mm_s[lo:hi] / 1000.0, 4, distinct=True),
+            orientation=orientation,
+        )
 
     def _names(self, lo: int, hi: int) -> list[list[str]]:
         """Position names of holes lo..hi-1, one list per stage (made once for the .src and the
@@ -484,6 +518,11 @@ class _Records:
             numbers = range(lo + 1, hi + 1)
             self._named = (lo, hi, [list(map(f"XH{{}}_{s}".format, numbers)) for s in self.names])
         return self._named[2]
+
+
+def _dense(keys: np.ndarray) -> np.ndarray:
+    """The rank of every integer key among the distinct keys (same shape): 0, 1, ..."""
+    return np.unique(keys, return_inverse=True)[1].reshape(keys.shape)
 
 
 def _hole_block(cell, stages: list[str]) -> str:
