@@ -1,11 +1,9 @@
 """The array paths of the KRL rewrite against the obvious ones they replace: literals formatted
-with array operations against ``fixed`` and ``float``, the exact decimal reader against
-``float``, the byte splice against string slicing, and the rigid-layout reader against the
-regex reader on programs in (and near) the controller's layout."""
+with array operations against ``fixed`` and ``float``, the byte splice against string slicing,
+and the rigid-layout reader against the regex reader on programs in (and near) the controller's
+layout (its numbers read by ``kinematics.decimals``, tested in ``test_decimals.py``)."""
 
 from __future__ import annotations
-
-import re
 
 import numpy as np
 import pytest
@@ -13,7 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from accugrid.codegen.krl import parse, splice
-from accugrid.codegen.krl.rigid import PAD, plain_decimals, text_bytes
+from accugrid.codegen.krl.rigid import PAD, text_bytes
 from accugrid.codegen.program_text import splice as splice_text
 from accugrid.codegen.textsafe import fixed
 from accugrid.kinematics.errors import InputError
@@ -45,29 +43,6 @@ def test_literals_are_fixed_and_read_back_as_float_reads_them(values, places):
 def test_literals_refuse_nan_like_fixed():
     with pytest.raises(ValueError):
         splice.literals(np.array([1.0, np.nan]), 3)
-
-
-LITERAL = st.one_of(
-    st.from_regex(r"[-+]?[0-9]{0,9}(\.[0-9]{0,9})?", fullmatch=True),
-    st.from_regex(r"[0-9]{0,3}\.[0-9]{0,3}\.[0-9]{0,3}", fullmatch=True),
-    st.sampled_from(["", ".", "-", "+.", "1e5", "1.2.3", "--1", "1-2", "0x1", " 1", "1 "]),
-)
-
-
-@given(st.lists(LITERAL, min_size=1, max_size=30))
-def test_plain_decimals_read_exactly_what_float_reads(literals):
-    text = ",".join(literals) + ","
-    buf = text_bytes(text)
-    ends = np.flatnonzero(buf[: len(text)] == 44)
-    starts = np.concatenate(([0], ends[:-1] + 1))
-    values, places, plain = plain_decimals(buf, starts, ends)
-    for literal, value, decimals, ok in zip(literals, values, places, plain, strict=True):
-        m = re.fullmatch(r"[-+]?([0-9]{0,8})(?:\.([0-9]{0,7}))?", literal)
-        count = len(m.group(1)) + len(m.group(2) or "") if m else 0
-        assert ok == (1 <= count <= 15), literal
-        if ok:
-            assert value == float(literal) and np.signbit(value) == np.signbit(float(literal))
-            assert decimals == len(m.group(2) or "")
 
 
 @given(

@@ -9,17 +9,13 @@ spaces shown and an optional CR before the LF:
 - ``LIN|PTP|SLIN|SPTP name[ C_DIS|C_PTP|C_VEL|C_ORI]``
 
 ``name`` is ASCII (``[A-Za-z_][A-Za-z0-9_]*``, at most 32 characters); every number a plain
-decimal: an optional sign, at most 8 digits before and 7 after an optional point, 1 to 15 in
-all.
-Such a number is read exactly: its digits as an integer below 2**53 divided by a power of ten,
-both exact in float64, is the correctly rounded quotient, what ``float`` gives. ``tail`` is empty
+decimal (``kinematics.decimals``: read exactly, what ``float`` gives). ``tail`` is empty
 or starts with a comma; the caller decides on each distinct tail (``distinct``). A line in these
 layouts reads as the regex reader (``parse._PLAIN_RE``) reads it; every other line is left to
 that reader.
 
-Digits are read eight at a time from one 64-bit word (SWAR: pairs, then quads, then the eight,
-each by one multiply and shift); offsets are byte (= character) offsets in the text, whose bytes
-``text_bytes`` gives.
+Offsets are byte (= character) offsets in the text, whose bytes ``text_bytes`` gives; bytes are
+compared eight at a time as one 64-bit word (``kinematics.decimals.words_at``).
 """
 
 from __future__ import annotations
@@ -29,11 +25,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
+from accugrid.kinematics.decimals import read_decimals, words_at
+
 __all__ = [
     "PAD",
     "RigidLines",
     "distinct",
-    "plain_decimals",
     "read_rigid",
     "strings",
     "text_bytes",
@@ -51,15 +48,7 @@ _WORD[np.frombuffer(b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_", np
 _WORD[48:58] = True
 _DIGIT = np.zeros(256, bool)
 _DIGIT[48:58] = True
-_POW10 = 10.0 ** np.arange(16)  # exact in float64
-_ZEROS = np.uint64(0x3030303030303030)  # "00000000"
-_HIGH = np.uint64(0xF0F0F0F0F0F0F0F0)
-_SIX = np.uint64(0x0606060606060606)
 # the last L bytes of a word kept (the digits), the others made "0": by L = 0..8
-_KEEP = np.array([((1 << (8 * n)) - 1) << (8 * (8 - n)) for n in range(9)], np.uint64)
-_FILL = _ZEROS & ~_KEEP
-_POINTS = np.uint64(0x2E2E2E2E2E2E2E2E)  # "........"
-_LOW7 = np.uint64(0x7F7F7F7F7F7F7F7F)
 
 
 def text_bytes(text: str) -> np.ndarray | None:
@@ -126,13 +115,6 @@ def _windows(buf: np.ndarray, at: np.ndarray, width: int) -> np.ndarray:
     return sliding_window_view(buf, width)[np.clip(at, 0, len(buf) - width)]
 
 
-def _word(buf: np.ndarray, at: np.ndarray) -> np.ndarray:
-    """The 8 bytes at each offset ``at`` (k,) as one little-endian uint64 (offsets out of
-    ``buf`` read its first or last 8 bytes)."""
-    words = np.ndarray((len(buf) - 7,), _U64, buffer=buf, strides=(1,))  # unaligned, overlapping
-    return words[np.clip(at, 0, len(buf) - 8)]
-
-
 def _at(buf: np.ndarray, at: np.ndarray) -> np.ndarray:
     """``buf[at]`` with offsets out of ``buf`` reading its first or last byte."""
     return np.take(buf, at, mode="clip")
@@ -142,7 +124,7 @@ def _is(buf: np.ndarray, at: np.ndarray, literal: bytes) -> np.ndarray:
     """Whether ``literal`` (at most 8 bytes) is at each offset ``at`` (k,)."""
     pattern = np.frombuffer(literal.ljust(8, b"\0"), _U64)[0]
     mask = np.frombuffer((b"\xff" * len(literal)).ljust(8, b"\0"), _U64)[0]
-    return (_word(buf, at) & mask) == pattern
+    return (words_at(buf, at) & mask) == pattern
 
 
 _FAR = np.iinfo(np.int64).max // 4  # an offset past every text
@@ -207,53 +189,6 @@ def distinct(buf: np.ndarray, span: np.ndarray, text: str) -> tuple[list[str], n
     return list(index), which
 
 
-def _whole(word: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The integer (k,) uint64 the last ``count`` (k,) (0 to 8) bytes of each word (k,) write,
-    and whether they are all ASCII digits (k,)."""
-    word = (word & _KEEP[count]) | _FILL[count]
-    ok = ((word & _HIGH) == _ZEROS) & (((word + _SIX) & _HIGH) == _ZEROS)
-    v = word - _ZEROS
-    v = (v * np.uint64(10) + (v >> np.uint64(8))) & np.uint64(0x00FF00FF00FF00FF)
-    v = (v * np.uint64(100) + (v >> np.uint64(16))) & np.uint64(0x0000FFFF0000FFFF)
-    v = (v * np.uint64(10000) + (v >> np.uint64(32))) & np.uint64(0xFFFFFFFF)
-    return v, ok
-
-
-def _ending(buf: np.ndarray, end: np.ndarray) -> np.ndarray:
-    """The 8 bytes before each offset ``end`` (k,) as words (k,) (the last byte highest)."""
-    word = _word(buf, end - 8)
-    near = np.flatnonzero(end < 8)  # the first bytes of the text: read at 0, moved up
-    word[near] <<= (8 * (8 - end[near])).astype(np.uint64)
-    return word
-
-
-def plain_decimals(
-    buf: np.ndarray, start: np.ndarray, end: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The number literals ``text[start[i]:end[i]]`` (k,) that are plain decimals (see the
-    module docstring) read exactly: values (k,) float, decimals (k,) and which literals are
-    plain decimals (k,) bool (the others' values undefined). ``buf``: ``text_bytes(text)``.
-
-    The point is found in the literal's last 8 bytes (one word: the byte equal to ``.``), so the
-    decimals are at most 7."""
-    first = _at(buf, start)
-    signed = (first == 45) | (first == 43)
-    size = end - start - signed  # digits and point
-    last = _ending(buf, end)
-    x = last ^ _POINTS
-    dots = ~(((x & _LOW7) + _LOW7) | x | _LOW7) & _KEEP[np.clip(size, 0, 8)]  # 0x80 at a "."
-    has_point = dots != 0
-    top = np.frexp(dots.astype(np.float64))[1]  # highest set bit + 1: 8 * (byte + 1)
-    after = np.where(has_point, 8 - top // 8, 0)
-    before = size - after - has_point
-    ok = (before <= 8) & (before + after >= 1) & (before + after <= 15)
-    part, part_ok = _whole(last, after)
-    whole, whole_ok = _whole(_ending(buf, end - after - has_point), np.clip(before, 0, 8))
-    ok &= whole_ok & part_ok
-    value = (whole * _POW10[after] + part) / _POW10[after]  # exact: integers below 2**53
-    return np.where(first == 45, -value, value), after, ok
-
-
 def read_rigid(buf: np.ndarray, starts: np.ndarray, ends: np.ndarray, text: str) -> RigidLines:
     """The rigid lines among the lines ``text[starts[i]:ends[i]]`` (n,) (without their CR LF);
     ``buf``: ``text_bytes(text)``."""
@@ -294,18 +229,20 @@ def _name_ok(buf: np.ndarray, at: np.ndarray, size: np.ndarray) -> np.ndarray:
 def _literals(
     buf: np.ndarray, at: np.ndarray, end: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``plain_decimals`` of the literals at ``at[i, j]:end[i, j]`` (k, 6): values, decimals and
+    """``read_decimals`` of the literals at ``at[i, j]:end[i, j]`` (k, 6): values, decimals and
     which are plain, (k, 6) each. An A, B or C literal written as the first row's (the tool
-    orientation, mostly one for the whole file) is read once."""
+    orientation, mostly one for the whole file) is read once: same length, at most 8, and the
+    same 8 bytes up to its end."""
     k = len(at)
     again = np.ones((k, 6), bool)
     for j in (3, 4, 5):
         size = end[:, j] - at[:, j]
-        word = _ending(buf, end[:, j]) & _KEEP[np.clip(size, 0, 8)]
-        again[1:, j] = ~((size[1:] == size[0]) & (size[0] <= 8) & (word[1:] == word[0]))
+        word = words_at(buf, end[:, j] - 8)
+        same = (size[1:] == size[0]) & (size[0] <= 8) & (word[1:] == word[0]) & (end[0, j] >= 8)
+        again[1:, j] = ~same
     read = np.flatnonzero(again.ravel())
     values, places, plain = np.empty(6 * k), np.empty(6 * k, np.int64), np.empty(6 * k, bool)
-    values[read], places[read], plain[read] = plain_decimals(
+    values[read], places[read], plain[read] = read_decimals(
         buf, at.ravel()[read], end.ravel()[read]
     )
     values, places, plain = values.reshape(k, 6), places.reshape(k, 6), plain.reshape(k, 6)
