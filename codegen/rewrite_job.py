@@ -27,8 +27,6 @@ from accugrid.codegen.rewrite import (
     warning_lines,
 )
 from accugrid.compensation.corrector import Corrector
-from accugrid.kinematics.calibrated import check_same_robot
-from accugrid.kinematics.robot import load_robot
 
 __all__ = ["RewriteJob", "RewriteRequest", "rewrite_job"]
 
@@ -85,7 +83,10 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     grid = cell.grid_file(req.grid)
     model_file = Path(req.model) if req.model is not None else cell.model_path
     calibrated = None
-    if model_file is not None:
+    if model_file is not None:  # the model's modules imported only when there is one
+        from accugrid.kinematics.calibrated import check_same_robot
+        from accugrid.kinematics.robot import load_robot
+
         calibrated = load_robot(model_file)
         nominal = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
         check_same_robot(calibrated, nominal, os.fspath(model_file))
