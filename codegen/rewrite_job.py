@@ -15,8 +15,6 @@ import numpy as np
 
 from accugrid.codegen.cell import load_cell
 from accugrid.codegen.dialects import dialect_of
-from accugrid.codegen.gcode.rewrite import rewrite_gcode
-from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.program_text import add_header, read_program
 from accugrid.codegen.rewrite import (
     CORRECTED,
@@ -29,8 +27,6 @@ from accugrid.codegen.rewrite import (
     warning_lines,
 )
 from accugrid.compensation.corrector import Corrector
-from accugrid.kinematics.calibrated import check_same_robot
-from accugrid.kinematics.robot import load_robot
 
 __all__ = ["RewriteJob", "RewriteRequest", "rewrite_job"]
 
@@ -87,7 +83,10 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     grid = cell.grid_file(req.grid)
     model_file = Path(req.model) if req.model is not None else cell.model_path
     calibrated = None
-    if model_file is not None:
+    if model_file is not None:  # the model's modules imported only when there is one
+        from accugrid.kinematics.calibrated import check_same_robot
+        from accugrid.kinematics.robot import load_robot
+
         calibrated = load_robot(model_file)
         nominal = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
         check_same_robot(calibrated, nominal, os.fspath(model_file))
@@ -128,10 +127,14 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     collecting = gc.isenabled()
     gc.disable()
     try:
-        if dialect_of(inputs[0]) == "krl":
+        if dialect_of(inputs[0]) == "krl":  # each dialect's reader imported when it is needed
+            from accugrid.codegen.krl.rewrite import rewrite_krl
+
             config = read_program(req.config_dat, req.max_bytes) if req.config_dat else None
             result = rewrite_krl(texts, opts, config)
         else:
+            from accugrid.codegen.gcode.rewrite import rewrite_gcode
+
             result = rewrite_gcode(os.fspath(inputs[0]), texts[os.fspath(inputs[0])], opts)
     finally:
         if collecting:

@@ -97,7 +97,7 @@ def krl_lines(draw) -> str:
 
 def _table(scan) -> tuple:
     t, u = scan.table, scan.use_table
-    arrays = (t.line, t.column, t.kind, t.agg, t.span, u.line, u.column)
+    arrays = (t.line, t.column, t.kind, t.agg, t.span, t.places, u.line, u.column)
     return (
         [a.tolist() for a in arrays],
         np.nan_to_num(t.xyz, nan=1e300).tolist(),

@@ -25,11 +25,14 @@ inline-form FOLD lines are comments). It finds:
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
 Every pattern is linear in its input (see the note above ``NUMBER``).
 
-Reading is whole-text first: one regex pass over a block of lines picks out the plain lines
-(declarations and motions with a flat aggregate or to a name, ``_PLAIN_RE``), whose numbers are
-converted a column at a time; every other line goes through the statement reader. Plain lines
-change no state, so a run of them takes the base in effect. What is read is kept in columns
-(``codegen.krl.tables``); ``KrlScan.positions`` and ``KrlScan.uses`` build objects on demand.
+Reading is whole-text first, a block of lines (``_CHUNK``) at a time, in three lanes: lines in
+the exact layout a controller writes (``codegen.krl.rigid``: array operations on the bytes, no
+regex), then one regex pass over the other lines picks out the plain ones (declarations and
+motions with a flat aggregate or to a name, ``_PLAIN_RE``, numbers converted a column at a
+time), and every other line goes through the statement reader. A rigid line is a plain line
+read the same way (``tests/test_krl_fast_paths.py``), and plain lines change no state, so a run
+of them takes the base in effect. What is read is kept in columns (``codegen.krl.tables``);
+``KrlScan.positions`` and ``KrlScan.uses`` build objects on demand.
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from accugrid.codegen.krl.rigid import distinct, read_rigid, text_bytes
 from accugrid.codegen.krl.tables import (
     ASSIGN,
     DECL,
@@ -583,9 +587,8 @@ class _Rows:
     """The rows being read into a scan's tables, the BaseRef index of ``scan.bases`` and the
     base changes to apply to ranges of rows once the file is read."""
 
-    def __init__(self, scan: KrlScan) -> None:
-        self.scan = scan
-        lines = scan.text.count("\n") + 1  # about one row a line at most, in most programs
+    def __init__(self, scan: KrlScan, lines: int) -> None:
+        self.scan = scan  # ``lines``: of the text; about one row a line at most, in most programs
         self.positions = position_columns(lines)
         self.uses = use_columns(lines)
         self.external: dict[int, tuple[str, float]] = {}
@@ -608,11 +611,12 @@ class _Rows:
         self, lineno, column, kind, agg, base, numbers: dict[str, Number], type_name, name, reason
     ) -> int:
         nan = math.nan
-        xyz, abc, span = [nan, nan, nan], [nan, nan, nan], [-1] * 6
+        xyz, abc, span, places = [nan, nan, nan], [nan, nan, nan], [-1] * 6, -1
         for i, k in enumerate("XYZ"):
             n = numbers.get(k)
             if n is not None:
                 xyz[i], span[2 * i], span[2 * i + 1] = n.value, n.start, n.end
+                places = max(places, min(decimals_of(n.literal), 32767))
         for i, k in enumerate("ABC"):
             n = numbers.get(k)
             if n is not None:
@@ -626,6 +630,7 @@ class _Rows:
             xyz=xyz,
             abc=abc,
             span=span,
+            places=places,
             type=type_name,
             name=name,
             reason=reason,
@@ -793,7 +798,7 @@ _PLAIN_RE = re.compile(
     r"|^([^\n]*+)$",
     re.M,
 )
-_CHUNK = 1 << 18  # characters per whole-text pass (bounds the per-line tuples held at once)
+_CHUNK = 1 << 20  # characters per whole-text pass (bounds the per-line tuples held at once)
 _NOT_IN_TAIL = frozenset("X Y Z A B C".split()) | _JOINTS
 
 
@@ -829,7 +834,7 @@ def scan_krl(
     path = None if path is None else os.fspath(path)
     check_text(text, path)
     scan = KrlScan(path, text)
-    rows = scan._rows = _Rows(scan)
+    rows = scan._rows = _Rows(scan, text.count("\n") + 1)
     flow = _Flow(initial_base or BaseRef("unknown", 0, reason="no $BASE set"), trust_calls, rows)
     if "\n" not in text:  # one line, or lone CR line endings: line by line
         offset = 0
@@ -861,29 +866,72 @@ def _line(line: str, offset: int, lineno: int, scan: KrlScan, flow: _Flow) -> No
     _statement(code, offset, lineno, scan, flow)
 
 
+@dataclass
+class _Plain:
+    """The plain lines among n lines of a chunk: ``plain`` (n,) bool.
+
+    Their aggregates (k rows): ``line`` (k,) index among the n lines, ``decl`` (k,) bool (else a
+    motion), ``brace`` and ``column`` (k,) text offset and line column of the ``{``, ``xyz`` and
+    ``abc`` (k, 3) (``abc`` NaN when not given), ``span`` (k, 3, 2) text offsets of the X, Y, Z
+    literals, ``places`` (k,) the most decimals among them, ``types`` and
+    ``names`` (k) str, ``external`` row -> first moving external axis.
+    Their motions to a name (m rows): ``use_line``, ``use_column`` (m,), ``motions``, ``texts``."""
+
+    plain: np.ndarray
+    line: np.ndarray
+    decl: np.ndarray
+    brace: np.ndarray
+    column: np.ndarray
+    xyz: np.ndarray
+    abc: np.ndarray
+    span: np.ndarray
+    places: np.ndarray
+    types: list[str]
+    names: list[str]
+    external: dict[int, tuple[str, float]]
+    use_line: np.ndarray
+    use_column: np.ndarray
+    motions: list[str]
+    texts: list[str]
+
+
 def _lengths(column, mask: list[bool]) -> np.ndarray:
     return np.fromiter(map(len, compress(column, mask)), np.int64)
 
 
-def _floats(column, mask: list[bool]) -> np.ndarray:
-    return np.fromiter(map(float, compress(column, mask)), float)
+def _floats(columns, mask: list[bool]) -> np.ndarray:
+    """The literals of each column at the rows ``mask``, converted in one pass: (rows, columns)."""
+    count = mask.count(True)
+    every = [literal for column in columns for literal in compress(column, mask)]
+    return np.fromiter(map(float, every), float, len(every)).reshape(len(columns), count).T
 
 
-def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _Flow) -> int:
-    """Read the lines of ``text[start:stop]`` (whole lines); the number of the next line."""
-    chunk = text[start:stop]
-    matches = _PLAIN_RE.findall(chunk)
-    count = chunk.count("\n") + (0 if chunk.endswith("\n") and stop < len(text) else 1)
+def _places(column, mask: list[bool]) -> np.ndarray:
+    """``decimals_of`` of the literals of a column at the rows ``mask`` (int16, <= 32767)."""
+    literals = list(compress(column, mask))
+    if not literals:
+        return np.zeros(0, np.int16)
+    data = np.frombuffer(("\n".join(literals) + "\n").encode("latin-1", "replace"), np.uint8)
+    ends = np.flatnonzero(data == 10)
+    starts = np.concatenate(([0], ends[:-1] + 1))
+    points = np.flatnonzero(data == 46)
+    marks = np.flatnonzero((data == 101) | (data == 69))  # an exponent ends the decimals
+    point = np.append(points, len(data))[np.searchsorted(points, starts)]
+    mark = np.append(marks, len(data))[np.searchsorted(marks, starts)]
+    stop = np.minimum(mark, ends)
+    return np.where(point < stop, np.minimum(stop - point - 1, 32767), 0).astype(np.int16)
+
+
+def _regex_plain(lines: str, index: np.ndarray, line_at: np.ndarray, n: int) -> _Plain:
+    """The plain lines among the lines of ``lines`` by ``_PLAIN_RE``: they are lines ``index``
+    (count,) of a chunk of n lines and start at text offsets ``line_at`` (count,)."""
+    count = len(index)
+    matches = _PLAIN_RE.findall(lines)
     del matches[count:]
-    if not count:
-        return lineno
     (head, type_, name, motion, target, agg, x, sxy, y, syz, z, a, b, c, tail, _) = zip(
         *matches, strict=True
     )
     del matches
-    newlines = np.flatnonzero(np.frombuffer(chunk.encode("latin-1", "replace"), np.uint8) == 10)
-    starts = np.concatenate(([0], newlines + 1))[:count]
-    ends = np.append(newlines, len(chunk))[:count]
     is_decl = np.fromiter(map(bool, type_), bool, count)
     has_agg = np.fromiter(map(bool, agg), bool, count)
     has_target = np.fromiter(map(bool, target), bool, count)
@@ -896,44 +944,176 @@ def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _
             plain &= np.fromiter((info.get(t, (True,))[0] for t in tail), bool, count)
     aggs = np.flatnonzero(plain & has_agg)
     mask = (plain & has_agg).tolist()
-    xyz = np.stack([_floats(x, mask), _floats(y, mask), _floats(z, mask)], axis=1)
+    xyz = _floats((x, y, z), mask)
     has_abc = np.fromiter(map(bool, compress(a, mask)), bool, len(aggs))
     abc = np.full((len(aggs), 3), np.nan)
     if has_abc.any():
         abc_mask = plain & has_agg
         abc_mask[aggs[~has_abc]] = False
-        abc_mask = abc_mask.tolist()
-        abc[has_abc] = np.stack(
-            [_floats(a, abc_mask), _floats(b, abc_mask), _floats(c, abc_mask)], 1
-        )
+        abc[has_abc] = _floats((a, b, c), abc_mask.tolist())
     finite = np.isfinite(xyz).all(axis=1) & (np.isfinite(abc) | np.isnan(abc)).all(axis=1)
     if not finite.all():  # a literal beyond the float range: the statement reader says where
         plain[aggs[~finite]] = False
         aggs, xyz, abc = aggs[finite], xyz[finite], abc[finite]
         mask = (plain & has_agg).tolist()
     at = _lengths(head, mask)  # the "{"
-    line_at = start + starts[aggs]
     xo = at + _lengths(agg, mask)
     xe = xo + _lengths(x, mask)
     yo = xe + _lengths(sxy, mask)
     ye = yo + _lengths(y, mask)
     zo = ye + _lengths(syz, mask)
     ze = zo + _lengths(z, mask)
-    span = (np.stack([xo, xe, yo, ye, zo, ze], axis=1) + line_at[:, None]).reshape(-1, 3, 2)
-    agg_decl = is_decl[aggs]
-    agg_type = list(map(sys.intern, compress(type_, mask)))  # one str per type, not per row
-    agg_name = [n or m for n, m in zip(compress(name, mask), compress(motion, mask), strict=True)]
+    starts = line_at[aggs]
+    span = (np.stack([xo, xe, yo, ye, zo, ze], axis=1) + starts[:, None]).reshape(-1, 3, 2)
     external = {}
     if any(moving is not None for _, moving in info.values()):
         for k, t in enumerate(compress(tail, mask)):
             if t and info[t][1] is not None:
                 external[k] = info[t][1]
-    moving_rows = np.array(sorted(external), dtype=np.int64)
-    targets = np.flatnonzero(plain & has_target)
     tmask = (plain & has_target).tolist()
-    t_text = list(compress(target, tmask))
-    t_column = _lengths(head, tmask) + 1
-    t_motion = list(map(sys.intern, compress(motion, tmask)))
+    spread = np.zeros(n, bool)
+    spread[index] = plain
+    return _Plain(
+        plain=spread,
+        line=index[aggs],
+        decl=is_decl[aggs],
+        brace=starts + at,
+        column=at + 1,
+        xyz=xyz,
+        abc=abc,
+        span=span,
+        places=np.maximum.reduce([_places(col, mask) for col in (x, y, z)]),
+        types=list(map(sys.intern, compress(type_, mask))),  # one str per type, not per row
+        names=[n or m for n, m in zip(compress(name, mask), compress(motion, mask), strict=True)],
+        external=external,
+        use_line=index[np.flatnonzero(plain & has_target)],
+        use_column=_lengths(head, tmask) + 1,
+        motions=list(map(sys.intern, compress(motion, tmask))),
+        texts=list(compress(target, tmask)),
+    )
+
+
+_TAIL_REFUSED = re.compile(r"[{}\";\n]")
+
+
+def _rigid_plain(
+    buf: np.ndarray, text: str, starts: np.ndarray, ends: np.ndarray, count: int
+) -> _Plain:
+    """The lines ``text[starts[i]:ends[i]]`` (without CR LF) in the rigid layouts
+    (``codegen.krl.rigid``) as plain lines, their tails read as ``_PLAIN_RE`` reads them."""
+    r = read_rigid(buf, starts, ends, text)
+    external = {}
+    if len(r.tail):
+        tails, which = distinct(buf, r.tail, text)
+        info = [
+            (False, None) if _TAIL_REFUSED.search(t) else _tail_info(t) if t else (True, None)
+            for t in tails
+        ]
+        ok = np.array([good for good, _ in info], bool)
+        if not ok.all():
+            keep = ok[which]
+            r, which = r.select(keep), which[keep]
+        if any(moving is not None for _, moving in info):
+            moving = np.array([m is not None for _, m in info], bool)
+            for k in np.flatnonzero(moving[which]).tolist():
+                external[k] = info[which[k]][1]
+    plain = np.zeros(count, bool)
+    plain[r.decl_line] = True
+    plain[r.use_line] = True
+    return _Plain(
+        plain=plain,
+        line=r.decl_line,
+        decl=np.ones(len(r.decl_line), bool),
+        brace=r.brace,
+        column=r.brace - starts[r.decl_line] + 1,
+        xyz=r.xyz,
+        abc=r.abc,
+        span=r.span,
+        places=r.places,
+        types=r.types,
+        names=r.names,
+        external=external,
+        use_line=r.use_line,
+        use_column=r.use_at - starts[r.use_line] + 1,
+        motions=r.motions,
+        texts=r.targets,
+    )
+
+
+def _merged(a: _Plain, b: _Plain) -> _Plain:
+    """The plain lines of two readers of the same chunk (distinct lines), in line order."""
+    if not b.plain.any():
+        return a
+    plain = a.plain | b.plain
+    line = np.concatenate([a.line, b.line])
+    order = np.argsort(line, kind="stable")
+    use_line = np.concatenate([a.use_line, b.use_line])
+    use_order = np.argsort(use_line, kind="stable").tolist()
+    rank = np.empty(len(order), np.int64)
+    rank[order] = np.arange(len(order))
+    external = dict(a.external)
+    external.update((len(a.line) + k, v) for k, v in b.external.items())
+
+    def rows(x, y, by):
+        both = np.concatenate([x, y])
+        return both[by]
+
+    def items(x, y, by):
+        both = x + y
+        return [both[i] for i in by]
+
+    return _Plain(
+        plain=plain,
+        line=line[order],
+        decl=rows(a.decl, b.decl, order),
+        brace=rows(a.brace, b.brace, order),
+        column=rows(a.column, b.column, order),
+        xyz=rows(a.xyz, b.xyz, order),
+        abc=rows(a.abc, b.abc, order),
+        span=rows(a.span, b.span, order),
+        places=rows(a.places, b.places, order),
+        types=items(a.types, b.types, order.tolist()),
+        names=items(a.names, b.names, order.tolist()),
+        external={int(rank[k]): v for k, v in external.items()},
+        use_line=use_line[use_order],
+        use_column=rows(a.use_column, b.use_column, use_order),
+        motions=items(a.motions, b.motions, use_order),
+        texts=items(a.texts, b.texts, use_order),
+    )
+
+
+def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _Flow) -> int:
+    """Read the lines of ``text[start:stop]`` (whole lines); the number of the next line.
+
+    Offsets are read in the chunk (``part``) and moved to the text's when the rows are added."""
+    part = text[start:stop]
+    buf = text_bytes(part)  # None (beyond latin-1): the regex reader alone
+    data = buf[: len(part)] if buf is not None else None
+    if data is None:
+        data = np.frombuffer(part.encode("latin-1", "replace"), np.uint8)
+    newlines = np.flatnonzero(data == 10)
+    count = len(newlines) + (stop == len(text))
+    if not count:
+        return lineno
+    starts = np.concatenate(([0], newlines + 1))[:count]
+    ends = np.append(newlines, len(part))[:count]
+    rest = np.arange(count)
+    if buf is not None:
+        bare = ends - ((buf[np.maximum(ends - 1, 0)] == 13) & (ends > starts))
+        rigid = _rigid_plain(buf, part, starts, bare, count)
+        rest = np.flatnonzero(~rigid.plain)
+    if len(rest) == count:
+        found = _regex_plain(part, rest, starts, count)
+    elif len(rest):
+        cut = zip(starts[rest].tolist(), ends[rest].tolist(), strict=True)
+        lines = "\n".join([part[a:b] for a, b in cut])
+        found = _merged(rigid, _regex_plain(lines, rest, starts[rest], count))
+    else:
+        found = rigid
+    del buf, data
+    plain = found.plain
+    aggs, targets = found.line, found.use_line
+    moving_rows = np.array(sorted(found.external), dtype=np.int64)
     decl_blocks = scan._fast_decls
     rows = flow.rows
 
@@ -941,27 +1121,28 @@ def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _
         """The plain lines lo..hi-1 of the chunk, under the base in effect."""
         pa, pb = np.searchsorted(aggs, (lo, hi))
         if pb > pa:
-            base = np.where(agg_decl[pa:pb], -1, rows.base_id(flow.state))
+            decls = found.decl[pa:pb]
+            base = np.where(decls, -1, rows.base_id(flow.state))
             ka, kb = np.searchsorted(moving_rows, (pa, pb))
             for k in moving_rows[ka:kb].tolist():
-                rows.external[rows.positions.count + k - pa] = external[k]
-            names = agg_name[pa:pb]
-            types = agg_type[pa:pb]
+                rows.external[rows.positions.count + k - pa] = found.external[k]
+            names = found.names[pa:pb]
+            types = found.types[pa:pb]
             rows.positions.extend(
                 pb - pa,
                 line=lineno + aggs[pa:pb],
-                column=at[pa:pb] + 1,
-                kind=np.where(agg_decl[pa:pb], DECL, MOTION),
-                agg=line_at[pa:pb] + at[pa:pb],
+                column=found.column[pa:pb],
+                kind=np.where(decls, DECL, MOTION),
+                agg=found.brace[pa:pb] + start,
                 base=base,
-                xyz=xyz[pa:pb],
-                abc=abc[pa:pb],
-                span=span[pa:pb],
+                xyz=found.xyz[pa:pb],
+                abc=found.abc[pa:pb],
+                span=found.span[pa:pb] + start,
+                places=found.places[pa:pb],
                 type=types,
                 name=names,
                 reason=[""] * (pb - pa),
             )
-            decls = agg_decl[pa:pb]
             if decls.all():  # the same lists as the table's
                 decl_blocks.append((names, types, lineno + aggs[pa:pb]))
             elif decls.any():
@@ -975,16 +1156,14 @@ def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _
                 )
         ua, ub = np.searchsorted(targets, (lo, hi))
         if ub > ua:
-            texts = t_text[ua:ub]
+            texts = found.texts[ua:ub]
             rows.uses.extend(
                 ub - ua,
                 line=lineno + targets[ua:ub],
-                column=t_column[ua:ub],
+                column=found.use_column[ua:ub],
                 base=np.full(ub - ua, rows.base_id(flow.state)),
-                motion=t_motion[ua:ub],
-                name=[  # plain names: normalize_name is upper(); the text itself when upper case
-                    u if u != t else t for u, t in zip(map(str.upper, texts), texts, strict=True)
-                ],
+                motion=found.motions[ua:ub],
+                name=_upper(texts),
                 text=texts,
                 reason=[""] * (ub - ua),
             )
@@ -993,11 +1172,20 @@ def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _
     for i in np.flatnonzero(~plain).tolist():
         if i > last:
             flush(last, i)
-        _line(chunk[starts[i] : ends[i]], start + int(starts[i]), lineno + i, scan, flow)
+        _line(part[starts[i] : ends[i]], start + int(starts[i]), lineno + i, scan, flow)
         last = i + 1
     if count > last:
         flush(last, count)
     return lineno + count
+
+
+def _upper(names: list[str]) -> list[str]:
+    """``normalize_name`` of plain names: upper case, the name itself when it is upper case
+    already (one str, not two)."""
+    joined = "\n".join(names)
+    if joined.upper() == joined:
+        return names
+    return [u if u != t else t for u, t in zip(map(str.upper, names), names, strict=True)]
 
 
 def parse_krl(text: str, path: str | os.PathLike[str] | None = None) -> list[KrlPosition]:

@@ -12,7 +12,7 @@ $ROBROOT).
 
 from __future__ import annotations
 
-from itertools import repeat
+from itertools import chain, repeat
 from pathlib import Path
 
 import numpy as np
@@ -27,8 +27,9 @@ from accugrid.codegen.krl.parse import (
     scan_krl,
     wildcard,
 )
+from accugrid.codegen.krl.splice import ByteSplicer, literals
 from accugrid.codegen.krl.tables import MOTION, PositionTable
-from accugrid.codegen.program_text import MIN_PLACES_MM, Splicer, precision
+from accugrid.codegen.program_text import MIN_PLACES_MM, precision
 from accugrid.codegen.rewrite import (
     CORRECTED,
     Options,
@@ -38,12 +39,11 @@ from accugrid.codegen.rewrite import (
     rotations_of,
     strict_check,
 )
-from accugrid.codegen.textsafe import fixed_many
 from accugrid.kinematics.frames import pose_from_xyzabc
 
 __all__ = ["rewrite_krl"]
 
-_BLOCK = 1 << 14  # positions per block of corrected numbers formatted and spliced at once
+_BLOCK = 1 << 16  # positions per block of corrected numbers formatted at once
 
 
 def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = None) -> Result:
@@ -78,7 +78,7 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
         )
         for s, (path, text, table) in enumerate(files):
             if todo[s].size:
-                places = opts.decimals if opts.decimals is not None else _places(text, table)
+                places = opts.decimals if opts.decimals is not None else _places(table)
                 out[path] = _splice(text, table, todo[s], targets[s], rows, starts[s], places)
     for path, text in texts.items():
         if out[path] is None:
@@ -87,18 +87,12 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
     return Result(out, rows)
 
 
-def _places(text: str, table: PositionTable) -> int:
+def _places(table: PositionTable) -> int:
     """The file's precision (``program_text.precision`` of its X, Y, Z literals)."""
-    span = table.span.reshape(-1, 2)
-    span = span[span[:, 0] >= 0]
-    if not len(span):
+    given = table.places[table.places >= 0]
+    if not given.size:
         return precision((), MIN_PLACES_MM)
-    found = 0
-    for a in range(0, len(span), 3 * _BLOCK):  # a block of literals at a time
-        block = span[a : a + 3 * _BLOCK]
-        literals = map(text.__getitem__, map(slice, block[:, 0].tolist(), block[:, 1].tolist()))
-        found = max(found, precision(literals))
-    return max(found, MIN_PLACES_MM)
+    return max(int(given.max()), MIN_PLACES_MM)
 
 
 def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple[Rows, np.ndarray]:
@@ -116,7 +110,7 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
                 "kinematics (--ignore-external-axes if not)"
             )
     frame = np.full(n, -1, np.int64)
-    open_ = np.fromiter(map(bool, reasons), bool, n) == 0
+    open_ = np.fromiter(map(bool, reasons), bool, n) == 0 if any(reasons) else np.ones(n, bool)
     motion = open_ & (t.kind == MOTION)
     for b in np.unique(t.base[motion]).tolist():
         at = np.flatnonzero(motion & (t.base == b))
@@ -145,11 +139,12 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
 def _use_rows(ctx: _Context, scan: KrlScan) -> Rows:
     """Report rows of the motions to a name that correct nothing (with the reason)."""
     u = scan.use_table
+    n = len(u)
+    check = ~np.fromiter(map(ctx.named.__contains__, u.name), bool, n)
+    if any(u.reason):
+        check |= np.fromiter(map(bool, u.reason), bool, n)
     lines, names, reasons = [], [], []
-    stored = map(ctx.named.__contains__, u.name)
-    for i in [
-        i for i, (hit, why) in enumerate(zip(stored, u.reason, strict=True)) if why or not hit
-    ]:
+    for i in np.flatnonzero(check).tolist():
         reason = u.reason[i] or ctx.unmatched_reason(u.name[i], u.text[i])
         if reason:
             lines.append(int(u.line[i]))
@@ -192,28 +187,39 @@ class _Context:
                 self.frame_uses.setdefault(key, (where, use))
             for key, line in scan.assigned.items():
                 self.assigned.setdefault(key, (where, line))
-        # stored positions: key of each table row ("" for motions), first row of each key
+        # stored positions: key of each table row ("" for motions), whether it is a plain name
         self.keys: list[list[str]] = []
+        self.plain: list[np.ndarray] = []
         self.named: set[str] = set()
         self.twice: set[str] = set()
         for scan in scans:
             t = scan.table
-            keys = [  # normalize_name of a plain name; the name itself when it is upper case
-                k if k != n else n for k, n in zip(map(str.upper, t.name), t.name, strict=True)
-            ]
+            n = len(t)
+            keys = _upper(t.name)
             for i in np.flatnonzero(t.kind == MOTION).tolist():
                 keys[i] = ""
-            for i, plain in enumerate(map(str.isidentifier, t.name)):
-                if not plain and keys[i]:
+            plain = np.fromiter(map(str.isidentifier, t.name), bool, n)
+            for i in np.flatnonzero(~plain).tolist():
+                if keys[i]:
                     keys[i] = normalize_name(t.name[i])
             self.keys.append(keys)
-            first = dict(zip(reversed(keys), range(len(keys) - 1, -1, -1), strict=True))
-            first.pop("", None)
-            self.twice.update(self.named.intersection(first))
-            self.named.update(first)
-            if len(first) < len(keys) - keys.count(""):
-                self.twice.update(k for i, k in enumerate(keys) if k and first[k] != i)
-        self.wild_named = {wildcard(key) for key in self.named if "[" in key}
+            self.plain.append(plain)
+            found = set(keys)
+            found.discard("")
+            self.twice.update(self.named.intersection(found))
+            self.named.update(found)
+            if len(found) < n - keys.count(""):
+                seen: set[str] = set()
+                for k in keys:
+                    if k in seen:
+                        self.twice.add(k)
+                    seen.add(k)
+                self.twice.discard("")
+        self.wild_named = (
+            {wildcard(key) for key in self.named if "[" in key}
+            if "[" in "".join(self.named)
+            else set()
+        )
         self.config_named = {}
         if config is not None:
             for p in config.positions:
@@ -223,9 +229,9 @@ class _Context:
         self.use_scan = np.concatenate(where or [np.zeros(0, np.int64)])
         self.use_line = np.concatenate([scan.use_table.line for scan in scans] or [self.use_scan])
         self.use_base = np.concatenate([scan.use_table.base for scan in scans] or [self.use_scan])
-        names = [n for scan in scans for n in scan.use_table.name]
-        reasons = [r for scan in scans for r in scan.use_table.reason]
-        if reasons.count("") < len(reasons) or "" in names:  # not a stored position's name
+        names = list(chain.from_iterable(scan.use_table.name for scan in scans))
+        reasons = list(chain.from_iterable(scan.use_table.reason for scan in scans))
+        if any(reasons) or "" in names:  # not a stored position's name
             names = [n if not r else "" for n, r in zip(names, reasons, strict=True)]
         self.use_of = dict(zip(reversed(names), range(len(names) - 1, -1, -1), strict=True))
         self.use_of.pop("", None)
@@ -302,10 +308,12 @@ class _Context:
         Returns which rows are plain (n,) bool, the index of each one's frame in ``frames``
         (n,) (-1: none), and the reason of those whose motion is under a base that cannot be
         placed (k -> reason)."""
-        keys = [self.keys[s][i] for i in rows.tolist()]
+        keys = self.keys[s]
+        if len(rows) != len(keys):
+            keys = [keys[i] for i in rows.tolist()]
         n = len(keys)
         blocked = self.twice | self.used_twice | self._blocked
-        plain = np.fromiter(map(str.isidentifier, keys), bool, n)
+        plain = self.plain[s][rows]  # (stored rows: never a motion's empty key)
         if blocked:
             plain &= ~np.fromiter(map(blocked.__contains__, keys), bool, n)
         if self.fdats:  # XP1 with an FDAT FP1 has a base of its own
@@ -433,6 +441,15 @@ class _Context:
         return f"{text} is not declared in the given files"
 
 
+def _upper(names: list[str]) -> list[str]:
+    """``normalize_name`` of plain names (a new list): upper case, the same str where a name is
+    upper case already."""
+    joined = "".join(names)
+    if joined.upper() == joined:
+        return list(names)
+    return [k if k != n else n for k, n in zip(map(str.upper, names), names, strict=True)]
+
+
 def _correct(
     tables: list[PositionTable],
     todo: list[np.ndarray],
@@ -484,25 +501,25 @@ def _splice(
     places: int,
 ) -> bytearray:
     """The file's bytes with the X, Y, Z of its corrected positions replaced (``places``
-    decimals); their rows (``first_row`` + table row) updated.
+    decimals; a number whose value does not change keeps its literal); their rows
+    (``first_row`` + table row) updated.
 
     ``todo`` (n,): placed table rows, ``targets`` (n, 3) mm base frame, NaN rows where not
     corrected."""
     inside = np.flatnonzero(np.isfinite(targets[:, 0]))
-    out = Splicer(text)
+    out = ByteSplicer(text)
     for a in range(0, len(inside), _BLOCK):
         k = inside[a : a + _BLOCK]
         goal = targets[k]
-        old = t.xyz[todo[k]]
-        news = fixed_many(goal.ravel(), places)
-        written = np.array(list(map(float, news))).reshape(-1, 3)
+        new, length, written = literals(goal.ravel(), places)
+        written = written.reshape(-1, 3)
         residual = np.linalg.norm(written - goal, axis=1)
         at = first_row + todo[k]
         rows.status[at] = CORRECTED
         rows.new[at] = written
         rows.residual_mm[at] = residual
         rows.rounding_mm[at] = residual
-        spans = t.span[todo[k]].reshape(-1, 2)
-        changed = np.flatnonzero(written.ravel() != old.ravel()).tolist()
-        out.add(spans[changed, 0].tolist(), spans[changed, 1].tolist(), [news[c] for c in changed])
+        changed = written.ravel() != t.xyz[todo[k]].ravel()
+        spans = t.span[todo[k]].reshape(-1, 2)[changed]
+        out.add(spans[:, 0], spans[:, 1], new[np.repeat(changed, length)], length[changed])
     return out.finish()

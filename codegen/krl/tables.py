@@ -122,7 +122,8 @@ class PositionTable:
     line, column (of the ``{``), base (index into ``bases``; -1 for stored positions): (N,) int32;
     kind (DECL/ASSIGN/MOTION) (N,) int8; agg (offset of the ``{``) (N,) int64. xyz, abc (N, 3)
     float mm/deg as written, NaN where not given; span (N, 3, 2) int64 start/end of the X, Y, Z
-    literals (-1: not given).
+    literals (-1: not given); places (N,) int16 the most decimals among those literals as written
+    (``decimals_of``, at most 32767; -1: none given), for ``codegen.program_text.precision``.
     type, name, reason: lists of str. external: row -> (key, value) of the first non-zero E1..E6."""
 
     line: np.ndarray
@@ -133,6 +134,7 @@ class PositionTable:
     xyz: np.ndarray
     abc: np.ndarray
     span: np.ndarray
+    places: np.ndarray
     type: list[str]
     name: list[str]
     reason: list[str]
@@ -171,6 +173,7 @@ def position_columns(capacity: int = 1024) -> Columns:
             "xyz": ("float64", (3,)),
             "abc": ("float64", (3,)),
             "span": ("int64", (3, 2)),
+            "places": ("int16", ()),
         },
         ("type", "name", "reason"),
         capacity,

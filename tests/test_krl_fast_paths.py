@@ -1,0 +1,169 @@
+"""The array paths of the KRL rewrite against the obvious ones they replace: literals formatted
+with array operations against ``fixed`` and ``float``, the byte splice against string slicing,
+and the rigid-layout reader against the regex reader on programs in (and near) the controller's
+layout (its numbers read by ``kinematics.decimals``, tested in ``test_decimals.py``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from accugrid.codegen.krl import parse, splice
+from accugrid.codegen.krl.rigid import PAD, text_bytes
+from accugrid.codegen.program_text import splice as splice_text
+from accugrid.codegen.textsafe import fixed
+from accugrid.kinematics.errors import InputError
+
+VALUES = st.one_of(
+    st.floats(-1e6, 1e6, allow_nan=False),
+    st.integers(-(10**7), 10**7).map(lambda k: k / 2000),  # halfway cases at 3 decimals
+    st.integers(-(10**7), 10**7).map(lambda k: k / 20),  # and at 1
+    st.sampled_from([0.0, -0.0, -0.0004, -0.0005, 0.0005, 5e-324, -1e-300, 1e15, -3e17]),
+)
+
+
+def _pieces(data: np.ndarray, lengths: np.ndarray) -> list[str]:
+    text = bytes(data).decode("ascii")
+    ends = np.cumsum(lengths).tolist()
+    return [text[a:b] for a, b in zip([0, *ends[:-1]], ends, strict=True)]
+
+
+@given(st.lists(VALUES, min_size=1, max_size=40), st.integers(0, 9))
+def test_literals_are_fixed_and_read_back_as_float_reads_them(values, places):
+    data, lengths, written = splice.literals(np.array(values), places)
+    texts = [fixed(v, places) for v in values]
+    assert _pieces(data, lengths) == texts
+    expected = np.array([float(t) for t in texts])
+    np.testing.assert_array_equal(written, expected)
+    assert (np.signbit(written) == np.signbit(expected)).all()  # "0.000" reads as +0.0
+
+
+def test_literals_refuse_nan_like_fixed():
+    with pytest.raises(ValueError):
+        splice.literals(np.array([1.0, np.nan]), 3)
+
+
+@given(
+    st.text(st.sampled_from("ab,;{} \n0123456789."), min_size=0, max_size=80),
+    st.lists(st.tuples(st.integers(0, 80), st.integers(0, 4), st.text("xyz-.9", max_size=6))),
+    st.booleans(),
+)
+def test_byte_splicer_is_slicing(text, edits, every_byte):
+    cuts, last = [], 0
+    for at, size, new in sorted(edits):
+        if at >= last and at + size <= len(text):
+            cuts.append((at, at + size, new))
+            last = at + size + 1 if size == 0 else at + size
+    expected = bytes(splice_text(text, list(cuts)))
+    starts = np.array([a for a, _, _ in cuts], np.int64)
+    ends = np.array([b for _, b, _ in cuts], np.int64)
+    new = np.frombuffer("".join(n for _, _, n in cuts).encode(), np.uint8)
+    lengths = np.array([len(n) for _, _, n in cuts], np.int64)
+    runs, edits = splice._RUNS, splice._EDITS
+    try:
+        splice._RUNS = 0 if every_byte else runs  # the path for many length changes too
+        splice._EDITS = 3  # a few edits at a time
+        out, cut = splice.ByteSplicer(text), len(cuts) // 2  # two blocks of edits
+        out.add(starts[:cut], ends[:cut], new[: lengths[:cut].sum()], lengths[:cut])
+        out.add(starts[cut:], ends[cut:], new[lengths[:cut].sum() :], lengths[cut:])
+        got = out.finish()
+    finally:
+        splice._RUNS, splice._EDITS = runs, edits
+    assert bytes(got) == expected
+
+
+NUMBER = st.one_of(
+    st.floats(-5000, 5000, allow_nan=False).map(lambda v: f"{v:.3f}"),
+    st.sampled_from(["0", "-0.0", "1.", ".5", "+2", "1e3", "123456789.5", "1234567890123456"]),
+    st.sampled_from(["12345678.12345678", "-.5", "007", "1.2.3", "9e999", "", "-"]),
+)
+NAME = st.sampled_from(["XP1", "xp2", "P_3", "_a", "A" * 33, "X1Y", "1X", "XP1[2]", "Xé"])
+TAIL = st.sampled_from(
+    [
+        "",
+        ",S 'B010',T 'B000010'",
+        ",S 'B010',T 'B000010',E1 0.0,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0",
+        ",E1 12.5,E2 3",
+        ",S 6,T 27  ",
+        ",A 5",
+        ",X 1",
+        ",S 'B01{0'",
+        ',S "x"',
+        ",S 'Q1'",
+        ",E1 foo",
+        " ,S 2",
+        ",S 2;",
+    ]
+)
+
+
+@st.composite
+def rigid_lines(draw) -> str:
+    """Lines in the controller's layout and small departures from it."""
+    lead = draw(st.sampled_from(["", "", " ", "\t", "  "]))
+    end = draw(st.sampled_from(["", "", " ", " ; c"]))
+    if draw(st.booleans()):
+        kind = draw(st.sampled_from(["E6POS", "POS", "FRAME", "E6POS", "AXIS", "e6pos"]))
+        body = f"X {draw(NUMBER)},Y {draw(NUMBER)},Z {draw(NUMBER)}"
+        if draw(st.booleans()):
+            body += f",A {draw(NUMBER)},B {draw(NUMBER)},C {draw(NUMBER)}"
+        space = draw(st.sampled_from(["", "", " "]))
+        return f"{lead}DECL {kind} {draw(NAME)}={space}{{{body}{draw(TAIL)}}}{end}"
+    motion = draw(st.sampled_from(["LIN", "PTP", "SLIN", "SPTP", "LIN", "CIRC", "lin"]))
+    clause = draw(st.sampled_from(["", "", " C_DIS", " C_PTP", " C_VEL", " C_ORI", " C_SPL"]))
+    return f"{lead}{motion} {draw(NAME)}{clause}{end}"
+
+
+def _scan(text: str):
+    try:
+        scan = parse.scan_krl(text, "p.src")
+    except InputError as exc:
+        return str(exc)
+    t, u = scan.table, scan.use_table
+    arrays = (t.line, t.column, t.kind, t.agg, t.base, t.span, t.places, u.line, u.column, u.base)
+    return (
+        [a.tolist() for a in arrays],
+        np.nan_to_num(t.xyz, nan=1e300).tolist(),
+        np.nan_to_num(t.abc, nan=1e300).tolist(),
+        np.signbit(t.xyz).tolist(),
+        (t.type, t.name, t.reason, t.external, u.motion, u.name, u.text, u.reason),
+        (scan.declared, scan.bases, scan.fdats, scan.frame_uses, scan.assigned),
+    )
+
+
+@given(
+    st.lists(
+        st.one_of(rigid_lines(), st.sampled_from(["DEF p( )", "END", "BAS (#BASE,1)", ""])),
+        max_size=25,
+    ),
+    st.sampled_from(["\n", "\r\n"]),
+)
+def test_rigid_reader_reads_as_the_regex_reader(lines, ending):
+    """The same text read with the rigid lane and with the regex reader alone (the lane off)."""
+    text = ending.join(lines)
+    fast = _scan(text)
+    original = parse.text_bytes
+    try:
+        parse.text_bytes = lambda _: None
+        slow = _scan(text)
+    finally:
+        parse.text_bytes = original
+    assert fast == slow
+
+
+def test_rigid_reader_takes_the_controller_layout():
+    """The layout of a controller-written pair is read by the rigid lane (not the regex)."""
+    text = (
+        "DECL E6POS XP1={X 1.5,Y -2,Z 3.25,A -90.000,B 0.000,C 180.000,S 'B010',T 'B000010',"
+        "E1 0.0,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}\r\nLIN XP1 C_DIS\r\n"
+    )
+    buf = text_bytes(text)
+    assert len(buf) == len(text) + PAD
+    starts = np.array([0, text.index("LIN")])
+    ends = np.array([text.index("\r"), text.rindex("\r")])
+    found = parse._rigid_plain(buf, text, starts, ends, 2)
+    assert found.plain.tolist() == [True, True]
+    assert found.xyz.tolist() == [[1.5, -2.0, 3.25]] and found.abc.tolist() == [[-90, 0, 180]]
+    assert found.names == ["XP1"] and found.texts == ["XP1"] and found.places.tolist() == [2]
