@@ -341,7 +341,12 @@ def warning_lines(result: Result, opts: Options) -> list[str]:
             f"{rows.rounding_mm[worst]:.3f} mm ({Path(file).name} line {line}): give "
             "more --decimals"
         )
-    flagged = [i for i in corrected.tolist() if rows.reason[i].startswith("flag: orientation")]
+    flag = "flag: orientation"
+    flagged = (
+        [i for i in corrected.tolist() if rows.reason[i].startswith(flag)]
+        if any(rows.reason)
+        else []
+    )
     if flagged:
         file, line = rows.where(flagged[0])
         out.append(
