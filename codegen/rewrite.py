@@ -24,8 +24,7 @@ from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation import GridModel
 from accugrid.compensation.corrector import Corrector
-from accugrid.compensation.settings import CorrectionSettings
-from accugrid.compensation.study import DEFAULT_TOLERANCE_MM
+from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM, CorrectionSettings
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc

@@ -14,10 +14,10 @@ from accugrid.codegen.atomic import JobFiles
 from accugrid.codegen.plots import fig12_png, hist_png
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation.plans import SEED_REGION, SEED_REPEATS
+from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.compensation.study import (
     AXES,
     DEFAULT_STD_FRACTION,
-    DEFAULT_TOLERANCE_MM,
     REPEAT_RULES,
     Progress,
     StudyResult,

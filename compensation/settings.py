@@ -9,10 +9,11 @@ from dataclasses import dataclass, replace
 from accugrid.compensation.interpolation import MAX_POWER, method_named
 from accugrid.kinematics.errors import InputError
 
-__all__ = ["MAX_CORRECTION_MM", "OUTSIDE", "CorrectionSettings"]
+__all__ = ["DEFAULT_TOLERANCE_MM", "MAX_CORRECTION_MM", "OUTSIDE", "CorrectionSettings"]
 
 OUTSIDE = ("error", "clamp")  # points outside the grid box: refuse, or use the nearest cell
 MAX_CORRECTION_MM = 5.0  # default safety limit on the length of any one correction
+DEFAULT_TOLERANCE_MM = 0.3  # the hole-position accuracy aircraft drilling asks (seed: +-0.3 mm)
 
 
 @dataclass(frozen=True)

@@ -43,6 +43,7 @@ from accugrid.compensation.cube_points import (
 )
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.plans import grid_axes
+from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.kinematics.configuration import solve_in_one_status
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.model import RobotModel
@@ -52,7 +53,6 @@ from accugrid.kinematics.units import mm_text
 __all__ = [
     "AXES",
     "DEFAULT_STD_FRACTION",
-    "DEFAULT_TOLERANCE_MM",
     "REPEAT_RULES",
     "Cubes",
     "Decision",
@@ -85,7 +85,6 @@ Progress = Callable[[Iterable, str, int], Iterable]
 #: "mean-of-extremes": the seed's rule (max/min per repeat round, averaged over the rounds);
 #: "mean-of-repeats": average the repeats of each point first, then max/min/std over points.
 REPEAT_RULES = ("mean-of-extremes", "mean-of-repeats")
-DEFAULT_TOLERANCE_MM = 0.3
 DEFAULT_STD_FRACTION = 0.5
 AXES = "XYZ"
 

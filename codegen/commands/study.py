@@ -40,7 +40,8 @@ from accugrid.codegen.cli_options import (
 from accugrid.codegen.progress import progress
 from accugrid.codegen.study_report import OUTPUTS, StudyRequest, study_files
 from accugrid.compensation.plans import SEED_REGION
-from accugrid.compensation.study import DEFAULT_STD_FRACTION, DEFAULT_TOLERANCE_MM, REPEAT_RULES
+from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
+from accugrid.compensation.study import DEFAULT_STD_FRACTION, REPEAT_RULES
 
 __all__ = ["NAME", "add_arguments", "run"]
 
