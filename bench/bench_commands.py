@@ -20,8 +20,6 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.bench_programs import points_csv, robot_points_csv  # noqa: E402
-from bench.bench_rewrite import gcode, krl_pair  # noqa: E402
 from bench.timing import table  # noqa: E402
 
 CELL = ROOT / "examples" / "cell.yaml"
@@ -63,6 +61,33 @@ for entry in entries:
         with open(entry[1], "wb") as f:
             f.write(b"x" * int(entry[0]))
 """
+
+
+# Writes one bench input: argv = project root, generator "module.name", target, n. A target
+# with a suffix is a file and the generator returns its text; else a folder the generator writes
+# its files into, returning them. Prints the paths written.
+MAKE_INPUT = """
+import sys
+from pathlib import Path
+sys.path.insert(0, sys.argv[1])
+module, name = sys.argv[2].rsplit(".", 1)
+make = getattr(__import__(module, fromlist=[name]), name)
+target, n = Path(sys.argv[3]), int(sys.argv[4])
+if target.suffix:
+    target.write_text(make(n))
+    print(target)
+else:
+    print("\\n".join(map(str, make(target, n))))
+"""
+
+
+def make_input(generator: str, target: Path, n: int) -> list[Path]:
+    """The input files ``generator`` makes for n rows at ``target``, made in a child process:
+    the bench process never holds a large input, because a child's peak RSS (``wait4``) starts
+    from its parent's at the fork (a 1e6-row text held here would show in every later row)."""
+    argv = [sys.executable, "-c", MAKE_INPUT, str(ROOT), generator, str(target), str(n)]
+    done = subprocess.run(argv, capture_output=True, text=True, check=True)
+    return [Path(line) for line in done.stdout.splitlines()]
 
 
 def run(argv: list[str]) -> tuple[float, float]:
@@ -124,8 +149,7 @@ def main(million: bool, only: str = "") -> None:
         sizes = [(100_000, 3)] + ([(1_000_000, 1)] if million else [])
         for n, repeats in sizes if only in "accugrid krl gcode holes correct points" else ():
             label = f"{n:.0e}".replace("+0", "")
-            holes = tmp / f"holes{n}.csv"
-            holes.write_text(points_csv(n))
+            (holes,) = make_input("bench.bench_programs.points_csv", tmp / f"holes{n}.csv", n)
             for command, out in (("krl", tmp / f"krl{n}"), ("gcode", tmp / f"holes{n}.ngc")):
                 if only not in f"accugrid {command} holes":
                     continue
@@ -134,8 +158,9 @@ def main(million: bool, only: str = "") -> None:
                 rows.append(job_row(name, args, [holes, CELL, GRID], out, tmp, repeats))
             if only not in "accugrid correct points":
                 continue
-            robot_holes = tmp / f"robot{n}.csv"
-            robot_holes.write_text(robot_points_csv(n))
+            (robot_holes,) = make_input(
+                "bench.bench_programs.robot_points_csv", tmp / f"robot{n}.csv", n
+            )
             out = tmp / f"corrected{n}.csv"
             args = ["correct", str(robot_holes), "--grid", str(GRID), "-o", str(out)]
             name = f"accugrid correct, {label} points"
@@ -145,13 +170,13 @@ def main(million: bool, only: str = "") -> None:
             label = f"{n:.0e}".replace("+0", "")
             folder = tmp / f"rewrite{n}"
             folder.mkdir()
-            pair = krl_pair(folder, n)
+            pair = make_input("bench.bench_rewrite.krl_pair", folder, n)
             out = tmp / f"rewritten{n}"
             args = ["rewrite", *map(str, pair), "--cell", str(CELL), "-o", str(out)]
             args += ["--max-mb", "512"]  # a 1e6-position .dat is 138 MiB (default limit 64)
             name = f"accugrid rewrite, {label} KRL pair"
             rows.append(job_row(name, args, [*pair, CELL, GRID], out, tmp, repeats))
-            (ngc,) = gcode(folder, n)
+            (ngc,) = make_input("bench.bench_rewrite.gcode", folder, n)
             out_ngc = tmp / f"rewritten{n}.ngc"
             args = ["rewrite", str(ngc), "--cell", str(CELL), "-o", str(out_ngc)]
             args += ["--max-mb", "512"]
