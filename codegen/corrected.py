@@ -19,7 +19,7 @@ import numpy as np
 from accugrid.codegen.atomic import JobFiles
 from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
 from accugrid.codegen.points import Points, read_points
-from accugrid.codegen.textsafe import fixed_rows, fixed_texts
+from accugrid.codegen.textsafe import fixed_bytes, fixed_rows, fixed_texts
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.measurements import REPEAT_TOL_MM
 from accugrid.compensation.settings import CorrectionSettings
@@ -122,13 +122,25 @@ def check_orientation(
         flags[int(i)].append(f"orientation {angle[i]:.1f} deg from {what}")
 
 
+def _plain_lines(rows: np.ndarray, numbers: np.ndarray) -> bytes:
+    """The CSV lines of unflagged rows: each row as read (``rows`` (n, r) uint8 NUL-padded),
+    its numbers (n, k) as ``fixed`` text with ``DECIMALS`` places, an empty flag, LF."""
+    n, k = numbers.shape
+    cells, _ = fixed_bytes(numbers.reshape(-1), DECIMALS)  # NUL-padded on the left
+    comma = np.full((n * k, 1), ord(","), np.uint8)
+    fields = np.concatenate([comma, cells], axis=1).reshape(n, -1)
+    ends = np.broadcast_to(np.frombuffer(b",\n", np.uint8), (n, 2))
+    text = np.concatenate([rows, fields, ends], axis=1).reshape(-1)
+    return text[text != 0].tobytes()
+
+
 def corrected_csv(
     points: Points,
     command: np.ndarray,
     correction: np.ndarray,
     flags: Flags,
     header: list[str],
-) -> Iterator[str]:
+) -> Iterator[str | bytes]:
     """The corrected CSV text in pieces (comment header and column names, then blocks of
     ``BLOCK`` rows), for writing a million points without holding the text whole."""
     out = io.StringIO()
@@ -144,6 +156,9 @@ def corrected_csv(
     )
     for lo in range(0, len(points), BLOCK):
         hi = min(lo + BLOCK, len(points))
+        if plain and not any(flag[lo:hi]):  # the block's lines built as bytes by numpy
+            yield _plain_lines(points.table.row_bytes(lo, hi), numbers[lo:hi])
+            continue
         if plain:  # every row of the block in one %-template pass over the rows as read
             table = np.empty((hi - lo, 3), dtype=object)
             table[:, 0] = points.table.plain_rows(lo, hi)

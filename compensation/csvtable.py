@@ -84,6 +84,16 @@ class Table:
         text = self._cells.data[int(bounds[lo * width]) + 1 : int(bounds[hi * width])]
         return text.decode("ascii").split("\n")
 
+    def row_bytes(self, lo: int, hi: int) -> np.ndarray | None:
+        """Rows lo..hi-1 as read (the text ``plain_rows`` gives, ASCII), one per row of an
+        (hi - lo, width) uint8 array NUL-padded on the right; None when ``plain_rows`` is."""
+        if self._cells is None:
+            return None
+        width, bounds = self._cells.width, self._cells.bounds
+        start = bounds[lo * width : hi * width : width] + 1
+        end = bounds[(lo + 1) * width : (hi + 1) * width : width]
+        return self._cells.cut(start, end).view(np.uint8).reshape(hi - lo, -1)
+
     def has(self, name: str) -> bool:
         return name.lower() in self._index
 
@@ -271,7 +281,7 @@ class _Cells:
         j = np.arange(lo, hi) * self.width + i
         return self.bounds[j] + 1, self.bounds[j + 1]
 
-    def _bytes(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+    def cut(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
         """The cells spanning ``data[start:end]`` as a fixed-width bytes array (NUL-padded)."""
         w = max(int((end - start).max(initial=0)), 1)
         at = start[:, None] + np.arange(w, dtype=start.dtype)
@@ -283,7 +293,7 @@ class _Cells:
         if not len(self):
             return []
         chunks = range(0, len(self), _CHUNK)
-        cuts = [self._bytes(*self._span(i, lo, min(lo + _CHUNK, len(self)))) for lo in chunks]
+        cuts = [self.cut(*self._span(i, lo, min(lo + _CHUNK, len(self)))) for lo in chunks]
         return b"\n".join(np.concatenate(cuts).tolist()).decode("ascii").split("\n")
 
     def rows(self) -> list[list[str]]:
@@ -299,7 +309,7 @@ class _Cells:
             values, _, done = read_decimals(self.buf, start, end)
             rest = np.flatnonzero(~done)  # exponents, blanks, long mantissas, empty, bad
             if rest.size:
-                cells = self._bytes(start[rest], end[rest])
+                cells = self.cut(start[rest], end[rest])
                 raw = cells.view(np.uint8).reshape(rest.size, -1)
                 if not (_NUMBER_BYTE[raw] | (raw == 0)).all():
                     return None  # 1_000, nan, inf: the cell-by-cell path decides

@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from accugrid.codegen.corrected import DECIMALS, _plain_lines
 from accugrid.codegen.textsafe import (
     comment_text,
     comment_texts,
@@ -67,6 +68,36 @@ def test_the_byte_buffer_reader_reads_what_the_csv_module_reads(table, ending, l
     if fast is None:  # odd file (blank or comment rows, leading blanks): the csv module's
         fast = parse_table(text, "t.csv")
     _same(fast, slow, header)
+
+
+@given(
+    st.integers(1, 4).flatmap(
+        lambda width: st.lists(st.lists(_CELL, min_size=width, max_size=width), min_size=1)
+    ),
+    st.sampled_from(["\n", "\r\n"]),
+    st.data(),
+)
+def test_row_bytes_are_the_plain_rows_and_the_corrected_lines_follow_them(rows, ending, data):
+    """``Table.row_bytes`` holds ``plain_rows``'s text; ``correct``'s byte-built lines are each
+    row as read, its numbers as ``fixed`` gives them, an empty flag."""
+    header = [f"c{i}" for i in range(len(rows[0]))]
+    table = _parse_simple(_table_text(header, rows, ending, []), "t.csv")
+    if table is None or table.plain_rows(0, 0) is None:  # odd or empty: no bytes kept
+        return
+    lo = data.draw(st.integers(0, len(table) - 1))
+    hi = data.draw(st.integers(lo + 1, len(table)))
+    texts = [bytes(row).rstrip(b"\0").decode() for row in table.row_bytes(lo, hi)]
+    assert texts == table.plain_rows(lo, hi)
+    numbers = np.array(
+        data.draw(
+            st.lists(st.lists(_NUMBER, min_size=6, max_size=6), min_size=hi - lo, max_size=hi - lo)
+        )
+    )
+    expected = "".join(
+        row + "," + ",".join(fixed(v, DECIMALS) for v in values) + ",\n"
+        for row, values in zip(texts, numbers.tolist(), strict=True)
+    )
+    assert _plain_lines(table.row_bytes(lo, hi), numbers).decode() == expected
 
 
 @given(
