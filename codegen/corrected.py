@@ -19,7 +19,7 @@ import numpy as np
 from accugrid.codegen.atomic import JobFiles
 from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
 from accugrid.codegen.points import Points, read_points
-from accugrid.codegen.textsafe import fixed_bytes, fixed_rows, fixed_texts
+from accugrid.codegen.textsafe import fixed_bytes, fixed_texts
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.measurements import REPEAT_TOL_MM
 from accugrid.compensation.settings import CorrectionSettings
@@ -122,15 +122,19 @@ def check_orientation(
         flags[int(i)].append(f"orientation {angle[i]:.1f} deg from {what}")
 
 
-def _plain_lines(rows: np.ndarray, numbers: np.ndarray) -> bytes:
-    """The CSV lines of unflagged rows: each row as read (``rows`` (n, r) uint8 NUL-padded),
-    its numbers (n, k) as ``fixed`` text with ``DECIMALS`` places, an empty flag, LF."""
+def _plain_lines(rows: np.ndarray, numbers: np.ndarray, flags: list[str]) -> bytes:
+    """CSV lines, UTF-8: each row as read (``rows`` (n, r) uint8 NUL-padded), its numbers
+    (n, k) as ``fixed`` text with ``DECIMALS`` places, its flag (n) (nothing ``csv.writer``
+    would quote), LF."""
     n, k = numbers.shape
     cells, _ = fixed_bytes(numbers.reshape(-1), DECIMALS)  # NUL-padded on the left
     comma = np.full((n * k, 1), ord(","), np.uint8)
     fields = np.concatenate([comma, cells], axis=1).reshape(n, -1)
-    ends = np.broadcast_to(np.frombuffer(b",\n", np.uint8), (n, 2))
-    text = np.concatenate([rows, fields, ends], axis=1).reshape(-1)
+    notes = [np.full((n, 1), ord(","), np.uint8)]
+    if any(flags):
+        notes.append(np.array([f.encode() for f in flags], dtype=bytes).view(np.uint8))
+    notes.append(np.full((n, 1), ord("\n"), np.uint8))
+    text = np.concatenate([rows, fields, *(c.reshape(n, -1) for c in notes)], axis=1).reshape(-1)
     return text[text != 0].tobytes()
 
 
@@ -151,20 +155,13 @@ def corrected_csv(
     for i, reasons in flags.items():
         flag[i] = "; ".join(reasons)
     numbers = np.column_stack([command, correction])
-    plain = points.table.plain_rows(0, 0) is not None and not _NEEDS_QUOTES.search(
+    plain = points.table.row_bytes(0, 0) is not None and not _NEEDS_QUOTES.search(
         "".join(flag[i] for i in flags)
     )
     for lo in range(0, len(points), BLOCK):
         hi = min(lo + BLOCK, len(points))
-        if plain and not any(flag[lo:hi]):  # the block's lines built as bytes by numpy
-            yield _plain_lines(points.table.row_bytes(lo, hi), numbers[lo:hi])
-            continue
-        if plain:  # every row of the block in one %-template pass over the rows as read
-            table = np.empty((hi - lo, 3), dtype=object)
-            table[:, 0] = points.table.plain_rows(lo, hi)
-            table[:, 1] = fixed_rows(numbers[lo:hi], DECIMALS)
-            table[:, 2] = flag[lo:hi]
-            yield ("%s,%s,%s\n" * (hi - lo)) % tuple(table.ravel().tolist())
+        if plain:  # the block's lines built as bytes by numpy from the rows as read
+            yield _plain_lines(points.table.row_bytes(lo, hi), numbers[lo:hi], flag[lo:hi])
             continue
         out = io.StringIO()
         writer = csv.writer(out, lineterminator="\n")

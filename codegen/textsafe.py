@@ -1,7 +1,7 @@
 """The only way numbers and user text reach a robot program (DESIGN.md, "Output safety").
 
 - ``fixed`` (and its bulk forms for 100,000-number files: ``fixed_many``, ``fixed_ready`` with
-  ``fixed_format``, and ``fixed_bytes``/``fixed_rows``, built by numpy; each property-tested to
+  ``fixed_format``, and ``fixed_bytes``, built by numpy; each property-tested to
   print what ``fixed`` prints): the one fixed-point formatter; never ``str(float)`` or ``%g`` in
   a program. ``fixed_same``: whether two numbers print the same.
 - ``comment_text``: user text made harmless inside a one-line comment of any dialect.
@@ -28,7 +28,6 @@ __all__ = [
     "fixed_format",
     "fixed_many",
     "fixed_ready",
-    "fixed_rows",
     "fixed_same",
     "fixed_texts",
     "krl_identifier",
@@ -156,24 +155,6 @@ def fixed_bytes(values: np.ndarray, places: int) -> tuple[np.ndarray, np.ndarray
         cells[signs, 0] = 0
         cells[signs, first] = ord("-")
     return cells, printed
-
-
-def fixed_rows(values: np.ndarray, places: int, sep: str = ",") -> list[str]:
-    """Each row of ``values`` (m, k) as ``sep.join(fixed(v, places) for v in row)`` (m,), made
-    by ``fixed_bytes``. ``sep``: one ASCII character other than NUL and newline."""
-    values = np.asarray(values, dtype=float)
-    if not (len(sep) == 1 and sep.isascii() and sep not in "\0\n"):
-        raise ValueError(f"separator must be one ASCII character, got {sep!r}")
-    m, k = values.shape
-    if not m * k:
-        return [""] * m
-    cells, _ = fixed_bytes(values.reshape(-1), places)
-    text = np.empty((m, k, cells.shape[1] + 1), np.uint8)
-    text[:, :, :-1] = cells.reshape(m, k, -1)
-    text[:, :, -1] = ord(sep)
-    text[:, -1, -1] = ord("\n")
-    flat = text.reshape(-1)
-    return flat[flat != 0].tobytes().decode("ascii").split("\n")[:-1]
 
 
 def fixed_same(a: np.ndarray, b: np.ndarray, places: int) -> np.ndarray:

@@ -72,27 +72,17 @@ class Table:
     def __len__(self) -> int:
         return len(self.lines)
 
-    def plain_rows(self, lo: int = 0, hi: int | None = None) -> list[str] | None:
-        """The text of rows lo..hi-1 as read, cells joined by commas, when no cell needs quoting
-        (a file the fast reader took): what ``csv.writer`` writes for each row; None otherwise."""
-        if self._cells is None:
-            return None
-        hi = len(self) if hi is None else hi
-        if hi <= lo:
-            return []
-        width, bounds = self._cells.width, self._cells.bounds
-        text = self._cells.data[int(bounds[lo * width]) + 1 : int(bounds[hi * width])]
-        return text.decode("ascii").split("\n")
-
     def row_bytes(self, lo: int, hi: int) -> np.ndarray | None:
-        """Rows lo..hi-1 as read (the text ``plain_rows`` gives, ASCII), one per row of an
-        (hi - lo, width) uint8 array NUL-padded on the right; None when ``plain_rows`` is."""
+        """The text of rows lo..hi-1 as read (ASCII, cells joined by commas, no cell needing
+        quotes: what ``csv.writer`` writes for each row), one per row of an (hi - lo, width)
+        uint8 array NUL-padded on the right, when the fast reader took the file; else None."""
         if self._cells is None:
             return None
         width, bounds = self._cells.width, self._cells.bounds
         start = bounds[lo * width : hi * width : width] + 1
         end = bounds[(lo + 1) * width : (hi + 1) * width : width]
-        return self._cells.cut(start, end).view(np.uint8).reshape(hi - lo, -1)
+        cells = self._cells.cut(start, end)
+        return cells.view(np.uint8).reshape(hi - lo, cells.itemsize)
 
     def has(self, name: str) -> bool:
         return name.lower() in self._index

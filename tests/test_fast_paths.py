@@ -1,6 +1,7 @@
 """The fast paths of the readers and writers against the slow, obvious ones they replace: the
 byte-buffer CSV reader against the csv module, the vectorized decimal parser against ``float``,
-``fixed_ready`` and ``fixed_rows`` against ``fixed``, ``comment_texts`` against ``comment_text``."""
+``fixed_ready``, ``fixed_bytes`` and ``correct``'s byte-built lines against ``fixed``,
+``comment_texts`` against ``comment_text``."""
 
 from __future__ import annotations
 
@@ -17,7 +18,6 @@ from accugrid.codegen.textsafe import (
     fixed_bytes,
     fixed_format,
     fixed_ready,
-    fixed_rows,
 )
 from accugrid.compensation.csvtable import _parse_csv, _parse_simple, parse_number, parse_table
 from accugrid.kinematics.errors import InputError
@@ -77,27 +77,29 @@ def test_the_byte_buffer_reader_reads_what_the_csv_module_reads(table, ending, l
     st.sampled_from(["\n", "\r\n"]),
     st.data(),
 )
-def test_row_bytes_are_the_plain_rows_and_the_corrected_lines_follow_them(rows, ending, data):
-    """``Table.row_bytes`` holds ``plain_rows``'s text; ``correct``'s byte-built lines are each
-    row as read, its numbers as ``fixed`` gives them, an empty flag."""
+def test_row_bytes_are_the_rows_and_the_corrected_lines_follow_them(rows, ending, data):
+    """``Table.row_bytes`` holds each row's cells joined by commas; ``correct``'s byte-built
+    lines are each row as read, its numbers as ``fixed`` gives them, its flag (any text without
+    what csv quotes, UTF-8)."""
     header = [f"c{i}" for i in range(len(rows[0]))]
     table = _parse_simple(_table_text(header, rows, ending, []), "t.csv")
-    if table is None or table.plain_rows(0, 0) is None:  # odd or empty: no bytes kept
+    if table is None or table.row_bytes(0, 0) is None:  # odd or empty: no bytes kept
         return
     lo = data.draw(st.integers(0, len(table) - 1))
     hi = data.draw(st.integers(lo + 1, len(table)))
     texts = [bytes(row).rstrip(b"\0").decode() for row in table.row_bytes(lo, hi)]
-    assert texts == table.plain_rows(lo, hi)
+    assert texts == [",".join(cells) for cells in table.rows[lo:hi]]
+    n = hi - lo
     numbers = np.array(
-        data.draw(
-            st.lists(st.lists(_NUMBER, min_size=6, max_size=6), min_size=hi - lo, max_size=hi - lo)
-        )
+        data.draw(st.lists(st.lists(_NUMBER, min_size=6, max_size=6), min_size=n, max_size=n))
     )
+    flag_text = st.text(st.characters(blacklist_characters=',"\r\n\x00'), max_size=12)
+    flags = data.draw(st.lists(st.just("") | flag_text, min_size=n, max_size=n))
     expected = "".join(
-        row + "," + ",".join(fixed(v, DECIMALS) for v in values) + ",\n"
-        for row, values in zip(texts, numbers.tolist(), strict=True)
+        row + "," + ",".join(fixed(v, DECIMALS) for v in values) + "," + flag + "\n"
+        for row, values, flag in zip(texts, numbers.tolist(), flags, strict=True)
     )
-    assert _plain_lines(table.row_bytes(lo, hi), numbers).decode() == expected
+    assert _plain_lines(table.row_bytes(lo, hi), numbers, flags).decode() == expected
 
 
 @given(
@@ -138,18 +140,6 @@ _NUMBER = st.one_of(
 )
 
 
-@given(
-    st.integers(1, 4).flatmap(
-        lambda k: st.lists(st.lists(_NUMBER, min_size=k, max_size=k), min_size=1, max_size=12)
-    ),
-    st.integers(0, 9),
-)
-def test_fixed_rows_print_what_fixed_prints(rows, places):
-    expected = [",".join(fixed(v, places) for v in row) for row in rows]
-    assert fixed_rows(np.array(rows), places) == expected
-    assert fixed_rows(np.array(rows), places, ";") == [e.replace(",", ";") for e in expected]
-
-
 @given(st.lists(_NUMBER, min_size=1, max_size=40), st.integers(0, 15))
 def test_fixed_bytes_print_what_fixed_prints_and_give_its_value(values, places):
     cells, printed = fixed_bytes(np.array(values), places)
@@ -158,11 +148,9 @@ def test_fixed_bytes_print_what_fixed_prints_and_give_its_value(values, places):
     assert printed.tolist() == [float(t) for t in texts]
 
 
-def test_fixed_rows_refuse_nan_and_bad_separators():
+def test_fixed_bytes_refuse_nan():
     with pytest.raises(ValueError, match="non-finite"):
-        fixed_rows(np.array([[1.0, np.inf]]), 3)
-    with pytest.raises(ValueError, match="separator"):
-        fixed_rows(np.array([[1.0]]), 3, "\n")
+        fixed_bytes(np.array([1.0, np.inf]), 3)
 
 
 def test_fixed_ready_keeps_the_shape_and_refuses_nan():
