@@ -48,7 +48,6 @@ _WORD[np.frombuffer(b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_", np
 _WORD[48:58] = True
 _DIGIT = np.zeros(256, bool)
 _DIGIT[48:58] = True
-# the last L bytes of a word kept (the digits), the others made "0": by L = 0..8
 
 
 def text_bytes(text: str) -> np.ndarray | None:
