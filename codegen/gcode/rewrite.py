@@ -15,7 +15,6 @@ from array import array
 
 import numpy as np
 
-from accugrid.codegen.gcode.numbers import literal_values
 from accugrid.codegen.gcode.parse import GcodeMoves, gcode_moves, modal_fill
 from accugrid.codegen.program_text import (
     MIN_PLACES_INCH,
@@ -34,7 +33,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
     strict_check,
 )
-from accugrid.codegen.textsafe import fixed_format, fixed_ready
+from accugrid.codegen.textsafe import fixed_bytes
 
 __all__ = ["rewrite_gcode"]
 
@@ -295,12 +294,10 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         idx = np.flatnonzero(np.isfinite(goal) & (place == p))
         if not len(idx):
             continue
-        # the texts fixed_many gives, made as one string: their values are read from its bytes
-        lines = ((fixed_format(p) + "\n") * len(idx)) % tuple(fixed_ready(goal[idx], p).tolist())
-        buf = np.frombuffer(lines.encode("latin-1"), np.uint8)
-        ends = np.flatnonzero(buf == 10)
-        new[idx] = literal_values(buf, np.append(0, ends[:-1] + 1), ends)
-        texts[idx] = np.array(lines.split("\n")[:-1], dtype=object)
+        # the texts fixed gives and the values they read as, from the formatter's array form
+        cells, new[idx] = fixed_bytes(goal[idx], p)
+        lines = np.concatenate([cells, np.full((len(idx), 1), 10, np.uint8)], axis=1).ravel()
+        texts[idx] = lines[lines != 0].tobytes().decode("ascii").split("\n")[:-1]
     edit = np.isfinite(new) & (new != values.ravel())
     written = np.where(edit, new, values.ravel()).reshape(n, 4) * scale[:, None]  # NaN: none
     r_cmd = modal_fill(written[:, 3], wrote_r, walk.r_cmd)
