@@ -4,6 +4,9 @@ every pose (issue target: under 5 s each). Stages timed separately, then the who
 Holes: a 400 x 250 pattern at 1.5 mm pitch on the example wing panel (examples/cell.yaml, drill
 axis normal to the 4 m radius skin), corrected with examples/grid_200mm.csv. The last two rows are
 the whole commands (CSV file in, program files out). Best of 3; peak MiB is traced Python memory.
+Each render row is compared with its floor, measured in the same run: the numbers it prints alone
+made into text (``fixed_bytes`` of positions, A B C, feeds, and for KRL S, T and the hole numbers
+of every position, NULs dropped), without the lines around them.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from accugrid.codegen.gcode.emit import render_gcode  # noqa: E402
 from accugrid.codegen.krl.emit import render_krl  # noqa: E402
 from accugrid.codegen.points import parse_points  # noqa: E402
 from accugrid.codegen.program import build_program  # noqa: E402
+from accugrid.codegen.textsafe import fixed_bytes  # noqa: E402
 from accugrid.compensation import GridModel  # noqa: E402
 from accugrid.kinematics.robot import load_robot  # noqa: E402
 from bench.timing import measure, table  # noqa: E402
@@ -68,6 +72,21 @@ def robot_points_csv(n: int = HOLES) -> str:
     return "id,x,y,z,i,j,k,diameter,depth\n" + "\n".join(rows) + "\n"
 
 
+def numbers_floor(program, frame: np.ndarray, per_position_ints: bool) -> bytes:
+    """The text of the numbers a program prints, one after another: positions (n, 4, 3) and
+    A B C (n, 3) in ``frame`` with the program's decimals, feeds with 1 decimal, and (KRL:
+    ``per_position_ints``) S, T and the hole number of each of 3 positions per hole."""
+    pos, abc = program.in_frame(frame)
+    cells = [fixed_bytes(np.concatenate([pos.reshape(-1), abc.reshape(-1)]), 3)[0]]
+    cells.append(fixed_bytes(program.feed_mm_s * 60.0, 1)[0])
+    if per_position_ints:
+        status, turn = program.configuration.to_kuka()
+        number = np.repeat(np.arange(1, len(program) + 1), 3)
+        ints = np.concatenate([status[:, :3].reshape(-1), turn[:, :3].reshape(-1), number])
+        cells.append(fixed_bytes(ints, 0)[0])
+    return b"".join(c.tobytes().translate(None, b"\0") for c in cells)
+
+
 def main() -> None:
     cell = load_cell(ROOT / "examples" / "cell.yaml")
     grid = GridModel.from_measurements(ROOT / "examples" / "grid_200mm.csv")
@@ -92,7 +111,12 @@ def main() -> None:
         ("parse points CSV", lambda: parse_points(text, "bench.csv")),
         ("correction + IK (program model)", lambda: build_program(points, cell, robot, grid)),
         ("render KRL (.src/.dat)", lambda: sum(map(len, render_krl(program, header).values()))),
+        ("floor: KRL numbers as text", lambda: numbers_floor(program, cell.robot_T_base, True)),
         ("render G-code (.ngc)", lambda: render_gcode(program, header)),
+        (
+            "floor: G-code numbers as text",
+            lambda: numbers_floor(program, cell.gcode.robot_T_program, False),
+        ),
         ("accugrid krl (read, correct, IK, render, write)", krl_job),
         ("accugrid gcode (read, correct, IK, render, write)", gcode_job),
     ]
@@ -109,6 +133,12 @@ def main() -> None:
         f"{cell.krl.lines_per_file}"
     )
     print(table(rows, ("stage", "best s", "peak MiB")))
+    best = {name: float(seconds) for name, seconds, _ in rows}
+    print(
+        "render / floor: KRL "
+        f"{best['render KRL (.src/.dat)'] / best['floor: KRL numbers as text']:.1f}x, G-code "
+        f"{best['render G-code (.ngc)'] / best['floor: G-code numbers as text']:.1f}x"
+    )
 
 
 if __name__ == "__main__":

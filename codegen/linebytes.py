@@ -43,8 +43,9 @@ def text_cells(texts: Sequence[str]) -> np.ndarray:
 
 def line_image(template: str, cells: Sequence[np.ndarray]) -> np.ndarray:
     """The image (n, L) uint8 of ``template`` (ASCII, one item's text with ``SLOT`` where each of
-    ``cells`` goes, in order) filled with ``cells``, each (n, w_k) uint8: every row is the constant
-    text with the item's cells in their slots."""
+    ``cells`` goes, in order) filled with ``cells``, each (n, w_k) uint8 with each row's bytes
+    adjacent (a C-contiguous last axis, as the cells above and their row selections have): every
+    row is the constant text with the item's cells in their slots."""
     texts = template.encode("ascii").split(SLOT.encode())
     if len(texts) != len(cells) + 1 or not cells:
         raise ValueError(f"template with {len(texts) - 1} slots for {len(cells)} cells")
@@ -59,7 +60,9 @@ def line_image(template: str, cells: Sequence[np.ndarray]) -> np.ndarray:
     image = np.empty((len(cells[0]), len(row)), np.uint8)
     image[:] = row
     for at, width, cell in zip(slots, widths, cells, strict=False):
-        image[:, at : at + width] = cell
+        if width:  # each row's cell as one element: a copy per row, not per byte
+            whole = f"V{width}"
+            image[:, at : at + width].view(whole)[:, 0] = cell.view(whole)[:, 0]
     return image
 
 
