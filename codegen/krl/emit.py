@@ -490,15 +490,15 @@ class _Records:
         """The line image of the .dat lines of the block of holes from ``start``: per hole, one
         DECL E6POS line per stage."""
         n, k = len(block.pos), len(self.stages)
-        number = np.arange(start + 1, start + n + 1)
         mm = number_cells(
             np.concatenate([block.pos.reshape(n, 3 * k), block.abc], axis=1), self.decimals
         )
-        ints = number_cells(np.column_stack([number, block.status_turn.reshape(n, 2 * k)]), 0)
+        number = number_cells(np.arange(start + 1, start + n + 1), 0)
+        st = _ST_CELLS[block.status_turn]  # (n, k, 2, w): Status 0..7 and Turn 0..63 from a table
         cells = []
         for j in range(k):
-            cells += [ints[:, 0], *(mm[:, 3 * j + c] for c in range(3))]
-            cells += [*(mm[:, 3 * k + c] for c in range(3)), ints[:, 1 + 2 * j], ints[:, 2 + 2 * j]]
+            cells += [number, *(mm[:, 3 * j + c] for c in range(3))]
+            cells += [*(mm[:, 3 * k + c] for c in range(3)), st[:, j, 0], st[:, j, 1]]
         return line_image(self.position_template, cells)
 
     def _hole_image(self, start: int, block: SimpleNamespace) -> np.ndarray:
@@ -517,6 +517,9 @@ class _Records:
             numbers = range(lo + 1, hi + 1)
             self._named = (lo, hi, [list(map(f"XH{{}}_{s}".format, numbers)) for s in self.names])
         return self._named[2]
+
+
+_ST_CELLS = number_cells(np.arange(64), 0)  # the text of every KUKA Status (0..7) and Turn (0..63)
 
 
 def _hole_template(cell, stages: list[str]) -> str:
