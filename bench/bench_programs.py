@@ -4,9 +4,8 @@ every pose (issue target: under 5 s each). Stages timed separately, then the who
 Holes: a 400 x 250 pattern at 1.5 mm pitch on the example wing panel (examples/cell.yaml, drill
 axis normal to the 4 m radius skin), corrected with examples/grid_200mm.csv. The last two rows are
 the whole commands (CSV file in, program files out). Best of 3; peak MiB is traced Python memory.
-Each render row is compared with its floor, measured in the same run: the numbers it prints alone
-made into text (``fixed_bytes`` of positions, A B C, feeds, and for KRL S, T and the hole numbers
-of every position, NULs dropped), without the lines around them.
+Each render row is compared with its floor, measured in the same run: the numbers it prints made
+into text alone, each value once per hole (``numbers_floor``), without the lines around them.
 """
 
 from __future__ import annotations
@@ -72,19 +71,35 @@ def robot_points_csv(n: int = HOLES) -> str:
     return "id,x,y,z,i,j,k,diameter,depth\n" + "\n".join(rows) + "\n"
 
 
-def numbers_floor(program, frame: np.ndarray, per_position_ints: bool) -> bytes:
-    """The text of the numbers a program prints, one after another: positions (n, 4, 3) and
-    A B C (n, 3) in ``frame`` with the program's decimals, feeds with 1 decimal, and (KRL:
-    ``per_position_ints``) S, T and the hole number of each of 3 positions per hole."""
-    pos, abc = program.in_frame(frame)
-    cells = [fixed_bytes(np.concatenate([pos.reshape(-1), abc.reshape(-1)]), 3)[0]]
-    cells.append(fixed_bytes(program.feed_mm_s * 60.0, 1)[0])
-    if per_position_ints:
-        status, turn = program.configuration.to_kuka()
-        number = np.repeat(np.arange(1, len(program) + 1), 3)
-        ints = np.concatenate([status[:, :3].reshape(-1), turn[:, :3].reshape(-1), number])
-        cells.append(fixed_bytes(ints, 0)[0])
-    return b"".join(c.tobytes().translate(None, b"\0") for c in cells)
+def numbers_floor(program, krl: bool) -> int:
+    """Bytes of the text of every number a program prints, each value once per hole, made a
+    block of 16,384 holes at a time as the renderers do: positions (n, stages, 3) and A B C
+    (n, 3) in the dialect's frame with its decimals, the feed (n,), and for KRL the hole number
+    and the S and T of each position, NULs dropped."""
+    cell = program.cell
+    frame, places = (
+        (cell.robot_T_base, cell.krl.decimals)
+        if krl
+        else (cell.gcode.robot_T_program, cell.gcode.decimals)
+    )
+    stages = [0, 1, 2, 3]
+    if krl and cell.drilling.retract_mm == cell.drilling.approach_mm:
+        stages = [0, 1, 2]  # the RET position is the APP one
+    status, turn = program.configuration.to_kuka()
+    size = 0
+    for lo in range(0, len(program), 16384):
+        hi = min(lo + 16384, len(program))
+        pos, abc = program.in_frame(frame, lo, hi)
+        mm = np.concatenate([pos[:, stages].reshape(-1), abc.reshape(-1)])
+        cells = [
+            fixed_bytes(mm, places)[0],
+            fixed_bytes(program.feed_mm_s[lo:hi], 4 if krl else 1)[0],
+        ]
+        if krl:
+            ints = [np.arange(lo + 1, hi + 1), status[lo:hi, stages], turn[lo:hi, stages]]
+            cells.append(fixed_bytes(np.concatenate([i.reshape(-1) for i in ints]), 0)[0])
+        size += sum(len(c.tobytes().translate(None, b"\0")) for c in cells)
+    return size
 
 
 def main() -> None:
@@ -111,12 +126,9 @@ def main() -> None:
         ("parse points CSV", lambda: parse_points(text, "bench.csv")),
         ("correction + IK (program model)", lambda: build_program(points, cell, robot, grid)),
         ("render KRL (.src/.dat)", lambda: sum(map(len, render_krl(program, header).values()))),
-        ("floor: KRL numbers as text", lambda: numbers_floor(program, cell.robot_T_base, True)),
+        ("floor: KRL numbers as text", lambda: numbers_floor(program, True)),
         ("render G-code (.ngc)", lambda: render_gcode(program, header)),
-        (
-            "floor: G-code numbers as text",
-            lambda: numbers_floor(program, cell.gcode.robot_T_program, False),
-        ),
+        ("floor: G-code numbers as text", lambda: numbers_floor(program, False)),
         ("accugrid krl (read, correct, IK, render, write)", krl_job),
         ("accugrid gcode (read, correct, IK, render, write)", gcode_job),
     ]
