@@ -28,6 +28,7 @@ from accugrid.codegen.points import parse_points  # noqa: E402
 from accugrid.codegen.program import build_program  # noqa: E402
 from accugrid.codegen.textsafe import fixed_bytes, fixed_many  # noqa: E402
 from accugrid.compensation import GridModel  # noqa: E402
+from accugrid.kinematics.decimals import read_decimals, words_at  # noqa: E402
 from accugrid.kinematics.robot import load_robot  # noqa: E402
 from bench.timing import measure, table  # noqa: E402
 
@@ -119,7 +120,7 @@ def number_table(n: int = NUMBERS) -> str:
     """``textsafe.fixed_bytes`` (every number a program or CSV gets) on n numbers in one call, in
     ns per number (best of 5), against its floor measured in the same run: ``np.rint`` and
     ``astype`` of the same scaled array, the least that finds the digits; the %-formatting it
-    replaces (``fixed_many``, best of 1) for scale."""
+    replaces (``fixed_many``, best of 1) for scale. Then the reader of such texts."""
     rng = np.random.default_rng(0)
     coordinates, holes = rng.uniform(-3000.0, 3000.0, n), np.arange(1.0, n + 1.0)
 
@@ -137,7 +138,24 @@ def number_table(n: int = NUMBERS) -> str:
         rows.append((name, f"{floor:.1f}", f"{fast:.1f}", f"{fast / floor:.1f}"))
     slow = ns(lambda: fixed_many(coordinates, 3), repeats=1)
     rows.append(("+-3000 mm, 3 places: %-formatting (fixed_many)", "", f"{slow:.1f}", ""))
-    return f"fixed_bytes, {n} numbers per call\n" + table(
+    # and back: kinematics.decimals.read_decimals of those texts, one per line; its floor the
+    # gather of the 8 bytes that end each text (words_at), the least a reader touches
+    cells, _ = fixed_bytes(coordinates, 3)
+    text = np.concatenate([cells, np.full((n, 1), ord("\n"), np.uint8)], axis=1).ravel()
+    text = text[text != 0]
+    end = np.flatnonzero(text == ord("\n"))
+    start = np.concatenate([[0], end[:-1] + 1])
+    floor = ns(lambda: words_at(text, end - 8))
+    fast = ns(lambda: read_decimals(text, start, end))
+    rows.append(
+        (
+            "read_decimals of their texts (3 places)",
+            f"{floor:.1f}",
+            f"{fast:.1f}",
+            f"{fast / floor:.1f}",
+        )
+    )
+    return f"fixed_bytes and read_decimals, {n} numbers per call\n" + table(
         rows, ("numbers", "floor ns/number", "ns/number", "/ floor")
     )
 

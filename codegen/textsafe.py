@@ -141,7 +141,9 @@ def _group_table(places: int, k: int) -> tuple[int, int, np.ndarray]:
     first = np.where(shown.any(axis=1), np.argmax(shown, axis=1), _GROUP)
     room = np.flatnonzero(first > 0)
     table[2, room, first[room] - 1] = ord("-")
-    return low, size, table.reshape(-1, _GROUP).view(np.uint32).reshape(-1)
+    table = table.reshape(-1, _GROUP).view(np.uint32).reshape(-1)
+    table.flags.writeable = False  # shared by every call (cached)
+    return low, size, table
 
 
 def fixed_bytes(values: np.ndarray, places: int) -> tuple[np.ndarray, np.ndarray]:
