@@ -238,6 +238,7 @@ def _write_rows(
     row is longer, its sign column."""
     m = len(q)
     always = places + (2 if places else 1)  # text bytes always shown: decimals, point, ones
+    signs = bool(negative.any())
 
     def signed(position: int) -> np.ndarray:
         """Where the ``-`` is at byte ``position`` (from the right) or left of it."""
@@ -247,21 +248,26 @@ def _write_rows(
 
     if width > _GROUP * groups:
         column = np.ndarray((m,), np.uint8, text, start, (pitch,))
-        np.multiply(signed(width - 1), np.uint8(ord("-")), out=column)
+        if signs:
+            np.multiply(signed(width - 1), np.uint8(ord("-")), out=column)
+        else:
+            column[...] = 0
     above = None  # q's digits left of the group
     for k in range(groups - 1, -1, -1):
         low, size, table = _group_table(places, k)
         here = q // q.dtype.type(10**low) if low else q
+        code = None  # the table's section of each row: 0, 1 or 2 (times size)
         if above is None:  # the leftmost group (with digits): nothing above it
             index = np.add(size, here)
-            code = signed(_GROUP * k).astype(q.dtype)
+            if signs:
+                code = signed(_GROUP * k).astype(q.dtype)
         else:
             index = here - above * size
-            code = None
             if _GROUP * (k + 1) > always:  # leading zeros or the sign may fall in this group
                 top = above == 0
-                code = (top & signed(_GROUP * k)).astype(q.dtype)
-                code += top
+                code = top.astype(q.dtype)
+                if signs:
+                    code += top & signed(_GROUP * k)
         if code is not None:
             code *= size
             index += code
