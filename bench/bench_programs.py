@@ -28,13 +28,15 @@ from accugrid.codegen.gcode.emit import render_gcode  # noqa: E402
 from accugrid.codegen.krl.emit import render_krl  # noqa: E402
 from accugrid.codegen.points import parse_points  # noqa: E402
 from accugrid.codegen.program import build_program  # noqa: E402
-from accugrid.codegen.textsafe import fixed_bytes  # noqa: E402
+from accugrid.codegen.textsafe import fixed_bytes, fixed_many  # noqa: E402
 from accugrid.compensation import GridModel  # noqa: E402
+from accugrid.kinematics.decimals import read_decimals, words_at  # noqa: E402
 from accugrid.kinematics.robot import load_robot  # noqa: E402
 from bench.timing import measure, table  # noqa: E402
 
 HOLES = 100_000
 RADIUS_MM = 4000.0
+NUMBERS = 1_500_000  # fixed_bytes rows: numbers formatted in one call
 
 
 def points_csv(n: int = HOLES) -> str:
@@ -150,6 +152,52 @@ def main() -> None:
         "render / floor: KRL "
         f"{best['render KRL (.src/.dat)'] / best['floor: KRL numbers as text']:.1f}x, G-code "
         f"{best['render G-code (.ngc)'] / best['floor: G-code numbers as text']:.1f}x"
+    )
+    print()
+    print(number_table())
+
+
+def number_table(n: int = NUMBERS) -> str:
+    """``textsafe.fixed_bytes`` (every number a program or CSV gets) on n numbers in one call, in
+    ns per number (best of 5), against its floor measured in the same run: ``np.rint`` and
+    ``astype`` of the same scaled array, the least that finds the digits; the %-formatting it
+    replaces (``fixed_many``, best of 1) for scale. Then the reader of such texts."""
+    rng = np.random.default_rng(0)
+    coordinates, holes = rng.uniform(-3000.0, 3000.0, n), np.arange(1.0, n + 1.0)
+
+    def ns(func, repeats=5):
+        return measure(func, repeats)[0] * 1e9 / n
+
+    rows = []
+    for name, values, places in [
+        ("+-3000 mm, 3 places", coordinates, 3),
+        ("+-3000 mm, 0 places", coordinates, 0),
+        (f"hole numbers 1..{n}, 0 places", holes, 0),
+    ]:
+        floor = ns(lambda v=values, p=places: np.rint(v * 10.0**p).astype(np.int64))
+        fast = ns(lambda v=values, p=places: fixed_bytes(v, p))
+        rows.append((name, f"{floor:.1f}", f"{fast:.1f}", f"{fast / floor:.1f}"))
+    slow = ns(lambda: fixed_many(coordinates, 3), repeats=1)
+    rows.append(("+-3000 mm, 3 places: %-formatting (fixed_many)", "", f"{slow:.1f}", ""))
+    # and back: kinematics.decimals.read_decimals of those texts, one per line; its floor the
+    # gather of the 8 bytes that end each text (words_at), the least a reader touches
+    cells, _ = fixed_bytes(coordinates, 3)
+    text = np.concatenate([cells, np.full((n, 1), ord("\n"), np.uint8)], axis=1).ravel()
+    text = text[text != 0]
+    end = np.flatnonzero(text == ord("\n"))
+    start = np.concatenate([[0], end[:-1] + 1])
+    floor = ns(lambda: words_at(text, end - 8))
+    fast = ns(lambda: read_decimals(text, start, end))
+    rows.append(
+        (
+            "read_decimals of their texts (3 places)",
+            f"{floor:.1f}",
+            f"{fast:.1f}",
+            f"{fast / floor:.1f}",
+        )
+    )
+    return f"fixed_bytes and read_decimals, {n} numbers per call\n" + table(
+        rows, ("numbers", "floor ns/number", "ns/number", "/ floor")
     )
 
 
