@@ -193,7 +193,8 @@ def _walked(step, case):
     text, moves, corrected, desired, r_planes, places = case
     walk = _Commanded()
     walk.cmd, walk.r_cmd = [1.0, 2.0, 50.0], 7.0  # as a previous block may leave it
-    edits = step(text, moves, slice(0, len(moves)), corrected, desired, r_planes, places, walk)
+    found = step(text, moves, slice(0, len(moves)), corrected, desired, r_planes, places, walk)
+    edits = [np.asarray(column).tolist() for column in found]  # starts, ends, bytes, lengths
     reached = np.frombuffer(walk.reached_rows, float).reshape(-1, 3)
     carried = np.array([*walk.cmd, walk.cycle_z, walk.r_cmd])
     return edits, carried, reached, walk.reached_at.tolist()

@@ -10,7 +10,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from accugrid.codegen.krl import parse, splice
+from accugrid.codegen import splice
+from accugrid.codegen.krl import parse
 from accugrid.codegen.krl.rigid import PAD, text_bytes
 from accugrid.codegen.program_text import splice as splice_text
 from accugrid.codegen.textsafe import fixed

@@ -19,7 +19,7 @@ from accugrid.codegen.gcode.parse import GcodeMoves, gcode_moves, modal_fill
 from accugrid.codegen.program_text import (
     MIN_PLACES_INCH,
     MIN_PLACES_MM,
-    Splicer,
+    distinct_ints,
     formatted,
     number_text,
     precision,
@@ -33,6 +33,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
     strict_check,
 )
+from accugrid.codegen.splice import ByteSplicer
 from accugrid.codegen.textsafe import fixed_bytes
 
 __all__ = ["rewrite_gcode"]
@@ -136,7 +137,7 @@ def _gcode_edits(
     corrected R planes (NaN: keep). Stretches of absolute moves (none a G28/G30/G53) are done
     in bulk (``_bulk_block``), the rest move by move (``_walk_block``), where increments (which
     depend on what was written before) are formatted on the way."""
-    out = Splicer(text)
+    out = ByteSplicer(text)
     places = _places(moves, opts)
     corrected = rows.status == CORRECTED
     walk = _Commanded()
@@ -180,8 +181,9 @@ def _stretches(moves: GcodeMoves, block: slice):
 
 
 def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
-    """The edits (starts, ends, new texts; sorted lists) of the moves ``block`` (a slice), move
-    by move, carrying ``walk`` (a ``_Commanded``) on."""
+    """The edits of the moves ``block`` (a slice), move by move, carrying ``walk`` (a
+    ``_Commanded``) on: as ``ByteSplicer.add`` takes them (starts, ends sorted, the new texts'
+    bytes one after another, their lengths)."""
     first = block.start
     scales = moves.scale.reshape(-1, 1)
     absolute = formatted(
@@ -268,7 +270,11 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         cmd = end
     walk.cmd, walk.cycle_z, walk.r_cmd = cmd, cycle_z, r_cmd
     edits.sort()
-    return tuple(map(list, zip(*edits, strict=True))) if edits else ([], [], [])
+    starts = np.array([e[0] for e in edits], np.int64)
+    ends = np.array([e[1] for e in edits], np.int64)
+    texts = [e[2] for e in edits]
+    lengths = np.fromiter(map(len, texts), np.int64, len(texts))
+    return starts, ends, np.frombuffer("".join(texts).encode("ascii"), np.uint8), lengths
 
 
 def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
@@ -288,16 +294,17 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     goal[:, 3] = np.where(wrote_r, r_planes[block] / scale, np.nan)
     goal = goal.ravel()
     new = np.full(4 * n, np.nan)  # the value each new text reads as
-    texts = np.empty(4 * n, dtype=object)
     place = np.repeat(places[block], 4)
-    for p in np.unique(place).tolist():
+    # the texts fixed gives and the values they read as, from the formatter's array form: the
+    # texts' bytes of each count of places, and each number's group and row in them
+    cells_of, group, row = [], np.full(4 * n, -1, np.int64), np.empty(4 * n, np.int64)
+    for p in distinct_ints(place):
         idx = np.flatnonzero(np.isfinite(goal) & (place == p))
         if not len(idx):
             continue
-        # the texts fixed gives and the values they read as, from the formatter's array form
         cells, new[idx] = fixed_bytes(goal[idx], p)
-        lines = np.concatenate([cells, np.full((len(idx), 1), 10, np.uint8)], axis=1).ravel()
-        texts[idx] = lines[lines != 0].tobytes().decode("ascii").split("\n")[:-1]
+        group[idx], row[idx] = len(cells_of), np.arange(len(idx))
+        cells_of.append(cells)
     edit = np.isfinite(new) & (new != values.ravel())
     written = np.where(edit, new, values.ravel()).reshape(n, 4) * scale[:, None]  # NaN: none
     r_cmd = modal_fill(written[:, 3], wrote_r, walk.r_cmd)
@@ -329,7 +336,17 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     starts = moves.word_start[block].ravel()[at]
     order = np.argsort(starts, kind="stable")
     at = at[order]
-    return starts[order].tolist(), moves.word_end[block].ravel()[at].tolist(), texts[at].tolist()
+    # the new texts in the edits' order, as rows of their cells (NUL-padded on the left)
+    if len(cells_of) == 1:
+        rows = cells_of[0][row[at]]
+    else:
+        rows = np.zeros((len(at), max((c.shape[1] for c in cells_of), default=1)), np.uint8)
+        for g, cells in enumerate(cells_of):
+            mine = np.flatnonzero(group[at] == g)
+            rows[mine, rows.shape[1] - cells.shape[1] :] = cells[row[at[mine]]]
+    shown = rows != 0
+    ends = moves.word_end[block].ravel()[at]
+    return starts[order], ends, rows[shown], shown.sum(axis=1)
 
 
 def _places(moves: GcodeMoves, opts: Options) -> np.ndarray:

@@ -27,7 +27,6 @@ from accugrid.codegen.krl.parse import (
     scan_krl,
     wildcard,
 )
-from accugrid.codegen.krl.splice import ByteSplicer, literals
 from accugrid.codegen.krl.tables import MOTION, PositionTable
 from accugrid.codegen.program_text import MIN_PLACES_MM, precision
 from accugrid.codegen.rewrite import (
@@ -39,6 +38,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
     strict_check,
 )
+from accugrid.codegen.splice import ByteSplicer, literals
 from accugrid.kinematics.frames import pose_from_xyzabc
 
 __all__ = ["rewrite_krl"]

@@ -1,7 +1,7 @@
-"""Many number literals of a program replaced at once, as bytes (the output of the KRL rewrite,
-``codegen.krl.rewrite``): the new literals formatted in one pass and read back exactly
-(``literals``), then copied into the program's bytes with array operations (``ByteSplicer``),
-never a Python string per literal.
+"""Many number literals of a program replaced at once, as bytes (the output of both rewriters,
+``codegen.krl.rewrite`` and ``codegen.gcode.rewrite``): the new literals formatted in one pass and
+read back exactly (``literals``), then copied into the program's bytes with array operations
+(``ByteSplicer``), never a Python string per literal.
 """
 
 from __future__ import annotations
