@@ -28,7 +28,7 @@ from accugrid.codegen.krl.parse import (
     wildcard,
 )
 from accugrid.codegen.krl.tables import MOTION, PositionTable
-from accugrid.codegen.program_text import MIN_PLACES_MM, precision
+from accugrid.codegen.program_text import MIN_PLACES_MM, distinct_ints, precision
 from accugrid.codegen.rewrite import (
     CORRECTED,
     Options,
@@ -112,7 +112,7 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
     frame = np.full(n, -1, np.int64)
     open_ = np.fromiter(map(bool, reasons), bool, n) == 0 if any(reasons) else np.ones(n, bool)
     motion = open_ & (t.kind == MOTION)
-    for b in np.unique(t.base[motion]).tolist():
+    for b in distinct_ints(t.base[motion]):
         at = np.flatnonzero(motion & (t.base == b))
         _, f, reason = ctx.resolve(scan.bases[b])
         if reason:
