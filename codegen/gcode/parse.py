@@ -35,6 +35,7 @@ from accugrid.kinematics.errors import InputError
 __all__ = [
     "AXES",
     "CYCLES",
+    "RESETS",
     "INCH_MM",
     "ROTARY",
     "WORD_LETTERS",
@@ -127,6 +128,8 @@ _G_NAMES = {float(g): g for g in (str(i) for i in range(100))}
 _new_word = tuple.__new__  # a Word without the NamedTuple constructor's Python frame
 _NAN3 = (math.nan, math.nan, math.nan)
 WORD_LETTERS = "XYZR"  # the words a move keeps, in the order its ``words`` dict lists them
+RESETS = frozenset(("G28", "G30", "G53"))  # moves after which the position is not known
+_F_INCREMENTAL, _F_CYCLE, _F_RESETS, _F_G99 = 1, 2, 4, 8  # ``GcodeMoves`` row flags
 
 
 class Word(NamedTuple):
@@ -182,18 +185,24 @@ class GcodeMoves:
     ``GcodeMove`` on demand.
 
     After ``finish``: ``line``, ``column`` (N,) int; ``start``, ``target``, ``end`` (N, 3) mm in
-    the program frame (NaN where unknown); ``scale`` and ``r_mm`` (N,) mm; ``incremental`` and
-    ``is_cycle`` (N,) bool; ``setters`` (N, 3) int (-1: none); ``word_start``, ``word_end`` (N, 4)
-    text offsets of the X, Y, Z, R numbers (-1: not written) and ``word_value`` (N, 4) their
-    values in program units; ``rotary_index`` (N,) int into ``rotaries`` (the distinct rotary
-    dicts, each once); ``motion``, ``reason``, ``retract`` lists of str."""
+    the program frame (NaN where unknown); ``scale`` and ``r_mm`` (N,) mm; ``incremental``,
+    ``is_cycle``, ``resets`` (a G28/G30/G53 move, after which the position is not known) and
+    ``g99`` (a cycle retracting to R) (N,) bool; ``setters`` (N, 3) int (-1: none);
+    ``word_start``, ``word_end`` (N, 4) text offsets of the X, Y, Z, R numbers (-1: not written)
+    and ``word_value`` (N, 4) their values in program units; ``rotary_index`` (N,) int into
+    ``rotaries`` (the distinct rotary dicts, each once); ``motion``, ``reason``, ``retract``
+    lists of str.
+
+    Rows come one by one (``add``, kept in ``array`` buffers) or in bulk (``extend``, kept as
+    the arrays given); ``finish`` joins them once."""
 
     def __init__(self, path: str | None, text: str) -> None:
         self.path, self.text = path, text
         self._ints = array("q")  # per move: line, column, 3 setters, 4 word starts, 4 word ends
         self._floats = array("d")  # per move: start, target, end (9), scale, r_mm, 4 values
-        self._flags = array("b")  # per move: incremental + 2 * is_cycle
+        self._flags = array("b")  # per move: the _F_ bits
         self._rotary = array("q")
+        self._blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
         self.rotaries: list[dict[str, float]] = []
         self.motion: list[str] = []
         self.reason: list[str] = []
@@ -249,24 +258,51 @@ class GcodeMoves:
                 math.nan if r is None else r.value,
             )
         )
-        self._flags.append(state.incremental + 2 * cycle)
-        names = self._names
         retract = state.retract if cycle else ""
+        self._flags.append(
+            state.incremental * _F_INCREMENTAL
+            + cycle * _F_CYCLE
+            + (motion in RESETS) * _F_RESETS
+            + (retract == "G99") * _F_G99
+        )
+        names = self._names
         self.motion.append(names.setdefault(motion, motion))
         self.retract.append(names.setdefault(retract, retract))
         self.reason.append(reason)
 
-    def extend(self, ints, floats, cycle, rotary, motion, retract, reason) -> None:
+    def _flush(self) -> None:
+        """The rows ``add`` stored since the last block, as a block."""
+        m = len(self._flags)
+        if not m:
+            return
+        self._blocks.append(
+            (
+                np.frombuffer(self._ints, np.int64).reshape(m, 13),
+                np.frombuffer(self._floats, float).reshape(m, 15),
+                np.frombuffer(self._flags, np.int8),
+                np.frombuffer(self._rotary, np.int64),
+            )
+        )
+        self._ints, self._floats = array("q"), array("d")  # the block keeps the old buffers
+        self._flags, self._rotary = array("b"), array("q")
+
+    def extend(self, ints, floats, cycle, g99, rotary, motion, retract, reason) -> None:
         """Store rows in bulk, as ``add`` stores one: ``ints`` (M, 13) and ``floats`` (M, 15) in
-        the row layout, ``cycle`` (M,) bool (no row is incremental), ``rotary`` the dict in
-        effect for all, ``motion``/``retract``/``reason`` M strings each."""
+        the row layout, ``cycle`` and ``g99`` (M,) bool (no row is incremental nor resets the
+        position), ``rotary`` the dict in effect for all, ``motion``/``retract``/``reason`` M
+        strings each. The arrays are kept, not copied."""
+        self._flush()
         if not self.rotaries or rotary is not self.rotaries[-1]:
             self.rotaries.append(rotary)
         m = len(motion)
-        self._rotary.frombytes(np.full(m, len(self.rotaries) - 1, np.int64).tobytes())
-        self._ints.frombytes(np.ascontiguousarray(ints, np.int64).tobytes())
-        self._floats.frombytes(np.ascontiguousarray(floats, float).tobytes())
-        self._flags.frombytes((2 * np.asarray(cycle, np.int8)).tobytes())
+        self._blocks.append(
+            (
+                np.asarray(ints, np.int64).reshape(m, 13),
+                np.asarray(floats, float).reshape(m, 15),
+                (_F_CYCLE * np.asarray(cycle, np.int8) + _F_G99 * g99).astype(np.int8),
+                np.full(m, len(self.rotaries) - 1, np.int64),
+            )
+        )
         names = self._names
         same = {k: names.setdefault(k, k) for k in {*motion, *retract}}  # one str per name
         self.motion += map(same.__getitem__, motion)
@@ -274,30 +310,44 @@ class GcodeMoves:
         self.reason += reason
 
     def finish(self) -> GcodeMoves:
-        """Expose the columns as arrays (views of the stored rows)."""
-        n = len(self)
-        ints = np.frombuffer(self._ints, dtype=np.int64).reshape(n, 13)
-        floats = np.frombuffer(self._floats, dtype=float).reshape(n, 15)
-        flags = np.frombuffer(self._flags, dtype=np.int8)
+        """Expose the columns as arrays (views of the joined rows)."""
+        self._flush()
+        blocks = self._blocks or [
+            (
+                np.zeros((0, 13), np.int64),
+                np.zeros((0, 15)),
+                np.zeros(0, np.int8),
+                np.zeros(0, np.int64),
+            )
+        ]
+        ints, floats, flags, rotary = (
+            np.concatenate(column) if len(blocks) > 1 else column[0]
+            for column in zip(*blocks, strict=True)
+        )
+        self._blocks = []
+        self.ints, self.floats, self.flags = ints, floats, flags
         self.line, self.column, self.setters = ints[:, 0], ints[:, 1], ints[:, 2:5]
         self.word_start, self.word_end = ints[:, 5:9], ints[:, 9:13]
         self.start, self.target, self.end = floats[:, 0:3], floats[:, 3:6], floats[:, 6:9]
         self.scale, self.r_mm, self.word_value = floats[:, 9], floats[:, 10], floats[:, 11:15]
-        self.incremental, self.is_cycle = (flags & 1) != 0, (flags & 2) != 0
-        self.rotary_index = np.frombuffer(self._rotary, dtype=np.int64)
+        self.incremental = (flags & _F_INCREMENTAL) != 0
+        self.is_cycle = (flags & _F_CYCLE) != 0
+        self.resets = (flags & _F_RESETS) != 0
+        self.g99 = (flags & _F_G99) != 0
+        self.rotary_index = rotary
         return self
 
     def move(self, i: int) -> GcodeMove:
-        """Move ``i`` as a ``GcodeMove`` (as the reader built it)."""
-        ints = self._ints[13 * i : 13 * i + 13].tolist()
-        floats = self._floats[15 * i : 15 * i + 15].tolist()
+        """Move ``i`` as a ``GcodeMove`` (as the reader built it; after ``finish``)."""
+        ints = self.ints[i].tolist()
+        floats = self.floats[i].tolist()
         words = {}
         for k, letter in enumerate(WORD_LETTERS):
             start, end = ints[5 + k], ints[9 + k]
             if start >= 0:
                 literal = self.text[start:end]
                 words[letter] = _new_word(Word, (letter, floats[11 + k], start, end, literal))
-        flags = self._flags[i]
+        flags = int(self.flags[i])
         return GcodeMove(
             self.path,
             ints[0],
@@ -306,15 +356,15 @@ class GcodeMoves:
             tuple(floats[0:3]),
             tuple(floats[3:6]),
             words,
-            bool(flags & 1),
+            bool(flags & _F_INCREMENTAL),
             floats[9],
             self.reason[i],
-            self.rotaries[self._rotary[i]],
+            self.rotaries[self.rotary_index[i]],
             tuple(None if j < 0 else j for j in ints[2:5]),
             self.retract[i],
             floats[10],
             tuple(floats[6:9]),
-            bool(flags & 2),
+            bool(flags & _F_CYCLE),
         )
 
 
@@ -722,7 +772,8 @@ class _Reader:
                     reason[k] = f"{axes} not known here (no absolute value since the start)"
         names = _MOTION_NAMES[motion].tolist()
         retracts = _RETRACT_NAMES[np.where(cycle, retract, 0)].tolist()
-        self.moves.extend(ints, floats, cycle, s.rotary, names, retracts, reason)
+        g99 = cycle & (retract == 99)
+        self.moves.extend(ints, floats, cycle, g99, s.rotary, names, retracts, reason)
         s.motion, s.unknown_motion = str(motion[-1]), ""
         s.retract = f"G{retract[-1]}"
         s.cycle_z, s.cycle_r = float(cycle_z[-1]), float(r_mm[-1])
@@ -923,9 +974,10 @@ def _chunk(text: str, start: int, stop: int, lineno: int, reader: _Reader) -> in
             spans[has, k, 1] = stops[np.searchsorted(stops, where[has])]
         values = np.full((len(at), 4), np.nan)
         written = spans[:, :, 0] >= 0
-        values[written] = literal_values(buf, spans[:, :, 0][written], spans[:, :, 1][written])
+        number_at, number_end = spans[:, :, 0][written], spans[:, :, 1][written]
+        values[written] = literal_values(buf, number_at, number_end)
         finite = ~np.isinf(values).any(axis=1)
-        spans[written] += start
+        spans[written] = np.stack([number_at, number_end], axis=1) + start  # offsets in the text
         retract, motion = retract[at], motion[at]
         plain[at[~finite]] = False  # a literal beyond the float range: the line reader says where
     begins, ends = (begins + start).tolist(), (ends + start).tolist()

@@ -15,7 +15,7 @@ from array import array
 
 import numpy as np
 
-from accugrid.codegen.gcode.parse import GcodeMoves, gcode_moves, modal_fill
+from accugrid.codegen.gcode.parse import RESETS, GcodeMoves, gcode_moves, modal_fill
 from accugrid.codegen.program_text import (
     MIN_PLACES_INCH,
     MIN_PLACES_MM,
@@ -157,7 +157,6 @@ def _gcode_edits(
     return out.finish()
 
 
-_RESETS = frozenset(("G28", "G30", "G53"))  # moves after which the position is not known
 _MIN_BULK = 256  # moves: a shorter stretch of absolute moves is walked with its neighbours
 
 
@@ -165,10 +164,8 @@ def _stretches(moves: GcodeMoves, block: slice):
     """(slice, step) of each stretch of the moves ``block``, in order: ``_bulk_block`` for runs
     of at least ``_MIN_BULK`` absolute moves that do not reset the position, ``_walk_block`` for
     the moves between them."""
-    n = len(moves.motion[block])
-    walked = moves.incremental[block] | np.fromiter(
-        map(_RESETS.__contains__, moves.motion[block]), bool, n
-    )
+    walked = moves.incremental[block] | moves.resets[block]
+    n = len(walked)
     runs = np.flatnonzero(np.diff(walked, prepend=True, append=True)).reshape(-1, 2)
     done = 0
     for lo, hi in runs[runs[:, 1] - runs[:, 0] >= min(_MIN_BULK, n)].tolist():
@@ -220,7 +217,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         r_mm,
         retract,
     ) in enumerate(columns):
-        if motion in _RESETS:
+        if motion in RESETS:
             cmd = [math.nan] * 3
             continue
         incremental = inc and not is_cycle
@@ -315,7 +312,7 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     # Z: a straight move's as written; a cycle's retract: nothing known without an R plane,
     # R under G99, the higher of the previous end and R under G98
     r_mm = moves.r_mm[block]
-    g99 = np.fromiter(map("G99".__eq__, moves.retract[block]), bool, n)
+    g99 = moves.g99[block]
     end[:, 2] = np.where(cycle, np.where(np.isnan(r_mm), np.nan, r_cmd), written[:, 2])
     carried = np.flatnonzero((cycle & ~g99 & ~np.isnan(r_mm)) | ~(cycle | wrote[:, 2])).tolist()
     if carried:  # those that depend on the previous end: one by one
