@@ -471,13 +471,17 @@ def _correct(
     at = np.concatenate([starts[s] + t for s, t in enumerate(todo)])
     n = len(which)
     robot = np.empty((n, 3))
-    rotations = np.empty((n, 3, 3))
     for a in range(0, n, _BLOCK):  # (N, 4, 4) frames a block at a time
         f = stack[which[a : a + _BLOCK]]
         robot[a : a + _BLOCK] = (
             np.einsum("nij,nj->ni", f[:, :3, :3], base_xyz[a : a + _BLOCK]) + f[:, :3, 3]
         )
-        rotations[a : a + _BLOCK] = rotations_of(f[:, :3, :3], abc[a : a + _BLOCK])
+    # the orientation of each run of positions in one frame with the same A, B, C (a whole file,
+    # mostly) computed once, for its first position
+    first = np.ones(n, bool)
+    first[1:] = (which[1:] != which[:-1]) | (abc[1:] != abc[:-1]).any(axis=1)  # NaN: its own
+    heads = np.flatnonzero(first)
+    rotations = rotations_of(stack[which[heads]][:, :3, :3], abc[heads])[np.cumsum(first) - 1]
     corrected = correct_points(robot, rows, at, opts, rotations)
     del rotations
     targets = np.full((n, 3), np.nan)
