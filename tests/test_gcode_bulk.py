@@ -277,3 +277,32 @@ def test_edits_in_stretches_are_the_move_by_move_edits(lines, data, min_bulk, de
     assert a == b
     for x, y in zip(columns_a, columns_b, strict=True):
         assert np.array_equal(x, y, equal_nan=True)
+
+
+LINE_PIECES = st.sampled_from(
+    ["N12 ", "N7\t", "G0 ", "G00 ", "G01 ", "G1 ", "G10 ", "G010 ", "G81 ", "G89 ", "G80 "]
+    + ["G73 ", "G98 ", "G99 ", "G100 ", "G0.5 ", "g1 ", "G", "X", "Y", "Z", "R", "F", "N"]
+    + ["12", "3", "0", "99", "-", "+", ".", "1.5", " ", "  ", "\t", "(", ")", "(move 12)"]
+    + [";", "\r", "9", "#1", "\u0663", "\u03a9", "\xe9", "\x0b"]  # Arabic-Indic 3 is \\d too
+)
+
+
+ANY_LINE = st.one_of(
+    plain_lines(),
+    st.tuples(plain_lines(), LINE_PIECES, st.integers(0, 40)).map(  # one piece put in a plain one
+        lambda t: t[0][: t[2]] + t[1] + t[0][t[2] :]
+    ),
+    st.lists(LINE_PIECES, max_size=10).map("".join),
+)
+
+
+@settings(max_examples=400)
+@given(st.lists(ANY_LINE, min_size=1, max_size=12))
+def test_line_codes_are_those_of_the_regex_on_every_line(lines):
+    """The heads found by matching each distinct shape of line once are those ``_ROW_RE`` finds
+    in every line of the text."""
+    chunk = "\n".join(lines)
+    count = len(lines)
+    heads = parse._ROW_RE.findall(chunk)[:count]
+    expected = [parse._plain_codes(head) for head in heads]
+    assert parse._line_codes(chunk, count)[0].tolist() == expected
