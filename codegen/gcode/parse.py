@@ -77,6 +77,9 @@ _ROW_RE = re.compile(
 _CODES_RE = re.compile(r"(?:G(9[89])[ \t]++)?+(?:G(\d++)[ \t]++)?+[XYZ]")
 _NOT_IN_NUMBER = np.ones(256, bool)
 _NOT_IN_NUMBER[list(NUMBER_BYTES)] = False
+_DIGIT = np.zeros(256, bool)
+_DIGIT[48:58] = True
+_NINES = bytes.maketrans(b"0123456789", b"9" * 10)  # every digit as a 9
 _CHUNK = 1 << 20  # characters per whole-text pass (bounds the per-line tuples held at once)
 _DIGITS_RE = re.compile(r"\d++")
 _OWORD_RE = re.compile(
@@ -647,11 +650,12 @@ def _line_codes(chunk: str, count: int) -> tuple[np.ndarray, np.ndarray]:
         packed = np.fromiter(map(codes.__getitem__, heads), np.int64, count)
         return packed, np.frombuffer(chunk.encode("latin-1", "replace"), np.uint8)
     buf = np.frombuffer(data, np.uint8)
-    digit = (buf >= 48) & (buf <= 57)
-    kept = np.zeros(len(buf), bool)  # a G-code's digits
-    kept[1:] = buf[:-1] == ord("G")
-    kept[2:] |= (buf[:-2] == ord("G")) & digit[1:-1]
-    nines = np.where(digit & ~kept, np.uint8(ord("9")), buf)
+    nines = np.frombuffer(data.translate(_NINES), np.uint8).copy()
+    first = np.flatnonzero(buf[:-1] == ord("G")) + 1  # a G-code's digits: its first two
+    first = first[_DIGIT[buf[first]]]
+    second = first[first + 1 < len(buf)] + 1
+    second = second[_DIGIT[buf[second]]]
+    nines[first], nines[second] = buf[first], buf[second]
     shapes = nines.tobytes().decode("latin-1").split("\n")
     del shapes[count:]
     codes = {shape: _plain_codes(_ROW_RE.match(shape)[1] or "") for shape in set(shapes)}
@@ -996,10 +1000,9 @@ def _chunk(text: str, start: int, stop: int, lineno: int, reader: _Reader) -> in
             spans[has, k, 1] = stops[np.searchsorted(stops, where[has])]
         values = np.full((len(at), 4), np.nan)
         written = spans[:, :, 0] >= 0
-        number_at, number_end = spans[:, :, 0][written], spans[:, :, 1][written]
-        values[written] = literal_values(buf, number_at, number_end)
+        values[written] = literal_values(buf, spans[:, :, 0][written], spans[:, :, 1][written])
         finite = ~np.isinf(values).any(axis=1)
-        spans[written] = np.stack([number_at, number_end], axis=1) + start  # offsets in the text
+        spans = np.where(spans >= 0, spans + start, -1)  # offsets in the text
         retract, motion = retract[at], motion[at]
         plain[at[~finite]] = False  # a literal beyond the float range: the line reader says where
     begins, ends = (begins + start).tolist(), (ends + start).tolist()
