@@ -13,7 +13,6 @@ from accugrid.codegen.textsafe import fixed_bytes
 __all__ = ["ByteSplicer", "literals"]
 
 _EDITS = 1 << 16  # edits spliced at a time (bounds the index arrays and the text encoded)
-_RUNS = 1024  # at most this many length-changing edits in them: copy the text between whole
 
 
 def literals(values: np.ndarray, places: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -44,16 +43,10 @@ class ByteSplicer:
         for a in range(0, len(starts), _EDITS):
             b = min(a + _EDITS, len(starts))
             lo, hi = self.last, int(ends[b - 1])
-            offset = np.concatenate(([0], np.cumsum(lengths[a:b])))
-            source = np.frombuffer(self.text[lo:hi].encode("latin-1"), np.uint8)
-            part = np.empty(
-                len(source) + int(offset[-1] - (ends[a:b] - starts[a:b]).sum()), np.uint8
-            )
-            _splice_part(
-                source, part, starts[a:b] - lo, ends[a:b] - lo, new[: offset[-1]], lengths[a:b]
-            )
-            new = new[offset[-1] :]
-            self.out += memoryview(part)
+            size = int(lengths[a:b].sum())
+            source = self.text[lo:hi].encode("latin-1")
+            self.out += _spliced(source, starts[a:b] - lo, ends[a:b] - lo, new[:size], lengths[a:b])
+            new = new[size:]
             self.last = hi
 
     def finish(self) -> bytearray:
@@ -64,37 +57,25 @@ class ByteSplicer:
         return self.out
 
 
-def _splice_part(
-    source: np.ndarray,
-    target: np.ndarray,
-    starts: np.ndarray,
-    ends: np.ndarray,
-    new: np.ndarray,
-    lengths: np.ndarray,
-) -> None:
-    """``target`` = ``source`` with the edits of ``ByteSplicer.add`` made (offsets in source)."""
+def _spliced(
+    source: bytes, starts: np.ndarray, ends: np.ndarray, new: np.ndarray, lengths: np.ndarray
+) -> bytearray:
+    """``source`` with ``source[starts[k]:ends[k]]`` replaced by the k-th piece of ``new`` for
+    every k (``ByteSplicer.add``'s edits, offsets in source).
+
+    The text between two edits that change the length keeps one shift: each such stretch is
+    copied whole (joined as bytes, with room for the new text of those edits between them), then
+    every new byte is put where it goes."""
     delta = lengths - (ends - starts)
+    moves = np.flatnonzero(delta)
+    view = memoryview(source)
+    cut_at = [0, *ends[moves].tolist()], [*starts[moves].tolist(), len(source)]
+    pieces: list = [b""] * (2 * len(moves) + 1)
+    pieces[0::2] = map(view.__getitem__, map(slice, *cut_at))
+    pieces[1::2] = map(bytes, lengths[moves].tolist())  # room for the new text
+    out = bytearray().join(pieces)
     shift = np.concatenate(([0], np.cumsum(delta)))  # of the text after edit k: shift[k + 1]
-    first = starts + shift[:-1]  # where each new piece goes
-    into = np.repeat(first - np.concatenate(([0], np.cumsum(lengths)[:-1])), lengths)
-    into += np.arange(len(new))
-    moves = np.flatnonzero(delta).tolist()
-    if len(moves) <= _RUNS:  # the text between length changes keeps one shift: one copy each
-        lo = 0
-        for k in moves:
-            hi, s = int(starts[k]), int(shift[k])
-            target[lo + s : hi + s] = source[lo:hi]
-            lo = int(ends[k])
-        s = int(shift[-1])
-        target[lo + s :] = source[lo:]
-    else:  # every byte kept, in order, where no new byte goes
-        kept = np.ones(len(source), bool)
-        old = ends - starts
-        kept[
-            np.repeat(starts - np.concatenate(([0], np.cumsum(old)[:-1])), old)
-            + np.arange(int(old.sum()))
-        ] = False
-        free = np.ones(len(target), bool)
-        free[into] = False
-        target[free] = source[kept]
-    target[into] = new
+    first = starts + shift[:-1] - np.concatenate(([0], np.cumsum(lengths)[:-1]))
+    into = np.repeat(first, lengths) + np.arange(len(new))  # where each new byte goes
+    np.frombuffer(out, np.uint8)[into] = new
+    return out

@@ -51,7 +51,7 @@ def test_literals_refuse_nan_like_fixed():
     st.lists(st.tuples(st.integers(0, 80), st.integers(0, 4), st.text("xyz-.9", max_size=6))),
     st.booleans(),
 )
-def test_byte_splicer_is_slicing(text, edits, every_byte):
+def test_byte_splicer_is_slicing(text, edits, few_at_a_time):
     cuts, last = [], 0
     for at, size, new in sorted(edits):
         if at >= last and at + size <= len(text):
@@ -62,16 +62,15 @@ def test_byte_splicer_is_slicing(text, edits, every_byte):
     ends = np.array([b for _, b, _ in cuts], np.int64)
     new = np.frombuffer("".join(n for _, _, n in cuts).encode(), np.uint8)
     lengths = np.array([len(n) for _, _, n in cuts], np.int64)
-    runs, edits = splice._RUNS, splice._EDITS
+    edits = splice._EDITS
     try:
-        splice._RUNS = 0 if every_byte else runs  # the path for many length changes too
-        splice._EDITS = 3  # a few edits at a time
+        splice._EDITS = 3 if few_at_a_time else edits
         out, cut = splice.ByteSplicer(text), len(cuts) // 2  # two blocks of edits
         out.add(starts[:cut], ends[:cut], new[: lengths[:cut].sum()], lengths[:cut])
         out.add(starts[cut:], ends[cut:], new[lengths[:cut].sum() :], lengths[cut:])
         got = out.finish()
     finally:
-        splice._RUNS, splice._EDITS = runs, edits
+        splice._EDITS = edits
     assert bytes(got) == expected
 
 
