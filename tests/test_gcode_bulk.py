@@ -297,12 +297,19 @@ ANY_LINE = st.one_of(
 
 
 @settings(max_examples=400)
-@given(st.lists(ANY_LINE, min_size=1, max_size=12))
-def test_line_codes_are_those_of_the_regex_on_every_line(lines):
-    """The heads found by matching each distinct shape of line once are those ``_ROW_RE`` finds
-    in every line of the text."""
-    chunk = "\n".join(lines)
-    count = len(lines)
-    heads = parse._ROW_RE.findall(chunk)[:count]
-    expected = [parse._plain_codes(head) for head in heads]
-    assert parse._line_codes(chunk, count)[0].tolist() == expected
+@given(st.lists(ANY_LINE, min_size=1, max_size=12), st.lists(ANY_LINE, max_size=6), st.booleans())
+def test_line_codes_are_those_of_the_regex_on_every_line(lines, before, few_kept):
+    """The heads found by matching each distinct shape of line once (the shapes of the lines
+    read ``before`` known already, or forgotten when more than the reader keeps) are those
+    ``_ROW_RE`` finds in every line of the text."""
+    known: dict[str, int] = {}
+    with mock.patch.object(parse, "_SHAPES_KEPT", 3 if few_kept else parse._SHAPES_KEPT):
+        for part in (before, lines):
+            chunk = "\n".join(part)
+            try:
+                data = chunk.encode("latin-1")
+            except UnicodeEncodeError:
+                data = None
+            heads = parse._ROW_RE.findall(chunk)[: len(part)]
+            expected = [parse._plain_codes(head) for head in heads]
+            assert parse._line_codes(chunk, data, len(part), known).tolist() == expected

@@ -80,6 +80,7 @@ _NOT_IN_NUMBER[list(NUMBER_BYTES)] = False
 _DIGIT = np.zeros(256, bool)
 _DIGIT[48:58] = True
 _NINES = bytes.maketrans(b"0123456789", b"9" * 10)  # every digit as a 9
+_SHAPES_KEPT = 1 << 14  # line shapes whose codes a reader keeps for the next chunks
 _CHUNK = 1 << 20  # characters per whole-text pass (bounds the per-line tuples held at once)
 _DIGITS_RE = re.compile(r"\d++")
 _OWORD_RE = re.compile(
@@ -634,21 +635,19 @@ def _plain_codes(codes: str) -> int:
     return 1000 * int(m[1] or 0) + (int(m[2]) if m[2] else -1) + 2
 
 
-def _line_codes(chunk: str, count: int) -> tuple[np.ndarray, np.ndarray]:
+def _line_codes(chunk: str, data: bytes | None, count: int, known: dict[str, int]) -> np.ndarray:
     """``_plain_codes`` of the head ``_ROW_RE`` finds in each of the first ``count`` lines of
-    ``chunk`` (M,), and the chunk's latin-1 bytes ('?' for a character beyond latin-1).
+    ``chunk`` (M,); ``data``: its latin-1 bytes (None: it has other characters); ``known``: the
+    codes of the shapes met so far (shape -> code), added to.
 
     ``_ROW_RE`` reads any digits as ``\\d`` but those of a G-code, the one or two right after
     its ``G``: lines that differ only in other digits match alike, so each distinct shape of line
     (those digits as 9s) is matched once, a few hundred shapes for 100,000 CAM lines."""
-    try:
-        data = chunk.encode("latin-1")
-    except UnicodeEncodeError:  # beyond latin-1 (a str not read from a file): \d is more than 0-9
+    if data is None:  # beyond latin-1 (a str not read from a file): \d is more than 0-9 there
         heads = _ROW_RE.findall(chunk)
         del heads[count:]
         codes = {g: _plain_codes(g) for g in set(heads)}  # each distinct head once
-        packed = np.fromiter(map(codes.__getitem__, heads), np.int64, count)
-        return packed, np.frombuffer(chunk.encode("latin-1", "replace"), np.uint8)
+        return np.fromiter(map(codes.__getitem__, heads), np.int64, count)
     buf = np.frombuffer(data, np.uint8)
     nines = np.frombuffer(data.translate(_NINES), np.uint8).copy()
     first = np.flatnonzero(buf[:-1] == ord("G")) + 1  # a G-code's digits: its first two
@@ -658,8 +657,13 @@ def _line_codes(chunk: str, count: int) -> tuple[np.ndarray, np.ndarray]:
     nines[first], nines[second] = buf[first], buf[second]
     shapes = nines.tobytes().decode("latin-1").split("\n")
     del shapes[count:]
-    codes = {shape: _plain_codes(_ROW_RE.match(shape)[1] or "") for shape in set(shapes)}
-    return np.fromiter(map(codes.__getitem__, shapes), np.int64, count), buf
+    new = set(shapes).difference(known)
+    if len(known) + len(new) > _SHAPES_KEPT:  # a program of few repeated shapes, it seems not
+        known.clear()
+        new = set(shapes)
+    for shape in new:
+        known[shape] = _plain_codes(_ROW_RE.match(shape)[1] or "")
+    return np.fromiter(map(known.__getitem__, shapes), np.int64, count)
 
 
 class _PlainRun(NamedTuple):
@@ -701,6 +705,7 @@ class _Reader:
         self.owords = bool(_OWORD_FIRST_RE.match(text) or _OWORD_NEXT_RE.search(text))
         self.slashes = "/" in text
         self.bom = next((b for b in _BOMS if text.startswith(b)), "")
+        self.shapes: dict[str, int] = {}  # ``_line_codes``' codes of the line shapes met
 
     def line(self, raw: str, lineno: int, line_offset: int) -> None:
         """Read one line (without its ending) that starts at text offset ``line_offset``."""
@@ -979,10 +984,16 @@ def _chunk(text: str, start: int, stop: int, lineno: int, reader: _Reader) -> in
     """Read the whole lines of ``text[start:stop]`` (line ``lineno`` first); the next line's
     number."""
     chunk = text[start:stop]
-    count = chunk.count("\n") + (0 if chunk.endswith("\n") and stop < len(text) else 1)
-    packed, buf = _line_codes(chunk, count)
-    retract, motion = packed // 1000, packed % 1000 - 2
+    try:
+        data = chunk.encode("latin-1")
+    except UnicodeEncodeError:  # a str not read from a file
+        data = None
+    text_part = data if data is not None else chunk.encode("latin-1", "replace")
+    buf = np.frombuffer(text_part, np.uint8)
     newlines = np.flatnonzero(buf == 10)
+    count = len(newlines) + (0 if chunk.endswith("\n") and stop < len(text) else 1)
+    packed = _line_codes(chunk, data, count, reader.shapes)
+    retract, motion = packed // 1000, packed % 1000 - 2
     begins = np.concatenate(([0], newlines + 1))[:count]
     ends = np.append(newlines, len(chunk))[:count]
     plain = motion > -2
