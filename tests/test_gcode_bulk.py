@@ -99,7 +99,7 @@ PROGRAMS = st.lists(
 )
 COLUMNS = (
     "line column start target end scale r_mm incremental is_cycle setters word_start word_end "
-    "word_value rotary_index"
+    "word_value rotary_index resets g99"
 ).split()
 
 
@@ -108,6 +108,7 @@ def _read(text: str, bulk: bool):
         if bulk:
             return gcode_moves(text, "p.ngc")
         reader, offset = parse._Reader("p.ngc", text), 0
+        reader.moves = parse.GcodeMoves("p.ngc", text, 1)  # its arrays grown as rows come
         for lineno, raw in enumerate(split_lines(text), start=1):
             reader.line(raw, lineno, offset)
             offset += len(raw) + 1

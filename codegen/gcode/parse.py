@@ -22,7 +22,6 @@ import math
 import os
 import re
 import string
-from array import array
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -197,16 +196,17 @@ class GcodeMoves:
     ``rotaries`` (the distinct rotary dicts, each once); ``motion``, ``reason``, ``retract``
     lists of str.
 
-    Rows come one by one (``add``, kept in ``array`` buffers) or in bulk (``extend``, kept as
-    the arrays given); ``finish`` joins them once."""
+    Rows come one by one (``add``) or in bulk (``rows`` to fill, then ``extend``), into arrays
+    of ``capacity`` rows (the program's lines: a line is one move at most; pages never written
+    are never resident), grown if ever full; ``finish`` exposes the rows stored."""
 
-    def __init__(self, path: str | None, text: str) -> None:
+    def __init__(self, path: str | None, text: str, capacity: int = 1024) -> None:
         self.path, self.text = path, text
-        self._ints = array("q")  # per move: line, column, 3 setters, 4 word starts, 4 word ends
-        self._floats = array("d")  # per move: start, target, end (9), scale, r_mm, 4 values
-        self._flags = array("b")  # per move: the _F_ bits
-        self._rotary = array("q")
-        self._blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+        capacity = max(capacity, 1)
+        self._ints = np.empty((capacity, 13), np.int64)  # line, column, 3 setters, 4+4 spans
+        self._floats = np.empty((capacity, 15))  # start, target, end (9), scale, r_mm, 4 values
+        self._flags = np.empty(capacity, np.int8)  # the _F_ bits
+        self._rotary = np.empty(capacity, np.int64)
         self.rotaries: list[dict[str, float]] = []
         self.motion: list[str] = []
         self.reason: list[str] = []
@@ -216,54 +216,63 @@ class GcodeMoves:
     def __len__(self) -> int:
         return len(self.motion)
 
+    def _room(self, m: int) -> int:
+        """The index of the next row, the arrays grown to hold ``m`` more."""
+        n = len(self.motion)
+        if n + m > len(self._flags):
+            size = max(n + m, 2 * len(self._flags))
+            for key in ("_ints", "_floats", "_flags", "_rotary"):
+                old = getattr(self, key)
+                grown = np.empty((size, *old.shape[1:]), old.dtype)
+                grown[:n] = old[:n]
+                setattr(self, key, grown)
+        return n
+
     def add(self, line, column, motion, start, target, words, reason, end, state, cycle) -> None:
         """Store one move as a row: ``start``, ``target``, ``end`` 3 mm each; ``words`` letter ->
         Word; ``state``: the ``_Modal`` it was read in (pos and setters before the move)."""
+        i = self._room(1)
         rotary = state.rotary
         if not self.rotaries or rotary is not self.rotaries[-1]:
             self.rotaries.append(rotary)
-        self._rotary.append(len(self.rotaries) - 1)
+        self._rotary[i] = len(self.rotaries) - 1
         get = words.get
         x, y, z, r = get("X"), get("Y"), get("Z"), get("R")
         s0, s1, s2 = state.setter
-        self._ints.extend(
-            (
-                line,
-                column,
-                -1 if s0 is None else s0,
-                -1 if s1 is None else s1,
-                -1 if s2 is None else s2,
-                -1 if x is None else x.start,
-                -1 if y is None else y.start,
-                -1 if z is None else z.start,
-                -1 if r is None else r.start,
-                -1 if x is None else x.end,
-                -1 if y is None else y.end,
-                -1 if z is None else z.end,
-                -1 if r is None else r.end,
-            )
+        self._ints[i] = (
+            line,
+            column,
+            -1 if s0 is None else s0,
+            -1 if s1 is None else s1,
+            -1 if s2 is None else s2,
+            -1 if x is None else x.start,
+            -1 if y is None else y.start,
+            -1 if z is None else z.start,
+            -1 if r is None else r.start,
+            -1 if x is None else x.end,
+            -1 if y is None else y.end,
+            -1 if z is None else z.end,
+            -1 if r is None else r.end,
         )
-        self._floats.extend(
-            (
-                start[0],
-                start[1],
-                start[2],
-                target[0],
-                target[1],
-                target[2],
-                end[0],
-                end[1],
-                end[2],
-                state.scale,
-                state.cycle_r if cycle else math.nan,
-                math.nan if x is None else x.value,
-                math.nan if y is None else y.value,
-                math.nan if z is None else z.value,
-                math.nan if r is None else r.value,
-            )
+        self._floats[i] = (
+            start[0],
+            start[1],
+            start[2],
+            target[0],
+            target[1],
+            target[2],
+            end[0],
+            end[1],
+            end[2],
+            state.scale,
+            state.cycle_r if cycle else math.nan,
+            math.nan if x is None else x.value,
+            math.nan if y is None else y.value,
+            math.nan if z is None else z.value,
+            math.nan if r is None else r.value,
         )
         retract = state.retract if cycle else ""
-        self._flags.append(
+        self._flags[i] = (
             state.incremental * _F_INCREMENTAL
             + cycle * _F_CYCLE
             + (motion in RESETS) * _F_RESETS
@@ -274,39 +283,21 @@ class GcodeMoves:
         self.retract.append(names.setdefault(retract, retract))
         self.reason.append(reason)
 
-    def _flush(self) -> None:
-        """The rows ``add`` stored since the last block, as a block."""
-        m = len(self._flags)
-        if not m:
-            return
-        self._blocks.append(
-            (
-                np.frombuffer(self._ints, np.int64).reshape(m, 13),
-                np.frombuffer(self._floats, float).reshape(m, 15),
-                np.frombuffer(self._flags, np.int8),
-                np.frombuffer(self._rotary, np.int64),
-            )
-        )
-        self._ints, self._floats = array("q"), array("d")  # the block keeps the old buffers
-        self._flags, self._rotary = array("b"), array("q")
+    def rows(self, m: int) -> tuple[np.ndarray, np.ndarray]:
+        """The next ``m`` rows to fill before ``extend`` stores them: ints (m, 13) and floats
+        (m, 15) in the row layout (views)."""
+        i = self._room(m)
+        return self._ints[i : i + m], self._floats[i : i + m]
 
-    def extend(self, ints, floats, cycle, g99, rotary, motion, retract, reason) -> None:
-        """Store rows in bulk, as ``add`` stores one: ``ints`` (M, 13) and ``floats`` (M, 15) in
-        the row layout, ``cycle`` and ``g99`` (M,) bool (no row is incremental nor resets the
-        position), ``rotary`` the dict in effect for all, ``motion``/``retract``/``reason`` M
-        strings each. The arrays are kept, not copied."""
-        self._flush()
+    def extend(self, cycle, g99, rotary, motion, retract, reason) -> None:
+        """Store the rows ``rows`` gave, filled, as ``add`` stores one: ``cycle`` and ``g99``
+        (M,) bool (no row is incremental nor resets the position), ``rotary`` the dict in effect
+        for all, ``motion``/``retract``/``reason`` M strings each."""
         if not self.rotaries or rotary is not self.rotaries[-1]:
             self.rotaries.append(rotary)
-        m = len(motion)
-        self._blocks.append(
-            (
-                np.asarray(ints, np.int64).reshape(m, 13),
-                np.asarray(floats, float).reshape(m, 15),
-                (_F_CYCLE * np.asarray(cycle, np.int8) + _F_G99 * g99).astype(np.int8),
-                np.full(m, len(self.rotaries) - 1, np.int64),
-            )
-        )
+        i, m = len(self.motion), len(motion)
+        self._flags[i : i + m] = _F_CYCLE * np.asarray(cycle, np.int8) + _F_G99 * g99
+        self._rotary[i : i + m] = len(self.rotaries) - 1
         names = self._names
         same = {k: names.setdefault(k, k) for k in {*motion, *retract}}  # one str per name
         self.motion += map(same.__getitem__, motion)
@@ -314,21 +305,9 @@ class GcodeMoves:
         self.reason += reason
 
     def finish(self) -> GcodeMoves:
-        """Expose the columns as arrays (views of the joined rows)."""
-        self._flush()
-        blocks = self._blocks or [
-            (
-                np.zeros((0, 13), np.int64),
-                np.zeros((0, 15)),
-                np.zeros(0, np.int8),
-                np.zeros(0, np.int64),
-            )
-        ]
-        ints, floats, flags, rotary = (
-            np.concatenate(column) if len(blocks) > 1 else column[0]
-            for column in zip(*blocks, strict=True)
-        )
-        self._blocks = []
+        """Expose the columns as arrays (views of the rows stored)."""
+        n = len(self.motion)
+        ints, floats, flags = self._ints[:n], self._floats[:n], self._flags[:n]
         self.ints, self.floats, self.flags = ints, floats, flags
         self.line, self.column, self.setters = ints[:, 0], ints[:, 1], ints[:, 2:5]
         self.word_start, self.word_end = ints[:, 5:9], ints[:, 9:13]
@@ -338,7 +317,7 @@ class GcodeMoves:
         self.is_cycle = (flags & _F_CYCLE) != 0
         self.resets = (flags & _F_RESETS) != 0
         self.g99 = (flags & _F_G99) != 0
-        self.rotary_index = rotary
+        self.rotary_index = self._rotary[:n]
         return self
 
     def move(self, i: int) -> GcodeMove:
@@ -699,7 +678,8 @@ class _Reader:
     def __init__(self, path: str | None, text: str) -> None:
         self.path = path
         self.state = _Modal()
-        self.moves = GcodeMoves(path, text)
+        lines = text.count("\n") if "\n" in text else text.count("\r")  # as split_lines cuts
+        self.moves = GcodeMoves(path, text, lines + 1)
         # whole-text checks first: most programs have no O-words or block deletes, and then no
         # line needs those per-line checks
         self.owords = bool(_OWORD_FIRST_RE.match(text) or _OWORD_NEXT_RE.search(text))
@@ -768,8 +748,11 @@ class _Reader:
                 before = z[k - 1] if k else s.pos[2]
                 z[k] = (r[k] if r[k] > before else before) if hole[k] else before
             end[:, 2] = z
-        start = np.vstack([np.array(s.pos, float)[None], end[:-1]])
-        target = np.column_stack([end[:, :2], np.where(cycle, cycle_z, end[:, 2])])
+        ints, floats = self.moves.rows(m)  # filled in place
+        floats[0, 0:3], floats[1:, 0:3] = s.pos, end[:-1]  # start
+        target = floats[:, 3:6]
+        target[:, :2], target[:, 2] = end[:, :2], np.where(cycle, cycle_z, end[:, 2])
+        floats[:, 6:9] = end
         # the move that last set each coordinate, before each move (a cycle always sets Z)
         index = np.arange(first, first + m)
         after = [
@@ -782,20 +765,11 @@ class _Reader:
         column = np.where(
             wrote[:, 0], starts[:, 0], np.where(wrote[:, 1], starts[:, 1], starts[:, 2])
         )
-        ints = np.column_stack(
-            [
-                np.arange(run.lineno, run.lineno + m),
-                column - run.begin + 1,
-                setters,
-                starts,
-                ends,
-            ]
-        )
-        values = np.where(wrote, run.values, np.nan)
-        values[:, 3] = np.where(wrote_r, values[:, 3], np.nan)
-        floats = np.column_stack(
-            [start, target, end, np.full(m, s.scale), np.where(cycle, r_mm, np.nan), values]
-        )
+        ints[:, 0], ints[:, 1] = np.arange(run.lineno, run.lineno + m), column - run.begin + 1
+        ints[:, 2:5], ints[:, 5:9], ints[:, 9:13] = setters, starts, ends
+        floats[:, 9], floats[:, 10] = s.scale, np.where(cycle, r_mm, np.nan)
+        floats[:, 11:15] = np.where(wrote, run.values, np.nan)
+        floats[:, 14] = np.where(wrote_r, floats[:, 14], np.nan)
         reason = [s.frame_reason()] * m
         if not reason[0]:
             missing = np.flatnonzero(cycle & (np.isnan(r_mm) | np.isnan(cycle_z))).tolist()
@@ -809,7 +783,7 @@ class _Reader:
         names = _MOTION_NAMES[motion].tolist()
         retracts = _RETRACT_NAMES[np.where(cycle, retract, 0)].tolist()
         g99 = cycle & (retract == 99)
-        self.moves.extend(ints, floats, cycle, g99, s.rotary, names, retracts, reason)
+        self.moves.extend(cycle, g99, s.rotary, names, retracts, reason)
         s.motion, s.unknown_motion = str(motion[-1]), ""
         s.retract = f"G{retract[-1]}"
         s.cycle_z, s.cycle_r = float(cycle_z[-1]), float(r_mm[-1])
