@@ -12,6 +12,7 @@ $ROBROOT).
 
 from __future__ import annotations
 
+from functools import cached_property
 from itertools import chain, repeat
 from pathlib import Path
 
@@ -140,7 +141,10 @@ def _use_rows(ctx: _Context, scan: KrlScan) -> Rows:
     """Report rows of the motions to a name that correct nothing (with the reason)."""
     u = scan.use_table
     n = len(u)
-    check = ~np.fromiter(map(ctx.named.__contains__, u.name), bool, n)
+    if ctx.aligned is not None:  # every motion uses a stored position's name
+        check = np.zeros(n, bool)
+    else:
+        check = ~np.fromiter(map(ctx.named.__contains__, u.name), bool, n)
     if any(u.reason):
         check |= np.fromiter(map(bool, u.reason), bool, n)
     lines, names, reasons = [], [], []
@@ -192,6 +196,7 @@ class _Context:
         self.plain: list[np.ndarray] = []
         self.named: set[str] = set()
         self.twice: set[str] = set()
+        distinct = []  # per file: no key twice in it, none empty
         for scan in scans:
             t = scan.table
             n = len(t)
@@ -206,8 +211,12 @@ class _Context:
             self.plain.append(plain)
             found = set(keys)
             found.discard("")
-            self.twice.update(self.named.intersection(found))
-            self.named.update(found)
+            if self.named:
+                self.twice.update(self.named.intersection(found))
+                self.named.update(found)
+            else:
+                self.named = found
+            distinct.append(len(found) == n)
             if len(found) < n - keys.count(""):
                 seen: set[str] = set()
                 for k in keys:
@@ -233,10 +242,14 @@ class _Context:
         reasons = list(chain.from_iterable(scan.use_table.reason for scan in scans))
         if any(reasons) or "" in names:  # not a stored position's name
             names = [n if not r else "" for n, r in zip(names, reasons, strict=True)]
-        self.use_of = dict(zip(reversed(names), range(len(names) - 1, -1, -1), strict=True))
-        self.use_of.pop("", None)
+        self.use_names = names
+        # the file whose stored positions are the names the motions use, in their order, each
+        # once (a controller's .dat and its .src): the k-th motion uses its k-th row
+        self.aligned = next(
+            (k for k, keys in enumerate(self.keys) if distinct[k] and keys == names), None
+        )
         self.used_twice: set[str] = set()
-        if len(self.use_of) < len(names) - names.count(""):
+        if self.aligned is None and len(self.use_of) < len(names) - names.count(""):
             self.used_twice = {n for i, n in enumerate(names) if n and self.use_of[n] != i}
         self._uses: dict[str, list[tuple[int, int]]] | None = None
         self.lone_dat = all(Path(s.path or "").suffix.lower() == ".dat" for s in scans)
@@ -244,6 +257,14 @@ class _Context:
         self.frames: list[np.ndarray] = []
         self._frame_ids: dict[int, int] = {}
         self._blocked = set(self.frame_uses) | set(self.assigned)
+
+    @cached_property
+    def use_of(self) -> dict[str, int]:
+        """The first motion (index among the motions of all files) to each name."""
+        names = self.use_names
+        use_of = dict(zip(reversed(names), range(len(names) - 1, -1, -1), strict=True))
+        use_of.pop("", None)
+        return use_of
 
     def frame_id(self, frame: np.ndarray) -> int:
         """Index of ``frame`` (one of the resolved frames) in ``frames``."""
@@ -318,7 +339,10 @@ class _Context:
             plain &= ~np.fromiter(map(blocked.__contains__, keys), bool, n)
         if self.fdats:  # XP1 with an FDAT FP1 has a base of its own
             plain &= ~np.array([k[:1] == "X" and "F" + k[1:] in self.fdats for k in keys], bool)
-        at = np.fromiter(map(self.use_of.get, keys, repeat(-1)), np.int64, n)
+        if s == self.aligned:  # the k-th motion to its k-th row
+            at = np.asarray(rows, np.int64)
+        else:
+            at = np.fromiter(map(self.use_of.get, keys, repeat(-1)), np.int64, n)
         plain &= at >= 0
         found = np.full(n, -1, np.int64)
         why: dict[int, str] = {}
