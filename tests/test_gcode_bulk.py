@@ -23,7 +23,7 @@ from accugrid.codegen.gcode import parse, rewrite
 from accugrid.codegen.gcode.numbers import literal_values
 from accugrid.codegen.gcode.parse import gcode_moves
 from accugrid.codegen.gcode.rewrite import _bulk_block, _Commanded, _file_precision, _walk_block
-from accugrid.codegen.program_text import precision, split_lines
+from accugrid.codegen.program_text import decimals_of, precision, split_lines
 from accugrid.codegen.rewrite import CORRECTED, Rows
 from accugrid.kinematics.errors import InputError
 
@@ -219,21 +219,27 @@ def test_bulk_walk_walks_as_the_move_by_move_walk(case):
 
 @given(st.lists(st.one_of(NUMBER, st.text("0123456789", min_size=1, max_size=30)), max_size=30))
 def test_literal_values_are_float_of_each_literal(literals):
-    """Every literal's value, sign of zero included, is ``float`` of its text."""
+    """Every literal's value, sign of zero included, is ``float`` of its text; its decimals
+    are those written."""
     text = " ".join(literals).encode("latin-1")
     starts = np.cumsum([0] + [len(t) + 1 for t in literals[:-1]]).astype(np.int64)
     ends = starts + [len(t) for t in literals]
-    values = literal_values(text, starts[: len(literals)], ends)
+    values, decimals = literal_values(text, starts[: len(literals)], ends)
+    assert decimals.tolist() == [decimals_of(t) for t in literals]
     expected = np.array([float(t) for t in literals])
     assert np.array_equal(values, expected)
     assert np.array_equal(np.signbit(values), np.signbit(expected))
 
 
-@given(st.lists(plain_lines(), min_size=0, max_size=20))
-def test_file_precision_is_the_precision_of_the_literals(lines):
-    """The precision read from the spans is ``precision`` of the X, Y, Z literals written."""
+@given(
+    st.lists(st.one_of(plain_lines(), partial_lines(), MODAL), min_size=0, max_size=20),
+    st.sampled_from(["\n", "\r"]),
+)
+def test_file_precision_is_the_precision_of_the_literals(lines, newline):
+    """The precision the readers keep (the whole-text one, or the line reader alone for lone
+    CR endings) is ``precision`` of the X, Y, Z literals of the moves."""
     try:
-        moves = gcode_moves("G21\n" + "\n".join(lines))
+        moves = gcode_moves(newline.join(["G21", *lines]))
     except InputError:
         return
     starts, ends = moves.word_start[:, :3], moves.word_end[:, :3]

@@ -194,7 +194,8 @@ class GcodeMoves:
     ``word_start``, ``word_end`` (N, 4) text offsets of the X, Y, Z, R numbers (-1: not written)
     and ``word_value`` (N, 4) their values in program units; ``rotary_index`` (N,) int into
     ``rotaries`` (the distinct rotary dicts, each once); ``motion``, ``reason``, ``retract``
-    lists of str.
+    lists of str; ``places`` the most decimals among the X, Y, Z literals of the moves (-1:
+    none).
 
     Rows come one by one (``add``) or in bulk (``rows`` to fill, then ``extend``), into arrays
     of ``capacity`` rows (the program's lines: a line is one move at most; pages never written
@@ -212,6 +213,7 @@ class GcodeMoves:
         self.reason: list[str] = []
         self.retract: list[str] = []
         self._names: dict[str, str] = {}  # one str object per distinct motion and retract
+        self.places = -1  # the most decimals among the X, Y, Z literals of the moves (-1: none)
 
     def __len__(self) -> int:
         return len(self.motion)
@@ -238,6 +240,9 @@ class GcodeMoves:
         self._rotary[i] = len(self.rotaries) - 1
         get = words.get
         x, y, z, r = get("X"), get("Y"), get("Z"), get("R")
+        for word in (x, y, z):
+            if word is not None:
+                self.places = max(self.places, decimals_of(word.literal))
         s0, s1, s2 = state.setter
         self._ints[i] = (
             line,
@@ -985,8 +990,13 @@ def _chunk(text: str, start: int, stop: int, lineno: int, reader: _Reader) -> in
             spans[has, k, 1] = stops[np.searchsorted(stops, where[has])]
         values = np.full((len(at), 4), np.nan)
         written = spans[:, :, 0] >= 0
-        values[written] = literal_values(buf, spans[:, :, 0][written], spans[:, :, 1][written])
+        decimals = np.full((len(at), 4), -1)
+        values[written], decimals[written] = literal_values(
+            buf, spans[:, :, 0][written], spans[:, :, 1][written]
+        )
         finite = ~np.isinf(values).any(axis=1)
+        if finite.any():  # each of these lines is a move (or an error): its X, Y, Z decimals
+            reader.moves.places = max(reader.moves.places, int(decimals[finite, :3].max()))
         spans = np.where(spans >= 0, spans + start, -1)  # offsets in the text
         retract, motion = retract[at], motion[at]
         plain[at[~finite]] = False  # a literal beyond the float range: the line reader says where

@@ -356,19 +356,5 @@ def _places(moves: GcodeMoves, opts: Options) -> np.ndarray:
 
 
 def _file_precision(moves: GcodeMoves) -> int:
-    """``precision`` of the X, Y, Z literals written, from their spans (a block of moves at a
-    time): a G-code literal has no exponent, so its decimals are the digits after its point (if
-    it has one)."""
-    found = []
-    for first in range(0, len(moves), _BLOCK):
-        starts = moves.word_start[first : first + _BLOCK, :3]
-        written = starts >= 0
-        if not written.any():
-            continue
-        starts, ends = starts[written], moves.word_end[first : first + _BLOCK, :3][written]
-        lo, hi = int(starts.min()), int(ends.max())
-        text = np.frombuffer(moves.text[lo:hi].encode("latin-1", "replace"), np.uint8)
-        points = np.append(np.flatnonzero(text == ord(".")) + lo, hi)  # hi: no point after
-        point = points[np.searchsorted(points, starts)]
-        found.append(int(np.where(point < ends, ends - point - 1, 0).max()))
-    return max(found) if found else precision(())
+    """``precision`` of the X, Y, Z literals written (the reader kept their most decimals)."""
+    return moves.places if moves.places >= 0 else precision(())
