@@ -33,7 +33,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
     strict_check,
 )
-from accugrid.codegen.splice import ByteSplicer
+from accugrid.codegen.splice import ByteSplicer, texts_of
 from accugrid.codegen.textsafe import fixed_bytes
 
 __all__ = ["rewrite_gcode"]
@@ -323,9 +323,10 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         end[:, 2] = z
     changed = np.flatnonzero(corrected[block])
     if len(changed):  # a cycle reaches its hole bottom, a straight move its end
-        hole = np.column_stack([end[changed, :2], cycle_z[changed]])
-        reached = np.where(cycle[changed, None], hole, end[changed])
-        walk.reached_rows.frombytes(np.ascontiguousarray(reached).tobytes())
+        reached = end[changed]
+        holes = np.flatnonzero(cycle[changed])
+        reached[holes, 2] = cycle_z[changed[holes]]
+        walk.reached_rows.frombytes(reached.tobytes())
         walk.reached_at.frombytes((block.start + changed).astype(np.int64).tobytes())
     walk.cmd = end[-1].tolist()
     walk.cycle_z, walk.r_cmd = float(cycle_z[-1]), float(r_cmd[-1])
@@ -341,9 +342,8 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         for g, cells in enumerate(cells_of):
             mine = np.flatnonzero(group[at] == g)
             rows[mine, rows.shape[1] - cells.shape[1] :] = cells[row[at[mine]]]
-    shown = rows != 0
     ends = moves.word_end[block].ravel()[at]
-    return starts[order], ends, rows[shown], shown.sum(axis=1)
+    return starts[order], ends, *texts_of(rows)
 
 
 def _places(moves: GcodeMoves, opts: Options) -> np.ndarray:
