@@ -303,13 +303,30 @@ ANY_LINE = st.one_of(
 )
 
 
+def _spans_in(line: str) -> list[list[int]]:
+    """Where the numbers after the first X, Y, Z, R before any "(" are in ``line``, read
+    character by character (-1: none)."""
+    words_end = line.find("(") if "(" in line else len(line)
+    spans = []
+    for letter in "XYZR":
+        at = line.find(letter, 0, words_end) + 1
+        if not at:
+            spans.append([-1, -1])
+            continue
+        end = at
+        while end < len(line) and line[end] in "0123456789.+-":
+            end += 1
+        spans.append([at, end])
+    return spans
+
+
 @settings(max_examples=400)
 @given(st.lists(ANY_LINE, min_size=1, max_size=12), st.lists(ANY_LINE, max_size=6), st.booleans())
-def test_line_codes_are_those_of_the_regex_on_every_line(lines, before, few_kept):
-    """The heads found by matching each distinct shape of line once (the shapes of the lines
-    read ``before`` known already, or forgotten when more than the reader keeps) are those
-    ``_ROW_RE`` finds in every line of the text."""
-    known: dict[str, int] = {}
+def test_line_shapes_read_as_every_line(lines, before, few_kept):
+    """Reading each distinct shape of line once (the shapes of the lines read ``before`` known
+    already, or forgotten when more than the reader keeps) gives every line the head
+    ``_ROW_RE`` finds in it and the number offsets it has."""
+    shapes = parse._Shapes()
     with mock.patch.object(parse, "_SHAPES_KEPT", 3 if few_kept else parse._SHAPES_KEPT):
         for part in (before, lines):
             chunk = "\n".join(part)
@@ -317,6 +334,7 @@ def test_line_codes_are_those_of_the_regex_on_every_line(lines, before, few_kept
                 data = chunk.encode("latin-1")
             except UnicodeEncodeError:
                 data = None
+            ids = shapes.ids(parse._shapes(chunk, data, len(part)))
             heads = parse._ROW_RE.findall(chunk)[: len(part)]
-            expected = [parse._plain_codes(head) for head in heads]
-            assert parse._line_codes(chunk, data, len(part), known).tolist() == expected
+            assert shapes.codes[ids].tolist() == [parse._plain_codes(head) for head in heads]
+            assert shapes.spans[ids].tolist() == [_spans_in(line) for line in part]

@@ -619,35 +619,75 @@ def _plain_codes(codes: str) -> int:
     return 1000 * int(m[1] or 0) + (int(m[2]) if m[2] else -1) + 2
 
 
-def _line_codes(chunk: str, data: bytes | None, count: int, known: dict[str, int]) -> np.ndarray:
-    """``_plain_codes`` of the head ``_ROW_RE`` finds in each of the first ``count`` lines of
-    ``chunk`` (M,); ``data``: its latin-1 bytes (None: it has other characters); ``known``: the
-    codes of the shapes met so far (shape -> code), added to.
+def _shapes(chunk: str, data: bytes | None, count: int) -> list[str]:
+    """The shapes of the first ``count`` lines of ``chunk``: each line with the digits
+    ``_ROW_RE`` reads alike as 9s; ``data``: the chunk's latin-1 bytes (None: it has other
+    characters, and then each line is its own shape: ``\\d`` is more than 0-9 there).
 
     ``_ROW_RE`` reads any digits as ``\\d`` but those of a G-code, the one or two right after
-    its ``G``: lines that differ only in other digits match alike, so each distinct shape of line
-    (those digits as 9s) is matched once, a few hundred shapes for 100,000 CAM lines."""
-    if data is None:  # beyond latin-1 (a str not read from a file): \d is more than 0-9 there
-        heads = _ROW_RE.findall(chunk)
-        del heads[count:]
-        codes = {g: _plain_codes(g) for g in set(heads)}  # each distinct head once
-        return np.fromiter(map(codes.__getitem__, heads), np.int64, count)
-    buf = np.frombuffer(data, np.uint8)
-    nines = np.frombuffer(data.translate(_NINES), np.uint8).copy()
-    first = np.flatnonzero(buf[:-1] == ord("G")) + 1  # a G-code's digits: its first two
-    first = first[_DIGIT[buf[first]]]
-    second = first[first + 1 < len(buf)] + 1
-    second = second[_DIGIT[buf[second]]]
-    nines[first], nines[second] = buf[first], buf[second]
-    shapes = nines.tobytes().decode("latin-1").split("\n")
+    its ``G``; a line keeps its length and every other character in its shape, so lines of one
+    shape match alike and have their words at the same offsets: a few hundred shapes for
+    100,000 CAM lines, each read once (``_Shapes``)."""
+    if data is None:
+        shapes = chunk.split("\n")
+    else:
+        buf = np.frombuffer(data, np.uint8)
+        nines = bytearray(data.translate(_NINES))
+        first = np.flatnonzero(buf[:-1] == ord("G")) + 1  # a G-code's digits: its first two
+        first = first[_DIGIT[buf[first]]]
+        second = first[first + 1 < len(buf)] + 1
+        second = second[_DIGIT[buf[second]]]
+        view = np.frombuffer(nines, np.uint8)
+        view[first], view[second] = buf[first], buf[second]
+        del view
+        shapes = nines.decode("latin-1").split("\n")
     del shapes[count:]
-    new = set(shapes).difference(known)
-    if len(known) + len(new) > _SHAPES_KEPT:  # a program of few repeated shapes, it seems not
-        known.clear()
-        new = set(shapes)
-    for shape in new:
-        known[shape] = _plain_codes(_ROW_RE.match(shape)[1] or "")
-    return np.fromiter(map(known.__getitem__, shapes), np.int64, count)
+    return shapes
+
+
+class _Shapes:
+    """The line shapes a reader met (at most _SHAPES_KEPT kept), each read once: ``codes`` (S,)
+    its ``_plain_codes`` (of the head ``_ROW_RE`` finds) and ``spans`` (S, 4, 2) the offsets of
+    its X, Y, Z, R numbers as a plain line has them (-1: none)."""
+
+    def __init__(self) -> None:
+        self.index: dict[str, int] = {}
+        self.codes = np.zeros(0, np.int64)
+        self.spans = np.zeros((0, 4, 2), np.int64)
+
+    def ids(self, shapes: list[str]) -> np.ndarray:
+        """The index (M,) of each shape in ``codes`` and ``spans``, the new ones read."""
+        new = list(set(shapes).difference(self.index))
+        if len(self.index) + len(new) > _SHAPES_KEPT:  # a program of few repeated shapes: not
+            self.index, self.codes, self.spans = {}, self.codes[:0], self.spans[:0]
+            new = list(set(shapes))
+        if new:
+            first = len(self.index)
+            self.index.update(zip(new, range(first, first + len(new)), strict=True))
+            codes = [_plain_codes(_ROW_RE.match(shape)[1] or "") for shape in new]
+            self.codes = np.append(self.codes, codes)
+            self.spans = np.concatenate([self.spans, _number_spans(new)])
+        return np.fromiter(map(self.index.__getitem__, shapes), np.int64, len(shapes))
+
+
+def _number_spans(lines: list[str]) -> np.ndarray:
+    """The offsets (M, 4, 2) in each line of the numbers after its first X, Y, Z and R before
+    any ``(`` (-1: none), a number ending at the first byte not in one."""
+    buf = np.frombuffer("\n".join(lines).encode("latin-1", "replace"), np.uint8)
+    newlines = np.flatnonzero(buf == 10)
+    begins = np.concatenate(([0], newlines + 1))
+    ends = np.append(newlines, len(buf))
+    stops = np.append(np.flatnonzero(_NOT_IN_NUMBER[buf]), len(buf))
+    opens = np.append(np.flatnonzero(buf == ord("(")), len(buf))
+    words_end = np.minimum(opens[np.searchsorted(opens, begins)], ends)
+    spans = np.full((len(lines), 4, 2), -1)
+    for k, letter in enumerate(b"XYZR"):
+        found = np.append(np.flatnonzero(buf == letter), len(buf))
+        where = found[np.searchsorted(found, begins)] + 1  # the number after the letter
+        has = where <= words_end
+        spans[has, k, 0] = where[has]
+        spans[has, k, 1] = stops[np.searchsorted(stops, where[has])]
+    return np.where(spans >= 0, spans - begins[:, None, None], -1)
 
 
 class _PlainRun(NamedTuple):
@@ -690,7 +730,7 @@ class _Reader:
         self.owords = bool(_OWORD_FIRST_RE.match(text) or _OWORD_NEXT_RE.search(text))
         self.slashes = "/" in text
         self.bom = next((b for b in _BOMS if text.startswith(b)), "")
-        self.shapes: dict[str, int] = {}  # ``_line_codes``' codes of the line shapes met
+        self.shapes = _Shapes()
 
     def line(self, raw: str, lineno: int, line_offset: int) -> None:
         """Read one line (without its ending) that starts at text offset ``line_offset``."""
@@ -971,23 +1011,16 @@ def _chunk(text: str, start: int, stop: int, lineno: int, reader: _Reader) -> in
     buf = np.frombuffer(text_part, np.uint8)
     newlines = np.flatnonzero(buf == 10)
     count = len(newlines) + (0 if chunk.endswith("\n") and stop < len(text) else 1)
-    packed = _line_codes(chunk, data, count, reader.shapes)
+    shape = reader.shapes.ids(_shapes(chunk, data, count))
+    packed = reader.shapes.codes[shape]
     retract, motion = packed // 1000, packed % 1000 - 2
     begins = np.concatenate(([0], newlines + 1))[:count]
     ends = np.append(newlines, len(chunk))[:count]
     plain = motion > -2
     at = np.flatnonzero(plain)
     if len(at):
-        stops = np.append(np.flatnonzero(_NOT_IN_NUMBER[buf]), len(buf))
-        opens = np.append(np.flatnonzero(buf == ord("(")), len(buf))
-        words_end = np.minimum(opens[np.searchsorted(opens, begins[at])], ends[at])
-        spans = np.full((len(at), 4, 2), -1)
-        for k, letter in enumerate(b"XYZR"):
-            found = np.append(np.flatnonzero(buf == letter), len(buf))
-            where = found[np.searchsorted(found, begins[at])] + 1  # the number after the letter
-            has = where <= words_end
-            spans[has, k, 0] = where[has]
-            spans[has, k, 1] = stops[np.searchsorted(stops, where[has])]
+        spans = reader.shapes.spans[shape[at]]  # in the line: in the chunk
+        spans = np.where(spans >= 0, spans + begins[at, None, None], -1)
         values = np.full((len(at), 4), np.nan)
         written = spans[:, :, 0] >= 0
         decimals = np.full((len(at), 4), -1)
