@@ -1033,28 +1033,28 @@ def _chunk(text: str, start: int, stop: int, lineno: int, reader: _Reader) -> in
         spans = np.where(spans >= 0, spans + start, -1)  # offsets in the text
         retract, motion = retract[at], motion[at]
         plain[at[~finite]] = False  # a literal beyond the float range: the line reader says where
-    begins, ends = (begins + start).tolist(), (ends + start).tolist()
+    begins, ends = begins + start, ends + start
+
+    def read_lines(lo: int, hi: int) -> None:
+        """Lines lo..hi-1 of the chunk by the line reader."""
+        for k, a, b in zip(
+            range(lo, hi), begins[lo:hi].tolist(), ends[lo:hi].tolist(), strict=True
+        ):
+            reader.line(text[a:b], lineno + k, a)
+
     runs = np.flatnonzero(np.diff(plain, prepend=False, append=False)).reshape(-1, 2)
     done = 0
     for lo, hi in runs.tolist():
-        for k in range(done, lo):
-            reader.line(text[begins[k] : ends[k]], lineno + k, begins[k])
+        read_lines(done, lo)
         a, b = np.searchsorted(at, (lo, hi))
         run = _PlainRun(
-            lineno + lo,
-            np.array(begins[lo:hi]),
-            spans[a:b],
-            values[a:b],
-            retract[a:b],
-            motion[a:b],
+            lineno + lo, begins[lo:hi], spans[a:b], values[a:b], retract[a:b], motion[a:b]
         )
         k = lo
         while k < hi:
             fast, slow = reader.plain_run(run.part(k - lo))
-            for j in range(k + fast, k + fast + slow):
-                reader.line(text[begins[j] : ends[j]], lineno + j, begins[j])
+            read_lines(k + fast, k + fast + slow)
             k += fast + slow
         done = hi
-    for k in range(done, count):
-        reader.line(text[begins[k] : ends[k]], lineno + k, begins[k])
+    read_lines(done, count)
     return lineno + count
