@@ -53,7 +53,10 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
         moves.target.copy(),
     )
     _protect_arc_starts(moves, rows)
-    at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))  # no reason
+    if any(rows.reason):  # the moves with no reason
+        at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))
+    else:
+        at = np.arange(len(moves))
     desired = moves.target.copy()
     if len(at):
         prog = desired[at]
@@ -150,7 +153,8 @@ def _gcode_edits(
         off = np.abs(reached - desired[at])
         residual = np.linalg.norm(off, axis=1)
         wrote = moves.word_start[at, :3] >= 0
-        rounding = np.where(wrote, off, 0.0).max(axis=1)
+        off_written = np.where(wrote, off, 0.0)
+        rounding = np.maximum(np.maximum(off_written[:, 0], off_written[:, 1]), off_written[:, 2])
         rows.new[at] = reached
         rows.residual_mm[at] = residual
         rows.rounding_mm[at] = rounding
