@@ -79,7 +79,7 @@ _NOT_IN_NUMBER[list(NUMBER_BYTES)] = False
 _DIGIT = np.zeros(256, bool)
 _DIGIT[48:58] = True
 _NINES = bytes.maketrans(b"0123456789", b"9" * 10)  # every digit as a 9
-_SHAPES_KEPT = 1 << 14  # line shapes whose codes a reader keeps for the next chunks
+_SHAPES_KEPT = 1 << 22  # characters of line shapes a reader keeps for the next chunks
 _CHUNK = 1 << 20  # characters per whole-text pass (bounds the per-line tuples held at once)
 _DIGITS_RE = re.compile(r"\d++")
 _OWORD_RE = re.compile(
@@ -646,7 +646,8 @@ def _shapes(chunk: str, data: bytes | None, count: int) -> list[str]:
 
 
 class _Shapes:
-    """The line shapes a reader met (at most _SHAPES_KEPT kept), each read once: ``codes`` (S,)
+    """The line shapes a reader met (_SHAPES_KEPT characters of them kept), each read once:
+    ``codes`` (S,)
     its ``_plain_codes`` (of the head ``_ROW_RE`` finds) and ``spans`` (S, 4, 2) the offsets of
     its X, Y, Z, R numbers as a plain line has them (-1: none)."""
 
@@ -654,13 +655,17 @@ class _Shapes:
         self.index: dict[str, int] = {}
         self.codes = np.zeros(0, np.int64)
         self.spans = np.zeros((0, 4, 2), np.int64)
+        self.size = 0  # characters
 
     def ids(self, shapes: list[str]) -> np.ndarray:
         """The index (M,) of each shape in ``codes`` and ``spans``, the new ones read."""
         new = list(set(shapes).difference(self.index))
-        if len(self.index) + len(new) > _SHAPES_KEPT:  # a program of few repeated shapes: not
-            self.index, self.codes, self.spans = {}, self.codes[:0], self.spans[:0]
+        size = sum(map(len, new))
+        if self.size + size > _SHAPES_KEPT:  # not a program of few repeated shapes, it seems
+            self.index, self.codes, self.spans, self.size = {}, self.codes[:0], self.spans[:0], 0
             new = list(set(shapes))
+            size = sum(map(len, new))
+        self.size += size
         if new:
             first = len(self.index)
             self.index.update(zip(new, range(first, first + len(new)), strict=True))
