@@ -58,13 +58,13 @@ _PLAIN_RE = re.compile(
     r"(?:[ \t]++R(" + _NUMBER + r"))?+([ \t]++F" + _NUMBER + r")?+[ \t]*+"
     r"(?:\([^()\n;]*+\)[ \t]*+)?+\r?+"
 )
-# The whole-text scanner: one match per line. A plain line is ``[N..] [G98|G99] [G0|G1|G73|G81..
-# G89] X.. Y.. Z.. [R..] [F..] [(comment)]`` where any one or two of X, Y, Z may be left out, with
-# single spaces between the position words. Its G-codes and first letter are one group (so findall
-# gives one str per line, never empty for a plain line); any other line matches the last branch
-# with the group empty. Where the numbers are is found from the bytes: before the comment the
-# letters X, Y, Z, R appear only as words, and each number ends at the first byte that is not in
-# one.
+# The whole-text scanner's line match, once per shape of line (``_Shapes``). A plain line is
+# ``[N..] [G98|G99] [G0|G1|G73|G81..G89] X.. Y.. Z.. [R..] [F..] [(comment)]`` where any one or two
+# of X, Y, Z may be left out, with single spaces between the position words. Its G-codes and first
+# letter are one group (never empty for a plain line); any other line matches the last branch
+# with the group empty. Where the numbers are is found from the bytes (``_number_spans``): before
+# the comment the letters X, Y, Z, R appear only as words, and each number ends at the first byte
+# that is not in one.
 _ROW_RE = re.compile(
     r"^(?:[ \t]*+(?:N\d++[ \t]++)?+((?:G9[89][ \t]++)?+(?:G(?:0?+[01]|0|8[1-9]|73)[ \t]++)?+[XYZ])"
     r"(?:(?<=X)" + _NUMBER + "(?: Y" + _NUMBER + ")?+(?: Z" + _NUMBER + ")?+"
@@ -980,11 +980,11 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
 def gcode_moves(text: str, path: str | os.PathLike[str] | None = None) -> GcodeMoves:
     """The moves of ``parse_gcode`` as columns.
 
-    Text with ``\\n`` line endings is read a chunk of lines at a time by one whole-text match
-    (``_ROW_RE``): runs of plain lines are taken in bulk (``_Reader.plain_run``), every other line
-    by the line reader (``_Reader.line``). Text without ``\\n`` (one line, or lone ``\\r``
-    endings) is read by the line reader alone. Both give what the line reader gives for every
-    line (tests/test_gcode_bulk.py)."""
+    Text with ``\\n`` line endings is read a chunk of lines at a time, each distinct shape of line
+    matched once (``_shapes``, ``_Shapes``): runs of plain lines are taken in bulk
+    (``_Reader.plain_run``), every other line by the line reader (``_Reader.line``). Text
+    without ``\\n`` (one line, or lone ``\\r`` endings) is read by the line reader alone. Both
+    give what the line reader gives for every line (tests/test_gcode_bulk.py)."""
     path = None if path is None else os.fspath(path)
     check_text(text, path)
     reader = _Reader(path, text)
