@@ -3,12 +3,12 @@
 Reader: ``gcode_moves`` reads a text with ``\\n`` endings by the whole-text scanner (runs of plain
 lines in bulk, every other line by the line reader, ``_Reader.line``); reading every line with
 ``_Reader.line`` must give the same moves, column by column, and each shape of line, read once,
-must give every line of that shape its ``_ROW_RE`` head and number offsets. Rewriter: ``_bulk_block`` (a block of
-absolute moves in bulk) must make the edits and leave the walk's state as ``_walk_block``,
-the move-by-move walk, does, and the whole walk (stretches of absolute moves in bulk between the
-others) must write what walking every move writes. Numbers: ``literal_values`` reads every
-literal as ``float`` does, and the file's precision read from the word spans is ``precision`` of
-the literals.
+must give every line of that shape its ``_ROW_RE`` head and number offsets. Rewriter:
+``_bulk_block`` (a block of absolute moves in bulk) must make the edits and leave the walk's
+state as ``_walk_block``, the move-by-move walk, does, and the whole walk (stretches of absolute
+moves in bulk between the others) must write what walking every move writes. Numbers:
+``literal_values`` reads every literal as ``float`` does, with its decimals, and the file's
+precision the readers keep is ``precision`` of the literals.
 """
 
 from __future__ import annotations
