@@ -101,6 +101,7 @@ _BULK_MOTIONS = CYCLES | {"0", "1"}  # the motion modes a run of plain lines is 
 _MOTION_NAMES = np.array(["G" + str(g) for g in range(100)], dtype=object)  # code -> name
 _RETRACT_NAMES = np.full(100, "", dtype=object)  # code -> a cycle's retract ("": not a cycle)
 _RETRACT_NAMES[[98, 99]] = "G98", "G99"
+_NAME_OBJECTS = [*_MOTION_NAMES.tolist(), *_RETRACT_NAMES[[0, 98, 99]].tolist()]  # those str
 INCH_MM = 25.4
 _ROTARY_SET = frozenset(ROTARY)
 _KEPT = frozenset(AXES + ROTARY + "RL")  # letters whose Word a move (or G10) needs
@@ -212,7 +213,8 @@ class GcodeMoves:
         self.motion: list[str] = []
         self.reason: list[str] = []
         self.retract: list[str] = []
-        self._names: dict[str, str] = {}  # one str object per distinct motion and retract
+        # one str object per distinct motion and retract: those of the name tables and others
+        self._names: dict[str, str] = dict(zip(_NAME_OBJECTS, _NAME_OBJECTS, strict=True))
         self.places = -1  # the most decimals among the X, Y, Z literals of the moves (-1: none)
 
     def __len__(self) -> int:
@@ -297,16 +299,15 @@ class GcodeMoves:
     def extend(self, cycle, g99, rotary, motion, retract, reason) -> None:
         """Store the rows ``rows`` gave, filled, as ``add`` stores one: ``cycle`` and ``g99``
         (M,) bool (no row is incremental nor resets the position), ``rotary`` the dict in effect
-        for all, ``motion``/``retract``/``reason`` M strings each."""
+        for all, ``motion``/``retract``/``reason`` M strings each (motions and retracts from
+        ``_MOTION_NAMES`` and ``_RETRACT_NAMES``)."""
         if not self.rotaries or rotary is not self.rotaries[-1]:
             self.rotaries.append(rotary)
         i, m = len(self.motion), len(motion)
         self._flags[i : i + m] = _F_CYCLE * np.asarray(cycle, np.int8) + _F_G99 * g99
         self._rotary[i : i + m] = len(self.rotaries) - 1
-        names = self._names
-        same = {k: names.setdefault(k, k) for k in {*motion, *retract}}  # one str per name
-        self.motion += map(same.__getitem__, motion)
-        self.retract += map(same.__getitem__, retract)
+        self.motion += motion
+        self.retract += retract
         self.reason += reason
 
     def finish(self) -> GcodeMoves:
