@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from accugrid.codegen.program_text import row_counts
 from accugrid.codegen.textsafe import fixed_bytes
 
 __all__ = ["ByteSplicer", "literals", "texts_of"]
@@ -28,8 +29,7 @@ def texts_of(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The texts of rows (m, w) uint8 of NUL-padded ASCII (``fixed_bytes``' cells) one after
     another (uint8) and the length of each (m,)."""
     shown = cells != 0
-    # a product with ones counts each row's bytes (2-3x faster than a sum over rows this short)
-    return cells[shown], shown.view(np.uint8) @ np.ones(cells.shape[1], np.intp)
+    return cells[shown], row_counts(shown)
 
 
 class ByteSplicer:
