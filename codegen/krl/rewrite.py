@@ -224,11 +224,6 @@ class _Context:
                         self.twice.add(k)
                     seen.add(k)
                 self.twice.discard("")
-        self.wild_named = (
-            {wildcard(key) for key in self.named if "[" in key}
-            if "[" in "".join(self.named)
-            else set()
-        )
         self.config_named = {}
         if config is not None:
             for p in config.positions:
@@ -257,6 +252,13 @@ class _Context:
         self.frames: list[np.ndarray] = []
         self._frame_ids: dict[int, int] = {}
         self._blocked = set(self.frame_uses) | set(self.assigned)
+
+    @cached_property
+    def wild_named(self) -> set[str]:
+        """The stored positions' array element names with their indices as wildcards."""
+        if "[" not in "".join(self.named):
+            return set()
+        return {wildcard(key) for key in self.named if "[" in key}
 
     @cached_property
     def use_of(self) -> dict[str, int]:
