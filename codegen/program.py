@@ -39,6 +39,7 @@ from accugrid.codegen.cell import Cell
 from accugrid.codegen.points import Points
 from accugrid.codegen.textsafe import fixed_texts
 from accugrid.compensation.grid import GridModel
+from accugrid.kinematics.blocks import run_blocks
 from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import (
@@ -385,8 +386,8 @@ def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarr
 
 def _ik_blocks(robot: RobotModel, poses, holes: int, stages: int, status, turn) -> SimpleNamespace:
     """``robot.ik`` of the poses (holes * stages, 4, 4) that ``poses(slice)`` makes, in blocks of
-    about ``IK_BLOCK`` poses: the same result, with the poses and the IK's (M, 8, ...)
-    temporaries bounded in memory."""
+    about ``IK_BLOCK`` poses on a few threads (``kinematics.blocks``): the same result as one
+    call, with the poses and the IK's (M, 8, ...) temporaries bounded in memory."""
     per = max(IK_BLOCK // stages, 1)
     m = holes * stages
     out = SimpleNamespace(
@@ -396,11 +397,14 @@ def _ik_blocks(robot: RobotModel, poses, holes: int, stages: int, status, turn) 
         status=np.empty(m, np.int16),  # -1..7
         turn=np.empty(m, np.int16),  # -1..63
     )
-    for i in range(0, holes, per):
+
+    def block(i: int) -> None:  # holes i .. i + per - 1, written into their rows of out
         sol = robot.ik(poses(slice(i, i + per)).reshape(-1, 4, 4), status=status, turn=turn)
         at = slice(i * stages, i * stages + len(sol.ok))
         for field, values in vars(out).items():
             values[at] = getattr(sol, field)
+
+    run_blocks(block, range(0, holes, per))
     return out
 
 
