@@ -161,18 +161,21 @@ def build_program(
     nominal += points.xyz[:, None, :]  # = xyz + offset * axis, without a second (N, 4, 3)
     base_rot = cell.robot_T_base[:3, :3]
     holes_robot = points.xyz @ base_rot.T + cell.robot_T_base[:3, 3]
+    robot_rotations = base_rot @ rotations  # once: the correction's and every stage's
     warnings: list[str] = []
     status = cell.configuration.status
     if model is not None:
         correction, warnings, status = _model_correction(
-            points, cell, model, grid, holes_robot, base_rot @ rotations
+            points, cell, model, grid, holes_robot, robot_rotations
         )
     elif grid is None:
         correction = np.zeros((n, 3))
     else:
-        correction, warnings = _correction(points, cell, grid, holes_robot, base_rot @ rotations)
+        correction, warnings = _correction(points, cell, grid, holes_robot, robot_rotations)
     positions = nominal + (correction @ base_rot)[:, None, :]  # e rotated into the BASE frame
-    status, turn, ik_warnings = _configuration(points, cell, robot, positions, rotations, status)
+    status, turn, ik_warnings = _configuration(
+        points, cell, robot, positions, robot_rotations, status
+    )
     return Program(
         cell=cell,
         points=points,
@@ -205,9 +208,13 @@ def _rotations(points: Points, cell: Cell) -> np.ndarray:
             "or turn the reference",
             *points.table.where(int(bad[0]), "i"),
         )
-    return np.concatenate(  # in blocks: the rule's (N, 3, 3) temporaries stay small
-        [orient_along_axes(points.axis[i : i + IK_BLOCK], reference) for i in range(0, n, IK_BLOCK)]
-    )
+    out = np.empty((n, 3, 3))
+
+    def block(i: int) -> None:  # in blocks: the rule's (N, 3, 3) temporaries stay small
+        out[i : i + IK_BLOCK] = orient_along_axes(points.axis[i : i + IK_BLOCK], reference)
+
+    run_blocks(block, range(0, n, IK_BLOCK))
+    return out
 
 
 def _correction(
@@ -310,8 +317,9 @@ def _configuration(
     rotations: np.ndarray,
     status: int | None,
 ) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """IK of every pose in KUKA ``status`` (None: the first pose's IK default): Status and Turn
-    (N, 4) per pose and the warnings."""
+    """IK of every pose (positions (N, 4, 3) mm, BASE frame; rotations (N, 3, 3) robot frame)
+    in KUKA ``status`` (None: the first pose's IK default): Status and Turn (N, 4) per pose and
+    the warnings."""
     n = len(points)
     if n == 0:
         return np.zeros((0, 4), int), np.zeros((0, 4), int), []
@@ -374,11 +382,11 @@ def _configuration(
 
 
 def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
-    """Robot-frame TCP poses (H, S, 4, 4) of positions (H, S, 3) mm and rotations (H, 3, 3)
-    in the BASE frame."""
+    """Robot-frame TCP poses (H, S, 4, 4) of positions (H, S, 3) mm in the BASE frame and
+    rotations (H, 3, 3) in the robot frame."""
     base_rot, base_org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
     out = np.empty((*positions.shape[:2], 4, 4))
-    out[:, :, :3, :3] = (base_rot @ rotations)[:, None]
+    out[:, :, :3, :3] = rotations[:, None]
     out[:, :, :3, 3] = positions @ base_rot.T + base_org
     out[:, :, 3] = (0.0, 0.0, 0.0, 1.0)
     return out

@@ -101,8 +101,8 @@ def _ik_of_program(monkeypatch, c, threads: int):
     pts = panel_points(ROWS)
     monkeypatch.setattr(program, "IK_BLOCK", 7)
     monkeypatch.setattr(blocks, "threads", lambda: threads)
-    rotations = program._rotations(pts, c)
-    positions = program.build_program(pts, c, robot(), None).positions
+    built = program.build_program(pts, c, robot(), None)
+    positions, rotations = built.positions, c.robot_T_base[:3, :3] @ built.rotations
     stages = 3 if c.drilling.retract_mm == c.drilling.approach_mm else 4
 
     def poses(holes):
