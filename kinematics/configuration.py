@@ -182,24 +182,23 @@ def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, 
     rows = np.flatnonzero(one)
     a = np.argmax(fits[rows], axis=1)
     s, e = a // 2, a % 2
-    cand = closed.arm_wrists(
-        dh, flange[rows], th1[rows, s], th2[rows, s, e], th3[rows, s, e]
-    )  # (m, 2, 6)
+    arm = (th1[rows, s], th2[rows, s, e], th3[rows, s, e])
     if status is None:
+        cand = closed.arm_wrists(dh, flange[rows], *arm)  # (m, 2, 6)
         ref = HOME_RAD if reference is None else np.asarray(reference, dtype=float)
         ref = np.broadcast_to(ref, (n, 6))[rows, None]
         pick = np.argmin((closed.wrap(cand - ref) ** 2).sum(axis=2), axis=1)
-        settled = np.ones(len(rows), bool)
+        q[rows] = cand[np.arange(len(rows)), pick]
+        found[rows] = True
+        rest = np.flatnonzero(~one & fits.any(axis=1))
     else:
-        cand_status = _status(robot, cand.reshape(-1, 6), np.repeat(wrist[rows], 2, axis=0))
-        match = _status_match(cand.reshape(-1, 6), cand_status, want[rows].repeat(2))
-        match = match.reshape(-1, 2)
-        pick, settled = np.argmax(match, axis=1), match.any(axis=1)
-    done = rows[settled]
-    q[done] = cand[settled, pick[settled]]
-    found[done] = True
-    rest = np.flatnonzero(~one & fits.any(axis=1))
-    rest = np.concatenate([rest, rows[~settled]]) if status is not None else rest
+        # the arm solution has the wanted bits 0 and 1 (its Status, the same numbers as its
+        # candidates' ``_status``): the wrist with the wanted bit 2 (A5 < 0) is the match
+        chosen, settled = closed.chosen_wrists(dh, flange[rows], *arm, want[rows] & 4 != 0)
+        done = rows[settled]
+        q[done] = chosen[settled]
+        found[done] = True
+        rest = np.concatenate([np.flatnonzero(~one & fits.any(axis=1)), rows[~settled]])
     if rest.size:
         q[rest], found[rest] = _select_all(robot, flange[rest], wrist[rest], want, rest, reference)
     return q, found, reach.reshape(n, 4).any(axis=1)

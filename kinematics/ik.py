@@ -16,6 +16,7 @@ __all__ = [
     "all_solutions",
     "arm_solutions",
     "arm_wrists",
+    "chosen_wrists",
     "closed_form_supported",
     "wrap",
     "wrist_angles",
@@ -119,6 +120,36 @@ def arm_wrists(
     return _joints(table, np.stack([th1, th2, th3], axis=-1), *wrist).reshape(-1, 2, 6)
 
 
+def chosen_wrists(
+    table: DHTable,
+    flange: np.ndarray,
+    th1: np.ndarray,
+    th2: np.ndarray,
+    th3: np.ndarray,
+    negative: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Of the 2 wrist solutions of one arm solution per pose, the first whose A5 < 0 is
+    ``negative`` (M,) bool, or that sits on the wrist singularity (|A5| < 1e-12 rad, where either
+    fits): KUKA joint angles (M, 6) rad in (-pi, pi] (rows without one: undefined) and whether
+    there is one (M,). Flange poses (M, 4, 4) mm, DH angles th1, th2, th3 (M,) rad. The numbers
+    of ``arm_wrists`` for the chosen solution, with half of its joint arithmetic."""
+    th4, th5, th6 = wrist_angles(table, th1, _r6(table, flange), th2 + th3)
+    a5 = wrap((np.stack([th5, -th5], axis=1) - table.theta_offset[4]) * table.sign[4])  # (M, 2)
+    fits = ((a5 < 0) == np.asarray(negative)[:, None]) | (np.abs(a5) < 1e-12)
+    second = ~fits[:, 0]
+    th4, th5, th6 = (
+        np.where(second, b, a)
+        for a, b in zip((th4, th5, th6), _flipped(th4, th5, th6), strict=True)
+    )
+    theta = np.stack([th1, th2, th3, th4, th5, th6], axis=1)
+    return wrap(table.axis_angles(theta)), fits.any(axis=1)
+
+
+def _flipped(th4: np.ndarray, th5: np.ndarray, th6: np.ndarray) -> tuple[np.ndarray, ...]:
+    """DH theta_4, theta_5, theta_6 of the other wrist solution (the same flange orientation)."""
+    return th4 + np.pi, -th5, th6 + np.pi
+
+
 def wrist_angles(
     table: DHTable, th1: np.ndarray, r6: list[list[np.ndarray]], phi: np.ndarray
 ) -> tuple[np.ndarray, ...]:
@@ -168,9 +199,10 @@ def _joints(
 ) -> np.ndarray:
     """KUKA angles (2M, 6) rad in (-pi, pi]: arm DH angles (M, 3) with both wrist solutions of
     th4, th5, th6 (M,) (the other one: A4 + 180 deg, -A5, A6 + 180 deg), wrist order inner."""
-    th4 = np.stack([th4, th4 + np.pi], axis=1).reshape(-1)
-    th5 = np.stack([th5, -th5], axis=1).reshape(-1)
-    th6 = np.stack([th6, th6 + np.pi], axis=1).reshape(-1)
+    other = _flipped(th4, th5, th6)
+    th4, th5, th6 = (
+        np.stack([a, b], axis=1).reshape(-1) for a, b in zip((th4, th5, th6), other, strict=True)
+    )
     theta = np.empty((len(th4), 6))
     theta[:, :3] = np.repeat(arm, 2, axis=0)
     theta[:, 3], theta[:, 4], theta[:, 5] = th4, th5, th6
