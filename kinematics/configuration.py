@@ -172,17 +172,19 @@ def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, 
     settle it (several arm solutions fit, or neither wrist has the wanted bit 2) take all 8
     candidates, so the pick is the same as over all 8 in candidate order."""
     n, dh = len(flange), robot.dh
-    th1, th2, th3, reach = closed.arm_solutions(dh, flange, wrist)
+    th1, th3, reach, plane = closed.arm_elbows(dh, wrist)
+    reach = np.repeat(reach, 2, axis=1)  # (N, 4): per shoulder and elbow
     bits = _arm_status(robot, th1, th3, wrist).reshape(n, 4)
     want = 2 if status is None else np.broadcast_to(np.asarray(status, dtype=int), (n,))
-    fits = reach.reshape(n, 4) & (bits == np.bitwise_and(want, 3)[..., None])
+    fits = reach & (bits == np.bitwise_and(want, 3)[..., None])
     one = fits.sum(axis=1) == 1
     q = np.full((n, 6), np.nan)
     found = np.zeros(n, bool)
     rows = np.flatnonzero(one)
     a = np.argmax(fits[rows], axis=1)
     s, e = a // 2, a % 2
-    arm = (th1[rows, s], th2[rows, s, e], th3[rows, s, e])
+    th2 = closed.upper_arm(dh, [part[rows, s] for part in plane], e)  # the chosen arm's only
+    arm = (th1[rows, s], th2, th3[rows, s, e])
     if status is None:
         cand = closed.arm_wrists(dh, flange[rows], *arm)  # (m, 2, 6)
         ref = HOME_RAD if reference is None else np.asarray(reference, dtype=float)
@@ -201,7 +203,7 @@ def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, 
         rest = np.concatenate([np.flatnonzero(~one & fits.any(axis=1)), rows[~settled]])
     if rest.size:
         q[rest], found[rest] = _select_all(robot, flange[rest], wrist[rest], want, rest, reference)
-    return q, found, reach.reshape(n, 4).any(axis=1)
+    return q, found, reach.any(axis=1)
 
 
 def _select_all(robot: Robot, flange, wrist, want, rows, reference):
