@@ -366,7 +366,10 @@ def _configuration(
         reason = sol.reason.reshape(n, stages)[hole, stage] or "no solution"
         _fail(points, hole, stage, reason, cell, failed.size, status, cell.configuration.turn)
     warnings += _branch_jumps(points, cell, q)
-    a5 = np.degrees(np.abs(q[:, :, 4])).min(axis=1)
+    a5 = np.abs(q[:, 0, 4])
+    for stage in range(1, stages):  # stage by stage: a reduction over a short axis is slow
+        np.minimum(a5, np.abs(q[:, stage, 4]), out=a5)
+    np.degrees(a5, out=a5)
     near = np.flatnonzero(a5 < cell.configuration.singular_a5_deg)
     if near.size:
         named = ", ".join(f"{points.label(int(i))} |A5| {a5[i]:.1f} deg" for i in near[:_LISTED])
@@ -420,10 +423,10 @@ def _branch_jumps(points: Points, cell: Cell, q: np.ndarray) -> list[str]:
     """An axis turning more than ``MAX_AXIS_JUMP_DEG`` between consecutive poses (a wrist flip or
     a change of branch): InputError naming the hole, or a warning with allow_change."""
     seq = q.reshape(-1, 6)
-    jump = np.empty(max(len(seq) - 1, 0))
-    for i in range(0, len(jump), IK_BLOCK):  # in blocks: no (M, 6) temporaries
-        step = np.diff(seq[i : i + IK_BLOCK + 1], axis=0)
-        jump[i : i + IK_BLOCK] = np.degrees(np.abs(step, out=step).max(axis=1))  # same maximum
+    jump = np.abs(seq[1:, 0] - seq[:-1, 0])
+    for axis in range(1, 6):  # axis by axis: no (M, 6) temporaries
+        np.maximum(jump, np.abs(seq[1:, axis] - seq[:-1, axis]), out=jump)
+    np.degrees(jump, out=jump)
     bad = np.flatnonzero(jump > MAX_AXIS_JUMP_DEG)
     if not bad.size:
         return []

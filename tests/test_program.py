@@ -7,12 +7,13 @@ import dataclasses
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 from program_helpers import cell, cell_with, error_field, grid, panel_points, robot
 
 from accugrid.codegen.points import parse_points
-from accugrid.codegen.program import STAGES, build_program
+from accugrid.codegen.program import STAGES, _branch_jumps, build_program
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc, transform_points
@@ -196,3 +197,36 @@ def test_any_panel_point_set_keeps_axis_straight_and_status(xy):
     np.testing.assert_allclose(
         prog.correction, error_field(transform_points(cell().robot_T_base, pts.xyz)), atol=0.2
     )
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    steps=arrays(float, (12, 3, 6), elements=st.floats(-1.0, 1.0)),
+    flips=st.sets(st.tuples(st.integers(0, 11), st.integers(0, 2), st.integers(0, 5)), max_size=3),
+)
+def test_a_joint_move_over_180_deg_between_poses_names_its_hole(steps, flips):
+    """``_branch_jumps`` against the plain rule: the largest |A_i| change between consecutive
+    poses (hole by hole, stage by stage) over 180 deg is an error naming the hole of the
+    later pose, or with allow_change a warning counting such moves."""
+    q = np.cumsum(steps.reshape(-1, 6), axis=0).reshape(12, 3, 6)  # moves of up to 1 rad
+    for hole, stage, axis in flips:
+        q[hole, stage:, axis] += np.radians(200.0)  # a jump of 200 deg +- 57 deg
+        if hole + 1 < 12:
+            q[hole + 1 :, :, axis] += np.radians(200.0)
+    seq = q.reshape(-1, 6)
+    moves = [float(np.degrees(np.max(np.abs(seq[i + 1] - seq[i])))) for i in range(len(seq) - 1)]
+    over = [i for i, m in enumerate(moves) if m > 180.0]
+    pts = panel_points(ROWS[:12])
+    if not over:
+        assert _branch_jumps(pts, cell(), q) == []
+        return
+    hole = (over[0] + 1) // 3
+    with pytest.raises(InputError) as info:
+        _branch_jumps(pts, cell(), q)
+    assert info.value.message.startswith(
+        f"hole 'H{hole + 1}': an axis turns {moves[over[0]]:.0f} deg from the previous pose"
+    )
+    assert info.value.line == hole + 2
+    allowed = cell_with(configuration={"allow_change": True})
+    (warning,) = _branch_jumps(pts, allowed, q)
+    assert warning.endswith(f"; {len(over)} such move(s) in the program")
