@@ -144,7 +144,7 @@ def build_program(
         raise InputError(
             "the points have no orientation: add columns a,b,c or i,j,k", points.path, 1
         )
-    rotations = _rotations(points, cell)
+    rotations, robot_rotations = _rotations(points, cell)
     axis = rotations[:, :, 2]
     depth = np.where(np.isnan(points.depth), cell.drilling.depth_mm, points.depth)
     feed = np.where(np.isnan(points.feed), cell.drilling.feed_mm_s, points.feed)
@@ -161,7 +161,6 @@ def build_program(
     nominal += points.xyz[:, None, :]  # = xyz + offset * axis, without a second (N, 4, 3)
     base_rot = cell.robot_T_base[:3, :3]
     holes_robot = points.xyz @ base_rot.T + cell.robot_T_base[:3, 3]
-    robot_rotations = base_rot @ rotations  # once: the correction's and every stage's
     warnings: list[str] = []
     status = cell.configuration.status
     if model is not None:
@@ -191,15 +190,23 @@ def build_program(
     )
 
 
-def _rotations(points: Points, cell: Cell) -> np.ndarray:
-    """Tool rotations (N, 3, 3) in the BASE frame: from a,b,c, or by the i,j,k rule of
-    ``orient_along_axes`` around the cell's reference orientation (a robot-frame A,B,C)."""
-    if points.abc is not None:
-        return abc_to_matrix(points.abc).reshape(-1, 3, 3)
+def _rotations(points: Points, cell: Cell) -> tuple[np.ndarray, np.ndarray]:
+    """Tool rotations (N, 3, 3) in the BASE frame, from a,b,c or by the i,j,k rule of
+    ``orient_along_axes`` around the cell's reference orientation (a robot-frame A,B,C), and
+    the same in the robot frame (once: the correction's and every stage's), in blocks on the
+    block threads."""
     n = len(points)
-    reference = cell.robot_T_base[:3, :3].T @ abc_to_matrix(
-        np.array(cell.configuration.reference_abc)
-    )
+    base_rot = cell.robot_T_base[:3, :3]
+    out, robot = np.empty((n, 3, 3)), np.empty((n, 3, 3))
+    if points.abc is not None:
+
+        def block(i: int) -> None:
+            out[i : i + IK_BLOCK] = abc_to_matrix(points.abc[i : i + IK_BLOCK]).reshape(-1, 3, 3)
+            robot[i : i + IK_BLOCK] = base_rot @ out[i : i + IK_BLOCK]
+
+        run_blocks(block, range(0, n, IK_BLOCK))
+        return out, robot
+    reference = base_rot.T @ abc_to_matrix(np.array(cell.configuration.reference_abc))
     bad = np.flatnonzero(too_tilted(points.axis, reference))
     if bad.size:
         raise InputError(
@@ -208,13 +215,13 @@ def _rotations(points: Points, cell: Cell) -> np.ndarray:
             "or turn the reference",
             *points.table.where(int(bad[0]), "i"),
         )
-    out = np.empty((n, 3, 3))
 
-    def block(i: int) -> None:  # in blocks: the rule's (N, 3, 3) temporaries stay small
+    def tilted(i: int) -> None:  # in blocks: the rule's (N, 3, 3) temporaries stay small
         out[i : i + IK_BLOCK] = orient_along_axes(points.axis[i : i + IK_BLOCK], reference)
+        robot[i : i + IK_BLOCK] = base_rot @ out[i : i + IK_BLOCK]
 
-    run_blocks(block, range(0, n, IK_BLOCK))
-    return out
+    run_blocks(tilted, range(0, n, IK_BLOCK))
+    return out, robot
 
 
 def _correction(
