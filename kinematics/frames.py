@@ -53,15 +53,17 @@ def matrix_to_abc(rot: np.ndarray) -> np.ndarray:
     ``GIMBAL_LOCK_RAD``) C is 0 and A carries the rotation about the vertical.
     """
     rot = np.asarray(rot, dtype=float)
+    out = np.empty(rot.shape[:-2] + (3,))
     b = np.arctan2(-rot[..., 2, 0], np.hypot(rot[..., 0, 0], rot[..., 1, 0]))
     locked = np.pi / 2 - np.abs(b) <= GIMBAL_LOCK_RAD
-    a = np.where(
-        locked,
-        np.arctan2(-rot[..., 0, 1], rot[..., 1, 1]),
-        np.arctan2(rot[..., 1, 0], rot[..., 0, 0]),
-    )
-    c = np.where(locked, 0.0, np.arctan2(rot[..., 2, 1], rot[..., 2, 2]))
-    return np.degrees(np.stack([a, b, c], axis=-1))
+    out[..., 0] = np.arctan2(rot[..., 1, 0], rot[..., 0, 0])
+    out[..., 2] = np.arctan2(rot[..., 2, 1], rot[..., 2, 2])
+    if locked.any():  # rare: the other formula only where it applies
+        held = rot[locked]
+        out[locked, 0] = np.arctan2(-held[..., 0, 1], held[..., 1, 1])
+        out[locked, 2] = 0.0
+    out[..., 1] = b
+    return np.degrees(out, out=out)
 
 
 def pose_from_xyzabc(xyzabc: np.ndarray) -> np.ndarray:

@@ -206,3 +206,24 @@ def test_kuka_abc_matches_scipy_zyx_including_gimbal_lock(a, b, c):
     np.testing.assert_allclose(got, expected, atol=1e-6)
     if abs(b) == 90.0:
         assert got[2] == 0.0
+
+
+@given(
+    st.lists(
+        st.tuples(
+            st.floats(-179.9, 179.9),
+            st.one_of(st.floats(-89.99, 89.99), st.sampled_from([-90.0, 90.0])),
+            st.floats(-179.9, 179.9),
+        ),
+        min_size=1,
+        max_size=20,
+    )
+)
+def test_abc_of_a_batch_is_the_abc_of_each_matrix(angles):
+    """matrix_to_abc over (N, 3, 3) with gimbal-locked and free rotations mixed: number for
+    number each matrix's own A, B, C (the locked rule only where it applies)."""
+    rot = frames.abc_to_matrix(np.array(angles))
+    batch = frames.matrix_to_abc(rot)
+    single = np.array([frames.matrix_to_abc(r) for r in rot])
+    np.testing.assert_array_equal(batch, single)
+    np.testing.assert_array_equal(frames.matrix_to_abc(rot[None])[0], batch)
