@@ -102,17 +102,17 @@ class Program:
         """Comment text of holes lo..hi-1: id, depth and diameter (templates sanitize it)."""
         hi = len(self) if hi is None else hi
         ids = self.points.ids[lo:hi]
+        depth = fixed_texts(self.depth_mm[lo:hi], 3, distinct=True).tolist()
         dia = self.points.diameter[lo:hi]
         given = ~np.isnan(dia)
-        table = np.empty((hi - lo, 3), dtype=object)
-        table[:, 0] = ids
-        table[:, 1] = fixed_texts(self.depth_mm[lo:hi], 3, distinct=True)
-        table[given, 2] = fixed_texts(dia[given], 3, distinct=True)
-        if given.all() != given.any() or "\n" in "".join(ids):  # some diameters, or a line break
-            return [f"{i} depth {d}" + ("" if t is None else f" dia {t}") for i, d, t in table]
-        line, columns = ("%s depth %s dia %s\n", 3) if given.all() else ("%s depth %s\n", 2)
-        texts = (line * len(table)) % tuple(table[:, :columns].ravel().tolist())
-        return texts.split("\n")[:-1]
+        if given.all():
+            texts = fixed_texts(dia, 3, distinct=True).tolist()
+            return [f"{i} depth {d} dia {t}" for i, d, t in zip(ids, depth, texts, strict=True)]
+        if not given.any():
+            return [f"{i} depth {d}" for i, d in zip(ids, depth, strict=True)]
+        texts = np.full(len(dia), "", dtype=object)
+        texts[given] = [f" dia {t}" for t in fixed_texts(dia[given], 3, distinct=True).tolist()]
+        return [f"{i} depth {d}{t}" for i, d, t in zip(ids, depth, texts.tolist(), strict=True)]
 
     def in_frame(
         self, robot_T_frame: np.ndarray, lo: int = 0, hi: int | None = None

@@ -14,6 +14,7 @@ from program_helpers import cell, cell_with, error_field, grid, panel_points, ro
 
 from accugrid.codegen.points import parse_points
 from accugrid.codegen.program import STAGES, _branch_jumps, build_program
+from accugrid.codegen.textsafe import fixed
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc, transform_points
@@ -230,3 +231,41 @@ def test_a_joint_move_over_180_deg_between_poses_names_its_hole(steps, flips):
     allowed = cell_with(configuration={"allow_change": True})
     (warning,) = _branch_jumps(pts, allowed, q)
     assert warning.endswith(f"; {len(over)} such move(s) in the program")
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    rows=st.lists(
+        st.tuples(
+            st.text(st.characters(blacklist_characters=',"#\r\x00'), min_size=1, max_size=6),
+            st.one_of(st.none(), st.floats(0.1, 30.0)),
+            st.one_of(st.none(), st.floats(0.1, 20.0)),
+        ),
+        min_size=1,
+        max_size=8,
+        unique_by=lambda row: row[0].strip(),
+    ),
+    cut=st.data(),
+)
+def test_labels_are_id_depth_and_diameter_of_each_hole(rows, cut):
+    """Program.labels: per hole "<id> depth <d>" and " dia <t>" when the diameter is given,
+    both with 3 decimals as ``fixed`` writes them (the depth: the cell's when not given); ids as
+    read, whatever they hold."""
+    rows = [r for r in rows if r[0].strip()]
+    if not rows:
+        return
+    text = "id,x,y,z,i,j,k,diameter,depth\n" + "".join(
+        f'"{i}",{25.0 * n},150,0,0,0,-1,{"" if d is None else d},{"" if h is None else h}\n'
+        for n, (i, d, h) in enumerate(rows)
+    )
+    prog = build_program(parse_points(text, "l.csv"), cell(), robot(), None)
+    default = cell().drilling.depth_mm
+    expected = [
+        f"{i.strip()} depth {fixed(default if h is None else h, 3)}"
+        + ("" if d is None else f" dia {fixed(d, 3)}")
+        for i, d, h in rows
+    ]
+    assert prog.labels() == expected
+    lo = cut.draw(st.integers(0, len(rows)))
+    hi = cut.draw(st.integers(lo, len(rows)))
+    assert prog.labels(lo, hi) == expected[lo:hi]
