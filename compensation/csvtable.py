@@ -270,8 +270,8 @@ class _Cells:
 
     def _span(self, i: int, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
         """Start and end offsets of column i's cells in rows lo..hi-1."""
-        j = np.arange(lo, hi) * self.width + i
-        return self.bounds[j] + 1, self.bounds[j + 1]
+        first, w = lo * self.width + i, self.width  # every width-th separator: strided views
+        return self.bounds[first : hi * w + i : w] + 1, self.bounds[first + 1 : hi * w + i + 1 : w]
 
     def cut(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
         """The cells spanning ``data[start:end]`` as a fixed-width bytes array (NUL-padded; its
