@@ -167,10 +167,12 @@ def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, 
     """The solution ``Robot.ik`` picks per flange pose (N, 4, 4), before Turn and limits: q (N, 6)
     rad in (-pi, pi] (NaN where none), found (N,), any candidate reachable (N,).
 
-    Status bits 0 and 1 (shoulder, elbow) follow from the 4 arm solutions alone; where one
-    arm solution has the wanted bits, only its 2 wrists are solved. Poses where that does not
-    settle it (several arm solutions fit, or neither wrist has the wanted bit 2) take all 8
-    candidates, so the pick is the same as over all 8 in candidate order."""
+    Status bits 0 and 1 (shoulder, elbow) follow from the 4 arm solutions alone (theta_2 is
+    solved only for the chosen one); where one arm solution has the wanted bits, only its 2
+    wrists are solved, and with a given Status only the joints of the wrist with the wanted
+    bit 2 are built. Poses where that does not settle it (several arm solutions fit, or neither
+    wrist has the wanted bit 2) take all 8 candidates, so the pick is the same as over all 8
+    in candidate order."""
     n, dh = len(flange), robot.dh
     th1, th3, reach, plane = closed.arm_elbows(dh, wrist)
     reach = np.repeat(reach, 2, axis=1)  # (N, 4): per shoulder and elbow
@@ -233,5 +235,5 @@ def _select_all(robot: Robot, flange, wrist, want, rows, reference):
 def _status_match(q: np.ndarray, cand_status: np.ndarray, want: np.ndarray) -> np.ndarray:
     """Candidates (M, 6) with the wanted Status; on the wrist singularity (A5 = 0) either bit 2
     fits."""
-    singular_wrist = np.abs(q[:, 4]) < 1e-12
+    singular_wrist = np.abs(q[:, 4]) < closed.SINGULAR_A5_RAD
     return (cand_status == want) | (singular_wrist & ((cand_status & 3) == (want & 3)))

@@ -13,6 +13,7 @@ import numpy as np
 from accugrid.kinematics.dh import DHTable
 
 __all__ = [
+    "SINGULAR_A5_RAD",
     "all_solutions",
     "arm_elbows",
     "arm_solutions",
@@ -26,6 +27,7 @@ __all__ = [
 ]
 
 _TOL = 1e-9
+SINGULAR_A5_RAD = 1e-12  # |A5| below this: on the wrist singularity, either wrist flag fits
 
 
 def closed_form_supported(table: DHTable) -> bool:
@@ -154,13 +156,14 @@ def chosen_wrists(
     negative: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Of the 2 wrist solutions of one arm solution per pose, the first whose A5 < 0 is
-    ``negative`` (M,) bool, or that sits on the wrist singularity (|A5| < 1e-12 rad, where either
-    fits): KUKA joint angles (M, 6) rad in (-pi, pi] (rows without one: undefined) and whether
-    there is one (M,). Flange poses (M, 4, 4) mm, DH angles th1, th2, th3 (M,) rad. The numbers
-    of ``arm_wrists`` for the chosen solution, with half of its joint arithmetic."""
+    ``negative`` (M,) bool, or that sits on the wrist singularity (|A5| <
+    ``SINGULAR_A5_RAD``, where either fits): KUKA joint angles (M, 6) rad in (-pi, pi] (rows
+    without one: undefined) and whether there is one (M,). Flange poses (M, 4, 4) mm, DH
+    angles th1, th2, th3 (M,) rad. The numbers of ``arm_wrists`` for the chosen solution,
+    with half of its joint arithmetic."""
     th4, th5, th6 = wrist_angles(table, th1, _r6(table, flange), th2 + th3)
     a5 = wrap((np.stack([th5, -th5], axis=1) - table.theta_offset[4]) * table.sign[4])  # (M, 2)
-    fits = ((a5 < 0) == np.asarray(negative)[:, None]) | (np.abs(a5) < 1e-12)
+    fits = ((a5 < 0) == np.asarray(negative)[:, None]) | (np.abs(a5) < SINGULAR_A5_RAD)
     second = ~fits[:, 0]
     th4, th5, th6 = (
         np.where(second, b, a)
