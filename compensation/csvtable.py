@@ -249,10 +249,11 @@ class _Cells:
         self.data = data
         self.width = width
         self.buf = buf = np.frombuffer(data, dtype=np.uint8)
-        seps = np.flatnonzero((buf == 44) | (buf == 10))
-        self.bounds = np.concatenate([[-1], seps, [len(data)]]).astype(
-            np.int32 if len(data) < 2**31 - 1 else np.int64
-        )
+        is_sep = buf == 44
+        is_sep |= buf == 10
+        seps = np.flatnonzero(is_sep)
+        self.bounds = np.empty(len(seps) + 2, np.int32 if len(data) < 2**31 - 1 else np.int64)
+        self.bounds[0], self.bounds[1:-1], self.bounds[-1] = -1, seps, len(data)
 
     def rows_ok(self) -> bool:
         """Whether every line has ``width`` fields and starts like a data row."""
