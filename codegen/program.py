@@ -48,7 +48,9 @@ from accugrid.kinematics.frames import (
     invert,
     matrix_to_abc,
     orient_along_axes,
+    rows_times,
     too_tilted,
+    transform_points,
 )
 from accugrid.kinematics.model import RobotModel
 from accugrid.kinematics.robot import Robot
@@ -160,7 +162,7 @@ def build_program(
     nominal = np.multiply(offsets[:, :, None], axis[:, None, :])
     nominal += points.xyz[:, None, :]  # = xyz + offset * axis, without a second (N, 4, 3)
     base_rot = cell.robot_T_base[:3, :3]
-    holes_robot = points.xyz @ base_rot.T + cell.robot_T_base[:3, 3]
+    holes_robot = transform_points(cell.robot_T_base, points.xyz)
     warnings: list[str] = []
     status = cell.configuration.status
     if model is not None:
@@ -171,7 +173,7 @@ def build_program(
         correction = np.zeros((n, 3))
     else:
         correction, warnings = _correction(points, cell, grid, holes_robot, robot_rotations)
-    positions = nominal + (correction @ base_rot)[:, None, :]  # e rotated into the BASE frame
+    positions = nominal + rows_times(correction, base_rot)[:, None, :]  # e in the BASE frame
     status, turn, ik_warnings = _configuration(
         points, cell, robot, positions, robot_rotations, status
     )
