@@ -123,7 +123,8 @@ class Program:
         given in the robot frame (e.g. ``cell.gcode.robot_T_program`` for G-code)."""
         frame_T_base = invert(robot_T_frame) @ self.cell.robot_T_base
         rot = frame_T_base[:3, :3]
-        pos = self.positions[lo:hi] @ rot.T + frame_T_base[:3, 3]
+        pos = rows_times(self.positions[lo:hi].reshape(-1, 3), rot.T).reshape(-1, 4, 3)
+        pos += frame_T_base[:3, 3]  # one product of all rows, not one per hole
         rotations = self.rotations[lo:hi]
         abc = matrix_to_abc(rot @ rotations) if len(rotations) else np.zeros((0, 3))
         return pos, abc
@@ -399,7 +400,8 @@ def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarr
     base_rot, base_org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
     out = np.empty((*positions.shape[:2], 4, 4))
     out[:, :, :3, :3] = rotations[:, None]
-    out[:, :, :3, 3] = positions @ base_rot.T + base_org
+    rows = rows_times(positions.reshape(-1, 3), base_rot.T) + base_org  # not one per hole
+    out[:, :, :3, 3] = rows.reshape(positions.shape)
     out[:, :, 3] = (0.0, 0.0, 0.0, 1.0)
     return out
 
