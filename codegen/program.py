@@ -200,30 +200,33 @@ def _rotations(points: Points, cell: Cell) -> tuple[np.ndarray, np.ndarray]:
     block threads."""
     n = len(points)
     base_rot = cell.robot_T_base[:3, :3]
-    out, robot = np.empty((n, 3, 3)), np.empty((n, 3, 3))
     if points.abc is not None:
 
-        def block(i: int) -> None:
-            out[i : i + IK_BLOCK] = abc_to_matrix(points.abc[i : i + IK_BLOCK]).reshape(-1, 3, 3)
-            robot[i : i + IK_BLOCK] = base_rot @ out[i : i + IK_BLOCK]
+        def rule(rows: slice) -> np.ndarray:
+            return abc_to_matrix(points.abc[rows]).reshape(-1, 3, 3)
 
-        run_blocks(block, range(0, n, IK_BLOCK))
-        return out, robot
-    reference = base_rot.T @ abc_to_matrix(np.array(cell.configuration.reference_abc))
-    bad = np.flatnonzero(too_tilted(points.axis, reference))
-    if bad.size:
-        raise InputError(
-            f"{points.name(int(bad[0]))}: the drill axis i,j,k is more than {MAX_TILT_DEG:g} deg "
-            "from the reference tool axis (configuration.reference); give a,b,c for this hole "
-            "or turn the reference",
-            *points.table.where(int(bad[0]), "i"),
-        )
+    else:
+        reference = base_rot.T @ abc_to_matrix(np.array(cell.configuration.reference_abc))
+        bad = np.flatnonzero(too_tilted(points.axis, reference))
+        if bad.size:
+            raise InputError(
+                f"{points.name(int(bad[0]))}: the drill axis i,j,k is more than "
+                f"{MAX_TILT_DEG:g} deg from the reference tool axis (configuration.reference); "
+                "give a,b,c for this hole or turn the reference",
+                *points.table.where(int(bad[0]), "i"),
+            )
 
-    def tilted(i: int) -> None:  # in blocks: the rule's (N, 3, 3) temporaries stay small
-        out[i : i + IK_BLOCK] = orient_along_axes(points.axis[i : i + IK_BLOCK], reference)
-        robot[i : i + IK_BLOCK] = base_rot @ out[i : i + IK_BLOCK]
+        def rule(rows: slice) -> np.ndarray:
+            return orient_along_axes(points.axis[rows], reference)
 
-    run_blocks(tilted, range(0, n, IK_BLOCK))
+    out, robot = np.empty((n, 3, 3)), np.empty((n, 3, 3))
+
+    def block(i: int) -> None:  # in blocks: the rule's (N, 3, 3) temporaries stay small
+        rows = slice(i, i + IK_BLOCK)
+        out[rows] = rule(rows)
+        robot[rows] = base_rot @ out[rows]
+
+    run_blocks(block, range(0, n, IK_BLOCK))
     return out, robot
 
 

@@ -269,3 +269,15 @@ def test_labels_are_id_depth_and_diameter_of_each_hole(rows, cut):
     lo = cut.draw(st.integers(0, len(rows)))
     hi = cut.draw(st.integers(lo, len(rows)))
     assert prog.labels(lo, hi) == expected[lo:hi]
+
+
+def test_a_drill_axis_too_far_from_the_reference_names_the_hole():
+    # base (0, 0, -1) is the reference tool Z; (0, 0, 1) is 180 deg from it
+    text = "id,x,y,z,i,j,k\nOK,0,150,0,0,0,-1\nBACK,25,150,0,0,0,1\n"
+    with pytest.raises(InputError) as info:
+        build_program(parse_points(text, "t.csv"), cell(), robot(), None)
+    assert info.value.message == (
+        "hole 'BACK': the drill axis i,j,k is more than 150 deg from the reference tool axis "
+        "(configuration.reference); give a,b,c for this hole or turn the reference"
+    )
+    assert (info.value.path, info.value.line, info.value.column) == ("t.csv", 3, 5)
