@@ -1,7 +1,10 @@
 """Kinematics on 100,000 poses of the kr210-paper robot (tool 250 mm along the flange Z): batched
 FK, closed-form IK (all 8 candidates, Status/Turn selection, limits), the error-field simulation
 (IK in one Status + true FK + noise), and the error Jacobian of seed Eq. 3-7. The peer is
-Pinocchio's FK one pose at a time in a Python loop (10,000 poses, scaled to 100,000).
+Pinocchio's FK one pose at a time in a Python loop (10,000 poses, scaled to 100,000). The IK in
+blocks of 16,384 poses (as ``build_program`` runs it) on one thread and on the block threads of
+``kinematics.blocks`` (the CPUs this process may use, at most 4): their ratio is the threads'
+gain on this machine at this moment (a busy machine shares its cores).
 Targets: FK and IK under 0.5 s each.
 
 Run: .venv/bin/python bench/bench_kinematics.py
@@ -17,6 +20,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from accugrid.kinematics.blocks import run_blocks, threads  # noqa: E402
 from accugrid.kinematics.error_model import error_jacobian  # noqa: E402
 from accugrid.kinematics.frames import pose_from_xyzabc  # noqa: E402
 from accugrid.kinematics.robot import load_robot  # noqa: E402
@@ -25,6 +29,7 @@ from bench.timing import measure, table  # noqa: E402
 
 N = 100_000
 N_PEER = 10_000
+BLOCK = 16_384  # poses per IK call, as build_program's IK_BLOCK
 REPEATS = 3
 
 
@@ -59,6 +64,20 @@ def main_bench() -> None:
     rows.append(("IK (closed form, default Status)", f"{N:,}", f"{ik_time:.3f}", f"{ik_mem:.0f}"))
     ik6_time, ik6_mem = measure(lambda: robot.ik(poses, status=6), REPEATS)
     rows.append(("IK (closed form, Status 6)", f"{N:,}", f"{ik6_time:.3f}", f"{ik6_mem:.0f}"))
+    q6 = np.empty((N, 6))
+
+    def ik_blocks(workers: int) -> None:
+        def block(i: int) -> None:
+            q6[i : i + BLOCK] = robot.ik(poses[i : i + BLOCK], status=6).q
+
+        run_blocks(block, range(0, N, BLOCK), workers)
+
+    one_time, one_mem = measure(lambda: ik_blocks(1), REPEATS)
+    rows.append(("IK Status 6, blocks, 1 thread", f"{N:,}", f"{one_time:.3f}", f"{one_mem:.0f}"))
+    n_threads = threads()
+    many_time, many_mem = measure(lambda: ik_blocks(n_threads), REPEATS)
+    label = f"IK Status 6, blocks, {n_threads} threads"
+    rows.append((label, f"{N:,}", f"{many_time:.3f}", f"{many_mem:.0f}"))
     sim_time, sim_mem = measure(
         lambda: simulate_measurements(robot, points, [0, 90, 0], 1, 0.02, 0.03), REPEATS
     )
@@ -76,6 +95,7 @@ def main_bench() -> None:
         f"FK / floor {fk_time / floor_time:.2f}; IK default Status / FK {ik_time / fk_time:.2f}, "
         f"IK Status 6 / FK {ik6_time / fk_time:.2f}"
     )
+    print(f"IK blocks: {n_threads} threads / 1 thread {many_time / one_time:.2f}")
 
 
 if __name__ == "__main__":

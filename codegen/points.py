@@ -104,12 +104,14 @@ def _points(table: Table) -> Points:
     elif any(has_ijk):
         table.require(["i", "j", "k"])
         raw = table.floats(["i", "j", "k"])
-        largest = np.max(np.abs(raw), axis=1, initial=0.0)  # scaled first: huge i,j,k
-        short = np.flatnonzero(~(largest > AXIS_MIN_LENGTH))  # must not overflow the norm
+        size = np.abs(raw)  # column by column below: reductions over a short axis are slow
+        largest = np.maximum(np.maximum(size[:, 0], size[:, 1]), size[:, 2])  # scaled first:
+        short = np.flatnonzero(~(largest > AXIS_MIN_LENGTH))  # huge i,j,k must not overflow
         if short.size:
             raise InputError("drill axis i,j,k has zero length", *table.where(int(short[0]), "i"))
         axis = raw / largest[:, None]
-        axis /= np.linalg.norm(axis, axis=1)[:, None]
+        square = np.square(axis, out=size)
+        axis /= np.sqrt(square[:, 0] + square[:, 1] + square[:, 2])[:, None]  # the norm
     return Points(
         path=table.path,
         table=table,

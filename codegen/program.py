@@ -39,6 +39,7 @@ from accugrid.codegen.cell import Cell
 from accugrid.codegen.points import Points
 from accugrid.codegen.textsafe import fixed_texts
 from accugrid.compensation.grid import GridModel
+from accugrid.kinematics.blocks import run_blocks
 from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import (
@@ -47,7 +48,9 @@ from accugrid.kinematics.frames import (
     invert,
     matrix_to_abc,
     orient_along_axes,
+    rows_times,
     too_tilted,
+    transform_points,
 )
 from accugrid.kinematics.model import RobotModel
 from accugrid.kinematics.robot import Robot
@@ -101,17 +104,17 @@ class Program:
         """Comment text of holes lo..hi-1: id, depth and diameter (templates sanitize it)."""
         hi = len(self) if hi is None else hi
         ids = self.points.ids[lo:hi]
+        depth = fixed_texts(self.depth_mm[lo:hi], 3, distinct=True).tolist()
         dia = self.points.diameter[lo:hi]
         given = ~np.isnan(dia)
-        table = np.empty((hi - lo, 3), dtype=object)
-        table[:, 0] = ids
-        table[:, 1] = fixed_texts(self.depth_mm[lo:hi], 3, distinct=True)
-        table[given, 2] = fixed_texts(dia[given], 3, distinct=True)
-        if given.all() != given.any() or "\n" in "".join(ids):  # some diameters, or a line break
-            return [f"{i} depth {d}" + ("" if t is None else f" dia {t}") for i, d, t in table]
-        line, columns = ("%s depth %s dia %s\n", 3) if given.all() else ("%s depth %s\n", 2)
-        texts = (line * len(table)) % tuple(table[:, :columns].ravel().tolist())
-        return texts.split("\n")[:-1]
+        if given.all():
+            texts = fixed_texts(dia, 3, distinct=True).tolist()
+            return [f"{i} depth {d} dia {t}" for i, d, t in zip(ids, depth, texts, strict=True)]
+        if not given.any():
+            return [f"{i} depth {d}" for i, d in zip(ids, depth, strict=True)]
+        texts = np.full(len(dia), "", dtype=object)
+        texts[given] = [f" dia {t}" for t in fixed_texts(dia[given], 3, distinct=True).tolist()]
+        return [f"{i} depth {d}{t}" for i, d, t in zip(ids, depth, texts.tolist(), strict=True)]
 
     def in_frame(
         self, robot_T_frame: np.ndarray, lo: int = 0, hi: int | None = None
@@ -120,7 +123,8 @@ class Program:
         given in the robot frame (e.g. ``cell.gcode.robot_T_program`` for G-code)."""
         frame_T_base = invert(robot_T_frame) @ self.cell.robot_T_base
         rot = frame_T_base[:3, :3]
-        pos = self.positions[lo:hi] @ rot.T + frame_T_base[:3, 3]
+        pos = rows_times(self.positions[lo:hi].reshape(-1, 3), rot.T).reshape(-1, 4, 3)
+        pos += frame_T_base[:3, 3]  # one product of all rows, not one per hole
         rotations = self.rotations[lo:hi]
         abc = matrix_to_abc(rot @ rotations) if len(rotations) else np.zeros((0, 3))
         return pos, abc
@@ -143,7 +147,7 @@ def build_program(
         raise InputError(
             "the points have no orientation: add columns a,b,c or i,j,k", points.path, 1
         )
-    rotations = _rotations(points, cell)
+    rotations, robot_rotations = _rotations(points, cell)
     axis = rotations[:, :, 2]
     depth = np.where(np.isnan(points.depth), cell.drilling.depth_mm, points.depth)
     feed = np.where(np.isnan(points.feed), cell.drilling.feed_mm_s, points.feed)
@@ -159,19 +163,21 @@ def build_program(
     nominal = np.multiply(offsets[:, :, None], axis[:, None, :])
     nominal += points.xyz[:, None, :]  # = xyz + offset * axis, without a second (N, 4, 3)
     base_rot = cell.robot_T_base[:3, :3]
-    holes_robot = points.xyz @ base_rot.T + cell.robot_T_base[:3, 3]
+    holes_robot = transform_points(cell.robot_T_base, points.xyz)
     warnings: list[str] = []
     status = cell.configuration.status
     if model is not None:
         correction, warnings, status = _model_correction(
-            points, cell, model, grid, holes_robot, base_rot @ rotations
+            points, cell, model, grid, holes_robot, robot_rotations
         )
     elif grid is None:
         correction = np.zeros((n, 3))
     else:
-        correction, warnings = _correction(points, cell, grid, holes_robot, base_rot @ rotations)
-    positions = nominal + (correction @ base_rot)[:, None, :]  # e rotated into the BASE frame
-    status, turn, ik_warnings = _configuration(points, cell, robot, positions, rotations, status)
+        correction, warnings = _correction(points, cell, grid, holes_robot, robot_rotations)
+    positions = nominal + rows_times(correction, base_rot)[:, None, :]  # e in the BASE frame
+    status, turn, ik_warnings = _configuration(
+        points, cell, robot, positions, robot_rotations, status
+    )
     return Program(
         cell=cell,
         points=points,
@@ -187,26 +193,41 @@ def build_program(
     )
 
 
-def _rotations(points: Points, cell: Cell) -> np.ndarray:
-    """Tool rotations (N, 3, 3) in the BASE frame: from a,b,c, or by the i,j,k rule of
-    ``orient_along_axes`` around the cell's reference orientation (a robot-frame A,B,C)."""
-    if points.abc is not None:
-        return abc_to_matrix(points.abc).reshape(-1, 3, 3)
+def _rotations(points: Points, cell: Cell) -> tuple[np.ndarray, np.ndarray]:
+    """Tool rotations (N, 3, 3) in the BASE frame, from a,b,c or by the i,j,k rule of
+    ``orient_along_axes`` around the cell's reference orientation (a robot-frame A,B,C), and
+    the same in the robot frame (once: the correction's and every stage's), in blocks on the
+    block threads."""
     n = len(points)
-    reference = cell.robot_T_base[:3, :3].T @ abc_to_matrix(
-        np.array(cell.configuration.reference_abc)
-    )
-    bad = np.flatnonzero(too_tilted(points.axis, reference))
-    if bad.size:
-        raise InputError(
-            f"{points.name(int(bad[0]))}: the drill axis i,j,k is more than {MAX_TILT_DEG:g} deg "
-            "from the reference tool axis (configuration.reference); give a,b,c for this hole "
-            "or turn the reference",
-            *points.table.where(int(bad[0]), "i"),
-        )
-    return np.concatenate(  # in blocks: the rule's (N, 3, 3) temporaries stay small
-        [orient_along_axes(points.axis[i : i + IK_BLOCK], reference) for i in range(0, n, IK_BLOCK)]
-    )
+    base_rot = cell.robot_T_base[:3, :3]
+    if points.abc is not None:
+
+        def rule(rows: slice) -> np.ndarray:
+            return abc_to_matrix(points.abc[rows]).reshape(-1, 3, 3)
+
+    else:
+        reference = base_rot.T @ abc_to_matrix(np.array(cell.configuration.reference_abc))
+        bad = np.flatnonzero(too_tilted(points.axis, reference))
+        if bad.size:
+            raise InputError(
+                f"{points.name(int(bad[0]))}: the drill axis i,j,k is more than "
+                f"{MAX_TILT_DEG:g} deg from the reference tool axis (configuration.reference); "
+                "give a,b,c for this hole or turn the reference",
+                *points.table.where(int(bad[0]), "i"),
+            )
+
+        def rule(rows: slice) -> np.ndarray:
+            return orient_along_axes(points.axis[rows], reference)
+
+    out, robot = np.empty((n, 3, 3)), np.empty((n, 3, 3))
+
+    def block(i: int) -> None:  # in blocks: the rule's (N, 3, 3) temporaries stay small
+        rows = slice(i, i + IK_BLOCK)
+        out[rows] = rule(rows)
+        robot[rows] = base_rot @ out[rows]
+
+    run_blocks(block, range(0, n, IK_BLOCK))
+    return out, robot
 
 
 def _correction(
@@ -309,8 +330,9 @@ def _configuration(
     rotations: np.ndarray,
     status: int | None,
 ) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """IK of every pose in KUKA ``status`` (None: the first pose's IK default): Status and Turn
-    (N, 4) per pose and the warnings."""
+    """IK of every pose (positions (N, 4, 3) mm, BASE frame; rotations (N, 3, 3) robot frame)
+    in KUKA ``status`` (None: the first pose's IK default): Status and Turn (N, 4) per pose and
+    the warnings."""
     n = len(points)
     if n == 0:
         return np.zeros((0, 4), int), np.zeros((0, 4), int), []
@@ -357,7 +379,10 @@ def _configuration(
         reason = sol.reason.reshape(n, stages)[hole, stage] or "no solution"
         _fail(points, hole, stage, reason, cell, failed.size, status, cell.configuration.turn)
     warnings += _branch_jumps(points, cell, q)
-    a5 = np.degrees(np.abs(q[:, :, 4])).min(axis=1)
+    a5 = np.abs(q[:, 0, 4])
+    for stage in range(1, stages):  # stage by stage: a reduction over a short axis is slow
+        np.minimum(a5, np.abs(q[:, stage, 4]), out=a5)
+    np.degrees(a5, out=a5)
     near = np.flatnonzero(a5 < cell.configuration.singular_a5_deg)
     if near.size:
         named = ", ".join(f"{points.label(int(i))} |A5| {a5[i]:.1f} deg" for i in near[:_LISTED])
@@ -373,20 +398,21 @@ def _configuration(
 
 
 def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
-    """Robot-frame TCP poses (H, S, 4, 4) of positions (H, S, 3) mm and rotations (H, 3, 3)
-    in the BASE frame."""
+    """Robot-frame TCP poses (H, S, 4, 4) of positions (H, S, 3) mm in the BASE frame and
+    rotations (H, 3, 3) in the robot frame."""
     base_rot, base_org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
     out = np.empty((*positions.shape[:2], 4, 4))
-    out[:, :, :3, :3] = (base_rot @ rotations)[:, None]
-    out[:, :, :3, 3] = positions @ base_rot.T + base_org
+    out[:, :, :3, :3] = rotations[:, None]
+    rows = rows_times(positions.reshape(-1, 3), base_rot.T) + base_org  # not one per hole
+    out[:, :, :3, 3] = rows.reshape(positions.shape)
     out[:, :, 3] = (0.0, 0.0, 0.0, 1.0)
     return out
 
 
 def _ik_blocks(robot: RobotModel, poses, holes: int, stages: int, status, turn) -> SimpleNamespace:
     """``robot.ik`` of the poses (holes * stages, 4, 4) that ``poses(slice)`` makes, in blocks of
-    about ``IK_BLOCK`` poses: the same result, with the poses and the IK's (M, 8, ...)
-    temporaries bounded in memory."""
+    about ``IK_BLOCK`` poses on a few threads (``kinematics.blocks``): the same result as one
+    call, with the poses and the IK's (M, 8, ...) temporaries bounded in memory."""
     per = max(IK_BLOCK // stages, 1)
     m = holes * stages
     out = SimpleNamespace(
@@ -396,11 +422,14 @@ def _ik_blocks(robot: RobotModel, poses, holes: int, stages: int, status, turn) 
         status=np.empty(m, np.int16),  # -1..7
         turn=np.empty(m, np.int16),  # -1..63
     )
-    for i in range(0, holes, per):
+
+    def block(i: int) -> None:  # holes i .. i + per - 1, written into their rows of out
         sol = robot.ik(poses(slice(i, i + per)).reshape(-1, 4, 4), status=status, turn=turn)
         at = slice(i * stages, i * stages + len(sol.ok))
         for field, values in vars(out).items():
             values[at] = getattr(sol, field)
+
+    run_blocks(block, range(0, holes, per))
     return out
 
 
@@ -408,10 +437,10 @@ def _branch_jumps(points: Points, cell: Cell, q: np.ndarray) -> list[str]:
     """An axis turning more than ``MAX_AXIS_JUMP_DEG`` between consecutive poses (a wrist flip or
     a change of branch): InputError naming the hole, or a warning with allow_change."""
     seq = q.reshape(-1, 6)
-    jump = np.empty(max(len(seq) - 1, 0))
-    for i in range(0, len(jump), IK_BLOCK):  # in blocks: no (M, 6) temporaries
-        step = np.diff(seq[i : i + IK_BLOCK + 1], axis=0)
-        jump[i : i + IK_BLOCK] = np.degrees(np.abs(step, out=step).max(axis=1))  # same maximum
+    jump = np.abs(seq[1:, 0] - seq[:-1, 0])
+    for axis in range(1, 6):  # axis by axis: no (M, 6) temporaries
+        np.maximum(jump, np.abs(seq[1:, axis] - seq[:-1, axis]), out=jump)
+    np.degrees(jump, out=jump)
     bad = np.flatnonzero(jump > MAX_AXIS_JUMP_DEG)
     if not bad.size:
         return []

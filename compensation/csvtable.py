@@ -18,7 +18,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
-from accugrid.kinematics.decimals import read_decimals
+from accugrid.kinematics.decimals import read_decimals, words_at
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import read_input_text
 
@@ -33,6 +33,8 @@ _CHUNK = 1 << 16  # rows cut from the byte buffer at a time (bounds the temporar
 # bytes a number cell of the fast reader may hold: ASCII digits, sign, point, exponent, blanks
 _NUMBER_BYTE = np.zeros(256, dtype=bool)
 _NUMBER_BYTE[np.frombuffer(b"0123456789+-.eE" + _BLANKS.encode(), dtype=np.uint8)] = True
+# the first m bytes of a little-endian word kept: by m = 0..8
+_FIRST_BYTES = np.array([(1 << (8 * m)) - 1 for m in range(9)], np.uint64)
 _BLANK_BYTE = np.zeros(256, dtype=bool)
 _BLANK_BYTE[np.frombuffer(_BLANKS.encode(), dtype=np.uint8)] = True
 # what a data line of the fast reader may not start with (a blank or comment line starts so)
@@ -247,10 +249,11 @@ class _Cells:
         self.data = data
         self.width = width
         self.buf = buf = np.frombuffer(data, dtype=np.uint8)
-        seps = np.flatnonzero((buf == 44) | (buf == 10))
-        self.bounds = np.concatenate([[-1], seps, [len(data)]]).astype(
-            np.int32 if len(data) < 2**31 - 1 else np.int64
-        )
+        is_sep = buf == 44
+        is_sep |= buf == 10
+        seps = np.flatnonzero(is_sep)
+        self.bounds = np.empty(len(seps) + 2, np.int32 if len(data) < 2**31 - 1 else np.int64)
+        self.bounds[0], self.bounds[1:-1], self.bounds[-1] = -1, seps, len(data)
 
     def rows_ok(self) -> bool:
         """Whether every line has ``width`` fields and starts like a data row."""
@@ -268,16 +271,26 @@ class _Cells:
 
     def _span(self, i: int, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
         """Start and end offsets of column i's cells in rows lo..hi-1."""
-        j = np.arange(lo, hi) * self.width + i
-        return self.bounds[j] + 1, self.bounds[j + 1]
+        first, w = lo * self.width + i, self.width  # every width-th separator: strided views
+        return self.bounds[first : hi * w + i : w] + 1, self.bounds[first + 1 : hi * w + i + 1 : w]
 
     def cut(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
-        """The cells spanning ``data[start:end]`` as a fixed-width bytes array (NUL-padded)."""
-        w = max(int((end - start).max(initial=0)), 1)
-        at = start[:, None] + np.arange(w, dtype=start.dtype)
-        cut = self.buf.take(at, mode="clip")  # beyond the buffer: clipped, then cleared
-        cut[at >= end[:, None]] = 0
-        return cut.view(f"S{w}").reshape(-1)
+        """The cells spanning ``data[start:end]`` as a fixed-width bytes array (NUL-padded; its
+        width the longest cell's rounded up to whole 8-byte words): read a word (8 bytes) at a
+        time, the bytes past each cell's end cleared."""
+        size = end - start
+        words = max(-(-int(size.max(initial=0)) // 8), 1)  # per cell
+        if len(self.buf) < 8:
+            return _byte_cut(self.buf, start, end, 8 * words)
+        offset = 8 * np.arange(words, dtype=start.dtype)
+        cut = words_at(self.buf, start[:, None] + offset)  # (n, words) uint64, little-endian
+        cut &= _FIRST_BYTES[np.clip(size[:, None] - offset, 0, 8)]
+        cut = cut.view(np.uint8).reshape(len(start), 8 * words)
+        late = np.flatnonzero(start + 8 * words > len(self.buf))  # words past the buffer's end
+        if late.size:
+            tail = _byte_cut(self.buf, start[late], end[late], 8 * words)
+            cut[late] = tail.view(np.uint8).reshape(late.size, -1)
+        return cut.view(f"S{8 * words}").reshape(-1)
 
     def text(self, i: int) -> list[str]:
         if not len(self):
@@ -317,6 +330,14 @@ class _Cells:
                     return None
             out[lo:hi] = values
         return out
+
+
+def _byte_cut(buf: np.ndarray, start: np.ndarray, end: np.ndarray, width: int) -> np.ndarray:
+    """``_Cells.cut`` byte by byte, ``width`` bytes per cell (for cells at the buffer's end)."""
+    at = start[:, None] + np.arange(width, dtype=start.dtype)
+    cut = buf.take(at, mode="clip")  # beyond the buffer: clipped, then cleared
+    cut[at >= end[:, None]] = 0
+    return cut.view(f"S{width}").reshape(-1)
 
 
 def _parse_simple(text: str, path: str) -> Table | None:

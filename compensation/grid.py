@@ -120,6 +120,10 @@ class GridModel:
         """(N,) bool: inside the grid box, boundary included (within 1e-6 mm)."""
         points = _as_points(points)
         lo, hi = self.origin - BOX_TOL_MM, self.upper + BOX_TOL_MM
+        if len(points) and all(
+            points[:, a].min() >= lo[a] and points[:, a].max() <= hi[a] for a in range(3)
+        ):  # the common case, column by column: no (N, 3) temporaries
+            return np.ones(len(points), bool)
         return ((points >= lo) & (points <= hi)).all(axis=1)
 
     def predict(
@@ -154,7 +158,8 @@ class GridModel:
         command = points + self._predict(points, settings, "clamp")
         for _ in range(int(settings.iterations) - 1):
             command = points + self._predict(command, settings, "clamp")
-        length = np.sqrt(np.einsum("ij,ij->i", command - points, command - points))
+        change = command - points
+        length = np.sqrt(np.einsum("ij,ij->i", change, change))
         limit = settings.max_correction_mm
         too_long = np.zeros(0, np.int64) if limit is None else np.flatnonzero(length > limit)
         angle = None

@@ -167,42 +167,45 @@ def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, 
     """The solution ``Robot.ik`` picks per flange pose (N, 4, 4), before Turn and limits: q (N, 6)
     rad in (-pi, pi] (NaN where none), found (N,), any candidate reachable (N,).
 
-    Status bits 0 and 1 (shoulder, elbow) follow from the 4 arm solutions alone; where one
-    arm solution has the wanted bits, only its 2 wrists are solved. Poses where that does not
-    settle it (several arm solutions fit, or neither wrist has the wanted bit 2) take all 8
-    candidates, so the pick is the same as over all 8 in candidate order."""
+    Status bits 0 and 1 (shoulder, elbow) follow from the 4 arm solutions alone (theta_2 is
+    solved only for the chosen one); where one arm solution has the wanted bits, only its 2
+    wrists are solved, and with a given Status only the joints of the wrist with the wanted
+    bit 2 are built. Poses where that does not settle it (several arm solutions fit, or neither
+    wrist has the wanted bit 2) take all 8 candidates, so the pick is the same as over all 8
+    in candidate order."""
     n, dh = len(flange), robot.dh
-    th1, th2, th3, reach = closed.arm_solutions(dh, flange, wrist)
+    th1, th3, reach, plane = closed.arm_elbows(dh, wrist)
+    reach = np.repeat(reach, 2, axis=1)  # (N, 4): per shoulder and elbow
     bits = _arm_status(robot, th1, th3, wrist).reshape(n, 4)
     want = 2 if status is None else np.broadcast_to(np.asarray(status, dtype=int), (n,))
-    fits = reach.reshape(n, 4) & (bits == np.bitwise_and(want, 3)[..., None])
+    fits = reach & (bits == np.bitwise_and(want, 3)[..., None])
     one = fits.sum(axis=1) == 1
     q = np.full((n, 6), np.nan)
     found = np.zeros(n, bool)
     rows = np.flatnonzero(one)
     a = np.argmax(fits[rows], axis=1)
     s, e = a // 2, a % 2
-    cand = closed.arm_wrists(
-        dh, flange[rows], th1[rows, s], th2[rows, s, e], th3[rows, s, e]
-    )  # (m, 2, 6)
+    th2 = closed.upper_arm(dh, [part[rows, s] for part in plane], e)  # the chosen arm's only
+    arm = (th1[rows, s], th2, th3[rows, s, e])
     if status is None:
+        cand = closed.arm_wrists(dh, flange[rows], *arm)  # (m, 2, 6)
         ref = HOME_RAD if reference is None else np.asarray(reference, dtype=float)
         ref = np.broadcast_to(ref, (n, 6))[rows, None]
         pick = np.argmin((closed.wrap(cand - ref) ** 2).sum(axis=2), axis=1)
-        settled = np.ones(len(rows), bool)
+        q[rows] = cand[np.arange(len(rows)), pick]
+        found[rows] = True
+        rest = np.flatnonzero(~one & fits.any(axis=1))
     else:
-        cand_status = _status(robot, cand.reshape(-1, 6), np.repeat(wrist[rows], 2, axis=0))
-        match = _status_match(cand.reshape(-1, 6), cand_status, want[rows].repeat(2))
-        match = match.reshape(-1, 2)
-        pick, settled = np.argmax(match, axis=1), match.any(axis=1)
-    done = rows[settled]
-    q[done] = cand[settled, pick[settled]]
-    found[done] = True
-    rest = np.flatnonzero(~one & fits.any(axis=1))
-    rest = np.concatenate([rest, rows[~settled]]) if status is not None else rest
+        # the arm solution has the wanted bits 0 and 1 (its Status, the same numbers as its
+        # candidates' ``_status``): the wrist with the wanted bit 2 (A5 < 0) is the match
+        chosen, settled = closed.chosen_wrists(dh, flange[rows], *arm, want[rows] & 4 != 0)
+        done = rows[settled]
+        q[done] = chosen[settled]
+        found[done] = True
+        rest = np.concatenate([np.flatnonzero(~one & fits.any(axis=1)), rows[~settled]])
     if rest.size:
         q[rest], found[rest] = _select_all(robot, flange[rest], wrist[rest], want, rest, reference)
-    return q, found, reach.reshape(n, 4).any(axis=1)
+    return q, found, reach.any(axis=1)
 
 
 def _select_all(robot: Robot, flange, wrist, want, rows, reference):
@@ -232,5 +235,5 @@ def _select_all(robot: Robot, flange, wrist, want, rows, reference):
 def _status_match(q: np.ndarray, cand_status: np.ndarray, want: np.ndarray) -> np.ndarray:
     """Candidates (M, 6) with the wanted Status; on the wrist singularity (A5 = 0) either bit 2
     fits."""
-    singular_wrist = np.abs(q[:, 4]) < 1e-12
+    singular_wrist = np.abs(q[:, 4]) < closed.SINGULAR_A5_RAD
     return (cand_status == want) | (singular_wrist & ((cand_status & 3) == (want & 3)))

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "BLAS_ROWS",
     "GIMBAL_LOCK_RAD",
     "MAX_TILT_DEG",
     "abc_to_matrix",
@@ -20,6 +21,7 @@ __all__ = [
     "pose_from_xyzabc",
     "rotate_vectors",
     "rotation_angle_deg",
+    "rows_times",
     "too_tilted",
     "transform_points",
     "xyzabc_from_pose",
@@ -29,6 +31,9 @@ __all__ = [
 # (scipy's Rotation.as_euler uses the same threshold and rule; it is the tests' peer).
 GIMBAL_LOCK_RAD = 1e-7
 MAX_TILT_DEG = 150.0  # drill axes further than this from the reference tool axis are refused
+# rows per product in ``rows_times``: (rows x 3) @ (3 x 3) products this small run on the
+# calling thread (OpenBLAS starts its threads above about 29,000 such rows)
+BLAS_ROWS = 16384
 
 
 def abc_to_matrix(abc_deg: np.ndarray) -> np.ndarray:
@@ -53,15 +58,17 @@ def matrix_to_abc(rot: np.ndarray) -> np.ndarray:
     ``GIMBAL_LOCK_RAD``) C is 0 and A carries the rotation about the vertical.
     """
     rot = np.asarray(rot, dtype=float)
+    out = np.empty(rot.shape[:-2] + (3,))
     b = np.arctan2(-rot[..., 2, 0], np.hypot(rot[..., 0, 0], rot[..., 1, 0]))
     locked = np.pi / 2 - np.abs(b) <= GIMBAL_LOCK_RAD
-    a = np.where(
-        locked,
-        np.arctan2(-rot[..., 0, 1], rot[..., 1, 1]),
-        np.arctan2(rot[..., 1, 0], rot[..., 0, 0]),
-    )
-    c = np.where(locked, 0.0, np.arctan2(rot[..., 2, 1], rot[..., 2, 2]))
-    return np.degrees(np.stack([a, b, c], axis=-1))
+    out[..., 0] = np.arctan2(rot[..., 1, 0], rot[..., 0, 0])
+    out[..., 2] = np.arctan2(rot[..., 2, 1], rot[..., 2, 2])
+    if locked.any():  # rare: the other formula only where it applies
+        held = rot[locked]
+        out[locked, 0] = np.arctan2(-held[..., 0, 1], held[..., 1, 1])
+        out[locked, 2] = 0.0
+    out[..., 1] = b
+    return np.degrees(out, out=out)
 
 
 def pose_from_xyzabc(xyzabc: np.ndarray) -> np.ndarray:
@@ -97,16 +104,29 @@ def invert(pose: np.ndarray) -> np.ndarray:
     return out
 
 
+def rows_times(rows: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """``rows @ matrix`` for rows (N, k) (or one row (k,)) and a small matrix (k, j), in
+    blocks of ``BLAS_ROWS`` rows: the same numbers as one product, all on the calling thread.
+    One product of 100,000 rows wakes BLAS's threads, which then spin on the cores for a while
+    (on 2 cores: about 0.1 s of a 1e5-hole program's IK threads' time)."""
+    rows = np.asarray(rows, dtype=float)
+    if rows.ndim < 2 or len(rows) <= BLAS_ROWS:
+        return rows @ matrix
+    out = np.empty((len(rows), matrix.shape[-1]))
+    for i in range(0, len(rows), BLAS_ROWS):
+        out[i : i + BLAS_ROWS] = rows[i : i + BLAS_ROWS] @ matrix
+    return out
+
+
 def transform_points(a_T_b: np.ndarray, points_b: np.ndarray) -> np.ndarray:
     """Map points given in frame b, (N, 3) mm, into frame a with one pose a_T_b (4, 4)."""
     a_T_b = np.asarray(a_T_b, dtype=float)
-    points_b = np.asarray(points_b, dtype=float)
-    return points_b @ a_T_b[:3, :3].T + a_T_b[:3, 3]
+    return rows_times(points_b, a_T_b[:3, :3].T) + a_T_b[:3, 3]
 
 
 def rotate_vectors(a_T_b: np.ndarray, vectors_b: np.ndarray) -> np.ndarray:
     """Rotate direction vectors (N, 3) from frame b into frame a (translation ignored)."""
-    return np.asarray(vectors_b, dtype=float) @ np.asarray(a_T_b, dtype=float)[:3, :3].T
+    return rows_times(vectors_b, np.asarray(a_T_b, dtype=float)[:3, :3].T)
 
 
 def rotation_angle_deg(rotations: np.ndarray, reference: np.ndarray) -> np.ndarray:

@@ -13,16 +13,21 @@ import numpy as np
 from accugrid.kinematics.dh import DHTable
 
 __all__ = [
+    "SINGULAR_A5_RAD",
     "all_solutions",
+    "arm_elbows",
     "arm_solutions",
     "arm_wrists",
+    "chosen_wrists",
     "closed_form_supported",
+    "upper_arm",
     "wrap",
     "wrist_angles",
     "wrist_points",
 ]
 
 _TOL = 1e-9
+SINGULAR_A5_RAD = 1e-12  # |A5| below this: on the wrist singularity, either wrist flag fits
 
 
 def closed_form_supported(table: DHTable) -> bool:
@@ -85,6 +90,15 @@ def arm_solutions(
     theta_2 and theta_3 (N, 2 shoulder, 2 elbow) rad, and (N, 2, 2) whether the wrist point is
     reachable (NaN angles where not). ``pw``: the wrist points (N, 3) mm when already known."""
     pw = wrist_points(table, flange) if pw is None else pw
+    th1, th3, reach, plane = arm_elbows(table, pw)
+    th2 = upper_arm(table, plane)  # (N, 2 shoulder, 2 elbow)
+    return th1, th2, th3, np.repeat(reach[:, :, None], 2, axis=2)
+
+
+def arm_elbows(table: DHTable, pw: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``arm_solutions`` without theta_2, for wrist points pw (N, 3) mm: theta_1 (N, 2
+    shoulder), theta_3 (N, 2 shoulder, 2 elbow) rad, reachable (N, 2 shoulder), and the arm
+    plane (px, py, gamma) (N, 2) of each shoulder that ``upper_arm`` takes (any rows of it)."""
     # Shoulder: the arm plane contains the A1 axis, so theta_1 points at the wrist or away.
     toward = np.arctan2(pw[:, 1], pw[:, 0])
     th1 = np.stack([toward, toward + np.pi], axis=1)  # (N, 2)
@@ -95,18 +109,32 @@ def arm_solutions(
     height = pw[:, None, 2] - table.d[0]
     sa1 = np.sin(table.alpha[0])
     px, py = radial, sa1 * height
-    a2 = table.a[1]
-    bx, by = table.a[2], -np.sin(table.alpha[2]) * table.d[3]
-    l3, beta = np.hypot(bx, by), np.arctan2(by, bx)
+    a2, l3, beta = _links(table)
     cos_g = (px**2 + py**2 - a2**2 - l3**2) / (2 * a2 * l3)  # (N, 2)
     reach = np.abs(cos_g) <= 1 + _TOL
     gamma = np.arccos(np.clip(cos_g, -1.0, 1.0))  # elbow angle >= 0; the other elbow: -gamma
     th3 = np.stack([gamma - beta, -gamma - beta], axis=2)  # (N, 2 shoulder, 2 elbow)
+    return th1, th3, reach, (px, np.broadcast_to(py, px.shape), gamma)
+
+
+def upper_arm(table: DHTable, plane: tuple[np.ndarray, ...], elbow=None) -> np.ndarray:
+    """DH theta_2 rad in the arm plane (px, py, gamma) of ``arm_elbows`` (rows of it, shape
+    (...)): of elbow solution ``elbow`` (0 or 1 (...)), or of both (..., 2) when None."""
+    px, py, gamma = plane
+    a2, l3, _ = _links(table)
     # sin and atan2 are odd, cos even: the -gamma elbow's terms are the +gamma ones negated
     lean = np.arctan2(l3 * np.sin(gamma), a2 + l3 * np.cos(gamma))
     toward_wrist = np.arctan2(py, px)
-    th2 = np.stack([toward_wrist - lean, toward_wrist + lean], axis=2)
-    return th1, th2, th3, np.repeat(reach[:, :, None], 2, axis=2)
+    if elbow is None:
+        return np.stack([toward_wrist - lean, toward_wrist + lean], axis=-1)
+    return np.where(np.asarray(elbow) == 0, toward_wrist - lean, toward_wrist + lean)
+
+
+def _links(table: DHTable) -> tuple[float, float, float]:
+    """Upper arm length a2 mm, forearm length l3 mm (A3 axis to the wrist point) and the
+    forearm's angle beta rad from the DH x3 axis."""
+    bx, by = table.a[2], -np.sin(table.alpha[2]) * table.d[3]
+    return table.a[1], np.hypot(bx, by), np.arctan2(by, bx)
 
 
 def arm_wrists(
@@ -117,6 +145,37 @@ def arm_wrists(
     numbers ``all_solutions`` gives for that arm solution."""
     wrist = wrist_angles(table, th1, _r6(table, flange), th2 + th3)
     return _joints(table, np.stack([th1, th2, th3], axis=-1), *wrist).reshape(-1, 2, 6)
+
+
+def chosen_wrists(
+    table: DHTable,
+    flange: np.ndarray,
+    th1: np.ndarray,
+    th2: np.ndarray,
+    th3: np.ndarray,
+    negative: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Of the 2 wrist solutions of one arm solution per pose, the first whose A5 < 0 is
+    ``negative`` (M,) bool, or that sits on the wrist singularity (|A5| <
+    ``SINGULAR_A5_RAD``, where either fits): KUKA joint angles (M, 6) rad in (-pi, pi] (rows
+    without one: undefined) and whether there is one (M,). Flange poses (M, 4, 4) mm, DH
+    angles th1, th2, th3 (M,) rad. The numbers of ``arm_wrists`` for the chosen solution,
+    with half of its joint arithmetic."""
+    th4, th5, th6 = wrist_angles(table, th1, _r6(table, flange), th2 + th3)
+    a5 = wrap((np.stack([th5, -th5], axis=1) - table.theta_offset[4]) * table.sign[4])  # (M, 2)
+    fits = ((a5 < 0) == np.asarray(negative)[:, None]) | (np.abs(a5) < SINGULAR_A5_RAD)
+    second = ~fits[:, 0]
+    th4, th5, th6 = (
+        np.where(second, b, a)
+        for a, b in zip((th4, th5, th6), _flipped(th4, th5, th6), strict=True)
+    )
+    theta = np.stack([th1, th2, th3, th4, th5, th6], axis=1)
+    return wrap(table.axis_angles(theta)), fits.any(axis=1)
+
+
+def _flipped(th4: np.ndarray, th5: np.ndarray, th6: np.ndarray) -> tuple[np.ndarray, ...]:
+    """DH theta_4, theta_5, theta_6 of the other wrist solution (the same flange orientation)."""
+    return th4 + np.pi, -th5, th6 + np.pi
 
 
 def wrist_angles(
@@ -168,9 +227,10 @@ def _joints(
 ) -> np.ndarray:
     """KUKA angles (2M, 6) rad in (-pi, pi]: arm DH angles (M, 3) with both wrist solutions of
     th4, th5, th6 (M,) (the other one: A4 + 180 deg, -A5, A6 + 180 deg), wrist order inner."""
-    th4 = np.stack([th4, th4 + np.pi], axis=1).reshape(-1)
-    th5 = np.stack([th5, -th5], axis=1).reshape(-1)
-    th6 = np.stack([th6, th6 + np.pi], axis=1).reshape(-1)
+    other = _flipped(th4, th5, th6)
+    th4, th5, th6 = (
+        np.stack([a, b], axis=1).reshape(-1) for a, b in zip((th4, th5, th6), other, strict=True)
+    )
     theta = np.empty((len(th4), 6))
     theta[:, :3] = np.repeat(arm, 2, axis=0)
     theta[:, 3], theta[:, 4], theta[:, 5] = th4, th5, th6

@@ -147,11 +147,17 @@ class Robot:
             q = np.where(want_neg & (q >= 0), q - 2 * np.pi, q)
             q = np.where(~want_neg & (q < 0), q + 2 * np.pi, q)
         lo, hi = np.radians(self.joint_limits_deg).T
-        outside = found[:, None] & ((q < lo - _LIMIT_TOL) | (q > hi + _LIMIT_TOL))
+        outside = (q < lo - _LIMIT_TOL) | (q > hi + _LIMIT_TOL)  # NaN (not found): False
+        beyond = outside[:, 0].copy()
+        for axis in range(1, 6):  # axis by axis: a reduction over the short axis is slow
+            beyond |= outside[:, axis]
+        beyond = np.flatnonzero(beyond)
         for axis in range(5, -1, -1):  # report the lowest axis outside its limits
             lo_deg, hi_deg = self.joint_limits_deg[axis]
-            reason[outside[:, axis]] = f"A{axis + 1} outside limits {lo_deg:g}..{hi_deg:g} deg"
-        ok = found & ~outside.any(axis=1)
+            hit = beyond[outside[beyond, axis]]
+            reason[hit] = f"A{axis + 1} outside limits {lo_deg:g}..{hi_deg:g} deg"
+        ok = found.copy()
+        ok[beyond] = False
         final = np.where(found[:, None], q, 0.0)  # after Turn: A3, A5 may have moved by 360 deg
         s, t = kuka_words(self, final, wrist)
         return IKSolution(q, ok, reason, np.where(found, s, -1), np.where(found, t, -1))

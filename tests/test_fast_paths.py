@@ -19,7 +19,13 @@ from accugrid.codegen.textsafe import (
     fixed_format,
     fixed_ready,
 )
-from accugrid.compensation.csvtable import _parse_csv, _parse_simple, parse_number, parse_table
+from accugrid.compensation.csvtable import (
+    _Cells,
+    _parse_csv,
+    _parse_simple,
+    parse_number,
+    parse_table,
+)
 from accugrid.kinematics.errors import InputError
 
 _CELL = st.one_of(
@@ -185,3 +191,27 @@ def test_comment_texts_near_the_fast_path_is_comment_text_of_each(texts, prefix,
 def test_comment_texts_of_safe_ids_cuts_at_the_limit():
     ids = ["B000001 depth 6.000", "X" * 70]
     assert comment_texts(ids) == [ids[0], "X" * 60]
+
+
+@given(st.binary(min_size=1, max_size=40).filter(lambda b: b"\0" not in b), st.data())
+def test_cut_cells_are_the_byte_slices_nul_padded(data, draw):
+    """``_Cells.cut`` (a word at a time, the cells at the buffer's end byte by byte): each cell
+    is ``data[start:end]``, NUL-padded to one width for all, from buffers shorter than a word
+    to cells that end at the buffer's last byte."""
+    cells = _Cells(data, 1)
+    spans = draw.draw(
+        st.lists(
+            st.integers(0, len(data)).flatmap(
+                lambda s: st.tuples(st.just(s), st.integers(s, len(data)))
+            ),
+            min_size=1,
+            max_size=10,
+        )
+    )
+    start = np.array([s for s, _ in spans], np.int32)
+    end = np.array([e for _, e in spans], np.int32)
+    cut = cells.cut(start, end)
+    assert cut.dtype.itemsize >= max(e - s for s, e in spans)
+    raw = cut.view(np.uint8).reshape(len(spans), -1)
+    for row, (s, e) in zip(raw.tolist(), spans, strict=True):
+        assert bytes(row) == data[s:e] + b"\0" * (len(row) - (e - s))

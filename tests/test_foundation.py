@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from accugrid.codegen.atomic import write_files
@@ -206,3 +206,43 @@ def test_kuka_abc_matches_scipy_zyx_including_gimbal_lock(a, b, c):
     np.testing.assert_allclose(got, expected, atol=1e-6)
     if abs(b) == 90.0:
         assert got[2] == 0.0
+
+
+@given(
+    st.lists(
+        st.tuples(
+            st.floats(-179.9, 179.9),
+            st.one_of(st.floats(-89.99, 89.99), st.sampled_from([-90.0, 90.0])),
+            st.floats(-179.9, 179.9),
+        ),
+        min_size=1,
+        max_size=20,
+    )
+)
+def test_abc_of_a_batch_is_the_abc_of_each_matrix(angles):
+    """matrix_to_abc over (N, 3, 3) with gimbal-locked and free rotations mixed: number for
+    number each matrix's own A, B, C (the locked rule only where it applies)."""
+    rot = frames.abc_to_matrix(np.array(angles))
+    batch = frames.matrix_to_abc(rot)
+    single = np.array([frames.matrix_to_abc(r) for r in rot])
+    np.testing.assert_array_equal(batch, single)
+    np.testing.assert_array_equal(frames.matrix_to_abc(rot[None])[0], batch)
+
+
+@settings(max_examples=15, deadline=None)
+@given(
+    st.integers(0, 3 * frames.BLAS_ROWS + 5),
+    st.floats(-3.0, 3.0),
+    st.sampled_from(["n", "t"]),
+    st.integers(0, 2**32 - 1),
+)
+def test_rows_times_is_one_product_in_blocks(n, scale, order, seed):
+    """rows_times gives the numbers of one (N, 3) @ (3, 3) product, above and below one block,
+    for a matrix given as is or transposed (a view), and for one row."""
+    rng = np.random.default_rng(seed)
+    rows = rng.normal(size=(n, 3)) * 10.0**scale
+    matrix = rng.normal(size=(3, 3))
+    matrix = matrix.T if order == "t" else matrix
+    np.testing.assert_array_equal(frames.rows_times(rows, matrix), rows @ matrix)
+    if n:
+        np.testing.assert_array_equal(frames.rows_times(rows[0], matrix), rows[0] @ matrix)

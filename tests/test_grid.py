@@ -318,3 +318,19 @@ def test_large_chunked_input_matches_small_blocks():
     whole = model.predict(points)
     np.testing.assert_allclose(whole[-5:], model.predict(points[-5:]), rtol=0, atol=1e-12)
     np.testing.assert_allclose(whole[:5], model.predict(points[:5]), rtol=0, atol=1e-12)
+
+
+@given(
+    arrays(float, st.tuples(st.integers(0, 30), st.just(3)), elements=st.floats(-0.5, 2.5)),
+    st.sampled_from([0.0, 1e-7, -1e-7, 2e-6]),
+)
+def test_contains_is_the_box_test_of_every_point(points, nudge):
+    """Inside the box (1e-6 mm tolerance), point by point, whether all points are inside (the
+    per-column shortcut) or not: the same answer as the coordinate comparison."""
+    model = unit_cell(np.arange(24.0).reshape(8, 3))
+    points = np.where(points > 2.0, 2.0 + nudge, points)  # some on or just past the far faces
+    lo, hi = model.origin - 1e-6, model.upper + 1e-6
+    expected = [bool(all(lo[a] <= p[a] <= hi[a] for a in range(3))) for p in points.tolist()]
+    assert model.contains(points).tolist() == expected
+    inside = points[expected]
+    assert model.contains(inside).tolist() == [True] * len(inside)

@@ -265,3 +265,40 @@ def test_neutral_configuration_names_the_branches_and_round_trips_kuka():
     back = Configuration.from_kuka(status, turn)
     for name in ("shoulder", "elbow", "wrist", "negative"):
         np.testing.assert_array_equal(getattr(back, name), getattr(config, name))
+
+
+def _flange_poses_near_branches(q: np.ndarray, r) -> np.ndarray:
+    """Flange poses (N, 4, 4) of joint vectors q (N, 6) rad, with A5 = 0 (the wrist
+    singularity) and A5 = +-1e-13 for some of them."""
+    q = q.copy()
+    q[::7, 4] = 0.0
+    q[1::7, 4] = 1e-13
+    q[2::7, 4] = -1e-13
+    return r.fk(q) @ np.linalg.inv(r.flange_T_tool)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    q=joints_within_limits(40),
+    status=arrays(int, 40, elements=st.integers(0, 7)),
+    name=st.sampled_from(["kr210", "kr210-paper"]),
+)
+def test_branch_selection_is_the_pick_over_all_8_candidates(q, status, name):
+    """``select`` solves only the wrists of the arm solution with the wanted Status bits where
+    one fits; its pick must be, number for number, the first match over all 8 candidates."""
+    from accugrid.kinematics import ik
+    from accugrid.kinematics.configuration import _select_all, select
+
+    r = robot(name, tool=True)
+    flange = _flange_poses_near_branches(q, r)
+    wrist = ik.wrist_points(r.dh, flange)
+    rows = np.arange(len(q))
+    for want in (status, np.full(len(q), status[0])):
+        got, found, _ = select(r, flange, wrist, want, None)
+        every, every_found = _select_all(r, flange, wrist, want, rows, None)
+        np.testing.assert_array_equal(found, every_found)
+        np.testing.assert_array_equal(got, every)
+    got, found, _ = select(r, flange, wrist, None, None)  # the default: nearest the reference
+    every, every_found = _select_all(r, flange, wrist, 2, rows, None)
+    np.testing.assert_array_equal(found, every_found)
+    np.testing.assert_array_equal(got, every)

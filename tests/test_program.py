@@ -7,12 +7,14 @@ import dataclasses
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 from program_helpers import cell, cell_with, error_field, grid, panel_points, robot
 
 from accugrid.codegen.points import parse_points
-from accugrid.codegen.program import STAGES, build_program
+from accugrid.codegen.program import STAGES, _branch_jumps, build_program
+from accugrid.codegen.textsafe import fixed
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc, transform_points
@@ -196,3 +198,86 @@ def test_any_panel_point_set_keeps_axis_straight_and_status(xy):
     np.testing.assert_allclose(
         prog.correction, error_field(transform_points(cell().robot_T_base, pts.xyz)), atol=0.2
     )
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    steps=arrays(float, (12, 3, 6), elements=st.floats(-1.0, 1.0)),
+    flips=st.sets(st.tuples(st.integers(0, 11), st.integers(0, 2), st.integers(0, 5)), max_size=3),
+)
+def test_a_joint_move_over_180_deg_between_poses_names_its_hole(steps, flips):
+    """``_branch_jumps`` against the plain rule: the largest |A_i| change between consecutive
+    poses (hole by hole, stage by stage) over 180 deg is an error naming the hole of the
+    later pose, or with allow_change a warning counting such moves."""
+    q = np.cumsum(steps.reshape(-1, 6), axis=0).reshape(12, 3, 6)  # moves of up to 1 rad
+    for hole, stage, axis in flips:
+        q[hole, stage:, axis] += np.radians(200.0)  # a jump of 200 deg +- 57 deg
+        if hole + 1 < 12:
+            q[hole + 1 :, :, axis] += np.radians(200.0)
+    seq = q.reshape(-1, 6)
+    moves = [float(np.degrees(np.max(np.abs(seq[i + 1] - seq[i])))) for i in range(len(seq) - 1)]
+    over = [i for i, m in enumerate(moves) if m > 180.0]
+    pts = panel_points(ROWS[:12])
+    if not over:
+        assert _branch_jumps(pts, cell(), q) == []
+        return
+    hole = (over[0] + 1) // 3
+    with pytest.raises(InputError) as info:
+        _branch_jumps(pts, cell(), q)
+    assert info.value.message.startswith(
+        f"hole 'H{hole + 1}': an axis turns {moves[over[0]]:.0f} deg from the previous pose"
+    )
+    assert info.value.line == hole + 2
+    allowed = cell_with(configuration={"allow_change": True})
+    (warning,) = _branch_jumps(pts, allowed, q)
+    assert warning.endswith(f"; {len(over)} such move(s) in the program")
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    rows=st.lists(
+        st.tuples(
+            st.text(st.characters(blacklist_characters=',"#\r\x00'), min_size=1, max_size=6),
+            st.one_of(st.none(), st.floats(0.1, 30.0)),
+            st.one_of(st.none(), st.floats(0.1, 20.0)),
+        ),
+        min_size=1,
+        max_size=8,
+        unique_by=lambda row: row[0].strip(),
+    ),
+    cut=st.data(),
+)
+def test_labels_are_id_depth_and_diameter_of_each_hole(rows, cut):
+    """Program.labels: per hole "<id> depth <d>" and " dia <t>" when the diameter is given,
+    both with 3 decimals as ``fixed`` writes them (the depth: the cell's when not given); ids as
+    read, whatever they hold."""
+    rows = [r for r in rows if r[0].strip()]
+    if not rows:
+        return
+    text = "id,x,y,z,i,j,k,diameter,depth\n" + "".join(
+        f'"{i}",{25.0 * n},150,0,0,0,-1,{"" if d is None else d},{"" if h is None else h}\n'
+        for n, (i, d, h) in enumerate(rows)
+    )
+    prog = build_program(parse_points(text, "l.csv"), cell(), robot(), None)
+    default = cell().drilling.depth_mm
+    expected = [
+        f"{i.strip()} depth {fixed(default if h is None else h, 3)}"
+        + ("" if d is None else f" dia {fixed(d, 3)}")
+        for i, d, h in rows
+    ]
+    assert prog.labels() == expected
+    lo = cut.draw(st.integers(0, len(rows)))
+    hi = cut.draw(st.integers(lo, len(rows)))
+    assert prog.labels(lo, hi) == expected[lo:hi]
+
+
+def test_a_drill_axis_too_far_from_the_reference_names_the_hole():
+    # base (0, 0, -1) is the reference tool Z; (0, 0, 1) is 180 deg from it
+    text = "id,x,y,z,i,j,k\nOK,0,150,0,0,0,-1\nBACK,25,150,0,0,0,1\n"
+    with pytest.raises(InputError) as info:
+        build_program(parse_points(text, "t.csv"), cell(), robot(), None)
+    assert info.value.message == (
+        "hole 'BACK': the drill axis i,j,k is more than 150 deg from the reference tool axis "
+        "(configuration.reference); give a,b,c for this hole or turn the reference"
+    )
+    assert (info.value.path, info.value.line, info.value.column) == ("t.csv", 3, 5)
