@@ -4,6 +4,8 @@ every pose (issue target: under 5 s each). Stages timed separately, then the who
 Holes: a 400 x 250 pattern at 1.5 mm pitch on the example wing panel (examples/cell.yaml, drill
 axis normal to the 4 m radius skin), corrected with examples/grid_200mm.csv. The last two rows are
 the whole commands (CSV file in, program files out). Best of 3; peak MiB is traced Python memory.
+Each render row is compared with its floor, measured in the same run: the numbers it prints made
+into text alone, each value once per hole (``numbers_floor``), without the lines around them.
 """
 
 from __future__ import annotations
@@ -26,12 +28,15 @@ from accugrid.codegen.gcode.emit import render_gcode  # noqa: E402
 from accugrid.codegen.krl.emit import render_krl  # noqa: E402
 from accugrid.codegen.points import parse_points  # noqa: E402
 from accugrid.codegen.program import build_program  # noqa: E402
+from accugrid.codegen.textsafe import fixed_bytes, fixed_many  # noqa: E402
 from accugrid.compensation import GridModel  # noqa: E402
+from accugrid.kinematics.decimals import read_decimals, words_at  # noqa: E402
 from accugrid.kinematics.robot import load_robot  # noqa: E402
 from bench.timing import measure, table  # noqa: E402
 
 HOLES = 100_000
 RADIUS_MM = 4000.0
+NUMBERS = 1_500_000  # fixed_bytes rows: numbers formatted in one call
 
 
 def points_csv(n: int = HOLES) -> str:
@@ -68,6 +73,37 @@ def robot_points_csv(n: int = HOLES) -> str:
     return "id,x,y,z,i,j,k,diameter,depth\n" + "\n".join(rows) + "\n"
 
 
+def numbers_floor(program, krl: bool) -> int:
+    """Bytes of the text of every number a program prints, each value once per hole, made a
+    block of 16,384 holes at a time as the renderers do: positions (n, stages, 3) and A B C
+    (n, 3) in the dialect's frame with its decimals, the feed (n,), and for KRL the hole number
+    and the S and T of each position, NULs dropped."""
+    cell = program.cell
+    frame, places = (
+        (cell.robot_T_base, cell.krl.decimals)
+        if krl
+        else (cell.gcode.robot_T_program, cell.gcode.decimals)
+    )
+    stages = [0, 1, 2, 3]
+    if krl and cell.drilling.retract_mm == cell.drilling.approach_mm:
+        stages = [0, 1, 2]  # the RET position is the APP one
+    status, turn = program.configuration.to_kuka()
+    size = 0
+    for lo in range(0, len(program), 16384):
+        hi = min(lo + 16384, len(program))
+        pos, abc = program.in_frame(frame, lo, hi)
+        mm = np.concatenate([pos[:, stages].reshape(-1), abc.reshape(-1)])
+        cells = [
+            fixed_bytes(mm, places)[0],
+            fixed_bytes(program.feed_mm_s[lo:hi], 4 if krl else 1)[0],
+        ]
+        if krl:
+            ints = [np.arange(lo + 1, hi + 1), status[lo:hi, stages], turn[lo:hi, stages]]
+            cells.append(fixed_bytes(np.concatenate([i.reshape(-1) for i in ints]), 0)[0])
+        size += sum(len(c.tobytes().translate(None, b"\0")) for c in cells)
+    return size
+
+
 def main() -> None:
     cell = load_cell(ROOT / "examples" / "cell.yaml")
     grid = GridModel.from_measurements(ROOT / "examples" / "grid_200mm.csv")
@@ -92,7 +128,9 @@ def main() -> None:
         ("parse points CSV", lambda: parse_points(text, "bench.csv")),
         ("correction + IK (program model)", lambda: build_program(points, cell, robot, grid)),
         ("render KRL (.src/.dat)", lambda: sum(map(len, render_krl(program, header).values()))),
+        ("floor: KRL numbers as text", lambda: numbers_floor(program, True)),
         ("render G-code (.ngc)", lambda: render_gcode(program, header)),
+        ("floor: G-code numbers as text", lambda: numbers_floor(program, False)),
         ("accugrid krl (read, correct, IK, render, write)", krl_job),
         ("accugrid gcode (read, correct, IK, render, write)", gcode_job),
     ]
@@ -109,6 +147,58 @@ def main() -> None:
         f"{cell.krl.lines_per_file}"
     )
     print(table(rows, ("stage", "best s", "peak MiB")))
+    best = {name: float(seconds) for name, seconds, _ in rows}
+    print(
+        "render / floor: KRL "
+        f"{best['render KRL (.src/.dat)'] / best['floor: KRL numbers as text']:.1f}x, G-code "
+        f"{best['render G-code (.ngc)'] / best['floor: G-code numbers as text']:.1f}x"
+    )
+    print()
+    print(number_table())
+
+
+def number_table(n: int = NUMBERS) -> str:
+    """``textsafe.fixed_bytes`` (every number a program or CSV gets) on n numbers in one call, in
+    ns per number (best of 5), against its floor measured in the same run: ``np.rint`` and
+    ``astype`` of the same scaled array, the least that finds the digits; the %-formatting it
+    replaces (``fixed_many``, best of 1) for scale. Then the reader of such texts."""
+    rng = np.random.default_rng(0)
+    coordinates, holes = rng.uniform(-3000.0, 3000.0, n), np.arange(1.0, n + 1.0)
+
+    def ns(func, repeats=5):
+        return measure(func, repeats)[0] * 1e9 / n
+
+    rows = []
+    for name, values, places in [
+        ("+-3000 mm, 3 places", coordinates, 3),
+        ("+-3000 mm, 0 places", coordinates, 0),
+        (f"hole numbers 1..{n}, 0 places", holes, 0),
+    ]:
+        floor = ns(lambda v=values, p=places: np.rint(v * 10.0**p).astype(np.int64))
+        fast = ns(lambda v=values, p=places: fixed_bytes(v, p))
+        rows.append((name, f"{floor:.1f}", f"{fast:.1f}", f"{fast / floor:.1f}"))
+    slow = ns(lambda: fixed_many(coordinates, 3), repeats=1)
+    rows.append(("+-3000 mm, 3 places: %-formatting (fixed_many)", "", f"{slow:.1f}", ""))
+    # and back: kinematics.decimals.read_decimals of those texts, one per line; its floor the
+    # gather of the 8 bytes that end each text (words_at), the least a reader touches
+    cells, _ = fixed_bytes(coordinates, 3)
+    text = np.concatenate([cells, np.full((n, 1), ord("\n"), np.uint8)], axis=1).ravel()
+    text = text[text != 0]
+    end = np.flatnonzero(text == ord("\n"))
+    start = np.concatenate([[0], end[:-1] + 1])
+    floor = ns(lambda: words_at(text, end - 8))
+    fast = ns(lambda: read_decimals(text, start, end))
+    rows.append(
+        (
+            "read_decimals of their texts (3 places)",
+            f"{floor:.1f}",
+            f"{fast:.1f}",
+            f"{fast / floor:.1f}",
+        )
+    )
+    return f"fixed_bytes and read_decimals, {n} numbers per call\n" + table(
+        rows, ("numbers", "floor ns/number", "ns/number", "/ floor")
+    )
 
 
 if __name__ == "__main__":

@@ -25,14 +25,14 @@ __all__ = [
     "add_header",
     "check_text",
     "decimals_of",
+    "distinct_ints",
     "formatted",
     "number_text",
-    "number_texts",
     "precision",
     "read_program",
+    "row_counts",
     "splice",
     "split_lines",
-    "Splicer",
 ]
 
 MAX_BYTES = 64 * 2**20
@@ -74,40 +74,29 @@ def check_text(text: str, path: str | os.PathLike[str] | None) -> None:
 
 def splice(text: str, edits: list[tuple[int, int, str]]) -> bytearray:
     """``text`` as latin-1 bytes with ``text[start:end]`` replaced by each new string
-    (non-overlapping edits, any order)."""
-    edits.sort()
-    out = Splicer(text)
-    if edits:
-        out.add(*map(list, zip(*edits, strict=True)))
-    return out.finish()
+    (non-overlapping edits, any order): the plain form of ``codegen.splice.ByteSplicer``."""
+    pieces, last = [], 0
+    for start, end, new in sorted(edits):
+        pieces += (text[last:start], new)
+        last = end
+    pieces.append(text[last:])
+    return bytearray("".join(pieces).encode("latin-1"))
 
 
-class Splicer:
-    """``text`` (latin-1) with spans replaced, as bytes built a block of edits at a time (each
-    block after the previous one, sorted, non-overlapping): a million edits never exist as one
-    list, and the new program exists once, as bytes (the program text is latin-1)."""
+def distinct_ints(values: np.ndarray) -> list[int]:
+    """The distinct values of an array of non-negative ints, ascending: ``np.unique`` without
+    its check for masked arrays, whose first call imports ``numpy.ma`` (numpy 2: about 10 ms of
+    a rewrite's start-up)."""
+    values = np.asarray(values).reshape(-1)
+    if not values.size:
+        return []
+    return np.flatnonzero(np.bincount(values)).tolist()
 
-    def __init__(self, text: str) -> None:
-        self.text = text
-        self.out = bytearray()
-        self.last = 0
 
-    def add(self, starts, ends, news) -> None:
-        """Replace ``text[starts[k]:ends[k]]`` by ``news[k]`` (lists of equal length)."""
-        if not len(starts):
-            return
-        gaps = map(self.text.__getitem__, map(slice, [self.last, *ends[:-1]], starts))
-        pieces: list[str] = [""] * (2 * len(starts))
-        pieces[0::2] = gaps
-        pieces[1::2] = news
-        self.out += "".join(pieces).encode("latin-1")
-        self.last = ends[-1]
-
-    def finish(self) -> bytearray:
-        """The new program's bytes, every edit made."""
-        self.out += self.text[self.last :].encode("latin-1")
-        self.last = len(self.text)
-        return self.out
+def row_counts(mask: np.ndarray) -> np.ndarray:
+    """The True cells (m,) int of each row of a bool array (m, w): a product with ones, 2-3x
+    faster than ``sum(axis=1)`` or ``all(axis=1)`` over rows this short (a few to 64 cells)."""
+    return mask.view(np.uint8) @ np.ones(mask.shape[1], np.intp)
 
 
 def precision(literals, minimum: int = 0) -> int:
@@ -127,15 +116,6 @@ def precision(literals, minimum: int = 0) -> int:
     return max(found, minimum)
 
 
-def number_texts(
-    old_texts: list[str], old_values: np.ndarray, new_values: np.ndarray, places: int
-) -> list[str]:
-    """New literals (N,) with ``places`` decimals; the old literal where the value is unchanged."""
-    new_texts = fixed_many(new_values, places)
-    same = np.array(list(map(float, new_texts))) == old_values
-    return [o if k else n for o, n, k in zip(old_texts, new_texts, same.tolist(), strict=True)]
-
-
 def number_text(old_text: str, old_value: float, new_value: float, places: int) -> str:
     """The new literal with ``places`` decimals; the old one when the value does not change."""
     new_text = fixed(new_value, places)
@@ -147,7 +127,7 @@ def formatted(values: np.ndarray, places: np.ndarray | int) -> list[str | None]:
     values = np.asarray(values, dtype=float)
     places = np.broadcast_to(np.asarray(places, dtype=int), values.shape)
     out: list[str | None] = [None] * len(values)
-    for p in np.unique(places).tolist():
+    for p in distinct_ints(places):
         idx = np.flatnonzero(np.isfinite(values) & (places == p))
         for i, text in zip(idx.tolist(), fixed_many(values[idx], p), strict=True):
             out[i] = text

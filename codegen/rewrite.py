@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from itertools import chain
 from pathlib import Path
 
 import numpy as np
@@ -145,8 +146,8 @@ class Rows:
                 or [np.zeros(0, np.int64)]
             ),
             np.concatenate([p.line for p in parts] or [np.zeros(0, np.int64)]),
-            [n for p in parts for n in p.name],
-            [r for p in parts for r in p.reason],
+            list(chain.from_iterable(p.name for p in parts)),
+            list(chain.from_iterable(p.reason for p in parts)),
             np.concatenate([p.old for p in parts] or [np.zeros((0, 3))]),
         )
         for key in ("status", "new", "residual_mm", "rounding_mm"):

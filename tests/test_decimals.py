@@ -5,10 +5,10 @@ from __future__ import annotations
 import re
 
 import numpy as np
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from accugrid.kinematics.decimals import read_decimals
+from accugrid.kinematics.decimals import _BLOCK, read_decimals
 
 PLAIN = re.compile(r"[+-]?(\d{0,8})(?:\.(\d{0,7}))?")
 
@@ -60,3 +60,18 @@ def test_a_buffer_shorter_than_a_word_and_literals_at_its_start():
     values, _, plain = read(["-0", "1.5", ""])
     assert plain.tolist() == [True, True, False]
     assert values[0] == 0 and np.signbit(values[0]) and values[1] == 1.5
+
+
+@settings(max_examples=3)
+@given(st.integers(0, 2**32 - 1), st.integers(-2, 2))
+def test_literals_in_more_than_one_block(seed, extra):
+    rng = np.random.default_rng(seed)
+    n = 2 * _BLOCK + extra
+    places = rng.integers(0, 8, n)
+    numbers = rng.uniform(-1.0, 1.0, n) * 10.0 ** rng.integers(-3, 8, n)
+    literals = [f"{v:.{p}f}" for v, p in zip(numbers.tolist(), places.tolist(), strict=True)]
+    literals[rng.integers(0, n)] = "1e5"  # not plain, somewhere
+    values, decimals, plain = read(literals)
+    assert plain.tolist() == [is_plain(s) for s in literals]
+    assert values[plain].tolist() == [float(s) for s in literals if is_plain(s)]
+    assert decimals[plain].tolist() == [len(s.partition(".")[2]) for s in literals if is_plain(s)]

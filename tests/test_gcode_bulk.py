@@ -2,12 +2,13 @@
 
 Reader: ``gcode_moves`` reads a text with ``\\n`` endings by the whole-text scanner (runs of plain
 lines in bulk, every other line by the line reader, ``_Reader.line``); reading every line with
-``_Reader.line`` must give the same moves, column by column. Rewriter: ``_bulk_block`` (a block of
-absolute moves in bulk) must make the edits and leave the walk's state as ``_walk_block``,
-the move-by-move walk, does, and the whole walk (stretches of absolute moves in bulk between the
-others) must write what walking every move writes. Numbers: ``literal_values`` reads every
-literal as ``float`` does, and the file's precision read from the word spans is ``precision`` of
-the literals.
+``_Reader.line`` must give the same moves, column by column, and each shape of line, read once,
+must give every line of that shape its ``_ROW_RE`` head and number offsets. Rewriter:
+``_bulk_block`` (a block of absolute moves in bulk) must make the edits and leave the walk's
+state as ``_walk_block``, the move-by-move walk, does, and the whole walk (stretches of absolute
+moves in bulk between the others) must write what walking every move writes. Numbers:
+``literal_values`` reads every literal as ``float`` does, with its decimals, and the file's
+precision the readers keep is ``precision`` of the literals.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from accugrid.codegen.gcode import parse, rewrite
 from accugrid.codegen.gcode.numbers import literal_values
 from accugrid.codegen.gcode.parse import gcode_moves
 from accugrid.codegen.gcode.rewrite import _bulk_block, _Commanded, _file_precision, _walk_block
-from accugrid.codegen.program_text import precision, split_lines
+from accugrid.codegen.program_text import decimals_of, precision, split_lines
 from accugrid.codegen.rewrite import CORRECTED, Rows
 from accugrid.kinematics.errors import InputError
 
@@ -99,7 +100,7 @@ PROGRAMS = st.lists(
 )
 COLUMNS = (
     "line column start target end scale r_mm incremental is_cycle setters word_start word_end "
-    "word_value rotary_index"
+    "word_value rotary_index resets g99"
 ).split()
 
 
@@ -108,6 +109,7 @@ def _read(text: str, bulk: bool):
         if bulk:
             return gcode_moves(text, "p.ngc")
         reader, offset = parse._Reader("p.ngc", text), 0
+        reader.moves = parse.GcodeMoves("p.ngc", text, 1)  # its arrays grown as rows come
         for lineno, raw in enumerate(split_lines(text), start=1):
             reader.line(raw, lineno, offset)
             offset += len(raw) + 1
@@ -193,7 +195,8 @@ def _walked(step, case):
     text, moves, corrected, desired, r_planes, places = case
     walk = _Commanded()
     walk.cmd, walk.r_cmd = [1.0, 2.0, 50.0], 7.0  # as a previous block may leave it
-    edits = step(text, moves, slice(0, len(moves)), corrected, desired, r_planes, places, walk)
+    found = step(text, moves, slice(0, len(moves)), corrected, desired, r_planes, places, walk)
+    edits = [np.asarray(column).tolist() for column in found]  # starts, ends, bytes, lengths
     reached = np.frombuffer(walk.reached_rows, float).reshape(-1, 3)
     carried = np.array([*walk.cmd, walk.cycle_z, walk.r_cmd])
     return edits, carried, reached, walk.reached_at.tolist()
@@ -217,21 +220,27 @@ def test_bulk_walk_walks_as_the_move_by_move_walk(case):
 
 @given(st.lists(st.one_of(NUMBER, st.text("0123456789", min_size=1, max_size=30)), max_size=30))
 def test_literal_values_are_float_of_each_literal(literals):
-    """Every literal's value, sign of zero included, is ``float`` of its text."""
+    """Every literal's value, sign of zero included, is ``float`` of its text; its decimals
+    are those written."""
     text = " ".join(literals).encode("latin-1")
     starts = np.cumsum([0] + [len(t) + 1 for t in literals[:-1]]).astype(np.int64)
     ends = starts + [len(t) for t in literals]
-    values = literal_values(text, starts[: len(literals)], ends)
+    values, decimals = literal_values(text, starts[: len(literals)], ends)
+    assert decimals.tolist() == [decimals_of(t) for t in literals]
     expected = np.array([float(t) for t in literals])
     assert np.array_equal(values, expected)
     assert np.array_equal(np.signbit(values), np.signbit(expected))
 
 
-@given(st.lists(plain_lines(), min_size=0, max_size=20))
-def test_file_precision_is_the_precision_of_the_literals(lines):
-    """The precision read from the spans is ``precision`` of the X, Y, Z literals written."""
+@given(
+    st.lists(st.one_of(plain_lines(), partial_lines(), MODAL), min_size=0, max_size=20),
+    st.sampled_from(["\n", "\r"]),
+)
+def test_file_precision_is_the_precision_of_the_literals(lines, newline):
+    """The precision the readers keep (the whole-text one, or the line reader alone for lone
+    CR endings) is ``precision`` of the X, Y, Z literals of the moves."""
     try:
-        moves = gcode_moves("G21\n" + "\n".join(lines))
+        moves = gcode_moves(newline.join(["G21", *lines]))
     except InputError:
         return
     starts, ends = moves.word_start[:, :3], moves.word_end[:, :3]
@@ -276,3 +285,57 @@ def test_edits_in_stretches_are_the_move_by_move_edits(lines, data, min_bulk, de
     assert a == b
     for x, y in zip(columns_a, columns_b, strict=True):
         assert np.array_equal(x, y, equal_nan=True)
+
+
+LINE_PIECES = st.sampled_from(
+    ["N12 ", "N7\t", "G0 ", "G00 ", "G01 ", "G1 ", "G10 ", "G010 ", "G81 ", "G89 ", "G80 "]
+    + ["G73 ", "G98 ", "G99 ", "G100 ", "G0.5 ", "g1 ", "G", "X", "Y", "Z", "R", "F", "N"]
+    + ["12", "3", "0", "99", "-", "+", ".", "1.5", " ", "  ", "\t", "(", ")", "(move 12)"]
+    + [";", "\r", "9", "#1", "\u0663", "\u03a9", "\xe9", "\x0b"]  # Arabic-Indic 3 is \\d too
+)
+
+
+ANY_LINE = st.one_of(
+    plain_lines(),
+    st.tuples(plain_lines(), LINE_PIECES, st.integers(0, 40)).map(  # one piece put in a plain one
+        lambda t: t[0][: t[2]] + t[1] + t[0][t[2] :]
+    ),
+    st.lists(LINE_PIECES, max_size=10).map("".join),
+)
+
+
+def _spans_in(line: str) -> list[list[int]]:
+    """Where the numbers after the first X, Y, Z, R before any "(" are in ``line``, read
+    character by character (-1: none)."""
+    words_end = line.find("(") if "(" in line else len(line)
+    spans = []
+    for letter in "XYZR":
+        at = line.find(letter, 0, words_end) + 1
+        if not at:
+            spans.append([-1, -1])
+            continue
+        end = at
+        while end < len(line) and line[end] in "0123456789.+-":
+            end += 1
+        spans.append([at, end])
+    return spans
+
+
+@settings(max_examples=400)
+@given(st.lists(ANY_LINE, min_size=1, max_size=12), st.lists(ANY_LINE, max_size=6), st.booleans())
+def test_line_shapes_read_as_every_line(lines, before, few_kept):
+    """Reading each distinct shape of line once (the shapes of the lines read ``before`` known
+    already, or forgotten when more than the reader keeps) gives every line the head
+    ``_ROW_RE`` finds in it and the number offsets it has."""
+    shapes = parse._Shapes()
+    with mock.patch.object(parse, "_SHAPES_KEPT", 3 if few_kept else parse._SHAPES_KEPT):
+        for part in (before, lines):
+            chunk = "\n".join(part)
+            try:
+                data = chunk.encode("latin-1")
+            except UnicodeEncodeError:
+                data = None
+            ids = shapes.ids(parse._shapes(chunk, data, len(part)))
+            heads = parse._ROW_RE.findall(chunk)[: len(part)]
+            assert shapes.codes[ids].tolist() == [parse._plain_codes(head) for head in heads]
+            assert shapes.spans[ids].tolist() == [_spans_in(line) for line in part]

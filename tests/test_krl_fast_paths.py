@@ -5,15 +5,22 @@ layout (its numbers read by ``kinematics.decimals``, tested in ``test_decimals.p
 
 from __future__ import annotations
 
+from unittest import mock
+
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from accugrid.codegen.krl import parse, splice
+from accugrid.codegen import splice
+from accugrid.codegen.krl import parse
+from accugrid.codegen.krl import rewrite as krl_rewrite
+from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.krl.rigid import PAD, text_bytes
 from accugrid.codegen.program_text import splice as splice_text
+from accugrid.codegen.rewrite import Options
 from accugrid.codegen.textsafe import fixed
+from accugrid.compensation import GridModel
 from accugrid.kinematics.errors import InputError
 
 VALUES = st.one_of(
@@ -50,7 +57,7 @@ def test_literals_refuse_nan_like_fixed():
     st.lists(st.tuples(st.integers(0, 80), st.integers(0, 4), st.text("xyz-.9", max_size=6))),
     st.booleans(),
 )
-def test_byte_splicer_is_slicing(text, edits, every_byte):
+def test_byte_splicer_is_slicing(text, edits, few_at_a_time):
     cuts, last = [], 0
     for at, size, new in sorted(edits):
         if at >= last and at + size <= len(text):
@@ -61,16 +68,15 @@ def test_byte_splicer_is_slicing(text, edits, every_byte):
     ends = np.array([b for _, b, _ in cuts], np.int64)
     new = np.frombuffer("".join(n for _, _, n in cuts).encode(), np.uint8)
     lengths = np.array([len(n) for _, _, n in cuts], np.int64)
-    runs, edits = splice._RUNS, splice._EDITS
+    edits = splice._EDITS
     try:
-        splice._RUNS = 0 if every_byte else runs  # the path for many length changes too
-        splice._EDITS = 3  # a few edits at a time
+        splice._EDITS = 3 if few_at_a_time else edits
         out, cut = splice.ByteSplicer(text), len(cuts) // 2  # two blocks of edits
         out.add(starts[:cut], ends[:cut], new[: lengths[:cut].sum()], lengths[:cut])
         out.add(starts[cut:], ends[cut:], new[lengths[:cut].sum() :], lengths[cut:])
         got = out.finish()
     finally:
-        splice._RUNS, splice._EDITS = runs, edits
+        splice._EDITS = edits
     assert bytes(got) == expected
 
 
@@ -167,3 +173,51 @@ def test_rigid_reader_takes_the_controller_layout():
     assert found.plain.tolist() == [True, True]
     assert found.xyz.tolist() == [[1.5, -2.0, 3.25]] and found.abc.tolist() == [[-90, 0, 180]]
     assert found.names == ["XP1"] and found.texts == ["XP1"] and found.places.tolist() == [2]
+
+
+def _grid_model():
+    axes = [np.arange(-600.0, 601.0, 200.0)] * 3
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    return GridModel.from_measurements((pts, pts - 0.001 * pts[:, [1, 2, 0]] - 0.2))
+
+
+PAIR_MODEL = _grid_model()
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(
+        st.tuples(st.integers(0, 6), st.integers(-700, 700), st.sampled_from(["XP", "xp", "P"])),
+        min_size=1,
+        max_size=10,
+    ),
+    st.permutations(range(10)),
+    st.booleans(),
+)
+def test_pair_read_in_order_as_by_name(rows, order, shuffled):
+    """A .src whose motions use the .dat's positions in their order, each once (the common
+    layout, matched row for row) is rewritten as when every name is looked up (and so are pairs
+    out of order, names used twice or missing, lower case)."""
+    dat = ["DEFDAT t"]
+    for i, (k, v, prefix) in enumerate(rows):
+        dat.append(f"DECL E6POS {prefix}{k}={{X {v}.5,Y {i * 10}.25,Z 100.0,A 0.0,B 90.0,C 0.0}}")
+    names = [f"{prefix}{k}" for k, _, prefix in rows]
+    if shuffled:
+        names = [names[j] for j in order if j < len(names)]
+    src = ["DEF t( )", "$BASE = BASE_DATA[1]"] + [f"LIN {n}" for n in names] + ["END"]
+    texts = {"t.src": "\n".join(src) + "\n", "t.dat": "\n".join(dat + ["ENDDAT"]) + "\n"}
+    opts = Options(model=PAIR_MODEL, base_data={1: np.eye(4)}, robot_T_program=np.eye(4))
+    fast = rewrite_krl(texts, opts)
+    init = krl_rewrite._Context.__init__
+
+    def by_name(self, *args):
+        init(self, *args)
+        if self.aligned is not None:  # every name looked up instead
+            self.aligned = None
+            names = self.use_names
+            self.used_twice = {n for i, n in enumerate(names) if n and self.use_of[n] != i}
+
+    with mock.patch.object(krl_rewrite._Context, "__init__", by_name):
+        slow = rewrite_krl(texts, opts)
+    assert fast.data == slow.data
+    assert [repr(r) for r in fast.rows] == [repr(r) for r in slow.rows]

@@ -11,12 +11,12 @@ drill axis: ``G1`` to the clearance point at approach speed, ``G1`` to the botto
 ``G4`` dwell, ``G1`` back to the retract point at approach speed. Feeds are mm/min (``G94``).
 
 Numbers go through ``fixed`` only: per-hole numbers are formatted once in Python
-(``program.decimals`` for mm and deg, 1 decimal for F; positions by the %-template of the hole
-lines itself from ``fixed_ready`` values, the same text) and reach the template as text; the
-template formats its scalar settings with the ``fixed`` filter. Jinja renders the frame of the
-file; the built-in template prints ``hole_lines``, every hole's lines from one %-template per kind
-of hole, while the records ``holes`` stay available to a user template that loops over them (built
-only if the template refers to them).
+(``program.decimals`` for mm and deg, 1 decimal for F; ``textsafe.fixed_bytes`` for the hole
+lines, ``fixed_texts`` for the records) and reach the template as text; the template formats its
+scalar settings with the ``fixed`` filter. Jinja renders the frame of the file; the built-in
+template prints ``hole_lines``, every hole's lines built as bytes by numpy from one template per
+kind of hole (``codegen.linebytes``), while the records ``holes`` stay available to a user
+template that loops over them (built only if the template refers to them).
 """
 
 from __future__ import annotations
@@ -28,16 +28,17 @@ from typing import NamedTuple
 import numpy as np
 
 from accugrid.codegen.cell import Cell
+from accugrid.codegen.linebytes import (
+    SLOT,
+    image_bytes,
+    line_image,
+    merge_images,
+    number_cells,
+    text_cells,
+)
 from accugrid.codegen.program import Program
 from accugrid.codegen.render import environment, render, template_dir, template_uses
-from accugrid.codegen.textsafe import (
-    comment_texts,
-    fixed,
-    fixed_format,
-    fixed_ready,
-    fixed_same,
-    fixed_texts,
-)
+from accugrid.codegen.textsafe import comment_texts, fixed, fixed_same, fixed_texts
 
 __all__ = ["BLOCK", "GcodeHole", "canned", "gcode_text", "render_gcode"]
 
@@ -68,14 +69,15 @@ def canned(pos: np.ndarray, decimals: int) -> np.ndarray:
 
 def render_gcode(program: Program, header: list[str], templates=None) -> str:
     """The ``.ngc`` text of the job."""
-    return "".join(gcode_text(program, header, templates))
+    return b"".join(gcode_text(program, header, templates)).decode("utf-8")
 
 
-def gcode_text(program: Program, header: list[str], templates=None) -> Iterator[str]:
-    """The ``.ngc`` text of the job in pieces, for writing a million-hole job without holding it
-    whole: where the template prints ``hole_lines`` as it is (``{{ hole_lines }}``), the frame
-    is rendered (now: template errors are raised here, the templates noted as inputs) around a
-    marker, and the hole lines follow in blocks of ``BLOCK`` holes as the pieces are taken."""
+def gcode_text(program: Program, header: list[str], templates=None) -> Iterator[bytes]:
+    """The ``.ngc`` text of the job in pieces of UTF-8, for writing a million-hole job without
+    holding it whole: where the template prints ``hole_lines`` as it is (``{{ hole_lines }}``),
+    the frame is rendered (now: template errors are raised here, the templates noted as inputs)
+    around a marker, and the hole lines follow in blocks of ``BLOCK`` holes as the pieces are
+    taken."""
     cell = program.cell
     env = environment(template_dir("gcode", templates))
     uses = template_uses(env, "program.ngc.j2")
@@ -88,21 +90,23 @@ def gcode_text(program: Program, header: list[str], templates=None) -> Iterator[
         "peck": cell.drilling.peck_mm,
     }
     if uses is None or "holes" in uses:  # a template that loops over the holes: all at once
-        blocks = [_block(program, lo, True) for lo in range(0, len(program), BLOCK)]
-        context["holes"] = [hole for records, _ in blocks for hole in records]
-        context["hole_lines"] = "".join(lines for _, lines in blocks)
-        return iter([render(env, "program.ngc.j2", **context)])
+        blocks = [_holes(program, lo) for lo in range(0, len(program), BLOCK)]
+        context["holes"] = [
+            hole for block in blocks for hole in _records(block, cell.gcode.decimals)
+        ]
+        context["hole_lines"] = b"".join(_lines(block, cell) for block in blocks).decode("ascii")
+        return iter([render(env, "program.ngc.j2", **context).encode()])
     if "hole_lines" not in uses:
-        return iter([render(env, "program.ngc.j2", **context)])
+        return iter([render(env, "program.ngc.j2", **context).encode()])
     source = env.loader.get_source(env, "program.ngc.j2")[0]
     if len(_PRINTED.findall(source)) != source.count("hole_lines"):  # filtered, cut, measured
-        context["hole_lines"] = "".join(_hole_lines(program))
-        return iter([render(env, "program.ngc.j2", **context)])
+        context["hole_lines"] = b"".join(_hole_lines(program)).decode("ascii")
+        return iter([render(env, "program.ngc.j2", **context).encode()])
     frame = render(env, "program.ngc.j2", hole_lines=_MARKER, **context).split(_MARKER)
-    return _around(frame, program)
+    return _around([piece.encode() for piece in frame], program)
 
 
-def _around(frame: list[str], program: Program) -> Iterator[str]:
+def _around(frame: list[bytes], program: Program) -> Iterator[bytes]:
     """The pieces of the frame with the hole lines between them."""
     yield frame[0]
     for piece in frame[1:]:
@@ -115,82 +119,109 @@ _MARKER = "\x00accugrid hole lines\x00"  # no text of a program holds a NUL
 _PRINTED = re.compile(r"\{\{-?\s*hole_lines\s*-?\}\}")
 
 
-def _hole_lines(program: Program) -> Iterator[str]:
+def _hole_lines(program: Program) -> Iterator[bytes]:
+    """The lines of every hole, ASCII, a block of ``BLOCK`` holes at a time."""
     for lo in range(0, len(program), BLOCK):
-        yield _block(program, lo, False)[1]
+        yield _lines(_holes(program, lo), program.cell)
 
 
-def _block(program: Program, lo: int, records: bool) -> tuple[list[GcodeHole], str]:
-    """Holes lo..lo+BLOCK-1: their ``GcodeHole`` records (when ``records``) and lines."""
+class _Holes(NamedTuple):
+    """Holes of a block: positions (n, 4, 3) mm and A B C (n, 3) deg in the program frame,
+    whether each takes a canned cycle and a retract move (n,), labels, feeds (n,) mm/min."""
+
+    pos: np.ndarray
+    abc: np.ndarray
+    cycle: np.ndarray
+    retract_move: np.ndarray
+    labels: list[str]
+    feed_mm_min: np.ndarray
+
+
+def _holes(program: Program, lo: int) -> _Holes:
+    """Holes lo..lo+BLOCK-1."""
     cell = program.cell
     hi = min(lo + BLOCK, len(program))
     pos, abc = program.in_frame(cell.gcode.robot_T_program, lo, hi)
     d = cell.gcode.decimals
     cycle = canned(pos, d) if cell.gcode.canned_cycles else np.zeros(len(pos), bool)
     retract_move = ~fixed_same(pos[:, 3, 2], pos[:, 0, 2], d)
-    labels = program.labels(lo, hi)
-    abc_text = fixed_texts(abc, d, distinct=True)
-    feed = fixed_texts(program.feed_mm_s[lo:hi] * 60.0, 1, distinct=True)
-    holes = []
-    if records:
-        coords = [list(map(tuple, hole)) for hole in fixed_texts(pos, d).tolist()]
-        holes = list(
-            map(
-                GcodeHole,
-                labels,
-                *zip(*coords, strict=True),
-                map(tuple, abc_text.tolist()),
-                feed.tolist(),
-                cycle.tolist(),
-                retract_move.tolist(),
-            )
+    feed = program.feed_mm_s[lo:hi] * 60.0
+    return _Holes(pos, abc, cycle, retract_move, program.labels(lo, hi), feed)
+
+
+def _records(holes: _Holes, decimals: int) -> list[GcodeHole]:
+    """The ``GcodeHole`` records of a block, for a template that loops over them."""
+    coords = [list(map(tuple, hole)) for hole in fixed_texts(holes.pos, decimals).tolist()]
+    return list(
+        map(
+            GcodeHole,
+            holes.labels,
+            *zip(*coords, strict=True),
+            map(tuple, fixed_texts(holes.abc, decimals, distinct=True).tolist()),
+            fixed_texts(holes.feed_mm_min, 1, distinct=True).tolist(),
+            holes.cycle.tolist(),
+            holes.retract_move.tolist(),
         )
-    ready = fixed_ready(pos, d)  # positions print in the %-template itself (fixed_format)
-    table = np.empty((len(pos), 17), dtype=object)
-    table[:, 0] = comment_texts(labels, prefix="hole ")
-    table[:, 1:4] = ready[:, 0]
-    table[:, 4:7] = abc_text
-    table[:, 7:16] = ready[:, 1:].reshape(-1, 9)
-    table[:, 16] = feed
+    )
+
+
+def _lines(holes: _Holes, cell: Cell) -> bytes:
+    """The lines of a block's holes, ASCII, built as one line image (``codegen.linebytes``); each
+    kind of hole has its template (``_hole_templates``)."""
+    n = len(holes.pos)
+    if not n:
+        return b""
+    numbers = number_cells(
+        np.concatenate([holes.pos[:, 0], holes.abc, holes.pos[:, 1:].reshape(n, 9)], axis=1),
+        cell.gcode.decimals,
+    )
+    comments = text_cells(comment_texts(holes.labels, prefix="hole "))
+    feeds = number_cells(holes.feed_mm_min, 1)
+    cycle, retract_move = holes.cycle, holes.retract_move
     kinds = (cycle & retract_move, cycle & ~retract_move, ~cycle)
     templates = _hole_templates(cell)
     for mask, (template, columns) in zip(kinds, templates, strict=True):
-        if mask.all():  # every hole of the block alike (the usual): its lines in one pass
-            return holes, (template * len(table)) % tuple(table[:, columns].ravel().tolist())
-    lines = np.empty(len(pos), dtype=object)
+        if mask.all():  # every hole of the block alike (the usual)
+            return image_bytes(line_image(template, _columns(columns, comments, numbers, feeds)))
+    images = []  # each kind's rows, then every hole's lines in place
     for mask, (template, columns) in zip(kinds, templates, strict=True):
-        count = int(np.count_nonzero(mask))
-        if count:  # each kind in one pass, then every hole's lines in place (NUL: no text has it)
-            text = ((template + "\0") * count) % tuple(table[mask][:, columns].ravel().tolist())
-            lines[mask] = text.split("\0")[:-1]
-    return holes, "".join(lines.tolist())
+        rows = np.flatnonzero(mask)
+        cells = _columns(columns, comments[rows], numbers[rows], feeds[rows])
+        images.append(line_image(template, cells))
+    return image_bytes(merge_images(kinds, images))
+
+
+def _columns(
+    columns: list[int], comments: np.ndarray, numbers: np.ndarray, feeds: np.ndarray
+) -> list[np.ndarray]:
+    """The cells (n, w) of ``columns`` (see ``_hole_templates``) from the comments (n, w), the
+    numbers of columns 1-15 (n, 15, w) and the feeds (n, w)."""
+    return [comments if c == 0 else feeds if c == 16 else numbers[:, c - 1] for c in columns]
 
 
 def _hole_templates(cell: Cell) -> list[tuple[str, list[int]]]:
-    """%-templates of one hole's lines, each with the columns it prints, for a canned cycle with a
-    retract move, a canned cycle without, and explicit moves. Columns: 0 comment, 1-3 APP X Y Z,
-    4-6 A B C, 7-9 CLR, 10-12 BOT, 13-15 RET (positions: ``fixed_ready`` values, printed with
-    ``fixed_format``), 16 feed."""
-    mm = fixed_format(cell.gcode.decimals)
-    xyz = f"X{mm} Y{mm} Z{mm}"
-    start = (f"(%s)\nG0 {xyz} A%s B%s C%s\n", [0, 1, 2, 3, 4, 5, 6])
+    """Templates (``linebytes.line_image``) of one hole's lines, each with the columns it prints,
+    for a canned cycle with a retract move, a canned cycle without, and explicit moves. Columns:
+    0 comment, 1-3 APP X Y Z, 4-6 A B C, 7-9 CLR, 10-12 BOT, 13-15 RET, 16 feed."""
+    xyz = f"X{SLOT} Y{SLOT} Z{SLOT}"
+    start = (f"({SLOT})\nG0 {xyz} A{SLOT} B{SLOT} C{SLOT}\n", [0, 1, 2, 3, 4, 5, 6])
     wait = f"P{fixed(cell.drilling.dwell_s, 3)}"
     if cell.drilling.peck_mm > 0:
         peck = fixed(cell.drilling.peck_mm, cell.gcode.decimals)
-        cycle = f"G98 G83 {xyz} R{mm} Q{peck} F%s\nG80\n"
+        cycle = f"G98 G83 {xyz} R{SLOT} Q{peck} F{SLOT}\nG80\n"
     elif cell.drilling.dwell_s > 0:
-        cycle = f"G98 G82 {xyz} R{mm} {wait} F%s\nG80\n"
+        cycle = f"G98 G82 {xyz} R{SLOT} {wait} F{SLOT}\nG80\n"
     else:
-        cycle = f"G98 G81 {xyz} R{mm} F%s\nG80\n"
+        cycle = f"G98 G81 {xyz} R{SLOT} F{SLOT}\nG80\n"
     cycle_columns = [10, 11, 12, 9, 16]
     approach = f" F{fixed(cell.drilling.approach_mm_s * 60.0, 1)}\n"
     explicit = (
-        f"G1 {xyz}{approach}G1 {xyz} F%s\n"
+        f"G1 {xyz}{approach}G1 {xyz} F{SLOT}\n"
         + (f"G4 {wait}\n" if cell.drilling.dwell_s > 0 else "")
         + f"G1 {xyz}{approach}"
     )
     return [
-        (start[0] + cycle + f"G0 Z{mm}\n", start[1] + cycle_columns + [15]),
+        (start[0] + cycle + f"G0 Z{SLOT}\n", start[1] + cycle_columns + [15]),
         (start[0] + cycle, start[1] + cycle_columns),
         (start[0] + explicit, start[1] + [7, 8, 9, 10, 11, 12, 16, 13, 14, 15]),
     ]

@@ -22,7 +22,6 @@ import math
 import os
 import re
 import string
-from array import array
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -35,6 +34,7 @@ from accugrid.kinematics.errors import InputError
 __all__ = [
     "AXES",
     "CYCLES",
+    "RESETS",
     "INCH_MM",
     "ROTARY",
     "WORD_LETTERS",
@@ -58,13 +58,13 @@ _PLAIN_RE = re.compile(
     r"(?:[ \t]++R(" + _NUMBER + r"))?+([ \t]++F" + _NUMBER + r")?+[ \t]*+"
     r"(?:\([^()\n;]*+\)[ \t]*+)?+\r?+"
 )
-# The whole-text scanner: one match per line. A plain line is ``[N..] [G98|G99] [G0|G1|G73|G81..
-# G89] X.. Y.. Z.. [R..] [F..] [(comment)]`` where any one or two of X, Y, Z may be left out, with
-# single spaces between the position words. Its G-codes and first letter are one group (so findall
-# gives one str per line, never empty for a plain line); any other line matches the last branch
-# with the group empty. Where the numbers are is found from the bytes: before the comment the
-# letters X, Y, Z, R appear only as words, and each number ends at the first byte that is not in
-# one.
+# The whole-text scanner's line match, once per shape of line (``_Shapes``). A plain line is
+# ``[N..] [G98|G99] [G0|G1|G73|G81..G89] X.. Y.. Z.. [R..] [F..] [(comment)]`` where any one or two
+# of X, Y, Z may be left out, with single spaces between the position words. Its G-codes and first
+# letter are one group (never empty for a plain line); any other line matches the last branch
+# with the group empty. Where the numbers are is found from the bytes (``_number_spans``): before
+# the comment the letters X, Y, Z, R appear only as words, and each number ends at the first byte
+# that is not in one.
 _ROW_RE = re.compile(
     r"^(?:[ \t]*+(?:N\d++[ \t]++)?+((?:G9[89][ \t]++)?+(?:G(?:0?+[01]|0|8[1-9]|73)[ \t]++)?+[XYZ])"
     r"(?:(?<=X)" + _NUMBER + "(?: Y" + _NUMBER + ")?+(?: Z" + _NUMBER + ")?+"
@@ -76,6 +76,10 @@ _ROW_RE = re.compile(
 _CODES_RE = re.compile(r"(?:G(9[89])[ \t]++)?+(?:G(\d++)[ \t]++)?+[XYZ]")
 _NOT_IN_NUMBER = np.ones(256, bool)
 _NOT_IN_NUMBER[list(NUMBER_BYTES)] = False
+_DIGIT = np.zeros(256, bool)
+_DIGIT[48:58] = True
+_NINES = bytes.maketrans(b"0123456789", b"9" * 10)  # every digit as a 9
+_SHAPES_KEPT = 1 << 22  # characters of line shapes a reader keeps for the next chunks
 _CHUNK = 1 << 20  # characters per whole-text pass (bounds the per-line tuples held at once)
 _DIGITS_RE = re.compile(r"\d++")
 _OWORD_RE = re.compile(
@@ -97,6 +101,7 @@ _BULK_MOTIONS = CYCLES | {"0", "1"}  # the motion modes a run of plain lines is 
 _MOTION_NAMES = np.array(["G" + str(g) for g in range(100)], dtype=object)  # code -> name
 _RETRACT_NAMES = np.full(100, "", dtype=object)  # code -> a cycle's retract ("": not a cycle)
 _RETRACT_NAMES[[98, 99]] = "G98", "G99"
+_NAME_OBJECTS = [*_MOTION_NAMES.tolist(), *_RETRACT_NAMES[[0, 98, 99]].tolist()]  # those str
 INCH_MM = 25.4
 _ROTARY_SET = frozenset(ROTARY)
 _KEPT = frozenset(AXES + ROTARY + "RL")  # letters whose Word a move (or G10) needs
@@ -127,6 +132,8 @@ _G_NAMES = {float(g): g for g in (str(i) for i in range(100))}
 _new_word = tuple.__new__  # a Word without the NamedTuple constructor's Python frame
 _NAN3 = (math.nan, math.nan, math.nan)
 WORD_LETTERS = "XYZR"  # the words a move keeps, in the order its ``words`` dict lists them
+RESETS = frozenset(("G28", "G30", "G53"))  # moves after which the position is not known
+_F_INCREMENTAL, _F_CYCLE, _F_RESETS, _F_G99 = 1, 2, 4, 8  # ``GcodeMoves`` row flags
 
 
 class Word(NamedTuple):
@@ -182,122 +189,154 @@ class GcodeMoves:
     ``GcodeMove`` on demand.
 
     After ``finish``: ``line``, ``column`` (N,) int; ``start``, ``target``, ``end`` (N, 3) mm in
-    the program frame (NaN where unknown); ``scale`` and ``r_mm`` (N,) mm; ``incremental`` and
-    ``is_cycle`` (N,) bool; ``setters`` (N, 3) int (-1: none); ``word_start``, ``word_end`` (N, 4)
-    text offsets of the X, Y, Z, R numbers (-1: not written) and ``word_value`` (N, 4) their
-    values in program units; ``rotary_index`` (N,) int into ``rotaries`` (the distinct rotary
-    dicts, each once); ``motion``, ``reason``, ``retract`` lists of str."""
+    the program frame (NaN where unknown); ``scale`` and ``r_mm`` (N,) mm; ``incremental``,
+    ``is_cycle``, ``resets`` (a G28/G30/G53 move, after which the position is not known) and
+    ``g99`` (a cycle retracting to R) (N,) bool; ``setters`` (N, 3) int (-1: none);
+    ``word_start``, ``word_end`` (N, 4) text offsets of the X, Y, Z, R numbers (-1: not written)
+    and ``word_value`` (N, 4) their values in program units; ``rotary_index`` (N,) int into
+    ``rotaries`` (the distinct rotary dicts, each once); ``motion``, ``reason``, ``retract``
+    lists of str; ``places`` the most decimals among the X, Y, Z literals of the moves (-1:
+    none).
 
-    def __init__(self, path: str | None, text: str) -> None:
+    Rows come one by one (``add``) or in bulk (``rows`` to fill, then ``extend``), into arrays
+    of ``capacity`` rows (the program's lines: a line is one move at most; pages never written
+    are never resident), grown if ever full; ``finish`` exposes the rows stored."""
+
+    def __init__(self, path: str | None, text: str, capacity: int = 1024) -> None:
         self.path, self.text = path, text
-        self._ints = array("q")  # per move: line, column, 3 setters, 4 word starts, 4 word ends
-        self._floats = array("d")  # per move: start, target, end (9), scale, r_mm, 4 values
-        self._flags = array("b")  # per move: incremental + 2 * is_cycle
-        self._rotary = array("q")
+        capacity = max(capacity, 1)
+        self._ints = np.empty((capacity, 13), np.int64)  # line, column, 3 setters, 4+4 spans
+        self._floats = np.empty((capacity, 15))  # start, target, end (9), scale, r_mm, 4 values
+        self._flags = np.empty(capacity, np.int8)  # the _F_ bits
+        self._rotary = np.empty(capacity, np.int64)
         self.rotaries: list[dict[str, float]] = []
         self.motion: list[str] = []
         self.reason: list[str] = []
         self.retract: list[str] = []
-        self._names: dict[str, str] = {}  # one str object per distinct motion and retract
+        # one str object per distinct motion and retract: those of the name tables and others
+        self._names: dict[str, str] = dict(zip(_NAME_OBJECTS, _NAME_OBJECTS, strict=True))
+        self.places = -1  # the most decimals among the X, Y, Z literals of the moves (-1: none)
 
     def __len__(self) -> int:
         return len(self.motion)
 
+    def _room(self, m: int) -> int:
+        """The index of the next row, the arrays grown to hold ``m`` more."""
+        n = len(self.motion)
+        if n + m > len(self._flags):
+            size = max(n + m, 2 * len(self._flags))
+            for key in ("_ints", "_floats", "_flags", "_rotary"):
+                old = getattr(self, key)
+                grown = np.empty((size, *old.shape[1:]), old.dtype)
+                grown[:n] = old[:n]
+                setattr(self, key, grown)
+        return n
+
     def add(self, line, column, motion, start, target, words, reason, end, state, cycle) -> None:
         """Store one move as a row: ``start``, ``target``, ``end`` 3 mm each; ``words`` letter ->
         Word; ``state``: the ``_Modal`` it was read in (pos and setters before the move)."""
+        i = self._room(1)
         rotary = state.rotary
         if not self.rotaries or rotary is not self.rotaries[-1]:
             self.rotaries.append(rotary)
-        self._rotary.append(len(self.rotaries) - 1)
+        self._rotary[i] = len(self.rotaries) - 1
         get = words.get
         x, y, z, r = get("X"), get("Y"), get("Z"), get("R")
+        for word in (x, y, z):
+            if word is not None:
+                self.places = max(self.places, decimals_of(word.literal))
         s0, s1, s2 = state.setter
-        self._ints.extend(
-            (
-                line,
-                column,
-                -1 if s0 is None else s0,
-                -1 if s1 is None else s1,
-                -1 if s2 is None else s2,
-                -1 if x is None else x.start,
-                -1 if y is None else y.start,
-                -1 if z is None else z.start,
-                -1 if r is None else r.start,
-                -1 if x is None else x.end,
-                -1 if y is None else y.end,
-                -1 if z is None else z.end,
-                -1 if r is None else r.end,
-            )
+        self._ints[i] = (
+            line,
+            column,
+            -1 if s0 is None else s0,
+            -1 if s1 is None else s1,
+            -1 if s2 is None else s2,
+            -1 if x is None else x.start,
+            -1 if y is None else y.start,
+            -1 if z is None else z.start,
+            -1 if r is None else r.start,
+            -1 if x is None else x.end,
+            -1 if y is None else y.end,
+            -1 if z is None else z.end,
+            -1 if r is None else r.end,
         )
-        self._floats.extend(
-            (
-                start[0],
-                start[1],
-                start[2],
-                target[0],
-                target[1],
-                target[2],
-                end[0],
-                end[1],
-                end[2],
-                state.scale,
-                state.cycle_r if cycle else math.nan,
-                math.nan if x is None else x.value,
-                math.nan if y is None else y.value,
-                math.nan if z is None else z.value,
-                math.nan if r is None else r.value,
-            )
+        self._floats[i] = (
+            start[0],
+            start[1],
+            start[2],
+            target[0],
+            target[1],
+            target[2],
+            end[0],
+            end[1],
+            end[2],
+            state.scale,
+            state.cycle_r if cycle else math.nan,
+            math.nan if x is None else x.value,
+            math.nan if y is None else y.value,
+            math.nan if z is None else z.value,
+            math.nan if r is None else r.value,
         )
-        self._flags.append(state.incremental + 2 * cycle)
-        names = self._names
         retract = state.retract if cycle else ""
+        self._flags[i] = (
+            state.incremental * _F_INCREMENTAL
+            + cycle * _F_CYCLE
+            + (motion in RESETS) * _F_RESETS
+            + (retract == "G99") * _F_G99
+        )
+        names = self._names
         self.motion.append(names.setdefault(motion, motion))
         self.retract.append(names.setdefault(retract, retract))
         self.reason.append(reason)
 
-    def extend(self, ints, floats, cycle, rotary, motion, retract, reason) -> None:
-        """Store rows in bulk, as ``add`` stores one: ``ints`` (M, 13) and ``floats`` (M, 15) in
-        the row layout, ``cycle`` (M,) bool (no row is incremental), ``rotary`` the dict in
-        effect for all, ``motion``/``retract``/``reason`` M strings each."""
+    def rows(self, m: int) -> tuple[np.ndarray, np.ndarray]:
+        """The next ``m`` rows to fill before ``extend`` stores them: ints (m, 13) and floats
+        (m, 15) in the row layout (views)."""
+        i = self._room(m)
+        return self._ints[i : i + m], self._floats[i : i + m]
+
+    def extend(self, cycle, g99, rotary, motion, retract, reason) -> None:
+        """Store the rows ``rows`` gave, filled, as ``add`` stores one: ``cycle`` and ``g99``
+        (M,) bool (no row is incremental nor resets the position), ``rotary`` the dict in effect
+        for all, ``motion``/``retract``/``reason`` M strings each (motions and retracts from
+        ``_MOTION_NAMES`` and ``_RETRACT_NAMES``)."""
         if not self.rotaries or rotary is not self.rotaries[-1]:
             self.rotaries.append(rotary)
-        m = len(motion)
-        self._rotary.frombytes(np.full(m, len(self.rotaries) - 1, np.int64).tobytes())
-        self._ints.frombytes(np.ascontiguousarray(ints, np.int64).tobytes())
-        self._floats.frombytes(np.ascontiguousarray(floats, float).tobytes())
-        self._flags.frombytes((2 * np.asarray(cycle, np.int8)).tobytes())
-        names = self._names
-        same = {k: names.setdefault(k, k) for k in {*motion, *retract}}  # one str per name
-        self.motion += map(same.__getitem__, motion)
-        self.retract += map(same.__getitem__, retract)
+        i, m = len(self.motion), len(motion)
+        self._flags[i : i + m] = _F_CYCLE * np.asarray(cycle, np.int8) + _F_G99 * g99
+        self._rotary[i : i + m] = len(self.rotaries) - 1
+        self.motion += motion
+        self.retract += retract
         self.reason += reason
 
     def finish(self) -> GcodeMoves:
-        """Expose the columns as arrays (views of the stored rows)."""
-        n = len(self)
-        ints = np.frombuffer(self._ints, dtype=np.int64).reshape(n, 13)
-        floats = np.frombuffer(self._floats, dtype=float).reshape(n, 15)
-        flags = np.frombuffer(self._flags, dtype=np.int8)
+        """Expose the columns as arrays (views of the rows stored)."""
+        n = len(self.motion)
+        ints, floats, flags = self._ints[:n], self._floats[:n], self._flags[:n]
+        self.ints, self.floats, self.flags = ints, floats, flags
         self.line, self.column, self.setters = ints[:, 0], ints[:, 1], ints[:, 2:5]
         self.word_start, self.word_end = ints[:, 5:9], ints[:, 9:13]
         self.start, self.target, self.end = floats[:, 0:3], floats[:, 3:6], floats[:, 6:9]
         self.scale, self.r_mm, self.word_value = floats[:, 9], floats[:, 10], floats[:, 11:15]
-        self.incremental, self.is_cycle = (flags & 1) != 0, (flags & 2) != 0
-        self.rotary_index = np.frombuffer(self._rotary, dtype=np.int64)
+        self.incremental = (flags & _F_INCREMENTAL) != 0
+        self.is_cycle = (flags & _F_CYCLE) != 0
+        self.resets = (flags & _F_RESETS) != 0
+        self.g99 = (flags & _F_G99) != 0
+        self.rotary_index = self._rotary[:n]
         return self
 
     def move(self, i: int) -> GcodeMove:
-        """Move ``i`` as a ``GcodeMove`` (as the reader built it)."""
-        ints = self._ints[13 * i : 13 * i + 13].tolist()
-        floats = self._floats[15 * i : 15 * i + 15].tolist()
+        """Move ``i`` as a ``GcodeMove`` (as the reader built it; after ``finish``)."""
+        ints = self.ints[i].tolist()
+        floats = self.floats[i].tolist()
         words = {}
         for k, letter in enumerate(WORD_LETTERS):
             start, end = ints[5 + k], ints[9 + k]
             if start >= 0:
                 literal = self.text[start:end]
                 words[letter] = _new_word(Word, (letter, floats[11 + k], start, end, literal))
-        flags = self._flags[i]
+        flags = int(self.flags[i])
         return GcodeMove(
             self.path,
             ints[0],
@@ -306,15 +345,15 @@ class GcodeMoves:
             tuple(floats[0:3]),
             tuple(floats[3:6]),
             words,
-            bool(flags & 1),
+            bool(flags & _F_INCREMENTAL),
             floats[9],
             self.reason[i],
-            self.rotaries[self._rotary[i]],
+            self.rotaries[self.rotary_index[i]],
             tuple(None if j < 0 else j for j in ints[2:5]),
             self.retract[i],
             floats[10],
             tuple(floats[6:9]),
-            bool(flags & 2),
+            bool(flags & _F_CYCLE),
         )
 
 
@@ -581,6 +620,82 @@ def _plain_codes(codes: str) -> int:
     return 1000 * int(m[1] or 0) + (int(m[2]) if m[2] else -1) + 2
 
 
+def _shapes(chunk: str, data: bytes | None, count: int) -> list[str]:
+    """The shapes of the first ``count`` lines of ``chunk``: each line with the digits
+    ``_ROW_RE`` reads alike as 9s; ``data``: the chunk's latin-1 bytes (None: it has other
+    characters, and then each line is its own shape: ``\\d`` is more than 0-9 there).
+
+    ``_ROW_RE`` reads any digits as ``\\d`` but those of a G-code, the one or two right after
+    its ``G``; a line keeps its length and every other character in its shape, so lines of one
+    shape match alike and have their words at the same offsets: a few hundred shapes for
+    100,000 CAM lines, each read once (``_Shapes``)."""
+    if data is None:
+        shapes = chunk.split("\n")
+    else:
+        buf = np.frombuffer(data, np.uint8)
+        nines = bytearray(data.translate(_NINES))
+        first = np.flatnonzero(buf[:-1] == ord("G")) + 1  # a G-code's digits: its first two
+        first = first[_DIGIT[buf[first]]]
+        second = first[first + 1 < len(buf)] + 1
+        second = second[_DIGIT[buf[second]]]
+        view = np.frombuffer(nines, np.uint8)
+        view[first], view[second] = buf[first], buf[second]
+        del view
+        shapes = nines.decode("latin-1").split("\n")
+    del shapes[count:]
+    return shapes
+
+
+class _Shapes:
+    """The line shapes a reader met (_SHAPES_KEPT characters of them kept), each read once:
+    ``codes`` (S,)
+    its ``_plain_codes`` (of the head ``_ROW_RE`` finds) and ``spans`` (S, 4, 2) the offsets of
+    its X, Y, Z, R numbers as a plain line has them (-1: none)."""
+
+    def __init__(self) -> None:
+        self.index: dict[str, int] = {}
+        self.codes = np.zeros(0, np.int64)
+        self.spans = np.zeros((0, 4, 2), np.int64)
+        self.size = 0  # characters
+
+    def ids(self, shapes: list[str]) -> np.ndarray:
+        """The index (M,) of each shape in ``codes`` and ``spans``, the new ones read."""
+        new = list(set(shapes).difference(self.index))
+        size = sum(map(len, new))
+        if self.size + size > _SHAPES_KEPT:  # not a program of few repeated shapes, it seems
+            self.index, self.codes, self.spans, self.size = {}, self.codes[:0], self.spans[:0], 0
+            new = list(set(shapes))
+            size = sum(map(len, new))
+        self.size += size
+        if new:
+            first = len(self.index)
+            self.index.update(zip(new, range(first, first + len(new)), strict=True))
+            codes = [_plain_codes(_ROW_RE.match(shape)[1] or "") for shape in new]
+            self.codes = np.append(self.codes, codes)
+            self.spans = np.concatenate([self.spans, _number_spans(new)])
+        return np.fromiter(map(self.index.__getitem__, shapes), np.int64, len(shapes))
+
+
+def _number_spans(lines: list[str]) -> np.ndarray:
+    """The offsets (M, 4, 2) in each line of the numbers after its first X, Y, Z and R before
+    any ``(`` (-1: none), a number ending at the first byte not in one."""
+    buf = np.frombuffer("\n".join(lines).encode("latin-1", "replace"), np.uint8)
+    newlines = np.flatnonzero(buf == 10)
+    begins = np.concatenate(([0], newlines + 1))
+    ends = np.append(newlines, len(buf))
+    stops = np.append(np.flatnonzero(_NOT_IN_NUMBER[buf]), len(buf))
+    opens = np.append(np.flatnonzero(buf == ord("(")), len(buf))
+    words_end = np.minimum(opens[np.searchsorted(opens, begins)], ends)
+    spans = np.full((len(lines), 4, 2), -1)
+    for k, letter in enumerate(b"XYZR"):
+        found = np.append(np.flatnonzero(buf == letter), len(buf))
+        where = found[np.searchsorted(found, begins)] + 1  # the number after the letter
+        has = where <= words_end
+        spans[has, k, 0] = where[has]
+        spans[has, k, 1] = stops[np.searchsorted(stops, where[has])]
+    return np.where(spans >= 0, spans - begins[:, None, None], -1)
+
+
 class _PlainRun(NamedTuple):
     """Consecutive plain lines of a chunk: ``lineno`` of the first; per line ``begin`` (its text
     offset), ``spans`` (M, 4, 2) text offsets (start, end) of the X, Y, Z, R numbers and
@@ -614,12 +729,14 @@ class _Reader:
     def __init__(self, path: str | None, text: str) -> None:
         self.path = path
         self.state = _Modal()
-        self.moves = GcodeMoves(path, text)
+        lines = text.count("\n") if "\n" in text else text.count("\r")  # as split_lines cuts
+        self.moves = GcodeMoves(path, text, lines + 1)
         # whole-text checks first: most programs have no O-words or block deletes, and then no
         # line needs those per-line checks
         self.owords = bool(_OWORD_FIRST_RE.match(text) or _OWORD_NEXT_RE.search(text))
         self.slashes = "/" in text
         self.bom = next((b for b in _BOMS if text.startswith(b)), "")
+        self.shapes = _Shapes()
 
     def line(self, raw: str, lineno: int, line_offset: int) -> None:
         """Read one line (without its ending) that starts at text offset ``line_offset``."""
@@ -682,8 +799,11 @@ class _Reader:
                 before = z[k - 1] if k else s.pos[2]
                 z[k] = (r[k] if r[k] > before else before) if hole[k] else before
             end[:, 2] = z
-        start = np.vstack([np.array(s.pos, float)[None], end[:-1]])
-        target = np.column_stack([end[:, :2], np.where(cycle, cycle_z, end[:, 2])])
+        ints, floats = self.moves.rows(m)  # filled in place
+        floats[0, 0:3], floats[1:, 0:3] = s.pos, end[:-1]  # start
+        target = floats[:, 3:6]
+        target[:, :2], target[:, 2] = end[:, :2], np.where(cycle, cycle_z, end[:, 2])
+        floats[:, 6:9] = end
         # the move that last set each coordinate, before each move (a cycle always sets Z)
         index = np.arange(first, first + m)
         after = [
@@ -696,20 +816,11 @@ class _Reader:
         column = np.where(
             wrote[:, 0], starts[:, 0], np.where(wrote[:, 1], starts[:, 1], starts[:, 2])
         )
-        ints = np.column_stack(
-            [
-                np.arange(run.lineno, run.lineno + m),
-                column - run.begin + 1,
-                setters,
-                starts,
-                ends,
-            ]
-        )
-        values = np.where(wrote, run.values, np.nan)
-        values[:, 3] = np.where(wrote_r, values[:, 3], np.nan)
-        floats = np.column_stack(
-            [start, target, end, np.full(m, s.scale), np.where(cycle, r_mm, np.nan), values]
-        )
+        ints[:, 0], ints[:, 1] = np.arange(run.lineno, run.lineno + m), column - run.begin + 1
+        ints[:, 2:5], ints[:, 5:9], ints[:, 9:13] = setters, starts, ends
+        floats[:, 9], floats[:, 10] = s.scale, np.where(cycle, r_mm, np.nan)
+        floats[:, 11:15] = np.where(wrote, run.values, np.nan)
+        floats[:, 14] = np.where(wrote_r, floats[:, 14], np.nan)
         reason = [s.frame_reason()] * m
         if not reason[0]:
             missing = np.flatnonzero(cycle & (np.isnan(r_mm) | np.isnan(cycle_z))).tolist()
@@ -722,7 +833,8 @@ class _Reader:
                     reason[k] = f"{axes} not known here (no absolute value since the start)"
         names = _MOTION_NAMES[motion].tolist()
         retracts = _RETRACT_NAMES[np.where(cycle, retract, 0)].tolist()
-        self.moves.extend(ints, floats, cycle, s.rotary, names, retracts, reason)
+        g99 = cycle & (retract == 99)
+        self.moves.extend(cycle, g99, s.rotary, names, retracts, reason)
         s.motion, s.unknown_motion = str(motion[-1]), ""
         s.retract = f"G{retract[-1]}"
         s.cycle_z, s.cycle_r = float(cycle_z[-1]), float(r_mm[-1])
@@ -869,11 +981,11 @@ def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[G
 def gcode_moves(text: str, path: str | os.PathLike[str] | None = None) -> GcodeMoves:
     """The moves of ``parse_gcode`` as columns.
 
-    Text with ``\\n`` line endings is read a chunk of lines at a time by one whole-text match
-    (``_ROW_RE``): runs of plain lines are taken in bulk (``_Reader.plain_run``), every other line
-    by the line reader (``_Reader.line``). Text without ``\\n`` (one line, or lone ``\\r``
-    endings) is read by the line reader alone. Both give what the line reader gives for every
-    line (tests/test_gcode_bulk.py)."""
+    Text with ``\\n`` line endings is read a chunk of lines at a time, each distinct shape of line
+    matched once (``_shapes``, ``_Shapes``): runs of plain lines are taken in bulk
+    (``_Reader.plain_run``), every other line by the line reader (``_Reader.line``). Text
+    without ``\\n`` (one line, or lone ``\\r`` endings) is read by the line reader alone. Both
+    give what the line reader gives for every line (tests/test_gcode_bulk.py)."""
     path = None if path is None else os.fspath(path)
     check_text(text, path)
     reader = _Reader(path, text)
@@ -897,59 +1009,58 @@ def _chunk(text: str, start: int, stop: int, lineno: int, reader: _Reader) -> in
     """Read the whole lines of ``text[start:stop]`` (line ``lineno`` first); the next line's
     number."""
     chunk = text[start:stop]
-    matches = _ROW_RE.findall(chunk)
-    count = chunk.count("\n") + (0 if chunk.endswith("\n") and stop < len(text) else 1)
-    del matches[count:]
-    codes = {g: _plain_codes(g) for g in set(matches)}  # each distinct head once
-    packed = np.fromiter(map(codes.__getitem__, matches), np.int64, count)
-    retract, motion = packed // 1000, packed % 1000 - 2
-    del matches
-    buf = np.frombuffer(chunk.encode("latin-1", "replace"), np.uint8)
+    try:
+        data = chunk.encode("latin-1")
+    except UnicodeEncodeError:  # a str not read from a file
+        data = None
+    text_part = data if data is not None else chunk.encode("latin-1", "replace")
+    buf = np.frombuffer(text_part, np.uint8)
     newlines = np.flatnonzero(buf == 10)
+    count = len(newlines) + (0 if chunk.endswith("\n") and stop < len(text) else 1)
+    shape = reader.shapes.ids(_shapes(chunk, data, count))
+    packed = reader.shapes.codes[shape]
+    retract, motion = packed // 1000, packed % 1000 - 2
     begins = np.concatenate(([0], newlines + 1))[:count]
     ends = np.append(newlines, len(chunk))[:count]
     plain = motion > -2
     at = np.flatnonzero(plain)
     if len(at):
-        stops = np.append(np.flatnonzero(_NOT_IN_NUMBER[buf]), len(buf))
-        opens = np.append(np.flatnonzero(buf == ord("(")), len(buf))
-        words_end = np.minimum(opens[np.searchsorted(opens, begins[at])], ends[at])
-        spans = np.full((len(at), 4, 2), -1)
-        for k, letter in enumerate(b"XYZR"):
-            found = np.append(np.flatnonzero(buf == letter), len(buf))
-            where = found[np.searchsorted(found, begins[at])] + 1  # the number after the letter
-            has = where <= words_end
-            spans[has, k, 0] = where[has]
-            spans[has, k, 1] = stops[np.searchsorted(stops, where[has])]
+        spans = reader.shapes.spans[shape[at]]  # in the line: in the chunk
+        spans = np.where(spans >= 0, spans + begins[at, None, None], -1)
         values = np.full((len(at), 4), np.nan)
         written = spans[:, :, 0] >= 0
-        values[written] = literal_values(buf, spans[:, :, 0][written], spans[:, :, 1][written])
+        decimals = np.full((len(at), 4), -1)
+        values[written], decimals[written] = literal_values(
+            buf, spans[:, :, 0][written], spans[:, :, 1][written]
+        )
         finite = ~np.isinf(values).any(axis=1)
-        spans[written] += start
+        if finite.any():  # each of these lines is a move (or an error): its X, Y, Z decimals
+            reader.moves.places = max(reader.moves.places, int(decimals[finite, :3].max()))
+        spans = np.where(spans >= 0, spans + start, -1)  # offsets in the text
         retract, motion = retract[at], motion[at]
         plain[at[~finite]] = False  # a literal beyond the float range: the line reader says where
-    begins, ends = (begins + start).tolist(), (ends + start).tolist()
+    begins, ends = begins + start, ends + start
+
+    def read_lines(lo: int, hi: int) -> None:
+        """Lines lo..hi-1 of the chunk by the line reader."""
+        for k, a, b in zip(
+            range(lo, hi), begins[lo:hi].tolist(), ends[lo:hi].tolist(), strict=True
+        ):
+            reader.line(text[a:b], lineno + k, a)
+
     runs = np.flatnonzero(np.diff(plain, prepend=False, append=False)).reshape(-1, 2)
     done = 0
     for lo, hi in runs.tolist():
-        for k in range(done, lo):
-            reader.line(text[begins[k] : ends[k]], lineno + k, begins[k])
+        read_lines(done, lo)
         a, b = np.searchsorted(at, (lo, hi))
         run = _PlainRun(
-            lineno + lo,
-            np.array(begins[lo:hi]),
-            spans[a:b],
-            values[a:b],
-            retract[a:b],
-            motion[a:b],
+            lineno + lo, begins[lo:hi], spans[a:b], values[a:b], retract[a:b], motion[a:b]
         )
         k = lo
         while k < hi:
             fast, slow = reader.plain_run(run.part(k - lo))
-            for j in range(k + fast, k + fast + slow):
-                reader.line(text[begins[j] : ends[j]], lineno + j, begins[j])
+            read_lines(k + fast, k + fast + slow)
             k += fast + slow
         done = hi
-    for k in range(done, count):
-        reader.line(text[begins[k] : ends[k]], lineno + k, begins[k])
+    read_lines(done, count)
     return lineno + count

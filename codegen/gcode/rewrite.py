@@ -15,11 +15,11 @@ from array import array
 
 import numpy as np
 
-from accugrid.codegen.gcode.parse import GcodeMoves, gcode_moves, modal_fill
+from accugrid.codegen.gcode.parse import RESETS, GcodeMoves, gcode_moves, modal_fill
 from accugrid.codegen.program_text import (
     MIN_PLACES_INCH,
     MIN_PLACES_MM,
-    Splicer,
+    distinct_ints,
     formatted,
     number_text,
     precision,
@@ -33,6 +33,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
     strict_check,
 )
+from accugrid.codegen.splice import ByteSplicer, texts_of
 from accugrid.codegen.textsafe import fixed_bytes
 
 __all__ = ["rewrite_gcode"]
@@ -52,7 +53,10 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
         moves.target.copy(),
     )
     _protect_arc_starts(moves, rows)
-    at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))  # no reason
+    if any(rows.reason):  # the moves with no reason
+        at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))
+    else:
+        at = np.arange(len(moves))
     desired = moves.target.copy()
     if len(at):
         prog = desired[at]
@@ -136,7 +140,7 @@ def _gcode_edits(
     corrected R planes (NaN: keep). Stretches of absolute moves (none a G28/G30/G53) are done
     in bulk (``_bulk_block``), the rest move by move (``_walk_block``), where increments (which
     depend on what was written before) are formatted on the way."""
-    out = Splicer(text)
+    out = ByteSplicer(text)
     places = _places(moves, opts)
     corrected = rows.status == CORRECTED
     walk = _Commanded()
@@ -149,14 +153,14 @@ def _gcode_edits(
         off = np.abs(reached - desired[at])
         residual = np.linalg.norm(off, axis=1)
         wrote = moves.word_start[at, :3] >= 0
-        rounding = np.where(wrote, off, 0.0).max(axis=1)
+        off_written = np.where(wrote, off, 0.0)
+        rounding = np.maximum(np.maximum(off_written[:, 0], off_written[:, 1]), off_written[:, 2])
         rows.new[at] = reached
         rows.residual_mm[at] = residual
         rows.rounding_mm[at] = rounding
     return out.finish()
 
 
-_RESETS = frozenset(("G28", "G30", "G53"))  # moves after which the position is not known
 _MIN_BULK = 256  # moves: a shorter stretch of absolute moves is walked with its neighbours
 
 
@@ -164,10 +168,8 @@ def _stretches(moves: GcodeMoves, block: slice):
     """(slice, step) of each stretch of the moves ``block``, in order: ``_bulk_block`` for runs
     of at least ``_MIN_BULK`` absolute moves that do not reset the position, ``_walk_block`` for
     the moves between them."""
-    n = len(moves.motion[block])
-    walked = moves.incremental[block] | np.fromiter(
-        map(_RESETS.__contains__, moves.motion[block]), bool, n
-    )
+    walked = moves.incremental[block] | moves.resets[block]
+    n = len(walked)
     runs = np.flatnonzero(np.diff(walked, prepend=True, append=True)).reshape(-1, 2)
     done = 0
     for lo, hi in runs[runs[:, 1] - runs[:, 0] >= min(_MIN_BULK, n)].tolist():
@@ -180,8 +182,9 @@ def _stretches(moves: GcodeMoves, block: slice):
 
 
 def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
-    """The edits (starts, ends, new texts; sorted lists) of the moves ``block`` (a slice), move
-    by move, carrying ``walk`` (a ``_Commanded``) on."""
+    """The edits of the moves ``block`` (a slice), move by move, carrying ``walk`` (a
+    ``_Commanded``) on: as ``ByteSplicer.add`` takes them (starts, ends sorted, the new texts'
+    bytes one after another, their lengths)."""
     first = block.start
     scales = moves.scale.reshape(-1, 1)
     absolute = formatted(
@@ -218,7 +221,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         r_mm,
         retract,
     ) in enumerate(columns):
-        if motion in _RESETS:
+        if motion in RESETS:
             cmd = [math.nan] * 3
             continue
         incremental = inc and not is_cycle
@@ -268,7 +271,11 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         cmd = end
     walk.cmd, walk.cycle_z, walk.r_cmd = cmd, cycle_z, r_cmd
     edits.sort()
-    return tuple(map(list, zip(*edits, strict=True))) if edits else ([], [], [])
+    starts = np.array([e[0] for e in edits], np.int64)
+    ends = np.array([e[1] for e in edits], np.int64)
+    texts = [e[2] for e in edits]
+    lengths = np.fromiter(map(len, texts), np.int64, len(texts))
+    return starts, ends, np.frombuffer("".join(texts).encode("ascii"), np.uint8), lengths
 
 
 def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
@@ -288,16 +295,17 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     goal[:, 3] = np.where(wrote_r, r_planes[block] / scale, np.nan)
     goal = goal.ravel()
     new = np.full(4 * n, np.nan)  # the value each new text reads as
-    texts = np.empty(4 * n, dtype=object)
     place = np.repeat(places[block], 4)
-    for p in np.unique(place).tolist():
+    # the texts fixed gives and the values they read as, from the formatter's array form: the
+    # texts' bytes of each count of places, and each number's group and row in them
+    cells_of, group, row = [], np.full(4 * n, -1, np.int64), np.empty(4 * n, np.int64)
+    for p in distinct_ints(place):
         idx = np.flatnonzero(np.isfinite(goal) & (place == p))
         if not len(idx):
             continue
-        # the texts fixed gives and the values they read as, from the formatter's array form
         cells, new[idx] = fixed_bytes(goal[idx], p)
-        lines = np.concatenate([cells, np.full((len(idx), 1), 10, np.uint8)], axis=1).ravel()
-        texts[idx] = lines[lines != 0].tobytes().decode("ascii").split("\n")[:-1]
+        group[idx], row[idx] = len(cells_of), np.arange(len(idx))
+        cells_of.append(cells)
     edit = np.isfinite(new) & (new != values.ravel())
     written = np.where(edit, new, values.ravel()).reshape(n, 4) * scale[:, None]  # NaN: none
     r_cmd = modal_fill(written[:, 3], wrote_r, walk.r_cmd)
@@ -308,7 +316,7 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     # Z: a straight move's as written; a cycle's retract: nothing known without an R plane,
     # R under G99, the higher of the previous end and R under G98
     r_mm = moves.r_mm[block]
-    g99 = np.fromiter(map("G99".__eq__, moves.retract[block]), bool, n)
+    g99 = moves.g99[block]
     end[:, 2] = np.where(cycle, np.where(np.isnan(r_mm), np.nan, r_cmd), written[:, 2])
     carried = np.flatnonzero((cycle & ~g99 & ~np.isnan(r_mm)) | ~(cycle | wrote[:, 2])).tolist()
     if carried:  # those that depend on the previous end: one by one
@@ -319,9 +327,10 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         end[:, 2] = z
     changed = np.flatnonzero(corrected[block])
     if len(changed):  # a cycle reaches its hole bottom, a straight move its end
-        hole = np.column_stack([end[changed, :2], cycle_z[changed]])
-        reached = np.where(cycle[changed, None], hole, end[changed])
-        walk.reached_rows.frombytes(np.ascontiguousarray(reached).tobytes())
+        reached = end[changed]
+        holes = np.flatnonzero(cycle[changed])
+        reached[holes, 2] = cycle_z[changed[holes]]
+        walk.reached_rows.frombytes(reached.tobytes())
         walk.reached_at.frombytes((block.start + changed).astype(np.int64).tobytes())
     walk.cmd = end[-1].tolist()
     walk.cycle_z, walk.r_cmd = float(cycle_z[-1]), float(r_cmd[-1])
@@ -329,7 +338,16 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     starts = moves.word_start[block].ravel()[at]
     order = np.argsort(starts, kind="stable")
     at = at[order]
-    return starts[order].tolist(), moves.word_end[block].ravel()[at].tolist(), texts[at].tolist()
+    # the new texts in the edits' order, as rows of their cells (NUL-padded on the left)
+    if len(cells_of) == 1:
+        rows = cells_of[0][row[at]]
+    else:
+        rows = np.zeros((len(at), max((c.shape[1] for c in cells_of), default=1)), np.uint8)
+        for g, cells in enumerate(cells_of):
+            mine = np.flatnonzero(group[at] == g)
+            rows[mine, rows.shape[1] - cells.shape[1] :] = cells[row[at[mine]]]
+    ends = moves.word_end[block].ravel()[at]
+    return starts[order], ends, *texts_of(rows)
 
 
 def _places(moves: GcodeMoves, opts: Options) -> np.ndarray:
@@ -342,19 +360,5 @@ def _places(moves: GcodeMoves, opts: Options) -> np.ndarray:
 
 
 def _file_precision(moves: GcodeMoves) -> int:
-    """``precision`` of the X, Y, Z literals written, from their spans (a block of moves at a
-    time): a G-code literal has no exponent, so its decimals are the digits after its point (if
-    it has one)."""
-    found = []
-    for first in range(0, len(moves), _BLOCK):
-        starts = moves.word_start[first : first + _BLOCK, :3]
-        written = starts >= 0
-        if not written.any():
-            continue
-        starts, ends = starts[written], moves.word_end[first : first + _BLOCK, :3][written]
-        lo, hi = int(starts.min()), int(ends.max())
-        text = np.frombuffer(moves.text[lo:hi].encode("latin-1", "replace"), np.uint8)
-        points = np.append(np.flatnonzero(text == ord(".")) + lo, hi)  # hi: no point after
-        point = points[np.searchsorted(points, starts)]
-        found.append(int(np.where(point < ends, ends - point - 1, 0).max()))
-    return max(found) if found else precision(())
+    """``precision`` of the X, Y, Z literals written (the reader kept their most decimals)."""
+    return moves.places if moves.places >= 0 else precision(())

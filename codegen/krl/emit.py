@@ -5,12 +5,13 @@ Templates ``program.src.j2`` and ``program.dat.j2`` (``templates/krl/``), render
 ends as the controller's own files have. Position names are ``XH<n>_APP|CLR|BOT|RET`` (n = hole
 number in the file, so always valid and unique, at most 24 characters); the hole id goes into a
 comment. Numbers go through ``fixed`` only: per-hole numbers are formatted once in Python (mm and
-deg with ``program.decimals``, $VEL.CP in m/s with 4 decimals, S and T as integers; positions by
-the %-template itself from ``fixed_ready`` values, the same text) and reach the template as text;
-the template formats its scalar settings with the ``fixed`` filter. Jinja renders
-the frame of each file; the per-hole lines come finished from one %-template per hole or position
-(``hole_lines``, ``position_lines``), while the records ``holes`` and ``positions`` stay available
-to a user template that loops over them (each is built only if the template refers to it).
+deg with ``program.decimals``, $VEL.CP in m/s with 4 decimals, S and T as integers;
+``textsafe.fixed_bytes`` for the lines, ``fixed_texts`` for the records) and reach the template as
+text; the template formats its scalar settings with the ``fixed`` filter. Jinja renders the frame
+of each file; the per-hole lines (``hole_lines``, ``position_lines``) come finished, built as
+bytes by numpy from one template per hole (``codegen.linebytes``), while the records ``holes``
+and ``positions`` stay available to a user template that loops over them (each is built only if
+the template refers to it).
 
 Splitting: when a job would make a ``.src`` or ``.dat`` longer than ``program.lines_per_file``,
 the holes go into numbered modules ``NAME_001``, ``NAME_002``, ... (each its own ``.src``/``.dat``
@@ -38,18 +39,11 @@ from typing import NamedTuple
 import numpy as np
 
 from accugrid.codegen.cell import Cell
+from accugrid.codegen.linebytes import SLOT, image_bytes, line_image, number_cells, text_cells
 from accugrid.codegen.points import Points
 from accugrid.codegen.program import STAGES, Program
 from accugrid.codegen.render import environment, render, template_dir, template_uses
-from accugrid.codegen.textsafe import (
-    KRL_NAME_MAX,
-    comment_texts,
-    fixed,
-    fixed_format,
-    fixed_many,
-    fixed_ready,
-    fixed_texts,
-)
+from accugrid.codegen.textsafe import KRL_NAME_MAX, comment_texts, fixed, fixed_texts
 from accugrid.compensation.csvtable import Table
 from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
@@ -398,9 +392,9 @@ class _Records:
     decimals, $VEL.CP m/s with 4, S and T as integers). Per hole, either records (``holes``,
     ``positions``: for templates that loop over them) or the finished CRLF lines (``hole_lines``,
     ``position_lines``: what the built-in templates print), whichever the template uses, made
-    file by file (a million-hole job never holds them all) from the numbers of a block of
-    ``BLOCK`` holes made at once (``_numbers``); angles, S, T and feeds, which repeat, are
-    formatted once per distinct value of a block."""
+    file by file (a million-hole job never holds them all) from a block of ``BLOCK`` holes made
+    at once (``_block_of``): the lines as one line image per kind for the block
+    (``codegen.linebytes``, numbers by ``textsafe.fixed_bytes``), cut into the files' rows."""
 
     def __init__(self, program: Program) -> None:
         self.program = program
@@ -415,17 +409,15 @@ class _Records:
             np.int16
         )
         self._block: tuple = (0, 0, None)
-        ext = _literal(
-            "".join(
-                f",E{k + 1} {fixed(v, cell.krl.decimals)}"
-                for k, v in enumerate(cell.krl.external_axes)
-            )
+        ext = "".join(
+            f",E{k + 1} {fixed(v, cell.krl.decimals)}" for k, v in enumerate(cell.krl.external_axes)
         )
-        mm = fixed_format(self.decimals)
-        self.position_block = "".join(
-            f"DECL E6POS XH%d_{s}={{X {mm},Y {mm},Z {mm},%s{ext}}}\r\n" for s in self.names
+        self.position_template = "".join(
+            f"DECL E6POS XH{SLOT}_{s}={{X {SLOT},Y {SLOT},Z {SLOT},A {SLOT},B {SLOT},C {SLOT},"
+            f"S {SLOT},T {SLOT}{ext}}}\r\n"
+            for s in self.names
         )
-        self.hole_block = _hole_block(cell, self.names)
+        self.hole_template = _hole_template(cell, self.names)
         self._named: tuple = (None, None, [])
 
     def context(self, lo: int, hi: int, uses: frozenset[str] | None) -> dict[str, object]:
@@ -435,81 +427,88 @@ class _Records:
             wanted &= uses
         out: dict[str, object] = {}
         n, k = hi - lo, len(self.stages)
-        numbers = self._numbers(lo, hi)
-        number = np.arange(lo + 1, hi + 1, dtype=object)
         if "positions" in wanted:
+            numbers = self._numbers(lo, hi)
             table = np.empty((n, k, 9), dtype=object)
             for j, column in enumerate(self._names(lo, hi)):
                 table[:, j, 0] = column
             table[:, :, 1:4] = fixed_texts(numbers.pos, self.decimals)
-            table[:, :, 4:7] = numbers.abc[:, None, :]
+            table[:, :, 4:7] = fixed_texts(numbers.abc, self.decimals, distinct=True)[:, None, :]
             table[:, :, 7:9] = fixed_texts(numbers.status_turn, 0, distinct=True)
             out["positions"] = list(map(KrlPosition._make, table.reshape(n * k, 9).tolist()))
         if "position_lines" in wanted:
-            table = np.empty((n, k, 5), dtype=object)
-            table[:, :, 0] = number[:, None]
-            table[:, :, 1:4] = numbers.ready
-            table[:, :, 4] = numbers.orientation
-            out["position_lines"] = (self.position_block * n) % tuple(table.ravel().tolist())
+            out["position_lines"] = self._lines("position_lines", lo, hi)
         if "holes" in wanted:
+            numbers = self._numbers(lo, hi)
             names = self._names(lo, hi)
             retract = names[3] if k == 4 else names[0]
-            labels = numbers.labels.tolist()
-            out["holes"] = list(map(KrlHole, labels, *names[:3], retract, numbers.feed.tolist()))
+            feed = fixed_texts(numbers.feed_m_s, 4, distinct=True).tolist()
+            out["holes"] = list(map(KrlHole, numbers.labels, *names[:3], retract, feed))
         if "hole_lines" in wanted:
-            table = np.empty((n, 6), dtype=object)  # in the order the lines print them
-            table[:, 0] = numbers.comments
-            table[:, [1, 2, 4, 5]] = number[:, None]
-            table[:, 3] = numbers.feed
-            out["hole_lines"] = (self.hole_block * n) % tuple(table.ravel().tolist())
+            out["hole_lines"] = self._lines("hole_lines", lo, hi)
         return out
 
-    def _numbers(self, lo: int, hi: int) -> SimpleNamespace:
-        """The numbers of holes lo..hi-1, sliced from those of the block that holds them (made
-        when a file first asks past the last block): positions ``pos`` (n, stages, 3) mm in the
-        BASE frame and the same ``fixed_ready``; as ``fixed`` text A,B,C ``abc`` (n, 3) and the
-        $VEL.CP ``feed`` of the feed in m/s (n,); S and T ``status_turn`` (n, stages, 2);
-        ``orientation`` (n, stages), the text ``A a,B b,C c,S s,T t`` of each position; the
-        hole ``labels`` (n,) and the same as safe comment text, ``comments``."""
+    def _block_of(self, lo: int, hi: int) -> tuple[int, SimpleNamespace]:
+        """The first hole and the numbers of the block that holds holes lo..hi-1 (made when a
+        file first asks past the last block): positions ``pos`` (n, stages, 3) mm in the BASE
+        frame, A,B,C ``abc`` (n, 3) deg, S and T ``status_turn`` (n, stages, 2), the feed
+        ``feed_m_s`` (n,) m/s, the hole ``labels`` (n,) and the line ``images`` made so far."""
         start, end, block = self._block
         if block is None or not start <= lo <= hi <= end:
             start, end = lo, max(hi, min(lo + BLOCK, len(self.program)))
-            block = self._make_block(start, end)
+            program = self.program
+            pos, abc = program.in_frame(program.cell.robot_T_base, start, end)
+            block = SimpleNamespace(
+                pos=pos[:, self.stages],
+                abc=abc,
+                status_turn=self.status_turn[start:end],
+                feed_m_s=program.feed_mm_s[start:end] / 1000.0,
+                labels=program.labels(start, end),
+                images={},
+            )
             self._block = (start, end, block)
-        part = slice(lo - start, hi - start)
-        return SimpleNamespace(**{key: value[part] for key, value in vars(block).items()})
+        return start, block
 
-    def _make_block(self, lo: int, hi: int) -> SimpleNamespace:
-        program = self.program
-        pos, abc = program.in_frame(program.cell.robot_T_base, lo, hi)
-        pos = pos[:, self.stages]
-        status_turn = self.status_turn[lo:hi]
-        values, ranks = np.unique(abc, return_inverse=True)  # the distinct A, B, C values
-        ranks = ranks.reshape(abc.shape)
-        abc_text = np.array(fixed_many(values, self.decimals), dtype=object)[ranks]
-        # one text per distinct (A, B, C, S, T) of the block's positions, from integer keys
-        ab = _dense(ranks[:, 0] * len(values) + ranks[:, 1])
-        hole_rank = _dense(ab * len(values) + ranks[:, 2])  # 0..n-1
-        words = status_turn.astype(np.int64) + 32768  # int16: 0..65535
-        key = (hole_rank[:, None] << 32) + (words[:, :, 0] << 16) + words[:, :, 1]
-        _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
-        hole, stage = np.divmod(first, len(self.stages))
-        table = np.empty((len(first), 5), dtype=object)
-        table[:, :3] = abc_text[hole]
-        table[:, 3:] = fixed_texts(status_turn[hole, stage], 0, distinct=True)
-        texts = ("A %s,B %s,C %s,S %s,T %s\n" * len(first)) % tuple(table.ravel().tolist())
-        orientation = np.array(texts.split("\n")[:-1], dtype=object)[inverse.reshape(key.shape)]
-        labels = program.labels(lo, hi)
+    def _numbers(self, lo: int, hi: int) -> SimpleNamespace:
+        """The numbers of holes lo..hi-1 (see ``_block_of``)."""
+        start, block = self._block_of(lo, hi)
+        part = slice(lo - start, hi - start)
         return SimpleNamespace(
-            labels=np.array(labels, dtype=object),
-            comments=np.array(comment_texts(labels), dtype=object),
-            pos=pos,
-            ready=fixed_ready(pos, self.decimals),
-            abc=abc_text,
-            status_turn=status_turn,
-            feed=fixed_texts(program.feed_mm_s[lo:hi] / 1000.0, 4, distinct=True),
-            orientation=orientation,
+            **{key: value[part] for key, value in vars(block).items() if key != "images"}
         )
+
+    def _lines(self, kind: str, lo: int, hi: int) -> str:
+        """The ``hole_lines`` or ``position_lines`` of holes lo..hi-1: rows of the block's line
+        image of that kind, made once per block."""
+        start, block = self._block_of(lo, hi)
+        if kind not in block.images:
+            make = self._hole_image if kind == "hole_lines" else self._position_image
+            block.images[kind] = make(start, block)
+        return image_bytes(block.images[kind][lo - start : hi - start]).decode("ascii")
+
+    def _position_image(self, start: int, block: SimpleNamespace) -> np.ndarray:
+        """The line image of the .dat lines of the block of holes from ``start``: per hole, one
+        DECL E6POS line per stage."""
+        n, k = len(block.pos), len(self.stages)
+        mm = number_cells(
+            np.concatenate([block.pos.reshape(n, 3 * k), block.abc], axis=1), self.decimals
+        )
+        number = number_cells(np.arange(start + 1, start + n + 1), 0)
+        st = _ST_CELLS[block.status_turn]  # (n, k, 2, w): Status 0..7 and Turn 0..63 from a table
+        cells = []
+        for j in range(k):
+            cells += [number, *(mm[:, 3 * j + c] for c in range(3))]
+            cells += [*(mm[:, 3 * k + c] for c in range(3)), st[:, j, 0], st[:, j, 1]]
+        return line_image(self.position_template, cells)
+
+    def _hole_image(self, start: int, block: SimpleNamespace) -> np.ndarray:
+        """The line image of the .src lines of the block of holes from ``start``: per hole, the
+        lines of ``_hole_template``."""
+        n = len(block.pos)
+        number = number_cells(np.arange(start + 1, start + n + 1), 0)
+        comments = text_cells(comment_texts(block.labels))
+        feed = number_cells(block.feed_m_s, 4)
+        return line_image(self.hole_template, [comments, number, number, feed, number, number])
 
     def _names(self, lo: int, hi: int) -> list[list[str]]:
         """Position names of holes lo..hi-1, one list per stage (made once for the .src and the
@@ -520,38 +519,37 @@ class _Records:
         return self._named[2]
 
 
-def _dense(keys: np.ndarray) -> np.ndarray:
-    """The rank of every integer key among the distinct keys (same shape): 0, 1, ..."""
-    return np.unique(keys, return_inverse=True)[1].reshape(keys.shape)
+_ST_CELLS = number_cells(np.arange(64), 0)  # the text of every KUKA Status (0..7) and Turn (0..63)
 
 
-def _hole_block(cell, stages: list[str]) -> str:
-    """The .src lines of one hole as a %-template over (comment label, hole number, hole number,
-    feed, hole number, hole number), with the cell's settings filled in; CRLF line ends."""
+def _hole_template(cell, stages: list[str]) -> str:
+    """The .src lines of one hole as a template of ``linebytes.line_image`` over (comment label,
+    hole number, hole number, feed, hole number, hole number), with the cell's settings filled
+    in; CRLF line ends."""
     approach = f"$VEL.CP = {fixed(cell.drilling.approach_mm_s / 1000.0, 4)}"
     if cell.krl.travel_motion == "ptp":
-        travel = ["PTP XH%d_APP C_PTP"]
+        travel = [f"PTP XH{SLOT}_APP C_PTP"]
     else:
         travel = [
-            _literal(f"$VEL.CP = {fixed(cell.drilling.travel_mm_s / 1000.0, 4)}"),
-            "LIN XH%d_APP C_DIS",
+            f"$VEL.CP = {fixed(cell.drilling.travel_mm_s / 1000.0, 4)}",
+            f"LIN XH{SLOT}_APP C_DIS",
         ]
     clamp = unclamp = []
     if cell.krl.clamp_output is not None:
-        clamp = [_literal(f"$OUT_C[{fixed(cell.krl.clamp_output, 0)}] = TRUE ; clamp")]
-        unclamp = [_literal(f"$OUT[{fixed(cell.krl.clamp_output, 0)}] = FALSE ; unclamp")]
+        clamp = [f"$OUT_C[{fixed(cell.krl.clamp_output, 0)}] = TRUE ; clamp"]
+        unclamp = [f"$OUT[{fixed(cell.krl.clamp_output, 0)}] = FALSE ; unclamp"]
     lines = [
-        "; hole %s",
+        f"; hole {SLOT}",
         *travel,
-        _literal(approach),
-        "LIN XH%d_CLR",
+        approach,
+        f"LIN XH{SLOT}_CLR",
         *clamp,
-        "$VEL.CP = %s",
-        "LIN XH%d_BOT",
-        _literal(f"WAIT SEC {fixed(cell.drilling.dwell_s, 3)}"),
+        f"$VEL.CP = {SLOT}",
+        f"LIN XH{SLOT}_BOT",
+        f"WAIT SEC {fixed(cell.drilling.dwell_s, 3)}",
         *unclamp,
-        _literal(approach),
-        f"LIN XH%d_{stages[3] if len(stages) == 4 else stages[0]} C_DIS",
+        approach,
+        f"LIN XH{SLOT}_{stages[3] if len(stages) == 4 else stages[0]} C_DIS",
     ]
     return "\r\n".join(lines) + "\r\n"
 

@@ -58,7 +58,7 @@ from accugrid.codegen.krl.tables import (
     position_columns,
     use_columns,
 )
-from accugrid.codegen.program_text import check_text, decimals_of, split_lines
+from accugrid.codegen.program_text import check_text, decimals_of, distinct_ints, split_lines
 from accugrid.kinematics.errors import InputError
 
 __all__ = [
@@ -658,7 +658,7 @@ class _Rows:
                 if op[0] == "swap":
                     part[part == self.base_id(op[2])] = self.base_id(op[3])
                     continue
-                for old in np.unique(part[part >= 0]).tolist():
+                for old in distinct_ints(part[part >= 0]):
                     ref = scan.bases[old]
                     if ref.label:
                         changed = BaseRef(

@@ -12,6 +12,7 @@ $ROBROOT).
 
 from __future__ import annotations
 
+from functools import cached_property
 from itertools import chain, repeat
 from pathlib import Path
 
@@ -27,9 +28,8 @@ from accugrid.codegen.krl.parse import (
     scan_krl,
     wildcard,
 )
-from accugrid.codegen.krl.splice import ByteSplicer, literals
 from accugrid.codegen.krl.tables import MOTION, PositionTable
-from accugrid.codegen.program_text import MIN_PLACES_MM, precision
+from accugrid.codegen.program_text import MIN_PLACES_MM, distinct_ints, precision
 from accugrid.codegen.rewrite import (
     CORRECTED,
     Options,
@@ -39,6 +39,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
     strict_check,
 )
+from accugrid.codegen.splice import ByteSplicer, literals
 from accugrid.kinematics.frames import pose_from_xyzabc
 
 __all__ = ["rewrite_krl"]
@@ -112,7 +113,7 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
     frame = np.full(n, -1, np.int64)
     open_ = np.fromiter(map(bool, reasons), bool, n) == 0 if any(reasons) else np.ones(n, bool)
     motion = open_ & (t.kind == MOTION)
-    for b in np.unique(t.base[motion]).tolist():
+    for b in distinct_ints(t.base[motion]):
         at = np.flatnonzero(motion & (t.base == b))
         _, f, reason = ctx.resolve(scan.bases[b])
         if reason:
@@ -140,7 +141,10 @@ def _use_rows(ctx: _Context, scan: KrlScan) -> Rows:
     """Report rows of the motions to a name that correct nothing (with the reason)."""
     u = scan.use_table
     n = len(u)
-    check = ~np.fromiter(map(ctx.named.__contains__, u.name), bool, n)
+    if ctx.aligned is not None:  # every motion uses a stored position's name
+        check = np.zeros(n, bool)
+    else:
+        check = ~np.fromiter(map(ctx.named.__contains__, u.name), bool, n)
     if any(u.reason):
         check |= np.fromiter(map(bool, u.reason), bool, n)
     lines, names, reasons = [], [], []
@@ -192,6 +196,7 @@ class _Context:
         self.plain: list[np.ndarray] = []
         self.named: set[str] = set()
         self.twice: set[str] = set()
+        distinct = []  # per file: no key twice in it, none empty
         for scan in scans:
             t = scan.table
             n = len(t)
@@ -206,8 +211,12 @@ class _Context:
             self.plain.append(plain)
             found = set(keys)
             found.discard("")
-            self.twice.update(self.named.intersection(found))
-            self.named.update(found)
+            if self.named:
+                self.twice.update(self.named.intersection(found))
+                self.named.update(found)
+            else:
+                self.named = found
+            distinct.append(len(found) == n)
             if len(found) < n - keys.count(""):
                 seen: set[str] = set()
                 for k in keys:
@@ -215,11 +224,6 @@ class _Context:
                         self.twice.add(k)
                     seen.add(k)
                 self.twice.discard("")
-        self.wild_named = (
-            {wildcard(key) for key in self.named if "[" in key}
-            if "[" in "".join(self.named)
-            else set()
-        )
         self.config_named = {}
         if config is not None:
             for p in config.positions:
@@ -233,10 +237,14 @@ class _Context:
         reasons = list(chain.from_iterable(scan.use_table.reason for scan in scans))
         if any(reasons) or "" in names:  # not a stored position's name
             names = [n if not r else "" for n, r in zip(names, reasons, strict=True)]
-        self.use_of = dict(zip(reversed(names), range(len(names) - 1, -1, -1), strict=True))
-        self.use_of.pop("", None)
+        self.use_names = names
+        # the file whose stored positions are the names the motions use, in their order, each
+        # once (a controller's .dat and its .src): the k-th motion uses its k-th row
+        self.aligned = next(
+            (k for k, keys in enumerate(self.keys) if distinct[k] and keys == names), None
+        )
         self.used_twice: set[str] = set()
-        if len(self.use_of) < len(names) - names.count(""):
+        if self.aligned is None and len(self.use_of) < len(names) - names.count(""):
             self.used_twice = {n for i, n in enumerate(names) if n and self.use_of[n] != i}
         self._uses: dict[str, list[tuple[int, int]]] | None = None
         self.lone_dat = all(Path(s.path or "").suffix.lower() == ".dat" for s in scans)
@@ -244,6 +252,21 @@ class _Context:
         self.frames: list[np.ndarray] = []
         self._frame_ids: dict[int, int] = {}
         self._blocked = set(self.frame_uses) | set(self.assigned)
+
+    @cached_property
+    def wild_named(self) -> set[str]:
+        """The stored positions' array element names with their indices as wildcards."""
+        if "[" not in "".join(self.named):
+            return set()
+        return {wildcard(key) for key in self.named if "[" in key}
+
+    @cached_property
+    def use_of(self) -> dict[str, int]:
+        """The first motion (index among the motions of all files) to each name."""
+        names = self.use_names
+        use_of = dict(zip(reversed(names), range(len(names) - 1, -1, -1), strict=True))
+        use_of.pop("", None)
+        return use_of
 
     def frame_id(self, frame: np.ndarray) -> int:
         """Index of ``frame`` (one of the resolved frames) in ``frames``."""
@@ -318,7 +341,10 @@ class _Context:
             plain &= ~np.fromiter(map(blocked.__contains__, keys), bool, n)
         if self.fdats:  # XP1 with an FDAT FP1 has a base of its own
             plain &= ~np.array([k[:1] == "X" and "F" + k[1:] in self.fdats for k in keys], bool)
-        at = np.fromiter(map(self.use_of.get, keys, repeat(-1)), np.int64, n)
+        if s == self.aligned:  # the k-th motion to its k-th row
+            at = np.asarray(rows, np.int64)
+        else:
+            at = np.fromiter(map(self.use_of.get, keys, repeat(-1)), np.int64, n)
         plain &= at >= 0
         found = np.full(n, -1, np.int64)
         why: dict[int, str] = {}
@@ -471,13 +497,17 @@ def _correct(
     at = np.concatenate([starts[s] + t for s, t in enumerate(todo)])
     n = len(which)
     robot = np.empty((n, 3))
-    rotations = np.empty((n, 3, 3))
     for a in range(0, n, _BLOCK):  # (N, 4, 4) frames a block at a time
         f = stack[which[a : a + _BLOCK]]
         robot[a : a + _BLOCK] = (
             np.einsum("nij,nj->ni", f[:, :3, :3], base_xyz[a : a + _BLOCK]) + f[:, :3, 3]
         )
-        rotations[a : a + _BLOCK] = rotations_of(f[:, :3, :3], abc[a : a + _BLOCK])
+    # the orientation of each run of positions in one frame with the same A, B, C (a whole file,
+    # mostly) computed once, for its first position
+    first = np.ones(n, bool)
+    first[1:] = (which[1:] != which[:-1]) | (abc[1:] != abc[:-1]).any(axis=1)  # NaN: its own
+    heads = np.flatnonzero(first)
+    rotations = rotations_of(stack[which[heads]][:, :3, :3], abc[heads])[np.cumsum(first) - 1]
     corrected = correct_points(robot, rows, at, opts, rotations)
     del rotations
     targets = np.full((n, 3), np.nan)

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
+from accugrid.codegen.program_text import row_counts
 from accugrid.kinematics.decimals import read_decimals, words_at
 
 __all__ = [
@@ -145,7 +146,7 @@ def strings(buf: np.ndarray, at: np.ndarray, length: np.ndarray) -> list[str]:
     width = int(length.max()) + 1
     cut = _windows(buf, at, width)
     column = np.arange(width)
-    cut[column == length[:, None]] = 10  # each string and a LF, one after another
+    cut[np.arange(len(at)), length] = 10  # each string and a LF, one after another
     joined = cut[column <= length[:, None]].tobytes().decode("latin-1")
     return joined.split("\n")[:-1]
 
@@ -158,11 +159,11 @@ def _same(buf: np.ndarray, at: np.ndarray, first: int, size: int) -> np.ndarray:
         words, rest = divmod(width, 8)
         if words:
             rows = _windows(buf, at + a, 8 * words).view(_U64)
-            equal &= (rows == buf[first + a : first + a + 8 * words].view(_U64)).all(axis=1)
+            equal &= row_counts(rows != buf[first + a : first + a + 8 * words].view(_U64)) == 0
         if rest:
             lo = first + a + 8 * words
             rows = _windows(buf, at + a + 8 * words, rest)
-            equal &= (rows == buf[lo : lo + rest]).all(axis=1)
+            equal &= row_counts(rows != buf[lo : lo + rest]) == 0
     return equal
 
 
@@ -222,7 +223,7 @@ def _name_ok(buf: np.ndarray, at: np.ndarray, size: np.ndarray) -> np.ndarray:
         return ok
     width = int(size[ok].max())
     rows = _windows(buf, at, width)
-    return ok & (_WORD[rows] | (np.arange(width) >= size[:, None])).all(axis=1)
+    return ok & (row_counts(~_WORD[rows] & (np.arange(width) < size[:, None])) == 0)
 
 
 def _literals(
