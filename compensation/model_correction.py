@@ -25,11 +25,13 @@ import numpy as np
 
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.settings import CorrectionSettings
+from accugrid.kinematics.blocks import run_blocks
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.robot import Robot
 
 __all__ = [
+    "BLOCK",
     "MAX_ITERATIONS",
     "SETUP_FACTOR",
     "SETUP_FLOOR_MM",
@@ -40,6 +42,7 @@ __all__ = [
     "residual_grid",
 ]
 
+BLOCK = 16384  # targets iterated together, blocks on the threads of kinematics.blocks
 TOL_MM = 1e-3  # default: |P - reach(P')| below 0.001 mm
 MAX_ITERATIONS = 12
 SETUP_FACTOR = 2.0  # a residual grid's mean offset beyond this x the validated max: refused
@@ -54,7 +57,9 @@ class ModelCorrection:
     ok: np.ndarray  # (N,) bool
     reason: np.ndarray  # (N,) object: "" when ok, else why not
     miss_mm: np.ndarray  # (N,) |P + r(P) - reach(P')| at the returned command, mm (NaN if none)
-    iterations: int  # passes over the points (each one nominal IK + calibrated FK)
+    iterations: (
+        int  # passes over the points (each one nominal IK + calibrated FK), most of any block
+    )
 
     @property
     def failed(self) -> np.ndarray:
@@ -119,25 +124,31 @@ def model_correct(
     ok = np.zeros(n, bool)
     miss_mm = np.full(n, np.nan)
     reason = np.full(n, "", dtype=object)
-    active = np.arange(n)
-    passes = 0
-    while active.size and passes < max_iterations:
-        passes += 1
-        reach, reached, why = reached_by_model(
-            calibrated, command[active], rotations[active], status, controller_tool
-        )
-        reason[active[~reached]] = why[~reached]
-        active, reach = active[reached], reach[reached]
-        miss = goals[active] - reach
-        length = np.linalg.norm(miss, axis=1)
-        miss_mm[active] = length
-        done = length < tol_mm
-        ok[active[done]] = True
-        command[active[~done]] += miss[~done]
-        active = active[~done]
-    reason[active] = f"no convergence to {tol_mm:g} mm in {max_iterations} iterations"
+    passes = np.zeros(-(-n // BLOCK), int)
+
+    def block(start: int) -> None:
+        """The iteration for targets start..start+BLOCK-1 (each target's own: blocks are
+        independent), written into their rows."""
+        active = np.arange(start, min(start + BLOCK, n))
+        while active.size and passes[start // BLOCK] < max_iterations:
+            passes[start // BLOCK] += 1
+            reach, reached, why = reached_by_model(
+                calibrated, command[active], rotations[active], status, controller_tool
+            )
+            reason[active[~reached]] = why[~reached]
+            active, reach = active[reached], reach[reached]
+            miss = goals[active] - reach
+            length = np.linalg.norm(miss, axis=1)
+            miss_mm[active] = length
+            done = length < tol_mm
+            ok[active[done]] = True
+            command[active[~done]] += miss[~done]
+            active = active[~done]
+        reason[active] = f"no convergence to {tol_mm:g} mm in {max_iterations} iterations"
+
+    run_blocks(block, range(0, n, BLOCK))
     command[~ok] = points[~ok]
-    return ModelCorrection(command, ok, reason, miss_mm, passes)
+    return ModelCorrection(command, ok, reason, miss_mm, int(passes.max(initial=0)))
 
 
 def residual_grid(

@@ -83,6 +83,25 @@ def test_unreachable_targets_are_reported_by_index():
     )
 
 
+def test_blocks_on_threads_give_the_one_block_result(monkeypatch):
+    # targets iterate in blocks on threads: every target's command, miss and reason as when all
+    # iterate together (some unreachable, some needing more passes than others)
+    import accugrid.compensation.model_correction as module
+
+    rng = np.random.default_rng(5)
+    targets = rng.uniform(LO, HI, (40, 3))
+    targets[[3, 17, 38]] = [5000.0, 0.0, 1500.0]
+    abc = tilted(np.array([0.0, 90.0, 0.0]), rng.uniform(-14.0, 14.0, (40, 3)))
+    whole = model_correct(CALIBRATED, targets, abc, STATUS, tol_mm=1e-7)
+    monkeypatch.setattr(module, "BLOCK", 7)
+    blocks = model_correct(CALIBRATED, targets, abc, STATUS, tol_mm=1e-7)
+    assert whole.failed.tolist() == blocks.failed.tolist() == [3, 17, 38]
+    np.testing.assert_array_equal(blocks.command, whole.command)
+    np.testing.assert_array_equal(blocks.miss_mm, whole.miss_mm)
+    assert blocks.reason.tolist() == whole.reason.tolist()
+    assert blocks.iterations == whole.iterations
+
+
 def _vertices(step: float = 400.0) -> np.ndarray:
     axes = [np.arange(LO[a], HI[a] + 1e-9, step) for a in range(3)]
     return np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
