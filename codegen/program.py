@@ -147,7 +147,7 @@ def build_program(
         raise InputError(
             "the points have no orientation: add columns a,b,c or i,j,k", points.path, 1
         )
-    rotations, robot_rotations = _rotations(points, cell)
+    rotations = _rotations(points, cell)
     axis = rotations[:, :, 2]
     depth = np.where(np.isnan(points.depth), cell.drilling.depth_mm, points.depth)
     feed = np.where(np.isnan(points.feed), cell.drilling.feed_mm_s, points.feed)
@@ -166,18 +166,16 @@ def build_program(
     holes_robot = transform_points(cell.robot_T_base, points.xyz)
     warnings: list[str] = []
     status = cell.configuration.status
-    if model is not None:
+    if model is not None:  # the robot-frame rotations whole only here: freed before the IK
         correction, warnings, status = _model_correction(
-            points, cell, model, grid, holes_robot, robot_rotations
+            points, cell, model, grid, holes_robot, base_rot @ rotations
         )
     elif grid is None:
         correction = np.zeros((n, 3))
     else:
-        correction, warnings = _correction(points, cell, grid, holes_robot, robot_rotations)
+        correction, warnings = _correction(points, cell, grid, holes_robot, base_rot @ rotations)
     positions = nominal + rows_times(correction, base_rot)[:, None, :]  # e in the BASE frame
-    status, turn, ik_warnings = _configuration(
-        points, cell, robot, positions, robot_rotations, status
-    )
+    status, turn, ik_warnings = _configuration(points, cell, robot, positions, rotations, status)
     return Program(
         cell=cell,
         points=points,
@@ -193,11 +191,11 @@ def build_program(
     )
 
 
-def _rotations(points: Points, cell: Cell) -> tuple[np.ndarray, np.ndarray]:
+def _rotations(points: Points, cell: Cell) -> np.ndarray:
     """Tool rotations (N, 3, 3) in the BASE frame, from a,b,c or by the i,j,k rule of
-    ``orient_along_axes`` around the cell's reference orientation (a robot-frame A,B,C), and
-    the same in the robot frame (once: the correction's and every stage's), in blocks on the
-    block threads."""
+    ``orient_along_axes`` around the cell's reference orientation (a robot-frame A,B,C), in
+    blocks on the block threads. The robot-frame rotations are made where they are used (whole
+    for the correction, block by block in the IK): a million-hole job never holds both."""
     n = len(points)
     base_rot = cell.robot_T_base[:3, :3]
     if points.abc is not None:
@@ -219,15 +217,14 @@ def _rotations(points: Points, cell: Cell) -> tuple[np.ndarray, np.ndarray]:
         def rule(rows: slice) -> np.ndarray:
             return orient_along_axes(points.axis[rows], reference)
 
-    out, robot = np.empty((n, 3, 3)), np.empty((n, 3, 3))
+    out = np.empty((n, 3, 3))
 
     def block(i: int) -> None:  # in blocks: the rule's (N, 3, 3) temporaries stay small
         rows = slice(i, i + IK_BLOCK)
         out[rows] = rule(rows)
-        robot[rows] = base_rot @ out[rows]
 
     run_blocks(block, range(0, n, IK_BLOCK))
-    return out, robot
+    return out
 
 
 def _correction(
@@ -330,9 +327,9 @@ def _configuration(
     rotations: np.ndarray,
     status: int | None,
 ) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """IK of every pose (positions (N, 4, 3) mm, BASE frame; rotations (N, 3, 3) robot frame)
-    in KUKA ``status`` (None: the first pose's IK default): Status and Turn (N, 4) per pose and
-    the warnings."""
+    """IK of every pose (positions (N, 4, 3) mm and rotations (N, 3, 3), BASE frame) in KUKA
+    ``status`` (None: the first pose's IK default): Status and Turn (N, 4) per pose and the
+    warnings."""
     n = len(points)
     if n == 0:
         return np.zeros((0, 4), int), np.zeros((0, 4), int), []
@@ -398,11 +395,11 @@ def _configuration(
 
 
 def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
-    """Robot-frame TCP poses (H, S, 4, 4) of positions (H, S, 3) mm in the BASE frame and
-    rotations (H, 3, 3) in the robot frame."""
+    """Robot-frame TCP poses (H, S, 4, 4) of positions (H, S, 3) mm and rotations (H, 3, 3) in
+    the BASE frame."""
     base_rot, base_org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
     out = np.empty((*positions.shape[:2], 4, 4))
-    out[:, :, :3, :3] = rotations[:, None]
+    out[:, :, :3, :3] = (base_rot @ rotations)[:, None]
     rows = rows_times(positions.reshape(-1, 3), base_rot.T) + base_org  # not one per hole
     out[:, :, :3, 3] = rows.reshape(positions.shape)
     out[:, :, 3] = (0.0, 0.0, 0.0, 1.0)
