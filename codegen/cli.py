@@ -21,12 +21,6 @@ from accugrid.kinematics.errors import InputError, printable
 from accugrid.kinematics.inputfile import track_inputs
 
 EXIT_OK, EXIT_INTERNAL, EXIT_INPUT = 0, 1, 2
-# Commands whose numpy products are as tall and thin as the (N, 3) @ (3, 3) frame changes of a
-# rewrite: numpy's OpenBLAS runs them on as many threads as there are cores, which costs more
-# than it saves (50 ms instead of 1 ms for 100,000 points on a busy 2-core machine), so they run
-# on one thread unless OPENBLAS_NUM_THREADS says otherwise (same bytes). Not every command: the
-# least squares of ``identify`` round differently on one thread.
-_ONE_BLAS_THREAD = frozenset({"rewrite"})
 
 
 __all__ = ["EXIT_INPUT", "EXIT_INTERNAL", "EXIT_OK", "build_parser", "main"]
@@ -71,10 +65,7 @@ def main(argv: list[str] | None = None) -> int:
     as an input that no output may replace (``codegen.atomic``).
     """
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
-    command = _command(argv)
-    if command in _ONE_BLAS_THREAD and "numpy" not in sys.modules:  # read when numpy loads
-        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    args = build_parser(command).parse_args(argv)
+    args = build_parser(_command(argv)).parse_args(argv)
     with warnings.catch_warnings(record=True) as held, track_inputs():
         warnings.simplefilter("default")
         try:

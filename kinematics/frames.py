@@ -105,14 +105,14 @@ def invert(pose: np.ndarray) -> np.ndarray:
 
 
 def rows_times(rows: np.ndarray, matrix: np.ndarray) -> np.ndarray:
-    """``rows @ matrix`` for rows (N, k) (or one row (k,)) and a small matrix (k, j), in
-    blocks of ``BLAS_ROWS`` rows: the same numbers as one product, all on the calling thread.
-    One product of 100,000 rows wakes BLAS's threads, which then spin on the cores for a while
-    (on 2 cores: about 0.1 s of a 1e5-hole program's IK threads' time)."""
+    """``rows @ matrix`` for rows (N, k) (or one row (k,)) and a small matrix (k, j) or vector
+    (k,), in blocks of ``BLAS_ROWS`` rows: the same numbers as one product, all on the calling
+    thread. One product of 100,000 rows wakes BLAS's threads, which then spin on the cores for a
+    while (on 2 cores: about 0.1 s of a 1e5-hole program's IK threads' time)."""
     rows = np.asarray(rows, dtype=float)
     if rows.ndim < 2 or len(rows) <= BLAS_ROWS:
         return rows @ matrix
-    out = np.empty((len(rows), matrix.shape[-1]))
+    out = np.empty((len(rows),) + np.shape(matrix)[1:])
     for i in range(0, len(rows), BLAS_ROWS):
         out[i : i + BLAS_ROWS] = rows[i : i + BLAS_ROWS] @ matrix
     return out
@@ -140,7 +140,7 @@ def rotation_angle_deg(rotations: np.ndarray, reference: np.ndarray) -> np.ndarr
 
 def axis_angle_deg(axes: np.ndarray, reference_axis: np.ndarray) -> np.ndarray:
     """Angle (N,) deg between unit vectors (N, 3) and one unit vector (3,)."""
-    return np.degrees(np.arccos(np.clip(axes @ reference_axis, -1.0, 1.0)))
+    return np.degrees(np.arccos(np.clip(rows_times(axes, reference_axis), -1.0, 1.0)))
 
 
 def orient_along_axes(axis: np.ndarray, reference: np.ndarray) -> np.ndarray:
@@ -170,4 +170,4 @@ def orient_along_axes(axis: np.ndarray, reference: np.ndarray) -> np.ndarray:
 
 def too_tilted(axis: np.ndarray, reference: np.ndarray) -> np.ndarray:
     """(N,) bool: drill axes (N, 3) too far from the reference tool Z for ``orient_along_axes``."""
-    return np.asarray(axis) @ reference[:, 2] < np.cos(np.radians(MAX_TILT_DEG))
+    return rows_times(axis, reference[:, 2]) < np.cos(np.radians(MAX_TILT_DEG))

@@ -238,11 +238,12 @@ def test_abc_of_a_batch_is_the_abc_of_each_matrix(angles):
 )
 def test_rows_times_is_one_product_in_blocks(n, scale, order, seed):
     """rows_times gives the numbers of one (N, 3) @ (3, 3) product, above and below one block,
-    for a matrix given as is or transposed (a view), and for one row."""
+    for a matrix given as is or transposed (a view), for one row, and for a vector (3,)."""
     rng = np.random.default_rng(seed)
     rows = rng.normal(size=(n, 3)) * 10.0**scale
     matrix = rng.normal(size=(3, 3))
     matrix = matrix.T if order == "t" else matrix
     np.testing.assert_array_equal(frames.rows_times(rows, matrix), rows @ matrix)
+    np.testing.assert_array_equal(frames.rows_times(rows, matrix[:, 1]), rows @ matrix[:, 1])
     if n:
         np.testing.assert_array_equal(frames.rows_times(rows[0], matrix), rows[0] @ matrix)

@@ -35,6 +35,7 @@ from accugrid.codegen.rewrite import (
 )
 from accugrid.codegen.splice import ByteSplicer, texts_of
 from accugrid.codegen.textsafe import fixed_bytes
+from accugrid.kinematics.frames import rows_times, transform_points
 
 __all__ = ["rewrite_gcode"]
 
@@ -61,12 +62,12 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
     if len(at):
         prog = desired[at]
         t = opts.robot_T_program
-        robot = prog @ t[:3, :3].T + t[:3, 3]
+        robot = transform_points(t, prog)
         abc = np.array([[r.get(k, math.nan) for k in "ABC"] for r in moves.rotaries])
         # each distinct A/B/C once (a program has few), then one row per point
         rotations = rotations_of(t[:3, :3], abc.reshape(-1, 3))[moves.rotary_index[at]]
         corrected = correct_points(robot, rows, at, opts, rotations)
-        back = (corrected - robot) @ t[:3, :3]  # R^T e, row-wise
+        back = rows_times(corrected - robot, t[:3, :3])  # R^T e, row-wise
         done = np.flatnonzero(np.isfinite(corrected[:, 0]))
         rows.status[at[done]] = CORRECTED
         desired[at[done]] = prog[done] + back[done]
@@ -106,9 +107,9 @@ def _corrected_r_planes(moves: GcodeMoves, rows: Rows, opts: Options) -> np.ndar
     if len(idx):
         pts = np.column_stack([moves.target[idx, 0], moves.target[idx, 1], moves.r_mm[idx]])
         t = opts.robot_T_program
-        robot = pts @ t[:3, :3].T + t[:3, 3]
+        robot = transform_points(t, pts)
         corrected = correct_points(robot, rows, idx, opts, mark=False)
-        back = (corrected - robot) @ t[:3, :3]
+        back = rows_times(corrected - robot, t[:3, :3])
         out[idx] = pts[:, 2] + back[:, 2]  # NaN where the R point is outside: R kept
     return out
 
