@@ -39,6 +39,7 @@ from accugrid.codegen.cell import Cell
 from accugrid.codegen.points import Points
 from accugrid.codegen.textsafe import fixed_texts
 from accugrid.compensation.grid import GridModel
+from accugrid.compensation.settings import GRID_ORIENTATION_TOL_DEG
 from accugrid.kinematics.blocks import run_blocks
 from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
@@ -57,7 +58,6 @@ from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.units import mm_text
 
 __all__ = [
-    "GRID_ORIENTATION_TOL_DEG",
     "IK_BLOCK",
     "MAX_AXIS_JUMP_DEG",
     "STAGES",
@@ -66,7 +66,6 @@ __all__ = [
 ]
 
 STAGES = ("APP", "CLR", "BOT", "RET")
-GRID_ORIENTATION_TOL_DEG = 5.0  # the grid's errors hold near the orientation it was measured at
 _LISTED = 5  # holes named in one message
 IK_BLOCK = 16384  # poses per IK call
 MAX_AXIS_JUMP_DEG = 180.0  # a larger joint move between consecutive poses: a wrist flip or wrap

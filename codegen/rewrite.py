@@ -15,21 +15,27 @@ import math
 from dataclasses import dataclass
 from itertools import chain
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from accugrid.codegen.header import grid_lines, input_line
 from accugrid.codegen.header import header_lines as make_header
-from accugrid.codegen.program import GRID_ORIENTATION_TOL_DEG
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation import GridModel
 from accugrid.compensation.corrector import Corrector
-from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM, CorrectionSettings
+from accugrid.compensation.settings import (
+    DEFAULT_TOLERANCE_MM,
+    GRID_ORIENTATION_TOL_DEG,
+    CorrectionSettings,
+)
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc
-from accugrid.kinematics.robot import Robot
+
+if TYPE_CHECKING:  # loaded by the model's reader, only with --model
+    from accugrid.kinematics.robot import Robot
 
 __all__ = [
     "ORIENTATION_LIMIT_DEG",

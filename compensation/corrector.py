@@ -17,14 +17,16 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from accugrid.compensation.grid import GridCheck, GridModel
 from accugrid.compensation.model_correction import ModelCorrection, model_correct, residual_grid
 from accugrid.compensation.settings import CorrectionSettings
-from accugrid.kinematics.robot import Robot
-from accugrid.kinematics.simulation import commanded_poses, grid_status
+
+if TYPE_CHECKING:  # a grid-only correction never loads the robot modules
+    from accugrid.kinematics.robot import Robot
 
 __all__ = ["Corrector", "model_status"]
 
@@ -43,6 +45,8 @@ def model_status(
     ``grid``'s measurement Status (at its origin and a,b,c; None if it has no a,b,c, which
     ``residual_grid`` then refuses); else the IK default (with ``turn``) at the first of
     ``points`` (N, 3) mm at ``abc_deg`` (N, 3) deg, robot frame (None if unreachable or none)."""
+    from accugrid.kinematics.simulation import commanded_poses, grid_status  # model jobs only
+
     if status is not None:
         return int(status)
     if grid is not None:

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -28,7 +29,9 @@ from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.blocks import run_blocks
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
-from accugrid.kinematics.robot import Robot
+
+if TYPE_CHECKING:  # a grid-only rewrite or correct never loads the robot modules
+    from accugrid.kinematics.robot import Robot
 
 __all__ = [
     "BLOCK",

@@ -9,11 +9,18 @@ from dataclasses import dataclass, replace
 from accugrid.compensation.interpolation import MAX_POWER, method_named
 from accugrid.kinematics.errors import InputError
 
-__all__ = ["DEFAULT_TOLERANCE_MM", "MAX_CORRECTION_MM", "OUTSIDE", "CorrectionSettings"]
+__all__ = [
+    "DEFAULT_TOLERANCE_MM",
+    "GRID_ORIENTATION_TOL_DEG",
+    "MAX_CORRECTION_MM",
+    "OUTSIDE",
+    "CorrectionSettings",
+]
 
 OUTSIDE = ("error", "clamp")  # points outside the grid box: refuse, or use the nearest cell
 MAX_CORRECTION_MM = 5.0  # default safety limit on the length of any one correction
 DEFAULT_TOLERANCE_MM = 0.3  # the hole-position accuracy aircraft drilling asks (seed: +-0.3 mm)
+GRID_ORIENTATION_TOL_DEG = 5.0  # the grid's errors hold near the orientation it was measured at
 
 
 @dataclass(frozen=True)

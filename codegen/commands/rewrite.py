@@ -34,11 +34,10 @@ from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.dialects import dialect_of
-from accugrid.codegen.program import GRID_ORIENTATION_TOL_DEG
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.rewrite import ORIENTATION_LIMIT_DEG
 from accugrid.codegen.rewrite_job import RewriteRequest, rewrite_job
-from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
+from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM, GRID_ORIENTATION_TOL_DEG
 from accugrid.kinematics.errors import InputError
 
 __all__ = ["NAME", "add_arguments", "run"]
