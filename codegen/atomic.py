@@ -9,8 +9,10 @@ Refused, with exit 2, even with ``--force``:
 - a target whose folder is a file.
 
 Writing (``write_files``): every file goes first to a temporary file beside its target
-(``.NAME.PID.RANDOM.accugrid.tmp``, created with the umask's permissions), then one sync makes the
-data durable, then the temporaries are renamed over the targets. The ``main`` files are renamed
+(``.NAME.PID.RANDOM.accugrid.tmp``, created with the umask's permissions; a job of several files:
+into a temporary folder of that name inside the target's folder, as ``NAME``), then one sync makes
+the data durable, then the temporaries are renamed over the targets (and the temporary folder
+removed). The ``main`` files are renamed
 last; the entry point (the last of them, e.g. ``NAME.src`` of a KRL job) is removed before any
 rename, and ``stale`` files (modules of an earlier job with the same name) are removed before
 the main files are renamed: a job killed at any moment (even by SIGKILL) never leaves its entry
@@ -280,11 +282,12 @@ def write_files(
         return list(paths)
     _remove_dead_temps(folders)
     temps: dict[Path, str] = {}
+    holders: dict[Path, str] = {}  # a job of several files: its temporaries' folder per folder
     try:
         with _signals_end_write():
             for path, key in paths.items():
-                temps[path] = _temp_name(path)  # known before it exists: always cleaned
                 try:
+                    temps[path] = _temp_path(path, holders if len(paths) > 1 else None)
                     _write_temp(temps[path], contents[key])
                 except OSError as exc:
                     raise InputError(f"cannot write: {exc.strerror or exc}", path) from None
@@ -301,8 +304,23 @@ def write_files(
         for tmp in temps.values():
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
+        for holder in holders.values():
+            _remove(holder)
     _sync_folders(folders)
     return list(paths)
+
+
+def _temp_path(path: Path, holders: dict[Path, str] | None) -> str:
+    """Where ``path``'s temporary goes: beside it, or (``holders``: a job of several files) in a
+    temporary folder made inside its folder on first use (``holders``: folder -> it), as
+    ``NAME``. Creating hundreds of files in a folder that holds the previous job's files costs
+    about four times as much as in an empty one (364 KRL files: 0.2 s against 0.05 s)."""
+    if holders is None:
+        return _temp_name(path)
+    if path.parent not in holders:
+        holders[path.parent] = _temp_name(path)  # known before it exists: always cleaned
+        os.mkdir(holders[path.parent], 0o777)  # the umask applies
+    return os.path.join(holders[path.parent], path.name)
 
 
 def _write_new_folder(folder: Path, paths: dict[Path, PathLike], contents: Mapping) -> None:

@@ -9,6 +9,7 @@ import signal
 import stat
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 from conftest import EXAMPLES, ROOT
@@ -170,6 +171,28 @@ def test_a_failure_while_writing_leaves_targets_and_no_temporaries(tmp_path, mon
         write_files({p: "new" for p in old}, force=True)
     assert {p: p.read_text() for p in old} == old
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in old)
+
+
+def test_a_job_of_several_files_writes_its_temporaries_in_one_folder_inside_the_targets(
+    tmp_path, monkeypatch
+):
+    old = {tmp_path / f"J_{k}.src": f"old {k}" for k in range(3)}
+    write_files(old)
+    real, seen = atomic._write_temp, []
+
+    def spy(tmp, payload):
+        seen.append(Path(tmp))
+        real(tmp, payload)
+
+    monkeypatch.setattr(atomic, "_write_temp", spy)
+    write_files({p: "new" for p in old}, force=True)
+    (holder,) = {t.parent for t in seen}
+    assert holder.parent == tmp_path and holder.name.endswith(".accugrid.tmp")
+    assert sorted(t.name for t in seen) == sorted(p.name for p in old)
+    assert {p: p.read_text() for p in old} == {p: "new" for p in old}
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in old)
+    write_files({tmp_path / "one.src": "x"})  # one file: its temporary beside it
+    assert seen[-1].parent == tmp_path and seen[-1].name.startswith(".one.src.")
 
 
 def job(name, parts, tag):
