@@ -1,8 +1,8 @@
 """The only way numbers and user text reach a robot program (DESIGN.md, "Output safety").
 
-- ``fixed`` (and its bulk forms for 100,000-number files: ``fixed_many``, ``fixed_ready`` with
-  ``fixed_format``, and ``fixed_bytes``, built by numpy; each property-tested to
-  print what ``fixed`` prints): the one fixed-point formatter; never ``str(float)`` or ``%g`` in
+- ``fixed`` (and its bulk forms for 100,000-number files: ``fixed_many``, one %-pass, and
+  ``fixed_bytes``, built by numpy; each property-tested to print what ``fixed`` prints): the one
+  fixed-point formatter; never ``str(float)`` or ``%g`` in
   a program. ``fixed_same``: whether two numbers print the same.
 - ``comment_text``: user text made harmless inside a one-line comment of any dialect.
 - ``krl_identifier``: a valid KRL name ([A-Za-z_][A-Za-z0-9_]*, at most 24 characters, not a
@@ -26,9 +26,7 @@ __all__ = [
     "comment_texts",
     "fixed",
     "fixed_bytes",
-    "fixed_format",
     "fixed_many",
-    "fixed_ready",
     "fixed_same",
     "fixed_texts",
     "krl_identifier",
@@ -67,10 +65,9 @@ def fixed(value: float, decimals: int = 3) -> str:
     return text
 
 
-def fixed_ready(values: np.ndarray, places: int) -> np.ndarray:
-    """The values (any shape) to print with ``"%.{places}f"`` (``fixed_format``) so that each
-    text is ``fixed(v, places)``: a copy whose values that would print as ``-0.000`` are +0.0.
-    Lets a %-template format numbers itself in one pass with the finished lines.
+def _ready(values: np.ndarray, places: int) -> np.ndarray:
+    """The values (any shape) to print with ``"%.{places}f"`` so that each text is
+    ``fixed(v, places)``: a copy whose values that would print as ``-0.000`` are +0.0.
 
     Raises ValueError for NaN or infinity, like ``fixed``.
     """
@@ -87,20 +84,15 @@ def fixed_ready(values: np.ndarray, places: int) -> np.ndarray:
     return values
 
 
-def fixed_format(places: int) -> str:
-    """The %-conversion that prints a ``fixed_ready`` value as ``fixed`` does."""
-    return f"%.{places}f"
-
-
 def fixed_many(values: np.ndarray, places: int) -> list[str]:
     """``fixed(v, places)`` of every value (N,), formatted in one pass (for 100k-number programs).
 
     Raises ValueError for NaN or infinity, like ``fixed``.
     """
-    ready = fixed_ready(values, places)
+    ready = _ready(values, places)
     if not len(ready):
         return []
-    texts = (((fixed_format(places) + "\n") * len(ready)) % tuple(ready.tolist())).split("\n")
+    texts = ((f"%.{places}f\n" * len(ready)) % tuple(ready.tolist())).split("\n")
     texts.pop()
     return texts
 

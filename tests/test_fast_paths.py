@@ -1,7 +1,7 @@
 """The fast paths of the readers and writers against the slow, obvious ones they replace: the
 byte-buffer CSV reader against the csv module, the vectorized decimal parser against ``float``,
-``fixed_ready``, ``fixed_bytes`` and ``correct``'s byte-built lines against ``fixed``,
-``comment_texts`` against ``comment_text``."""
+``fixed_many``'s %-ready values, ``fixed_bytes`` and ``correct``'s byte-built lines against
+``fixed``, ``comment_texts`` against ``comment_text``."""
 
 from __future__ import annotations
 
@@ -11,14 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from accugrid.codegen.corrected import DECIMALS, _plain_lines
-from accugrid.codegen.textsafe import (
-    comment_text,
-    comment_texts,
-    fixed,
-    fixed_bytes,
-    fixed_format,
-    fixed_ready,
-)
+from accugrid.codegen.textsafe import _ready, comment_text, comment_texts, fixed, fixed_bytes
 from accugrid.compensation.csvtable import (
     _Cells,
     _parse_csv,
@@ -132,9 +125,9 @@ def test_plain_decimals_are_exactly_what_float_reads(numbers):
     st.lists(st.floats(allow_nan=False, allow_infinity=False, width=64), max_size=30),
     st.integers(0, 6),
 )
-def test_fixed_ready_prints_what_fixed_prints(values, places):
-    ready = fixed_ready(np.array(values), places)
-    assert [fixed_format(places) % v for v in ready.tolist()] == [fixed(v, places) for v in values]
+def test_ready_values_print_what_fixed_prints(values, places):
+    ready = _ready(np.array(values), places)
+    assert [f"%.{places}f" % v for v in ready.tolist()] == [fixed(v, places) for v in values]
 
 
 _NUMBER = st.one_of(
@@ -159,16 +152,17 @@ def test_fixed_bytes_refuse_nan():
         fixed_bytes(np.array([1.0, np.inf]), 3)
 
 
-def test_fixed_ready_keeps_the_shape_and_refuses_nan():
+def test_ready_values_keep_the_shape_and_refuse_nan():
     values = np.array([[-0.0004, 1.0], [-0.0, 2.5]])[:, [1, 0]]  # not C-contiguous
-    assert [fixed_format(3) % v for v in fixed_ready(values, 3).ravel()] == [
+    places = 3
+    assert [f"%.{places}f" % v for v in _ready(values, places).ravel()] == [
         "1.000",
         "0.000",
         "2.500",
         "0.000",
     ]
     with pytest.raises(ValueError):
-        fixed_ready(np.array([1.0, np.nan]), 3)
+        _ready(np.array([1.0, np.nan]), 3)
 
 
 @given(st.lists(st.text(max_size=80), max_size=20), st.sampled_from(["", "hole "]))
