@@ -208,7 +208,7 @@ def wrist_angles(
     s4, s5 = np.sign(np.sin(table.alpha[3])), np.sign(np.sin(table.alpha[4]))
     wx, wy, wz = w(m0, 2), w(m1, 2), w(m2, 2)
     across = np.hypot(wx, wy)
-    singular = across < 1e-12
+    singular = across < SINGULAR_A5_RAD  # sin A5 ~ A5 there
     th5 = np.arctan2(across, -s4 * s5 * wz)
     # Row 3 of W is s4 * (sin th5 cos th6, -sin th5 sin th6, -s5 cos th5) with th5 >= 0.
     th4 = np.arctan2(s5 * wy, s5 * wx)
