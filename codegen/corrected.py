@@ -18,8 +18,9 @@ import numpy as np
 
 from accugrid.codegen.atomic import JobFiles
 from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input_line
+from accugrid.codegen.linebytes import SLOT, image_bytes, line_image, number_cells
 from accugrid.codegen.points import Points, read_points
-from accugrid.codegen.textsafe import fixed_bytes, fixed_texts
+from accugrid.codegen.textsafe import fixed_texts
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.measurements import REPEAT_TOL_MM
 from accugrid.compensation.settings import CorrectionSettings
@@ -125,17 +126,13 @@ def check_orientation(
 def _plain_lines(rows: np.ndarray, numbers: np.ndarray, flags: list[str]) -> bytes:
     """CSV lines, UTF-8: each row as read (``rows`` (n, r) uint8 NUL-padded), its numbers
     (n, k) as ``fixed`` text with ``DECIMALS`` places, its flag (n) (nothing ``csv.writer``
-    would quote), LF."""
+    would quote), LF; one line image (``codegen.linebytes``)."""
     n, k = numbers.shape
-    cells, _ = fixed_bytes(numbers.reshape(-1), DECIMALS)  # NUL-padded on the left
-    comma = np.full((n * k, 1), ord(","), np.uint8)
-    fields = np.concatenate([comma, cells], axis=1).reshape(n, -1)
-    notes = [np.full((n, 1), ord(","), np.uint8)]
-    if any(flags):
-        notes.append(np.array([f.encode() for f in flags], dtype=bytes).view(np.uint8))
-    notes.append(np.full((n, 1), ord("\n"), np.uint8))
-    text = np.concatenate([rows, fields, *(c.reshape(n, -1) for c in notes)], axis=1).reshape(-1)
-    return text[text != 0].tobytes()
+    cells = number_cells(numbers, DECIMALS)  # (n, k, w)
+    notes = np.array([f.encode() for f in flags], dtype=bytes)  # UTF-8, NUL-padded
+    template = SLOT + f",{SLOT}" * (k + 1) + "\n"
+    columns = [rows, *(cells[:, j] for j in range(k)), notes.view(np.uint8).reshape(n, -1)]
+    return image_bytes(line_image(template, columns))
 
 
 def corrected_csv(
