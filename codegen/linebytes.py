@@ -1,7 +1,8 @@
-"""Program lines built by numpy as bytes, for jobs of 100,000 holes without a Python format call
-per number: a "line image" (n, L) uint8 holds in row i the text of item i (one hole: one or more
-lines), its numbers and texts in fixed-width cells padded with NUL between the constant text of a
-template; dropping every NUL gives the lines. No text of a program holds a NUL.
+"""Program lines (and ``correct``'s CSV lines) built by numpy as bytes, for jobs of 100,000 holes
+without a Python format call per number: a "line image" (n, L) uint8 holds in row i the text of
+item i (one hole: one or more lines), its numbers and texts in fixed-width cells padded with NUL
+between the constant text of a template; dropping every NUL gives the lines. No text of a
+program holds a NUL.
 
 - ``number_cells(values, places)``: the ``fixed`` text of every value (any shape ``s``) as cells
   (*s, w) uint8, NUL-padded on the left (``textsafe.fixed_bytes``);
