@@ -195,6 +195,64 @@ def test_a_job_of_several_files_writes_its_temporaries_in_one_folder_inside_the_
     assert seen[-1].parent == tmp_path and seen[-1].name.startswith(".one.src.")
 
 
+@pytest.mark.parametrize("folder", ["", "new"])  # an existing folder, one made by the write
+def test_every_file_is_synced_before_the_first_rename(tmp_path, monkeypatch, folder):
+    """Each temporary is fsynced (on the background thread) before any rename puts a file in
+    place; only folders are synced after."""
+    target = tmp_path / folder
+    files = job("JOB", 3, "new")
+    if not folder:
+        write_job(target, files, "JOB")
+    events = []
+    real_fsync, real_replace, real_rename = os.fsync, os.replace, os.rename
+
+    def fsync(fd):
+        kind = "folder" if stat.S_ISDIR(os.fstat(fd).st_mode) else "file"
+        events.append(kind)
+        real_fsync(fd)
+
+    monkeypatch.setattr(atomic.os, "fsync", fsync)
+    monkeypatch.setattr(
+        atomic.os, "replace", lambda a, b: events.append("rename") or real_replace(a, b)
+    )
+    monkeypatch.setattr(
+        atomic.os, "rename", lambda a, b: events.append("rename") or real_rename(a, b)
+    )
+    write_job(target, files, "JOB")
+    first_rename = events.index("rename")
+    assert events[:first_rename] == ["file"] * len(files)
+    assert "file" not in events[first_rename:]
+    assert snapshot(target) == files
+
+
+@pytest.mark.parametrize("folder", ["", "new"])
+def test_a_file_that_cannot_be_synced_leaves_targets_and_no_temporaries(
+    tmp_path, monkeypatch, folder
+):
+    target = tmp_path / folder
+    old = job("JOB", 3, "old")
+    if not folder:
+        write_job(target, old, "JOB")
+    real_fsync, synced = os.fsync, []
+
+    def failing(fd):
+        synced.append(fd)
+        if len(synced) == 2:
+            raise OSError(5, "Input/output error")
+        real_fsync(fd)
+
+    monkeypatch.setattr(atomic.os, "fsync", failing)
+    with pytest.raises(InputError, match="cannot write: Input/output error") as error:
+        write_job(target, job("JOB", 3, "new"), "JOB")
+    assert Path(error.value.path).parent == target  # names the target, not its temporary
+    monkeypatch.undo()
+    if folder:
+        assert list(tmp_path.iterdir()) == []
+    else:
+        assert snapshot(target) == old
+        assert sorted(p.name for p in target.iterdir()) == sorted(old)
+
+
 def job(name, parts, tag):
     """A KRL-like job: NAME.src calls NAME_001..; every file says which job it belongs to.
     File name -> text."""
