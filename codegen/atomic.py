@@ -34,7 +34,7 @@ import queue
 import signal
 import stat
 import threading
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -282,6 +282,7 @@ def write_files(
     force: bool = False,
     main: Iterable[PathLike] = (),
     stale: Iterable[PathLike] = (),
+    ready: Callable[[], None] | None = None,
 ) -> list[Path]:
     """Write every file of a job atomically; text is encoded as UTF-8 with newlines untouched.
     Each file's text is taken from ``contents`` when it is written, in order, and may come in
@@ -290,8 +291,11 @@ def write_files(
 
     ``main``: targets among ``contents`` renamed last, in order (the entry point last), after
     their old versions and the ``stale`` files (leftovers of an earlier job of the same name,
-    deleted unless rewritten) are removed. Returns the written paths. On an error or signal
-    before the renames the targets are left as they were and no temporary remains.
+    deleted unless rewritten) are removed. ``ready()``: the job's last check, called once every
+    temporary is written and before any rename (e.g. waiting for work that ran beside the
+    writing); its InputError ends the write like any other. Returns the written paths. On an
+    error or signal before the renames the targets are left as they were and no temporary
+    remains.
     """
     paths = {Path(t): t for t in contents}  # the text is fetched as it is written
     main_paths = [Path(p) for p in main]
@@ -311,7 +315,7 @@ def write_files(
                 f"cannot create the output folder: {exc.strerror or exc}", os.fspath(folder)
             ) from None
     if new_folder is not None:
-        _write_new_folder(new_folder, paths, contents)
+        _write_new_folder(new_folder, paths, contents, ready)
         _sync_folders({new_folder, new_folder.parent})
         return list(paths)
     _remove_dead_temps(folders)
@@ -327,6 +331,8 @@ def write_files(
                 except OSError as exc:
                     raise InputError(f"cannot write: {exc.strerror or exc}", path) from None
                 durable.add(temps[path], path)
+            if ready is not None:
+                ready()
             durable.wait()
             with _signals_held():
                 try:
@@ -360,10 +366,12 @@ def _temp_path(path: Path, holders: dict[Path, str] | None) -> str:
     return os.path.join(holders[path.parent], path.name)
 
 
-def _write_new_folder(folder: Path, paths: dict[Path, PathLike], contents: Mapping) -> None:
+def _write_new_folder(
+    folder: Path, paths: dict[Path, PathLike], contents: Mapping, ready: Callable[[], None] | None
+) -> None:
     """Write the files ``paths`` (all in ``folder``, which does not exist) into a temporary
-    folder beside it, sync, and rename that folder to ``folder``; on an error or signal before
-    the rename, nothing of it remains."""
+    folder beside it, ``ready()``, sync, and rename that folder to ``folder``; on an error or
+    signal before the rename, nothing of it remains."""
     _remove_dead_temps([folder.parent])
     tmp = _temp_name(folder)  # known before it exists: always cleaned
     durable = _Durable()
@@ -376,6 +384,8 @@ def _write_new_folder(folder: Path, paths: dict[Path, PathLike], contents: Mappi
                     durable.add(os.path.join(tmp, path.name), path)
             except OSError as exc:
                 raise InputError(f"cannot write: {exc.strerror or exc}", folder) from None
+            if ready is not None:
+                ready()
             durable.wait()
             with _signals_held():
                 try:

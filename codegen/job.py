@@ -28,17 +28,25 @@ __all__ = ["Job", "add_job_arguments", "grid_path", "prepare", "summary"]
 
 @dataclass
 class Job:
-    """A drilling-program job: the corrected program, its header lines, the files it read
-    (never overwritten) and, once a dialect rendered it, what to write: ``files`` (text or text
-    in pieces, by path, fetched as written), ``main`` (among them, renamed last, in order) and
-    ``stale`` (an earlier job's files to remove)."""
+    """A drilling-program job: the corrected program (its IK check may still run: ``finish``),
+    its header lines, the files it read (never overwritten) and, once a dialect rendered it,
+    what to write: ``files`` (text or text in pieces, by path, fetched as written), ``main``
+    (among them, renamed last, in order) and ``stale`` (an earlier job's files to remove)."""
 
     program: Program
     header: list[str]
     inputs: list[Path]
+    command: str = ""
     files: Mapping[Path, object] = field(default_factory=dict)
     main: list[Path] = field(default_factory=list)
     stale: list[Path] = field(default_factory=list)
+
+    def finish(self) -> None:
+        """Wait for the program's IK check (its InputError stops the job before anything is
+        replaced: ``write_files(..., ready=job.finish)``) and print the program's warnings to
+        stderr."""
+        for warning in self.program.wait().warnings:
+            print(f"accugrid {self.command}: warning: {warning}", file=sys.stderr)
 
 
 def add_job_arguments(parser: argparse.ArgumentParser) -> None:
@@ -103,7 +111,8 @@ def prepare(
     command: str,
     check: Callable[[Cell, int, list[str]], None] | None = None,
 ) -> Job:
-    """Read POINTS, CELL and the grid; build the program; print its warnings to stderr.
+    """Read POINTS, CELL and the grid; build the corrected program, its IK check started in the
+    background (``Job.finish`` waits for it and prints the warnings).
     ``check(cell, holes, header)``, when given, runs after reading and before the correction and IK
     (the heavy work), with a header of as many lines as the job's: a dialect refuses there what
     it could not write."""
@@ -139,15 +148,13 @@ def prepare(
     closing = [f"holes {len(points)}"]
     if check is not None:
         check(cell, len(points), header_lines(command, inputs, details, 0.0, "", closing))
-    program = build_program(points, cell, robot, grid, model)
-    for warning in program.warnings:
-        print(f"accugrid {command}: warning: {warning}", file=sys.stderr)
+    program = build_program(points, cell, robot, grid, model, background=True)
     largest, hole = program.largest_correction()
     where = f" at hole {points.ids[hole]}" if hole is not None else ""
     header = header_lines(command, inputs, details, largest, where, closing)
     inputs = [Path(args.points), Path(args.cell)] + ([grid_file] if grid_file else [])
     inputs += [model_file] if model_file is not None and model_file.is_file() else []
-    return Job(program, header, inputs)
+    return Job(program, header, inputs, command)
 
 
 def summary(job: Job, written: list[Path]) -> str:

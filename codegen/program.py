@@ -30,7 +30,9 @@ take its own.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from types import SimpleNamespace
 
 import numpy as np
@@ -60,6 +62,7 @@ from accugrid.kinematics.units import mm_text
 __all__ = [
     "IK_BLOCK",
     "MAX_AXIS_JUMP_DEG",
+    "IKCheck",
     "STAGES",
     "Program",
     "build_program",
@@ -78,18 +81,35 @@ class Program:
 
     cell: Cell
     points: Points
-    nominal: np.ndarray  # (N, 4, 3) mm, BASE frame, before correction
     positions: np.ndarray  # (N, 4, 3) mm, BASE frame, corrected
     rotations: np.ndarray  # (N, 3, 3)
     correction: np.ndarray  # (N, 3) mm, robot frame, e added to every stage of the hole
     feed_mm_s: np.ndarray  # (N,)
     depth_mm: np.ndarray  # (N,)
-    configuration: Configuration  # (N, 4) per pose, stage order STAGES; emitters convert it
+    configuration: Configuration | None  # (N, 4) per pose, stage order STAGES; None until
+    # ``wait`` when the IK check runs in the background (``build_program(background=True)``)
     warnings: list[str]
     corrected: bool
+    checking: IKCheck | None = field(default=None, repr=False, compare=False)
 
     def __len__(self) -> int:
         return len(self.positions)
+
+    @property
+    def nominal(self) -> np.ndarray:
+        """(N, 4, 3) mm, BASE frame: the positions before correction, made when asked (a
+        million-hole job keeps no second copy of its positions)."""
+        return _nominal(self.cell, self.points.xyz, self.rotations[:, :, 2], self.depth_mm)
+
+    def wait(self) -> Program:
+        """This program with its IK check done: waits for a check running in the background,
+        then ``configuration`` is set and its warnings follow the correction's; raises the
+        check's InputError (an unreachable hole, a branch jump)."""
+        if self.checking is not None:
+            configuration, warnings = self.checking.result()  # raises again if waited again
+            self.configuration, self.checking = configuration, None
+            self.warnings = self.warnings + warnings
+        return self
 
     def largest_correction(self) -> tuple[float, int | None]:
         """(length mm, hole index) of the largest correction; (0, None) for no holes."""
@@ -129,16 +149,42 @@ class Program:
         return pos, abc
 
 
+class IKCheck:
+    """A program's IK check (``_configuration``) on a background thread; ``result()`` waits for
+    it: (Configuration, warnings), or its exception raised in the caller's thread."""
+
+    def __init__(self, check: Callable[[], tuple[Configuration, list[str]]]) -> None:
+        self._outcome: tuple | BaseException | None = None
+        self._thread = threading.Thread(target=self._run, args=(check,), name="accugrid-ik")
+        self._thread.start()
+
+    def _run(self, check) -> None:
+        try:
+            self._outcome = check()
+        except BaseException as exc:  # raised again by result(), in the waiting thread
+            self._outcome = exc
+
+    def result(self) -> tuple[Configuration, list[str]]:
+        self._thread.join()
+        if isinstance(self._outcome, BaseException):
+            raise self._outcome
+        return self._outcome
+
+
 def build_program(
     points: Points,
     cell: Cell,
     robot: RobotModel,
     grid: GridModel | None = None,
     model: Robot | None = None,
+    background: bool = False,
 ) -> Program:
     """Corrected, IK-checked program for ``points`` in ``cell`` (``grid``: None for no
     correction; ``robot`` with the cell's tool; ``model``: a calibrated Robot, then ``grid`` is
-    the measured grid whose residual after the model is added, or None)."""
+    the measured grid whose residual after the model is added, or None). ``background``: the
+    IK check (Status, Turn, reach, limits, branch jumps, the wrist singularity) runs on a
+    background thread while the caller goes on with what needs only the positions (a G-code
+    program, the .src of a KRL job); ``Program.wait()`` joins it."""
     n = len(points)
     if n == 0:
         raise InputError("no drilling points in the file", points.path)
@@ -150,17 +196,6 @@ def build_program(
     axis = rotations[:, :, 2]
     depth = np.where(np.isnan(points.depth), cell.drilling.depth_mm, points.depth)
     feed = np.where(np.isnan(points.feed), cell.drilling.feed_mm_s, points.feed)
-    offsets = np.stack(
-        [
-            np.full(n, -cell.drilling.approach_mm),
-            np.full(n, -cell.drilling.clearance_mm),
-            depth,
-            np.full(n, -cell.drilling.retract_mm),
-        ],
-        axis=1,
-    )
-    nominal = np.multiply(offsets[:, :, None], axis[:, None, :])
-    nominal += points.xyz[:, None, :]  # = xyz + offset * axis, without a second (N, 4, 3)
     base_rot = cell.robot_T_base[:3, :3]
     holes_robot = transform_points(cell.robot_T_base, points.xyz)
     warnings: list[str] = []
@@ -173,21 +208,45 @@ def build_program(
         correction = np.zeros((n, 3))
     else:
         correction, warnings = _correction(points, cell, grid, holes_robot, base_rot @ rotations)
-    positions = nominal + rows_times(correction, base_rot)[:, None, :]  # e in the BASE frame
-    status, turn, ik_warnings = _configuration(points, cell, robot, positions, rotations, status)
-    return Program(
+    positions = _nominal(cell, points.xyz, axis, depth)
+    positions += rows_times(correction, base_rot)[:, None, :]  # e in the BASE frame
+
+    def check() -> tuple[Configuration, list[str]]:
+        pose_status, turn, ik_warnings = _configuration(
+            points, cell, robot, positions, rotations, status
+        )
+        return Configuration.from_kuka(pose_status, turn), ik_warnings
+
+    program = Program(
         cell=cell,
         points=points,
-        nominal=nominal,
         positions=positions,
         rotations=rotations,
         correction=correction,
         feed_mm_s=feed,
         depth_mm=depth,
-        configuration=Configuration.from_kuka(status, turn),
-        warnings=warnings + ik_warnings,
+        configuration=None,
+        warnings=warnings,
         corrected=grid is not None or model is not None,
+        checking=IKCheck(check) if background else None,
     )
+    if not background:
+        program.configuration, ik_warnings = check()
+        program.warnings = warnings + ik_warnings
+    return program
+
+
+def _nominal(cell: Cell, xyz: np.ndarray, axis: np.ndarray, depth: np.ndarray) -> np.ndarray:
+    """Uncorrected positions (N, 4, 3) mm, BASE frame, stage order ``STAGES``: the hole points
+    xyz (N, 3) mm moved along their drill axes (N, 3) by the cell's distances and the depths
+    (N,) mm."""
+    drilling = cell.drilling
+    offsets = np.empty((len(xyz), 4))
+    offsets[:, 0], offsets[:, 1] = -drilling.approach_mm, -drilling.clearance_mm
+    offsets[:, 2], offsets[:, 3] = depth, -drilling.retract_mm
+    out = np.multiply(offsets[:, :, None], axis[:, None, :])
+    out += xyz[:, None, :]  # = xyz + offset * axis, without a second (N, 4, 3)
+    return out
 
 
 def _rotations(points: Points, cell: Cell) -> np.ndarray:
@@ -422,8 +481,8 @@ def _ik_blocks(robot: RobotModel, poses, holes: int, stages: int, status, turn) 
     def block(i: int) -> None:  # holes i .. i + per - 1, written into their rows of out
         sol = robot.ik(poses(slice(i, i + per)).reshape(-1, 4, 4), status=status, turn=turn)
         at = slice(i * stages, i * stages + len(sol.ok))
-        for field, values in vars(out).items():
-            values[at] = getattr(sol, field)
+        for name, values in vars(out).items():
+            values[at] = getattr(sol, name)
 
     run_blocks(block, range(0, holes, per))
     return out

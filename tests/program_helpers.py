@@ -81,3 +81,18 @@ def panel_csv(xy: np.ndarray, ids: list[str] | None = None, tilt: float = 4000.0
 
 def panel_points(xy: np.ndarray, ids: list[str] | None = None):
     return parse_points(panel_csv(xy, ids), "panel.csv")
+
+
+def near_singular_wrist():
+    """One hole 'SING-1' whose APP pose has A5 = 1 deg (A = 0, -90, 110, 0, 1, 0 deg) in the
+    example cell, as parsed points (x, y, z, a, b, c), and that pose base_T_tcp (4, 4)."""
+    from accugrid.kinematics.frames import xyzabc_from_pose
+
+    c = cell()
+    pose = robot().fk(np.radians([[0.0, -90.0, 110.0, 0.0, 1.0, 0.0]]))[0]
+    base_T_tcp = np.linalg.inv(c.robot_T_base) @ pose
+    # the hole point is the pose + approach along the tool axis (the APP stage is the pose)
+    x = xyzabc_from_pose(base_T_tcp)
+    hole = x[:3] + c.drilling.approach_mm * base_T_tcp[:3, 2]
+    text = "id,x,y,z,a,b,c\nSING-1," + ",".join(f"{v:.6f}" for v in [*hole, *x[3:]]) + "\n"
+    return parse_points(text, "s.csv"), base_T_tcp

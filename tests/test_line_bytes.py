@@ -168,7 +168,6 @@ def programs(draw):
     return Program(
         cell=c,
         points=points,
-        nominal=positions,
         positions=positions,
         rotations=abc_to_matrix(abc),
         correction=np.zeros((n, 3)),
@@ -281,8 +280,10 @@ def test_krl_hole_and_position_lines_are_the_lines_written_out(bare_templates, p
     src, dat = krl_lines(program)
     with mock.patch.object(krl_emit, "BLOCK", block):
         files = krl_emit.render_krl(program, ["h"], bare_templates)
-        texts = [files[name] for name in files]
-    assert "".join(texts[0::2]) == src and "".join(texts[1::2]) == dat
+        texts = {
+            ext: [files[name] for name in files if name.endswith(ext)] for ext in (".src", ".dat")
+        }
+    assert "".join(texts[".src"]) == src and "".join(texts[".dat"]) == dat
     single = cell_with(program.cell, krl={"lines_per_file": 100000})
     files = krl_emit.render_krl(dataclasses.replace(program, cell=single), ["h"])
     name = single.krl.name

@@ -10,7 +10,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
-from program_helpers import cell, cell_with, error_field, grid, panel_points, robot
+from program_helpers import (
+    cell,
+    cell_with,
+    error_field,
+    grid,
+    near_singular_wrist,
+    panel_points,
+    robot,
+)
 
 from accugrid.codegen.points import parse_points
 from accugrid.codegen.program import STAGES, _branch_jumps, build_program
@@ -131,19 +139,11 @@ def test_status_that_cannot_be_kept_is_an_error_unless_allowed():
 
 def test_wrist_singularity_warning_names_the_hole():
     c = cell()
-    r = robot()
-    q = np.radians([[0.0, -90.0, 110.0, 0.0, 1.0, 0.0]])  # A5 = 1 deg
-    pose = r.fk(q)[0]
-    base_T_tcp = np.linalg.inv(c.robot_T_base) @ pose
-    from accugrid.kinematics.frames import xyzabc_from_pose
-
-    # the hole point is the pose + approach along the tool axis (the APP stage is the pose)
-    x = xyzabc_from_pose(base_T_tcp)
-    hole = x[:3] + c.drilling.approach_mm * base_T_tcp[:3, 2]
-    text = "id,x,y,z,a,b,c\nSING-1," + ",".join(f"{v:.6f}" for v in [*hole, *x[3:]]) + "\n"
-    prog = build_program(parse_points(text, "s.csv"), c, r, None)
+    points, base_T_tcp = near_singular_wrist()
+    prog = build_program(points, c, robot(), None)
     assert len(prog.warnings) == 1
     assert "wrist singularity" in prog.warnings[0] and "hole 'SING-1'" in prog.warnings[0]
+    x = np.concatenate([points.xyz[0] - c.drilling.approach_mm * base_T_tcp[:3, 2], points.abc[0]])
     np.testing.assert_allclose(pose_from_xyzabc(x)[:3, 3], base_T_tcp[:3, 3], atol=1e-6)
 
 

@@ -34,6 +34,6 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     check_targets([out], [args.points, args.cell] + ([args.grid] if args.grid else []), args.force)
     job = gcode_job(args, out)
-    written = write_files(job.files, job.inputs, args.force)
+    written = write_files(job.files, job.inputs, args.force, ready=job.finish)
     print(summary(job, written))
     return 0

@@ -37,6 +37,8 @@ def run(args: argparse.Namespace) -> int:
     inputs = [args.points, args.cell] + ([args.grid] if args.grid else [])
     check_targets(krl_targets(args.cell, out), inputs, args.force)
     job = krl_job(args, out)
-    written = write_files(job.files, job.inputs, args.force, main=job.main, stale=job.stale)
+    written = write_files(
+        job.files, job.inputs, args.force, ready=job.finish, main=job.main, stale=job.stale
+    )
     print(summary(job, written))
     return 0

@@ -22,9 +22,10 @@ per module follow from the rendered lines per hole of the template in use. Past 
 million holes at 5,000 lines per file) they are numbered with as many digits as needed, as long
 as the name stays a KRL name (at most 24 characters); a job whose modules cannot be named, or
 whose main program cannot call them all within the line limit, is refused after reading the
-points and before correction and IK (``module_names``). Files are rendered pair by pair as they
-are written (``KrlFiles``). A KR C4 holds only a few MiB of programs in its memory at once, so
-a job of many modules is run a batch of modules at a time (copied in turn, or loaded on demand).
+points and before correction and IK (``module_names``). Files are rendered one by one as they
+are written, the modules' ``.src`` before their ``.dat`` (``KrlFiles``). A KR C4 holds only a
+few MiB of programs in its memory at once, so a job of many modules is run a batch of modules at
+a time (copied in turn, or loaded on demand).
 """
 
 from __future__ import annotations
@@ -195,7 +196,7 @@ def render_krl(program: Program, header: list[str], templates=None) -> KrlFiles:
     a mapping that renders each file pair when it is asked for (see ``KrlFiles``)."""
     cell = program.cell
     files = _file_renderer(cell, header, _Records(program), templates)
-    return KrlFiles(files, *_modules(files, cell, len(program)), len(program), cell)
+    return KrlFiles(files, *_split(cell, len(program), header, templates), len(program), cell)
 
 
 def module_names(cell: Cell, holes: int, header: list[str], templates=None) -> list[str]:
@@ -204,26 +205,31 @@ def module_names(cell: Cell, holes: int, header: list[str], templates=None) -> l
     be named or called within ``program.lines_per_file``, so such a job is refused before the
     heavy work. ``header``: a header with as many lines as the job's will have. The lines per
     hole come from rendering a 1- and a 2-hole placeholder program with the same templates."""
+    return _split(cell, holes, header, templates)[0]
+
+
+def _split(cell: Cell, holes: int, header: list[str], templates) -> tuple[list[str], int]:
+    """The modules of a job of ``holes`` holes and the holes per module (``_modules``), from a
+    placeholder program: known before the correction, and without waiting for the IK check."""
     records = _Records(_placeholder(cell))
-    return _modules(_file_renderer(cell, header, records, templates), cell, holes)[0]
+    return _modules(_file_renderer(cell, header, records, templates), cell, holes)
 
 
 class KrlFiles(Mapping):
-    """The files of a KRL job by name, modules first (``NAME_001.src``, ``NAME_001.dat``, ...),
-    then the main program (``NAME.src``, ``NAME.dat``). A file pair is rendered when one of its
-    files is asked for and only the last pair is kept, so that writing a million-hole job in
-    order holds one module's text at a time; each file is checked against
-    ``program.lines_per_file`` as it is rendered."""
+    """The files of a KRL job by name: the modules' ``.src`` (``NAME_001.src``, ...), then their
+    ``.dat``, then the main program (``NAME.src``, ``NAME.dat``). The ``.src`` files need no
+    Status or Turn, so they are made while the program's IK check still runs (``Program.wait``);
+    the first ``.dat`` waits for it. Each file is rendered when asked for and not kept, so that
+    writing a million-hole job in order holds one file's text at a time; each is checked
+    against ``program.lines_per_file`` as it is rendered."""
 
     def __init__(self, files, modules: list[str], per_part: int, holes: int, cell: Cell) -> None:
         self._files, self._modules, self._holes, self._cell = files, modules, holes, cell
         self._per_part = per_part
         name = cell.krl.name
         self._pairs = [*modules, name] if modules else [name]
-        self._index = {
-            f"{m}{ext}": k for k, m in enumerate(self._pairs) for ext in (".src", ".dat")
-        }
-        self._last: tuple[int, dict[str, str]] | None = None
+        self._index = {f"{m}{ext}": (k, ext) for ext in _EXTS for k, m in enumerate(modules)}
+        self._index |= {f"{name}{ext}": (len(modules), ext) for ext in _EXTS}
 
     def __iter__(self):
         return iter(self._index)
@@ -232,10 +238,7 @@ class KrlFiles(Mapping):
         return len(self._index)
 
     def __getitem__(self, file: str) -> str:
-        k = self._index[file]
-        if self._last is None or self._last[0] != k:
-            self._last = (k, self._render(k))
-        return self._last[1][file]
+        return self._render(*self._index[file])
 
     def at(self, folder: Path) -> Mapping:
         """The same files keyed by their path in ``folder``, still rendered as asked for."""
@@ -253,28 +256,30 @@ class KrlFiles(Mapping):
 
         return InFolder()
 
-    def _render(self, k: int) -> dict[str, str]:
+    def _render(self, k: int, ext: str) -> str:
         name, modules, per = self._pairs[k], self._modules, self._per_part
         if not modules:
-            pair = self._files(name, "single", 0, self._holes)
+            text = self._files(name, "single", 0, self._holes, ext)
         elif k < len(modules):
-            pair = self._files(name, "part", k * per, min(self._holes, (k + 1) * per))
+            text = self._files(name, "part", k * per, min(self._holes, (k + 1) * per), ext)
         else:
-            pair = self._files(name, "main", 0, 0, modules)
-        out = dict(zip((f"{name}.src", f"{name}.dat"), pair, strict=True))
+            text = self._files(name, "main", 0, 0, ext, modules)
         limit = self._cell.krl.lines_per_file
-        for file, text in out.items():
-            if _lines(text) > limit:
-                raise InputError(
-                    f"{file} would have {_lines(text)} lines, more than program.lines_per_file "
-                    f"({limit}); the main program's calls or a template's lines do not fit",
-                    self._cell.path,
-                )
-        return out
+        if _lines(text) > limit:
+            raise InputError(
+                f"{name}{ext} would have {_lines(text)} lines, more than program.lines_per_file "
+                f"({limit}); the main program's calls or a template's lines do not fit",
+                self._cell.path,
+            )
+        return text
+
+
+_EXTS = (".src", ".dat")
 
 
 def _file_renderer(cell: Cell, header: list[str], records: _Records, templates):
-    """files(name, role, lo, hi, calls=()) -> (.src, .dat) text of holes lo..hi-1."""
+    """files(name, role, lo, hi, ext, calls=()) -> the ``ext`` (".src" or ".dat") text of
+    holes lo..hi-1."""
     env = environment(template_dir("krl", templates), newline="\r\n")
     common = {
         "header": header,
@@ -295,20 +300,20 @@ def _file_renderer(cell: Cell, header: list[str], records: _Records, templates):
     src_uses = template_uses(env, "program.src.j2")
     dat_uses = template_uses(env, "program.dat.j2")
 
-    def files(name: str, role: str, lo: int, hi: int, calls=()) -> tuple[str, str]:
-        src = render(
-            env,
-            "program.src.j2",
-            name=name,
-            role=role,
-            calls=list(calls),
-            **records.context(lo, hi, src_uses),
-            **common,
-        )
-        dat = render(
+    def files(name: str, role: str, lo: int, hi: int, ext: str, calls=()) -> str:
+        if ext == ".src":
+            return render(
+                env,
+                "program.src.j2",
+                name=name,
+                role=role,
+                calls=list(calls),
+                **records.context(lo, hi, src_uses),
+                **common,
+            )
+        return render(
             env, "program.dat.j2", name=name, **records.context(lo, hi, dat_uses), **common
         )
-        return src, dat
 
     return files
 
@@ -333,7 +338,7 @@ def _modules(files, cell: Cell, n: int) -> tuple[list[str], int]:
             cell.path,
         )
     modules = [f"{name}_{k + 1:0{digits}d}" for k in range(parts)]
-    main = max(map(_lines, files(name, "main", 0, 0, modules)))
+    main = max(_lines(files(name, "main", 0, 0, ext, modules)) for ext in _EXTS)
     if main > limit:
         raise InputError(
             f"{n} holes need {parts} modules of {per_part} holes; the main program calling them "
@@ -345,8 +350,8 @@ def _modules(files, cell: Cell, n: int) -> tuple[list[str], int]:
 
 def _capacity(files, name: str, role: str, limit: int) -> int:
     """Holes that fit one file pair of ``role``, from rendering it with 1 and 2 holes."""
-    one = [_lines(t) for t in files(name, role, 0, 1)]
-    two = [_lines(t) for t in files(name, role, 0, 2)]
+    one = [_lines(files(name, role, 0, 1, ext)) for ext in _EXTS]
+    two = [_lines(files(name, role, 0, 2, ext)) for ext in _EXTS]
     fits = []
     for a, b in zip(one, two, strict=True):
         per_hole = max(b - a, 1)
@@ -375,7 +380,6 @@ def _placeholder(cell: Cell) -> Program:
     return Program(
         cell=cell,
         points=points,
-        nominal=zeros,
         positions=zeros,
         rotations=np.tile(np.eye(3), (2, 1, 1)),
         correction=zeros[:, 0],
@@ -404,10 +408,7 @@ class _Records:
             [0, 1, 2] if cell.drilling.retract_mm == cell.drilling.approach_mm else [0, 1, 2, 3]
         )
         self.names = [STAGES[k] for k in self.stages]
-        status, turn = program.configuration.to_kuka()  # Status 0..7, Turn 0..63
-        self.status_turn = np.stack([status[:, self.stages], turn[:, self.stages]], axis=2).astype(
-            np.int16
-        )
+        self._status_turn: np.ndarray | None = None  # once the program's IK check is done
         self._block: tuple = (0, 0, None)
         ext = "".join(
             f",E{k + 1} {fixed(v, cell.krl.decimals)}" for k, v in enumerate(cell.krl.external_axes)
@@ -428,54 +429,65 @@ class _Records:
         out: dict[str, object] = {}
         n, k = hi - lo, len(self.stages)
         if "positions" in wanted:
-            numbers = self._numbers(lo, hi)
+            pos, abc = self._numbers(lo, hi, "pos", "abc")
             table = np.empty((n, k, 9), dtype=object)
             for j, column in enumerate(self._names(lo, hi)):
                 table[:, j, 0] = column
-            table[:, :, 1:4] = fixed_texts(numbers.pos, self.decimals)
-            table[:, :, 4:7] = fixed_texts(numbers.abc, self.decimals, distinct=True)[:, None, :]
-            table[:, :, 7:9] = fixed_texts(numbers.status_turn, 0, distinct=True)
+            table[:, :, 1:4] = fixed_texts(pos, self.decimals)
+            table[:, :, 4:7] = fixed_texts(abc, self.decimals, distinct=True)[:, None, :]
+            table[:, :, 7:9] = fixed_texts(self.status_turn(lo, hi), 0, distinct=True)
             out["positions"] = list(map(KrlPosition._make, table.reshape(n * k, 9).tolist()))
         if "position_lines" in wanted:
             out["position_lines"] = self._lines("position_lines", lo, hi)
         if "holes" in wanted:
-            numbers = self._numbers(lo, hi)
+            labels, feed_m_s = self._numbers(lo, hi, "labels", "feed_m_s")
             names = self._names(lo, hi)
             retract = names[3] if k == 4 else names[0]
-            feed = fixed_texts(numbers.feed_m_s, 4, distinct=True).tolist()
-            out["holes"] = list(map(KrlHole, numbers.labels, *names[:3], retract, feed))
+            feed = fixed_texts(feed_m_s, 4, distinct=True).tolist()
+            out["holes"] = list(map(KrlHole, labels, *names[:3], retract, feed))
         if "hole_lines" in wanted:
             out["hole_lines"] = self._lines("hole_lines", lo, hi)
         return out
 
+    def status_turn(self, lo: int, hi: int) -> np.ndarray:
+        """KUKA Status and Turn (hi - lo, stages, 2) of holes lo..hi-1: the .dat needs them (the
+        .src does not), so this is where a job waits for the program's IK check."""
+        if self._status_turn is None:
+            status, turn = self.program.wait().configuration.to_kuka()  # S 0..7, T 0..63
+            pair = np.stack([status[:, self.stages], turn[:, self.stages]], axis=2)
+            self._status_turn = pair.astype(np.int16)
+        return self._status_turn[lo:hi]
+
     def _block_of(self, lo: int, hi: int) -> tuple[int, SimpleNamespace]:
-        """The first hole and the numbers of the block that holds holes lo..hi-1 (made when a
-        file first asks past the last block): positions ``pos`` (n, stages, 3) mm in the BASE
-        frame, A,B,C ``abc`` (n, 3) deg, S and T ``status_turn`` (n, stages, 2), the feed
-        ``feed_m_s`` (n,) m/s, the hole ``labels`` (n,) and the line ``images`` made so far."""
+        """The first hole and the block that holds holes lo..hi-1 (a new one when a file first
+        asks past the last block): its size ``n``, the feed ``feed_m_s`` (n,) m/s, the line
+        ``images`` made so far by kind, and the parts ``_part`` makes on first use."""
         start, end, block = self._block
         if block is None or not start <= lo <= hi <= end:
             start, end = lo, max(hi, min(lo + BLOCK, len(self.program)))
-            program = self.program
-            pos, abc = program.in_frame(program.cell.robot_T_base, start, end)
-            block = SimpleNamespace(
-                pos=pos[:, self.stages],
-                abc=abc,
-                status_turn=self.status_turn[start:end],
-                feed_m_s=program.feed_mm_s[start:end] / 1000.0,
-                labels=program.labels(start, end),
-                images={},
-            )
+            feed_m_s = self.program.feed_mm_s[start:end] / 1000.0
+            block = SimpleNamespace(n=end - start, feed_m_s=feed_m_s, images={})
             self._block = (start, end, block)
         return start, block
 
-    def _numbers(self, lo: int, hi: int) -> SimpleNamespace:
-        """The numbers of holes lo..hi-1 (see ``_block_of``)."""
+    def _part(self, start: int, block: SimpleNamespace, name: str):
+        """A part of the block from ``start``, made on first use (the ``.src`` need the labels,
+        the ``.dat`` the numbers): positions ``pos`` (n, stages, 3) mm in the BASE frame, A,B,C
+        ``abc`` (n, 3) deg, the hole ``labels`` (n,); or the ``feed_m_s``."""
+        if not hasattr(block, name):
+            program, end = self.program, start + block.n
+            if name == "labels":
+                block.labels = program.labels(start, end)
+            else:
+                pos, block.abc = program.in_frame(program.cell.robot_T_base, start, end)
+                block.pos = pos[:, self.stages]
+        return getattr(block, name)
+
+    def _numbers(self, lo: int, hi: int, *names: str) -> list:
+        """The parts ``names`` (see ``_part``) of holes lo..hi-1."""
         start, block = self._block_of(lo, hi)
         part = slice(lo - start, hi - start)
-        return SimpleNamespace(
-            **{key: value[part] for key, value in vars(block).items() if key != "images"}
-        )
+        return [self._part(start, block, name)[part] for name in names]
 
     def _lines(self, kind: str, lo: int, hi: int) -> str:
         """The ``hole_lines`` or ``position_lines`` of holes lo..hi-1: rows of the block's line
@@ -489,12 +501,11 @@ class _Records:
     def _position_image(self, start: int, block: SimpleNamespace) -> np.ndarray:
         """The line image of the .dat lines of the block of holes from ``start``: per hole, one
         DECL E6POS line per stage."""
-        n, k = len(block.pos), len(self.stages)
-        mm = number_cells(
-            np.concatenate([block.pos.reshape(n, 3 * k), block.abc], axis=1), self.decimals
-        )
+        n, k = block.n, len(self.stages)
+        pos, abc = self._part(start, block, "pos"), self._part(start, block, "abc")
+        mm = number_cells(np.concatenate([pos.reshape(n, 3 * k), abc], axis=1), self.decimals)
         number = number_cells(np.arange(start + 1, start + n + 1), 0)
-        st = _ST_CELLS[block.status_turn]  # (n, k, 2, w): Status 0..7 and Turn 0..63 from a table
+        st = _ST_CELLS[self.status_turn(start, start + n)]  # (n, k, 2, w): S 0..7, T 0..63
         cells = []
         for j in range(k):
             cells += [number, *(mm[:, 3 * j + c] for c in range(3))]
@@ -504,9 +515,9 @@ class _Records:
     def _hole_image(self, start: int, block: SimpleNamespace) -> np.ndarray:
         """The line image of the .src lines of the block of holes from ``start``: per hole, the
         lines of ``_hole_template``."""
-        n = len(block.pos)
+        n = block.n
         number = number_cells(np.arange(start + 1, start + n + 1), 0)
-        comments = text_cells(comment_texts(block.labels))
+        comments = text_cells(comment_texts(self._part(start, block, "labels")))
         feed = number_cells(block.feed_m_s, 4)
         return line_image(self.hole_template, [comments, number, number, feed, number, number])
 
