@@ -101,6 +101,19 @@ class Program:
         million-hole job keeps no second copy of its positions)."""
         return _nominal(self.cell, self.points.xyz, self.rotations[:, :, 2], self.depth_mm)
 
+    def kuka_words(self, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
+        """KUKA Status and Turn (hi - lo, 4) of holes lo..hi-1, stage order ``STAGES``. With
+        the IK check in the background, as soon as its blocks have reached these holes (what
+        the check keeps, see ``IKCheck.early``); else after ``wait``."""
+        if self.checking is not None:
+            early = self.checking.early(lo, hi)
+            if early is not None:
+                return early
+        c = self.wait().configuration
+        return Configuration(
+            c.shoulder[lo:hi], c.elbow[lo:hi], c.wrist[lo:hi], c.negative[lo:hi]
+        ).to_kuka()
+
     def wait(self) -> Program:
         """This program with its IK check done: waits for a check running in the background,
         then ``configuration`` is set and its warnings follow the correction's; raises the
@@ -150,25 +163,78 @@ class Program:
 
 
 class IKCheck:
-    """A program's IK check (``_configuration``) on a background thread; ``result()`` waits for
-    it: (Configuration, warnings), or its exception raised in the caller's thread."""
+    """A program's IK check (``_configuration``) on a background thread: ``result()`` waits for
+    it, (Configuration, warnings) or its exception raised in the caller's thread; ``early``
+    hands out Status and Turn of holes its blocks have reached."""
 
-    def __init__(self, check: Callable[[], tuple[Configuration, list[str]]]) -> None:
+    def __init__(self, check: Callable[[_Progress], tuple[Configuration, list[str]]]) -> None:
         self._outcome: tuple | BaseException | None = None
+        self._progress = _Progress()
         self._thread = threading.Thread(target=self._run, args=(check,), name="accugrid-ik")
         self._thread.start()
 
     def _run(self, check) -> None:
         try:
-            self._outcome = check()
+            self._outcome = check(self._progress)
         except BaseException as exc:  # raised again by result(), in the waiting thread
             self._outcome = exc
+        finally:
+            self._progress.close()
 
     def result(self) -> tuple[Configuration, list[str]]:
         self._thread.join()
         if isinstance(self._outcome, BaseException):
             raise self._outcome
         return self._outcome
+
+    def early(self, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """KUKA Status and Turn (hi - lo, 4) of holes lo..hi-1 once the IK blocks have reached
+        them, before the check ends: the numbers the check keeps, since it changes only holes
+        with a failing pose (``allow_change``); None when one of these holes has one or the
+        check ended first (then ``result()`` tells)."""
+        return self._progress.early(lo, hi)
+
+
+class _Progress:
+    """How far the IK blocks of a check have come: the first pass's ``ok``, ``status`` and
+    ``turn`` per pose (holes * stages, hole-major) and the holes done so far."""
+
+    def __init__(self) -> None:
+        self._changed = threading.Condition()
+        self._holes, self._closed = 0, False
+        self._sol: SimpleNamespace | None = None
+        self._stages = 0
+
+    def start(self, sol: SimpleNamespace, stages: int) -> None:
+        with self._changed:
+            self._sol, self._stages = sol, stages
+
+    def advance(self, holes: int) -> None:
+        with self._changed:
+            self._holes = holes
+            self._changed.notify_all()
+
+    def _reached(self, hi: int) -> bool:
+        return self._sol is not None and self._holes >= hi
+
+    def close(self) -> None:
+        with self._changed:
+            self._closed = True
+            self._changed.notify_all()
+
+    def early(self, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray] | None:
+        with self._changed:
+            self._changed.wait_for(lambda: self._reached(hi) or self._closed)
+            if not self._reached(hi):
+                return None
+            sol, k = self._sol, self._stages
+        rows = slice(lo * k, hi * k)
+        if not sol.ok[rows].all():
+            return None
+        status, turn = (a[rows].reshape(-1, k).astype(int) for a in (sol.status, sol.turn))
+        if k == 3:  # RET is the APP position
+            status, turn = (np.concatenate([a, a[:, :1]], axis=1) for a in (status, turn))
+        return status, turn
 
 
 def build_program(
@@ -211,9 +277,9 @@ def build_program(
     positions = _nominal(cell, points.xyz, axis, depth)
     positions += rows_times(correction, base_rot)[:, None, :]  # e in the BASE frame
 
-    def check() -> tuple[Configuration, list[str]]:
+    def check(progress: _Progress | None = None) -> tuple[Configuration, list[str]]:
         pose_status, turn, ik_warnings = _configuration(
-            points, cell, robot, positions, rotations, status
+            points, cell, robot, positions, rotations, status, progress
         )
         return Configuration.from_kuka(pose_status, turn), ik_warnings
 
@@ -384,10 +450,11 @@ def _configuration(
     positions: np.ndarray,
     rotations: np.ndarray,
     status: int | None,
+    progress: _Progress | None = None,
 ) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """IK of every pose (positions (N, 4, 3) mm and rotations (N, 3, 3), BASE frame) in KUKA
     ``status`` (None: the first pose's IK default): Status and Turn (N, 4) per pose and the
-    warnings."""
+    warnings. ``progress``: told of the IK blocks as they are done."""
     n = len(points)
     if n == 0:
         return np.zeros((0, 4), int), np.zeros((0, 4), int), []
@@ -402,7 +469,7 @@ def _configuration(
         if not first.ok[0]:
             _fail(points, 0, 0, first.reason[0], cell)
         status = int(first.status[0])
-    sol = _ik_blocks(robot, poses, n, stages, status, cell.configuration.turn)
+    sol = _ik_blocks(robot, poses, n, stages, status, cell.configuration.turn, progress)
     ok = sol.ok.reshape(n, stages)
     q = sol.q.reshape(n, stages, 6)
     pose_status = sol.status.reshape(n, stages).astype(int)
@@ -464,10 +531,13 @@ def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarr
     return out
 
 
-def _ik_blocks(robot: RobotModel, poses, holes: int, stages: int, status, turn) -> SimpleNamespace:
+def _ik_blocks(
+    robot: RobotModel, poses, holes: int, stages: int, status, turn, progress=None
+) -> SimpleNamespace:
     """``robot.ik`` of the poses (holes * stages, 4, 4) that ``poses(slice)`` makes, in blocks of
     about ``IK_BLOCK`` poses on a few threads (``kinematics.blocks``): the same result as one
-    call, with the poses and the IK's (M, 8, ...) temporaries bounded in memory."""
+    call, with the poses and the IK's (M, 8, ...) temporaries bounded in memory. ``progress``
+    (a ``_Progress``) is handed the result arrays and told the holes done, block by block."""
     per = max(IK_BLOCK // stages, 1)
     m = holes * stages
     out = SimpleNamespace(
@@ -484,7 +554,11 @@ def _ik_blocks(robot: RobotModel, poses, holes: int, stages: int, status, turn) 
         for name, values in vars(out).items():
             values[at] = getattr(sol, name)
 
-    run_blocks(block, range(0, holes, per))
+    if progress is None:
+        run_blocks(block, range(0, holes, per))
+        return out
+    progress.start(out, stages)
+    run_blocks(block, range(0, holes, per), done=lambda i: progress.advance(min(i + per, holes)))
     return out
 
 

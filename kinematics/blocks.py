@@ -29,17 +29,23 @@ def threads() -> int:
 
 
 def run_blocks(
-    work: Callable[[int], None], starts: Sequence[int], workers: int | None = None
+    work: Callable[[int], None],
+    starts: Sequence[int],
+    workers: int | None = None,
+    done: Callable[[int], None] | None = None,
 ) -> None:
     """``work(start)`` for every start, on up to ``workers`` threads (None: ``threads()``), at most
     that many blocks in flight; in order on the caller's thread when one thread or one block.
     The first failing block (in the order of ``starts``) raises its exception here, after every
-    earlier block has run."""
+    earlier block has run. ``done(start)``: called on the caller's thread once the blocks up to
+    and including ``start`` have run, in the order of ``starts``."""
     workers = threads() if workers is None else workers
     workers = min(workers, len(starts))
+    done = done or (lambda start: None)
     if workers <= 1:
         for start in starts:
             work(start)
+            done(start)
         return
     from concurrent.futures import ThreadPoolExecutor  # imports logging: only when threaded
 
@@ -48,10 +54,17 @@ def run_blocks(
         try:
             for start in starts:
                 if len(pending) == workers:
-                    pending.popleft().result()
-                pending.append(pool.submit(work, start))
+                    done(_result(pending.popleft()))
+                pending.append((start, pool.submit(work, start)))
             while pending:
-                pending.popleft().result()
+                done(_result(pending.popleft()))
         finally:
-            for future in pending:  # after a failure: later blocks not yet started never start
+            for _, future in pending:  # after a failure: later blocks not yet started never start
                 future.cancel()
+
+
+def _result(block: tuple) -> int:
+    """The start of a (start, future) block once it has run (its exception raised here)."""
+    start, future = block
+    future.result()
+    return start

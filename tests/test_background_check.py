@@ -5,9 +5,12 @@ KRL ``.src`` files made while it runs."""
 from __future__ import annotations
 
 import threading
+from unittest import mock
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from program_helpers import (
     CELL,
     POINTS,
@@ -64,6 +67,30 @@ def test_a_program_checked_in_the_background_is_the_one_checked_at_once(case):
     ):
         np.testing.assert_array_equal(got, want)
     np.testing.assert_array_equal(later.positions, at_once.positions)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.sampled_from(["fixed Status", "allow change"]),
+    st.integers(1, 40),
+    st.lists(st.tuples(st.integers(0, len(ROWS)), st.integers(0, len(ROWS))), max_size=6),
+)
+def test_status_and_turn_from_the_ik_blocks_are_what_the_finished_check_keeps(case, block, ranges):
+    """Holes lo..hi-1 asked for while the check runs (IK blocks of ``block`` poses, some holes
+    changing Status with allow_change): the Status and Turn the finished check keeps."""
+    c = (
+        cell()
+        if case == "fixed Status"
+        else cell_with(configuration={"status": 0, "allow_change": True})
+    )
+    pts = panel_points(ROWS)
+    final = build_program(pts, c, robot(), grid()).configuration.to_kuka()
+    with mock.patch.object(program, "IK_BLOCK", block):
+        prog = build_program(pts, c, robot(), grid(), background=True)
+        for lo, hi in [(min(a, b), max(a, b)) for a, b in ranges] + [(0, len(ROWS))]:
+            for got, want in zip(prog.kuka_words(lo, hi), final, strict=True):
+                np.testing.assert_array_equal(got, want[lo:hi])
+        prog.wait()
 
 
 def test_an_unreachable_hole_checked_in_the_background_is_raised_by_wait():

@@ -43,15 +43,24 @@ def test_every_block_before_the_first_failure_runs_once_and_that_failure_is_rais
         if start in failing:
             raise Failed(start)
 
+    finished = []
+
+    def done(start: int) -> None:  # every block up to start has run, told in order
+        assert threading.current_thread() is threading.main_thread()
+        with lock:
+            assert set(range(start + 1)) <= set(ran)
+        finished.append(start)
+
     first = min((s for s in starts if s in failing), default=None)
     if first is None:
-        blocks.run_blocks(work, starts, workers)
+        blocks.run_blocks(work, starts, workers, done)
     else:
         with pytest.raises(Failed) as info:
-            blocks.run_blocks(work, starts, workers)
+            blocks.run_blocks(work, starts, workers, done)
         assert info.value.args == (first,)
     assert len(ran) == len(set(ran))  # no block twice
     assert set(range(count if first is None else first)) <= set(ran)
+    assert finished == starts[: count if first is None else first]
 
 
 def test_no_more_blocks_in_flight_than_threads():

@@ -408,7 +408,6 @@ class _Records:
             [0, 1, 2] if cell.drilling.retract_mm == cell.drilling.approach_mm else [0, 1, 2, 3]
         )
         self.names = [STAGES[k] for k in self.stages]
-        self._status_turn: np.ndarray | None = None  # once the program's IK check is done
         self._block: tuple = (0, 0, None)
         ext = "".join(
             f",E{k + 1} {fixed(v, cell.krl.decimals)}" for k, v in enumerate(cell.krl.external_axes)
@@ -451,12 +450,11 @@ class _Records:
 
     def status_turn(self, lo: int, hi: int) -> np.ndarray:
         """KUKA Status and Turn (hi - lo, stages, 2) of holes lo..hi-1: the .dat needs them (the
-        .src does not), so this is where a job waits for the program's IK check."""
-        if self._status_turn is None:
-            status, turn = self.program.wait().configuration.to_kuka()  # S 0..7, T 0..63
-            pair = np.stack([status[:, self.stages], turn[:, self.stages]], axis=2)
-            self._status_turn = pair.astype(np.int16)
-        return self._status_turn[lo:hi]
+        .src does not), so this is where a job waits for the program's IK check to reach
+        them (``Program.kuka_words``)."""
+        status, turn = self.program.kuka_words(lo, hi)  # S 0..7, T 0..63
+        pair = np.stack([status[:, self.stages], turn[:, self.stages]], axis=2)
+        return pair.astype(np.int16)
 
     def _block_of(self, lo: int, hi: int) -> tuple[int, SimpleNamespace]:
         """The first hole and the block that holds holes lo..hi-1 (a new one when a file first
