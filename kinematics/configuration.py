@@ -145,11 +145,22 @@ def _arm_status(robot: Robot, th1: np.ndarray, th3: np.ndarray, wrist: np.ndarra
     ``_status`` on the arm's joint vectors (A1 and A3 wrapped as ``wrap(axis_angles)`` does),
     without the other four axes; the shoulder bit once per shoulder solution."""
     dh = robot.dh
-    a1 = closed.wrap((th1 - dh.theta_offset[0]) * dh.sign[0])
     a3 = closed.wrap((th3 - dh.theta_offset[2]) * dh.sign[2])
-    dh_a1 = dh.sign[0] * a1 + dh.theta_offset[0]
-    x_a1 = wrist[:, None, 0] * np.cos(dh_a1) + wrist[:, None, 1] * np.sin(dh_a1)
-    return kuka_status((x_a1 < 0)[:, :, None], a3 >= robot.phi_rad, False)
+    # x_a1 (the wrist point along the A1 arm direction) is +r for the shoulder toward the
+    # wrist point and -r for the other, r = hypot(x, y) > 0, within a few ulps of r: the bit
+    # is the shoulder's index. Worked out only where r is 0 or subnormal (on the A1 axis).
+    behind = np.zeros(th1.shape, bool)
+    behind[:, 1] = True
+    axis = np.flatnonzero((np.abs(wrist[:, 0]) < _NORMAL) & (np.abs(wrist[:, 1]) < _NORMAL))
+    if axis.size:
+        a1 = closed.wrap((th1[axis] - dh.theta_offset[0]) * dh.sign[0])
+        dh_a1 = dh.sign[0] * a1 + dh.theta_offset[0]
+        x_a1 = wrist[axis, None, 0] * np.cos(dh_a1) + wrist[axis, None, 1] * np.sin(dh_a1)
+        behind[axis] = x_a1 < 0
+    return kuka_status(behind[:, :, None], a3 >= robot.phi_rad, False)
+
+
+_NORMAL = 1e-100  # mm: |x|, |y| of a wrist point off the A1 axis are far above this
 
 
 def _status(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> np.ndarray:
@@ -179,16 +190,26 @@ def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, 
     bits = _arm_status(robot, th1, th3, wrist).reshape(n, 4)
     want = 2 if status is None else np.broadcast_to(np.asarray(status, dtype=int), (n,))
     fits = reach & (bits == np.bitwise_and(want, 3)[..., None])
-    one = fits.sum(axis=1) == 1
+    fitting = fits[:, 0].astype(np.int8)
+    for k in range(1, 4):  # column by column: a reduction over the short axis is slow
+        fitting += fits[:, k]
+    one = fitting == 1
     q = np.full((n, 6), np.nan)
     found = np.zeros(n, bool)
     rows = np.flatnonzero(one)
-    a = np.argmax(fits[rows], axis=1)
+    every = len(rows) == n  # then rows are all poses in order: no gathers
+
+    def of_rows(x: np.ndarray) -> np.ndarray:
+        return x if every else x[rows]
+
+    chosen_fits = of_rows(fits)
+    a = chosen_fits[:, 1] + 2 * chosen_fits[:, 2].astype(np.int64) + 3 * chosen_fits[:, 3]
     s, e = a // 2, a % 2
-    th2 = closed.upper_arm(dh, [part[rows, s] for part in plane], e)  # the chosen arm's only
-    arm = (th1[rows, s], th2, th3[rows, s, e])
+    line = np.arange(len(rows))
+    th2 = closed.upper_arm(dh, [of_rows(part)[line, s] for part in plane], e)  # chosen arm only
+    arm = (of_rows(th1)[line, s], th2, of_rows(th3)[line, s, e])
     if status is None:
-        cand = closed.arm_wrists(dh, flange[rows], *arm)  # (m, 2, 6)
+        cand = closed.arm_wrists(dh, of_rows(flange), *arm)  # (m, 2, 6)
         ref = HOME_RAD if reference is None else np.asarray(reference, dtype=float)
         ref = np.broadcast_to(ref, (n, 6))[rows, None]
         pick = np.argmin((closed.wrap(cand - ref) ** 2).sum(axis=2), axis=1)
@@ -198,14 +219,17 @@ def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, 
     else:
         # the arm solution has the wanted bits 0 and 1 (its Status, the same numbers as its
         # candidates' ``_status``): the wrist with the wanted bit 2 (A5 < 0) is the match
-        chosen, settled = closed.chosen_wrists(dh, flange[rows], *arm, want[rows] & 4 != 0)
+        chosen, settled = closed.chosen_wrists(dh, of_rows(flange), *arm, of_rows(want) & 4 != 0)
         done = rows[settled]
-        q[done] = chosen[settled]
-        found[done] = True
+        if len(done) == n:  # every pose: no scatter
+            q, found = chosen, np.ones(n, bool)
+        else:
+            q[done] = chosen[settled]
+            found[done] = True
         rest = np.concatenate([np.flatnonzero(~one & fits.any(axis=1)), rows[~settled]])
     if rest.size:
         q[rest], found[rest] = _select_all(robot, flange[rest], wrist[rest], want, rest, reference)
-    return q, found, reach.any(axis=1)
+    return q, found, reach[:, 0] | reach[:, 2]  # reach repeats each shoulder's for 2 elbows
 
 
 def _select_all(robot: Robot, flange, wrist, want, rows, reference):

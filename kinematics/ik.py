@@ -40,9 +40,14 @@ def closed_form_supported(table: DHTable) -> bool:
 
 
 def wrap(angle: np.ndarray) -> np.ndarray:
-    """Angles (any shape) rad wrapped into (-pi, pi]."""
-    out = angle - (2 * np.pi) * np.round(np.asarray(angle) / (2 * np.pi))
-    return np.where(out <= -np.pi, out + 2 * np.pi, out)
+    """Angles (any shape) rad wrapped into (-pi, pi] (a new array)."""
+    angle = np.asarray(angle)
+    out = np.divide(angle, 2 * np.pi, out=np.empty(angle.shape))  # in place from here on
+    np.round(out, out=out)
+    out *= 2 * np.pi
+    np.subtract(angle, out, out=out)
+    np.add(out, 2 * np.pi, out=out, where=out <= -np.pi)
+    return out
 
 
 def wrist_points(table: DHTable, flange: np.ndarray) -> np.ndarray:
@@ -113,7 +118,9 @@ def arm_elbows(table: DHTable, pw: np.ndarray) -> tuple[np.ndarray, ...]:
     cos_g = (px**2 + py**2 - a2**2 - l3**2) / (2 * a2 * l3)  # (N, 2)
     reach = np.abs(cos_g) <= 1 + _TOL
     gamma = np.arccos(np.clip(cos_g, -1.0, 1.0))  # elbow angle >= 0; the other elbow: -gamma
-    th3 = np.stack([gamma - beta, -gamma - beta], axis=2)  # (N, 2 shoulder, 2 elbow)
+    th3 = np.empty((*gamma.shape, 2))  # (N, 2 shoulder, 2 elbow)
+    np.subtract(gamma, beta, out=th3[..., 0])
+    np.subtract(-gamma, beta, out=th3[..., 1])
     return th1, th3, reach, (px, np.broadcast_to(py, px.shape), gamma)
 
 

@@ -152,13 +152,14 @@ class Robot:
         for axis in range(1, 6):  # axis by axis: a reduction over the short axis is slow
             beyond |= outside[:, axis]
         beyond = np.flatnonzero(beyond)
-        for axis in range(5, -1, -1):  # report the lowest axis outside its limits
+        for axis in range(5, -1, -1) if beyond.size else ():  # the lowest axis outside is named
             lo_deg, hi_deg = self.joint_limits_deg[axis]
             hit = beyond[outside[beyond, axis]]
             reason[hit] = f"A{axis + 1} outside limits {lo_deg:g}..{hi_deg:g} deg"
         ok = found.copy()
         ok[beyond] = False
-        final = np.where(found[:, None], q, 0.0)  # after Turn: A3, A5 may have moved by 360 deg
+        # after Turn: A3, A5 may have moved by 360 deg
+        final = q if found.all() else np.where(found[:, None], q, 0.0)
         s, t = kuka_words(self, final, wrist)
         return IKSolution(q, ok, reason, np.where(found, s, -1), np.where(found, t, -1))
 
