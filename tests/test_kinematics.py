@@ -277,6 +277,37 @@ def _flange_poses_near_branches(q: np.ndarray, r) -> np.ndarray:
     return r.fk(q) @ np.linalg.inv(r.flange_T_tool)
 
 
+@settings(max_examples=60, deadline=None)
+@given(
+    xy=arrays(
+        float,
+        (30, 2),
+        elements=st.one_of(
+            st.floats(-3000, 3000),
+            st.sampled_from([0.0, -0.0, 5e-324, -5e-324, 1e-200, 1e-310, 1e-12]),
+        ),
+    ),
+    z=st.floats(-500, 2500),
+    name=st.sampled_from(["kr210", "kr210-paper"]),
+)
+def test_the_shoulder_bits_of_the_arm_solutions_are_the_shoulder_sign_test(xy, z, name):
+    """``_arm_status`` takes the shoulder bit from the solution's index off the A1 axis: the
+    same bits as the sign of the wrist point along each solution's A1 direction, also for
+    wrist points on the axis or a subnormal distance from it."""
+    from accugrid.kinematics import ik
+    from accugrid.kinematics.configuration import _arm_status
+
+    r = robot(name)
+    wrist = np.column_stack([xy, np.full(len(xy), z)])
+    th1, th3, _, _ = ik.arm_elbows(r.dh, wrist)
+    dh = r.dh
+    a1 = ik.wrap((th1 - dh.theta_offset[0]) * dh.sign[0])  # KUKA A1, then back to DH
+    dh_a1 = dh.sign[0] * a1 + dh.theta_offset[0]
+    behind = wrist[:, None, 0] * np.cos(dh_a1) + wrist[:, None, 1] * np.sin(dh_a1) < 0
+    bits = _arm_status(r, th1, th3, wrist)  # (N, 2 shoulder, 2 elbow)
+    np.testing.assert_array_equal(bits & 1 == 1, np.repeat(behind[:, :, None], 2, axis=2))
+
+
 @settings(max_examples=25, deadline=None)
 @given(
     q=joints_within_limits(40),
