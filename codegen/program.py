@@ -52,6 +52,7 @@ from accugrid.kinematics.frames import (
     matrix_to_abc,
     orient_along_axes,
     rows_times,
+    times_stack,
     too_tilted,
     transform_points,
 )
@@ -158,7 +159,7 @@ class Program:
         pos = rows_times(self.positions[lo:hi].reshape(-1, 3), rot.T).reshape(-1, 4, 3)
         pos += frame_T_base[:3, 3]  # one product of all rows, not one per hole
         rotations = self.rotations[lo:hi]
-        abc = matrix_to_abc(rot @ rotations) if len(rotations) else np.zeros((0, 3))
+        abc = matrix_to_abc(times_stack(rot, rotations)) if len(rotations) else np.zeros((0, 3))
         return pos, abc
 
 
@@ -268,12 +269,14 @@ def build_program(
     status = cell.configuration.status
     if model is not None:  # the robot-frame rotations whole only here: freed before the IK
         correction, warnings, status = _model_correction(
-            points, cell, model, grid, holes_robot, base_rot @ rotations
+            points, cell, model, grid, holes_robot, times_stack(base_rot, rotations)
         )
     elif grid is None:
         correction = np.zeros((n, 3))
     else:
-        correction, warnings = _correction(points, cell, grid, holes_robot, base_rot @ rotations)
+        correction, warnings = _correction(
+            points, cell, grid, holes_robot, times_stack(base_rot, rotations)
+        )
     positions = _nominal(cell, points.xyz, axis, depth)
     positions += rows_times(correction, base_rot)[:, None, :]  # e in the BASE frame
 
@@ -524,7 +527,7 @@ def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarr
     the BASE frame."""
     base_rot, base_org = cell.robot_T_base[:3, :3], cell.robot_T_base[:3, 3]
     out = np.empty((*positions.shape[:2], 4, 4))
-    out[:, :, :3, :3] = (base_rot @ rotations)[:, None]
+    out[:, :, :3, :3] = times_stack(base_rot, rotations)[:, None]
     rows = rows_times(positions.reshape(-1, 3), base_rot.T) + base_org  # not one per hole
     out[:, :, :3, 3] = rows.reshape(positions.shape)
     out[:, :, 3] = (0.0, 0.0, 0.0, 1.0)

@@ -27,7 +27,7 @@ from accugrid.kinematics import ik as closed
 from accugrid.kinematics.configuration import IKSolution, kuka_words, select
 from accugrid.kinematics.dh import DHTable, flange_poses
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import invert, pose_from_xyzabc
+from accugrid.kinematics.frames import invert, pose_from_xyzabc, stack_times
 from accugrid.kinematics.joint_errors import (
     GRAVITY_MPS2,
     MAX_ORDER,
@@ -99,7 +99,7 @@ class Robot:
         q = np.atleast_2d(np.asarray(q, dtype=float))
         if self.fk_joint_errors is not None:
             q = q + self.fk_joint_errors.delta(self.dh, q)
-        return flange_poses(self.dh, q) @ self.flange_T_tool
+        return stack_times(flange_poses(self.dh, q), self.flange_T_tool)
 
     def fk_pinocchio(self, q: np.ndarray) -> np.ndarray:
         """The same as ``fk`` through Pinocchio, one pose at a time (reference and peer; slow)."""
@@ -133,7 +133,7 @@ class Robot:
         n = len(poses)
         if not closed.closed_form_supported(self.dh):
             raise InputError(f"robot {self.name}: DH structure has no closed-form inverse")
-        flange = poses @ invert(self.flange_T_tool)
+        flange = stack_times(poses, invert(self.flange_T_tool))
         wrist = closed.wrist_points(self.dh, flange)
         q, found, reach = select(self, flange, wrist, status, reference)
         reason = np.full(n, "", dtype=object)
@@ -166,7 +166,7 @@ class Robot:
     def ik_all(self, robot_T_tcp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """All 8 solutions (N, 8, 6) rad in (-pi, pi] and their reachability mask (N, 8)."""
         poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
-        return closed.all_solutions(self.dh, poses @ invert(self.flange_T_tool))
+        return closed.all_solutions(self.dh, stack_times(poses, invert(self.flange_T_tool)))
 
 
 def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:
