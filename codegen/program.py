@@ -198,7 +198,8 @@ class IKCheck:
 
 class _Progress:
     """How far the IK blocks of a check have come: the first pass's ``ok``, ``status`` and
-    ``turn`` per pose (holes * stages, hole-major) and the holes done so far."""
+    ``turn`` per pose (holes * stages, hole-major; each block writes its rows once and the
+    check never changes them after) and the holes done so far."""
 
     def __init__(self) -> None:
         self._changed = threading.Condition()
@@ -473,7 +474,7 @@ def _configuration(
             _fail(points, 0, 0, first.reason[0], cell)
         status = int(first.status[0])
     sol = _ik_blocks(robot, poses, n, stages, status, cell.configuration.turn, progress)
-    ok = sol.ok.reshape(n, stages)
+    ok = sol.ok.reshape(n, stages).copy()  # the retry changes this, never the blocks' own
     q = sol.q.reshape(n, stages, 6)
     pose_status = sol.status.reshape(n, stages).astype(int)
     pose_turn = sol.turn.reshape(n, stages).astype(int)

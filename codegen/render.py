@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import os
+import re
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -22,7 +23,16 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import note_input
 from accugrid.templates import TEMPLATE_DIR
 
-__all__ = ["environment", "render", "template_dir", "template_uses"]
+__all__ = [
+    "environment",
+    "printed_plainly",
+    "render",
+    "render_around",
+    "template_dir",
+    "template_uses",
+]
+
+_MARKER = "\x00accugrid lines\x00"  # no text of a program holds a NUL
 
 
 def template_dir(dialect: str, templates: str | os.PathLike[str] | None = None) -> Path:
@@ -92,3 +102,18 @@ def _template_errors(env: jinja2.Environment, template: str) -> Iterator[None]:
         ) from None
     except jinja2.UndefinedError as exc:
         raise InputError(f"template uses an undefined value: {exc.message}", template) from None
+
+
+def printed_plainly(env: jinja2.Environment, template: str, name: str) -> bool:
+    """Whether ``template`` prints the variable ``name`` and only as it is (``{{ name }}``,
+    with or without whitespace control), never filtered, cut or measured: then its text can be
+    rendered around the value (``render_around``) and the value put in between as bytes."""
+    source = env.loader.get_source(env, template)[0]
+    printed = re.findall(r"\{\{-?\s*" + re.escape(name) + r"\s*-?\}\}", source)
+    return bool(printed) and len(printed) == source.count(name)
+
+
+def render_around(env: jinja2.Environment, template: str, name: str, /, **context) -> list[str]:
+    """The text of ``template`` (which prints ``name`` plainly: ``printed_plainly``) cut where
+    it prints ``name``: k + 1 pieces for k prints."""
+    return render(env, template, **{name: _MARKER}, **context).split(_MARKER)

@@ -289,3 +289,32 @@ def test_krl_hole_and_position_lines_are_the_lines_written_out(bare_templates, p
     name = single.krl.name
     assert files[f"{name}.src"].split("; spindle on\r\n")[1].rsplit("WAIT SEC 0\r\n", 1)[0] == src
     assert files[f"{name}.dat"].split("; h\r\n")[1] == dat + "ENDDAT\r\n"
+
+
+@pytest.fixture(scope="module")
+def twice_templates(tmp_path_factory):
+    """KRL templates that print the lines of the holes twice, between lines of their own."""
+    folder = tmp_path_factory.mktemp("twice") / "krl"
+    folder.mkdir()
+    for ext, lines in ((".src", "hole_lines"), (".dat", "position_lines")):
+        text = f"; {{{{ name }}}}\n{{{{ {lines} }}}}; again\n{{{{- {lines} -}}}}\n; end\n"
+        (folder / f"program{ext}.j2").write_text(text)
+    return folder
+
+
+@settings(max_examples=60, deadline=None)
+@given(programs(), st.integers(0, 6), st.integers(0, 6))
+def test_krl_files_count_the_lines_they_have(twice_templates, program, lo, more):
+    """The line count a KRL file is checked against program.lines_per_file with (from the lines
+    per hole where the lines stay bytes) is the number of lines in its text: built-in templates
+    and templates that print the lines twice."""
+    hi = min(len(program), lo + more)
+    lo = min(lo, hi)
+    for templates in (None, twice_templates):
+        records = krl_emit._Records(program)
+        files = krl_emit._file_renderer(program.cell, ["h", "i"], records, templates)
+        for ext in (".src", ".dat"):
+            for role in ("single", "part"):
+                pieces, count = files("P", role, lo, hi, ext)
+                assert count == b"".join(pieces).count(b"\n")
+                assert len(pieces) == (5 if templates == twice_templates else 3)  # lines as bytes

@@ -21,7 +21,6 @@ template that loops over them (built only if the template refers to them).
 
 from __future__ import annotations
 
-import re
 from collections.abc import Iterator
 from typing import NamedTuple
 
@@ -37,7 +36,14 @@ from accugrid.codegen.linebytes import (
     text_cells,
 )
 from accugrid.codegen.program import Program
-from accugrid.codegen.render import environment, render, template_dir, template_uses
+from accugrid.codegen.render import (
+    environment,
+    printed_plainly,
+    render,
+    render_around,
+    template_dir,
+    template_uses,
+)
 from accugrid.codegen.textsafe import comment_texts, fixed, fixed_same, fixed_texts
 
 __all__ = ["BLOCK", "GcodeHole", "canned", "gcode_text", "render_gcode"]
@@ -98,11 +104,10 @@ def gcode_text(program: Program, header: list[str], templates=None) -> Iterator[
         return iter([render(env, "program.ngc.j2", **context).encode()])
     if "hole_lines" not in uses:
         return iter([render(env, "program.ngc.j2", **context).encode()])
-    source = env.loader.get_source(env, "program.ngc.j2")[0]
-    if len(_PRINTED.findall(source)) != source.count("hole_lines"):  # filtered, cut, measured
+    if not printed_plainly(env, "program.ngc.j2", "hole_lines"):  # filtered, cut, measured
         context["hole_lines"] = b"".join(_hole_lines(program)).decode("ascii")
         return iter([render(env, "program.ngc.j2", **context).encode()])
-    frame = render(env, "program.ngc.j2", hole_lines=_MARKER, **context).split(_MARKER)
+    frame = render_around(env, "program.ngc.j2", "hole_lines", **context)
     return _around([piece.encode() for piece in frame], program)
 
 
@@ -115,8 +120,6 @@ def _around(frame: list[bytes], program: Program) -> Iterator[bytes]:
 
 
 BLOCK = 16384  # holes formatted at a time
-_MARKER = "\x00accugrid hole lines\x00"  # no text of a program holds a NUL
-_PRINTED = re.compile(r"\{\{-?\s*hole_lines\s*-?\}\}")
 
 
 def _hole_lines(program: Program) -> Iterator[bytes]:

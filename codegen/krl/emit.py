@@ -43,7 +43,14 @@ from accugrid.codegen.cell import Cell
 from accugrid.codegen.linebytes import SLOT, image_bytes, line_image, number_cells, text_cells
 from accugrid.codegen.points import Points
 from accugrid.codegen.program import STAGES, Program
-from accugrid.codegen.render import environment, render, template_dir, template_uses
+from accugrid.codegen.render import (
+    environment,
+    printed_plainly,
+    render,
+    render_around,
+    template_dir,
+    template_uses,
+)
 from accugrid.codegen.textsafe import KRL_NAME_MAX, comment_texts, fixed, fixed_texts
 from accugrid.compensation.csvtable import Table
 from accugrid.kinematics.configuration import Configuration
@@ -238,10 +245,16 @@ class KrlFiles(Mapping):
         return len(self._index)
 
     def __getitem__(self, file: str) -> str:
+        return b"".join(self.pieces(file)).decode("utf-8")
+
+    def pieces(self, file: str) -> list[bytes]:
+        """The text of ``file`` in pieces of UTF-8, as it is written (the lines the template
+        prints as they are go from their bytes into the file, never through a str)."""
         return self._render(*self._index[file])
 
     def at(self, folder: Path) -> Mapping:
-        """The same files keyed by their path in ``folder``, still rendered as asked for."""
+        """The same files keyed by their path in ``folder``, in pieces (``pieces``), still
+        rendered as asked for."""
         files = self
 
         class InFolder(Mapping):
@@ -251,27 +264,28 @@ class KrlFiles(Mapping):
             def __len__(self) -> int:
                 return len(files)
 
-            def __getitem__(self, path: Path) -> str:
-                return files[Path(path).relative_to(folder).as_posix()]
+            def __getitem__(self, path: Path) -> list[bytes]:
+                return files.pieces(Path(path).name)
 
         return InFolder()
 
-    def _render(self, k: int, ext: str) -> str:
+    def _render(self, k: int, ext: str) -> list[bytes]:
         name, modules, per = self._pairs[k], self._modules, self._per_part
         if not modules:
-            text = self._files(name, "single", 0, self._holes, ext)
+            pieces, lines = self._files(name, "single", 0, self._holes, ext)
         elif k < len(modules):
-            text = self._files(name, "part", k * per, min(self._holes, (k + 1) * per), ext)
+            lo, hi = k * per, min(self._holes, (k + 1) * per)
+            pieces, lines = self._files(name, "part", lo, hi, ext)
         else:
-            text = self._files(name, "main", 0, 0, ext, modules)
+            pieces, lines = self._files(name, "main", 0, 0, ext, modules)
         limit = self._cell.krl.lines_per_file
-        if _lines(text) > limit:
+        if lines > limit:
             raise InputError(
-                f"{name}{ext} would have {_lines(text)} lines, more than program.lines_per_file "
+                f"{name}{ext} would have {lines} lines, more than program.lines_per_file "
                 f"({limit}); the main program's calls or a template's lines do not fit",
                 self._cell.path,
             )
-        return text
+        return pieces
 
 
 _EXTS = (".src", ".dat")
@@ -279,7 +293,8 @@ _EXTS = (".src", ".dat")
 
 def _file_renderer(cell: Cell, header: list[str], records: _Records, templates):
     """files(name, role, lo, hi, ext, calls=()) -> the ``ext`` (".src" or ".dat") text of
-    holes lo..hi-1."""
+    holes lo..hi-1 in pieces of UTF-8, and its number of lines. Where the template prints its
+    per-hole lines as they are, its text is rendered around them and they stay bytes."""
     env = environment(template_dir("krl", templates), newline="\r\n")
     common = {
         "header": header,
@@ -297,23 +312,29 @@ def _file_renderer(cell: Cell, header: list[str], records: _Records, templates):
         "dwell": cell.drilling.dwell_s,
         "ext": cell.krl.external_axes,
     }
-    src_uses = template_uses(env, "program.src.j2")
-    dat_uses = template_uses(env, "program.dat.j2")
+    kinds = {}  # ext -> template, its variables (None: any), its lines variable, printed as is
+    for ext, lines in ((".src", "hole_lines"), (".dat", "position_lines")):
+        template = f"program{ext}.j2"
+        uses = template_uses(env, template)
+        plain = uses is not None and printed_plainly(env, template, lines)
+        kinds[ext] = (template, uses, lines, plain)
 
-    def files(name: str, role: str, lo: int, hi: int, ext: str, calls=()) -> str:
+    def files(name: str, role: str, lo: int, hi: int, ext: str, calls=()):
+        template, uses, lines, plain = kinds[ext]
+        context = {"name": name, **common}
         if ext == ".src":
-            return render(
-                env,
-                "program.src.j2",
-                name=name,
-                role=role,
-                calls=list(calls),
-                **records.context(lo, hi, src_uses),
-                **common,
-            )
-        return render(
-            env, "program.dat.j2", name=name, **records.context(lo, hi, dat_uses), **common
-        )
+            context |= {"role": role, "calls": list(calls)}
+        if not plain:
+            text = render(env, template, **records.context(lo, hi, uses), **context)
+            return [text.encode()], _lines(text)
+        context |= records.context(lo, hi, uses - {lines})
+        frame = render_around(env, template, lines, **context)
+        block = records.lines_bytes(lines, lo, hi)
+        pieces = [frame[0].encode()]
+        for part in frame[1:]:
+            pieces += [block, part.encode()]
+        count = sum(map(_lines, frame)) + (len(frame) - 1) * records.line_count(lines, lo, hi)
+        return pieces, count
 
     return files
 
@@ -338,7 +359,7 @@ def _modules(files, cell: Cell, n: int) -> tuple[list[str], int]:
             cell.path,
         )
     modules = [f"{name}_{k + 1:0{digits}d}" for k in range(parts)]
-    main = max(_lines(files(name, "main", 0, 0, ext, modules)) for ext in _EXTS)
+    main = max(files(name, "main", 0, 0, ext, modules)[1] for ext in _EXTS)
     if main > limit:
         raise InputError(
             f"{n} holes need {parts} modules of {per_part} holes; the main program calling them "
@@ -350,8 +371,8 @@ def _modules(files, cell: Cell, n: int) -> tuple[list[str], int]:
 
 def _capacity(files, name: str, role: str, limit: int) -> int:
     """Holes that fit one file pair of ``role``, from rendering it with 1 and 2 holes."""
-    one = [_lines(files(name, role, 0, 1, ext)) for ext in _EXTS]
-    two = [_lines(files(name, role, 0, 2, ext)) for ext in _EXTS]
+    one = [files(name, role, 0, 1, ext)[1] for ext in _EXTS]
+    two = [files(name, role, 0, 2, ext)[1] for ext in _EXTS]
     fits = []
     for a, b in zip(one, two, strict=True):
         per_hole = max(b - a, 1)
@@ -437,7 +458,7 @@ class _Records:
             table[:, :, 7:9] = fixed_texts(self.status_turn(lo, hi), 0, distinct=True)
             out["positions"] = list(map(KrlPosition._make, table.reshape(n * k, 9).tolist()))
         if "position_lines" in wanted:
-            out["position_lines"] = self._lines("position_lines", lo, hi)
+            out["position_lines"] = self.lines_bytes("position_lines", lo, hi).decode("ascii")
         if "holes" in wanted:
             labels, feed_m_s = self._numbers(lo, hi, "labels", "feed_m_s")
             names = self._names(lo, hi)
@@ -445,7 +466,7 @@ class _Records:
             feed = fixed_texts(feed_m_s, 4, distinct=True).tolist()
             out["holes"] = list(map(KrlHole, labels, *names[:3], retract, feed))
         if "hole_lines" in wanted:
-            out["hole_lines"] = self._lines("hole_lines", lo, hi)
+            out["hole_lines"] = self.lines_bytes("hole_lines", lo, hi).decode("ascii")
         return out
 
     def status_turn(self, lo: int, hi: int) -> np.ndarray:
@@ -487,14 +508,19 @@ class _Records:
         part = slice(lo - start, hi - start)
         return [self._part(start, block, name)[part] for name in names]
 
-    def _lines(self, kind: str, lo: int, hi: int) -> str:
-        """The ``hole_lines`` or ``position_lines`` of holes lo..hi-1: rows of the block's line
-        image of that kind, made once per block."""
+    def lines_bytes(self, kind: str, lo: int, hi: int) -> bytes:
+        """The ``hole_lines`` or ``position_lines`` of holes lo..hi-1, ASCII: rows of the
+        block's line image of that kind, made once per block."""
         start, block = self._block_of(lo, hi)
         if kind not in block.images:
             make = self._hole_image if kind == "hole_lines" else self._position_image
             block.images[kind] = make(start, block)
-        return image_bytes(block.images[kind][lo - start : hi - start]).decode("ascii")
+        return image_bytes(block.images[kind][lo - start : hi - start])
+
+    def line_count(self, kind: str, lo: int, hi: int) -> int:
+        """The lines ``lines_bytes`` has for holes lo..hi-1 (labels are one-line comments)."""
+        per_hole = self.hole_template.count("\n") if kind == "hole_lines" else len(self.stages)
+        return (hi - lo) * per_hole
 
     def _position_image(self, start: int, block: SimpleNamespace) -> np.ndarray:
         """The line image of the .dat lines of the block of holes from ``start``: per hole, one
