@@ -77,7 +77,11 @@ def _kind(mode: int) -> str:
     return kinds.get(stat.S_IFMT(mode), "not a regular file")
 
 
-def _check_one(path: Path, input_ids: set[tuple[int, int]], force: bool) -> None:
+def _check_one(
+    path: Path, input_ids: set[tuple[int, int]], force: bool, folders: set[Path] | None = None
+) -> None:
+    """Refuse ``path`` as an output (module docstring); ``folders``: folders already found
+    usable, whose files skip that check (a KRL job has hundreds of files in one folder)."""
     where = os.fspath(path)
     try:
         st = os.stat(path)
@@ -95,6 +99,8 @@ def _check_one(path: Path, input_ids: set[tuple[int, int]], force: bool) -> None
             raise InputError(f"output exists and is {_kind(st.st_mode)}; refusing it", where)
         if not force:
             raise InputError("output exists (use --force to overwrite)", where)
+    if folders is not None and path.parent in folders:
+        return
     for parent in path.absolute().parents:
         try:
             pst = os.stat(parent)
@@ -103,6 +109,8 @@ def _check_one(path: Path, input_ids: set[tuple[int, int]], force: bool) -> None
         if not stat.S_ISDIR(pst.st_mode):
             raise InputError(f"cannot create the output: {parent} is not a folder", where)
         break
+    if folders is not None:
+        folders.add(path.parent)
 
 
 def check_targets(
@@ -301,8 +309,9 @@ def write_files(
     main_paths = [Path(p) for p in main]
     stale_paths = [Path(p) for p in stale if Path(p) not in paths]
     input_ids = _input_identities(inputs)
+    usable: set[Path] = set()
     for path in list(paths) + stale_paths:
-        _check_one(path, input_ids, force)
+        _check_one(path, input_ids, force, usable)
     folders = {p.parent for p in paths}
     new_folder = next(iter(folders)) if len(folders) == 1 and len(paths) > 1 else None
     if new_folder is not None and os.path.lexists(new_folder):

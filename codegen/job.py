@@ -110,13 +110,14 @@ def prepare(
     args: argparse.Namespace,
     command: str,
     check: Callable[[Cell, int, list[str]], None] | None = None,
+    cell: Cell | None = None,
 ) -> Job:
     """Read POINTS, CELL and the grid; build the corrected program, its IK check started in the
     background (``Job.finish`` waits for it and prints the warnings).
     ``check(cell, holes, header)``, when given, runs after reading and before the correction and IK
     (the heavy work), with a header of as many lines as the job's: a dialect refuses there what
-    it could not write."""
-    cell = load_cell(args.cell)
+    it could not write. ``cell``: CELL when the command already read it."""
+    cell = load_cell(args.cell) if cell is None else cell
     if args.allow_config_change:
         configuration = dataclasses.replace(cell.configuration, allow_change=True)
         cell = dataclasses.replace(cell, configuration=configuration)

@@ -25,6 +25,7 @@ from accugrid.templates import TEMPLATE_DIR
 
 __all__ = [
     "environment",
+    "loaded",
     "printed_plainly",
     "render",
     "render_around",
@@ -71,10 +72,20 @@ def _environment(folder: str, newline: str) -> jinja2.Environment:
     return env
 
 
-def render(env: jinja2.Environment, template: str, /, **context: object) -> str:
-    """Render ``template``; template and undefined-variable errors become InputErrors."""
+def render(env: jinja2.Environment, template: str | jinja2.Template, /, **context: object) -> str:
+    """Render ``template`` (a name, or one ``loaded`` for many files of a job); template and
+    undefined-variable errors become InputErrors."""
+    name = template if isinstance(template, str) else template.name
+    with _template_errors(env, name):
+        loaded = env.get_template(template) if isinstance(template, str) else template
+        return loaded.render(**context)
+
+
+def loaded(env: jinja2.Environment, template: str) -> jinja2.Template:
+    """``template`` compiled once for the files of a job (Jinja checks a template's file for
+    changes each time it is fetched by name); errors as InputErrors."""
     with _template_errors(env, template):
-        return env.get_template(template).render(**context)
+        return env.get_template(template)
 
 
 def template_uses(env: jinja2.Environment, template: str) -> frozenset[str] | None:
@@ -113,7 +124,9 @@ def printed_plainly(env: jinja2.Environment, template: str, name: str) -> bool:
     return bool(printed) and len(printed) == source.count(name)
 
 
-def render_around(env: jinja2.Environment, template: str, name: str, /, **context) -> list[str]:
+def render_around(
+    env: jinja2.Environment, template: str | jinja2.Template, name: str, /, **context
+) -> list[str]:
     """The text of ``template`` (which prints ``name`` plainly: ``printed_plainly``) cut where
     it prints ``name``: k + 1 pieces for k prints."""
     return render(env, template, **{name: _MARKER}, **context).split(_MARKER)

@@ -14,7 +14,7 @@ from program_helpers import CELL, POINTS, ROOT, cell, cell_with, grid, panel_poi
 
 from accugrid.codegen.cli import main
 from accugrid.codegen.krl import emit
-from accugrid.codegen.krl.emit import MeasureSettings, module_names, render_krl, render_measurement
+from accugrid.codegen.krl.emit import MeasureSettings, module_split, render_krl, render_measurement
 from accugrid.codegen.krl.parse import parse_krl
 from accugrid.codegen.program import build_program
 from accugrid.kinematics.errors import InputError
@@ -314,11 +314,11 @@ def test_a_million_hole_job_numbers_its_modules_past_999():
     """The example cell (5,000 lines per file) splits 1e6 holes into more than 999 modules:
     numbered with four digits, valid KRL names, all called from the main program."""
     header = ["h"] * 6
-    names = module_names(cell(), 1_000_000, header)
+    names = module_split(cell(), 1_000_000, header)[0]
     assert len(names) > 999 and names[0] == "WING_PANEL_0001"
     assert names[-1] == f"WING_PANEL_{len(names):04d}"
     assert all(len(n) <= 24 and NAME_RE.match(n) for n in names)
-    assert module_names(cell(), 100_000, header)[:2] == ["WING_PANEL_001", "WING_PANEL_002"]
+    assert module_split(cell(), 100_000, header)[0][:2] == ["WING_PANEL_001", "WING_PANEL_002"]
 
 
 @pytest.mark.parametrize(
@@ -331,7 +331,7 @@ def test_a_million_hole_job_numbers_its_modules_past_999():
 def test_modules_that_cannot_be_named_or_called_are_refused(name, holes, lines, message):
     c = cell_with(krl={"name": name, "lines_per_file": lines})
     with pytest.raises(InputError, match=message):
-        module_names(c, holes, ["h"])
+        module_split(c, holes, ["h"])[0]
 
 
 def test_a_job_the_modules_cannot_hold_is_refused_before_the_correction(tmp_path, capsys):

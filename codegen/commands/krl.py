@@ -17,6 +17,7 @@ import argparse
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cell import load_cell
 from accugrid.codegen.job import add_job_arguments, summary
 from accugrid.codegen.krl.job import krl_job, krl_targets
 
@@ -35,8 +36,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     inputs = [args.points, args.cell] + ([args.grid] if args.grid else [])
-    check_targets(krl_targets(args.cell, out), inputs, args.force)
-    job = krl_job(args, out)
+    cell = load_cell(args.cell)
+    check_targets(krl_targets(cell, out), inputs, args.force)
+    job = krl_job(args, out, cell)
     written = write_files(
         job.files, job.inputs, args.force, ready=job.finish, main=job.main, stale=job.stale
     )

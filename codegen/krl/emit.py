@@ -22,7 +22,7 @@ per module follow from the rendered lines per hole of the template in use. Past 
 million holes at 5,000 lines per file) they are numbered with as many digits as needed, as long
 as the name stays a KRL name (at most 24 characters); a job whose modules cannot be named, or
 whose main program cannot call them all within the line limit, is refused after reading the
-points and before correction and IK (``module_names``). Files are rendered one by one as they
+points and before correction and IK (``module_split``). Files are rendered one by one as they
 are written, the modules' ``.src`` before their ``.dat`` (``KrlFiles``). A KR C4 holds only a
 few MiB of programs in its memory at once, so a job of many modules is run a batch of modules at
 a time (copied in turn, or loaded on demand).
@@ -45,6 +45,7 @@ from accugrid.codegen.points import Points
 from accugrid.codegen.program import STAGES, Program
 from accugrid.codegen.render import (
     environment,
+    loaded,
     printed_plainly,
     render,
     render_around,
@@ -64,7 +65,7 @@ __all__ = [
     "KrlPosition",
     "MeasureMove",
     "MeasureSettings",
-    "module_names",
+    "module_split",
     "render_krl",
     "render_measurement",
 ]
@@ -198,26 +199,30 @@ def _move_lines(targets: list[str], ids: list[str], settings: MeasureSettings) -
     return (("%s %s ; %s\r\n" + _literal(wait)) * len(targets)) % tuple(table.ravel().tolist())
 
 
-def render_krl(program: Program, header: list[str], templates=None) -> KrlFiles:
+def render_krl(
+    program: Program,
+    header: list[str],
+    templates=None,
+    split: tuple[list[str], int] | None = None,
+) -> KrlFiles:
     """File name -> text for the job (``NAME.src``, ``NAME.dat`` and any ``NAME_nnn`` pairs), as
-    a mapping that renders each file pair when it is asked for (see ``KrlFiles``)."""
+    a mapping that renders each file when it is asked for (see ``KrlFiles``). ``split``: the
+    job's ``module_split`` when the caller already made it."""
     cell = program.cell
     files = _file_renderer(cell, header, _Records(program), templates)
-    return KrlFiles(files, *_split(cell, len(program), header, templates), len(program), cell)
+    split = split or module_split(cell, len(program), header, templates)
+    return KrlFiles(files, *split, len(program), cell)
 
 
-def module_names(cell: Cell, holes: int, header: list[str], templates=None) -> list[str]:
+def module_split(
+    cell: Cell, holes: int, header: list[str], templates=None
+) -> tuple[list[str], int]:
     """The modules a job of ``holes`` holes is split into (``NAME_001``, ...; [] for one file
-    pair), known before any correction or IK: InputError (naming the cell file) when they cannot
-    be named or called within ``program.lines_per_file``, so such a job is refused before the
-    heavy work. ``header``: a header with as many lines as the job's will have. The lines per
-    hole come from rendering a 1- and a 2-hole placeholder program with the same templates."""
-    return _split(cell, holes, header, templates)[0]
-
-
-def _split(cell: Cell, holes: int, header: list[str], templates) -> tuple[list[str], int]:
-    """The modules of a job of ``holes`` holes and the holes per module (``_modules``), from a
-    placeholder program: known before the correction, and without waiting for the IK check."""
+    pair) and the holes per module, known before any correction or IK: InputError (naming the
+    cell file) when they cannot be named or called within ``program.lines_per_file``, so such a
+    job is refused before the heavy work. ``header``: a header with as many lines as the job's
+    will have. The lines per hole come from rendering a 1- and a 2-hole placeholder program with
+    the same templates (so the split never waits for the IK check)."""
     records = _Records(_placeholder(cell))
     return _modules(_file_renderer(cell, header, records, templates), cell, holes)
 
@@ -317,7 +322,7 @@ def _file_renderer(cell: Cell, header: list[str], records: _Records, templates):
         template = f"program{ext}.j2"
         uses = template_uses(env, template)
         plain = uses is not None and printed_plainly(env, template, lines)
-        kinds[ext] = (template, uses, lines, plain)
+        kinds[ext] = (loaded(env, template), uses, lines, plain)
 
     def files(name: str, role: str, lo: int, hi: int, ext: str, calls=()):
         template, uses, lines, plain = kinds[ext]
