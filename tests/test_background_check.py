@@ -103,21 +103,29 @@ def test_an_unreachable_hole_checked_in_the_background_is_raised_by_wait():
     assert prog.configuration is None
 
 
+@pytest.mark.parametrize("failure", ["unreachable in the Status", "branch jump"])
 @pytest.mark.parametrize("command", ["krl", "gcode"])
-def test_a_job_whose_ik_check_fails_replaces_nothing(tmp_path, capsys, command):
-    """The check fails after the files were rendered: exit 2, one line, the previous output
-    untouched and no temporaries left."""
+def test_a_job_whose_ik_check_fails_replaces_nothing(tmp_path, capsys, command, failure):
+    """The check fails after the files were rendered (a hole that cannot keep the Status: the
+    .dat asks for it; a branch jump: only the job's final wait sees it): exit 2, one line, the
+    previous output untouched and no temporaries left."""
     out = tmp_path / ("krl" if command == "krl" else "p.ngc")
     assert main([command, str(POINTS), "--cell", str(CELL), "-o", str(out)]) == 0
     before = {p: p.read_bytes() for p in sorted(tmp_path.rglob("*")) if p.is_file()}
     capsys.readouterr()
-    bad_cell = status_zero_cell(tmp_path / "cell")
-    code = main([command, str(POINTS), "--cell", str(bad_cell), "-o", str(out), "--force"])
+    points, cell_file, message = POINTS, CELL, "hole 'B': an axis turns 184 deg"
+    if failure == "branch jump":  # A6 from about 100 to -100 deg between two holes
+        points = tmp_path / "input" / "jump.csv"
+        points.parent.mkdir()
+        points.write_text("id,x,y,z,a,b,c\nA,0,300,0,-90,0,100\nB,25,300,0,-90,0,-100\n")
+    else:
+        cell_file, message = status_zero_cell(tmp_path / "input"), "hole 'WP-R1-001'"
+    code = main([command, str(points), "--cell", str(cell_file), "-o", str(out), "--force"])
     stdout, err = capsys.readouterr()
     assert code == 2 and stdout == "" and err.count("\n") == 1
-    assert "hole 'WP-R1-001'" in err and "with Status 0" in err
+    assert message in err
     after = {p: p.read_bytes() for p in sorted(tmp_path.rglob("*")) if p.is_file()}
-    assert {p: b for p, b in after.items() if "cell" not in p.parts} == before
+    assert {p: b for p, b in after.items() if "input" not in p.parts} == before
 
 
 def test_krl_src_files_are_written_while_the_ik_check_runs(tmp_path, monkeypatch, capsys):

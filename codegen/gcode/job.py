@@ -14,7 +14,8 @@ __all__ = ["gcode_job"]
 
 
 def gcode_job(args: argparse.Namespace, out: Path) -> Job:
-    """The whole job of ``accugrid gcode`` arguments into the file ``out``."""
+    """The whole job of ``accugrid gcode`` arguments into the file ``out``; the program's IK
+    check still runs: write with ``ready=job.finish``."""
     job = prepare(args, "gcode")
     return dataclasses.replace(
         job, files={out: gcode_text(job.program, job.header, args.templates)}

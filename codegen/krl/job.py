@@ -26,7 +26,7 @@ def krl_job(args: argparse.Namespace, out: Path, cell: Cell | None = None) -> Jo
     """The whole job of ``accugrid krl`` arguments into folder ``out`` (``cell``: the cell file
     when already read): modules that cannot be named or called are refused before the
     correction; NAME.src is written last (NAME.dat before it) and the modules of an earlier job
-    of this name are stale."""
+    of this name are stale. The program's IK check still runs: write with ``ready=job.finish``."""
     split = []
 
     def check(cell: Cell, holes: int, header: list[str]) -> None:
