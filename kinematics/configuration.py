@@ -194,6 +194,7 @@ def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, 
     for k in range(1, 4):  # column by column: a reduction over the short axis is slow
         fitting += fits[:, k]
     one = fitting == 1
+    several = np.flatnonzero(fitting > 1)  # the pick among them needs all 8 candidates
     q = np.full((n, 6), np.nan)
     found = np.zeros(n, bool)
     rows = np.flatnonzero(one)
@@ -215,7 +216,7 @@ def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, 
         pick = np.argmin((closed.wrap(cand - ref) ** 2).sum(axis=2), axis=1)
         q[rows] = cand[np.arange(len(rows)), pick]
         found[rows] = True
-        rest = np.flatnonzero(~one & fits.any(axis=1))
+        rest = several
     else:
         # the arm solution has the wanted bits 0 and 1 (its Status, the same numbers as its
         # candidates' ``_status``): the wrist with the wanted bit 2 (A5 < 0) is the match
@@ -226,7 +227,7 @@ def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, 
         else:
             q[done] = chosen[settled]
             found[done] = True
-        rest = np.concatenate([np.flatnonzero(~one & fits.any(axis=1)), rows[~settled]])
+        rest = np.concatenate([several, rows[~settled]])
     if rest.size:
         q[rest], found[rest] = _select_all(robot, flange[rest], wrist[rest], want, rest, reference)
     return q, found, reach[:, 0] | reach[:, 2]  # reach repeats each shoulder's for 2 elbows

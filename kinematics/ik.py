@@ -88,14 +88,11 @@ def all_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, np.nd
     return q, ok
 
 
-def arm_solutions(
-    table: DHTable, flange: np.ndarray, pw: np.ndarray | None = None
-) -> tuple[np.ndarray, ...]:
+def arm_solutions(table: DHTable, flange: np.ndarray) -> tuple[np.ndarray, ...]:
     """DH angles of the 4 arm solutions for flange poses (N, 4, 4) mm: theta_1 (N, 2 shoulder),
     theta_2 and theta_3 (N, 2 shoulder, 2 elbow) rad, and (N, 2, 2) whether the wrist point is
-    reachable (NaN angles where not). ``pw``: the wrist points (N, 3) mm when already known."""
-    pw = wrist_points(table, flange) if pw is None else pw
-    th1, th3, reach, plane = arm_elbows(table, pw)
+    reachable (NaN angles where not)."""
+    th1, th3, reach, plane = arm_elbows(table, wrist_points(table, flange))
     th2 = upper_arm(table, plane)  # (N, 2 shoulder, 2 elbow)
     return th1, th2, th3, np.repeat(reach[:, :, None], 2, axis=2)
 
