@@ -1,4 +1,4 @@
-"""Robot models: a standard-DH serial arm (seed Eq. 2) on Pinocchio, with KUKA joint conventions.
+"""Robot models: a standard-DH serial arm (seed Eq. 2) on Pinocchio, in its controller's angles.
 
 A robot is YAML data (``kinematics/robots/*.yaml`` for the built-ins, or a user file): six DH rows
 ``{a_mm, alpha_deg, d_mm, theta_offset_deg, sign}`` with theta = sign * A + theta_offset, joint
@@ -8,10 +8,11 @@ under gravity, transmission harmonics, thermal growth; ``kinematics.joint_errors
 "true" robot. A YAML file may instead name a URDF (``urdf: file``, ``tip: frame``), see
 ``kinematics.urdf``.
 
-Joint vectors are KUKA axis angles A1..A6 in radians, shape (N, 6); poses are (N, 4, 4) mm.
+Joint vectors are the controller's axis angles in radians (KUKA A1..A6; ABB axes 1..6 for
+``irb6700``, as a RAPID jointtarget holds them), shape (N, 6); poses are (N, 4, 4) mm.
 
-KUKA Status and Turn, the branch selection of ``Robot.ik`` and ``IKSolution``:
-``kinematics.configuration``.
+KUKA Status and Turn, ABB confdata, the branch selection of ``Robot.ik`` / ``Robot.ik_confdata``
+and ``IKSolution``: ``kinematics.configuration``.
 """
 
 from __future__ import annotations
@@ -51,7 +52,7 @@ _LIMIT_TOL = 1e-9
 
 @dataclass(frozen=True)
 class Robot:
-    """A serial robot in standard DH form with KUKA axis conventions and a tool."""
+    """A serial robot in standard DH form, in its controller's axis angles, with a tool."""
 
     name: str
     dh: DHTable
