@@ -8,7 +8,6 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-import pinocchio as pin
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -92,18 +91,6 @@ def off_singularities(q: np.ndarray) -> np.ndarray:
 def test_fk_is_the_urdf_chain_of_ros_industrial(q):
     expected = np.array([urdf_frames(qk)[-1] for qk in q])
     np.testing.assert_allclose(robot().fk(q), expected, rtol=0, atol=1e-9)
-
-
-@given(q=within_limits(8))
-def test_fk_equals_pinocchio_forward_kinematics(q):
-    r = robot(tool=True)
-    model, frame = r.pinocchio_model()
-    data = model.createData()
-    expected = []
-    for qk in q:
-        pin.framesForwardKinematics(model, data, qk * r.dh.sign)
-        expected.append(data.oMf[frame].homogeneous.copy())
-    np.testing.assert_allclose(r.fk(q), np.array(expected), rtol=0, atol=1e-9)
 
 
 def test_limits_are_the_data_sheet_working_range():

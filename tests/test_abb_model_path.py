@@ -15,7 +15,6 @@ from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
 
 TOOL = ["--tool", "0", "0", "250", "0", "0", "0"]
-HEADER = "id,x,y,z,a,b,c,s,x_meas,y_meas,z_meas\n"
 # parameter errors of the size of seed Table 1 (mm, mm, rad, rad per DH row)
 ERRORS = """errors:
   - {da_mm: 0.41, dd_mm: -1.2, dalpha_rad: 3.0e-5, dtheta_rad: -2.5e-4}
@@ -61,15 +60,11 @@ def test_session_identify_and_correct_land_on_the_targets(tmp_path, capsys):
     # geometric errors only, noise-free data: the identified model is exact up to the logged
     # 4 decimals, so the commands correct --model writes put the true arm on the targets
     robot_file = true_robot_file(tmp_path)
-    rng = np.random.default_rng(5)
-    xyz = rng.uniform([1500, -400, 1000], [2000, 400, 1600], (40, 3))
-    abc = np.array(ABC) + rng.uniform(-20, 20, (40, 3))
-    body = "".join(
-        f"P{i},{','.join(f'{v:.3f}' for v in (*p, *a))},{STATUS},,,\n"
-        for i, (p, a) in enumerate(zip(xyz, abc, strict=True))
-    )
-    plan = tmp_path / "plan.csv"
-    plan.write_text(HEADER + body)
+    region = ["--region", "1400", "2000", "-400", "400", "1000", "1600"]
+    planned = ["plan", "identify", "--robot", "irb6700", *TOOL, *region, "--count", "40"]
+    assert main([*planned, "--abc", *map(str, ABC), "--tilt", "25", "-o", str(tmp_path)]) == 0
+    plan = tmp_path / "measure_identify.csv"
+    assert f"Status {STATUS}" in capsys.readouterr().out
     meas, cal = tmp_path / "meas.csv", tmp_path / "cal.yaml"
     sim = ["simulate", "--robot", str(robot_file), "--poses", str(plan), *TOOL, "-o", str(meas)]
     assert main(sim) == 0, capsys.readouterr().err
