@@ -11,13 +11,12 @@ descriptions: Status bit 0 shoulder, bit 1 elbow, bit 2 wrist; Turn bit i set wh
 The joint angles themselves are the neutral data: a vendor whose words need more than these
 flags takes them from q. ABB ``confdata`` [cf1, cf4, cf6, cfx] (``abb_confdata``, RAPID
 reference manual, data type confdata): cf1, cf4, cf6 are the quadrant numbers of axes 1, 4 and 6
-(``abb_quadrant``: 0 for 0..90 deg, 1 for 90..180 deg, ..., -1 for 0..-90 deg, -2 for -90..-180
-deg, ...); cfx for a serial 6-axis arm is 4 * (wrist centre behind axis 1) + 2 * (wrist centre
-behind the lower arm) + (axis 5 negative), the table of cfx 0..7 in the manual. "Behind axis 1"
-is the shoulder flag; "behind the lower arm" is the side of the line through axes 2 and 3 the
-wrist centre lies on, the normal (elbow-up) side being "in front" (``abb_front``; within the
-IRB 6700's axis 3 range it is the elbow flag negated). ``select_confdata`` picks the solution
-of a wanted confdata.
+(``abb_quadrant``: floor(angle / 90 deg), 0 for 0..90 deg, -1 for -90..0 deg, ...); cfx for a
+serial 6-axis arm is 4 * (wrist centre behind axis 1) + 2 * (wrist centre behind the lower arm)
++ (axis 5 negative), the manual's table of cfx 0..7. "Behind axis 1" is the shoulder flag;
+"behind the lower arm" is the side of the line through axes 2 and 3 the wrist centre lies on,
+the normal (elbow-up) side being "in front" (``abb_front``; within the IRB 6700's axis 3 range
+it is the elbow flag negated). ``select_confdata`` picks the solution of a wanted confdata.
 
 Branch selection (``select``: the one joint solution ``Robot.ik`` returns for a wanted Status, or
 the one nearest a reference) and the ``IKSolution`` record live here too, so the DH robot
@@ -285,13 +284,11 @@ _QUARTER = np.pi / 2
 
 
 def abb_quadrant(angle: np.ndarray) -> np.ndarray:
-    """ABB quadrant numbers (...) int of axis angles (...) rad: k >= 0 for k * 90 <= angle <
-    (k + 1) * 90 deg, and mirrored for negative angles, -1 - k for k * 90 < -angle <= (k + 1) *
-    90 deg (quadrant -1 is "0 to -90 deg"; -90 deg itself is in -2). Only exact negative
-    multiples of 90 deg differ from floor(angle / 90 deg)."""
-    angle = np.asarray(angle, dtype=float)
-    turns = np.floor(np.abs(angle) / _QUARTER).astype(int)
-    return np.where(angle >= 0, turns, -1 - turns)
+    """ABB quadrant numbers (...) int of axis angles (...) rad: floor(angle / 90 deg), i.e.
+    0 for 0 <= angle < 90 deg, 1 for 90..180, -1 for -90 <= angle < 0, -2 for -180..-90, ...
+    (the manual's "0-90", "90-180", "0 to -90"; it leaves the exact multiples of 90 deg open:
+    ``select_confdata`` accepts either neighbour there)."""
+    return np.floor(np.asarray(angle, dtype=float) / _QUARTER).astype(int)
 
 
 def abb_front(robot: Robot, q: np.ndarray) -> np.ndarray:

@@ -148,14 +148,15 @@ def test_positive_axes_turn_the_abb_way():
         (360.0, 4),
         (-1e-9, -1),
         (-45.0, -1),
-        (-90.0, -2),
+        (-90.0, -1),
         (-91.0, -2),
-        (-180.0, -3),
+        (-180.0, -2),
         (-300.0, -4),
     ],
 )
 def test_quadrants_are_numbered_as_the_rapid_manual(deg, quadrant):
-    # quadrant 0 is 0..90 deg in the positive direction, 1 is 90..180, -1 is 0..-90, ...
+    # quadrant 0 is 0..90 deg in the positive direction, 1 is 90..180, -1 is 0..-90, ...; an
+    # exact multiple of 90 deg starts its quadrant (floor)
     assert abb_quadrant(np.radians(deg)) == quadrant
 
 
@@ -264,13 +265,15 @@ def test_wrong_or_unreachable_confdata_is_refused_with_the_reason():
 
 
 def test_angles_on_a_quadrant_edge_keep_the_wanted_quadrant():
-    # axis 1 at exactly 0 and axis 6 at exactly -90 deg: the IK's round-off must not move them
-    # into the neighbouring quadrant
+    # axis 1 at exactly 0, axis 4 at 90 and axis 6 at -90 deg: the IK's round-off must not move
+    # them into the neighbouring quadrant; and as the manual leaves the edge itself open, a
+    # confdata that names the quadrant on the other side of it is solved too (1 ulp inside it)
     r = robot()
     q = np.radians([[0.0, 10.0, -20.0, 90.0, 50.0, -90.0]])
     confdata = abb_confdata(r, q)
-    np.testing.assert_array_equal(confdata, [[0, 1, -2, 0]])
-    sol = r.ik_confdata(r.fk(q), confdata)
-    assert sol.ok[0], sol.reason[0]
-    np.testing.assert_array_equal(abb_confdata(r, sol.q), confdata)
-    np.testing.assert_allclose(sol.q, q, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(confdata, [[0, 1, -1, 0]])
+    for wanted in ([0, 1, -1, 0], [-1, 0, -2, 0]):
+        sol = r.ik_confdata(r.fk(q), wanted)
+        assert sol.ok[0], sol.reason[0]
+        np.testing.assert_array_equal(abb_confdata(r, sol.q)[0], wanted)
+        np.testing.assert_allclose(sol.q, q, rtol=0, atol=1e-9)
