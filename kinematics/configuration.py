@@ -332,26 +332,17 @@ def select_confdata(
     confdata is ``confdata`` ((4,) or (N, 4) int), before joint limits: q (N, 6) rad (NaN rows
     where there is none) and the reason (N,) object ("" where found).
 
-    cfx picks one of the 8 closed-form solutions (on the wrist singularity, |axis 5| <
-    ``SINGULAR_A5_RAD``, either axis 5 sign fits); axes 1, 4 and 6 then take the turn
-    (+- k * 360 deg) that puts them in quadrants cf1, cf4, cf6. An angle within ``tol_rad`` of
-    its quadrant is moved onto the quadrant's edge; one farther off has no solution there (cf1
-    disagrees with the cfx shoulder bit, or cf4/cf6 with the cfx axis 5 bit). Axes 2, 3 and 5,
-    which confdata does not name, take the turn inside the joint limits where the angle in
-    (-180, 180] deg is outside them (an axis 3 of -180 deg)."""
+    cfx picks one of the 8 closed-form solutions (``_cfx_branch``); axes 1, 4 and 6 then take
+    the turn (+- k * 360 deg) that puts them in quadrants cf1, cf4, cf6. An angle within
+    ``tol_rad`` of its quadrant is moved onto the quadrant's edge; one farther off has no
+    solution there (cf1 disagrees with the cfx shoulder bit, or cf4/cf6 with the cfx axis 5
+    bit). Axes 2, 3 and 5, which confdata does not name, take the turn inside the joint limits
+    where the angle in (-180, 180] deg is outside them (an axis 3 of -180 deg)."""
     n = len(flange)
     want = np.broadcast_to(np.asarray(confdata, dtype=int), (n, 4))
-    cand, reach = closed.all_solutions(robot.dh, flange)  # (N, 8, 6), (N, 8)
-    flat = cand.reshape(-1, 6)
-    cand_cfx = abb_cfx(robot, flat, np.repeat(wrist, 8, axis=0)).reshape(n, 8)
-    singular = np.abs(cand[:, :, 4]) < closed.SINGULAR_A5_RAD
-    wanted = want[:, 3, None]
-    match = reach & ((cand_cfx == wanted) | (singular & ((cand_cfx | 1) == (wanted | 1))))
-    found = match.any(axis=1)
-    q = np.where(found[:, None], cand[np.arange(n), np.argmax(match, axis=1)], 0.0)
-    reason = np.full(n, "", dtype=object)
-    reason[~found] = "no solution with the requested cfx"
-    reason[~reach.any(axis=1)] = "unreachable"
+    q, reason = _cfx_branch(robot, flange, wrist, want[:, 3])
+    found = reason == ""
+    q[~found] = 0.0
     lo, hi = np.radians(robot.joint_limits_deg).T
     for axis in (1, 2, 4):
         angle = q[:, axis]
@@ -365,6 +356,66 @@ def select_confdata(
         reason[missed] = f"A{axis + 1} cannot be in quadrant cf{axis + 1} with this cfx"
         found &= inside
     q[~found] = np.nan
+    return q, reason
+
+
+_CLEAR = 1e-9  # |sin| of the elbow angle above this: the elbow index alone gives the lower-arm bit
+
+
+def _cfx_branch(
+    robot: Robot, flange: np.ndarray, wrist: np.ndarray, cfx: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The first of the 8 closed-form solutions (candidate order) with ABB cfx (N,) int per
+    flange pose (N, 4, 4) mm, wrist centres (N, 3) mm: q (N, 6) rad in (-pi, pi] (NaN rows where
+    there is none) and the reason (N,) object ("" where found).
+
+    Where the wrist centre is off axis 1 and the arm is neither stretched nor folded, cfx names
+    the arm solution by itself (shoulder index = its bit 2; elbow index 0, theta_3 + beta =
+    gamma >= 0, is in front of the lower arm when sin(alpha_1) < 0) and only its 2 wrists are
+    solved (``closed.chosen_wrists``); elsewhere the 8 candidates are compared
+    (``_cfx_candidates``), which gives the same numbers."""
+    n, dh = len(flange), robot.dh
+    cfx = np.asarray(cfx)
+    th1, th3, reach, plane = closed.arm_elbows(dh, wrist)
+    line = np.arange(n)
+    s = (cfx >> 2) & 1
+    e = ((cfx >> 1) & 1 == 0) != (np.sin(dh.alpha[0]) < 0)
+    e = e.astype(int)
+    off_axis = (np.abs(wrist[:, 0]) >= _NORMAL) | (np.abs(wrist[:, 1]) >= _NORMAL)
+    easy = reach[line, s] & (np.abs(np.sin(plane[2][line, s])) > _CLEAR) & off_axis
+    easy &= (cfx >= 0) & (cfx <= 7)
+    rows = np.flatnonzero(easy)
+    q = np.full((n, 6), np.nan)
+    reason = np.full(n, "", dtype=object)
+    settled = np.ones(0, bool)
+    if rows.size:
+        sr, er = s[rows], e[rows]
+        th2 = closed.upper_arm(dh, [part[rows, sr] for part in plane], er)
+        arm = (th1[rows, sr], th2, th3[rows, sr, er])
+        q[rows], settled = closed.chosen_wrists(dh, flange[rows], *arm, cfx[rows] & 1 == 1)
+    hard = np.concatenate([np.flatnonzero(~easy), rows[~settled]])
+    if hard.size:
+        q[hard], reason[hard] = _cfx_candidates(robot, flange[hard], wrist[hard], cfx[hard])
+    return q, reason
+
+
+def _cfx_candidates(
+    robot: Robot, flange: np.ndarray, wrist: np.ndarray, cfx: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``_cfx_branch`` over all 8 candidates: the first whose ``abb_cfx`` is cfx (on the wrist
+    singularity, |axis 5| < ``SINGULAR_A5_RAD``, either axis 5 sign fits)."""
+    n = len(flange)
+    cand, reach = closed.all_solutions(robot.dh, flange)  # (N, 8, 6), (N, 8)
+    cand_cfx = abb_cfx(robot, cand.reshape(-1, 6), np.repeat(wrist, 8, axis=0)).reshape(n, 8)
+    singular = np.abs(cand[:, :, 4]) < closed.SINGULAR_A5_RAD
+    wanted = np.asarray(cfx)[:, None]
+    match = reach & ((cand_cfx == wanted) | (singular & ((cand_cfx | 1) == (wanted | 1))))
+    found = match.any(axis=1)
+    q = cand[np.arange(n), np.argmax(match, axis=1)]
+    q[~found] = np.nan
+    reason = np.full(n, "", dtype=object)
+    reason[~found] = "no solution with the requested cfx"
+    reason[~reach.any(axis=1)] = "unreachable"
     return q, reason
 
 

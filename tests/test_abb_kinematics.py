@@ -277,3 +277,26 @@ def test_angles_on_a_quadrant_edge_keep_the_wanted_quadrant():
         assert sol.ok[0], sol.reason[0]
         np.testing.assert_array_equal(abb_confdata(r, sol.q)[0], wanted)
         np.testing.assert_allclose(sol.q, q, rtol=0, atol=1e-9)
+
+
+@settings(max_examples=40)
+@given(
+    q=within_limits(40),
+    cfx=arrays(int, 40, elements=st.integers(-1, 8)),
+    tool=st.booleans(),
+)
+def test_cfx_branch_is_the_pick_over_all_8_candidates(q, cfx, tool):
+    """``_cfx_branch`` solves only the wrists of the arm solution cfx names where that is clear;
+    its numbers must be the first match over all 8 candidates, bit for bit (cfx -1 and 8, which
+    name no solution, included)."""
+    from accugrid.kinematics import ik
+    from accugrid.kinematics.configuration import _cfx_branch, _cfx_candidates
+
+    r = robot(tool=tool)
+    flange = r.fk(q) @ np.linalg.inv(r.flange_T_tool)
+    wrist = ik.wrist_points(r.dh, flange)
+    got, reason = _cfx_branch(r, flange, wrist, cfx)
+    every, every_reason = _cfx_candidates(r, flange, wrist, cfx)
+    np.testing.assert_array_equal(got, every)
+    np.testing.assert_array_equal(reason, every_reason)
+    assert (reason[(cfx < 0) | (cfx > 7)] == "no solution with the requested cfx").all()
