@@ -414,7 +414,8 @@ def _correct(
     warnings = verdict.enforce(points.label, points.table.where, allow_partial, "hole")
     warnings += verdict.flag_lines(points.label, "hole")
     marks = [
-        f"not corrected: {points.name(i)}: {verdict.reason(i)}" for i in verdict.refused.tolist()
+        f"not corrected: hole {points.ids[i]}: {verdict.reason(i)}"
+        for i in verdict.refused.tolist()
     ]
     return verdict.command - holes_robot, warnings, status, marks
 

@@ -64,7 +64,7 @@ NAN3 = (math.nan, math.nan, math.nan)
 class Options:
     """How to rewrite. Frames are (4, 4) mm poses."""
 
-    model: GridModel
+    model: GridModel | None  # the grid (the residual grid with a model; None: the model alone)
     base_data: dict[int, np.ndarray]  # BASE_DATA[n] -> robot_T_base
     robot_T_program: np.ndarray  # G-code program frame
     correction: CorrectionSettings = CorrectionSettings()
@@ -342,12 +342,13 @@ def header_lines(result: Result, program: str, cell: str, opts: Options) -> list
     largest, where = result.largest()
     model = opts.model
     at = "" if where is None else f" at {where.name} line {where.line}"
-    grid = Path(model.source_path).name if model.source_path else "arrays"
     inputs = [
         input_line("program", program, file_sha256(program)),
         input_line("cell", cell, file_sha256(cell)),
-        *grid_lines(grid, model.source_sha256, model.step),
     ]
+    if model is not None:
+        grid = Path(model.source_path).name if model.source_path else "arrays"
+        inputs += grid_lines(grid, model.source_sha256, model.step)
     if opts.model_file is not None:
         inputs.insert(2, input_line("model", opts.model_file, file_sha256(opts.model_file)))
     rows = result.rows

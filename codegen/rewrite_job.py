@@ -80,11 +80,13 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     inputs = list(req.outputs)
     read = [*inputs, Path(req.cell)] + ([req.config_dat] if req.config_dat else [])
     cell = load_cell(req.cell)
-    grid = cell.grid_file(req.grid)
     model_file = Path(req.model) if req.model is not None else cell.model_path
-    measured = GridModel.from_measurements(grid)
+    grid = None  # a model corrects alone when neither --grid nor the cell names one
+    if model_file is None or req.grid is not None or cell.grid_path is not None:
+        grid = cell.grid_file(req.grid)
+    measured = None if grid is None else GridModel.from_measurements(grid)
     model = nominal = None
-    if model_file is not None or measured.status is None:  # robot modules only when needed
+    if model_file is not None or (measured is not None and measured.status is None):
         from accugrid.kinematics.robot import load_robot
 
         nominal = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
@@ -153,6 +155,7 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     if req.report is not None:
         files[req.report] = report_csv(result.rows).encode("utf-8")
     warnings = []
-    if policy.grid_status is not None and measured.status is None:
+    if policy.grid_status is not None and measured is not None and measured.status is None:
         warnings.append(f"the grid does not record its Status: {policy.describe_status()}")
-    return RewriteJob(files, [*read, grid], result, warnings + warning_lines(result, opts))
+    read += [grid] if grid is not None else []
+    return RewriteJob(files, read, result, warnings + warning_lines(result, opts))

@@ -245,7 +245,9 @@ class GridModel:
         lo, hi = self.origin[:, None], self.upper[:, None]
         out = np.empty_like(points)
         for start in range(0, len(points), _CHUNK):
-            block = np.ascontiguousarray(points[start : start + _CHUNK].T)  # (3, n)
+            # (3, n), always a copy: for one point the transpose is contiguous already and
+            # the clip below would move the caller's point into the box
+            block = np.array(points[start : start + _CHUNK].T, order="C")
             if not (
                 (block.min(axis=1) >= self.origin).all() and (block.max(axis=1) <= self.upper).all()
             ):

@@ -126,7 +126,7 @@ def test_hole_outside_the_grid_is_named():
     assert "hole 'HIGH' (p.csv:3): outside the grid box by 100.000 mm" in info.value.message
     prog = build_program(parse_points(text, "p.csv"), cell(), robot(), grid(), allow_partial=True)
     assert prog.correction[1].tolist() == [0.0, 0.0, 0.0] and prog.correction[0].any()
-    assert prog.uncorrected == ["not corrected: hole 'HIGH': outside the grid box by 100.000 mm"]
+    assert prog.uncorrected == ["not corrected: hole HIGH: outside the grid box by 100.000 mm"]
 
 
 def test_status_that_cannot_be_kept_is_an_error_unless_allowed():
