@@ -15,17 +15,19 @@ weighting over the 8 vertices of a cell jumps where the positions straddle a cel
 the example grid's Y = 0 plane). One vector per hole keeps the axis straight and the hole where
 the grid says. Orientation is not corrected.
 
-With a calibrated model (``correction.model``, ``--model``) the vector is P' - P of
-``compensation.corrector`` at the hole point and its own orientation (the controller's IK with
-the cell's tool in the program's Status, the calibrated arm's FK), plus the grid as the residual
-after the model when one is given.
+With a calibrated model (``correction.model``, ``--model``) the vector is P' - P of the
+correction policy (``compensation.policy``) at the hole point and its own orientation (the
+controller's IK with the cell's tool in the program's Status, the calibrated arm carrying the
+cell's tool), plus the grid as the residual after the model when one is given. The policy also
+decides which holes are not corrected (outside the grid, orientation, Status, ...): the job is
+refused unless ``allow_partial``, then those holes keep e = 0 and are listed in the header.
 
 Every corrected pose goes through IK: unreachable or out-of-limit poses are InputErrors naming
 the hole; |A5| below ``configuration.singular_a5`` is a warning. The KUKA Status/Turn is the
-cell's; else, with a model, the one it corrected in (``Corrector``: the grid's measurement
-Status, or the first hole's IK default); else the first pose's IK solution; it stays the same
-for the whole program unless ``configuration.allow_change`` lets a hole that cannot reach it
-take its own. The jobs run this check on a background thread (``build_program(...,
+cell's; else, with a grid or a model, the one it corrected in (the grid's measurement Status, or
+the first hole's IK default); else the first pose's IK solution; it stays the same for the whole
+program unless ``configuration.allow_change`` lets a hole that cannot reach it take its own (an
+uncorrected hole only: a correction holds in the Status it was made for). The jobs run this check on a background thread (``build_program(...,
 background=True)``) while they write what needs only the positions; ``Program.wait`` joins it,
 ``Program.kuka_words`` hands out the Status and Turn of holes its IK blocks have reached.
 """
@@ -294,9 +296,11 @@ def build_program(
     positions = _nominal(cell, points.xyz, axis, depth)
     positions += rows_times(correction, base_rot)[:, None, :]  # e in the BASE frame
 
+    corrected_in = status if model is not None or grid is not None else None
+
     def check(progress: _Progress | None = None) -> tuple[Configuration, list[str]]:
         pose_status, turn, ik_warnings = _configuration(
-            points, cell, robot, positions, rotations, status, progress
+            points, cell, robot, positions, rotations, status, progress, corrected_in, correction
         )
         return Configuration.from_kuka(pose_status, turn), ik_warnings
 
@@ -428,10 +432,14 @@ def _configuration(
     rotations: np.ndarray,
     status: int | None,
     progress: _Progress | None = None,
+    corrected_in: int | None = None,
+    correction: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """IK of every pose (positions (N, 4, 3) mm and rotations (N, 3, 3), BASE frame) in KUKA
     ``status`` (None: the first pose's IK default): Status and Turn (N, 4) per pose and the
-    warnings. ``progress``: told of the IK blocks as they are done."""
+    warnings. ``progress``: told of the IK blocks as they are done. ``corrected_in``: the
+    Status the corrections (N, 3) mm ``correction`` hold in (the policy's): a corrected hole
+    that takes another one (allow_change) is an InputError."""
     n = len(points)
     if n == 0:
         return np.zeros((0, 4), int), np.zeros((0, 4), int), []
@@ -466,6 +474,16 @@ def _configuration(
         pose_status[failed] = retry.status.reshape(-1, stages)
         pose_turn[failed] = retry.turn.reshape(-1, stages)
         changed = failed[ok[failed].all(axis=1)]
+        moved = changed[np.any(correction[changed] != 0, axis=1)] if correction is not None else []
+        if corrected_in is not None and len(moved):
+            hole = int(moved[0])
+            raise InputError(
+                f"{points.name(hole)}: takes KUKA Status {int(pose_status[hole, 0])} "
+                f"(configuration.allow_change), but its correction holds only in Status "
+                f"{corrected_in}, the one it was corrected in; {len(moved)} such hole(s): give "
+                "them a program of their own",
+                *points.table.where(hole),
+            )
         if changed.size:
             warnings.append(
                 f"{changed.size} hole(s) take another Status than {status} "

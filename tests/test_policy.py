@@ -450,3 +450,22 @@ def test_policy_words_are_the_same_through_the_api_and_the_cli(tmp_path, capsys)
     argv = ["correct", str(points), "--grid", str(grid), "-o", str(tmp_path / "o.csv")]
     assert main(argv) == 2
     assert f": {verdict.reason(0)} (--allow-partial" in capsys.readouterr().err
+
+
+def test_a_corrected_hole_that_takes_another_status_is_refused():
+    # configuration.allow_change lets a hole take another Status; its correction was made for
+    # the program's Status only (grid or model), so a corrected hole may not change
+    from accugrid.codegen import program as program_module
+    from accugrid.kinematics.errors import InputError
+    from tests.program_helpers import cell_with, panel_points, robot
+
+    c = cell_with(configuration={"status": 0, "allow_change": True})
+    pts = panel_points([(0.0, 100.0), (250.0, 300.0)])
+    uncorrected = build_program(pts, c, robot(), None)  # no correction: they may change
+    assert (uncorrected.configuration.to_kuka()[0] != 0).any()
+    positions, rotations = uncorrected.positions, uncorrected.rotations
+    correction = np.full((len(pts), 3), 0.5)
+    with pytest.raises(
+        InputError, match=r"takes KUKA Status \d \(configuration.allow_change\), but"
+    ):
+        program_module._configuration(pts, c, robot(), positions, rotations, 0, None, 0, correction)
