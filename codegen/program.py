@@ -27,9 +27,10 @@ the hole; |A5| below ``configuration.singular_a5`` is a warning. The KUKA Status
 cell's; else, with a grid or a model, the one it corrected in (the grid's measurement Status, or
 the first hole's IK default); else the first pose's IK solution; it stays the same for the whole
 program unless ``configuration.allow_change`` lets a hole that cannot reach it take its own (an
-uncorrected hole only: a correction holds in the Status it was made for). The jobs run this check on a background thread (``build_program(...,
-background=True)``) while they write what needs only the positions; ``Program.wait`` joins it,
-``Program.kuka_words`` hands out the Status and Turn of holes its IK blocks have reached.
+uncorrected hole only: a correction holds in the Status it was made for). The jobs run this
+check on a background thread (``build_program(..., background=True)``) while they write what
+needs only the positions; ``Program.wait`` joins it, ``Program.kuka_words`` hands out the
+Status and Turn of holes its IK blocks have reached.
 """
 
 from __future__ import annotations
