@@ -239,8 +239,9 @@ def correct_points(request: CorrectRequest) -> JobFiles:
     details = [f"method {method}, power {power:g}, iterations {its}"]
     iterations = f"{its} iteration{'s' if its != 1 else ''}"
     power_text = f" power {power:g}" if method == "idw" else ""
+    unknown = "status     not recorded in the grid file (column s): not checked"
     lines = [
-        model.describe(),
+        model.describe() + ("" if model.status is not None else "\n" + unknown),
         f"corrected  {int(verdict.corrected.sum())} point(s), {method}{power_text}, {iterations}",
     ]
     return corrected_file(request, points, verdict, sources, details, lines)

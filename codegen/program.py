@@ -418,6 +418,8 @@ def _correct(
     verdict = policy.decide(holes_robot, rotations, status=status)
     warnings = verdict.enforce(points.label, points.table.where, allow_partial, "hole")
     warnings += verdict.flag_lines(points.label, "hole")
+    if policy.grid is not None and policy.grid.status is None and policy.grid_status is not None:
+        warnings.append(f"the grid does not record its Status: {policy.describe_status()}")
     marks = [
         f"not corrected: hole {points.ids[i]}: {verdict.reason(i)}"
         for i in verdict.refused.tolist()
