@@ -63,6 +63,7 @@ class ModelCorrection:
     iterations: (
         int  # passes over the points (each one nominal IK + calibrated FK), most of any block
     )
+    q: np.ndarray | None = None  # (N, 6) rad: the controller's joints at the command (NaN: none)
 
     @property
     def failed(self) -> np.ndarray:
@@ -84,6 +85,11 @@ def reached_by_model(
     solves with ``controller_tool`` (flange_T_tool (4, 4) mm, its TOOL_DATA), the arm carries
     ``arm_tool`` (the tool whose tip lands; for a program both are the cell's tool, the drill
     as taught); either defaults to the calibrated TCP (the SMR the model was measured with)."""
+    return _reach(calibrated, commands, rotations, status, controller_tool, arm_tool)[:3]
+
+
+def _reach(calibrated, commands, rotations, status, controller_tool, arm_tool):
+    """``reached_by_model`` and the controller's joints (N, 6) rad (NaN rows: none)."""
     poses = np.zeros((len(commands), 4, 4))
     poses[:, :3, :3] = rotations
     poses[:, :3, 3] = commands
@@ -96,7 +102,7 @@ def reached_by_model(
     out = np.full((len(commands), 3), np.nan)
     if sol.ok.any():
         out[sol.ok] = true.fk(sol.q[sol.ok])[:, :3, 3]
-    return out, sol.ok, sol.reason
+    return out, sol.ok, sol.reason, sol.q
 
 
 def model_correct(
@@ -135,6 +141,7 @@ def model_correct(
     command = points.copy()
     ok = np.zeros(n, bool)
     miss_mm = np.full(n, np.nan)
+    joints = np.full((n, 6), np.nan)
     reason = np.full(n, "", dtype=object)
     passes = np.zeros(-(-n // BLOCK), int)
 
@@ -144,7 +151,7 @@ def model_correct(
         active = np.arange(start, min(start + BLOCK, n))
         while active.size and passes[start // BLOCK] < max_iterations:
             passes[start // BLOCK] += 1
-            reach, reached, why = reached_by_model(
+            reach, reached, why, q = _reach(
                 calibrated,
                 command[active],
                 rotations[active],
@@ -153,11 +160,12 @@ def model_correct(
                 arm_tool,
             )
             reason[active[~reached]] = why[~reached]
-            active, reach = active[reached], reach[reached]
+            active, reach, q = active[reached], reach[reached], q[reached]
             miss = goals[active] - reach
             length = np.linalg.norm(miss, axis=1)
             miss_mm[active] = length
             done = length < tol_mm
+            joints[active[done]] = q[done]  # the command is final: its joints are these
             ok[active[done]] = True
             command[active[~done]] += miss[~done]
             active = active[~done]
@@ -165,7 +173,7 @@ def model_correct(
 
     run_blocks(block, range(0, n, BLOCK))
     command[~ok] = points[~ok]
-    return ModelCorrection(command, ok, reason, miss_mm, int(passes.max(initial=0)))
+    return ModelCorrection(command, ok, reason, miss_mm, int(passes.max(initial=0)), joints)
 
 
 def residual_grid(

@@ -318,9 +318,7 @@ class Policy:
                 v.why[todo[at]] = result.reason[at]
         done = todo[result.ok]
         v.command[done] = result.command[result.ok]
-        q = self._joints(
-            v.command[done], rotations[done], None if status is None else status[result.ok]
-        )
+        q = result.q[result.ok]  # the controller's joints at the final commands
         a5 = singular_a5_deg(q)
         near = np.flatnonzero(a5 < self.singular_deg)
         v.flag(done[near], F_SINGULAR, "a5", a5[near])
@@ -333,15 +331,6 @@ class Policy:
                 v.refuse(done[out], OUTSIDE_MODEL, box[out])
             else:
                 v.flag(done[out], F_REGION, "box", box[out])
-
-    def _joints(self, commands: np.ndarray, rotations: np.ndarray, status) -> np.ndarray:
-        """The controller's joints (M, 6) rad for commands (M, 3) mm at rotations (M, 3, 3)."""
-        solver = self.calibrated
-        if self.controller_tool is not None:
-            solver = solver.with_tool(self.controller_tool)
-        poses = np.zeros((len(commands), 4, 4))
-        poses[:, :3, :3], poses[:, :3, 3], poses[:, 3, 3] = rotations, commands, 1.0
-        return solver.ik(poses, status=status).q
 
 
 @dataclass
