@@ -386,27 +386,33 @@ class Verdict:
     def reason(self, i: int, bits: int = 0xFF) -> str:
         """The words of position i: why it is not corrected, else its flags among ``bits``
         ("" for none)."""
-        p = self.policy
-        grid = p.grid
-        words = {
-            "grid": p.grid_name,
-            "grid_abc": ""
-            if grid is None or grid.orientation_abc is None
-            else ", ".join(f"{a:.3f}" for a in grid.orientation_abc),
-            "grid_status": p.grid_status,
-            "limit": p.orientation_limit_deg,
-            "max": p.settings.max_correction_mm or 0.0,
-            "singular": p.singular_deg,
-            "value": float(self.value[i]),
-            "why": self.why[i],
-            "region": self._region(i),
-        }
-        words.update({k: float(a[i]) for k, a in self.numbers.items()})
+        words = self._words()
+        words["value"], words["why"] = float(self.value[i]), self.why[i]
+        for k, a in self.numbers.items():
+            words[k] = float(a[i])
         code = int(self.code[i])
+        if code == OUTSIDE_MODEL or (code == CORRECTED and self.flags[i] & bits & F_REGION):
+            words["region"] = self._region(i)
         if code != CORRECTED:
-            return REASONS[code][1].format(**words)
+            return REASONS[code][1].format_map(words)
         flags = int(self.flags[i]) & bits
-        return "; ".join(t.format(**words) for bit, t in FLAGS.items() if flags & bit)
+        return "; ".join(t.format_map(words) for bit, t in FLAGS.items() if flags & bit)
+
+    def _words(self) -> dict:
+        """The words every position shares (made once per verdict), a fresh copy."""
+        if "_shared" not in self.__dict__:
+            p = self.policy
+            abc = None if p.grid is None else p.grid.orientation_abc
+            self.__dict__["_shared"] = {
+                "grid": p.grid_name,
+                "grid_abc": "" if abc is None else ", ".join(f"{a:.3f}" for a in abc),
+                "grid_status": p.grid_status,
+                "limit": p.orientation_limit_deg,
+                "max": p.settings.max_correction_mm or 0.0,
+                "singular": p.singular_deg,
+                "region": "",
+            }
+        return dict(self.__dict__["_shared"])
 
     def flag_lines(self, label, what: str = "position") -> list[str]:
         """One line per kind of flag among the corrected positions: how many, and the words

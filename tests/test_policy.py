@@ -469,3 +469,46 @@ def test_a_corrected_hole_that_takes_another_status_is_refused():
         InputError, match=r"takes KUKA Status \d \(configuration.allow_change\), but"
     ):
         program_module._configuration(pts, c, robot(), positions, rotations, 0, None, 0, correction)
+
+
+def test_rewrite_allow_partial_marks_uncorrected_positions_in_the_header(tmp_path, capsys):
+    grid = _grid(tmp_path, robot="kr210-paper")
+    cell = _cell(tmp_path, grid=grid.name)
+    src = tmp_path / "h.src"
+    src.write_text(
+        "DEF h( )\n$BASE=BASE_DATA[1]\nLIN {X 1500,Y 100,Z 1400,A 0,B 90,C 0,S 6}\n"
+        "LIN {X 1500,Y 100,Z 1900,A 0,B 90,C 0,S 6}\nEND\n"
+    )
+    out = tmp_path / "o.src"
+    argv = ["rewrite", str(src), "--cell", str(cell), "-o", str(out), "--header"]
+    assert main([*argv, "--allow-partial"]) == 0
+    text = out.read_text()
+    assert "; not corrected: line 4 LIN: outside the grid box by 100.000 mm" in text
+    assert "; positions corrected 1" in text
+
+
+def test_rewrite_strict_without_a_model_says_outside_positions_are_refused_by_default(
+    tmp_path, capsys
+):
+    grid = _grid(tmp_path, robot="kr210-paper")
+    cell = _cell(tmp_path, grid=grid.name)
+    src = tmp_path / "s.src"
+    src.write_text("DEF s( )\n$BASE=BASE_DATA[1]\nLIN {X 1500,Y 100,Z 1900,A 0,B 90,C 0}\nEND\n")
+    argv = ["rewrite", str(src), "--cell", str(cell), "-o", str(tmp_path / "o.src"), "--strict"]
+    assert main(argv) == 2  # the old spelling keeps refusing a position outside the grid
+    err = capsys.readouterr().err
+    assert "note: --strict is no longer needed for positions outside the grid" in err
+    assert "1 outside the grid" in err
+
+
+def test_gcode_positions_take_the_cells_status_against_the_grids(tmp_path, capsys):
+    grid = _grid(tmp_path, robot="kr210-paper")
+    ngc = tmp_path / "p.ngc"
+    ngc.write_text("G90 G21\nG1 X1500 Y100 Z1400 F100\nM2\n")  # program frame = base = robot
+    out = tmp_path / "o.ngc"
+    for status, code in ((6, 0), (2, 2)):
+        cell = _cell(tmp_path, grid=grid.name, status=status)
+        assert main(["rewrite", str(ngc), "--cell", str(cell), "-o", str(out), "--force"]) == code
+        err = capsys.readouterr().err
+        if code:
+            assert "in KUKA Status 2: the grid holds only in Status 6" in err
