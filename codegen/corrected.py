@@ -231,17 +231,21 @@ def correct_points(request: CorrectRequest) -> JobFiles:
     points = read_points(request.points)
     check_added_columns(points)
     rotations = None if points.abc is None else abc_to_matrix(points.abc).reshape(-1, 3, 3)
-    verdict = policy.decide(
-        points.xyz, rotations, points.axis, point_status(points, request.status)
-    )
+    own = point_status(points, request.status)
+    verdict = policy.decide(points.xyz, rotations, points.axis, own)
     sources = grid_lines(Path(request.grid).name, model.source_sha256, model.step)
     method, power, its = settings.method, settings.power, settings.iterations
     details = [f"method {method}, power {power:g}, iterations {its}"]
     iterations = f"{its} iteration{'s' if its != 1 else ''}"
     power_text = f" power {power:g}" if method == "idw" else ""
-    unknown = "status     not recorded in the grid file (column s): not checked"
+    if model.status is None:
+        said = "status     not recorded in the grid file (column s): not checked"
+    elif own is None:
+        said = "status     the points' KUKA Status is not given (column s, --status): not checked"
+    else:
+        said = "status     checked against the points' (column s or --status)"
     lines = [
-        model.describe() + ("" if model.status is not None else "\n" + unknown),
+        model.describe() + "\n" + said,
         f"corrected  {int(verdict.corrected.sum())} point(s), {method}{power_text}, {iterations}",
     ]
     return corrected_file(request, points, verdict, sources, details, lines)

@@ -23,9 +23,10 @@ import numpy as np
 
 from accugrid.kinematics.yamlfile import YamlDoc
 
-__all__ = ["SECTION", "Validity", "validity_section"]
+__all__ = ["KEYS", "SECTION", "Validity", "validity_section"]
 
 SECTION = ("identification", "validity")
+KEYS = ("box_min_mm", "box_max_mm", "tool_axis", "tilt_deg", "joints_deg", "validated_max_mm")
 _EPS = 1e-6  # mm / deg: this close to a bound still counts as inside
 
 
@@ -67,10 +68,21 @@ class Validity:
 
     @classmethod
     def from_doc(cls, doc: YamlDoc) -> Validity | None:
-        """The ``identification.validity`` section of a calibrated file, None without one."""
+        """The ``identification.validity`` section of a calibrated file, None without one;
+        InputError at an unknown key (a misspelt one would silently drop a bound)."""
         if not doc.has(*SECTION):
             return None
         key = SECTION
+        section = doc.get(*key)
+        if not isinstance(section, dict):
+            raise doc.error(f"{doc.keyname(*key)} must be a mapping", *key)
+        for name in section:
+            if name not in KEYS:
+                raise doc.error(
+                    f"{doc.keyname(*key, name)}: unknown key (allowed: {', '.join(KEYS)})",
+                    *key,
+                    name,
+                )
         lower = np.array([doc.number(*key, "box_min_mm", i) for i in range(3)])
         upper = np.array([doc.number(*key, "box_max_mm", i) for i in range(3)])
         axis = np.array([doc.number(*key, "tool_axis", i) for i in range(3)])

@@ -344,6 +344,13 @@ def test_identify_records_where_the_model_holds_and_targets_outside_are_flagged(
     assert main([*argv, "--strict", "--force"]) == 2
     err = capsys.readouterr().err
     assert "1 outside the model's poses" in err and "hole 'FAR'" in err
+    # a misspelt key of the record is a located error, never a silently dropped bound
+    text = cal.read_text().replace("    tilt_deg:", "    tilt_dg:", 1)
+    assert "tilt_dg" in text
+    cal.write_text(text)
+    assert main([*argv, "--force"]) == 2
+    err = capsys.readouterr().err
+    assert "cal.yaml:" in err and "'identification.validity.tilt_dg': unknown key" in err
 
 
 def test_validity_measures_the_distance_tilt_and_joint_excess():
