@@ -154,8 +154,8 @@ def prepare(
         model,
         background=True,
         validity=validity,
-        allow_partial=args.allow_partial,
-        strict=args.strict,
+        allow_partial=getattr(args, "allow_partial", False),
+        strict=getattr(args, "strict", False),
     )
     largest, hole = program.largest_correction()
     where = f" at hole {points.ids[hole]}" if hole is not None else ""
@@ -171,4 +171,6 @@ def summary(job: Job, written: list[Path]) -> str:
     largest, _ = job.program.largest_correction()
     names = ", ".join(str(p) for p in written[:3]) + (" ..." if len(written) > 3 else "")
     what = "corrected" if job.program.corrected else "uncorrected"
+    if job.program.uncorrected:
+        what += f" but {len(job.program.uncorrected)} (--allow-partial)"
     return f"wrote {names}: {len(job.program)} holes, {what}, largest correction {largest:.3f} mm"

@@ -519,3 +519,81 @@ def test_gcode_positions_take_the_cells_status_against_the_grids(tmp_path, capsy
         err = capsys.readouterr().err
         if code:
             assert "in KUKA Status 2: the grid holds only in Status 6" in err
+
+
+@st.composite
+def _jobs(draw):
+    """A random smooth error field on a random regular grid (Status 6, A 0 B 90 C 0), a model
+    or none, and 1..8 targets inside or outside it, tilted 0..25 deg, in Status 6 or 2."""
+    origin = np.array([draw(st.floats(1300, 1500)), draw(st.floats(-400, -200)), 1250.0])
+    step = np.array([draw(st.floats(100, 250)) for _ in range(3)])
+    coeff = np.array([[draw(st.floats(-1e-3, 1e-3)) for _ in range(3)] for _ in range(3)])
+    offset = np.array([draw(st.floats(-1.0, 1.0)) for _ in range(3)])
+    model = draw(st.sampled_from([None, "kr210-paper"]))
+    n = draw(st.integers(1, 8))
+    u = np.array([[draw(st.floats(-0.2, 1.2)) for _ in range(3)] for _ in range(n)])
+    tilt = np.array([draw(st.sampled_from([0.0, 4.0, 12.0, 20.0])) for _ in range(n)])
+    status = np.array([draw(st.sampled_from([6, 2])) for _ in range(n)])
+    return origin, step, coeff, offset, model, u, tilt, status
+
+
+@settings(max_examples=30)
+@given(job=_jobs())
+def test_property_the_policy_corrects_exactly_or_leaves_the_target_with_a_reason(job):
+    """Over random grids, models and targets: a corrected target lands within 0.01 mm under
+    the correction it was made with (the grid's errors, or the calibrated arm carrying the
+    drill in the target's own Status plus the residual grid); any other is left as it is with
+    a reason, the grid's Status and box among them."""
+    origin, step, coeff, offset, model, u, tilt, status = job
+    from accugrid.compensation import GridModel
+
+    axes = [origin[a] + step[a] * np.arange(3) for a in range(3)]
+    vertices = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    field = offset + (vertices - origin) @ coeff  # a smooth field, mm
+    abc = np.tile([0.0, 90.0, 0.0], (len(vertices), 1))
+    drill = pose_from_xyzabc(np.array(DRILL))
+    settings_ = CorrectionSettings(method="trilinear", iterations=4)
+    targets = origin + u * 2 * step
+    rotations = np.array([abc_to_matrix(np.array([0.0, 90.0, c])) for c in tilt])
+    if model is None:  # the grid measured the arm's error field e = P - M
+        measured = GridModel.from_measurements((vertices, vertices - field, abc))
+        grid = GridModel(
+            measured.origin, measured.step, measured.errors, measured.orientation_abc, status=6
+        )
+        policy = Policy.build(settings_, grid)
+    else:  # the arm is the model plus the field the residual grid measured
+        arm = load_robot(model).with_tool(drill)
+        poses = np.tile(np.eye(4), (len(vertices), 1, 1))
+        poses[:, :3, :3], poses[:, :3, 3] = abc_to_matrix(abc), vertices
+        sol = NOMINAL.with_tool(drill).ik(poses, status=6)
+        reach = arm.true_robot().fk(sol.q)[:, :3, 3]
+        measured = GridModel.from_measurements((vertices, reach - field * 0.1, abc))
+        grid = GridModel(
+            measured.origin, measured.step, measured.errors, measured.orientation_abc, status=6
+        )
+        policy = Policy.build(settings_, grid, load_robot(model), None, (drill, drill))
+    verdict = policy.decide(targets, rotations, status=status)
+    done = verdict.corrected
+    reasons = verdict.reasons()
+    assert all(reasons[i] for i in np.flatnonzero(~done))
+    np.testing.assert_array_equal(verdict.command[~done], targets[~done])
+    assert not (done & (status != 6)).any()  # the grid holds in Status 6 only
+    inside = ((targets >= grid.origin - 1e-6) & (targets <= grid.upper + 1e-6)).all(axis=1)
+    assert not (done & ~inside).any()
+    if not done.any():
+        return
+    command = verdict.command[done]
+    if model is None:  # the arm commits the grid's error at the command: M = P' - e(P')
+        errors = GridModel.from_measurements((vertices, vertices - field, abc))
+        # (at the nearest box point where a command steps out of the box, as the correction)
+        landed = command - errors.predict(command, "trilinear", outside="clamp")
+        assert np.abs(landed - targets[done]).max() < 0.01
+        return
+    poses = np.tile(np.eye(4), (len(command), 1, 1))
+    poses[:, :3, :3], poses[:, :3, 3] = rotations[done], command
+    sol = NOMINAL.with_tool(drill).ik(poses, status=status[done])
+    assert sol.ok.all()
+    landed = arm.true_robot().fk(sol.q)[:, :3, 3] - 0.1 * (
+        offset + (targets[done] - origin) @ coeff
+    )  # the arm less the field its grid measured (at the target: the residual grid's r(P))
+    assert np.abs(landed - targets[done]).max() < 0.01
