@@ -186,6 +186,12 @@ class Policy:
             return cls(
                 settings, measured, None, status, grid_status, source, validity=validity, **limits
             )
+        if measured is not None and grid_status is None and measured.orientation_abc is not None:
+            raise InputError(  # a residual grid is computed in its own Status only
+                "the grid does not record its KUKA Status (column s) and the model reaches no "
+                "Status at its origin: the residual cannot be computed",
+                measured.source_path,
+            )
         if status is None:
             status = (
                 grid_status

@@ -28,6 +28,7 @@ from accugrid.codegen.cli_options import add_abc, add_policy, add_status, add_to
 from accugrid.codegen.corrected import CorrectRequest, correct_points
 from accugrid.compensation.grid import MAX_CORRECTION_MM
 from accugrid.compensation.measurements import REPEAT_TOL_MM
+from accugrid.compensation.policy import GRID_ORIENTATION_TOL_DEG, ORIENTATION_LIMIT_DEG
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
 
@@ -100,16 +101,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--orientation-tol",
         type=float,
-        default=5.0,
+        default=GRID_ORIENTATION_TOL_DEG,
         metavar="DEG",
-        help="flag points whose orientation differs from the grid's by more, deg (default: 5)",
+        help="flag points whose orientation differs from the grid's by more, deg "
+        f"(default: {GRID_ORIENTATION_TOL_DEG:g})",
     )
     parser.add_argument(
         "--orientation-limit",
         type=float,
-        default=15.0,
+        default=ORIENTATION_LIMIT_DEG,
         metavar="DEG",
-        help="refuse points whose orientation differs from the grid's by more, deg (default: 15)",
+        help="refuse points whose orientation differs from the grid's by more, deg "
+        f"(default: {ORIENTATION_LIMIT_DEG:g})",
     )
     parser.add_argument(
         "--allow-orientation",
