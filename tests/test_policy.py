@@ -145,6 +145,16 @@ def test_rewrite_model_corrects_each_krl_position_in_its_own_status(tmp_path, ca
     assert np.abs(landed - [1500.0, 100.0, 1400.0]).max() < 1e-3
 
 
+def test_krl_status_words_are_read_per_aggregate():
+    from accugrid.codegen.krl.rewrite import aggregate_status
+
+    text = (
+        "LIN {X 1,S 6,T 2} ; {S 3}\nDECL E6POS P={X 1,Y 2,S 'B010'}\nLIN {X 2}\nLIN {X 3, s 'H5'}\n"
+    )
+    agg = np.array([text.index("{"), text.index("={") + 1, text.index("{X 2"), text.index("{X 3")])
+    assert aggregate_status(text, agg).tolist() == [6, 2, -1, 5]
+
+
 def test_grid_only_rewrite_leaves_a_position_in_another_status_and_says_why(tmp_path, capsys):
     # finding: grid-only rewrite corrected an S 2 position with a Status-6 grid, unflagged
     grid = _grid(tmp_path)

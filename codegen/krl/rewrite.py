@@ -528,21 +528,23 @@ def _correct(
     return [targets[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
-_STATUS_RE = re.compile(r"[{,]\s*S\s+(?:'B([01]+)'|(\d+))", re.IGNORECASE)
+_STATUS_RE = re.compile(r"[{,]\s*S\s+(?:'B([01]+)'|'H([0-9A-F]+)'|(\d+))", re.IGNORECASE)
 
 
 def aggregate_status(text: str, agg: np.ndarray) -> np.ndarray:
     """The KUKA Status S (n,) of the aggregates whose ``{`` is at text offsets ``agg`` (n,)
-    (-1: no S); ``S 6`` or ``S 'B110'``. One regular-expression pass over the text, the
+    (-1: no S); ``S 6``, ``S 'B110'`` or ``S 'H6'``. One regular-expression pass over the text, the
     matches assigned to their aggregates by offset."""
     out = np.full(len(agg), -1, np.int64)
     if not len(agg) or "S" not in text.upper():
         return out
-    found = [(m.start(), m.group(1), m.group(2)) for m in _STATUS_RE.finditer(text)]
+    found = [(m.start(), m.group(1), m.group(2), m.group(3)) for m in _STATUS_RE.finditer(text)]
     if not found:
         return out
     at = np.array([f[0] for f in found], np.int64)
-    value = np.array([int(b, 2) if b else int(d) for _, b, d in found], np.int64)
+    value = np.array(
+        [int(b, 2) if b else int(h, 16) if h else int(d) for _, b, h, d in found], np.int64
+    )
     order = np.argsort(agg, kind="stable")
     starts = agg[order]
     braces = np.flatnonzero(np.frombuffer(text.encode("latin-1", "replace"), np.uint8) == 125)
