@@ -6,11 +6,11 @@ STAMP := $(VENV)/.installed
 
 .PHONY: demo test bench bytecode lint format clean
 
+# setuptools' editable finder always adds a note on folders named like the package: there is none
+# (the sources live in kinematics/, codegen/, ... mapped under accugrid), so that one note is muted.
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	# setuptools' editable finder always adds a note on folders named like the package: none is
-	# (the sources live in kinematics/, codegen/, ... mapped under accugrid), so the note is muted.
 	PYTHONWARNINGS='ignore:Editable installation' $(BIN)/python -m pip install --quiet -e '.[test,lint]'
 	$(MAKE) --no-print-directory bytecode
 	touch $(STAMP)
