@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.cell import Cell, load_cell
+from accugrid.codegen.cli_options import add_table_format
 from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program import Program, build_program
@@ -82,6 +83,7 @@ def add_job_arguments(parser: argparse.ArgumentParser) -> None:
         "krl/ or gcode/ folder)",
     )
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    add_table_format(parser)
 
 
 def model_path(args: argparse.Namespace, cell: Cell) -> Path | None:

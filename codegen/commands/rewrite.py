@@ -33,6 +33,7 @@ import sys
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cli_options import add_table_format
 from accugrid.codegen.dialects import dialect_of
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.rewrite import ORIENTATION_LIMIT_DEG
@@ -61,6 +62,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--strict", action="store_true", help="error when a position lies outside the grid"
     )
+    add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
     parser.add_argument(
         "--config-dat", metavar="$config.dat", help="KRL $config.dat with BASE_DATA[n] values"
