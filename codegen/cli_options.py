@@ -189,8 +189,9 @@ def add_table_format(parser: argparse.ArgumentParser) -> None:
         "--units",
         choices=["mm", "m", "in"],
         default="mm",
-        help="unit of the lengths (x,y,z, x_meas..z_meas, diameter, depth) in the CSVs of this "
-        "command, converted to mm on read (default: mm)",
+        help="unit of the lengths (x,y,z, x_meas..z_meas, diameter, depth) in the files "
+        "--columns applies to (without --columns: in every CSV of this command), converted to "
+        "mm on read (default: mm)",
     )
     group.add_argument(
         "--delimiter",

@@ -81,8 +81,9 @@ class TableFormat:
 
     ``delimiter`` ``,``, ``;`` or tab (None: found from the file); ``decimal`` ``.`` or ``,``
     (None: found; a comma only with another delimiter); ``columns``: accugrid's column name ->
-    the file's header name (applied to each file that has one of those names); ``units`` of every
-    length column (``LENGTH_COLUMNS``): ``mm``, ``m`` or ``in``, converted to mm on read.
+    the file's header name, applied to each file that has one of those names (the export; a file
+    without any is read as it is); ``units`` of the length columns (``LENGTH_COLUMNS``) of the
+    export (of every file without ``columns``): ``mm``, ``m`` or ``in``, converted to mm on read.
     """
 
     delimiter: str | None = None
@@ -486,8 +487,8 @@ def parse_table(text: str, path: str = "<string>", fmt: TableFormat | None = Non
         table = _parse_csv(text, path, delimiter)
         decimal = fmt.decimal or ("." if delimiter == "," else _decimal_of(table))
         _convert_cells(table, decimal, None)
-    if fmt.columns:
-        _map_columns(table, fmt)
+    if fmt.columns and not _map_columns(table, fmt):
+        return table  # not the export the mapping and units describe
     if fmt.units != "mm":
         _convert_cells(table, ".", UNITS[fmt.units])
     return table
@@ -609,14 +610,15 @@ def _convert_cells(table: Table, decimal: str, scale: Decimal | None) -> None:
                 row[i] = format(value.scaleb(3) if scale == 1000 else value * scale, "f")
 
 
-def _map_columns(table: Table, fmt: TableFormat) -> None:
-    """Rename the file's columns to accugrid's by ``fmt.columns``, when the file has any of the
-    mapped names; InputError at the header for a mapped name it lacks while having others."""
+def _map_columns(table: Table, fmt: TableFormat) -> bool:
+    """Rename the file's columns to accugrid's by ``fmt.columns`` when the file has any of the
+    mapped names (True), else leave it (False); InputError at the header for a mapped name it
+    lacks while having others."""
     wanted = {source.lower(): name for name, source in fmt.columns.items()}
     have = {name.strip().lower() for name in table.header}
     if not have & wanted.keys():
         table.unmapped = f"; the column mapping {fmt.mapping_text()} names none of them"
-        return
+        return False
     for name, source in fmt.columns.items():
         if source.lower() not in have:
             raise InputError(
@@ -629,6 +631,7 @@ def _map_columns(table: Table, fmt: TableFormat) -> None:
     _check_header(header, table.path, table.header_line)
     table.header = header
     table._index = {name.strip().lower(): i for i, name in enumerate(header)}
+    return True
 
 
 def _parse_csv(text: str, path: str, delimiter: str = ",") -> Table:
