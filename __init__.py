@@ -5,12 +5,14 @@ The repository's top-level folders install as this one package (``pyproject.toml
 ``accugrid.kinematics`` (robot models, IK, error model, frames), ``accugrid.compensation`` (grid
 model, plans, study), ``accugrid.codegen`` (points and cell files, program model, dialects, CLI) and
 ``accugrid.templates`` (Jinja2 templates). The names in ``__all__`` are the library surface; each is
-imported on first use, so ``import accugrid`` (and the CLI's start-up) stays cheap.
+imported on first use (``kinematics.exports``), so ``import accugrid`` (and the CLI's start-up)
+stays cheap.
 """
 
 import os
 import sys
-from importlib import import_module
+
+from accugrid.kinematics.exports import lazy_namespace
 
 
 def _version() -> str:
@@ -60,10 +62,20 @@ _API = {
     "load_robot": "accugrid.kinematics.robot",
     "RobotModel": "accugrid.kinematics.model",
     "Configuration": "accugrid.kinematics.configuration",
+    "pose_set": "accugrid.kinematics.identification",
+    "identify": "accugrid.kinematics.identification",
+    "identification_summary": "accugrid.kinematics.calibrated",
+    "calibrated_yaml": "accugrid.kinematics.calibrated",
     "GridModel": "accugrid.compensation.grid",
     "CorrectionSettings": "accugrid.compensation.settings",
     "Measurements": "accugrid.compensation.measurements",
     "read_measurements": "accugrid.compensation.measurements",
+    "TableFormat": "accugrid.compensation.csvtable",
+    "model_correct": "accugrid.compensation.model_correction",
+    "residual_grid": "accugrid.compensation.model_correction",
+    "grid_plan": "accugrid.compensation.plans",
+    "experiment_plan": "accugrid.compensation.plans",
+    "identification_plan": "accugrid.compensation.plans",
     "Points": "accugrid.codegen.points",
     "read_points": "accugrid.codegen.points",
     "Cell": "accugrid.codegen.cell",
@@ -76,14 +88,4 @@ _API = {
 
 __all__ = ["__version__", *_API]
 
-
-def __getattr__(name: str):
-    if name not in _API:
-        raise AttributeError(f"module 'accugrid' has no attribute {name!r}")
-    value = getattr(import_module(_API[name]), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = lazy_namespace(__name__, _API)

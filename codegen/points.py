@@ -55,6 +55,10 @@ class Points:
     def __len__(self) -> int:
         return len(self.ids)
 
+    def __repr__(self) -> str:
+        how = f", orientation {self.orientation}" if self.orientation else ""
+        return f"Points({len(self)} holes from {os.path.basename(self.path)}{how})"
+
     @property
     def lines(self) -> list[int]:
         return self.table.lines

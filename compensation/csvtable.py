@@ -162,6 +162,9 @@ class Table:
     def __len__(self) -> int:
         return len(self.lines)
 
+    def __repr__(self) -> str:
+        return f"Table({self.path!r}, {len(self)} rows, columns {', '.join(self.header)})"
+
     def row_bytes(self, lo: int, hi: int) -> np.ndarray | None:
         """The text of rows lo..hi-1 as read (ASCII, cells joined by commas, no cell needing
         quotes: what ``csv.writer`` writes for each row), one per row of an (hi - lo, width)

@@ -61,6 +61,17 @@ class Measurements:
     position_decimals: np.ndarray | None = None
     status: np.ndarray | None = None
 
+    def __repr__(self) -> str:
+        source = f" from {os.path.basename(self.path)}" if self.path else ""
+        extra = [
+            name for name, v in (("a,b,c", self.abc), ("a1..a6", self.joints)) if v is not None
+        ]
+        return (
+            f"Measurements({len(self.commanded)} rows{source}"
+            + "".join(f", {name}" for name in extra)
+            + ")"
+        )
+
     def where(self, row: int) -> str:
         """Human location of a row: 'line 12' for a file, 'row 3' (0-based) for arrays."""
         return f"line {self.lines[row]}" if self.lines is not None else f"row {row}"

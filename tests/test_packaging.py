@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import shutil
 import subprocess
 import sys
@@ -115,3 +116,26 @@ def test_flat_api_resolves_every_public_name() -> None:
     for name in accugrid.__all__:
         assert getattr(accugrid, name) is not None, name
     assert accugrid.load_robot("kr210").name == "kr210"
+
+
+def test_every_package_lists_names_that_resolve() -> None:
+    """Each package (a folder with an __init__.py) declares a non-empty ``__all__``, each name
+    importable from it, and ``dir()`` shows them before they are loaded."""
+    folders = [ROOT] + [p.parent for f in PACKAGE_FOLDERS for p in (ROOT / f).rglob("__init__.py")]
+    for folder in folders:
+        name = "accugrid" + "".join("." + part for part in folder.relative_to(ROOT).parts)
+        package = importlib.import_module(name)
+        assert package.__all__, name
+        assert set(package.__all__) <= set(dir(package)), name
+        for public in package.__all__:
+            assert getattr(package, public) is not None, f"{name}.{public}"
+
+
+def test_importing_accugrid_loads_no_heavy_library() -> None:
+    """The lazy names keep ``import accugrid`` (and the CLI's start) free of numpy's users."""
+    code = (
+        "import sys, accugrid, accugrid.kinematics, accugrid.compensation, accugrid.codegen;"
+        "print(sorted(m for m in ('numpy', 'scipy', 'pinocchio', 'jinja2') if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
+    assert out.stdout.strip() == "[]"
