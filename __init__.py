@@ -55,36 +55,43 @@ def _metadata_version(folder: str, kind: str) -> str | None:
 
 __version__ = _version()
 
-# public name -> module that defines it
-_API = {
-    "InputError": "accugrid.kinematics.errors",
-    "Robot": "accugrid.kinematics.robot",
-    "load_robot": "accugrid.kinematics.robot",
-    "RobotModel": "accugrid.kinematics.model",
-    "Configuration": "accugrid.kinematics.configuration",
-    "pose_set": "accugrid.kinematics.identification",
-    "identify": "accugrid.kinematics.identification",
-    "identification_summary": "accugrid.kinematics.calibrated",
-    "calibrated_yaml": "accugrid.kinematics.calibrated",
-    "GridModel": "accugrid.compensation.grid",
-    "CorrectionSettings": "accugrid.compensation.settings",
-    "Measurements": "accugrid.compensation.measurements",
-    "read_measurements": "accugrid.compensation.measurements",
-    "TableFormat": "accugrid.compensation.csvtable",
-    "model_correct": "accugrid.compensation.model_correction",
-    "residual_grid": "accugrid.compensation.model_correction",
-    "grid_plan": "accugrid.compensation.plans",
-    "experiment_plan": "accugrid.compensation.plans",
-    "identification_plan": "accugrid.compensation.plans",
-    "Points": "accugrid.codegen.points",
-    "read_points": "accugrid.codegen.points",
-    "Cell": "accugrid.codegen.cell",
-    "load_cell": "accugrid.codegen.cell",
-    "Program": "accugrid.codegen.program",
-    "build_program": "accugrid.codegen.program",
-    "render_krl": "accugrid.codegen.krl.emit",
-    "render_gcode": "accugrid.codegen.gcode.emit",
+# the names a script needs, by the package that lists (and lazily imports) them
+_PUBLIC = {
+    "accugrid.kinematics": (
+        "InputError",
+        "Robot",
+        "load_robot",
+        "RobotModel",
+        "Configuration",
+        "pose_set",
+        "identify",
+        "identification_summary",
+        "calibrated_yaml",
+    ),
+    "accugrid.compensation": (
+        "GridModel",
+        "CorrectionSettings",
+        "Measurements",
+        "read_measurements",
+        "TableFormat",
+        "model_correct",
+        "residual_grid",
+        "grid_plan",
+        "experiment_plan",
+        "identification_plan",
+    ),
+    "accugrid.codegen": (
+        "Points",
+        "read_points",
+        "Cell",
+        "load_cell",
+        "Program",
+        "build_program",
+        "render_krl",
+        "render_gcode",
+    ),
 }
+_API = {name: package for package, names in _PUBLIC.items() for name in names}
 
 __all__ = ["__version__", *_API]
 
