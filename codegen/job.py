@@ -20,6 +20,7 @@ from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program import Program, build_program
 from accugrid.compensation import GridModel
+from accugrid.compensation.csvtable import declared_or
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import load_robot
@@ -126,7 +127,9 @@ def prepare(
     model_file = model_path(args, cell)
     grid_file = grid_path(args, cell, model_file)
     points = read_points(args.points)
-    grid = None if grid_file is None else GridModel.from_measurements(grid_file)
+    grid = None
+    if grid_file is not None:
+        grid = GridModel.from_measurements(grid_file, fmt=declared_or(cell.tracker))
     robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
     model = None
     if model_file is not None:

@@ -27,6 +27,7 @@ from accugrid.codegen.rewrite import (
     warning_lines,
 )
 from accugrid.compensation.corrector import Corrector
+from accugrid.compensation.csvtable import declared_or, reading_as
 
 __all__ = ["RewriteJob", "RewriteRequest", "rewrite_job"]
 
@@ -94,13 +95,14 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
             calibrated = calibrated.with_tool(cell.flange_T_tool)
         read.append(model_file)
     # with a model: residual grid in the Status the grid was measured in (wrist flips otherwise)
-    corrector = Corrector.build(
-        cell.correction,
-        grid,
-        calibrated,
-        cell.configuration.status,
-        cell.flange_T_tool if calibrated is not None else None,
-    )
+    with reading_as(declared_or(cell.tracker)):  # the grid file as the cell's tracker writes it
+        corrector = Corrector.build(
+            cell.correction,
+            grid,
+            calibrated,
+            cell.configuration.status,
+            cell.flange_T_tool if calibrated is not None else None,
+        )
     opts = Options(
         model=corrector.grid,
         base_data=cell.base_data,

@@ -42,6 +42,7 @@ __all__ = [
     "Table",
     "TableFormat",
     "decimals_of",
+    "declared_or",
     "parse_number",
     "parse_table",
     "read_table",
@@ -125,6 +126,13 @@ def reading_as(fmt: TableFormat | None) -> Iterator[None]:
         yield
     finally:
         _FORMAT.reset(token)
+
+
+def declared_or(fallback: TableFormat | None) -> TableFormat | None:
+    """The format ``reading_as`` set when it declares anything (the command line's), else
+    ``fallback`` (e.g. the cell file's tracker section)."""
+    current = _FORMAT.get()
+    return current if current is not None and current != _PLAIN else fallback
 
 
 class Table:

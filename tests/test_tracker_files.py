@@ -193,3 +193,54 @@ def test_any_export_reads_as_its_canonical_file(rows, delimiter, comma, units, r
     fmt = TableFormat(columns={"id": "Name", **mapping}, units=units)
     expected = parse_table(canonical, "c.csv").floats(SIX)
     assert np.array_equal(parse_table(text, "e.csv", fmt).floats(SIX), expected)
+
+
+def _cell_with_grid(tmp_path, name: str, grid, tracker: str = ""):
+    """examples/cell.yaml with its grid replaced (and a tracker: section appended)."""
+    text = (EXAMPLES / "cell.yaml").read_text().replace("grid: grid_200mm.csv", f"grid: {grid}")
+    path = tmp_path / name
+    path.write_text(text + tracker)
+    return path
+
+
+def test_the_cell_tracker_section_reads_its_grid_file(tmp_path, capsys):
+    """A cell whose grid is a PolyWorks-shaped export with a tracker: section makes the same KRL
+    program as the cell with the canonical grid (only the lines naming files and SHA-256 differ);
+    the points file of the job is read as it is."""
+    from accugrid.codegen.cell import load_cell
+    from accugrid.kinematics.frames import invert, transform_points
+
+    option = EXAMPLES_AND_OPTIONS["polyworks_grid_8.csv"][1]
+    columns = dict(item.split("=") for item in option.split(","))
+    tracker = "\ntracker:\n  columns: {" + ", ".join(f"{k}: {v}" for k, v in columns.items())
+    tracker += "}\n  decimal: comma\n"
+    plain = _cell_with_grid(tmp_path, "plain.yaml", CANONICAL)
+    export = _cell_with_grid(tmp_path, "export.yaml", TRACKER / "polyworks_grid_8.csv", tracker)
+    assert load_cell(export).tracker == TableFormat(decimal=",", columns=columns)
+    robot_points = np.array([[1250.5, -550, 1150], [1333.25, -420.75, 1280.125]])
+    base = transform_points(invert(load_cell(plain).robot_T_base), robot_points)
+    points = tmp_path / "holes.csv"
+    points.write_text(
+        "id,x,y,z,i,j,k\n"
+        + "".join(f"H{n},{x},{y},{z},0,0,-1\n" for n, (x, y, z) in enumerate(base))
+    )
+    outputs = {}
+    for cell in (plain, export):
+        out = tmp_path / cell.stem
+        assert main(["krl", str(points), "--cell", str(cell), "-o", str(out)]) == 0, (
+            capsys.readouterr()
+        )
+        outputs[cell.stem] = {
+            p.name: [line for line in p.read_text().splitlines() if "sha256" not in line]
+            for p in sorted(out.iterdir())
+        }
+    assert outputs["plain"] == outputs["export"]
+    assert len(outputs["plain"]) == 2
+
+
+def test_a_bad_tracker_section_names_its_key(tmp_path):
+    from accugrid.codegen.cell import load_cell
+
+    cell = _cell_with_grid(tmp_path, "c.yaml", CANONICAL, "\ntracker:\n  units: km\n")
+    with pytest.raises(InputError, match="tracker.units"):
+        load_cell(cell)
