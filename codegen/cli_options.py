@@ -196,12 +196,14 @@ def add_table_format(parser: argparse.ArgumentParser) -> None:
     group.add_argument(
         "--delimiter",
         choices=list(DELIMITERS),
-        help="column delimiter (default: found from the header and the first rows)",
+        help="column delimiter of the export (default: found from the header and the first "
+        "rows; a file whose header does not hold it is read as found)",
     )
     group.add_argument(
         "--decimal",
         choices=list(DECIMALS),
-        help="decimal mark (default: found; a comma only with a semicolon or tab delimiter)",
+        help="decimal mark of the export (default: found; a comma-separated file always has a "
+        "decimal point)",
     )
 
 

@@ -80,11 +80,12 @@ _ODD_START[np.frombuffer(b"#,\n" + _BLANKS.encode() + bytes(range(0x1C, 0x20)), 
 class TableFormat:
     """How a CSV file is written where it differs from DESIGN.md's.
 
-    ``delimiter`` ``,``, ``;`` or tab (None: found from the file); ``decimal`` ``.`` or ``,``
-    (None: found; a comma only with another delimiter); ``columns``: accugrid's column name ->
-    the file's header name, applied to each file that has one of those names (the export; a file
-    without any is read as it is); ``units`` of the length columns (``LENGTH_COLUMNS``) of the
-    export (of every file without ``columns``): ``mm``, ``m`` or ``in``, converted to mm on read.
+    ``delimiter`` ``,``, ``;`` or tab (used where the header holds it, else found from the file);
+    ``decimal`` ``.`` or ``,`` (None: found; a comma only beside another delimiter); ``columns``:
+    accugrid's column name -> the file's header name, applied to each file that has one of those
+    names (the export; a file without any is read as it is); ``units`` of the length columns
+    (``LENGTH_COLUMNS``) of the export (of every file without ``columns``): ``mm``, ``m`` or
+    ``in``, converted to mm on read.
     """
 
     delimiter: str | None = None
@@ -485,19 +486,13 @@ def read_table(path: str | os.PathLike[str], fmt: TableFormat | None = None) -> 
 def parse_table(text: str, path: str = "<string>", fmt: TableFormat | None = None) -> Table:
     """Parse CSV text (see module docstring); ``path`` is used in error messages only."""
     fmt = fmt or _FORMAT.get() or _PLAIN
-    delimiter = fmt.delimiter or _delimiter_of(text, path)
-    if delimiter == "," and fmt.decimal == ",":
-        raise InputError(
-            "a decimal comma needs a semicolon or tab delimiter, and this file is comma-separated",
-            path,
-            _header_line(text)[0],
-        )
+    delimiter = _delimiter_of(text, path, fmt.delimiter)
     if delimiter == "," and fmt.units == "mm":  # DESIGN.md's format: the fast reader first
         table = _parse_simple(text, path) or _parse_csv(text, path)
     else:
         table = _parse_csv(text, path, delimiter)
-        decimal = fmt.decimal or ("." if delimiter == "," else _decimal_of(table))
-        _convert_cells(table, decimal, None)
+        if delimiter != ",":  # a decimal comma only beside another delimiter
+            _convert_cells(table, fmt.decimal or _decimal_of(table), None)
     if fmt.columns and not _map_columns(table, fmt):
         return table  # not the export the mapping and units describe
     if fmt.units != "mm":
@@ -536,11 +531,14 @@ def _header_line(text: str) -> tuple[int, str]:
     return 0, ""
 
 
-def _delimiter_of(text: str, path: str) -> str:
-    """The delimiter of a file: a comma unless its header line holds a semicolon or tab; then
-    the one candidate that splits the header into several columns and the first rows below it
-    into as many. InputError (at the header) naming what was found when none or several do."""
+def _delimiter_of(text: str, path: str, declared: str | None = None) -> str:
+    """The delimiter of a file: ``declared`` when its header line holds it; else a comma unless
+    the header line holds a semicolon or tab; then the one candidate that splits the header into
+    several columns and the first rows below it into as many. InputError (at the header) naming
+    what was found when none or several do."""
     number, line = _header_line(text)
+    if declared and declared in line:
+        return declared
     if ";" not in line and "\t" not in line:
         return ","
     head, end = text, -1

@@ -135,9 +135,14 @@ def test_an_undecidable_delimiter_names_what_was_found():
     assert table.header == ["id,x", "y"]
 
 
-def test_a_decimal_comma_needs_another_delimiter():
-    with pytest.raises(InputError, match="comma-separated"):
-        parse_table("x,y\n1,2\n", "c.csv", TableFormat(decimal=","))
+def test_the_export_options_leave_a_canonical_file_of_the_same_command_alone():
+    """--delimiter and --decimal describe the export: a comma file (the job's points) is read
+    with a comma and points all the same."""
+    fmt = TableFormat(delimiter=";", decimal=",", columns={"x": "X_nom"})
+    table = parse_table("id,x,y\nP1,1.5,2\n", "p.csv", fmt)
+    assert table.floats(["x", "y"]).tolist() == [[1.5, 2.0]]
+    export = parse_table("id;X_nom;y\nP1;1,5;2\n", "e.csv", fmt)
+    assert export.floats(["x", "y"]).tolist() == [[1.5, 2.0]]
 
 
 def test_the_canonical_file_keeps_the_fast_reader():
