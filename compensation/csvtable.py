@@ -26,7 +26,6 @@ from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
-from decimal import Decimal
 
 import numpy as np
 
@@ -51,7 +50,7 @@ __all__ = [
 
 DELIMITERS = {"comma": ",", "semicolon": ";", "tab": "\t"}
 DECIMALS = {"point": ".", "comma": ","}
-UNITS = {"mm": Decimal(1), "m": Decimal(1000), "in": Decimal("25.4")}  # mm per unit, exact
+UNITS = {"mm": "1", "m": "1000", "in": "25.4"}  # mm per unit, as exact decimal text
 # the columns holding lengths (DESIGN.md points, measurements, experiment plans): --units scales
 LENGTH_COLUMNS = frozenset(
     ("x", "y", "z", "x_meas", "y_meas", "z_meas", "diameter", "depth", "step")
@@ -596,7 +595,7 @@ def _decimal_of(table: Table) -> str:
     return "," if "," in first else "."
 
 
-def _convert_cells(table: Table, decimal: str, scale: Decimal | None) -> None:
+def _convert_cells(table: Table, decimal: str, scale: str | None) -> None:
     """In place: a decimal comma made a point in every number written with one (``scale``
     None), or every number of the length columns times ``scale`` (exact decimal arithmetic, so
     ``1.2345`` m reads as ``1234.5`` mm)."""
@@ -610,13 +609,16 @@ def _convert_cells(table: Table, decimal: str, scale: Decimal | None) -> None:
                     if "," in cell and pattern.fullmatch(cell):
                         row[i] = cell.replace(",", ".")
         return
+    from decimal import Decimal  # only files in m or inch need it
+
+    factor = Decimal(scale)
     columns = [i for i, name in enumerate(table.header) if name.lower() in LENGTH_COLUMNS]
     for row in rows:
         for i in columns:
             text = row[i].strip(_BLANKS)
             if _DECIMAL.fullmatch(text) and not text[-1].isalpha():  # not nan, inf
                 value = Decimal(text)
-                row[i] = format(value.scaleb(3) if scale == 1000 else value * scale, "f")
+                row[i] = format(value.scaleb(3) if scale == "1000" else value * factor, "f")
 
 
 def _map_columns(table: Table, fmt: TableFormat) -> bool:
