@@ -157,6 +157,7 @@ class Table:
         self._cells = cells
         self.lines = _Lines([] if lines is None else lines)
         self.header_line = header_line
+        self.delimiter = ","  # the file's, as parse_table found it
         self.unmapped = ""  # a column mapping that named none of this file's columns
         self._index = {name.strip().lower(): i for i, name in enumerate(self.header)}
 
@@ -490,6 +491,7 @@ def parse_table(text: str, path: str = "<string>", fmt: TableFormat | None = Non
         table = _parse_simple(text, path) or _parse_csv(text, path)
     else:
         table = _parse_csv(text, path, delimiter)
+        table.delimiter = delimiter
         if delimiter != ",":  # a decimal comma only beside another delimiter
             _convert_cells(table, fmt.decimal or _decimal_of(table), None)
     if fmt.columns and not _map_columns(table, fmt):

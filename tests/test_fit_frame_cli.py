@@ -167,6 +167,14 @@ def test_transform_triples_and_the_former_spelling(tmp_path, frame_file, capsys)
     assert first[1:4] != original[1:4] and first[7:] != original[7:]  # both triples mapped
 
 
+def test_transform_refuses_a_file_it_cannot_rewrite_as_written(tmp_path, frame_file, capsys):
+    src = tmp_path / "semi.csv"
+    src.write_text("# export\nid;x;y;z\nP1;1,5;2;3\n")
+    out = tmp_path / "out.csv"
+    assert transform(src, frame_file, out) == 2 and not out.exists()
+    assert f"{src}:2: transform rewrites comma-separated files" in _error_line(capsys)
+
+
 def test_transform_refusals(tmp_path, frame_file, capsys):
     out = tmp_path / "out.csv"
     partial = tmp_path / "partial.csv"
