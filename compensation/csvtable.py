@@ -535,8 +535,8 @@ def _header_line(text: str) -> tuple[int, str]:
 def _delimiter_of(text: str, path: str, declared: str | None = None) -> str:
     """The delimiter of a file: ``declared`` when its header line holds it; else a comma unless
     the header line holds a semicolon or tab; then the one candidate that splits the header into
-    several columns and the first rows below it into as many. InputError (at the header) naming
-    what was found when none or several do."""
+    several columns and the first rows below it into as many (or the only one that splits the
+    header at all). InputError (at the header) naming what was found when none or several do."""
     number, line = _header_line(text)
     if declared and declared in line:
         return declared
@@ -549,15 +549,17 @@ def _delimiter_of(text: str, path: str, declared: str | None = None) -> str:
             break
     else:
         head = text[: end + 1]
-    fits, found = [], []
+    fits, splits, found = [], [], []
     for name, delimiter in DELIMITERS.items():
         records = list(_records(head, delimiter, 51))
         widths = sorted({len(fields) for _, fields in records})
         found.append(f"{name}: {len(records[0][1])} column(s) in the header, {widths} per row")
-        if len(records[0][1]) > 1 and len(widths) == 1:
-            fits.append(name)
-    if len(fits) == 1:
-        return DELIMITERS[fits[0]]
+        if len(records[0][1]) > 1:
+            splits.append(name)
+            if len(widths) == 1:
+                fits.append(name)
+    if len(fits) == 1 or (not fits and len(splits) == 1):  # the reader then names a ragged row
+        return DELIMITERS[(fits or splits)[0]]
     raise InputError(
         f"cannot tell the delimiter ({'; '.join(found)}): give --delimiter "
         + (" or ".join(fits) if fits else "comma, semicolon or tab"),

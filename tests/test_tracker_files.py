@@ -249,3 +249,10 @@ def test_a_bad_tracker_section_names_its_key(tmp_path):
     cell = _cell_with_grid(tmp_path, "c.yaml", CANONICAL, "\ntracker:\n  units: km\n")
     with pytest.raises(InputError, match="tracker.units"):
         load_cell(cell)
+
+
+def test_a_ragged_semicolon_file_is_located_at_its_row():
+    """Only the semicolon splits the header: the reader takes it and names the ragged row."""
+    with pytest.raises(InputError) as info:
+        parse_table("id;x;y\nP1;1;2\nP2;1;2;3\n", "r.csv")
+    assert (info.value.line, info.value.message) == (3, "4 fields, but the header has 3")
