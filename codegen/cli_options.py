@@ -8,10 +8,12 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Sequence
+from contextlib import AbstractContextManager
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from accugrid.compensation.csvtable import DECIMALS, DELIMITERS, TableFormat, reading_as
 from accugrid.compensation.plans import SEED_ABC, SEED_CENTRES, SEED_REPEATS
 from accugrid.kinematics.errors import InputError
 
@@ -25,10 +27,12 @@ __all__ = [
     "add_harmonics",
     "add_policy",
     "add_status",
+    "add_table_format",
     "add_tool",
     "harmonics_of",
     "parse_centres",
     "parse_steps",
+    "reading_format",
     "robot_with_tool",
 ]
 
@@ -185,4 +189,65 @@ def add_policy(parser: argparse.ArgumentParser, what: str) -> None:
         action="store_true",
         help=f"with a model: refuse {what} outside the poses it was identified from (region, "
         "tool tilt, joint ranges) instead of flagging them",
+    )
+
+
+def add_table_format(parser: argparse.ArgumentParser) -> None:
+    """How the points and measurement CSVs of the command are written (tracker exports as they
+    come): ``--columns``, ``--units``, ``--delimiter``, ``--decimal``; see ``reading_format``."""
+    group = parser.add_argument_group("points and measurement files as exported")
+    group.add_argument(
+        "--columns",
+        type=_column_mapping,
+        metavar="NAME=HEADER,...",
+        help="read the file column HEADER as accugrid's NAME, in every CSV of this command that "
+        "has one of the HEADERs, e.g. x=X_nom,y=Y_nom,z=Z_nom,x_meas=X_act,y_meas=Y_act,"
+        "z_meas=Z_act (header names are case-insensitive)",
+    )
+    group.add_argument(
+        "--units",
+        choices=["mm", "m", "in"],
+        default="mm",
+        help="unit of the lengths (x,y,z, x_meas..z_meas, diameter, depth) in the files "
+        "--columns applies to (without --columns: in every CSV of this command), converted to "
+        "mm on read (default: mm)",
+    )
+    group.add_argument(
+        "--delimiter",
+        choices=list(DELIMITERS),
+        help="column delimiter of the export (default: found from the header and the first "
+        "rows; a file whose header does not hold it is read as found)",
+    )
+    group.add_argument(
+        "--decimal",
+        choices=list(DECIMALS),
+        help="decimal mark of the export (default: found; a comma-separated file always has a "
+        "decimal point)",
+    )
+
+
+def _column_mapping(text: str) -> dict[str, str]:
+    mapping: dict[str, str] = {}
+    for item in text.split(","):
+        name, sep, header = (part.strip() for part in item.partition("="))
+        if not sep or not name or not header:
+            raise argparse.ArgumentTypeError(f"{item.strip()!r} is not NAME=HEADER")
+        if name.lower() in mapping:
+            raise argparse.ArgumentTypeError(f"{name} is mapped twice")
+        mapping[name.lower()] = header
+    if len({h.lower() for h in mapping.values()}) != len(mapping):
+        raise argparse.ArgumentTypeError("one HEADER is mapped to two names")
+    return mapping
+
+
+def reading_format(args: argparse.Namespace) -> AbstractContextManager[None]:
+    """The block in which every CSV the command reads is read as ``add_table_format``'s
+    options say."""
+    return reading_as(
+        TableFormat(
+            delimiter=DELIMITERS.get(args.delimiter or ""),
+            decimal=DECIMALS.get(args.decimal or ""),
+            columns=args.columns,
+            units=args.units,
+        )
     )

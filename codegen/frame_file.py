@@ -163,6 +163,13 @@ def transform_csv(
     line as it was, a comment naming the frame file first. InputError on a bad file."""
     text = read_input_text(table_path)[1]
     table = parse_table(text, table_path)
+    if table.delimiter != ",":  # its cells are rewritten in place, as comma-separated text
+        raise InputError(
+            "transform rewrites comma-separated files; this one is separated by "
+            f"{'a semicolon' if table.delimiter == ';' else 'tabs'}",
+            table_path,
+            table.header_line,
+        )
     tracker_T_robot = load_frame(frame_path)
     pose = tracker_T_robot if inverse else invert(tracker_T_robot)
     triples = _chosen(table, columns)

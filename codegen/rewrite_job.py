@@ -25,6 +25,7 @@ from accugrid.codegen.rewrite import (
     warning_lines,
 )
 from accugrid.compensation import GridModel
+from accugrid.compensation.csvtable import declared_or
 from accugrid.compensation.policy import Policy
 
 __all__ = ["RewriteJob", "RewriteRequest", "rewrite_job"]
@@ -84,7 +85,9 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     grid = None  # a model corrects alone when neither --grid nor the cell names one
     if model_file is None or req.grid is not None or cell.grid_path is not None:
         grid = cell.grid_file(req.grid)
-    measured = None if grid is None else GridModel.from_measurements(grid)
+    measured = None  # the grid file as the cell's tracker writes it
+    if grid is not None:
+        measured = GridModel.from_measurements(grid, fmt=declared_or(cell.tracker))
     model = nominal = None
     if model_file is not None or (measured is not None and measured.status is None):
         from accugrid.kinematics.robot import load_robot

@@ -42,6 +42,7 @@ from accugrid.kinematics.joint_errors import (
     PointMass,
     Thermal,
 )
+from accugrid.kinematics.units import mm_text
 from accugrid.kinematics.yamlfile import YamlDoc, load_yaml
 
 __all__ = ["BUILTIN", "Robot", "load_robot"]
@@ -65,6 +66,16 @@ class Robot:
     # (3,) mm per axis: the largest held-out error its identification predicts (a calibrated
     # file's cross-validated max, else its fit residual max); None: the model makes no claim
     validated_max_mm: np.ndarray | None = None
+
+    def __repr__(self) -> str:
+        parts = [repr(self.name)]
+        if self.errors is not None:
+            parts.append("DH errors")
+        if self.joint_errors is not None:
+            parts.append("joint errors")
+        if not np.array_equal(self.flange_T_tool, np.eye(4)):
+            parts.append(f"tool xyz {mm_text(self.flange_T_tool[:3, 3], 3)} mm")
+        return f"Robot({', '.join(parts)})"
 
     def with_tool(self, flange_T_tool: np.ndarray) -> Robot:
         """The same robot with another tool (4, 4) mm."""

@@ -14,7 +14,8 @@ held-out targets at the grid orientation and --targets tilted up to --target-til
 arm lands when commanded P' (noise-free), max |P - M| and std per axis, mm.
 
 Output: the table on stdout, DIR/comparison.csv (one row per budget, target set and method) and
-DIR/comparison.png. Lengths in mm, angles in degrees.
+DIR/comparison_max.png and DIR/comparison_std.png (the tolerance, or the std limit, as a line).
+Lengths in mm, angles in degrees.
 """
 
 from __future__ import annotations
@@ -131,14 +132,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--output",
         required=True,
         metavar="DIR",
-        help="folder for comparison.csv and comparison.png",
+        help="folder for comparison.csv, comparison_max.png and comparison_std.png",
     )
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
-    paths = [str(out / "comparison.csv"), str(out / "comparison.png")]
+    from accugrid.codegen.plots import COMPARISON_STATS, comparison_png
+
+    paths = [str(out / "comparison.csv")]
+    paths += [str(out / f"comparison_{stat}.png") for stat in COMPARISON_STATS]
     inputs = [args.simulate] if Path(args.simulate).is_file() else []
     check_targets(paths, inputs, args.force)
     if not args.budgets or min(args.budgets) < 8:
@@ -168,12 +172,11 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
         harmonics=harmonics_of(args),
     )
-    from accugrid.codegen.plots import comparison_png
-
     out.mkdir(parents=True, exist_ok=True)
-    write_files(
-        {paths[0]: csv_text(result), paths[1]: comparison_png(result)}, inputs, force=args.force
-    )
+    files = {paths[0]: csv_text(result)}
+    for path, stat in zip(paths[1:], COMPARISON_STATS, strict=True):
+        files[path] = comparison_png(result, stat)
+    write_files(files, inputs, force=args.force)
     print(report_text(result))
     for path in paths:
         print(f"wrote {path}")

@@ -24,7 +24,7 @@ import sys
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import add_abc, add_policy, add_status, add_tool
+from accugrid.codegen.cli_options import add_abc, add_policy, add_status, add_table_format, add_tool
 from accugrid.codegen.corrected import CorrectRequest, correct_points
 from accugrid.compensation.grid import MAX_CORRECTION_MM
 from accugrid.compensation.measurements import REPEAT_TOL_MM
@@ -127,6 +127,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="largest distance of a repeated measurement from its mean, mm "
         f"(default: {REPEAT_TOL_MM:g})",
     )
+    add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite an existing output")
 
 

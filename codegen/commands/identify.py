@@ -30,6 +30,7 @@ from accugrid.codegen.calibration import IdentifyOptions, calibrate
 from accugrid.codegen.cli_options import (
     add_harmonics,
     add_status,
+    add_table_format,
     add_tool,
     harmonics_of,
     robot_with_tool,
@@ -83,6 +84,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("-o", "--output", required=True, metavar="CAL.yaml", help="robot YAML")
     parser.add_argument("--urdf", metavar="FILE.urdf", help="also write the model as URDF")
+    add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 

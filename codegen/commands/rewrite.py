@@ -36,7 +36,7 @@ import sys
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import add_policy
+from accugrid.codegen.cli_options import add_policy, add_table_format
 from accugrid.codegen.dialects import dialect_of
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.rewrite_job import RewriteRequest, rewrite_job
@@ -63,6 +63,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="output file or dir")
     parser.add_argument("--report", metavar="REPORT.csv", help="write the per-position report")
     add_policy(parser, "positions")
+    add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
     parser.add_argument(
         "--config-dat", metavar="$config.dat", help="KRL $config.dat with BASE_DATA[n] values"

@@ -25,7 +25,13 @@ import argparse
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
+from accugrid.codegen.cli_options import (
+    add_abc,
+    add_status,
+    add_table_format,
+    add_tool,
+    robot_with_tool,
+)
 from accugrid.codegen.measurement_file import SimulateRequest, simulate_files
 
 __all__ = ["NAME", "add_arguments", "run"]
@@ -79,6 +85,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("-o", "--output", metavar="CSV", help="measurement CSV to write")
     parser.add_argument("--plot", metavar="PNG", help="draw seed Fig. 3 into this PNG file")
+    add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 

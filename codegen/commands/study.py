@@ -32,6 +32,7 @@ from accugrid.codegen.cli_options import (
     add_abc,
     add_experiment_arguments,
     add_status,
+    add_table_format,
     add_tool,
     parse_centres,
     parse_steps,
@@ -134,6 +135,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="with --measured: grid measurement CSV at the chosen step and measured random points",
     )
     parser.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
+    add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 
