@@ -103,6 +103,6 @@ def run(args: argparse.Namespace) -> int:
         folds=args.folds,
     )
     calibration = calibrate(args.measurements, robot, options, args.output, args.urdf)
-    write_files(calibration.files, inputs, args.force)
+    write_files(calibration.files, inputs, args.force, main=[args.output])  # the YAML last
     print(calibration.report)
     return 0

@@ -1,0 +1,178 @@
+"""A job of several files is all old or all new after a SIGKILL at any file operation.
+
+A child process runs the real command and SIGKILLs itself at the k-th rename, removal or folder
+removal of ``codegen.atomic``, for every k the job has. Before any recovery the entry point (the
+KRL ``.src``, the rewritten program, the calibrated YAML) never stands beside a mix; after the
+recovery every accugrid write does first, the output set is exactly the old one or the new one.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+
+import pytest
+from conftest import EXAMPLES
+
+from accugrid.codegen import atomic
+from accugrid.codegen.cli import main
+
+KILL_AT = """
+import os, signal, sys, types
+from accugrid.codegen import atomic
+from accugrid.codegen.cli import main
+at, count = int(sys.argv[1]), [0]
+def counted(real):
+    def call(*args, **kwargs):
+        count[0] += 1
+        if count[0] == at:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return real(*args, **kwargs)
+    return call
+fs = types.SimpleNamespace(**vars(os))
+for name in ("replace", "rename", "unlink", "rmdir"):
+    setattr(fs, name, counted(getattr(os, name)))
+atomic.os = fs
+code = main(sys.argv[2:])
+print("operations", count[0])
+sys.exit(code)
+"""
+
+
+def visible(folders):
+    """Every non-hidden file of ``folders``: (folder name, file name) -> bytes."""
+    return {
+        (f.name, p.name): p.read_bytes()
+        for f in folders
+        for p in sorted(f.iterdir())
+        if not p.name.startswith(".")
+    }
+
+
+def restore(folders, state):
+    """Put ``folders`` back to ``state`` (a ``visible`` snapshot), hidden leftovers removed."""
+    for folder in folders:
+        shutil.rmtree(folder, ignore_errors=True)
+        folder.mkdir(parents=True)
+    for (folder_name, name), data in state.items():
+        next(f for f in folders if f.name == folder_name).joinpath(name).write_bytes(data)
+
+
+def kill_at(at, argv):
+    return subprocess.run(
+        [sys.executable, "-c", KILL_AT, str(at), *map(str, argv)],
+        capture_output=True,
+        text=True,
+        timeout=120,  # a guard against a hang, not a timing assertion
+    )
+
+
+def check_every_kill(folders, entry, old_argv, new_argv):
+    """Run ``old_argv`` then, for every k, ``new_argv`` killed at its k-th file operation;
+    check the invariant before recovery and all-old-or-all-new after. Returns the outcomes."""
+    assert main([str(a) for a in old_argv]) == 0
+    old = visible(folders)
+    full = kill_at(0, new_argv)  # never killed: counts the operations
+    assert full.returncode == 0, full.stderr
+    operations = int(full.stdout.rsplit("operations", 1)[1])
+    new = visible(folders)
+    assert new != old and len(new) > 1
+    outcomes = []
+    for at in range(1, operations + 1):
+        restore(folders, old)
+        proc = kill_at(at, new_argv)
+        assert proc.returncode == -9, (at, proc.stderr)
+        seen = visible(folders)
+        if entry.exists():  # whoever starts from the entry point sees one job
+            assert seen in (old, new), at
+        atomic.recover(folders)  # what the next accugrid write into the folder does first
+        after = visible(folders)
+        assert after in (old, new), (at, sorted(set(after.items()) ^ set(old.items())))
+        assert not [p for f in folders for p in f.iterdir() if p.name.endswith(".accugrid.tmp")]
+        outcomes.append("new" if after == new else "old")
+    # the kills fell before the journal (all old) and after it (all new)
+    assert outcomes[0] == "old" and outcomes[-1] == "new", outcomes
+    return outcomes
+
+
+@pytest.fixture
+def cell_dir(tmp_path):
+    for name in ("cell.yaml", "grid_200mm.csv", "wing_panel_points.csv", "cam_drill.src"):
+        shutil.copy(EXAMPLES / name, tmp_path / name)
+    shutil.copy(EXAMPLES / "cam_drill.dat", tmp_path / "cam_drill.dat")
+    return tmp_path
+
+
+def test_krl_modules_after_a_kill_at_every_step(cell_dir):
+    """The old job has more modules than the new one: stale modules go too, or none does."""
+    cell = cell_dir / "cell.yaml"
+    text = cell.read_text()
+    (cell_dir / "long.yaml").write_text(
+        text.replace("lines_per_file: 5000 ", "lines_per_file: 120  ")
+    )
+    (cell_dir / "short.yaml").write_text(
+        text.replace("lines_per_file: 5000 ", "lines_per_file: 250  ")
+    )
+    out = cell_dir / "krl"
+    common = ["krl", cell_dir / "wing_panel_points.csv", "-o", out, "--force", "--cell"]
+    outcomes = check_every_kill(
+        [out], out / "WING_PANEL.src", [*common, cell_dir / "long.yaml"], [*common, cell]
+    )
+    assert len(outcomes) > 8
+
+
+def test_rewrite_program_and_report_after_a_kill_at_every_step(cell_dir):
+    """A KRL pair and its report, the report in another folder: one job across two folders."""
+    out, reports = cell_dir / "out", cell_dir / "reports"
+    out.mkdir()
+    reports.mkdir()
+    common = [
+        "rewrite",
+        *(cell_dir / f"cam_drill.{ext}" for ext in ("src", "dat")),
+        "--cell",
+        cell_dir / "cell.yaml",
+        "-o",
+        out,
+        "--report",
+        reports / "report.csv",
+        "--force",
+    ]
+    check_every_kill([out, reports], out / "cam_drill.src", common, [*common, "--header"])
+
+
+def test_identify_yaml_and_urdf_after_a_kill_at_every_step(tmp_path):
+    robot = ["--robot", "kr210", "--tool", "0", "0", "250", "0", "0", "0"]
+    plan, meas = tmp_path / "plan", tmp_path / "meas.csv"
+    assert main(["plan", "identify", *robot, "--count", "30", "-o", str(plan)]) == 0
+    poses = next(plan.glob("*.csv"))
+    assert main(["simulate", *robot, "--poses", str(poses), "--seed", "1", "-o", str(meas)]) == 0
+    out = tmp_path / "cal"
+    out.mkdir()
+    common = ["identify", meas, *robot, "-o", out / "cal.yaml", "--urdf", out / "cal.urdf"]
+    check_every_kill([out], out / "cal.yaml", [*common, "--folds", "0"], [*common, "--force"])
+
+
+def test_the_next_write_into_the_folder_finishes_a_killed_job(cell_dir):
+    """No explicit recovery: another command writing into the folder finds the dead job's
+    journal and completes it before its own write."""
+    out = cell_dir / "krl"
+    common = [
+        "krl",
+        cell_dir / "wing_panel_points.csv",
+        "-o",
+        out,
+        "--cell",
+        cell_dir / "cell.yaml",
+    ]
+    assert main([str(a) for a in common]) == 0
+    first = visible([out])
+    proc = kill_at(3, [*common, "--force", "--no-correction"])  # the journal, then the .src
+    assert proc.returncode == -9
+    assert not (out / "WING_PANEL.src").exists()  # killed between the journal and the end
+    points = out / "wing_panel_copy.csv"
+    argv = ["correct", cell_dir / "wing_panel_points.csv", "--grid", cell_dir / "grid_200mm.csv"]
+    assert main([str(a) for a in [*argv, "-o", points]]) in (0, 2)
+    after = {k: v for k, v in visible([out]).items() if k[1] != points.name}
+    assert after != first and after.keys() == first.keys()
+    assert not [p for p in out.iterdir() if p.name.endswith(".accugrid.tmp")]
