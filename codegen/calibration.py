@@ -14,12 +14,14 @@ import numpy as np
 from accugrid import __version__
 from accugrid.compensation.measurements import read_measurements
 from accugrid.kinematics.calibrated import calibrated_yaml, identification_summary
-from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.errors import InputError, printable
 from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification, Terms, identify, pose_set
 from accugrid.kinematics.robot import Robot
 
-__all__ = ["Calibration", "IdentifyOptions", "calibrate"]
+__all__ = ["MAX_ROWS", "Calibration", "IdentifyOptions", "calibrate"]
+
+MAX_ROWS = 100_000  # measurement rows identify takes (a tracker session has hundreds)
 
 
 @dataclass(frozen=True)
@@ -54,6 +56,13 @@ def calibrate(
     if options.folds < 0 or options.folds == 1:
         raise InputError(f"--folds must be 0 (none) or at least 2, got {options.folds}")
     meas = read_measurements(measurements)
+    if len(meas.commanded) > MAX_ROWS:
+        raise InputError(
+            f"{len(meas.commanded)} measurement rows; identify takes at most {MAX_ROWS} (its time "
+            "and memory grow with the rows, 1e5 rows take about a minute); measure fewer poses "
+            "or fewer repeats",
+            measurements,
+        )
     status = meas.status if meas.status is not None else options.status
     data = pose_set(
         robot,
@@ -75,7 +84,7 @@ def calibrate(
         folds=options.folds,
         harmonics=options.harmonics,
     )
-    source = Path(measurements).name
+    source = printable(Path(measurements).name)  # a non-UTF-8 byte: escaped text
     summary = identification_summary(result, robot, source, meas.sha256)
     header = f"accugrid {__version__} identify: {robot.name} calibrated from {source}"
     files = {output: calibrated_yaml(result.robot, summary, header)}

@@ -148,5 +148,6 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
             data = add_header(data.decode("latin-1"), lines, dialect_of(path)).encode("latin-1")
         files[target] = data
     if req.report is not None:
-        files[req.report] = report_csv(result.rows).encode("utf-8")
+        # a non-UTF-8 byte in a file name is written as an escape (\\udcff), not refused
+        files[req.report] = report_csv(result.rows).encode("utf-8", "backslashreplace")
     return RewriteJob(files, [*read, grid], result, warning_lines(result, opts))

@@ -67,6 +67,7 @@ class Robot:
     # (3,) mm per axis: the largest held-out error its identification predicts (a calibrated
     # file's cross-validated max, else its fit residual max); None: the model makes no claim
     validated_max_mm: np.ndarray | None = None
+    source: str | None = None  # the robot file (for messages); None: built in code
 
     def with_tool(self, flange_T_tool: np.ndarray) -> Robot:
         """The same robot with another tool (4, 4) mm."""
@@ -140,7 +141,11 @@ class Robot:
         poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
         n = len(poses)
         if not closed.closed_form_supported(self.dh):
-            raise InputError(f"robot {self.name}: DH structure has no closed-form inverse")
+            raise InputError(
+                f"robot {self.name}: its dh structure has no closed-form inverse (it needs "
+                "alpha +-90 deg in rows 1, 3, 4, 5, alpha 0 in row 2, d2 = d3 = a4 = a5 = d5 = 0)",
+                self.source,
+            )
         flange = stack_times(poses, invert(self.flange_T_tool))
         wrist = closed.wrist_points(self.dh, flange)
         q, found, reach = select(self, flange, wrist, status, reference)
@@ -280,7 +285,15 @@ def _robot_from_doc(doc: YamlDoc) -> Robot:
     joint_errors = _joint_errors_from_doc(doc) if doc.has("joint_errors") else None
     validated = _validated_max(doc)
     return Robot(
-        name, table, limits, tool, errors, description, joint_errors, validated_max_mm=validated
+        name,
+        table,
+        limits,
+        tool,
+        errors,
+        description,
+        joint_errors,
+        validated_max_mm=validated,
+        source=doc.path,
     )
 
 
