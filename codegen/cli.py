@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import io
 import os
 import sys
 import warnings
@@ -65,6 +66,9 @@ def main(argv: list[str] | None = None) -> int:
     as an input that no output may replace (``codegen.atomic``).
     """
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    for stream in (sys.stdout, sys.stderr):  # a non-UTF-8 byte of a file name prints as \udcff
+        if isinstance(stream, io.TextIOWrapper):
+            stream.reconfigure(errors="backslashreplace")
     args = build_parser(_command(argv)).parse_args(argv)
     with warnings.catch_warnings(record=True) as held, track_inputs():
         warnings.simplefilter("default")

@@ -24,6 +24,8 @@ __all__ = [
     "COORDINATE_MAX",
     "MAX_CANDIDATES",
     "MAX_COUNT",
+    "MAX_POSES",
+    "MAX_REPEATS",
     "add_abc",
     "add_experiment_arguments",
     "add_harmonics",
@@ -39,7 +41,9 @@ __all__ = [
 
 COORDINATE_MAX = 1e6  # |mm| of a coordinate, |deg| of an angle given on the command line
 MAX_CANDIDATES = 100_000  # random candidate poses of a pose plan (each is an IK and a Jacobian)
-MAX_COUNT = 1_000_000  # points, poses, targets, repeats: any other count of things to make
+MAX_POSES = 1000  # poses of an identification plan: choosing them grows with poses x candidates
+MAX_REPEATS = 1000  # measurements of each point or pose (the seed takes 5)
+MAX_COUNT = 100_000  # held-out targets, validation points
 
 
 def number(
@@ -173,7 +177,7 @@ def add_experiment_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--repeats",
-        type=number("", 1, MAX_COUNT, whole=True),
+        type=number("", 1, MAX_REPEATS, whole=True),
         default=SEED_REPEATS,
         help=f"measurements of every point (default: {SEED_REPEATS})",
     )

@@ -27,6 +27,8 @@ from accugrid.codegen.cli_options import (
     COORDINATE_MAX,
     MAX_CANDIDATES,
     MAX_COUNT,
+    MAX_POSES,
+    MAX_REPEATS,
     add_abc,
     add_harmonics,
     add_status,
@@ -68,10 +70,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--budgets",
         nargs="+",
-        type=number("", 1, MAX_COUNT, whole=True),
+        type=number("poses", 1, MAX_POSES, whole=True),
         default=list(DEFAULT_BUDGETS),
         metavar="N",
-        help="measured-point budgets (distinct poses or vertices; default: 27 60 125 252)",
+        help="measured-point budgets (distinct poses or vertices; default: 27 60 125 252; "
+        f"at most {MAX_POSES})",
     )
     add_abc(parser, "grid orientation (grids, residual grid, untilted targets)")
     add_tool(
@@ -110,7 +113,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--repeats",
-        type=number("", 1, MAX_COUNT, whole=True),
+        type=number("", 1, MAX_REPEATS, whole=True),
         default=3,
         help="measurements per point (default: 3)",
     )

@@ -33,7 +33,8 @@ from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import (
     COORDINATE_MAX,
     MAX_CANDIDATES,
-    MAX_COUNT,
+    MAX_POSES,
+    MAX_REPEATS,
     add_abc,
     add_experiment_arguments,
     add_harmonics,
@@ -73,7 +74,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     grid.add_argument(
         "--repeats",
-        type=number("", 1, MAX_COUNT, whole=True),
+        type=number("", 1, MAX_REPEATS, whole=True),
         default=1,
         help="rounds over the grid (default: 1)",
     )
@@ -95,7 +96,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     cube.add_argument(
         "--repeats",
-        type=number("", 1, MAX_COUNT, whole=True),
+        type=number("", 1, MAX_REPEATS, whole=True),
         default=SEED_REPEATS,
         help=f"rounds (default: {SEED_REPEATS})",
     )
@@ -105,10 +106,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     _add_region(ident)
     ident.add_argument(
         "--count",
-        type=number("", 1, MAX_COUNT, whole=True),
+        type=number("poses", 1, MAX_POSES, whole=True),
         required=True,
         metavar="N",
-        help="number of poses to measure",
+        help=f"number of poses to measure (at most {MAX_POSES})",
     )
     ident.add_argument(
         "--tilt",
@@ -125,7 +126,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     ident.add_argument(
         "--repeats",
-        type=number("", 1, MAX_COUNT, whole=True),
+        type=number("", 1, MAX_REPEATS, whole=True),
         default=1,
         help="rounds over the poses (default: 1)",
     )

@@ -26,7 +26,7 @@ from pathlib import Path
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import (
     COORDINATE_MAX,
-    MAX_COUNT,
+    MAX_REPEATS,
     add_abc,
     add_status,
     add_tool,
@@ -70,7 +70,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--repeats",
-        type=number("", 1, MAX_COUNT, whole=True),
+        type=number("", 1, MAX_REPEATS, whole=True),
         default=1,
         help="measurements per vertex (default: 1)",
     )
