@@ -295,3 +295,9 @@ def test_misspelt_cell_keys_are_refused_before_anything_is_written(tmp_path, inp
             seen.append(case)
         shutil.rmtree(out / "krl", ignore_errors=True)
     assert seen  # the campaign hit misspelt keys
+
+
+def test_a_large_size_limit_allocates_nothing_for_it(tmp_path, inputs):
+    """--max-mb 1e6 (a TiB): the reader asks for the file's size, not the limit (MemoryError)."""
+    argv = [a.replace("OUT", str(tmp_path)).replace("IN", str(inputs)) for a in BASE["rewrite"]]
+    assert check([*argv, "--max-mb", "1e6"], tmp_path)[0] == 0
