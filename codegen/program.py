@@ -580,9 +580,12 @@ def _branch_jumps(points: Points, cell: Cell, q: np.ndarray) -> list[str]:
     if not bad.size:
         return []
     hole = int((bad[0] + 1) // q.shape[1])
+    before, after = np.degrees(seq[bad[0]]), np.degrees(seq[bad[0] + 1])
+    axis = int(np.argmax(np.abs(after - before)))
     message = (
-        f"{points.name(hole)}: an axis turns {jump[bad[0]]:.0f} deg from the previous pose "
-        f"(more than {MAX_AXIS_JUMP_DEG:g} deg: the robot changes configuration on the way)"
+        f"{points.name(hole)}: A{axis + 1} turns {jump[bad[0]]:.0f} deg from the previous pose "
+        f"({before[axis]:.1f} to {after[axis]:.1f} deg; more than {MAX_AXIS_JUMP_DEG:g} deg: the "
+        "robot changes configuration on the way)"
     )
     if not cell.configuration.allow_change:
         raise InputError(

@@ -113,8 +113,8 @@ def test_a_job_whose_ik_check_fails_replaces_nothing(tmp_path, capsys, command, 
     assert main([command, str(POINTS), "--cell", str(CELL), "-o", str(out)]) == 0
     before = {p: p.read_bytes() for p in sorted(tmp_path.rglob("*")) if p.is_file()}
     capsys.readouterr()
-    points, cell_file, message = POINTS, CELL, "hole 'B': an axis turns 184 deg"
-    if failure == "branch jump":  # A6 from about 100 to -100 deg between two holes
+    points, cell_file, message = POINTS, CELL, "hole 'B': A4 turns 184 deg"
+    if failure == "branch jump":  # C from 100 to -100 deg: the wrist flips (A4) between holes
         points = tmp_path / "input" / "jump.csv"
         points.parent.mkdir()
         points.write_text("id,x,y,z,a,b,c\nA,0,300,0,-90,0,100\nB,25,300,0,-90,0,-100\n")
