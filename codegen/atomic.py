@@ -509,6 +509,7 @@ def _commit(
     others = [h for h in holders.values() if h != home]
     steps += [x for h in others for x in (b"H", os.fsencode(os.path.abspath(h)))]
     journal = os.path.abspath(os.path.join(home, _JOURNAL))
+    _sync_folders({Path(h).parent for h in holders.values()})  # the temporary folders' entries
     for holder in others:
         _write_synced(os.path.join(holder, _LINK), os.fsencode(journal))
     _write_synced(journal + ".new", b"\0".join([_MAGIC, *steps, b"END"]))

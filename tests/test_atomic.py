@@ -220,9 +220,10 @@ def test_every_file_is_synced_before_the_first_rename(tmp_path, monkeypatch, fol
     )
     write_job(target, files, "JOB")
     first_rename = events.index("rename")
-    # a folder made by the write: one rename of it; an existing one: the journal (a file and
-    # its folder) is made durable before its rename commits the job
-    before = ["file"] * len(files) + ([] if folder else ["file", "folder"])
+    # a folder made by the write: one rename of it; an existing one: the temporary folder's
+    # entry, then the journal (a file and its folder) are made durable before its rename
+    # commits the job
+    before = ["file"] * len(files) + ([] if folder else ["folder", "file", "folder"])
     assert events[:first_rename] == before
     assert "file" not in events[first_rename:]
     assert snapshot(target) == files

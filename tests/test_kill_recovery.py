@@ -1,6 +1,6 @@
 """A job of several files is all old or all new after a SIGKILL at any file operation.
 
-A child process runs the real command and SIGKILLs itself at the k-th rename, removal or folder
+A forked child runs the real command and SIGKILLs itself at the k-th rename, removal or folder
 removal of ``codegen.atomic``, for every k the job has. Before any recovery the entry point (the
 KRL ``.src``, the rewritten program, the calibrated YAML) never stands beside a mix; after the
 recovery every accugrid write does first, the output set is exactly the old one or the new one.
@@ -8,36 +8,16 @@ recovery every accugrid write does first, the output set is exactly the old one 
 
 from __future__ import annotations
 
+import os
 import shutil
-import subprocess
-import sys
+import signal
+import types
 
 import pytest
 from conftest import EXAMPLES
 
 from accugrid.codegen import atomic
 from accugrid.codegen.cli import main
-
-KILL_AT = """
-import os, signal, sys, types
-from accugrid.codegen import atomic
-from accugrid.codegen.cli import main
-at, count = int(sys.argv[1]), [0]
-def counted(real):
-    def call(*args, **kwargs):
-        count[0] += 1
-        if count[0] == at:
-            os.kill(os.getpid(), signal.SIGKILL)
-        return real(*args, **kwargs)
-    return call
-fs = types.SimpleNamespace(**vars(os))
-for name in ("replace", "rename", "unlink", "rmdir"):
-    setattr(fs, name, counted(getattr(os, name)))
-atomic.os = fs
-code = main(sys.argv[2:])
-print("operations", count[0])
-sys.exit(code)
-"""
 
 
 def visible(folders):
@@ -59,13 +39,41 @@ def restore(folders, state):
         next(f for f in folders if f.name == folder_name).joinpath(name).write_bytes(data)
 
 
-def kill_at(at, argv):
-    return subprocess.run(
-        [sys.executable, "-c", KILL_AT, str(at), *map(str, argv)],
-        capture_output=True,
-        text=True,
-        timeout=120,  # a guard against a hang, not a timing assertion
-    )
+def kill_at(at: int, argv) -> tuple[int, int]:
+    """Run ``main(argv)`` in a forked child whose ``codegen.atomic`` SIGKILLs the process at its
+    ``at``-th rename, removal or folder removal (0: never). (exit code, -9 when killed; the
+    number of those operations the child made)."""
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: never returns to pytest
+        code, count = 1, [0]
+        try:
+            os.close(read)
+            for fd in (1, 2):
+                os.dup2(os.open(os.devnull, os.O_WRONLY), fd)
+
+            def counted(real):
+                def call(*args, **kwargs):
+                    count[0] += 1
+                    os.write(write, b".")
+                    if count[0] == at:
+                        os.kill(os.getpid(), signal.SIGKILL)
+                    return real(*args, **kwargs)
+
+                return call
+
+            fs = types.SimpleNamespace(**vars(os))
+            for name in ("replace", "rename", "unlink", "rmdir"):
+                setattr(fs, name, counted(getattr(os, name)))
+            atomic.os = fs
+            code = main([str(a) for a in argv])
+        finally:
+            os._exit(code)
+    os.close(write)
+    with os.fdopen(read, "rb") as said:
+        operations = len(said.read())  # until the child ends
+    _, status = os.waitpid(pid, 0)
+    return os.waitstatus_to_exitcode(status), operations
 
 
 def check_every_kill(folders, entry, old_argv, new_argv):
@@ -73,16 +81,14 @@ def check_every_kill(folders, entry, old_argv, new_argv):
     check the invariant before recovery and all-old-or-all-new after. Returns the outcomes."""
     assert main([str(a) for a in old_argv]) == 0
     old = visible(folders)
-    full = kill_at(0, new_argv)  # never killed: counts the operations
-    assert full.returncode == 0, full.stderr
-    operations = int(full.stdout.rsplit("operations", 1)[1])
+    code, operations = kill_at(0, new_argv)  # never killed: counts the operations
+    assert code == 0
     new = visible(folders)
     assert new != old and len(new) > 1
     outcomes = []
     for at in range(1, operations + 1):
         restore(folders, old)
-        proc = kill_at(at, new_argv)
-        assert proc.returncode == -9, (at, proc.stderr)
+        assert kill_at(at, new_argv)[0] == -9, at
         seen = visible(folders)
         if entry.exists():  # whoever starts from the entry point sees one job
             assert seen in (old, new), at
@@ -167,8 +173,7 @@ def test_the_next_write_into_the_folder_finishes_a_killed_job(cell_dir):
     ]
     assert main([str(a) for a in common]) == 0
     first = visible([out])
-    proc = kill_at(3, [*common, "--force", "--no-correction"])  # the journal, then the .src
-    assert proc.returncode == -9
+    assert kill_at(3, [*common, "--force", "--no-correction"])[0] == -9  # journal, the .src
     assert not (out / "WING_PANEL.src").exists()  # killed between the journal and the end
     points = out / "wing_panel_copy.csv"
     argv = ["correct", cell_dir / "wing_panel_points.csv", "--grid", cell_dir / "grid_200mm.csv"]

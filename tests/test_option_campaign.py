@@ -90,11 +90,7 @@ def run_case(argv: list[str]) -> tuple[int | str, str]:
     start = time.monotonic()
     os.set_blocking(read, False)
     while True:
-        try:
-            while chunk := os.read(read, 65536):
-                err += chunk
-        except BlockingIOError:
-            pass
+        err += _drain(read)  # a full pipe would block the child
         done, status = os.waitpid(pid, os.WNOHANG)
         if done:
             break
@@ -104,12 +100,13 @@ def run_case(argv: list[str]) -> tuple[int | str, str]:
             os.close(read)
             return "timeout", err.decode(errors="replace")
         time.sleep(0.005)
-    with_rest = err + _drain(read)
+    err += _drain(read)
     os.close(read)
-    return os.waitstatus_to_exitcode(status), with_rest.decode(errors="replace")
+    return os.waitstatus_to_exitcode(status), err.decode(errors="replace")
 
 
 def _drain(fd: int) -> bytes:
+    """What the non-blocking ``fd`` holds now (EOF: what is left)."""
     out = bytearray()
     try:
         while chunk := os.read(fd, 65536):
