@@ -1,4 +1,4 @@
-"""Robot, calibrated-robot and cell files: an unknown key in any section is a located error
+"""Robot, calibrated-robot, cell and frame files: an unknown key in any section is a located error
 naming the nearest valid key; a misspelled section is never read as absent."""
 
 from __future__ import annotations
@@ -10,6 +10,7 @@ from conftest import EXAMPLES
 
 from accugrid.codegen.cell import load_cell
 from accugrid.codegen.cli import main
+from accugrid.codegen.frame_file import load_frame
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import BUILTIN, load_robot
 
@@ -146,3 +147,20 @@ def test_a_misspelt_cell_key_is_located_with_a_hint(tmp_path, pattern, replaceme
         line,
         len(replacement) - len(replacement.lstrip()) + 1,
     )
+
+
+def test_a_misspelt_frame_file_key_is_located(tmp_path, capsys):
+    """A frame file as fit-frame writes it, with 'matrix' misspelt: its check would be skipped."""
+    tracker = EXAMPLES / "tracker"
+    frame = tmp_path / "frame.yaml"
+    files = ["--base-plane", "base_plane.csv", "--a1-circle", "a1_circle.csv"]
+    files += ["--flange-holes", "flange_holes.csv"]
+    argv = ["fit-frame", *(f if f.startswith("--") else str(tracker / f) for f in files)]
+    assert main([*argv, "-o", str(frame)]) == 0
+    load_frame(frame)
+    text, line = misspell(frame.read_text(), r"  matrix:", "  matirx:")
+    frame.write_text(text)
+    with pytest.raises(InputError) as error:
+        load_frame(frame)
+    assert error.value.message == "tracker_T_robot.matirx: unknown key; did you mean matrix?"
+    assert (error.value.line, error.value.column) == (line, 3)
