@@ -1,8 +1,9 @@
 """Standard Denavit-Hartenberg chains exactly as seed Eq. 2, batched over N joint vectors.
 
 A_i = Rot(Z, theta_i) · Trans(0, 0, d_i) · Trans(a_i, 0, 0) · Rot(X, alpha_i), and the flange pose
-is A_1 · A_2 · ... · A_6 (seed Eq. 1). KUKA axis angles map to DH angles through a per-joint sign
-and offset: theta_i = sign_i * A_i + theta_offset_i. Lengths in mm, angles in radians.
+is A_1 · A_2 · ... · A_6 (seed Eq. 1). The controller's axis angles (KUKA A1..A6, ABB axes 1..6)
+map to DH angles through a per-joint sign and offset: theta_i = sign_i * A_i + theta_offset_i.
+Lengths in mm, angles in radians.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Closed-form inverse kinematics of a 6R arm with a spherical wrist (KUKA KR type), batched.
+"""Closed-form inverse kinematics of a 6R arm with a spherical wrist (KUKA KR, ABB IRB), batched.
 
 Supported DH structure (checked by ``closed_form_supported``): alpha_1, alpha_3, alpha_4, alpha_5 =
 ±90°, alpha_2 = 0, d_2 = d_3 = 0, a_4 = a_5 = d_5 = 0 (axes 4, 5, 6 meet in the wrist point).

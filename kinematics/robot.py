@@ -1,4 +1,4 @@
-"""Robot models: a standard-DH serial arm (seed Eq. 2) on Pinocchio, with KUKA joint conventions.
+"""Robot models: a standard-DH serial arm (seed Eq. 2) on Pinocchio, in its controller's angles.
 
 A robot is YAML data (``kinematics/robots/*.yaml`` for the built-ins, or a user file): six DH rows
 ``{a_mm, alpha_deg, d_mm, theta_offset_deg, sign}`` with theta = sign * A + theta_offset, joint
@@ -8,10 +8,11 @@ under gravity, transmission harmonics, thermal growth; ``kinematics.joint_errors
 "true" robot. A YAML file may instead name a URDF (``urdf: file``, ``tip: frame``), see
 ``kinematics.urdf``.
 
-Joint vectors are KUKA axis angles A1..A6 in radians, shape (N, 6); poses are (N, 4, 4) mm.
+Joint vectors are the controller's axis angles in radians (KUKA A1..A6; ABB axes 1..6 for
+``irb6700``, as a RAPID jointtarget holds them), shape (N, 6); poses are (N, 4, 4) mm.
 
-KUKA Status and Turn, the branch selection of ``Robot.ik`` and ``IKSolution``:
-``kinematics.configuration``.
+KUKA Status and Turn, ABB confdata, the branch selection of ``Robot.ik`` / ``Robot.ik_confdata``
+and ``IKSolution``: ``kinematics.configuration``.
 """
 
 from __future__ import annotations
@@ -24,7 +25,12 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.kinematics import ik as closed
-from accugrid.kinematics.configuration import IKSolution, kuka_words, select
+from accugrid.kinematics.configuration import (
+    IKSolution,
+    kuka_words,
+    select,
+    select_confdata,
+)
 from accugrid.kinematics.dh import DHTable, flange_poses
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import invert, pose_from_xyzabc, stack_times
@@ -48,13 +54,13 @@ __all__ = [
     "load_robot",
 ]
 
-BUILTIN = ("kr210", "kr210-paper", "kr210-realistic")
+BUILTIN = ("kr210", "kr210-paper", "kr210-realistic", "irb6700")
 _LIMIT_TOL = 1e-9
 
 
 @dataclass(frozen=True)
 class Robot:
-    """A serial robot in standard DH form with KUKA axis conventions and a tool."""
+    """A serial robot in standard DH form, in its controller's axis angles, with a tool."""
 
     name: str
     dh: DHTable
@@ -138,16 +144,8 @@ class Robot:
         one configuration along a path or a grid, give one ``status`` for all poses.
         ``turn=None``: every angle in (-180, 180] (closest to 0).
         """
-        poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
-        n = len(poses)
-        if not closed.closed_form_supported(self.dh):
-            raise InputError(
-                f"robot {self.name}: its dh structure has no closed-form inverse (it needs "
-                "alpha +-90 deg in rows 1, 3, 4, 5, alpha 0 in row 2, d2 = d3 = a4 = a5 = d5 = 0)",
-                self.source,
-            )
-        flange = stack_times(poses, invert(self.flange_T_tool))
-        wrist = closed.wrist_points(self.dh, flange)
+        flange, wrist = self._flange_wrist(robot_T_tcp)
+        n = len(flange)
         q, found, reach = select(self, flange, wrist, status, reference)
         reason = np.full(n, "", dtype=object)
         reason[~found] = "unreachable"
@@ -159,6 +157,34 @@ class Robot:
             q = np.where(round_off, 0.0, q)
             q = np.where(want_neg & (q >= 0), q - 2 * np.pi, q)
             q = np.where(~want_neg & (q < 0), q + 2 * np.pi, q)
+        return self._within_limits(q, found, reason, wrist)
+
+    def ik_confdata(self, robot_T_tcp: np.ndarray, confdata: np.ndarray) -> IKSolution:
+        """Joint solutions (ABB axis angles) for TCP poses (N, 4, 4) mm in ABB confdata
+        [cf1, cf4, cf6, cfx] ((4,) or (N, 4) int): the one solution whose
+        ``configuration.abb_confdata`` is the given one (``configuration.select_confdata``),
+        then the joint limits. ``status`` and ``turn`` of the result are the KUKA words of the
+        same joints."""
+        flange, wrist = self._flange_wrist(robot_T_tcp)
+        q, reason = select_confdata(self, flange, wrist, confdata)
+        return self._within_limits(q, reason == "", reason, wrist)
+
+    def _flange_wrist(self, robot_T_tcp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Flange poses (N, 4, 4) mm and wrist centres (N, 3) mm of TCP poses (N, 4, 4) mm;
+        InputError for a DH structure without the closed-form inverse."""
+        poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
+        if not closed.closed_form_supported(self.dh):
+            raise InputError(
+                f"robot {self.name}: its dh structure has no closed-form inverse (it needs "
+                "alpha +-90 deg in rows 1, 3, 4, 5, alpha 0 in row 2, d2 = d3 = a4 = a5 = d5 = 0)",
+                self.source,
+            )
+        flange = stack_times(poses, invert(self.flange_T_tool))
+        return flange, closed.wrist_points(self.dh, flange)
+
+    def _within_limits(self, q, found, reason, wrist) -> IKSolution:
+        """The IKSolution of the chosen joints q (N, 6) rad (found (N,) bool, ``reason`` (N,)
+        object, changed in place) with the joint limits applied; wrist centres (N, 3) mm."""
         lo, hi = np.radians(self.joint_limits_deg).T
         outside = (q < lo - _LIMIT_TOL) | (q > hi + _LIMIT_TOL)  # NaN (not found): False
         beyond = outside[:, 0].copy()

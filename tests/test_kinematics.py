@@ -84,9 +84,10 @@ def test_batched_fk_equals_plain_numpy_product_of_eq2(q):
     np.testing.assert_allclose(robot().fk(q), reference_fk(ROBOTS / "kr210.yaml", q), atol=1e-9)
 
 
+@pytest.mark.parametrize("name", ["kr210", "irb6700"])
 @given(q=joints_within_limits(8))
-def test_fk_equals_pinocchio_forward_kinematics(q):
-    r = robot(tool=True)
+def test_fk_equals_pinocchio_forward_kinematics(name, q):
+    r = robot(name, tool=True)
     model, frame = r.pinocchio_model()
     data = model.createData()
     expected = []
