@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import importlib
+import io
 import os
 import sys
 import warnings
@@ -76,6 +77,9 @@ def main(argv: list[str] | None = None) -> int:
     as an input that no output may replace (``codegen.atomic``).
     """
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    for stream in (sys.stdout, sys.stderr):  # a non-UTF-8 byte of a file name prints as \udcff
+        if isinstance(stream, io.TextIOWrapper):
+            stream.reconfigure(errors="backslashreplace")
     args = build_parser(_command(argv)).parse_args(argv)
     with warnings.catch_warnings(record=True) as held, track_inputs(), _reading_format(args):
         warnings.simplefilter("default")

@@ -7,7 +7,8 @@ for that command; ``robot_with_tool`` turns ``--robot``/``--tool`` values into a
 from __future__ import annotations
 
 import argparse
-from collections.abc import Sequence
+import math
+from collections.abc import Callable, Sequence
 from contextlib import AbstractContextManager
 from typing import TYPE_CHECKING
 
@@ -22,6 +23,11 @@ if TYPE_CHECKING:
     from accugrid.kinematics.robot import Robot
 
 __all__ = [
+    "COORDINATE_MAX",
+    "MAX_CANDIDATES",
+    "MAX_COUNT",
+    "MAX_POSES",
+    "MAX_REPEATS",
     "add_abc",
     "add_experiment_arguments",
     "add_harmonics",
@@ -30,6 +36,7 @@ __all__ = [
     "add_table_format",
     "add_tool",
     "harmonics_of",
+    "number",
     "parse_centres",
     "parse_steps",
     "reading_format",
@@ -37,12 +44,54 @@ __all__ = [
 ]
 
 
+COORDINATE_MAX = 1e6  # |mm| of a coordinate, |deg| of an angle given on the command line
+MAX_CANDIDATES = 100_000  # random candidate poses of a pose plan (each is an IK and a Jacobian)
+MAX_POSES = 1000  # poses of an identification plan: choosing them grows with poses x candidates
+MAX_REPEATS = 1000  # measurements of each point or pose (the seed takes 5)
+MAX_COUNT = 100_000  # held-out targets, validation points
+
+
+def number(
+    unit: str,
+    lo: float | None = None,
+    hi: float | None = None,
+    above: bool = False,
+    whole: bool = False,
+) -> Callable[[str], float]:
+    """The argparse ``type`` of every number option: a finite number (``whole``: an integer) in
+    [lo, hi] (``above``: lo excluded), ``unit`` (mm, deg, s, ...; "" for counts) in its
+    messages; argparse turns the refusal into exit 2 naming the option. -0 reads as 0."""
+    said = f" {unit}" if unit else ""
+
+    def parse(text: str) -> float:
+        try:
+            value = int(text, 10) if whole else float(text)
+        except ValueError:
+            kind = "a whole number" if whole else "a number"
+            raise argparse.ArgumentTypeError(
+                f"'{text}' is not {kind}{unit and f' ({unit})'}"
+            ) from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(
+                f"'{text}' is not a finite number{unit and f' ({unit})'}"
+            )
+        if lo is not None and (value <= lo if above else value < lo):
+            raise argparse.ArgumentTypeError(
+                f"'{text}' must be {'>' if above else '>='} {lo:g}{said}"
+            )
+        if hi is not None and value > hi:
+            raise argparse.ArgumentTypeError(f"'{text}' must be <= {hi:g}{said}")
+        return value if whole else value + 0.0
+
+    return parse
+
+
 def add_abc(parser: argparse.ArgumentParser, help_text: str) -> None:
     """``--abc A B C``: a fixed TCP orientation, KUKA ABC in deg (default: the seed's 0 90 0)."""
     parser.add_argument(
         "--abc",
         nargs=3,
-        type=float,
+        type=number("deg", -COORDINATE_MAX, COORDINATE_MAX),
         default=list(SEED_ABC),
         metavar=("A", "B", "C"),
         help=f"{help_text}, KUKA A B C in deg (default: 0 90 0)",
@@ -54,7 +103,7 @@ def add_tool(parser: argparse.ArgumentParser, help_text: str) -> None:
     parser.add_argument(
         "--tool",
         nargs=6,
-        type=float,
+        type=number("mm or deg", -COORDINATE_MAX, COORDINATE_MAX),
         metavar=("X", "Y", "Z", "A", "B", "C"),
         help=help_text,
     )
@@ -133,7 +182,7 @@ def add_experiment_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--repeats",
-        type=int,
+        type=number("", 1, MAX_REPEATS, whole=True),
         default=SEED_REPEATS,
         help=f"measurements of every point (default: {SEED_REPEATS})",
     )

@@ -156,7 +156,8 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
             data = add_header(data.decode("latin-1"), lines, dialect_of(path)).encode("latin-1")
         files[target] = data
     if req.report is not None:
-        files[req.report] = report_csv(result.rows).encode("utf-8")
+        # a non-UTF-8 byte in a file name is written as an escape (\\udcff), not refused
+        files[req.report] = report_csv(result.rows).encode("utf-8", "backslashreplace")
     warnings = []
     if policy.grid_status is not None and measured is not None and measured.status is None:
         warnings.append(f"the grid does not record its Status: {policy.describe_status()}")

@@ -25,11 +25,17 @@ from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import (
+    COORDINATE_MAX,
+    MAX_CANDIDATES,
+    MAX_COUNT,
+    MAX_POSES,
+    MAX_REPEATS,
     add_abc,
     add_harmonics,
     add_status,
     add_tool,
     harmonics_of,
+    number,
     robot_with_tool,
 )
 from accugrid.codegen.comparison_report import csv_text, report_text
@@ -56,7 +62,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--region",
         nargs=6,
-        type=float,
+        type=number("mm", -COORDINATE_MAX, COORDINATE_MAX),
         default=[v for pair in zip(*SEED_REGION, strict=True) for v in pair],
         metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
         help="measured region in the robot frame, mm (default: the seed's 1200 2200 -600 600 "
@@ -65,10 +71,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--budgets",
         nargs="+",
-        type=int,
+        type=number("poses", 1, MAX_POSES, whole=True),
         default=list(DEFAULT_BUDGETS),
         metavar="N",
-        help="measured-point budgets (distinct poses or vertices; default: 27 60 125 252)",
+        help="measured-point budgets (distinct poses or vertices; default: 27 60 125 252; "
+        f"at most {MAX_POSES})",
     )
     add_abc(parser, "grid orientation (grids, residual grid, untilted targets)")
     add_tool(
@@ -78,45 +85,49 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_status(parser, "KUKA Status 0..7 of every pose (default: the IK default's at the centre)")
     parser.add_argument(
         "--tilt",
-        type=float,
+        type=number("deg", 0, 180),
         default=25.0,
         metavar="DEG",
         help="identification poses tilted up to this from --abc (default: 25)",
     )
     parser.add_argument(
         "--target-tilt",
-        type=float,
+        type=number("deg", 0, 180),
         default=25.0,
         metavar="DEG",
         help="tilted held-out targets up to this from --abc (default: 25)",
     )
     parser.add_argument(
         "--targets",
-        type=int,
+        type=number("", 1, MAX_COUNT, whole=True),
         default=200,
         metavar="N",
         help="held-out targets per set (default: 200)",
     )
     parser.add_argument(
         "--candidates",
-        type=int,
+        type=number("candidate poses", 1, MAX_CANDIDATES, whole=True),
         default=1500,
         metavar="N",
-        help="random candidate poses the model's poses are chosen from (default: 1500)",
+        help="random candidate poses the model's poses are chosen from "
+        f"(default: 1500, at most {MAX_CANDIDATES})",
     )
     parser.add_argument(
-        "--repeats", type=int, default=3, help="measurements per point (default: 3)"
+        "--repeats",
+        type=number("", 1, MAX_REPEATS, whole=True),
+        default=3,
+        help="measurements per point (default: 3)",
     )
     parser.add_argument(
         "--noise-tracker",
-        type=float,
+        type=number("mm", 0, 1000),
         default=0.02,
         metavar="MM",
         help="tracker noise, Gaussian sigma per axis, mm (default: 0.02)",
     )
     parser.add_argument(
         "--noise-repeat",
-        type=float,
+        type=number("mm", 0, 1000),
         default=0.03,
         metavar="MM",
         help="robot repeatability, sigma per axis and visit, mm (default: 0.03)",
@@ -126,7 +137,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "also compare a model with these reducer harmonics identified (budgets of at least "
         "its parameter count)",
     )
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    parser.add_argument(
+        "--seed",
+        type=number("", 0, 2**32 - 1, whole=True),
+        default=0,
+        help="random seed (default: 0)",
+    )
     parser.add_argument(
         "-o",
         "--output",
