@@ -44,6 +44,16 @@ def test_canned_cycles_sticky_z_r_and_retract():
     assert "R" in holes[0].words and not any(h.reason for h in holes)
 
 
+def test_incremental_cycles_as_linuxcnc_reads_them():
+    """G91: X, Y from where the tool is (each of L repeats), R from the current Z, Z from R;
+    a G98 retract to the higher of the start Z and R (checked against rs274's moves)."""
+    text = "G21 G90 G98 G0 X250 Y0 Z50\nG91 G81 X25 Y25 Z-50 R-25 L2\nX5 Z-4 R-1\n"
+    first, second = parse_gcode(text)[1:]
+    assert first.target == (275, 25, -25) and first.r_mm == 25 and first.end == (300, 50, 50)
+    assert second.target == (305, 50, 45) and second.r_mm == 49 and second.end == (305, 50, 50)
+    assert not first.reason and not second.reason
+
+
 @pytest.mark.parametrize(
     ("program", "reason"),
     [
@@ -53,7 +63,8 @@ def test_canned_cycles_sticky_z_r_and_retract():
         ("G0 X0 Y0 Z0\nG41 D1 G1 X10\n", "cutter compensation"),
         ("G0 Z5\n", "X,Y not known"),
         ("G0 X0 Y0 Z0\nG18 G81 X1 Z-1 R1\n", "plane G18"),
-        ("G0 X0 Y0 Z0\nG91 G81 X1 Y1 Z-1 R1\n", "G91"),
+        ("G0 X0 Y0 Z0\nG28\nG91 G81 X1 Y1 Z-1 R1\n", "X,Y,Z not known"),
+        ("G0 X0 Y0 Z0\nG91 G81 X1 Y1 Z-1 R1 L0.5\n", "not a repeat count"),
         ("o100 sub\nG0 X0 Y0 Z0\n", "O-word"),
     ],
 )

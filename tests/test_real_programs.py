@@ -13,11 +13,15 @@ import csv
 
 import numpy as np
 import pytest
-from rewrite_helpers import E_CONST, write_cell
+from rewrite_helpers import E_CONST, error_field, write_cell
 from scipy.spatial.transform import Rotation
+from test_gcode_rs274 import MOVE_RE, canonical
 
 from accugrid.codegen.cli import main
+from accugrid.codegen.gcode.rewrite import rewrite_gcode
 from accugrid.codegen.krl.parse import scan_krl
+from accugrid.codegen.rewrite import Options
+from accugrid.compensation import GridModel
 
 BASE2 = (100.0, 50.0, 0.0, 90.0, 0.0, 0.0)  # robot_T_base of BASE_DATA[2]
 R2 = Rotation.from_euler("ZYX", BASE2[3:], degrees=True).as_matrix()
@@ -131,3 +135,107 @@ def test_spline_block_base_is_the_same_in_every_reading_lane():
         bases = [(p.line, p.base.number) for p in scan.positions]
         bases += [(u.line, u.base.number) for u in scan.uses]
         assert sorted(bases) == [(4, 2), (5, 2), (6, 2), (6, 2), (8, 0)], sep
+
+
+# ---------------------------------------------------------------- G-code: incremental cycles
+
+PROGRAM_ABC = (500.0, -200.0, 100.0, 0.0, 180.0, 0.0)  # robot_T_program: Z down, X reversed
+T_PROGRAM = np.eye(4)
+T_PROGRAM[:3, :3] = Rotation.from_euler("ZYX", PROGRAM_ABC[3:], degrees=True).as_matrix()
+T_PROGRAM[:3, 3] = PROGRAM_ABC[:3]
+
+
+def _grid(field: str) -> GridModel:
+    axes = [np.arange(-600.0, 601.0, 100.0)] * 3
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    return GridModel.from_measurements((pts, pts - error_field(pts, field)))
+
+
+SMOOTH, CONSTANT = _grid("smooth"), _grid("constant")
+
+
+def corrected(model: GridModel, program_xyz) -> np.ndarray:
+    """Where a program-frame point (N, 3) must be commanded: p + R^T e(T p), e from the grid."""
+    p = np.atleast_2d(np.asarray(program_xyz, float))
+    robot = p @ T_PROGRAM[:3, :3].T + T_PROGRAM[:3, 3]
+    return p + (model.correct(robot) - robot) @ T_PROGRAM[:3, :3]
+
+
+def gcode_rewrite(text: str, model: GridModel):
+    opts = Options(model=model, base_data={}, robot_T_program=T_PROGRAM, decimals=3)
+    result = rewrite_gcode("p.ngc", text, opts)
+    return result.texts["p.ngc"], list(result.rows)
+
+
+def holes(moves: np.ndarray, out: str) -> tuple[np.ndarray, np.ndarray]:
+    """The hole bottoms (STRAIGHT_FEED ends) of rs274's G81 expansion, and the R plane each
+    feed starts from (the traverse before it)."""
+    kinds = [m.group(1) for m in MOVE_RE.finditer(out)]
+    feeds = np.array([i for i, kind in enumerate(kinds) if kind == "STRAIGHT_FEED"], np.int64)
+    return moves[feeds, :3], moves[feeds - 1, :3]
+
+
+HALF = 0.5e-3 + 1e-9  # half the last written decimal (3 decimals), mm per axis
+
+
+def test_incremental_cycle_holes_land_on_their_corrections(rs274, tmp_path):
+    """G91 G81: X, Y from where the tool is, R from its Z, Z from R. Each hole (and R plane) is
+    corrected as the absolute point it reaches and written back as differences of corrected
+    positions: rs274's holes are the independently corrected ones, not dragged."""
+    text = (
+        "G21 G90 G17 G98 F100\n"
+        "G0 X250 Y0 Z50\n"
+        "G91 G81 X25 Y25 Z-50 R-25\n"
+        "X25 Y-10 Z-40 R-20\n"
+        "G80\n"
+        "G91 G0 X-10 Y5\n"
+        "G90 G0 Z100\n"
+        "M2\n"
+    )
+    nominal_holes = np.array([[275.0, 25.0, -25.0], [300.0, 15.0, -10.0]])
+    nominal_r = np.array([[275.0, 25.0, 25.0], [300.0, 15.0, 30.0]])
+    moves, out = canonical(rs274, tmp_path, text)
+    np.testing.assert_allclose(holes(moves, out)[0], nominal_holes)  # as read here
+    np.testing.assert_allclose(holes(moves, out)[1], nominal_r)
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert [r.status for r in rows] == ["corrected"] * 5
+    moves, out = canonical(rs274, tmp_path, new)
+    bottoms, r_planes = holes(moves, out)
+    np.testing.assert_allclose(bottoms, corrected(SMOOTH, nominal_holes), atol=HALF)
+    want_r = corrected(SMOOTH, nominal_r)[:, 2]  # only the Z of the R point can be written
+    np.testing.assert_allclose(r_planes[:, 2], want_r, atol=HALF)
+    # the G91 move after the cycles lands on its own correction too (X, Y it writes)
+    after = corrected(SMOOTH, [[290.0, 20.0, 50.0]])[0]
+    np.testing.assert_allclose(moves[-2, :2], after[:2], atol=HALF)
+    assert np.abs(bottoms - nominal_holes).max() > 0.01  # the field moves them measurably
+
+
+def test_repeated_incremental_cycle_is_corrected_or_left_as_programmed(rs274, tmp_path):
+    """G91 G81 ... L2 moves by one increment to both holes. Where their corrections are equal
+    (a constant field) both land on them; where they differ (a varying field) the block and the
+    move that sets its start are reported, and the holes land exactly as programmed."""
+    text = "G21 G90 G17 G98 F100\nG0 X250 Y0 Z50\nG91 G81 X25 Y25 Z-50 R-25 L2\nG80\nM2\n"
+    nominal = np.array([[275.0, 25.0, -25.0], [300.0, 50.0, -25.0]])
+    new, rows = gcode_rewrite(text, CONSTANT)
+    assert [r.status for r in rows] == ["corrected", "corrected"]
+    bottoms = holes(*canonical(rs274, tmp_path, new))[0]
+    np.testing.assert_allclose(bottoms, nominal + T_PROGRAM[:3, :3].T @ E_CONST, atol=HALF)
+
+    text = text.replace("X25 Y25", "X100 Y100")  # 141 mm apart: corrections 0.01 mm apart
+    nominal = np.array([[350.0, 100.0, -25.0], [450.0, 200.0, -25.0]])
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert [r.status for r in rows] == ["skipped", "skipped"]
+    assert "sets the start of the G91 cycle at line 3" in rows[0].reason
+    assert "repeated L2" in rows[1].reason and "differ by" in rows[1].reason
+    assert new == text
+    np.testing.assert_allclose(holes(*canonical(rs274, tmp_path, new))[0], nominal)
+
+
+def test_incremental_chain_after_an_unknown_position_is_reported(tmp_path):
+    """After G28 the position is not known: the G91 cycle and moves after it are reported,
+    never guessed, and kept as written."""
+    text = "G21 G90 G0 X250 Y0 Z50\nG28\nG91 G81 X25 Y25 Z-50 R-25\nG0 X5\nG90 G0 X10 Y10 Z10\n"
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert [r.status for r in rows] == ["corrected", "skipped", "skipped", "skipped", "corrected"]
+    assert "not known" in rows[2].reason and "not known" in rows[3].reason
+    assert new.splitlines()[1:4] == text.splitlines()[1:4]

@@ -2,7 +2,8 @@
 each number, for pre-flight correction.
 
 Follows the modal state a CAM post relies on: motion mode (G0/G1/G2/G3, canned cycles G73/G81-G89
-with G98/G99 and sticky Z and R), G90/G91 (incremental targets are made absolute), G20/G21
+with G98/G99, sticky Z and R and, under G91, X and Y from the tool, R from its Z, Z from R and L
+repeats, as LinuxCNC reads them), G90/G91 (incremental targets are made absolute), G20/G21
 (targets in mm; ``scale`` converts back), G17/G18/G19, N-numbers, ``( )`` and ``;`` comments,
 words in any order and case, with or without spaces, and parameter assignments (``#1 = 5``,
 ``#<_z> = 0.4``). G54 is the program frame (the power-on default). Reported instead of guessed:
@@ -107,7 +108,7 @@ _ROTARY_SET = frozenset(ROTARY)
 _KEPT = frozenset(AXES + ROTARY + "RL")  # letters whose Word a move (or G10) needs
 _POSITION_LETTERS = frozenset(AXES + ROTARY + "R")
 _NONMODAL = frozenset("4 10 28 28.1 30 30.1 52 53 92 92.1 92.2 92.3".split())
-_PARAMETER_CODES = frozenset("4 10 28.1 30.1 52 92 92.1 92.2 92.3".split())
+_PARAMETER_CODES = frozenset("10 28.1 30.1 52 92 92.1 92.2 92.3".split())
 # G-codes that neither move nor change where a programmed position lands (or whose effect is
 # followed above); any other G-code is a motion this reader does not know
 _HARMLESS = frozenset(
@@ -216,6 +217,7 @@ class GcodeMoves:
         # one str object per distinct motion and retract: those of the name tables and others
         self._names: dict[str, str] = dict(zip(_NAME_OBJECTS, _NAME_OBJECTS, strict=True))
         self.places = -1  # the most decimals among the X, Y, Z literals of the moves (-1: none)
+        self.repeats: dict[int, int] = {}  # row -> a cycle's L repeat count, where not 1
 
     def __len__(self) -> int:
         return len(self.motion)
@@ -232,9 +234,12 @@ class GcodeMoves:
                 setattr(self, key, grown)
         return n
 
-    def add(self, line, column, motion, start, target, words, reason, end, state, cycle) -> None:
+    def add(
+        self, line, column, motion, start, target, words, reason, end, state, cycle, r_mm
+    ) -> None:
         """Store one move as a row: ``start``, ``target``, ``end`` 3 mm each; ``words`` letter ->
-        Word; ``state``: the ``_Modal`` it was read in (pos and setters before the move)."""
+        Word; ``state``: the ``_Modal`` it was read in (pos and setters before the move);
+        ``r_mm``: a cycle's R plane (absolute mm)."""
         i = self._room(1)
         rotary = state.rotary
         if not self.rotaries or rotary is not self.rotaries[-1]:
@@ -272,7 +277,7 @@ class GcodeMoves:
             end[1],
             end[2],
             state.scale,
-            state.cycle_r if cycle else math.nan,
+            r_mm if cycle else math.nan,
             math.nan if x is None else x.value,
             math.nan if y is None else y.value,
             math.nan if z is None else z.value,
@@ -856,12 +861,14 @@ class _Reader:
                 "is not known"
             )
         has_rotary = self._rotary(block)
-        nonmodal = [g for g in block.gcodes if g in _NONMODAL] if block.gcodes else []
+        # a dwell (G4) takes no axis words: those of its line are the motion mode's
+        nonmodal = [g for g in block.gcodes if g in _NONMODAL and g != "4"] if block.gcodes else []
         if nonmodal and nonmodal[0] in _PARAMETER_CODES:
             return  # the axis words are parameters, not a move
         axis_words = {k: words[k] for k in AXES if k in words}
         moving = [k for k in block.exprs if k in _POSITION_LETTERS]
-        if not axis_words and not has_rotary and not moving:
+        home = nonmodal[:1] == ["28"] or nonmodal[:1] == ["30"]  # goes home even without words
+        if not axis_words and not has_rotary and not moving and not home:
             return
         if axis_words:
             column = min(w.start for w in axis_words.values()) - line_offset + 1
@@ -896,16 +903,19 @@ class _Reader:
         self.state.rotary = rotary
         return True
 
-    def _add(self, move: tuple, reason: str, end: list[float], written, cycle=False) -> None:
+    def _add(
+        self, move: tuple, reason: str, end: list[float], written, cycle=False, r_mm=math.nan
+    ) -> None:
         """Store ``move`` (line, column, motion, target, words) with its reason (or "not known"
-        for a NaN target), ending at ``end``; ``cycle``: a canned-cycle hole."""
+        for a NaN target), ending at ``end``; ``cycle``: a canned-cycle hole, whose R plane is
+        ``r_mm`` (absolute mm)."""
         t = move[3]
         if not reason and (t[0] != t[0] or t[1] != t[1] or t[2] != t[2]):  # NaN: unknown
             missing = ",".join(k for i, k in enumerate(AXES) if math.isnan(t[i]))
             reason = f"{missing} not known here (no absolute value since the start)"
         state = self.state
         index = len(self.moves)
-        self.moves.add(*move[:3], state.pos, t, move[4], reason, end, state, cycle)
+        self.moves.add(*move[:3], state.pos, t, move[4], reason, end, state, cycle, r_mm)
         for i, k in enumerate(AXES):
             if k in written:
                 state.setter[i] = index
@@ -935,13 +945,9 @@ class _Reader:
         self._add(move, reason, target, set(axis_words) | set(exprs))
 
     def _cycle(self, lineno, column, axis_words, words, exprs) -> None:
+        """A canned-cycle block: its (first) hole. Under G91, X and Y are increments from where
+        the tool is (repeated L times), R from the current Z and Z from R (as LinuxCNC)."""
         s = self.state
-        target = list(s.pos)
-        for i, k in enumerate("XY"):
-            if k in axis_words:
-                target[i] = axis_words[k].value * s.scale
-            elif k in exprs:
-                target[i] = math.nan
         if "Z" in axis_words:
             s.cycle_z = axis_words["Z"].value * s.scale
         elif "Z" in exprs:
@@ -952,17 +958,39 @@ class _Reader:
             move_words["R"] = words["R"]
         elif "R" in exprs:
             s.cycle_r = math.nan
-        move = (lineno, column, "G" + s.motion, (target[0], target[1], s.cycle_z), move_words)
+        repeats = 1
         reason = _expression_reason(exprs, lineno) or s.frame_reason()
-        if s.incremental:
-            reason = reason or "canned cycle in G91 (incremental cycle words)"
-        elif s.plane != "17":
+        if "L" in words:
+            count = words["L"].value
+            if count >= 1 and count == int(count):
+                repeats = int(count)
+            else:
+                reason = reason or f"canned cycle L{words['L'].literal}: not a repeat count"
+        if "L" in exprs:
+            reason = reason or f"canned cycle {exprs['L']}: the repeat count is not known"
+        step = [0.0, 0.0]  # X, Y increment of each repeat (G91)
+        first = list(s.pos[:2])
+        for i, k in enumerate("XY"):
+            if k in axis_words:
+                value = axis_words[k].value * s.scale
+                step[i] = value if s.incremental else 0.0
+                first[i] = s.pos[i] + value if s.incremental else value
+            elif k in exprs:
+                first[i] = step[i] = math.nan
+        r_level = s.pos[2] + s.cycle_r if s.incremental else s.cycle_r
+        bottom = r_level + s.cycle_z if s.incremental else s.cycle_z
+        target = (first[0], first[1], bottom)
+        if s.plane != "17":
             reason = reason or f"canned cycle in plane G{s.plane} (only G17 is read)"
         elif math.isnan(s.cycle_r) or math.isnan(s.cycle_z):
             reason = reason or "canned cycle without an R plane or Z depth"
-        clear = s.cycle_r if s.retract == "G99" else max(s.pos[2], s.cycle_r)
-        end = [target[0], target[1], clear if not s.incremental else math.nan]
-        self._add(move, reason, end, set(axis_words) | set(exprs) | {"Z"}, cycle=True)
+        clear = r_level if s.retract == "G99" else max(s.pos[2], r_level)
+        last = [first[i] + (repeats - 1) * step[i] for i in range(2)]
+        if repeats != 1:
+            self.moves.repeats[len(self.moves)] = repeats
+        move = (lineno, column, "G" + s.motion, target, move_words)
+        written = set(axis_words) | set(exprs) | {"Z"}
+        self._add(move, reason, [last[0], last[1], clear], written, cycle=True, r_mm=r_level)
 
 
 def _expression_reason(exprs: dict[str, str], lineno: int) -> str:

@@ -5,7 +5,10 @@ G-code positions are in the cell's program frame (G54); A, B, C words are the to
 corrected, and its R plane by the Z correction at (X, Y, R). Axes a line does not write keep their
 commanded value; the report gives the remaining difference (``residual_mm``). Under G91 the
 increments are recomputed from the commanded (rewritten) previous position, so every later move
-lands where it should. Arcs are not corrected, nor the moves that set an arc's start.
+lands where it should, corrected or as programmed: a G91 cycle's X, Y from the tool, its R from
+the tool's Z and its Z from R. A G91 cycle repeated L times has one increment for all its holes:
+corrected when their corrections agree within the written resolution, else it and the moves that
+set its start are not. Arcs are not corrected, nor the moves that set an arc's start.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from accugrid.codegen.program_text import (
 )
 from accugrid.codegen.rewrite import (
     CORRECTED,
+    SKIPPED,
     Options,
     Result,
     Rows,
@@ -71,6 +75,7 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
         done = np.flatnonzero(np.isfinite(corrected[:, 0]))
         rows.status[at[done]] = CORRECTED
         desired[at[done]] = prog[done] + back[done]
+    _repeated_holes(moves, rows, desired, opts)
     r_planes = _corrected_r_planes(moves, rows, opts)
     out = _gcode_edits(text, moves, rows, desired, r_planes, opts)
     strict_check(rows, opts)
@@ -95,6 +100,52 @@ def _protect_arc_starts(moves: GcodeMoves, rows: Rows) -> None:
         for j in moves.setters[i].tolist():
             if j >= 0 and not reasons[j]:
                 reasons[j] = why
+
+
+def _repeated_holes(moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Options) -> None:
+    """A G91 cycle repeated L times moves by one increment to each hole: corrected only when
+    every hole's correction is its first hole's within the written resolution. Otherwise it is
+    not corrected (``desired`` back to the target; the reason says by how much they differ),
+    and neither are the moves that set its start X and Y, so that its holes land as programmed
+    (one increment cannot undo a corrected start for every hole)."""
+    repeated = sorted(i for i, count in moves.repeats.items() if moves.incremental[i])
+    if not repeated:
+        return
+    places = _places(moves, opts)
+    t = opts.robot_T_program
+    for i in repeated:
+        if rows.status[i] != CORRECTED:
+            continue
+        step = np.nan_to_num(moves.word_value[i, :2]) * moves.scale[i]
+        k = np.arange(1, moves.repeats[i])[:, None]
+        holes = moves.target[i] + np.column_stack([k * step, np.zeros(len(k))])
+        robot = transform_points(t, holes)
+        corrected = correct_points(robot, rows, np.full(len(holes), i), opts, mark=False)
+        shift = rows_times(corrected - robot, t[:3, :3])
+        spread = float(np.abs(shift - (desired[i] - moves.target[i])).max(initial=0.0))
+        if spread <= moves.scale[i] * 10.0 ** -int(places[i]):
+            continue
+        why = "outside the grid" if math.isnan(spread) else f"differ by {spread:.4f} mm"
+        rows.status[i] = SKIPPED
+        rows.reason[i] = (
+            f"G91 cycle repeated L{moves.repeats[i]}: one increment for all its holes, whose "
+            f"corrections {why} (more than the written resolution); left as programmed"
+        )
+        desired[i] = moves.target[i]
+    todo = [i for i in repeated if rows.status[i] != CORRECTED]
+    while todo:  # the moves that set their start, and those of a cycle among them
+        i = todo.pop()
+        why = (
+            f"sets the start of the G91 cycle at line {moves.line[i]}, repeated "
+            f"L{moves.repeats[i]}, which is not corrected"
+        )
+        for j in moves.setters[i, :2].tolist():
+            if j >= 0 and rows.status[j] == CORRECTED:
+                rows.status[j] = SKIPPED
+                rows.reason[j] = why
+                desired[j] = moves.target[j]
+                if moves.incremental[j] and moves.repeats.get(j, 1) > 1:
+                    todo.append(j)
 
 
 def _corrected_r_planes(moves: GcodeMoves, rows: Rows, opts: Options) -> np.ndarray:
@@ -225,6 +276,24 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         if motion in RESETS:
             cmd = [math.nan] * 3
             continue
+        if is_cycle and inc:
+            r_goal = r_planes[first + b] if changed else math.nan
+            reached, end, cycle_z, r_cmd = _incremental_cycle(
+                text,
+                edits,
+                cmd,
+                (starts, ends, values),
+                goals,
+                r_mm if math.isnan(r_goal) else r_goal,
+                (scale, int(places[first + b]), retract, moves.repeats.get(first + b, 1)),
+                (cycle_z, r_cmd),
+                changed,
+            )
+            if changed:
+                walk.reached_rows.extend(reached)
+                walk.reached_at.append(first + b)
+            cmd = end
+            continue
         incremental = inc and not is_cycle
         end = list(cmd)
         for i in range(3):
@@ -277,6 +346,44 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     texts = [e[2] for e in edits]
     lengths = np.fromiter(map(len, texts), np.int64, len(texts))
     return starts, ends, np.frombuffer("".join(texts).encode("ascii"), np.uint8), lengths
+
+
+def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, changed):
+    """One G91 canned-cycle block, written so that its first hole reaches ``goal`` and its R
+    plane ``r_goal`` (absolute mm, program frame) from where the rewritten program leaves the
+    tool (``cmd``): X, Y as increments from ``cmd``, R from its Z, Z from R (as LinuxCNC reads
+    them). ``words``: the block's (starts, ends, values) of X, Y, Z, R; ``how``: (mm per unit,
+    decimals, retract, L repeats); ``sticky``: the Z and R words in effect (mm, as written).
+    A repeated block not ``changed`` (corrected) keeps its X, Y step as written.
+    Adds the edits to ``edits``; (the first hole's bottom, where the block leaves the tool, the
+    Z and R words now in effect), mm. Where ``cmd`` or a goal is not known a word is kept."""
+    starts, ends, values = words
+    scale, places, retract, repeats = how
+    cycle_z, r_cmd = sticky
+
+    def write(i: int, base: float, want: float) -> float:
+        """Word ``i`` as the increment from ``base`` to ``want``; its value (mm) written."""
+        old_text = new_text = text[starts[i] : ends[i]]
+        if not (math.isnan(base) or math.isnan(want)):
+            new_text = number_text(old_text, values[i], (want - base) / scale, places)
+        if new_text != old_text:
+            edits.append((starts[i], ends[i], new_text))
+        return float(new_text) * scale
+
+    fixed_step = repeats > 1 and not changed  # its start is as programmed: so is its step
+    step = [
+        (values[i] * scale if fixed_step else write(i, cmd[i], goal[i])) if starts[i] >= 0 else 0.0
+        for i in range(2)
+    ]
+    if starts[3] >= 0:
+        r_cmd = write(3, cmd[2], r_goal)
+    level = cmd[2] + r_cmd  # the R plane reached
+    if starts[2] >= 0:
+        cycle_z = write(2, level, goal[2])
+    hole = [cmd[0] + step[0], cmd[1] + step[1], level + cycle_z]
+    clear = level if retract == "G99" else max(cmd[2], level)
+    end = [cmd[0] + repeats * step[0], cmd[1] + repeats * step[1], clear]
+    return hole, end, cycle_z, r_cmd
 
 
 def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
