@@ -239,3 +239,43 @@ def test_incremental_chain_after_an_unknown_position_is_reported(tmp_path):
     assert [r.status for r in rows] == ["corrected", "skipped", "skipped", "skipped", "corrected"]
     assert "not known" in rows[2].reason and "not known" in rows[3].reason
     assert new.splitlines()[1:4] == text.splitlines()[1:4]
+
+
+# ---------------------------------------------------------------- G-code: modal canned cycles
+
+
+@pytest.mark.parametrize("cycle", ["G81", "G82 P0.5", "G83 Q2", "G73 Q2"])
+def test_each_modal_cycle_hole_gets_its_own_depth_and_r_plane(rs274, tmp_path, cycle):
+    """Continuation lines of a canned cycle write X, Y only: each hole keeps the depth and R
+    plane in effect. Each one's corrected Z and R are written as words added to its line where
+    they differ from those in effect; rs274's expansion puts every hole bottom and R plane on
+    its independent correction."""
+    text = (
+        "G21 G90 G17 G99 F100\n"
+        "G0 X0 Y0 Z50\n"
+        f"{cycle} X10 Y10 Z-5 R2\n"
+        "X150 Y10\n"
+        "x150 y150 (lower case, a comment)\n"
+        "X300 Y-100 Z-8\n"
+        "G80\n"
+        "M2\n"
+    )
+    xy = np.array([[10.0, 10.0], [150.0, 10.0], [150.0, 150.0], [300.0, -100.0]])
+    nominal_holes = np.column_stack([xy, [-5.0, -5.0, -5.0, -8.0]])
+    nominal_r = np.column_stack([xy, np.full(4, 2.0)])
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert [r.status for r in rows] == ["corrected"] * 5
+    lines = new.splitlines()
+    assert lines[3].startswith("X") and " Z-5.3" in lines[3] and " R1." in lines[3]
+    assert " z-5.3" in lines[4] and lines[4].endswith("(lower case, a comment)")
+    moves, out = canonical(rs274, tmp_path, new)
+    feeds = holes(moves, out)[0]
+    # each hole's feeds are near its X, Y; G73/G83 feed in pecks: the deepest is the bottom
+    near = [feeds[np.abs(feeds[:, :2] - p).max(axis=1) < 1.0] for p in xy]
+    deepest = np.array([f[np.argmin(f[:, 2])] for f in near])
+    np.testing.assert_allclose(deepest, corrected(SMOOTH, nominal_holes), atol=HALF)
+    assert np.abs(deepest[1:, 2] - deepest[0, 2]).max() > 0.005  # the depths differ per hole
+    for k, want in enumerate(corrected(SMOOTH, nominal_r)[:, 2]):
+        assert np.isclose(moves[:, 2], want, atol=HALF).any(), f"R plane of hole {k}"
+    # the same feeds (a changed R plane may add a traverse to it between holes)
+    assert len(holes(*canonical(rs274, tmp_path, text))[0]) == len(feeds)

@@ -38,7 +38,7 @@ from accugrid.codegen.rewrite import (
     strict_check,
 )
 from accugrid.codegen.splice import ByteSplicer, texts_of
-from accugrid.codegen.textsafe import fixed_bytes
+from accugrid.codegen.textsafe import fixed, fixed_bytes
 from accugrid.kinematics.frames import rows_times, transform_points
 
 __all__ = ["rewrite_gcode"]
@@ -151,10 +151,10 @@ def _repeated_holes(moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Op
 def _corrected_r_planes(moves: GcodeMoves, rows: Rows, opts: Options) -> np.ndarray:
     """(N,) corrected R plane (mm) of each corrected cycle that writes R; NaN: keep R.
 
-    The R point is (X, Y, R) of the hole; only its Z correction can be written."""
+    The R point is (X, Y, R) of the hole; only its Z correction can be written (in its R word,
+    or one added to its line)."""
     out = np.full(len(moves), np.nan)
-    wrote_r = moves.is_cycle & (moves.word_start[:, 3] >= 0) & (rows.status == CORRECTED)
-    idx = np.flatnonzero(wrote_r)
+    idx = np.flatnonzero(moves.is_cycle & ~np.isnan(moves.r_mm) & (rows.status == CORRECTED))
     if len(idx):
         pts = np.column_stack([moves.target[idx, 0], moves.target[idx, 1], moves.r_mm[idx]])
         t = opts.robot_T_program
@@ -171,7 +171,8 @@ class _Commanded:
     where each corrected move reaches (``reached_rows``, 3 per move, of the moves ``reached_at``).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, fill: np.ndarray) -> None:
+        self.fill = fill  # (N,) absolute cycles read without a reason: may get Z, R words added
         self.cmd = [math.nan] * 3
         self.cycle_z = self.r_cmd = math.nan
         self.reached_rows = array("d")
@@ -195,9 +196,10 @@ def _gcode_edits(
     out = ByteSplicer(text)
     places = _places(moves, opts)
     corrected = rows.status == CORRECTED
-    walk = _Commanded()
+    read = np.fromiter(map(bool, moves.reason), bool, len(moves)) if any(moves.reason) else False
+    walk = _Commanded(moves.is_cycle & ~moves.incremental & ~read)
     for first in range(0, len(moves), _BLOCK):
-        for part, step in _stretches(moves, slice(first, first + _BLOCK)):
+        for part, step in _stretches(moves, slice(first, first + _BLOCK), walk.fill):
             out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
     if walk.reached_at:
         at = np.frombuffer(walk.reached_at, dtype=np.int64)
@@ -216,11 +218,13 @@ def _gcode_edits(
 _MIN_BULK = 256  # moves: a shorter stretch of absolute moves is walked with its neighbours
 
 
-def _stretches(moves: GcodeMoves, block: slice):
+def _stretches(moves: GcodeMoves, block: slice, fill: np.ndarray):
     """(slice, step) of each stretch of the moves ``block``, in order: ``_bulk_block`` for runs
-    of at least ``_MIN_BULK`` absolute moves that do not reset the position, ``_walk_block`` for
-    the moves between them."""
-    walked = moves.incremental[block] | moves.resets[block]
+    of at least ``_MIN_BULK`` absolute moves that do not reset the position and are no cycle
+    that may need a Z or R word added (``fill`` (N,)), ``_walk_block`` for the moves between
+    them."""
+    short = ((moves.word_start[block, 2:4] < 0).any(axis=1)) & fill[block]
+    walked = moves.incremental[block] | moves.resets[block] | short
     n = len(walked)
     runs = np.flatnonzero(np.diff(walked, prepend=True, append=True)).reshape(-1, 2)
     done = 0
@@ -325,6 +329,17 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
                 new_text = r_texts[b]
                 edits.append((starts[3], ends[3], new_text))
             r_cmd = float(new_text) * scale
+        if walk.fill[first + b] and (starts[2] < 0 or starts[3] < 0):
+            r_goal = r_planes[first + b] if changed else math.nan
+            cycle_z, r_cmd = _added_words(
+                text,
+                edits,
+                (starts, ends),
+                (goals[2], r_mm if math.isnan(r_goal) else r_goal),
+                (cycle_z, r_cmd),
+                scale,
+                int(places[first + b]),
+            )
         if is_cycle:
             reached = [end[0], end[1], cycle_z]
             if inc or math.isnan(r_mm):
@@ -346,6 +361,30 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     texts = [e[2] for e in edits]
     lengths = np.fromiter(map(len, texts), np.int64, len(texts))
     return starts, ends, np.frombuffer("".join(texts).encode("ascii"), np.uint8), lengths
+
+
+def _added_words(text, edits, spans, goals, sticky, scale, places):
+    """The Z and R words a cycle's line needs but does not write: where the hole bottom and R
+    plane it should reach (``goals``, absolute mm) differ from the depth and R plane in effect
+    (``sticky``, mm, as written), `` Z..``/`` R..`` are added after its last position word (in
+    the case of its letters). ``spans``: the line's (starts, ends) of X, Y, Z, R. Adds the edit
+    to ``edits``; the depth and R plane now in effect (mm)."""
+    starts, ends = spans
+    sticky, added = list(sticky), []
+    for k, letter in ((2, "Z"), (3, "R")):
+        if starts[k] >= 0 or math.isnan(goals[k - 2]):
+            continue
+        new_text = fixed(goals[k - 2] / scale, places)
+        if float(new_text) * scale != sticky[k - 2]:
+            added.append(letter + new_text)
+            sticky[k - 2] = float(new_text) * scale
+    if added:
+        letter_at = min(a for a in starts if a >= 0) - 1  # the letter of its first word
+        while text[letter_at] in " \t":
+            letter_at -= 1
+        words = " " + " ".join(added)
+        edits.append((max(ends), max(ends), words.lower() if text[letter_at].islower() else words))
+    return sticky[0], sticky[1]
 
 
 def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, changed):
