@@ -279,3 +279,47 @@ def test_each_modal_cycle_hole_gets_its_own_depth_and_r_plane(rs274, tmp_path, c
         assert np.isclose(moves[:, 2], want, atol=HALF).any(), f"R plane of hole {k}"
     # the same feeds (a changed R plane may add a traverse to it between holes)
     assert len(holes(*canonical(rs274, tmp_path, text))[0]) == len(feeds)
+
+
+# ---------------------------------------------------------------- G-code: lines that hid a move
+
+
+def test_a_dwell_and_a_move_on_one_line_is_a_move(rs274, tmp_path):
+    """`G4 P0.1 G0 X100 Y50` dwells, then moves: it gets its report row and correction, and the
+    next `G0 Z5` is corrected at (100, 50, 5), not at (0, 0, 5)."""
+    text = "G21 G90 G17\nG0 X0 Y0 Z20\nG4 P0.1 G0 X100 Y50\nG0 Z5\nM2\n"
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert [(r.line, r.status) for r in rows] == [
+        (2, "corrected"),
+        (3, "corrected"),
+        (4, "corrected"),
+    ]
+    moves, out = canonical(rs274, tmp_path, new)
+    assert "DWELL(0.1000)" in out
+    # each line writes its own axes: line 3 X, Y (Z stays where line 2 left it), line 4 Z
+    after_dwell = corrected(SMOOTH, [[100.0, 50.0, 20.0]])[0]
+    np.testing.assert_allclose(moves[1, :2], after_dwell[:2], atol=HALF)
+    want_z = corrected(SMOOTH, [[100.0, 50.0, 5.0]])[0, 2]
+    assert abs(moves[2, 2] - want_z) <= HALF
+    np.testing.assert_array_equal(moves[2, :2], moves[1, :2])
+
+
+def test_a_full_circle_without_end_point_words_keeps_its_start(rs274, tmp_path):
+    """`G2 I12.5 J0` is a full circle: it gets a report row, and the moves that set its start
+    are not corrected (the circle is not), so rs274 cuts the same circle."""
+    text = "G21 G90 G17 F100\nG0 X40 Y10 Z5\nG1 Z-2\nG2 I12.5 J0\nG0 Z10\nG0 X100 Y100\nM2\n"
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert [(r.line, r.status) for r in rows] == [
+        (2, "skipped"),
+        (3, "skipped"),
+        (4, "skipped"),
+        (5, "corrected"),
+        (6, "corrected"),
+    ]
+    assert "arc" in rows[2].reason and "line 4" in rows[0].reason and "line 4" in rows[1].reason
+    assert new.splitlines()[:4] == text.splitlines()[:4]
+    arcs = [line for line in canonical(rs274, tmp_path, new)[1].splitlines() if "ARC_FEED" in line]
+    before = [
+        line for line in canonical(rs274, tmp_path, text)[1].splitlines() if "ARC_FEED" in line
+    ]
+    assert len(arcs) == 1 and arcs[0].split("ARC_FEED")[1] == before[0].split("ARC_FEED")[1]

@@ -128,6 +128,7 @@ _KNOWN_MOTIONS = {
     "38.5": "probe G38.5",
     "76": "threading cycle G76",
 }
+_ARC_WORDS = frozenset("IJK")  # an arc's centre: a G2/G3 block with them and no axis moves
 _WCS = frozenset(("55", "56", "57", "58", "59", "59.1", "59.2", "59.3"))
 _G_NAMES = {float(g): g for g in (str(i) for i in range(100))}
 _new_word = tuple.__new__  # a Word without the NamedTuple constructor's Python frame
@@ -868,7 +869,8 @@ class _Reader:
         axis_words = {k: words[k] for k in AXES if k in words}
         moving = [k for k in block.exprs if k in _POSITION_LETTERS]
         home = nonmodal[:1] == ["28"] or nonmodal[:1] == ["30"]  # goes home even without words
-        if not axis_words and not has_rotary and not moving and not home:
+        circle = state.motion in ("2", "3") and not _ARC_WORDS.isdisjoint(words)  # full circle
+        if not axis_words and not has_rotary and not moving and not home and not circle:
             return
         if axis_words:
             column = min(w.start for w in axis_words.values()) - line_offset + 1
