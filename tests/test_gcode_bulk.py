@@ -193,7 +193,8 @@ def cases(draw):
 
 def _walked(step, case):
     text, moves, corrected, desired, r_planes, places = case
-    walk = _Commanded(np.zeros(len(moves), bool))  # no words to add: those lines are walked
+    read = np.array([not r for r in moves.reason], bool)
+    walk = _Commanded(moves.is_cycle & ~moves.incremental & read)  # may get Z, R words added
     walk.cmd, walk.r_cmd = [1.0, 2.0, 50.0], 7.0  # as a previous block may leave it
     found = step(text, moves, slice(0, len(moves)), corrected, desired, r_planes, places, walk)
     edits = [np.asarray(column).tolist() for column in found]  # starts, ends, bytes, lengths
@@ -274,7 +275,7 @@ def test_edits_in_stretches_are_the_move_by_move_edits(lines, data, min_bulk, de
     for whole in (False, True):
         rows = Rows(["p"], np.zeros(n, np.int64), moves.line, [], [], moves.target)
         rows.status[np.array(status, bool)] = CORRECTED
-        stretches = (lambda m, b, fill: [(b, _walk_block)]) if whole else rewrite._stretches
+        stretches = (lambda m, b: [(b, _walk_block)]) if whole else rewrite._stretches
         with (
             mock.patch.object(rewrite, "_stretches", stretches),
             mock.patch.object(rewrite, "_MIN_BULK", min_bulk),

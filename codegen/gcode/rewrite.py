@@ -199,7 +199,7 @@ def _gcode_edits(
     read = np.fromiter(map(bool, moves.reason), bool, len(moves)) if any(moves.reason) else False
     walk = _Commanded(moves.is_cycle & ~moves.incremental & ~read)
     for first in range(0, len(moves), _BLOCK):
-        for part, step in _stretches(moves, slice(first, first + _BLOCK), walk.fill):
+        for part, step in _stretches(moves, slice(first, first + _BLOCK)):
             out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
     if walk.reached_at:
         at = np.frombuffer(walk.reached_at, dtype=np.int64)
@@ -218,13 +218,11 @@ def _gcode_edits(
 _MIN_BULK = 256  # moves: a shorter stretch of absolute moves is walked with its neighbours
 
 
-def _stretches(moves: GcodeMoves, block: slice, fill: np.ndarray):
+def _stretches(moves: GcodeMoves, block: slice):
     """(slice, step) of each stretch of the moves ``block``, in order: ``_bulk_block`` for runs
-    of at least ``_MIN_BULK`` absolute moves that do not reset the position and are no cycle
-    that may need a Z or R word added (``fill`` (N,)), ``_walk_block`` for the moves between
-    them."""
-    short = ((moves.word_start[block, 2:4] < 0).any(axis=1)) & fill[block]
-    walked = moves.incremental[block] | moves.resets[block] | short
+    of at least ``_MIN_BULK`` absolute moves that do not reset the position, ``_walk_block`` for
+    the moves between them."""
+    walked = moves.incremental[block] | moves.resets[block]
     n = len(walked)
     runs = np.flatnonzero(np.diff(walked, prepend=True, append=True)).reshape(-1, 2)
     done = 0
@@ -355,7 +353,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
             walk.reached_at.append(first + b)
         cmd = end
     walk.cmd, walk.cycle_z, walk.r_cmd = cmd, cycle_z, r_cmd
-    edits.sort()
+    edits.sort(key=lambda e: e[:2])  # stable: the words added at one place stay in order
     starts = np.array([e[0] for e in edits], np.int64)
     ends = np.array([e[1] for e in edits], np.int64)
     texts = [e[2] for e in edits]
@@ -378,12 +376,9 @@ def _added_words(text, edits, spans, goals, sticky, scale, places):
         if float(new_text) * scale != sticky[k - 2]:
             added.append(letter + new_text)
             sticky[k - 2] = float(new_text) * scale
-    if added:
-        letter_at = min(a for a in starts if a >= 0) - 1  # the letter of its first word
-        while text[letter_at] in " \t":
-            letter_at -= 1
-        words = " " + " ".join(added)
-        edits.append((max(ends), max(ends), words.lower() if text[letter_at].islower() else words))
+    lower = bool(added) and _lower_case(text, np.asarray(starts))
+    for word in added:  # each its own edit at the same place, in this order
+        edits.append((max(ends), max(ends), " " + (word.lower() if lower else word)))
     return sticky[0], sticky[1]
 
 
@@ -428,24 +423,33 @@ def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, chang
 def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     """``_walk_block`` in bulk for a block whose moves are all absolute (none resets the
     position): every number is formatted and compared at once, X and Y carried forward where a
-    move does not write them, and only the Z ends that depend on the previous one (a G98 retract,
-    the higher of the previous end and R; a straight move without Z) are carried one by one."""
+    move does not write them, the Z and R words a cycle's line needs added (``_added_words``),
+    and only the Z ends that depend on the previous one (a G98 retract, the higher of the
+    previous end and R; a straight move without Z) are carried one by one."""
     n = len(moves.motion[block])
     scale = moves.scale[block]
     values = moves.word_value[block]
     cycle = moves.is_cycle[block]
     wrote = moves.word_start[block] >= 0  # (n, 4) X, Y, Z, R written
     wrote_r = cycle & wrote[:, 3]
-    goal = np.full((n, 4), np.nan)  # the corrected numbers in program units (NaN: keep)
+    r_mm = moves.r_mm[block]
+    fill = walk.fill[block]
+    # the numbers in program units (NaN: keep): the corrected X, Y, Z, R words, then the Z and R
+    # a cycle's line needs where it does not write them (added if they differ from those in
+    # effect)
+    goal = np.full((n, 6), np.nan)
     fix = corrected[block, None] & wrote[:, :3]
     goal[:, :3] = np.where(fix, desired[block] / scale[:, None], np.nan)
     goal[:, 3] = np.where(wrote_r, r_planes[block] / scale, np.nan)
+    goal[:, 4] = np.where(fill & ~wrote[:, 2], desired[block, 2] / scale, np.nan)
+    r_need = np.where(corrected[block] & ~np.isnan(r_planes[block]), r_planes[block], r_mm)
+    goal[:, 5] = np.where(fill & ~wrote[:, 3], r_need / scale, np.nan)
     goal = goal.ravel()
-    new = np.full(4 * n, np.nan)  # the value each new text reads as
-    place = np.repeat(places[block], 4)
+    new = np.full(6 * n, np.nan)  # the value each new text reads as
+    place = np.repeat(places[block], 6)
     # the texts fixed gives and the values they read as, from the formatter's array form: the
     # texts' bytes of each count of places, and each number's group and row in them
-    cells_of, group, row = [], np.full(4 * n, -1, np.int64), np.empty(4 * n, np.int64)
+    cells_of, group, row = [], np.full(6 * n, -1, np.int64), np.empty(6 * n, np.int64)
     for p in distinct_ints(place):
         idx = np.flatnonzero(np.isfinite(goal) & (place == p))
         if not len(idx):
@@ -453,16 +457,25 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         cells, new[idx] = fixed_bytes(goal[idx], p)
         group[idx], row[idx] = len(cells_of), np.arange(len(idx))
         cells_of.append(cells)
-    edit = np.isfinite(new) & (new != values.ravel())
-    written = np.where(edit, new, values.ravel()).reshape(n, 4) * scale[:, None]  # NaN: none
-    r_cmd = modal_fill(written[:, 3], wrote_r, walk.r_cmd)
-    cycle_z = modal_fill(written[:, 2], cycle & wrote[:, 2], walk.cycle_z)
+    new = new.reshape(n, 6)
+    edit = np.zeros((n, 6), bool)
+    edit[:, :4] = np.isfinite(new[:, :4]) & (new[:, :4] != values)
+    written = np.where(edit[:, :4], new[:, :4], values) * scale[:, None]  # NaN: none
+    added = new[:, 4:] * scale[:, None]  # NaN: none
+    sticky = []  # the depth and R plane in effect after each move, each word added where needed
+    for k, wrote_k, before in ((2, cycle & wrote[:, 2], walk.cycle_z), (3, wrote_r, walk.r_cmd)):
+        value = np.where(wrote_k, written[:, k], added[:, k - 2])
+        after = modal_fill(value, wrote_k | ~np.isnan(added[:, k - 2]), before)
+        edit[:, k + 2] = ~np.isnan(added[:, k - 2]) & (
+            added[:, k - 2] != np.append(before, after[:-1])
+        )
+        sticky.append(after)
+    cycle_z, r_cmd = sticky
     end = np.empty((n, 3))
     for i in range(2):  # X, Y: as written, else where the previous move left them
         end[:, i] = modal_fill(written[:, i], wrote[:, i], walk.cmd[i])
     # Z: a straight move's as written; a cycle's retract: nothing known without an R plane,
     # R under G99, the higher of the previous end and R under G98
-    r_mm = moves.r_mm[block]
     g99 = moves.g99[block]
     end[:, 2] = np.where(cycle, np.where(np.isnan(r_mm), np.nan, r_cmd), written[:, 2])
     carried = np.flatnonzero((cycle & ~g99 & ~np.isnan(r_mm)) | ~(cycle | wrote[:, 2])).tolist()
@@ -481,20 +494,51 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         walk.reached_at.frombytes((block.start + changed).astype(np.int64).tobytes())
     walk.cmd = end[-1].tolist()
     walk.cycle_z, walk.r_cmd = float(cycle_z[-1]), float(r_cmd[-1])
-    at = np.flatnonzero(edit)
-    starts = moves.word_start[block].ravel()[at]
+    # where each edit goes: a word's number, or (an added word) after the line's last word
+    spans = np.empty((n, 6, 2), np.int64)
+    spans[:, :4, 0], spans[:, :4, 1] = moves.word_start[block], moves.word_end[block]
+    spans[:, 4:, :] = moves.word_end[block].max(axis=1)[:, None, None]
+    at = np.flatnonzero(edit.ravel())
+    starts = spans[:, :, 0].ravel()[at]
     order = np.argsort(starts, kind="stable")
     at = at[order]
-    # the new texts in the edits' order, as rows of their cells (NUL-padded on the left)
-    if len(cells_of) == 1:
-        rows = cells_of[0][row[at]]
-    else:
-        rows = np.zeros((len(at), max((c.shape[1] for c in cells_of), default=1)), np.uint8)
-        for g, cells in enumerate(cells_of):
-            mine = np.flatnonzero(group[at] == g)
-            rows[mine, rows.shape[1] - cells.shape[1] :] = cells[row[at[mine]]]
-    ends = moves.word_end[block].ravel()[at]
+    # the new texts in the edits' order, as rows of their cells (NUL-padded on the left), an
+    # added word's letter (and the space before it) in the first two columns
+    width = max((c.shape[1] for c in cells_of), default=1)
+    rows = np.zeros((len(at), 2 + width), np.uint8)
+    for g, cells in enumerate(cells_of):
+        mine = np.flatnonzero(group[at] == g)
+        rows[mine, rows.shape[1] - cells.shape[1] :] = cells[row[at[mine]]]
+    adds = np.flatnonzero(at % 6 >= 4)
+    if len(adds):
+        lines = block.start + at[adds] // 6
+        letters = np.where(at[adds] % 6 == 4, ord("Z"), ord("R"))
+        rows[adds, 0], rows[adds, 1] = ord(" "), letters + 32 * _lower_cases(text, moves, lines)
+    ends = spans[:, :, 1].ravel()[at]
     return starts[order], ends, *texts_of(rows)
+
+
+def _lower_cases(text: str, moves: GcodeMoves, lines: np.ndarray) -> np.ndarray:
+    """``_lower_case`` of the moves ``lines`` (M,) as 0/1 (M,) uint8: the byte before each
+    first number, the line read again only where that is a blank."""
+    starts = moves.word_start[lines]
+    first = np.where(starts >= 0, starts, np.iinfo(np.int64).max).min(axis=1)
+    before = np.frombuffer(
+        "".join(map(text.__getitem__, (first - 1).tolist())).encode("latin-1", "replace"), np.uint8
+    )
+    lower = ((before >= ord("a")) & (before <= ord("z"))).astype(np.uint8)
+    for k in np.flatnonzero((before == ord(" ")) | (before == ord("\t"))).tolist():
+        lower[k] = _lower_case(text, starts[k])
+    return lower
+
+
+def _lower_case(text: str, starts) -> bool:
+    """Whether the letter of a line's first position word (``starts``: its X, Y, Z, R number
+    starts, -1: none) is lower case."""
+    letter_at = min(a for a in starts.tolist() if a >= 0) - 1
+    while text[letter_at] in " \t":
+        letter_at -= 1
+    return text[letter_at].islower()
 
 
 def _places(moves: GcodeMoves, opts: Options) -> np.ndarray:
