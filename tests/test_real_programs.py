@@ -210,6 +210,25 @@ def test_incremental_cycle_holes_land_on_their_corrections(rs274, tmp_path):
     assert np.abs(bottoms - nominal_holes).max() > 0.01  # the field moves them measurably
 
 
+def test_incremental_cycle_continuation_lines_get_their_own_r_and_z(rs274, tmp_path):
+    """G91 continuation lines that write only X, Y: each hole's R (from the tool's Z) and Z
+    (from R) words are added where they differ from those in effect."""
+    text = (
+        "G21 G90 G17 G98 F100\nG0 X250 Y0 Z50\nG91 G81 X25 Y25 Z-50 R-25\nX25 Y-10\n"
+        "X-5 Y40\nG80\nM2\n"
+    )
+    xy = np.array([[275.0, 25.0], [300.0, 15.0], [295.0, 55.0]])
+    nominal_holes = np.column_stack([xy, np.full(3, -25.0)])
+    nominal_r = np.column_stack([xy, np.full(3, 25.0)])
+    np.testing.assert_allclose(holes(*canonical(rs274, tmp_path, text))[0], nominal_holes)
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert [r.status for r in rows] == ["corrected"] * 4
+    assert " R-" in new.splitlines()[3]  # added: the line had none
+    bottoms, r_planes = holes(*canonical(rs274, tmp_path, new))
+    np.testing.assert_allclose(bottoms, corrected(SMOOTH, nominal_holes), atol=HALF)
+    np.testing.assert_allclose(r_planes[:, 2], corrected(SMOOTH, nominal_r)[:, 2], atol=HALF)
+
+
 def test_repeated_incremental_cycle_is_corrected_or_left_as_programmed(rs274, tmp_path):
     """G91 G81 ... L2 moves by one increment to both holes. Where their corrections are equal
     (a constant field) both land on them; where they differ (a varying field) the block and the

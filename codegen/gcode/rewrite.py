@@ -172,7 +172,7 @@ class _Commanded:
     """
 
     def __init__(self, fill: np.ndarray) -> None:
-        self.fill = fill  # (N,) absolute cycles read without a reason: may get Z, R words added
+        self.fill = fill  # (N,) cycles read without a reason: may get Z, R words added
         self.cmd = [math.nan] * 3
         self.cycle_z = self.r_cmd = math.nan
         self.reached_rows = array("d")
@@ -197,7 +197,7 @@ def _gcode_edits(
     places = _places(moves, opts)
     corrected = rows.status == CORRECTED
     read = np.fromiter(map(bool, moves.reason), bool, len(moves)) if any(moves.reason) else False
-    walk = _Commanded(moves.is_cycle & ~moves.incremental & ~read)
+    walk = _Commanded(moves.is_cycle & ~read)
     for first in range(0, len(moves), _BLOCK):
         for part, step in _stretches(moves, slice(first, first + _BLOCK)):
             out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
@@ -290,6 +290,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
                 (scale, int(places[first + b]), retract, moves.repeats.get(first + b, 1)),
                 (cycle_z, r_cmd),
                 changed,
+                walk.fill[first + b],
             )
             if changed:
                 walk.reached_rows.extend(reached)
@@ -382,13 +383,14 @@ def _added_words(text, edits, spans, goals, sticky, scale, places):
     return sticky[0], sticky[1]
 
 
-def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, changed):
+def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, changed, fill):
     """One G91 canned-cycle block, written so that its first hole reaches ``goal`` and its R
     plane ``r_goal`` (absolute mm, program frame) from where the rewritten program leaves the
     tool (``cmd``): X, Y as increments from ``cmd``, R from its Z, Z from R (as LinuxCNC reads
     them). ``words``: the block's (starts, ends, values) of X, Y, Z, R; ``how``: (mm per unit,
     decimals, retract, L repeats); ``sticky``: the Z and R words in effect (mm, as written).
-    A repeated block not ``changed`` (corrected) keeps its X, Y step as written.
+    A repeated block not ``changed`` (corrected) keeps its X, Y step as written; with ``fill``
+    (a line read without a reason) the R and Z words it needs but does not write are added.
     Adds the edits to ``edits``; (the first hole's bottom, where the block leaves the tool, the
     Z and R words now in effect), mm. Where ``cmd`` or a goal is not known a word is kept."""
     starts, ends, values = words
@@ -405,15 +407,32 @@ def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, chang
         return float(new_text) * scale
 
     fixed_step = repeats > 1 and not changed  # its start is as programmed: so is its step
+
+    def add(letter: str, base: float, want: float, sticky: float) -> float:
+        """The word the line needs but does not write, added where it differs from ``sticky``
+        (mm, as written); the value (mm) in effect."""
+        if not fill or math.isnan(base) or math.isnan(want):
+            return sticky
+        new_text = fixed((want - base) / scale, places)
+        if float(new_text) * scale == sticky:
+            return sticky
+        lower = _lower_case(text, np.asarray(starts))
+        edits.append((max(ends), max(ends), " " + (letter.lower() if lower else letter) + new_text))
+        return float(new_text) * scale
+
     step = [
         (values[i] * scale if fixed_step else write(i, cmd[i], goal[i])) if starts[i] >= 0 else 0.0
         for i in range(2)
     ]
     if starts[3] >= 0:
         r_cmd = write(3, cmd[2], r_goal)
+    else:
+        r_cmd = add("R", cmd[2], r_goal, r_cmd)
     level = cmd[2] + r_cmd  # the R plane reached
     if starts[2] >= 0:
         cycle_z = write(2, level, goal[2])
+    else:
+        cycle_z = add("Z", level, goal[2], cycle_z)
     hole = [cmd[0] + step[0], cmd[1] + step[1], level + cycle_z]
     clear = level if retract == "G99" else max(cmd[2], level)
     end = [cmd[0] + repeats * step[0], cmd[1] + repeats * step[1], clear]
