@@ -342,3 +342,15 @@ def test_a_full_circle_without_end_point_words_keeps_its_start(rs274, tmp_path):
         line for line in canonical(rs274, tmp_path, text)[1].splitlines() if "ARC_FEED" in line
     ]
     assert len(arcs) == 1 and arcs[0].split("ARC_FEED")[1] == before[0].split("ARC_FEED")[1]
+
+
+def test_a_cycle_hole_left_uncorrected_keeps_its_programmed_depth(rs274, tmp_path):
+    """A continuation hole outside the grid is not corrected: it gets back the depth and R
+    plane its program gives, not the previous hole's corrected ones."""
+    text = "G21 G90 G17 G99 F100\nG0 X0 Y0 Z50\nG81 X10 Y10 Z-5 R2\nX2000 Y0\nG80\nM2\n"
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert [r.status for r in rows] == ["corrected", "corrected", "outside"]
+    bottoms, r_planes = holes(*canonical(rs274, tmp_path, new))
+    np.testing.assert_allclose(bottoms[0], corrected(SMOOTH, [[10.0, 10.0, -5.0]])[0], atol=HALF)
+    np.testing.assert_array_equal(bottoms[1], [2000.0, 0.0, -5.0])
+    np.testing.assert_array_equal(r_planes[1], [2000.0, 0.0, 2.0])
