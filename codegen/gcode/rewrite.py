@@ -120,7 +120,10 @@ def _repeated_holes(moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Op
         k = np.arange(1, moves.repeats[i])[:, None]
         holes = moves.target[i] + np.column_stack([k * step, np.zeros(len(k))])
         robot = transform_points(t, holes)
-        corrected = correct_points(robot, rows, np.full(len(holes), i), opts, mark=False)
+        abc = np.array([moves.rotaries[moves.rotary_index[i]].get(k, math.nan) for k in "ABC"])
+        rotations = np.repeat(rotations_of(t[:3, :3], abc[None]), len(holes), axis=0)
+        at = np.full(len(holes), i)
+        corrected = correct_points(robot, rows, at, opts, rotations, mark=False)
         shift = rows_times(corrected - robot, t[:3, :3])
         spread = float(np.abs(shift - (desired[i] - moves.target[i])).max(initial=0.0))
         if spread <= moves.scale[i] * 10.0 ** -int(places[i]):
