@@ -13,6 +13,8 @@ import csv
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from rewrite_helpers import E_CONST, error_field, write_cell
 from scipy.spatial.transform import Rotation
 from test_gcode_rs274 import MOVE_RE, canonical
@@ -354,3 +356,36 @@ def test_a_cycle_hole_left_uncorrected_keeps_its_programmed_depth(rs274, tmp_pat
     np.testing.assert_allclose(bottoms[0], corrected(SMOOTH, [[10.0, 10.0, -5.0]])[0], atol=HALF)
     np.testing.assert_array_equal(bottoms[1], [2000.0, 0.0, -5.0])
     np.testing.assert_array_equal(r_planes[1], [2000.0, 0.0, 2.0])
+
+
+cycle_line = st.tuples(
+    st.sampled_from(["", "G90 ", "G91 "]),
+    st.sampled_from(["", "G98 ", "G99 "]),
+    st.tuples(st.integers(200, 400), st.integers(200, 400)),  # X, Y under G90
+    st.tuples(st.integers(-40, 40), st.integers(-40, 40)),  # under G91
+    st.one_of(st.none(), st.integers(-30, -12)),  # Z: below every R
+    st.one_of(st.none(), st.integers(-10, 10)),  # R
+)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(cycle_line, min_size=1, max_size=6), st.sampled_from(["G81", "G82 P0.1"]))
+def test_every_cycle_hole_lands_on_its_correction(rs274, tmp_path_factory, lines, cycle):
+    """Random canned-cycle blocks, absolute and incremental, with and without Z and R (sticky):
+    the holes rs274 drills for the rewritten program are the independent corrections of the
+    holes it drills for the original (each line writes X and Y)."""
+    folder = tmp_path_factory.mktemp("cycles")
+    text = ["G21 G90 G17 G98 F100", "G0 X300 Y100 Z60", f"{cycle} X300 Y100 Z-20 R5"]
+    incremental = False
+    for mode, retract, absolute, steps, z, r in lines:
+        incremental = mode == "G91 " if mode else incremental
+        x, y = steps if incremental else absolute
+        words = [f"X{x}", f"Y{y}"] + ([f"Z{z}"] if z is not None else [])
+        text.append(mode + retract + " ".join(words + ([f"R{r}"] if r is not None else [])))
+    text = "\n".join([*text, "G80", "M2"]) + "\n"
+    bottoms, r_planes = holes(*canonical(rs274, folder, text))
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert all(r.status == "corrected" for r in rows), [r.reason for r in rows]
+    after = holes(*canonical(rs274, folder, new))
+    np.testing.assert_allclose(after[0], corrected(SMOOTH, bottoms), atol=HALF)
+    np.testing.assert_allclose(after[1][:, 2], corrected(SMOOTH, r_planes)[:, 2], atol=HALF)

@@ -6,9 +6,10 @@ corrected, and its R plane by the Z correction at (X, Y, R). Axes a line does no
 commanded value; the report gives the remaining difference (``residual_mm``). Under G91 the
 increments are recomputed from the commanded (rewritten) previous position, so every later move
 lands where it should, corrected or as programmed: a G91 cycle's X, Y from the tool, its R from
-the tool's Z and its Z from R. A G91 cycle repeated L times has one increment for all its holes:
-corrected when their corrections agree within the written resolution, else it and the moves that
-set its start are not. Arcs are not corrected, nor the moves that set an arc's start.
+the initial level and its Z from R. A G91 cycle repeated L times has one increment for all its
+holes: corrected when their corrections agree within the written resolution, else it and the
+moves that set its start are not. A cycle line that writes no Z or R gets the words its hole
+needs. Arcs are not corrected, nor the moves that set an arc's start.
 """
 
 from __future__ import annotations
@@ -177,6 +178,7 @@ class _Commanded:
     def __init__(self, fill: np.ndarray) -> None:
         self.fill = fill  # (N,) cycles read without a reason: may get Z, R words added
         self.cmd = [math.nan] * 3
+        self.il = math.nan  # the initial level of the run of cycles (mm, as commanded)
         self.cycle_z = self.r_cmd = math.nan
         self.reached_rows = array("d")
         self.reached_at = array("q")
@@ -281,6 +283,8 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         if motion in RESETS:
             cmd = [math.nan] * 3
             continue
+        if is_cycle and moves.first_cycle[first + b]:
+            walk.il = cmd[2]
         if is_cycle and inc:
             r_goal = r_planes[first + b] if changed else math.nan
             reached, end, cycle_z, r_cmd = _incremental_cycle(
@@ -291,7 +295,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
                 goals,
                 r_mm if math.isnan(r_goal) else r_goal,
                 (scale, int(places[first + b]), retract, moves.repeats.get(first + b, 1)),
-                (cycle_z, r_cmd),
+                (cycle_z, r_cmd, walk.il),
                 changed,
                 walk.fill[first + b],
             )
@@ -349,7 +353,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
             elif retract == "G99":
                 end = [end[0], end[1], r_cmd]
             else:
-                end = [end[0], end[1], max(cmd[2], r_cmd)]
+                end = [end[0], end[1], max(walk.il, r_cmd)]
         else:
             reached = end
         if changed:
@@ -389,16 +393,17 @@ def _added_words(text, edits, spans, goals, sticky, scale, places):
 def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, changed, fill):
     """One G91 canned-cycle block, written so that its first hole reaches ``goal`` and its R
     plane ``r_goal`` (absolute mm, program frame) from where the rewritten program leaves the
-    tool (``cmd``): X, Y as increments from ``cmd``, R from its Z, Z from R (as LinuxCNC reads
-    them). ``words``: the block's (starts, ends, values) of X, Y, Z, R; ``how``: (mm per unit,
-    decimals, retract, L repeats); ``sticky``: the Z and R words in effect (mm, as written).
+    tool (``cmd``): X, Y as increments from ``cmd``, R from the initial level, Z from R (as
+    LinuxCNC reads them). ``words``: the block's (starts, ends, values) of X, Y, Z, R; ``how``:
+    (mm per unit, decimals, retract, L repeats); ``sticky``: the Z and R words in effect (mm, as
+    written) and the initial level (mm).
     A repeated block not ``changed`` (corrected) keeps its X, Y step as written; with ``fill``
     (a line read without a reason) the R and Z words it needs but does not write are added.
     Adds the edits to ``edits``; (the first hole's bottom, where the block leaves the tool, the
     Z and R words now in effect), mm. Where ``cmd`` or a goal is not known a word is kept."""
     starts, ends, values = words
     scale, places, retract, repeats = how
-    cycle_z, r_cmd = sticky
+    cycle_z, r_cmd, il = sticky
 
     def write(i: int, base: float, want: float) -> float:
         """Word ``i`` as the increment from ``base`` to ``want``; its value (mm) written."""
@@ -428,16 +433,16 @@ def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, chang
         for i in range(2)
     ]
     if starts[3] >= 0:
-        r_cmd = write(3, cmd[2], r_goal)
+        r_cmd = write(3, il, r_goal)
     else:
-        r_cmd = add("R", cmd[2], r_goal, r_cmd)
-    level = cmd[2] + r_cmd  # the R plane reached
+        r_cmd = add("R", il, r_goal, r_cmd)
+    level = il + r_cmd  # the R plane reached
     if starts[2] >= 0:
         cycle_z = write(2, level, goal[2])
     else:
         cycle_z = add("Z", level, goal[2], cycle_z)
     hole = [cmd[0] + step[0], cmd[1] + step[1], level + cycle_z]
-    clear = level if retract == "G99" else max(cmd[2], level)
+    clear = level if retract == "G99" else max(il, level)
     end = [cmd[0] + repeats * step[0], cmd[1] + repeats * step[1], clear]
     return hole, end, cycle_z, r_cmd
 
@@ -500,12 +505,20 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     # R under G99, the higher of the previous end and R under G98
     g99 = moves.g99[block]
     end[:, 2] = np.where(cycle, np.where(np.isnan(r_mm), np.nan, r_cmd), written[:, 2])
-    carried = np.flatnonzero((cycle & ~g99 & ~np.isnan(r_mm)) | ~(cycle | wrote[:, 2])).tolist()
-    if carried:  # those that depend on the previous end: one by one
+    starts_run = moves.first_cycle[block]
+    carried = (cycle & ~g99 & ~np.isnan(r_mm)) | ~(cycle | wrote[:, 2]) | starts_run
+    if carried.any():  # those that depend on the previous end (or set the initial level)
         z, r, hole = end[:, 2].tolist(), r_cmd.tolist(), cycle.tolist()
-        for k in carried:
+        run_start, high = starts_run.tolist(), (~g99 & ~np.isnan(r_mm)).tolist()
+        for k in np.flatnonzero(carried).tolist():
             before = z[k - 1] if k else walk.cmd[2]
-            z[k] = max(before, r[k]) if hole[k] else before
+            if not hole[k]:
+                z[k] = before
+                continue
+            if run_start[k]:
+                walk.il = before
+            if high[k]:
+                z[k] = max(walk.il, r[k])
         end[:, 2] = z
     changed = np.flatnonzero(corrected[block])
     if len(changed):  # a cycle reaches its hole bottom, a straight move its end
