@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import re
+import subprocess
 
 import numpy as np
 import pytest
@@ -175,3 +176,25 @@ def test_realworld_reasons(realworld, tmp_path):
         "skipped",
     ]
     assert "Subprog" in rows[-2]["reason"] or any("Subprog" in r["reason"] for r in rows)
+
+
+@pytest.mark.parametrize("case", sorted(k for k, v in CASES.items() if v[0][0].startswith("gcode")))
+def test_realworld_gcode_through_rs274(realworld, tmp_path, rs274, case):
+    """LinuxCNC's interpreter runs every rewritten G-code program as it runs the original: the
+    same sequence of canonical commands (only their numbers differ) and the same ending (a few
+    of these programs stop at a tool the interpreter's table lacks, or a missing subroutine)."""
+    names, options, _ = CASES[case]
+    cell = write_cell(tmp_path, base_data={11: (1200, -300, 700, 30, 0, 0)})
+    program = realworld / names[0]
+    out = tmp_path / program.name
+    assert main(["rewrite", str(program), "--cell", str(cell), "-o", str(out), *options]) == 0
+    runs = []
+    for path in (program, out):
+        run = subprocess.run(
+            [rs274, "-g", str(path)], capture_output=True, text=True, timeout=60, check=False
+        )
+        commands = [line.split("N.....")[-1].split("(")[0] for line in run.stdout.splitlines()]
+        error = run.stderr.replace(str(path), "PROGRAM").splitlines()[:2]
+        runs.append((run.returncode, error, commands))
+    assert runs[0] == runs[1]
+    assert len(runs[0][2]) > 5
