@@ -384,9 +384,10 @@ def _added_words(text, edits, spans, goals, sticky, scale, places):
         if float(new_text) * scale != sticky[k - 2]:
             added.append(letter + new_text)
             sticky[k - 2] = float(new_text) * scale
-    lower = bool(added) and _lower_case(text, np.asarray(starts))
-    for word in added:  # each its own edit at the same place, in this order
-        edits.append((max(ends), max(ends), " " + (word.lower() if lower else word)))
+    if added:  # one edit: " Z.. R.." after the line's last position word
+        words = " " + " ".join(added)
+        lower = _lower_case(text, np.asarray(starts))
+        edits.append((max(ends), max(ends), words.lower() if lower else words))
     return sticky[0], sticky[1]
 
 
@@ -529,7 +530,10 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         walk.reached_at.frombytes((block.start + changed).astype(np.int64).tobytes())
     walk.cmd = end[-1].tolist()
     walk.cycle_z, walk.r_cmd = float(cycle_z[-1]), float(r_cmd[-1])
-    # where each edit goes: a word's number, or (an added word) after the line's last word
+    # where each edit goes: a word's number, or (the words added to a line, one edit) after the
+    # line's last word
+    added = edit[:, 4:].copy()  # (n, 2) the Z, R words added to each line
+    edit[:, 4], edit[:, 5] = added.any(axis=1), False
     spans = np.empty((n, 6, 2), np.int64)
     spans[:, :4, 0], spans[:, :4, 1] = moves.word_start[block], moves.word_end[block]
     spans[:, 4:, :] = moves.word_end[block].max(axis=1)[:, None, None]
@@ -537,18 +541,30 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     starts = spans[:, :, 0].ravel()[at]
     order = np.argsort(starts, kind="stable")
     at = at[order]
-    # the new texts in the edits' order, as rows of their cells (NUL-padded on the left), an
-    # added word's letter (and the space before it) in the first two columns
+    # the new texts in the edits' order, as rows of cells (NULs are dropped): a number's cells
+    # end at column 2 + width; added words are " Z" and its cells, then " R" and its cells
     width = max((c.shape[1] for c in cells_of), default=1)
-    rows = np.zeros((len(at), 2 + width), np.uint8)
-    for g, cells in enumerate(cells_of):
-        mine = np.flatnonzero(group[at] == g)
-        rows[mine, rows.shape[1] - cells.shape[1] :] = cells[row[at[mine]]]
-    adds = np.flatnonzero(at % 6 >= 4)
+    rows = np.zeros((len(at), 4 + 2 * width), np.uint8)
+
+    def put(mine: np.ndarray, numbers: np.ndarray, stop: int) -> None:
+        """The cells of the numbers ``numbers`` (flat indices) into ``rows[mine]``, ending at
+        column ``stop``."""
+        for g, cells in enumerate(cells_of):
+            sel = group[numbers] == g
+            rows[mine[sel], stop - cells.shape[1] : stop] = cells[row[numbers[sel]]]
+
+    words = np.flatnonzero(at % 6 < 4)
+    put(words, at[words], 2 + width)
+    adds = np.flatnonzero(at % 6 == 4)
     if len(adds):
-        lines = block.start + at[adds] // 6
-        letters = np.where(at[adds] % 6 == 4, ord("Z"), ord("R"))
-        rows[adds, 0], rows[adds, 1] = ord(" "), letters + 32 * _lower_cases(text, moves, lines)
+        k = at[adds] // 6
+        lower = 32 * _lower_cases(text, moves, block.start + k)
+        for col, letter in enumerate((ord("Z"), ord("R"))):
+            has = added[k, col]
+            mine, stop = adds[has], (col + 1) * (2 + width)
+            rows[mine, stop - width - 2] = ord(" ")
+            rows[mine, stop - width - 1] = letter + lower[has]
+            put(mine, at[mine] + col, stop)
     ends = spans[:, :, 1].ravel()[at]
     return starts[order], ends, *texts_of(rows)
 
