@@ -262,6 +262,21 @@ def test_incremental_chain_after_an_unknown_position_is_reported(tmp_path):
     assert new.splitlines()[1:4] == text.splitlines()[1:4]
 
 
+def test_incremental_cycle_with_a_repeat_count_not_read_keeps_its_start(tmp_path):
+    """A G91 cycle whose L is not read (beyond the repeats checked) is reported, the move that
+    sets its start is not corrected (so its holes are where the program puts them) and what
+    follows it under G91 is not known."""
+    text = (
+        "G21 G90 G0 X250 Y0 Z50\nG91 G81 X1 Y1 Z-50 R-25 L1000000000\nG80 G0 X5\n"
+        "G90 G0 X10 Y10 Z10\n"
+    )
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert [r.status for r in rows] == ["skipped", "skipped", "skipped", "corrected"]
+    assert "sets the start of the G91 cycle at line 2" in rows[0].reason
+    assert "more than 10000 repeats" in rows[1].reason and "not known" in rows[2].reason
+    assert new.splitlines()[:3] == text.splitlines()[:3]
+
+
 # ---------------------------------------------------------------- G-code: modal canned cycles
 
 

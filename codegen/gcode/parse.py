@@ -134,6 +134,7 @@ _WCS = frozenset(("55", "56", "57", "58", "59", "59.1", "59.2", "59.3"))
 _G_NAMES = {float(g): g for g in (str(i) for i in range(100))}
 _new_word = tuple.__new__  # a Word without the NamedTuple constructor's Python frame
 _NAN3 = (math.nan, math.nan, math.nan)
+MAX_REPEATS = 10_000  # a canned cycle's L beyond this is reported (each hole is checked)
 WORD_LETTERS = "XYZR"  # the words a move keeps, in the order its ``words`` dict lists them
 RESETS = frozenset(("G28", "G30", "G53"))  # moves after which the position is not known
 _F_INCREMENTAL, _F_CYCLE, _F_RESETS, _F_G99, _F_FIRST = 1, 2, 4, 8, 16  # ``GcodeMoves`` flags
@@ -220,7 +221,9 @@ class GcodeMoves:
         # one str object per distinct motion and retract: those of the name tables and others
         self._names: dict[str, str] = dict(zip(_NAME_OBJECTS, _NAME_OBJECTS, strict=True))
         self.places = -1  # the most decimals among the X, Y, Z literals of the moves (-1: none)
-        self.repeats: dict[int, int] = {}  # row -> a cycle's L repeat count, where not 1
+        self.repeats: dict[
+            int, int
+        ] = {}  # row -> a cycle's L repeat count where not 1 (0: unknown)
 
     def __len__(self) -> int:
         return len(self.motion)
@@ -987,7 +990,11 @@ class _Reader:
         reason = _expression_reason(exprs, lineno) or s.frame_reason()
         if "L" in words:
             count = words["L"].value
-            if count >= 1 and count == int(count):
+            if count > MAX_REPEATS:
+                reason = reason or (
+                    f"canned cycle L{words['L'].literal}: more than {MAX_REPEATS} repeats, not read"
+                )
+            elif count >= 1 and count == int(count):
                 repeats = int(count)
             else:
                 reason = reason or f"canned cycle L{words['L'].literal}: not a repeat count"
@@ -1014,6 +1021,10 @@ class _Reader:
             reason = reason or "canned cycle without an R plane or Z depth"
         clear = r_level if s.retract == "G99" else max(s.cycle_il, r_level)
         last = [first[i] + (repeats - 1) * step[i] for i in range(2)]
+        if "L" in exprs or ("L" in words and repeats == 1 and words["L"].value != 1):
+            repeats = 0  # not known: under G91 neither is where its holes end
+            if s.incremental:
+                last = [math.nan, math.nan]
         if repeats != 1:
             self.moves.repeats[len(self.moves)] = repeats
         move = (lineno, column, "G" + s.motion, target, move_words)

@@ -139,16 +139,17 @@ def _repeated_holes(moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Op
     todo = [i for i in repeated if rows.status[i] != CORRECTED]
     while todo:  # the moves that set their start, and those of a cycle among them
         i = todo.pop()
+        count = f"L{moves.repeats[i]}" if moves.repeats[i] else "an unknown number of times"
         why = (
-            f"sets the start of the G91 cycle at line {moves.line[i]}, repeated "
-            f"L{moves.repeats[i]}, which is not corrected"
+            f"sets the start of the G91 cycle at line {moves.line[i]}, repeated {count}, which is "
+            "not corrected"
         )
         for j in moves.setters[i, :2].tolist():
             if j >= 0 and rows.status[j] == CORRECTED:
                 rows.status[j] = SKIPPED
                 rows.reason[j] = why
                 desired[j] = moves.target[j]
-                if moves.incremental[j] and moves.repeats.get(j, 1) > 1:
+                if moves.incremental[j] and moves.repeats.get(j, 1) != 1:
                     todo.append(j)
 
 
@@ -415,7 +416,7 @@ def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, chang
             edits.append((starts[i], ends[i], new_text))
         return float(new_text) * scale
 
-    fixed_step = repeats > 1 and not changed  # its start is as programmed: so is its step
+    fixed_step = repeats != 1 and not changed  # its start is as programmed: so is its step
 
     def add(letter: str, base: float, want: float, sticky: float) -> float:
         """The word the line needs but does not write, added where it differs from ``sticky``
@@ -444,7 +445,8 @@ def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, chang
         cycle_z = add("Z", level, goal[2], cycle_z)
     hole = [cmd[0] + step[0], cmd[1] + step[1], level + cycle_z]
     clear = level if retract == "G99" else max(il, level)
-    end = [cmd[0] + repeats * step[0], cmd[1] + repeats * step[1], clear]
+    times = repeats if repeats else math.nan  # 0: not known
+    end = [cmd[0] + times * step[0], cmd[1] + times * step[1], clear]
     return hole, end, cycle_z, r_cmd
 
 
