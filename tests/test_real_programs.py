@@ -164,7 +164,11 @@ def corrected(model: GridModel, program_xyz) -> np.ndarray:
 
 
 def gcode_rewrite(text: str, model: GridModel):
-    opts = Options(model=model, base_data={}, robot_T_program=T_PROGRAM, decimals=3)
+    """The rewritten text and its report rows; positions left uncorrected are kept and reported
+    (allow_partial: these tests look at each position's outcome)."""
+    opts = Options(
+        model=model, base_data={}, robot_T_program=T_PROGRAM, decimals=3, allow_partial=True
+    )
     result = rewrite_gcode("p.ngc", text, opts)
     return result.texts["p.ngc"], list(result.rows)
 
