@@ -26,6 +26,7 @@ from pathlib import Path
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import (
     COORDINATE_MAX,
+    OUTSIDE_WORDS,
     add_abc,
     add_policy,
     add_status,
@@ -93,12 +94,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="fixed-point iterations of P' = P + e(P') (default: 1 = seed Eq. 14)",
     )
     parser.add_argument(
-        "--outside",
-        choices=["error", "clamp"],
-        default="error",
-        help="points outside the grid box: refuse (default) or use the nearest cell and flag",
-    )
-    parser.add_argument(
         "--max-correction",
         type=number("mm", 0, COORDINATE_MAX, above=True),
         default=MAX_CORRECTION_MM,
@@ -144,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
         method=args.method,
         power=args.power,
         iterations=args.iterations,
-        outside=args.outside,
+        outside=OUTSIDE_WORDS[args.outside],
         max_correction_mm=args.max_correction,
     )
     request = CorrectRequest(

@@ -36,7 +36,13 @@ import sys
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import COORDINATE_MAX, add_policy, add_table_format, number
+from accugrid.codegen.cli_options import (
+    COORDINATE_MAX,
+    OUTSIDE_WORDS,
+    add_policy,
+    add_table_format,
+    number,
+)
 from accugrid.codegen.dialects import dialect_of
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.rewrite_job import RewriteRequest, rewrite_job
@@ -178,6 +184,7 @@ def run(args: argparse.Namespace) -> int:
             decimals=args.decimals,
             strict=args.strict,
             allow_partial=args.allow_partial,
+            outside=OUTSIDE_WORDS[args.outside],
             base=args.base,
             trust_calls=args.trust_calls,
             ignore_external_axes=args.ignore_external_axes,
