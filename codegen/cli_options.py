@@ -107,20 +107,25 @@ class _Deprecated(argparse.Action):
         self.new, self.convert, self.old_values = new, convert, old_values
 
     def __call__(self, parser, namespace, values, option_string=None):
+        said = f"{option_string} {_words(values)}"
         if self.old_values is None:
-            said, instead = option_string, self.new
             values = values if self.convert is None else self.convert(values)
+            instead = f"{self.new} {_words(values)}"
         elif values in self.old_values:
-            said, instead = (
-                f"{option_string} {values}",
-                f"{option_string} {self.old_values[values]}",
-            )
             values = self.old_values[values]
+            instead = f"{option_string} {values}"
         else:
             setattr(namespace, self.dest, values)
             return
         print(f"{parser.prog}: warning: {said} is deprecated, use {instead}", file=sys.stderr)
         setattr(namespace, self.dest, values)
+
+
+def _words(value: object) -> str:
+    """An option's value as typed: numbers as %g, lists space-separated."""
+    if isinstance(value, list | tuple):
+        return " ".join(_words(v) for v in value)
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def add_deprecated(

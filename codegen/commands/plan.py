@@ -182,7 +182,7 @@ def _common(parser: argparse.ArgumentParser) -> None:
         type=number("%", 1, 100, whole=True),
         default=20,
         metavar="P",
-        help="speed of the first PTP, percent of maximum (default: 20)",
+        help="speed of the first PTP, %% of maximum (default: 20)",
     )
     parser.add_argument(
         "--speed",
@@ -194,7 +194,7 @@ def _common(parser: argparse.ArgumentParser) -> None:
     add_deprecated(
         parser,
         "--vel",
-        "--speed MM_S (mm/s)",
+        "--speed",
         "speed",
         convert=lambda m_s: 1000.0 * m_s,
         type=number("m/s", 0, 2, above=True),

@@ -103,7 +103,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=number("MiB", 0, 1e6, above=True),
         default=MAX_BYTES / 2**20,
         metavar="MiB",
-        help=f"refuse program files larger than this (default {MAX_BYTES // 2**20})",
+        help=f"refuse program files larger than this, MiB (default: {MAX_BYTES // 2**20})",
     )
     parser.add_argument("--header", action="store_true", help="add the accugrid comment header")
     parser.add_argument(
@@ -132,8 +132,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=number("mm", 0, COORDINATE_MAX, above=True),
         default=DEFAULT_TOLERANCE_MM,
         metavar="MM",
-        help="hole position tolerance: warn when rounding to the written decimals leaves more "
-        f"than a tenth of it (default: {DEFAULT_TOLERANCE_MM:g})",
+        help="hole position tolerance, mm: warn when rounding to the written decimals leaves "
+        f"more than a tenth of it (default: {DEFAULT_TOLERANCE_MM:g})",
     )
 
 

@@ -4,7 +4,7 @@ step whose compensated error meets the tolerance, then validate it (Tables 4-5, 
 For every step, each centre's cube is modelled from its 8 vertices (IDW, seed Eq. 12-13), its 9
 test points (GB/T 12642 / ISO 9283 positions plus the seed's P6-P9) are corrected (Eq. 14), and
 the remaining error r = target - reached is summarised over all centres per axis: max, min and
-standard deviation (Table 4; max/min are the mean over repeat rounds of each round's max/min,
+standard deviation (Table 4; max/min are the mean over the repeats of each repeat's max/min,
 the seed's rule). Cubic curves of max and min against the step give each axis's threshold step
 (where a curve leaves +-tolerance, Fig. 12). The chosen step is the largest tested step within
 every threshold whose measured max/min lie in the band and whose standard deviation is
@@ -104,7 +104,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=number("mm", 0, COORDINATE_MAX, above=True),
         default=DEFAULT_TOLERANCE_MM,
         metavar="MM",
-        help=f"accuracy requirement +-MM per axis (default: {DEFAULT_TOLERANCE_MM})",
+        help=f"accuracy requirement +-MM per axis, mm (default: {DEFAULT_TOLERANCE_MM})",
     )
     parser.add_argument(
         "--std-fraction",
@@ -132,7 +132,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--validation-step",
         type=number("mm", 0, COORDINATE_MAX, above=True),
         metavar="MM",
-        help="in simulation, validate a grid at this step instead of the chosen one "
+        help="in simulation, validate a grid at this step, mm, instead of the chosen one "
         "(e.g. 200 to compare with the seed's Table 5)",
     )
     parser.add_argument(
