@@ -26,7 +26,7 @@ accugrid correct examples/wing_panel_robot.csv --grid out/grid_200mm.csv \
 # Table 4, the chosen step, Table 5, Fig. 12 and a report in out/study/.
 accugrid plan experiment --centre D 1700 0 1500 --steps 20:380:120 --repeats 3 \
     -o out/plan --force
-accugrid study --simulate kr210-paper --centre D 1700 0 1500 --steps 20:380:120 --repeats 3 \
+accugrid study --robot kr210-paper --centre D 1700 0 1500 --steps 20:380:120 --repeats 3 \
     --region 1500 1900 -200 200 1300 1700 --validation-points 50 -o out/study --force
 
 # Pre-flight rewrite of programs a CAM system wrote (examples/cam_drill.*): only the numbers of
@@ -40,7 +40,7 @@ accugrid rewrite examples/cam_drill.ngc --cell examples/cell.yaml \
     --allow-partial
 diff examples/cam_drill.dat out/rewrite/cam_drill.dat || true
 
-# Model-based calibration (issue 13) on kr210-realistic (seed Table 1 errors + compliance under
+# Model-based calibration on kr210-realistic (seed Table 1 errors + compliance under
 # gravity + reducer harmonics): 60 D-optimal poses tilted up to 25 deg (CSV skeleton + KRL
 # measurement program) -> a simulated tracker session at those poses, 3 repeats, with the joints
 # the controller logs -> the calibrated model (DH errors, TCP, A2/A3 compliance, the reducer

@@ -67,9 +67,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_abc(parser, "with --model: orientation of points without a,b,c, reference for i,j,k axes")
     add_tool(
         parser,
-        "with --model: the tool whose tip is to land (the drill as taught), x y z mm a b c deg, "
-        "on the controller and the calibrated arm (default: the SMR the model was measured "
-        "with: its identification.controller_tool and identified TCP)",
+        "with --model: the tool whose tip is to land (the drill as taught), on the controller "
+        "and the calibrated arm",
+        "the SMR the model was measured with: its identification.controller_tool and "
+        "identified TCP",
     )
     add_policy(parser, "points")
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="CSV to write")

@@ -6,7 +6,7 @@
   cube        one cube's vertices C1..C8 and test points P1..P9 (GB/T 12642-2001 / ISO 9283:1998
               test points plus the seed's P6..P9, seed Sec. 4.3), --repeats times.
   experiment  the seed's step experiment (Sec. 4.2, 5): for every centre and step, the cube's 8
-              vertices and 9 test points, --repeats rounds each (default: seed Table 3 centres
+              vertices and 9 test points, --repeats times each (default: seed Table 3 centres
               D-H, steps 20..500 mm every 60, 5 repeats, A B C = 0 90 0).
   identify    --count poses for `accugrid identify`: from --candidates random positions in
               --region at orientations within --tilt deg of --abc, reachable in the Status with
