@@ -25,7 +25,9 @@ the hole; |A5| below ``configuration.singular_a5`` is a warning. The KUKA Status
 cell's; else, with a model, the one it corrected in (``Corrector``: the grid's measurement
 Status, or the first hole's IK default); else the first pose's IK solution; it stays the same
 for the whole program unless ``configuration.allow_change`` lets a hole that cannot reach it
-take its own. The jobs run this check on a background thread (``build_program(...,
+take its own. The joint angles of every pose (the IK solution each pose is written with) are
+kept (``Program.joints``): each dialect derives its own configuration words from them (KUKA
+Status/Turn, ABB confdata). The jobs run this check on a background thread (``build_program(...,
 background=True)``) while they write what needs only the positions; ``Program.wait`` joins it,
 ``Program.kuka_words`` hands out the Status and Turn of holes its IK blocks have reached.
 """
@@ -94,6 +96,8 @@ class Program:
     warnings: list[str]
     corrected: bool
     checking: IKCheck | None = field(default=None, repr=False, compare=False)
+    joints: np.ndarray | None = field(default=None, repr=False)  # (N, S, 6) rad, robot axes of
+    # each pose, S = 4 stages, or 3 when RET is the APP position; None until ``wait``
 
     def __len__(self) -> int:
         return len(self.positions)
@@ -122,10 +126,16 @@ class Program:
         then ``configuration`` is set and its warnings follow the correction's; raises the
         check's InputError (an unreachable hole, a branch jump)."""
         if self.checking is not None:
-            configuration, warnings = self.checking.result()  # raises again if waited again
-            self.configuration, self.checking = configuration, None
+            configuration, warnings, joints = self.checking.result()  # raises again if waited
+            self.configuration, self.joints, self.checking = configuration, joints, None
             self.warnings = self.warnings + warnings
         return self
+
+    def joint_angles(self, lo: int = 0, hi: int | None = None) -> np.ndarray:
+        """Joint angles (hi - lo, 4, 6) rad of holes lo..hi-1, stage order ``STAGES``: the IK
+        solution each pose is written with (after ``wait``)."""
+        q = self.wait().joints[lo:hi]
+        return q if q.shape[1] == 4 else np.concatenate([q, q[:, :1]], axis=1)
 
     def largest_correction(self) -> tuple[float, int | None]:
         """(length mm, hole index) of the largest correction; (0, None) for no holes."""
@@ -167,10 +177,10 @@ class Program:
 
 class IKCheck:
     """A program's IK check (``_configuration``) on a background thread: ``result()`` waits for
-    it, (Configuration, warnings) or its exception raised in the caller's thread; ``early``
-    hands out Status and Turn of holes its blocks have reached."""
+    it, (Configuration, warnings, joint angles) or its exception raised in the caller's thread;
+    ``early`` hands out Status and Turn of holes its blocks have reached."""
 
-    def __init__(self, check: Callable[[_Progress], tuple[Configuration, list[str]]]) -> None:
+    def __init__(self, check: Callable[[_Progress], tuple]) -> None:
         self._outcome: tuple | BaseException | None = None
         self._progress = _Progress()
         self._thread = threading.Thread(target=self._run, args=(check,), name="accugrid-ik")
@@ -184,7 +194,7 @@ class IKCheck:
         finally:
             self._progress.close()
 
-    def result(self) -> tuple[Configuration, list[str]]:
+    def result(self) -> tuple[Configuration, list[str], np.ndarray]:
         self._thread.join()
         if isinstance(self._outcome, BaseException):
             raise self._outcome
@@ -283,11 +293,11 @@ def build_program(
     positions = _nominal(cell, points.xyz, axis, depth)
     positions += rows_times(correction, base_rot)[:, None, :]  # e in the BASE frame
 
-    def check(progress: _Progress | None = None) -> tuple[Configuration, list[str]]:
-        pose_status, turn, ik_warnings = _configuration(
+    def check(progress: _Progress | None = None) -> tuple[Configuration, list[str], np.ndarray]:
+        pose_status, turn, ik_warnings, q = _configuration(
             points, cell, robot, positions, rotations, status, progress
         )
-        return Configuration.from_kuka(pose_status, turn), ik_warnings
+        return Configuration.from_kuka(pose_status, turn), ik_warnings, q
 
     program = Program(
         cell=cell,
@@ -303,7 +313,7 @@ def build_program(
         checking=IKCheck(check) if background else None,
     )
     if not background:
-        program.configuration, ik_warnings = check()
+        program.configuration, ik_warnings, program.joints = check()
         program.warnings = warnings + ik_warnings
     return program
 
@@ -457,13 +467,14 @@ def _configuration(
     rotations: np.ndarray,
     status: int | None,
     progress: _Progress | None = None,
-) -> tuple[np.ndarray, np.ndarray, list[str]]:
+) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray]:
     """IK of every pose (positions (N, 4, 3) mm and rotations (N, 3, 3), BASE frame) in KUKA
-    ``status`` (None: the first pose's IK default): Status and Turn (N, 4) per pose and the
-    warnings. ``progress``: told of the IK blocks as they are done."""
+    ``status`` (None: the first pose's IK default): Status and Turn (N, 4) per pose, the
+    warnings and the joint angles (N, S, 6) rad (S: the stages solved, 3 when RET is APP).
+    ``progress``: told of the IK blocks as they are done."""
     n = len(points)
     if n == 0:
-        return np.zeros((0, 4), int), np.zeros((0, 4), int), []
+        return np.zeros((0, 4), int), np.zeros((0, 4), int), [], np.zeros((0, 4, 6))
     stages = len(STAGES) - (1 if cell.drilling.retract_mm == cell.drilling.approach_mm else 0)
 
     def poses(holes) -> np.ndarray:
@@ -522,7 +533,7 @@ def _configuration(
     if stages == 3:  # RET is the APP position
         pose_status = np.concatenate([pose_status, pose_status[:, :1]], axis=1)
         pose_turn = np.concatenate([pose_turn, pose_turn[:, :1]], axis=1)
-    return pose_status, pose_turn, warnings
+    return pose_status, pose_turn, warnings, q
 
 
 def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
