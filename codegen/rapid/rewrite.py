@@ -242,6 +242,7 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
             start = k + 1
     found = RapidPositions(path, [])
     declared: dict[str, list[_Target]] = {}  # lower-case robtarget name -> its targets
+    data: dict[str, str] = {}  # lower-case tooldata / wobjdata name -> its value (masked)
     decl_of: dict[int, str] = {}  # statement -> the robtarget it declares
     for s, (at, stmt) in enumerate(statements):
         _check_brackets(stmt, at, path, where)
@@ -252,6 +253,8 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
         line = where(at + m.start(2))[0]
         if kind in NEVER:
             found.others.append((line, name, f"{kind}: {_WHY_NEVER[kind]}, never corrected"))
+        if kind in ("tooldata", "wobjdata") and m.group(5) is not None:
+            data[name.lower()] = m.group(5)
         if kind != "robtarget":
             continue
         decl_of[s] = name.lower()
@@ -285,6 +288,7 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
         else None
     )
     wobj, tool = section.wobj.lower(), section.tool.lower()
+    unfit = _unfit_frames(data, section)
     for s, (at, stmt) in enumerate(statements):
         line = where(at + len(stmt) - len(stmt.lstrip()))[0]
         assign = _ASSIGN.match(stmt)
@@ -308,6 +312,8 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
                     f"(rapid.wobj {section.wobj}) nor wobj0"
                 )
             frame = 0 if used_wobj == "wobj0" else 1
+            for what in (used_tool.lower(), used_wobj):
+                why = why or (f"{unfit[what]} (line {line})" if what in unfit else "")
             if move[2]:
                 why = why or f"a point of the circular move at line {line}: arcs are not corrected"
             points = [positional[i] for i in move[0] if i < len(positional)]
@@ -385,6 +391,41 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
             target.reason = f"work object {section.wobj} is changed at run time"
     found.targets.sort(key=lambda t: (t.line, t.spans[0][0] if t.spans else 0))
     return found
+
+
+def _unfit_frames(data: dict[str, str], section) -> dict[str, str]:
+    """The cell's tool and work object where the module declares them otherwise than the cell
+    (a stationary tool, a work object the robot holds, another user or object frame): lower-case
+    name -> why its moves are not placed."""
+    out = {}
+    tool, wobj = section.tool.lower(), section.wobj.lower()
+    if data.get(tool, "[TRUE").lstrip(" \t\r\n[").upper().startswith("FALSE"):
+        out[tool] = f"tool {section.tool} is stationary (robhold FALSE): the robot holds the part"
+    value = data.get(wobj)
+    if value is None:
+        return out
+    if value.lstrip(" \t\r\n[").upper().startswith("TRUE"):
+        out[wobj] = f"work object {section.wobj} is held by the robot (robhold TRUE)"
+        return out
+    numbers = [float(n) for n in re.findall(_NUM, value.split(",", 3)[-1])]
+    if len(numbers) != 14:
+        return out
+    frames = []
+    for k in (0, 7):
+        pose = np.eye(4)
+        pose[:3, :3] = _matrices(np.array(numbers[k + 3 : k + 7]))[0]
+        pose[:3, 3] = numbers[k : k + 3]
+        frames.append(pose)
+    robot_T_wobj = frames[0] @ frames[1]
+    if not (
+        np.allclose(robot_T_wobj[:3, 3], section.robot_T_wobj[:3, 3], rtol=0, atol=0.01)
+        and np.allclose(robot_T_wobj[:3, :3], section.robot_T_wobj[:3, :3], rtol=0, atol=1e-6)
+    ):
+        out[wobj] = (
+            f"the module's wobjdata {section.wobj} (user and object frame) is not the cell's base "
+            "frame"
+        )
+    return out
 
 
 def _literal(name, lit, offset, text, where, line=None) -> _Target:
