@@ -1,0 +1,307 @@
+"""ABB RAPID: the generated drilling module (quaternions, confdata against the IK, the module
+frame), the pre-flight rewrite of the real RAPID programs in ../shared/realworld/rapid with a
+constant error field (every changed number checked against the frame maths done here), bad
+input, and the KRL and G-code outputs pinned to what they were before RAPID came in."""
+
+from __future__ import annotations
+
+import hashlib
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import EXAMPLES
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from rewrite_helpers import E_CONST, write_grid
+from scipy.spatial.transform import Rotation
+
+from accugrid.codegen.cli import main
+from accugrid.kinematics.configuration import abb_confdata
+from accugrid.kinematics.robot import load_robot
+
+NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+TARGET = re.compile(
+    rf"CONST robtarget (\w+):=\[\[({NUM}),({NUM}),({NUM})\],\[({NUM}),({NUM}),({NUM}),({NUM})\],"
+    rf"\[({NUM}),({NUM}),({NUM}),({NUM})\],\[9E\+09(?:,9E\+09){{5}}\]\];"
+)
+TOOL = np.eye(4)
+TOOL[2, 3] = 250.0  # examples/cell_irb6700.yaml: tool z 250
+ROBOT_T_WOBJ = np.eye(4)  # examples/cell_irb6700.yaml: base x 2000 y 300 z 1200, a -90 b 0 c 90
+ROBOT_T_WOBJ[:3, :3] = Rotation.from_euler("ZYX", [-90, 0, 90], degrees=True).as_matrix()
+ROBOT_T_WOBJ[:3, 3] = [2000.0, 300.0, 1200.0]
+
+
+def _robtargets(text: str):
+    """name -> (position (3,) mm in the work object, quaternion (4,), confdata (4,) int)."""
+    out = {}
+    for m in TARGET.finditer(text):
+        v = [float(x) for x in m.groups()[1:]]
+        out[m.group(1)] = (np.array(v[:3]), np.array(v[3:7]), np.array(v[7:11], dtype=int))
+    return out
+
+
+@settings(max_examples=8)
+@given(
+    xy=st.lists(
+        st.tuples(st.floats(0, 600), st.floats(150, 450), st.floats(-5, 5), st.floats(-8, 8)),
+        min_size=1,
+        max_size=4,
+    ),
+)
+def test_every_robtarget_has_the_confdata_of_its_ik_solution(tmp_path_factory, xy):
+    tmp = tmp_path_factory.mktemp("rapid")
+    rows = ["id,x,y,z,i,j,k"]
+    for n, (x, y, tilt_x, tilt_y) in enumerate(xy):
+        axis = Rotation.from_euler("xy", [tilt_x, tilt_y], degrees=True).apply([0, 0, -1])
+        rows.append(f"H{n},{x:.3f},{y:.3f},0," + ",".join(f"{a:.6f}" for a in axis))
+    (tmp / "p.csv").write_text("\n".join(rows) + "\n")
+    out = tmp / "JOB.mod"
+    cell = EXAMPLES / "cell_irb6700.yaml"
+    assert main(["rapid", str(tmp / "p.csv"), "--cell", str(cell), "-o", str(out)]) == 0
+    targets = _robtargets(out.read_text())
+    assert len(targets) == 4 * len(xy)
+    names = [f"p{h}_{s}" for h in range(1, len(xy) + 1) for s in ("APP", "CLR", "BOT", "RET")]
+    assert list(targets) == names  # every pose, in program order
+    pos = np.array([targets[n][0] for n in names])
+    quat = np.array([targets[n][1] for n in names])
+    conf = np.array([targets[n][2] for n in names])
+    np.testing.assert_allclose(np.linalg.norm(quat, axis=1), 1.0, rtol=0, atol=1e-9)
+    assert (quat[:, 0] >= 0).all()
+    wobj_T_tcp = np.tile(np.eye(4), (len(names), 1, 1))
+    wobj_T_tcp[:, :3, :3] = Rotation.from_quat(np.roll(quat, -1, axis=1)).as_matrix()
+    wobj_T_tcp[:, :3, 3] = pos
+    poses = ROBOT_T_WOBJ @ wobj_T_tcp
+    robot = load_robot("irb6700").with_tool(TOOL)
+    # the controller's solution in the written confdata reaches the pose ...
+    sol = robot.ik_confdata(poses, conf)
+    assert sol.ok.all(), sol.reason
+    np.testing.assert_allclose(robot.fk(sol.q)[:, :3, 3], poses[:, :3, 3], atol=1e-6)
+    # ... and is the program's IK solution: one Status, the first pose's IK default
+    first = robot.ik(poses[:1])
+    own = robot.ik(poses, status=int(first.status[0]))
+    assert own.ok.all()
+    np.testing.assert_array_equal(abb_confdata(robot, own.q), conf)
+
+
+def test_module_frame_tool_and_work_object():
+    text = (EXAMPLES / "WING.mod").read_bytes().decode("ascii")
+    assert text.startswith("MODULE WING\r\n    ! accugrid ")
+    assert text.rstrip().endswith("ENDMODULE")
+    assert "PERS tooldata tDrill:=[TRUE,[[0.000,0.000,250.000],[1.000000000," in text
+    q = Rotation.from_matrix(ROBOT_T_WOBJ[:3, :3]).as_quat()  # x, y, z, w
+    q = np.roll(q, 1) * np.sign(q[3])
+    wobj = re.search(
+        rf"PERS wobjdata wobjPanel:=\[FALSE,TRUE,\"\",\[\[({NUM}),({NUM}),({NUM})\],"
+        rf"\[({NUM}),({NUM}),({NUM}),({NUM})\]\]",
+        text,
+    )
+    np.testing.assert_allclose([float(v) for v in wobj.groups()], [2000, 300, 1200, *q], atol=1e-9)
+    moves = re.findall(r"^ +(MoveJ|MoveL|WaitTime|SetDO)", text, re.M)
+    assert moves[0] == "SetDO" and moves[-1] == "SetDO"
+    assert moves[1:-1] == ["MoveJ", "MoveL", "MoveL", "WaitTime", "MoveL"] * 72
+
+
+def test_module_name_over_32_characters_is_a_located_error(tmp_path, capsys):
+    cell = tmp_path / "cell.yaml"
+    grid = EXAMPLES / "grid_irb6700_200mm.csv"
+    text = (
+        (EXAMPLES / "cell_irb6700.yaml").read_text().replace(f"grid: {grid.name}", f"grid: {grid}")
+    )
+    cell.write_text(text.replace("module: WING ", "module: " + "M" * 33))
+    points = EXAMPLES / "wing_panel_points.csv"
+    assert main(["rapid", str(points), "--cell", str(cell), "-o", str(tmp_path / "a.mod")]) == 2
+    err = capsys.readouterr().err
+    assert f"{cell}:" in err and "rapid.module" in err and "32" in err
+    cell.write_text(text.replace("  module: WING ", "  # module"))
+    long = tmp_path / ("W" * 33 + ".mod")
+    assert main(["rapid", str(points), "--cell", str(cell), "-o", str(long)]) == 2
+    assert str(long) in capsys.readouterr().err
+    assert not long.exists()
+
+
+# file -> (the cell's rapid.tool and rapid.wobj, the frame its corrected robtargets are written
+# in: "robot" (wobj0) or "base" (the work object, the cell's base); None: nothing can be placed)
+CASES = {
+    "robodk_Program.mod": ("Tool", "Frame2", "robot"),  # Frame2's literal frame is not the base
+    "harshbhatt99_Module1.mod": ("TCPMarker", "WobjWhiteboard", "base"),
+    "juanlopezp_Module1.mod": ("TVentosa", "WO", "robot"),  # MoveJ Target_10 .. \WObj:=wobj0
+    "edgarivanmm_MainModule.modx": ("gripperIvan", "wobjMesa", "robot"),  # moves without \WObj
+    "rparak_Module1.mod": ("tool0", "wobjX", None),  # only Offs(...) operands
+    "mcoffman1_AA_example_script.mod": ("INST_tool", "INST_workobject", None),  # oframe moved
+    "mjkkirschner_test02_001.prg": ("drill", "block", None),  # stationary drill, held block
+    "zwj12_WeldTestModule.mod": ("toolWeldGun", "wobjX", None),  # welding moves, external axes
+    "kangoananya_iGPS_SC_Acc_Exp.mod": ("tool0", "wobjX", None),  # reassigned, custom moves
+    "kangoananya_user.sys": ("tool0", "wobjX", None),  # no robtargets
+    "taeyangshim-stack_user.sys": ("tool0", "wobjX", None),  # joint targets only
+    "bhomaidan1990_currLeft.mod": ("tool0", "wobjX", None),  # arm angle in eax_a, Offs
+}
+BASE = (400.0, -250.0, 300.0, 30.0, 10.0, -20.0)  # the test cell's base (wobj), mm and deg
+
+
+def _cell(folder: Path, tool: str, wobj: str) -> Path:
+    write_grid(folder / "grid.csv", (-6000,) * 3, (6000,) * 3, 3000.0, field="constant")
+    x, y, z, a, b, c = BASE
+    (folder / "cell.yaml").write_text(
+        "robot: irb6700\ngrid: grid.csv\ntool: {number: 1, x: 0, y: 0, z: 250, a: 0, b: 0, c: 0}\n"
+        f"base: {{number: 1, x: {x}, y: {y}, z: {z}, a: {a}, b: {b}, c: {c}}}\n"
+        f"rapid: {{tool: {tool}, wobj: {wobj}}}\n"
+    )
+    return folder / "cell.yaml"
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_realworld_rapid_rewrite_changes_only_the_corrected_numbers(
+    realworld, tmp_path, capsys, name
+):
+    tool, wobj, frame = CASES[name]
+    program = realworld / "rapid" / name
+    cell = _cell(tmp_path, tool, wobj)
+    out = tmp_path / name
+    code = main(["rewrite", str(program), "--cell", str(cell), "-o", str(out)])
+    if frame is None:
+        assert code == 2
+        err = capsys.readouterr().err
+        assert re.search(rf"{re.escape(str(program))}:\d+: ", err), err
+        assert not out.exists()
+        return
+    assert code == 0
+    old, new = program.read_bytes().decode("latin-1"), out.read_bytes().decode("latin-1")
+    old_nums, new_nums = list(re.finditer(NUM, old)), list(re.finditer(NUM, new))
+    assert re.split(NUM, old) == re.split(NUM, new)  # every other byte is the same
+    # x, y, z of every robtarget literal (test's own reading): offset -> axis
+    xyz = {}
+    for m in re.finditer(rf"\[\s*\[\s*({NUM})\s*,\s*({NUM})\s*,\s*({NUM})\s*\]\s*,\s*\[", old):
+        for axis in range(3):
+            xyz[m.start(axis + 1)] = (axis, m)
+    rot = Rotation.from_euler("ZYX", BASE[3:], degrees=True).as_matrix()
+    e = E_CONST if frame == "robot" else rot.T @ E_CONST  # the correction in the program frame
+    changed = 0
+    for a, b in zip(old_nums, new_nums, strict=True):
+        if a.group() == b.group():
+            continue
+        changed += 1
+        axis, literal = xyz[a.start()]  # only robtarget positions change
+        places = max(
+            max(len(g.partition(".")[2]) if "e" not in g.lower() else 6 for g in literal.groups()),
+            2,
+        )
+        assert len(b.group().partition(".")[2]) >= 2
+        assert abs(float(b.group()) - (float(a.group()) + e[axis])) <= 0.5 * 10**-places + 1e-9
+    assert changed >= 3
+
+
+def _rewrite(tmp_path, text: str, capsys, *extra: str) -> tuple[int, str, str]:
+    program = tmp_path / "t.mod"
+    program.write_bytes(text.encode("latin-1"))
+    cell = _cell(tmp_path, "tDrill", "wobjPanel")
+    out = tmp_path / "out.mod"
+    report = tmp_path / "r.csv"
+    code = main(
+        [
+            "rewrite",
+            str(program),
+            "--cell",
+            str(cell),
+            "-o",
+            str(out),
+            "--report",
+            str(report),
+            *extra,
+        ]
+    )
+    err = capsys.readouterr().err
+    return code, err, report.read_text() if report.exists() else ""
+
+
+HEAD = "MODULE T\r\n"
+GOOD = "[[1,2,3],[1,0,0,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+MOVE = "tDrill\\WObj:=wobjPanel;\r\n"
+
+
+def test_unbalanced_brackets_are_a_located_error(tmp_path, capsys):
+    text = HEAD + f"CONST robtarget p1:={GOOD};\r\nCONST robtarget p2:=[[1,2,3],[1,0,0,0];\r\n"
+    code, err, _ = _rewrite(tmp_path, text + "ENDMODULE\r\n", capsys)
+    assert code == 2 and "t.mod:3:" in err and "unbalanced" in err
+    assert not (tmp_path / "out.mod").exists()
+
+
+def test_non_unit_quaternion_external_axes_and_offs_are_reported(tmp_path, capsys):
+    text = (
+        HEAD
+        + f"CONST robtarget pBadQ:={GOOD.replace('[1,0,0,0]', '[0.9,0,0,0]')};\r\n"
+        + f"CONST robtarget pExt:={GOOD.replace('[9E+09,', '[250,', 1)};\r\n"
+        + f"CONST robtarget pOff:={GOOD};\r\nCONST robtarget pOk:={GOOD};\r\nPROC main()\r\n"
+        + f"MoveL pBadQ, v10, fine, {MOVE}MoveL pExt, v10, fine, {MOVE}"
+        + f"MoveL Offs(pOff,0,0,10), v10, fine, {MOVE}MoveL pOk, v10, fine, {MOVE}"
+        + "ENDPROC\r\nENDMODULE\r\n"
+    )
+    code, err, report = _rewrite(tmp_path, text, capsys)
+    assert code == 0, err
+    rows = {line.split(",")[2]: line for line in report.splitlines()[1:]}
+    assert "not a unit quaternion" in rows["pBadQ"]
+    assert "external axis eax_a" in rows["pExt"]
+    assert "Offs" in rows["pOff"] and ",skipped," in rows["pOff"]
+    assert ",corrected," in rows["pOk"]
+
+
+# sha256 of the KRL and G-code outputs before the RAPID plug-in (main at bc49327), made with:
+#   accugrid krl examples/wing_panel_points.csv --cell examples/cell.yaml -o krl
+#   accugrid gcode examples/wing_panel_points.csv --cell examples/cell.yaml -o wing_panel.ngc
+#   accugrid rewrite examples/cam_drill.src examples/cam_drill.dat --cell examples/cell.yaml \
+#       -o rewrite --report rewrite/krl_report.csv
+#   accugrid rewrite examples/cam_drill.ngc --cell examples/cell.yaml -o rewrite/cam_drill.ngc \
+#       --report rewrite/ngc_report.csv
+#   sha256sum krl/* wing_panel.ngc rewrite/*
+PINNED = {
+    "krl/WING_PANEL.dat": "45d6e2727b93b052793d17db918f866e58d9b89f09d0d444b78b506553d5e94f",
+    "krl/WING_PANEL.src": "ba27ddf7d0ef0f738c30da3999b33343d692e4ac3badd92acbfb1acfc7392d9c",
+    "wing_panel.ngc": "fd65f52aa8f4cd8564d18a51a991446e1db4eb86bb52e2eb4b8d7dfa1a310823",
+    "rewrite/cam_drill.src": "906b0c5c3880571c3acdfdcbd6b1852cae3046505cbda35f93c4ea7b93d8d49f",
+    "rewrite/cam_drill.dat": "9fe57ed90bf612f68861400420d399b00b75bb951a725fdd9de327c77ec13159",
+    "rewrite/cam_drill.ngc": "79ac0550bb923f083ee2f1e49aacef68ff3d9a18b7b4f531d2f3055dea60595c",
+    "rewrite/krl_report.csv": "56889fee0467db34a037dcf8e252860327b4d867f07f8f4a48cb539852cf547c",
+    "rewrite/ngc_report.csv": "e35796954cca6576affa285c3216397cf06cda05122eb0c2626fbb9c217cf4e1",
+}
+
+
+def test_krl_and_gcode_outputs_are_byte_identical_to_before_rapid(tmp_path):
+    points, cell = str(EXAMPLES / "wing_panel_points.csv"), str(EXAMPLES / "cell.yaml")
+    cam = EXAMPLES / "cam_drill"
+    assert main(["krl", points, "--cell", cell, "-o", str(tmp_path / "krl")]) == 0
+    assert main(["gcode", points, "--cell", cell, "-o", str(tmp_path / "wing_panel.ngc")]) == 0
+    (tmp_path / "rewrite").mkdir()
+    assert (
+        main(
+            [
+                "rewrite",
+                f"{cam}.src",
+                f"{cam}.dat",
+                "--cell",
+                cell,
+                "-o",
+                str(tmp_path / "rewrite"),
+                "--report",
+                str(tmp_path / "rewrite/krl_report.csv"),
+            ]
+        )
+        == 0
+    )
+    assert (
+        main(
+            [
+                "rewrite",
+                f"{cam}.ngc",
+                "--cell",
+                cell,
+                "-o",
+                str(tmp_path / "rewrite/cam_drill.ngc"),
+                "--report",
+                str(tmp_path / "rewrite/ngc_report.csv"),
+            ]
+        )
+        == 0
+    )
+    digests = {name: hashlib.sha256((tmp_path / name).read_bytes()).hexdigest() for name in PINNED}
+    assert digests == PINNED
