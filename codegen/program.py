@@ -97,7 +97,8 @@ class Program:
     corrected: bool
     checking: IKCheck | None = field(default=None, repr=False, compare=False)
     joints: np.ndarray | None = field(default=None, repr=False)  # (N, S, 6) rad, robot axes of
-    # each pose, S = 4 stages, or 3 when RET is the APP position; None until ``wait``
+    # each pose, S = 4 stages, or 3 when RET is the APP position; set by ``wait`` when built
+    # with ``keep_joints``
 
     def __len__(self) -> int:
         return len(self.positions)
@@ -133,8 +134,11 @@ class Program:
 
     def joint_angles(self, lo: int = 0, hi: int | None = None) -> np.ndarray:
         """Joint angles (hi - lo, 4, 6) rad of holes lo..hi-1, stage order ``STAGES``: the IK
-        solution each pose is written with (after ``wait``)."""
-        q = self.wait().joints[lo:hi]
+        solution each pose is written with (a program built with ``keep_joints``)."""
+        joints = self.wait().joints
+        if joints is None:
+            raise ValueError("the program was built without keep_joints")
+        q = joints[lo:hi]
         return q if q.shape[1] == 4 else np.concatenate([q, q[:, :1]], axis=1)
 
     def largest_correction(self) -> tuple[float, int | None]:
@@ -194,7 +198,7 @@ class IKCheck:
         finally:
             self._progress.close()
 
-    def result(self) -> tuple[Configuration, list[str], np.ndarray]:
+    def result(self) -> tuple[Configuration, list[str], np.ndarray | None]:
         self._thread.join()
         if isinstance(self._outcome, BaseException):
             raise self._outcome
@@ -258,13 +262,16 @@ def build_program(
     grid: GridModel | None = None,
     model: Robot | None = None,
     background: bool = False,
+    keep_joints: bool = False,
 ) -> Program:
     """Corrected, IK-checked program for ``points`` in ``cell`` (``grid``: None for no
     correction; ``robot`` with the cell's tool; ``model``: a calibrated Robot, then ``grid`` is
     the measured grid whose residual after the model is added, or None). ``background``: the
     IK check (Status, Turn, reach, limits, branch jumps, the wrist singularity) runs on a
     background thread while the caller goes on with what needs only the positions (a G-code
-    program, the .src of a KRL job); ``Program.wait()`` joins it."""
+    program, the .src of a KRL job); ``Program.wait()`` joins it. ``keep_joints``: keep the
+    joint angles of every pose (``Program.joints``, 144 bytes a hole: only for a dialect whose
+    configuration words need more than KUKA Status/Turn, e.g. ABB confdata)."""
     n = len(points)
     if n == 0:
         raise InputError("no drilling points in the file", points.path)
@@ -293,11 +300,11 @@ def build_program(
     positions = _nominal(cell, points.xyz, axis, depth)
     positions += rows_times(correction, base_rot)[:, None, :]  # e in the BASE frame
 
-    def check(progress: _Progress | None = None) -> tuple[Configuration, list[str], np.ndarray]:
+    def check(progress: _Progress | None = None) -> tuple:
         pose_status, turn, ik_warnings, q = _configuration(
             points, cell, robot, positions, rotations, status, progress
         )
-        return Configuration.from_kuka(pose_status, turn), ik_warnings, q
+        return Configuration.from_kuka(pose_status, turn), ik_warnings, q if keep_joints else None
 
     program = Program(
         cell=cell,

@@ -37,7 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     check_targets([out], [args.points, args.cell] + ([args.grid] if args.grid else []), args.force)
-    job = prepare(args, NAME)
+    job = prepare(args, NAME, joints=True)  # confdata comes from the joint angles
     files = plugin_of(NAME).render(job.program, job.header, args.templates, out)
     job = dataclasses.replace(job, files=files)
     written = write_files(job.files, job.inputs, args.force, ready=job.finish)

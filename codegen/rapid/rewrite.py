@@ -186,36 +186,31 @@ def _check_brackets(stmt: str, start: int, path: str, where) -> None:
             )
 
 
-def _arguments(stmt: str, at: int) -> tuple[list[tuple[int, str]], dict[str, str]]:
-    """The positional arguments (offset in ``stmt``, text stripped) of an instruction whose
-    arguments start at ``at``, and its optional ones (lower-case name -> value)."""
-    positional, optional = [], {}
-    depth, start = 0, at
-    pieces = []
-    for k in range(at, len(stmt) + 1):
-        ch = stmt[k] if k < len(stmt) else ","
+def _split_top(text: str, separator: str, at: int = 0) -> list[tuple[int, str]]:
+    """``text[at:]`` cut at each ``separator`` outside brackets: (offset in ``text``, piece)."""
+    pieces, depth, start = [], 0, at
+    for k in range(at, len(text)):
+        ch = text[k]
         if ch in "[(":
             depth += 1
         elif ch in "])":
             depth -= 1
-        elif ch == "," and depth == 0:
-            pieces.append((start, stmt[start:k]))
+        elif ch == separator and depth == 0:
+            pieces.append((start, text[start:k]))
             start = k + 1
-    for offset, piece in pieces:
-        parts, depth, cut = [], 0, 0
-        for k, ch in enumerate(piece):
-            if ch in "[(":
-                depth += 1
-            elif ch in "])":
-                depth -= 1
-            elif ch == "\\" and depth == 0:
-                parts.append((cut, piece[cut:k]))
-                cut = k + 1
-        parts.append((cut, piece[cut:]))
-        (first_at, first), *switches = parts
+    pieces.append((start, text[start:]))
+    return pieces
+
+
+def _arguments(stmt: str, at: int) -> tuple[list[tuple[int, str]], dict[str, str]]:
+    """The positional arguments (offset in ``stmt``, text stripped) of an instruction whose
+    arguments start at ``at``, and its optional ones (``\\WObj:=w``: lower-case name -> value)."""
+    positional, optional = [], {}
+    for offset, piece in _split_top(stmt, ",", at):
+        (_, first), *switches = _split_top(piece, "\\")
         if first.strip():
             lead = len(first) - len(first.lstrip())
-            positional.append((offset + first_at + lead, first.strip()))
+            positional.append((offset + lead, first.strip()))
         for _, switch in switches:
             name, _, value = switch.partition(":=")
             optional[name.strip().lower()] = value.strip()
@@ -228,18 +223,17 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
     ``ignore_external_axes``: external axes in use do not keep a robtarget from correction."""
     check_text(text, path)
     masked = _masked(text)
-    newlines = [k for k, ch in enumerate(text) if ch == "\n"]
+    newlines = [m.start() for m in re.finditer("\n", text)]
 
     def where(offset: int) -> tuple[int, int]:
         line = bisect.bisect_left(newlines, offset)
         return line + 1, offset - (newlines[line - 1] if line else -1)
 
     statements, start = [], 0
-    for k, ch in enumerate(masked):
-        if ch == ";":
-            if masked[start:k].strip():
-                statements.append((start, masked[start:k]))
-            start = k + 1
+    for end in (m.start() for m in re.finditer(";", masked)):
+        if masked[start:end].strip():
+            statements.append((start, masked[start:end]))
+        start = end + 1
     found = RapidPositions(path, [])
     declared: dict[str, list[_Target]] = {}  # lower-case robtarget name -> its targets
     data: dict[str, str] = {}  # lower-case tooldata / wobjdata name -> its value (masked)
@@ -281,7 +275,7 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
         re.compile(
             r"(?<![.\w])("
             + "|".join(map(re.escape, sorted(declared, key=len, reverse=True)))
-            + r")\b(\s*\{\s*(\d+)?[^}]*\})?",
+            + r")\b(?:\s*\{\s*(\d+)\s*\}|\s*\{[^}]*\})?",  # p, p{3} (element 3), p{i}
             re.I,
         )
         if declared
@@ -335,11 +329,7 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
             key = ref.group(1).lower()
             if decl_of.get(s) == key and ref.start() < stmt.find(":="):
                 continue  # the name in its own declaration
-            index = (
-                int(ref.group(3))
-                if ref.group(3) and ref.group(2).strip()[1:-1].strip().isdigit()
-                else None
-            )
+            index = int(ref.group(2)) if ref.group(2) else None  # None: any element
             before = stmt[: ref.start()]
             offset_fn = _OFFSET_BEFORE.search(before)
             arg = next((a for o, a in positional if o == ref.start()), None) if move else None
