@@ -30,7 +30,14 @@ class Dialect:
     name: str
     title: str
     suffixes: tuple[str, ...]
-    plugin: str | None = None  # module holding PLUGIN (a DialectPlugin), imported when used
+    plugin: str | None = None  # module holding PLUGIN (a DialectPlugin)
+
+    @classmethod
+    def of_plugin(cls, module: str) -> Dialect:
+        """The entry of the plug-in in ``module`` (a light module: its name, title and suffixes
+        are read here, at start-up)."""
+        plugin = importlib.import_module(module).PLUGIN
+        return cls(plugin.name, plugin.title, tuple(plugin.suffixes), module)
 
 
 DIALECTS = {
@@ -40,15 +47,12 @@ DIALECTS = {
         "RS274NGC / ISO G-code",
         (".ngc", ".nc", ".gcode", ".gc", ".cnc", ".tap", ".iso", ".mpf", ".spf", ".eia"),
     ),
-    "rapid": Dialect(
-        "rapid", "ABB RAPID", (".mod", ".modx", ".prg", ".sys"), "accugrid.codegen.rapid.plugin"
-    ),
+    "rapid": Dialect.of_plugin("accugrid.codegen.rapid.plugin"),
 }
 
 
 def plugin_of(name: str) -> DialectPlugin | None:
-    """The plug-in of dialect ``name`` (its module imported now), None for a dialect not yet
-    written as one."""
+    """The plug-in of dialect ``name``, None for a dialect not yet written as one."""
     module = DIALECTS[name].plugin
     return None if module is None else importlib.import_module(module).PLUGIN
 

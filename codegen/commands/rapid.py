@@ -19,8 +19,10 @@ import dataclasses
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cell import load_cell
 from accugrid.codegen.dialects import plugin_of
 from accugrid.codegen.job import add_job_arguments, prepare, summary
+from accugrid.codegen.rapid.emit import module_name
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -37,8 +39,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     check_targets([out], [args.points, args.cell] + ([args.grid] if args.grid else []), args.force)
-    job = prepare(args, NAME, joints=True)  # confdata comes from the joint angles
-    files = plugin_of(NAME).render(job.program, job.header, args.templates, out)
+    cell = load_cell(args.cell)
+    plugin = plugin_of(NAME)
+    module_name(cell.dialects[NAME].module, out)  # a name RAPID refuses: before any work
+    job = prepare(args, NAME, cell=cell, joints=True)  # confdata comes from the joint angles
+    files = plugin.render(job.program, job.header, args.templates, out)
     job = dataclasses.replace(job, files=files)
     written = write_files(job.files, job.inputs, args.force, ready=job.finish)
     print(summary(job, written))

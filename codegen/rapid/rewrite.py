@@ -102,6 +102,7 @@ _DECL = re.compile(
 )
 _ASSIGN = re.compile(r"\s*([A-Za-z]\w*)\s*(?:\{[^}]*\})?\s*(?:\.\s*\w+\s*)*:=")
 _INSTR = re.compile(r"\s*([A-Za-z]\w*)")
+_NAME = re.compile(r"(?<![.\w])([A-Za-z]\w*)(?:\s*\{\s*(\d+)\s*\}|\s*\{[^}]*\})?")  # p{3}: 3
 _OFFSET_BEFORE = re.compile(r"\b(Offs|RelTool)\s*\(\s*\Z", re.I)
 _MODULE_LINE = re.compile(r"^[ \t]*MODULE\b.*$", re.I | re.M)
 
@@ -168,6 +169,10 @@ def _masked(text: str) -> str:
 
 
 def _check_brackets(stmt: str, start: int, path: str, where) -> None:
+    """InputError at the first bracket of ``stmt`` (at offset ``start``) that is not closed or
+    closes none."""
+    if stmt.count("[") == stmt.count("]") and stmt.count("(") == stmt.count(")"):
+        return  # the usual statement: no walk over its characters
     depth = {"[": 0, "(": 0}
     pairs = {"]": "[", ")": "("}
     for k, ch in enumerate(stmt):
@@ -188,6 +193,12 @@ def _check_brackets(stmt: str, start: int, path: str, where) -> None:
 
 def _split_top(text: str, separator: str, at: int = 0) -> list[tuple[int, str]]:
     """``text[at:]`` cut at each ``separator`` outside brackets: (offset in ``text``, piece)."""
+    if "[" not in text and "(" not in text:  # the usual move: no walk over its characters
+        pieces, start = [], at
+        for piece in text[at:].split(separator):
+            pieces.append((start, piece))
+            start += len(piece) + 1
+        return pieces
     pieces, depth, start = [], 0, at
     for k in range(at, len(text)):
         ch = text[k]
@@ -271,16 +282,6 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
     uses: dict[str, list[_Use]] = {n: [] for n in declared}
     assigned: set[str] = set()
     moves: list[tuple[int, list[str], bool]] = []  # line, lower-case names or "#k", circular
-    names = (
-        re.compile(
-            r"(?<![.\w])("
-            + "|".join(map(re.escape, sorted(declared, key=len, reverse=True)))
-            + r")\b(?:\s*\{\s*(\d+)\s*\}|\s*\{[^}]*\})?",  # p, p{3} (element 3), p{i}
-            re.I,
-        )
-        if declared
-        else None
-    )
     wobj, tool = section.wobj.lower(), section.tool.lower()
     unfit = _unfit_frames(data, section)
     for s, (at, stmt) in enumerate(statements):
@@ -323,10 +324,12 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
                     found.targets.append(target)
         elif instr and instr.group(1).lower() == "moveabsj":
             found.others.append((line, "MoveAbsJ", "joint target of MoveAbsJ, never corrected"))
-        if names is None or s in decl_of and not stmt.count(":="):
+        if not declared or s in decl_of and not stmt.count(":="):
             continue
-        for ref in names.finditer(stmt):
+        for ref in _NAME.finditer(stmt):
             key = ref.group(1).lower()
+            if key not in declared:
+                continue
             if decl_of.get(s) == key and ref.start() < stmt.find(":="):
                 continue  # the name in its own declaration
             index = int(ref.group(2)) if ref.group(2) else None  # None: any element
