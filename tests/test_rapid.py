@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import hashlib
 import re
+from decimal import Decimal
 from pathlib import Path
 
 import numpy as np
@@ -183,10 +184,7 @@ def test_realworld_rapid_rewrite_changes_only_the_corrected_numbers(
             continue
         changed += 1
         axis, literal = xyz[a.start()]  # only robtarget positions change
-        places = max(
-            max(len(g.partition(".")[2]) if "e" not in g.lower() else 6 for g in literal.groups()),
-            2,
-        )
+        places = max(max(map(_places, literal.groups())), 2)
         assert len(b.group().partition(".")[2]) >= 2
         assert abs(float(b.group()) - (float(a.group()) + e[axis])) <= 0.5 * 10**-places + 1e-9
     assert changed >= 3
@@ -305,3 +303,83 @@ def test_krl_and_gcode_outputs_are_byte_identical_to_before_rapid(tmp_path):
     )
     digests = {name: hashlib.sha256((tmp_path / name).read_bytes()).hexdigest() for name in PINNED}
     assert digests == PINNED
+
+
+def _places(literal: str) -> int:
+    """Decimal places a corrected number must keep for the literal it replaces: those written
+    (0.50: 2); for an exponent form 2, the 0.01 mm every correction keeps (DESIGN.md)."""
+    return 2 if "e" in literal.lower() else max(-Decimal(literal).as_tuple().exponent, 0)
+
+
+def _literal_text(value: float, places: int, exponent: bool) -> str:
+    return f"{value:.{places}E}" if exponent else f"{value:.{places}f}"
+
+
+@settings(max_examples=25)
+@given(
+    data=st.lists(
+        st.tuples(
+            st.sampled_from(["CONST", "PERS", "VAR", "TASK PERS", "LOCAL CONST"]),
+            st.integers(1, 2),  # elements (2: an array {2})
+            st.sampled_from(["", " ", "\r\n      ", "\n\t"]),  # spacing inside the aggregate
+            st.integers(0, 5),  # decimals written
+            st.booleans(),  # exponent form (1.25E+02)
+            st.booleans(),  # moved in the cell's work object (else wobj0)
+            st.lists(st.floats(-900, 900), min_size=6, max_size=6),
+        ),
+        min_size=1,
+        max_size=5,
+    ),
+    crlf=st.booleans(),
+)
+def test_rewrite_finds_every_robtarget_in_any_layout(tmp_path_factory, data, crlf):
+    tmp = tmp_path_factory.mktemp("layout")
+    nl = "\r\n" if crlf else "\n"
+    pieces: list[tuple[str, object]] = [(f"MODULE L{nl}  ! Größe: a Latin-1 comment{nl}", None)]
+    moves = []
+    for t, (kind, count, sp, places, exponent, in_wobj, values) in enumerate(data):
+        name = f"p{t}"
+        pieces.append((f"  {kind} robtarget {name}{'{2}' if count == 2 else ''} :={sp}", None))
+        if count == 2:
+            pieces.append(("[", None))
+        for k in range(count):
+            pieces.append((f"[{sp}[", None))
+            for axis in range(3):
+                text = _literal_text(values[3 * k + axis], places, exponent)
+                pieces.append((text, (t, in_wobj)))
+                pieces.append(("," + sp if axis < 2 else "],", None))
+            pieces.append((f"[1,0,0,0],{sp}[0,0,0,0],[9E+09,9E9,9E+09,9e+09,9E+09,9E+09]]", None))
+            pieces.append(("," if k + 1 < count else "", None))
+        pieces.append(("]" if count == 2 else "", None))
+        pieces.append((f";{nl}", None))
+        wobj = "\\WObj:=wobjPanel" if in_wobj else ""
+        for k in range(count):
+            ref = f"{name}{{{k + 1}}}" if count == 2 else name
+            moves.append(f"    MoveL {ref}, v10, fine, tDrill{wobj};{nl}")
+    pieces.append((f"  PROC main(){nl}{''.join(moves)}  ENDPROC{nl}ENDMODULE{nl}", None))
+    text = "".join(p for p, _ in pieces)
+    program = tmp / "layout.mod"
+    program.write_bytes(text.encode("latin-1"))
+    cell = _cell(tmp, "tDrill", "wobjPanel")
+    out = tmp / "out.mod"
+    assert main(["rewrite", str(program), "--cell", str(cell), "-o", str(out)]) == 0
+    new = out.read_bytes().decode("latin-1")
+    rot = Rotation.from_euler("ZYX", BASE[3:], degrees=True).as_matrix()
+    # walk the new text piece by piece: fixed text equal, numbers corrected
+    pos_new, count, axis = 0, 0, 0
+    for piece, what in pieces:
+        if what is None:
+            assert new[pos_new : pos_new + len(piece)] == piece
+            pos_new += len(piece)
+            continue
+        m = re.compile(NUM).match(new, pos_new)
+        t, in_wobj = what
+        e = rot.T @ E_CONST if in_wobj else E_CONST
+        want = float(piece) + e[axis % 3]
+        mine = [p for p, w in pieces if w is not None and w[0] == t]  # the target's literals
+        places = max(max(map(_places, mine)), 2)
+        assert abs(float(m.group()) - want) <= 0.5 * 10**-places + 1e-9, (piece, m.group())
+        pos_new = m.end()
+        axis += 1
+        count += 1
+    assert pos_new == len(new) and count == 3 * sum(d[1] for d in data)
