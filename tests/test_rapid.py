@@ -383,3 +383,22 @@ def test_rewrite_finds_every_robtarget_in_any_layout(tmp_path_factory, data, crl
         axis += 1
         count += 1
     assert pos_new == len(new) and count == 3 * sum(d[1] for d in data)
+
+
+def test_module_is_the_same_in_blocks_and_from_a_template_that_uses_the_lines_whole(
+    tmp_path, monkeypatch
+):
+    points, cell = EXAMPLES / "wing_panel_points.csv", EXAMPLES / "cell_irb6700.yaml"
+    whole = (EXAMPLES / "WING.mod").read_bytes()
+    monkeypatch.setattr("accugrid.codegen.rapid.emit.BLOCK", 5)  # 72 holes: 15 blocks
+    assert main(["rapid", str(points), "--cell", str(cell), "-o", str(tmp_path / "b.mod")]) == 0
+    assert (tmp_path / "b.mod").read_bytes() == whole
+    templates = tmp_path / "templates"
+    templates.mkdir()
+    source = (Path(__file__).parents[1] / "templates/rapid/program.mod.j2").read_text()
+    # a user's copy that tests the lines: they are no longer printed plainly
+    (templates / "program.mod.j2").write_text("{% if hole_lines %}{% endif %}" + source)
+    out = tmp_path / "c.mod"
+    args = ["rapid", str(points), "--cell", str(cell), "--templates", str(templates), "-o"]
+    assert main([*args, str(out)]) == 0
+    assert out.read_bytes() == whole

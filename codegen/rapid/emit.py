@@ -16,6 +16,7 @@ at most 32 characters (``rapid.module``, else the output file's stem): an InputE
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -23,14 +24,21 @@ from scipy.spatial.transform import Rotation
 
 from accugrid.codegen.program import STAGES, Program
 from accugrid.codegen.rapid.names import rapid_name_problem
-from accugrid.codegen.render import environment, render, template_dir
+from accugrid.codegen.render import (
+    environment,
+    printed_plainly,
+    render,
+    render_around,
+    template_dir,
+)
 from accugrid.codegen.textsafe import comment_texts, fixed, fixed_texts
 from accugrid.kinematics.configuration import abb_confdata
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import load_robot
 
-__all__ = ["QUATERNION_DECIMALS", "module_name", "quaternions", "render_rapid"]
+__all__ = ["BLOCK", "QUATERNION_DECIMALS", "module_name", "quaternions", "render_rapid"]
 
+BLOCK = 16384  # holes whose lines are made at a time
 QUATERNION_DECIMALS = 9  # as RobotStudio writes them: the written quaternion is unit to 1e-9
 _UNUSED = ",".join(["9E+09"] * 6)  # external axes a..f not in use
 _NEWLINE = "\r\n"
@@ -62,58 +70,20 @@ def module_name(section_module: str | None, out: Path) -> str:
 
 def render_rapid(
     program: Program, header: list[str], templates=None, out: Path = Path("ACCUGRID.mod")
-) -> dict[Path, str]:
-    """{out: text} of the module; waits for the program's IK check (the confdata needs its
-    joint angles)."""
+) -> dict[Path, Iterator[str]]:
+    """{out: the module's text in pieces}: the frame rendered by Jinja around the robtarget and
+    move lines, which follow in blocks of ``BLOCK`` holes as the pieces are taken (a template
+    that does not print them plainly gets them whole). Waits for the program's IK check (the
+    confdata needs its joint angles)."""
     cell = program.cell
     section = cell.dialects["rapid"]
-    name = module_name(section.module, out)
-    n, places = len(program), section.decimals
-    q = program.joint_angles().reshape(-1, 6)
-    confdata = abb_confdata(load_robot(cell.robot_name), q).reshape(n, 4, 4)
-    quats = quaternions(program.rotations)  # one orientation per hole, every stage
-    names = [f"p{h}_{s}" for h in range(1, n + 1) for s in STAGES]
-    table = np.empty((n * 4, 12), dtype=object)
-    table[:, 0] = names
-    table[:, 1:4] = fixed_texts(program.positions.reshape(-1, 3), places)
-    table[:, 4:8] = np.repeat(fixed_texts(quats, QUATERNION_DECIMALS), 4, axis=0)
-    table[:, 8:12] = fixed_texts(confdata.reshape(-1, 4), 0, distinct=True)
-    target = (
-        "    CONST robtarget %s:=[[%s,%s,%s],[%s,%s,%s,%s],[%s,%s,%s,%s],[" + _UNUSED + "]];"
-    ) + _NEWLINE
-    target_lines = (target * len(table)) % tuple(table.ravel().tolist())
-    move = f"{section.tool}\\WObj:={section.wobj};{_NEWLINE}"
-    hole = (
-        "        ! %s"
-        + _NEWLINE
-        + "        MoveJ %s, vTravel, zTravel, "
-        + move
-        + "        MoveL %s, vApproach, fine, "
-        + move
-        + "        MoveL %s, [%s,500,5000,1000], fine, "
-        + move
-        + "        WaitTime "
-        + fixed(cell.drilling.dwell_s, 3)
-        + ";"
-        + _NEWLINE
-        + "        MoveL %s, vApproach, zTravel, "
-        + move
-    )
-    holes = np.empty((n, 6), dtype=object)
-    holes[:, 0] = comment_texts(program.labels(), prefix="hole ")
-    holes[:, 1:3] = np.array(names, dtype=object).reshape(n, 4)[:, :2]
-    holes[:, 3] = np.array(names, dtype=object).reshape(n, 4)[:, 2]
-    holes[:, 4] = fixed_texts(program.feed_mm_s, places, distinct=True)
-    holes[:, 5] = np.array(names, dtype=object).reshape(n, 4)[:, 3]
-    hole_lines = (hole * n) % tuple(holes.ravel().tolist())
+    places = section.decimals
     flange_T_tool, robot_T_wobj = cell.flange_T_tool, section.robot_T_wobj
     tool_q, wobj_q = quaternions(np.stack([flange_T_tool[:3, :3], robot_T_wobj[:3, :3]]))
     zone = section.zone_mm
     env = environment(template_dir("rapid", templates), newline=_NEWLINE)
-    text = render(
-        env,
-        "program.mod.j2",
-        module=name,
+    context = dict(
+        module=module_name(section.module, out),
         header=header,
         tool=section.tool,
         wobj=section.wobj,
@@ -128,11 +98,100 @@ def render_rapid(
         # zonedata: TCP zone, then orientation, external-axis zones (mm) and angles (deg), the
         # proportions of ABB's predefined z5 .. z200
         zone=",".join(
-            fixed(v, places) for v in (zone, 1.5 * zone, 1.5 * zone, 0.15 * zone, 1.5 * zone)
-        )
-        + ","
-        + fixed(0.15 * zone, places),
-        target_lines=target_lines.removesuffix(_NEWLINE),
-        hole_lines=hole_lines.removesuffix(_NEWLINE),
+            fixed(v, places)
+            for v in (zone, 1.5 * zone, 1.5 * zone, 0.15 * zone, 1.5 * zone, 0.15 * zone)
+        ),
     )
-    return {out: text}
+    robot = load_robot(cell.robot_name)
+    blocks = range(0, len(program), BLOCK)
+    template = "program.mod.j2"
+    if printed_plainly(env, template, "target_lines") and printed_plainly(
+        env, template, "hole_lines"
+    ):
+        frame = render_around(env, template, "hole_lines", target_lines=_TARGETS, **context)
+        if len(frame) == 2 and frame[0].count(_TARGETS) == 1:  # each printed once, in order
+            head, between = frame[0].split(_TARGETS)
+            return {out: _pieces(program, robot, places, head, between, frame[1])}
+    targets = "".join(_target_lines(program, robot, lo, places) for lo in blocks)
+    holes = "".join(_hole_lines(program, lo, places) for lo in blocks)
+    text = render(
+        env,
+        template,
+        target_lines=targets.removesuffix(_NEWLINE),
+        hole_lines=holes.removesuffix(_NEWLINE),
+        **context,
+    )
+    return {out: iter([text])}
+
+
+_TARGETS = "\x00accugrid targets\x00"  # where the robtargets go (no program text holds a NUL)
+
+
+def _pieces(program, robot, places, head, between, after) -> Iterator[str]:
+    """The module: ``head``, the robtarget lines, ``between``, the move lines, ``after`` (the
+    last line of each list without its line end: the template's own follows)."""
+    blocks = range(0, len(program), BLOCK)
+    yield head
+    yield from _without_last_newline(_target_lines(program, robot, lo, places) for lo in blocks)
+    yield between
+    yield from _without_last_newline(_hole_lines(program, lo, places) for lo in blocks)
+    yield after
+
+
+def _without_last_newline(pieces: Iterator[str]) -> Iterator[str]:
+    previous = None
+    for piece in pieces:
+        if previous is not None:
+            yield previous
+        previous = piece
+    if previous is not None:
+        yield previous.removesuffix(_NEWLINE)
+
+
+def _names(lo: int, hi: int) -> np.ndarray:
+    """Robtarget names (hi - lo, 4) of holes lo..hi-1: ``p<n>_<stage>``, n from 1."""
+    return np.array(
+        [f"p{h}_{s}" for h in range(lo + 1, hi + 1) for s in STAGES], dtype=object
+    ).reshape(-1, 4)
+
+
+def _target_lines(program: Program, robot, lo: int, places: int) -> str:
+    """The CONST robtarget lines of holes lo..lo+BLOCK-1, four per hole."""
+    hi = min(lo + BLOCK, len(program))
+    q = program.joint_angles(lo, hi).reshape(-1, 6)
+    table = np.empty(((hi - lo) * 4, 12), dtype=object)
+    table[:, 0] = _names(lo, hi).ravel()
+    table[:, 1:4] = fixed_texts(program.positions[lo:hi].reshape(-1, 3), places)
+    quats = quaternions(program.rotations[lo:hi])  # one orientation per hole, every stage
+    table[:, 4:8] = np.repeat(fixed_texts(quats, QUATERNION_DECIMALS), 4, axis=0)
+    table[:, 8:12] = fixed_texts(abb_confdata(robot, q), 0, distinct=True)
+    return (_TARGET * len(table)) % tuple(table.ravel().tolist())
+
+
+_TARGET = (
+    "    CONST robtarget %s:=[[%s,%s,%s],[%s,%s,%s,%s],[%s,%s,%s,%s],[" + _UNUSED + "]];"
+) + _NEWLINE
+
+
+def _hole_lines(program: Program, lo: int, places: int) -> str:
+    """The moves of holes lo..lo+BLOCK-1: a comment, MoveJ, MoveL, MoveL at the feed,
+    WaitTime, MoveL."""
+    cell = program.cell
+    section = cell.dialects["rapid"]
+    hi = min(lo + BLOCK, len(program))
+    move = f"{section.tool}\\WObj:={section.wobj};{_NEWLINE}"
+    hole = (
+        f"        ! %s{_NEWLINE}"
+        f"        MoveJ %s, vTravel, zTravel, {move}"
+        f"        MoveL %s, vApproach, fine, {move}"
+        f"        MoveL %s, [%s,500,5000,1000], fine, {move}"
+        f"        WaitTime {fixed(cell.drilling.dwell_s, 3)};{_NEWLINE}"
+        f"        MoveL %s, vApproach, zTravel, {move}"
+    )
+    names = _names(lo, hi)
+    table = np.empty((hi - lo, 6), dtype=object)
+    table[:, 0] = comment_texts(program.labels(lo, hi), prefix="hole ")
+    table[:, 1:4] = names[:, :3]
+    table[:, 4] = fixed_texts(program.feed_mm_s[lo:hi], places, distinct=True)
+    table[:, 5] = names[:, 3]
+    return (hole * (hi - lo)) % tuple(table.ravel().tolist())
