@@ -85,16 +85,18 @@ _ROBTARGET = re.compile(
     r"\[\s*" + r"\s*,\s*".join([_group(3), _group(4), _group(4), _group(6)]) + r"\s*\]"
 )
 _MASK = re.compile(r'"[^"\r\n]*"|![^\r\n]*')
+# on the lower-cased text: a cheap look at the first letter, then the word start, then the words
 _SET_ASIDE = re.compile(
+    r"(?=[%bcdefilmprtuw])(?<!\w)(?:"
     r"%%%[\s\S]*?%%%"
-    r"|\bMODULE\s+\w+\s*(?:\([^)]*\))?"
-    r"|\b(?:LOCAL\s+)?(?:PROC|TRAP|FUNC\s+\w+)\s+\w+\s*\([^)]*\)"
-    r"|\bRECORD\b[\s\S]*?\bENDRECORD\b"
-    r"|\b(?:IF|ELSEIF|WHILE|FOR)\b[^;]*?\b(?:THEN|DO)\b"
-    r"|\bTEST\b[^\r\n;]*|\bCASE\b[^:;]*:|\bDEFAULT\s*:"
-    r"|\bERROR\b(?:\s*\([^)]*\))?"
-    r"|\b(?:ENDPROC|ENDFUNC|ENDTRAP|ENDMODULE|ENDIF|ENDFOR|ENDWHILE|ENDTEST|ELSE|BACKWARD|UNDO)\b",
-    re.I,
+    r"|module\s+\w+\s*(?:\([^)]*\))?"
+    r"|(?:local\s+)?(?:proc|trap|func\s+\w+)\s+\w+\s*\([^)]*\)"
+    r"|record\b[\s\S]*?\bendrecord\b"
+    r"|(?:if|elseif|while|for)\b[^;]*?\b(?:then|do)\b"
+    r"|test\b[^\r\n;]*|case\b[^:;]*:|default\s*:"
+    r"|error\b(?:\s*\([^)]*\))?"
+    r"|(?:endproc|endfunc|endtrap|endmodule|endif|endfor|endwhile|endtest|else|backward|undo)\b"
+    r")"
 )
 _DECL = re.compile(
     r"\s*(?:(?:LOCAL|TASK)\s+)*(CONST|PERS|VAR)\s+(\w+)\s+(\w+)\s*(\{[^}]*\})?\s*(?::=([\s\S]*))?\Z",
@@ -165,7 +167,12 @@ def _masked(text: str) -> str:
     """``text`` with comments and strings blanked, then everything that is no statement set
     aside (the same length: offsets stay)."""
     out = _MASK.sub(lambda m: " " * len(m.group()), text)
-    return _SET_ASIDE.sub(lambda m: re.sub(r"[^\r\n]", " ", m.group()), out)
+    pieces, last = [], 0
+    for m in _SET_ASIDE.finditer(out.lower()):  # latin-1 lower-cases one character to one
+        pieces += (out[last : m.start()], re.sub(r"[^\r\n]", " ", m.group()))
+        last = m.end()
+    pieces.append(out[last:])
+    return "".join(pieces)
 
 
 def _check_brackets(stmt: str, start: int, path: str, where) -> None:
