@@ -402,3 +402,22 @@ def test_module_is_the_same_in_blocks_and_from_a_template_that_uses_the_lines_wh
     args = ["rapid", str(points), "--cell", str(cell), "--templates", str(templates), "-o"]
     assert main([*args, str(out)]) == 0
     assert out.read_bytes() == whole
+
+
+def test_header_goes_below_the_module_line_of_a_prg(tmp_path, capsys):
+    text = (
+        "%%%\r\n  VERSION:1\r\n  LANGUAGE:ENGLISH\r\n%%%\r\n\r\nMODULE T\r\n"
+        f"  CONST robtarget p1:={GOOD};\r\n  PROC main()\r\n    MoveL p1, v10, fine, {MOVE}"
+        "  ENDPROC\r\nENDMODULE\r\n"
+    )
+    program = tmp_path / "t.prg"
+    program.write_bytes(text.encode("latin-1"))
+    cell = _cell(tmp_path, "tDrill", "wobjPanel")
+    out = tmp_path / "out.prg"
+    assert main(["rewrite", str(program), "--cell", str(cell), "-o", str(out), "--header"]) == 0
+    lines = out.read_bytes().decode("latin-1").split("\r\n")
+    assert lines[:6] == text.split("\r\n")[:6]  # %%% block and MODULE line as they were
+    header = [line for line in lines[6:] if line.startswith("    ! ")]
+    assert lines[6 : 6 + len(header)] == header and header[0].startswith("    ! accugrid ")
+    assert any("largest correction" in line for line in header)
+    assert "\n" not in out.read_bytes().decode("latin-1").replace("\r\n", "")
