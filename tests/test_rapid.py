@@ -421,3 +421,11 @@ def test_header_goes_below_the_module_line_of_a_prg(tmp_path, capsys):
     assert lines[6 : 6 + len(header)] == header and header[0].startswith("    ! accugrid ")
     assert any("largest correction" in line for line in header)
     assert "\n" not in out.read_bytes().decode("latin-1").replace("\r\n", "")
+
+
+def test_the_rewritten_example_is_what_rewrite_writes(tmp_path):
+    out = tmp_path / "cam_drill.mod"
+    cell = EXAMPLES / "cell_irb6700.yaml"
+    args = ["rewrite", str(EXAMPLES / "cam_drill.mod"), "--cell", str(cell), "--header"]
+    assert main([*args, "-o", str(out)]) == 0
+    assert out.read_bytes() == (EXAMPLES / "cam_drill_rewritten.mod").read_bytes()
