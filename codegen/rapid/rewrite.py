@@ -112,13 +112,16 @@ _MODULE_LINE = re.compile(r"^[ \t]*MODULE\b.*$", re.I | re.M)
 @dataclass
 class _Target:
     """One robtarget: ``name`` (``p``, ``p{3}``, ``inline MoveL``), its statement's ``line``,
-    the offsets (start, end) of its 17 numbers, their values, its frame (0 robot, 1 the
-    cell's work object, -1 none yet) and the reason it is left as it is ("" when placeable)."""
+    the offsets (start, end) of its x, y, z numbers, x, y, z and the quaternion [q1..q4] as
+    written (``values``, 7), why its own numbers keep it from correction (``own``), its frame
+    (0 robot, 1 the cell's work object, -1 none yet) and the reason it is left as it is (""
+    when placeable)."""
 
     name: str
     line: int
     spans: list[tuple[int, int]]
     values: list[float]
+    own: str = ""
     frame: int = -1
     reason: str = ""
 
@@ -284,7 +287,9 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
         array = m.group(4) is not None
         for j, lit in enumerate(literals, 1):
             targets.append(
-                _literal(f"{name}{{{j}}}" if array else name, lit, value_at, text, where)
+                _literal(
+                    f"{name}{{{j}}}" if array else name, lit, value_at, where, ignore_external_axes
+                )
             )
     uses: dict[str, list[_Use]] = {n: [] for n in declared}
     assigned: set[str] = set()
@@ -324,7 +329,12 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
                 lit = _ROBTARGET.fullmatch(arg)
                 if lit:
                     target = _literal(
-                        f"inline {instr.group(1)}", lit, at + offset, text, where, line
+                        f"inline {instr.group(1)}",
+                        lit,
+                        at + offset,
+                        where,
+                        ignore_external_axes,
+                        line,
                     )
                     target.frame, target.reason = (frame, why) if why else (frame, "")
                     moves[-1][1].append(f"#{len(found.targets)}")
@@ -385,8 +395,7 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
                 target.frame = mine[0].frame
         found.targets.extend(targets)
     for target in found.targets:
-        if not target.reason:
-            target.reason = _own_reason(target, ignore_external_axes)
+        target.reason = target.reason or target.own
         if not target.reason and target.frame == 1 and wobj in assigned:
             target.reason = f"work object {section.wobj} is changed at run time"
     found.targets.sort(key=lambda t: (t.line, t.spans[0][0] if t.spans else 0))
@@ -428,19 +437,21 @@ def _unfit_frames(data: dict[str, str], section) -> dict[str, str]:
     return out
 
 
-def _literal(name, lit, offset, text, where, line=None) -> _Target:
-    spans = [(offset + lit.start(g), offset + lit.end(g)) for g in range(1, 18)]
-    values = [float(text[a:b]) for a, b in spans]
-    return _Target(name, line or where(offset + lit.start())[0], spans, values)
+def _literal(name, lit, offset, where, ignore_external_axes, line=None) -> _Target:
+    """The robtarget of the match ``lit`` of ``_ROBTARGET`` in text at ``offset``."""
+    spans = [(offset + lit.start(g), offset + lit.end(g)) for g in (1, 2, 3)]
+    numbers = [float(v) for v in lit.groups()]
+    own = _own_reason(numbers, ignore_external_axes)
+    return _Target(name, line or where(offset + lit.start())[0], spans, numbers[:7], own)
 
 
-def _own_reason(target: _Target, ignore_external_axes: bool) -> str:
-    """Why a robtarget's own numbers keep it from being corrected ("" when nothing does)."""
-    q = np.array(target.values[3:7])
+def _own_reason(numbers: list[float], ignore_external_axes: bool) -> str:
+    """Why a robtarget's own 17 numbers keep it from being corrected ("" when nothing does)."""
+    q = np.array(numbers[3:7])
     norm = float(np.linalg.norm(q))
     if abs(norm - 1.0) > QUATERNION_TOL:
         return f"quaternion of length {norm:.6f}, not a unit quaternion: no valid orientation"
-    ext = target.values[11:17]
+    ext = numbers[11:17]
     used = [k for k, v in enumerate(ext) if abs(v) < UNUSED_AXIS]
     if used and not ignore_external_axes:
         k = used[0]
