@@ -534,7 +534,7 @@ def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
         extra = _other_rows(path, found)
         parts += [rows, extra]
         if not rows.count(CORRECTED) and not rows.count(OUTSIDE):
-            _nothing_placed(path, found)
+            _nothing_placed(path, found, rows)
     all_rows = Rows.concat(parts)
     strict_check(all_rows, opts)
     return Result(data, all_rows)
@@ -560,21 +560,21 @@ def _other_rows(path: str, found: RapidPositions) -> Rows:
     )
 
 
-def _nothing_placed(path: str, found: RapidPositions) -> None:
+def _nothing_placed(path: str, found: RapidPositions, rows: Rows) -> None:
+    """InputError at the first robtarget, with the counts by reason: no robtarget of the module
+    was corrected or left outside the grid."""
     if not found.targets:
         what = f"; {len(found.others)} data left as they are" if found.others else ""
         raise InputError(f"no robtarget in this module: nothing to correct{what}", path, 1)
-    first = found.targets[0]
     counts: dict[str, int] = {}
-    for target in found.targets:
-        key = re.sub(r" at line \d+", "", target.reason)
+    for reason in rows.reason:
+        key = re.sub(r" (at )?\(?line \d+\)?", "", reason) or "not corrected"
         counts[key] = counts.get(key, 0) + 1
     summary = "; ".join(f"{c} {r}" for r, c in sorted(counts.items(), key=lambda kv: -kv[1]))
     raise InputError(
-        f"no robtarget can be placed ({len(found.targets)}: {summary}); first {first.name}: "
-        f"{first.reason}",
-        path,
-        first.line,
+        f"no robtarget can be placed ({len(found.targets)}: {summary}); first {rows.name[0]}: "
+        f"{rows.reason[0]}",
+        *rows.where(0),
     )
 
 
