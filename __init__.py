@@ -62,6 +62,7 @@ _API = {
     "Configuration": "accugrid.kinematics.configuration",
     "GridModel": "accugrid.compensation.grid",
     "CorrectionSettings": "accugrid.compensation.settings",
+    "Policy": "accugrid.compensation.policy",
     "Measurements": "accugrid.compensation.measurements",
     "read_measurements": "accugrid.compensation.measurements",
     "Points": "accugrid.codegen.points",

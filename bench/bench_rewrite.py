@@ -44,7 +44,7 @@ def krl_pair(folder: Path, n: int = N) -> list[Path]:
     dat = ["&ACCESS RVP", "DEFDAT big"]
     dat += [
         f"DECL E6POS XP{i}={{X {x:.3f},Y {y:.3f},Z {z:.3f},A -90.000,B 0.000,C 180.000,"
-        f"S 'B010',T 'B000010',E1 0.0,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}}"
+        f"S 'B110',T 'B000010',E1 0.0,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}}"
         for i, (x, y, z) in enumerate(p)
     ]
     src = ["&ACCESS RVP", "DEF big( )", "BAS (#BASE,1)"]

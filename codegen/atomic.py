@@ -55,11 +55,12 @@ PathLike = str | os.PathLike[str]
 class JobFiles:
     """What a command's domain call hands back: the files of the job (path -> text or bytes,
     written together by ``write_files``), the inputs they must never replace, and the lines
-    the command prints once they are written."""
+    the command prints once they are written (``lines`` on stdout, ``warnings`` on stderr)."""
 
     files: dict[PathLike, bytes | str]
     inputs: list[PathLike | None] = field(default_factory=list)
     lines: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
 
 
 def _input_identities(inputs: Iterable[PathLike | None]) -> set[tuple[int, int]]:

@@ -18,6 +18,7 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification, Terms, identify, pose_set
 from accugrid.kinematics.robot import Robot
+from accugrid.kinematics.validity import validity_section
 
 __all__ = ["Calibration", "IdentifyOptions", "calibrate"]
 
@@ -77,6 +78,8 @@ def calibrate(
     )
     source = Path(measurements).name
     summary = identification_summary(result, robot, source, meas.sha256)
+    validated = result.max_mm if result.cross_validation is None else result.cross_validation.max_mm
+    summary["validity"] = validity_section(data.commanded, data.rotations, data.q, validated)
     header = f"accugrid {__version__} identify: {robot.name} calibrated from {source}"
     files = {output: calibrated_yaml(result.robot, summary, header)}
     report = _report(output, robot, result)

@@ -23,6 +23,7 @@ __all__ = [
     "add_abc",
     "add_experiment_arguments",
     "add_harmonics",
+    "add_policy",
     "add_status",
     "add_tool",
     "harmonics_of",
@@ -167,3 +168,21 @@ def parse_centres(items: list[list[str]] | None) -> dict[str, tuple[float, float
             raise InputError(f"--centre {name} given twice")
         centres[name] = point
     return centres
+
+
+def add_policy(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--allow-partial`` and ``--strict``, the job rule of the correction policy
+    (``compensation.policy``) for every command that corrects; ``what`` names its positions."""
+    parser.add_argument(
+        "--allow-partial",
+        action="store_true",
+        help=f"write the job although some {what} cannot be corrected (outside the grid, "
+        "orientation or Status the grid does not hold for, unreachable): they are left as "
+        "they are, counted by reason on stderr and marked (default: refuse the job, exit 2)",
+    )
+    parser.add_argument(
+        "--strict",
+        action="store_true",
+        help=f"with a model: refuse {what} outside the poses it was identified from (region, "
+        "tool tilt, joint ranges) instead of flagging them",
+    )

@@ -5,30 +5,32 @@ driven by the nominal controller in one KUKA Status, takes to P (``compensation.
 iterated to 0.001 mm); with ``--grid`` the grid holds the residual after the model and is added.
 Orientation: a,b,c columns as given; i,j,k drill axes oriented along the axis nearest ``--abc``;
 points without orientation at ``--abc``. The output CSV is the one of ``accugrid correct``.
-Refused (exit 2, nothing written): a point the nominal controller cannot reach in the Status or
-that does not converge, points outside the residual grid (unless --outside clamp), any correction
-longer than --max-correction.
+Tools: without --tool the points are where the SMR the model was measured with is to land (the
+file's identification.controller_tool on the controller, the identified TCP on the arm); with
+--tool they are where that tool's tip (the drill as taught) is to land, on the calibrated arm.
+The verdicts are the correction policy's (``compensation.policy``).
 """
 
 from __future__ import annotations
 
-from collections import defaultdict
+import os
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from accugrid.codegen.atomic import JobFiles
 from accugrid.codegen.corrected import (
     CorrectRequest,
-    Flags,
     check_added_columns,
-    check_outside,
     corrected_file,
+    point_status,
 )
 from accugrid.codegen.header import grid_lines, input_line
 from accugrid.codegen.points import Points, read_points
-from accugrid.compensation.corrector import Corrector
 from accugrid.compensation.model_correction import TOL_MM
+from accugrid.compensation.policy import Policy
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import (
@@ -38,10 +40,13 @@ from accugrid.kinematics.frames import (
     pose_from_xyzabc,
     too_tilted,
 )
-from accugrid.kinematics.robot import load_robot
+from accugrid.kinematics.robot import Robot, load_robot
 from accugrid.kinematics.yamlfile import load_yaml
 
-__all__ = ["controller_tool", "correct_by_model", "point_orientations"]
+if TYPE_CHECKING:
+    from accugrid.kinematics.validity import Validity
+
+__all__ = ["ModelFile", "correct_by_model", "point_orientations", "read_model"]
 
 _LISTED = 5
 
@@ -64,58 +69,77 @@ def point_orientations(points: Points, reference_abc: np.ndarray) -> np.ndarray:
     return matrix_to_abc(orient_along_axes(points.axis, reference))
 
 
-def controller_tool(model: str, tool: list[float] | None) -> np.ndarray | None:
-    """The controller's flange_T_tool (4, 4) mm: ``--tool``, else the ``controller_tool`` the
-    calibrated file records (``identification:``, written by ``accugrid identify``), else None
-    (the model's identified TCP)."""
-    if tool is not None:
-        return pose_from_xyzabc(np.array(tool, dtype=float))
-    if not Path(model).is_file():
-        return None
-    doc = load_yaml(model)
-    if not doc.has("identification", "controller_tool"):
-        return None
-    return pose_from_xyzabc([doc.number("identification", "controller_tool", k) for k in "xyzabc"])
+@dataclass(frozen=True)
+class ModelFile:
+    """A calibrated model as every command reads it: the robot (its ``true_robot()`` the arm,
+    its tool the identified TCP: the SMR it was measured with), where it holds (``validity``,
+    None without a record) and the controller's tool of its measurements (flange_T_tool (4, 4)
+    mm, None when the file does not record it)."""
+
+    path: str
+    robot: Robot
+    validity: Validity | None
+    measured_with: np.ndarray | None
+
+    @property
+    def smr_tools(self) -> tuple[np.ndarray | None, np.ndarray]:
+        """(controller, arm) tools that land the SMR the model was measured with."""
+        return self.measured_with, self.robot.flange_T_tool
+
+
+def read_model(path: str | os.PathLike[str], nominal: Robot | None = None) -> ModelFile:
+    """Load a calibrated robot YAML (or a built-in robot name) once for a job; with
+    ``nominal`` (the cell's robot) InputError unless it is a model of that robot."""
+    from accugrid.kinematics.calibrated import check_same_robot
+    from accugrid.kinematics.validity import Validity
+
+    text = os.fspath(path)
+    robot = load_robot(text)
+    if not hasattr(robot, "true_robot"):
+        raise InputError("a calibrated model must be a DH robot file (accugrid identify)", text)
+    if nominal is not None:
+        check_same_robot(robot, nominal, text)
+    validity, tool = None, None
+    if Path(text).is_file():
+        doc = load_yaml(text)
+        validity = Validity.from_doc(doc)
+        if doc.has("identification", "controller_tool"):
+            keys = ("identification", "controller_tool")
+            tool = pose_from_xyzabc([doc.number(*keys, k) for k in "xyzabc"])
+    return ModelFile(text, robot, validity, tool)
 
 
 def correct_by_model(request: CorrectRequest) -> JobFiles:
     """The ``correct`` job with a model (``correct_points`` dispatches here): the corrected CSV
-    and the printed summary; InputError naming the first point not corrected."""
+    and the printed summary; InputError naming the first point not corrected (unless
+    ``allow_partial``)."""
     settings, model_file = request.settings, request.model
     is_file = Path(model_file).is_file()
-    calibrated = load_robot(model_file)
-    tool = controller_tool(model_file, request.tool)
+    model = read_model(model_file)
+    calibrated = model.robot
+    if request.tool is None:
+        tools = model.smr_tools
+    else:
+        given = pose_from_xyzabc(np.array(request.tool, dtype=float))
+        tools = (given, given)
     points = read_points(request.points)
     check_added_columns(points)
     abc = point_orientations(points, np.array(request.abc, dtype=float))
-    corrector = Corrector.build(
+    policy = Policy.build(
         settings,
         request.grid,
         calibrated,
         request.status,
-        tool,
+        tools,
         request.repeat_tol_mm,
         points.xyz,
         abc,
+        validity=model.validity,
+        **request.limits(),
     )
-    grid, status = corrector.grid, corrector.status
-    flags: Flags = defaultdict(list)
-    if grid is not None:
-        found = corrector.check(points.xyz, abc_to_matrix(abc).reshape(-1, 3, 3))
-        check_outside(points, grid, found.outside, settings.outside, flags)
-        if found.angle is not None:  # the model holds at any orientation: flag, never refuse
-            for i in np.flatnonzero(found.angle > request.orientation_tol_deg):
-                flags[int(i)].append(f"orientation {found.angle[i]:.1f} deg from residual grid")
-    result = corrector.correct(points.xyz, abc)
-    if not result.ok.all():
-        bad = result.failed
-        named = "; ".join(f"{points.label(int(i))}: {result.reason[i]}" for i in bad[:_LISTED])
-        more = f" and {bad.size - _LISTED} more" if bad.size > _LISTED else ""
-        raise InputError(
-            f"{bad.size} point(s) not corrected by model {calibrated.name} in Status {status}: "
-            f"{named}{more}",
-            *points.table.where(int(bad[0])),
-        )
+    grid, status = policy.grid, policy.status
+    own = point_status(points, None)
+    verdict = policy.decide(points.xyz, abc_to_matrix(abc).reshape(-1, 3, 3), status=own)
     sources = [input_line("model", model_file, file_sha256(model_file) if is_file else "-")]
     details = [f"robot {calibrated.name}, KUKA Status {status}"]
     lines = []
@@ -123,9 +147,11 @@ def correct_by_model(request: CorrectRequest) -> JobFiles:
         sources += grid_lines(Path(request.grid).name, grid.source_sha256, grid.step)
         details.append(f"residual grid: method {settings.method}, power {settings.power:g}")
         lines.append(grid.describe().replace("grid       ", "residual   ", 1))
+        lines.append(policy.describe_status())
+    done = verdict.corrected
+    miss = np.nanmax(verdict.numbers.get("miss", [0.0]), initial=0.0)
     lines += [
         f"model      {model_file} ({calibrated.name}), KUKA Status {status}",
-        f"corrected  {len(points)} point(s) in {result.iterations} pass(es), largest miss "
-        f"{np.nanmax(result.miss_mm, initial=0.0):.6f} mm (tolerance {TOL_MM:g})",
+        f"corrected  {int(done.sum())} point(s), largest miss {miss:.6f} mm (tolerance {TOL_MM:g})",
     ]
-    return corrected_file(request, points, result.command, flags, sources, details, lines)
+    return corrected_file(request, points, verdict, sources, details, lines)

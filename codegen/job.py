@@ -6,15 +6,13 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import os
 import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-
 from accugrid.codegen.cell import Cell, load_cell
+from accugrid.codegen.cli_options import add_policy
 from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program import Program, build_program
@@ -81,6 +79,7 @@ def add_job_arguments(parser: argparse.ArgumentParser) -> None:
         help="folder with your copies of the templates (a copy of templates/ or of its "
         "krl/ or gcode/ folder)",
     )
+    add_policy(parser, "holes")
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 
@@ -128,14 +127,12 @@ def prepare(
     points = read_points(args.points)
     grid = None if grid_file is None else GridModel.from_measurements(grid_file)
     robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
-    model = None
-    if model_file is not None:
-        from accugrid.kinematics.calibrated import check_same_robot  # model jobs only
+    model = validity = None
+    if model_file is not None:  # the arm; the tool is the cell's, never the model's TCP
+        from accugrid.codegen.correct_model import read_model  # model jobs only
 
-        model = load_robot(model_file)
-        check_same_robot(model, robot, os.fspath(model_file))
-        if np.array_equal(model.flange_T_tool, np.eye(4)):  # no TCP in the file: the cell's
-            model = model.with_tool(cell.flange_T_tool)
+        found = read_model(model_file, robot)
+        model, validity = found.robot, found.validity
     inputs = [input_line("points", args.points, file_sha256(args.points))]
     inputs.append(input_line("cell", args.cell, cell.sha256))
     details = []
@@ -151,9 +148,21 @@ def prepare(
     closing = [f"holes {len(points)}"]
     if check is not None:
         check(cell, len(points), header_lines(command, inputs, details, 0.0, "", closing))
-    program = build_program(points, cell, robot, grid, model, background=True, keep_joints=joints)
+    program = build_program(
+        points,
+        cell,
+        robot,
+        grid,
+        model,
+        background=True,
+        validity=validity,
+        allow_partial=getattr(args, "allow_partial", False),
+        strict=getattr(args, "strict", False),
+        keep_joints=joints,
+    )
     largest, hole = program.largest_correction()
     where = f" at hole {points.ids[hole]}" if hole is not None else ""
+    closing += program.uncorrected
     header = header_lines(command, inputs, details, largest, where, closing)
     inputs = [Path(args.points), Path(args.cell)] + ([grid_file] if grid_file else [])
     inputs += [model_file] if model_file is not None and model_file.is_file() else []
@@ -165,4 +174,6 @@ def summary(job: Job, written: list[Path]) -> str:
     largest, _ = job.program.largest_correction()
     names = ", ".join(str(p) for p in written[:3]) + (" ..." if len(written) > 3 else "")
     what = "corrected" if job.program.corrected else "uncorrected"
+    if job.program.uncorrected:
+        what += f" but {len(job.program.uncorrected)} (--allow-partial)"
     return f"wrote {names}: {len(job.program)} holes, {what}, largest correction {largest:.3f} mm"

@@ -1,7 +1,7 @@
 """The measurement CSV of a simulated laser-tracker session (``accugrid simulate``): a grid at
-one orientation (id,x,y,z,a,b,c,x_meas,y_meas,z_meas) or a plan's poses with the controller's
-joints (id,x,y,z,a,b,c,s,a1..a6,x_meas,y_meas,z_meas), mm and deg, 4 decimals, a ``#`` comment
-line with the settings first; and seed Fig. 3 of the robot's error field.
+one orientation (id,x,y,z,a,b,c,s,x_meas,y_meas,z_meas; s the KUKA Status) or a plan's poses with
+the controller's joints (id,x,y,z,a,b,c,s,a1..a6,x_meas,y_meas,z_meas), mm and deg, 4 decimals,
+a ``#`` comment line with the settings first; and seed Fig. 3 of the robot's error field.
 """
 
 from __future__ import annotations
@@ -113,8 +113,12 @@ def _measurement_csv(request: SimulateRequest, report: list[str]) -> str:
         f"seed {r.seed}",
         limit=400,
     )
-    lines = [f"# {header}", "id,x,y,z,a,b,c,x_meas,y_meas,z_meas"]
-    abc = ",".join(fixed(v, 4) for v in r.abc)
+    # the Status the grid was measured in, as column s (a grid holds in it only)
+    lines = [
+        f"# {header}",
+        "id,x,y,z,a,b,c" + ("" if status is None else ",s") + ",x_meas,y_meas,z_meas",
+    ]
+    abc = ",".join(fixed(v, 4) for v in r.abc) + ("" if status is None else f",{status}")
     ids = np.repeat(np.arange(1, len(points) + 1), r.repeats)
     for ident, cmd, meas in zip(ids, commanded, measured, strict=True):
         cmd_text = ",".join(fixed(v, 4) for v in cmd)

@@ -15,21 +15,24 @@ weighting over the 8 vertices of a cell jumps where the positions straddle a cel
 the example grid's Y = 0 plane). One vector per hole keeps the axis straight and the hole where
 the grid says. Orientation is not corrected.
 
-With a calibrated model (``correction.model``, ``--model``) the vector is P' - P of
-``compensation.corrector`` at the hole point and its own orientation (the controller's IK with
-the cell's tool in the program's Status, the calibrated arm's FK), plus the grid as the residual
-after the model when one is given.
+With a calibrated model (``correction.model``, ``--model``) the vector is P' - P of the
+correction policy (``compensation.policy``) at the hole point and its own orientation (the
+controller's IK with the cell's tool in the program's Status, the calibrated arm carrying the
+cell's tool), plus the grid as the residual after the model when one is given. The policy also
+decides which holes are not corrected (outside the grid, orientation, Status, ...): the job is
+refused unless ``allow_partial``, then those holes keep e = 0 and are listed in the header.
 
 Every corrected pose goes through IK: unreachable or out-of-limit poses are InputErrors naming
 the hole; |A5| below ``configuration.singular_a5`` is a warning. The KUKA Status/Turn is the
-cell's; else, with a model, the one it corrected in (``Corrector``: the grid's measurement
-Status, or the first hole's IK default); else the first pose's IK solution; it stays the same
-for the whole program unless ``configuration.allow_change`` lets a hole that cannot reach it
-take its own. The joint angles of every pose (the IK solution each pose is written with) are
-kept (``Program.joints``): each dialect derives its own configuration words from them (KUKA
-Status/Turn, ABB confdata). The jobs run this check on a background thread (``build_program(...,
-background=True)``) while they write what needs only the positions; ``Program.wait`` joins it,
-``Program.kuka_words`` hands out the Status and Turn of holes its IK blocks have reached.
+cell's; else, with a grid or a model, the one it corrected in (the grid's measurement Status, or
+the first hole's IK default); else the first pose's IK solution; it stays the same for the whole
+program unless ``configuration.allow_change`` lets a hole that cannot reach it take its own (an
+uncorrected hole only: a correction holds in the Status it was made for). The jobs run this
+check on a background thread (``build_program(..., background=True)``) while they write what
+needs only the positions; ``Program.wait`` joins it, ``Program.kuka_words`` hands out the
+Status and Turn of holes its IK blocks have reached. The joint angles of every pose (the IK
+solution each pose is written with) are kept when a dialect asks (``keep_joints``:
+``Program.joints``): ABB confdata comes from them.
 """
 
 from __future__ import annotations
@@ -45,7 +48,7 @@ from accugrid.codegen.cell import Cell
 from accugrid.codegen.points import Points
 from accugrid.codegen.textsafe import fixed_texts
 from accugrid.compensation.grid import GridModel
-from accugrid.compensation.settings import GRID_ORIENTATION_TOL_DEG
+from accugrid.compensation.policy import singular_a5_deg
 from accugrid.kinematics.blocks import run_blocks
 from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.errors import InputError
@@ -62,7 +65,6 @@ from accugrid.kinematics.frames import (
 )
 from accugrid.kinematics.model import RobotModel
 from accugrid.kinematics.robot import Robot
-from accugrid.kinematics.units import mm_text
 
 __all__ = [
     "IK_BLOCK",
@@ -99,6 +101,7 @@ class Program:
     joints: np.ndarray | None = field(default=None, repr=False)  # (N, S, 6) rad, robot axes of
     # each pose, S = 4 stages, or 3 when RET is the APP position; set by ``wait`` when built
     # with ``keep_joints``
+    uncorrected: list[str] = field(default_factory=list)  # header lines: holes left as they are
 
     def __len__(self) -> int:
         return len(self.positions)
@@ -262,11 +265,16 @@ def build_program(
     grid: GridModel | None = None,
     model: Robot | None = None,
     background: bool = False,
+    validity=None,
+    allow_partial: bool = False,
+    strict: bool = False,
     keep_joints: bool = False,
 ) -> Program:
     """Corrected, IK-checked program for ``points`` in ``cell`` (``grid``: None for no
     correction; ``robot`` with the cell's tool; ``model``: a calibrated Robot, then ``grid`` is
-    the measured grid whose residual after the model is added, or None). ``background``: the
+    the measured grid whose residual after the model is added, or None; ``validity``: where the
+    model holds (``kinematics.validity``); ``allow_partial``, ``strict``: the policy's job rule,
+    ``compensation.policy``). ``background``: the
     IK check (Status, Turn, reach, limits, branch jumps, the wrist singularity) runs on a
     background thread while the caller goes on with what needs only the positions (a G-code
     program, the .src of a KRL job); ``Program.wait()`` joins it. ``keep_joints``: keep the
@@ -286,23 +294,31 @@ def build_program(
     base_rot = cell.robot_T_base[:3, :3]
     holes_robot = transform_points(cell.robot_T_base, points.xyz)
     warnings: list[str] = []
+    marks: list[str] = []
     status = cell.configuration.status
-    if model is not None:  # the robot-frame rotations whole only here: freed before the IK
-        correction, warnings, status = _model_correction(
-            points, cell, model, grid, holes_robot, times_stack(base_rot, rotations)
-        )
-    elif grid is None:
+    if model is None and grid is None:
         correction = np.zeros((n, 3))
-    else:
-        correction, warnings = _correction(
-            points, cell, grid, holes_robot, times_stack(base_rot, rotations)
+    else:  # the robot-frame rotations whole only here: freed before the IK
+        correction, warnings, status, marks = _correct(
+            points,
+            cell,
+            robot,
+            grid,
+            model,
+            validity,
+            holes_robot,
+            times_stack(base_rot, rotations),
+            allow_partial,
+            strict,
         )
     positions = _nominal(cell, points.xyz, axis, depth)
     positions += rows_times(correction, base_rot)[:, None, :]  # e in the BASE frame
 
+    corrected_in = status if model is not None or grid is not None else None
+
     def check(progress: _Progress | None = None) -> tuple:
         pose_status, turn, ik_warnings, q = _configuration(
-            points, cell, robot, positions, rotations, status, progress
+            points, cell, robot, positions, rotations, status, progress, corrected_in, correction
         )
         return Configuration.from_kuka(pose_status, turn), ik_warnings, q if keep_joints else None
 
@@ -318,6 +334,7 @@ def build_program(
         warnings=warnings,
         corrected=grid is not None or model is not None,
         checking=IKCheck(check) if background else None,
+        uncorrected=marks,
     )
     if not background:
         program.configuration, ik_warnings, program.joints = check()
@@ -374,96 +391,57 @@ def _rotations(points: Points, cell: Cell) -> np.ndarray:
     return out
 
 
-def _correction(
-    points: Points, cell: Cell, grid: GridModel, holes_robot: np.ndarray, rotations: np.ndarray
-) -> tuple[np.ndarray, list[str]]:
-    """e (N, 3) robot frame at every hole and the orientation warnings; InputError naming holes
-    outside the grid or with a correction above the safety limit. rotations (N, 3, 3) robot
-    frame."""
-    found = grid.check(holes_robot, cell.correction, rotations=rotations)
-    if found.outside.size:
-        outside = found.outside
-        named = "; ".join(points.label(int(i)) for i in outside[:_LISTED])
-        more = f" and {outside.size - _LISTED} more" if outside.size > _LISTED else ""
-        raise InputError(
-            f"{outside.size} hole(s) outside the grid box {mm_text(grid.origin, 1)}.."
-            f"{mm_text(grid.upper, 1)} mm (robot frame): {named}{more}",
-            *points.table.where(int(outside[0])),
-        )
-    if found.too_long.size:
-        worst = int(np.argmax(found.length))
-        raise InputError(
-            f"{points.name(worst)}: correction of {found.length[worst]:.3f} mm exceeds the safety "
-            f"limit of {cell.correction.max_correction_mm:g} mm; check the grid and the base frame",
-            *points.table.where(worst),
-        )
-    return found.correction, _orientation_warnings(points, grid, found.angle)
-
-
-def _model_correction(
+def _correct(
     points: Points,
     cell: Cell,
-    model: Robot,
+    robot: RobotModel,
     grid: GridModel | None,
+    model: Robot | None,
+    validity,
     holes_robot: np.ndarray,
     rotations: np.ndarray,
-) -> tuple[np.ndarray, list[str], int | None]:
-    """P' - P (N, 3) robot frame by the calibrated ``model`` (+ the residual of the measured
-    ``grid`` after the model), the warnings and the KUKA Status corrected in (``Corrector``'s
-    rule), which the program then runs in; InputError naming holes the controller cannot
-    reach or that do not converge, and as ``_correction`` for the residual grid. rotations
-    (N, 3, 3) robot frame."""
-    from accugrid.compensation.corrector import Corrector  # model jobs only: costly imports
+    allow_partial: bool,
+    strict: bool,
+) -> tuple[np.ndarray, list[str], int | None, list[str]]:
+    """The correction policy (``compensation.policy``) at every hole point (N, 3) mm with its
+    rotation (N, 3, 3), robot frame: e = P' - P (N, 3) (0 for holes left uncorrected), the
+    warnings, the KUKA Status the program runs in (the cell's; else the one the model corrected
+    in, or the grid's) and the header lines marking each hole left uncorrected. The tool is the
+    cell's (the drill as taught) on the controller and on the calibrated arm. InputError (the
+    policy's job rule) unless every hole is corrected or ``allow_partial``."""
+    from accugrid.compensation.policy import Policy
 
-    abc = matrix_to_abc(rotations)
-    corrector = Corrector.build(
+    status = cell.configuration.status
+    tools = (cell.flange_T_tool, cell.flange_T_tool)
+    kwargs = {"singular_deg": cell.configuration.singular_a5_deg, "strict": strict}
+    abc = None
+    if model is not None:  # the A,B,C only for the model's Status rule
+        abc = matrix_to_abc(rotations)
+    policy = Policy.build(
         cell.correction,
         grid,
         model,
-        cell.configuration.status,
-        cell.flange_T_tool,
+        status,
+        tools,
         points=holes_robot,
         abc_deg=abc,
         turn=cell.configuration.turn,
+        nominal=robot if isinstance(robot, Robot) else None,
+        validity=validity,
+        **kwargs,
     )
-    status = corrector.status
-    warnings: list[str] = []
-    if corrector.grid is not None:
-        warnings = _correction(points, cell, corrector.grid, holes_robot, rotations)[1]
-    result = corrector.correct(holes_robot, abc)
-    if not result.ok.all():
-        bad = result.failed
-        i = int(bad[0])
-        more = f"; {bad.size - 1} more hole(s)" if bad.size > 1 else ""
-        raise InputError(
-            f"{points.name(i)}: not corrected by model {model.name} in Status {status}: "
-            f"{result.reason[i]}{more}",
-            *points.table.where(i),
-        )
-    length, over = corrector.too_long(holes_robot, result.command)
-    if over.any():
-        worst = int(np.argmax(length))
-        raise InputError(
-            f"{points.name(worst)}: correction of {length[worst]:.3f} mm exceeds the safety "
-            f"limit of {cell.correction.max_correction_mm:g} mm; check the model and the base "
-            "frame",
-            *points.table.where(worst),
-        )
-    return result.command - holes_robot, warnings, status
-
-
-def _orientation_warnings(points: Points, grid: GridModel, angle: np.ndarray | None) -> list[str]:
-    if angle is None:
-        return []
-    far = np.flatnonzero(angle > GRID_ORIENTATION_TOL_DEG)
-    if not far.size:
-        return []
-    i = int(far[np.argmax(angle[far])])
-    return [
-        f"{far.size} hole(s) more than {GRID_ORIENTATION_TOL_DEG:g} deg from the grid's "
-        f"measured orientation {mm_text(grid.orientation_abc, 1)} deg (largest {angle[i]:.1f} deg "
-        f"at {points.label(i)}): their correction is less trustworthy"
+    if status is None:
+        status = policy.status if model is not None else policy.grid_status
+    verdict = policy.decide(holes_robot, rotations, status=status)
+    warnings = verdict.enforce(points.label, points.table.where, allow_partial, "hole")
+    warnings += verdict.flag_lines(points.label, "hole")
+    if policy.grid is not None and policy.grid.status is None and policy.grid_status is not None:
+        warnings.append(f"the grid does not record its Status: {policy.describe_status()}")
+    marks = [
+        f"not corrected: hole {points.ids[i]}: {verdict.reason(i)}"
+        for i in verdict.refused.tolist()
     ]
+    return verdict.command - holes_robot, warnings, status, marks
 
 
 def _configuration(
@@ -474,11 +452,15 @@ def _configuration(
     rotations: np.ndarray,
     status: int | None,
     progress: _Progress | None = None,
+    corrected_in: int | None = None,
+    correction: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray]:
     """IK of every pose (positions (N, 4, 3) mm and rotations (N, 3, 3), BASE frame) in KUKA
     ``status`` (None: the first pose's IK default): Status and Turn (N, 4) per pose, the
     warnings and the joint angles (N, S, 6) rad (S: the stages solved, 3 when RET is APP).
-    ``progress``: told of the IK blocks as they are done."""
+    ``progress``: told of the IK blocks as they are done. ``corrected_in``: the Status the
+    corrections (N, 3) mm ``correction`` hold in (the policy's): a corrected hole that takes
+    another one (allow_change) is an InputError."""
     n = len(points)
     if n == 0:
         return np.zeros((0, 4), int), np.zeros((0, 4), int), [], np.zeros((0, 4, 6))
@@ -513,6 +495,16 @@ def _configuration(
         pose_status[failed] = retry.status.reshape(-1, stages)
         pose_turn[failed] = retry.turn.reshape(-1, stages)
         changed = failed[ok[failed].all(axis=1)]
+        moved = changed[np.any(correction[changed] != 0, axis=1)] if correction is not None else []
+        if corrected_in is not None and len(moved):
+            hole = int(moved[0])
+            raise InputError(
+                f"{points.name(hole)}: takes KUKA Status {int(pose_status[hole, 0])} "
+                f"(configuration.allow_change), but its correction holds only in Status "
+                f"{corrected_in}, the one it was corrected in; {len(moved)} such hole(s): give "
+                "them a program of their own",
+                *points.table.where(hole),
+            )
         if changed.size:
             warnings.append(
                 f"{changed.size} hole(s) take another Status than {status} "
@@ -525,10 +517,9 @@ def _configuration(
         reason = sol.reason.reshape(n, stages)[hole, stage] or "no solution"
         _fail(points, hole, stage, reason, cell, failed.size, status, cell.configuration.turn)
     warnings += _branch_jumps(points, cell, q)
-    a5 = np.abs(q[:, 0, 4])
+    a5 = singular_a5_deg(q[:, 0])
     for stage in range(1, stages):  # stage by stage: a reduction over a short axis is slow
-        np.minimum(a5, np.abs(q[:, stage, 4]), out=a5)
-    np.degrees(a5, out=a5)
+        np.minimum(a5, singular_a5_deg(q[:, stage]), out=a5)
     near = np.flatnonzero(a5 < cell.configuration.singular_a5_deg)
     if near.size:
         named = ", ".join(f"{points.label(int(i))} |A5| {a5[i]:.1f} deg" for i in near[:_LISTED])

@@ -5,8 +5,11 @@ robot-frame points, the report CSV and the header.
 Each Cartesian position that can be placed in the robot frame is corrected with the grid model
 (P' = P + e, in the robot frame, converted back to the program's frame) and only its X, Y, Z
 numbers are replaced in the text; every other byte is kept (``codegen.program_text``). What cannot
-be placed is reported with the reason, never guessed. Positions outside the grid box stay as they
-are (an error with ``strict``).
+be placed is reported with the reason, never guessed. Whether a placed position is corrected is
+the correction policy's verdict (``compensation.policy``); a position it does not correct
+(outside the grid, orientation or Status the grid does not hold for, ...) fails the job unless
+``allow_partial``, which leaves it as it is and marks it in the report, and so does a rewrite that
+corrects nothing.
 """
 
 from __future__ import annotations
@@ -22,23 +25,18 @@ import numpy as np
 from accugrid.codegen.header import grid_lines, input_line
 from accugrid.codegen.header import header_lines as make_header
 from accugrid.codegen.program_text import MAX_BYTES
-from accugrid.codegen.textsafe import fixed
 from accugrid.compensation import GridModel
-from accugrid.compensation.corrector import Corrector
-from accugrid.compensation.settings import (
-    DEFAULT_TOLERANCE_MM,
-    GRID_ORIENTATION_TOL_DEG,
-    CorrectionSettings,
-)
+from accugrid.compensation.policy import CORRECTED as POLICY_CORRECTED
+from accugrid.compensation.policy import OUTSIDE_GRID, REASONS, Policy
+from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM, CorrectionSettings
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc
+from accugrid.kinematics.frames import abc_to_matrix
 
 if TYPE_CHECKING:  # loaded by the model's reader, only with --model
     from accugrid.kinematics.robot import Robot
 
 __all__ = [
-    "ORIENTATION_LIMIT_DEG",
     "REPORT_COLUMNS",
     "Options",
     "Result",
@@ -50,48 +48,47 @@ __all__ = [
     "STATUSES",
     "correct_points",
     "header_lines",
-    "warning_lines",
-    "outside_reason",
+    "partial_check",
     "report_csv",
     "rotations_of",
-    "strict_check",
+    "warning_lines",
 ]
 
 REPORT_COLUMNS = (
     "file,line,name,status,reason,x,y,z,x_new,y_new,z_new,dx,dy,dz,correction_mm,residual_mm"
 )
 NAN3 = (math.nan, math.nan, math.nan)
-ORIENTATION_LIMIT_DEG = 15.0  # as ``accugrid correct --orientation-limit``
 
 
 @dataclass
 class Options:
     """How to rewrite. Frames are (4, 4) mm poses."""
 
-    model: GridModel
+    model: GridModel | None  # the grid (the residual grid with a model; None: the model alone)
     base_data: dict[int, np.ndarray]  # BASE_DATA[n] -> robot_T_base
     robot_T_program: np.ndarray  # G-code program frame
     correction: CorrectionSettings = CorrectionSettings()
     decimals: int | None = None  # None: the file's precision (see ``precision``)
-    strict: bool = False
+    allow_partial: bool = False  # write although the policy leaves positions uncorrected
     base_override: int | None = None
     tool_number: int | None = None  # the cell's TOOL_DATA number (the TCP the grid holds for)
     trust_calls: bool = False
     ignore_external_axes: bool = False
     max_bytes: int = MAX_BYTES
-    orientation_tol: float = GRID_ORIENTATION_TOL_DEG  # deg: flag beyond (as ``correct``)
-    orientation_limit: float = ORIENTATION_LIMIT_DEG  # deg: skip beyond
-    allow_orientation: bool = False  # correct (and flag) beyond the limit instead
     tolerance_mm: float = DEFAULT_TOLERANCE_MM  # warn when rounding leaves more than a tenth
-    corrector: Corrector | None = None  # with a calibrated model: ``model`` is its residual grid
+    policy: Policy | None = None  # decides every position (None: the grid's, default limits)
     model_file: str | None = None  # the calibrated robot YAML (header)
     reference_abc: tuple[float, float, float] | None = None  # robot-frame A,B,C deg the model
     # assumes where a position has none (3-axis G-code): the cell's configuration.reference
 
+    def __post_init__(self) -> None:
+        if self.policy is None:
+            self.policy = Policy(self.correction, self.model)
+
     @property
     def calibrated(self) -> Robot | None:
-        """The calibrated model the corrector uses, None for the grid alone."""
-        return None if self.corrector is None else self.corrector.calibrated
+        """The calibrated model the policy uses, None for the grid alone."""
+        return self.policy.calibrated
 
 
 @dataclass(slots=True)
@@ -117,7 +114,8 @@ class Rows:
     """The report rows (N), column by column: ``files`` (distinct paths) and ``file`` (N,) index
     into it, ``line`` (N,) int, ``name`` and ``reason`` lists of str, ``status`` (N,) codes of
     ``STATUSES``, ``old`` and ``new`` (N, 3) mm (NaN: none), ``residual_mm`` and ``rounding_mm``
-    (N,) mm. Iterating gives ``Row`` objects (copies)."""
+    (N,) mm, ``code`` (N,) the policy's reason code of a position it did not correct
+    (``compensation.policy.REASONS``, 0: none). Iterating gives ``Row`` objects (copies)."""
 
     def __init__(
         self,
@@ -135,6 +133,7 @@ class Rows:
         self.name = name
         self.reason = reason
         self.status = np.zeros(n, np.int8)
+        self.code = np.zeros(n, np.int8)
         self.old = np.asarray(old, dtype=float).reshape(n, 3)
         self.new = np.full((n, 3), math.nan)
         self.residual_mm = np.full(n, math.nan)
@@ -156,7 +155,7 @@ class Rows:
             list(chain.from_iterable(p.reason for p in parts)),
             np.concatenate([p.old for p in parts] or [np.zeros((0, 3))]),
         )
-        for key in ("status", "new", "residual_mm", "rounding_mm"):
+        for key in ("status", "code", "new", "residual_mm", "rounding_mm"):
             setattr(out, key, np.concatenate([getattr(p, key) for p in parts] or [out.status]))
         return out
 
@@ -226,102 +225,43 @@ def correct_points(
     opts: Options,
     rotations: np.ndarray | None = None,
     mark: bool = True,
+    status: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Correct robot-frame points (N, 3) mm with one ``GridModel.check``; (N, 3) commands, NaN
-    rows where a point is not corrected.
+    """Correct robot-frame points (N, 3) mm by the policy's verdict (``opts.policy``); (N, 3)
+    commands, NaN rows where a point is not corrected.
 
     ``at`` (N,): the report row of each point in ``rows`` (an error names its file and line).
-    ``rotations`` (N, 3, 3): each point's orientation, robot frame (NaN rows: none). With
-    ``mark``, rows outside the grid get status "outside", rows beyond ``orientation_limit``
-    (``accugrid correct``'s rule) stay "skipped" with the angle as the reason (unless
-    ``allow_orientation``), rows beyond ``orientation_tol`` a ``flag:`` reason. InputError at the
-    row when a correction to be written is longer than the safety limit. With ``opts.calibrated``
-    the points with an orientation are corrected by ``opts.corrector`` (model plus residual grid)
-    (the model holds at any orientation: flagged, never skipped); the others stay NaN."""
+    ``rotations`` (N, 3, 3): each point's orientation, robot frame (NaN rows: none; with a model
+    and ``opts.reference_abc`` such a point takes the reference). ``status`` (N,): each point's
+    own KUKA Status (-1: the job's). With ``mark``, rows not corrected get status "outside"
+    (outside the grid) or stay "skipped", with the policy's code and words as the reason;
+    flagged rows a ``flag:`` reason. InputError at the row when a correction is longer than the
+    safety limit."""
     out = np.full_like(points_robot, np.nan)
     if not len(points_robot):
         return out
-    found = opts.model.check(points_robot, opts.correction, rotations=rotations)
-    use = np.ones(len(points_robot), bool)
-    use[found.outside] = False
-    if mark:
-        for i in found.outside.tolist():
-            rows.status[at[i]] = OUTSIDE
-            rows.reason[at[i]] = outside_reason(points_robot[i])
-        if found.angle is not None:
-            skip = _orientation(found.angle, rows, at, opts)
-            if opts.calibrated is None:
-                use &= ~skip
-    command, length = found.command, found.length
-    if opts.calibrated is not None:
-        command, length = _by_model(points_robot, rotations, rows, at, use, opts)
-        use &= ~np.isnan(command[:, 0])
-    limit = opts.correction.max_correction_mm
-    too_long = [] if limit is None else np.flatnonzero(use & (length > limit)).tolist()
-    if too_long:
-        i = max(too_long, key=lambda k: length[k])
-        raise InputError(
-            f"{rows.name[at[i]]}: correction of {length[i]:.3f} mm exceeds the safety limit of "
-            f"{opts.correction.max_correction_mm:g} mm; refusing the whole job (check the grid)",
-            *rows.where(at[i]),
-        )
-    out[use] = command[use]
-    return out
-
-
-def _by_model(
-    points: np.ndarray,
-    rotations: np.ndarray | None,
-    rows: Rows,
-    at: np.ndarray,
-    use: np.ndarray,
-    opts,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Model commands (N, 3) mm robot frame (NaN where not corrected) and their lengths (N,) mm
-    for the ``use`` rows with an orientation; InputError at the row the model cannot correct."""
-    command = np.full_like(points, np.nan)
-    if rotations is None:
-        rotations = np.full((len(points), 3, 3), np.nan)
-    oriented = ~np.isnan(rotations[:, 0, 0])
-    if opts.reference_abc is not None:
-        rotations = np.where(
-            oriented[:, None, None], rotations, abc_to_matrix(np.array(opts.reference_abc))
-        )
-        oriented[:] = True
-    for i in np.flatnonzero(use & ~oriented).tolist():
-        rows.reason[at[i]] = "no orientation (A, B, C) here: the model needs one; left as is"
-    todo = np.flatnonzero(use & oriented)
-    if todo.size:
-        result = opts.corrector.correct(points[todo], matrix_to_abc(rotations[todo]).reshape(-1, 3))
-        if not result.ok.all():
-            j = int(result.failed[0])
-            k = at[int(todo[j])]
-            raise InputError(
-                f"{rows.name[k]}: not corrected by model {opts.calibrated.name}: "
-                f"{result.reason[j]}"
-                + (f"; {result.failed.size - 1} more" if result.failed.size > 1 else ""),
-                *rows.where(k),
-            )
-        command[todo] = result.command
-    return command, opts.corrector.too_long(points, command)[0]
-
-
-def _orientation(angle: np.ndarray, rows: Rows, at: np.ndarray, opts: Options) -> np.ndarray:
-    """Points (N,) beyond the orientation limit (reasons set in their rows ``at``), flags for
-    those beyond the tol."""
-    grid = ", ".join(fixed(v) for v in opts.model.orientation_abc)
-    skip = np.zeros(len(angle), bool)
-    for i in np.flatnonzero(angle > opts.orientation_tol).tolist():
-        a = float(angle[i])
-        if a > opts.orientation_limit and not opts.allow_orientation:
-            skip[i] = True
-            rows.reason[at[i]] = (
-                f"orientation {a:.1f} deg from the grid's ({grid}), more than "
-                f"--orientation-limit {opts.orientation_limit:g}: the grid does not hold there"
-            )
+    if opts.calibrated is not None and opts.reference_abc is not None:
+        reference = abc_to_matrix(np.array(opts.reference_abc))
+        if rotations is None:
+            rotations = np.broadcast_to(reference, (len(points_robot), 3, 3))
         else:
-            rows.reason[at[i]] = f"flag: orientation {a:.1f} deg from the grid's ({grid})"
-    return skip
+            given = np.isfinite(rotations[:, 0, 0])
+            rotations = np.where(given[:, None, None], rotations, reference)
+    verdict = opts.policy.decide(points_robot, rotations, status=status)
+    verdict.enforce(
+        lambda i: rows.name[at[i]], lambda i: rows.where(at[i]), allow_partial=True
+    )  # only the safety limit: the rows' verdicts are counted for the whole job
+    if mark:
+        refused = verdict.refused
+        rows.code[at[refused]] = verdict.code[refused]
+        rows.status[at[refused[verdict.code[refused] == OUTSIDE_GRID]]] = OUTSIDE
+        flagged = np.flatnonzero(verdict.flags != 0)
+        for i in np.union1d(refused, flagged).tolist():
+            words = verdict.reason(i)
+            rows.reason[at[i]] = words if verdict.code[i] else f"flag: {words}"
+    use = verdict.code == POLICY_CORRECTED
+    out[use] = verdict.command[use]
+    return out
 
 
 def rotations_of(frames: np.ndarray, abc: np.ndarray) -> np.ndarray:
@@ -347,37 +287,52 @@ def warning_lines(result: Result, opts: Options) -> list[str]:
             f"{rows.rounding_mm[worst]:.3f} mm ({Path(file).name} line {line}): give "
             "more --decimals"
         )
-    flag = "flag: orientation"
     flagged = (
-        [i for i in corrected.tolist() if rows.reason[i].startswith(flag)]
+        [i for i in corrected.tolist() if rows.reason[i].startswith("flag: ")]
         if any(rows.reason)
         else []
     )
     if flagged:
         file, line = rows.where(flagged[0])
         out.append(
-            f"{len(flagged)} corrected position(s) more than --orientation-tol "
-            f"{opts.orientation_tol:g} deg from the grid's orientation (see the report), first "
-            f"{Path(file).name} line {line}"
+            f"{len(flagged)} corrected position(s) flagged (see the report), first "
+            f"{Path(file).name} line {line}: {rows.reason[flagged[0]][6:]}"
         )
+    refused = np.flatnonzero(rows.code != POLICY_CORRECTED)
+    if refused.size:  # the job went on: --allow-partial
+        out.append(f"{refused.size} position(s) left uncorrected ({_counts(rows)})")
     return out
 
 
-def outside_reason(robot_xyz: np.ndarray) -> str:
-    x, y, z = (fixed(v) for v in robot_xyz)
-    return f"outside the grid (robot frame {x}, {y}, {z} mm): left as is"
+def _counts(rows: Rows) -> str:
+    """The positions the policy did not correct, counted by reason."""
+    codes, count = np.unique(rows.code[rows.code != POLICY_CORRECTED], return_counts=True)
+    return ", ".join(f"{c} {REASONS[int(k)][0]}" for k, c in zip(codes, count, strict=True))
 
 
-def strict_check(rows: Rows, opts: Options) -> None:
-    if opts.strict:
-        outside = np.flatnonzero(rows.status == OUTSIDE)
-        if outside.size:
-            i = int(outside[0])
-            raise InputError(
-                f"{outside.size} position(s) outside the grid (--strict); first: {rows.name[i]}: "
-                f"{rows.reason[i]}",
-                *rows.where(i),
-            )
+def partial_check(rows: Rows, opts: Options) -> None:
+    """The policy's job rule over the whole rewrite: InputError at the first position the
+    policy did not correct, with the counts by reason, and when nothing at all is corrected,
+    unless ``opts.allow_partial``."""
+    if opts.allow_partial:
+        return
+    refused = np.flatnonzero(rows.code != POLICY_CORRECTED)
+    if refused.size:
+        i = int(refused[0])
+        raise InputError(
+            f"{refused.size} position(s) cannot be corrected ({_counts(rows)}); first "
+            f"{rows.name[i]}: {rows.reason[i]} (--allow-partial writes the program with them "
+            "as they are, marked in the report)",
+            *rows.where(i),
+        )
+    if len(rows) and not rows.count(CORRECTED):
+        i = 0
+        raise InputError(
+            f"no position corrected: {len(rows)} position(s) read, none placed and corrected; "
+            f"first {rows.name[i]}: {rows.reason[i] or 'not corrected'} (see --report; "
+            "--allow-partial writes the program unchanged)",
+            *rows.where(i),
+        )
 
 
 def header_lines(result: Result, program: str, cell: str, opts: Options) -> list[str]:
@@ -387,15 +342,19 @@ def header_lines(result: Result, program: str, cell: str, opts: Options) -> list
     largest, where = result.largest()
     model = opts.model
     at = "" if where is None else f" at {where.name} line {where.line}"
-    grid = Path(model.source_path).name if model.source_path else "arrays"
     inputs = [
         input_line("program", program, file_sha256(program)),
         input_line("cell", cell, file_sha256(cell)),
-        *grid_lines(grid, model.source_sha256, model.step),
     ]
+    if model is not None:
+        grid = Path(model.source_path).name if model.source_path else "arrays"
+        inputs += grid_lines(grid, model.source_sha256, model.step)
     if opts.model_file is not None:
         inputs.insert(2, input_line("model", opts.model_file, file_sha256(opts.model_file)))
-    closing = [f"positions corrected {result.rows.count(CORRECTED)}"]
+    rows = result.rows
+    closing = [f"positions corrected {rows.count(CORRECTED)}"]
+    for i in np.flatnonzero(rows.code != POLICY_CORRECTED).tolist():
+        closing.append(f"not corrected: line {rows.line[i]} {rows.name[i]}: {rows.reason[i]}")
     return make_header("rewrite", inputs, (), largest, at, closing)
 
 

@@ -12,8 +12,6 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from accugrid.codegen.cell import load_cell
 from accugrid.codegen.dialects import dialect_of, plugin_of
 from accugrid.codegen.program_text import add_header, read_program
@@ -27,7 +25,8 @@ from accugrid.codegen.rewrite import (
     report_csv,
     warning_lines,
 )
-from accugrid.compensation.corrector import Corrector
+from accugrid.compensation import GridModel
+from accugrid.compensation.policy import Policy
 
 __all__ = ["RewriteJob", "RewriteRequest", "rewrite_job"]
 
@@ -46,6 +45,7 @@ class RewriteRequest:
     header: bool = False
     decimals: int | None = None
     strict: bool = False
+    allow_partial: bool = False
     base: int | None = None
     trust_calls: bool = False
     ignore_external_axes: bool = False
@@ -81,46 +81,51 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     inputs = list(req.outputs)
     read = [*inputs, Path(req.cell)] + ([req.config_dat] if req.config_dat else [])
     cell = load_cell(req.cell)
-    grid = cell.grid_file(req.grid)
     model_file = Path(req.model) if req.model is not None else cell.model_path
-    calibrated = None
-    if model_file is not None:  # the model's modules imported only when there is one
-        from accugrid.kinematics.calibrated import check_same_robot
+    grid = None  # a model corrects alone when neither --grid nor the cell names one
+    if model_file is None or req.grid is not None or cell.grid_path is not None:
+        grid = cell.grid_file(req.grid)
+    measured = None if grid is None else GridModel.from_measurements(grid)
+    model = nominal = None
+    if model_file is not None or (measured is not None and measured.status is None):
         from accugrid.kinematics.robot import load_robot
 
-        calibrated = load_robot(model_file)
         nominal = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
-        check_same_robot(calibrated, nominal, os.fspath(model_file))
-        if np.array_equal(calibrated.flange_T_tool, np.eye(4)):  # no TCP in the file: the cell's
-            calibrated = calibrated.with_tool(cell.flange_T_tool)
+    if model_file is not None:  # the arm; the tool is the cell's, never the model's TCP
+        from accugrid.codegen.correct_model import read_model
+
+        model = read_model(model_file, nominal)
         read.append(model_file)
-    # with a model: residual grid in the Status the grid was measured in (wrist flips otherwise)
-    corrector = Corrector.build(
+    # the grid (a residual one with a model) holds in the Status it was measured in
+    policy = Policy.build(
         cell.correction,
-        grid,
-        calibrated,
+        measured,
+        None if model is None else model.robot,
         cell.configuration.status,
-        cell.flange_T_tool if calibrated is not None else None,
+        (cell.flange_T_tool, cell.flange_T_tool),
+        nominal=nominal,
+        validity=None if model is None else model.validity,
+        orientation_tol_deg=req.orientation_tol,
+        orientation_limit_deg=req.orientation_limit,
+        allow_orientation=req.allow_orientation,
+        strict=req.strict,
     )
     opts = Options(
-        model=corrector.grid,
+        model=policy.grid,
         base_data=cell.base_data,
         robot_T_program=cell.gcode.robot_T_program,
         correction=cell.correction,
         decimals=req.decimals,
-        strict=req.strict,
+        allow_partial=req.allow_partial,
         base_override=req.base,
         tool_number=cell.tool_number,
         trust_calls=req.trust_calls,
         ignore_external_axes=req.ignore_external_axes,
         max_bytes=req.max_bytes,
-        orientation_tol=req.orientation_tol,
-        orientation_limit=req.orientation_limit,
-        allow_orientation=req.allow_orientation,
         tolerance_mm=req.tolerance_mm,
-        corrector=corrector,
+        policy=policy,
         model_file=None if model_file is None else os.fspath(model_file),
-        reference_abc=cell.configuration.reference_abc if calibrated is not None else None,
+        reference_abc=cell.configuration.reference_abc if model is not None else None,
     )
     texts = {os.fspath(p): read_program(p, req.max_bytes) for p in inputs}
     # The readers build their tables from many small strings and tuples; the cycle collector
@@ -160,4 +165,8 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
         files[target] = data
     if req.report is not None:
         files[req.report] = report_csv(result.rows).encode("utf-8")
-    return RewriteJob(files, [*read, grid], result, warning_lines(result, opts))
+    warnings = []
+    if policy.grid_status is not None and measured is not None and measured.status is None:
+        warnings.append(f"the grid does not record its Status: {policy.describe_status()}")
+    read += [grid] if grid is not None else []
+    return RewriteJob(files, read, result, warnings + warning_lines(result, opts))

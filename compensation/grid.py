@@ -47,7 +47,8 @@ class GridModel:
 
     origin, step (3,) mm; counts (3,) int (vertices per axis, >= 2); errors (nx, ny, nz, 3) mm,
     e = P - M at the vertices; orientation_abc (3,) deg or None: the TCP orientation of the
-    measurement; source_sha256: SHA-256 of the measurement file (None for arrays).
+    measurement; status: the KUKA Status it was measured in (column s; None: not recorded);
+    source_sha256: SHA-256 of the measurement file (None for arrays).
     """
 
     def __init__(
@@ -60,6 +61,7 @@ class GridModel:
         source_path: str | None = None,
         repeats: np.ndarray | None = None,
         spread_mm: float = 0.0,
+        status: int | None = None,
     ) -> None:
         self.errors = np.array(errors, dtype=float)
         if self.errors.ndim != 4 or self.errors.shape[3] != 3 or min(self.errors.shape[:3]) < 2:
@@ -74,6 +76,7 @@ class GridModel:
         self.source_path = source_path
         self.repeats = repeats
         self.spread_mm = float(spread_mm)
+        self.status = None if status is None else int(status)
         self.errors.flags.writeable = False  # predict works from the copy below
         # per-axis vertex values (3, nx*ny*nz), contiguous for the gathers in predict
         self._values = np.ascontiguousarray(self.errors.reshape(-1, 3).T)
@@ -104,6 +107,7 @@ class GridModel:
             source_path=meas.path,
             repeats=grid.repeats,
             spread_mm=grid.spread_mm,
+            status=grid.status,
         )
 
     @property
@@ -217,6 +221,8 @@ class GridModel:
             lines.append(f"error e{name}   {e[:, axis].min():+.4f} .. {e[:, axis].max():+.4f} mm")
         if self.orientation_abc is not None:
             lines.append(f"orientation a,b,c {mm_text(self.orientation_abc)} deg")
+        if self.status is not None:
+            lines.append(f"status     KUKA Status {self.status} (column s)")
         return "\n".join(lines)
 
     def _refuse_outside(self, points: np.ndarray) -> None:
@@ -239,7 +245,9 @@ class GridModel:
         lo, hi = self.origin[:, None], self.upper[:, None]
         out = np.empty_like(points)
         for start in range(0, len(points), _CHUNK):
-            block = np.ascontiguousarray(points[start : start + _CHUNK].T)  # (3, n)
+            # (3, n), always a copy: for one point the transpose is contiguous already and
+            # the clip below would move the caller's point into the box
+            block = np.array(points[start : start + _CHUNK].T, order="C")
             if not (
                 (block.min(axis=1) >= self.origin).all() and (block.max(axis=1) <= self.upper).all()
             ):

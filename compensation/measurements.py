@@ -71,7 +71,8 @@ class VertexGrid:
     """An axis-aligned regular grid with one averaged error per vertex.
 
     origin, step (3,) mm; counts (3,) int; errors (nx, ny, nz, 3) mm, e = P - M;
-    repeats (nx, ny, nz) int; spread_mm: largest distance of a repeat from its vertex mean.
+    repeats (nx, ny, nz) int; spread_mm: largest distance of a repeat from its vertex mean;
+    abc (3,) deg the common orientation, status the common KUKA Status (None: not recorded).
     """
 
     origin: np.ndarray
@@ -81,6 +82,9 @@ class VertexGrid:
     repeats: np.ndarray
     spread_mm: float
     abc: np.ndarray | None
+    status: int | None = (
+        None  # the KUKA Status the grid was measured in (column s), None: not recorded
+    )
 
 
 def read_measurements(path: str | os.PathLike[str]) -> Measurements:
@@ -212,7 +216,24 @@ def build_grid(
         repeats=repeats.reshape(tuple(counts)),
         spread_mm=float(spread.max()),
         abc=_common_orientation(meas),
+        status=_common_status(meas),
     )
+
+
+def _common_status(meas: Measurements) -> int | None:
+    """The one KUKA Status of a grid measurement (column s), None when not recorded; InputError
+    at the first row in another Status: a grid holds in the Status it was measured in."""
+    if meas.status is None or not len(meas.status):
+        return None
+    other = np.flatnonzero(meas.status != meas.status[0])
+    if other.size:
+        i = int(other[0])
+        raise InputError(
+            f"a grid is measured in one KUKA Status: column s is {int(meas.status[i])} here, "
+            f"{int(meas.status[0])} in the first row",
+            *_located(meas, i),
+        )
+    return int(meas.status[0])
 
 
 def _detect_axes(

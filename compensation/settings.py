@@ -11,7 +11,6 @@ from accugrid.kinematics.errors import InputError
 
 __all__ = [
     "DEFAULT_TOLERANCE_MM",
-    "GRID_ORIENTATION_TOL_DEG",
     "MAX_CORRECTION_MM",
     "OUTSIDE",
     "CorrectionSettings",
@@ -20,7 +19,6 @@ __all__ = [
 OUTSIDE = ("error", "clamp")  # points outside the grid box: refuse, or use the nearest cell
 MAX_CORRECTION_MM = 5.0  # default safety limit on the length of any one correction
 DEFAULT_TOLERANCE_MM = 0.3  # the hole-position accuracy aircraft drilling asks (seed: +-0.3 mm)
-GRID_ORIENTATION_TOL_DEG = 5.0  # the grid's errors hold near the orientation it was measured at
 
 
 @dataclass(frozen=True)

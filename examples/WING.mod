@@ -2,7 +2,7 @@ MODULE WING
     ! accugrid 0.1.0 rapid
     ! points wing_panel_points.csv sha256 9ab3999a86a5246f16c20d34ba26ba801ae14d91c960fcc50b6135fe9e75ad12
     ! cell cell_irb6700.yaml sha256 a9446f38a6cfb11d74737f0a3b472333dd0344b840e04abc0177f0fb2a39a2f3
-    ! grid grid_irb6700_200mm.csv sha256 2b0c6efbfaff2bcc1d891b51d73a9091392b70375478baca3e4589d05e10c0a8
+    ! grid grid_irb6700_200mm.csv sha256 a595bed6b2ca0d6ce01bb72e1888c2462fdd63e98a49c3ba94f7576afe7e2791
     ! grid step 200.000 x 200.000 x 200.000 mm
     ! largest correction 4.039 mm at hole WP-R3-001
     ! holes 72

@@ -2,7 +2,7 @@ MODULE CAM_DRILL
     ! accugrid 0.1.0 rewrite
     ! program cam_drill.mod sha256 21b9d3dd78905f3f7aa5c88a8f05057f503e1189cbd9f8d78f98362b3164a71a
     ! cell cell_irb6700.yaml sha256 a9446f38a6cfb11d74737f0a3b472333dd0344b840e04abc0177f0fb2a39a2f3
-    ! grid grid_irb6700_200mm.csv sha256 2b0c6efbfaff2bcc1d891b51d73a9091392b70375478baca3e4589d05e10c0a8
+    ! grid grid_irb6700_200mm.csv sha256 a595bed6b2ca0d6ce01bb72e1888c2462fdd63e98a49c3ba94f7576afe7e2791
     ! grid step 200.000 x 200.000 x 200.000 mm
     ! largest correction 3.923 mm at pHole3 line 9
     ! positions corrected 2

@@ -37,12 +37,14 @@ def error_field(p: np.ndarray) -> np.ndarray:
 
 @lru_cache(maxsize=1)
 def grid() -> GridModel:
-    """Synthetic grid over the demo region (step 200 mm), measured at A 0 B 90 C 0."""
+    """Synthetic grid over the demo region (step 200 mm), measured at A 0 B 90 C 0 in KUKA
+    Status 6 (recorded, as simulate's column s)."""
     axes = [np.arange(1200, 2201, 200.0), np.arange(-600, 601, 200.0), np.arange(1100, 2101, 200.0)]
     commanded = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     measured = commanded - error_field(commanded)
     abc = np.tile([0.0, 90.0, 0.0], (len(commanded), 1))
-    return GridModel.from_measurements((commanded, measured, abc))
+    g = GridModel.from_measurements((commanded, measured, abc))
+    return GridModel(g.origin, g.step, g.errors, g.orientation_abc, status=6)
 
 
 @lru_cache(maxsize=1)

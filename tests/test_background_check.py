@@ -51,8 +51,8 @@ def test_a_program_checked_in_the_background_is_the_one_checked_at_once(case):
     pts = panel_points(ROWS)
     if case == "no correction":
         g = None
-    elif case == "allow change":
-        c = cell_with(configuration={"status": 0, "allow_change": True})
+    elif case == "allow change":  # Status 0: not the grid's (6), so uncorrected
+        c, g = cell_with(configuration={"status": 0, "allow_change": True}), None
     elif case == "singular wrist":
         pts, g = near_singular_wrist()[0], None
     at_once = build_program(pts, c, robot(), g)
@@ -84,9 +84,10 @@ def test_status_and_turn_from_the_ik_blocks_are_what_the_finished_check_keeps(ca
         else cell_with(configuration={"status": 0, "allow_change": True})
     )
     pts = panel_points(ROWS)
-    final = build_program(pts, c, robot(), grid()).configuration.to_kuka()
+    g = grid() if case == "fixed Status" else None  # the grid holds in Status 6 only
+    final = build_program(pts, c, robot(), g).configuration.to_kuka()
     with mock.patch.object(program, "IK_BLOCK", block):
-        prog = build_program(pts, c, robot(), grid(), background=True)
+        prog = build_program(pts, c, robot(), g, background=True)
         for lo, hi in [(min(a, b), max(a, b)) for a, b in ranges] + [(0, len(ROWS))]:
             for got, want in zip(prog.kuka_words(lo, hi), final, strict=True):
                 np.testing.assert_array_equal(got, want[lo:hi])
@@ -120,7 +121,8 @@ def test_a_job_whose_ik_check_fails_replaces_nothing(tmp_path, capsys, command, 
         points.write_text("id,x,y,z,a,b,c\nA,0,300,0,-90,0,100\nB,25,300,0,-90,0,-100\n")
     else:
         cell_file, message = status_zero_cell(tmp_path / "input"), "hole 'WP-R1-001'"
-    code = main([command, str(points), "--cell", str(cell_file), "-o", str(out), "--force"])
+    argv = [command, str(points), "--cell", str(cell_file), "-o", str(out), "--force"]
+    code = main([*argv, "--no-correction"])  # the IK check's own failures
     stdout, err = capsys.readouterr()
     assert code == 2 and stdout == "" and err.count("\n") == 1
     assert message in err

@@ -130,7 +130,7 @@ def test_a_stray_point_is_located_at_its_line(tmp_path):
     text = grid_text()
     n = len(text.splitlines())
     path = tmp_path / "g.csv"
-    path.write_text(text + "S,1250,0,1500,0,90,0,1250,0,1500\n")
+    path.write_text(text + "S,1250,0,1500,0,90,0,6,1250,0,1500\n")
     with pytest.raises(InputError, match="uneven grid spacing along x") as info:
         build_grid(read_measurements(path))
     assert (info.value.path, info.value.line) == (str(path), n + 1)

@@ -101,14 +101,22 @@ def test_outside_points_are_named_or_clamped_and_flagged(tmp_path, capsys):
     code, out = run(tmp_path, points)
     err = capsys.readouterr().err
     assert code == 2 and not out.exists()
-    assert "points.csv:3: 1 point(s) outside the grid box" in err and "hole 'far'" in err
+    assert "points.csv:3: 1 point(s) cannot be corrected (1 outside the grid)" in err
+    assert "hole 'far'" in err and "outside the grid box by 50.000 mm" in err
     code, out = run(tmp_path, points, "--outside", "clamp")
     assert code == 0
     rows = read_rows(out)
     assert rows[2][4:] == ["1450.1000", "-0.2000", "1200.3000", "0.1000", "-0.2000", "0.3000"] + [
-        "outside grid: clamped"
+        "outside the grid box by 50.000 mm: the nearest cell's error used"
     ]
     assert "flagged    1 point(s)" in capsys.readouterr().out
+    code, out = run(tmp_path, points, "--allow-partial", "--force")  # written, far left as is
+    assert code == 0
+    rows = read_rows(out)
+    assert rows[2][4:] == ["1450.0000", "0.0000", "1200.0000", "0.0000", "0.0000", "0.0000"] + [
+        "not corrected: outside the grid box by 50.000 mm"
+    ]
+    assert "1 point(s) cannot be corrected (1 outside the grid)" in capsys.readouterr().err
 
 
 def test_safety_limit_refuses_the_job_and_keeps_the_old_output(tmp_path, capsys):
@@ -128,10 +136,10 @@ def test_safety_limit_refuses_the_job_and_keeps_the_old_output(tmp_path, capsys)
     ("orientation", "args", "code", "flag"),
     [
         ("0,90,0", [], 0, ""),
-        ("0,83,0", [], 0, "orientation 7.0 deg from grid"),
+        ("0,83,0", [], 0, "orientation 7.0 deg from the grid's"),
         ("20,90,0", [], 2, None),  # 20 deg about robot Z
-        ("0,70,0", ["--allow-orientation"], 0, "orientation 20.0 deg from grid"),
-        ("0,70,0", ["--orientation-limit", "25"], 0, "orientation 20.0 deg from grid"),
+        ("0,70,0", ["--allow-orientation"], 0, "orientation 20.0 deg from the grid's"),
+        ("0,70,0", ["--orientation-limit", "25"], 0, "orientation 20.0 deg from the grid's"),
     ],
 )
 def test_orientation_far_from_the_grid_is_flagged_or_refused(
@@ -141,7 +149,7 @@ def test_orientation_far_from_the_grid_is_flagged_or_refused(
     result, out = run(tmp_path, points, *args)
     assert result == code
     if code:
-        assert "more than 15 deg from the grid's orientation" in capsys.readouterr().err
+        assert "beyond the limit of 15 deg" in capsys.readouterr().err
         assert not out.exists()
     else:
         assert read_rows(out)[1][-1] == flag
@@ -153,7 +161,7 @@ def test_drill_axis_orientation_is_compared_with_the_grid_tool_axis(tmp_path):
     code, out = run(tmp_path, points, "--allow-orientation")
     assert code == 0
     flags = [r[-1] for r in read_rows(out)[1:]]
-    assert flags == ["", "orientation 45.0 deg from grid"]
+    assert flags == ["", "orientation 45.0 deg from the grid's"]
 
 
 @pytest.mark.parametrize(

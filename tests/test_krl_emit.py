@@ -303,6 +303,9 @@ def test_command_allow_config_change(tmp_path, capsys):
     cell_file.write_text(text)
     (tmp_path / "grid_200mm.csv").write_bytes((CELL.parent / "grid_200mm.csv").read_bytes())
     args = ["krl", str(POINTS), "--cell", str(cell_file), "-o", str(tmp_path / "o")]
+    assert main(args) == 2  # the grid holds in Status 6 only
+    assert "72 another Status than the grid's" in capsys.readouterr().err
+    args.append("--no-correction")
     assert main(args) == 2
     err = capsys.readouterr().err
     assert "hole 'WP-R1-001'" in err and "with Status 0" in err

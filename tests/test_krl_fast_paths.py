@@ -206,7 +206,9 @@ def test_pair_read_in_order_as_by_name(rows, order, shuffled):
         names = [names[j] for j in order if j < len(names)]
     src = ["DEF t( )", "$BASE = BASE_DATA[1]"] + [f"LIN {n}" for n in names] + ["END"]
     texts = {"t.src": "\n".join(src) + "\n", "t.dat": "\n".join(dat + ["ENDDAT"]) + "\n"}
-    opts = Options(model=PAIR_MODEL, base_data={1: np.eye(4)}, robot_T_program=np.eye(4))
+    opts = Options(
+        model=PAIR_MODEL, base_data={1: np.eye(4)}, robot_T_program=np.eye(4), allow_partial=True
+    )
     fast = rewrite_krl(texts, opts)
     init = krl_rewrite._Context.__init__
 

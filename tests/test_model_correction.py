@@ -3,24 +3,30 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from accugrid.codegen.cli import main
-from accugrid.compensation.corrector import Corrector
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.model_correction import model_correct, residual_grid
+from accugrid.compensation.policy import F_SINGULAR, TOO_LONG, UNREACHABLE, Policy
 from accugrid.compensation.settings import CorrectionSettings
+from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
 
 CALIBRATED = load_robot("kr210-realistic")  # its true robot stands for the calibrated arm
 PAPER = load_robot("kr210-paper")
+# the same model claiming what a calibrated file's identification validated: 0.5 mm per axis,
+# so a residual grid may be offset by up to 1 mm (SETUP_FACTOR x) on average
+CLAIMING = dataclasses.replace(PAPER, validated_max_mm=np.full(3, 0.5))
 STATUS = 6  # the seed region's Status at A 0 B 90 C 0 (kinematics.simulation.grid_status)
 LO, HI = np.array([1300.0, -500.0, 1200.0]), np.array([2100.0, 500.0, 2000.0])
 
@@ -113,7 +119,7 @@ def test_residual_grid_makes_model_plus_grid_exact_at_the_vertices():
     abc = np.array([0.0, 90.0, 0.0])
     vertices = _vertices()
     measured = drive(CALIBRATED, vertices, abc, STATUS)
-    grid = residual_grid(PAPER, (vertices, measured, np.tile(abc, (len(vertices), 1))), STATUS)
+    grid = residual_grid(CLAIMING, (vertices, measured, np.tile(abc, (len(vertices), 1))), STATUS)
     assert np.abs(grid.errors).max() > 0.1  # the model really leaves something
     # model + residual grid predicts the measured position at every vertex
     model_reach = drive(PAPER, vertices, abc, STATUS)
@@ -128,7 +134,7 @@ def test_model_plus_residual_grid_lands_exactly_when_the_residual_is_constant():
     offset = np.array([0.3, -0.2, 0.5])
     vertices = _vertices()
     measured = drive(PAPER, vertices, abc, STATUS) + offset
-    grid = residual_grid(PAPER, (vertices, measured, np.tile(abc, (len(vertices), 1))), STATUS)
+    grid = residual_grid(CLAIMING, (vertices, measured, np.tile(abc, (len(vertices), 1))), STATUS)
     rng = np.random.default_rng(3)
     targets = grid.origin + rng.uniform(0.05, 0.95, (20, 3)) * (grid.upper - grid.origin)
     for method in ("idw", "trilinear"):
@@ -209,7 +215,7 @@ def test_correct_cli_residual_grid_of_a_perfect_model_changes_nothing(tmp_path, 
     a = np.array([[float(r[k]) for k in keys] for r in _rows(alone)])
     b = np.array([[float(r[k]) for k in keys] for r in _rows(both)])
     np.testing.assert_allclose(a, b, atol=3e-4, rtol=0)
-    assert "orientation 11.2 deg from residual grid" in _rows(both)[1]["flag"]
+    assert "orientation 11.2 deg from the residual grid's" in _rows(both)[1]["flag"]
 
 
 def test_correct_cli_drives_with_the_controllers_tool_not_the_identified_tcp(tmp_path, capsys):
@@ -240,7 +246,7 @@ def test_correct_cli_drives_with_the_controllers_tool_not_the_identified_tcp(tmp
     np.testing.assert_allclose(landed, target, atol=3e-4, rtol=0)
 
 
-# The one correction decision (compensation.corrector): grid alone, model, model + residual.
+# The one correction decision (compensation.policy): grid alone, model, model + residual.
 
 
 def _box_targets(grid: GridModel, seed: int, n: int = 20) -> np.ndarray:
@@ -256,58 +262,75 @@ def _measured_grid(robot, offset: float | np.ndarray = 0.0) -> GridModel:
     return GridModel.from_measurements((vertices, measured, np.tile(abc, (len(vertices), 1))))
 
 
-def test_corrector_model_only_lands_on_the_targets_in_the_first_points_status():
+def test_policy_model_only_lands_on_the_targets_in_the_first_points_status():
     targets = _box_targets(_measured_grid(CALIBRATED), seed=5)
     abc = np.tile([0.0, 90.0, 0.0], (len(targets), 1))
-    corrector = Corrector.build(CorrectionSettings(), None, CALIBRATED, points=targets, abc_deg=abc)
-    assert corrector.grid is None and corrector.status == STATUS
-    result = corrector.correct(targets, abc)
-    assert result.ok.all() and (result.reason == "").all()
-    reached = drive(CALIBRATED, result.command, abc, STATUS)
+    policy = Policy.build(CorrectionSettings(), None, CALIBRATED, points=targets, abc_deg=abc)
+    assert policy.grid is None and policy.status == STATUS
+    verdict = policy.decide(targets, abc_to_matrix(abc))
+    assert verdict.corrected.all() and ((verdict.flags | F_SINGULAR) == F_SINGULAR).all()
+    reached = drive(CALIBRATED, verdict.command, abc, STATUS)
     assert np.linalg.norm(reached - targets, axis=1).max() < 1e-3
-    assert np.linalg.norm(result.command - targets, axis=1).min() > 0.5  # it did correct
+    assert np.linalg.norm(verdict.command - targets, axis=1).min() > 0.5  # it did correct
 
 
-def test_corrector_model_plus_residual_grid_lands_on_the_targets():
+def test_policy_model_plus_residual_grid_lands_on_the_targets():
     # The real arm: the model kr210-paper moved by a constant offset the model does not know.
     offset = np.array([0.3, -0.2, 0.5])
     grid = _measured_grid(PAPER, offset)
-    corrector = Corrector.build(CorrectionSettings(method="trilinear"), grid, PAPER)
-    assert corrector.status == STATUS  # the grid's measurement Status
+    policy = Policy.build(CorrectionSettings(method="trilinear"), grid, CLAIMING)
+    assert policy.status == STATUS == policy.grid_status  # the grid's measurement Status
     np.testing.assert_allclose(
-        corrector.grid.errors.reshape(-1, 3), np.tile(-offset, (27, 1)), atol=1e-9
+        policy.grid.errors.reshape(-1, 3), np.tile(-offset, (27, 1)), atol=1e-9
     )
     targets = _box_targets(grid, seed=7)
     abc = np.tile([0.0, 90.0, 0.0], (len(targets), 1))
-    result = corrector.correct(targets, abc)
-    assert result.ok.all()
-    reached = drive(PAPER, result.command, abc, STATUS) + offset
+    verdict = policy.decide(targets, abc_to_matrix(abc))
+    assert verdict.corrected.all()
+    reached = drive(PAPER, verdict.command, abc, STATUS) + offset
     assert np.linalg.norm(reached - targets, axis=1).max() < 1e-3
 
 
-def test_corrector_keeps_a_given_status_and_reports_unreachable_targets():
-    corrector = Corrector.build(CorrectionSettings(), None, CALIBRATED, status=STATUS)
-    assert corrector.status == STATUS
+def test_policy_keeps_a_given_status_and_reports_unreachable_targets():
+    policy = Policy.build(CorrectionSettings(), None, CALIBRATED, status=STATUS)
+    assert policy.status == STATUS
     targets = np.array([[1500.0, 0.0, 1500.0], [5000.0, 0.0, 1500.0]])
-    result = corrector.correct(targets, np.tile([0.0, 90.0, 0.0], (2, 1)))
-    assert result.ok.tolist() == [True, False]
-    assert result.reason[1] == "unreachable"
+    verdict = policy.decide(targets, abc_to_matrix(np.tile([0.0, 90.0, 0.0], (2, 1))))
+    assert verdict.corrected.tolist() == [True, False]
+    assert verdict.code[1] == UNREACHABLE
+    assert verdict.reason(1) == "not reachable in KUKA Status 6: unreachable"
+    np.testing.assert_array_equal(verdict.command[1], targets[1])  # left as it is
 
 
-def test_corrector_without_a_model_is_the_grid_correction():
+def test_policy_without_a_model_is_the_grid_correction():
     grid = _measured_grid(CALIBRATED)  # the realistic arm's error field
     settings = CorrectionSettings(method="trilinear")
-    corrector = Corrector.build(settings, grid)
-    assert corrector.calibrated is None and corrector.grid is grid
+    policy = Policy.build(settings, grid)
+    assert policy.calibrated is None and policy.grid is grid
     targets = _box_targets(grid, seed=9)
-    result = corrector.correct(targets, np.tile([0.0, 90.0, 0.0], (len(targets), 1)))
-    assert result.ok.all()
-    np.testing.assert_array_equal(result.command, grid.correct(targets, settings))
+    verdict = policy.decide(targets, abc_to_matrix(np.tile([0.0, 90.0, 0.0], (len(targets), 1))))
+    assert verdict.corrected.all()
+    np.testing.assert_array_equal(verdict.command, grid.correct(targets, settings))
 
 
-def test_corrector_too_long_masks_corrections_above_the_safety_limit():
-    corrector = Corrector(CorrectionSettings(max_correction_mm=1.0), None)
-    command = np.array([[0.6, 0.8, 0.0], [3.0, 4.0, 0.0], [np.nan, np.nan, np.nan]])
-    length, over = corrector.too_long(np.zeros((3, 3)), command)
-    np.testing.assert_allclose(length, [1.0, 5.0, 0.0])
-    assert over.tolist() == [False, True, False]
+def test_policy_refuses_corrections_above_the_safety_limit_whatever_allow_partial():
+    grid = _measured_grid(CALIBRATED)
+    policy = Policy.build(CorrectionSettings(max_correction_mm=0.01), grid)
+    targets = _box_targets(grid, seed=3, n=3)
+    verdict = policy.decide(targets)
+    assert (verdict.code == TOO_LONG).all()
+    length = np.linalg.norm(grid.correct(targets) - targets, axis=1)
+    np.testing.assert_allclose(verdict.value, length)
+    with pytest.raises(InputError, match="exceeds the safety limit of 0.01 mm"):
+        verdict.enforce(str, lambda i: (None,), allow_partial=True)
+
+
+def test_residual_grid_setup_check_runs_for_a_model_without_identification():
+    # A model file without an identification: section makes no accuracy claim; a residual grid
+    # offset by 1 mm (measured with another tool or base) must still be refused, not added.
+    grid = _measured_grid(PAPER, np.array([0.0, 0.0, 1.0]))
+    assert PAPER.validated_max_mm is None
+    with pytest.raises(InputError, match="offset from the model by"):
+        Policy.build(CorrectionSettings(), grid, PAPER)
+    small = _measured_grid(PAPER, np.array([0.0, 0.0, 0.1]))  # within the floor: accepted
+    assert Policy.build(CorrectionSettings(), small, PAPER).grid is not None

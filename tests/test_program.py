@@ -122,8 +122,11 @@ def test_hole_outside_the_grid_is_named():
     text = "id,x,y,z,i,j,k\nIN,0,150,0,0,0,-1\nHIGH,0,1200,0,0,0,-1\n"
     with pytest.raises(InputError) as info:
         build_program(parse_points(text, "p.csv"), cell(), robot(), grid())
-    assert "1 hole(s) outside the grid box" in info.value.message
-    assert "hole 'HIGH' (p.csv:3)" in info.value.message
+    assert "1 hole(s) cannot be corrected (1 outside the grid)" in info.value.message
+    assert "hole 'HIGH' (p.csv:3): outside the grid box by 100.000 mm" in info.value.message
+    prog = build_program(parse_points(text, "p.csv"), cell(), robot(), grid(), allow_partial=True)
+    assert prog.correction[1].tolist() == [0.0, 0.0, 0.0] and prog.correction[0].any()
+    assert prog.uncorrected == ["not corrected: hole HIGH: outside the grid box by 100.000 mm"]
 
 
 def test_status_that_cannot_be_kept_is_an_error_unless_allowed():
@@ -147,12 +150,20 @@ def test_wrist_singularity_warning_names_the_hole():
     np.testing.assert_allclose(pose_from_xyzabc(x)[:3, 3], base_T_tcp[:3, 3], atol=1e-6)
 
 
-def test_orientation_far_from_the_grid_is_a_warning():
-    # drill axis tilted 20 deg away from base -Z (robot +X): still reachable
-    t = np.radians(20)
-    text = f"id,x,y,z,i,j,k\nTILT,100,300,0,{np.sin(t):.6f},0,{-np.cos(t):.6f}\n"
-    prog = build_program(parse_points(text, "t.csv"), cell(), robot(), grid())
-    assert any("from the grid's measured orientation" in w and "TILT" in w for w in prog.warnings)
+def test_orientation_far_from_the_grid_is_flagged_or_refused_as_in_correct():
+    # drill axis tilted 10 deg (flagged) or 20 deg (beyond the limit: refused, as correct and
+    # rewrite do) away from base -Z (robot +X): still reachable
+    for deg, refused in ((10, False), (20, True)):
+        t = np.radians(deg)
+        text = f"id,x,y,z,i,j,k\nTILT,100,300,0,{np.sin(t):.6f},0,{-np.cos(t):.6f}\n"
+        if refused:
+            with pytest.raises(InputError, match="orientation 20.0 deg from the grid's"):
+                build_program(parse_points(text, "t.csv"), cell(), robot(), grid())
+            continue
+        prog = build_program(parse_points(text, "t.csv"), cell(), robot(), grid())
+        assert any(
+            "orientation 10.0 deg from the grid's" in w and "TILT" in w for w in prog.warnings
+        )
 
 
 def test_points_without_orientation_or_holes_are_refused():

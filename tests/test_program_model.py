@@ -50,11 +50,11 @@ def test_cell_correction_model_is_a_path_next_to_the_cell(tmp_path):
 
 def test_krl_with_a_model_names_it_in_the_header_and_refuses_no_correction(tmp_path, capsys):
     out = tmp_path / "krl"
-    argv = ["krl", str(POINTS), "--cell", str(CELL), "--model", "kr210-realistic", "-o", str(out)]
+    argv = ["krl", str(POINTS), "--cell", str(CELL), "--model", "kr210-paper", "-o", str(out)]
     assert main(argv) == 0
     src = next(out.glob("*.src")).read_text()
-    assert "; model kr210-realistic sha256 built-in" in src
-    assert "corrected by model kr210-realistic and the residual grid" in src
+    assert "; model kr210-paper sha256 built-in" in src
+    assert "corrected by model kr210-paper and the residual grid" in src
     assert main([*argv[:-2], "--no-correction", "-o", str(tmp_path / "k2")]) == 2
     assert "--model and --no-correction exclude each other" in capsys.readouterr().err
 

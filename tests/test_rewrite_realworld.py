@@ -85,7 +85,7 @@ def test_realworld_rewrite(realworld, tmp_path, case):
     inputs = [realworld / n for n in names]
     out = tmp_path / "out"
     target = out if len(inputs) == 2 else out / inputs[0].name  # a pair: -o is a folder
-    args = ["rewrite", *map(str, inputs), "--cell", str(cell), "-o", str(target)]
+    args = ["rewrite", "--allow-partial", *map(str, inputs), "--cell", str(cell), "-o", str(target)]
     report = tmp_path / "report.csv"
     assert main([*args, "--report", str(report), *options]) == 0
     rows = list(csv.DictReader(report.open()))
@@ -133,7 +133,8 @@ def test_realworld_reasons(realworld, tmp_path):
     side = realworld / "krl" / "chinamilling_St1_Job1_Side1.src"
     report = tmp_path / "r.csv"
     args = [str(side), str(side.with_suffix(".dat")), "--cell", str(cell)]
-    assert main(["rewrite", *args, "-o", str(tmp_path / "o"), "--report", str(report)]) == 0
+    argv = ["rewrite", "--allow-partial", *args, "-o", str(tmp_path / "o"), "--report", str(report)]
+    assert main(argv) == 0
     text = report.read_text()
     assert "frame arithmetic" in text and "MoveSettings" in text and "$POS_ACT" in text
     robodk = realworld / "krl" / "robodk_Program.src"

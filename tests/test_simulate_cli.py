@@ -37,7 +37,7 @@ def test_good_run_writes_the_measurement_csv(tmp_path):
     lines = out.read_text().splitlines()
     assert lines[0].startswith("# accugrid simulate: robot kr210-paper")
     rows = list(csv.DictReader(lines[1:]))
-    assert list(rows[0]) == "id x y z a b c x_meas y_meas z_meas".split()
+    assert list(rows[0]) == "id x y z a b c s x_meas y_meas z_meas".split()  # s: the Status
     assert len(rows) == 3 * 3 * 2 * 2  # 18 vertices x 2 repeats, consecutive
     assert [r["id"] for r in rows[:4]] == ["P1", "P1", "P2", "P2"]
     assert rows[0]["x"] == "1400.0000" and rows[0]["z"] == "1300.0000"

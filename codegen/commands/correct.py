@@ -9,23 +9,26 @@ The output CSV has every input column untouched, then x_cmd,y_cmd,z_cmd (the com
 ex,ey,ez (the correction applied, P' - P, mm; 4 decimals) and flag (empty, or why a point
 deserves a look: clamped to the grid, orientation far from the grid's).
 
-Refused (exit 2, nothing written): points outside the grid box (unless --outside clamp), any
-correction longer than --max-correction, a point whose orientation differs from the grid's by
-more than --orientation-limit (unless --allow-orientation). The orientation difference is the
-angle of the relative rotation for a,b,c points, the angle between the drill axis and the grid
-tool's Z axis for i,j,k points.
+Refused (exit 2, nothing written): any correction longer than --max-correction; unless
+--allow-partial, any point the grid or model does not correct: outside the grid box (unless
+--outside clamp), orientation more than --orientation-limit from the grid's (unless
+--allow-orientation), another KUKA Status (column s or --status) than the grid's. The
+orientation difference is the angle of the relative rotation for a,b,c points, the angle
+between the drill axis and the grid tool's Z axis for i,j,k points.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import add_abc, add_status, add_tool
+from accugrid.codegen.cli_options import add_abc, add_policy, add_status, add_tool
 from accugrid.codegen.corrected import CorrectRequest, correct_points
 from accugrid.compensation.grid import MAX_CORRECTION_MM
 from accugrid.compensation.measurements import REPEAT_TOL_MM
+from accugrid.compensation.policy import GRID_ORIENTATION_TOL_DEG, ORIENTATION_LIMIT_DEG
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
 
@@ -48,15 +51,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_status(
         parser,
-        "with --model: the KUKA Status the program runs in (default: the Status the --grid "
-        "was measured in, without --grid the IK default at the first point)",
+        "the KUKA Status of points without a column s; a grid corrects only points in the "
+        "Status it was measured in (with --model default: the grid's, without --grid the IK "
+        "default at the first point)",
     )
     add_abc(parser, "with --model: orientation of points without a,b,c, reference for i,j,k axes")
     add_tool(
         parser,
-        "with --model: the controller's TOOL_DATA, mm and deg (default: the model file's "
-        "identification.controller_tool, else its identified TCP)",
+        "with --model: the tool whose tip is to land (the drill as taught), x y z mm a b c deg, "
+        "on the controller and the calibrated arm (default: the SMR the model was measured "
+        "with: its identification.controller_tool and identified TCP)",
     )
+    add_policy(parser, "points")
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="CSV to write")
     parser.add_argument(
         "--method",
@@ -95,16 +101,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--orientation-tol",
         type=float,
-        default=5.0,
+        default=GRID_ORIENTATION_TOL_DEG,
         metavar="DEG",
-        help="flag points whose orientation differs from the grid's by more, deg (default: 5)",
+        help="flag points whose orientation differs from the grid's by more, deg "
+        f"(default: {GRID_ORIENTATION_TOL_DEG:g})",
     )
     parser.add_argument(
         "--orientation-limit",
         type=float,
-        default=15.0,
+        default=ORIENTATION_LIMIT_DEG,
         metavar="DEG",
-        help="refuse points whose orientation differs from the grid's by more, deg (default: 15)",
+        help="refuse points whose orientation differs from the grid's by more, deg "
+        f"(default: {ORIENTATION_LIMIT_DEG:g})",
     )
     parser.add_argument(
         "--allow-orientation",
@@ -145,11 +153,15 @@ def run(args: argparse.Namespace) -> int:
         status=args.status,
         abc=tuple(args.abc),
         tool=None if args.tool is None else tuple(args.tool),
+        strict=args.strict,
+        allow_partial=args.allow_partial,
     )
     model_file = args.model if args.model and Path(args.model).is_file() else None
     check_targets([args.output], [args.points, args.grid, model_file], args.force)
     job = correct_points(request)
     write_files(job.files, job.inputs, args.force)
+    for line in job.warnings:
+        print(f"accugrid correct: warning: {line}", file=sys.stderr)
     for line in job.lines:
         print(line)
     return 0

@@ -3,12 +3,15 @@
 Every Cartesian position that can be placed in the robot frame is corrected with the grid
 (P' = P + e, robot frame, converted back to the program frame); only those X, Y, Z numbers change,
 with the input's decimal places but never coarser than 0.01 mm (0.001 in). Every other byte
-(spacing, comments, line endings, encoding) is kept. Positions outside the grid (home, clearance,
-approach poses) stay as they are; anything that cannot be placed (frame arithmetic ':', a base
-from a variable or a call, EK(), AXIS/E6AXIS targets, $POS_ACT, G55-G59/G92 offsets, arcs,
-unknown motions, parameter words) is left untouched, and so is a position more than
---orientation-limit from the grid's orientation (flagged beyond --orientation-tol, as in
-accugrid correct). The report lists each position with its status and reason.
+(spacing, comments, line endings, encoding) is kept. Anything that cannot be placed (frame
+arithmetic ':', a base from a variable or a call, EK(), AXIS/E6AXIS targets, $POS_ACT,
+G55-G59/G92 offsets, arcs, unknown motions, parameter words) is left untouched. A placed
+position the grid or model does not correct (outside the grid, more than --orientation-limit
+from the grid's orientation, another KUKA Status than the grid's: the S of a KRL position, the
+cell's configuration for G-code) fails the job, and so does a rewrite that corrects nothing,
+unless --allow-partial, which leaves them as they are, counts them by reason on stderr and marks
+them in the report and the --header. The report lists each position with its status and
+reason.
 
 KRL: PROGRAM is a .src or .dat; give the .dat beside it as the second argument. A stored position
 is corrected only if a motion uses it (never a frame given to $TOOL/$BASE/$LOAD, an operand of
@@ -38,11 +41,12 @@ import sys
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cli_options import add_policy
 from accugrid.codegen.dialects import dialect_of
 from accugrid.codegen.program_text import MAX_BYTES
-from accugrid.codegen.rewrite import ORIENTATION_LIMIT_DEG
 from accugrid.codegen.rewrite_job import RewriteRequest, rewrite_job
-from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM, GRID_ORIENTATION_TOL_DEG
+from accugrid.compensation.policy import GRID_ORIENTATION_TOL_DEG, ORIENTATION_LIMIT_DEG
+from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.kinematics.errors import InputError
 
 __all__ = ["NAME", "add_arguments", "run"]
@@ -65,9 +69,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="output file or dir")
     parser.add_argument("--report", metavar="REPORT.csv", help="write the per-position report")
-    parser.add_argument(
-        "--strict", action="store_true", help="error when a position lies outside the grid"
-    )
+    add_policy(parser, "positions")
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
     parser.add_argument(
         "--config-dat", metavar="$config.dat", help="KRL $config.dat with BASE_DATA[n] values"
@@ -163,6 +165,13 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--tolerance must be > 0 mm, got {args.tolerance}")
     if args.base is not None and not 0 <= args.base <= 32:
         raise InputError(f"--base must be a BASE_DATA number 0..32, got {args.base}")
+    if args.strict and args.model is None:
+        print(
+            "accugrid rewrite: note: --strict is no longer needed for positions outside the "
+            "grid (refused by default now; --allow-partial keeps them as they are); it refuses "
+            "positions outside a model's poses",
+            file=sys.stderr,
+        )
     outputs = _outputs(inputs, args.output)
     targets = list(outputs.values()) + ([Path(args.report)] if args.report else [])
     if len(set(map(os.path.abspath, targets))) != len(targets):
@@ -180,6 +189,7 @@ def run(args: argparse.Namespace) -> int:
             header=args.header,
             decimals=args.decimals,
             strict=args.strict,
+            allow_partial=args.allow_partial,
             base=args.base,
             trust_calls=args.trust_calls,
             ignore_external_axes=args.ignore_external_axes,

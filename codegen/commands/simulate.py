@@ -5,7 +5,8 @@ program does (--status S, default: the IK default configuration's Status at the 
 basic area, A3 >= phi and the wrist closest to A4 = A5 = A6 = 0); the "true" robot (nominal DH
 plus the parameter errors of its YAML, e.g. seed Table 1 for kr210-paper) lands where its own
 forward kinematics puts it. Optional Gaussian noise: robot repeatability and tracker, per axis,
-seeded. The result is a measurement CSV (id,x,y,z,a,b,c,x_meas,y_meas,z_meas; mm and deg) for
+seeded. The result is a measurement CSV (id,x,y,z,a,b,c,s,x_meas,y_meas,z_meas; mm and deg, s
+the KUKA Status the grid holds in) for
 `accugrid correct` & co.
 
 --poses PLAN.csv instead measures the poses of a plan at any orientation (columns x,y,z,a,b,c,

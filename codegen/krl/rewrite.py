@@ -12,6 +12,7 @@ $ROBROOT).
 
 from __future__ import annotations
 
+import re
 from functools import cached_property
 from itertools import chain, repeat
 from pathlib import Path
@@ -36,8 +37,8 @@ from accugrid.codegen.rewrite import (
     Result,
     Rows,
     correct_points,
+    partial_check,
     rotations_of,
-    strict_check,
 )
 from accugrid.codegen.splice import ByteSplicer, literals
 from accugrid.kinematics.frames import pose_from_xyzabc
@@ -74,8 +75,12 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
         frames = ctx.frames
         files = [(scan.path, scan.text, scan.table) for scan in scans]
         del scans, ctx, config  # the uses and names are done with: memory for what follows
+        status = [
+            aggregate_status(text, table.agg[t])
+            for (_, text, table), t in zip(files, todo, strict=True)
+        ]
         targets = _correct(
-            [table for _, _, table in files], todo, placed, frames, rows, starts, opts
+            [table for _, _, table in files], todo, placed, frames, rows, starts, opts, status
         )
         for s, (path, text, table) in enumerate(files):
             if todo[s].size:
@@ -84,7 +89,7 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
     for path, text in texts.items():
         if out[path] is None:
             out[path] = text.encode("latin-1")  # nothing corrected in it
-    strict_check(rows, opts)
+    partial_check(rows, opts)
     return Result(out, rows)
 
 
@@ -484,12 +489,14 @@ def _correct(
     rows: Rows,
     starts: np.ndarray,
     opts: Options,
+    status: list[np.ndarray],
 ) -> list[np.ndarray]:
     """Correct every placed position of every file at once (one ``correct_points``).
 
     ``todo[s]``: placed table rows of file s, ``placed[s][todo[s]]`` the index of each one's
-    robot_T_base in ``frames``, ``starts[s]``: its first report row. Per file: the corrected
-    targets (n, 3) mm base frame (NaN rows: not corrected)."""
+    robot_T_base in ``frames``, ``starts[s]``: its first report row, ``status[s]`` each one's
+    own KUKA Status (-1: none). Per file: the corrected targets (n, 3) mm base frame (NaN rows:
+    not corrected)."""
     stack = np.array(frames)
     which = np.concatenate([placed[s][t] for s, t in enumerate(todo)])
     base_xyz = np.concatenate([table.xyz[t] for table, t in zip(tables, todo, strict=True)])
@@ -508,7 +515,7 @@ def _correct(
     first[1:] = (which[1:] != which[:-1]) | (abc[1:] != abc[:-1]).any(axis=1)  # NaN: its own
     heads = np.flatnonzero(first)
     rotations = rotations_of(stack[which[heads]][:, :3, :3], abc[heads])[np.cumsum(first) - 1]
-    corrected = correct_points(robot, rows, at, opts, rotations)
+    corrected = correct_points(robot, rows, at, opts, rotations, status=np.concatenate(status))
     del rotations
     targets = np.full((n, 3), np.nan)
     for a in range(0, n, _BLOCK):
@@ -519,6 +526,35 @@ def _correct(
         )  # R^T e
     bounds = np.cumsum([0] + [t.size for t in todo])
     return [targets[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
+_STATUS_RE = re.compile(r"[{,]\s*S\s+(?:'B([01]+)'|'H([0-9A-F]+)'|(\d+))", re.IGNORECASE)
+
+
+def aggregate_status(text: str, agg: np.ndarray) -> np.ndarray:
+    """The KUKA Status S (n,) of the aggregates whose ``{`` is at text offsets ``agg`` (n,)
+    (-1: no S); ``S 6``, ``S 'B110'`` or ``S 'H6'``. One regular-expression pass over the text, the
+    matches assigned to their aggregates by offset."""
+    out = np.full(len(agg), -1, np.int64)
+    if not len(agg) or "S" not in text.upper():
+        return out
+    found = [(m.start(), m.group(1), m.group(2), m.group(3)) for m in _STATUS_RE.finditer(text)]
+    if not found:
+        return out
+    at = np.array([f[0] for f in found], np.int64)
+    value = np.array(
+        [int(b, 2) if b else int(h, 16) if h else int(d) for _, b, h, d in found], np.int64
+    )
+    order = np.argsort(agg, kind="stable")
+    starts = agg[order]
+    braces = np.flatnonzero(np.frombuffer(text.encode("latin-1", "replace"), np.uint8) == 125)
+    braces = np.append(braces, len(text))  # an aggregate's "}" is the first after its "{"
+    closes = braces[np.searchsorted(braces, starts)]
+    k = np.searchsorted(starts, at, side="right") - 1
+    inside = k >= 0
+    inside[inside] &= at[inside] < closes[k[inside]]
+    out[order[k[inside]]] = value[inside]
+    return out
 
 
 def _splice(

@@ -20,8 +20,11 @@ instruction accugrid does not know, not used, without literal numbers, with a qu
 not unit, or with external axes in use (unless ``--ignore-external-axes``); and every
 ``tooldata``, ``wobjdata``, ``jointtarget``, ``loaddata``, ``pose`` (never corrected). Only the
 x, y, z numbers of a corrected robtarget change (the input's decimals, at least 0.01 mm);
-orientation, confdata and every other byte stay. A module where nothing can be placed is an
-InputError (exit 2) naming the first robtarget and its reason.
+orientation, confdata and every other byte stay. Whether a placed robtarget is corrected is
+the correction policy's verdict (``codegen.rewrite.correct_points``), and so is the job's rule
+(``partial_check``: a robtarget the policy does not correct, or a module where none is
+corrected, fails the job unless ``--allow-partial``); a module without robtargets is an
+InputError too.
 """
 
 from __future__ import annotations
@@ -44,12 +47,11 @@ from accugrid.codegen.program_text import (
 )
 from accugrid.codegen.rewrite import (
     CORRECTED,
-    OUTSIDE,
     Options,
     Result,
     Rows,
     correct_points,
-    strict_check,
+    partial_check,
 )
 from accugrid.codegen.textsafe import comment_text
 from accugrid.kinematics.errors import InputError
@@ -531,13 +533,12 @@ def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
         done = ~np.isnan(new[:, 0])
         rows.new[done] = np.array([float(e[2]) for e in edits]).reshape(-1, 3)
         rows.rounding_mm[done] = np.linalg.norm(rows.new[done] - new[done], axis=1)
-        extra = _other_rows(path, found)
-        parts += [rows, extra]
-        if not rows.count(CORRECTED) and not rows.count(OUTSIDE):
-            _nothing_placed(path, found, rows)
-    all_rows = Rows.concat(parts)
-    strict_check(all_rows, opts)
-    return Result(data, all_rows)
+        if not found.targets and not opts.allow_partial:
+            what = f"; {len(found.others)} data left as they are" if found.others else ""
+            raise InputError(f"no robtarget in this module: nothing to correct{what}", path, 1)
+        partial_check(rows, opts)  # the policy's job rule, over the robtargets
+        parts += [rows, _other_rows(path, found)]
+    return Result(data, Rows.concat(parts))
 
 
 def _matrices(quats: np.ndarray) -> np.ndarray:
@@ -557,24 +558,6 @@ def _other_rows(path: str, found: RapidPositions) -> Rows:
         [o[1] for o in found.others],
         [o[2] for o in found.others],
         np.full((n, 3), np.nan),
-    )
-
-
-def _nothing_placed(path: str, found: RapidPositions, rows: Rows) -> None:
-    """InputError at the first robtarget, with the counts by reason: no robtarget of the module
-    was corrected or left outside the grid."""
-    if not found.targets:
-        what = f"; {len(found.others)} data left as they are" if found.others else ""
-        raise InputError(f"no robtarget in this module: nothing to correct{what}", path, 1)
-    counts: dict[str, int] = {}
-    for reason in rows.reason:
-        key = re.sub(r" (at )?\(?line \d+\)?", "", reason) or "not corrected"
-        counts[key] = counts.get(key, 0) + 1
-    summary = "; ".join(f"{c} {r}" for r, c in sorted(counts.items(), key=lambda kv: -kv[1]))
-    raise InputError(
-        f"no robtarget can be placed ({len(found.targets)}: {summary}); first {rows.name[0]}: "
-        f"{rows.reason[0]}",
-        *rows.where(0),
     )
 
 
