@@ -19,7 +19,8 @@ from rewrite_helpers import E_CONST, write_grid
 from scipy.spatial.transform import Rotation
 
 from accugrid.codegen.cli import main
-from accugrid.kinematics.configuration import abb_confdata
+from accugrid.codegen.rapid.rewrite import kuka_status_of
+from accugrid.kinematics.configuration import abb_confdata, status_turn
 from accugrid.kinematics.robot import load_robot
 
 NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
@@ -84,6 +85,8 @@ def test_every_robtarget_has_the_confdata_of_its_ik_solution(tmp_path_factory, x
     own = robot.ik(poses, status=int(first.status[0]))
     assert own.ok.all()
     np.testing.assert_array_equal(abb_confdata(robot, own.q), conf)
+    # the rewrite's reading of a cfx as a KUKA Status is the Status of that joint solution
+    np.testing.assert_array_equal(kuka_status_of(conf[:, 3]), status_turn(robot, sol.q)[0])
 
 
 def test_module_frame_tool_and_work_object():
@@ -433,3 +436,22 @@ def test_the_rewritten_example_is_what_rewrite_writes(tmp_path):
     args = ["rewrite", str(EXAMPLES / "cam_drill.mod"), "--cell", str(cell), "--header"]
     assert main([*args, "-o", str(out)]) == 0
     assert out.read_bytes() == (EXAMPLES / "cam_drill_rewritten.mod").read_bytes()
+
+
+def test_a_robtarget_in_another_configuration_than_the_grid_is_refused(tmp_path, capsys):
+    # examples/cam_drill.mod with pHole3 in cfx 0 (KUKA Status 2); the grid holds in Status 6
+    text = (EXAMPLES / "cam_drill.mod").read_bytes().decode("latin-1")
+    line = next(k for k in text.split("\r\n") if "pHole3:=" in k)
+    text = text.replace(line, line.replace("[0,0,-1,1]", "[0,0,-1,0]"))
+    program = tmp_path / "cam.mod"
+    program.write_bytes(text.encode("latin-1"))
+    cell, out = EXAMPLES / "cell_irb6700.yaml", tmp_path / "out.mod"
+    assert main(["rewrite", str(program), "--cell", str(cell), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"{program}:9:" in err and "Status" in err and not out.exists()
+    report = tmp_path / "r.csv"
+    args = ["rewrite", str(program), "--cell", str(cell), "-o", str(out), "--report", str(report)]
+    assert main([*args, "--allow-partial"]) == 0
+    rows = {r.split(",")[2]: r for r in report.read_text().splitlines()[1:]}
+    assert ",corrected," not in rows["pHole3"] and "Status" in rows["pHole3"]
+    assert ",corrected," in rows["inline MoveL"]

@@ -54,9 +54,10 @@ from accugrid.codegen.rewrite import (
     partial_check,
 )
 from accugrid.codegen.textsafe import comment_text
+from accugrid.kinematics.configuration import kuka_status
 from accugrid.kinematics.errors import InputError
 
-__all__ = ["RapidPositions", "add_header", "rewrite_rapid", "scan", "splice"]
+__all__ = ["RapidPositions", "add_header", "kuka_status_of", "rewrite_rapid", "scan", "splice"]
 
 QUATERNION_TOL = 1e-3  # |  |q| - 1 | beyond this: not an orientation the controller accepts
 UNUSED_AXIS = 8.9e9  # 9E+09 marks an external axis not in use
@@ -115,7 +116,8 @@ _MODULE_LINE = re.compile(r"^[ \t]*MODULE\b.*$", re.I | re.M)
 class _Target:
     """One robtarget: ``name`` (``p``, ``p{3}``, ``inline MoveL``), its statement's ``line``,
     the offsets (start, end) of its x, y, z numbers, x, y, z and the quaternion [q1..q4] as
-    written (``values``, 7), why its own numbers keep it from correction (``own``), its frame
+    written (``values``, 7), the cfx of its confdata, why its own numbers keep it from
+    correction (``own``), its frame
     (0 robot, 1 the cell's work object, -1 none yet) and the reason it is left as it is (""
     when placeable)."""
 
@@ -123,6 +125,7 @@ class _Target:
     line: int
     spans: list[tuple[int, int]]
     values: list[float]
+    cfx: int = -1
     own: str = ""
     frame: int = -1
     reason: str = ""
@@ -444,7 +447,8 @@ def _literal(name, lit, offset, where, ignore_external_axes, line=None) -> _Targ
     spans = [(offset + lit.start(g), offset + lit.end(g)) for g in (1, 2, 3)]
     numbers = [float(v) for v in lit.groups()]
     own = _own_reason(numbers, ignore_external_axes)
-    return _Target(name, line or where(offset + lit.start())[0], spans, numbers[:7], own)
+    line = line or where(offset + lit.start())[0]
+    return _Target(name, line, spans, numbers[:7], int(numbers[10]), own)
 
 
 def _own_reason(numbers: list[float], ignore_external_axes: bool) -> str:
@@ -523,7 +527,8 @@ def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
             robot = np.einsum("nij,nj->ni", t[:, :3, :3], xyz) + t[:, :3, 3]
             quats = np.array([found.targets[i].values[3:7] for i in at.tolist()])
             rotations = t[:, :3, :3] @ _matrices(quats)
-            corrected = correct_points(robot, rows, at, opts, rotations)
+            cfx = np.array([found.targets[i].cfx for i in at.tolist()])
+            corrected = correct_points(robot, rows, at, opts, rotations, status=kuka_status_of(cfx))
             back = np.einsum("nji,nj->ni", t[:, :3, :3], corrected - robot)  # R^T e
             done = np.flatnonzero(np.isfinite(corrected[:, 0]))
             new[at[done]] = xyz[done] + back[done]
@@ -539,6 +544,18 @@ def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
         partial_check(rows, opts)  # the policy's job rule, over the robtargets
         parts += [rows, _other_rows(path, found)]
     return Result(data, Rows.concat(parts))
+
+
+def kuka_status_of(cfx: np.ndarray) -> np.ndarray:
+    """The KUKA Status (N,) of the arm configuration a confdata's cfx (N,) names (-1 where cfx
+    is not 0..7), so that the policy holds each robtarget against the Status its grid was
+    measured in. cfx = 4 * (wrist centre behind axis 1) + 2 * (behind the lower arm) + (axis 5
+    negative); behind axis 1 is the shoulder flag (Status bit 0), axis 5 negative the wrist
+    (bit 2), and behind the lower arm is the elbow flag (bit 1) negated within the IRB 6700's
+    axis 3 range (``kinematics.configuration``)."""
+    cfx = np.asarray(cfx, dtype=np.int64)
+    status = kuka_status((cfx >> 2) & 1, 1 - ((cfx >> 1) & 1), cfx & 1)
+    return np.where((cfx >= 0) & (cfx <= 7), status, -1)
 
 
 def _matrices(quats: np.ndarray) -> np.ndarray:
