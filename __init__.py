@@ -5,12 +5,14 @@ The repository's top-level folders install as this one package (``pyproject.toml
 ``accugrid.kinematics`` (robot models, IK, error model, frames), ``accugrid.compensation`` (grid
 model, plans, study), ``accugrid.codegen`` (points and cell files, program model, dialects, CLI) and
 ``accugrid.templates`` (Jinja2 templates). The names in ``__all__`` are the library surface; each is
-imported on first use, so ``import accugrid`` (and the CLI's start-up) stays cheap.
+imported on first use (``kinematics.exports``), so ``import accugrid`` (and the CLI's start-up)
+stays cheap.
 """
 
 import os
 import sys
-from importlib import import_module
+
+from accugrid.kinematics.exports import lazy_namespace
 
 
 def _version() -> str:
@@ -53,38 +55,45 @@ def _metadata_version(folder: str, kind: str) -> str | None:
 
 __version__ = _version()
 
-# public name -> module that defines it
-_API = {
-    "InputError": "accugrid.kinematics.errors",
-    "Robot": "accugrid.kinematics.robot",
-    "load_robot": "accugrid.kinematics.robot",
-    "RobotModel": "accugrid.kinematics.model",
-    "Configuration": "accugrid.kinematics.configuration",
-    "GridModel": "accugrid.compensation.grid",
-    "CorrectionSettings": "accugrid.compensation.settings",
-    "Policy": "accugrid.compensation.policy",
-    "Measurements": "accugrid.compensation.measurements",
-    "read_measurements": "accugrid.compensation.measurements",
-    "Points": "accugrid.codegen.points",
-    "read_points": "accugrid.codegen.points",
-    "Cell": "accugrid.codegen.cell",
-    "load_cell": "accugrid.codegen.cell",
-    "Program": "accugrid.codegen.program",
-    "build_program": "accugrid.codegen.program",
-    "render_krl": "accugrid.codegen.krl.emit",
-    "render_gcode": "accugrid.codegen.gcode.emit",
+# the names a script needs, by the package that lists (and lazily imports) them
+_PUBLIC = {
+    "accugrid.kinematics": (
+        "InputError",
+        "Robot",
+        "load_robot",
+        "RobotModel",
+        "Configuration",
+        "pose_set",
+        "identify",
+        "identification_summary",
+        "calibrated_yaml",
+    ),
+    "accugrid.compensation": (
+        "GridModel",
+        "CorrectionSettings",
+        "Policy",
+        "Measurements",
+        "read_measurements",
+        "TableFormat",
+        "model_correct",
+        "residual_grid",
+        "grid_plan",
+        "experiment_plan",
+        "identification_plan",
+    ),
+    "accugrid.codegen": (
+        "Points",
+        "read_points",
+        "Cell",
+        "load_cell",
+        "Program",
+        "build_program",
+        "render_krl",
+        "render_gcode",
+    ),
 }
+_API = {name: package for package, names in _PUBLIC.items() for name in names}
 
 __all__ = ["__version__", *_API]
 
-
-def __getattr__(name: str):
-    if name not in _API:
-        raise AttributeError(f"module 'accugrid' has no attribute {name!r}")
-    value = getattr(import_module(_API[name]), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = lazy_namespace(__name__, _API)

@@ -1,5 +1,19 @@
-"""File IO, the neutral program model, KRL and G-code emitters and parsers, and the CLI."""
+"""File IO, the neutral program model, the dialects (KRL, G-code) and the CLI. The names of
+``__all__`` besides ``__version__`` are imported on first use."""
 
 from accugrid import __version__
+from accugrid.kinematics.exports import lazy_namespace
 
-__all__ = ["__version__"]
+_API = {
+    "Points": "accugrid.codegen.points",
+    "read_points": "accugrid.codegen.points",
+    "parse_points": "accugrid.codegen.points",
+    "Cell": "accugrid.codegen.cell",
+    "load_cell": "accugrid.codegen.cell",
+    "Program": "accugrid.codegen.program",
+    "build_program": "accugrid.codegen.program",
+    "render_krl": "accugrid.codegen.krl.emit",
+    "render_gcode": "accugrid.codegen.gcode.emit",
+}
+__all__ = ["__version__", *_API]
+__getattr__, __dir__ = lazy_namespace(__name__, _API)

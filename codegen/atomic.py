@@ -9,20 +9,40 @@ Refused, with exit 2, even with ``--force``:
 - a target whose folder is a file.
 
 Writing (``write_files``): every file goes first to a temporary file beside its target
-(``.NAME.PID.RANDOM.accugrid.tmp``, created with the umask's permissions; a job of several files:
-into a temporary folder of that name inside the target's folder, as ``NAME``), each made durable
-(fsync, on a background thread as soon as it is written), then the temporaries are renamed over
-the targets (and the temporary folder removed). The ``main`` files are renamed last; the entry
-point (the last of them, e.g. ``NAME.src`` of a KRL job) is removed before any rename, and
-``stale`` files (modules of an earlier job with the same name) are removed before
-the main files are renamed: a job killed at any moment (even by SIGKILL) never leaves its entry
-point beside a mix of old and new files. A job of several files into a folder that does not
-exist yet is written into a temporary folder beside it (same naming), synced, and renamed once
-into place: the folder appears whole, with one rename instead of one per file. SIGTERM, SIGHUP
-and SIGINT are held during the renames; before them they end the write with the temporaries
-removed (exit 128 + signal).
-Temporaries (files and folders) a killed process left behind are removed by the next write
-into the same folder.
+(``.NAME.PID.RANDOM.accugrid.tmp``, NAME cut so the whole name fits in 255 bytes; created with the
+umask's permissions). A job of several files writes its temporaries into one temporary folder of
+that name inside each target folder, as ``NAME``. Every temporary is made durable (fsync, on a
+background thread as soon as it is written) before anything is replaced.
+
+All old or all new, SIGKILL and power loss included:
+
+- A job of one file: one rename over the target.
+- A job of several files into a folder that does not exist yet: written into a temporary folder
+  beside it, synced, and renamed once into place; the folder appears whole.
+- A job of several files otherwise is committed by a **journal**: once every temporary is
+  durable, the list of the job's steps (remove the old entry point, rename each temporary over
+  its target, delete the ``stale`` files, rename the ``main`` files last, in order) is written to
+  ``journal`` in the temporary folder of the entry point's folder, fsynced, and that folder
+  synced; the temporary folders in the job's other folders hold a ``link`` to it. Then the steps
+  run, the target folders are synced, and the temporary folders removed (the journal last).
+  Each step is guarded by its temporary still being there, so running the list again finishes
+  the job from wherever it stopped.
+- Recovery: every accugrid write (``check_targets`` and ``write_files``) first looks at the
+  temporary folders of processes that no longer run in each folder it writes into: one with a
+  journal (or a link to an existing journal) is finished, rolled forward to all new; anything
+  else (killed before the journal was in place) is deleted, which leaves all old.
+
+What a reader of a target folder sees: before the journal is in place, the old files only; after
+the job or its recovery, the new files only (and no stale module). Between a kill during the
+steps and the next accugrid write into one of the job's folders, the files may be a mix of old
+and new, but the entry point (the last ``main`` file, e.g. ``NAME.src`` of a KRL job, the program
+of a rewrite, the YAML of ``identify``) is absent: whoever starts from it never sees a mix. A job
+whose folders were moved or renamed between the kill and the recovery is not recovered.
+
+SIGTERM, SIGHUP and SIGINT are held from the journal to the end of the steps; before the journal
+they end the write with the temporaries removed (exit 128 + signal). An error during the steps
+(e.g. a folder made read-only meanwhile) leaves the journal for the next write to finish, and says
+so.
 """
 
 from __future__ import annotations
@@ -44,6 +64,11 @@ from accugrid.kinematics.inputfile import file_identities, tracked_inputs
 __all__ = ["JobFiles", "check_targets", "write_files"]
 
 _TMP_SUFFIX = ".accugrid.tmp"
+_JOURNAL = "journal"  # in a job's temporary folder: the job is committed
+_LINK = "link"  # in the job's other temporary folders: the journal's path
+_MAGIC = b"accugrid journal 1"
+_NAME_MAX = 255  # bytes of one file name (Linux, macOS, Windows filesystems)
+_PATH_MAX = 4096  # bytes of a path given to the system, with its final NUL (Linux)
 _SIGNALS = tuple(
     getattr(signal, name) for name in ("SIGTERM", "SIGHUP", "SIGINT") if hasattr(signal, name)
 )
@@ -120,14 +145,20 @@ def check_targets(
     force: bool = False,
 ) -> None:
     """Refuse before any work is done: a target that is an input, exists without ``force``, is
-    not a regular file, or cannot be created (see the module docstring)."""
+    not a regular file, or cannot be created (see the module docstring). An interrupted job in
+    the targets' folders is finished or removed first (``recover``)."""
     input_ids = _input_identities(inputs)
+    targets = [Path(t) for t in targets]
+    recover({t.parent for t in targets})
     for target in targets:
-        _check_one(Path(target), input_ids, force)
+        _check_one(target, input_ids, force)
 
 
-def _remove_dead_temps(folders: Iterable[Path]) -> None:
-    """Delete temporaries in ``folders`` left by accugrid processes that no longer run."""
+def recover(folders: Iterable[PathLike]) -> None:
+    """Finish or remove the jobs that processes which no longer run left in ``folders`` (module
+    docstring): a temporary folder with a journal, or a link to a journal that still exists, is
+    rolled forward; every other temporary is deleted. InputError when a journal's steps cannot
+    be run (the journal stays for the next attempt)."""
     for folder in folders:
         try:
             entries = list(os.scandir(folder))
@@ -139,7 +170,24 @@ def _remove_dead_temps(folders: Iterable[Path]) -> None:
             parts = entry.name[: -len(_TMP_SUFFIX)].rsplit(".", 2)
             if len(parts) != 3 or not parts[1].isdigit() or _alive(int(parts[1])):
                 continue
+            journal = _journal_of(entry.path)
+            if journal is not None:
+                _finish(journal, folder)
             _remove(entry.path)
+
+
+def _journal_of(holder: str) -> str | None:
+    """The journal that commits the job of the temporary folder ``holder``: its own, or the one
+    its link names, if it exists (None: not committed, or not a folder)."""
+    own = os.path.join(holder, _JOURNAL)
+    if os.path.isfile(own):
+        return own
+    try:
+        with open(os.path.join(holder, _LINK), "rb") as file:
+            linked = os.fsdecode(file.read())
+    except OSError:
+        return None
+    return linked if os.path.isfile(linked) else None
 
 
 def _remove(path: str) -> None:
@@ -211,10 +259,11 @@ def _signals_held() -> Iterator[None]:
 
 
 def _temp_name(path: Path) -> str:
+    """``.NAME.PID.RANDOM.accugrid.tmp`` beside ``path``, NAME cut to fit ``_NAME_MAX`` bytes."""
     # os.urandom(4).hex() is secrets.token_hex(4), without importing secrets (hmac, random)
-    return os.path.join(
-        path.parent, f".{path.name}.{os.getpid()}.{os.urandom(4).hex()}{_TMP_SUFFIX}"
-    )
+    tail = f".{os.getpid()}.{os.urandom(4).hex()}{_TMP_SUFFIX}"
+    name = os.fsencode(path.name)[: _NAME_MAX - 1 - len(tail)]
+    return os.path.join(path.parent, "." + os.fsdecode(name) + tail)
 
 
 def _write_temp(tmp: str, data: bytes | bytearray | str | Iterable[bytes | str]) -> None:
@@ -310,33 +359,29 @@ def write_files(
     main_paths = [Path(p) for p in main]
     stale_paths = [Path(p) for p in stale if Path(p) not in paths]
     input_ids = _input_identities(inputs)
+    folders = {p.parent for p in paths}
+    recover(folders | {p.parent for p in stale_paths})
     usable: set[Path] = set()
     for path in list(paths) + stale_paths:
         _check_one(path, input_ids, force, usable)
-    folders = {p.parent for p in paths}
     new_folder = next(iter(folders)) if len(folders) == 1 and len(paths) > 1 else None
     if new_folder is not None and os.path.lexists(new_folder):
         new_folder = None
     for folder in sorted({new_folder.parent} if new_folder is not None else folders):
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise InputError(
-                f"cannot create the output folder: {exc.strerror or exc}", os.fspath(folder)
-            ) from None
+        _make_folder(folder)
     if new_folder is not None:
         _write_new_folder(new_folder, paths, contents, ready)
         _sync_folders({new_folder, new_folder.parent})
         return list(paths)
-    _remove_dead_temps(folders)
     temps: dict[Path, str] = {}
     holders: dict[Path, str] = {}  # a job of several files: its temporaries' folder per folder
     durable = _Durable()
+    committed, several = False, len(paths) > 1 or bool(stale_paths)
     try:
         with _signals_end_write():
             for path, key in paths.items():
                 try:
-                    temps[path] = _temp_path(path, holders if len(paths) > 1 else None)
+                    temps[path] = _temp_path(path, holders if several else None)
                     _write_temp(temps[path], contents[key])
                 except OSError as exc:
                     raise InputError(f"cannot write: {exc.strerror or exc}", path) from None
@@ -345,22 +390,57 @@ def write_files(
                 ready()
             durable.wait()
             with _signals_held():
-                try:
-                    _swap(temps, main_paths, stale_paths)
-                except OSError as exc:  # e.g. a folder made read-only meanwhile
-                    where = exc.filename or next(iter(paths))
-                    raise InputError(f"cannot replace: {exc.strerror or exc}", where) from None
+                if not holders:  # one file: one rename
+                    ((path, tmp),) = temps.items()
+                    try:
+                        os.replace(tmp, path)
+                    except OSError as exc:
+                        raise InputError(f"cannot replace: {exc.strerror or exc}", path) from None
+                else:
+                    journal = _commit(temps, main_paths, stale_paths, holders)
+                    committed = True
+                    _finish(journal, next(iter(paths)).parent)
     except _Stop as stop:
         raise SystemExit(128 + stop.signum) from None
     finally:
         durable.close()
-        for tmp in temps.values():
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
-        for holder in holders.values():
-            _remove(holder)
+        if not committed:
+            for tmp in temps.values():
+                with contextlib.suppress(OSError):
+                    os.unlink(tmp)
+            for holder in holders.values():
+                _remove(holder)
     _sync_folders(folders)
     return list(paths)
+
+
+def _make_folder(folder: Path) -> None:
+    """Create ``folder`` and its missing parents, one level at a time (a loop, not recursion:
+    a path of thousands of levels is an ordinary error)."""
+    longest = max((len(os.fsencode(part)) for part in folder.parts), default=0)
+    if longest > _NAME_MAX:
+        reason = f"a folder name longer than {_NAME_MAX} bytes"
+    elif len(os.fsencode(folder)) >= _PATH_MAX:
+        reason = f"a path longer than {_PATH_MAX - 1} bytes"
+    else:
+        reason = ""
+    if reason:  # refused before any level is made
+        raise InputError(f"cannot create the output folder: File name too long ({reason})", folder)
+    missing = []
+    for level in [folder, *folder.parents]:
+        if os.path.isdir(level):
+            break
+        missing.append(level)
+    try:
+        for level in reversed(missing):
+            with contextlib.suppress(FileExistsError):
+                os.mkdir(level, 0o777)
+            if not os.path.isdir(level):
+                raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), level)
+    except OSError as exc:
+        raise InputError(
+            f"cannot create the output folder: {exc.strerror or exc}", os.fspath(folder)
+        ) from None
 
 
 def _temp_path(path: Path, holders: dict[Path, str] | None) -> str:
@@ -382,7 +462,7 @@ def _write_new_folder(
     """Write the files ``paths`` (all in ``folder``, which does not exist) into a temporary
     folder beside it, ``ready()``, sync, and rename that folder to ``folder``; on an error or
     signal before the rename, nothing of it remains."""
-    _remove_dead_temps([folder.parent])
+    recover([folder.parent])
     tmp = _temp_name(folder)  # known before it exists: always cleaned
     durable = _Durable()
     try:
@@ -409,19 +489,95 @@ def _write_new_folder(
         _remove(tmp)
 
 
-def _swap(temps: dict[Path, str], main: list[Path], stale: list[Path]) -> None:
-    """Rename the temporaries over their targets, ``main`` last in order. When the job has more
-    than one file, the old entry point (the last of ``main``) is removed first, so no moment
-    shows it beside a mix of old and new files."""
+def _commit(
+    temps: dict[Path, str], main: list[Path], stale: list[Path], holders: dict[Path, str]
+) -> str:
+    """Write the job's journal (its steps, module docstring) durably into the temporary folder
+    of the entry point's folder, with a link to it in the other temporary folders; returns its
+    path. The job is committed once this returns."""
     last = [p for p in main if p in temps]
-    if last and (len(temps) > 1 or stale):
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(last[-1])
+    steps: list[bytes] = []
+    if last:  # the old entry point goes first (while its temporary waits)
+        steps += [b"U", os.fsencode(last[-1]), os.fsencode(temps[last[-1]])]
     for path, tmp in temps.items():
         if path not in last:
-            os.replace(tmp, path)
+            steps += [b"R", os.fsencode(tmp), os.fsencode(path)]
     for path in stale:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(path)
+        steps += [b"D", os.fsencode(path)]
     for path in last:
-        os.replace(temps[path], path)
+        steps += [b"R", os.fsencode(temps[path]), os.fsencode(path)]
+    home = holders[last[-1].parent] if last else next(iter(holders.values()))
+    others = [h for h in holders.values() if h != home]
+    steps += [x for h in others for x in (b"H", os.fsencode(os.path.abspath(h)))]
+    journal = os.path.abspath(os.path.join(home, _JOURNAL))
+    _sync_folders({Path(h).parent for h in holders.values()})  # the temporary folders' entries
+    for holder in others:
+        _write_synced(os.path.join(holder, _LINK), os.fsencode(journal))
+    _write_synced(journal + ".new", b"\0".join([_MAGIC, *steps, b"END"]))
+    os.rename(journal + ".new", journal)
+    _sync_folders({Path(home)})
+    return journal
+
+
+def _write_synced(path: str, data: bytes) -> None:
+    """Create ``path`` with ``data``, fsynced, and sync its folder."""
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    try:
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view) :]
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+    _sync_folders({Path(path).parent})
+
+
+def _finish(journal: str, where: PathLike) -> None:
+    """Run the steps of ``journal`` (each guarded: again after a kill finishes the job), sync
+    the target folders, remove the job's other temporary folders, then the journal. InputError
+    (naming ``where``) when a step fails: the journal stays for the next write."""
+    try:
+        with open(journal, "rb") as file:
+            words = file.read().split(b"\0")
+    except OSError as exc:
+        raise InputError(
+            f"cannot read an interrupted job's journal {journal}: {exc}", where
+        ) from None
+    if words[:1] != [_MAGIC] or words[-1:] != [b"END"]:
+        raise InputError(f"unreadable journal of an interrupted job: {journal}", where)
+    words = [os.fsdecode(w) for w in words[1:-1]]
+    arity = {"U": 2, "R": 2, "D": 1, "H": 1}
+    folders: set[Path] = set()
+    others: list[str] = []
+    at = 0
+    try:
+        while at < len(words):
+            op, args = words[at], words[at + 1 : at + 1 + arity[words[at]]]
+            at += 1 + len(args)
+            if op == "U" and os.path.lexists(args[1]):
+                with contextlib.suppress(FileNotFoundError):
+                    os.unlink(args[0])
+            elif op == "R" and os.path.lexists(args[0]):
+                os.replace(args[0], args[1])
+            elif op == "D":
+                with contextlib.suppress(FileNotFoundError):
+                    os.unlink(args[0])
+            elif op == "H":
+                others.append(args[0])
+            if op != "H":
+                folders.add(Path(args[1] if op == "R" else args[0]).parent)
+    except (KeyError, IndexError):
+        raise InputError(f"unreadable journal of an interrupted job: {journal}", where) from None
+    except OSError as exc:
+        raise InputError(
+            f"cannot replace: {exc.strerror or exc}; the next accugrid write into this folder "
+            "finishes the job",
+            exc.filename or where,
+        ) from None
+    _sync_folders(folders)
+    for holder in others:
+        _remove(holder)
+    home = os.path.dirname(journal)
+    with contextlib.suppress(OSError):
+        os.unlink(journal)
+    _remove(home)

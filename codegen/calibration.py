@@ -14,13 +14,16 @@ import numpy as np
 from accugrid import __version__
 from accugrid.compensation.measurements import read_measurements
 from accugrid.kinematics.calibrated import calibrated_yaml, identification_summary
-from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.errors import InputError, printable
 from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification, Terms, identify, pose_set
+from accugrid.kinematics.inputfile import read_input_bytes
 from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.validity import validity_section
 
-__all__ = ["Calibration", "IdentifyOptions", "calibrate"]
+__all__ = ["MAX_ROWS", "Calibration", "IdentifyOptions", "calibrate"]
+
+MAX_ROWS = 100_000  # measurement rows identify takes (a tracker session has hundreds)
 
 
 @dataclass(frozen=True)
@@ -43,6 +46,12 @@ class Calibration:
     report: str
 
 
+def _data_lines(path: str | Path) -> int:
+    """The lines of a CSV file that are neither blank nor comments, less its header row."""
+    lines = read_input_bytes(path).splitlines()
+    return sum(1 for line in lines if line.strip() and not line.lstrip().startswith(b"#")) - 1
+
+
 def calibrate(
     measurements: str | Path,
     robot: Robot,
@@ -54,6 +63,14 @@ def calibrate(
     render the calibrated robot YAML for ``output`` (and its URDF for ``urdf``)."""
     if options.folds < 0 or options.folds == 1:
         raise InputError(f"--folds must be 0 (none) or at least 2, got {options.folds}")
+    rows = _data_lines(measurements)  # before the reader, which takes long over 1e6 rows
+    if rows > MAX_ROWS:
+        raise InputError(
+            f"{rows} measurement rows; identify takes at most {MAX_ROWS} (its time and memory "
+            "grow with the rows, 1e5 rows take about a minute); measure fewer poses or fewer "
+            "repeats",
+            measurements,
+        )
     meas = read_measurements(measurements)
     status = meas.status if meas.status is not None else options.status
     data = pose_set(
@@ -76,7 +93,7 @@ def calibrate(
         folds=options.folds,
         harmonics=options.harmonics,
     )
-    source = Path(measurements).name
+    source = printable(Path(measurements).name)  # a non-UTF-8 byte: escaped text
     summary = identification_summary(result, robot, source, meas.sha256)
     validated = result.max_mm if result.cross_validation is None else result.cross_validation.max_mm
     summary["validity"] = validity_section(data.commanded, data.rotations, data.q, validated)

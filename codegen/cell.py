@@ -13,6 +13,9 @@ one frozen record per concern, each built and validated in one place:
   configuration changes, wrist-singularity margin, reference orientation);
 - ``cell.correction`` (``compensation.settings.CorrectionSettings``): ``correction:`` (method,
   power, iterations); ``correction.model`` is ``cell.model_path``, beside ``cell.grid_path``;
+- ``cell.tracker`` (``compensation.csvtable.TableFormat`` or None): ``tracker:`` (columns, units,
+  delimiter, decimal), how the cell's tracker software writes the grid file (the command line's
+  ``--columns``/``--units``/... win over it);
 - ``cell.dialects[name]`` for every dialect of ``codegen.dialects.DIALECTS``, e.g. ``cell.krl``
   (``codegen.krl.section.KrlSection``) and ``cell.gcode`` (``codegen.gcode.section.GcodeSection``):
   what only that dialect reads. Each dialect's ``section.py`` holds its record and declares
@@ -34,6 +37,7 @@ import numpy as np
 
 from accugrid.codegen.cellfile import DISTANCE_MAX_MM, CellReader, SectionKeys
 from accugrid.codegen.dialects import DIALECTS
+from accugrid.compensation.csvtable import DECIMALS, DELIMITERS, UNITS, TableFormat
 from accugrid.compensation.interpolation import METHODS
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.errors import InputError
@@ -98,6 +102,7 @@ class Cell:
     correction: CorrectionSettings
     dialects: Mapping[str, object]  # dialect name -> its section record
     sha256: str = ""
+    tracker: TableFormat | None = None  # how the grid file is written (tracker:), None: found
 
     @property
     def krl(self) -> KrlSection:
@@ -127,6 +132,7 @@ _KEYS: SectionKeys = {
     "drilling": frozenset({"approach", "clearance", "retract", "depth", "dwell", "peck"}),
     "configuration": frozenset({"status", "turn", "allow_change", "singular_a5", "reference"}),
     "correction": frozenset({"method", "iterations", "power", "model"}),
+    "tracker": frozenset({"columns", "units", "delimiter", "decimal"}),
 }
 _TOP_KEYS = {"robot", "grid", "tool", "base", "base_data"}
 
@@ -172,6 +178,7 @@ def load_cell(path: str | os.PathLike[str]) -> Cell:
         correction=_correction(r),
         dialects={n: module.read_section(r, robot_T_base) for n, module in sections.items()},
         sha256=doc.sha256,
+        tracker=_tracker(r),
     )
 
 
@@ -225,6 +232,26 @@ def _configuration(r: CellReader) -> ConfigurationSection:
         singular_a5_deg=r.number(key, "singular_a5", 5.0, 0.0, 90.0),
         reference_abc=r.abc(r.value(key, "reference"), f"{key}.reference", (0.0, 90.0, 0.0)),
     )
+
+
+def _tracker(r: CellReader) -> TableFormat | None:
+    """``tracker:``: the grid file's column mapping (accugrid name: the file's header), length
+    unit, delimiter and decimal mark; None when the section is absent."""
+    if not r.section("tracker"):
+        return None
+    columns = r.mapping(r.value("tracker", "columns"), "tracker.columns", None)
+    for name, header in columns.items():
+        if not isinstance(header, str) or not header.strip():
+            raise r.error(f"tracker.columns.{name}", "must be the file's column name")
+    try:
+        return TableFormat(
+            delimiter=DELIMITERS.get(r.choice("tracker", "delimiter", "", ["", *DELIMITERS])),
+            decimal=DECIMALS.get(r.choice("tracker", "decimal", "", ["", *DECIMALS])),
+            columns=columns,
+            units=r.choice("tracker", "units", "mm", list(UNITS)),
+        )
+    except ValueError as exc:  # two names for one column, a decimal comma with commas
+        raise r.error("tracker", str(exc)) from None
 
 
 def _correction(r: CellReader) -> CorrectionSettings:

@@ -17,7 +17,7 @@ import numpy as np
 
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
-from accugrid.kinematics.yamlfile import YamlDoc
+from accugrid.kinematics.yamlfile import YamlDoc, unknown_key
 
 __all__ = [
     "ANGLE_MAX_DEG",
@@ -61,9 +61,11 @@ class CellReader:
         if allowed is not None:
             for k in data:
                 if str(k) not in allowed:
-                    raise self.error(
-                        f"{key}.{k}" if key else str(k),
-                        f"unknown key (allowed: {', '.join(sorted(allowed))})",
+                    name = f"{key}.{k}" if key else str(k)
+                    raise InputError(
+                        unknown_key(name, k, allowed),
+                        os.fspath(self.path),
+                        *self.doc.marks.get((*key.split("."), str(k)) if key else (str(k),), ()),
                     )
         return {str(k): v for k, v in data.items()}
 

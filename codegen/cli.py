@@ -10,7 +10,9 @@ column, no traceback), 1 internal error.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import io
 import os
 import sys
 import warnings
@@ -57,6 +59,16 @@ def _command(argv: list[str]) -> str | None:
     return next((word for word in argv if not word.startswith("-")), None)
 
 
+def _reading_format(args: argparse.Namespace) -> contextlib.AbstractContextManager[None]:
+    """How the command's points and measurement CSVs are written (``--columns``, ``--units``,
+    ...), for the commands that read them; nothing is imported for the others."""
+    if not hasattr(args, "units"):
+        return contextlib.nullcontext()
+    from accugrid.codegen.cli_options import reading_format
+
+    return reading_format(args)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the process exit code (also used by the console script).
 
@@ -65,8 +77,11 @@ def main(argv: list[str] | None = None) -> int:
     as an input that no output may replace (``codegen.atomic``).
     """
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    for stream in (sys.stdout, sys.stderr):  # a non-UTF-8 byte of a file name prints as \udcff
+        if isinstance(stream, io.TextIOWrapper):
+            stream.reconfigure(errors="backslashreplace")
     args = build_parser(_command(argv)).parse_args(argv)
-    with warnings.catch_warnings(record=True) as held, track_inputs():
+    with warnings.catch_warnings(record=True) as held, track_inputs(), _reading_format(args):
         warnings.simplefilter("default")
         try:
             code = int(args.handler(args) or EXIT_OK)

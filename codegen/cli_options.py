@@ -7,11 +7,14 @@ for that command; ``robot_with_tool`` turns ``--robot``/``--tool`` values into a
 from __future__ import annotations
 
 import argparse
-from collections.abc import Sequence
+import math
+from collections.abc import Callable, Sequence
+from contextlib import AbstractContextManager
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from accugrid.compensation.csvtable import DECIMALS, DELIMITERS, TableFormat, reading_as
 from accugrid.compensation.plans import SEED_ABC, SEED_CENTRES, SEED_REPEATS
 from accugrid.kinematics.errors import InputError
 
@@ -20,17 +23,67 @@ if TYPE_CHECKING:
     from accugrid.kinematics.robot import Robot
 
 __all__ = [
+    "COORDINATE_MAX",
+    "MAX_CANDIDATES",
+    "MAX_COUNT",
+    "MAX_POSES",
+    "MAX_REPEATS",
     "add_abc",
     "add_experiment_arguments",
     "add_harmonics",
     "add_policy",
     "add_status",
+    "add_table_format",
     "add_tool",
     "harmonics_of",
+    "number",
     "parse_centres",
     "parse_steps",
+    "reading_format",
     "robot_with_tool",
 ]
+
+
+COORDINATE_MAX = 1e6  # |mm| of a coordinate, |deg| of an angle given on the command line
+MAX_CANDIDATES = 100_000  # random candidate poses of a pose plan (each is an IK and a Jacobian)
+MAX_POSES = 1000  # poses of an identification plan: choosing them grows with poses x candidates
+MAX_REPEATS = 1000  # measurements of each point or pose (the seed takes 5)
+MAX_COUNT = 100_000  # held-out targets, validation points
+
+
+def number(
+    unit: str,
+    lo: float | None = None,
+    hi: float | None = None,
+    above: bool = False,
+    whole: bool = False,
+) -> Callable[[str], float]:
+    """The argparse ``type`` of every number option: a finite number (``whole``: an integer) in
+    [lo, hi] (``above``: lo excluded), ``unit`` (mm, deg, s, ...; "" for counts) in its
+    messages; argparse turns the refusal into exit 2 naming the option. -0 reads as 0."""
+    said = f" {unit}" if unit else ""
+
+    def parse(text: str) -> float:
+        try:
+            value = int(text, 10) if whole else float(text)
+        except ValueError:
+            kind = "a whole number" if whole else "a number"
+            raise argparse.ArgumentTypeError(
+                f"'{text}' is not {kind}{unit and f' ({unit})'}"
+            ) from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(
+                f"'{text}' is not a finite number{unit and f' ({unit})'}"
+            )
+        if lo is not None and (value <= lo if above else value < lo):
+            raise argparse.ArgumentTypeError(
+                f"'{text}' must be {'>' if above else '>='} {lo:g}{said}"
+            )
+        if hi is not None and value > hi:
+            raise argparse.ArgumentTypeError(f"'{text}' must be <= {hi:g}{said}")
+        return value if whole else value + 0.0
+
+    return parse
 
 
 def add_abc(parser: argparse.ArgumentParser, help_text: str) -> None:
@@ -38,7 +91,7 @@ def add_abc(parser: argparse.ArgumentParser, help_text: str) -> None:
     parser.add_argument(
         "--abc",
         nargs=3,
-        type=float,
+        type=number("deg", -COORDINATE_MAX, COORDINATE_MAX),
         default=list(SEED_ABC),
         metavar=("A", "B", "C"),
         help=f"{help_text}, KUKA A B C in deg (default: 0 90 0)",
@@ -50,7 +103,7 @@ def add_tool(parser: argparse.ArgumentParser, help_text: str) -> None:
     parser.add_argument(
         "--tool",
         nargs=6,
-        type=float,
+        type=number("mm or deg", -COORDINATE_MAX, COORDINATE_MAX),
         metavar=("X", "Y", "Z", "A", "B", "C"),
         help=help_text,
     )
@@ -129,7 +182,7 @@ def add_experiment_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--repeats",
-        type=int,
+        type=number("", 1, MAX_REPEATS, whole=True),
         default=SEED_REPEATS,
         help=f"measurements of every point (default: {SEED_REPEATS})",
     )
@@ -185,4 +238,65 @@ def add_policy(parser: argparse.ArgumentParser, what: str) -> None:
         action="store_true",
         help=f"with a model: refuse {what} outside the poses it was identified from (region, "
         "tool tilt, joint ranges) instead of flagging them",
+    )
+
+
+def add_table_format(parser: argparse.ArgumentParser) -> None:
+    """How the points and measurement CSVs of the command are written (tracker exports as they
+    come): ``--columns``, ``--units``, ``--delimiter``, ``--decimal``; see ``reading_format``."""
+    group = parser.add_argument_group("points and measurement files as exported")
+    group.add_argument(
+        "--columns",
+        type=_column_mapping,
+        metavar="NAME=HEADER,...",
+        help="read the file column HEADER as accugrid's NAME, in every CSV of this command that "
+        "has one of the HEADERs, e.g. x=X_nom,y=Y_nom,z=Z_nom,x_meas=X_act,y_meas=Y_act,"
+        "z_meas=Z_act (header names are case-insensitive)",
+    )
+    group.add_argument(
+        "--units",
+        choices=["mm", "m", "in"],
+        default="mm",
+        help="unit of the lengths (x,y,z, x_meas..z_meas, diameter, depth) in the files "
+        "--columns applies to (without --columns: in every CSV of this command), converted to "
+        "mm on read (default: mm)",
+    )
+    group.add_argument(
+        "--delimiter",
+        choices=list(DELIMITERS),
+        help="column delimiter of the export (default: found from the header and the first "
+        "rows; a file whose header does not hold it is read as found)",
+    )
+    group.add_argument(
+        "--decimal",
+        choices=list(DECIMALS),
+        help="decimal mark of the export (default: found; a comma-separated file always has a "
+        "decimal point)",
+    )
+
+
+def _column_mapping(text: str) -> dict[str, str]:
+    mapping: dict[str, str] = {}
+    for item in text.split(","):
+        name, sep, header = (part.strip() for part in item.partition("="))
+        if not sep or not name or not header:
+            raise argparse.ArgumentTypeError(f"{item.strip()!r} is not NAME=HEADER")
+        if name.lower() in mapping:
+            raise argparse.ArgumentTypeError(f"{name} is mapped twice")
+        mapping[name.lower()] = header
+    if len({h.lower() for h in mapping.values()}) != len(mapping):
+        raise argparse.ArgumentTypeError("one HEADER is mapped to two names")
+    return mapping
+
+
+def reading_format(args: argparse.Namespace) -> AbstractContextManager[None]:
+    """The block in which every CSV the command reads is read as ``add_table_format``'s
+    options say."""
+    return reading_as(
+        TableFormat(
+            delimiter=DELIMITERS.get(args.delimiter or ""),
+            decimal=DECIMALS.get(args.decimal or ""),
+            columns=args.columns,
+            units=args.units,
+        )
     )

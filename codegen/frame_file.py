@@ -27,10 +27,11 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.fitting import CircleFit
 from accugrid.kinematics.frames import invert, pose_from_xyzabc, transform_points, xyzabc_from_pose
 from accugrid.kinematics.inputfile import read_input_text
-from accugrid.kinematics.yamlfile import load_yaml
+from accugrid.kinematics.yamlfile import Schema, load_yaml
 
 __all__ = [
     "DECIMALS",
+    "FRAME_SCHEMA",
     "KEYS",
     "MATRIX_TOL",
     "TRIPLES",
@@ -41,6 +42,16 @@ __all__ = [
 ]
 
 KEYS = ("x", "y", "z", "a", "b", "c")
+# A frame file (``frame_yaml`` writes it, ``load_frame`` reads tracker_T_robot; the rest is a
+# record of the fit)
+FRAME_SCHEMA: Schema = {
+    "accugrid": None,
+    "tracker_T_robot": {**dict.fromkeys(KEYS), "matrix": None},
+    "smr_radius_mm": None,
+    "inputs": None,
+    "fits": None,
+    "checks": None,
+}
 TRIPLES = {"xyz": ("x", "y", "z"), "meas": ("x_meas", "y_meas", "z_meas")}  # transform columns
 DECIMALS = 4  # of a transformed number, mm
 MATRIX_TOL = 1e-6
@@ -104,6 +115,7 @@ def load_frame(path: str | os.PathLike[str]) -> np.ndarray:
     """Read tracker_T_robot (4, 4) mm from a frame YAML; InputError naming file, line and key."""
     path = os.fspath(path)
     doc = load_yaml(path)
+    doc.check_keys(FRAME_SCHEMA)
     data = doc.data
 
     def fail(message: str, *keys: str) -> InputError:
@@ -163,6 +175,13 @@ def transform_csv(
     line as it was, a comment naming the frame file first. InputError on a bad file."""
     text = read_input_text(table_path)[1]
     table = parse_table(text, table_path)
+    if table.delimiter != ",":  # its cells are rewritten in place, as comma-separated text
+        raise InputError(
+            "transform rewrites comma-separated files; this one is separated by "
+            f"{'a semicolon' if table.delimiter == ';' else 'tabs'}",
+            table_path,
+            table.header_line,
+        )
     tracker_T_robot = load_frame(frame_path)
     pose = tracker_T_robot if inverse else invert(tracker_T_robot)
     triples = _chosen(table, columns)

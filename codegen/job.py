@@ -12,11 +12,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from accugrid.codegen.cell import Cell, load_cell
-from accugrid.codegen.cli_options import add_policy
+from accugrid.codegen.cli_options import add_policy, add_table_format
 from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program import Program, build_program
 from accugrid.compensation import GridModel
+from accugrid.compensation.csvtable import declared_or
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import load_robot
@@ -81,6 +82,7 @@ def add_job_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_policy(parser, "holes")
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    add_table_format(parser)
 
 
 def model_path(args: argparse.Namespace, cell: Cell) -> Path | None:
@@ -125,7 +127,9 @@ def prepare(
     model_file = model_path(args, cell)
     grid_file = grid_path(args, cell, model_file)
     points = read_points(args.points)
-    grid = None if grid_file is None else GridModel.from_measurements(grid_file)
+    grid = None
+    if grid_file is not None:
+        grid = GridModel.from_measurements(grid_file, fmt=declared_or(cell.tracker))
     robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
     model = validity = None
     if model_file is not None:  # the arm; the tool is the cell's, never the model's TCP

@@ -1,6 +1,8 @@
 """Every picture accugrid draws, as PNG bytes (matplotlib, Agg backend, imported on first use):
 seed Fig. 3 (``simulate --plot``), Fig. 12 and the Table 5 histograms (``study``), the robot-frame
-fit (``fit-frame --plot``), the method comparison (``compare``). Lengths mm."""
+fit (``fit-frame --plot``), the method comparison (``compare``: one figure for the max, one for
+the std). Lengths mm. Where a plot shows remaining errors it draws the tolerance (default
++-0.3 mm) as a line, and its legend stands outside the data, at the figure's right."""
 
 from __future__ import annotations
 
@@ -11,12 +13,20 @@ import numpy as np
 
 from accugrid.codegen.textsafe import fixed
 from accugrid.compensation.comparison import TARGET_SETS, Comparison
-from accugrid.compensation.study import AXES, StudyResult, Validation
+from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
+from accugrid.compensation.study import AXES, DEFAULT_STD_FRACTION, StudyResult, Validation
 from accugrid.kinematics.base_frame import RobotFrameFit
 from accugrid.kinematics.fitting import CircleFit
 from accugrid.kinematics.frames import invert, transform_points
 
-__all__ = ["comparison_png", "fig3_png", "fig12_png", "frame_fit_png", "hist_png"]
+__all__ = [
+    "COMPARISON_STATS",
+    "comparison_png",
+    "fig3_png",
+    "fig12_png",
+    "frame_fit_png",
+    "hist_png",
+]
 
 _NO_SOFTWARE = {"Software": None}  # no matplotlib version in the file: the same bytes anywhere
 
@@ -28,6 +38,20 @@ def _pyplot():
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def _legend_outside(fig, ax) -> None:
+    """One legend for the figure, at its right, outside every panel (``ax``'s handles; the
+    figure must use the constrained layout)."""
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside right center", fontsize=8, frameon=False)
+
+
+def _tolerance_lines(ax, tol: float, label: str, *, vertical: bool = False) -> None:
+    """Dashed lines at +-``tol`` mm (across a histogram's x axis with ``vertical``)."""
+    line = ax.axvline if vertical else ax.axhline
+    line(tol, color="tab:green", ls="--", lw=1.0, label=label)
+    line(-tol, color="tab:green", ls="--", lw=1.0)
 
 
 def _png(plt, fig, dpi: float | None = None, metadata: dict | None = _NO_SOFTWARE) -> bytes:
@@ -63,53 +87,52 @@ def fig3_png(
 
 
 def fig12_png(result: StudyResult) -> bytes:
-    """Seed Fig. 12: max/min error against step per axis, cubic curves, tolerance band."""
+    """Seed Fig. 12: max/min error against step per axis, cubic curves, tolerance lines."""
     plt = _pyplot()
 
     tol = result.tolerance_mm
     steps = result.steps
     dense = np.linspace(steps.min(), steps.max(), 300)
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), sharey=True)
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2), sharey=True, layout="constrained")
     for a, ax in enumerate(axes):
-        ax.axhspan(-tol, tol, color="tab:green", alpha=0.08, label=f"±{tol:g} mm")
-        ax.axhline(tol, color="tab:green", lw=0.8)
-        ax.axhline(-tol, color="tab:green", lw=0.8)
+        ax.axhspan(-tol, tol, color="tab:green", alpha=0.08)
+        _tolerance_lines(ax, tol, f"tolerance ±{tol:g} mm")
         ax.plot(steps, [r.max[a] for r in result.table], "o", color="tab:red", label="max")
         ax.plot(steps, [r.min[a] for r in result.table], "s", color="tab:blue", label="min")
-        ax.plot(dense, result.max_curves[a](dense), "-", color="tab:red", lw=1)
-        ax.plot(dense, result.min_curves[a](dense), "-", color="tab:blue", lw=1)
+        ax.plot(dense, result.max_curves[a](dense), "-", color="tab:red", lw=1, label="max, cubic")
+        ax.plot(dense, result.min_curves[a](dense), "-", color="tab:blue", lw=1, label="min, cubic")
         th = result.decision.thresholds[a]
         if np.isfinite(th):
-            ax.axvline(th, color="gray", ls=":", label=f"threshold {th:.0f} mm")
+            ax.axvline(th, color="gray", ls=":", label="threshold step")
         if result.decision.step is not None:
-            ax.axvline(result.decision.step, color="black", ls="--", label="chosen step")
+            ax.axvline(result.decision.step, color="black", ls="-.", label="chosen step")
         ax.set_title(f"{AXES[a]} after compensation")
         ax.set_xlabel("grid step (mm)")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="best", framealpha=0.6)
     axes[0].set_ylabel("remaining error (mm)")
-    fig.tight_layout()
+    _legend_outside(fig, max(axes, key=lambda ax: len(ax.get_legend_handles_labels()[1])))
     return _png(plt, fig, dpi=110)
 
 
-def hist_png(validation: Validation) -> bytes:
-    """Table 5 before/after histograms per axis (all samples)."""
+def hist_png(validation: Validation, tolerance_mm: float = DEFAULT_TOLERANCE_MM) -> bytes:
+    """Table 5 before/after histograms per axis (all samples), the tolerance +-``tolerance_mm``
+    as lines."""
     plt = _pyplot()
 
     before = validation.before.reshape(-1, 3)
     after = validation.after.reshape(-1, 3)
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    fig, axes = plt.subplots(1, 3, figsize=(14, 3.8), layout="constrained")
     for a, ax in enumerate(axes):
-        lo = min(before[:, a].min(), after[:, a].min())
-        hi = max(before[:, a].max(), after[:, a].max())
+        lo = min(before[:, a].min(), after[:, a].min(), -tolerance_mm)
+        hi = max(before[:, a].max(), after[:, a].max(), tolerance_mm)
         bins = np.linspace(lo, hi, 40)
         ax.hist(before[:, a], bins=bins, alpha=0.6, label="before", color="tab:orange")
         ax.hist(after[:, a], bins=bins, alpha=0.6, label="after", color="tab:blue")
+        _tolerance_lines(ax, tolerance_mm, f"tolerance ±{tolerance_mm:g} mm", vertical=True)
         ax.set_title(f"{AXES[a]} error at validation points")
         ax.set_xlabel("error (mm)")
-        ax.legend(fontsize=8)
     axes[0].set_ylabel("samples")
-    fig.tight_layout()
+    _legend_outside(fig, axes[0])
     return _png(plt, fig, dpi=110)
 
 
@@ -212,13 +235,26 @@ def frame_fit_png(fit: RobotFrameFit, points: Mapping[str, np.ndarray]) -> bytes
     return _png(plt, fig)
 
 
-def comparison_png(result: Comparison) -> bytes:
-    """``accugrid compare``: held-out max |P - M| (solid) and std (dashed) per axis, mm, against
-    the measured-point budget, one line pair per method; a row per target set."""
+COMPARISON_STATS = ("max", "std")  # one figure each
+
+
+def comparison_png(
+    result: Comparison, stat: str, tolerance_mm: float = DEFAULT_TOLERANCE_MM
+) -> bytes:
+    """``accugrid compare``: the held-out ``stat`` ("max": max |P - M|, with the tolerance
+    ``tolerance_mm`` as a line; "std": the std, with the study's std limit, a fraction of the
+    tolerance) per axis, mm, against the measured-point budget: one line per method, a row of
+    panels per target set, the legend outside at the right."""
     plt = _pyplot()
     methods = [m for m in dict.fromkeys(r.method for r in result.rows) if m != "uncorrected"]
-    fig, axes = plt.subplots(2, 3, figsize=(12, 6.4), sharex=True, constrained_layout=True)
+    fig, axes = plt.subplots(2, 3, figsize=(13, 6.4), sharex=True, layout="constrained")
     colours = plt.get_cmap("tab10").colors
+    limit = tolerance_mm if stat == "max" else DEFAULT_STD_FRACTION * tolerance_mm
+    limit_label = (
+        f"tolerance {tolerance_mm:g} mm"
+        if stat == "max"
+        else f"std limit {limit:g} mm ({DEFAULT_STD_FRACTION:g} x tolerance)"
+    )
     for i, targets in enumerate(TARGET_SETS):
         before = result.row(0, targets, "uncorrected")
         for k, axis in enumerate("XYZ"):
@@ -226,23 +262,23 @@ def comparison_png(result: Comparison) -> bytes:
             for colour, method in zip(colours, methods, strict=False):
                 rows = [r for r in result.rows if (r.targets, r.method) == (targets, method)]
                 at = [r.budget for r in rows]  # a budget too small for a model has no row
-                peak = [r.max_mm[k] for r in rows]
-                std = [r.std_mm[k] for r in rows]
-                ax.plot(at, peak, "o-", color=colour, label=f"{method}, max")
-                ax.plot(at, std, "s--", color=colour, ms=3, lw=0.8, label=f"{method}, std")
-            ax.set_title(
-                f"{targets}: {axis} (uncorrected max {before.max_mm[k]:.2f} mm)", fontsize=9
-            )
+                values = [(r.max_mm if stat == "max" else r.std_mm)[k] for r in rows]
+                ax.plot(at, values, "o-", color=colour, label=method)
+            ax.axhline(limit, color="tab:green", ls="--", lw=1.0, label=limit_label)
+            uncorrected = (before.max_mm if stat == "max" else before.std_mm)[k]
+            ax.set_title(f"{targets}: {axis} (uncorrected {stat} {uncorrected:.2f} mm)", fontsize=9)
             ax.set_ylim(bottom=0.0)
             ax.grid(alpha=0.3)
             if i == 1:
                 ax.set_xlabel("measured points (budget)")
             if k == 0:
-                ax.set_ylabel("held-out |P - M|, mm")
-    axes[0, 0].legend(fontsize=6, ncol=2)
+                ax.set_ylabel(
+                    f"held-out {stat} |P - M|, mm" if stat == "max" else "held-out std, mm"
+                )
+    _legend_outside(fig, axes[0, 0])
     fig.suptitle(
-        f"{result.robot}: {result.n_targets} held-out targets per set, {result.repeats} repeats "
-        f"per measured point, KUKA Status {result.status}",
+        f"{result.robot}: {stat} of the remaining error, {result.n_targets} held-out targets per "
+        f"set, {result.repeats} repeats per measured point, KUKA Status {result.status}",
         fontsize=10,
     )
     return _png(plt, fig, dpi=80)

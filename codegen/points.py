@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.compensation.csvtable import Table, parse_table, read_table
+from accugrid.compensation.csvtable import Table, TableFormat, parse_table, read_table
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 
@@ -55,6 +55,10 @@ class Points:
     def __len__(self) -> int:
         return len(self.ids)
 
+    def __repr__(self) -> str:
+        how = f", orientation {self.orientation}" if self.orientation else ""
+        return f"Points({len(self)} holes from {os.path.basename(self.path)}{how})"
+
     @property
     def lines(self) -> list[int]:
         return self.table.lines
@@ -75,14 +79,15 @@ class Points:
         return f"hole '{self.ids[r]}' ({self.path}:{self.lines[r]})"
 
 
-def read_points(path: str | os.PathLike[str]) -> Points:
-    """Read and validate a points CSV file (see module docstring)."""
-    return _points(read_table(path))
+def read_points(path: str | os.PathLike[str], fmt: TableFormat | None = None) -> Points:
+    """Read and validate a points CSV file (see module docstring); ``fmt``: how it is written
+    (delimiter, decimal mark, column mapping, units; default: found)."""
+    return _points(read_table(path, fmt))
 
 
-def parse_points(text: str, path: str = "<string>") -> Points:
+def parse_points(text: str, path: str = "<string>", fmt: TableFormat | None = None) -> Points:
     """Parse points CSV text; ``path`` is used in messages only."""
-    return _points(parse_table(text, path))
+    return _points(parse_table(text, path, fmt))
 
 
 def _points(table: Table) -> Points:

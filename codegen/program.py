@@ -50,7 +50,7 @@ from accugrid.codegen.textsafe import fixed_texts
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.policy import singular_a5_deg
 from accugrid.kinematics.blocks import run_blocks
-from accugrid.kinematics.configuration import Configuration
+from accugrid.kinematics.configuration import Configuration, kuka_turn
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import (
     MAX_TILT_DEG,
@@ -569,12 +569,55 @@ def _ik_blocks(
         for name, values in vars(out).items():
             values[at] = getattr(sol, name)
 
-    if progress is None:
-        run_blocks(block, range(0, holes, per))
-        return out
-    progress.start(out, stages)
-    run_blocks(block, range(0, holes, per), done=lambda i: progress.advance(min(i + per, holes)))
+    follow = _WristFollower(robot, out) if turn is None else None
+
+    def done(i: int) -> None:  # in hole order, once holes ..i + per - 1 are solved
+        end = min(i + per, holes)
+        if follow is not None:
+            follow(slice(i * stages, end * stages))
+        if progress is not None:
+            progress.advance(end)
+
+    if progress is not None:
+        progress.start(out, stages)
+    run_blocks(block, range(0, holes, per), done=done)
     return out
+
+
+class _WristFollower:
+    """A4 and A6 along the program (Turn free): the Status fixes the arm and the wrist, not the
+    turn of A4 and A6, so each solved pose takes the angle closest to the pose before it (a
+    full turn more or less than the IK's (-180, 180] deg one: 181 deg, not -179 deg, after 178
+    deg) where that stays within the joint limits; the KUKA Turn of a moved pose follows.
+    Called on the rows of each block in program order (``run_blocks``' ``done``), before the
+    block is published to an early reader."""
+
+    def __init__(self, robot: RobotModel, sol: SimpleNamespace) -> None:
+        self._sol = sol
+        self._limits = np.radians(robot.joint_limits_deg)
+        self._last: dict[int, float] = {}  # axis -> its angle at the last solved pose, rad
+
+    def __call__(self, rows: slice) -> None:
+        q, solved = self._sol.q[rows], np.flatnonzero(self._sol.ok[rows])
+        if not solved.size:
+            return
+        moved = np.zeros(len(solved), dtype=bool)
+        for axis in (3, 5):
+            angles = q[solved, axis]
+            start = self._last.get(axis, angles[0])
+            path = np.unwrap(np.concatenate([[start], angles]))[1:]
+            lo, hi = self._limits[axis]
+            path[path > hi] -= 2 * np.pi  # beyond a limit: back by a turn (a jump: reported)
+            path[path < lo] += 2 * np.pi
+            outside = (path < lo) | (path > hi)
+            path[outside] = angles[outside]
+            moved |= path != angles
+            q[solved, axis] = path
+            self._last[axis] = float(path[-1])
+        if moved.any():
+            rows_moved = solved[moved]
+            turn = self._sol.turn[rows]  # a view, as q
+            turn[rows_moved] = kuka_turn(q[rows_moved] < 0)
 
 
 def _branch_jumps(points: Points, cell: Cell, q: np.ndarray) -> list[str]:
@@ -589,9 +632,12 @@ def _branch_jumps(points: Points, cell: Cell, q: np.ndarray) -> list[str]:
     if not bad.size:
         return []
     hole = int((bad[0] + 1) // q.shape[1])
+    before, after = np.degrees(seq[bad[0]]), np.degrees(seq[bad[0] + 1])
+    axis = int(np.argmax(np.abs(after - before)))
     message = (
-        f"{points.name(hole)}: an axis turns {jump[bad[0]]:.0f} deg from the previous pose "
-        f"(more than {MAX_AXIS_JUMP_DEG:g} deg: the robot changes configuration on the way)"
+        f"{points.name(hole)}: A{axis + 1} turns {jump[bad[0]]:.0f} deg from the previous pose "
+        f"({before[axis]:.1f} to {after[axis]:.1f} deg; more than {MAX_AXIS_JUMP_DEG:g} deg: the "
+        "robot changes configuration on the way)"
     )
     if not cell.configuration.allow_change:
         raise InputError(

@@ -26,6 +26,7 @@ from accugrid.codegen.rewrite import (
     warning_lines,
 )
 from accugrid.compensation import GridModel
+from accugrid.compensation.csvtable import declared_or
 from accugrid.compensation.policy import Policy
 
 __all__ = ["RewriteJob", "RewriteRequest", "rewrite_job"]
@@ -85,7 +86,9 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     grid = None  # a model corrects alone when neither --grid nor the cell names one
     if model_file is None or req.grid is not None or cell.grid_path is not None:
         grid = cell.grid_file(req.grid)
-    measured = None if grid is None else GridModel.from_measurements(grid)
+    measured = None  # the grid file as the cell's tracker writes it
+    if grid is not None:
+        measured = GridModel.from_measurements(grid, fmt=declared_or(cell.tracker))
     model = nominal = None
     if model_file is not None or (measured is not None and measured.status is None):
         from accugrid.kinematics.robot import load_robot
@@ -164,7 +167,8 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
             data = text.encode("latin-1")
         files[target] = data
     if req.report is not None:
-        files[req.report] = report_csv(result.rows).encode("utf-8")
+        # a non-UTF-8 byte in a file name is written as an escape (\\udcff), not refused
+        files[req.report] = report_csv(result.rows).encode("utf-8", "backslashreplace")
     warnings = []
     if policy.grid_status is not None and measured is not None and measured.status is None:
         warnings.append(f"the grid does not record its Status: {policy.describe_status()}")

@@ -213,7 +213,7 @@ def study_files(
             text_table(h5, r5),
         ]
         files[output / "table5.csv"] = csv_text(h5, r5)
-        files[output / "table5_hist.png"] = hist_png(validation)
+        files[output / "table5_hist.png"] = hist_png(validation, result.tolerance_mm)
         report += [
             f"{len(validation.points)} random points; grid step {steps_used} mm{chosen}, "
             f"{int(np.prod(validation.model.counts))} vertices.",

@@ -1,10 +1,18 @@
 """Reading the CSV files of DESIGN.md with errors that name file, line and column.
 
 Format: UTF-8 (a BOM is tolerated), a header row, comma-separated, ``.`` decimal point; lines end
-with LF, CRLF or CR; lines whose first field starts with ``#`` are comments; blank lines are
-skipped; column names are case-insensitive. Quoted fields may hold commas and line breaks (they
-are data, never syntax). Numbers are ASCII decimals only (``parse_number``). Files are read by
-the guarded reader (``kinematics.inputfile``: regular files, size limit).
+with LF, CRLF or CR; lines whose first field starts with ``#`` (or ``//``, as metrology software
+writes its notes) are comments; blank lines are skipped; column names are case-insensitive.
+Quoted fields may hold commas and line breaks (they are data, never syntax). Numbers are ASCII
+decimals only (``parse_number``). Files are read by the guarded reader (``kinematics.inputfile``:
+regular files, size limit).
+
+Tracker exports as they come (``TableFormat``): the delimiter (comma, semicolon, tab) is taken
+from the header row and the rows below it; a decimal comma is recognised with a semicolon or tab
+delimiter; a column mapping renames the file's columns to accugrid's; lengths in m or inch are
+converted to mm as decimal text, exactly. A file that cannot be decided is an InputError that says
+what was found and which setting decides it. The CLI sets the format of a command with
+``reading_as``; the comma, point, mm file without mapping takes the fast reader as before.
 """
 
 from __future__ import annotations
@@ -14,7 +22,10 @@ import io
 import math
 import os
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -22,7 +33,29 @@ from accugrid.kinematics.decimals import read_decimals, words_at
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import read_input_text
 
-__all__ = ["Table", "decimals_of", "parse_number", "parse_table", "read_table"]
+__all__ = [
+    "DECIMALS",
+    "DELIMITERS",
+    "LENGTH_COLUMNS",
+    "UNITS",
+    "Table",
+    "TableFormat",
+    "decimals_of",
+    "declared_or",
+    "parse_number",
+    "parse_table",
+    "read_table",
+    "reading_as",
+]
+
+DELIMITERS = {"comma": ",", "semicolon": ";", "tab": "\t"}
+DECIMALS = {"point": ".", "comma": ","}
+UNITS = {"mm": "1", "m": "1000", "in": "25.4"}  # mm per unit, as exact decimal text
+# the columns holding lengths (DESIGN.md points, measurements, experiment plans): --units scales
+LENGTH_COLUMNS = frozenset(
+    ("x", "y", "z", "x_meas", "y_meas", "z_meas", "diameter", "depth", "step")
+)
+_COMMENT = ("#", "//")
 
 _DECIMAL = re.compile(
     r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|(?i:nan|inf|infinity))"
@@ -42,6 +75,66 @@ _ODD_START = np.zeros(256, dtype=bool)
 _ODD_START[np.frombuffer(b"#,\n" + _BLANKS.encode() + bytes(range(0x1C, 0x20)), np.uint8)] = True
 
 
+@dataclass(frozen=True)
+class TableFormat:
+    """How a CSV file is written where it differs from DESIGN.md's.
+
+    ``delimiter`` ``,``, ``;`` or tab (used where the header holds it, else found from the file);
+    ``decimal`` ``.`` or ``,`` (None: found; a comma only beside another delimiter); ``columns``:
+    accugrid's column name -> the file's header name, applied to each file that has one of those
+    names (the export; a file without any is read as it is); ``units`` of the length columns
+    (``LENGTH_COLUMNS``) of the export (of every file without ``columns``): ``mm``, ``m`` or
+    ``in``, converted to mm on read.
+    """
+
+    delimiter: str | None = None
+    decimal: str | None = None
+    columns: Mapping[str, str] | None = None
+    units: str = "mm"
+
+    def __post_init__(self) -> None:
+        if self.delimiter not in (None, *DELIMITERS.values()):
+            raise ValueError(f"delimiter must be one of , ; or tab, got {self.delimiter!r}")
+        if self.decimal not in (None, *DECIMALS.values()):
+            raise ValueError(f"decimal must be '.' or ',', got {self.decimal!r}")
+        if self.units not in UNITS:
+            raise ValueError(f"units must be one of {', '.join(UNITS)}, got {self.units!r}")
+        if self.delimiter == "," and self.decimal == ",":
+            raise ValueError("a decimal comma needs a semicolon or tab delimiter")
+        names = {k.strip().lower(): v.strip() for k, v in (self.columns or {}).items()}
+        if len(names) != len(self.columns or {}) or "" in names or "" in names.values():
+            raise ValueError(f"column mapping must pair distinct names: {self.columns!r}")
+        sources = [v.lower() for v in names.values()]
+        if len(set(sources)) != len(sources):
+            raise ValueError(f"column mapping reads one file column twice: {self.columns!r}")
+        object.__setattr__(self, "columns", names)
+
+    def mapping_text(self) -> str:
+        return ",".join(f"{k}={v}" for k, v in self.columns.items())
+
+
+_PLAIN = TableFormat()
+_FORMAT: ContextVar[TableFormat | None] = ContextVar("table_format", default=None)
+
+
+@contextmanager
+def reading_as(fmt: TableFormat | None) -> Iterator[None]:
+    """Within the block, ``read_table``/``parse_table`` calls without a format read with
+    ``fmt`` (None: the default, DESIGN.md's format with the delimiter and decimal found)."""
+    token = _FORMAT.set(fmt)
+    try:
+        yield
+    finally:
+        _FORMAT.reset(token)
+
+
+def declared_or(fallback: TableFormat | None) -> TableFormat | None:
+    """The format ``reading_as`` set when it declares anything (the command line's), else
+    ``fallback`` (e.g. the cell file's tracker section)."""
+    current = _FORMAT.get()
+    return current if current is not None and current != _PLAIN else fallback
+
+
 class Table:
     """A parsed CSV: header names as written, the cells and the file line of each row.
 
@@ -56,12 +149,16 @@ class Table:
         rows: list[list[str]] | None = None,
         lines: Sequence[int] | None = None,
         cells: _Cells | None = None,
+        header_line: int = 1,
     ) -> None:
         self.path = path
         self.header = header
         self._rows = rows
         self._cells = cells
         self.lines = _Lines([] if lines is None else lines)
+        self.header_line = header_line
+        self.delimiter = ","  # the file's, as parse_table found it
+        self.unmapped = ""  # a column mapping that named none of this file's columns
         self._index = {name.strip().lower(): i for i, name in enumerate(self.header)}
 
     @property
@@ -73,6 +170,9 @@ class Table:
 
     def __len__(self) -> int:
         return len(self.lines)
+
+    def __repr__(self) -> str:
+        return f"Table({self.path!r}, {len(self)} rows, columns {', '.join(self.header)})"
 
     def row_bytes(self, lo: int, hi: int) -> np.ndarray | None:
         """The text of rows lo..hi-1 as read (ASCII, cells joined by commas, no cell needing
@@ -95,7 +195,9 @@ class Table:
             return self._index[name.lower()]
         except KeyError:
             raise InputError(
-                f"missing column '{name}' (have: {', '.join(self.header)})", self.path, 1
+                f"missing column '{name}' (have: {', '.join(self.header)}){self.unmapped}",
+                self.path,
+                self.header_line,
             ) from None
 
     def require(self, names: Iterable[str]) -> None:
@@ -103,9 +205,10 @@ class Table:
         missing = [n for n in names if not self.has(n)]
         if missing:
             raise InputError(
-                f"missing column(s) {', '.join(missing)} (have: {', '.join(self.header)})",
+                f"missing column(s) {', '.join(missing)} (have: {', '.join(self.header)})"
+                + self.unmapped,
                 self.path,
-                1,
+                self.header_line,
             )
 
     def text(self, name: str) -> list[str]:
@@ -355,7 +458,7 @@ def _parse_simple(text: str, path: str) -> Table | None:
         end = text.find("\n", pos)
         first = text[pos:] if end < 0 else text[pos:end]
         line += 1
-        if first.replace(",", "").strip() and first.lstrip()[:1] != "#":
+        if first.replace(",", "").strip() and not first.lstrip().startswith(_COMMENT):
             break
         if end < 0:
             return None
@@ -364,42 +467,205 @@ def _parse_simple(text: str, path: str) -> Table | None:
     _check_header(header, path, line)
     body = "" if end < 0 else text[end + 1 :].rstrip("\n")
     if not body:
-        return Table(path, header, [], [])
+        return Table(path, header, [], [], header_line=line)
     cells = _Cells(body.encode("ascii"), len(header))
     if not cells.rows_ok():
         return None
-    return Table(path, header, None, range(line + 1, line + 1 + len(cells)), cells)
+    lines = range(line + 1, line + 1 + len(cells))
+    return Table(path, header, None, lines, cells, header_line=line)
 
 
-def read_table(path: str | os.PathLike[str]) -> Table:
+def read_table(path: str | os.PathLike[str], fmt: TableFormat | None = None) -> Table:
     """Read a CSV file into a Table; InputError for unreadable, empty, ragged or non-UTF-8 files,
-    and for anything the guarded reader refuses (``kinematics.inputfile``)."""
+    and for anything the guarded reader refuses (``kinematics.inputfile``). ``fmt``: how the file
+    is written (default: the one ``reading_as`` set, else found from the file)."""
     path = os.fspath(path)
-    return parse_table(read_input_text(path)[1], path)
+    return parse_table(read_input_text(path)[1], path, fmt)
 
 
-def parse_table(text: str, path: str = "<string>") -> Table:
+def parse_table(text: str, path: str = "<string>", fmt: TableFormat | None = None) -> Table:
     """Parse CSV text (see module docstring); ``path`` is used in error messages only."""
-    simple = _parse_simple(text, path)
-    return simple if simple is not None else _parse_csv(text, path)
+    fmt = fmt or _FORMAT.get() or _PLAIN
+    delimiter = _delimiter_of(text, path, fmt.delimiter)
+    if delimiter == "," and fmt.units == "mm":  # DESIGN.md's format: the fast reader first
+        table = _parse_simple(text, path) or _parse_csv(text, path)
+    else:
+        table = _parse_csv(text, path, delimiter)
+        table.delimiter = delimiter
+        if delimiter != ",":  # a decimal comma only beside another delimiter
+            _convert_cells(table, fmt.decimal or _decimal_of(table), None)
+    if fmt.columns and not _map_columns(table, fmt):
+        return table  # not the export the mapping and units describe
+    if fmt.units != "mm":
+        _convert_cells(table, ".", UNITS[fmt.units])
+    return table
 
 
-def _parse_csv(text: str, path: str) -> Table:
-    """Any file of the module docstring's format, through the csv module."""
-    # Lines end only at CR, LF or CRLF: VT, FF, NEL and U+2028 inside a field are data.
-    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
-    header: list[str] | None = None
-    rows: list[list[str]] = []
-    lines: list[int] = []
+def _records(text: str, delimiter: str, count: int) -> Iterator[tuple[int, list[str]]]:
+    """(first line, fields) of up to ``count`` records that are not blank or comments."""
+    reader = csv.reader(io.StringIO(text, newline=""), delimiter=delimiter)
     end_line = 0
     try:
         for record in reader:
             start_line, end_line = end_line + 1, reader.line_num
-            if not "".join(record).strip() or record[0].lstrip()[:1] == "#":
+            if "".join(record).strip() and not record[0].lstrip().startswith(_COMMENT):
+                yield start_line, record
+                count -= 1
+                if not count:
+                    return
+    except csv.Error:
+        return
+
+
+def _header_line(text: str) -> tuple[int, str]:
+    """(line number, text) of the first line that is neither blank nor a comment; (0, "")."""
+    pos, number = 0, 0
+    while pos <= len(text):
+        end = text.find("\n", pos)
+        line = text[pos:] if end < 0 else text[pos:end]
+        number += 1
+        if line.strip(_BLANKS + ",;") and not line.lstrip().startswith(_COMMENT):
+            return number, line
+        if end < 0:
+            break
+        pos = end + 1
+    return 0, ""
+
+
+def _delimiter_of(text: str, path: str, declared: str | None = None) -> str:
+    """The delimiter of a file: ``declared`` when its header line holds it; else a comma unless
+    the header line holds a semicolon or tab; then the one candidate that splits the header into
+    several columns and the first rows below it into as many (or the only one that splits the
+    header at all). InputError (at the header) naming what was found when none or several do."""
+    number, line = _header_line(text)
+    if declared and declared in line:
+        return declared
+    if ";" not in line and "\t" not in line:
+        return ","
+    head, end = text, -1
+    for _ in range(number + 50):  # the header and up to 50 rows below it, whole lines
+        end = text.find("\n", end + 1)
+        if end < 0:
+            break
+    else:
+        head = text[: end + 1]
+    fits, splits, found = [], [], []
+    for name, delimiter in DELIMITERS.items():
+        records = list(_records(head, delimiter, 51))
+        widths = sorted({len(fields) for _, fields in records})
+        found.append(f"{name}: {len(records[0][1])} column(s) in the header, {widths} per row")
+        if len(records[0][1]) > 1:
+            splits.append(name)
+            if len(widths) == 1:
+                fits.append(name)
+    if len(fits) == 1 or (not fits and len(splits) == 1):  # the reader then names a ragged row
+        return DELIMITERS[(fits or splits)[0]]
+    raise InputError(
+        f"cannot tell the delimiter ({'; '.join(found)}): give --delimiter "
+        + (" or ".join(fits) if fits else "comma, semicolon or tab"),
+        path,
+        number,
+    )
+
+
+_NUMBER_WITH = {
+    sep: re.compile(
+        rf"[{_BLANKS}]*[+-]?(?:[0-9]+\{sep}[0-9]*|\{sep}[0-9]+)(?:[eE][+-]?[0-9]+)?[{_BLANKS}]*"
+    )
+    for sep in ".,"
+}
+
+
+def _decimal_of(table: Table) -> str:
+    """The decimal mark of a semicolon or tab file: a comma when some number is written with one
+    and none with a point; a point otherwise. InputError at the first number of the second kind
+    when both are found."""
+    first: dict[str, tuple[int, int, str]] = {}
+    for r, row in enumerate(table.rows):
+        for i, cell in enumerate(row):
+            for sep, pattern in _NUMBER_WITH.items():
+                if sep not in first and pattern.fullmatch(cell):
+                    first[sep] = (r, i, cell.strip(_BLANKS))
+        if len(first) == 2:
+            (r, i, cell), (r0, i0, cell0) = sorted(first.values())[::-1]
+            raise InputError(
+                f"numbers with a decimal point and with a decimal comma: '{_shorten(cell)}' here, "
+                f"'{_shorten(cell0)}' on line {table.lines[r0]} column {i0 + 1}: give "
+                "--decimal point or --decimal comma",
+                table.path,
+                table.lines[r],
+                i + 1,
+            )
+    return "," if "," in first else "."
+
+
+def _convert_cells(table: Table, decimal: str, scale: str | None) -> None:
+    """In place: a decimal comma made a point in every number written with one (``scale``
+    None), or every number of the length columns times ``scale`` (exact decimal arithmetic, so
+    ``1.2345`` m reads as ``1234.5`` mm)."""
+    rows = table.rows
+    table._cells = None  # the cells are now the rows
+    if scale is None:
+        if decimal == ",":
+            pattern = _NUMBER_WITH[","]
+            for row in rows:
+                for i, cell in enumerate(row):
+                    if "," in cell and pattern.fullmatch(cell):
+                        row[i] = cell.replace(",", ".")
+        return
+    from decimal import Decimal  # only files in m or inch need it
+
+    factor = Decimal(scale)
+    columns = [i for i, name in enumerate(table.header) if name.lower() in LENGTH_COLUMNS]
+    for row in rows:
+        for i in columns:
+            text = row[i].strip(_BLANKS)
+            if _DECIMAL.fullmatch(text) and not text[-1].isalpha():  # not nan, inf
+                value = Decimal(text)
+                row[i] = format(value.scaleb(3) if scale == "1000" else value * factor, "f")
+
+
+def _map_columns(table: Table, fmt: TableFormat) -> bool:
+    """Rename the file's columns to accugrid's by ``fmt.columns`` when the file has any of the
+    mapped names (True), else leave it (False); InputError at the header for a mapped name it
+    lacks while having others."""
+    wanted = {source.lower(): name for name, source in fmt.columns.items()}
+    have = {name.strip().lower() for name in table.header}
+    if not have & wanted.keys():
+        table.unmapped = f"; the column mapping {fmt.mapping_text()} names none of them"
+        return False
+    for name, source in fmt.columns.items():
+        if source.lower() not in have:
+            raise InputError(
+                f"column mapping {name}={source}: no column '{source}' in the header "
+                f"(have: {', '.join(table.header)})",
+                table.path,
+                table.header_line,
+            )
+    header = [wanted.get(name.strip().lower(), name) for name in table.header]
+    _check_header(header, table.path, table.header_line)
+    table.header = header
+    table._index = {name.strip().lower(): i for i, name in enumerate(header)}
+    return True
+
+
+def _parse_csv(text: str, path: str, delimiter: str = ",") -> Table:
+    """Any file of the module docstring's format, through the csv module."""
+    # Lines end only at CR, LF or CRLF: VT, FF, NEL and U+2028 inside a field are data.
+    reader = csv.reader(io.StringIO(text, newline=""), delimiter=delimiter, strict=True)
+    header: list[str] | None = None
+    rows: list[list[str]] = []
+    lines: list[int] = []
+    end_line = header_line = 0
+    try:
+        for record in reader:
+            start_line, end_line = end_line + 1, reader.line_num
+            if not "".join(record).strip() or record[0].lstrip().startswith(_COMMENT):
                 continue  # blank or comment
             if header is None:
                 header = [cell.strip() for cell in record]
                 _check_header(header, path, start_line)
+                header_line = start_line
                 continue
             if len(record) != len(header):
                 raise InputError(
@@ -411,7 +677,7 @@ def _parse_csv(text: str, path: str) -> Table:
         raise InputError(f"malformed CSV: {exc}", path, reader.line_num) from None
     if header is None:
         raise InputError("no header row (the file is empty or only comments)", path)
-    return Table(path, header, rows, lines)
+    return Table(path, header, rows, lines, header_line=header_line)
 
 
 def _check_header(header: list[str], path: str, line: int) -> None:

@@ -15,10 +15,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from accugrid.compensation.csvtable import TableFormat
 from accugrid.compensation.interpolation import METHODS, CellInterpolator
 from accugrid.compensation.measurements import (
     COORD_TOL_MM,
     REPEAT_TOL_MM,
+    Measurements,
     build_grid,
     measurements_from_arrays,
     read_measurements,
@@ -84,19 +86,31 @@ class GridModel:
     @classmethod
     def from_measurements(
         cls,
-        source: str | os.PathLike[str] | tuple,
+        source: str | os.PathLike[str] | tuple | Measurements | np.ndarray,
+        measured: np.ndarray | None = None,
+        abc: np.ndarray | None = None,
+        *,
         coord_tol_mm: float = COORD_TOL_MM,
         repeat_tol_mm: float = REPEAT_TOL_MM,
+        fmt: TableFormat | None = None,
     ) -> GridModel:
-        """Build from a measurement CSV path or a tuple (commanded (N,3), measured (N,3)[, abc]).
+        """Build from measurements: a CSV path (read as ``fmt`` says, default: found), a
+        ``Measurements``, the arrays commanded (N, 3) and ``measured`` (N, 3) mm (robot frame;
+        ``abc`` (N, 3) KUKA deg optional) or a tuple of them.
 
         Repeats of a commanded point are averaged; InputError (file, line) when the points are
         not a complete regular grid or repeats disagree by more than ``repeat_tol_mm``.
         """
-        if isinstance(source, tuple):
+        if measured is not None:
+            source = (source, measured, abc)
+        if isinstance(source, Measurements):
+            meas = source
+        elif isinstance(source, tuple):
             meas = measurements_from_arrays(*source)
+        elif isinstance(source, np.ndarray):
+            raise TypeError("give the measured points too: from_measurements(commanded, measured)")
         else:
-            meas = read_measurements(source)
+            meas = read_measurements(source, fmt)
         grid = build_grid(meas, coord_tol_mm=coord_tol_mm, repeat_tol_mm=repeat_tol_mm)
         return cls(
             grid.origin,
@@ -108,6 +122,13 @@ class GridModel:
             repeats=grid.repeats,
             spread_mm=grid.spread_mm,
             status=grid.status,
+        )
+
+    def __repr__(self) -> str:
+        source = f", from {os.path.basename(self.source_path)}" if self.source_path else ""
+        return (
+            f"GridModel({'x'.join(map(str, self.counts))} vertices, origin "
+            f"{mm_text(self.origin, 3)} mm, step {mm_text(self.step, 3)} mm{source})"
         )
 
     @property

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.compensation.csvtable import Table, parse_table
+from accugrid.compensation.csvtable import Table, TableFormat, parse_table
 from accugrid.kinematics.digest import sha256_hex
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
@@ -61,6 +61,17 @@ class Measurements:
     position_decimals: np.ndarray | None = None
     status: np.ndarray | None = None
 
+    def __repr__(self) -> str:
+        source = f" from {os.path.basename(self.path)}" if self.path else ""
+        extra = [
+            name for name, v in (("a,b,c", self.abc), ("a1..a6", self.joints)) if v is not None
+        ]
+        return (
+            f"Measurements({len(self.commanded)} rows{source}"
+            + "".join(f", {name}" for name in extra)
+            + ")"
+        )
+
     def where(self, row: int) -> str:
         """Human location of a row: 'line 12' for a file, 'row 3' (0-based) for arrays."""
         return f"line {self.lines[row]}" if self.lines is not None else f"row {row}"
@@ -87,12 +98,13 @@ class VertexGrid:
     )
 
 
-def read_measurements(path: str | os.PathLike[str]) -> Measurements:
+def read_measurements(path: str | os.PathLike[str], fmt: TableFormat | None = None) -> Measurements:
     """Read a measurement CSV (DESIGN.md): x,y,z,x_meas,y_meas,z_meas required; a,b,c, the
-    logged joints a1..a6 (all six or none) and the Status s optional."""
+    logged joints a1..a6 (all six or none) and the Status s optional. ``fmt``: how a tracker
+    export is written (delimiter, decimal mark, column mapping, units; default: found)."""
     path = os.fspath(path)
     raw, text = read_input_text(path)
-    table = parse_table(text, path)
+    table = parse_table(text, path, fmt)
     table.require(["x", "y", "z", "x_meas", "y_meas", "z_meas"])
     if not len(table):
         raise InputError("no measurement rows", path)

@@ -142,7 +142,19 @@ def _joint_errors_dict(moves: JointErrors) -> dict:
 
 def check_same_robot(model: Robot, robot: Robot, where: str | None = None) -> None:
     """InputError unless ``model`` (e.g. a calibrated file) has ``robot``'s nominal DH and
-    joint limits (within 1e-9 mm/deg): a model identified on another robot type."""
+    joint limits (within 1e-9 mm/deg): a model identified on another robot type, or either of
+    them a URDF robot (no DH table to compare)."""
+    if not isinstance(model, Robot):
+        raise InputError(
+            f"model {model.name} is a URDF robot, not a calibrated DH model "
+            "(accugrid identify writes one)",
+            where,
+        )
+    if not isinstance(robot, Robot):
+        raise InputError(
+            f"robot {robot.name} is a URDF robot: a calibrated model applies to a DH robot only",
+            where,
+        )
     a, b = model.dh, robot.dh
     rows = [
         ("a_mm", a.a, b.a),

@@ -72,7 +72,10 @@ def read_input_bytes(path: str | os.PathLike[str], limit: int = MAX_INPUT_BYTES)
             now = os.fstat(handle.fileno())
             if not stat.S_ISREG(now.st_mode):
                 raise InputError(f"not a regular file ({_kind(now.st_mode)})", where)
-            data = handle.read(limit + 1)
+            # its size (+1 to see growth), not the limit: a buffer is allocated for the count
+            data = handle.read(min(limit, now.st_size) + 1)
+            while len(data) <= limit and (more := handle.read(min(limit + 1 - len(data), 2**20))):
+                data += more  # the file grew since fstat
     except OSError as exc:
         raise InputError(f"cannot read: {exc.strerror or exc}", where) from None
     if len(data) > limit:

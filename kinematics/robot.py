@@ -42,9 +42,19 @@ from accugrid.kinematics.joint_errors import (
     PointMass,
     Thermal,
 )
-from accugrid.kinematics.yamlfile import YamlDoc, load_yaml
+from accugrid.kinematics.units import mm_text
+from accugrid.kinematics.validity import KEYS as VALIDITY_KEYS
+from accugrid.kinematics.yamlfile import Schema, YamlDoc, load_yaml
 
-__all__ = ["BUILTIN", "Robot", "load_robot"]
+__all__ = [
+    "BUILTIN",
+    "ERROR_KEYS",
+    "IDENTIFICATION_SCHEMA",
+    "JOINT_ERRORS_SCHEMA",
+    "ROBOT_SCHEMA",
+    "Robot",
+    "load_robot",
+]
 
 BUILTIN = ("kr210", "kr210-paper", "kr210-realistic", "irb6700")
 _LIMIT_TOL = 1e-9
@@ -65,6 +75,17 @@ class Robot:
     # (3,) mm per axis: the largest held-out error its identification predicts (a calibrated
     # file's cross-validated max, else its fit residual max); None: the model makes no claim
     validated_max_mm: np.ndarray | None = None
+    source: str | None = None  # the robot file (for messages); None: built in code
+
+    def __repr__(self) -> str:
+        parts = [repr(self.name)]
+        if self.errors is not None:
+            parts.append("DH errors")
+        if self.joint_errors is not None:
+            parts.append("joint errors")
+        if not np.array_equal(self.flange_T_tool, np.eye(4)):
+            parts.append(f"tool xyz {mm_text(self.flange_T_tool[:3, 3], 3)} mm")
+        return f"Robot({', '.join(parts)})"
 
     def with_tool(self, flange_T_tool: np.ndarray) -> Robot:
         """The same robot with another tool (4, 4) mm."""
@@ -165,7 +186,11 @@ class Robot:
         InputError for a DH structure without the closed-form inverse."""
         poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
         if not closed.closed_form_supported(self.dh):
-            raise InputError(f"robot {self.name}: DH structure has no closed-form inverse")
+            raise InputError(
+                f"robot {self.name}: its dh structure has no closed-form inverse (it needs "
+                "alpha +-90 deg in rows 1, 3, 4, 5, alpha 0 in row 2, d2 = d3 = a4 = a5 = d5 = 0)",
+                self.source,
+            )
         flange = stack_times(poses, invert(self.flange_T_tool))
         return flange, closed.wrist_points(self.dh, flange)
 
@@ -218,7 +243,54 @@ def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:
     return _robot_from_doc(doc)
 
 
+_XYZ: Schema = dict.fromkeys("xyz")
+_POSE: Schema = dict.fromkeys("xyzabc")
+# The ``identification:`` summary of a calibrated file (``calibrated.identification_summary``
+# writes it; ``_validated_max`` and ``codegen.correct_model`` read it). A key written there is
+# declared here.
+IDENTIFICATION_SCHEMA: Schema = {
+    "robot": None,
+    "measurements": {"file": None, "sha256": None},
+    "controller_tool": _POSE,
+    "poses": None,
+    "rows": None,
+    "identifiable_parameters": None,
+    "unidentifiable_directions": None,
+    "condition_number": None,
+    "observability_o1": None,
+    "residual_rms_mm": _XYZ,
+    "residual_max_mm": _XYZ,
+    "robust_sigma_mm": None,
+    "outliers": None,
+    "parameters": [dict.fromkeys(("name", "value", "std", "unit", "identifiable"))],
+    "tracker_T_robot": _POSE,
+    "cross_validation": {"folds": None, "predicted_rms_mm": _XYZ, "predicted_max_mm": _XYZ},
+    "validity": dict.fromkeys(VALIDITY_KEYS),  # kinematics.validity reads and checks its values
+}
+# ``joint_errors:`` (``_joint_errors_from_doc``)
+JOINT_ERRORS_SCHEMA: Schema = {
+    "compliance_rad_per_nm": None,
+    "masses": [dict.fromkeys(("link", "kg", "at_mm"))],
+    "harmonics": [dict.fromkeys(("axis", "order", "amplitude_rad", "phase_deg"))],
+    "thermal": dict.fromkeys(("delta_t_k", "expansion_per_k")),
+    "gravity_mps2": None,
+}
+ERROR_KEYS = ("da_mm", "dd_mm", "dalpha_rad", "dtheta_rad")  # one ``errors:`` row
+# A DH robot file, calibrated or not: every key ``_robot_from_doc`` reads.
+ROBOT_SCHEMA: Schema = {
+    "name": None,
+    "description": None,
+    "dh": [dict.fromkeys(("a_mm", "alpha_deg", "d_mm", "theta_offset_deg", "sign"))],
+    "limits_deg": None,
+    "tool": _POSE,
+    "errors": [dict.fromkeys(ERROR_KEYS)],
+    "joint_errors": JOINT_ERRORS_SCHEMA,
+    "identification": IDENTIFICATION_SCHEMA,
+}
+
+
 def _robot_from_doc(doc: YamlDoc) -> Robot:
+    doc.check_keys(ROBOT_SCHEMA)
     name = doc.string("name")
     rows = doc.sequence("dh", length=6)
     a, alpha, d, offset, sign = (np.empty(6) for _ in range(5))
@@ -246,14 +318,21 @@ def _robot_from_doc(doc: YamlDoc) -> Robot:
     errors = None
     if doc.has("errors"):
         doc.sequence("errors", length=6)
-        keys = ("da_mm", "dd_mm", "dalpha_rad", "dtheta_rad")
-        errors = np.array([[doc.number("errors", i, k) for k in keys] for i in range(6)])
+        errors = np.array([[doc.number("errors", i, k) for k in ERROR_KEYS] for i in range(6)])
     table = DHTable(a=a, d=d, alpha=alpha, theta_offset=offset, sign=sign)
     description = doc.string("description", default="")
     joint_errors = _joint_errors_from_doc(doc) if doc.has("joint_errors") else None
     validated = _validated_max(doc)
     return Robot(
-        name, table, limits, tool, errors, description, joint_errors, validated_max_mm=validated
+        name,
+        table,
+        limits,
+        tool,
+        errors,
+        description,
+        joint_errors,
+        validated_max_mm=validated,
+        source=doc.path,
     )
 
 
@@ -262,7 +341,12 @@ def _validated_max(doc: YamlDoc) -> np.ndarray | None:
     the cross-validated held-out max per axis, else the fit's residual max; None without."""
     for key in (("cross_validation", "predicted_max_mm"), ("residual_max_mm",)):
         if doc.has("identification", *key):
-            return np.array([doc.number("identification", *key, axis) for axis in "xyz"])
+            values = np.array([doc.number("identification", *key, axis) for axis in "xyz"])
+            if np.any(values < 0):
+                axis = "xyz"[int(np.argmax(values < 0))]
+                where = ("identification", *key, axis)
+                raise doc.error(f"{doc.keyname(*where)} must be >= 0 mm", *where)
+            return values
     return None
 
 

@@ -32,9 +32,18 @@ from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.ik import wrap
 from accugrid.kinematics.inputfile import note_input
-from accugrid.kinematics.yamlfile import YamlDoc
+from accugrid.kinematics.yamlfile import Schema, YamlDoc
 
-__all__ = ["UrdfRobot", "urdf_robot_from_doc"]
+__all__ = ["URDF_ROBOT_SCHEMA", "UrdfRobot", "urdf_robot_from_doc"]
+
+# A URDF robot file: every key ``urdf_robot_from_doc`` reads.
+URDF_ROBOT_SCHEMA: Schema = {
+    "name": None,
+    "description": None,
+    "urdf": None,
+    "tip": None,
+    "tool": dict.fromkeys("xyzabc"),
+}
 
 _MM = 1000.0
 _DAMPING = 1e-6  # squared damping of the least-squares step (dimensionless, metres and rad)
@@ -174,6 +183,7 @@ def urdf_robot_from_doc(doc: YamlDoc, folder: Path) -> UrdfRobot:
     """The UrdfRobot a robot YAML describes (keys: name, urdf, tip, optional tool, description)."""
     import pinocchio as pin
 
+    doc.check_keys(URDF_ROBOT_SCHEMA)
     path = folder / doc.string("urdf")
     if not path.is_file():
         raise doc.error(f"{doc.keyname('urdf')}: URDF file not found: {path}", "urdf")

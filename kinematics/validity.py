@@ -73,16 +73,7 @@ class Validity:
         if not doc.has(*SECTION):
             return None
         key = SECTION
-        section = doc.get(*key)
-        if not isinstance(section, dict):
-            raise doc.error(f"{doc.keyname(*key)} must be a mapping", *key)
-        for name in section:
-            if name not in KEYS:
-                raise doc.error(
-                    f"{doc.keyname(*key, name)}: unknown key (allowed: {', '.join(KEYS)})",
-                    *key,
-                    name,
-                )
+        doc.check_keys(dict.fromkeys(KEYS), *key)
         lower = np.array([doc.number(*key, "box_min_mm", i) for i in range(3)])
         upper = np.array([doc.number(*key, "box_max_mm", i) for i in range(3)])
         axis = np.array([doc.number(*key, "tool_axis", i) for i in range(3)])

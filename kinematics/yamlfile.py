@@ -6,14 +6,22 @@ refuses what no accugrid file needs and what makes a small file expensive: alias
 (``&a``/``*a``, the "billion laughs"), explicit tags (``!!int``, ``!!python/...``), duplicate keys
 (the last one would win silently), nesting deeper than ``MAX_DEPTH``, complex keys, and integers
 outside the float range. Each refusal is an InputError at the offending line and column.
+
+Unknown keys are errors too: each reader declares the keys of its sections once, as a ``Schema``
+(key -> None for a value, a nested Schema for a mapping, ``[Schema]`` for a list of mappings), and
+``YamlDoc.check_keys`` refuses any other key at its line and column, naming the nearest valid
+one ("erors: unknown key; did you mean errors?").
 """
 
 from __future__ import annotations
 
+import difflib
 import math
 import os
+import re
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Union
 
 import yaml
 
@@ -21,11 +29,22 @@ from accugrid.kinematics.digest import sha256_hex
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.inputfile import MAX_CONFIG_BYTES, read_input_text
 
-__all__ = ["MAX_DEPTH", "YamlDoc", "load_yaml"]
+__all__ = ["MAX_DEPTH", "Schema", "YamlDoc", "load_yaml", "unknown_key"]
 
 MAX_DEPTH = 32  # nested mappings/sequences; our files use 4
 _INT_CHARS = 400  # a longer integer is beyond float64 (and slow to convert): refused unread
 _MISSING = object()
+
+# key -> None (any value), a nested Schema (a mapping), or [Schema] (a list of mappings)
+Schema = Mapping[str, Union["Schema", list, None]]
+
+
+def unknown_key(name: str, key: object, allowed: Collection[str]) -> str:
+    """'NAME: unknown key; did you mean X?' (else the allowed keys) for ``key`` at ``name``."""
+    near = difflib.get_close_matches(str(key), sorted(allowed), n=1, cutoff=0.6)
+    if near:
+        return f"{name}: unknown key; did you mean {near[0]}?"
+    return f"{name}: unknown key (allowed: {', '.join(sorted(allowed))})"
 
 
 class _Refused(yaml.YAMLError):
@@ -84,6 +103,13 @@ class _StrictLoader(yaml.SafeLoader):
 
 
 _StrictLoader.add_constructor("tag:yaml.org,2002:int", _StrictLoader.construct_yaml_int)
+# YAML 1.1 (PyYAML) reads 5e-8 and 1E3, without a decimal point, as text; YAML 1.2 and every
+# user read them as numbers
+_StrictLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$"),
+    list("-+0123456789."),
+)
 
 
 def _located(exc: yaml.YAMLError, text: str, path: str) -> InputError:
@@ -159,6 +185,28 @@ class YamlDoc:
                 line, col = self.marks[keys[:depth]]
                 return InputError(message, self.path, line, col)
         return InputError(message, self.path)
+
+    def check_keys(self, schema: Schema, *keys: Any) -> None:
+        """InputError at the first key of the mapping at ``keys`` (and of its nested mappings
+        and lists of mappings, as ``schema`` declares them) that ``schema`` does not name. An
+        absent or empty value passes; a value where a mapping belongs is an error."""
+        value = self.get(*keys, default=None)
+        if value is None:
+            return
+        if not isinstance(value, dict):
+            raise self.error(f"{self.keyname(*keys)} must be a mapping", *keys)
+        for key, item in value.items():
+            if key not in schema:
+                name = self.keyname(*keys, key).strip("'")
+                raise self.error(unknown_key(name, key, schema), *keys, key)
+            inner = schema[key]
+            if isinstance(inner, list):
+                if not isinstance(item, list):
+                    raise self.error(f"{self.keyname(*keys, key)} must be a list", *keys, key)
+                for i in range(len(item)):
+                    self.check_keys(inner[0], *keys, key, i)
+            elif inner is not None:
+                self.check_keys(inner, *keys, key)
 
     def get(self, *keys: Any, default: Any = _MISSING) -> Any:
         value: Any = self.data

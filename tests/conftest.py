@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import shutil
 from pathlib import Path
 
 import pytest
@@ -10,6 +12,7 @@ from hypothesis import settings
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 REALWORLD = ROOT.parent / "shared" / "realworld"
+RS274 = shutil.which("rs274") or ("/usr/bin/rs274" if os.path.exists("/usr/bin/rs274") else None)
 
 # Property tests must stay quick on a shared 2-core machine; CI uses the same profile.
 settings.register_profile("accugrid", max_examples=60, deadline=None)
@@ -22,3 +25,14 @@ def realworld() -> Path:
     if not REALWORLD.is_dir():
         pytest.fail(f"{REALWORLD} is missing: the real-world programs must sit beside the checkout")
     return REALWORLD
+
+
+@pytest.fixture(scope="module")
+def rs274() -> str:
+    """LinuxCNC's standalone RS274NGC interpreter; skipped where it is not installed and CI is
+    not set (on CI a missing rs274 is a failure)."""
+    if RS274 is None:
+        if os.environ.get("CI"):
+            pytest.fail("rs274 (LinuxCNC) is not installed, and CI is set: .ci/run must install it")
+        pytest.skip("rs274 (LinuxCNC's standalone interpreter) is not installed; CI runs this")
+    return RS274

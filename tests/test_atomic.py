@@ -223,7 +223,11 @@ def test_every_file_is_synced_before_the_first_rename(tmp_path, monkeypatch, fol
     )
     write_job(target, files, "JOB")
     first_rename = events.index("rename")
-    assert events[:first_rename] == ["file"] * len(files)
+    # a folder made by the write: one rename of it; an existing one: the temporary folder's
+    # entry, then the journal (a file and its folder) are made durable before its rename
+    # commits the job
+    before = ["file"] * len(files) + ([] if folder else ["folder", "file", "folder"])
+    assert events[:first_rename] == before
     assert "file" not in events[first_rename:]
     assert snapshot(target) == files
 
@@ -302,14 +306,19 @@ class Killed(BaseException):
 
 
 @pytest.mark.parametrize("new_parts", [2, 5])
-def test_a_job_killed_at_any_step_of_the_swap_never_mixes_jobs(tmp_path, monkeypatch, new_parts):
-    """Issue item 2: stop the swap after every possible number of file operations."""
+def test_a_job_killed_at_any_step_of_the_swap_is_whole_after_recovery(
+    tmp_path, monkeypatch, new_parts
+):
+    """Stop the write after every possible number of file operations (the journal's rename,
+    each removal and rename): until the next write the entry point never stands beside a mix;
+    after ``recover`` the folder holds exactly the old job or exactly the new one."""
     name = "JOB"
-    steps = 2 * new_parts + 2 + 8  # renames + removals, with room to spare
-    for stop_after in range(steps):
+    old, new = job(name, 4, "old"), job(name, new_parts, "new")
+    outcomes = set()
+    for stop_after in range(2 * new_parts + 20):
         folder = tmp_path / f"k{stop_after}"
         folder.mkdir()
-        write_job(folder, job(name, 4, "old"), name)
+        write_job(folder, old, name)
         count = [0]
 
         def op(real, count=count, stop_after=stop_after):
@@ -321,17 +330,22 @@ def test_a_job_killed_at_any_step_of_the_swap_never_mixes_jobs(tmp_path, monkeyp
 
             return wrapped
 
-        monkeypatch.setattr(atomic.os, "replace", op(os.replace))
-        monkeypatch.setattr(atomic.os, "unlink", op(os.unlink))
+        for call in ("replace", "rename", "unlink", "rmdir"):
+            monkeypatch.setattr(atomic.os, call, op(getattr(os, call)))
         try:
-            write_job(folder, job(name, new_parts, "new"), name)
+            write_job(folder, new, name)
+            done = True
         except Killed:
-            pass
+            done = False
         monkeypatch.undo()
         assert consistent(folder, name), (stop_after, snapshot(folder))
-        main_src = folder / f"{name}.src"
-        if main_src.exists() and main_src.read_text().startswith("new"):
-            assert snapshot(folder) == job(name, new_parts, "new")
+        atomic.recover([folder])  # what the next accugrid write into the folder does first
+        after = {p.name: p.read_text() for p in folder.iterdir()}
+        assert after in (old, new), (stop_after, after)
+        outcomes.add("new" if after == new else "old")
+        if done:
+            break
+    assert outcomes == {"old", "new"}  # kills before and after the journal were both seen
 
 
 def test_a_complete_job_replaces_a_longer_one_without_stale_modules(tmp_path):
@@ -451,3 +465,46 @@ def test_a_temporary_folder_of_a_dead_process_is_removed(tmp_path):
     (leftover / "JOB_001.src").write_text("half")
     write_job(tmp_path / "krl", job("JOB", 1, "new"), "JOB")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["krl"]
+
+
+# ---------------------------------------------------------------- names and folders at the limits
+
+
+@pytest.mark.parametrize("count", [1, 3])
+def test_output_names_of_255_bytes_are_written(tmp_path, count):
+    """The temporary's name is cut to fit in NAME_MAX, not the output's: 255-byte names (here
+    with two-byte characters) work alone, in a job of several files and as a new folder."""
+    stem = "é" * 125  # 250 bytes
+    files = {tmp_path / f"{stem}{k}.src": f"job {k}" for k in range(count)}
+    assert all(len(os.fsencode(p.name)) == 255 for p in files)
+    write_files(files)
+    write_files({p: "again" for p in files}, force=True)  # over existing files: the journal
+    assert {p: p.read_text() for p in files} == {p: "again" for p in files}
+    folder = tmp_path / ("d" * 255)
+    write_files({folder / "a.src": "a", folder / "b.src": "b"})
+    assert snapshot(folder) == {"a.src": "a", "b.src": "b"}
+    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".accugrid.tmp")]
+
+
+def test_an_output_a_thousand_folders_deep_is_made_without_recursion(tmp_path, capsys):
+    deep = tmp_path.joinpath(*["a"] * 1000)
+    points = tmp_path / "points.csv"
+    points.write_text("x,y,z\n1700,0,1500\n")
+    grid = EXAMPLES / "grid_200mm.csv"
+    try:
+        code, err = run(["correct", points, "--grid", grid, "-o", deep / "o.csv"], capsys)
+        assert code == 0, err
+        assert "\n1700,0,1500," in (deep / "o.csv").read_text()
+    finally:  # shutil.rmtree (pytest's clean-up) recurses once per level
+        levels = [tmp_path / "a"]
+        while (levels[-1] / "a").is_dir():
+            levels.append(levels[-1] / "a")
+        for level in reversed(levels):
+            for file in level.glob("*.csv"):
+                file.unlink()
+            if level.is_dir():
+                level.rmdir()
+    too_deep = tmp_path.joinpath(*["b" * 200] * 30)  # longer than PATH_MAX (4096 bytes)
+    code, err = run(["correct", points, "--grid", grid, "-o", too_deep / "o.csv"], capsys)
+    assert code == 2 and "File name too long" in err and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["points.csv"]  # no folder begun

@@ -104,6 +104,9 @@ def test_an_unreachable_hole_checked_in_the_background_is_raised_by_wait():
     assert prog.configuration is None
 
 
+SPIN = (("A", -90), ("B", 30), ("C", 150), ("D", -90))  # hole id, KUKA A deg (B 0, C 180)
+
+
 @pytest.mark.parametrize("failure", ["unreachable in the Status", "branch jump"])
 @pytest.mark.parametrize("command", ["krl", "gcode"])
 def test_a_job_whose_ik_check_fails_replaces_nothing(tmp_path, capsys, command, failure):
@@ -114,11 +117,12 @@ def test_a_job_whose_ik_check_fails_replaces_nothing(tmp_path, capsys, command, 
     assert main([command, str(POINTS), "--cell", str(CELL), "-o", str(out)]) == 0
     before = {p: p.read_bytes() for p in sorted(tmp_path.rglob("*")) if p.is_file()}
     capsys.readouterr()
-    points, cell_file, message = POINTS, CELL, "hole 'B': an axis turns 184 deg"
-    if failure == "branch jump":  # A6 from about 100 to -100 deg between two holes
+    points, cell_file, message = POINTS, CELL, "hole 'D': A6 turns 241 deg"
+    if failure == "branch jump":  # A spins the drill 120 deg per hole: A6 runs out of its range
         points = tmp_path / "input" / "jump.csv"
         points.parent.mkdir()
-        points.write_text("id,x,y,z,a,b,c\nA,0,300,0,-90,0,100\nB,25,300,0,-90,0,-100\n")
+        spin = "".join(f"{h},{25 * k},300,0,{a},0,180\n" for k, (h, a) in enumerate(SPIN))
+        points.write_text("id,x,y,z,a,b,c\n" + spin)
     else:
         cell_file, message = status_zero_cell(tmp_path / "input"), "hole 'WP-R1-001'"
     argv = [command, str(points), "--cell", str(cell_file), "-o", str(out), "--force"]

@@ -114,8 +114,10 @@ def test_a_step_too_small_for_memory_is_refused_before_any_array(tmp_path, capsy
 def test_repeat_tol_nan_is_refused(tmp_path, capsys):
     argv = ["correct", str(EXAMPLES / "wing_panel_robot.csv"), "--grid"]
     argv += [str(EXAMPLES / "grid_200mm.csv"), "-o", str(tmp_path / "o.csv")]
-    assert main([*argv, "--repeat-tol", "nan"]) == 2
-    assert "repeat tolerance must be a finite number" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as stop:  # refused by the option's type
+        main([*argv, "--repeat-tol", "nan"])
+    assert stop.value.code == 2
+    assert "--repeat-tol: 'nan' is not a finite number (mm)" in capsys.readouterr().err
     assert not (tmp_path / "o.csv").exists()
 
 

@@ -37,7 +37,7 @@ angles = st.floats(-180.0, 180.0, allow_nan=False)
 def test_written_yaml_reloads_to_the_same_fk(tmp_path_factory, errors, tool):
     robot = calibrated(errors, tool)
     path = tmp_path_factory.mktemp("cal") / "cal.yaml"
-    summary = {"robot": "kr210", "note": "anything", "parameters": [{"name": "da1", "value": 1.0}]}
+    summary = {"robot": "kr210", "poses": 40, "parameters": [{"name": "da1", "value": 1.0}]}
     path.write_text(calibrated_yaml(robot, summary, header="a header\nof two lines"))
     loaded = load_robot(path)
     np.testing.assert_array_equal(loaded.errors, robot.errors)

@@ -65,7 +65,8 @@ def test_the_points_column_counts_what_was_measured(tiny_run):
     points = {r["targets"] + r["method"]: int(r["points"]) for r in rows}
     assert points["tiltedgrid idw"] == 27 and points["tiltedmodel"] == 27
     assert points["tiltedmodel + residual grid"] == 27 + 27
-    assert (tiny_run / "comparison.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    for stat in ("max", "std"):
+        assert (tiny_run / f"comparison_{stat}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 @pytest.mark.parametrize("budget", [8, 27, 60, 125, 252, 1000])

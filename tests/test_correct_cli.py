@@ -167,11 +167,8 @@ def test_drill_axis_orientation_is_compared_with_the_grid_tool_axis(tmp_path):
 @pytest.mark.parametrize(
     ("points", "args", "message"),
     [
-        ("x,y,z\n1200,0,1200\n", ["--method", "idw", "--power", "0"], "power must be > 0"),
-        ("x,y,z\n1200,0,1200\n", ["--iterations", "0"], "iterations must be"),
         ("x,y,z,ex\n1200,0,1200,1\n", [], "column(s) ex would be written"),
         ("x,y,z\n1200,zero,1200\n", [], "points.csv:2:2: 'zero' in column 'y'"),
-        ("x,y,z\n1200,0,1200\n", ["--max-correction", "0"], "--max-correction must be > 0"),
     ],
 )
 def test_bad_input_is_one_line_exit_2(tmp_path, capsys, points, args, message):
@@ -179,6 +176,21 @@ def test_bad_input_is_one_line_exit_2(tmp_path, capsys, points, args, message):
     err = capsys.readouterr().err
     assert code == 2 and not out.exists()
     assert message in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--method", "idw", "--power", "0"], "--power: '0' must be > 0"),
+        (["--iterations", "0"], "--iterations: '0' must be >= 1"),
+        (["--max-correction", "0"], "--max-correction: '0' must be > 0 mm"),
+    ],
+)
+def test_bad_option_values_are_refused_by_their_type(tmp_path, capsys, args, message):
+    with pytest.raises(SystemExit) as stop:
+        run(tmp_path, write_points(tmp_path, "x,y,z\n1200,0,1200\n"), *args)
+    assert stop.value.code == 2 and message in capsys.readouterr().err
+    assert not (tmp_path / "out.csv").exists()
 
 
 def test_existing_output_needs_force_and_inputs_are_never_targets(tmp_path, capsys):

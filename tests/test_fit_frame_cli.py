@@ -152,6 +152,29 @@ def test_transform_xyz_default_and_quoted_cells(tmp_path, frame_file):
     np.testing.assert_allclose(got, transform_points(pose, [[1, 2, 3], [4, 5, 6]]), atol=5e-5)
 
 
+def test_transform_triples_and_the_former_spelling(tmp_path, frame_file, capsys):
+    """--triples both maps both triples; the former --columns both still does, with a
+    deprecation line on stderr (--columns names a column mapping elsewhere)."""
+    src = TRACKER / "meas_tracker.csv"
+    new, old = tmp_path / "new.csv", tmp_path / "old.csv"
+    assert transform(src, frame_file, new, "--triples", "both") == 0
+    assert "deprecated" not in capsys.readouterr().err
+    assert transform(src, frame_file, old, "--columns", "both") == 0
+    assert "--columns is deprecated here, use --triples both" in capsys.readouterr().err
+    assert new.read_bytes() == old.read_bytes()
+    first = new.read_text().splitlines()[5].split(",")
+    original = src.read_text().splitlines()[4].split(",")
+    assert first[1:4] != original[1:4] and first[7:] != original[7:]  # both triples mapped
+
+
+def test_transform_refuses_a_file_it_cannot_rewrite_as_written(tmp_path, frame_file, capsys):
+    src = tmp_path / "semi.csv"
+    src.write_text("# export\nid;x;y;z\nP1;1,5;2;3\n")
+    out = tmp_path / "out.csv"
+    assert transform(src, frame_file, out) == 2 and not out.exists()
+    assert f"{src}:2: transform rewrites comma-separated files" in _error_line(capsys)
+
+
 def test_transform_refusals(tmp_path, frame_file, capsys):
     out = tmp_path / "out.csv"
     partial = tmp_path / "partial.csv"

@@ -193,7 +193,8 @@ def cases(draw):
 
 def _walked(step, case):
     text, moves, corrected, desired, r_planes, places = case
-    walk = _Commanded()
+    read = np.array([not r for r in moves.reason], bool)
+    walk = _Commanded(moves.is_cycle & read)  # may get Z, R words added
     walk.cmd, walk.r_cmd = [1.0, 2.0, 50.0], 7.0  # as a previous block may leave it
     found = step(text, moves, slice(0, len(moves)), corrected, desired, r_planes, places, walk)
     edits = [np.asarray(column).tolist() for column in found]  # starts, ends, bytes, lengths

@@ -40,8 +40,29 @@ def test_canned_cycles_sticky_z_r_and_retract():
     assert [h.target for h in holes] == [(10, 20, -5), (30, 20, -5), (40, 20, -8)]
     assert [h.motion for h in holes] == ["G81", "G81", "G83"]
     assert holes[0].end == (10, 20, 2)  # G99: back to R
-    assert holes[2].end == (40, 20, 3)  # G98: back to the higher of old Z (R of the previous) and R
+    assert holes[2].end == (40, 20, 50)  # G98: back to the Z the run of cycles began at (rs274)
     assert "R" in holes[0].words and not any(h.reason for h in holes)
+
+
+def test_incremental_cycles_as_linuxcnc_reads_them():
+    """G91: X, Y from where the tool is (each of L repeats), R from the current Z, Z from R;
+    a G98 retract to the higher of the start Z and R (checked against rs274's moves)."""
+    text = "G21 G90 G98 G0 X250 Y0 Z50\nG91 G81 X25 Y25 Z-50 R-25 L2\nX5 Z-4 R-1\n"
+    first, second = parse_gcode(text)[1:]
+    assert first.target == (275, 25, -25) and first.r_mm == 25 and first.end == (300, 50, 50)
+    assert second.target == (305, 50, 45) and second.r_mm == 49 and second.end == (305, 50, 50)
+    assert not first.reason and not second.reason
+
+
+def test_g98_retracts_to_the_initial_level_of_the_run():
+    """G98 retracts to the Z where the run of cycle blocks began (not the previous hole's
+    retract); G80 or another motion mode ends the run (as rs274 expands it)."""
+    text = (
+        "G21 G90 G98 G0 X0 Y0 Z10\nG81 X1 Z-5 R20\nX2 R5\nG80\nG0 Z30\nG99 G81 X3 Z-5 R4\n"
+        "G98 X4 R2\n"
+    )
+    ends = [m.end[2] for m in parse_gcode(text)]
+    assert ends == [10, 20, 10, 30, 4, 30]
 
 
 @pytest.mark.parametrize(
@@ -53,7 +74,9 @@ def test_canned_cycles_sticky_z_r_and_retract():
         ("G0 X0 Y0 Z0\nG41 D1 G1 X10\n", "cutter compensation"),
         ("G0 Z5\n", "X,Y not known"),
         ("G0 X0 Y0 Z0\nG18 G81 X1 Z-1 R1\n", "plane G18"),
-        ("G0 X0 Y0 Z0\nG91 G81 X1 Y1 Z-1 R1\n", "G91"),
+        ("G0 X0 Y0 Z0\nG28\nG91 G81 X1 Y1 Z-1 R1\n", "X,Y,Z not known"),
+        ("G0 X0 Y0 Z0\nG91 G81 X1 Y1 Z-1 R1 L0.5\n", "not a repeat count"),
+        ("G0 X0 Y0 Z0\nG91 G81 X1 Y1 Z-1 R1 L1000000000\n", "more than 10000 repeats"),
         ("o100 sub\nG0 X0 Y0 Z0\n", "O-word"),
     ],
 )

@@ -9,9 +9,7 @@ installed and CI is not set; on CI a missing rs274 is a failure.
 
 from __future__ import annotations
 
-import os
 import re
-import shutil
 import subprocess
 
 import numpy as np
@@ -22,7 +20,6 @@ from accugrid.codegen.gcode.emit import render_gcode
 from accugrid.codegen.program import build_program
 from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc
 
-RS274 = shutil.which("rs274") or ("/usr/bin/rs274" if os.path.exists("/usr/bin/rs274") else None)
 MOVE_RE = re.compile(r"(STRAIGHT_TRAVERSE|STRAIGHT_FEED)\(([^)]*)\)")
 ROWS = np.array(
     [
@@ -32,15 +29,6 @@ ROWS = np.array(
     ]
 )
 TOL_MM = 0.001
-
-
-@pytest.fixture(scope="module")
-def rs274():
-    if RS274 is None:
-        if os.environ.get("CI"):
-            pytest.fail("rs274 (LinuxCNC) is not installed, and CI is set: .ci/run must install it")
-        pytest.skip("rs274 (LinuxCNC's standalone interpreter) is not installed; CI runs this")
-    return RS274
 
 
 def canonical(rs274, tmp_path, text):

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES
 from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
@@ -334,3 +335,23 @@ def test_contains_is_the_box_test_of_every_point(points, nudge):
     assert model.contains(points).tolist() == expected
     inside = points[expected]
     assert model.contains(inside).tolist() == [True] * len(inside)
+
+
+def test_from_measurements_takes_a_file_a_measurements_or_the_arrays():
+    """A file, its Measurements, the arrays (commanded, measured, abc) and their tuple are one
+    grid; one array alone is a TypeError that says what is missing."""
+    from accugrid.compensation.measurements import read_measurements
+
+    path = EXAMPLES / "grid_200mm.csv"
+    meas = read_measurements(path)
+    by_file = GridModel.from_measurements(path)
+    for other in (
+        GridModel.from_measurements(meas),
+        GridModel.from_measurements(meas.commanded, meas.measured, meas.abc),
+        GridModel.from_measurements((meas.commanded, meas.measured, meas.abc)),
+    ):
+        assert np.array_equal(other.errors, by_file.errors)
+        assert np.array_equal(other.orientation_abc, by_file.orientation_abc)
+    assert "6x7x6 vertices" in repr(by_file) and "grid_200mm.csv" in repr(by_file)
+    with pytest.raises(TypeError, match="measured"):
+        GridModel.from_measurements(meas.commanded)

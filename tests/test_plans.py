@@ -186,13 +186,19 @@ def test_plan_unreachable_cube_is_input_error(tmp_path, capsys):
     [
         (["--steps", "500:20:60"], "--steps"),
         (["--steps", "a,b"], "--steps"),
-        (["--wait-sec", "-1"], "--wait-sec"),
         (["--centre", "D", "1", "2", "x"], "numbers"),
     ],
 )
 def test_plan_bad_options(tmp_path, capsys, extra, match):
     assert main(["plan", "experiment", *extra, "-o", str(tmp_path)]) == 2
     assert match in capsys.readouterr().err
+
+
+def test_a_negative_dwell_is_refused_by_the_option_type(tmp_path, capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["plan", "experiment", "--wait-sec", "-1", "-o", str(tmp_path)])
+    assert stop.value.code == 2
+    assert "--wait-sec: '-1' must be >= 0 s" in capsys.readouterr().err
 
 
 def test_experiment_step_column_keeps_precision():

@@ -360,7 +360,8 @@ def test_identify_records_where_the_model_holds_and_targets_outside_are_flagged(
     cal.write_text(text)
     assert main([*argv, "--force"]) == 2
     err = capsys.readouterr().err
-    assert "cal.yaml:" in err and "'identification.validity.tilt_dg': unknown key" in err
+    assert "cal.yaml:" in err
+    assert "identification.validity.tilt_dg: unknown key; did you mean tilt_deg?" in err
 
 
 def test_validity_measures_the_distance_tilt_and_joint_excess():

@@ -132,10 +132,11 @@ def test_inch_one_decimal_program_keeps_the_correction(realworld, tmp_path):
     program = realworld / "gcode" / "printhor_example3_inch.gcode"
     out, rep = tmp_path / "e3.gcode", tmp_path / "r.csv"
     assert rewrite(program, "--cell", cell, "-o", out, "--report", rep) == 0
-    first = out.read_text().splitlines()[2]
+    # (the first holes set the start of G91 cycles repeated L3, L4: not corrected)
+    first = out.read_text().splitlines()[8]
     e_in = E_CONST / 25.4  # the constant error in inches
-    want = (3 + e_in[0], 4 + e_in[1], 0.2 + e_in[2], -1.1 + e_in[2])
-    assert first == "n0030 g81 x{:.3f} y{:.3f} r{:.3f} z{:.3f}".format(*want)
+    want = (5 + e_in[0], 6 + e_in[1], 0.2 + e_in[2], -1.1 + e_in[2])
+    assert first == "n0090 g83 g90 x{:.3f} y{:.3f} r{:.3f} z{:.3f} q0.21".format(*want)
     for row in report(rep):
         if row["status"] == "corrected":
             assert float(row["residual_mm"]) <= 0.0005 * 25.4 * math.sqrt(3)

@@ -97,8 +97,11 @@ def test_region_min_not_below_max(tmp_path, capsys, axis):
 
 @pytest.mark.parametrize("step", ["0", "-50"])
 def test_non_positive_step(tmp_path, capsys, step):
-    code, out = simulate(tmp_path, step=step)
-    refused(capsys, code, out, "--step must be positive")
+    with pytest.raises(SystemExit) as stop:  # refused by the option's type
+        simulate(tmp_path, step=step)
+    assert stop.value.code == 2
+    assert f"--step: '{step}' must be > 0 mm" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
 
 
 def test_unreachable_corner(tmp_path, capsys):

@@ -14,7 +14,8 @@ held-out targets at the grid orientation and --targets tilted up to --target-til
 arm lands when commanded P' (noise-free), max |P - M| and std per axis, mm.
 
 Output: the table on stdout, DIR/comparison.csv (one row per budget, target set and method) and
-DIR/comparison.png. Lengths in mm, angles in degrees.
+DIR/comparison_max.png and DIR/comparison_std.png (the tolerance, or the std limit, as a line).
+Lengths in mm, angles in degrees.
 """
 
 from __future__ import annotations
@@ -24,11 +25,17 @@ from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import (
+    COORDINATE_MAX,
+    MAX_CANDIDATES,
+    MAX_COUNT,
+    MAX_POSES,
+    MAX_REPEATS,
     add_abc,
     add_harmonics,
     add_status,
     add_tool,
     harmonics_of,
+    number,
     robot_with_tool,
 )
 from accugrid.codegen.comparison_report import csv_text, report_text
@@ -55,7 +62,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--region",
         nargs=6,
-        type=float,
+        type=number("mm", -COORDINATE_MAX, COORDINATE_MAX),
         default=[v for pair in zip(*SEED_REGION, strict=True) for v in pair],
         metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
         help="measured region in the robot frame, mm (default: the seed's 1200 2200 -600 600 "
@@ -64,10 +71,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--budgets",
         nargs="+",
-        type=int,
+        type=number("poses", 1, MAX_POSES, whole=True),
         default=list(DEFAULT_BUDGETS),
         metavar="N",
-        help="measured-point budgets (distinct poses or vertices; default: 27 60 125 252)",
+        help="measured-point budgets (distinct poses or vertices; default: 27 60 125 252; "
+        f"at most {MAX_POSES})",
     )
     add_abc(parser, "grid orientation (grids, residual grid, untilted targets)")
     add_tool(
@@ -77,45 +85,49 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_status(parser, "KUKA Status 0..7 of every pose (default: the IK default's at the centre)")
     parser.add_argument(
         "--tilt",
-        type=float,
+        type=number("deg", 0, 180),
         default=25.0,
         metavar="DEG",
         help="identification poses tilted up to this from --abc (default: 25)",
     )
     parser.add_argument(
         "--target-tilt",
-        type=float,
+        type=number("deg", 0, 180),
         default=25.0,
         metavar="DEG",
         help="tilted held-out targets up to this from --abc (default: 25)",
     )
     parser.add_argument(
         "--targets",
-        type=int,
+        type=number("", 1, MAX_COUNT, whole=True),
         default=200,
         metavar="N",
         help="held-out targets per set (default: 200)",
     )
     parser.add_argument(
         "--candidates",
-        type=int,
+        type=number("candidate poses", 1, MAX_CANDIDATES, whole=True),
         default=1500,
         metavar="N",
-        help="random candidate poses the model's poses are chosen from (default: 1500)",
+        help="random candidate poses the model's poses are chosen from "
+        f"(default: 1500, at most {MAX_CANDIDATES})",
     )
     parser.add_argument(
-        "--repeats", type=int, default=3, help="measurements per point (default: 3)"
+        "--repeats",
+        type=number("", 1, MAX_REPEATS, whole=True),
+        default=3,
+        help="measurements per point (default: 3)",
     )
     parser.add_argument(
         "--noise-tracker",
-        type=float,
+        type=number("mm", 0, 1000),
         default=0.02,
         metavar="MM",
         help="tracker noise, Gaussian sigma per axis, mm (default: 0.02)",
     )
     parser.add_argument(
         "--noise-repeat",
-        type=float,
+        type=number("mm", 0, 1000),
         default=0.03,
         metavar="MM",
         help="robot repeatability, sigma per axis and visit, mm (default: 0.03)",
@@ -125,20 +137,28 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "also compare a model with these reducer harmonics identified (budgets of at least "
         "its parameter count)",
     )
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    parser.add_argument(
+        "--seed",
+        type=number("", 0, 2**32 - 1, whole=True),
+        default=0,
+        help="random seed (default: 0)",
+    )
     parser.add_argument(
         "-o",
         "--output",
         required=True,
         metavar="DIR",
-        help="folder for comparison.csv and comparison.png",
+        help="folder for comparison.csv, comparison_max.png and comparison_std.png",
     )
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
-    paths = [str(out / "comparison.csv"), str(out / "comparison.png")]
+    from accugrid.codegen.plots import COMPARISON_STATS, comparison_png
+
+    paths = [str(out / "comparison.csv")]
+    paths += [str(out / f"comparison_{stat}.png") for stat in COMPARISON_STATS]
     inputs = [args.simulate] if Path(args.simulate).is_file() else []
     check_targets(paths, inputs, args.force)
     if not args.budgets or min(args.budgets) < 8:
@@ -168,12 +188,11 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
         harmonics=harmonics_of(args),
     )
-    from accugrid.codegen.plots import comparison_png
-
     out.mkdir(parents=True, exist_ok=True)
-    write_files(
-        {paths[0]: csv_text(result), paths[1]: comparison_png(result)}, inputs, force=args.force
-    )
+    files = {paths[0]: csv_text(result)}
+    for path, stat in zip(paths[1:], COMPARISON_STATS, strict=True):
+        files[path] = comparison_png(result, stat)
+    write_files(files, inputs, force=args.force)
     print(report_text(result))
     for path in paths:
         print(f"wrote {path}")

@@ -24,13 +24,21 @@ import sys
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import add_abc, add_policy, add_status, add_tool
+from accugrid.codegen.cli_options import (
+    COORDINATE_MAX,
+    add_abc,
+    add_policy,
+    add_status,
+    add_table_format,
+    add_tool,
+    number,
+)
 from accugrid.codegen.corrected import CorrectRequest, correct_points
 from accugrid.compensation.grid import MAX_CORRECTION_MM
+from accugrid.compensation.interpolation import MAX_POWER
 from accugrid.compensation.measurements import REPEAT_TOL_MM
 from accugrid.compensation.policy import GRID_ORIENTATION_TOL_DEG, ORIENTATION_LIMIT_DEG
 from accugrid.compensation.settings import CorrectionSettings
-from accugrid.kinematics.errors import InputError
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -72,14 +80,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--power",
-        type=float,
+        type=number("", 0, MAX_POWER, above=True),
         default=1.0,
         metavar="P",
         help="inverse-distance power p, weights 1/s^p, 0 < p <= 16 (default: 1, the seed's)",
     )
     parser.add_argument(
         "--iterations",
-        type=int,
+        type=number("", 1, 100, whole=True),
         default=1,
         metavar="K",
         help="fixed-point iterations of P' = P + e(P') (default: 1 = seed Eq. 14)",
@@ -92,7 +100,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--max-correction",
-        type=float,
+        type=number("mm", 0, COORDINATE_MAX, above=True),
         default=MAX_CORRECTION_MM,
         metavar="MM",
         help=f"refuse the job if any correction is longer than this, mm "
@@ -100,7 +108,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--orientation-tol",
-        type=float,
+        type=number("deg", 0, 180),
         default=GRID_ORIENTATION_TOL_DEG,
         metavar="DEG",
         help="flag points whose orientation differs from the grid's by more, deg "
@@ -108,7 +116,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--orientation-limit",
-        type=float,
+        type=number("deg", 0, 180),
         default=ORIENTATION_LIMIT_DEG,
         metavar="DEG",
         help="refuse points whose orientation differs from the grid's by more, deg "
@@ -121,18 +129,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--repeat-tol",
-        type=float,
+        type=number("mm", 0, COORDINATE_MAX),
         default=REPEAT_TOL_MM,
         metavar="MM",
         help="largest distance of a repeated measurement from its mean, mm "
         f"(default: {REPEAT_TOL_MM:g})",
     )
+    add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite an existing output")
 
 
 def run(args: argparse.Namespace) -> int:
-    if not args.max_correction > 0:
-        raise InputError(f"--max-correction must be > 0 mm, got {args.max_correction}")
     settings = CorrectionSettings(
         method=args.method,
         power=args.power,

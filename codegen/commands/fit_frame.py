@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 
 from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cli_options import add_table_format, number
 from accugrid.codegen.frame_file import fit_frame_files
 from accugrid.kinematics.base_frame import SMR_RADIUS_MM
 
@@ -42,7 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--smr-radius",
-        type=float,
+        type=number("mm", 0, 1000, above=True),
         default=SMR_RADIUS_MM,
         metavar="MM",
         help=f"SMR ball radius in mm (default {SMR_RADIUS_MM}, a 1.5-inch SMR)",
@@ -51,6 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--plot", metavar="FIG.png", help="also write a PNG of the fitted plane and circles"
     )
+    add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 

@@ -26,10 +26,11 @@ import argparse
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.calibration import IdentifyOptions, calibrate
+from accugrid.codegen.calibration import MAX_ROWS, IdentifyOptions, calibrate
 from accugrid.codegen.cli_options import (
     add_harmonics,
     add_status,
+    add_table_format,
     add_tool,
     harmonics_of,
     robot_with_tool,
@@ -43,7 +44,11 @@ NAME = "identify"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("measurements", metavar="MEAS.csv", help="measurement CSV (mm, deg)")
+    parser.add_argument(
+        "measurements",
+        metavar="MEAS.csv",
+        help=f"measurement CSV (mm, deg), at most {MAX_ROWS} rows",
+    )
     parser.add_argument(
         "--robot",
         required=True,
@@ -83,6 +88,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("-o", "--output", required=True, metavar="CAL.yaml", help="robot YAML")
     parser.add_argument("--urdf", metavar="FILE.urdf", help="also write the model as URDF")
+    add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 
@@ -103,6 +109,6 @@ def run(args: argparse.Namespace) -> int:
         folds=args.folds,
     )
     calibration = calibrate(args.measurements, robot, options, args.output, args.urdf)
-    write_files(calibration.files, inputs, args.force)
+    write_files(calibration.files, inputs, args.force, main=[args.output])  # the YAML last
     print(calibration.report)
     return 0

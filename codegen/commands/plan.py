@@ -31,12 +31,17 @@ from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import (
+    COORDINATE_MAX,
+    MAX_CANDIDATES,
+    MAX_POSES,
+    MAX_REPEATS,
     add_abc,
     add_experiment_arguments,
     add_harmonics,
     add_status,
     add_tool,
     harmonics_of,
+    number,
     parse_centres,
     parse_steps,
     robot_with_tool,
@@ -55,7 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     _add_region(grid)
     grid.add_argument(
         "--step",
-        type=float,
+        type=number("mm", 0, COORDINATE_MAX, above=True),
         required=True,
         metavar="MM",
         help="grid step, mm; a side that is not a whole number of steps gets the next "
@@ -67,37 +72,70 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="serpentine",
         help="visiting order (default: serpentine)",
     )
-    grid.add_argument("--repeats", type=int, default=1, help="rounds over the grid (default: 1)")
+    grid.add_argument(
+        "--repeats",
+        type=number("", 1, MAX_REPEATS, whole=True),
+        default=1,
+        help="rounds over the grid (default: 1)",
+    )
     cube = sub.add_parser("cube", help="one cube's vertices C1..C8 and test points P1..P9")
     cube.add_argument(
-        "--centre", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"), help="mm"
+        "--centre",
+        nargs=3,
+        type=number("mm", -COORDINATE_MAX, COORDINATE_MAX),
+        required=True,
+        metavar=("X", "Y", "Z"),
+        help="mm",
     )
-    cube.add_argument("--step", type=float, required=True, metavar="MM", help="cube edge, mm")
     cube.add_argument(
-        "--repeats", type=int, default=SEED_REPEATS, help=f"rounds (default: {SEED_REPEATS})"
+        "--step",
+        type=number("mm", 0, COORDINATE_MAX, above=True),
+        required=True,
+        metavar="MM",
+        help="cube edge, mm",
+    )
+    cube.add_argument(
+        "--repeats",
+        type=number("", 1, MAX_REPEATS, whole=True),
+        default=SEED_REPEATS,
+        help=f"rounds (default: {SEED_REPEATS})",
     )
     exp = sub.add_parser("experiment", help="the seed's step experiment (Sec. 4.2, 5)")
     add_experiment_arguments(exp)
     ident = sub.add_parser("identify", help="D-optimal poses for a kinematic identification")
     _add_region(ident)
     ident.add_argument(
-        "--count", type=int, required=True, metavar="N", help="number of poses to measure"
+        "--count",
+        type=number("poses", 1, MAX_POSES, whole=True),
+        required=True,
+        metavar="N",
+        help=f"number of poses to measure (at most {MAX_POSES})",
     )
     ident.add_argument(
         "--tilt",
-        type=float,
+        type=number("deg", 0, 180),
         default=30.0,
         metavar="DEG",
         help="largest rotation from --abc, deg (default: 30)",
     )
     ident.add_argument(
         "--candidates",
-        type=int,
+        type=number("candidate poses", 1, MAX_CANDIDATES, whole=True),
         default=2000,
-        help="random candidate poses to choose from (default: 2000)",
+        help=f"random candidate poses to choose from (default: 2000, at most {MAX_CANDIDATES})",
     )
-    ident.add_argument("--repeats", type=int, default=1, help="rounds over the poses (default: 1)")
-    ident.add_argument("--seed", type=int, default=0, help="seed of the candidates (default: 0)")
+    ident.add_argument(
+        "--repeats",
+        type=number("", 1, MAX_REPEATS, whole=True),
+        default=1,
+        help="rounds over the poses (default: 1)",
+    )
+    ident.add_argument(
+        "--seed",
+        type=number("", 0, 2**32 - 1, whole=True),
+        default=0,
+        help="seed of the candidates (default: 0)",
+    )
     ident.add_argument(
         "--compliance",
         action="store_true",
@@ -112,7 +150,7 @@ def _add_region(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--region",
         nargs=6,
-        type=float,
+        type=number("mm", -COORDINATE_MAX, COORDINATE_MAX),
         metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
         default=[SEED_REGION[0][0], SEED_REGION[1][0], SEED_REGION[0][1], SEED_REGION[1][1]]
         + [SEED_REGION[0][2], SEED_REGION[1][2]],
@@ -139,24 +177,27 @@ def _common(parser: argparse.ArgumentParser) -> None:
         "at the first position)",
     )
     parser.add_argument(
-        "--tool-number", type=int, default=1, help="TOOL_DATA index in the program (default: 1)"
+        "--tool-number",
+        type=number("", 1, 32, whole=True),
+        default=1,
+        help="TOOL_DATA index in the program (default: 1)",
     )
     parser.add_argument(
         "--base-number",
-        type=int,
+        type=number("", 0, 32, whole=True),
         default=0,
         help="BASE_DATA index in the program; 0 = $NULLFRAME, the robot frame (default: 0)",
     )
     parser.add_argument(
         "--ptp-percent",
-        type=int,
+        type=number("%", 1, 100, whole=True),
         default=20,
         metavar="P",
         help="speed of the first PTP, percent of maximum (default: 20)",
     )
     parser.add_argument(
         "--vel",
-        type=float,
+        type=number("m/s", 0, 10, above=True),
         default=0.25,
         metavar="M_S",
         help="LIN speed $VEL.CP, m/s (default: 0.25)",
@@ -164,14 +205,14 @@ def _common(parser: argparse.ArgumentParser) -> None:
     wait = parser.add_mutually_exclusive_group()
     wait.add_argument(
         "--wait-sec",
-        type=float,
+        type=number("s", 0, 1e6),
         default=3.0,
         metavar="S",
         help="dwell at each position for the tracker, s (default: 3)",
     )
     wait.add_argument(
         "--wait-input",
-        type=int,
+        type=number("", 1, 4096, whole=True),
         metavar="N",
         help="instead of a dwell, wait at each position until $IN[N] is TRUE",
     )
@@ -217,7 +258,9 @@ def run(args: argparse.Namespace) -> int:
         templates=args.templates,
     )
     job = plan_files(request, args.output)
-    write_files(job.files, force=args.force)
+    # a measurement program: its .src (what the controller runs) replaced last
+    main = [path for path in job.files if Path(path).suffix == ".src"]
+    write_files(job.files, force=args.force, main=main)
     for line in job.lines:
         print(line)
     return 0

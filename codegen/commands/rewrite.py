@@ -41,7 +41,7 @@ import sys
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import add_policy
+from accugrid.codegen.cli_options import COORDINATE_MAX, add_policy, add_table_format, number
 from accugrid.codegen.dialects import dialect_of
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.rewrite_job import RewriteRequest, rewrite_job
@@ -70,13 +70,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="output file or dir")
     parser.add_argument("--report", metavar="REPORT.csv", help="write the per-position report")
     add_policy(parser, "positions")
+    add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
     parser.add_argument(
         "--config-dat", metavar="$config.dat", help="KRL $config.dat with BASE_DATA[n] values"
     )
     parser.add_argument(
         "--base",
-        type=int,
+        type=number("", 0, 32, whole=True),
         metavar="N",
         help="BASE_DATA number in effect where the program does not set one (a lone .dat, or "
         "the start of a routine); 0 = robot frame",
@@ -94,13 +95,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--decimals",
-        type=int,
+        type=number("", 0, 9, whole=True),
         metavar="N",
         help="decimals of corrected numbers (default: as input)",
     )
     parser.add_argument(
         "--max-mb",
-        type=float,
+        type=number("MiB", 0, 1e6, above=True),
         default=MAX_BYTES / 2**20,
         metavar="MiB",
         help=f"refuse program files larger than this (default {MAX_BYTES // 2**20})",
@@ -108,7 +109,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--header", action="store_true", help="add the accugrid comment header")
     parser.add_argument(
         "--orientation-tol",
-        type=float,
+        type=number("deg", 0, 180),
         default=GRID_ORIENTATION_TOL_DEG,
         metavar="DEG",
         help="flag positions whose orientation differs from the grid's by more, deg "
@@ -116,7 +117,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--orientation-limit",
-        type=float,
+        type=number("deg", 0, 180),
         default=ORIENTATION_LIMIT_DEG,
         metavar="DEG",
         help="leave positions whose orientation differs from the grid's by more uncorrected, "
@@ -129,7 +130,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--tolerance",
-        type=float,
+        type=number("mm", 0, COORDINATE_MAX, above=True),
         default=DEFAULT_TOLERANCE_MM,
         metavar="MM",
         help="hole position tolerance: warn when rounding to the written decimals leaves more "
@@ -157,14 +158,8 @@ def run(args: argparse.Namespace) -> int:
         kinds != {"krl"} or inputs[0].suffix.lower() == inputs[1].suffix.lower()
     ):
         raise InputError("the second file must be the .dat of a KRL .src", args.dat)
-    if args.decimals is not None and not 0 <= args.decimals <= 9:
-        raise InputError(f"--decimals must be 0..9, got {args.decimals}")
-    if not 0 <= args.orientation_tol <= args.orientation_limit:
-        raise InputError("need 0 <= --orientation-tol <= --orientation-limit (deg)")
-    if not args.tolerance > 0:
-        raise InputError(f"--tolerance must be > 0 mm, got {args.tolerance}")
-    if args.base is not None and not 0 <= args.base <= 32:
-        raise InputError(f"--base must be a BASE_DATA number 0..32, got {args.base}")
+    if not args.orientation_tol <= args.orientation_limit:
+        raise InputError("need --orientation-tol <= --orientation-limit (deg)")
     if args.strict and args.model is None:
         print(
             "accugrid rewrite: note: --strict is no longer needed for positions outside the "

@@ -25,7 +25,16 @@ import argparse
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import add_abc, add_status, add_tool, robot_with_tool
+from accugrid.codegen.cli_options import (
+    COORDINATE_MAX,
+    MAX_REPEATS,
+    add_abc,
+    add_status,
+    add_table_format,
+    add_tool,
+    number,
+    robot_with_tool,
+)
 from accugrid.codegen.measurement_file import SimulateRequest, simulate_files
 
 __all__ = ["NAME", "add_arguments", "run"]
@@ -42,11 +51,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--region",
         nargs=6,
-        type=float,
+        type=number("mm", -COORDINATE_MAX, COORDINATE_MAX),
         metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
         help="grid box in the robot frame, mm (needed with -o)",
     )
-    parser.add_argument("--step", type=float, help="grid step, mm (needed with -o)")
+    parser.add_argument(
+        "--step",
+        type=number("mm", 0, COORDINATE_MAX, above=True),
+        help="grid step, mm (needed with -o)",
+    )
     parser.add_argument(
         "--poses",
         metavar="PLAN.csv",
@@ -58,27 +71,34 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         parser, "KUKA Status 0..7 kept for every vertex (default: the IK default's at the first)"
     )
     parser.add_argument(
-        "--repeats", type=int, default=1, help="measurements per vertex (default: 1)"
+        "--repeats",
+        type=number("", 1, MAX_REPEATS, whole=True),
+        default=1,
+        help="measurements per vertex (default: 1)",
     )
     parser.add_argument(
         "--noise-tracker",
-        type=float,
+        type=number("mm", 0, 1000),
         default=0.0,
         metavar="MM",
         help="laser-tracker noise, Gaussian sigma per axis, mm (default: 0)",
     )
     parser.add_argument(
         "--noise-repeat",
-        type=float,
+        type=number("mm", 0, 1000),
         default=0.0,
         metavar="MM",
         help="robot repeatability, Gaussian sigma per axis and visit, mm (default: 0)",
     )
     parser.add_argument(
-        "--seed", type=int, default=0, help="random seed for the noise (default: 0)"
+        "--seed",
+        type=number("", 0, 2**32 - 1, whole=True),
+        default=0,
+        help="random seed for the noise (default: 0)",
     )
     parser.add_argument("-o", "--output", metavar="CSV", help="measurement CSV to write")
     parser.add_argument("--plot", metavar="PNG", help="draw seed Fig. 3 into this PNG file")
+    add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 

@@ -29,10 +29,14 @@ from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import (
+    COORDINATE_MAX,
+    MAX_COUNT,
     add_abc,
     add_experiment_arguments,
     add_status,
+    add_table_format,
     add_tool,
+    number,
     parse_centres,
     parse_steps,
     robot_with_tool,
@@ -63,19 +67,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_tool(parser, "simulated tool, flange_T_tool in mm and deg (default: the flange)")
     parser.add_argument(
         "--noise-tracker",
-        type=float,
+        type=number("mm", 0, 1000),
         default=0.02,
         metavar="MM",
         help="simulated tracker noise, Gaussian sigma per axis, mm (default: 0.02)",
     )
     parser.add_argument(
         "--noise-repeat",
-        type=float,
+        type=number("mm", 0, 1000),
         default=0.03,
         metavar="MM",
         help="simulated robot repeatability, Gaussian sigma per axis, mm (default: 0.03)",
     )
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    parser.add_argument(
+        "--seed",
+        type=number("", 0, 2**32 - 1, whole=True),
+        default=0,
+        help="random seed (default: 0)",
+    )
     add_status(
         parser,
         "KUKA Status (0..7) the simulated robot keeps for every point, as a program of LIN "
@@ -85,7 +94,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--region",
         nargs=6,
-        type=float,
+        type=number("mm", -COORDINATE_MAX, COORDINATE_MAX),
         metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
         default=[r[0][0], r[1][0], r[0][1], r[1][1], r[0][2], r[1][2]],
         help="validation region in the robot frame, mm (default: the seed's 1000 x 1200 x 1000 "
@@ -93,14 +102,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--tolerance",
-        type=float,
+        type=number("mm", 0, COORDINATE_MAX, above=True),
         default=DEFAULT_TOLERANCE_MM,
         metavar="MM",
         help=f"accuracy requirement +-MM per axis (default: {DEFAULT_TOLERANCE_MM})",
     )
     parser.add_argument(
         "--std-fraction",
-        type=float,
+        type=number("", 0, 1e6, above=True),
         default=DEFAULT_STD_FRACTION,
         metavar="F",
         help="'relatively small' standard deviation: std <= F x tolerance on every axis "
@@ -115,14 +124,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--validation-points",
-        type=int,
+        type=number("", 1, MAX_COUNT, whole=True),
         default=200,
         metavar="N",
         help="random points for Table 5 in simulation (default: 200)",
     )
     parser.add_argument(
         "--validation-step",
-        type=float,
+        type=number("mm", 0, COORDINATE_MAX, above=True),
         metavar="MM",
         help="in simulation, validate a grid at this step instead of the chosen one "
         "(e.g. 200 to compare with the seed's Table 5)",
@@ -134,6 +143,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="with --measured: grid measurement CSV at the chosen step and measured random points",
     )
     parser.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
+    add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 

@@ -1,7 +1,7 @@
 """Map laser-tracker coordinates of a CSV into the robot frame (or back, with --inverse).
 
 FRAME is a robot-frame YAML written by `accugrid fit-frame` (tracker_T_robot). The mapped
-columns are one or both triples x,y,z and x_meas,y_meas,z_meas (mm), chosen by --columns:
+columns are one or both triples x,y,z and x_meas,y_meas,z_meas (mm), chosen by --triples:
   meas   x_meas,y_meas,z_meas only (the default when the file has them: in a measurement CSV
          x,y,z are the commanded points, already in the robot frame)
   xyz    x,y,z only (the default for a file without x_meas,y_meas,z_meas)
@@ -14,13 +14,15 @@ line naming the frame file (and its SHA-256) is put first.
 from __future__ import annotations
 
 import argparse
+import sys
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.frame_file import transform_csv
 
-__all__ = ["NAME", "add_arguments", "run"]
+__all__ = ["NAME", "TRIPLES", "add_arguments", "run"]
 
 NAME = "transform"
+TRIPLES = ("meas", "xyz", "both")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -30,10 +32,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("-o", "--output", required=True, metavar="OUT.csv", help="CSV to write")
     parser.add_argument(
-        "--columns",
-        choices=["meas", "xyz", "both"],
+        "--triples",
+        choices=TRIPLES,
         help="which triples to map (default: meas if the file has x_meas,y_meas,z_meas, else xyz)",
     )
+    # the former spelling: --columns names a column mapping in the commands that read tracker files
+    parser.add_argument("--columns", choices=TRIPLES, help=argparse.SUPPRESS)
     parser.add_argument(
         "--inverse",
         action="store_true",
@@ -43,8 +47,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.columns:
+        print(
+            "accugrid transform: warning: --columns is deprecated here, use --triples "
+            f"{args.columns}",
+            file=sys.stderr,
+        )
     check_targets([args.output], [args.table, args.frame], args.force)
-    job = transform_csv(args.table, args.frame, args.output, args.columns, args.inverse)
+    triples = args.triples or args.columns
+    job = transform_csv(args.table, args.frame, args.output, triples, args.inverse)
     write_files(job.files, job.inputs, args.force)
     for line in job.lines:
         print(line)

@@ -1,3 +1,12 @@
-"""The G-code dialect (RS274/NGC as LinuxCNC reads it): emitter and parser."""
+"""The G-code dialect (RS274/NGC as LinuxCNC reads it): emitter, parser and rewrite. The names
+of ``__all__`` are imported on first use."""
 
-__all__: list[str] = []
+from accugrid.kinematics.exports import lazy_namespace
+
+_API = {
+    "render_gcode": "accugrid.codegen.gcode.emit",
+    "rewrite_gcode": "accugrid.codegen.gcode.rewrite",
+    "GcodeSection": "accugrid.codegen.gcode.section",
+}
+__all__ = list(_API)
+__getattr__, __dir__ = lazy_namespace(__name__, _API)

@@ -2,7 +2,9 @@
 each number, for pre-flight correction.
 
 Follows the modal state a CAM post relies on: motion mode (G0/G1/G2/G3, canned cycles G73/G81-G89
-with G98/G99 and sticky Z and R), G90/G91 (incremental targets are made absolute), G20/G21
+with G98/G99 (G98 back to the initial level, the Z where the run of cycle blocks began), sticky Z
+and R and, under G91, X and Y from the tool, R from the initial level, Z from R and L repeats, as
+LinuxCNC reads them), G90/G91 (incremental targets are made absolute), G20/G21
 (targets in mm; ``scale`` converts back), G17/G18/G19, N-numbers, ``( )`` and ``;`` comments,
 words in any order and case, with or without spaces, and parameter assignments (``#1 = 5``,
 ``#<_z> = 0.4``). G54 is the program frame (the power-on default). Reported instead of guessed:
@@ -107,7 +109,7 @@ _ROTARY_SET = frozenset(ROTARY)
 _KEPT = frozenset(AXES + ROTARY + "RL")  # letters whose Word a move (or G10) needs
 _POSITION_LETTERS = frozenset(AXES + ROTARY + "R")
 _NONMODAL = frozenset("4 10 28 28.1 30 30.1 52 53 92 92.1 92.2 92.3".split())
-_PARAMETER_CODES = frozenset("4 10 28.1 30.1 52 92 92.1 92.2 92.3".split())
+_PARAMETER_CODES = frozenset("10 28.1 30.1 52 92 92.1 92.2 92.3".split())
 # G-codes that neither move nor change where a programmed position lands (or whose effect is
 # followed above); any other G-code is a motion this reader does not know
 _HARMLESS = frozenset(
@@ -127,13 +129,15 @@ _KNOWN_MOTIONS = {
     "38.5": "probe G38.5",
     "76": "threading cycle G76",
 }
+_ARC_WORDS = frozenset("IJK")  # an arc's centre: a G2/G3 block with them and no axis moves
 _WCS = frozenset(("55", "56", "57", "58", "59", "59.1", "59.2", "59.3"))
 _G_NAMES = {float(g): g for g in (str(i) for i in range(100))}
 _new_word = tuple.__new__  # a Word without the NamedTuple constructor's Python frame
 _NAN3 = (math.nan, math.nan, math.nan)
+MAX_REPEATS = 10_000  # a canned cycle's L beyond this is reported (each hole is checked)
 WORD_LETTERS = "XYZR"  # the words a move keeps, in the order its ``words`` dict lists them
 RESETS = frozenset(("G28", "G30", "G53"))  # moves after which the position is not known
-_F_INCREMENTAL, _F_CYCLE, _F_RESETS, _F_G99 = 1, 2, 4, 8  # ``GcodeMoves`` row flags
+_F_INCREMENTAL, _F_CYCLE, _F_RESETS, _F_G99, _F_FIRST = 1, 2, 4, 8, 16  # ``GcodeMoves`` flags
 
 
 class Word(NamedTuple):
@@ -190,8 +194,9 @@ class GcodeMoves:
 
     After ``finish``: ``line``, ``column`` (N,) int; ``start``, ``target``, ``end`` (N, 3) mm in
     the program frame (NaN where unknown); ``scale`` and ``r_mm`` (N,) mm; ``incremental``,
-    ``is_cycle``, ``resets`` (a G28/G30/G53 move, after which the position is not known) and
-    ``g99`` (a cycle retracting to R) (N,) bool; ``setters`` (N, 3) int (-1: none);
+    ``is_cycle``, ``resets`` (a G28/G30/G53 move, after which the position is not known),
+    ``g99`` (a cycle retracting to R) and ``first_cycle`` (the first cycle block of a run: it sets
+    the initial level) (N,) bool; ``setters`` (N, 3) int (-1: none);
     ``word_start``, ``word_end`` (N, 4) text offsets of the X, Y, Z, R numbers (-1: not written)
     and ``word_value`` (N, 4) their values in program units; ``rotary_index`` (N,) int into
     ``rotaries`` (the distinct rotary dicts, each once); ``motion``, ``reason``, ``retract``
@@ -216,6 +221,9 @@ class GcodeMoves:
         # one str object per distinct motion and retract: those of the name tables and others
         self._names: dict[str, str] = dict(zip(_NAME_OBJECTS, _NAME_OBJECTS, strict=True))
         self.places = -1  # the most decimals among the X, Y, Z literals of the moves (-1: none)
+        self.repeats: dict[
+            int, int
+        ] = {}  # row -> a cycle's L repeat count where not 1 (0: unknown)
 
     def __len__(self) -> int:
         return len(self.motion)
@@ -232,9 +240,12 @@ class GcodeMoves:
                 setattr(self, key, grown)
         return n
 
-    def add(self, line, column, motion, start, target, words, reason, end, state, cycle) -> None:
+    def add(
+        self, line, column, motion, start, target, words, reason, end, state, cycle, r_mm
+    ) -> None:
         """Store one move as a row: ``start``, ``target``, ``end`` 3 mm each; ``words`` letter ->
-        Word; ``state``: the ``_Modal`` it was read in (pos and setters before the move)."""
+        Word; ``state``: the ``_Modal`` it was read in (pos and setters before the move);
+        ``r_mm``: a cycle's R plane (absolute mm)."""
         i = self._room(1)
         rotary = state.rotary
         if not self.rotaries or rotary is not self.rotaries[-1]:
@@ -272,7 +283,7 @@ class GcodeMoves:
             end[1],
             end[2],
             state.scale,
-            state.cycle_r if cycle else math.nan,
+            r_mm if cycle else math.nan,
             math.nan if x is None else x.value,
             math.nan if y is None else y.value,
             math.nan if z is None else z.value,
@@ -281,7 +292,8 @@ class GcodeMoves:
         retract = state.retract if cycle else ""
         self._flags[i] = (
             state.incremental * _F_INCREMENTAL
-            + cycle * _F_CYCLE
+            + bool(cycle) * _F_CYCLE
+            + (cycle == 2) * _F_FIRST
             + (motion in RESETS) * _F_RESETS
             + (retract == "G99") * _F_G99
         )
@@ -296,15 +308,18 @@ class GcodeMoves:
         i = self._room(m)
         return self._ints[i : i + m], self._floats[i : i + m]
 
-    def extend(self, cycle, g99, rotary, motion, retract, reason) -> None:
-        """Store the rows ``rows`` gave, filled, as ``add`` stores one: ``cycle`` and ``g99``
-        (M,) bool (no row is incremental nor resets the position), ``rotary`` the dict in effect
+    def extend(self, cycle, g99, first, rotary, motion, retract, reason) -> None:
+        """Store the rows ``rows`` gave, filled, as ``add`` stores one: ``cycle``, ``g99`` and
+        ``first`` (the first cycle of a run) (M,) bool (no row is incremental nor resets the
+        position), ``rotary`` the dict in effect
         for all, ``motion``/``retract``/``reason`` M strings each (motions and retracts from
         ``_MOTION_NAMES`` and ``_RETRACT_NAMES``)."""
         if not self.rotaries or rotary is not self.rotaries[-1]:
             self.rotaries.append(rotary)
         i, m = len(self.motion), len(motion)
-        self._flags[i : i + m] = _F_CYCLE * np.asarray(cycle, np.int8) + _F_G99 * g99
+        self._flags[i : i + m] = (
+            _F_CYCLE * np.asarray(cycle, np.int8) + _F_G99 * g99 + _F_FIRST * np.asarray(first)
+        )
         self._rotary[i : i + m] = len(self.rotaries) - 1
         self.motion += motion
         self.retract += retract
@@ -321,6 +336,7 @@ class GcodeMoves:
         self.scale, self.r_mm, self.word_value = floats[:, 9], floats[:, 10], floats[:, 11:15]
         self.incremental = (flags & _F_INCREMENTAL) != 0
         self.is_cycle = (flags & _F_CYCLE) != 0
+        self.first_cycle = (flags & _F_FIRST) != 0
         self.resets = (flags & _F_RESETS) != 0
         self.g99 = (flags & _F_G99) != 0
         self.rotary_index = self._rotary[:n]
@@ -380,6 +396,9 @@ class _Modal:
     retract: str = "G98"
     cycle_z: float = math.nan
     cycle_r: float = math.nan
+    # the initial level: Z where a run of cycle blocks began (None: no run; a non-cycle motion
+    # mode or G80 ends one), which G98 retracts to and a G91 R is counted from (as LinuxCNC)
+    cycle_il: float | None = None
     pos: list[float] = field(default_factory=lambda: [math.nan] * 3)  # absolute mm, program frame
     setter: list[int | None] = field(default_factory=lambda: [None] * 3)
     rotary: dict[str, float] = field(default_factory=dict)
@@ -398,6 +417,8 @@ class _Modal:
         """One G-code of a block (its number as text: "1", "91.1"); ``l_word``: the block's L."""
         if g in MOTION_MODES:
             self.motion, self.unknown_motion = g, ""
+            if g not in CYCLES:
+                self.cycle_il = None
         elif g == "20" or g == "21":
             self.scale = INCH_MM if g == "20" else 1.0
         elif g == "90" or g == "91":
@@ -429,7 +450,7 @@ class _Modal:
         elif g in _NONMODAL or g in _HARMLESS:
             pass
         else:  # a motion whose geometry is not known, or a code this reader does not know
-            self.motion = g
+            self.motion, self.cycle_il = g, None
             what = _KNOWN_MOTIONS.get(g, f"unknown G-code G{g}")
             self.unknown_motion = (
                 f"{what} (line {lineno}): its geometry is not known to accugrid, not corrected"
@@ -789,15 +810,25 @@ class _Reader:
         end = np.empty((m, 3))
         for i in range(2):  # X, Y: as written, else where the previous move left them
             end[:, i] = modal_fill(v[:, i], wrote[:, i], s.pos[i])
-        # Z: a straight move's as written, a cycle's retract (R under G99, the higher of where
-        # the hole started and R under G98), else where the previous move left it
+        # Z: a straight move's as written, a cycle's retract (R under G99, the higher of the
+        # initial level and R under G98), else where the previous move left it; the first cycle
+        # of a run (after another motion mode) sets the initial level
         end[:, 2] = np.where(cycle, r_mm, v[:, 2])
-        carried = np.flatnonzero((cycle & (retract == 98)) | ~(cycle | wrote[:, 2])).tolist()
-        if carried:  # those that depend on the previous end: one by one
+        starts_run = cycle & ~np.append(s.cycle_il is not None, cycle[:-1])
+        carried = (cycle & (retract == 98)) | ~(cycle | wrote[:, 2]) | starts_run
+        il = s.cycle_il
+        if carried.any():  # those that depend on the previous end: one by one
             z, r, hole = end[:, 2].tolist(), r_mm.tolist(), cycle.tolist()
-            for k in carried:
+            run_start, g98 = starts_run.tolist(), (retract == 98).tolist()
+            for k in np.flatnonzero(carried).tolist():
                 before = z[k - 1] if k else s.pos[2]
-                z[k] = (r[k] if r[k] > before else before) if hole[k] else before
+                if not hole[k]:
+                    z[k] = before
+                    continue
+                if run_start[k]:
+                    il = before
+                if g98[k]:
+                    z[k] = r[k] if r[k] > il else il
             end[:, 2] = z
         ints, floats = self.moves.rows(m)  # filled in place
         floats[0, 0:3], floats[1:, 0:3] = s.pos, end[:-1]  # start
@@ -834,8 +865,9 @@ class _Reader:
         names = _MOTION_NAMES[motion].tolist()
         retracts = _RETRACT_NAMES[np.where(cycle, retract, 0)].tolist()
         g99 = cycle & (retract == 99)
-        self.moves.extend(cycle, g99, s.rotary, names, retracts, reason)
+        self.moves.extend(cycle, g99, starts_run, s.rotary, names, retracts, reason)
         s.motion, s.unknown_motion = str(motion[-1]), ""
+        s.cycle_il = il if cycle[-1] else None
         s.retract = f"G{retract[-1]}"
         s.cycle_z, s.cycle_r = float(cycle_z[-1]), float(r_mm[-1])
         s.pos = end[-1].tolist()
@@ -856,12 +888,15 @@ class _Reader:
                 "is not known"
             )
         has_rotary = self._rotary(block)
-        nonmodal = [g for g in block.gcodes if g in _NONMODAL] if block.gcodes else []
+        # a dwell (G4) takes no axis words: those of its line are the motion mode's
+        nonmodal = [g for g in block.gcodes if g in _NONMODAL and g != "4"] if block.gcodes else []
         if nonmodal and nonmodal[0] in _PARAMETER_CODES:
             return  # the axis words are parameters, not a move
         axis_words = {k: words[k] for k in AXES if k in words}
         moving = [k for k in block.exprs if k in _POSITION_LETTERS]
-        if not axis_words and not has_rotary and not moving:
+        home = nonmodal[:1] == ["28"] or nonmodal[:1] == ["30"]  # goes home even without words
+        circle = state.motion in ("2", "3") and not _ARC_WORDS.isdisjoint(words)  # full circle
+        if not axis_words and not has_rotary and not moving and not home and not circle:
             return
         if axis_words:
             column = min(w.start for w in axis_words.values()) - line_offset + 1
@@ -896,16 +931,19 @@ class _Reader:
         self.state.rotary = rotary
         return True
 
-    def _add(self, move: tuple, reason: str, end: list[float], written, cycle=False) -> None:
+    def _add(
+        self, move: tuple, reason: str, end: list[float], written, cycle=False, r_mm=math.nan
+    ) -> None:
         """Store ``move`` (line, column, motion, target, words) with its reason (or "not known"
-        for a NaN target), ending at ``end``; ``cycle``: a canned-cycle hole."""
+        for a NaN target), ending at ``end``; ``cycle``: a canned-cycle hole (2: the first of a
+        run of cycle blocks), whose R plane is ``r_mm`` (absolute mm)."""
         t = move[3]
         if not reason and (t[0] != t[0] or t[1] != t[1] or t[2] != t[2]):  # NaN: unknown
             missing = ",".join(k for i, k in enumerate(AXES) if math.isnan(t[i]))
             reason = f"{missing} not known here (no absolute value since the start)"
         state = self.state
         index = len(self.moves)
-        self.moves.add(*move[:3], state.pos, t, move[4], reason, end, state, cycle)
+        self.moves.add(*move[:3], state.pos, t, move[4], reason, end, state, cycle, r_mm)
         for i, k in enumerate(AXES):
             if k in written:
                 state.setter[i] = index
@@ -935,13 +973,9 @@ class _Reader:
         self._add(move, reason, target, set(axis_words) | set(exprs))
 
     def _cycle(self, lineno, column, axis_words, words, exprs) -> None:
+        """A canned-cycle block: its (first) hole. Under G91, X and Y are increments from where
+        the tool is (repeated L times), R from the current Z and Z from R (as LinuxCNC)."""
         s = self.state
-        target = list(s.pos)
-        for i, k in enumerate("XY"):
-            if k in axis_words:
-                target[i] = axis_words[k].value * s.scale
-            elif k in exprs:
-                target[i] = math.nan
         if "Z" in axis_words:
             s.cycle_z = axis_words["Z"].value * s.scale
         elif "Z" in exprs:
@@ -952,17 +986,51 @@ class _Reader:
             move_words["R"] = words["R"]
         elif "R" in exprs:
             s.cycle_r = math.nan
-        move = (lineno, column, "G" + s.motion, (target[0], target[1], s.cycle_z), move_words)
+        repeats = 1
         reason = _expression_reason(exprs, lineno) or s.frame_reason()
-        if s.incremental:
-            reason = reason or "canned cycle in G91 (incremental cycle words)"
-        elif s.plane != "17":
+        if "L" in words:
+            count = words["L"].value
+            if count > MAX_REPEATS:
+                reason = reason or (
+                    f"canned cycle L{words['L'].literal}: more than {MAX_REPEATS} repeats, not read"
+                )
+            elif count >= 1 and count == int(count):
+                repeats = int(count)
+            else:
+                reason = reason or f"canned cycle L{words['L'].literal}: not a repeat count"
+        if "L" in exprs:
+            reason = reason or f"canned cycle {exprs['L']}: the repeat count is not known"
+        step = [0.0, 0.0]  # X, Y increment of each repeat (G91)
+        first = list(s.pos[:2])
+        for i, k in enumerate("XY"):
+            if k in axis_words:
+                value = axis_words[k].value * s.scale
+                step[i] = value if s.incremental else 0.0
+                first[i] = s.pos[i] + value if s.incremental else value
+            elif k in exprs:
+                first[i] = step[i] = math.nan
+        first_of_run = s.cycle_il is None
+        if first_of_run:
+            s.cycle_il = s.pos[2]
+        r_level = s.cycle_il + s.cycle_r if s.incremental else s.cycle_r
+        bottom = r_level + s.cycle_z if s.incremental else s.cycle_z
+        target = (first[0], first[1], bottom)
+        if s.plane != "17":
             reason = reason or f"canned cycle in plane G{s.plane} (only G17 is read)"
         elif math.isnan(s.cycle_r) or math.isnan(s.cycle_z):
             reason = reason or "canned cycle without an R plane or Z depth"
-        clear = s.cycle_r if s.retract == "G99" else max(s.pos[2], s.cycle_r)
-        end = [target[0], target[1], clear if not s.incremental else math.nan]
-        self._add(move, reason, end, set(axis_words) | set(exprs) | {"Z"}, cycle=True)
+        clear = r_level if s.retract == "G99" else max(s.cycle_il, r_level)
+        last = [first[i] + (repeats - 1) * step[i] for i in range(2)]
+        if "L" in exprs or ("L" in words and repeats == 1 and words["L"].value != 1):
+            repeats = 0  # not known: under G91 neither is where its holes end
+            if s.incremental:
+                last = [math.nan, math.nan]
+        if repeats != 1:
+            self.moves.repeats[len(self.moves)] = repeats
+        move = (lineno, column, "G" + s.motion, target, move_words)
+        written = set(axis_words) | set(exprs) | {"Z"}
+        cycle = 2 if first_of_run else 1
+        self._add(move, reason, [last[0], last[1], clear], written, cycle=cycle, r_mm=r_level)
 
 
 def _expression_reason(exprs: dict[str, str], lineno: int) -> str:

@@ -5,7 +5,11 @@ G-code positions are in the cell's program frame (G54); A, B, C words are the to
 corrected, and its R plane by the Z correction at (X, Y, R). Axes a line does not write keep their
 commanded value; the report gives the remaining difference (``residual_mm``). Under G91 the
 increments are recomputed from the commanded (rewritten) previous position, so every later move
-lands where it should. Arcs are not corrected, nor the moves that set an arc's start.
+lands where it should, corrected or as programmed: a G91 cycle's X, Y from the tool, its R from
+the initial level and its Z from R. A G91 cycle repeated L times has one increment for all its
+holes: corrected when their corrections agree within the written resolution, else it and the
+moves that set its start are not. A cycle line that writes no Z or R gets the words its hole
+needs. Arcs are not corrected, nor the moves that set an arc's start.
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from accugrid.codegen.program_text import (
 )
 from accugrid.codegen.rewrite import (
     CORRECTED,
+    SKIPPED,
     Options,
     Result,
     Rows,
@@ -34,7 +39,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
 )
 from accugrid.codegen.splice import ByteSplicer, texts_of
-from accugrid.codegen.textsafe import fixed_bytes
+from accugrid.codegen.textsafe import fixed, fixed_bytes
 from accugrid.kinematics.frames import rows_times, transform_points
 
 __all__ = ["rewrite_gcode"]
@@ -71,6 +76,7 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
         done = np.flatnonzero(np.isfinite(corrected[:, 0]))
         rows.status[at[done]] = CORRECTED
         desired[at[done]] = prog[done] + back[done]
+    _repeated_holes(moves, rows, desired, opts)
     r_planes = _corrected_r_planes(moves, rows, opts)
     out = _gcode_edits(text, moves, rows, desired, r_planes, opts)
     partial_check(rows, opts)
@@ -97,13 +103,63 @@ def _protect_arc_starts(moves: GcodeMoves, rows: Rows) -> None:
                 reasons[j] = why
 
 
+def _repeated_holes(moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Options) -> None:
+    """A G91 cycle repeated L times moves by one increment to each hole: corrected only when
+    every hole's correction is its first hole's within the written resolution. Otherwise it is
+    not corrected (``desired`` back to the target; the reason says by how much they differ),
+    and neither are the moves that set its start X and Y, so that its holes land as programmed
+    (one increment cannot undo a corrected start for every hole)."""
+    repeated = sorted(i for i, count in moves.repeats.items() if moves.incremental[i])
+    if not repeated:
+        return
+    places = _places(moves, opts)
+    t = opts.robot_T_program
+    for i in repeated:
+        if rows.status[i] != CORRECTED:
+            continue
+        step = np.nan_to_num(moves.word_value[i, :2]) * moves.scale[i]
+        k = np.arange(1, moves.repeats[i])[:, None]
+        holes = moves.target[i] + np.column_stack([k * step, np.zeros(len(k))])
+        robot = transform_points(t, holes)
+        abc = np.array([moves.rotaries[moves.rotary_index[i]].get(k, math.nan) for k in "ABC"])
+        rotations = np.repeat(rotations_of(t[:3, :3], abc[None]), len(holes), axis=0)
+        at = np.full(len(holes), i)
+        corrected = correct_points(robot, rows, at, opts, rotations, mark=False)
+        shift = rows_times(corrected - robot, t[:3, :3])
+        spread = float(np.abs(shift - (desired[i] - moves.target[i])).max(initial=0.0))
+        if spread <= moves.scale[i] * 10.0 ** -int(places[i]):
+            continue
+        why = "outside the grid" if math.isnan(spread) else f"differ by {spread:.4f} mm"
+        rows.status[i] = SKIPPED
+        rows.reason[i] = (
+            f"G91 cycle repeated L{moves.repeats[i]}: one increment for all its holes, whose "
+            f"corrections {why} (more than the written resolution); left as programmed"
+        )
+        desired[i] = moves.target[i]
+    todo = [i for i in repeated if rows.status[i] != CORRECTED]
+    while todo:  # the moves that set their start, and those of a cycle among them
+        i = todo.pop()
+        count = f"L{moves.repeats[i]}" if moves.repeats[i] else "an unknown number of times"
+        why = (
+            f"sets the start of the G91 cycle at line {moves.line[i]}, repeated {count}, which is "
+            "not corrected"
+        )
+        for j in moves.setters[i, :2].tolist():
+            if j >= 0 and rows.status[j] == CORRECTED:
+                rows.status[j] = SKIPPED
+                rows.reason[j] = why
+                desired[j] = moves.target[j]
+                if moves.incremental[j] and moves.repeats.get(j, 1) != 1:
+                    todo.append(j)
+
+
 def _corrected_r_planes(moves: GcodeMoves, rows: Rows, opts: Options) -> np.ndarray:
     """(N,) corrected R plane (mm) of each corrected cycle that writes R; NaN: keep R.
 
-    The R point is (X, Y, R) of the hole; only its Z correction can be written."""
+    The R point is (X, Y, R) of the hole; only its Z correction can be written (in its R word,
+    or one added to its line)."""
     out = np.full(len(moves), np.nan)
-    wrote_r = moves.is_cycle & (moves.word_start[:, 3] >= 0) & (rows.status == CORRECTED)
-    idx = np.flatnonzero(wrote_r)
+    idx = np.flatnonzero(moves.is_cycle & ~np.isnan(moves.r_mm) & (rows.status == CORRECTED))
     if len(idx):
         pts = np.column_stack([moves.target[idx, 0], moves.target[idx, 1], moves.r_mm[idx]])
         t = opts.robot_T_program
@@ -120,8 +176,10 @@ class _Commanded:
     where each corrected move reaches (``reached_rows``, 3 per move, of the moves ``reached_at``).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, fill: np.ndarray) -> None:
+        self.fill = fill  # (N,) cycles read without a reason: may get Z, R words added
         self.cmd = [math.nan] * 3
+        self.il = math.nan  # the initial level of the run of cycles (mm, as commanded)
         self.cycle_z = self.r_cmd = math.nan
         self.reached_rows = array("d")
         self.reached_at = array("q")
@@ -144,7 +202,8 @@ def _gcode_edits(
     out = ByteSplicer(text)
     places = _places(moves, opts)
     corrected = rows.status == CORRECTED
-    walk = _Commanded()
+    read = np.fromiter(map(bool, moves.reason), bool, len(moves)) if any(moves.reason) else False
+    walk = _Commanded(moves.is_cycle & ~read)
     for first in range(0, len(moves), _BLOCK):
         for part, step in _stretches(moves, slice(first, first + _BLOCK)):
             out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
@@ -225,6 +284,27 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         if motion in RESETS:
             cmd = [math.nan] * 3
             continue
+        if is_cycle and moves.first_cycle[first + b]:
+            walk.il = cmd[2]
+        if is_cycle and inc:
+            r_goal = r_planes[first + b] if changed else math.nan
+            reached, end, cycle_z, r_cmd = _incremental_cycle(
+                text,
+                edits,
+                cmd,
+                (starts, ends, values),
+                goals,
+                r_mm if math.isnan(r_goal) else r_goal,
+                (scale, int(places[first + b]), retract, moves.repeats.get(first + b, 1)),
+                (cycle_z, r_cmd, walk.il),
+                changed,
+                walk.fill[first + b],
+            )
+            if changed:
+                walk.reached_rows.extend(reached)
+                walk.reached_at.append(first + b)
+            cmd = end
+            continue
         incremental = inc and not is_cycle
         end = list(cmd)
         for i in range(3):
@@ -256,6 +336,17 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
                 new_text = r_texts[b]
                 edits.append((starts[3], ends[3], new_text))
             r_cmd = float(new_text) * scale
+        if walk.fill[first + b] and (starts[2] < 0 or starts[3] < 0):
+            r_goal = r_planes[first + b] if changed else math.nan
+            cycle_z, r_cmd = _added_words(
+                text,
+                edits,
+                (starts, ends),
+                (goals[2], r_mm if math.isnan(r_goal) else r_goal),
+                (cycle_z, r_cmd),
+                scale,
+                int(places[first + b]),
+            )
         if is_cycle:
             reached = [end[0], end[1], cycle_z]
             if inc or math.isnan(r_mm):
@@ -263,7 +354,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
             elif retract == "G99":
                 end = [end[0], end[1], r_cmd]
             else:
-                end = [end[0], end[1], max(cmd[2], r_cmd)]
+                end = [end[0], end[1], max(walk.il, r_cmd)]
         else:
             reached = end
         if changed:
@@ -271,7 +362,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
             walk.reached_at.append(first + b)
         cmd = end
     walk.cmd, walk.cycle_z, walk.r_cmd = cmd, cycle_z, r_cmd
-    edits.sort()
+    edits.sort(key=lambda e: e[:2])  # stable: the words added at one place stay in order
     starts = np.array([e[0] for e in edits], np.int64)
     ends = np.array([e[1] for e in edits], np.int64)
     texts = [e[2] for e in edits]
@@ -279,27 +370,116 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     return starts, ends, np.frombuffer("".join(texts).encode("ascii"), np.uint8), lengths
 
 
+def _added_words(text, edits, spans, goals, sticky, scale, places):
+    """The Z and R words a cycle's line needs but does not write: where the hole bottom and R
+    plane it should reach (``goals``, absolute mm) differ from the depth and R plane in effect
+    (``sticky``, mm, as written), `` Z..``/`` R..`` are added after its last position word (in
+    the case of its letters). ``spans``: the line's (starts, ends) of X, Y, Z, R. Adds the edit
+    to ``edits``; the depth and R plane now in effect (mm)."""
+    starts, ends = spans
+    sticky, added = list(sticky), []
+    for k, letter in ((2, "Z"), (3, "R")):
+        if starts[k] >= 0 or math.isnan(goals[k - 2]):
+            continue
+        new_text = fixed(goals[k - 2] / scale, places)
+        if float(new_text) * scale != sticky[k - 2]:
+            added.append(letter + new_text)
+            sticky[k - 2] = float(new_text) * scale
+    if added:  # one edit: " Z.. R.." after the line's last position word
+        words = " " + " ".join(added)
+        lower = _lower_case(text, np.asarray(starts))
+        edits.append((max(ends), max(ends), words.lower() if lower else words))
+    return sticky[0], sticky[1]
+
+
+def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, changed, fill):
+    """One G91 canned-cycle block, written so that its first hole reaches ``goal`` and its R
+    plane ``r_goal`` (absolute mm, program frame) from where the rewritten program leaves the
+    tool (``cmd``): X, Y as increments from ``cmd``, R from the initial level, Z from R (as
+    LinuxCNC reads them). ``words``: the block's (starts, ends, values) of X, Y, Z, R; ``how``:
+    (mm per unit, decimals, retract, L repeats); ``sticky``: the Z and R words in effect (mm, as
+    written) and the initial level (mm).
+    A repeated block not ``changed`` (corrected) keeps its X, Y step as written; with ``fill``
+    (a line read without a reason) the R and Z words it needs but does not write are added.
+    Adds the edits to ``edits``; (the first hole's bottom, where the block leaves the tool, the
+    Z and R words now in effect), mm. Where ``cmd`` or a goal is not known a word is kept."""
+    starts, ends, values = words
+    scale, places, retract, repeats = how
+    cycle_z, r_cmd, il = sticky
+
+    def write(i: int, base: float, want: float) -> float:
+        """Word ``i`` as the increment from ``base`` to ``want``; its value (mm) written."""
+        old_text = new_text = text[starts[i] : ends[i]]
+        if not (math.isnan(base) or math.isnan(want)):
+            new_text = number_text(old_text, values[i], (want - base) / scale, places)
+        if new_text != old_text:
+            edits.append((starts[i], ends[i], new_text))
+        return float(new_text) * scale
+
+    fixed_step = repeats != 1 and not changed  # its start is as programmed: so is its step
+
+    def add(letter: str, base: float, want: float, sticky: float) -> float:
+        """The word the line needs but does not write, added where it differs from ``sticky``
+        (mm, as written); the value (mm) in effect."""
+        if not fill or math.isnan(base) or math.isnan(want):
+            return sticky
+        new_text = fixed((want - base) / scale, places)
+        if float(new_text) * scale == sticky:
+            return sticky
+        lower = _lower_case(text, np.asarray(starts))
+        edits.append((max(ends), max(ends), " " + (letter.lower() if lower else letter) + new_text))
+        return float(new_text) * scale
+
+    step = [
+        (values[i] * scale if fixed_step else write(i, cmd[i], goal[i])) if starts[i] >= 0 else 0.0
+        for i in range(2)
+    ]
+    if starts[3] >= 0:
+        r_cmd = write(3, il, r_goal)
+    else:
+        r_cmd = add("R", il, r_goal, r_cmd)
+    level = il + r_cmd  # the R plane reached
+    if starts[2] >= 0:
+        cycle_z = write(2, level, goal[2])
+    else:
+        cycle_z = add("Z", level, goal[2], cycle_z)
+    hole = [cmd[0] + step[0], cmd[1] + step[1], level + cycle_z]
+    clear = level if retract == "G99" else max(il, level)
+    times = repeats if repeats else math.nan  # 0: not known
+    end = [cmd[0] + times * step[0], cmd[1] + times * step[1], clear]
+    return hole, end, cycle_z, r_cmd
+
+
 def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     """``_walk_block`` in bulk for a block whose moves are all absolute (none resets the
     position): every number is formatted and compared at once, X and Y carried forward where a
-    move does not write them, and only the Z ends that depend on the previous one (a G98 retract,
-    the higher of the previous end and R; a straight move without Z) are carried one by one."""
+    move does not write them, the Z and R words a cycle's line needs added (``_added_words``),
+    and only the Z ends that depend on the previous one (a G98 retract, the higher of the
+    previous end and R; a straight move without Z) are carried one by one."""
     n = len(moves.motion[block])
     scale = moves.scale[block]
     values = moves.word_value[block]
     cycle = moves.is_cycle[block]
     wrote = moves.word_start[block] >= 0  # (n, 4) X, Y, Z, R written
     wrote_r = cycle & wrote[:, 3]
-    goal = np.full((n, 4), np.nan)  # the corrected numbers in program units (NaN: keep)
+    r_mm = moves.r_mm[block]
+    fill = walk.fill[block]
+    # the numbers in program units (NaN: keep): the corrected X, Y, Z, R words, then the Z and R
+    # a cycle's line needs where it does not write them (added if they differ from those in
+    # effect)
+    goal = np.full((n, 6), np.nan)
     fix = corrected[block, None] & wrote[:, :3]
     goal[:, :3] = np.where(fix, desired[block] / scale[:, None], np.nan)
     goal[:, 3] = np.where(wrote_r, r_planes[block] / scale, np.nan)
+    goal[:, 4] = np.where(fill & ~wrote[:, 2], desired[block, 2] / scale, np.nan)
+    r_need = np.where(corrected[block] & ~np.isnan(r_planes[block]), r_planes[block], r_mm)
+    goal[:, 5] = np.where(fill & ~wrote[:, 3], r_need / scale, np.nan)
     goal = goal.ravel()
-    new = np.full(4 * n, np.nan)  # the value each new text reads as
-    place = np.repeat(places[block], 4)
+    new = np.full(6 * n, np.nan)  # the value each new text reads as
+    place = np.repeat(places[block], 6)
     # the texts fixed gives and the values they read as, from the formatter's array form: the
     # texts' bytes of each count of places, and each number's group and row in them
-    cells_of, group, row = [], np.full(4 * n, -1, np.int64), np.empty(4 * n, np.int64)
+    cells_of, group, row = [], np.full(6 * n, -1, np.int64), np.empty(6 * n, np.int64)
     for p in distinct_ints(place):
         idx = np.flatnonzero(np.isfinite(goal) & (place == p))
         if not len(idx):
@@ -307,24 +487,41 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         cells, new[idx] = fixed_bytes(goal[idx], p)
         group[idx], row[idx] = len(cells_of), np.arange(len(idx))
         cells_of.append(cells)
-    edit = np.isfinite(new) & (new != values.ravel())
-    written = np.where(edit, new, values.ravel()).reshape(n, 4) * scale[:, None]  # NaN: none
-    r_cmd = modal_fill(written[:, 3], wrote_r, walk.r_cmd)
-    cycle_z = modal_fill(written[:, 2], cycle & wrote[:, 2], walk.cycle_z)
+    new = new.reshape(n, 6)
+    edit = np.zeros((n, 6), bool)
+    edit[:, :4] = np.isfinite(new[:, :4]) & (new[:, :4] != values)
+    written = np.where(edit[:, :4], new[:, :4], values) * scale[:, None]  # NaN: none
+    added = new[:, 4:] * scale[:, None]  # NaN: none
+    sticky = []  # the depth and R plane in effect after each move, each word added where needed
+    for k, wrote_k, before in ((2, cycle & wrote[:, 2], walk.cycle_z), (3, wrote_r, walk.r_cmd)):
+        value = np.where(wrote_k, written[:, k], added[:, k - 2])
+        after = modal_fill(value, wrote_k | ~np.isnan(added[:, k - 2]), before)
+        edit[:, k + 2] = ~np.isnan(added[:, k - 2]) & (
+            added[:, k - 2] != np.append(before, after[:-1])
+        )
+        sticky.append(after)
+    cycle_z, r_cmd = sticky
     end = np.empty((n, 3))
     for i in range(2):  # X, Y: as written, else where the previous move left them
         end[:, i] = modal_fill(written[:, i], wrote[:, i], walk.cmd[i])
     # Z: a straight move's as written; a cycle's retract: nothing known without an R plane,
     # R under G99, the higher of the previous end and R under G98
-    r_mm = moves.r_mm[block]
     g99 = moves.g99[block]
     end[:, 2] = np.where(cycle, np.where(np.isnan(r_mm), np.nan, r_cmd), written[:, 2])
-    carried = np.flatnonzero((cycle & ~g99 & ~np.isnan(r_mm)) | ~(cycle | wrote[:, 2])).tolist()
-    if carried:  # those that depend on the previous end: one by one
+    starts_run = moves.first_cycle[block]
+    carried = (cycle & ~g99 & ~np.isnan(r_mm)) | ~(cycle | wrote[:, 2]) | starts_run
+    if carried.any():  # those that depend on the previous end (or set the initial level)
         z, r, hole = end[:, 2].tolist(), r_cmd.tolist(), cycle.tolist()
-        for k in carried:
+        run_start, high = starts_run.tolist(), (~g99 & ~np.isnan(r_mm)).tolist()
+        for k in np.flatnonzero(carried).tolist():
             before = z[k - 1] if k else walk.cmd[2]
-            z[k] = max(before, r[k]) if hole[k] else before
+            if not hole[k]:
+                z[k] = before
+                continue
+            if run_start[k]:
+                walk.il = before
+            if high[k]:
+                z[k] = max(walk.il, r[k])
         end[:, 2] = z
     changed = np.flatnonzero(corrected[block])
     if len(changed):  # a cycle reaches its hole bottom, a straight move its end
@@ -335,20 +532,66 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         walk.reached_at.frombytes((block.start + changed).astype(np.int64).tobytes())
     walk.cmd = end[-1].tolist()
     walk.cycle_z, walk.r_cmd = float(cycle_z[-1]), float(r_cmd[-1])
-    at = np.flatnonzero(edit)
-    starts = moves.word_start[block].ravel()[at]
+    # where each edit goes: a word's number, or (the words added to a line, one edit) after the
+    # line's last word
+    added = edit[:, 4:].copy()  # (n, 2) the Z, R words added to each line
+    edit[:, 4], edit[:, 5] = added.any(axis=1), False
+    spans = np.empty((n, 6, 2), np.int64)
+    spans[:, :4, 0], spans[:, :4, 1] = moves.word_start[block], moves.word_end[block]
+    spans[:, 4:, :] = moves.word_end[block].max(axis=1)[:, None, None]
+    at = np.flatnonzero(edit.ravel())
+    starts = spans[:, :, 0].ravel()[at]
     order = np.argsort(starts, kind="stable")
     at = at[order]
-    # the new texts in the edits' order, as rows of their cells (NUL-padded on the left)
-    if len(cells_of) == 1:
-        rows = cells_of[0][row[at]]
-    else:
-        rows = np.zeros((len(at), max((c.shape[1] for c in cells_of), default=1)), np.uint8)
+    # the new texts in the edits' order, as rows of cells (NULs are dropped): a number's cells
+    # end at column 2 + width; added words are " Z" and its cells, then " R" and its cells
+    width = max((c.shape[1] for c in cells_of), default=1)
+    rows = np.zeros((len(at), 4 + 2 * width), np.uint8)
+
+    def put(mine: np.ndarray, numbers: np.ndarray, stop: int) -> None:
+        """The cells of the numbers ``numbers`` (flat indices) into ``rows[mine]``, ending at
+        column ``stop``."""
         for g, cells in enumerate(cells_of):
-            mine = np.flatnonzero(group[at] == g)
-            rows[mine, rows.shape[1] - cells.shape[1] :] = cells[row[at[mine]]]
-    ends = moves.word_end[block].ravel()[at]
+            sel = group[numbers] == g
+            rows[mine[sel], stop - cells.shape[1] : stop] = cells[row[numbers[sel]]]
+
+    words = np.flatnonzero(at % 6 < 4)
+    put(words, at[words], 2 + width)
+    adds = np.flatnonzero(at % 6 == 4)
+    if len(adds):
+        k = at[adds] // 6
+        lower = 32 * _lower_cases(text, moves, block.start + k)
+        for col, letter in enumerate((ord("Z"), ord("R"))):
+            has = added[k, col]
+            mine, stop = adds[has], (col + 1) * (2 + width)
+            rows[mine, stop - width - 2] = ord(" ")
+            rows[mine, stop - width - 1] = letter + lower[has]
+            put(mine, at[mine] + col, stop)
+    ends = spans[:, :, 1].ravel()[at]
     return starts[order], ends, *texts_of(rows)
+
+
+def _lower_cases(text: str, moves: GcodeMoves, lines: np.ndarray) -> np.ndarray:
+    """``_lower_case`` of the moves ``lines`` (M,) as 0/1 (M,) uint8: the byte before each
+    first number, the line read again only where that is a blank."""
+    starts = moves.word_start[lines]
+    first = np.where(starts >= 0, starts, np.iinfo(np.int64).max).min(axis=1)
+    before = np.frombuffer(
+        "".join(map(text.__getitem__, (first - 1).tolist())).encode("latin-1", "replace"), np.uint8
+    )
+    lower = ((before >= ord("a")) & (before <= ord("z"))).astype(np.uint8)
+    for k in np.flatnonzero((before == ord(" ")) | (before == ord("\t"))).tolist():
+        lower[k] = _lower_case(text, starts[k])
+    return lower
+
+
+def _lower_case(text: str, starts) -> bool:
+    """Whether the letter of a line's first position word (``starts``: its X, Y, Z, R number
+    starts, -1: none) is lower case."""
+    letter_at = min(a for a in starts.tolist() if a >= 0) - 1
+    while text[letter_at] in " \t":
+        letter_at -= 1
+    return text[letter_at].islower()
 
 
 def _places(moves: GcodeMoves, opts: Options) -> np.ndarray:

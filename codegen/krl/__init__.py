@@ -1,3 +1,12 @@
-"""The KUKA KRL dialect: emitter (program model to .src/.dat text) and parser."""
+"""The KUKA KRL dialect: emitter (program model to .src/.dat text), parser and rewrite. The
+names of ``__all__`` are imported on first use."""
 
-__all__: list[str] = []
+from accugrid.kinematics.exports import lazy_namespace
+
+_API = {
+    "render_krl": "accugrid.codegen.krl.emit",
+    "rewrite_krl": "accugrid.codegen.krl.rewrite",
+    "KrlSection": "accugrid.codegen.krl.section",
+}
+__all__ = list(_API)
+__getattr__, __dir__ = lazy_namespace(__name__, _API)

@@ -17,10 +17,11 @@ inline-form FOLD lines are comments). It finds:
   ``IPO_FRAME``);
 - base frame context, followed in program order: ``$BASE = BASE_DATA[n]``, ``$BASE = {FRAME: ..}``,
   ``$BASE = $NULLFRAME``, ``BAS(#BASE, n)``, ``FDAT_ACT = Fname`` (``BASE_NO`` of the FDAT
-  declaration), and for one spline motion ``WITH $BASE = SBASE(Fname.BASE_NO)``. What cannot be
-  decided is an ``unknown`` base with the reason: frame arithmetic ``:``, a variable, ``EK(...)``,
-  the start of a routine (inherited from the caller), a call that may change it, a jump target,
-  a branch or loop that changes it.
+  declaration), for one spline motion ``WITH $BASE = SBASE(Fname.BASE_NO)`` and for the
+  segments of a ``SPLINE``/``PTP_SPLINE`` block the block's own ``WITH $BASE = ...`` (until
+  ``ENDSPLINE``). What cannot be decided is an ``unknown`` base with the reason: frame
+  arithmetic ``:``, a variable, ``EK(...)``, the start of a routine (inherited from the caller),
+  a call that may change it, a jump target, a branch or loop that changes it.
 
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
 Every pattern is linear in its input (see the note above ``NUMBER``).
@@ -697,6 +698,7 @@ class _Flow:
         self.blocks: list[_Block] = []
         self.sets_base = False
         self.since = rows.mark()  # where the routine's rows start
+        self.before_spline: BaseRef | None = None  # the base outside an open spline block
 
     def start_routine(self, name: str, line: int) -> None:
         self.finish_routine()
@@ -711,6 +713,7 @@ class _Flow:
         self.blocks = []
         self.sets_base = False
         self.since = self.rows.mark()
+        self.before_spline = None
 
     def finish_routine(self) -> None:
         """A jump target makes the base path-dependent when the routine sets the base anywhere."""
@@ -725,6 +728,17 @@ class _Flow:
     def set(self, base: BaseRef) -> None:
         self.state = base
         self.sets_base = True
+
+    def open_spline(self, base: BaseRef | None) -> None:
+        """A SPLINE/PTP_SPLINE block: its segments move in ``base`` (None: the base in effect)."""
+        self.before_spline = self.state
+        if base is not None:
+            self.state = base
+
+    def close_spline(self) -> None:
+        """ENDSPLINE: the base in effect before the block again."""
+        if self.before_spline is not None:
+            self.state, self.before_spline = self.before_spline, None
 
     def label(self, name: str, line: int) -> None:
         s = self.state
@@ -1227,6 +1241,12 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
     if word in MOTIONS:
         _motion(code, rest_at, word, off, lineno, scan, flow)
         return
+    if word in ("SPLINE", "PTP_SPLINE"):
+        flow.open_spline(_spline_base(code, word, lineno))
+        return
+    if word == "ENDSPLINE":
+        flow.close_spline()
+        return
     if (
         word == "DECL"
         or (word == "GLOBAL" and _GLOBAL_DECL_RE.match(code, pos))
@@ -1561,6 +1581,15 @@ def _with_base(code: str, lineno: int) -> BaseRef | None:
     if n:
         return _base_data_ref(n.group(1), lineno, "WITH $BASE = ")
     return BaseRef("unknown", lineno, reason=f"WITH $BASE = {value}: not a BASE_DATA number")
+
+
+def _spline_base(code: str, word: str, lineno: int) -> BaseRef | None:
+    """The base a SPLINE/PTP_SPLINE block sets for its segments (``SPLINE WITH $BASE =
+    BASE_DATA[2]``, ``$BASE = SBASE(FS1.BASE_NO)``); None when the block does not set it."""
+    base = _with_base(code, lineno) if "$" in code else None
+    if base is None or base.kind != "unknown":
+        return base
+    return BaseRef("unknown", lineno, reason=f"{word} block at line {lineno}: {base.reason}")
 
 
 def _operands(code: str, at: int, path: str | None, lineno: int) -> tuple[list, int]:

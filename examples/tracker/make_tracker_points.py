@@ -44,7 +44,7 @@ def measurement_csv(tracker_T_robot: np.ndarray, rng: np.random.Generator) -> st
     meas = transform_points(tracker_T_robot, reached) + rng.normal(0.0, NOISE_MM, cmd.shape)
     lines = [
         "# 2x2x2 grid: commanded x,y,z in the robot frame, measured x_meas,y_meas,z_meas in the",
-        "# tracker frame; map them with: accugrid transform --columns meas",
+        "# tracker frame; map them with: accugrid transform --triples meas",
         "# synthetic: examples/tracker/make_tracker_points.py",
         "id,x,y,z,a,b,c,x_meas,y_meas,z_meas",
     ]
