@@ -247,8 +247,8 @@ def test_non_unit_quaternion_external_axes_and_offs_are_reported(tmp_path, capsy
     assert ",corrected," in rows["pOk"]
 
 
-# sha256 of the KRL and G-code outputs of main without the RAPID plug-in (f1fd063, the policy
-# merged; run from a checkout of that commit with its own venv), made with:
+# sha256 of the KRL and G-code outputs of main without the RAPID plug-in (5a07359; run from a
+# checkout of that commit with its own venv), made with:
 #   accugrid krl examples/wing_panel_points.csv --cell examples/cell.yaml -o krl
 #   accugrid gcode examples/wing_panel_points.csv --cell examples/cell.yaml -o wing_panel.ngc
 #   mkdir rewrite
@@ -263,9 +263,9 @@ PINNED = {
     "wing_panel.ngc": "64c9ec5409f11ecf827d77605eb9309d1abe37a064c935dc98851d5613520efe",
     "rewrite/cam_drill.src": "906b0c5c3880571c3acdfdcbd6b1852cae3046505cbda35f93c4ea7b93d8d49f",
     "rewrite/cam_drill.dat": "9fe57ed90bf612f68861400420d399b00b75bb951a725fdd9de327c77ec13159",
-    "rewrite/cam_drill.ngc": "79ac0550bb923f083ee2f1e49aacef68ff3d9a18b7b4f531d2f3055dea60595c",
+    "rewrite/cam_drill.ngc": "2392a6f9bcbce2e58eba23e8ee57833b58708cb8d59697a5f5862379d9a23d69",
     "rewrite/krl_report.csv": "3cc8cfb5c2a29df187ad05cd0f5d7beedc7575c2476ae4e34b40177a6494230b",
-    "rewrite/ngc_report.csv": "e40c5a2f52bc3840baa1157a7e2ec5583b9028c8ab3cbc65b6ec96cdfbfc433b",
+    "rewrite/ngc_report.csv": "06515ed7e8e793e76d34e1bc2c006760df280a7fde2e25e17d28ce842d94d6a5",
 }
 
 
