@@ -112,12 +112,14 @@ def prepare(
     command: str,
     check: Callable[[Cell, int, list[str]], None] | None = None,
     cell: Cell | None = None,
+    joints: bool = False,
 ) -> Job:
     """Read POINTS, CELL and the grid; build the corrected program, its IK check started in the
     background (``Job.finish`` waits for it and prints the warnings).
     ``check(cell, holes, header)``, when given, runs after reading and before the correction and IK
     (the heavy work), with a header of as many lines as the job's: a dialect refuses there what
-    it could not write. ``cell``: CELL when the command already read it."""
+    it could not write. ``cell``: CELL when the command already read it. ``joints``: the program
+    keeps the joint angles of every pose (``Program.joints``)."""
     cell = load_cell(args.cell) if cell is None else cell
     outside = OUTSIDE_WORDS[getattr(args, "outside", "refuse")]
     cell = dataclasses.replace(cell, correction=cell.correction.but(outside=outside))
@@ -162,6 +164,7 @@ def prepare(
         validity=validity,
         allow_partial=getattr(args, "allow_partial", False),
         strict=getattr(args, "strict", False),
+        keep_joints=joints,
     )
     largest, hole = program.largest_correction()
     where = f" at hole {points.ids[hole]}" if hole is not None else ""

@@ -30,7 +30,9 @@ program unless ``configuration.allow_change`` lets a hole that cannot reach it t
 uncorrected hole only: a correction holds in the Status it was made for). The jobs run this
 check on a background thread (``build_program(..., background=True)``) while they write what
 needs only the positions; ``Program.wait`` joins it, ``Program.kuka_words`` hands out the
-Status and Turn of holes its IK blocks have reached.
+Status and Turn of holes its IK blocks have reached. The joint angles of every pose (the IK
+solution each pose is written with) are kept when a dialect asks (``keep_joints``:
+``Program.joints``): ABB confdata comes from them.
 """
 
 from __future__ import annotations
@@ -96,6 +98,9 @@ class Program:
     warnings: list[str]
     corrected: bool
     checking: IKCheck | None = field(default=None, repr=False, compare=False)
+    joints: np.ndarray | None = field(default=None, repr=False)  # (N, S, 6) rad, robot axes of
+    # each pose, S = 4 stages, or 3 when RET is the APP position; set by ``wait`` when built
+    # with ``keep_joints``
     uncorrected: list[str] = field(default_factory=list)  # header lines: holes left as they are
 
     def __len__(self) -> int:
@@ -125,10 +130,19 @@ class Program:
         then ``configuration`` is set and its warnings follow the correction's; raises the
         check's InputError (an unreachable hole, a branch jump)."""
         if self.checking is not None:
-            configuration, warnings = self.checking.result()  # raises again if waited again
-            self.configuration, self.checking = configuration, None
+            configuration, warnings, joints = self.checking.result()  # raises again if waited
+            self.configuration, self.joints, self.checking = configuration, joints, None
             self.warnings = self.warnings + warnings
         return self
+
+    def joint_angles(self, lo: int = 0, hi: int | None = None) -> np.ndarray:
+        """Joint angles (hi - lo, 4, 6) rad of holes lo..hi-1, stage order ``STAGES``: the IK
+        solution each pose is written with (a program built with ``keep_joints``)."""
+        joints = self.wait().joints
+        if joints is None:
+            raise ValueError("the program was built without keep_joints")
+        q = joints[lo:hi]
+        return q if q.shape[1] == 4 else np.concatenate([q, q[:, :1]], axis=1)
 
     def largest_correction(self) -> tuple[float, int | None]:
         """(length mm, hole index) of the largest correction; (0, None) for no holes."""
@@ -170,10 +184,10 @@ class Program:
 
 class IKCheck:
     """A program's IK check (``_configuration``) on a background thread: ``result()`` waits for
-    it, (Configuration, warnings) or its exception raised in the caller's thread; ``early``
-    hands out Status and Turn of holes its blocks have reached."""
+    it, (Configuration, warnings, joint angles) or its exception raised in the caller's thread;
+    ``early`` hands out Status and Turn of holes its blocks have reached."""
 
-    def __init__(self, check: Callable[[_Progress], tuple[Configuration, list[str]]]) -> None:
+    def __init__(self, check: Callable[[_Progress], tuple]) -> None:
         self._outcome: tuple | BaseException | None = None
         self._progress = _Progress()
         self._thread = threading.Thread(target=self._run, args=(check,), name="accugrid-ik")
@@ -187,7 +201,7 @@ class IKCheck:
         finally:
             self._progress.close()
 
-    def result(self) -> tuple[Configuration, list[str]]:
+    def result(self) -> tuple[Configuration, list[str], np.ndarray | None]:
         self._thread.join()
         if isinstance(self._outcome, BaseException):
             raise self._outcome
@@ -254,6 +268,7 @@ def build_program(
     validity=None,
     allow_partial: bool = False,
     strict: bool = False,
+    keep_joints: bool = False,
 ) -> Program:
     """Corrected, IK-checked program for ``points`` in ``cell`` (``grid``: None for no
     correction; ``robot`` with the cell's tool; ``model``: a calibrated Robot, then ``grid`` is
@@ -262,7 +277,9 @@ def build_program(
     ``compensation.policy``). ``background``: the
     IK check (Status, Turn, reach, limits, branch jumps, the wrist singularity) runs on a
     background thread while the caller goes on with what needs only the positions (a G-code
-    program, the .src of a KRL job); ``Program.wait()`` joins it."""
+    program, the .src of a KRL job); ``Program.wait()`` joins it. ``keep_joints``: keep the
+    joint angles of every pose (``Program.joints``, 144 bytes a hole: only for a dialect whose
+    configuration words need more than KUKA Status/Turn, e.g. ABB confdata)."""
     n = len(points)
     if n == 0:
         raise InputError("no drilling points in the file", points.path)
@@ -299,11 +316,11 @@ def build_program(
 
     corrected_in = status if model is not None or grid is not None else None
 
-    def check(progress: _Progress | None = None) -> tuple[Configuration, list[str]]:
-        pose_status, turn, ik_warnings = _configuration(
+    def check(progress: _Progress | None = None) -> tuple:
+        pose_status, turn, ik_warnings, q = _configuration(
             points, cell, robot, positions, rotations, status, progress, corrected_in, correction
         )
-        return Configuration.from_kuka(pose_status, turn), ik_warnings
+        return Configuration.from_kuka(pose_status, turn), ik_warnings, q if keep_joints else None
 
     program = Program(
         cell=cell,
@@ -320,7 +337,7 @@ def build_program(
         uncorrected=marks,
     )
     if not background:
-        program.configuration, ik_warnings = check()
+        program.configuration, ik_warnings, program.joints = check()
         program.warnings = warnings + ik_warnings
     return program
 
@@ -437,15 +454,16 @@ def _configuration(
     progress: _Progress | None = None,
     corrected_in: int | None = None,
     correction: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray, list[str]]:
+) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray]:
     """IK of every pose (positions (N, 4, 3) mm and rotations (N, 3, 3), BASE frame) in KUKA
-    ``status`` (None: the first pose's IK default): Status and Turn (N, 4) per pose and the
-    warnings. ``progress``: told of the IK blocks as they are done. ``corrected_in``: the
-    Status the corrections (N, 3) mm ``correction`` hold in (the policy's): a corrected hole
-    that takes another one (allow_change) is an InputError."""
+    ``status`` (None: the first pose's IK default): Status and Turn (N, 4) per pose, the
+    warnings and the joint angles (N, S, 6) rad (S: the stages solved, 3 when RET is APP).
+    ``progress``: told of the IK blocks as they are done. ``corrected_in``: the Status the
+    corrections (N, 3) mm ``correction`` hold in (the policy's): a corrected hole that takes
+    another one (allow_change) is an InputError."""
     n = len(points)
     if n == 0:
-        return np.zeros((0, 4), int), np.zeros((0, 4), int), []
+        return np.zeros((0, 4), int), np.zeros((0, 4), int), [], np.zeros((0, 4, 6))
     stages = len(STAGES) - (1 if cell.drilling.retract_mm == cell.drilling.approach_mm else 0)
 
     def poses(holes) -> np.ndarray:
@@ -513,7 +531,7 @@ def _configuration(
     if stages == 3:  # RET is the APP position
         pose_status = np.concatenate([pose_status, pose_status[:, :1]], axis=1)
         pose_turn = np.concatenate([pose_turn, pose_turn[:, :1]], axis=1)
-    return pose_status, pose_turn, warnings
+    return pose_status, pose_turn, warnings, q
 
 
 def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:

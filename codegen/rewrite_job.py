@@ -1,6 +1,7 @@
 """``accugrid rewrite`` as one call: from what the command line asks (``RewriteRequest``) to the
 bytes of every output file (``RewriteJob``). Reads the cell, the grid, the calibrated model and
-the programs, rewrites them (``codegen.krl.rewrite`` / ``codegen.gcode.rewrite``), adds the
+the programs, rewrites them (``codegen.krl.rewrite`` / ``codegen.gcode.rewrite``, or the
+dialect's plug-in, ``codegen.plugin``), adds the
 header and makes the report; the command only parses, calls ``rewrite_job``, writes and prints.
 """
 
@@ -12,7 +13,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from accugrid.codegen.cell import load_cell
-from accugrid.codegen.dialects import dialect_of
+from accugrid.codegen.dialects import dialect_of, plugin_of
 from accugrid.codegen.program_text import add_header, read_program
 from accugrid.codegen.rewrite import (
     CORRECTED,
@@ -137,7 +138,11 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     collecting = gc.isenabled()
     gc.disable()
     try:
-        if dialect_of(inputs[0]) == "krl":  # each dialect's reader imported when it is needed
+        name = dialect_of(inputs[0])
+        plugin = plugin_of(name)
+        if plugin is not None:
+            result = plugin.rewrite(texts, opts, cell.dialects[name])
+        elif name == "krl":  # each dialect's reader imported when it is needed
             from accugrid.codegen.krl.rewrite import rewrite_krl
 
             config = read_program(req.config_dat, req.max_bytes) if req.config_dat else None
@@ -155,7 +160,13 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
         data = result.data.pop(os.fspath(path))  # the new program exists once, as bytes
         if req.header:
             lines = header_lines(result, os.fspath(path), os.fspath(req.cell), opts)
-            data = add_header(data.decode("latin-1"), lines, dialect_of(path)).encode("latin-1")
+            text, kind = data.decode("latin-1"), dialect_of(path)
+            plugin = plugin_of(kind)
+            if plugin is None:
+                text = add_header(text, lines, kind)
+            else:
+                text = plugin.add_header(text, lines)
+            data = text.encode("latin-1")
         files[target] = data
     if req.report is not None:
         # a non-UTF-8 byte in a file name is written as an escape (\\udcff), not refused

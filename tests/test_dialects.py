@@ -11,7 +11,17 @@ from accugrid.kinematics.errors import InputError
 
 @pytest.mark.parametrize(
     ("name", "dialect"),
-    [("a.src", "krl"), ("B.DAT", "krl"), ("x.sub", "krl"), ("p.ngc", "gcode"), ("p.NC", "gcode")],
+    [
+        ("a.src", "krl"),
+        ("B.DAT", "krl"),
+        ("x.sub", "krl"),
+        ("p.ngc", "gcode"),
+        ("p.NC", "gcode"),
+        ("m.mod", "rapid"),
+        ("m.MODX", "rapid"),
+        ("p.prg", "rapid"),
+        ("user.sys", "rapid"),
+    ],
 )
 def test_suffix_names_the_dialect(name, dialect):
     assert dialect_of(name) == dialect
@@ -22,16 +32,16 @@ def test_no_suffix_is_claimed_twice():
     assert len(suffixes) == len(set(suffixes))
 
 
-@pytest.mark.parametrize("name", ["notes.txt", "program", "drill.mod"])
+@pytest.mark.parametrize("name", ["notes.txt", "program", "drill.ls"])
 def test_unknown_suffix_is_refused_not_taken_for_gcode(name):
     with pytest.raises(InputError, match="unknown program type"):
         dialect_of(name)
 
 
 def test_rewrite_refuses_an_unknown_suffix(tmp_path, capsys):
-    program = tmp_path / "drill.mod"
-    program.write_text("MODULE drill\nENDMODULE\n")
-    out = tmp_path / "out.mod"
+    program = tmp_path / "drill.ls"
+    program.write_text("/PROG DRILL\n/END\n")
+    out = tmp_path / "out.ls"
     code = main(["rewrite", str(program), "--cell", "examples/cell.yaml", "-o", str(out)])
     assert code == 2 and not out.exists()
-    assert "unknown program type '.mod'" in capsys.readouterr().err
+    assert "unknown program type '.ls'" in capsys.readouterr().err

@@ -41,9 +41,13 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "plan",
         "measurement plans: grid, ISO 9283 cube, the seed's step experiment, identification poses",
     ),
+    "rapid": (
+        "rapid",
+        "corrected ABB RAPID drilling module (.mod) from a points CSV",
+    ),
     "rewrite": (
         "rewrite",
-        "correct the positions of an existing KRL or G-code program in place (pre-flight)",
+        "correct the positions of an existing KRL, G-code or RAPID program in place (pre-flight)",
     ),
     "simulate": (
         "simulate",

@@ -1,4 +1,4 @@
-"""Pre-flight correction of an existing KRL (.src/.dat) or G-code program.
+"""Pre-flight correction of an existing KRL (.src/.dat), G-code or ABB RAPID program.
 
 Every Cartesian position that can be placed in the robot frame is corrected with the grid
 (P' = P + e, robot frame, converted back to the program frame); only those X, Y, Z numbers change,
@@ -22,6 +22,11 @@ POS/E6POS of a .dat given alone, --base N says which BASE_DATA they are in (a po
 wins over it).
 G-code: positions are in the cell's program_frame (default: its base), G54 active; A, B, C
 words are the tool orientation and stay as written.
+
+RAPID (.mod/.modx/.prg/.sys): robtargets moved only by MoveL/MoveJ (and their DO/AO/GO/Sync
+forms, TriggL/TriggJ) with the cell's rapid.tool in its rapid.wobj (the base frame) or wobj0 (the
+robot frame); never tooldata, wobjdata, jointtarget, loaddata, pose, Offs/RelTool operands or
+robtargets changed at run time.
 
 Output: for one file, -o is the output file (or an existing directory). For a .src/.dat pair,
 -o is a directory (the files keep their names, which KRL needs to match DEF/DEFDAT) or the output
@@ -56,7 +61,9 @@ NAME = "rewrite"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("program", metavar="PROGRAM", help="KRL .src/.dat or G-code file")
+    parser.add_argument(
+        "program", metavar="PROGRAM", help="KRL .src/.dat, G-code or RAPID (.mod/.modx/.prg/.sys)"
+    )
     parser.add_argument("dat", nargs="?", metavar="PROGRAM.dat", help="the .dat of a KRL .src")
     parser.add_argument("--cell", required=True, metavar="CELL.yaml", help="cell file (frames)")
     parser.add_argument("--grid", metavar="MEAS.csv", help="measurement CSV (overrides the cell)")
@@ -89,8 +96,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--ignore-external-axes",
         action="store_true",
-        help="KRL: correct positions with non-zero E1..E6 (the external axes do not move the "
-        "robot or the base)",
+        help="KRL, RAPID: correct positions with external axes in use (non-zero E1..E6, RAPID "
+        "eax values other than 9E+09): the external axes move neither the robot nor the base",
     )
     parser.add_argument(
         "--decimals",
