@@ -120,6 +120,11 @@ def test_shared_options_have_one_default():
     assert len({tuple(v) for v in defaults["--abc"].values()}) == 1
     assert set(defaults["--tool"].values()) == {None}
     assert set(defaults["--status"].values()) == {None}
+    for name, parser in PARSERS.items():
+        for action in _options(parser):
+            if "--status" in action.option_strings:
+                assert action.help.startswith("KUKA Status 0..7 "), name
+                assert list(action.choices) == list(range(8)), name
     assert set(defaults["--outside"]) == set(defaults["--allow-partial"])  # every correcting one
     assert {"correct", "krl", "gcode", "rewrite"} <= set(defaults["--outside"])
     assert set(defaults["--outside"].values()) == {"refuse"}

@@ -60,7 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_status(
         parser,
-        "the KUKA Status of points without a column s; a grid corrects only points in the "
+        "KUKA Status 0..7 of points without a column s; a grid corrects only points in the "
         "Status it was measured in (with --model default: the grid's, without --grid the IK "
         "default at the first point)",
     )

@@ -162,7 +162,7 @@ def _common(parser: argparse.ArgumentParser) -> None:
     add_tool(parser, "measured point (SMR) on the flange")
     add_status(
         parser,
-        "KUKA Status (0..7) for every position (default: the IK default configuration "
+        "KUKA Status 0..7 for every position (default: the IK default configuration "
         "at the first position)",
     )
     parser.add_argument(

@@ -86,7 +86,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_status(
         parser,
-        "KUKA Status (0..7) the simulated robot keeps for every point, as a program of LIN "
+        "KUKA Status 0..7 the simulated robot keeps for every point, as a program of LIN "
         "moves does (default: the IK default configuration at the first centre)",
     )
     r = SEED_REGION
