@@ -114,13 +114,23 @@ def calibrated_yaml(robot: Robot, summary: dict | None = None, header: str = "")
 
 
 def _joint_errors_dict(moves: JointErrors) -> dict:
-    """The ``joint_errors:`` section ``load_robot`` reads (compliance, masses, harmonics,
-    thermal, gravity)."""
+    """The ``joint_errors:`` section ``load_robot`` reads (compliance, masses, gravity moments,
+    harmonics, thermal, gravity)."""
     out: dict = {"compliance_rad_per_nm": [float(c) for c in moves.compliance]}
     out["masses"] = [
         {"link": m.link, "kg": float(m.kg), "at_mm": [float(v) for v in m.at_mm]}
         for m in moves.masses
     ]
+    if moves.moments is not None:
+        out["gravity_moments"] = [
+            {
+                "axis": int(axis) + 1,
+                "link": int(link) + 1,
+                "c_kg": float(moves.moments[axis, link, 0]),
+                "c_kg_mm": [float(v) for v in moves.moments[axis, link, 1:]],
+            }
+            for axis, link in zip(*np.nonzero(np.abs(moves.moments).sum(axis=2)), strict=True)
+        ]
     if moves.harmonics:
         out["harmonics"] = [
             {

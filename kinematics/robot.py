@@ -75,8 +75,9 @@ class Robot:
         if self.joint_errors is not None:
             if self.joint_errors.thermal is not None:
                 dh = self.joint_errors.thermal.apply(dh)
-            if np.any(self.joint_errors.compliance) or self.joint_errors.harmonics:
-                moves = self.joint_errors
+            je = self.joint_errors
+            if np.any(je.compliance) or je.harmonics or je.moments is not None:
+                moves = je
         return Robot(
             f"{self.name} (true)",
             dh,
@@ -242,7 +243,9 @@ def _validated_max(doc: YamlDoc) -> np.ndarray | None:
 
 def _joint_errors_from_doc(doc: YamlDoc) -> JointErrors:
     """The ``joint_errors:`` section: ``compliance_rad_per_nm`` (6 numbers), ``masses`` (list of
-    {link 1..6, kg, at_mm [x, y, z]}), ``harmonics`` (list of {axis 1..6, order, amplitude_rad,
+    {link 1..6, kg, at_mm [x, y, z]}), ``gravity_moments`` (list of {axis 1..6, link 1..6, c_kg
+    rad/(N·m)·kg, c_kg_mm [x, y, z] rad/(N·m)·kg·mm}: compliance × first moments without masses,
+    ``kinematics.joint_errors``), ``harmonics`` (list of {axis 1..6, order, amplitude_rad,
     phase_deg}), ``thermal`` {delta_t_k, expansion_per_k}, ``gravity_mps2``."""
     key = "joint_errors"
     doc.get(key, "compliance_rad_per_nm", default={})  # checks that the section is a mapping
@@ -260,6 +263,22 @@ def _joint_errors_from_doc(doc: YamlDoc) -> JointErrors:
                 raise doc.error(f"{doc.keyname(*k, 'kg')} must not be negative", *k, "kg")
             doc.sequence(*k, "at_mm", length=3)
             masses.append(PointMass(link, kg, tuple(doc.number(*k, "at_mm", j) for j in range(3))))
+    moments = None
+    if doc.has(key, "gravity_moments"):
+        moments = np.zeros((6, 6, 4))
+        for i in range(len(doc.sequence(key, "gravity_moments"))):
+            k = (key, "gravity_moments", i)
+            axis, link = _whole(doc, 1, 6, *k, "axis"), _whole(doc, 1, 6, *k, "link")
+            if link <= axis:
+                raise doc.error(
+                    f"{doc.keyname(*k, 'link')} must be beyond the axis (a link the axis carries)",
+                    *k,
+                    "link",
+                )
+            doc.sequence(*k, "c_kg_mm", length=3)
+            moments[axis - 1, link - 1] = [doc.number(*k, "c_kg")] + [
+                doc.number(*k, "c_kg_mm", j) for j in range(3)
+            ]
     harmonics = []
     if doc.has(key, "harmonics"):
         for i in range(len(doc.sequence(key, "harmonics"))):
@@ -285,7 +304,7 @@ def _joint_errors_from_doc(doc: YamlDoc) -> JointErrors:
             doc.number(key, "thermal", "expansion_per_k", default=Thermal.expansion_per_k),
         )
     gravity = doc.number(key, "gravity_mps2", default=GRAVITY_MPS2)
-    return JointErrors(compliance, tuple(masses), tuple(harmonics), thermal, gravity)
+    return JointErrors(compliance, tuple(masses), tuple(harmonics), thermal, gravity, moments)
 
 
 def _whole(doc: YamlDoc, lo: int, hi: int, *keys) -> int:
