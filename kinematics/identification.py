@@ -56,6 +56,8 @@ __all__ = [
     "identify",
     "parameter_names",
     "parameter_units",
+    "linearised",
+    "pose_folds",
     "pose_set",
     "select_poses",
 ]
@@ -503,10 +505,10 @@ def identify(
     coefficients (rad) of these (axis 1..6, order) reducer harmonics. ``gravity``: also these
     mass-free gravity groups (``kinematics.candidates``). ``selected``: the joint terms were
     chosen by cross-validation (``kinematics.structure``), which bounds them itself: the poses
-    need only outnumber the DH + TCP parameters and give more equations than parameters. ``folds`` >= 2 also runs
-    k-fold cross-validation over the distinct poses. InputError for too few poses, poses in one
-    plane or one orientation, or data that leave more directions unidentifiable than the robot's
-    structural ones.
+    need only outnumber the DH + TCP parameters and give more equations than parameters.
+    ``folds`` >= 2 also runs k-fold cross-validation over the distinct poses. InputError for
+    too few poses, poses in one plane or one orientation, or data that leave more directions
+    unidentifiable than the robot's structural ones.
     """
     base_T0 = _rigid_fit(data.commanded, data.measured) if base_frame else np.eye(4)
     target = _in_robot_frame(base_T0, data.measured)
@@ -545,7 +547,7 @@ def identify(
         correction[:3, :3] = Rotation.from_rotvec(x[30:33]).as_matrix()
         correction[:3, 3] = x[27:30]
         tracker = base_T0 @ correction
-    cv = _cross_validate(model, sub, data, target, folds) if folds else None
+    cv = _cross_validate(model, sub, data, target, folds, selected) if folds else None
     arm = model.arm(x)
     calibrated = Robot(
         f"{robot.name}-calibrated",
@@ -603,20 +605,21 @@ def _fit(model: _Model, sub: _Subspace, q: np.ndarray, target: np.ndarray):
     return directions @ z, residuals, sigma
 
 
-def _cross_validate(model: _Model, sub: _Subspace, data: PoseSet, target, folds: int):
+def _cross_validate(
+    model: _Model, sub: _Subspace, data: PoseSet, target, folds: int, selected: bool = False
+):
     """k-fold over the distinct poses (repeats stay together), fitted in the identifiable
-    subspace of all data: the held-out residuals' RMS and max per axis (``CrossValidation``)."""
+    subspace of all data: the held-out residuals' RMS and max per axis (``CrossValidation``).
+    A fold must keep as many poses as parameters (``selected``: more equations than them)."""
     if folds < 2 or folds > data.poses:
         raise InputError(f"--folds must be between 2 and the {data.poses} poses, got {folds}")
-    order = np.random.default_rng(0).permutation(data.poses)
-    fold_of_pose = np.empty(data.poses, dtype=int)
-    fold_of_pose[order] = np.arange(data.poses) % folds
-    fold = fold_of_pose[data.group]
+    fold = pose_folds(data.poses, folds)[data.group]
     rank = sub.basis.shape[1]
     held = np.empty_like(target)
     for k in range(folds):
         train = fold != k
-        if len(np.unique(data.group[train])) < rank:
+        kept = len(np.unique(data.group[train]))
+        if (3 * kept <= rank) if selected else (kept < rank):
             raise InputError(
                 f"{folds}-fold cross-validation leaves fewer poses than the {rank} identifiable "
                 "parameters per fit; use fewer folds"
@@ -624,6 +627,45 @@ def _cross_validate(model: _Model, sub: _Subspace, data: PoseSet, target, folds:
         x, _, _ = _fit(model, sub, data.q[train], target[train])
         held[~train] = target[~train] - model.positions(x, data.q[~train])
     return CrossValidation(folds, np.sqrt(np.mean(held**2, axis=0)), np.abs(held).max(axis=0))
+
+
+def pose_folds(poses: int, folds: int, seed: int = 0) -> np.ndarray:
+    """The fold (poses,) int 0..folds-1 of each distinct pose: a fixed permutation from
+    ``numpy.random.default_rng(seed)`` dealt round-robin (sizes differ by at most one)."""
+    order = np.random.default_rng(seed).permutation(poses)
+    fold_of_pose = np.empty(poses, dtype=int)
+    fold_of_pose[order] = np.arange(poses) % folds
+    return fold_of_pose
+
+
+def linearised(
+    robot: Robot,
+    data: PoseSet,
+    result: Identification,
+    base_frame: bool = False,
+    compliance: bool = False,
+    harmonics: Terms = (),
+    candidates: Terms = (),
+    gravity: tuple[GravityTerm, ...] = (),
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The identification of ``result`` (fitted with ``base_frame``, ``compliance``, ``harmonics``)
+    linearised for a search over more terms: its residuals y (3N,) mm (row-major x, y, z), the
+    Jacobian of its identifiable directions X (3N, r) and the columns (3N, m) of the candidate
+    harmonics (two per (axis, order), sin then cos) then of the ``gravity`` groups (``size``
+    each), all at the fitted parameters, mm per rad."""
+    base_T0 = _rigid_fit(data.commanded, data.measured) if base_frame else np.eye(4)
+    every = tuple(harmonics) + tuple(candidates)
+    model = _Model(robot, base_frame, base_T0, compliance, every, gravity)
+    fitted = _Model(robot, base_frame, base_T0, compliance, harmonics)
+    x = np.zeros(model.n)
+    x[: fitted.i_grav] = result.x[: fitted.i_grav]
+    x[model.i_harm : model.i_harm + 2 * len(harmonics)] = result.x[fitted.i_harm :]
+    jac = model.jacobian(x, data.q).reshape(-1, model.n)
+    base = np.r_[0 : fitted.i_grav, model.i_harm : model.i_harm + 2 * len(harmonics)]
+    sub = _subspace(fitted.jacobian(np.zeros(fitted.n), data.q), RTOL)
+    directions = sub.basis / sub.scale[:, None]
+    extra = np.r_[model.i_harm + 2 * len(harmonics) : model.n, model.i_grav : model.i_harm]
+    return result.residuals.reshape(-1), jac[:, base] @ directions, jac[:, extra]
 
 
 def _in_robot_frame(base_T0: np.ndarray, points: np.ndarray) -> np.ndarray:

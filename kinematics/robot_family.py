@@ -99,7 +99,7 @@ class FamilyRobot:
 
 
 def random_robot(seed: int, declared_tool=DECLARED_TOOL) -> FamilyRobot:
-    """The family member ``seed`` (any int >= 0) with the declared tool (x, y, z mm, a, b, c deg)."""
+    """The family member ``seed`` (int >= 0) with the declared tool (x, y, z mm, a, b, c deg)."""
     rng = np.random.default_rng([21, seed])
     nominal = load_robot("kr210").with_tool(pose_from_xyzabc(declared_tool))
     table1 = load_robot("kr210-paper").errors
