@@ -18,8 +18,25 @@ from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification
 from accugrid.kinematics.joint_errors import JointErrors
 from accugrid.kinematics.robot import Robot
+from accugrid.kinematics.structure import Selection
 
-__all__ = ["calibrated_yaml", "check_same_robot", "identification_summary"]
+__all__ = ["STRUCTURE_KEYS", "calibrated_yaml", "check_same_robot", "identification_summary"]
+
+# the keys of ``identification.structure`` (written by ``structure_summary`` only); nested ones
+# under "cv_curve", "left_out" and "nested" as listed there
+STRUCTURE_KEYS = (
+    "mode",
+    "max_order",
+    "max_order_rule",
+    "folds",
+    "candidates",
+    "pinned",
+    "chosen",
+    "left_out",
+    "cv_curve",
+    "kept_steps",
+    "nested",
+)
 
 _SAME_TOL = 1e-9  # mm / deg: nominal DH values closer than this are the same robot
 
@@ -37,8 +54,11 @@ def identification_summary(
     nominal: Robot,
     source: str | None = None,
     sha256: str | None = None,
+    selection: Selection | None = None,
 ) -> dict:
-    """The ``identification:`` section: plain data (mm, rad, deg as named) for the YAML."""
+    """The ``identification:`` section: plain data (mm, rad, deg as named) for the YAML;
+    ``selection``: the structure chosen by cross-validation (None: DH + TCP and the pinned
+    terms, ``--structure dh``)."""
     parameters = [
         {
             "name": name,
@@ -76,7 +96,49 @@ def identification_summary(
             "predicted_rms_mm": _axes(cv.rms_mm),
             "predicted_max_mm": _axes(cv.max_mm),
         }
+    summary["structure"] = structure_summary(selection)
     return summary
+
+
+def structure_summary(selection: Selection | None) -> dict:
+    """``identification.structure``: the mode ('dh' or 'auto'), and for 'auto' the search (the
+    highest order and why, folds, number of candidate groups), the pinned and chosen groups, what
+    was left out and why, the cross-validation curve (held-out RMS and max per axis, mm, against
+    the groups added; the first ``kept_steps`` steps are the chosen model) and the nested
+    estimate (mm). Keys: ``STRUCTURE_KEYS``."""
+    if selection is None:
+        return {"mode": "dh"}
+    nested = selection.nested
+    out = {
+        "mode": "auto",
+        "max_order": selection.max_order,
+        "max_order_rule": selection.max_order_rule,
+        "folds": selection.folds,
+        "candidates": selection.candidates,
+        "pinned": list(selection.pinned),
+        "chosen": list(selection.chosen),
+        "left_out": [{"term": name, "reason": why} for name, why in selection.left_out],
+        "cv_curve": [
+            {
+                "added": step.added or "start",
+                "parameters": step.parameters,
+                "held_out_rms_mm": _axes(step.rms_mm),
+                "held_out_max_mm": _axes(step.max_mm),
+            }
+            for step in selection.curve
+        ],
+        "kept_steps": selection.kept,
+    }
+    if nested is not None:
+        out["nested"] = {
+            "folds": nested.folds,
+            "held_out_rms_mm": _axes(nested.rms_mm),
+            "held_out_max_mm": _axes(nested.max_mm),
+            "noise_sigma_mm": None if nested.noise_mm is None else float(nested.noise_mm),
+            "model_rms_mm": None if nested.model_rms_mm is None else _axes(nested.model_rms_mm),
+            "chosen_by_fold": [list(c) for c in nested.chosen],
+        }
+    return out
 
 
 def calibrated_yaml(robot: Robot, summary: dict | None = None, header: str = "") -> str:

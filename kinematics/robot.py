@@ -234,8 +234,14 @@ def _robot_from_doc(doc: YamlDoc) -> Robot:
 
 def _validated_max(doc: YamlDoc) -> np.ndarray | None:
     """(3,) mm from a calibrated file's ``identification:`` section (module ``calibrated``):
-    the cross-validated held-out max per axis, else the fit's residual max; None without."""
-    for key in (("cross_validation", "predicted_max_mm"), ("residual_max_mm",)):
+    the nested cross-validation's held-out max per axis (a structure chosen from the data), else
+    the cross-validated held-out max, else the fit's residual max; None without."""
+    keys = (
+        ("structure", "nested", "held_out_max_mm"),
+        ("cross_validation", "predicted_max_mm"),
+        ("residual_max_mm",),
+    )
+    for key in keys:
         if doc.has("identification", *key):
             return np.array([doc.number("identification", *key, axis) for axis in "xyz"])
     return None

@@ -34,6 +34,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.linalg import solve_triangular
 
+from accugrid.kinematics.blas import one_blas_thread
 from accugrid.kinematics.candidates import GravityTerm, gravity_terms, harmonic_name
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.identification import (
@@ -50,6 +51,7 @@ __all__ = [
     "DEFAULT_MAX_ORDER",
     "GAPS_PER_PERIOD",
     "MAX_SHARE",
+    "GAIN_SE",
     "MAX_STEPS",
     "SEPARATE",
     "Nested",
@@ -64,6 +66,7 @@ GAPS_PER_PERIOD = 4.0  # an order's period must span this many median gaps betwe
 SEPARATE = 0.05  # a group whose columns keep less than this share beyond the model: inseparable
 MAX_SHARE = 0.5  # parameters at most this share of a training fold's equations
 MAX_STEPS = 40  # groups one search adds at most
+GAIN_SE = 2.0  # a step is kept when its held-out gain exceeds this many of its standard errors
 _NESTED_SEED = 1  # inner folds: another permutation of the training poses
 
 
@@ -153,6 +156,15 @@ def identify_structure(
     the poses resolve, with the reason in ``Selection.max_order_rule``; a larger one given is
     refused naming the limit). ``folds`` >= 2: the cross-validation folds (also the nested
     estimate's outer folds). InputError for too few poses, a bad ``max_order`` or ``folds``."""
+    with one_blas_thread():  # thousands of small solves: BLAS threads only wait on each other
+        return _identify_structure(
+            robot, data, base_frame, compliance, harmonics, max_order, folds, nested
+        )
+
+
+def _identify_structure(
+    robot, data, base_frame, compliance, harmonics, max_order, folds, nested
+) -> tuple[Identification, Selection]:
     if folds < 2 or folds > data.poses:
         raise InputError(f"--folds must be between 2 and the {data.poses} poses, got {folds}")
     resolved, rule = max_order_of(data)
@@ -385,19 +397,16 @@ class _Problem:
         return out
 
     def one_standard_error(self, path) -> int:
-        """The number of groups the one-standard-error rule keeps on ``path``: the fewest whose
-        held-out sum of squares exceeds the best step's by at most one standard error of the
-        paired per-pose differences."""
-        sse = np.array([self._pose_sse(held) for _, held in path])  # (steps, poses)
-        used = ~np.isnan(path[0][1])
-        poses = np.unique(self.pose[used])
-        sse = sse[:, poses]
-        best = int(np.argmin(sse.sum(axis=1)))
-        for step in range(best + 1):
-            d = sse[step] - sse[best]
-            if d.mean() <= d.std(ddof=1) / np.sqrt(len(d)):
-                return step
-        return best
+        """The number of steps of ``path`` kept: steps are kept while each lowers the held-out
+        sum of squares by more than ``GAIN_SE`` standard errors of its paired per-pose
+        differences (its own uncertainty, against the step before)."""
+        used = np.unique(self.pose[~np.isnan(path[0][1])])
+        sse = np.array([self._pose_sse(held)[used] for _, held in path])  # (steps, poses)
+        for step in range(1, len(path)):
+            gain = sse[step - 1] - sse[step]
+            if gain.mean() <= GAIN_SE * gain.std(ddof=1) / np.sqrt(len(gain)):
+                return step - 1
+        return len(path) - 1
 
     def held_out_stats(self, held: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
         """(RMS (3,), max |.| (3,), overall RMS) mm of held-out residuals (M,)."""
