@@ -275,9 +275,9 @@ def _joint_errors_from_doc(doc: YamlDoc) -> JointErrors:
         for i in range(len(doc.sequence(key, "gravity_moments"))):
             k = (key, "gravity_moments", i)
             axis, link = _whole(doc, 1, 6, *k, "axis"), _whole(doc, 1, 6, *k, "link")
-            if link <= axis:
+            if link < axis:
                 raise doc.error(
-                    f"{doc.keyname(*k, 'link')} must be beyond the axis (a link the axis carries)",
+                    f"{doc.keyname(*k, 'link')} must be a link the axis carries (>= axis)",
                     *k,
                     "link",
                 )

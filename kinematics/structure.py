@@ -52,6 +52,7 @@ __all__ = [
     "GAPS_PER_PERIOD",
     "MAX_SHARE",
     "GAIN_SE",
+    "LOOK_AHEAD",
     "MAX_STEPS",
     "SEPARATE",
     "Nested",
@@ -67,6 +68,7 @@ SEPARATE = 0.05  # a group whose columns keep less than this share beyond the mo
 MAX_SHARE = 0.5  # parameters at most this share of a training fold's equations
 MAX_STEPS = 40  # groups one search adds at most
 GAIN_SE = 2.0  # a step is kept when its held-out gain exceeds this many of its standard errors
+LOOK_AHEAD = 2  # ... or that of the next steps together, up to this many
 _NESTED_SEED = 1  # inner folds: another permutation of the training poses
 
 
@@ -397,16 +399,23 @@ class _Problem:
         return out
 
     def one_standard_error(self, path) -> int:
-        """The number of steps of ``path`` kept: steps are kept while each lowers the held-out
-        sum of squares by more than ``GAIN_SE`` standard errors of its paired per-pose
-        differences (its own uncertainty, against the step before)."""
+        """The number of steps of ``path`` kept: steps are kept while the next one, or the next
+        ``LOOK_AHEAD`` together, lower the held-out sum of squares by more than ``GAIN_SE``
+        standard errors of their paired per-pose differences (the gain's own uncertainty), times
+        the square root of the number of steps (k steps together: terms that only help as a set,
+        e.g. neighbouring orders, held to the bar of k single steps)."""
         used = np.unique(self.pose[~np.isnan(path[0][1])])
         sse = np.array([self._pose_sse(held)[used] for _, held in path])  # (steps, poses)
-        for step in range(1, len(path)):
-            gain = sse[step - 1] - sse[step]
-            if gain.mean() <= GAIN_SE * gain.std(ddof=1) / np.sqrt(len(gain)):
-                return step - 1
-        return len(path) - 1
+        step = 0
+        while step + 1 < len(path):
+            ahead = sse[step] - sse[step + 1 : step + 1 + LOOK_AHEAD]  # (1..LOOK_AHEAD, poses)
+            se = ahead.std(axis=1, ddof=1) / np.sqrt(ahead.shape[1])
+            steps = np.arange(1, len(ahead) + 1)
+            passed = np.flatnonzero(ahead.mean(axis=1) > GAIN_SE * np.sqrt(steps) * se)
+            if not passed.size:
+                break
+            step += int(passed[0]) + 1
+        return step
 
     def held_out_stats(self, held: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
         """(RMS (3,), max |.| (3,), overall RMS) mm of held-out residuals (M,)."""
