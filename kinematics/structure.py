@@ -68,7 +68,7 @@ SEPARATE = 0.05  # a group whose columns keep less than this share beyond the mo
 MAX_SHARE = 0.5  # parameters at most this share of a training fold's equations
 MAX_STEPS = 40  # groups one search adds at most
 GAIN_SE = 2.0  # a step is kept when its held-out gain exceeds this many of its standard errors
-LOOK_AHEAD = 2  # ... or that of the next steps together, up to this many
+LOOK_AHEAD = 4  # ... or that of the next steps together, up to this many
 _NESTED_SEED = 1  # inner folds: another permutation of the training poses
 
 
