@@ -13,8 +13,12 @@ The candidates (``kinematics.candidates``) are groups of linear parameters: redu
    value) cannot be told apart by these poses and is skipped; the path stops when no group
    lowers the held-out error, at ``MAX_SHARE`` of a fold's equations in parameters or after
    ``MAX_STEPS`` steps.
-3. **One-standard-error rule** on the path: the fewest groups whose held-out sum of squares is
-   within one standard error (over the poses, paired with the best step) of the path's best.
+3. **Keep steps while they beat their own uncertainty**: a step is kept when its held-out gain
+   (paired per-pose differences of the sums of squares) exceeds ``GAIN_SE`` standard errors;
+   when it does not, the next up to ``LOOK_AHEAD`` steps together may carry it if their joint
+   gain exceeds √k times that bar (neighbouring orders that only help as a pair). On noise the
+   greedy path's best gain is biased upward (the best of ~100 candidates), which is why the bar
+   is two standard errors, not one.
 4. **Nested cross-validation** for the accuracy to expect: in each outer fold the whole search
    (steps 2-3, on inner folds of the training poses) is repeated, the chosen groups are fitted
    on the training poses and the held-out poses are predicted; so the estimate is not the score
@@ -120,25 +124,18 @@ class Selection:
     nested: Nested | None
 
 
-def max_order_of(data: PoseSet) -> tuple[int, str]:
-    """The highest harmonic order the poses resolve (``GAPS_PER_PERIOD`` median gaps of the
-    sorted distinct angles of the axis with the densest poses per radian... of every axis) and
-    the rule in words."""
+def max_order_of(data: PoseSet) -> np.ndarray:
+    """The highest harmonic order (6,) the poses resolve on each axis: an order's period must
+    span ``GAPS_PER_PERIOD`` median gaps between the sorted distinct angles of the poses on that
+    axis (1 for an axis the poses do not move)."""
     first = np.unique(data.group, return_index=True)[1]
-    limits = []
+    out = np.ones(6, dtype=int)
     for axis in range(6):
-        angles = np.sort(data.q[first, axis])
-        gaps = np.diff(angles)
+        gaps = np.diff(np.sort(data.q[first, axis]))
         gaps = gaps[gaps > 1e-9]
         if gaps.size:
-            limits.append((2 * np.pi / (GAPS_PER_PERIOD * float(np.median(gaps))), axis))
-    order, axis = min(limits) if limits else (1.0, 0)
-    gap = float(np.degrees(np.median(np.diff(np.unique(data.q[first, axis])))))
-    rule = (
-        f"a period must span {GAPS_PER_PERIOD:g} median gaps between the poses' angles "
-        f"(A{axis + 1}: {gap:.2f} deg)"
-    )
-    return max(int(order), 1), rule
+            out[axis] = max(int(2 * np.pi / (GAPS_PER_PERIOD * float(np.median(gaps)))), 1)
+    return out
 
 
 def identify_structure(
@@ -169,19 +166,20 @@ def _identify_structure(
 ) -> tuple[Identification, Selection]:
     if folds < 2 or folds > data.poses:
         raise InputError(f"--folds must be between 2 and the {data.poses} poses, got {folds}")
-    resolved, rule = max_order_of(data)
+    resolved = max_order_of(data)
+    rule = f"a period must span {GAPS_PER_PERIOD:g} median gaps between the poses' angles"
     if max_order is None:
-        max_order = min(DEFAULT_MAX_ORDER, resolved)
-        if resolved < DEFAULT_MAX_ORDER:
-            rule = f"clamped from {DEFAULT_MAX_ORDER}: {rule}"
-    elif not 1 <= max_order <= resolved:
+        max_order = DEFAULT_MAX_ORDER
+    elif not 1 <= max_order <= resolved.max():
         raise InputError(
             f"--max-order {max_order}: these {data.poses} poses resolve harmonic orders 1.."
-            f"{resolved} ({rule}); measure more poses or lower it",
+            f"{resolved.max()} at most (A{int(np.argmax(resolved)) + 1}; {rule}); measure more "
+            "poses or lower it",
             data.path,
         )
-    else:
-        rule = "given"
+    caps = np.minimum(resolved, max_order)
+    clamped = [f"A{a + 1} to {caps[a]}" for a in range(6) if caps[a] < max_order]
+    rule = f"clamped {', '.join(clamped)} ({rule})" if clamped else rule
     base = identify(
         robot, data, base_frame, compliance, harmonics=harmonics, selected=True, folds=0
     )
@@ -189,7 +187,7 @@ def _identify_structure(
     search = tuple(
         (axis, order)
         for axis in range(1, 7)
-        for order in range(1, max_order + 1)
+        for order in range(1, int(caps[axis - 1]) + 1)
         if (axis, order) not in pinned
     )
     gravity = gravity_terms(robot)
@@ -204,7 +202,7 @@ def _identify_structure(
     kept = problem.one_standard_error(path)
     chosen = [g for g, _ in path[1 : kept + 1]]
     rejected = [g for g, _ in path[kept + 1 :]]
-    left_out += [(names[g], "within one standard error of the chosen model") for g in rejected]
+    left_out += [(names[g], "its held-out gain is within its uncertainty") for g in rejected]
     estimate = _nested(problem, fold, folds, names, data) if nested else None
     picked_harmonics = pinned + tuple(search[g] for g in chosen if g < len(search))
     picked_gravity = tuple(gravity[g - len(search)] for g in chosen if g >= len(search))
