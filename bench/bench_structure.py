@@ -184,7 +184,8 @@ def family(count: int) -> None:
     ratios = np.sort(ratios)
     worst = ratios[int(np.ceil(0.9 * len(ratios))) - 1 :]
     print(
-        f"auto / true-structure max over {len(ratios)} family robots: median {np.median(ratios):.2f}, "
+        f"auto / true-structure max over {len(ratios)} family robots: median "
+        f"{np.median(ratios):.2f}, "
         f"worst tenth {', '.join(f'{r:.2f}' for r in worst)}; nested RMS estimate / true: "
         f"median {np.median(estimates):.2f} (range {min(estimates):.2f}-{max(estimates):.2f}); "
         f"search + nested estimate {np.median(seconds):.1f} s median, {max(seconds):.1f} s max"

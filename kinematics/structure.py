@@ -14,11 +14,13 @@ The candidates (``kinematics.candidates``) are groups of linear parameters: redu
    lowers the held-out error, at ``MAX_SHARE`` of a fold's equations in parameters or after
    ``MAX_STEPS`` steps.
 3. **Keep steps while they beat their own uncertainty**: a step is kept when its held-out gain
-   (paired per-pose differences of the sums of squares) exceeds ``GAIN_SE`` standard errors;
-   when it does not, the next up to ``LOOK_AHEAD`` steps together may carry it if their joint
-   gain exceeds √k times that bar (neighbouring orders that only help as a pair). On noise the
-   greedy path's best gain is biased upward (the best of ~100 candidates), which is why the bar
-   is two standard errors, not one.
+   (paired per-pose differences of the sums of squares) exceeds its standard error times a bar
+   that accounts for the step being the best of m candidate groups: the one-sided normal
+   quantile of ``FALSE_STEP`` / m (Bonferroni; 3.3 for m = 100). A step that fails may be
+   carried by the next 2..``LOOK_AHEAD`` steps together when their joint gain passes the same
+   bar (terms that only help together, e.g. neighbouring orders on a narrow angle range). With a
+   bar of one or two standard errors noise-only data gained terms: the best of ~100 candidates
+   is always a little lucky.
 4. **Nested cross-validation** for the accuracy to expect: in each outer fold the whole search
    (steps 2-3, on inner folds of the training poses) is repeated, the chosen groups are fitted
    on the training poses and the held-out poses are predicted; so the estimate is not the score
@@ -37,6 +39,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.linalg import solve_triangular
+from scipy.stats import norm
 
 from accugrid.kinematics.blas import one_blas_thread
 from accugrid.kinematics.candidates import GravityTerm, gravity_terms, harmonic_name
@@ -55,7 +58,7 @@ __all__ = [
     "DEFAULT_MAX_ORDER",
     "GAPS_PER_PERIOD",
     "MAX_SHARE",
-    "GAIN_SE",
+    "FALSE_STEP",
     "LOOK_AHEAD",
     "MAX_STEPS",
     "SEPARATE",
@@ -71,8 +74,8 @@ GAPS_PER_PERIOD = 4.0  # an order's period must span this many median gaps betwe
 SEPARATE = 0.05  # a group whose columns keep less than this share beyond the model: inseparable
 MAX_SHARE = 0.5  # parameters at most this share of a training fold's equations
 MAX_STEPS = 40  # groups one search adds at most
-GAIN_SE = 2.0  # a step is kept when its held-out gain exceeds this many of its standard errors
-LOOK_AHEAD = 4  # ... or that of the next steps together, up to this many
+FALSE_STEP = 0.05  # chance that a step on noise alone passes the bar (shared by the candidates)
+LOOK_AHEAD = 4  # a step that fails may be carried by the next 2..LOOK_AHEAD steps together
 _NESTED_SEED = 1  # inner folds: another permutation of the training poses
 
 
@@ -250,6 +253,9 @@ class _Problem:
         self.y, self.x0, self.c, self.groups = y, x0, columns, groups
         self.pose, self.poses = pose_of_row, poses
         self.top = float(np.sqrt(np.mean(columns**2, axis=0)).max()) if columns.size else 1.0
+        # a step is the best of len(groups) tries: the one-sided normal bar whose tail
+        # FALSE_STEP is shared among them (Bonferroni), 3.3 standard errors for 100 groups
+        self.bar = float(norm.isf(FALSE_STEP / max(len(groups), 1)))
 
     def reduce(self, names: list[str]) -> list[tuple[str, str]]:
         """Keep of each group only its directions the data separate from the DH + TCP (+ pinned)
@@ -398,18 +404,16 @@ class _Problem:
 
     def one_standard_error(self, path) -> int:
         """The number of steps of ``path`` kept: steps are kept while the next one, or the next
-        ``LOOK_AHEAD`` together, lower the held-out sum of squares by more than ``GAIN_SE``
-        standard errors of their paired per-pose differences (the gain's own uncertainty), times
-        the square root of the number of steps (k steps together: terms that only help as a set,
-        e.g. neighbouring orders, held to the bar of k single steps)."""
+        2..``LOOK_AHEAD`` together (terms that only help as a set, e.g. neighbouring orders),
+        lower the held-out sum of squares by more than ``bar`` standard errors of their paired
+        per-pose differences (the gain's own uncertainty)."""
         used = np.unique(self.pose[~np.isnan(path[0][1])])
         sse = np.array([self._pose_sse(held)[used] for _, held in path])  # (steps, poses)
         step = 0
         while step + 1 < len(path):
             ahead = sse[step] - sse[step + 1 : step + 1 + LOOK_AHEAD]  # (1..LOOK_AHEAD, poses)
             se = ahead.std(axis=1, ddof=1) / np.sqrt(ahead.shape[1])
-            steps = np.arange(1, len(ahead) + 1)
-            passed = np.flatnonzero(ahead.mean(axis=1) > GAIN_SE * np.sqrt(steps) * se)
+            passed = np.flatnonzero(ahead.mean(axis=1) > self.bar * se)
             if not passed.size:
                 break
             step += int(passed[0]) + 1
