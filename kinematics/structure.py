@@ -21,6 +21,9 @@ The candidates (``kinematics.candidates``) are groups of linear parameters: redu
    bar (terms that only help together, e.g. neighbouring orders on a narrow angle range). With a
    bar of one or two standard errors noise-only data gained terms: the best of ~100 candidates
    is always a little lucky.
+   Then each kept harmonic is swapped for a neighbouring order of its axis (k ± 1, 2) where that
+   lowers the held-out error: over a narrow angle range neighbouring orders differ by a fraction
+   of a period and the greedy step may take the wrong one.
 4. **Nested cross-validation** for the accuracy to expect: in each outer fold the whole search
    (steps 2-3, on inner folds of the training poses) is repeated, the chosen groups are fitted
    on the training poses and the held-out poses are predicted; so the estimate is not the score
@@ -199,12 +202,23 @@ def _identify_structure(
     starts = np.cumsum([0] + [2] * len(search) + [g.size for g in gravity])
     groups = [np.arange(starts[i], starts[i + 1]) for i in range(len(names))]
     problem = _Problem(y, x0, columns, groups, np.repeat(data.group, 3), data.poses)
+    index = {t: i for i, t in enumerate(search)}
+    problem.neighbours = {
+        i: [index[(a, k + d)] for d in (-2, -1, 1, 2) if (a, k + d) in index]
+        for i, (a, k) in enumerate(search)
+    }
     left_out = problem.reduce(names)
     fold = pose_folds(data.poses, folds)
     path = problem.path(fold, np.ones(data.poses, bool))
     kept = problem.one_standard_error(path)
-    chosen = [g for g, _ in path[1 : kept + 1]]
-    rejected = [g for g, _ in path[kept + 1 :]]
+    greedy = [g for g, _ in path[1 : kept + 1]]
+    chosen = problem.refine(greedy, fold, np.ones(data.poses, bool))
+    rejected = [g for g, _ in path[kept + 1 :] if g not in chosen]
+    left_out += [
+        (names[g], f"swapped for {names[c]}: a neighbouring order, lower held-out error")
+        for g, c in zip(greedy, chosen, strict=True)
+        if g != c
+    ]
     left_out += [(names[g], "its held-out gain is within its uncertainty") for g in rejected]
     estimate = _nested(problem, fold, folds, names, data) if nested else None
     picked_harmonics = pinned + tuple(search[g] for g in chosen if g < len(search))
@@ -252,6 +266,7 @@ class _Problem:
     def __init__(self, y, x0, columns, groups, pose_of_row, poses: int) -> None:
         self.y, self.x0, self.c, self.groups = y, x0, columns, groups
         self.pose, self.poses = pose_of_row, poses
+        self.neighbours: dict[int, list[int]] = {}  # harmonic group -> neighbouring orders
         self.top = float(np.sqrt(np.mean(columns**2, axis=0)).max()) if columns.size else 1.0
         # a step is the best of len(groups) tries: the one-sided normal bar whose tail
         # FALSE_STEP is shared among them (Bonferroni), 3.3 standard errors for 100 groups
@@ -402,6 +417,25 @@ class _Problem:
                 out[i] += np.sum((et - t[:, g] @ w) ** 2)
         return out
 
+    def refine(self, chosen: list[int], fold_of_pose: np.ndarray, use: np.ndarray) -> list[int]:
+        """``chosen`` with each harmonic swapped for a neighbouring order of its axis (k ± 1, 2)
+        where that lowers the held-out sum of squares (over a narrow angle range neighbouring
+        orders differ by a fraction of a period; the greedy step may take the wrong one)."""
+        rows = use[self.pose]
+        fold = fold_of_pose[self.pose]
+        folds = np.unique(fold_of_pose[use])
+        best = np.nansum(self._held(chosen, fold, rows, folds) ** 2)
+        chosen = list(chosen)
+        for at in range(len(chosen)):
+            for other in self.neighbours.get(chosen[at], []):
+                if other in chosen or not self.observable[other]:
+                    continue
+                trial = chosen[:at] + [other] + chosen[at + 1 :]
+                sse = np.nansum(self._held(trial, fold, rows, folds) ** 2)
+                if sse < best:
+                    chosen, best = trial, sse
+        return chosen
+
     def one_standard_error(self, path) -> int:
         """The number of steps of ``path`` kept: steps are kept while the next one, or the next
         2..``LOOK_AHEAD`` together (terms that only help as a set, e.g. neighbouring orders),
@@ -447,7 +481,7 @@ def _nested(problem: _Problem, fold: np.ndarray, folds: int, names, data: PoseSe
         inner[use] = pose_folds(int(use.sum()), folds, _NESTED_SEED + k)
         path = problem.path(inner, use)
         kept = problem.one_standard_error(path)
-        chosen = [g for g, _ in path[1 : kept + 1]]
+        chosen = problem.refine([g for g, _ in path[1 : kept + 1]], inner, use)
         chosen_by_fold.append(tuple(names[g] for g in chosen))
         x = problem.design(chosen)
         train, test = use[problem.pose], ~use[problem.pose]
