@@ -167,7 +167,8 @@ def main_bench() -> None:
         started = time.perf_counter()
         if auto:
             data = pose_set(plain, commanded, measured, abc_deg=abc_rows, status=STATUS)
-            top = int(max_order_of(data).max()) if harmonics == 0 else None
+            first = np.unique(data.group, return_index=True)[1]
+            top = int(max_order_of(data.q[first]).max()) if harmonics == 0 else None
             result, selection = identify_structure(plain, data, max_order=top)
             cv = selection.nested
             print(f"{name}: chose {', '.join(selection.chosen)}")

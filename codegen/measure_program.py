@@ -197,7 +197,30 @@ def _identification_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
         f"{r.tilt_deg:g} deg, |A5| >= 10 deg); observability O1 {o1:.4f}",
         f"path {plan.path_length():.1f} mm",
     ]
+    info.append(_candidates_line(robot, plan, status))
     return plan, info
+
+
+def _candidates_line(robot, plan: Plan, status: int) -> str:
+    """What the planned poses can tell ``identify``'s search: the harmonic orders resolved per
+    axis and the candidate groups they cannot separate from the DH errors and TCP."""
+    from accugrid.kinematics.structure import observability
+
+    poses = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
+    first = np.unique(np.column_stack([plan.points, plan.abc_rows()]), axis=0, return_index=True)[1]
+    q = robot.ik(poses[np.sort(first)], status=status).q
+    caps, hidden = observability(robot, q)
+    resolved = " ".join(f"A{a + 1}:{caps[a]}" for a in range(6))
+    orders: dict[str, list[str]] = {}
+    for name, _ in hidden:  # 'A6 k3' -> {'A6': ['3']}, a gravity group as it is
+        axis, _, order = name.partition(" k")
+        orders.setdefault(axis if order else name, []).append(order)
+    text = "; ".join(f"{key} orders {','.join(ks)}" if ks[0] else key for key, ks in orders.items())
+    text = text or "none"
+    return (
+        f"candidates for identify's structure search: harmonic orders up to {resolved}; "
+        f"not separable from the DH errors and TCP by these poses: {text}"
+    )
 
 
 def _program(

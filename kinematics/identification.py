@@ -57,6 +57,7 @@ __all__ = [
     "parameter_names",
     "parameter_units",
     "linearised",
+    "planned_columns",
     "pose_folds",
     "pose_set",
     "select_poses",
@@ -666,6 +667,20 @@ def linearised(
     directions = sub.basis / sub.scale[:, None]
     extra = np.r_[model.i_harm + 2 * len(harmonics) : model.n, model.i_grav : model.i_harm]
     return result.residuals.reshape(-1), jac[:, base] @ directions, jac[:, extra]
+
+
+def planned_columns(
+    robot: Robot, q: np.ndarray, candidates: Terms, gravity: tuple[GravityTerm, ...]
+) -> tuple[np.ndarray, np.ndarray]:
+    """For poses not yet measured, joints q (N, 6) rad: the identifiable DH + TCP columns X
+    (3N, r) of the nominal model and the candidate columns (3N, m) (harmonics, two each, then the
+    gravity groups), as ``linearised`` gives them for measured data."""
+    model = _Model(robot, False, np.eye(4), False, candidates, gravity)
+    jac = model.jacobian(np.zeros(model.n), np.atleast_2d(q)).reshape(-1, model.n)
+    sub = _subspace(jac[:, :27].reshape(len(q), 3, 27), RTOL)
+    base = jac[:, :27] @ (sub.basis / sub.scale[:, None])
+    extra = np.r_[model.i_harm : model.n, model.i_grav : model.i_harm]
+    return base, jac[:, extra]
 
 
 def _in_robot_frame(base_T0: np.ndarray, points: np.ndarray) -> np.ndarray:

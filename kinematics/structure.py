@@ -53,6 +53,7 @@ from accugrid.kinematics.identification import (
     Terms,
     identify,
     linearised,
+    planned_columns,
     pose_folds,
 )
 from accugrid.kinematics.robot import Robot
@@ -70,6 +71,7 @@ __all__ = [
     "Step",
     "identify_structure",
     "max_order_of",
+    "observability",
 ]
 
 DEFAULT_MAX_ORDER = 16  # reducer output stages; a user may search further with --max-order
@@ -130,18 +132,34 @@ class Selection:
     nested: Nested | None
 
 
-def max_order_of(data: PoseSet) -> np.ndarray:
-    """The highest harmonic order (6,) the poses resolve on each axis: an order's period must
-    span ``GAPS_PER_PERIOD`` median gaps between the sorted distinct angles of the poses on that
-    axis (1 for an axis the poses do not move)."""
-    first = np.unique(data.group, return_index=True)[1]
+def max_order_of(q: np.ndarray) -> np.ndarray:
+    """The highest harmonic order (6,) the distinct poses' joints q (P, 6) rad resolve on each
+    axis: an order's period must span ``GAPS_PER_PERIOD`` median gaps between the sorted angles
+    on that axis (1 for an axis the poses do not move)."""
     out = np.ones(6, dtype=int)
     for axis in range(6):
-        gaps = np.diff(np.sort(data.q[first, axis]))
+        gaps = np.diff(np.sort(q[:, axis]))
         gaps = gaps[gaps > 1e-9]
         if gaps.size:
             out[axis] = max(int(2 * np.pi / (GAPS_PER_PERIOD * float(np.median(gaps)))), 1)
     return out
+
+
+def observability(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, list[tuple[str, str]]]:
+    """Before measuring: the highest order (6,) joints q (P, 6) rad resolve per axis, and the
+    candidate groups (orders up to ``DEFAULT_MAX_ORDER`` clamped to those, the gravity groups)
+    these poses cannot tell from the DH errors and TCP: (name, reason)."""
+    caps = np.minimum(max_order_of(q), DEFAULT_MAX_ORDER)
+    search = tuple((a, k) for a in range(1, 7) for k in range(1, int(caps[a - 1]) + 1))
+    gravity = gravity_terms(robot)
+    x0, columns = planned_columns(robot, q, search, gravity)
+    names = [harmonic_name(*t) for t in search] + [g.name for g in gravity]
+    starts = np.cumsum([0] + [2] * len(search) + [g.size for g in gravity])
+    groups = [np.arange(starts[i], starts[i + 1]) for i in range(len(names))]
+    problem = _Problem(
+        np.zeros(len(x0)), x0, columns, groups, np.repeat(np.arange(len(q)), 3), len(q)
+    )
+    return caps, problem.reduce(names)
 
 
 def identify_structure(
@@ -172,7 +190,7 @@ def _identify_structure(
 ) -> tuple[Identification, Selection]:
     if folds < 2 or folds > data.poses:
         raise InputError(f"--folds must be between 2 and the {data.poses} poses, got {folds}")
-    resolved = max_order_of(data)
+    resolved = max_order_of(data.q[np.unique(data.group, return_index=True)[1]])
     rule = f"a period must span {GAPS_PER_PERIOD:g} median gaps between the poses' angles"
     if max_order is None:
         max_order = DEFAULT_MAX_ORDER

@@ -304,3 +304,15 @@ def test_too_few_poses_are_refused(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "12 distinct poses for 22 identifiable parameters" in err and err.count("\n") == 1
     assert not (tmp_path / "cal.yaml").exists()
+
+
+def test_plan_identify_reports_the_candidates_its_poses_cannot_separate(tmp_path, capsys):
+    """With the tool on A6's axis an A6 harmonic cannot move the TCP: the plan says so before
+    anyone measures; an offset tool lets the poses see A6's orders."""
+    plan = ["plan", "identify", "--count", "40", "--tilt", "25", "-o", str(tmp_path), "--force"]
+    assert main([*plan, "--tool", "0", "0", "250", "0", "0", "0"]) == 0
+    on_axis = [line for line in capsys.readouterr().out.splitlines() if "not separable" in line]
+    assert len(on_axis) == 1 and "A6 orders 1,2,3" in on_axis[0]
+    assert main([*plan, "--tool", "20", "-10", "250", "0", "0", "0"]) == 0
+    offset = [line for line in capsys.readouterr().out.splitlines() if "not separable" in line]
+    assert len(offset) == 1 and "A6 orders 1,2,3" not in offset[0]
