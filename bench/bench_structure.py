@@ -182,7 +182,7 @@ def family(count: int) -> None:
     )
     print(table(rows, columns))
     ratios = np.sort(ratios)
-    worst = ratios[int(np.ceil(0.9 * len(ratios))) - 1 :]
+    worst = ratios[int(0.9 * len(ratios)) :]
     print(
         f"auto / true-structure max over {len(ratios)} family robots: median "
         f"{np.median(ratios):.2f}, "
