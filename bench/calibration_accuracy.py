@@ -181,7 +181,8 @@ def main_bench() -> None:
         models[name] = (result.robot, residual)
         print(
             f"{name}: {POSES} poses x {POSE_REPEATS} (O1 {o1:.3g}), rank {result.rank} of "
-            f"{len(result.x)}, condition {result.condition_number:.3g}, identify + 5-fold CV "
+            f"{len(result.x)}, condition {result.condition_number:.3g}, "
+            f"{'search + nested CV' if auto else 'identify + 5-fold CV'} "
             f"{identify_s:.2f} s; residual RMS {', '.join(f'{v:.3f}' for v in result.rms_mm)} "
             f"mm; {'nested ' if auto else ''}cross-validation RMS "
             f"{', '.join(f'{v:.3f}' for v in cv.rms_mm)}, max "
