@@ -153,9 +153,7 @@ def observability(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, list[tuple[s
     search = tuple((a, k) for a in range(1, 7) for k in range(1, int(caps[a - 1]) + 1))
     gravity = gravity_terms(robot)
     x0, columns = planned_columns(robot, q, search, gravity)
-    names = [harmonic_name(*t) for t in search] + [g.name for g in gravity]
-    starts = np.cumsum([0] + [2] * len(search) + [g.size for g in gravity])
-    groups = [np.arange(starts[i], starts[i + 1]) for i in range(len(names))]
+    names, groups = _library(search, gravity)
     problem = _Problem(
         np.zeros(len(x0)), x0, columns, groups, np.repeat(np.arange(len(q)), 3), len(q)
     )
@@ -216,9 +214,7 @@ def _identify_structure(
     )
     gravity = gravity_terms(robot)
     y, x0, columns = linearised(robot, data, base, base_frame, compliance, pinned, search, gravity)
-    names = [harmonic_name(*t) for t in search] + [g.name for g in gravity]
-    starts = np.cumsum([0] + [2] * len(search) + [g.size for g in gravity])
-    groups = [np.arange(starts[i], starts[i + 1]) for i in range(len(names))]
+    names, groups = _library(search, gravity)
     problem = _Problem(y, x0, columns, groups, np.repeat(data.group, 3), data.poses)
     index = {t: i for i, t in enumerate(search)}
     problem.neighbours = {
@@ -275,6 +271,14 @@ def _identify_structure(
         nested=estimate,
     )
     return result, selection
+
+
+def _library(search: Terms, gravity: tuple[GravityTerm, ...]):
+    """The candidate groups' names and their column indices (harmonics, two columns each, then
+    the gravity groups), in the column order of ``linearised`` and ``planned_columns``."""
+    names = [harmonic_name(*t) for t in search] + [g.name for g in gravity]
+    starts = np.cumsum([0] + [2] * len(search) + [g.size for g in gravity])
+    return names, [np.arange(starts[i], starts[i + 1]) for i in range(len(names))]
 
 
 class _Problem:
