@@ -46,7 +46,7 @@ class PlanRequest:
     ``repeats``; experiment: ``centres`` (name -> (3,) mm), ``steps`` (mm), ``repeats``;
     identify: ``region``, ``count`` poses within ``tilt_deg`` of ``abc`` D-optimal among
     ``candidates`` random ones (``seed``), ``repeats`` rounds, D-optimal for the model
-    ``identify`` will fit (``compliance``, ``harmonics`` as (axis, order) pairs).
+    ``identify`` will fit (``compliance``, ``harmonics`` as (axis, order) pairs, ``gravity``).
     Program: ``name`` (default measure_KIND), TOOL_DATA ``tool_number``, BASE_DATA
     ``base_number`` (0: the robot frame), first-PTP ``ptp_percent``, LIN ``vel_m_s``, and after
     each position ``wait_input`` ($IN number) or ``wait_sec`` s; ``templates``: a folder with
@@ -69,6 +69,7 @@ class PlanRequest:
     seed: int = 0
     compliance: bool = False
     harmonics: tuple[tuple[int, int], ...] = ()
+    gravity: tuple = ()  # mass-free gravity groups (kinematics.candidates.GravityTerm)
     name: str | None = None
     tool_number: int = 1
     base_number: int = 0
@@ -188,9 +189,11 @@ def _identification_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
         seed=r.seed,
         compliance=r.compliance,
         harmonics=r.harmonics,
+        gravity=r.gravity,
     )
     model = "DH errors, TCP" + (", compliance" if r.compliance else "")
     model += f", {len(r.harmonics)} harmonics" if r.harmonics else ""
+    model += "".join(f", {g.name}" for g in r.gravity)
     info = [
         f"identification plan ({model}): {r.count} poses x {r.repeats} repeats chosen D-optimally "
         f"from {usable} of {r.candidates} candidates (Status {status}, tilt up to "

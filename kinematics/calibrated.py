@@ -20,7 +20,13 @@ from accugrid.kinematics.joint_errors import JointErrors
 from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.structure import Selection
 
-__all__ = ["STRUCTURE_KEYS", "calibrated_yaml", "check_same_robot", "identification_summary"]
+__all__ = [
+    "STRUCTURE_KEYS",
+    "calibrated_yaml",
+    "check_same_robot",
+    "chosen_structure",
+    "identification_summary",
+]
 
 # the keys of ``identification.structure`` (written by ``structure_summary`` only); nested ones
 # under "cv_curve", "left_out" and "nested" as listed there
@@ -242,3 +248,21 @@ def check_same_robot(model: Robot, robot: Robot, where: str | None = None) -> No
             f"{model.joint_limits_deg[i, j]:g} vs {robot.joint_limits_deg[i, j]:g}",
             where,
         )
+
+
+def chosen_structure(path, robot: Robot):
+    """The joint-error structure a calibrated file (``path``) was fitted with, for planning more
+    poses on ``robot`` (its nominal model): (compliance under masses, harmonics (axis, order),
+    gravity groups of ``kinematics.candidates``). InputError when the file is of another robot."""
+    from accugrid.kinematics.candidates import gravity_terms
+    from accugrid.kinematics.robot import load_robot
+    from accugrid.kinematics.yamlfile import load_yaml
+
+    model = load_robot(path)
+    check_same_robot(model, robot, str(path))
+    moves = model.joint_errors
+    harmonics = tuple((h.axis, h.order) for h in moves.harmonics) if moves else ()
+    compliance = bool(moves is not None and moves.masses and np.any(moves.compliance))
+    chosen = load_yaml(path).get("identification", "structure", "chosen", default=[]) or []
+    gravity = tuple(t for t in gravity_terms(robot) if t.name in chosen)
+    return compliance, harmonics, gravity

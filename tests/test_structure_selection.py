@@ -316,3 +316,21 @@ def test_plan_identify_reports_the_candidates_its_poses_cannot_separate(tmp_path
     assert main([*plan, "--tool", "20", "-10", "250", "0", "0", "0"]) == 0
     offset = [line for line in capsys.readouterr().out.splitlines() if "not separable" in line]
     assert len(offset) == 1 and "A6 orders 1,2,3" not in offset[0]
+
+
+def test_plan_identify_augment_plans_for_the_structure_a_calibrated_file_chose(tmp_path, capsys):
+    csv = write_csv(tmp_path / "meas.csv", arm([Harmonic(2, 5, 2e-4, 0.5)]), joints(40, 41))
+    assert run(tmp_path, csv, "--max-order", "6") == 0
+    cal = tmp_path / "cal.yaml"
+    capsys.readouterr()
+    plan = ["plan", "identify", "--count", "40", "--tilt", "25", "--tool", "20", "-10", "250"]
+    plan += ["0", "0", "0", "--augment", str(cal), "-o", str(tmp_path / "plan")]
+    assert main(plan) == 0
+    printed = capsys.readouterr().out
+    chosen = yaml.safe_load(cal.read_text())["identification"]["structure"]["chosen"]
+    harmonics = sum(1 for name in chosen if not name.startswith("gravity"))
+    assert f"identification plan (DH errors, TCP, {harmonics} harmonics" in printed
+    other = ["plan", "identify", "--count", "10", "--robot", "kr210-realistic"]
+    other += ["--augment", str(tmp_path / "meas.csv"), "-o", str(tmp_path / "p2")]
+    assert main(other) == 2  # not a robot file
+    assert capsys.readouterr().err.count("\n") == 1
