@@ -16,6 +16,11 @@ FK, repeatability 0.03 mm and tracker noise 0.02 mm (sigma per axis), as ``accug
   identified too, at the orders kr210-realistic's reducers have (``identify --harmonics``: the
   orders are known from the reducers' data sheets; amplitudes and phases are fitted), alone and
   with the same 27-vertex residual grid.
+- model, structure from the data: plain ``identify`` (``kinematics.structure``: the joint-error
+  terms chosen by cross-validation; nominal kr210, no masses, no orders), from its own 60 poses
+  D-optimal for DH + TCP, x 3; and the same searching every order the poses resolve
+  (``--max-order`` at the highest axis's limit, 124 here: kr210-realistic's motor-side stages
+  150/160 stay beyond it).
 
 Held out: 200 random targets inside the region (50 mm margin) at A 0 B 90 C 0, and 200 at
 orientations tilted 0-25 deg. The table shows where the real arm lands when commanded P'
@@ -43,6 +48,7 @@ from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc  # noqa: 
 from accugrid.kinematics.identification import identify, pose_set, select_poses  # noqa: E402
 from accugrid.kinematics.joint_errors import JointErrors  # noqa: E402
 from accugrid.kinematics.robot import load_robot  # noqa: E402
+from accugrid.kinematics.structure import identify_structure, max_order_of  # noqa: E402
 
 STATUS = 6
 SEED_ABC = np.array([0.0, 90.0, 0.0])
@@ -143,24 +149,44 @@ def main_bench() -> None:
     tool = cell.controller.flange_T_tool  # the controller's TOOL_DATA: the nominal drill
     residual_session = cell.measure(residual_vertices, SEED_ABC, 3, rng)
     models = {}
-    for name, harmonics in (("model", ()), ("model + harmonics", HARMONICS)):
-        chosen, o1 = select_poses(cell.nominal, q, POSES, compliance=True, harmonics=harmonics)
+    plain = load_robot("kr210").with_tool(pose_from_xyzabc(TOOL))
+    for name, harmonics in (
+        ("model", ()),
+        ("model + harmonics", HARMONICS),
+        ("model, structure from the data", None),
+        ("model, structure from the data, orders up to what the poses resolve", 0),
+    ):
+        auto = harmonics is None or isinstance(harmonics, int)
+        if auto:
+            chosen, o1 = select_poses(plain, q, POSES)
+        else:
+            chosen, o1 = select_poses(cell.nominal, q, POSES, compliance=True, harmonics=harmonics)
         commanded, measured, abc_rows = cell.measure(
             cand_p[chosen], cand_abc[chosen], POSE_REPEATS, rng
         )
         started = time.perf_counter()
-        data = pose_set(cell.nominal, commanded, measured, abc_deg=abc_rows, status=STATUS)
-        result = identify(cell.nominal, data, compliance=True, folds=5, harmonics=harmonics)
+        if auto:
+            data = pose_set(plain, commanded, measured, abc_deg=abc_rows, status=STATUS)
+            first = np.unique(data.group, return_index=True)[1]
+            top = int(max_order_of(data.q[first]).max()) if harmonics == 0 else None
+            result, selection = identify_structure(plain, data, max_order=top)
+            cv = selection.nested
+            print(f"{name}: chose {', '.join(selection.chosen)}")
+        else:
+            data = pose_set(cell.nominal, commanded, measured, abc_deg=abc_rows, status=STATUS)
+            result = identify(cell.nominal, data, compliance=True, folds=5, harmonics=harmonics)
+            cv = result.cross_validation
         identify_s = time.perf_counter() - started
         residual = residual_grid(result.robot, residual_session, STATUS, controller_tool=tool)
         models[name] = (result.robot, residual)
         print(
             f"{name}: {POSES} poses x {POSE_REPEATS} (O1 {o1:.3g}), rank {result.rank} of "
-            f"{len(result.x)}, condition {result.condition_number:.3g}, identify + 5-fold CV "
+            f"{len(result.x)}, condition {result.condition_number:.3g}, "
+            f"{'search + nested CV' if auto else 'identify + 5-fold CV'} "
             f"{identify_s:.2f} s; residual RMS {', '.join(f'{v:.3f}' for v in result.rms_mm)} "
-            f"mm; cross-validation RMS "
-            f"{', '.join(f'{v:.3f}' for v in result.cross_validation.rms_mm)}, max "
-            f"{', '.join(f'{v:.3f}' for v in result.cross_validation.max_mm)} mm"
+            f"mm; {'nested ' if auto else ''}cross-validation RMS "
+            f"{', '.join(f'{v:.3f}' for v in cv.rms_mm)}, max "
+            f"{', '.join(f'{v:.3f}' for v in cv.max_mm)} mm"
         )
     print()
     header = "| targets, method | measured points | max X | max Y | max Z | std X | std Y | std Z |"

@@ -19,11 +19,13 @@ from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification, Terms, identify, pose_set
 from accugrid.kinematics.inputfile import read_input_bytes
 from accugrid.kinematics.robot import Robot
+from accugrid.kinematics.structure import Selection, identify_structure
 from accugrid.kinematics.validity import validity_section
 
-__all__ = ["MAX_ROWS", "Calibration", "IdentifyOptions", "calibrate"]
+__all__ = ["MAX_ROWS", "STRUCTURES", "Calibration", "IdentifyOptions", "calibrate"]
 
 MAX_ROWS = 100_000  # measurement rows identify takes (a tracker session has hundreds)
+STRUCTURES = ("auto", "dh")  # --structure: chosen by cross-validation, or DH + TCP (+ pinned)
 
 
 @dataclass(frozen=True)
@@ -33,8 +35,10 @@ class IdentifyOptions:
     status: int | None = None  # KUKA Status of rows without logged joints or column s
     base_frame: bool = False  # the tracker-to-robot frame
     compliance: bool = False  # A2/A3 compliance under gravity
-    harmonics: Terms = ()  # (axis 1..6, order) reducer harmonics
-    folds: int = 5  # k-fold cross-validation (0: none)
+    harmonics: Terms = ()  # (axis 1..6, order) reducer harmonics, pinned
+    folds: int = 5  # k-fold cross-validation (0: none; auto: the search's and nested folds)
+    structure: str = "auto"  # STRUCTURES
+    max_order: int | None = None  # highest harmonic order searched (None: from the poses)
 
 
 @dataclass(frozen=True)
@@ -44,6 +48,7 @@ class Calibration:
     result: Identification
     files: dict[str, str]
     report: str
+    selection: Selection | None = None
 
 
 def _data_lines(path: str | Path) -> int:
@@ -71,6 +76,16 @@ def calibrate(
             "repeats",
             measurements,
         )
+    if options.structure not in STRUCTURES:
+        raise InputError(
+            f"--structure {options.structure!r}: one of {', '.join(STRUCTURES)} (auto: the "
+            "joint-error terms chosen by cross-validation; dh: DH errors and TCP only)"
+        )
+    auto = options.structure == "auto"
+    if auto and options.folds == 0:
+        raise InputError("--folds 0: choosing the structure needs folds; add --structure dh")
+    if not auto and options.max_order is not None:
+        raise InputError("--max-order chooses the harmonics searched by --structure auto")
     meas = read_measurements(measurements)
     status = meas.status if meas.status is not None else options.status
     data = pose_set(
@@ -85,29 +100,48 @@ def calibrate(
         labels=[meas.where(r) for r in range(len(meas.commanded))],
         path=meas.path,
     )
-    result = identify(
-        robot,
-        data,
-        base_frame=options.base_frame,
-        compliance=options.compliance,
-        folds=options.folds,
-        harmonics=options.harmonics,
-    )
+    selection = None
+    if auto:
+        result, selection = identify_structure(
+            robot,
+            data,
+            base_frame=options.base_frame,
+            compliance=options.compliance,
+            harmonics=options.harmonics,
+            max_order=options.max_order,
+            folds=options.folds,
+        )
+    else:
+        result = identify(
+            robot,
+            data,
+            base_frame=options.base_frame,
+            compliance=options.compliance,
+            folds=options.folds,
+            harmonics=options.harmonics,
+        )
     source = printable(Path(measurements).name)  # a non-UTF-8 byte: escaped text
-    summary = identification_summary(result, robot, source, meas.sha256)
-    validated = result.max_mm if result.cross_validation is None else result.cross_validation.max_mm
+    summary = identification_summary(result, robot, source, meas.sha256, selection)
+    if selection is not None and selection.nested is not None:  # the honest estimate
+        validated = selection.nested.max_mm
+    elif result.cross_validation is not None:
+        validated = result.cross_validation.max_mm
+    else:
+        validated = result.max_mm
     summary["validity"] = validity_section(data.commanded, data.rotations, data.q, validated)
     header = f"accugrid {__version__} identify: {robot.name} calibrated from {source}"
     files = {output: calibrated_yaml(result.robot, summary, header)}
     report = _report(output, robot, result)
+    if selection is not None:
+        report += "\n" + _structure_report(selection)
     if urdf:
         from accugrid.kinematics.urdf_export import urdf_text
 
         files[urdf] = urdf_text(result.robot)
-        joint_terms = options.compliance or options.harmonics
+        joint_terms = result.robot.joint_errors is not None
         extra = " (geometric part only: URDF has no joint errors)" if joint_terms else ""
         report += f"\nwrote {urdf}{extra}"
-    return Calibration(result, files, report)
+    return Calibration(result, files, report, selection)
 
 
 def _per_axis(label: str, rms: np.ndarray, peak: np.ndarray) -> str:
@@ -157,4 +191,44 @@ def _report(path: str, robot: Robot, result: Identification) -> str:
             "  determined only in the combinations above (minimum-norm values in the file): "
             + ", ".join(tied)
         )
+    return "\n".join(lines)
+
+
+def _structure_report(selection: Selection) -> str:
+    """The lines on the chosen structure: terms, the cross-validation curve, what was left out,
+    the nested estimate of the accuracy."""
+    chosen = ", ".join(selection.chosen) or "none (DH errors and TCP only)"
+    lines = [
+        f"  structure chosen by {selection.folds}-fold cross-validation over the distinct poses "
+        f"from {selection.candidates} candidate groups (harmonic orders 1..{selection.max_order}: "
+        f"{selection.max_order_rule}; gravity of A2, A3 without masses): {chosen}"
+    ]
+    if selection.pinned:
+        lines.append("  pinned (always kept): " + ", ".join(selection.pinned))
+    lines.append("  cross-validation curve (held-out measured - model, mm; * = chosen model):")
+    for i, step in enumerate(selection.curve):
+        label = "DH + TCP" + (" + pinned" if selection.pinned else "") if i == 0 else step.added
+        mark = "*" if i == selection.kept else " "
+        rms = " ".join(f"{v:.4f}" for v in step.rms_mm)
+        peak = " ".join(f"{v:.4f}" for v in step.max_mm)
+        lines.append(
+            f"   {mark}{'' if i == 0 else '+ '}{label} ({step.parameters} parameters): "
+            f"RMS X Y Z {rms}  max {peak}"
+        )
+    if selection.left_out:
+        shown = "; ".join(f"{name} ({why})" for name, why in selection.left_out[:6])
+        more = len(selection.left_out) - 6
+        lines.append(f"  left out: {shown}" + (f"; and {more} more" if more > 0 else ""))
+    nested = selection.nested
+    if nested is not None:
+        rms = " ".join(f"{v:.4f}" for v in nested.rms_mm)
+        peak = " ".join(f"{v:.4f}" for v in nested.max_mm)
+        line = (
+            f"  expected accuracy (nested {nested.folds}-fold cross-validation, the search "
+            f"repeated inside each fold), held-out measured - model: RMS X Y Z {rms}  max {peak}"
+        )
+        if nested.model_rms_mm is not None:
+            model = " ".join(f"{v:.4f}" for v in nested.model_rms_mm)
+            line += f"; the model alone (row noise {nested.noise_mm:.4f} mm removed): RMS {model}"
+        lines.append(line)
     return "\n".join(lines)

@@ -46,7 +46,7 @@ class PlanRequest:
     ``repeats``; experiment: ``centres`` (name -> (3,) mm), ``steps`` (mm), ``repeats``;
     identify: ``region``, ``count`` poses within ``tilt_deg`` of ``abc`` D-optimal among
     ``candidates`` random ones (``seed``), ``repeats`` rounds, D-optimal for the model
-    ``identify`` will fit (``compliance``, ``harmonics`` as (axis, order) pairs).
+    ``identify`` will fit (``compliance``, ``harmonics`` as (axis, order) pairs, ``gravity``).
     Program: ``name`` (default measure_KIND), TOOL_DATA ``tool_number``, BASE_DATA
     ``base_number`` (0: the robot frame), first-PTP ``ptp_percent``, LIN ``vel_m_s``, and after
     each position ``wait_input`` ($IN number) or ``wait_sec`` s; ``templates``: a folder with
@@ -69,6 +69,7 @@ class PlanRequest:
     seed: int = 0
     compliance: bool = False
     harmonics: tuple[tuple[int, int], ...] = ()
+    gravity: tuple = ()  # mass-free gravity groups (kinematics.candidates.GravityTerm)
     name: str | None = None
     tool_number: int = 1
     base_number: int = 0
@@ -188,16 +189,41 @@ def _identification_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
         seed=r.seed,
         compliance=r.compliance,
         harmonics=r.harmonics,
+        gravity=r.gravity,
     )
     model = "DH errors, TCP" + (", compliance" if r.compliance else "")
     model += f", {len(r.harmonics)} harmonics" if r.harmonics else ""
+    model += "".join(f", {g.name}" for g in r.gravity)
     info = [
         f"identification plan ({model}): {r.count} poses x {r.repeats} repeats chosen D-optimally "
         f"from {usable} of {r.candidates} candidates (Status {status}, tilt up to "
         f"{r.tilt_deg:g} deg, |A5| >= 10 deg); observability O1 {o1:.4f}",
         f"path {plan.path_length():.1f} mm",
     ]
+    info.append(_candidates_line(robot, plan, status))
     return plan, info
+
+
+def _candidates_line(robot, plan: Plan, status: int) -> str:
+    """What the planned poses can tell ``identify``'s search: the harmonic orders resolved per
+    axis and the candidate groups they cannot separate from the DH errors and TCP."""
+    from accugrid.kinematics.structure import observability
+
+    poses = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
+    first = np.unique(np.column_stack([plan.points, plan.abc_rows()]), axis=0, return_index=True)[1]
+    q = robot.ik(poses[np.sort(first)], status=status).q
+    caps, hidden = observability(robot, q)
+    resolved = " ".join(f"A{a + 1}:{caps[a]}" for a in range(6))
+    orders: dict[str, list[str]] = {}
+    for name, _ in hidden:  # 'A6 k3' -> {'A6': ['3']}, a gravity group as it is
+        axis, _, order = name.partition(" k")
+        orders.setdefault(axis if order else name, []).append(order)
+    text = "; ".join(f"{key} orders {','.join(ks)}" if ks[0] else key for key, ks in orders.items())
+    text = text or "none"
+    return (
+        f"candidates for identify's structure search: harmonic orders up to {resolved}; "
+        f"not separable from the DH errors and TCP by these poses: {text}"
+    )
 
 
 def _program(

@@ -309,13 +309,15 @@ def identification_plan(
     min_a5_deg: float = MIN_A5_DEG,
     compliance: bool = False,
     harmonics: tuple[tuple[int, int], ...] = (),
+    gravity: tuple = (),
 ) -> tuple[Plan, float, int]:
     """``count`` poses for ``accugrid identify``: ``candidates`` random positions in the box
     lo..hi (mm) at random orientations within ``tilt_deg`` (rotation angle) of ``abc`` (deg),
     kept where the nominal IK in KUKA ``status`` is within the joint limits and |A5| >=
     ``min_a5_deg`` (away from the wrist singularity), then the D-optimal ``count`` of them,
     visited in a nearest-neighbour order, ``repeats`` rounds. Column ``s`` holds the Status.
-    ``compliance``, ``harmonics``: the model to be identified (``identification.identify``).
+    ``compliance``, ``harmonics``, ``gravity`` (mass-free gravity groups): the model to be
+    identified (``identification.identify``).
     Returns (plan, O1 of the chosen set, number of usable candidates)."""
     from scipy.spatial.transform import Rotation
 
@@ -347,7 +349,7 @@ def identification_plan(
             "region, change the tilt or lower the count"
         )
     chosen, o1 = select_poses(
-        robot, sol.q[usable], count, compliance=compliance, harmonics=harmonics
+        robot, sol.q[usable], count, compliance=compliance, harmonics=harmonics, gravity=gravity
     )
     rows = usable[chosen][_nearest_neighbour_order(points[usable[chosen]])]
     xyzabc = xyzabc_from_pose(poses[rows])

@@ -53,20 +53,19 @@ accugrid rewrite examples/cam_drill.ngc --cell examples/cell.yaml \
     --allow-partial
 diff examples/cam_drill.dat out/rewrite/cam_drill.dat || true
 
-# Model-based calibration on kr210-realistic (seed Table 1 errors + compliance under
-# gravity + reducer harmonics): 60 D-optimal poses tilted up to 25 deg (CSV skeleton + KRL
-# measurement program) -> a simulated tracker session at those poses, 3 repeats, with the joints
-# the controller logs -> the calibrated model (DH errors, TCP, A2/A3 compliance, the reducer
-# harmonics of the orders kr210-realistic's reducers have) -> the wing panel holes corrected by
-# the model plus a 27-vertex residual grid measured on the same robot.
-HARMONICS="A1:1,40,150 A2:1,7,160 A3:1,7,160 A4:2 A5:2 A6:2"  # kr210-realistic's reducer orders
+# Model-based calibration on kr210-realistic (seed Table 1 errors + compliance under gravity +
+# reducer harmonics, none of which the user states): 60 D-optimal poses tilted up to 25 deg (CSV
+# skeleton + KRL measurement program) -> a simulated tracker session at those poses, 3 repeats,
+# with the joints the controller logs -> the calibrated model (DH errors, TCP and the joint-error
+# terms plain `identify` chooses from the data by cross-validation) -> the wing panel holes
+# corrected by the model plus a 27-vertex residual grid measured on the same robot.
 accugrid plan identify --robot kr210-realistic --tool 0 0 250 0 0 0 --count 60 --tilt 25 \
-    --compliance --harmonics $HARMONICS --name IDENT -o out/model --force
+    --name IDENT -o out/model --force
 accugrid simulate --robot kr210-realistic --poses out/model/ident.csv --tool 0 0 250 0 0 0 \
     --repeats 3 --noise-tracker 0.02 --noise-repeat 0.03 --seed 2 \
     -o out/model/ident_measured.csv --force
 accugrid identify out/model/ident_measured.csv --robot kr210-realistic --tool 0 0 250 0 0 0 \
-    --compliance --harmonics $HARMONICS -o out/model/calibrated.yaml --force
+    -o out/model/calibrated.yaml --force
 accugrid simulate --robot kr210-realistic --region 1200 2200 -500 500 1100 2100 --step 500 \
     --abc 0 90 0 --tool 0 0 250 0 0 0 --repeats 3 --noise-tracker 0.02 --noise-repeat 0.03 \
     --seed 3 -o out/model/residual_27.csv --force

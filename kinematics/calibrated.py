@@ -18,8 +18,14 @@ from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification
 from accugrid.kinematics.joint_errors import JointErrors
 from accugrid.kinematics.robot import Robot
+from accugrid.kinematics.structure import Selection
 
-__all__ = ["calibrated_yaml", "check_same_robot", "identification_summary"]
+__all__ = [
+    "calibrated_yaml",
+    "check_same_robot",
+    "chosen_structure",
+    "identification_summary",
+]
 
 _SAME_TOL = 1e-9  # mm / deg: nominal DH values closer than this are the same robot
 
@@ -37,8 +43,11 @@ def identification_summary(
     nominal: Robot,
     source: str | None = None,
     sha256: str | None = None,
+    selection: Selection | None = None,
 ) -> dict:
-    """The ``identification:`` section: plain data (mm, rad, deg as named) for the YAML."""
+    """The ``identification:`` section: plain data (mm, rad, deg as named) for the YAML;
+    ``selection``: the structure chosen by cross-validation (None: DH + TCP and the pinned
+    terms, ``--structure dh``)."""
     parameters = [
         {
             "name": name,
@@ -76,7 +85,49 @@ def identification_summary(
             "predicted_rms_mm": _axes(cv.rms_mm),
             "predicted_max_mm": _axes(cv.max_mm),
         }
+    summary["structure"] = structure_summary(selection)
     return summary
+
+
+def structure_summary(selection: Selection | None) -> dict:
+    """``identification.structure``: the mode ('dh' or 'auto'), and for 'auto' the search (the
+    highest order and why, folds, number of candidate groups), the pinned and chosen groups, what
+    was left out and why, the cross-validation curve (held-out RMS and max per axis, mm, against
+    the groups added; the first ``kept_steps`` steps are the chosen model) and the nested
+    estimate (mm). Keys: ``robot.STRUCTURE_SCHEMA``."""
+    if selection is None:
+        return {"mode": "dh"}
+    nested = selection.nested
+    out = {
+        "mode": "auto",
+        "max_order": selection.max_order,
+        "max_order_rule": selection.max_order_rule,
+        "folds": selection.folds,
+        "candidates": selection.candidates,
+        "pinned": list(selection.pinned),
+        "chosen": list(selection.chosen),
+        "left_out": [{"term": name, "reason": why} for name, why in selection.left_out],
+        "cv_curve": [
+            {
+                "added": step.added or "start",
+                "parameters": step.parameters,
+                "held_out_rms_mm": _axes(step.rms_mm),
+                "held_out_max_mm": _axes(step.max_mm),
+            }
+            for step in selection.curve
+        ],
+        "kept_steps": selection.kept,
+    }
+    if nested is not None:
+        out["nested"] = {
+            "folds": nested.folds,
+            "held_out_rms_mm": _axes(nested.rms_mm),
+            "held_out_max_mm": _axes(nested.max_mm),
+            "noise_sigma_mm": None if nested.noise_mm is None else float(nested.noise_mm),
+            "model_rms_mm": None if nested.model_rms_mm is None else _axes(nested.model_rms_mm),
+            "chosen_by_fold": [list(c) for c in nested.chosen],
+        }
+    return out
 
 
 def calibrated_yaml(robot: Robot, summary: dict | None = None, header: str = "") -> str:
@@ -114,13 +165,23 @@ def calibrated_yaml(robot: Robot, summary: dict | None = None, header: str = "")
 
 
 def _joint_errors_dict(moves: JointErrors) -> dict:
-    """The ``joint_errors:`` section ``load_robot`` reads (compliance, masses, harmonics,
-    thermal, gravity)."""
+    """The ``joint_errors:`` section ``load_robot`` reads (compliance, masses, gravity moments,
+    harmonics, thermal, gravity)."""
     out: dict = {"compliance_rad_per_nm": [float(c) for c in moves.compliance]}
     out["masses"] = [
         {"link": m.link, "kg": float(m.kg), "at_mm": [float(v) for v in m.at_mm]}
         for m in moves.masses
     ]
+    if moves.moments is not None:
+        out["gravity_moments"] = [
+            {
+                "axis": int(axis) + 1,
+                "link": int(link) + 1,
+                "c_kg": float(moves.moments[axis, link, 0]),
+                "c_kg_mm": [float(v) for v in moves.moments[axis, link, 1:]],
+            }
+            for axis, link in zip(*np.nonzero(np.abs(moves.moments).sum(axis=2)), strict=True)
+        ]
     if moves.harmonics:
         out["harmonics"] = [
             {
@@ -182,3 +243,21 @@ def check_same_robot(model: Robot, robot: Robot, where: str | None = None) -> No
             f"{model.joint_limits_deg[i, j]:g} vs {robot.joint_limits_deg[i, j]:g}",
             where,
         )
+
+
+def chosen_structure(path, robot: Robot):
+    """The joint-error structure a calibrated file (``path``) was fitted with, for planning more
+    poses on ``robot`` (its nominal model): (compliance under masses, harmonics (axis, order),
+    gravity groups of ``kinematics.candidates``). InputError when the file is of another robot."""
+    from accugrid.kinematics.candidates import gravity_terms
+    from accugrid.kinematics.robot import load_robot
+    from accugrid.kinematics.yamlfile import load_yaml
+
+    model = load_robot(path)
+    check_same_robot(model, robot, str(path))
+    moves = model.joint_errors
+    harmonics = tuple((h.axis, h.order) for h in moves.harmonics) if moves else ()
+    compliance = bool(moves is not None and moves.masses and np.any(moves.compliance))
+    chosen = load_yaml(path).get("identification", "structure", "chosen", default=[]) or []
+    gravity = tuple(t for t in gravity_terms(robot) if t.name in chosen)
+    return compliance, harmonics, gravity

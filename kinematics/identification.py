@@ -6,7 +6,9 @@ flange frame (Δx, Δy, Δz mm, added to the tool's translation); with ``base_fr
 correction of the tracker frame: translation (mm) and rotation vector (rad) of
 ``T0⁻¹ · tracker_T_robot``, where T0 is the rigid fit of the commanded to the measured positions;
 with ``compliance`` the compliance of A2 and A3 (rad/N·m): the arm reaches FK(q + δ) with
-δ_j = c_j · τ_j(q), τ the gravity torque of the robot's lumped masses; with ``harmonics`` last, per
+δ_j = c_j · τ_j(q), τ the gravity torque of the robot's lumped masses; with ``gravity`` the
+parameters of each mass-free gravity group (``kinematics.candidates.GravityTerm``, rad per unit
+torque function); with ``harmonics`` last, per
 (axis, order) term, the sine and cosine coefficients s, c (rad) of a reducer transmission error
 δ_axis += s · sin(order · A_axis) + c · cos(order · A_axis) (``kinematics.joint_errors``, the same
 model the calibrated robot's ``true_robot`` applies; the orders come from the reducers' data
@@ -34,11 +36,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from accugrid.kinematics.candidates import GravityTerm, reference_joints
 from accugrid.kinematics.dh import PARAMETERS, flange_poses
 from accugrid.kinematics.error_model import error_jacobian
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
-from accugrid.kinematics.joint_errors import MAX_ORDER, Harmonic, JointErrors
+from accugrid.kinematics.joint_errors import MAX_ORDER, Harmonic, JointErrors, gravity_basis
 from accugrid.kinematics.robot import Robot
 
 __all__ = [
@@ -53,6 +56,9 @@ __all__ = [
     "identify",
     "parameter_names",
     "parameter_units",
+    "linearised",
+    "planned_columns",
+    "pose_folds",
     "pose_set",
     "select_poses",
 ]
@@ -76,10 +82,14 @@ Terms = tuple[tuple[int, int], ...]  # reducer harmonics to identify: (axis 1..6
 
 
 def parameter_names(
-    base_frame: bool = False, compliance: bool = False, harmonics: Terms = ()
+    base_frame: bool = False,
+    compliance: bool = False,
+    harmonics: Terms = (),
+    gravity: tuple[GravityTerm, ...] = (),
 ) -> list[str]:
     """Names of the parameters in x order: ``da1 dd1 dalpha1 dtheta1 ... tool_x tool_y tool_z``
     [``base_x base_y base_z base_rx base_ry base_rz``] [``compliance_a2 compliance_a3``]
+    [``gravity_a2_forearm_1`` ... per gravity group parameter]
     [``harmonic_a2_k7_sin harmonic_a2_k7_cos`` ... per (axis, order) of ``harmonics``]."""
     names = [f"d{p}{i}" for i in range(1, 7) for p in PARAMETERS]
     names += ["tool_x", "tool_y", "tool_z"]
@@ -87,18 +97,25 @@ def parameter_names(
         names += ["base_x", "base_y", "base_z", "base_rx", "base_ry", "base_rz"]
     if compliance:
         names += [f"compliance_a{axis + 1}" for axis in COMPLIANT_AXES]
+    for term in gravity:
+        stem = term.name.replace(" ", "_").lower()
+        names += [f"{stem}_{b + 1}" for b in range(term.size)]
     for axis, order in harmonics:
         names += [f"harmonic_a{axis}_k{order}_{part}" for part in ("sin", "cos")]
     return names
 
 
 def parameter_units(
-    base_frame: bool = False, compliance: bool = False, harmonics: Terms = ()
+    base_frame: bool = False,
+    compliance: bool = False,
+    harmonics: Terms = (),
+    gravity: tuple[GravityTerm, ...] = (),
 ) -> list[str]:
     """Unit of each parameter in x order: 'mm', 'rad' or 'rad/Nm'."""
     units = [_LENGTH[p] for _ in range(6) for p in PARAMETERS] + ["mm"] * 3
     units += ["mm"] * 3 + ["rad"] * 3 if base_frame else []
     units += ["rad/Nm"] * len(COMPLIANT_AXES) if compliance else []
+    units += ["rad"] * sum(term.size for term in gravity)
     return units + ["rad"] * (2 * len(harmonics))
 
 
@@ -226,10 +243,11 @@ def identification_jacobian(
     base_frame: bool = False,
     compliance: bool = False,
     harmonics: Terms = (),
+    gravity: tuple[GravityTerm, ...] = (),
 ) -> np.ndarray:
     """∂(model TCP position)/∂x: (N, 3, n) mm per parameter unit at joints q (N, 6) rad and
     parameters x (n,) (default 0, the nominal model), for pose planning and ``identify``."""
-    model = _Model(robot, base_frame, np.eye(4), compliance, harmonics)
+    model = _Model(robot, base_frame, np.eye(4), compliance, harmonics, gravity)
     x = np.zeros(model.n) if x is None else np.asarray(x, dtype=float)
     return model.jacobian(x, np.atleast_2d(np.asarray(q, dtype=float)))
 
@@ -255,27 +273,42 @@ class _Model:
         base_T0: np.ndarray,
         compliance: bool = False,
         harmonics: Terms = (),
+        gravity: tuple[GravityTerm, ...] = (),
     ) -> None:
         self.robot, self.base_frame, self.base_T0 = robot, base_frame, base_T0
         self.masses = _masses(robot) if compliance else ()
         self.compliance, self.harmonics = compliance, tuple(harmonics)
+        self.gravity = tuple(gravity)
         self.i_comp = 27 + (6 if base_frame else 0)
-        self.i_harm = self.i_comp + (len(COMPLIANT_AXES) if compliance else 0)
+        self.i_grav = self.i_comp + (len(COMPLIANT_AXES) if compliance else 0)
+        self.i_harm = self.i_grav + sum(term.size for term in self.gravity)
         self.n = self.i_harm + 2 * len(self.harmonics)
 
+    def _gravity_slices(self):
+        start = self.i_grav
+        for term in self.gravity:
+            yield term, slice(start, start + term.size)
+            start += term.size
+
     def joint_errors(self, x: np.ndarray) -> JointErrors | None:
-        """The compliance and reducer harmonics of x as ``JointErrors`` (None without either)."""
-        if not self.compliance and not self.harmonics:
+        """The compliance, gravity moments and reducer harmonics of x as ``JointErrors`` (None
+        without any)."""
+        if not self.compliance and not self.harmonics and not self.gravity:
             return None
         c = np.zeros(6)
         if self.compliance:
-            c[list(COMPLIANT_AXES)] = x[self.i_comp : self.i_harm]
+            c[list(COMPLIANT_AXES)] = x[self.i_comp : self.i_grav]
+        moments = None
+        if self.gravity:
+            moments = sum(term.moments(x[part]) for term, part in self._gravity_slices())
         terms = []
         for k, (axis, order) in enumerate(self.harmonics):
             s, co = x[self.i_harm + 2 * k : self.i_harm + 2 * k + 2]
             # s·sin(kA) + c·cos(kA) = A·sin(kA + φ) with A = |(s, c)|, φ = atan2(c, s)
             terms.append(Harmonic(axis, order, float(np.hypot(s, co)), float(np.arctan2(co, s))))
-        return JointErrors(compliance=c, masses=tuple(self.masses), harmonics=tuple(terms))
+        return JointErrors(
+            compliance=c, masses=tuple(self.masses), harmonics=tuple(terms), moments=moments
+        )
 
     def arm(self, x: np.ndarray) -> Robot:
         """The nominal robot with the DH errors, TCP offset, compliance and harmonics of x
@@ -316,6 +349,11 @@ class _Model:
             for k, axis in enumerate(COMPLIANT_AXES):  # ∂p/∂A = sign · ∂p/∂θ (Δθ column)
                 column = jac[:, :, 4 * axis + 3] * arm.dh.sign[axis]
                 jac[:, :, self.i_comp + k] = column * torque[:, axis, None]
+        if self.gravity:
+            unit = gravity_basis(arm.dh, q, arm.fk_joint_errors.gravity_mps2)
+            for term, part in self._gravity_slices():
+                column = jac[:, :, 4 * (term.axis - 1) + 3] * arm.dh.sign[term.axis - 1]
+                jac[:, :, part] = column[:, :, None] * term.functions(unit)[:, None, :]
         for k, (axis, order) in enumerate(self.harmonics):
             column = jac[:, :, 4 * (axis - 1) + 3] * arm.dh.sign[axis - 1]
             angle = order * q[:, axis - 1, None]
@@ -403,16 +441,6 @@ def _subspace(jac: np.ndarray, rtol: float) -> _Subspace:
     return _Subspace(scale, vt[:rank].T, vt[rank:].T, sing)
 
 
-def _reference_joints(robot: Robot) -> np.ndarray:
-    """A fixed spread-out set of joint vectors (rad) inside the limits, A5 away from 0."""
-    rng = np.random.default_rng(0)
-    lo, hi = np.radians(robot.joint_limits_deg).T
-    lo, hi = np.maximum(lo, -np.pi), np.minimum(hi, np.pi)
-    q = lo + rng.random((_REFERENCE_POSES, 6)) * (hi - lo)
-    q[:, 4] = np.where(np.abs(q[:, 4]) < 0.3, 0.3, q[:, 4])
-    return q
-
-
 def select_poses(
     robot: Robot,
     q: np.ndarray,
@@ -420,6 +448,7 @@ def select_poses(
     base_frame: bool = False,
     compliance: bool = False,
     harmonics: Terms = (),
+    gravity: tuple[GravityTerm, ...] = (),
 ) -> tuple[np.ndarray, float]:
     """Greedy D-optimal choice of ``count`` of the candidate joints q (M, 6) rad: each step adds
     the candidate that most increases det(JᵀJ) of the column-scaled identification Jacobian in
@@ -428,8 +457,10 @@ def select_poses(
     q = np.atleast_2d(np.asarray(q, dtype=float))
     if not 1 <= count <= len(q):
         raise InputError(f"cannot choose {count} poses from {len(q)} candidates")
-    model = _Model(robot, base_frame, np.eye(4), compliance, harmonics)
-    reference = _subspace(model.jacobian(np.zeros(model.n), _reference_joints(robot)), RTOL)
+    model = _Model(robot, base_frame, np.eye(4), compliance, harmonics, gravity)
+    reference = _subspace(
+        model.jacobian(np.zeros(model.n), reference_joints(robot, _REFERENCE_POSES)), RTOL
+    )
     rank = reference.basis.shape[1]
     if count * 3 < rank:
         raise InputError(
@@ -464,25 +495,38 @@ def identify(
     folds: int = 0,
     rtol: float = RTOL,
     harmonics: Terms = (),
+    gravity: tuple[GravityTerm, ...] = (),
+    selected: bool = False,
 ) -> Identification:
     """Identify the DH errors and TCP offset (and the tracker frame) from ``data``.
 
     ``robot``: the nominal model with the nominal tool (its own ``errors`` and joint errors
     are not used). ``compliance``: also the compliance of A2, A3 (rad/N·m) under the gravity
     torques of the robot's ``joint_errors.masses``. ``harmonics``: also the sine and cosine
-    coefficients (rad) of these (axis 1..6, order) reducer harmonics. ``folds`` >= 2 also runs
-    k-fold cross-validation over the distinct poses. InputError for too few poses, poses in one
-    plane or one orientation, or data that leave more directions unidentifiable than the robot's
-    structural ones.
+    coefficients (rad) of these (axis 1..6, order) reducer harmonics. ``gravity``: also these
+    mass-free gravity groups (``kinematics.candidates``). ``selected``: the joint terms were
+    chosen by cross-validation (``kinematics.structure``), which bounds them itself: the poses
+    need only outnumber the DH + TCP parameters and give more equations than parameters.
+    ``folds`` >= 2 also runs k-fold cross-validation over the distinct poses. InputError for
+    too few poses, poses in one plane or one orientation, or data that leave more directions
+    unidentifiable than the robot's structural ones.
     """
     base_T0 = _rigid_fit(data.commanded, data.measured) if base_frame else np.eye(4)
     target = _in_robot_frame(base_T0, data.measured)
-    model = _Model(robot, base_frame, base_T0, compliance, harmonics)
-    names = parameter_names(base_frame, compliance, harmonics)
+    model = _Model(robot, base_frame, base_T0, compliance, harmonics, gravity)
+    names = parameter_names(base_frame, compliance, harmonics, gravity)
     x0 = np.zeros(model.n)
     sub = _subspace(model.jacobian(x0, data.q), rtol)
-    reference = _subspace(model.jacobian(x0, _reference_joints(robot)), rtol)
-    _check_rank(sub, reference, data, names)
+    reference = _subspace(model.jacobian(x0, reference_joints(robot, _REFERENCE_POSES)), rtol)
+    geometric = (
+        _subspace(
+            model.jacobian(x0, reference_joints(robot, _REFERENCE_POSES))[:, :, : model.i_comp],
+            rtol,
+        )
+        if selected
+        else None
+    )
+    _check_rank(sub, reference, data, names, geometric)
     x, residuals, sigma = _fit(model, sub, data.q, target)
     rows = len(data)
     rank = sub.basis.shape[1]
@@ -504,7 +548,7 @@ def identify(
         correction[:3, :3] = Rotation.from_rotvec(x[30:33]).as_matrix()
         correction[:3, 3] = x[27:30]
         tracker = base_T0 @ correction
-    cv = _cross_validate(model, sub, data, target, folds) if folds else None
+    cv = _cross_validate(model, sub, data, target, folds, selected) if folds else None
     arm = model.arm(x)
     calibrated = Robot(
         f"{robot.name}-calibrated",
@@ -519,7 +563,7 @@ def identify(
     return Identification(
         robot=calibrated,
         names=names,
-        units=parameter_units(base_frame, compliance, harmonics),
+        units=parameter_units(base_frame, compliance, harmonics, gravity),
         x=x,
         std=std,
         identifiable=identifiable,
@@ -562,20 +606,21 @@ def _fit(model: _Model, sub: _Subspace, q: np.ndarray, target: np.ndarray):
     return directions @ z, residuals, sigma
 
 
-def _cross_validate(model: _Model, sub: _Subspace, data: PoseSet, target, folds: int):
+def _cross_validate(
+    model: _Model, sub: _Subspace, data: PoseSet, target, folds: int, selected: bool = False
+):
     """k-fold over the distinct poses (repeats stay together), fitted in the identifiable
-    subspace of all data: the held-out residuals' RMS and max per axis (``CrossValidation``)."""
+    subspace of all data: the held-out residuals' RMS and max per axis (``CrossValidation``).
+    A fold must keep as many poses as parameters (``selected``: more equations than them)."""
     if folds < 2 or folds > data.poses:
         raise InputError(f"--folds must be between 2 and the {data.poses} poses, got {folds}")
-    order = np.random.default_rng(0).permutation(data.poses)
-    fold_of_pose = np.empty(data.poses, dtype=int)
-    fold_of_pose[order] = np.arange(data.poses) % folds
-    fold = fold_of_pose[data.group]
+    fold = pose_folds(data.poses, folds)[data.group]
     rank = sub.basis.shape[1]
     held = np.empty_like(target)
     for k in range(folds):
         train = fold != k
-        if len(np.unique(data.group[train])) < rank:
+        kept = len(np.unique(data.group[train]))
+        if (3 * kept <= rank) if selected else (kept < rank):
             raise InputError(
                 f"{folds}-fold cross-validation leaves fewer poses than the {rank} identifiable "
                 "parameters per fit; use fewer folds"
@@ -583,6 +628,59 @@ def _cross_validate(model: _Model, sub: _Subspace, data: PoseSet, target, folds:
         x, _, _ = _fit(model, sub, data.q[train], target[train])
         held[~train] = target[~train] - model.positions(x, data.q[~train])
     return CrossValidation(folds, np.sqrt(np.mean(held**2, axis=0)), np.abs(held).max(axis=0))
+
+
+def pose_folds(poses: int, folds: int, seed: int = 0) -> np.ndarray:
+    """The fold (poses,) int 0..folds-1 of each distinct pose: a fixed permutation from
+    ``numpy.random.default_rng(seed)`` dealt round-robin (sizes differ by at most one)."""
+    order = np.random.default_rng(seed).permutation(poses)
+    fold_of_pose = np.empty(poses, dtype=int)
+    fold_of_pose[order] = np.arange(poses) % folds
+    return fold_of_pose
+
+
+def linearised(
+    robot: Robot,
+    data: PoseSet,
+    result: Identification,
+    base_frame: bool = False,
+    compliance: bool = False,
+    harmonics: Terms = (),
+    candidates: Terms = (),
+    gravity: tuple[GravityTerm, ...] = (),
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The identification of ``result`` (fitted with ``base_frame``, ``compliance``, ``harmonics``)
+    linearised for a search over more terms: its residuals y (3N,) mm (row-major x, y, z), the
+    Jacobian of its identifiable directions X (3N, r) and the columns (3N, m) of the candidate
+    harmonics (two per (axis, order), sin then cos) then of the ``gravity`` groups (``size``
+    each), all at the fitted parameters, mm per rad."""
+    base_T0 = _rigid_fit(data.commanded, data.measured) if base_frame else np.eye(4)
+    every = tuple(harmonics) + tuple(candidates)
+    model = _Model(robot, base_frame, base_T0, compliance, every, gravity)
+    fitted = _Model(robot, base_frame, base_T0, compliance, harmonics)
+    x = np.zeros(model.n)
+    x[: fitted.i_grav] = result.x[: fitted.i_grav]
+    x[model.i_harm : model.i_harm + 2 * len(harmonics)] = result.x[fitted.i_harm :]
+    jac = model.jacobian(x, data.q).reshape(-1, model.n)
+    base = np.r_[0 : fitted.i_grav, model.i_harm : model.i_harm + 2 * len(harmonics)]
+    sub = _subspace(fitted.jacobian(np.zeros(fitted.n), data.q), RTOL)
+    directions = sub.basis / sub.scale[:, None]
+    extra = np.r_[model.i_harm + 2 * len(harmonics) : model.n, model.i_grav : model.i_harm]
+    return result.residuals.reshape(-1), jac[:, base] @ directions, jac[:, extra]
+
+
+def planned_columns(
+    robot: Robot, q: np.ndarray, candidates: Terms, gravity: tuple[GravityTerm, ...]
+) -> tuple[np.ndarray, np.ndarray]:
+    """For poses not yet measured, joints q (N, 6) rad: the identifiable DH + TCP columns X
+    (3N, r) of the nominal model and the candidate columns (3N, m) (harmonics, two each, then the
+    gravity groups), as ``linearised`` gives them for measured data."""
+    model = _Model(robot, False, np.eye(4), False, candidates, gravity)
+    jac = model.jacobian(np.zeros(model.n), np.atleast_2d(q)).reshape(-1, model.n)
+    sub = _subspace(jac[:, :27].reshape(len(q), 3, 27), RTOL)
+    base = jac[:, :27] @ (sub.basis / sub.scale[:, None])
+    extra = np.r_[model.i_harm : model.n, model.i_grav : model.i_harm]
+    return base, jac[:, extra]
 
 
 def _in_robot_frame(base_T0: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -625,11 +723,26 @@ def _check_geometry(data: PoseSet) -> None:
         )
 
 
-def _check_rank(sub: _Subspace, reference: _Subspace, data: PoseSet, names: list[str]) -> None:
-    """InputError for fewer poses than identifiable parameters, poses in one plane or one
-    orientation, and data that lose directions a spread-out pose set identifies."""
+def _check_rank(
+    sub: _Subspace,
+    reference: _Subspace,
+    data: PoseSet,
+    names: list[str],
+    geometric: _Subspace | None = None,
+) -> None:
+    """InputError for fewer poses than identifiable parameters (with ``geometric``, the
+    reference subspace of the DH + TCP part: fewer poses than its parameters, or fewer equations
+    than all), poses in one plane or one orientation, and data that lose directions a
+    spread-out pose set identifies."""
     rank, wanted = sub.basis.shape[1], reference.basis.shape[1]
-    if data.poses < wanted:
+    if geometric is not None and 3 * data.poses <= wanted:
+        raise InputError(
+            f"{data.poses} distinct poses ({3 * data.poses} equations) for {wanted} identifiable "
+            "parameters: measure more poses or fit fewer terms",
+            data.path,
+        )
+    if data.poses < (wanted if geometric is None else geometric.basis.shape[1]):
+        wanted = wanted if geometric is None else geometric.basis.shape[1]
         raise InputError(
             f"{data.poses} distinct poses for {wanted} identifiable parameters: measure at least "
             f"{wanted} poses (about twice that for a useful fit)",

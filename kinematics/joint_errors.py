@@ -8,6 +8,11 @@ The true robot reaches FK(q + δ(q)) when its controller commands the KUKA axis 
   the joint the way gravity pulls it). τ comes from lumped point masses, each fixed in one DH link
   frame (frame i is the pose A_1 ... A_i of seed Eq. 1; mm), with gravity along −Z of the robot
   base (floor mounting): τ_j = sign_j · z_{j−1} · Σ_{masses on links ≥ j} (p_m − o_{j−1}) × m g.
+- **gravity moments** (compliance without masses): δ_j += Σ_L Σ_u G_jLu · τ_j^(L,u)(q), where
+  τ_j^(L,u) is the gravity torque on axis j of a unit mass (u = 0, 1 kg at the origin of link frame
+  L) or a unit first moment (u = 1..3, 1 kg·mm along x, y, z of frame L), so G_jLu = c_j · m_L
+  (rad/(N·m)·kg) and c_j · m_L · r_L (rad/(N·m)·kg·mm): the compliance × first-moment products of
+  unknown lumped masses, linear in the data (``moments`` (6, 6, 4): axis, link 1..6, u).
 - **reducer transmission errors**: δ_j += Σ_k A_jk sin(k_jk · q_j + φ_jk), amplitudes in rad.
 
 Thermal drift is a change of the link lengths, not of the joint angles: ``JointErrors.thermal``
@@ -22,7 +27,15 @@ import numpy as np
 
 from accugrid.kinematics.dh import DHTable, chain
 
-__all__ = ["GRAVITY_MPS2", "MAX_ORDER", "Harmonic", "JointErrors", "PointMass", "Thermal"]
+__all__ = [
+    "GRAVITY_MPS2",
+    "MAX_ORDER",
+    "Harmonic",
+    "JointErrors",
+    "PointMass",
+    "Thermal",
+    "gravity_basis",
+]
 
 GRAVITY_MPS2 = 9.80665
 MAX_ORDER = 100_000  # highest harmonic order accepted (a motor-side stage is a few hundred)
@@ -72,6 +85,7 @@ class JointErrors:
     harmonics: tuple[Harmonic, ...] = ()
     thermal: Thermal | None = None
     gravity_mps2: float = GRAVITY_MPS2
+    moments: np.ndarray | None = None  # (6, 6, 4) gravity moments G (module docstring)
 
     @classmethod
     def from_compliance(
@@ -89,29 +103,26 @@ class JointErrors:
 
         This is also ∂δ/∂c: ∂δ_j/∂c_j = τ_j(q), ∂δ_j/∂c_i = 0 for i ≠ j."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
-        tau = np.zeros((len(q), 6))
         wanted = np.ones(6, bool) if axes is None else np.asarray(axes, bool)
         masses = [m for m in self.masses if m.kg != 0.0]
         if not masses or not wanted.any():
-            return tau
-        deepest = max(m.link for m in masses)
-        frames = [np.broadcast_to(np.eye(4), (len(q), 4, 4))] + chain(dh, q, links=deepest)
-        # first moments kg·mm of the masses on each link, base frame
-        first = np.zeros((deepest + 1, len(q), 3))
-        kg = np.zeros(deepest + 1)
+            return np.zeros((len(q), 6))
+        first = np.zeros((6, 4))  # per link: kg, then kg·mm first moment in the link frame
         for m in masses:
-            link = frames[m.link]
-            first[m.link] += m.kg * (link[:, :3, :3] @ np.asarray(m.at_mm, dtype=float))
-            first[m.link] += m.kg * link[:, :3, 3]
-            kg[m.link] += m.kg
-        for j in np.flatnonzero(wanted[:deepest]):  # joint j + 1 turns about z of frame j
-            # moment of the weights beyond joint j about frame j's origin: v × (0, 0, -g), with
-            # v = Σ kg (p - o_j) in kg·m
-            v = (first[j + 1 :].sum(axis=0) - kg[j + 1 :].sum() * frames[j][:, :3, 3]) * 1e-3
-            axis = frames[j][:, :3, 2]
-            moment_on_axis = self.gravity_mps2 * (v[:, 0] * axis[:, 1] - v[:, 1] * axis[:, 0])
-            tau[:, j] = dh.sign[j] * moment_on_axis
-        return tau
+            first[m.link - 1] += m.kg * np.array([1.0, *m.at_mm])
+        deepest = max(m.link for m in masses)
+        unit = gravity_basis(dh, q, self.gravity_mps2, deepest)  # (N, 6, deepest, 4)
+        return np.einsum("njlu,lu->nj", unit, first[:deepest]) * wanted
+
+    def moment_deltas(self, dh: DHTable, q: np.ndarray) -> np.ndarray:
+        """δ (N, 6) rad of the gravity moments alone (zero without ``moments``)."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        if self.moments is None or not np.any(self.moments):
+            return np.zeros((len(q), 6))
+        used = np.flatnonzero(np.abs(self.moments).sum(axis=(0, 2)))
+        deepest = int(used.max()) + 1
+        unit = gravity_basis(dh, q, self.gravity_mps2, deepest)
+        return np.einsum("njlu,jlu->nj", unit, self.moments[:, :deepest])
 
     def delta(self, dh: DHTable, q: np.ndarray) -> np.ndarray:
         """Joint-angle perturbation δ (N, 6) rad at commanded KUKA angles q (N, 6) rad."""
@@ -119,6 +130,30 @@ class JointErrors:
         out = np.zeros((len(q), 6))
         if np.any(self.compliance):
             out += self.compliance * self.gravity_torques(dh, q, self.compliance != 0)
+        if self.moments is not None:
+            out += self.moment_deltas(dh, q)
         for h in self.harmonics:
             out[:, h.axis - 1] += h.amplitude_rad * np.sin(h.order * q[:, h.axis - 1] + h.phase_rad)
         return out
+
+
+def gravity_basis(dh: DHTable, q: np.ndarray, gravity_mps2: float, links: int = 6) -> np.ndarray:
+    """Gravity torques (N, 6, links, 4) N·m on each KUKA axis at joints q (N, 6) rad of a unit
+    quantity fixed in link frame L = 1..links: u = 0 one kg at the frame's origin, u = 1..3 one
+    kg·mm of first moment along its x, y, z (gravity along −Z of the base; zero on axes at or
+    beyond L, which do not carry it). Torques are linear in the masses: a lumped mass m at r (mm)
+    in frame L gives τ = unit[..., L, :] @ (m, m·r)."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    frames = [np.broadcast_to(np.eye(4), (len(q), 4, 4))] + chain(dh, q, links=links)
+    out = np.zeros((len(q), 6, links, 4))
+    for j in range(min(links, 6)):  # joint j + 1 turns about z of frame j
+        axis = frames[j][:, :3, 2]
+        origin = frames[j][:, :3, 3]
+        for link in range(j + 1, links + 1):
+            # lever v (kg·m) of each unit quantity about frame j's origin, base frame
+            levers = [frames[link][:, :3, 3] - origin] + [frames[link][:, :3, k] for k in range(3)]
+            for u, v in enumerate(levers):
+                # moment of v × (0, 0, -g) about the axis
+                moment = gravity_mps2 * 1e-3 * (v[:, 0] * axis[:, 1] - v[:, 1] * axis[:, 0])
+                out[:, j, link - 1, u] = dh.sign[j] * moment
+    return out

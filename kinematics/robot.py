@@ -52,6 +52,7 @@ __all__ = [
     "IDENTIFICATION_SCHEMA",
     "JOINT_ERRORS_SCHEMA",
     "ROBOT_SCHEMA",
+    "STRUCTURE_SCHEMA",
     "Robot",
     "load_robot",
 ]
@@ -102,8 +103,9 @@ class Robot:
         if self.joint_errors is not None:
             if self.joint_errors.thermal is not None:
                 dh = self.joint_errors.thermal.apply(dh)
-            if np.any(self.joint_errors.compliance) or self.joint_errors.harmonics:
-                moves = self.joint_errors
+            je = self.joint_errors
+            if np.any(je.compliance) or je.harmonics or je.moments is not None:
+                moves = je
         return Robot(
             f"{self.name} (true)",
             dh,
@@ -248,6 +250,29 @@ _POSE: Schema = dict.fromkeys("xyzabc")
 # The ``identification:`` summary of a calibrated file (``calibrated.identification_summary``
 # writes it; ``_validated_max`` and ``codegen.correct_model`` read it). A key written there is
 # declared here.
+# ``identification.structure`` (written by ``calibrated.structure_summary`` only)
+STRUCTURE_SCHEMA: Schema = {
+    "mode": None,
+    "max_order": None,
+    "max_order_rule": None,
+    "folds": None,
+    "candidates": None,
+    "pinned": None,
+    "chosen": None,
+    "left_out": [dict.fromkeys(("term", "reason"))],
+    "cv_curve": [
+        {"added": None, "parameters": None, "held_out_rms_mm": _XYZ, "held_out_max_mm": _XYZ}
+    ],
+    "kept_steps": None,
+    "nested": {
+        "folds": None,
+        "held_out_rms_mm": _XYZ,
+        "held_out_max_mm": _XYZ,
+        "noise_sigma_mm": None,
+        "model_rms_mm": _XYZ,
+        "chosen_by_fold": None,
+    },
+}
 IDENTIFICATION_SCHEMA: Schema = {
     "robot": None,
     "measurements": {"file": None, "sha256": None},
@@ -266,6 +291,7 @@ IDENTIFICATION_SCHEMA: Schema = {
     "tracker_T_robot": _POSE,
     "cross_validation": {"folds": None, "predicted_rms_mm": _XYZ, "predicted_max_mm": _XYZ},
     "validity": dict.fromkeys(VALIDITY_KEYS),  # kinematics.validity reads and checks its values
+    "structure": STRUCTURE_SCHEMA,
 }
 # ``joint_errors:`` (``_joint_errors_from_doc``)
 JOINT_ERRORS_SCHEMA: Schema = {
@@ -274,6 +300,7 @@ JOINT_ERRORS_SCHEMA: Schema = {
     "harmonics": [dict.fromkeys(("axis", "order", "amplitude_rad", "phase_deg"))],
     "thermal": dict.fromkeys(("delta_t_k", "expansion_per_k")),
     "gravity_mps2": None,
+    "gravity_moments": [dict.fromkeys(("axis", "link", "c_kg", "c_kg_mm"))],
 }
 ERROR_KEYS = ("da_mm", "dd_mm", "dalpha_rad", "dtheta_rad")  # one ``errors:`` row
 # A DH robot file, calibrated or not: every key ``_robot_from_doc`` reads.
@@ -338,8 +365,14 @@ def _robot_from_doc(doc: YamlDoc) -> Robot:
 
 def _validated_max(doc: YamlDoc) -> np.ndarray | None:
     """(3,) mm from a calibrated file's ``identification:`` section (module ``calibrated``):
-    the cross-validated held-out max per axis, else the fit's residual max; None without."""
-    for key in (("cross_validation", "predicted_max_mm"), ("residual_max_mm",)):
+    the nested cross-validation's held-out max per axis (a structure chosen from the data), else
+    the cross-validated held-out max, else the fit's residual max; None without."""
+    keys = (
+        ("structure", "nested", "held_out_max_mm"),
+        ("cross_validation", "predicted_max_mm"),
+        ("residual_max_mm",),
+    )
+    for key in keys:
         if doc.has("identification", *key):
             values = np.array([doc.number("identification", *key, axis) for axis in "xyz"])
             if np.any(values < 0):
@@ -352,7 +385,9 @@ def _validated_max(doc: YamlDoc) -> np.ndarray | None:
 
 def _joint_errors_from_doc(doc: YamlDoc) -> JointErrors:
     """The ``joint_errors:`` section: ``compliance_rad_per_nm`` (6 numbers), ``masses`` (list of
-    {link 1..6, kg, at_mm [x, y, z]}), ``harmonics`` (list of {axis 1..6, order, amplitude_rad,
+    {link 1..6, kg, at_mm [x, y, z]}), ``gravity_moments`` (list of {axis 1..6, link 1..6, c_kg
+    rad/(N·m)·kg, c_kg_mm [x, y, z] rad/(N·m)·kg·mm}: compliance × first moments without masses,
+    ``kinematics.joint_errors``), ``harmonics`` (list of {axis 1..6, order, amplitude_rad,
     phase_deg}), ``thermal`` {delta_t_k, expansion_per_k}, ``gravity_mps2``."""
     key = "joint_errors"
     doc.get(key, "compliance_rad_per_nm", default={})  # checks that the section is a mapping
@@ -370,6 +405,22 @@ def _joint_errors_from_doc(doc: YamlDoc) -> JointErrors:
                 raise doc.error(f"{doc.keyname(*k, 'kg')} must not be negative", *k, "kg")
             doc.sequence(*k, "at_mm", length=3)
             masses.append(PointMass(link, kg, tuple(doc.number(*k, "at_mm", j) for j in range(3))))
+    moments = None
+    if doc.has(key, "gravity_moments"):
+        moments = np.zeros((6, 6, 4))
+        for i in range(len(doc.sequence(key, "gravity_moments"))):
+            k = (key, "gravity_moments", i)
+            axis, link = _whole(doc, 1, 6, *k, "axis"), _whole(doc, 1, 6, *k, "link")
+            if link < axis:
+                raise doc.error(
+                    f"{doc.keyname(*k, 'link')} must be a link the axis carries (>= axis)",
+                    *k,
+                    "link",
+                )
+            doc.sequence(*k, "c_kg_mm", length=3)
+            moments[axis - 1, link - 1] = [doc.number(*k, "c_kg")] + [
+                doc.number(*k, "c_kg_mm", j) for j in range(3)
+            ]
     harmonics = []
     if doc.has(key, "harmonics"):
         for i in range(len(doc.sequence(key, "harmonics"))):
@@ -395,7 +446,7 @@ def _joint_errors_from_doc(doc: YamlDoc) -> JointErrors:
             doc.number(key, "thermal", "expansion_per_k", default=Thermal.expansion_per_k),
         )
     gravity = doc.number(key, "gravity_mps2", default=GRAVITY_MPS2)
-    return JointErrors(compliance, tuple(masses), tuple(harmonics), thermal, gravity)
+    return JointErrors(compliance, tuple(masses), tuple(harmonics), thermal, gravity, moments)
 
 
 def _whole(doc: YamlDoc, lo: int, hi: int, *keys) -> int:

@@ -27,6 +27,7 @@ UNITLESS = {
     "--decimals",
     "--folds",
     "--iterations",
+    "--max-order",
     "--power",
     "--repeats",
     "--seed",

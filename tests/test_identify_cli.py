@@ -56,8 +56,8 @@ def test_identify_writes_a_loadable_calibrated_robot_and_urdf(tmp_path, capsys):
     code, out = identify(tmp_path, csv, "--urdf", str(urdf))
     assert code == 0
     printed = capsys.readouterr().out
-    assert "22 of 27 parameters identifiable" in printed
-    assert "5-fold cross-validation" in printed
+    assert "22 of 27 parameters identifiable" in printed  # no joint-error term chosen
+    assert "expected accuracy (nested 5-fold cross-validation" in printed
     cal = load_robot(out)
     assert cal.name == "kr210-calibrated"
     # the calibrated arm predicts new poses of the real one to well below the raw error
@@ -68,7 +68,7 @@ def test_identify_writes_a_loadable_calibrated_robot_and_urdf(tmp_path, capsys):
     assert raw > 2.0 and left < 0.1
     summary = yaml.safe_load(out.read_text())["identification"]
     assert summary["robot"] == "kr210" and summary["poses"] == 60
-    assert summary["cross_validation"]["folds"] == 5
+    assert summary["structure"]["nested"]["folds"] == 5 and summary["structure"]["chosen"] == []
     assert len(summary["parameters"]) == 27
     assert urdf.read_text().startswith("<?xml")
 

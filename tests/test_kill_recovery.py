@@ -159,7 +159,8 @@ def test_identify_yaml_and_urdf_after_a_kill_at_every_step(tmp_path):
     out = tmp_path / "cal"
     out.mkdir()
     common = ["identify", meas, *robot, "-o", out / "cal.yaml", "--urdf", out / "cal.urdf"]
-    check_every_kill([out], out / "cal.yaml", [*common, "--folds", "0"], [*common, "--force"])
+    old, new = [*common, "--structure", "dh", "--folds", "0"], [*common, "--force"]
+    check_every_kill([out], out / "cal.yaml", old, new)
 
 
 def test_the_next_write_into_the_folder_finishes_a_killed_job(cell_dir):

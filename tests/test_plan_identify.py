@@ -71,7 +71,23 @@ def test_plan_simulate_identify_round_trip(tmp_path, capsys):
     ]
     csv.write_text("\n".join(filled) + "\n")
     out = tmp_path / "cal.yaml"
-    assert main(["identify", str(csv), "--robot", "kr210", "--tool", *TOOL, "-o", str(out)]) == 0
+    assert (
+        main(
+            [
+                "identify",
+                str(csv),
+                "--robot",
+                "kr210",
+                "--tool",
+                *TOOL,
+                "-o",
+                str(out),
+                "--structure",
+                "dh",
+            ]
+        )
+        == 0
+    )
     assert "from 36 poses (72 rows); 22 of 27 parameters identifiable" in capsys.readouterr().out
     cal = load_robot(out).true_robot()
     rng = np.random.default_rng(0)
@@ -154,7 +170,18 @@ def test_poses_chosen_for_the_harmonic_model_identify_it(tmp_path, capsys):
     poses = str(tmp_path / "plan" / "measure_identify.csv")
     sim = ["simulate", "--robot", "kr210-realistic", "--poses", poses, *tool, "-o", str(meas)]
     assert main([*sim, "--noise-tracker", "0", "--noise-repeat", "0"]) == 0
-    ident = ["identify", str(meas), "--robot", "kr210-realistic", *tool, *model, "--folds", "0"]
+    ident = [
+        "identify",
+        str(meas),
+        "--robot",
+        "kr210-realistic",
+        *tool,
+        *model,
+        "--folds",
+        "0",
+        "--structure",
+        "dh",
+    ]
     assert main([*ident, "-o", str(cal)]) == 0
     terms = {(h.axis, h.order): h.amplitude_rad for h in load_robot(cal).joint_errors.harmonics}
     assert terms.keys() == {(2, 7), (3, 7)}

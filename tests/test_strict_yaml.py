@@ -20,15 +20,60 @@ ROBOT = ["--robot", "kr210-realistic", "--tool", "0", "0", "250", "0", "0", "0"]
 @pytest.fixture(scope="module")
 def calibrated(tmp_path_factory):
     """A calibrated file as `identify` writes it: errors, joint_errors (compliance, masses,
-    harmonics), identification with cross-validation."""
+    harmonics), identification with cross-validation (the DH fit plus the pinned terms)."""
     folder = tmp_path_factory.mktemp("cal")
     plan, meas, out = folder / "plan", folder / "meas.csv", folder / "cal.yaml"
     harmonics = ["--compliance", "--harmonics", "A2:1"]
     assert main(["plan", "identify", *ROBOT, "--count", "40", *harmonics, "-o", str(plan)]) == 0
     poses = str(next(plan.glob("*.csv")))
     assert main(["simulate", *ROBOT, "--poses", poses, "--seed", "1", "-o", str(meas)]) == 0
-    assert main(["identify", str(meas), *ROBOT, *harmonics, "-o", str(out)]) == 0
+    assert (
+        main(["identify", str(meas), *ROBOT, *harmonics, "--structure", "dh", "-o", str(out)]) == 0
+    )
     return out.read_text()
+
+
+@pytest.fixture(scope="module")
+def chosen(tmp_path_factory):
+    """A calibrated file whose structure was chosen from the data (identification.structure)."""
+    folder = tmp_path_factory.mktemp("auto")
+    plan, meas, out = folder / "plan", folder / "meas.csv", folder / "cal.yaml"
+    assert main(["plan", "identify", *ROBOT, "--count", "40", "-o", str(plan)]) == 0
+    poses = str(next(plan.glob("*.csv")))
+    assert main(["simulate", *ROBOT, "--poses", poses, "--seed", "1", "-o", str(meas)]) == 0
+    assert main(["identify", str(meas), *ROBOT, "-o", str(out)]) == 0
+    return out.read_text()
+
+
+@pytest.mark.parametrize(
+    ("pattern", "replacement", "message"),
+    [
+        (r"  structure:", "  structur:", "identification.structur: unknown key; did you mean "),
+        (r"held_out_max_mm:", "held_out_mx_mm:", "unknown key; did you mean held_out_max_mm?"),
+        (r"    kept_steps:", "    kept_step:", "structure.kept_step: unknown key; did you mean "),
+    ],
+)
+def test_a_misspelt_key_in_the_chosen_structure_is_a_located_error(
+    chosen, tmp_path, pattern, replacement, message
+):
+    text, line = misspell(chosen, pattern, replacement)
+    path = tmp_path / "cal.yaml"
+    path.write_text(text)
+    with pytest.raises(InputError, match=re.escape(message)) as error:
+        load_robot(path)
+    assert error.value.line == line
+
+
+def test_a_negative_nested_estimate_is_refused(chosen, tmp_path):
+    """The nested estimate is the model's claim (the residual-grid check relies on it)."""
+    head, nested = chosen.split("    nested:\n")
+    text, line = misspell(nested, r"held_out_max_mm: {x: ", "held_out_max_mm: {x: -")
+    text, line = head + "    nested:\n" + text, line + head.count("\n") + 1
+    path = tmp_path / "cal.yaml"
+    path.write_text(text)
+    with pytest.raises(InputError, match=r"must be >= 0 mm") as error:
+        load_robot(path)
+    assert error.value.line == line
 
 
 def test_every_built_in_robot_and_example_cell_loads():

@@ -8,11 +8,15 @@ are the nominal IK in its Status: column s, else --status, else the IK default p
 
 Identified (position-only residuals, robust Gauss-Newton, kinematics.identification): the 24 DH
 errors of seed Eq. 2 (Δa, Δd mm; Δα, Δθ rad), the TCP offset in the flange (mm), with
---base-frame the tracker-to-robot frame (then x_meas.. may be in tracker coordinates) and with
---compliance the compliance of A2 and A3 under gravity (rad/N.m; the robot YAML must carry the
-gravity model, joint_errors.masses) and with --harmonics the sine and cosine coefficients (rad) of
-reducer transmission errors of the given orders per axis (orders from the reducers' data sheets).
-Directions the data cannot see (SVD of the column-scaled Jacobian) are held at zero and listed.
+--base-frame the tracker-to-robot frame (then x_meas.. may be in tracker coordinates), and the
+joint errors the measurements show (--structure auto, the default; kinematics.structure): reducer
+harmonics s*sin(k*A)+c*cos(k*A) per axis and order k <= --max-order, and the gravity compliance
+of A2 and A3 without masses (compliance x first moments of the links), chosen by cross-validation
+over the distinct poses, with an accuracy estimate by nested cross-validation. --harmonics pins
+orders known from the reducers' data sheets and --compliance the compliance of A2 and A3 under the
+robot YAML's gravity model (joint_errors.masses): always kept. --structure dh fits the DH errors
+and TCP (and the pinned terms) only. Directions the data cannot see (SVD of the column-scaled
+Jacobian) are held at zero and listed.
 
 Output: a robot YAML (-o) loadable wherever a robot is accepted: the nominal model, the identified
 errors and TCP, and an `identification:` summary (parameters with standard deviations, condition
@@ -61,11 +65,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "(default: the IK default per pose)",
     )
     parser.add_argument(
+        "--structure",
+        default="auto",
+        metavar="WORD",
+        help="auto (default): choose the joint-error terms (reducer harmonics, gravity "
+        "compliance) by cross-validation; dh: DH errors and TCP (and pinned terms) only",
+    )
+    parser.add_argument(
+        "--max-order",
+        type=int,
+        default=None,
+        metavar="K",
+        help="highest reducer harmonic order auto searches (default: 16, clamped to what the "
+        "poses resolve; a larger one is refused naming the limit)",
+    )
+    parser.add_argument(
         "--folds",
         type=int,
         default=5,
         metavar="K",
-        help="k-fold cross-validation over the distinct poses (default: 5; 0: none)",
+        help="k-fold cross-validation over the distinct poses (default: 5; 0: none, only with "
+        "--structure dh)",
     )
     parser.add_argument(
         "--base-frame",
@@ -75,12 +95,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--compliance",
         action="store_true",
-        help="also identify the compliance of A2 and A3 (rad/N.m) under gravity; needs the "
-        "robot's gravity model (joint_errors.masses in its YAML, e.g. kr210-realistic)",
+        help="always identify the compliance of A2 and A3 (rad/N.m) under the robot's gravity "
+        "model (joint_errors.masses in its YAML, e.g. kr210-realistic)",
     )
     add_harmonics(
         parser,
-        "also identify reducer transmission errors s*sin(k*A)+c*cos(k*A) of these orders",
+        "always identify reducer transmission errors s*sin(k*A)+c*cos(k*A) of these orders",
     )
     parser.add_argument("-o", "--output", required=True, metavar="CAL.yaml", help="robot YAML")
     parser.add_argument("--urdf", metavar="FILE.urdf", help="also write the model as URDF")
@@ -103,6 +123,8 @@ def run(args: argparse.Namespace) -> int:
         compliance=args.compliance,
         harmonics=harmonics_of(args),
         folds=args.folds,
+        structure=args.structure,
+        max_order=args.max_order,
     )
     calibration = calibrate(args.measurements, robot, options, args.output, args.urdf)
     write_files(calibration.files, inputs, args.force, main=[args.output])  # the YAML last

@@ -12,6 +12,9 @@
               --region at orientations within --tilt deg of --abc, reachable in the Status with
               |A5| >= 10 deg, the D-optimal set (greedy, most observable DH errors and TCP),
               visited in nearest-neighbour order; a,b,c per row and column s (the Status).
+              --augment CAL.yaml: D-optimal for the structure a calibrated file was fitted
+              with (a second session for that model); it also prints which candidates of
+              identify's structure search the poses cannot separate.
 
 Outputs in DIR: NAME.csv (id,x,y,z,a,b,c[,centre,step,label,repeat],x_meas,y_meas,z_meas with
 the measured columns empty for the operator) and the KUKA KRL program NAME.src/NAME.dat that
@@ -139,6 +142,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="choose the poses for `identify --compliance` too (the robot's gravity model)",
     )
     add_harmonics(ident, "choose the poses for `identify --harmonics` with these terms too")
+    ident.add_argument(
+        "--augment",
+        metavar="CAL.yaml",
+        help="choose the poses for the structure a calibrated robot file was fitted with (its "
+        "harmonics, compliance and gravity groups): a second, short session for that model",
+    )
     for p in (grid, cube, exp, ident):
         _common(p)
 
@@ -228,9 +237,20 @@ def _common(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     check_targets(plan_targets(args.output, args.kind, args.name), force=args.force)
     kind = args.kind
+    robot = robot_with_tool(args.robot, args.tool)
+    compliance = kind == "identify" and args.compliance
+    harmonics = harmonics_of(args) if kind == "identify" else ()
+    gravity = ()
+    if kind == "identify" and args.augment:
+        from accugrid.kinematics.calibrated import chosen_structure
+
+        chosen = chosen_structure(args.augment, robot)
+        compliance = compliance or chosen[0]
+        harmonics = tuple(dict.fromkeys(harmonics + chosen[1]))
+        gravity = chosen[2]
     request = PlanRequest(
         kind=kind,
-        robot=robot_with_tool(args.robot, args.tool),
+        robot=robot,
         abc=tuple(args.abc),
         status=args.status,
         region=tuple(args.region) if kind in ("grid", "identify") else None,
@@ -244,8 +264,9 @@ def run(args: argparse.Namespace) -> int:
         tilt_deg=args.tilt if kind == "identify" else 0.0,
         candidates=args.candidates if kind == "identify" else 0,
         seed=args.seed if kind == "identify" else 0,
-        compliance=kind == "identify" and args.compliance,
-        harmonics=harmonics_of(args) if kind == "identify" else (),
+        compliance=compliance,
+        harmonics=harmonics,
+        gravity=gravity,
         name=args.name,
         tool_number=args.tool_number,
         base_number=args.base_number,

@@ -1,0 +1,227 @@
+"""The structure ``accugrid identify`` chooses from the data, on robots nobody has described.
+
+Each robot of ``kinematics.robot_family`` (seeds 0..N-1, ``--robots N``, default 20; DH errors of
+seed Table 1's magnitude, 0-4 reducer harmonics per axis of orders <= 16, gravity compliance of
+random masses, an SMR up to 1 mm off the declared 0/0/250 mm TCP), and the built-in
+kr210-realistic and kr210-paper with a TCP off by (0.4, -0.3, 0.6) mm: 60 poses from `plan
+identify` (the seed's region, tilted up to 30 deg, D-optimal among 2000 candidates, the IK default's
+Status at the region's centre) measured 3 times (repeatability 0.03, tracker 0.02 mm, the joints
+the controller logs); 200 held-out targets in the region (50 mm margin) tilted up to 25 deg.
+Columns: the model's max |calibrated − true| FK position error over the targets (mm) for
+
+- auto: plain ``identify`` (the structure chosen by cross-validation, ``kinematics.structure``);
+- true: the same fit told the true terms (the robot's harmonic orders and, with compliance, the
+  mass-free gravity groups);
+- dh: DH errors + TCP only (``--structure dh``);
+
+and the nested cross-validation estimate against the truth (the model's RMS, noise removed;
+the held-out max, noise included, against the true max). Then the two black-box tables: two
+family robots (seeds 100, 101) measured at 60 random poses tilted up to 25 deg (A) and at the 60
+poses of `plan identify` (B): plain identify against the fit told the true orders and compliance
+(with the true masses). Not timed tests; run ``make bench ARGS=structure`` (or
+``.venv/bin/python bench/bench_structure.py --robots 20``).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from accugrid.compensation.comparison import tilted_abc  # noqa: E402
+from accugrid.compensation.plans import SEED_REGION, identification_plan  # noqa: E402
+from accugrid.kinematics.candidates import gravity_terms, harmonic_name  # noqa: E402
+from accugrid.kinematics.frames import pose_from_xyzabc  # noqa: E402
+from accugrid.kinematics.identification import identify, pose_set  # noqa: E402
+from accugrid.kinematics.joint_errors import JointErrors  # noqa: E402
+from accugrid.kinematics.robot import load_robot  # noqa: E402
+from accugrid.kinematics.robot_family import DECLARED_TOOL, FamilyRobot, random_robot  # noqa: E402
+from accugrid.kinematics.structure import identify_structure  # noqa: E402
+from bench.timing import table  # noqa: E402
+
+LO, HI = np.array(SEED_REGION[0]), np.array(SEED_REGION[1])
+DRILL = (0.0, 90.0, 0.0)
+POSES, REPEATS, TARGETS = 60, 3, 200
+TILT_PLAN, TILT_TARGETS = 30.0, 25.0
+
+
+def named(name: str) -> FamilyRobot:
+    """A built-in robot as a family member: its own errors, the TCP off by (0.4, -0.3, 0.6) mm."""
+    robot = load_robot(name).with_tool(pose_from_xyzabc(DECLARED_TOOL))
+    return FamilyRobot(-1, replace(robot, name=name), np.array([0.4, -0.3, 0.6]))
+
+
+def status_of(nominal) -> int:
+    return int(nominal.ik(pose_from_xyzabc([*(LO + HI) / 2, *DRILL])).status[0])
+
+
+def planned_joints(nominal, status: int) -> np.ndarray:
+    plan = identification_plan(nominal, LO, HI, POSES, TILT_PLAN, DRILL, status)[0]
+    poses = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
+    return nominal.ik(poses, status=status).q
+
+
+def tilted_joints(nominal, status: int, count: int, tilt: float, seed: int) -> np.ndarray:
+    """Joints (count, 6) of random positions in the region (50 mm margin) tilted up to ``tilt``."""
+    rng = np.random.default_rng(seed)
+    out = np.zeros((0, 6))
+    while len(out) < count:
+        points = rng.uniform(LO + 50.0, HI - 50.0, (count, 3))
+        abc = tilted_abc(rng, count, DRILL, tilt)
+        sol = nominal.ik(pose_from_xyzabc(np.column_stack([points, abc])), status=status)
+        out = np.vstack([out, sol.q[sol.ok & (np.abs(sol.q[:, 4]) > np.radians(10.0))]])
+    return out[:count]
+
+
+def measured(robot: FamilyRobot, q: np.ndarray, seed: int):
+    s = robot.session(q, REPEATS, seed)
+    return pose_set(robot.nominal, s.commanded, s.measured, s.abc_deg, s.joints_deg)
+
+
+def model_error(calibrated, truth, targets: np.ndarray) -> np.ndarray:
+    """calibrated − true TCP positions (N, 3) mm at the targets."""
+    return calibrated.true_robot().fk(targets)[:, :3, 3] - truth.fk(targets)[:, :3, 3]
+
+
+def true_terms(robot: FamilyRobot) -> tuple[tuple[tuple[int, int], ...], bool]:
+    errors = robot.robot.joint_errors
+    if errors is None:
+        return (), False
+    return tuple((h.axis, h.order) for h in errors.harmonics), bool(np.any(errors.compliance))
+
+
+def short(names) -> str:
+    return (
+        " ".join(
+            n.replace("gravity ", "g")
+            .replace(" upper arm", "u")
+            .replace(" forearm", "f")
+            .replace(" wrist", "w")
+            .replace(" ", "")
+            for n in names
+        )
+        or "-"
+    )
+
+
+def one_robot(robot: FamilyRobot, q: np.ndarray, targets: np.ndarray, seed: int):
+    nominal, truth = robot.nominal, robot.true_robot()
+    data = measured(robot, q, seed)
+    started = time.perf_counter()
+    auto, selection = identify_structure(nominal, data)
+    seconds = time.perf_counter() - started
+    harmonics, compliant = true_terms(robot)
+    gravity = gravity_terms(nominal) if compliant else ()
+    told = identify(nominal, data, harmonics=harmonics, gravity=gravity, selected=True)
+    dh = identify(nominal, data)
+    errors = [model_error(r.robot, truth, targets) for r in (auto, told, dh)]
+    names = [harmonic_name(*t) for t in harmonics] + (["gravity"] if compliant else [])
+    nested = selection.nested
+    true_rms = np.sqrt(np.mean(errors[0] ** 2))
+    return {
+        "names": names,
+        "chosen": selection.chosen,
+        "max": [float(np.abs(e).max()) for e in errors],
+        "est_rms": float(np.sqrt(np.mean(nested.model_rms_mm**2))),
+        "true_rms": float(true_rms),
+        "est_max": float(nested.max_mm.max()),
+        "seconds": seconds,
+    }
+
+
+def family(count: int) -> None:
+    rows, ratios, estimates = [], [], []
+    seconds = []
+    for seed in [*range(count), "kr210-realistic", "kr210-paper"]:
+        robot = random_robot(seed) if isinstance(seed, int) else named(seed)
+        status = status_of(robot.nominal)
+        q = planned_joints(robot.nominal, status)
+        targets = tilted_joints(robot.nominal, status, TARGETS, TILT_TARGETS, 5)
+        out = one_robot(robot, q, targets, 1000 + (seed if isinstance(seed, int) else 0))
+        auto, told, dh = out["max"]
+        if isinstance(seed, int):
+            ratios.append(auto / told)
+            estimates.append(out["est_rms"] / out["true_rms"])
+            seconds.append(out["seconds"])
+        rows.append(
+            (
+                str(seed),
+                short(out["names"]),
+                short(out["chosen"]),
+                f"{auto:.3f}",
+                f"{told:.3f}",
+                f"{dh:.3f}",
+                f"{auto / told:.2f}",
+                f"{out['est_rms']:.3f} / {out['true_rms']:.3f}",
+                f"{out['est_max']:.3f}",
+                f"{out['seconds']:.1f}",
+            )
+        )
+    print(
+        f"{POSES} poses x {REPEATS} from plan identify, {TARGETS} targets tilted up to "
+        f"{TILT_TARGETS:g} deg; max |model - true| mm (g: gravity group A2/A3 upper arm, "
+        "forearm, wrist)"
+    )
+    columns = (
+        "robot",
+        "true terms",
+        "chosen terms",
+        "auto max",
+        "true-structure max",
+        "DH max",
+        "auto / true",
+        "nested RMS est / true",
+        "nested max (noisy)",
+        "search s",
+    )
+    print(table(rows, columns))
+    ratios = np.sort(ratios)
+    worst = ratios[int(0.9 * len(ratios)) :]
+    print(
+        f"auto / true-structure max over {len(ratios)} family robots: median "
+        f"{np.median(ratios):.2f}, "
+        f"worst tenth {', '.join(f'{r:.2f}' for r in worst)}; nested RMS estimate / true: "
+        f"median {np.median(estimates):.2f} (range {min(estimates):.2f}-{max(estimates):.2f}); "
+        f"search + nested estimate {np.median(seconds):.1f} s median, {max(seconds):.1f} s max"
+    )
+
+
+def black_boxes() -> None:
+    rows = []
+    for seed in (100, 101):
+        robot = random_robot(seed)
+        nominal, truth = robot.nominal, robot.true_robot()
+        status = status_of(nominal)
+        targets = tilted_joints(nominal, status, TARGETS, TILT_TARGETS, 5)
+        harmonics = robot.harmonics
+        masses = replace(
+            nominal,
+            joint_errors=JointErrors.from_compliance(np.zeros(6), robot.robot.joint_errors.masses),
+        )
+        for label, q in (
+            ("A: 60 random poses tilted <= 25 deg", tilted_joints(nominal, status, POSES, 25.0, 3)),
+            ("B: 60 poses from plan identify", planned_joints(nominal, status)),
+        ):
+            data = measured(robot, q, 7)
+            auto = identify_structure(nominal, data)[0]
+            told = identify(masses, data, compliance=True, harmonics=harmonics, selected=True)
+            cells = []
+            for result in (auto, told):
+                e = np.linalg.norm(model_error(result.robot, truth, targets), axis=1)
+                cells.append(f"{e.max():.3f} max, {e.mean():.3f} mean")
+            rows.append((f"family {seed}", label, *cells))
+    print("\nBlack boxes: |model - true| (3D) on 200 targets tilted up to 25 deg, mm")
+    print(table(rows, ("robot", "poses", "plain identify (auto)", "told true orders + compliance")))
+
+
+if __name__ == "__main__":
+    args = sys.argv[1:]
+    count = int(args[args.index("--robots") + 1]) if "--robots" in args else 20
+    family(count)
+    black_boxes()

@@ -1,0 +1,530 @@
+"""Choosing the joint-error structure of a calibrated model from the measurements.
+
+The candidates (``kinematics.candidates``) are groups of linear parameters: reducer harmonics
+(axis, order 1..K) and the mass-free gravity parts of A2 and A3. The search:
+
+1. Fit DH errors + TCP (+ the tracker frame, ``--compliance`` with masses and the pinned
+   harmonics, which are always kept) with the full nonlinear model; linearise there: residuals y,
+   the identifiable base columns X and every candidate's columns, computed once.
+2. **Grouped forward selection by K-fold cross-validation over the distinct poses** (repeats in
+   one fold): each step adds the group whose least-squares fit (X and the groups so far refitted
+   in every fold, by QR updates) gives the smallest held-out sum of squares; a group whose
+   columns lie within ``SEPARATE`` of the current model's span on the data (relative singular
+   value) cannot be told apart by these poses and is skipped; the path stops when no group
+   lowers the held-out error, at ``MAX_SHARE`` of a fold's equations in parameters or after
+   ``MAX_STEPS`` steps.
+3. **Keep steps while they beat their own uncertainty**: a step is kept when its held-out gain
+   (paired per-pose differences of the sums of squares) exceeds its standard error times a bar
+   that accounts for the step being the best of m candidate groups: the one-sided normal
+   quantile of ``FALSE_STEP`` / m (Bonferroni; 3.3 for m = 100). A step that fails may be
+   carried by the next 2..``LOOK_AHEAD`` steps together when their joint gain passes the same
+   bar (terms that only help together, e.g. neighbouring orders on a narrow angle range). With a
+   bar of one or two standard errors noise-only data gained terms: the best of ~100 candidates
+   is always a little lucky.
+   Then each kept harmonic is swapped for a neighbouring order of its axis (k ± 1, 2) where that
+   lowers the held-out error: over a narrow angle range neighbouring orders differ by a fraction
+   of a period and the greedy step may take the wrong one.
+4. **Nested cross-validation** for the accuracy to expect: in each outer fold the whole search
+   (steps 2-3, on inner folds of the training poses) is repeated, the chosen groups are fitted
+   on the training poses and the held-out poses are predicted; so the estimate is not the score
+   the selection minimised. With repeated poses, the row noise (pooled scatter of the repeats)
+   is removed from the held-out RMS to give the model's own error.
+5. The chosen groups are fitted with the full nonlinear model (``identification.identify``).
+
+K (the highest harmonic order searched) defaults to ``DEFAULT_MAX_ORDER`` clamped to what the
+poses resolve: an order's period 2π/k must span ``GAPS_PER_PERIOD`` median gaps between the
+sorted angles of the distinct poses on every axis (finer periods fall between the poses).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.linalg import solve_triangular
+from scipy.stats import norm
+
+from accugrid.kinematics.blas import one_blas_thread
+from accugrid.kinematics.candidates import GravityTerm, gravity_terms, harmonic_name
+from accugrid.kinematics.errors import InputError
+from accugrid.kinematics.identification import (
+    Identification,
+    PoseSet,
+    Terms,
+    identify,
+    linearised,
+    planned_columns,
+    pose_folds,
+)
+from accugrid.kinematics.robot import Robot
+
+__all__ = [
+    "DEFAULT_MAX_ORDER",
+    "GAPS_PER_PERIOD",
+    "MAX_SHARE",
+    "FALSE_STEP",
+    "LOOK_AHEAD",
+    "MAX_STEPS",
+    "SEPARATE",
+    "Nested",
+    "Selection",
+    "Step",
+    "identify_structure",
+    "max_order_of",
+    "observability",
+]
+
+DEFAULT_MAX_ORDER = 16  # reducer output stages; a user may search further with --max-order
+GAPS_PER_PERIOD = 4.0  # an order's period must span this many median gaps between pose angles
+SEPARATE = 0.05  # a group whose columns keep less than this share beyond the model: inseparable
+MAX_SHARE = 0.5  # parameters at most this share of a training fold's equations
+MAX_STEPS = 40  # groups one search adds at most
+FALSE_STEP = 0.05  # chance that a step on noise alone passes the bar (shared by the candidates)
+LOOK_AHEAD = 4  # a step that fails may be carried by the next 2..LOOK_AHEAD steps together
+_NESTED_SEED = 1  # inner folds: another permutation of the training poses
+
+
+@dataclass(frozen=True)
+class Step:
+    """One point of the cross-validation curve: the group ``added`` ('' for the start), the
+    linear parameters then fitted, held-out RMS and max |.| per axis (3,) mm and overall RMS."""
+
+    added: str
+    parameters: int
+    rms_mm: np.ndarray
+    max_mm: np.ndarray
+    score_mm: float
+
+
+@dataclass(frozen=True)
+class Nested:
+    """Nested cross-validation: held-out (measured − model) RMS and max per axis (3,) mm, the row
+    noise sigma mm per axis from the repeats (None without repeats) and the model's own RMS (3,)
+    mm with that noise removed (None without repeats); ``chosen``: the groups of each outer fold."""
+
+    folds: int
+    rms_mm: np.ndarray
+    max_mm: np.ndarray
+    noise_mm: float | None
+    model_rms_mm: np.ndarray | None
+    chosen: tuple[tuple[str, ...], ...]
+
+
+@dataclass(frozen=True)
+class Selection:
+    """What the search chose: ``pinned`` group names (kept, not searched), ``chosen`` in the
+    order added, the fitted ``harmonics`` (pinned + chosen) and ``gravity`` groups, the
+    cross-validation ``curve`` (start, every step of the path; ``kept`` steps chosen), what was
+    ``left_out`` ((name, reason) pairs), the highest order searched and why, and the nested
+    estimate."""
+
+    pinned: tuple[str, ...]
+    chosen: tuple[str, ...]
+    harmonics: Terms
+    gravity: tuple[GravityTerm, ...]
+    curve: tuple[Step, ...]
+    kept: int
+    left_out: tuple[tuple[str, str], ...]
+    max_order: int
+    max_order_rule: str
+    folds: int
+    candidates: int
+    nested: Nested | None
+
+
+def max_order_of(q: np.ndarray) -> np.ndarray:
+    """The highest harmonic order (6,) the distinct poses' joints q (P, 6) rad resolve on each
+    axis: an order's period must span ``GAPS_PER_PERIOD`` median gaps between the sorted angles
+    on that axis (1 for an axis the poses do not move)."""
+    out = np.ones(6, dtype=int)
+    for axis in range(6):
+        gaps = np.diff(np.sort(q[:, axis]))
+        gaps = gaps[gaps > 1e-9]
+        if gaps.size:
+            out[axis] = max(int(2 * np.pi / (GAPS_PER_PERIOD * float(np.median(gaps)))), 1)
+    return out
+
+
+def observability(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, list[tuple[str, str]]]:
+    """Before measuring: the highest order (6,) joints q (P, 6) rad resolve per axis, and the
+    candidate groups (orders up to ``DEFAULT_MAX_ORDER`` clamped to those, the gravity groups)
+    these poses cannot tell from the DH errors and TCP: (name, reason)."""
+    caps = np.minimum(max_order_of(q), DEFAULT_MAX_ORDER)
+    search = tuple((a, k) for a in range(1, 7) for k in range(1, int(caps[a - 1]) + 1))
+    gravity = gravity_terms(robot)
+    x0, columns = planned_columns(robot, q, search, gravity)
+    names, groups = _library(search, gravity)
+    problem = _Problem(
+        np.zeros(len(x0)), x0, columns, groups, np.repeat(np.arange(len(q)), 3), len(q)
+    )
+    return caps, problem.reduce(names)
+
+
+def identify_structure(
+    robot: Robot,
+    data: PoseSet,
+    base_frame: bool = False,
+    compliance: bool = False,
+    harmonics: Terms = (),
+    max_order: int | None = None,
+    folds: int = 5,
+    nested: bool = True,
+) -> tuple[Identification, Selection]:
+    """Choose the joint-error groups by cross-validation (module docstring) and fit them.
+
+    ``harmonics`` and ``compliance`` (with the robot's masses) are pinned: always in the model.
+    ``max_order``: the highest order searched (default: ``DEFAULT_MAX_ORDER`` clamped to what
+    the poses resolve, with the reason in ``Selection.max_order_rule``; a larger one given is
+    refused naming the limit). ``folds`` >= 2: the cross-validation folds (also the nested
+    estimate's outer folds). InputError for too few poses, a bad ``max_order`` or ``folds``."""
+    with one_blas_thread():  # thousands of small solves: BLAS threads only wait on each other
+        return _identify_structure(
+            robot, data, base_frame, compliance, harmonics, max_order, folds, nested
+        )
+
+
+def _identify_structure(
+    robot, data, base_frame, compliance, harmonics, max_order, folds, nested
+) -> tuple[Identification, Selection]:
+    if folds < 2 or folds > data.poses:
+        raise InputError(f"--folds must be between 2 and the {data.poses} poses, got {folds}")
+    resolved = max_order_of(data.q[np.unique(data.group, return_index=True)[1]])
+    rule = f"a period must span {GAPS_PER_PERIOD:g} median gaps between the poses' angles"
+    if max_order is None:
+        max_order = DEFAULT_MAX_ORDER
+    elif not 1 <= max_order <= resolved.max():
+        raise InputError(
+            f"--max-order {max_order}: these {data.poses} poses resolve harmonic orders 1.."
+            f"{resolved.max()} at most (A{int(np.argmax(resolved)) + 1}; {rule}); measure more "
+            "poses or lower it",
+            data.path,
+        )
+    caps = np.minimum(resolved, max_order)
+    clamped = [f"A{a + 1} to {caps[a]}" for a in range(6) if caps[a] < max_order]
+    rule = f"clamped {', '.join(clamped)} ({rule})" if clamped else rule
+    base = identify(
+        robot, data, base_frame, compliance, harmonics=harmonics, selected=True, folds=0
+    )
+    pinned = tuple(harmonics)
+    search = tuple(
+        (axis, order)
+        for axis in range(1, 7)
+        for order in range(1, int(caps[axis - 1]) + 1)
+        if (axis, order) not in pinned
+    )
+    gravity = gravity_terms(robot)
+    y, x0, columns = linearised(robot, data, base, base_frame, compliance, pinned, search, gravity)
+    names, groups = _library(search, gravity)
+    problem = _Problem(y, x0, columns, groups, np.repeat(data.group, 3), data.poses)
+    index = {t: i for i, t in enumerate(search)}
+    problem.neighbours = {
+        i: [index[(a, k + d)] for d in (-2, -1, 1, 2) if (a, k + d) in index]
+        for i, (a, k) in enumerate(search)
+    }
+    left_out = problem.reduce(names)
+    fold = pose_folds(data.poses, folds)
+    path = problem.path(fold, np.ones(data.poses, bool))
+    kept = problem.one_standard_error(path)
+    greedy = [g for g, _ in path[1 : kept + 1]]
+    chosen = problem.refine(greedy, fold, np.ones(data.poses, bool))
+    rejected = [g for g, _ in path[kept + 1 :] if g not in chosen]
+    left_out += [
+        (names[g], f"swapped for {names[c]}: a neighbouring order, lower held-out error")
+        for g, c in zip(greedy, chosen, strict=True)
+        if g != c
+    ]
+    left_out += [(names[g], "its held-out gain is within its uncertainty") for g in rejected]
+    estimate = _nested(problem, fold, folds, names, data) if nested else None
+    picked_harmonics = pinned + tuple(search[g] for g in chosen if g < len(search))
+    picked_gravity = tuple(gravity[g - len(search)] for g in chosen if g >= len(search))
+    result = identify(
+        robot,
+        data,
+        base_frame,
+        compliance,
+        harmonics=picked_harmonics,
+        gravity=picked_gravity,
+        selected=True,
+    )
+    curve = tuple(
+        Step(
+            "" if g is None else names[g],
+            x0.shape[1] + sum(len(problem.groups[c]) for c, _ in path[1 : i + 1]),
+            *problem.held_out_stats(held),
+        )
+        for i, (g, held) in enumerate(path)
+    )
+    if estimate is not None:  # the model's claim: the nested estimate, not the fit's residual
+        result = replace(result, robot=replace(result.robot, validated_max_mm=estimate.max_mm))
+    selection = Selection(
+        pinned=tuple(harmonic_name(*t) for t in pinned) + (("compliance",) if compliance else ()),
+        chosen=tuple(names[g] for g in chosen),
+        harmonics=picked_harmonics,
+        gravity=picked_gravity,
+        curve=curve,
+        kept=kept,
+        left_out=tuple(left_out),
+        max_order=max_order,
+        max_order_rule=rule,
+        folds=folds,
+        candidates=len(names),
+        nested=estimate,
+    )
+    return result, selection
+
+
+def _library(search: Terms, gravity: tuple[GravityTerm, ...]):
+    """The candidate groups' names and their column indices (harmonics, two columns each, then
+    the gravity groups), in the column order of ``linearised`` and ``planned_columns``."""
+    names = [harmonic_name(*t) for t in search] + [g.name for g in gravity]
+    starts = np.cumsum([0] + [2] * len(search) + [g.size for g in gravity])
+    return names, [np.arange(starts[i], starts[i + 1]) for i in range(len(names))]
+
+
+class _Problem:
+    """The linearised search: residuals y (M,), base columns X (M, r), candidate columns C
+    (M, m) in groups (index arrays into C), the pose (M,) of each equation."""
+
+    def __init__(self, y, x0, columns, groups, pose_of_row, poses: int) -> None:
+        self.y, self.x0, self.c, self.groups = y, x0, columns, groups
+        self.pose, self.poses = pose_of_row, poses
+        self.neighbours: dict[int, list[int]] = {}  # harmonic group -> neighbouring orders
+        self.top = float(np.sqrt(np.mean(columns**2, axis=0)).max()) if columns.size else 1.0
+        # a step is the best of len(groups) tries: the one-sided normal bar whose tail
+        # FALSE_STEP is shared among them (Bonferroni), 3.3 standard errors for 100 groups
+        self.bar = float(norm.isf(FALSE_STEP / max(len(groups), 1)))
+
+    def reduce(self, names: list[str]) -> list[tuple[str, str]]:
+        """Keep of each group only its directions the data separate from the DH + TCP (+ pinned)
+        model (relative singular value >= ``SEPARATE`` beyond X); groups left without any, or
+        that do not move the TCP, are out: (name, reason)."""
+        out = []
+        q, _ = np.linalg.qr(self.x0)
+        columns, groups = [], []
+        start = 0
+        for i, g in enumerate(self.groups):
+            cols = self.c[:, g]
+            norms = np.sqrt(np.mean(cols**2, axis=0))
+            if norms.min() <= 1e-9 * self.top:
+                out.append((names[i], "does not move the TCP at these poses"))
+                groups.append(np.arange(start, start))
+                continue
+            cols = cols / norms
+            rest = cols - q @ (q.T @ cols)
+            _, sing, vt = np.linalg.svd(rest, full_matrices=False)
+            keep = sing >= SEPARATE * np.linalg.norm(cols, 2)
+            if not keep.any():
+                out.append(
+                    (
+                        names[i],
+                        "these poses cannot tell it from the DH errors and TCP (accugrid plan "
+                        "identify chooses poses that separate it)",
+                    )
+                )
+            reduced = cols @ vt[keep].T
+            reduced /= np.sqrt(np.mean(reduced**2, axis=0))
+            columns.append(reduced)
+            groups.append(np.arange(start, start + reduced.shape[1]))
+            start += reduced.shape[1]
+        self.c = np.column_stack(columns) if columns else np.zeros((len(self.y), 0))
+        self.groups = groups
+        self.size = np.array([len(g) for g in groups])
+        self.observable = self.size > 0
+        self.pairs = np.array([i for i, g in enumerate(groups) if len(g) == 2], dtype=int)
+        self.others = [i for i, g in enumerate(groups) if len(g) not in (0, 2)]
+        return out
+
+    def path(
+        self, fold_of_pose: np.ndarray, use: np.ndarray
+    ) -> list[tuple[int | None, np.ndarray]]:
+        """Forward selection on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,):
+        [(group added or None, held-out residuals (M,) with NaN off ``use``)], start first."""
+        rows = use[self.pose]
+        fold = fold_of_pose[self.pose]
+        folds = np.unique(fold_of_pose[use])
+        train_eq = min(int(np.sum(rows & (fold != k))) for k in folds)
+        chosen: list[int] = []
+        held = self._held(chosen, fold, rows, folds)
+        path = [(None, held)]
+        sse = self._pose_sse(held)
+        free = self.observable.copy()
+        budget = MAX_SHARE * train_eq - self.x0.shape[1]
+        for _ in range(MAX_STEPS):
+            used = int(self.size[chosen].sum()) if chosen else 0
+            allowed = free & (used + self.size <= budget)
+            if not allowed.any():
+                break
+            trial = self._trial(chosen, allowed, fold, rows, folds)
+            best = int(np.argmin(trial))
+            if not np.isfinite(trial[best]) or trial[best] >= sse.sum():
+                break
+            chosen.append(best)
+            free[best] = False
+            held = self._held(chosen, fold, rows, folds)
+            sse = self._pose_sse(held)
+            path.append((best, held))
+        return path
+
+    def design(self, chosen: list[int]) -> np.ndarray:
+        if not chosen:
+            return self.x0
+        cols = np.concatenate([self.groups[g] for g in chosen])
+        return np.column_stack([self.x0, self.c[:, cols]])
+
+    def _held(self, chosen, fold, rows, folds) -> np.ndarray:
+        """Held-out residuals (M,) of the model ``chosen`` (NaN outside ``rows``)."""
+        held = np.full(len(self.y), np.nan)
+        x = self.design(chosen)
+        for k in folds:
+            train, test = rows & (fold != k), rows & (fold == k)
+            beta = np.linalg.lstsq(x[train], self.y[train], rcond=None)[0]
+            held[test] = self.y[test] - x[test] @ beta
+        return held
+
+    def _pose_sse(self, held: np.ndarray) -> np.ndarray:
+        ok = ~np.isnan(held)
+        return np.bincount(self.pose[ok], held[ok] ** 2, minlength=self.poses)
+
+    def _trial(self, chosen, allowed, fold, rows, folds) -> np.ndarray:
+        """Held-out sum of squares (groups,) of the model ``chosen`` plus each allowed group
+        (inf where not allowed or inseparable on the data or a fold)."""
+        x = self.design(chosen)
+        out = np.where(allowed, 0.0, np.inf)
+        q_all, _ = np.linalg.qr(x[rows])
+        c_all = self.c[rows]
+        rest_all = c_all - q_all @ (q_all.T @ c_all)
+        # separable from the model so far: the smallest singular value of each group's rest
+        # against its own largest (eigenvalues of the small Gram matrices, pairs in one batch)
+        pairs = self.pairs[allowed[self.pairs]]
+        if pairs.size:
+            idx = np.stack([self.groups[i] for i in pairs])
+            rest_gram = np.einsum("ngi,ngj->gij", rest_all[:, idx], rest_all[:, idx])
+            own_gram = np.einsum("ngi,ngj->gij", c_all[:, idx], c_all[:, idx])
+            ratio = np.linalg.eigvalsh(rest_gram)[:, 0] / np.linalg.eigvalsh(own_gram)[:, -1]
+            out[pairs[ratio < SEPARATE**2]] = np.inf
+        for i in self.others:
+            if (
+                allowed[i]
+                and _relative_floor(rest_all[:, self.groups[i]], c_all[:, self.groups[i]])
+                < SEPARATE
+            ):
+                out[i] = np.inf
+        pairs = self.pairs[np.isfinite(out[self.pairs])]
+        others = [i for i in self.others if np.isfinite(out[i])]
+        for k in folds:
+            train, test = rows & (fold != k), rows & (fold == k)
+            q, r = np.linalg.qr(x[train])
+            yt = self.y[train]
+            qty = q.T @ yt
+            rt = yt - q @ qty
+            et = self.y[test] - x[test] @ solve_triangular(r, qty)
+            ct = self.c[train]
+            a = q.T @ ct
+            p = ct - q @ a
+            t = self.c[test] - x[test] @ solve_triangular(r, a)
+            if pairs.size:
+                idx = np.stack([self.groups[i] for i in pairs])  # (G, 2)
+                pg, tg = p[:, idx], t[:, idx]  # (n, G, 2)
+                gram = np.einsum("ngi,ngj->gij", pg, pg)
+                rhs = np.einsum("ngi,n->gi", pg, rt)
+                det = gram[:, 0, 0] * gram[:, 1, 1] - gram[:, 0, 1] ** 2
+                ok = det > 1e-12 * np.maximum(gram[:, 0, 0] * gram[:, 1, 1], 1e-300)
+                safe = np.where(ok[:, None, None], gram, np.eye(2))
+                w = np.linalg.solve(safe, rhs[:, :, None])[:, :, 0]
+                new = et[:, None] - np.einsum("ngi,gi->ng", tg, w)
+                out[pairs] += np.where(ok, np.sum(new**2, axis=0), np.inf)
+            for i in others:
+                g = self.groups[i]
+                w = np.linalg.lstsq(p[:, g], rt, rcond=None)[0]
+                out[i] += np.sum((et - t[:, g] @ w) ** 2)
+        return out
+
+    def refine(self, chosen: list[int], fold_of_pose: np.ndarray, use: np.ndarray) -> list[int]:
+        """``chosen`` with each harmonic swapped for a neighbouring order of its axis (k ± 1, 2)
+        where that lowers the held-out sum of squares (over a narrow angle range neighbouring
+        orders differ by a fraction of a period; the greedy step may take the wrong one)."""
+        rows = use[self.pose]
+        fold = fold_of_pose[self.pose]
+        folds = np.unique(fold_of_pose[use])
+        best = np.nansum(self._held(chosen, fold, rows, folds) ** 2)
+        chosen = list(chosen)
+        for at in range(len(chosen)):
+            for other in self.neighbours.get(chosen[at], []):
+                if other in chosen or not self.observable[other]:
+                    continue
+                trial = chosen[:at] + [other] + chosen[at + 1 :]
+                sse = np.nansum(self._held(trial, fold, rows, folds) ** 2)
+                if sse < best:
+                    chosen, best = trial, sse
+        return chosen
+
+    def one_standard_error(self, path) -> int:
+        """The number of steps of ``path`` kept: steps are kept while the next one, or the next
+        2..``LOOK_AHEAD`` together (terms that only help as a set, e.g. neighbouring orders),
+        lower the held-out sum of squares by more than ``bar`` standard errors of their paired
+        per-pose differences (the gain's own uncertainty)."""
+        used = np.unique(self.pose[~np.isnan(path[0][1])])
+        sse = np.array([self._pose_sse(held)[used] for _, held in path])  # (steps, poses)
+        step = 0
+        while step + 1 < len(path):
+            ahead = sse[step] - sse[step + 1 : step + 1 + LOOK_AHEAD]  # (1..LOOK_AHEAD, poses)
+            se = ahead.std(axis=1, ddof=1) / np.sqrt(ahead.shape[1])
+            passed = np.flatnonzero(ahead.mean(axis=1) > self.bar * se)
+            if not passed.size:
+                break
+            step += int(passed[0]) + 1
+        return step
+
+    def held_out_stats(self, held: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """(RMS (3,), max |.| (3,), overall RMS) mm of held-out residuals (M,)."""
+        per_axis = held.reshape(-1, 3)
+        per_axis = per_axis[~np.isnan(per_axis[:, 0])]
+        rms = np.sqrt(np.mean(per_axis**2, axis=0))
+        return rms, np.abs(per_axis).max(axis=0), float(np.sqrt(np.mean(per_axis**2)))
+
+
+def _relative_floor(rest: np.ndarray, cols: np.ndarray) -> float:
+    """Smallest singular value of ``rest`` over the largest of ``cols`` (0 for empty)."""
+    top = np.linalg.svd(cols, compute_uv=False)
+    if top.size == 0 or top[0] <= 0:
+        return 0.0
+    return float(np.linalg.svd(rest, compute_uv=False)[-1] / top[0])
+
+
+def _nested(problem: _Problem, fold: np.ndarray, folds: int, names, data: PoseSet) -> Nested:
+    """The whole search repeated inside each outer fold (inner folds: another permutation of the
+    training poses), the chosen groups fitted on the training poses, the held-out poses
+    predicted (``Nested``)."""
+    held = np.full(len(problem.y), np.nan)
+    chosen_by_fold = []
+    for k in range(folds):
+        use = fold != k
+        inner = np.full(problem.poses, -1)
+        inner[use] = pose_folds(int(use.sum()), folds, _NESTED_SEED + k)
+        path = problem.path(inner, use)
+        kept = problem.one_standard_error(path)
+        chosen = problem.refine([g for g, _ in path[1 : kept + 1]], inner, use)
+        chosen_by_fold.append(tuple(names[g] for g in chosen))
+        x = problem.design(chosen)
+        train, test = use[problem.pose], ~use[problem.pose]
+        beta = np.linalg.lstsq(x[train], problem.y[train], rcond=None)[0]
+        held[test] = problem.y[test] - x[test] @ beta
+    rms, peak, _ = problem.held_out_stats(held)
+    noise = _repeat_noise(data)
+    model = None if noise is None else np.sqrt(np.maximum(rms**2 - noise**2, 0.0))
+    return Nested(folds, rms, peak, noise, model, tuple(chosen_by_fold))
+
+
+def _repeat_noise(data: PoseSet) -> float | None:
+    """Row noise sigma mm per axis: the pooled scatter of the repeats of each pose (None when no
+    pose is repeated)."""
+    counts = np.bincount(data.group)
+    repeated = counts[data.group] > 1
+    if not repeated.any():
+        return None
+    mean = np.zeros((len(counts), 3))
+    np.add.at(mean, data.group, data.measured)
+    mean /= np.maximum(counts, 1)[:, None]
+    scatter = data.measured[repeated] - mean[data.group[repeated]]
+    dof = 3 * (int(np.sum(counts[counts > 1])) - int(np.sum(counts > 1)))
+    return float(np.sqrt(np.sum(scatter**2) / dof))
