@@ -1,6 +1,6 @@
 """The full seed study in simulation (issue 4, "Speed"): 5 centres x 9 steps x (8 vertices + 9
 test points) x 5 repeats on kr210-paper, then Table 5 with 200 validation points, as
-`accugrid study --simulate kr210-paper` runs it (without plots). Peer: the same experiment with
+`accugrid study --robot kr210-paper` runs it (without plots). Peer: the same experiment with
 the default per-point IK configuration of kinematics.simulation.simulate_measurements.
 """
 

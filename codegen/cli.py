@@ -34,7 +34,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="accugrid",
         description="Grid-based TCP error compensation for robotic drilling. "
-        "Lengths in mm, angles in degrees.",
+        "Lengths in mm, angles in degrees, speeds in mm/s, times in s.",
     )
     parser.add_argument("--version", action="version", version=f"accugrid {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from collections.abc import Callable, Sequence
 from contextlib import AbstractContextManager
 from typing import TYPE_CHECKING
@@ -24,16 +25,22 @@ if TYPE_CHECKING:
 
 __all__ = [
     "COORDINATE_MAX",
+    "DEFAULT_ROBOT",
+    "DEFAULT_TILT_DEG",
     "MAX_CANDIDATES",
     "MAX_COUNT",
     "MAX_POSES",
     "MAX_REPEATS",
+    "OUTSIDE_WORDS",
     "add_abc",
+    "add_deprecated",
     "add_experiment_arguments",
     "add_harmonics",
     "add_policy",
+    "add_robot",
     "add_status",
     "add_table_format",
+    "add_tilt",
     "add_tool",
     "harmonics_of",
     "number",
@@ -49,6 +56,9 @@ MAX_CANDIDATES = 100_000  # random candidate poses of a pose plan (each is an IK
 MAX_POSES = 1000  # poses of an identification plan: choosing them grows with poses x candidates
 MAX_REPEATS = 1000  # measurements of each point or pose (the seed takes 5)
 MAX_COUNT = 100_000  # held-out targets, validation points
+DEFAULT_ROBOT = "kr210-paper"  # every command whose --robot may be left out: the seed's arm
+DEFAULT_TILT_DEG = 25.0  # --tilt of identification poses, planned or simulated
+OUTSIDE_WORDS = {"refuse": "error", "clamp": "clamp"}  # --outside -> CorrectionSettings.outside
 
 
 def number(
@@ -83,7 +93,88 @@ def number(
             raise argparse.ArgumentTypeError(f"'{text}' must be <= {hi:g}{said}")
         return value if whole else value + 0.0
 
+    parse.unit = unit  # type: ignore[attr-defined]  # what --help must name (tests check it)
     return parse
+
+
+class _Deprecated(argparse.Action):
+    """An old spelling kept for one release, said once on stderr: an old option (``new``: the
+    one to use; ``convert`` maps its value, e.g. m/s to mm/s) or, with ``old_values``, old values
+    of a current option (old -> new word)."""
+
+    def __init__(self, option_strings, dest, new="", convert=None, old_values=None, **kwargs):
+        super().__init__(option_strings, dest, **kwargs)
+        self.new, self.convert, self.old_values = new, convert, old_values
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        said = f"{option_string} {_words(values)}"
+        if self.old_values is None:
+            values = values if self.convert is None else self.convert(values)
+            instead = f"{self.new} {_words(values)}"
+        elif values in self.old_values:
+            values = self.old_values[values]
+            instead = f"{option_string} {values}"
+        else:
+            setattr(namespace, self.dest, values)
+            return
+        print(f"{parser.prog}: warning: {said} is deprecated, use {instead}", file=sys.stderr)
+        setattr(namespace, self.dest, values)
+
+
+def _words(value: object) -> str:
+    """An option's value as typed: numbers as %g, lists space-separated."""
+    if isinstance(value, list | tuple):
+        return " ".join(_words(v) for v in value)
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def add_deprecated(
+    parser: argparse.ArgumentParser | argparse._MutuallyExclusiveGroup,
+    old: str,
+    new: str,
+    dest: str,
+    convert: Callable[[object], object] | None = None,
+    **kwargs,
+) -> None:
+    """``old``, the former spelling of option ``new`` (stored in ``dest``, through ``convert``),
+    accepted for one release with a deprecation line on stderr and left out of --help;
+    ``kwargs`` as ``add_argument``'s (nargs, type, ...)."""
+    parser.add_argument(
+        old,
+        dest=dest,
+        action=_Deprecated,
+        new=new,
+        convert=convert,
+        help=argparse.SUPPRESS,
+        **kwargs,
+    )
+
+
+def add_robot(parser: argparse.ArgumentParser, help_text: str, required: bool = False) -> None:
+    """``--robot ROBOT``: a built-in robot (``kinematics.robot.BUILTIN``, listed in --help) or a
+    robot YAML file; default ``DEFAULT_ROBOT`` unless ``required``."""
+    from accugrid.kinematics.robot import BUILTIN  # only the commands that drive a robot
+
+    default = "" if required else f" (default: {DEFAULT_ROBOT})"
+    parser.add_argument(
+        "--robot",
+        required=required,
+        default=None if required else DEFAULT_ROBOT,
+        metavar="ROBOT",
+        help=f"{help_text}: built-in {', '.join(BUILTIN)} or a robot YAML file{default}",
+    )
+
+
+def add_tilt(parser: argparse.ArgumentParser, help_text: str) -> None:
+    """``--tilt DEG``: identification poses tilted up to DEG from --abc (default
+    ``DEFAULT_TILT_DEG``)."""
+    parser.add_argument(
+        "--tilt",
+        type=number("deg", 0, 180),
+        default=DEFAULT_TILT_DEG,
+        metavar="DEG",
+        help=f"{help_text}, deg (default: {DEFAULT_TILT_DEG:g})",
+    )
 
 
 def add_abc(parser: argparse.ArgumentParser, help_text: str) -> None:
@@ -98,14 +189,14 @@ def add_abc(parser: argparse.ArgumentParser, help_text: str) -> None:
     )
 
 
-def add_tool(parser: argparse.ArgumentParser, help_text: str) -> None:
-    """``--tool X Y Z A B C``: flange_T_tool in mm and deg (default: none, the flange)."""
+def add_tool(parser: argparse.ArgumentParser, help_text: str, default: str = "the flange") -> None:
+    """``--tool X Y Z A B C``: flange_T_tool in mm and deg (default: None, said as ``default``)."""
     parser.add_argument(
         "--tool",
         nargs=6,
         type=number("mm or deg", -COORDINATE_MAX, COORDINATE_MAX),
         metavar=("X", "Y", "Z", "A", "B", "C"),
-        help=help_text,
+        help=f"{help_text}: flange_T_tool, X Y Z in mm and A B C in deg (default: {default})",
     )
 
 
@@ -224,8 +315,9 @@ def parse_centres(items: list[list[str]] | None) -> dict[str, tuple[float, float
 
 
 def add_policy(parser: argparse.ArgumentParser, what: str) -> None:
-    """``--allow-partial`` and ``--strict``, the job rule of the correction policy
-    (``compensation.policy``) for every command that corrects; ``what`` names its positions."""
+    """``--allow-partial``, ``--strict`` and ``--outside``, the correction policy
+    (``compensation.policy``) of every command that corrects; ``what`` names its positions.
+    ``--outside`` is a word of ``OUTSIDE_WORDS`` (``error``: its former spelling of refuse)."""
     parser.add_argument(
         "--allow-partial",
         action="store_true",
@@ -238,6 +330,16 @@ def add_policy(parser: argparse.ArgumentParser, what: str) -> None:
         action="store_true",
         help=f"with a model: refuse {what} outside the poses it was identified from (region, "
         "tool tilt, joint ranges) instead of flagging them",
+    )
+    parser.add_argument(
+        "--outside",
+        choices=[*OUTSIDE_WORDS, "error"],
+        default="refuse",
+        action=_Deprecated,
+        old_values={"error": "refuse"},
+        metavar="{refuse,clamp}",
+        help=f"{what} outside the grid box: refuse, i.e. not corrected (the job is refused "
+        "unless --allow-partial), or clamp: the nearest cell's error, flagged (default: refuse)",
     )
 
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from accugrid.codegen.cell import Cell, load_cell
-from accugrid.codegen.cli_options import add_policy, add_table_format
+from accugrid.codegen.cli_options import OUTSIDE_WORDS, add_policy, add_table_format
 from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program import Program, build_program
@@ -121,6 +121,8 @@ def prepare(
     it could not write. ``cell``: CELL when the command already read it. ``joints``: the program
     keeps the joint angles of every pose (``Program.joints``)."""
     cell = load_cell(args.cell) if cell is None else cell
+    outside = OUTSIDE_WORDS[getattr(args, "outside", "refuse")]
+    cell = dataclasses.replace(cell, correction=cell.correction.but(outside=outside))
     if args.allow_config_change:
         configuration = dataclasses.replace(cell.configuration, allow_change=True)
         cell = dataclasses.replace(cell, configuration=configuration)

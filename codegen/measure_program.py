@@ -243,7 +243,7 @@ def _program(
     if not 1 <= r.ptp_percent <= 100:
         raise InputError(f"--ptp-percent must be 1..100, got {r.ptp_percent}")
     if not 0 < r.vel_m_s <= 2.0:
-        raise InputError(f"--vel must be in (0, 2] m/s, got {r.vel_m_s:g}")
+        raise InputError(f"--speed must be in (0, 2000] mm/s, got {1000 * r.vel_m_s:g}")
     for option in ("tool_number", "base_number"):
         value = getattr(r, option)
         low = 1 if option == "tool_number" else 0

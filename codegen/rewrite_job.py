@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import gc
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from accugrid.codegen.cell import load_cell
@@ -47,6 +47,7 @@ class RewriteRequest:
     decimals: int | None = None
     strict: bool = False
     allow_partial: bool = False
+    outside: str = "error"  # CorrectionSettings.outside
     base: int | None = None
     trust_calls: bool = False
     ignore_external_axes: bool = False
@@ -82,6 +83,7 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     inputs = list(req.outputs)
     read = [*inputs, Path(req.cell)] + ([req.config_dat] if req.config_dat else [])
     cell = load_cell(req.cell)
+    cell = replace(cell, correction=cell.correction.but(outside=req.outside))
     model_file = Path(req.model) if req.model is not None else cell.model_path
     grid = None  # a model corrects alone when neither --grid nor the cell names one
     if model_file is None or req.grid is not None or cell.grid_path is not None:

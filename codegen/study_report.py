@@ -163,7 +163,7 @@ def study_files(
     step = result.decision.step
     if r.validation_step_mm is not None:
         if r.robot is None:
-            raise InputError("--validation-step goes with --simulate")
+            raise InputError("--validation-step goes with a simulated study, not --measured")
         if not r.validation_step_mm > 0:
             raise InputError(f"--validation-step must be > 0 mm, got {r.validation_step_mm:g}")
         step = r.validation_step_mm

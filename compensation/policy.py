@@ -425,7 +425,7 @@ class Verdict:
         of the first (``label(i)`` names it)."""
         out = []
         for bit in FLAGS:
-            at = np.flatnonzero((self.flags & bit) & (self.code == CORRECTED))
+            at = np.flatnonzero(((self.flags & bit) != 0) & (self.code == CORRECTED))
             if at.size:
                 i = int(at[0])
                 out.append(f"{at.size} {what}(s) flagged, first {label(i)}: {self.reason(i, bit)}")

@@ -39,7 +39,7 @@ accugrid correct examples/wing_panel_robot.csv --grid out/grid_200mm.csv \
 # Table 4, the chosen step, Table 5, Fig. 12 and a report in out/study/.
 accugrid plan experiment --centre D 1700 0 1500 --steps 20:380:120 --repeats 3 \
     -o out/plan --force
-accugrid study --simulate kr210-paper --centre D 1700 0 1500 --steps 20:380:120 --repeats 3 \
+accugrid study --robot kr210-paper --centre D 1700 0 1500 --steps 20:380:120 --repeats 3 \
     --region 1500 1900 -200 200 1300 1700 --validation-points 50 -o out/study --force
 
 # Pre-flight rewrite of programs a CAM system wrote (examples/cam_drill.*): only the numbers of

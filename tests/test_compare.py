@@ -20,6 +20,7 @@ from accugrid.compensation.comparison import (
 )
 
 TINY = ["--budgets", "27", "--targets", "40", "--candidates", "300", "--repeats", "1"]
+TINY += ["--robot", "kr210-realistic", "--tool", "0", "0", "250", "0", "0", "0"]
 
 
 @pytest.fixture(scope="module")

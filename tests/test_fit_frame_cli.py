@@ -160,7 +160,7 @@ def test_transform_triples_and_the_former_spelling(tmp_path, frame_file, capsys)
     assert transform(src, frame_file, new, "--triples", "both") == 0
     assert "deprecated" not in capsys.readouterr().err
     assert transform(src, frame_file, old, "--columns", "both") == 0
-    assert "--columns is deprecated here, use --triples both" in capsys.readouterr().err
+    assert "--columns both is deprecated, use --triples both" in capsys.readouterr().err
     assert new.read_bytes() == old.read_bytes()
     first = new.read_text().splitlines()[5].split(",")
     original = src.read_text().splitlines()[4].split(",")

@@ -141,7 +141,7 @@ def test_realistic_robot_makes_the_seed_study_choose_the_seeds_step(tmp_path, ca
     # geometric-only kr210-paper chooses 440 mm. Default study settings = the seed's design.
     from accugrid.codegen.cli import main
 
-    assert main(["study", "--simulate", "kr210-realistic", "-o", str(tmp_path / "s")]) == 0
+    assert main(["study", "--robot", "kr210-realistic", "-o", str(tmp_path / "s")]) == 0
     out = capsys.readouterr().out
     assert "step 200 mm chosen" in out
     threshold_z = float(out.split("threshold step Z: ")[1].split(" mm")[0])

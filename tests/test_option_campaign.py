@@ -54,7 +54,7 @@ OPTIONS = [
     ("plan identify", "--count", 1), ("plan identify", "--candidates", 1),
     ("plan identify", "--tilt", 1), ("plan identify", "--abc", 3), ("plan identify", "--tool", 6),
     ("plan identify", "--region", 6), ("plan identify", "--seed", 1),
-    ("plan identify", "--repeats", 1), ("plan identify", "--vel", 1),
+    ("plan identify", "--repeats", 1), ("plan identify", "--speed", 1),
     ("plan identify", "--wait-sec", 1), ("plan identify", "--ptp-percent", 1),
     ("plan identify", "--tool-number", 1), ("plan identify", "--base-number", 1),
     ("plan cube", "--centre", 3), ("plan cube", "--step", 1), ("plan cube", "--repeats", 1),

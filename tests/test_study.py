@@ -254,7 +254,7 @@ QUICK += ["--validation-points", "30", "--region", "1500", "1900", "-200", "200"
 
 def test_study_cli_simulated(tmp_path, capsys):
     out = tmp_path / "study"
-    assert main(["study", "--simulate", "kr210-paper", *QUICK, "-o", str(out)]) == 0
+    assert main(["study", "--robot", "kr210-paper", *QUICK, "-o", str(out)]) == 0
     text = capsys.readouterr().out
     assert "Table 4" in text and "Table 5" in text and "chosen" in text
     t4 = parse_table((out / "table4.csv").read_text(), "t4")
@@ -271,12 +271,12 @@ def test_study_cli_simulated(tmp_path, capsys):
     assert "](fig12.png)" in report and "](table5_hist.png)" in report
     # same settings, same numbers
     again = tmp_path / "again"
-    assert main(["study", "--simulate", "kr210-paper", *QUICK, "-o", str(again)]) == 0
+    assert main(["study", "--robot", "kr210-paper", *QUICK, "-o", str(again)]) == 0
     assert (again / "table4.csv").read_bytes() == (out / "table4.csv").read_bytes()
 
 
 def test_study_cli_cube_outside_reach(tmp_path, capsys):
-    argv = ["study", "--simulate", "kr210-paper", "--centre", "FAR", "3400", "0", "1500"]
+    argv = ["study", "--robot", "kr210-paper", "--centre", "FAR", "3400", "0", "1500"]
     assert main([*argv, "--steps", "20,80", "-o", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert "cube of centre FAR at step 20 mm is outside the reach of kr210-paper" in err
@@ -304,8 +304,10 @@ def test_study_cli_option_errors(tmp_path, capsys):
     plan = write(tmp_path, filled_plan_text())
     argv = ["study", "--measured", str(plan), "-o", str(tmp_path / "m")]
     assert main([*argv, "--validation-step", "200"]) == 2
-    assert "--validation-step goes with --simulate" in capsys.readouterr().err
-    assert main(["study", "--simulate", "kr210-paper", "--steps", "100", "-o", str(tmp_path)]) == 2
+    assert (
+        "--validation-step goes with a simulated study, not --measured" in capsys.readouterr().err
+    )
+    assert main(["study", "--robot", "kr210-paper", "--steps", "100", "-o", str(tmp_path)]) == 2
     assert "two steps" in capsys.readouterr().err
 
 

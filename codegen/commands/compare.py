@@ -1,5 +1,5 @@
 """Which correction, from how many measured points: grid only (IDW, trilinear), model only and
-model + residual grid, held out on a simulated robot (issue 13 item 7; compensation.comparison).
+model + residual grid, held out on a simulated robot (--robot; compensation.comparison).
 
 For each budget N of measured points (--budgets): the grid over --region with at most N vertices
 at the grid orientation (--abc), corrected P' = P + e(P) by IDW and by trilinear interpolation;
@@ -31,8 +31,11 @@ from accugrid.codegen.cli_options import (
     MAX_POSES,
     MAX_REPEATS,
     add_abc,
+    add_deprecated,
     add_harmonics,
+    add_robot,
     add_status,
+    add_tilt,
     add_tool,
     harmonics_of,
     number,
@@ -48,17 +51,11 @@ __all__ = ["NAME", "add_arguments", "run"]
 NAME = "compare"
 
 DEFAULT_BUDGETS = (27, 60, 125, 252)
-DEFAULT_TOOL = (0.0, 0.0, 250.0, 0.0, 0.0, 0.0)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--simulate",
-        default="kr210-realistic",
-        metavar="ROBOT",
-        help="simulated robot: built-in or robot YAML whose true robot is the real arm "
-        "(default: kr210-realistic)",
-    )
+    add_robot(parser, "simulated robot (its true robot, with errors, is the real arm)")
+    add_deprecated(parser, "--simulate", "--robot", "robot")
     parser.add_argument(
         "--region",
         nargs=6,
@@ -78,24 +75,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         f"at most {MAX_POSES})",
     )
     add_abc(parser, "grid orientation (grids, residual grid, untilted targets)")
-    add_tool(
-        parser,
-        "tool on the flange (the controller's TOOL_DATA), mm and deg (default: 0 0 250 0 0 0)",
-    )
+    add_tool(parser, "tool on the flange (the controller's TOOL_DATA)")
     add_status(parser, "KUKA Status 0..7 of every pose (default: the IK default's at the centre)")
-    parser.add_argument(
-        "--tilt",
-        type=number("deg", 0, 180),
-        default=25.0,
-        metavar="DEG",
-        help="identification poses tilted up to this from --abc (default: 25)",
-    )
+    add_tilt(parser, "identification poses tilted up to this from --abc")
     parser.add_argument(
         "--target-tilt",
         type=number("deg", 0, 180),
         default=25.0,
         metavar="DEG",
-        help="tilted held-out targets up to this from --abc (default: 25)",
+        help="tilted held-out targets up to this from --abc, deg (default: 25)",
     )
     parser.add_argument(
         "--targets",
@@ -159,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
 
     paths = [str(out / "comparison.csv")]
     paths += [str(out / f"comparison_{stat}.png") for stat in COMPARISON_STATS]
-    inputs = [args.simulate] if Path(args.simulate).is_file() else []
+    inputs = [args.robot] if Path(args.robot).is_file() else []
     check_targets(paths, inputs, args.force)
     if not args.budgets or min(args.budgets) < 8:
         raise InputError("--budgets: every budget must be at least 8 points")
@@ -167,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--targets and --repeats must be at least 1")
     if not 0.0 <= args.target_tilt <= 90.0:
         raise InputError(f"--target-tilt must be 0..90 deg, got {args.target_tilt:g}")
-    robot = robot_with_tool(args.simulate, args.tool if args.tool else DEFAULT_TOOL)
+    robot = robot_with_tool(args.robot, args.tool)
     if robot.true_robot() is None:
         raise InputError(f"robot {robot.name} has no errors: nothing to compare")
     lo, hi = args.region[0::2], args.region[1::2]

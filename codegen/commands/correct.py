@@ -26,6 +26,7 @@ from pathlib import Path
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cli_options import (
     COORDINATE_MAX,
+    OUTSIDE_WORDS,
     add_abc,
     add_policy,
     add_status,
@@ -59,16 +60,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_status(
         parser,
-        "the KUKA Status of points without a column s; a grid corrects only points in the "
+        "KUKA Status 0..7 of points without a column s; a grid corrects only points in the "
         "Status it was measured in (with --model default: the grid's, without --grid the IK "
         "default at the first point)",
     )
     add_abc(parser, "with --model: orientation of points without a,b,c, reference for i,j,k axes")
     add_tool(
         parser,
-        "with --model: the tool whose tip is to land (the drill as taught), x y z mm a b c deg, "
-        "on the controller and the calibrated arm (default: the SMR the model was measured "
-        "with: its identification.controller_tool and identified TCP)",
+        "with --model: the tool whose tip is to land (the drill as taught), on the controller "
+        "and the calibrated arm",
+        "the SMR the model was measured with: its identification.controller_tool and "
+        "identified TCP",
     )
     add_policy(parser, "points")
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="CSV to write")
@@ -91,12 +93,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=1,
         metavar="K",
         help="fixed-point iterations of P' = P + e(P') (default: 1 = seed Eq. 14)",
-    )
-    parser.add_argument(
-        "--outside",
-        choices=["error", "clamp"],
-        default="error",
-        help="points outside the grid box: refuse (default) or use the nearest cell and flag",
     )
     parser.add_argument(
         "--max-correction",
@@ -144,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
         method=args.method,
         power=args.power,
         iterations=args.iterations,
-        outside=args.outside,
+        outside=OUTSIDE_WORDS[args.outside],
         max_correction_mm=args.max_correction,
     )
     request = CorrectRequest(

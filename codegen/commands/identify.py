@@ -33,6 +33,7 @@ from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.calibration import MAX_ROWS, IdentifyOptions, calibrate
 from accugrid.codegen.cli_options import (
     add_harmonics,
+    add_robot,
     add_status,
     add_table_format,
     add_tool,
@@ -53,15 +54,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="MEAS.csv",
         help=f"measurement CSV (mm, deg), at most {MAX_ROWS} rows",
     )
-    parser.add_argument(
-        "--robot",
-        required=True,
-        help="nominal robot: built-in (kr210, kr210-paper) or robot YAML file",
-    )
+    add_robot(parser, "nominal model of the measured arm", required=True)
     add_tool(
         parser,
-        "tool the measurements were taken with (flange_T_tool, the controller's "
-        "TOOL_DATA; the SMR position), mm and deg (default: the flange)",
+        "tool the measurements were taken with (the controller's TOOL_DATA; the SMR position)",
     )
     add_status(
         parser,

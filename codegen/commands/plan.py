@@ -6,7 +6,7 @@
   cube        one cube's vertices C1..C8 and test points P1..P9 (GB/T 12642-2001 / ISO 9283:1998
               test points plus the seed's P6..P9, seed Sec. 4.3), --repeats times.
   experiment  the seed's step experiment (Sec. 4.2, 5): for every centre and step, the cube's 8
-              vertices and 9 test points, --repeats rounds each (default: seed Table 3 centres
+              vertices and 9 test points, --repeats times each (default: seed Table 3 centres
               D-H, steps 20..500 mm every 60, 5 repeats, A B C = 0 90 0).
   identify    --count poses for `accugrid identify`: from --candidates random positions in
               --region at orientations within --tilt deg of --abc, reachable in the Status with
@@ -24,7 +24,7 @@ the robot frame ($BASE = $NULLFRAME, i.e. $ROBROOT = $WORLD) unless --base-numbe
 BASE_DATA that equals the robot frame. Every position is checked with the robot's IK (--robot,
 --tool) in one KUKA Status for the whole plan (--status; default: the IK default at the first
 position), since LIN moves keep the first PTP's configuration; the IK also gives each E6POS its T.
-Lengths in mm, angles in deg, speeds in m/s.
+Lengths in mm, angles in deg, speeds in mm/s.
 """
 
 from __future__ import annotations
@@ -39,9 +39,12 @@ from accugrid.codegen.cli_options import (
     MAX_POSES,
     MAX_REPEATS,
     add_abc,
+    add_deprecated,
     add_experiment_arguments,
     add_harmonics,
+    add_robot,
     add_status,
+    add_tilt,
     add_tool,
     harmonics_of,
     number,
@@ -79,7 +82,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--repeats",
         type=number("", 1, MAX_REPEATS, whole=True),
         default=1,
-        help="rounds over the grid (default: 1)",
+        help="passes over the grid (default: 1)",
     )
     cube = sub.add_parser("cube", help="one cube's vertices C1..C8 and test points P1..P9")
     cube.add_argument(
@@ -101,7 +104,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--repeats",
         type=number("", 1, MAX_REPEATS, whole=True),
         default=SEED_REPEATS,
-        help=f"rounds (default: {SEED_REPEATS})",
+        help=f"passes over the cube (default: {SEED_REPEATS})",
     )
     exp = sub.add_parser("experiment", help="the seed's step experiment (Sec. 4.2, 5)")
     add_experiment_arguments(exp)
@@ -114,13 +117,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         help=f"number of poses to measure (at most {MAX_POSES})",
     )
-    ident.add_argument(
-        "--tilt",
-        type=number("deg", 0, 180),
-        default=30.0,
-        metavar="DEG",
-        help="largest rotation from --abc, deg (default: 30)",
-    )
+    add_tilt(ident, "largest rotation from --abc")
     ident.add_argument(
         "--candidates",
         type=number("candidate poses", 1, MAX_CANDIDATES, whole=True),
@@ -131,7 +128,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--repeats",
         type=number("", 1, MAX_REPEATS, whole=True),
         default=1,
-        help="rounds over the poses (default: 1)",
+        help="passes over the poses (default: 1)",
     )
     ident.add_argument(
         "--seed",
@@ -170,19 +167,11 @@ def _add_region(parser: argparse.ArgumentParser) -> None:
 
 def _common(parser: argparse.ArgumentParser) -> None:
     add_abc(parser, "fixed TCP orientation")
-    parser.add_argument(
-        "--robot",
-        default="kr210",
-        help="robot for the reach check and S/T: built-in name or YAML (default: kr210)",
-    )
-    add_tool(
-        parser,
-        "measured point (SMR) on the flange, flange_T_tool in mm and deg "
-        "(default: the flange centre)",
-    )
+    add_robot(parser, "robot for the reach check and S/T (its nominal model)")
+    add_tool(parser, "measured point (SMR) on the flange")
     add_status(
         parser,
-        "KUKA Status (0..7) for every position (default: the IK default configuration "
+        "KUKA Status 0..7 for every position (default: the IK default configuration "
         "at the first position)",
     )
     parser.add_argument(
@@ -202,14 +191,23 @@ def _common(parser: argparse.ArgumentParser) -> None:
         type=number("%", 1, 100, whole=True),
         default=20,
         metavar="P",
-        help="speed of the first PTP, percent of maximum (default: 20)",
+        help="speed of the first PTP, %% of maximum (default: 20)",
     )
     parser.add_argument(
+        "--speed",
+        type=number("mm/s", 0, 2000, above=True),
+        default=250.0,
+        metavar="MM_S",
+        help="LIN speed between positions ($VEL.CP in the program), mm/s (default: 250)",
+    )
+    add_deprecated(
+        parser,
         "--vel",
-        type=number("m/s", 0, 10, above=True),
-        default=0.25,
+        "--speed",
+        "speed",
+        convert=lambda m_s: 1000.0 * m_s,
+        type=number("m/s", 0, 2, above=True),
         metavar="M_S",
-        help="LIN speed $VEL.CP, m/s (default: 0.25)",
     )
     wait = parser.add_mutually_exclusive_group()
     wait.add_argument(
@@ -273,7 +271,7 @@ def run(args: argparse.Namespace) -> int:
         tool_number=args.tool_number,
         base_number=args.base_number,
         ptp_percent=args.ptp_percent,
-        vel_m_s=args.vel,
+        vel_m_s=args.speed / 1000.0,
         wait_sec=args.wait_sec,
         wait_input=args.wait_input,
         templates=args.templates,

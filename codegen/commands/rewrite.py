@@ -6,12 +6,12 @@ with the input's decimal places but never coarser than 0.01 mm (0.001 in). Every
 (spacing, comments, line endings, encoding) is kept. Anything that cannot be placed (frame
 arithmetic ':', a base from a variable or a call, EK(), AXIS/E6AXIS targets, $POS_ACT,
 G55-G59/G92 offsets, arcs, unknown motions, parameter words) is left untouched. A placed
-position the grid or model does not correct (outside the grid, more than --orientation-limit
-from the grid's orientation, another KUKA Status than the grid's: the S of a KRL position, the
-cell's configuration for G-code) fails the job, and so does a rewrite that corrects nothing,
-unless --allow-partial, which leaves them as they are, counts them by reason on stderr and marks
-them in the report and the --header. The report lists each position with its status and
-reason.
+position the grid or model does not correct (outside the grid unless --outside clamp, more than
+--orientation-limit from the grid's orientation, another KUKA Status than the grid's: the S of a
+KRL position, the cell's configuration for G-code) fails the job, and so does a rewrite that
+corrects nothing, unless --allow-partial, which leaves them as they are, counts them by reason on
+stderr and marks them in the report and the --header. The report lists each position with its
+status and reason.
 
 KRL: PROGRAM is a .src or .dat; give the .dat beside it as the second argument. A stored position
 is corrected only if a motion uses it (never a frame given to $TOOL/$BASE/$LOAD, an operand of
@@ -41,7 +41,13 @@ import sys
 from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli_options import COORDINATE_MAX, add_policy, add_table_format, number
+from accugrid.codegen.cli_options import (
+    COORDINATE_MAX,
+    OUTSIDE_WORDS,
+    add_policy,
+    add_table_format,
+    number,
+)
 from accugrid.codegen.dialects import dialect_of
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.codegen.rewrite_job import RewriteRequest, rewrite_job
@@ -104,7 +110,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=number("MiB", 0, 1e6, above=True),
         default=MAX_BYTES / 2**20,
         metavar="MiB",
-        help=f"refuse program files larger than this (default {MAX_BYTES // 2**20})",
+        help=f"refuse program files larger than this, MiB (default: {MAX_BYTES // 2**20})",
     )
     parser.add_argument("--header", action="store_true", help="add the accugrid comment header")
     parser.add_argument(
@@ -133,8 +139,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=number("mm", 0, COORDINATE_MAX, above=True),
         default=DEFAULT_TOLERANCE_MM,
         metavar="MM",
-        help="hole position tolerance: warn when rounding to the written decimals leaves more "
-        f"than a tenth of it (default: {DEFAULT_TOLERANCE_MM:g})",
+        help="hole position tolerance, mm: warn when rounding to the written decimals leaves "
+        f"more than a tenth of it (default: {DEFAULT_TOLERANCE_MM:g})",
     )
 
 
@@ -185,6 +191,7 @@ def run(args: argparse.Namespace) -> int:
             decimals=args.decimals,
             strict=args.strict,
             allow_partial=args.allow_partial,
+            outside=OUTSIDE_WORDS[args.outside],
             base=args.base,
             trust_calls=args.trust_calls,
             ignore_external_axes=args.ignore_external_axes,

@@ -29,6 +29,7 @@ from accugrid.codegen.cli_options import (
     COORDINATE_MAX,
     MAX_REPEATS,
     add_abc,
+    add_robot,
     add_status,
     add_table_format,
     add_tool,
@@ -43,11 +44,7 @@ NAME = "simulate"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--robot",
-        default="kr210-paper",
-        help="built-in robot (kr210, kr210-paper) or robot YAML file (default: kr210-paper)",
-    )
+    add_robot(parser, "simulated robot (its true robot, with errors, is the real arm)")
     parser.add_argument(
         "--region",
         nargs=6,
@@ -66,7 +63,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="measure the poses of a plan (x,y,z,a,b,c[,id][,s]) instead of a grid",
     )
     add_abc(parser, "TCP orientation at every vertex")
-    add_tool(parser, "tool on the flange (flange_T_tool), mm and deg (default: the flange itself)")
+    add_tool(parser, "tool on the flange")
     add_status(
         parser, "KUKA Status 0..7 kept for every vertex (default: the IK default's at the first)"
     )

@@ -4,14 +4,14 @@ step whose compensated error meets the tolerance, then validate it (Tables 4-5, 
 For every step, each centre's cube is modelled from its 8 vertices (IDW, seed Eq. 12-13), its 9
 test points (GB/T 12642 / ISO 9283 positions plus the seed's P6-P9) are corrected (Eq. 14), and
 the remaining error r = target - reached is summarised over all centres per axis: max, min and
-standard deviation (Table 4; max/min are the mean over repeat rounds of each round's max/min,
+standard deviation (Table 4; max/min are the mean over the repeats of each repeat's max/min,
 the seed's rule). Cubic curves of max and min against the step give each axis's threshold step
 (where a curve leaves +-tolerance, Fig. 12). The chosen step is the largest tested step within
 every threshold whose measured max/min lie in the band and whose standard deviation is
 "relatively small": std <= --std-fraction x tolerance on every axis. Table 5: a grid at that step
 over the whole --region, errors before/after correction at --validation-points random points.
 
-Inputs: --simulate ROBOT (a built-in or YAML robot with parameter errors; tracker and
+Inputs: --robot ROBOT (simulated: a built-in or YAML robot with parameter errors; tracker and
 repeatability noise, seeded) or --measured FILE (the `accugrid plan experiment` CSV with
 x_meas,y_meas,z_meas filled in; its test points measured without correction, so r is
 (P - M) - e_pred(P), the first-order effect of the correction). With --measured, Table 5 needs
@@ -32,7 +32,9 @@ from accugrid.codegen.cli_options import (
     COORDINATE_MAX,
     MAX_COUNT,
     add_abc,
+    add_deprecated,
     add_experiment_arguments,
+    add_robot,
     add_status,
     add_table_format,
     add_tool,
@@ -53,18 +55,15 @@ NAME = "study"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    source = parser.add_mutually_exclusive_group(required=True)
-    source.add_argument(
-        "--simulate",
-        metavar="ROBOT",
-        help="simulate ROBOT (built-in name or YAML), e.g. kr210-paper",
-    )
+    source = parser.add_mutually_exclusive_group()
+    add_robot(source, "simulated robot, unless --measured")
+    add_deprecated(source, "--simulate", "--robot", "robot")
     source.add_argument(
         "--measured", metavar="FILE", help="filled-in `accugrid plan experiment` CSV"
     )
     add_experiment_arguments(parser)
     add_abc(parser, "simulated TCP orientation")
-    add_tool(parser, "simulated tool, flange_T_tool in mm and deg (default: the flange)")
+    add_tool(parser, "simulated tool")
     parser.add_argument(
         "--noise-tracker",
         type=number("mm", 0, 1000),
@@ -87,7 +86,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_status(
         parser,
-        "KUKA Status (0..7) the simulated robot keeps for every point, as a program of LIN "
+        "KUKA Status 0..7 the simulated robot keeps for every point, as a program of LIN "
         "moves does (default: the IK default configuration at the first centre)",
     )
     r = SEED_REGION
@@ -105,7 +104,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=number("mm", 0, COORDINATE_MAX, above=True),
         default=DEFAULT_TOLERANCE_MM,
         metavar="MM",
-        help=f"accuracy requirement +-MM per axis (default: {DEFAULT_TOLERANCE_MM})",
+        help=f"accuracy requirement +-MM per axis, mm (default: {DEFAULT_TOLERANCE_MM})",
     )
     parser.add_argument(
         "--std-fraction",
@@ -119,7 +118,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--repeat-rule",
         choices=REPEAT_RULES,
         default=REPEAT_RULES[0],
-        help="how repeats enter max/min: the seed's mean of per-round extremes (default) or "
+        help="how repeats enter max/min: the seed's mean of per-repeat extremes (default) or "
         "extremes of per-point means",
     )
     parser.add_argument(
@@ -133,7 +132,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--validation-step",
         type=number("mm", 0, COORDINATE_MAX, above=True),
         metavar="MM",
-        help="in simulation, validate a grid at this step instead of the chosen one "
+        help="in simulation, validate a grid at this step, mm, instead of the chosen one "
         "(e.g. 200 to compare with the seed's Table 5)",
     )
     parser.add_argument(
@@ -151,9 +150,9 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     inputs = [p for p in [args.measured, *(args.validate or [])] if p]
     check_targets([out / name for name in OUTPUTS], inputs=inputs, force=args.force)
-    simulated = args.simulate is not None
+    simulated = args.measured is None
     request = StudyRequest(
-        robot=robot_with_tool(args.simulate, args.tool) if simulated else None,
+        robot=robot_with_tool(args.robot, args.tool) if simulated else None,
         measured=args.measured,
         centres=parse_centres(args.centre) if simulated else None,
         steps=parse_steps(args.steps) if simulated else None,

@@ -14,9 +14,9 @@ line naming the frame file (and its SHA-256) is put first.
 from __future__ import annotations
 
 import argparse
-import sys
 
 from accugrid.codegen.atomic import check_targets, write_files
+from accugrid.codegen.cli_options import add_deprecated
 from accugrid.codegen.frame_file import transform_csv
 
 __all__ = ["NAME", "TRIPLES", "add_arguments", "run"]
@@ -37,7 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="which triples to map (default: meas if the file has x_meas,y_meas,z_meas, else xyz)",
     )
     # the former spelling: --columns names a column mapping in the commands that read tracker files
-    parser.add_argument("--columns", choices=TRIPLES, help=argparse.SUPPRESS)
+    add_deprecated(parser, "--columns", "--triples", "triples", choices=TRIPLES)
     parser.add_argument(
         "--inverse",
         action="store_true",
@@ -47,15 +47,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.columns:
-        print(
-            "accugrid transform: warning: --columns is deprecated here, use --triples "
-            f"{args.columns}",
-            file=sys.stderr,
-        )
     check_targets([args.output], [args.table, args.frame], args.force)
-    triples = args.triples or args.columns
-    job = transform_csv(args.table, args.frame, args.output, triples, args.inverse)
+    job = transform_csv(args.table, args.frame, args.output, args.triples, args.inverse)
     write_files(job.files, job.inputs, args.force)
     for line in job.lines:
         print(line)
