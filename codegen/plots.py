@@ -26,6 +26,8 @@ __all__ = [
     "fig12_png",
     "frame_fit_png",
     "hist_png",
+    "validation_hist_png",
+    "validation_rows_png",
 ]
 
 _NO_SOFTWARE = {"Software": None}  # no matplotlib version in the file: the same bytes anywhere
@@ -282,3 +284,36 @@ def comparison_png(
         fontsize=10,
     )
     return _png(plt, fig, dpi=80)
+
+
+def validation_hist_png(deviation: np.ndarray, tolerance_mm: float) -> bytes:
+    """``accugrid validate``: histograms of the deviation d = M - P (N, 3) mm per axis after
+    correction, the tolerance +-``tolerance_mm`` as lines."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, 3, figsize=(10, 2.9), layout="constrained")
+    reach = max(float(np.abs(deviation).max()), tolerance_mm) * 1.1
+    bins = np.linspace(-reach, reach, 41)
+    for k, ax in enumerate(axes):
+        ax.hist(deviation[:, k], bins=bins, color="tab:blue", alpha=0.8, label="measured rows")
+        _tolerance_lines(ax, tolerance_mm, f"tolerance ±{tolerance_mm:g} mm", vertical=True)
+        ax.set_title(f"{'XYZ'[k]}: measured - target", fontsize=9)
+        ax.set_xlabel("deviation (mm)")
+    axes[0].set_ylabel("rows")
+    _legend_outside(fig, axes[0])
+    return _png(plt, fig, dpi=90)
+
+
+def validation_rows_png(deviation: np.ndarray, tolerance_mm: float) -> bytes:
+    """``accugrid validate``: the deviation d = M - P (N, 3) mm of every row in file order,
+    one line per axis, the tolerance as lines (rasterised: small for 1e4 rows)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(10, 2.6), layout="constrained")
+    rows = np.arange(1, len(deviation) + 1)
+    for k, colour in enumerate(("tab:red", "tab:blue", "tab:purple")):
+        ax.plot(rows, deviation[:, k], ".", ms=3, color=colour, label=f"d{'xyz'[k]}")
+    _tolerance_lines(ax, tolerance_mm, f"tolerance ±{tolerance_mm:g} mm")
+    ax.set_xlabel("row of the validation file")
+    ax.set_ylabel("measured - target (mm)")
+    ax.grid(alpha=0.3)
+    _legend_outside(fig, ax)
+    return _png(plt, fig, dpi=90)
