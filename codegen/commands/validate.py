@@ -56,7 +56,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=number("mm", 0, COORDINATE_MAX, above=True),
         default=DEFAULT_TOLERANCE_MM,
         metavar="MM",
-        help=f"pass when every row is within +-MM on X, Y and Z (default: {DEFAULT_TOLERANCE_MM:g})",
+        help=f"pass when every row is within +-MM on X, Y and Z, mm "
+        f"(default: {DEFAULT_TOLERANCE_MM:g})",
     )
     parser.add_argument(
         "--report-html",
