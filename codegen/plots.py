@@ -26,8 +26,8 @@ __all__ = [
     "fig12_png",
     "frame_fit_png",
     "hist_png",
+    "rows_png",
     "validation_hist_png",
-    "validation_rows_png",
 ]
 
 _NO_SOFTWARE = {"Software": None}  # no matplotlib version in the file: the same bytes anywhere
@@ -303,17 +303,18 @@ def validation_hist_png(deviation: np.ndarray, tolerance_mm: float) -> bytes:
     return _png(plt, fig, dpi=90)
 
 
-def validation_rows_png(deviation: np.ndarray, tolerance_mm: float) -> bytes:
-    """``accugrid validate``: the deviation d = M - P (N, 3) mm of every row in file order,
-    one line per axis, the tolerance as lines (rasterised: small for 1e4 rows)."""
+def rows_png(values: np.ndarray, tolerance_mm: float, ylabel: str, xlabel: str) -> bytes:
+    """Per-row errors (N, 3) mm in file order (validation deviations, identification
+    residuals), one marker colour per axis, the tolerance as lines; rasterised, small for 1e4
+    rows."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(10, 2.6), layout="constrained")
-    rows = np.arange(1, len(deviation) + 1)
+    rows = np.arange(1, len(values) + 1)
     for k, colour in enumerate(("tab:red", "tab:blue", "tab:purple")):
-        ax.plot(rows, deviation[:, k], ".", ms=3, color=colour, label=f"d{'xyz'[k]}")
+        ax.plot(rows, values[:, k], ".", ms=3, color=colour, label="XYZ"[k])
     _tolerance_lines(ax, tolerance_mm, f"tolerance ±{tolerance_mm:g} mm")
-    ax.set_xlabel("row of the validation file")
-    ax.set_ylabel("measured - target (mm)")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
     _legend_outside(fig, ax)
     return _png(plt, fig, dpi=90)

@@ -16,8 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.atomic import JobFiles
-from accugrid.codegen.plots import validation_hist_png, validation_rows_png
+from accugrid.codegen.plots import rows_png, validation_hist_png
 from accugrid.codegen.report_html import Figure, Section, Table, report_html
+from accugrid.compensation.csvtable import read_table
 from accugrid.compensation.measurements import read_measurements
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.compensation.validation import (
@@ -69,7 +70,12 @@ def validate_files(request: ValidateRequest) -> ValidateJob:
     validated = _validated_error(request.model)
     meas = read_measurements(request.measurements)
     name = printable(Path(request.measurements).name)
-    labels = [f"{name}:{meas.lines[r]}" for r in range(len(meas.commanded))]
+    table = read_table(request.measurements)  # the ids (the reader of positions drops them)
+    ids = table.text("id") if table.has("id") else [""] * len(table)
+    labels = [
+        f"{name}:{meas.lines[r]}" + (f" {printable(ids[r], 40)}" if ids[r] else "")
+        for r in range(len(meas.commanded))
+    ]
     result = validate_positions(meas.commanded, meas.measured, labels, request.tolerance_mm)
     check_same_frame(result, validated, request.measurements)
     lines = _summary(result, validated)
@@ -154,7 +160,7 @@ def _report(request: ValidateRequest, result: ValidationResult, validated) -> st
     )
     worst = result.worst(_WORST)
     worst_table = Table(
-        ["where (file:line)", "id / pose", "dx (mm)", "dy (mm)", "dz (mm)", "|d| (mm)", ""],
+        ["where (file:line id)", "pose", "dx (mm)", "dy (mm)", "dz (mm)", "|d| (mm)", ""],
         [
             [result.labels[i], str(int(result.pose[i]) + 1)]
             + [f"{v:+.3f}" for v in result.deviation[i]]
@@ -174,7 +180,15 @@ def _report(request: ValidateRequest, result: ValidationResult, validated) -> st
             + [f"{result.ap_mm[p]:.3f}", "-" if np.isnan(rp) else f"{rp:.3f}"]
         )
     iso = Table(
-        ["pose (first row)", "repeats", "APx (mm)", "APy (mm)", "APz (mm)", "AP (mm)", "RP (mm)"],
+        [
+            "pose (first row, id)",
+            "repeats",
+            "APx (mm)",
+            "APy (mm)",
+            "APz (mm)",
+            "AP (mm)",
+            "RP (mm)",
+        ],
         iso_rows,
         f"ISO 9283 per pose, the {len(iso_rows)} largest AP",
     )
@@ -208,7 +222,12 @@ def _report(request: ValidateRequest, result: ValidationResult, validated) -> st
                     f"Deviation per axis, every row; dashed: the tolerance ±{tol:g} mm.",
                 ),
                 Figure(
-                    validation_rows_png(result.deviation, tol),
+                    rows_png(
+                        result.deviation,
+                        tol,
+                        "measured - target (mm)",
+                        "row of the validation file",
+                    ),
                     "Deviation of every row in file order; dashed: the tolerance.",
                 ),
             ],
