@@ -22,6 +22,7 @@ from accugrid.kinematics.frames import invert, transform_points
 __all__ = [
     "COMPARISON_STATS",
     "comparison_png",
+    "correction_map_png",
     "fig3_png",
     "fig12_png",
     "frame_fit_png",
@@ -317,4 +318,53 @@ def rows_png(values: np.ndarray, tolerance_mm: float, ylabel: str, xlabel: str) 
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
     _legend_outside(fig, ax)
+    return _png(plt, fig, dpi=90)
+
+
+def correction_map_png(
+    points: np.ndarray, correction: np.ndarray, corrected: np.ndarray, flagged: np.ndarray
+) -> bytes:
+    """Plan view (X-Y, robot frame) of the positions (N, 3) mm coloured by the length of the
+    correction (N, 3) mm applied, arrows along it (at most 400, scaled to the plot), the
+    positions not corrected (``corrected`` (N,) False) as black crosses and the flagged ones
+    (``flagged`` (N,) bool) ringed in orange; rasterised, small for 1e4 holes."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(10, 5.2), layout="constrained")
+    length = np.linalg.norm(correction, axis=1)
+    done = np.flatnonzero(corrected)
+    mesh = ax.scatter(
+        points[done, 0], points[done, 1], c=length[done], s=14, cmap="viridis", rasterized=True
+    )
+    fig.colorbar(mesh, ax=ax, label="|correction| (mm)")
+    if done.size:
+        arrows = done[:: max(1, done.size // 400)]
+        span = np.ptp(points[:, :2], axis=0).max() if len(points) > 1 else 1.0
+        scale = max(float(length[arrows].max()), 1e-9) / (0.04 * max(span, 1.0))
+        ax.quiver(
+            points[arrows, 0],
+            points[arrows, 1],
+            correction[arrows, 0],
+            correction[arrows, 1],
+            angles="xy",
+            scale_units="xy",
+            scale=scale,
+            width=0.002,
+            color="tab:red",
+            label=f"XY correction (1 mm drawn as {1.0 / scale:.0f} mm)",
+        )
+    skipped = np.flatnonzero(~corrected)
+    if skipped.size:
+        ax.plot(points[skipped, 0], points[skipped, 1], "kx", ms=6, label="not corrected")
+    ringed = np.flatnonzero(flagged & corrected)
+    if ringed.size:
+        ax.plot(
+            points[ringed, 0], points[ringed, 1], "o", mfc="none", mec="tab:orange", ms=9,
+            label="flagged",
+        )  # fmt: skip
+    ax.set_xlabel("X robot frame (mm)")
+    ax.set_ylabel("Y robot frame (mm)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(alpha=0.3)
+    if ax.get_legend_handles_labels()[1]:
+        _legend_outside(fig, ax)
     return _png(plt, fig, dpi=90)
