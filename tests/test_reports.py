@@ -89,3 +89,27 @@ def test_a_report_path_that_is_an_input_or_a_folder_writes_nothing(tmp_path, cap
     err = capsys.readouterr().err
     assert len(err.splitlines()) == 1 and str(target) in err
     assert not out.exists() and points.read_bytes() == before
+
+
+@pytest.mark.parametrize("dialect", ["krl", "gcode"])
+def test_program_report_beside_the_same_program_bytes(tmp_path, dialect):
+    points, cell = EXAMPLES / "wing_panel_points.csv", EXAMPLES / "cell.yaml"
+    plain, reported = tmp_path / "plain", tmp_path / "reported"
+    out = {"krl": "", "gcode": "w.ngc"}[dialect]
+    base = [dialect, str(points), "--cell", str(cell), "--grid", str(GRID)]
+    assert main([*base, "-o", str(plain / out)]) == 0
+    report = tmp_path / "r.html"
+    assert main([*base, "-o", str(reported / out), "--report-html", str(report)]) == 0
+    for path in sorted(plain.rglob("*")):
+        assert (reported / path.relative_to(plain)).read_bytes() == path.read_bytes()
+    page = check_report(report, [points, cell, GRID], figures=1)
+    assert page.verdict == ["PASS"]
+    assert "72 positions: 72 corrected" in " ".join(page.text)
+
+
+def test_no_correction_has_no_report(tmp_path, capsys):
+    base = ["gcode", str(EXAMPLES / "wing_panel_points.csv"), "--cell", str(EXAMPLES / "cell.yaml")]
+    out = tmp_path / "w.ngc"
+    code = main([*base, "--no-correction", "-o", str(out), "--report-html", str(tmp_path / "r")])
+    assert code == 2 and not out.exists()
+    assert "--no-correction" in capsys.readouterr().err
