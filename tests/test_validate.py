@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import math
+import shlex
 import statistics
 
 import numpy as np
@@ -188,3 +189,21 @@ def test_ap_moves_with_a_shift_and_rp_does_not(values, shift):
     assert np.allclose(b.ap_xyz, a.ap_xyz + np.array(shift), atol=1e-9)
     assert np.allclose(b.rp_mm, a.rp_mm, atol=1e-9)
     assert (a.repeats == 2).all()
+
+
+def test_the_validation_page_runs_as_written(tmp_path, monkeypatch, capsys):
+    """docs/validation.md: every `accugrid` line of its sh blocks runs from a folder holding the
+    examples, exits 0, and the last writes the report."""
+    from conftest import ROOT
+
+    page = (ROOT / "docs" / "validation.md").read_text()
+    blocks = page.split("```sh\n")[1:]
+    commands = [line for b in blocks for line in b.split("```")[0].splitlines() if line.strip()]
+    assert len(commands) == 6 and all(c.startswith("accugrid ") for c in commands)
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    monkeypatch.chdir(tmp_path)
+    for command in commands:
+        assert main(shlex.split(command)[1:]) == 0, command
+    assert "PASS: 0 of 216 rows" in capsys.readouterr().out
+    check_report(tmp_path / "out" / "validation" / "validation.html",
+                 [tmp_path / "out" / "validation" / "after.csv"], figures=2)  # fmt: skip
