@@ -171,11 +171,12 @@ def corrected_file(
     model = request.model if request.model and Path(request.model).is_file() else None
     files = {request.output: text}
     if request.report_html:
-        from accugrid.codegen.correction_report import correction_report
+        from accugrid.codegen.correction_report import correction_report, verdict_states
 
         roles = [("points", request.points), ("model", request.model), ("grid", request.grid)]
+        state, reasons = verdict_states(verdict)
         files[request.report_html] = correction_report(
-            "Corrected points", verdict, points.label, roles
+            "Corrected points", points.xyz, verdict.command, state, reasons, points.label, roles
         )
         lines.append(f"wrote {request.report_html}")
     return JobFiles(files, [request.points, request.grid, model], lines, warnings)

@@ -187,12 +187,17 @@ def with_report(job: Job, report: str | None, title: str) -> Mapping[Path, objec
         raise InputError("--report-html reports the corrections; --no-correction makes none")
     from collections import ChainMap
 
-    from accugrid.codegen.correction_report import correction_report
+    from accugrid.codegen.correction_report import correction_report, verdict_states
 
     roles = ["points", "cell"] + ["grid or model"] * (len(job.inputs) - 2)
+    verdict = job.program.verdict
+    state, reasons = verdict_states(verdict)
     page = correction_report(
         title,
-        job.program.verdict,
+        verdict.points,
+        verdict.command,
+        state,
+        reasons,
         job.program.points.label,
         list(zip(roles, [str(p) for p in job.inputs], strict=True)),
     )

@@ -322,9 +322,13 @@ def rows_png(values: np.ndarray, tolerance_mm: float, ylabel: str, xlabel: str) 
 
 
 def correction_map_png(
-    points: np.ndarray, correction: np.ndarray, corrected: np.ndarray, flagged: np.ndarray
+    points: np.ndarray,
+    correction: np.ndarray,
+    corrected: np.ndarray,
+    flagged: np.ndarray,
+    frame: str = "robot frame",
 ) -> bytes:
-    """Plan view (X-Y, robot frame) of the positions (N, 3) mm coloured by the length of the
+    """Plan view (X-Y in ``frame``) of the positions (N, 3) mm coloured by the length of the
     correction (N, 3) mm applied, arrows along it (at most 400, scaled to the plot), the
     positions not corrected (``corrected`` (N,) False) as black crosses and the flagged ones
     (``flagged`` (N,) bool) ringed in orange; rasterised, small for 1e4 holes."""
@@ -361,8 +365,8 @@ def correction_map_png(
             points[ringed, 0], points[ringed, 1], "o", mfc="none", mec="tab:orange", ms=9,
             label="flagged",
         )  # fmt: skip
-    ax.set_xlabel("X robot frame (mm)")
-    ax.set_ylabel("Y robot frame (mm)")
+    ax.set_xlabel(f"X {frame} (mm)")
+    ax.set_ylabel(f"Y {frame} (mm)")
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(alpha=0.3)
     if ax.get_legend_handles_labels()[1]:
