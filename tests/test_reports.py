@@ -113,3 +113,19 @@ def test_no_correction_has_no_report(tmp_path, capsys):
     code = main([*base, "--no-correction", "-o", str(out), "--report-html", str(tmp_path / "r")])
     assert code == 2 and not out.exists()
     assert "--no-correction" in capsys.readouterr().err
+
+
+def test_rewrite_report_names_each_position_left_as_it_is(tmp_path):
+    src, dat = EXAMPLES / "cam_drill.src", EXAMPLES / "cam_drill.dat"
+    cell = EXAMPLES / "cell.yaml"
+    base = ["rewrite", str(src), str(dat), "--cell", str(cell), "--allow-partial"]
+    assert main([*base, "-o", str(tmp_path / "plain")]) == 0
+    report = tmp_path / "rw.html"
+    assert main([*base, "-o", str(tmp_path / "rw"), "--report-html", str(report)]) == 0
+    for name in ("cam_drill.src", "cam_drill.dat"):
+        assert (tmp_path / "rw" / name).read_bytes() == (tmp_path / "plain" / name).read_bytes()
+    page = check_report(report, [src, dat, cell, GRID], figures=1)
+    assert page.verdict == ["FAIL"]  # the home PTP lies outside the grid: written as it was
+    text = " ".join(page.text)
+    assert "cam_drill.src:20 PTP" in text and "outside the grid box by 250.000 mm" in text
+    assert "cam_drill.dat:5 XHOME" in text and "joint-space target" in text
