@@ -98,10 +98,7 @@ def html_report(
         ],  # fmt: skip
         "Held-out error per target set, budget and method",
     )
-    notes = [
-        result.settings,
-        *report_text(result).splitlines()[len(table_text(result).splitlines()) + 1 :],
-    ]
+    notes = [result.settings, *_notes(result)]
     pictures = [
         Figure(png, f"Held-out {stat} of the remaining error against the measured points; "
                f"dashed: the {'tolerance' if stat == 'max' else 'std limit'}.")
