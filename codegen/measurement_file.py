@@ -20,7 +20,7 @@ import numpy as np
 from accugrid.codegen.atomic import JobFiles
 from accugrid.codegen.plots import fig3_png
 from accugrid.codegen.textsafe import comment_text, fixed
-from accugrid.compensation.csvtable import read_table
+from accugrid.compensation.csvtable import Table, read_table
 from accugrid.compensation.plans import grid_vertices
 from accugrid.kinematics.configuration import status_turn
 from accugrid.kinematics.errors import InputError
@@ -148,21 +148,7 @@ def _pose_measurement_csv(request: SimulateRequest, report: list[str]) -> str:
         raise InputError("no poses in the plan", r.poses)
     xyzabc = table.floats(["x", "y", "z", "a", "b", "c"])
     ids = table.text("id") if table.has("id") else [f"P{i + 1}" for i in range(len(table))]
-    status = r.status
-    if table.has("s"):
-        status = table.floats(["s"])[:, 0].astype(int)
-    try:
-        q, measured = simulate_pose_measurements(
-            robot,
-            pose_from_xyzabc(xyzabc),
-            status,
-            repeats=r.repeats,
-            noise_tracker_mm=r.noise_tracker_mm,
-            noise_repeat_mm=r.noise_repeat_mm,
-            seed=r.seed,
-        )
-    except InputError as exc:
-        raise InputError(exc.message, r.poses) from None
+    q, measured = _measure_poses(r, table, xyzabc)
     status_of = status_turn(robot, q)[0]
     header = comment_text(
         f"accugrid simulate: robot {robot.name}, poses of {Path(r.poses).name}, repeats "
@@ -183,6 +169,30 @@ def _pose_measurement_csv(request: SimulateRequest, report: list[str]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _measure_poses(
+    request: SimulateRequest, table: Table, xyzabc: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The session at the poses x,y,z,a,b,c (N, 6) mm and KUKA deg of the file ``table``, each
+    in its Status (column s, else --status, else the IK default per pose): the controller's
+    joints (N, 6) rad and the measured positions (N * repeats, 3) mm; InputError at the file."""
+    r = request
+    status = r.status
+    if table.has("s"):
+        status = table.floats(["s"])[:, 0].astype(int)
+    try:
+        return simulate_pose_measurements(
+            r.robot,
+            pose_from_xyzabc(xyzabc),
+            status,
+            repeats=r.repeats,
+            noise_tracker_mm=r.noise_tracker_mm,
+            noise_repeat_mm=r.noise_repeat_mm,
+            seed=r.seed,
+        )
+    except InputError as exc:
+        raise InputError(exc.message, r.poses) from None
+
+
 def _is_corrected(path: str) -> bool:
     """The poses file is a corrected points CSV (it has the command columns x_cmd,y_cmd,z_cmd)."""
     table = read_table(path)
@@ -201,21 +211,7 @@ def _corrected_measurement_csv(request: SimulateRequest, report: list[str]) -> s
     points = read_points(r.poses)
     command = points.table.floats(list(_COMMAND))
     abc = point_orientations(points, np.array(r.abc, dtype=float))
-    status = r.status
-    if points.table.has("s"):
-        status = points.table.floats(["s"])[:, 0].astype(int)
-    try:
-        q, measured = simulate_pose_measurements(
-            robot,
-            pose_from_xyzabc(np.hstack([command, abc])),
-            status,
-            repeats=r.repeats,
-            noise_tracker_mm=r.noise_tracker_mm,
-            noise_repeat_mm=r.noise_repeat_mm,
-            seed=r.seed,
-        )
-    except InputError as exc:
-        raise InputError(exc.message, r.poses) from None
+    q, measured = _measure_poses(r, points.table, np.hstack([command, abc]))
     status_of = status_turn(robot, q)[0]
     header = comment_text(
         f"accugrid simulate: robot {robot.name}, after correction: commands of "
