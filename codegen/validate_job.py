@@ -4,8 +4,9 @@ MEAS is a measurement CSV taken after correction at new points: x,y,z the target
 positions the corrected program aimed at, robot frame, mm), x_meas,y_meas,z_meas where the
 tracker measured the TCP there (robot frame, mm); optional id, a,b,c, s. Statistics and verdict:
 ``compensation.validation`` (deviation d = M - P). The model (and the residual grid, when the
-correction used one) are named with their SHA-256; the model's validated error decides whether
-the file can be from the model's base frame and tool (``check_same_frame``).
+correction used one: read as a grid, the poses outside its box counted) are named with their
+SHA-256; the model's validated error decides whether the file can be from the model's base
+frame and tool (``check_same_frame``).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from accugrid.compensation.validation import (
     validate_positions,
 )
 from accugrid.kinematics.errors import InputError, printable
+from accugrid.kinematics.units import mm_text
 from accugrid.kinematics.validity import Validity
 from accugrid.kinematics.yamlfile import load_yaml
 
@@ -79,9 +81,20 @@ def validate_files(request: ValidateRequest) -> ValidateJob:
     result = validate_positions(meas.commanded, meas.measured, labels, request.tolerance_mm)
     check_same_frame(result, validated, request.measurements)
     lines = _summary(result, validated)
+    grid_note = None
+    if request.grid:  # read as a grid (a wrong file is refused); the rows outside its box told
+        from accugrid.compensation.grid import GridModel
+
+        grid = GridModel.from_measurements(request.grid)
+        outside = int((~grid.contains(np.unique(result.target, axis=0))).sum())
+        grid_note = (
+            f"residual grid {mm_text(grid.origin)} .. {mm_text(grid.upper)} mm, step "
+            f"{mm_text(grid.step)} mm: {outside} of {len(result.ap_mm)} poses outside its box"
+        )
+        lines.insert(-1, grid_note)
     files: dict[str, str] = {}
     if request.report_html:
-        files[request.report_html] = _report(request, result, validated)
+        files[request.report_html] = _report(request, result, validated, grid_note)
         lines.append(f"wrote {request.report_html}")
     inputs = [request.measurements, request.model, request.grid]
     return ValidateJob(JobFiles(files, inputs, lines), result)
@@ -150,7 +163,9 @@ def _summary(result: ValidationResult, validated: np.ndarray | None) -> list[str
     return lines
 
 
-def _report(request: ValidateRequest, result: ValidationResult, validated) -> str:
+def _report(
+    request: ValidateRequest, result: ValidationResult, validated, grid_note: str | None
+) -> str:
     """The HTML report of the validation."""
     tol = result.tolerance_mm
     stats = Table(
@@ -206,6 +221,8 @@ def _report(request: ValidateRequest, result: ValidationResult, validated) -> st
             + " ".join(f"{v:.3f}" for v in validated)
             + " mm."
         )
+    if grid_note:
+        notes.append(grid_note[0].upper() + grid_note[1:] + ".")
     outside = int(result.outside.sum())
     facts = [
         ("rows / poses", f"{len(result.deviation)} / {len(result.ap_mm)}"),

@@ -125,13 +125,16 @@ def test_a_failed_validation_exits_3_and_still_writes_its_report(cell, capsys):
 
 def test_the_report_is_self_contained_and_names_every_input_with_its_sha256(cell):
     report = cell / "structure.html"
-    grid = cell / "ident.csv"  # any file given as --grid is named with its hash
+    from conftest import EXAMPLES
+
+    grid = EXAMPLES / "grid_200mm.csv"  # the residual grid is read and named with its hash
     assert run("validate", cell / "after.csv", "--model", cell / "cal.yaml", "--grid", grid,
                "--report-html", report) == 0  # fmt: skip
     page = check_report(report, [cell / "after.csv", cell / "cal.yaml", grid], figures=2)
     text = " ".join(page.text)
     assert page.verdict == ["PASS"]
     assert "±0.3 mm per axis" in text
+    assert "step (200.000, 200.000, 200.000) mm: 0 of 24 poses outside its box" in text
 
 
 def shifted(cell, name, offset):
@@ -171,6 +174,8 @@ def test_bad_report_paths_and_models_are_located_errors(cell, capsys):
     assert meas.read_bytes() == before
     assert run("validate", meas, "--model", cell / "plan" / "ident.csv") == 2
     assert run("validate", meas, "--model", cell / "targets.csv") == 2  # not a calibrated model
+    # a --grid that is no grid measurement
+    assert run("validate", meas, "--model", cell / "cal.yaml", "--grid", meas) == 2
 
 
 @settings(max_examples=50, deadline=None)

@@ -49,7 +49,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--grid",
         metavar="G",
-        help="the residual grid the correction used, named with its SHA-256 in the report",
+        help="the residual grid the correction used: read as a grid, named with its SHA-256, "
+        "the poses outside its box counted",
     )
     parser.add_argument(
         "--tolerance",
