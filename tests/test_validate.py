@@ -212,3 +212,18 @@ def test_the_validation_page_runs_as_written(tmp_path, monkeypatch, capsys):
     assert "PASS: 0 of 216 rows" in capsys.readouterr().out
     check_report(tmp_path / "out" / "validation" / "validation.html",
                  [tmp_path / "out" / "validation" / "after.csv"], figures=2)  # fmt: skip
+
+
+def test_text_from_the_files_reaches_the_report_escaped(cell):
+    lines = (cell / "after.csv").read_text().splitlines()
+    rows = [ln for ln in lines if not ln.startswith(("#", "id"))]
+    hostile = ["id,x,y,z,a,b,c,s,x_meas,y_meas,z_meas"] + [
+        '<script>alert("x")</script>,' + row.split(",", 1)[1] for row in rows
+    ]
+    path = cell / "hostile.csv"
+    path.write_text("\n".join(hostile) + "\n")
+    report = cell / "hostile.html"
+    assert run("validate", path, "--model", cell / "cal.yaml", "--report-html", report) == 0
+    page = check_report(report, [path, cell / "cal.yaml"], figures=2)
+    assert "<script" not in report.read_text()
+    assert '<script>alert("x")</script>' in " ".join(page.text)  # shown as text
