@@ -169,7 +169,17 @@ def corrected_file(
         lines.append(f"  ... and {len(flagged) - _LISTED} more (see the flag column)")
     lines.append(f"wrote {request.output}")
     model = request.model if request.model and Path(request.model).is_file() else None
-    return JobFiles({request.output: text}, [request.points, request.grid, model], lines, warnings)
+    files = {request.output: text}
+    if request.report_html:
+        from accugrid.codegen.correction_report import correction_report, verdict_states
+
+        roles = [("points", request.points), ("model", request.model), ("grid", request.grid)]
+        state, reasons = verdict_states(verdict)
+        files[request.report_html] = correction_report(
+            "Corrected points", points.xyz, verdict.command, state, reasons, points.label, roles
+        )
+        lines.append(f"wrote {request.report_html}")
+    return JobFiles(files, [request.points, request.grid, model], lines, warnings)
 
 
 @dataclass(frozen=True)
@@ -195,6 +205,7 @@ class CorrectRequest:
     tool: tuple[float, ...] | None = None
     strict: bool = False
     allow_partial: bool = False
+    report_html: str | None = None  # the HTML report to write beside the CSV
 
     def limits(self) -> dict:
         """The policy's orientation and strictness fields (``Policy.build``)."""

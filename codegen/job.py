@@ -22,7 +22,7 @@ from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import load_robot
 
-__all__ = ["Job", "add_job_arguments", "grid_path", "prepare", "summary"]
+__all__ = ["Job", "add_job_arguments", "grid_path", "prepare", "summary", "with_report"]
 
 
 @dataclass
@@ -81,6 +81,12 @@ def add_job_arguments(parser: argparse.ArgumentParser) -> None:
         "krl/ or gcode/ folder)",
     )
     add_policy(parser, "holes")
+    parser.add_argument(
+        "--report-html",
+        metavar="FILE",
+        help="also write the self-contained HTML report (inputs with SHA-256, a map of the "
+        "corrections, the holes flagged or not corrected with the reasons)",
+    )
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
     add_table_format(parser)
 
@@ -173,6 +179,34 @@ def prepare(
     inputs = [Path(args.points), Path(args.cell)] + ([grid_file] if grid_file else [])
     inputs += [model_file] if model_file is not None and model_file.is_file() else []
     return Job(program, header, inputs, command)
+
+
+def with_report(job: Job, report: str | None, title: str) -> Mapping[Path, object]:
+    """The job's files plus its HTML report (``codegen.correction_report``) at ``report``;
+    the files alone without one. The program's files stay
+    rendered on demand (a chain of mappings, not a copy). InputError for an uncorrected
+    program (--no-correction: no correction to report)."""
+    if not report:
+        return job.files
+    if job.program.verdict is None:
+        raise InputError("--report-html reports the corrections; --no-correction makes none")
+    from collections import ChainMap
+
+    from accugrid.codegen.correction_report import correction_report, verdict_states
+
+    roles = ["points", "cell"] + ["grid or model"] * (len(job.inputs) - 2)
+    verdict = job.program.verdict
+    state, reasons = verdict_states(verdict)
+    page = correction_report(
+        title,
+        verdict.points,
+        verdict.command,
+        state,
+        reasons,
+        job.program.points.label,
+        list(zip(roles, [str(p) for p in job.inputs], strict=True)),
+    )
+    return ChainMap({Path(report): page}, job.files)
 
 
 def summary(job: Job, written: list[Path]) -> str:

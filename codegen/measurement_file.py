@@ -2,6 +2,12 @@
 one orientation (id,x,y,z,a,b,c,s,x_meas,y_meas,z_meas; s the KUKA Status) or a plan's poses with
 the controller's joints (id,x,y,z,a,b,c,s,a1..a6,x_meas,y_meas,z_meas), mm and deg, 4 decimals,
 a ``#`` comment line with the settings first; and seed Fig. 3 of the robot's error field.
+
+A corrected points CSV (``accugrid correct``: x,y,z targets, x_cmd,y_cmd,z_cmd commands) given as
+the poses is measured after correction: the robot is commanded to x_cmd.. (at each point's a,b,c,
+or its i,j,k drill axis oriented as ``correct`` does from ``--abc``) and the rows keep x,y,z, the
+targets, beside x_meas.. (id,x,y,z,a,b,c,s,x_meas,y_meas,z_meas): the file ``accugrid validate``
+checks.
 """
 
 from __future__ import annotations
@@ -14,7 +20,7 @@ import numpy as np
 from accugrid.codegen.atomic import JobFiles
 from accugrid.codegen.plots import fig3_png
 from accugrid.codegen.textsafe import comment_text, fixed
-from accugrid.compensation.csvtable import read_table
+from accugrid.compensation.csvtable import Table, read_table
 from accugrid.compensation.plans import grid_vertices
 from accugrid.kinematics.configuration import status_turn
 from accugrid.kinematics.errors import InputError
@@ -31,6 +37,8 @@ from accugrid.kinematics.simulation import (
 )
 
 __all__ = ["SimulateRequest", "simulate_files"]
+
+_COMMAND = ("x_cmd", "y_cmd", "z_cmd")  # the command columns of a corrected points CSV
 
 
 @dataclass(frozen=True)
@@ -68,7 +76,9 @@ def simulate_files(request: SimulateRequest) -> JobFiles:
             f"note: robot {robot.name} has no parameter errors; the simulated error is noise only"
         )
     files: dict[str, bytes | str] = {}
-    if request.output and request.poses:
+    if request.output and request.poses and _is_corrected(request.poses):
+        files[request.output] = _corrected_measurement_csv(request, lines)
+    elif request.output and request.poses:
         files[request.output] = _pose_measurement_csv(request, lines)
     elif request.output:
         files[request.output] = _measurement_csv(request, lines)
@@ -138,21 +148,7 @@ def _pose_measurement_csv(request: SimulateRequest, report: list[str]) -> str:
         raise InputError("no poses in the plan", r.poses)
     xyzabc = table.floats(["x", "y", "z", "a", "b", "c"])
     ids = table.text("id") if table.has("id") else [f"P{i + 1}" for i in range(len(table))]
-    status = r.status
-    if table.has("s"):
-        status = table.floats(["s"])[:, 0].astype(int)
-    try:
-        q, measured = simulate_pose_measurements(
-            robot,
-            pose_from_xyzabc(xyzabc),
-            status,
-            repeats=r.repeats,
-            noise_tracker_mm=r.noise_tracker_mm,
-            noise_repeat_mm=r.noise_repeat_mm,
-            seed=r.seed,
-        )
-    except InputError as exc:
-        raise InputError(exc.message, r.poses) from None
+    q, measured = _measure_poses(r, table, xyzabc)
     status_of = status_turn(robot, q)[0]
     header = comment_text(
         f"accugrid simulate: robot {robot.name}, poses of {Path(r.poses).name}, repeats "
@@ -170,6 +166,70 @@ def _pose_measurement_csv(request: SimulateRequest, report: list[str]) -> str:
         ident = comment_text(ids[row], limit=40).replace(",", " ")
         lines.append(f"{ident},{pose_text},{status_of[row]},{joint_text},{meas_text}")
     report.append(f"{robot.name}: {len(table)} poses x {r.repeats} repeats = {len(rows)} rows")
+    return "\n".join(lines) + "\n"
+
+
+def _measure_poses(
+    request: SimulateRequest, table: Table, xyzabc: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The session at the poses x,y,z,a,b,c (N, 6) mm and KUKA deg of the file ``table``, each
+    in its Status (column s, else --status, else the IK default per pose): the controller's
+    joints (N, 6) rad and the measured positions (N * repeats, 3) mm; InputError at the file."""
+    r = request
+    status = r.status
+    if table.has("s"):
+        status = table.floats(["s"])[:, 0].astype(int)
+    try:
+        return simulate_pose_measurements(
+            r.robot,
+            pose_from_xyzabc(xyzabc),
+            status,
+            repeats=r.repeats,
+            noise_tracker_mm=r.noise_tracker_mm,
+            noise_repeat_mm=r.noise_repeat_mm,
+            seed=r.seed,
+        )
+    except InputError as exc:
+        raise InputError(exc.message, r.poses) from None
+
+
+def _is_corrected(path: str) -> bool:
+    """The poses file is a corrected points CSV (it has the command columns x_cmd,y_cmd,z_cmd)."""
+    table = read_table(path)
+    return all(table.has(name) for name in _COMMAND)
+
+
+def _corrected_measurement_csv(request: SimulateRequest, report: list[str]) -> str:
+    """The tracker session after correction: commanded at x_cmd.., the rows keeping the
+    targets x,y,z (id,x,y,z,a,b,c,s,x_meas,y_meas,z_meas)."""
+    from accugrid.codegen.correct_model import point_orientations
+    from accugrid.codegen.points import read_points
+
+    robot, r = request.robot, request
+    if r.region is not None or r.step_mm is not None:
+        raise InputError("--poses and --region/--step exclude each other")
+    points = read_points(r.poses)
+    command = points.table.floats(list(_COMMAND))
+    abc = point_orientations(points, np.array(r.abc, dtype=float))
+    q, measured = _measure_poses(r, points.table, np.hstack([command, abc]))
+    status_of = status_turn(robot, q)[0]
+    header = comment_text(
+        f"accugrid simulate: robot {robot.name}, after correction: commands of "
+        f"{Path(r.poses).name}, targets as x,y,z, repeats {r.repeats}, noise tracker "
+        f"{r.noise_tracker_mm:g} mm, repeat {r.noise_repeat_mm:g} mm, seed {r.seed}",
+        limit=400,
+    )
+    lines = [f"# {header}", "id,x,y,z,a,b,c,s,x_meas,y_meas,z_meas"]
+    rows = np.repeat(np.arange(len(points)), r.repeats)
+    for row, meas in zip(rows, measured, strict=True):
+        pose_text = ",".join(fixed(v, 4) for v in (*points.xyz[row], *abc[row]))
+        meas_text = ",".join(fixed(v, 4) for v in meas)
+        ident = comment_text(points.ids[row], limit=40).replace(",", " ")
+        lines.append(f"{ident},{pose_text},{status_of[row]},{meas_text}")
+    report.append(
+        f"{robot.name}: {len(points)} corrected points measured at their commands x {r.repeats} "
+        f"repeats = {len(rows)} rows (x,y,z: the targets)"
+    )
     return "\n".join(lines) + "\n"
 
 

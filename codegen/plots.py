@@ -22,10 +22,13 @@ from accugrid.kinematics.frames import invert, transform_points
 __all__ = [
     "COMPARISON_STATS",
     "comparison_png",
+    "correction_map_png",
     "fig3_png",
     "fig12_png",
     "frame_fit_png",
     "hist_png",
+    "rows_png",
+    "validation_hist_png",
 ]
 
 _NO_SOFTWARE = {"Software": None}  # no matplotlib version in the file: the same bytes anywhere
@@ -282,3 +285,90 @@ def comparison_png(
         fontsize=10,
     )
     return _png(plt, fig, dpi=80)
+
+
+def validation_hist_png(deviation: np.ndarray, tolerance_mm: float) -> bytes:
+    """``accugrid validate``: histograms of the deviation d = M - P (N, 3) mm per axis after
+    correction, the tolerance +-``tolerance_mm`` as lines."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, 3, figsize=(10, 2.9), layout="constrained")
+    reach = max(float(np.abs(deviation).max()), tolerance_mm) * 1.1
+    bins = np.linspace(-reach, reach, 41)
+    for k, ax in enumerate(axes):
+        ax.hist(deviation[:, k], bins=bins, color="tab:blue", alpha=0.8, label="measured rows")
+        _tolerance_lines(ax, tolerance_mm, f"tolerance ±{tolerance_mm:g} mm", vertical=True)
+        ax.set_title(f"{'XYZ'[k]}: measured - target", fontsize=9)
+        ax.set_xlabel("deviation (mm)")
+    axes[0].set_ylabel("rows")
+    _legend_outside(fig, axes[0])
+    return _png(plt, fig, dpi=90)
+
+
+def rows_png(values: np.ndarray, tolerance_mm: float, ylabel: str, xlabel: str) -> bytes:
+    """Per-row errors (N, 3) mm in file order (validation deviations, identification
+    residuals), one marker colour per axis, the tolerance as lines; rasterised, small for 1e4
+    rows."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(10, 2.6), layout="constrained")
+    rows = np.arange(1, len(values) + 1)
+    for k, colour in enumerate(("tab:red", "tab:blue", "tab:purple")):
+        ax.plot(rows, values[:, k], ".", ms=3, color=colour, label="XYZ"[k])
+    _tolerance_lines(ax, tolerance_mm, f"tolerance ±{tolerance_mm:g} mm")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    _legend_outside(fig, ax)
+    return _png(plt, fig, dpi=90)
+
+
+def correction_map_png(
+    points: np.ndarray,
+    correction: np.ndarray,
+    corrected: np.ndarray,
+    flagged: np.ndarray,
+    frame: str = "robot frame",
+) -> bytes:
+    """Plan view (X-Y in ``frame``) of the positions (N, 3) mm coloured by the length of the
+    correction (N, 3) mm applied, arrows along it (at most 400, scaled to the plot), the
+    positions not corrected (``corrected`` (N,) False) as black crosses and the flagged ones
+    (``flagged`` (N,) bool) ringed in orange; rasterised, small for 1e4 holes."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(10, 5.2), layout="constrained")
+    length = np.linalg.norm(correction, axis=1)
+    done = np.flatnonzero(corrected)
+    mesh = ax.scatter(
+        points[done, 0], points[done, 1], c=length[done], s=14, cmap="viridis", rasterized=True
+    )
+    fig.colorbar(mesh, ax=ax, label="|correction| (mm)")
+    if done.size:
+        arrows = done[:: max(1, done.size // 400)]
+        span = np.ptp(points[:, :2], axis=0).max() if len(points) > 1 else 1.0
+        scale = max(float(length[arrows].max()), 1e-9) / (0.04 * max(span, 1.0))
+        ax.quiver(
+            points[arrows, 0],
+            points[arrows, 1],
+            correction[arrows, 0],
+            correction[arrows, 1],
+            angles="xy",
+            scale_units="xy",
+            scale=scale,
+            width=0.002,
+            color="tab:red",
+            label=f"XY correction (1 mm drawn as {1.0 / scale:.0f} mm)",
+        )
+    skipped = np.flatnonzero(~corrected)
+    if skipped.size:
+        ax.plot(points[skipped, 0], points[skipped, 1], "kx", ms=6, label="not corrected")
+    ringed = np.flatnonzero(flagged & corrected)
+    if ringed.size:
+        ax.plot(
+            points[ringed, 0], points[ringed, 1], "o", mfc="none", mec="tab:orange", ms=9,
+            label="flagged",
+        )  # fmt: skip
+    ax.set_xlabel(f"X {frame} (mm)")
+    ax.set_ylabel(f"Y {frame} (mm)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(alpha=0.3)
+    if ax.get_legend_handles_labels()[1]:
+        _legend_outside(fig, ax)
+    return _png(plt, fig, dpi=90)

@@ -48,7 +48,7 @@ from accugrid.codegen.cell import Cell
 from accugrid.codegen.points import Points
 from accugrid.codegen.textsafe import fixed_texts
 from accugrid.compensation.grid import GridModel
-from accugrid.compensation.policy import singular_a5_deg
+from accugrid.compensation.policy import Verdict, singular_a5_deg
 from accugrid.kinematics.blocks import run_blocks
 from accugrid.kinematics.configuration import Configuration, kuka_turn
 from accugrid.kinematics.errors import InputError
@@ -102,6 +102,7 @@ class Program:
     # each pose, S = 4 stages, or 3 when RET is the APP position; set by ``wait`` when built
     # with ``keep_joints``
     uncorrected: list[str] = field(default_factory=list)  # header lines: holes left as they are
+    verdict: Verdict | None = field(default=None, repr=False)  # the policy's, robot frame
 
     def __len__(self) -> int:
         return len(self.positions)
@@ -296,10 +297,11 @@ def build_program(
     warnings: list[str] = []
     marks: list[str] = []
     status = cell.configuration.status
+    verdict = None
     if model is None and grid is None:
         correction = np.zeros((n, 3))
     else:  # the robot-frame rotations whole only here: freed before the IK
-        correction, warnings, status, marks = _correct(
+        correction, warnings, status, marks, verdict = _correct(
             points,
             cell,
             robot,
@@ -335,6 +337,7 @@ def build_program(
         corrected=grid is not None or model is not None,
         checking=IKCheck(check) if background else None,
         uncorrected=marks,
+        verdict=verdict,
     )
     if not background:
         program.configuration, ik_warnings, program.joints = check()
@@ -402,11 +405,12 @@ def _correct(
     rotations: np.ndarray,
     allow_partial: bool,
     strict: bool,
-) -> tuple[np.ndarray, list[str], int | None, list[str]]:
+) -> tuple[np.ndarray, list[str], int | None, list[str], Verdict]:
     """The correction policy (``compensation.policy``) at every hole point (N, 3) mm with its
     rotation (N, 3, 3), robot frame: e = P' - P (N, 3) (0 for holes left uncorrected), the
     warnings, the KUKA Status the program runs in (the cell's; else the one the model corrected
-    in, or the grid's) and the header lines marking each hole left uncorrected. The tool is the
+    in, or the grid's), the header lines marking each hole left uncorrected and the verdict
+    (for the report). The tool is the
     cell's (the drill as taught) on the controller and on the calibrated arm. InputError (the
     policy's job rule) unless every hole is corrected or ``allow_partial``."""
     from accugrid.compensation.policy import Policy
@@ -441,7 +445,7 @@ def _correct(
         f"not corrected: hole {points.ids[i]}: {verdict.reason(i)}"
         for i in verdict.refused.tolist()
     ]
-    return verdict.command - holes_robot, warnings, status, marks
+    return verdict.command - holes_robot, warnings, status, marks, verdict
 
 
 def _configuration(

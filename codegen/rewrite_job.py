@@ -12,6 +12,8 @@ import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+import numpy as np
+
 from accugrid.codegen.cell import load_cell
 from accugrid.codegen.dialects import dialect_of, plugin_of
 from accugrid.codegen.program_text import add_header, read_program
@@ -42,6 +44,7 @@ class RewriteRequest:
     grid: str | None = None
     model: str | None = None
     report: Path | None = None
+    report_html: Path | None = None
     config_dat: Path | None = None
     header: bool = False
     decimals: int | None = None
@@ -175,4 +178,39 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     if policy.grid_status is not None and measured is not None and measured.status is None:
         warnings.append(f"the grid does not record its Status: {policy.describe_status()}")
     read += [grid] if grid is not None else []
+    if req.report_html is not None:
+        files[req.report_html] = _html_report(req, result.rows, read).encode("utf-8")
     return RewriteJob(files, read, result, warnings + warning_lines(result, opts))
+
+
+def _html_report(req: RewriteRequest, rows, read: list[Path]) -> str:
+    """The HTML report of the rewrite (``codegen.correction_report``): every position as
+    written and as rewritten (program frame), its status and reason."""
+    from accugrid.codegen.correction_report import (
+        CORRECTED,
+        FLAGGED,
+        NOT_CORRECTED,
+        SKIPPED,
+        correction_report,
+    )
+    from accugrid.codegen.rewrite import CORRECTED as DONE
+    from accugrid.codegen.rewrite import OUTSIDE
+
+    state = np.full(len(rows.line), SKIPPED, np.int8)
+    state[rows.status == OUTSIDE] = NOT_CORRECTED
+    done = rows.status == DONE
+    state[done] = CORRECTED
+    state[done & np.array([bool(r) for r in rows.reason], dtype=bool)] = FLAGGED
+    names = [Path(f).name for f in rows.files]
+
+    def label(i: int) -> str:
+        return f"{names[rows.file[i]]}:{rows.line[i]} {rows.name[i]}"
+
+    roles = [("program", os.fspath(p)) for p in req.outputs]
+    roles += [("cell", req.cell)] + [
+        ("grid or model", os.fspath(p)) for p in read[len(roles) + 1 :]
+    ]
+    new = np.where(np.isnan(rows.new), rows.old, rows.new)
+    return correction_report(
+        "Rewritten program", rows.old, new, state, rows.reason, label, roles, "program frame"
+    )

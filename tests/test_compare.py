@@ -140,3 +140,16 @@ def test_harmonics_must_name_an_axis_and_orders(tmp_path, capsys):
         err = capsys.readouterr().err
         assert "--harmonics" in err and why in err
     assert not any(tmp_path.iterdir())
+
+
+def test_the_report_holds_the_table_and_both_figures(tmp_path, capsys):
+    from report_helpers import check_report
+
+    report = tmp_path / "compare.html"
+    assert main(["compare", *TINY, "-o", str(tmp_path / "c"), "--report-html", str(report)]) == 0
+    page = check_report(report, [], figures=2)
+    assert page.verdict == ["no pass criterion"]
+    text = " ".join(page.text)
+    for row in rows_of(tmp_path / "c"):
+        assert row["method"] in text and row["max_x"] in text
+    assert f"wrote {report}" in capsys.readouterr().out

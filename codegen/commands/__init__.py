@@ -57,6 +57,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "study",
         "grid-step study of the seed (Tables 4-5, Fig. 12): simulated or measured",
     ),
+    "validate": (
+        "validate",
+        "check a calibrated model on points measured after correction: statistics, ISO 9283, "
+        "pass/fail",
+    ),
     "transform": (
         "transform",
         "map tracker-frame x,y,z / x_meas,y_meas,z_meas columns into the robot frame",

@@ -41,7 +41,7 @@ from accugrid.codegen.cli_options import (
     number,
     robot_with_tool,
 )
-from accugrid.codegen.comparison_report import csv_text, report_text
+from accugrid.codegen.comparison_report import csv_text, html_report, report_text
 from accugrid.compensation.comparison import compare_methods
 from accugrid.compensation.plans import SEED_REGION
 from accugrid.kinematics.errors import InputError
@@ -138,6 +138,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="DIR",
         help="folder for comparison.csv, comparison_max.png and comparison_std.png",
     )
+    parser.add_argument(
+        "--report-html",
+        metavar="FILE",
+        help="also write the self-contained HTML report (settings, table, both figures)",
+    )
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 
@@ -148,7 +153,7 @@ def run(args: argparse.Namespace) -> int:
     paths = [str(out / "comparison.csv")]
     paths += [str(out / f"comparison_{stat}.png") for stat in COMPARISON_STATS]
     inputs = [args.robot] if Path(args.robot).is_file() else []
-    check_targets(paths, inputs, args.force)
+    check_targets(paths + ([args.report_html] if args.report_html else []), inputs, args.force)
     if not args.budgets or min(args.budgets) < 8:
         raise InputError("--budgets: every budget must be at least 8 points")
     if args.targets < 1 or args.repeats < 1:
@@ -180,6 +185,10 @@ def run(args: argparse.Namespace) -> int:
     files = {paths[0]: csv_text(result)}
     for path, stat in zip(paths[1:], COMPARISON_STATS, strict=True):
         files[path] = comparison_png(result, stat)
+    if args.report_html:
+        pngs = dict(zip(COMPARISON_STATS, list(files.values())[1:], strict=True))
+        files[args.report_html] = html_report(result, pngs, [("robot", args.robot)])
+        paths.append(args.report_html)
     write_files(files, inputs, force=args.force)
     print(report_text(result))
     for path in paths:

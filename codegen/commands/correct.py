@@ -131,6 +131,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="largest distance of a repeated measurement from its mean, mm "
         f"(default: {REPEAT_TOL_MM:g})",
     )
+    parser.add_argument(
+        "--report-html",
+        metavar="FILE",
+        help="also write the self-contained HTML report (inputs with SHA-256, a map of the "
+        "corrections, the positions flagged or not corrected with the reasons)",
+    )
     add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite an existing output")
 
@@ -158,9 +164,11 @@ def run(args: argparse.Namespace) -> int:
         tool=None if args.tool is None else tuple(args.tool),
         strict=args.strict,
         allow_partial=args.allow_partial,
+        report_html=args.report_html,
     )
     model_file = args.model if args.model and Path(args.model).is_file() else None
-    check_targets([args.output], [args.points, args.grid, model_file], args.force)
+    targets = [args.output] + ([args.report_html] if args.report_html else [])
+    check_targets(targets, [args.points, args.grid, model_file], args.force)
     job = correct_points(request)
     write_files(job.files, job.inputs, args.force)
     for line in job.warnings:

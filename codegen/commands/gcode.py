@@ -18,7 +18,7 @@ from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.gcode.job import gcode_job
-from accugrid.codegen.job import add_job_arguments, summary
+from accugrid.codegen.job import add_job_arguments, summary, with_report
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -32,8 +32,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
-    check_targets([out], [args.points, args.cell] + ([args.grid] if args.grid else []), args.force)
+    report = [Path(args.report_html)] if args.report_html else []
+    inputs = [args.points, args.cell] + ([args.grid] if args.grid else [])
+    check_targets([out, *report], inputs, args.force)
     job = gcode_job(args, out)
-    written = write_files(job.files, job.inputs, args.force, ready=job.finish)
+    files = with_report(job, args.report_html, "G-code drilling program")
+    written = write_files(files, job.inputs, args.force, ready=job.finish)
     print(summary(job, written))
     return 0

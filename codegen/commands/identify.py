@@ -104,12 +104,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("-o", "--output", required=True, metavar="CAL.yaml", help="robot YAML")
     parser.add_argument("--urdf", metavar="FILE.urdf", help="also write the model as URDF")
+    parser.add_argument(
+        "--report-html",
+        metavar="FILE",
+        help="also write the self-contained HTML report (inputs with SHA-256, residuals, "
+        "cross-validation against +-0.3 mm, parameters, unidentifiable directions)",
+    )
     add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
 
 def run(args: argparse.Namespace) -> int:
-    targets = [args.output] + ([args.urdf] if args.urdf else [])
+    targets = [args.output] + [t for t in (args.urdf, args.report_html) if t]
     if args.urdf and Path(args.urdf).resolve() == Path(args.output).resolve():
         raise InputError("--urdf and -o name the same file", args.urdf)
     inputs = [args.measurements] + ([args.robot] if Path(args.robot).is_file() else [])
@@ -127,6 +133,13 @@ def run(args: argparse.Namespace) -> int:
         max_order=args.max_order,
     )
     calibration = calibrate(args.measurements, robot, options, args.output, args.urdf)
+    if args.report_html:
+        from accugrid.codegen.identify_report import identify_report
+
+        roles = [("measurements", args.measurements), ("nominal robot", args.robot)]
+        calibration.files[args.report_html] = identify_report(
+            calibration.files[args.output], calibration.result.residuals, roles
+        )
     write_files(calibration.files, inputs, args.force, main=[args.output])  # the YAML last
     print(calibration.report)
     return 0

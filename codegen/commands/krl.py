@@ -18,7 +18,7 @@ from pathlib import Path
 
 from accugrid.codegen.atomic import check_targets, write_files
 from accugrid.codegen.cell import load_cell
-from accugrid.codegen.job import add_job_arguments, summary
+from accugrid.codegen.job import add_job_arguments, summary, with_report
 from accugrid.codegen.krl.job import krl_job, krl_targets
 
 __all__ = ["NAME", "add_arguments", "run"]
@@ -37,10 +37,12 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     inputs = [args.points, args.cell] + ([args.grid] if args.grid else [])
     cell = load_cell(args.cell)
-    check_targets(krl_targets(cell, out), inputs, args.force)
+    report = [Path(args.report_html)] if args.report_html else []
+    check_targets(krl_targets(cell, out) + report, inputs, args.force)
     job = krl_job(args, out, cell)
+    files = with_report(job, args.report_html, "KUKA KRL drilling program")
     written = write_files(
-        job.files, job.inputs, args.force, ready=job.finish, main=job.main, stale=job.stale
+        files, job.inputs, args.force, ready=job.finish, main=job.main, stale=job.stale
     )
     print(summary(job, written))
     return 0

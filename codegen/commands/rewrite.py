@@ -75,6 +75,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("-o", "--output", required=True, metavar="OUT", help="output file or dir")
     parser.add_argument("--report", metavar="REPORT.csv", help="write the per-position report")
+    parser.add_argument(
+        "--report-html",
+        metavar="FILE",
+        help="also write the self-contained HTML report (inputs with SHA-256, a map of the "
+        "corrections, the positions flagged, not corrected or skipped with the reasons)",
+    )
     add_policy(parser, "positions")
     add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
@@ -174,7 +180,8 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     outputs = _outputs(inputs, args.output)
-    targets = list(outputs.values()) + ([Path(args.report)] if args.report else [])
+    reports = [Path(r) for r in (args.report, args.report_html) if r]
+    targets = list(outputs.values()) + reports
     if len(set(map(os.path.abspath, targets))) != len(targets):
         raise InputError("two outputs would have the same name", args.output)
     read = inputs + [Path(args.cell)] + ([Path(args.config_dat)] if args.config_dat else [])
@@ -186,6 +193,7 @@ def run(args: argparse.Namespace) -> int:
             grid=args.grid,
             model=args.model,
             report=Path(args.report) if args.report else None,
+            report_html=Path(args.report_html) if args.report_html else None,
             config_dat=Path(args.config_dat) if args.config_dat else None,
             header=args.header,
             decimals=args.decimals,

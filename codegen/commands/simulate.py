@@ -12,7 +12,9 @@ the KUKA Status the grid holds in) for
 --poses PLAN.csv instead measures the poses of a plan at any orientation (columns x,y,z,a,b,c,
 optional id and s, e.g. from `accugrid plan identify`): each in its Status (column s, else
 --status, else the IK default per pose), with the joints the controller reports (a1..a6, KUKA
-deg, 4 decimals) in the output, for `accugrid identify`.
+deg, 4 decimals) in the output, for `accugrid identify`. A corrected points CSV (from `accugrid
+correct`, with x_cmd,y_cmd,z_cmd) is measured at its commands and the rows keep its x,y,z, the
+targets: the measurement after correction that `accugrid validate` checks.
 
 --plot FILE draws seed Fig. 3: the X, Y, Z components of the error e = P - M over the plane of
 seed Table 2 (X 1000..2000, Y -500..500, Z 1800 mm, A 0, B 90, C 0 deg). Lengths in mm, angles in
@@ -60,7 +62,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--poses",
         metavar="PLAN.csv",
-        help="measure the poses of a plan (x,y,z,a,b,c[,id][,s]) instead of a grid",
+        help="measure the poses of a plan (x,y,z,a,b,c[,id][,s]) instead of a grid; a corrected "
+        "points CSV is measured at its x_cmd,y_cmd,z_cmd (a,b,c, or i,j,k oriented from --abc)",
     )
     add_abc(parser, "TCP orientation at every vertex")
     add_tool(parser, "tool on the flange")
