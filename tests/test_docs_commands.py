@@ -4,9 +4,10 @@ Every ```sh block of README.md and docs/*.md is a list of shell commands: each `
 command (backslash continuations joined, `#` comments dropped) runs with the venv's console
 script from a temporary folder holding a copy of examples/, the commands of one page in order
 (later ones read what earlier ones wrote), and must exit 0. `make ...` lines are skipped (the
-quick start is `make demo` / `make test` itself). Blocks that only illustrate (a user's own file
-names, a long study, the output a command prints) are fenced ```text or ```console and are not
-run. docs/validation.md is run by tests/test_validate.py and is skipped here.
+quick start is `make demo` / `make test` itself). Blocks that only illustrate (the install, a
+user's own file names, a long study, the output a command prints) are fenced ```text or
+```console and are not run. docs/validation.md is run by tests/test_validate.py and is skipped
+here.
 """
 
 import re
