@@ -70,6 +70,7 @@ __all__ = [
     "BaseRef",
     "Declared",
     "Fdat",
+    "FRAME_OPERAND",
     "FrameUse",
     "JOINT_TARGET",
     "KrlPosition",
@@ -96,6 +97,9 @@ JOINT_KEYS = frozenset("A1 A2 A3 A4 A5 A6 E1 E2 E3 E4 E5 E6".split())
 # the reason of an aggregate of joint angles: a target the robot reaches by its joints, never a
 # Cartesian position to correct
 JOINT_TARGET = "joint-space target (AXIS/E6AXIS): not a Cartesian position"
+# how the reason of an operand of ':' before the last (a frame or an offset) begins: the motion's
+# target is the last operand, which alone stands for the motion
+FRAME_OPERAND = "the frame operand of ':'"
 _NOT_CALLS = (
     frozenset(
         """IF ELSE ENDIF WHILE ENDWHILE FOR ENDFOR LOOP ENDLOOP REPEAT UNTIL SWITCH CASE DEFAULT
@@ -1648,10 +1652,12 @@ def _motion(
         operands, at = _operands(code, at, scan.path, lineno)
         target_text = code[start:at].strip()
         arith = len(operands) > 1
-        for kind, s, e in operands:
+        for k, (kind, s, e) in enumerate(operands):
             if kind == "agg":
                 if relative:
                     why = f"relative motion {word}: an offset, not a position"
+                elif arith and k < len(operands) - 1:
+                    why = f"{FRAME_OPERAND} in {target_text}: an offset, not the target"
                 elif arith:
                     why = f"frame arithmetic ':' in {target_text}: computed at run time"
                 else:
@@ -1670,6 +1676,8 @@ def _motion(
                     why = f"relative motion {word}: an offset, not a position"
                 elif arith:
                     why = f"frame arithmetic ':' in {target_text}: computed at run time"
+                    if k < len(operands) - 1:
+                        why = f"{FRAME_OPERAND} in {target_text}: an offset, not the target"
                     _frame_use(
                         scan,
                         name,

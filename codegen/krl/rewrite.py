@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.krl.parse import (
+    FRAME_OPERAND,
     JOINT_TARGET,
     BaseRef,
     Declared,
@@ -141,7 +142,7 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
                 frame[i] = ctx.frame_id(f)
     rows = Rows([scan.path or ""], np.zeros(n, np.int64), t.line, t.name, reasons, old)
     for i in np.flatnonzero(frame < 0).tolist():  # not placed: does a motion command it?
-        if t.reason[i] != JOINT_TARGET:
+        if t.reason[i] != JOINT_TARGET and not t.reason[i].startswith(FRAME_OPERAND):
             rows.commanded[i] = t.kind[i] == MOTION or ctx.moved_to(s, i)
     return rows, frame
 
@@ -163,7 +164,7 @@ def _use_rows(ctx: _Context, scan: KrlScan) -> Rows:
             lines.append(int(u.line[i]))
             names.append(u.text[i])
             reasons.append(reason)
-            cartesian.append(not ctx.joint_name(u.name[i]))
+            cartesian.append(not (reason.startswith(FRAME_OPERAND) or ctx.joint_name(u.name[i])))
     n = len(lines)
     rows = Rows(
         [scan.path or ""], np.zeros(n, np.int64), lines, names, reasons, np.full((n, 3), np.nan)
