@@ -336,7 +336,13 @@ def partial_check(rows: Rows, opts: Options) -> None:
             "as they are, marked in the report)",
             *rows.where(i),
         )
-    if len(rows) and not rows.count(CORRECTED):
+    if not len(rows):  # a program of calls, or of data only: its holes are elsewhere
+        raise InputError(
+            "no position corrected: the program commands no position that a rewrite can read "
+            "(its motions may be in routines it calls; --allow-partial writes it unchanged)",
+            rows.files[0] if rows.files else None,
+        )
+    if not rows.count(CORRECTED):
         i = 0
         raise InputError(
             f"no position corrected: {len(rows)} position(s) read, none placed and corrected; "

@@ -102,3 +102,19 @@ def test_gcode_moves_that_cannot_be_placed_count_except_machine_moves(
     err = capsys.readouterr().err
     if counted:
         assert f"{counted} not placed in the robot frame" in err, err
+
+
+def test_a_program_whose_holes_are_all_in_called_routines_is_not_a_silent_success(
+    realworld, tmp_path, capsys
+):
+    # a LinuxCNC program that drills only through `o<drill> call`: no position is read, so the
+    # rewrite corrects nothing; it came back byte-identical with exit 0
+    program = realworld / "gcode" / "lagun_HEMA-P005.cnc"
+    cell = write_cell(tmp_path)
+    out = tmp_path / "o.cnc"
+    argv = ["rewrite", str(program), "--cell", str(cell), "-o", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"{program}: no position corrected" in err and not out.exists()
+    assert main([*argv, "--allow-partial"]) == 0
+    assert out.read_bytes() == program.read_bytes()
