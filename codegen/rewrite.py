@@ -27,7 +27,7 @@ from accugrid.codegen.header import header_lines as make_header
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.compensation import GridModel
 from accugrid.compensation.policy import CORRECTED as POLICY_CORRECTED
-from accugrid.compensation.policy import OUTSIDE_GRID, REASONS, Policy
+from accugrid.compensation.policy import NOT_PLACED, OUTSIDE_GRID, REASONS, Policy
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM, CorrectionSettings
 from accugrid.kinematics.digest import file_sha256
 from accugrid.kinematics.errors import InputError
@@ -115,7 +115,9 @@ class Rows:
     into it, ``line`` (N,) int, ``name`` and ``reason`` lists of str, ``status`` (N,) codes of
     ``STATUSES``, ``old`` and ``new`` (N, 3) mm (NaN: none), ``residual_mm`` and ``rounding_mm``
     (N,) mm, ``code`` (N,) the policy's reason code of a position it did not correct
-    (``compensation.policy.REASONS``, 0: none). Iterating gives ``Row`` objects (copies)."""
+    (``compensation.policy.REASONS``, 0: none), ``commanded`` (N,) bool: a Cartesian position a
+    motion of the program commands (set by the dialect's reader; ``partial_check`` counts those
+    left uncorrected). Iterating gives ``Row`` objects (copies)."""
 
     def __init__(
         self,
@@ -134,6 +136,7 @@ class Rows:
         self.reason = reason
         self.status = np.zeros(n, np.int8)
         self.code = np.zeros(n, np.int8)
+        self.commanded = np.zeros(n, bool)
         self.old = np.asarray(old, dtype=float).reshape(n, 3)
         self.new = np.full((n, 3), math.nan)
         self.residual_mm = np.full(n, math.nan)
@@ -155,7 +158,7 @@ class Rows:
             list(chain.from_iterable(p.reason for p in parts)),
             np.concatenate([p.old for p in parts] or [np.zeros((0, 3))]),
         )
-        for key in ("status", "code", "new", "residual_mm", "rounding_mm"):
+        for key in ("status", "code", "commanded", "new", "residual_mm", "rounding_mm"):
             setattr(out, key, np.concatenate([getattr(p, key) for p in parts] or [out.status]))
         return out
 
@@ -311,9 +314,17 @@ def _counts(rows: Rows) -> str:
 
 
 def partial_check(rows: Rows, opts: Options) -> None:
-    """The policy's job rule over the whole rewrite: InputError at the first position the
-    policy did not correct, with the counts by reason, and when nothing at all is corrected,
-    unless ``opts.allow_partial``."""
+    """The policy's job rule over the whole rewrite. A position a motion commands (``commanded``)
+    that could not be placed in the robot frame (skipped, with its reason) lands off by the
+    robot's error like one the policy refused: it gets the code ``NOT_PLACED`` and counts.
+    Joint targets, tool and base frames, offsets and data no motion uses are not positions to
+    correct and do not count. InputError at the first position not corrected, with the counts
+    by reason, and when nothing at all is corrected, unless ``opts.allow_partial``."""
+    unplaced = rows.commanded & (rows.status == SKIPPED) & (rows.code == POLICY_CORRECTED)
+    if unplaced.any():
+        rows.code[unplaced] = NOT_PLACED
+        for i in np.flatnonzero(unplaced).tolist():
+            rows.reason[i] = rows.reason[i] or "its position is not known"
     if opts.allow_partial:
         return
     refused = np.flatnonzero(rows.code != POLICY_CORRECTED)
@@ -325,7 +336,13 @@ def partial_check(rows: Rows, opts: Options) -> None:
             "as they are, marked in the report)",
             *rows.where(i),
         )
-    if len(rows) and not rows.count(CORRECTED):
+    if not len(rows):  # a program of calls, or of data only: its holes are elsewhere
+        raise InputError(
+            "no position corrected: the program commands no position that a rewrite can read "
+            "(its motions may be in routines it calls; --allow-partial writes it unchanged)",
+            rows.files[0] if rows.files else None,
+        )
+    if not rows.count(CORRECTED):
         i = 0
         raise InputError(
             f"no position corrected: {len(rows)} position(s) read, none placed and corrected; "

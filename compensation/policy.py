@@ -61,6 +61,7 @@ __all__ = [
     "GRID_ORIENTATION_TOL_DEG",
     "NO_CONVERGENCE",
     "NO_ORIENTATION",
+    "NOT_PLACED",
     "ORIENTATION",
     "ORIENTATION_LIMIT_DEG",
     "OUTSIDE_GRID",
@@ -82,6 +83,10 @@ SINGULAR_A5_DEG = 5.0  # |A5| below this: near the wrist singularity
 # reason codes: why a position is not corrected (0: it is)
 CORRECTED, OUTSIDE_GRID, ORIENTATION, STATUS, NO_ORIENTATION = 0, 1, 2, 3, 4
 UNREACHABLE, NO_CONVERGENCE, OUTSIDE_MODEL, TOO_LONG = 5, 6, 7, 8
+# a position a program commands that cannot be placed in the robot frame (unknown base, a
+# variable, an offset, an unknown start): never given to ``decide``, it lands off by the robot's
+# error all the same, so it counts in the job rule like any position not corrected
+NOT_PLACED = 9
 # code -> (short words for counts, the reason's words; fields: see ``Verdict.reason``)
 REASONS = {
     OUTSIDE_GRID: ("outside the grid", "outside the {grid} box by {value:.3f} mm"),
@@ -106,6 +111,7 @@ REASONS = {
         "beyond the safety limit",
         "correction of {value:.3f} mm exceeds the safety limit of {max:g} mm",
     ),
+    NOT_PLACED: ("not placed in the robot frame", "not placed in the robot frame: {why}"),
 }
 # flags (bits): corrected, but worth a look
 F_ORIENTATION, F_CLAMPED, F_REGION, F_SINGULAR = 1, 2, 4, 8

@@ -44,7 +44,8 @@ accugrid study --robot kr210-paper --centre D 1700 0 1500 --steps 20:380:120 --r
 
 # Pre-flight rewrite of programs a CAM system wrote (examples/cam_drill.*): only the numbers of
 # the positions inside the grid change; the report lists every position with its status/reason.
-# Their home pose lies outside the grid: --allow-partial writes them with it left as it is.
+# Their clearance moves (the home pose, outside the grid; a Z-only move before any X, Y) cannot be
+# corrected: --allow-partial writes them left as they are, counted on stderr and in the report.
 # The grid is the cell's (examples/grid_200mm.csv).
 accugrid rewrite examples/cam_drill.src examples/cam_drill.dat --cell examples/cell.yaml \
     -o out/rewrite --report out/rewrite/cam_drill_krl_report.csv --force --allow-partial

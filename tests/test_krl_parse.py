@@ -70,7 +70,7 @@ def test_motions_inline_circ_partial_arithmetic_and_comments():
     assert "joint-space" in pos[4].reason
     assert "frame arithmetic" in pos[5].reason
     assert "relative motion" in pos[6].reason
-    assert scan.uses[0].name == "P1" and "frame arithmetic" in scan.uses[0].reason
+    assert scan.uses[0].name == "P1" and "frame operand of ':'" in scan.uses[0].reason
     for p in pos:
         spans_ok(text, p)
 

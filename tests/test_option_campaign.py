@@ -298,3 +298,35 @@ def test_a_large_size_limit_allocates_nothing_for_it(tmp_path, inputs):
     """--max-mb 1e6 (a TiB): the reader asks for the file's size, not the limit (MemoryError)."""
     argv = [a.replace("OUT", str(tmp_path)).replace("IN", str(inputs)) for a in BASE["rewrite"]]
     assert check([*argv, "--max-mb", "1e6"], tmp_path)[0] == 0
+
+
+def test_identify_refuses_a_non_finite_tool_naming_the_option_and_unit(tmp_path, capsys):
+    # identify --tool 0 0 nan 0 0 0 ended in an internal error
+    meas = tmp_path / "m.csv"
+    meas.write_text("x,y,z,x_meas,y_meas,z_meas\n1700,0,1500,1700,0,1500\n")
+    argv = ["identify", str(meas), "--robot", "kr210", "--tool", "0", "0", "nan", "0", "0", "0"]
+    with pytest.raises(SystemExit) as stop:
+        main([*argv, "-o", str(tmp_path / "cal.yaml")])
+    assert stop.value.code == 2
+    assert "argument --tool: 'nan' is not a finite number (mm or deg)" in capsys.readouterr().err
+    assert not (tmp_path / "cal.yaml").exists()
+
+
+def test_a_robot_without_the_closed_form_inverse_is_refused_naming_its_file(
+    tmp_path, inputs, capsys
+):
+    # "DH structure has no closed-form inverse" named neither the robot nor its file
+    from importlib import resources
+
+    nominal = resources.files("accugrid.kinematics").joinpath("robots", "kr210.yaml").read_text()
+    bent = nominal.replace("{a_mm: 0.0, alpha_deg: -90.0", "{a_mm: 10.0, alpha_deg: -90.0", 1)
+    assert bent != nominal
+    (inputs / "bent.yaml").write_text(bent.replace("name: kr210", "name: bent", 1))
+    cell = inputs / "cell.yaml"
+    cell.write_text(cell.read_text().replace("robot: kr210-paper", "robot: bent.yaml", 1))
+    points = inputs / "wing_panel_robot.csv"
+    argv = ["krl", str(points), "--cell", str(cell), "--no-correction", "-o", str(tmp_path / "k")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"{inputs / 'bent.yaml'}: robot bent: its dh structure has no closed-form inverse" in err
+    assert not (tmp_path / "k").exists()

@@ -608,3 +608,29 @@ def test_property_the_policy_corrects_exactly_or_leaves_the_target_with_a_reason
         offset + (targets[done] - origin) @ coeff
     )  # the arm less the field its grid measured (at the target: the residual grid's r(P))
     assert np.abs(landed - targets[done]).max() < 0.01
+
+
+def test_krl_model_after_a_one_millimetre_tool_change_lands_the_new_tool(tmp_path, capsys):
+    # finding: a model identified with the tool at z 250 and a cell tool of z 251 put every hole
+    # 1.00 mm off, exit 0 (the identified TCP was used, not the cell's)
+    cal = _calibrated(tmp_path / "cal.yaml", tcp=DRILL)
+    new_tool = (0.0, 0.0, 251.0, 0.0, 0.0, 0.0)
+    cell = _cell(tmp_path, model="cal.yaml", status=6)
+    cell.write_text(cell.read_text().replace("z: 250", "z: 251"))
+    points = tmp_path / "p.csv"
+    points.write_text("id,x,y,z,a,b,c\nH1,1500,100,1400,0,90,0\n")
+    out = tmp_path / "krl"
+    assert main(["krl", str(points), "--cell", str(cell), "-o", str(out)]) == 0
+    at = {p.name: np.array([p.x, p.y, p.z]) for p in parse_krl(next(out.glob("*.dat")).read_text())}
+    # the hole point: on the LIN from the clearance point (2 mm out) to the bottom (10 mm in)
+    hole = at["XH1_CLR"] + 2.0 / 12.0 * (at["XH1_BOT"] - at["XH1_CLR"])
+    target = np.array([[1500.0, 100.0, 1400.0]])
+    landed = _landed(cal, hole[None], [[0.0, 90.0, 0.0]], 6, tool=new_tool)
+    assert np.linalg.norm(landed - target) < 1e-3
+    # the old rule (the controller with the new tool, the arm carrying the identified TCP)
+    from accugrid.compensation.model_correction import model_correct
+
+    tool = pose_from_xyzabc(np.array(new_tool))
+    abc = np.array([[0.0, 90.0, 0.0]])
+    old = model_correct(load_robot(cal), target, abc, 6, None, controller_tool=tool)
+    assert abs(np.linalg.norm(old.command[0] - hole) - 1.0) < 0.05

@@ -19,6 +19,7 @@ from accugrid.codegen.krl.parse import parse_krl
 from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.rewrite import Options
 from accugrid.compensation import GridModel
+from accugrid.kinematics.errors import InputError
 
 BASE2 = (100.0, 50.0, 0.0, 90.0, 0.0, 0.0)  # robot_T_base of BASE_DATA[2]
 R2 = Rotation.from_euler("ZYX", BASE2[3:], degrees=True).as_matrix()
@@ -218,7 +219,9 @@ def test_incremental_program_lands_where_its_absolute_twin_does(points):
 
 def test_arc_start_is_protected():
     text = "G90 G0 X0 Y0 Z10\nG1 Z-1\nG2 X20 Y0 I10 J0\nG1 X40\n"
-    result = rewrite_gcode("arc.ngc", text, _options())
+    with pytest.raises(InputError, match="3 not placed in the robot frame"):
+        rewrite_gcode("arc.ngc", text, _options())  # the arc and its start: left off
+    result = rewrite_gcode("arc.ngc", text, _options(allow_partial=True))
     status = [(r.status, r.reason.split(" ")[0]) for r in result.rows]
     assert status[0][1] == "sets" and status[1][1] == "sets" and status[2][1] == "arc"
     assert status[3][0] == "corrected"

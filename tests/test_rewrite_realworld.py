@@ -165,22 +165,13 @@ def test_realworld_reasons(realworld, tmp_path):
     text = report.read_text()
     assert "frame arithmetic" in text and "MoveSettings" in text and "$POS_ACT" in text
     robodk = realworld / "krl" / "robodk_Program.src"
-    assert (
-        main(
-            [
-                "rewrite",
-                str(robodk),
-                "--cell",
-                str(cell),
-                "-o",
-                str(tmp_path / "r.src"),
-                "--report",
-                str(report),
-                "--force",
-            ]
-        )
-        == 0
-    )
+    argv = ["rewrite", str(robodk), "--cell", str(cell), "-o", str(tmp_path / "r.src")]
+    argv += ["--report", str(report), "--force"]
+    # its last two LINs follow a call that may change $BASE: not placed, they would land off by
+    # the robot's error, so the job fails unless partial output is allowed
+    assert main(argv) == 2
+    assert not (tmp_path / "r.src").exists()
+    assert main([*argv, "--allow-partial"]) == 0
     rows = list(csv.DictReader(report.open()))
     assert [r["status"] for r in rows if r["name"] == "LIN"] == [
         "corrected",
@@ -200,7 +191,8 @@ def test_realworld_gcode_through_rs274(realworld, tmp_path, rs274, case):
     cell = write_cell(tmp_path, base_data={11: (1200, -300, 700, 30, 0, 0)})
     program = realworld / names[0]
     out = tmp_path / program.name
-    assert main(["rewrite", str(program), "--cell", str(cell), "-o", str(out), *options]) == 0
+    argv = ["rewrite", "--allow-partial", str(program), "--cell", str(cell), "-o", str(out)]
+    assert main([*argv, *options]) == 0
     runs = []
     for path in (program, out):
         run = subprocess.run(

@@ -58,6 +58,11 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
         list(moves.reason),
         moves.target.copy(),
     )
+    # every move commands a position in the program frame, except a home or machine-coordinate
+    # move (G28/G30/G53: a fixed machine position) and axis words under G80 (no motion)
+    rows.commanded[:] = ~moves.resets
+    if "G80" in moves.motion:
+        rows.commanded &= np.array([m != "G80" for m in moves.motion], bool)
     _protect_arc_starts(moves, rows)
     if any(rows.reason):  # the moves with no reason
         at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))

@@ -70,7 +70,9 @@ __all__ = [
     "BaseRef",
     "Declared",
     "Fdat",
+    "FRAME_OPERAND",
     "FrameUse",
+    "JOINT_TARGET",
     "KrlPosition",
     "KrlScan",
     "KrlUse",
@@ -92,6 +94,12 @@ POSITION_TYPES = frozenset(("E6POS", "POS", "FRAME", "AXIS", "E6AXIS"))
 CARTESIAN_KEYS = frozenset("X Y Z A B C S T E1 E2 E3 E4 E5 E6".split())
 _JOINTS = frozenset(("A1", "A2", "A3", "A4", "A5", "A6"))
 JOINT_KEYS = frozenset("A1 A2 A3 A4 A5 A6 E1 E2 E3 E4 E5 E6".split())
+# the reason of an aggregate of joint angles: a target the robot reaches by its joints, never a
+# Cartesian position to correct
+JOINT_TARGET = "joint-space target (AXIS/E6AXIS): not a Cartesian position"
+# how the reason of an operand of ':' before the last (a frame or an offset) begins: the motion's
+# target is the last operand, which alone stands for the motion
+FRAME_OPERAND = "the frame operand of ':'"
 _NOT_CALLS = (
     frozenset(
         """IF ELSE ENDIF WHILE ENDWHILE FOR ENDFOR LOOP ENDLOOP REPEAT UNTIL SWITCH CASE DEFAULT
@@ -573,7 +581,7 @@ def position_reason(type_name: str, numbers: dict[str, Number]) -> str:
             return ""
     keys = set(numbers)
     if type_name in ("AXIS", "E6AXIS") or keys & _JOINTS:
-        return "joint-space target (AXIS/E6AXIS): not a Cartesian position"
+        return JOINT_TARGET
     missing = [k for k in "XYZ" if k not in keys]
     if missing:
         given = ",".join(k for k in "XYZABC" if k in keys) or "none"
@@ -1644,16 +1652,18 @@ def _motion(
         operands, at = _operands(code, at, scan.path, lineno)
         target_text = code[start:at].strip()
         arith = len(operands) > 1
-        for kind, s, e in operands:
+        for k, (kind, s, e) in enumerate(operands):
             if kind == "agg":
                 if relative:
                     why = f"relative motion {word}: an offset, not a position"
+                elif arith and k < len(operands) - 1:
+                    why = f"{FRAME_OPERAND} in {target_text}: an offset, not the target"
                 elif arith:
                     why = f"frame arithmetic ':' in {target_text}: computed at run time"
                 else:
                     why = ""
-                row, _, _, _ = _add_position(code, s, off, lineno, scan, MOTION, "", word, base)
-                if why:
+                row, _, own, _ = _add_position(code, s, off, lineno, scan, MOTION, "", word, base)
+                if why and own != JOINT_TARGET:  # a joint target stays one, relative or not
                     scan._rows.positions.set(row, "reason", why)
             else:
                 operand = code[s:e].strip()
@@ -1666,6 +1676,8 @@ def _motion(
                     why = f"relative motion {word}: an offset, not a position"
                 elif arith:
                     why = f"frame arithmetic ':' in {target_text}: computed at run time"
+                    if k < len(operands) - 1:
+                        why = f"{FRAME_OPERAND} in {target_text}: an offset, not the target"
                     _frame_use(
                         scan,
                         name,

@@ -20,6 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.krl.parse import (
+    FRAME_OPERAND,
+    JOINT_TARGET,
     BaseRef,
     Declared,
     Fdat,
@@ -139,6 +141,9 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
             else:
                 frame[i] = ctx.frame_id(f)
     rows = Rows([scan.path or ""], np.zeros(n, np.int64), t.line, t.name, reasons, old)
+    for i in np.flatnonzero(frame < 0).tolist():  # not placed: does a motion command it?
+        if t.reason[i] != JOINT_TARGET and not t.reason[i].startswith(FRAME_OPERAND):
+            rows.commanded[i] = t.kind[i] == MOTION or ctx.moved_to(s, i)
     return rows, frame
 
 
@@ -152,17 +157,20 @@ def _use_rows(ctx: _Context, scan: KrlScan) -> Rows:
         check = ~np.fromiter(map(ctx.named.__contains__, u.name), bool, n)
     if any(u.reason):
         check |= np.fromiter(map(bool, u.reason), bool, n)
-    lines, names, reasons = [], [], []
+    lines, names, reasons, cartesian = [], [], [], []
     for i in np.flatnonzero(check).tolist():
         reason = u.reason[i] or ctx.unmatched_reason(u.name[i], u.text[i])
         if reason:
             lines.append(int(u.line[i]))
             names.append(u.text[i])
             reasons.append(reason)
+            cartesian.append(not (reason.startswith(FRAME_OPERAND) or ctx.joint_name(u.name[i])))
     n = len(lines)
-    return Rows(
+    rows = Rows(
         [scan.path or ""], np.zeros(n, np.int64), lines, names, reasons, np.full((n, 3), np.nan)
     )
+    rows.commanded[:] = cartesian  # a motion to it: commanded unless a joint target
+    return rows
 
 
 class _Context:
@@ -447,6 +455,25 @@ class _Context:
         if self.lone_dat and in_dat and self.initial is not None:
             why += f" (--base N applies to POS/E6POS only, this is {type_name or 'untyped'})"
         return None, why
+
+    def moved_to(self, s: int, i: int) -> bool:
+        """Whether a motion commands stored position row i of file s: a motion uses its name
+        and it is not a frame or an offset (``:``, ``$TOOL``/``$BASE``, ...)."""
+        key = self.keys[s][i]
+        wild = wildcard(key)
+        names = (key, wild, key.split(".")[0], wild.split(".")[0])
+        if any(k in self.frame_uses for k in names):
+            return False
+        return s == self.aligned or key in self.use_of or wild in self.use_of
+
+    def joint_name(self, name: str) -> bool:
+        """Whether a motion's target name is a joint target: declared AXIS/E6AXIS in the given
+        files, or a joint aggregate in --config-dat."""
+        stored = self.config_named.get(name)
+        if stored is not None and stored.reason == JOINT_TARGET:
+            return True
+        found = self.declared(name.split("[")[0].split(".")[0])
+        return found is not None and found[1].type in ("AXIS", "E6AXIS")
 
     def declared(self, variable: str) -> tuple[str, Declared] | None:
         for scan in self.every:
