@@ -1,0 +1,104 @@
+"""The commands a newcomer copies from README.md and docs/*.md run, and the pages' links resolve.
+
+Every ```sh block of README.md and docs/*.md is a list of shell commands: each `accugrid ...`
+command (backslash continuations joined, `#` comments dropped) runs with the venv's console
+script from a temporary folder holding a copy of examples/, the commands of one page in order
+(later ones read what earlier ones wrote), and must exit 0. `make ...` lines are skipped (the
+quick start is `make demo` / `make test` itself). Blocks that only illustrate (the install, a
+user's own file names, a long study, the output a command prints) are fenced ```text or
+```console and are not run. docs/validation.md is run by tests/test_validate.py and is skipped
+here.
+"""
+
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from conftest import ROOT
+
+__all__: list[str] = []
+
+RUN_ELSEWHERE = {"validation.md"}  # tests/test_validate.py runs its sh blocks
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+ACCUGRID = Path(sys.executable).with_name("accugrid")
+
+
+def sh_commands(text: str) -> list[str]:
+    """The commands of the ```sh blocks of a Markdown text, continuations joined, in order."""
+    commands = []
+    for block in re.findall(r"^```sh\n(.*?)^```", text, flags=re.M | re.S):
+        joined = re.sub(r"\s*\\\n\s*", " ", block)
+        for line in joined.splitlines():
+            line = line.strip()
+            if line and not line.startswith("#"):
+                commands.append(line)
+    return commands
+
+
+def test_the_extractor_reads_blocks_continuations_and_comments():
+    text = "x\n```sh\n# c\naccugrid a \\\n    --b 1\nmake demo\n```\n```text\naccugrid no\n```\n"
+    assert sh_commands(text) == ["accugrid a --b 1", "make demo"]
+
+
+def _page_id(page: Path) -> str:
+    return str(page.relative_to(ROOT))
+
+
+RUNNABLE = [p for p in PAGES if p.name not in RUN_ELSEWHERE and sh_commands(p.read_text())]
+
+
+@pytest.mark.parametrize("page", RUNNABLE, ids=_page_id)
+def test_every_command_of_the_page_runs(page, tmp_path):
+    shutil.copytree(ROOT / "examples", tmp_path / "examples")
+    ran = 0
+    for command in sh_commands(page.read_text()):
+        words = shlex.split(command)
+        if words[0] == "make":
+            continue
+        assert words[0] == "accugrid", f"{_page_id(page)}: not an accugrid command: {command}"
+        done = subprocess.run(
+            [str(ACCUGRID), *words[1:]], cwd=tmp_path, capture_output=True, text=True, timeout=120
+        )
+        assert done.returncode == 0, f"{_page_id(page)}: {command}\n{done.stderr[-2000:]}"
+        ran += 1
+    assert ran, f"{_page_id(page)}: no accugrid command ran"
+
+
+LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
+
+
+@pytest.mark.parametrize("page", PAGES + [ROOT / "CHANGELOG.md"], ids=_page_id)
+def test_every_relative_link_resolves(page):
+    text = page.read_text()
+    anchors = {_anchor(h) for h in re.findall(r"^#+ (.*)$", text, flags=re.M)}
+    missing = []
+    for target in LINK.findall(text):
+        if re.match(r"[a-z]+:", target):
+            continue  # an external address
+        path, _, anchor = target.partition("#")
+        if path:
+            resolved = (page.parent / path).resolve()
+            if not resolved.exists():
+                missing.append(target)
+            elif anchor and resolved.suffix == ".md":
+                heads = re.findall(r"^#+ (.*)$", resolved.read_text(), flags=re.M)
+                if anchor not in {_anchor(h) for h in heads}:
+                    missing.append(target)
+        elif anchor not in anchors:
+            missing.append(target)
+    assert not missing, f"{_page_id(page)}: links that do not resolve: {missing}"
+
+
+def _anchor(heading: str) -> str:
+    """GitHub's anchor of a heading: lower case, punctuation dropped, spaces as dashes."""
+    return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+
+def test_the_docs_name_no_issue_numbers():
+    for page in PAGES:
+        found = re.findall(r"issue [0-9]+", page.read_text(), flags=re.I)
+        assert not found, f"{_page_id(page)}: {found}"
