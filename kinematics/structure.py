@@ -311,6 +311,7 @@ def _identify_structure(
     problem = _Problem(y, x0, columns, groups, np.repeat(data.group, 3), data.poses)
     # a screened order is the best of its axis's whole periodogram: its bar counts that pool
     problem.bars[library : len(search)] = norm.isf(FALSE_STEP / (len(names) + pool))
+    problem.screened[library : len(search)] = True
     index = {t: i for i, t in enumerate(search)}
     problem.neighbours = {
         i: [index[(a, k + d)] for d in (-2, -1, 1, 2) if (a, k + d) in index]
@@ -318,14 +319,11 @@ def _identify_structure(
     }
     left_out = problem.reduce(names)
     fold = pose_folds(data.poses, folds)
-    path = problem.path(fold, np.ones(data.poses, bool))
-    kept = problem.one_standard_error(path)
-    greedy = [g for g, _ in path[1 : kept + 1]]
-    chosen = problem.refine(greedy, fold, np.ones(data.poses, bool))
+    path, kept, greedy, chosen = problem.search(fold, np.ones(data.poses, bool))
     rejected = [g for g, _ in path[kept + 1 :] if g not in chosen]
     left_out += [
         (names[g], f"swapped for {names[c]}: a neighbouring order, lower held-out error")
-        for g, c in zip(greedy, chosen, strict=True)
+        for g, c in zip(greedy, chosen, strict=False)
         if g != c
     ]
     left_out += [(names[g], "its held-out gain is within its uncertainty") for g in rejected]
@@ -387,6 +385,7 @@ class _Problem:
         self.top = float(np.sqrt(np.mean(columns**2, axis=0)).max()) if columns.size else 1.0
         # a step is the best of len(groups) tries: the one-sided normal bar whose tail
         # FALSE_STEP is shared among them (Bonferroni), 3.3 standard errors for 100 groups
+        self.screened = np.zeros(len(groups), bool)  # orders the periodogram offered
         self.bars = np.full(len(groups), norm.isf(FALSE_STEP / max(len(groups), 1)))
 
     def reduce(self, names: list[str]) -> list[tuple[str, str]]:
@@ -429,20 +428,39 @@ class _Problem:
         self.others = [i for i, g in enumerate(groups) if len(g) not in (0, 2)]
         return out
 
+    def search(self, fold_of_pose: np.ndarray, use: np.ndarray):
+        """The whole search on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,): the
+        library's path, its kept steps refined (neighbouring orders), then the path on from there
+        with the screened orders offered too (their steps must clear the pool's bar). Returns
+        (path: start, library steps kept, the continuation; kept steps; the greedy library
+        groups kept; the chosen groups)."""
+        first = self.path(fold_of_pose, use, [], ~self.screened)
+        kept = self.one_standard_error(first)
+        greedy = [g for g, _ in first[1 : kept + 1]]
+        chosen = self.refine(greedy, fold_of_pose, use)
+        if not self.screened.any():
+            return first, kept, greedy, chosen
+        on = self.path(fold_of_pose, use, chosen, np.ones(len(self.groups), bool))
+        more = self.one_standard_error(on)
+        path = first[: kept + 1] + on[1:]
+        return path, kept + more, greedy, chosen + [g for g, _ in on[1 : more + 1]]
+
     def path(
-        self, fold_of_pose: np.ndarray, use: np.ndarray
+        self, fold_of_pose: np.ndarray, use: np.ndarray, start: list[int], offered: np.ndarray
     ) -> list[tuple[int | None, np.ndarray]]:
-        """Forward selection on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,):
-        [(group added or None, held-out residuals (M,) with NaN off ``use``)], start first."""
+        """Forward selection on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,) from
+        the groups ``start`` over the groups ``offered`` (groups,) bool: [(group added or None,
+        held-out residuals (M,) with NaN off ``use``)], the start first."""
         rows = use[self.pose]
         fold = fold_of_pose[self.pose]
         folds = np.unique(fold_of_pose[use])
         train_eq = min(int(np.sum(rows & (fold != k))) for k in folds)
-        chosen: list[int] = []
+        chosen = list(start)
         held = self._held(chosen, fold, rows, folds)
         path = [(None, held)]
         sse = self._pose_sse(held)
-        free = self.observable.copy()
+        free = self.observable & offered
+        free[chosen] = False
         budget = MAX_SHARE * train_eq - self.x0.shape[1]
         for _ in range(MAX_STEPS):
             used = int(self.size[chosen].sum()) if chosen else 0
@@ -598,9 +616,7 @@ def _nested(problem: _Problem, fold: np.ndarray, folds: int, names, data: PoseSe
         use = fold != k
         inner = np.full(problem.poses, -1)
         inner[use] = pose_folds(int(use.sum()), folds, _NESTED_SEED + k)
-        path = problem.path(inner, use)
-        kept = problem.one_standard_error(path)
-        chosen = problem.refine([g for g, _ in path[1 : kept + 1]], inner, use)
+        chosen = problem.search(inner, use)[3]
         chosen_by_fold.append(tuple(names[g] for g in chosen))
         x = problem.design(chosen)
         train, test = use[problem.pose], ~use[problem.pose]
