@@ -151,26 +151,30 @@ def max_order_of(q: np.ndarray) -> np.ndarray:
     """The highest harmonic order (6,) the distinct poses' joints q (P, 6) rad resolve on each
     axis: an order's period must span ``GAPS_PER_PERIOD`` median gaps between the sorted angles
     on that axis (1 for an axis the poses do not move)."""
-    out = np.ones(6, dtype=int)
-    for axis in range(6):
-        gaps = np.diff(np.sort(q[:, axis]))
-        gaps = gaps[gaps > 1e-9]
-        if gaps.size:
-            out[axis] = max(int(2 * np.pi / (GAPS_PER_PERIOD * float(np.median(gaps)))), 1)
-    return out
+    return np.array(
+        [
+            max(int(2 * np.pi / (GAPS_PER_PERIOD * float(np.median(g)))), 1) if g.size else 1
+            for g in _angle_gaps(q)
+        ]
+    )
 
 
 def screen_limit(q: np.ndarray) -> np.ndarray:
     """The highest order (6,) the periodogram screens per axis for distinct poses' joints q (P, 6)
     rad: π over the smallest gap between the sorted angles (finer periods alias even on
     irregular samples), at most ``SCREEN_MAX_ORDER`` (0 for an axis the poses do not move)."""
-    out = np.zeros(6, dtype=int)
-    for axis in range(6):
-        gaps = np.diff(np.sort(q[:, axis]))
-        gaps = gaps[gaps > 1e-9]
-        if gaps.size:
-            out[axis] = min(int(np.pi / float(gaps.min())), SCREEN_MAX_ORDER)
-    return out
+    return np.array(
+        [
+            min(int(np.pi / float(g.min())), SCREEN_MAX_ORDER) if g.size else 0
+            for g in _angle_gaps(q)
+        ]
+    )
+
+
+def _angle_gaps(q: np.ndarray) -> list[np.ndarray]:
+    """Per axis the gaps (rad) > 0 between the sorted angles of joints q (P, 6) rad."""
+    gaps = np.diff(np.sort(q, axis=0), axis=0)
+    return [gaps[:, axis][gaps[:, axis] > 1e-9] for axis in range(6)]
 
 
 def _screen(y, base, joint, angle, caps, last) -> list[tuple[int, int]]:
