@@ -40,8 +40,10 @@ residuals (beyond DH, TCP and the gravity groups) over every (axis, order 1..π 
 gap between the axis's angles, at most ``SCREEN_MAX_ORDER``), ``SCREEN_STEPS`` picks, each
 deflating what it explains, keeps the first ``SCREEN_KEEP`` picks beyond K per axis as
 candidates. Such a candidate is the best of a pool of hundreds, so its step must pass the bar
-of that whole pool (Bonferroni over library + pool). The screen sees all poses, also in the
-nested estimate (it only proposes; the choice is made in the folds).
+of that whole pool (Bonferroni over library + pool). The library's search (steps 2-3) runs
+first; then it continues from there with the screened orders offered too, and those it keeps
+are swapped for a neighbouring order where that lowers the held-out error. The screen sees all
+poses, also in the nested estimate (it only proposes; the choice is made in the folds).
 """
 
 from __future__ import annotations
@@ -287,6 +289,7 @@ def _identify_structure(
         if (axis, order) not in pinned
     )
     library = len(search)
+    screened: list[tuple[int, int]] = []
     # orders beyond the library: a periodogram of the DH fit's residuals per axis screens
     # caps+1..screen_limit and offers its SCREEN_KEEP best to the same selection
     last = screen_limit(data.q[np.unique(data.group, return_index=True)[1]])
@@ -304,7 +307,16 @@ def _identify_structure(
             for t in _screen(y, np.column_stack([x0, ones[:, 12:]]), joint, angle, caps, last)
             if t not in pinned
         ]
-        search += tuple(screened)
+        # their neighbouring orders, for the swap only (k149 may be picked for k150)
+        nearby = tuple(
+            dict.fromkeys(
+                (a, k + d)
+                for a, k in screened
+                for d in (-2, -1, 1, 2)
+                if (a, k + d) not in screened and (a, k + d) not in pinned and k + d > caps[a - 1]
+            )
+        )
+        search += tuple(screened) + nearby
         ranges = ", ".join(
             f"A{a} to {last[a - 1]}" for a in range(1, 7) if last[a - 1] > caps[a - 1]
         )
@@ -314,8 +326,12 @@ def _identify_structure(
     names, groups = _library(search, gravity)
     problem = _Problem(y, x0, columns, groups, np.repeat(data.group, 3), data.poses)
     # a screened order is the best of its axis's whole periodogram: its bar counts that pool
-    problem.bars[library : len(search)] = norm.isf(FALSE_STEP / (len(names) + pool))
-    problem.screened[library : len(search)] = True
+    offered = library + len(screened)
+    # the bar of a step: the best of the offered groups; a screened order's, of the whole pool
+    problem.bars[:] = norm.isf(FALSE_STEP / (offered + len(gravity)))
+    problem.bars[library:offered] = norm.isf(FALSE_STEP / (library + len(gravity) + pool))
+    problem.screened[library:offered] = True
+    problem.offered[offered : len(search)] = False
     index = {t: i for i, t in enumerate(search)}
     problem.neighbours = {
         i: [index[(a, k + d)] for d in (-2, -1, 1, 2) if (a, k + d) in index]
@@ -390,6 +406,7 @@ class _Problem:
         # a step is the best of len(groups) tries: the one-sided normal bar whose tail
         # FALSE_STEP is shared among them (Bonferroni), 3.3 standard errors for 100 groups
         self.screened = np.zeros(len(groups), bool)  # orders the periodogram offered
+        self.offered = np.ones(len(groups), bool)  # False: a screened order's neighbour (swap)
         self.bars = np.full(len(groups), norm.isf(FALSE_STEP / max(len(groups), 1)))
 
     def reduce(self, names: list[str]) -> list[tuple[str, str]]:
@@ -438,16 +455,17 @@ class _Problem:
         with the screened orders offered too (their steps must clear the pool's bar). Returns
         (path: start, library steps kept, the continuation; kept steps; the greedy library
         groups kept; the chosen groups)."""
-        first = self.path(fold_of_pose, use, [], ~self.screened)
+        first = self.path(fold_of_pose, use, [], self.offered & ~self.screened)
         kept = self.one_standard_error(first)
         greedy = [g for g, _ in first[1 : kept + 1]]
         chosen = self.refine(greedy, fold_of_pose, use)
         if not self.screened.any():
             return first, kept, greedy, chosen
-        on = self.path(fold_of_pose, use, chosen, np.ones(len(self.groups), bool))
+        on = self.path(fold_of_pose, use, chosen, self.offered)
         more = self.one_standard_error(on)
         path = first[: kept + 1] + on[1:]
-        return path, kept + more, greedy, chosen + [g for g, _ in on[1 : more + 1]]
+        added = chosen + [g for g, _ in on[1 : more + 1]]
+        return path, kept + more, greedy, self.refine(added, fold_of_pose, use, len(chosen))
 
     def path(
         self, fold_of_pose: np.ndarray, use: np.ndarray, start: list[int], offered: np.ndarray
@@ -556,16 +574,19 @@ class _Problem:
                 out[i] += np.sum((et - t[:, g] @ w) ** 2)
         return out
 
-    def refine(self, chosen: list[int], fold_of_pose: np.ndarray, use: np.ndarray) -> list[int]:
-        """``chosen`` with each harmonic swapped for a neighbouring order of its axis (k ± 1, 2)
-        where that lowers the held-out sum of squares (over a narrow angle range neighbouring
-        orders differ by a fraction of a period; the greedy step may take the wrong one)."""
+    def refine(
+        self, chosen: list[int], fold_of_pose: np.ndarray, use: np.ndarray, start: int = 0
+    ) -> list[int]:
+        """``chosen`` with each harmonic from ``start`` on swapped for a neighbouring order of its
+        axis (k ± 1, 2) where that lowers the held-out sum of squares (over a narrow angle range
+        neighbouring orders differ by a fraction of a period; the greedy step may take the wrong
+        one)."""
         rows = use[self.pose]
         fold = fold_of_pose[self.pose]
         folds = np.unique(fold_of_pose[use])
         best = np.nansum(self._held(chosen, fold, rows, folds) ** 2)
         chosen = list(chosen)
-        for at in range(len(chosen)):
+        for at in range(start, len(chosen)):
             for other in self.neighbours.get(chosen[at], []):
                 if other in chosen or not self.observable[other]:
                     continue
