@@ -18,8 +18,9 @@ and the nested cross-validation estimate against the truth (the model's RMS, noi
 the held-out max, noise included, against the true max). Then the two black-box tables: two
 family robots (seeds 100, 101) measured at 60 random poses tilted up to 25 deg (A) and at the 60
 poses of `plan identify` (B): plain identify against the fit told the true orders and compliance
-(with the true masses). Not timed tests; run ``make bench ARGS=structure`` (or
-``.venv/bin/python bench/bench_structure.py --robots 20``).
+(with the true masses), on the targets inside the poses' joint ranges (random poses leave a fifth
+of the targets outside, where the fit extrapolates; their max is printed apart). Not timed tests;
+run ``make bench ARGS=structure`` (or ``.venv/bin/python bench/bench_structure.py --robots 20``).
 """
 
 from __future__ import annotations
@@ -211,13 +212,21 @@ def black_boxes() -> None:
             data = measured(robot, q, 7)
             auto = identify_structure(nominal, data)[0]
             told = identify(masses, data, compliance=True, harmonics=harmonics, selected=True)
+            # a model fitted at these poses is only known inside their joint ranges: targets
+            # beyond them extrapolate high-order harmonics (the told fit reached 0.9 mm there)
+            inside = np.all((targets >= q.min(axis=0)) & (targets <= q.max(axis=0)), axis=1)
             cells = []
             for result in (auto, told):
                 e = np.linalg.norm(model_error(result.robot, truth, targets), axis=1)
-                cells.append(f"{e.max():.3f} max, {e.mean():.3f} mean")
-            rows.append((f"family {seed}", label, *cells))
-    print("\nBlack boxes: |model - true| (3D) on 200 targets tilted up to 25 deg, mm")
-    print(table(rows, ("robot", "poses", "plain identify (auto)", "told true orders + compliance")))
+                far = f"{e[~inside].max():.3f}" if (~inside).any() else "-"
+                cells.append(f"{e[inside].max():.3f} max, {e[inside].mean():.3f} mean; {far}")
+            rows.append((f"family {seed}", label, f"{(~inside).sum()}", *cells))
+    print(
+        "\nBlack boxes: |model - true| (3D) on 200 targets tilted up to 25 deg, mm: max and mean "
+        "over the targets inside the poses' joint ranges; after ';' the max over those outside"
+    )
+    columns = ("robot", "poses", "targets outside", "plain identify (auto)", "told true terms")
+    print(table(rows, columns))
 
 
 if __name__ == "__main__":

@@ -18,9 +18,9 @@ FK, repeatability 0.03 mm and tracker noise 0.02 mm (sigma per axis), as ``accug
   with the same 27-vertex residual grid.
 - model, structure from the data: plain ``identify`` (``kinematics.structure``: the joint-error
   terms chosen by cross-validation; nominal kr210, no masses, no orders), from its own 60 poses
-  D-optimal for DH + TCP, x 3; and the same searching every order the poses resolve
-  (``--max-order`` at the highest axis's limit, 124 here: kr210-realistic's motor-side stages
-  150/160 stay beyond it).
+  D-optimal for DH + TCP, x 3 (orders beyond the library offered by the periodogram screen);
+  and the same with the library up to every order the poses resolve (``--max-order`` at the
+  highest axis's limit, 124 here).
 
 Held out: 200 random targets inside the region (50 mm margin) at A 0 B 90 C 0, and 200 at
 orientations tilted 0-25 deg. The table shows where the real arm lands when commanded P'

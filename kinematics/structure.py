@@ -31,9 +31,19 @@ The candidates (``kinematics.candidates``) are groups of linear parameters: redu
    is removed from the held-out RMS to give the model's own error.
 5. The chosen groups are fitted with the full nonlinear model (``identification.identify``).
 
-K (the highest harmonic order searched) defaults to ``DEFAULT_MAX_ORDER`` clamped to what the
-poses resolve: an order's period 2π/k must span ``GAPS_PER_PERIOD`` median gaps between the
-sorted angles of the distinct poses on every axis (finer periods fall between the poses).
+K (the highest harmonic order of the library) defaults to ``DEFAULT_MAX_ORDER`` clamped to what
+the poses resolve: an order's period 2π/k must span ``GAPS_PER_PERIOD`` median gaps between the
+sorted angles of the distinct poses on every axis. Higher orders (reducer stages of 40..160) are
+not excluded: irregular samples alias only approximately, so a few sparse high orders can be
+identified. A **screen** before step 2 offers them: a greedy periodogram of the DH fit's
+residuals (beyond DH, TCP and the gravity groups) over every (axis, order 1..π / the smallest
+gap between the axis's angles, at most ``SCREEN_MAX_ORDER``), ``SCREEN_STEPS`` picks, each
+deflating what it explains, keeps the first ``SCREEN_KEEP`` picks beyond K per axis as
+candidates. Such a candidate is the best of a pool of hundreds, so its step must pass the bar
+of that whole pool (Bonferroni over library + pool). The library's search (steps 2-3) runs
+first; then it continues from there with the screened orders offered too, and those it keeps
+are swapped for a neighbouring order where that lowers the held-out error. The screen sees all
+poses, also in the nested estimate (it only proposes; the choice is made in the folds).
 """
 
 from __future__ import annotations
@@ -65,6 +75,8 @@ __all__ = [
     "FALSE_STEP",
     "LOOK_AHEAD",
     "MAX_STEPS",
+    "SCREEN_KEEP",
+    "SCREEN_MAX_ORDER",
     "SEPARATE",
     "Nested",
     "Selection",
@@ -72,6 +84,7 @@ __all__ = [
     "identify_structure",
     "max_order_of",
     "observability",
+    "screen_limit",
 ]
 
 DEFAULT_MAX_ORDER = 16  # reducer output stages; a user may search further with --max-order
@@ -81,7 +94,11 @@ MAX_SHARE = 0.5  # parameters at most this share of a training fold's equations
 MAX_STEPS = 40  # groups one search adds at most
 FALSE_STEP = 0.05  # chance that a step on noise alone passes the bar (shared by the candidates)
 LOOK_AHEAD = 4  # a step that fails may be carried by the next 2..LOOK_AHEAD steps together
+SCREEN_MAX_ORDER = 200  # the highest order the periodogram screens (reducer stages up to ~160)
+SCREEN_KEEP = 3  # orders beyond the library an axis's periodogram adds as candidates
+SCREEN_STEPS = 30  # picks of the greedy periodogram (low and high orders together)
 _NESTED_SEED = 1  # inner folds: another permutation of the training poses
+_FIRST_ORDERS = tuple((axis, 1) for axis in range(1, 7))  # sin, cos give each joint's column
 
 
 @dataclass(frozen=True)
@@ -136,13 +153,72 @@ def max_order_of(q: np.ndarray) -> np.ndarray:
     """The highest harmonic order (6,) the distinct poses' joints q (P, 6) rad resolve on each
     axis: an order's period must span ``GAPS_PER_PERIOD`` median gaps between the sorted angles
     on that axis (1 for an axis the poses do not move)."""
-    out = np.ones(6, dtype=int)
-    for axis in range(6):
-        gaps = np.diff(np.sort(q[:, axis]))
-        gaps = gaps[gaps > 1e-9]
-        if gaps.size:
-            out[axis] = max(int(2 * np.pi / (GAPS_PER_PERIOD * float(np.median(gaps)))), 1)
-    return out
+    return np.array(
+        [
+            max(int(2 * np.pi / (GAPS_PER_PERIOD * float(np.median(g)))), 1) if g.size else 1
+            for g in _angle_gaps(q)
+        ]
+    )
+
+
+def screen_limit(q: np.ndarray) -> np.ndarray:
+    """The highest order (6,) the periodogram screens per axis for distinct poses' joints q (P, 6)
+    rad: π over the smallest gap between the sorted angles (finer periods alias even on
+    irregular samples), at most ``SCREEN_MAX_ORDER`` (0 for an axis the poses do not move)."""
+    return np.array(
+        [
+            min(int(np.pi / float(g.min())), SCREEN_MAX_ORDER) if g.size else 0
+            for g in _angle_gaps(q)
+        ]
+    )
+
+
+def _angle_gaps(q: np.ndarray) -> list[np.ndarray]:
+    """Per axis the gaps (rad) > 0 between the sorted angles of joints q (P, 6) rad."""
+    gaps = np.diff(np.sort(q, axis=0), axis=0)
+    return [gaps[:, axis][gaps[:, axis] > 1e-9] for axis in range(6)]
+
+
+def _screen(y, base, joint, angle, caps, last) -> list[tuple[int, int]]:
+    """Harmonics beyond the library (orders caps[axis]+1..last[axis] (6,)) that a greedy
+    periodogram of the residuals y (M,) mm picks: beyond the columns ``base`` (M, r) (DH, TCP,
+    gravity), each pick is the (axis, order) of orders 1..last whose two columns, on the joint's
+    column joint (M, 6) mm/rad at the rows' angles (M, 6) rad, remove most of what is left; picks
+    are deflated, so a low order taken first no longer leaks into the high ones and a peak's
+    neighbours lose what it explained. The first ``SCREEN_KEEP`` high orders per axis, sorted."""
+    q_, _ = np.linalg.qr(base)
+    terms = [(a + 1, k) for a in range(6) for k in range(1, int(last[a]) + 1)]
+    if not terms:
+        return []
+    axis = np.array([t[0] - 1 for t in terms])
+    order = np.array([t[1] for t in terms], dtype=float)
+    phase = angle[:, axis] * order  # (M, G)
+    rest = joint[:, axis, None] * np.stack([np.sin(phase), np.cos(phase)], axis=2)  # (M, G, 2)
+    rest /= np.sqrt(np.mean(rest**2, axis=0)) + 1e-300
+    rest -= np.einsum("mr,rgi->mgi", q_, np.einsum("mr,mgi->rgi", q_, rest))
+    left = y - q_ @ (q_.T @ y)
+    own = np.einsum("mgi,mgi->gi", rest, rest)
+    picked: list[tuple[int, int]] = []
+    found = np.zeros(6, dtype=int)
+    for _ in range(SCREEN_STEPS):
+        gram = np.einsum("mgi,mgj->gij", rest, rest)
+        rhs = np.einsum("mgi,m->gi", rest, left)
+        # a pair whose columns are (nearly) spanned already has nothing left to give
+        alive = np.linalg.eigvalsh(gram)[:, 0] > SEPARATE**2 * own.max(axis=1)
+        safe = np.where(alive[:, None, None], gram, np.eye(2))
+        gain = np.einsum("gi,gi->g", rhs, np.linalg.solve(safe, rhs[:, :, None])[:, :, 0])
+        gain[~alive] = -np.inf
+        best = int(np.argmax(gain))
+        if not np.isfinite(gain[best]):
+            break
+        u, _ = np.linalg.qr(rest[:, best])  # (M, 2)
+        rest -= np.einsum("mj,jgi->mgi", u, np.einsum("mj,mgi->jgi", u, rest))
+        left -= u @ (u.T @ left)
+        a, k = terms[best]
+        if k > caps[a - 1] and found[a - 1] < SCREEN_KEEP:
+            picked.append((a, k))
+            found[a - 1] += 1
+    return sorted(picked)
 
 
 def observability(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, list[tuple[str, str]]]:
@@ -212,10 +288,50 @@ def _identify_structure(
         for order in range(1, int(caps[axis - 1]) + 1)
         if (axis, order) not in pinned
     )
+    library = len(search)
+    screened: list[tuple[int, int]] = []
+    # orders beyond the library: a periodogram of the DH fit's residuals per axis screens
+    # caps+1..screen_limit and offers its SCREEN_KEEP best to the same selection
+    last = screen_limit(data.q[np.unique(data.group, return_index=True)[1]])
+    first = caps + 1
+    pool = int(np.maximum(last - first + 1, 0).sum())
     gravity = gravity_terms(robot)
+    if pool:
+        y, x0, ones = linearised(
+            robot, data, base, base_frame, compliance, pinned, _FIRST_ORDERS, gravity
+        )
+        angle = np.repeat(data.q, 3, axis=0)
+        joint = np.sin(angle) * ones[:, 0:12:2] + np.cos(angle) * ones[:, 1:12:2]  # (M, 6)
+        screened = [
+            t
+            for t in _screen(y, np.column_stack([x0, ones[:, 12:]]), joint, angle, caps, last)
+            if t not in pinned
+        ]
+        # their neighbouring orders, for the swap only (k149 may be picked for k150)
+        nearby = tuple(
+            dict.fromkeys(
+                (a, k + d)
+                for a, k in screened
+                for d in (-2, -1, 1, 2)
+                if (a, k + d) not in screened and (a, k + d) not in pinned and k + d > caps[a - 1]
+            )
+        )
+        search += tuple(screened) + nearby
+        ranges = ", ".join(
+            f"A{a} to {last[a - 1]}" for a in range(1, 7) if last[a - 1] > caps[a - 1]
+        )
+        found = ", ".join(harmonic_name(*t) for t in screened) or "none"
+        rule += f"; screened beyond: {ranges} (π / the smallest gap): {found}"
     y, x0, columns = linearised(robot, data, base, base_frame, compliance, pinned, search, gravity)
     names, groups = _library(search, gravity)
     problem = _Problem(y, x0, columns, groups, np.repeat(data.group, 3), data.poses)
+    # a screened order is the best of its axis's whole periodogram: its bar counts that pool
+    offered = library + len(screened)
+    # the bar of a step: the best of the offered groups; a screened order's, of the whole pool
+    problem.bars[:] = norm.isf(FALSE_STEP / (offered + len(gravity)))
+    problem.bars[library:offered] = norm.isf(FALSE_STEP / (library + len(gravity) + pool))
+    problem.screened[library:offered] = True
+    problem.offered[offered : len(search)] = False
     index = {t: i for i, t in enumerate(search)}
     problem.neighbours = {
         i: [index[(a, k + d)] for d in (-2, -1, 1, 2) if (a, k + d) in index]
@@ -223,14 +339,11 @@ def _identify_structure(
     }
     left_out = problem.reduce(names)
     fold = pose_folds(data.poses, folds)
-    path = problem.path(fold, np.ones(data.poses, bool))
-    kept = problem.one_standard_error(path)
-    greedy = [g for g, _ in path[1 : kept + 1]]
-    chosen = problem.refine(greedy, fold, np.ones(data.poses, bool))
+    path, kept, greedy, chosen = problem.search(fold, np.ones(data.poses, bool))
     rejected = [g for g, _ in path[kept + 1 :] if g not in chosen]
     left_out += [
         (names[g], f"swapped for {names[c]}: a neighbouring order, lower held-out error")
-        for g, c in zip(greedy, chosen, strict=True)
+        for g, c in zip(greedy, chosen, strict=False)
         if g != c
     ]
     left_out += [(names[g], "its held-out gain is within its uncertainty") for g in rejected]
@@ -292,7 +405,9 @@ class _Problem:
         self.top = float(np.sqrt(np.mean(columns**2, axis=0)).max()) if columns.size else 1.0
         # a step is the best of len(groups) tries: the one-sided normal bar whose tail
         # FALSE_STEP is shared among them (Bonferroni), 3.3 standard errors for 100 groups
-        self.bar = float(norm.isf(FALSE_STEP / max(len(groups), 1)))
+        self.screened = np.zeros(len(groups), bool)  # orders the periodogram offered
+        self.offered = np.ones(len(groups), bool)  # False: a screened order's neighbour (swap)
+        self.bars = np.full(len(groups), norm.isf(FALSE_STEP / max(len(groups), 1)))
 
     def reduce(self, names: list[str]) -> list[tuple[str, str]]:
         """Keep of each group only its directions the data separate from the DH + TCP (+ pinned)
@@ -334,20 +449,40 @@ class _Problem:
         self.others = [i for i, g in enumerate(groups) if len(g) not in (0, 2)]
         return out
 
+    def search(self, fold_of_pose: np.ndarray, use: np.ndarray):
+        """The whole search on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,): the
+        library's path, its kept steps refined (neighbouring orders), then the path on from there
+        with the screened orders offered too (their steps must clear the pool's bar). Returns
+        (path: start, library steps kept, the continuation; kept steps; the greedy library
+        groups kept; the chosen groups)."""
+        first = self.path(fold_of_pose, use, [], self.offered & ~self.screened)
+        kept = self.one_standard_error(first)
+        greedy = [g for g, _ in first[1 : kept + 1]]
+        chosen = self.refine(greedy, fold_of_pose, use)
+        if not self.screened.any():
+            return first, kept, greedy, chosen
+        on = self.path(fold_of_pose, use, chosen, self.offered)
+        more = self.one_standard_error(on)
+        path = first[: kept + 1] + on[1:]
+        added = chosen + [g for g, _ in on[1 : more + 1]]
+        return path, kept + more, greedy, self.refine(added, fold_of_pose, use, len(chosen))
+
     def path(
-        self, fold_of_pose: np.ndarray, use: np.ndarray
+        self, fold_of_pose: np.ndarray, use: np.ndarray, start: list[int], offered: np.ndarray
     ) -> list[tuple[int | None, np.ndarray]]:
-        """Forward selection on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,):
-        [(group added or None, held-out residuals (M,) with NaN off ``use``)], start first."""
+        """Forward selection on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,) from
+        the groups ``start`` over the groups ``offered`` (groups,) bool: [(group added or None,
+        held-out residuals (M,) with NaN off ``use``)], the start first."""
         rows = use[self.pose]
         fold = fold_of_pose[self.pose]
         folds = np.unique(fold_of_pose[use])
         train_eq = min(int(np.sum(rows & (fold != k))) for k in folds)
-        chosen: list[int] = []
+        chosen = list(start)
         held = self._held(chosen, fold, rows, folds)
         path = [(None, held)]
         sse = self._pose_sse(held)
-        free = self.observable.copy()
+        free = self.observable & offered
+        free[chosen] = False
         budget = MAX_SHARE * train_eq - self.x0.shape[1]
         for _ in range(MAX_STEPS):
             used = int(self.size[chosen].sum()) if chosen else 0
@@ -439,16 +574,19 @@ class _Problem:
                 out[i] += np.sum((et - t[:, g] @ w) ** 2)
         return out
 
-    def refine(self, chosen: list[int], fold_of_pose: np.ndarray, use: np.ndarray) -> list[int]:
-        """``chosen`` with each harmonic swapped for a neighbouring order of its axis (k ± 1, 2)
-        where that lowers the held-out sum of squares (over a narrow angle range neighbouring
-        orders differ by a fraction of a period; the greedy step may take the wrong one)."""
+    def refine(
+        self, chosen: list[int], fold_of_pose: np.ndarray, use: np.ndarray, start: int = 0
+    ) -> list[int]:
+        """``chosen`` with each harmonic from ``start`` on swapped for a neighbouring order of its
+        axis (k ± 1, 2) where that lowers the held-out sum of squares (over a narrow angle range
+        neighbouring orders differ by a fraction of a period; the greedy step may take the wrong
+        one)."""
         rows = use[self.pose]
         fold = fold_of_pose[self.pose]
         folds = np.unique(fold_of_pose[use])
         best = np.nansum(self._held(chosen, fold, rows, folds) ** 2)
         chosen = list(chosen)
-        for at in range(len(chosen)):
+        for at in range(start, len(chosen)):
             for other in self.neighbours.get(chosen[at], []):
                 if other in chosen or not self.observable[other]:
                     continue
@@ -469,7 +607,9 @@ class _Problem:
         while step + 1 < len(path):
             ahead = sse[step] - sse[step + 1 : step + 1 + LOOK_AHEAD]  # (1..LOOK_AHEAD, poses)
             se = ahead.std(axis=1, ddof=1) / np.sqrt(ahead.shape[1])
-            passed = np.flatnonzero(ahead.mean(axis=1) > self.bar * se)
+            added = [g for g, _ in path[step + 1 : step + 1 + len(ahead)]]
+            bar = np.maximum.accumulate(self.bars[added])  # a set passes the bar of its hardest
+            passed = np.flatnonzero(ahead.mean(axis=1) > bar * se)
             if not passed.size:
                 break
             step += int(passed[0]) + 1
@@ -501,9 +641,7 @@ def _nested(problem: _Problem, fold: np.ndarray, folds: int, names, data: PoseSe
         use = fold != k
         inner = np.full(problem.poses, -1)
         inner[use] = pose_folds(int(use.sum()), folds, _NESTED_SEED + k)
-        path = problem.path(inner, use)
-        kept = problem.one_standard_error(path)
-        chosen = problem.refine([g for g, _ in path[1 : kept + 1]], inner, use)
+        chosen = problem.search(inner, use)[3]
         chosen_by_fold.append(tuple(names[g] for g in chosen))
         x = problem.design(chosen)
         train, test = use[problem.pose], ~use[problem.pose]
