@@ -254,7 +254,8 @@ def test_huge_literals_are_located_or_reported():
 CONFIG_DAT = (
     "DEFDAT  $CONFIG PUBLIC\n"
     'DECL ADAT TDEFAULT={TriggerPara {TriggerPath 0,TriggerTask[] " "}}\n'
-    'DECL ADAT TSPOT={TriggerPara {TriggerPath 1,TriggerTask[] ""},Spot {Gun 2,Name[] "a, {b}; c"}}\n'
+    'DECL ADAT TSPOT={TriggerPara {TriggerPath 1,TriggerTask[] ""},'
+    'Spot {Gun 2,Name[] "a, {b}; c"}}\n'
     'DECL FDAT FHOME={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE,POINT2[] " ",TQ_STATE FALSE}\n'
     "DECL LDAT LCPDAT1={VEL 2.0,ACC 100.0,APO_DIST 100.0,APO_FAC 50.0,AXIS_VEL 100.0,"
     "AXIS_ACC 100.0,ORI_TYP #VAR,CIRC_TYP #BASE,JERK_FAC 50.0,GEAR_JERK 100.0,EXAX_IGN 0}\n"
