@@ -173,6 +173,10 @@ def test_fdat_labels_loops_and_calls():
         ('DEF a()\n$OUT[1]=TRUE\nMsg("open\nEND', 3, 5),
         ("DEFDAT a\nDECL E6POS P={X 1,X 2,Y 3,Z 4}\n", 2, 21),
         ("DEF a()\nLIN {X 1,Y 'Q1',Z 3}\n", 2, 12),
+        ('DEF a()\nLIN {X 1,Y 2,Z 3,N[] "a" b}\n', 2, 18),
+        ("DEF a()\nLIN {X 1,Y 2,Z 3,N {Q 0,R 1} x}\n", 2, 18),
+        ("DEF a()\nLIN {X 1,Y 2,Z 3,N[] 5}\n", 2, 18),
+        ('DEFDAT a\nDECL ADAT T={P {Q 0,R[] " "}\n', 2, 13),
     ],
 )
 def test_malformed_programs_name_line_and_column(text, line, column):
@@ -243,3 +247,38 @@ def test_huge_literals_are_located_or_reported():
     first, second = scan.positions
     assert first.base.kind == "unknown" and "not a number" in first.base.reason
     assert second.base.kind == "unknown" and "not a BASE_DATA number" in second.base.reason
+
+
+# a controller $config.dat as KSS writes it: motion data with nested aggregates, CHAR members
+# (NAME[] "text", also empty and holding , { ; ), enums, booleans, reals with exponents
+CONFIG_DAT = (
+    "DEFDAT  $CONFIG PUBLIC\n"
+    'DECL ADAT TDEFAULT={TriggerPara {TriggerPath 0,TriggerTask[] " "}}\n'
+    'DECL ADAT TSPOT={TriggerPara {TriggerPath 1,TriggerTask[] ""},'
+    'Spot {Gun 2,Name[] "a, {b}; c"}}\n'
+    'DECL FDAT FHOME={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE,POINT2[] " ",TQ_STATE FALSE}\n'
+    "DECL LDAT LCPDAT1={VEL 2.0,ACC 100.0,APO_DIST 100.0,APO_FAC 50.0,AXIS_VEL 100.0,"
+    "AXIS_ACC 100.0,ORI_TYP #VAR,CIRC_TYP #BASE,JERK_FAC 50.0,GEAR_JERK 100.0,EXAX_IGN 0}\n"
+    "DECL PDAT PPDAT1={VEL 100.0,ACC 100.0,APO_DIST 100.0,APO_MODE #CDIS,GEAR_JERK 50.0}\n"
+    'DECL TOOL_INFO_T TINFO={Name[] "drill, 8 mm",Mass 1.5E+01,Fixed TRUE,Load {M -1,F 1e-3}}\n'
+    "BASE_DATA[1]={X 1.0E+03,Y -250.5,Z 0.0,A 90.0,B 0.0,C 0.0}\n"
+    "BASE_DATA[2]={X 12.5,Y 0.0,Z 7.0,A 0.0,B -0.5,C 180.0}\n"
+    "DECL E6POS XP1={X 1.5E+02,Y -2.25,Z .5,A 0.0,B 90.0,C 0.0,S 6,T 27,E1 0.0,E2 0.0}\n"
+    "ENDDAT\n"
+)
+
+
+def test_config_dat_with_strings_and_nested_aggregates_is_read():
+    scan = scan_krl(CONFIG_DAT, "$config.dat")
+    assert scan.base_data == {
+        1: ((1000.0, -250.5, 0.0, 90.0, 0.0, 0.0), 8),  # line 8
+        2: ((12.5, 0.0, 7.0, 0.0, -0.5, 180.0), 9),
+    }
+    assert (scan.fdats["FHOME"].base_no, scan.fdats["FHOME"].tool_no) == (2, 1)
+    pos = parse_krl(CONFIG_DAT, "$config.dat")
+    assert [p.name for p in pos] == ["XP1"]  # motion data and strings are no positions
+    assert (pos[0].x, pos[0].y, pos[0].z, pos[0].s, pos[0].t) == (150.0, -2.25, 0.5, 6, 27)
+    assert not pos[0].reason
+    spans_ok(CONFIG_DAT, pos[0])
+    inline = parse_krl('DEF a()\nLIN {X 1,Y 2,Z 3,N[] "",M {Q 1,R[] "a, b"}}\nEND\n', "a.src")
+    assert inline[0].values == {"X": 1, "Y": 2, "Z": 3} and not inline[0].reason

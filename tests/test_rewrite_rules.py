@@ -439,6 +439,40 @@ def test_config_dat_fdats_and_positions_are_read(tmp_path, cell):
     assert "joint-space target" in rows[1]["reason"]
 
 
+def test_config_dat_and_program_dat_with_strings_in_nested_aggregates(tmp_path):
+    """A controller $config.dat (motion data with CHAR members, enums, booleans) gives
+    BASE_DATA[2]; the program's own .dat carries such members too."""
+    cell = write_cell(tmp_path, field="constant")  # declares no BASE_DATA[2]
+    config = tmp_path / "config.dat"
+    config.write_text(
+        "DEFDAT  $CONFIG PUBLIC\n"
+        'DECL ADAT TDEFAULT={TriggerPara {TriggerPath 0,TriggerTask[] " "}}\n'
+        "DECL LDAT LDEFAULT={VEL 2.0,ACC 100.0,APO_DIST 100.0,ORI_TYP #VAR,CIRC_TYP #BASE}\n"
+        "DECL PDAT PDEFAULT={VEL 100.0,ACC 100.0,APO_DIST 100.0,APO_MODE #CDIS}\n"
+        'DECL FDAT FDEFAULT={TOOL_NO 1,BASE_NO 0,IPO_FRAME #BASE,POINT2[] "",TQ_STATE FALSE}\n'
+        "BASE_DATA[2]={X 0.0,Y 0.0,Z 0.0,A 9.0E+01,B 0.0,C 0.0}\n"
+        "ENDDAT\n"
+    )
+    src, dat = tmp_path / "job.src", tmp_path / "job.dat"
+    src.write_text(krl_src("FDAT_ACT=FP1", "LIN XP1"))
+    dat.write_text(
+        "DEFDAT job\n"
+        'DECL ADAT AP1={TriggerPara {TriggerPath 0,TriggerTask[] "drill, 8 mm"}}\n'
+        "DECL E6POS XP1={X 1000.000,Y 0.000,Z 1000.000,A 0.0,B 90.0,C 0.0}\n"
+        'DECL FDAT FP1={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE,POINT2[] " "}\n'
+        "ENDDAT\n"
+    )
+    out, rep = tmp_path / "out", tmp_path / "r.csv"
+    args = ("--cell", cell, "-o", out, "--report", rep, "--force")
+    assert rewrite(src, dat, *args) == 0  # read; BASE_DATA[2] is unknown without --config-dat
+    assert "BASE_DATA[2] is in neither" in report(rep)[0]["reason"]
+    assert rewrite(src, dat, *args, "--config-dat", config) == 0
+    row = report(rep)[0]
+    assert row["name"] == "XP1" and row["status"] == "corrected"
+    want = np.array([1000.0, 0.0, 1000.0]) + R2.T @ E_CONST
+    assert np.allclose([float(row[k]) for k in ("x_new", "y_new", "z_new")], want, atol=5e-4)
+
+
 def test_outputs_are_readable_by_others_under_umask_022(tmp_path, cell):
     """A transfer service must be able to read the programs (they were 0600 before)."""
     src, dat = tmp_path / "job.src", tmp_path / "job.dat"

@@ -133,6 +133,9 @@ _ITEM_RE = re.compile(
     + _END
     + r"|([^,]*+))\s*+(?:,|$)"
 )
+# a component whose value holds commas: a "string" (CHAR array: NAME[] "text"; KRL strings have
+# no escape, a string ends at the next quote) or a nested aggregate {...}
+_NESTED_ITEM_RE = re.compile(r'\s*+([A-Za-z_]\w*+)(?:\s*+\[\s*+\])?+\s*+(?:("[^"]*+")|(?=\{))')
 _TYPE_PREFIX_RE = re.compile(r"\s*+([A-Za-z_]\w*+)\s*+:")
 _LABEL_RE = re.compile(r"\s*+([A-Za-z_]\w*+)\s*+:(?!:)\s*+")
 _WORD_RE = re.compile(r"\s*+([A-Za-z_$]\w*+)")
@@ -453,8 +456,8 @@ def parse_aggregate(
         body = code[body_start : end - 1]
     numbers: dict[str, Number] = {}
     reason = ""
-    if "{" in body or '"' in body:
-        items = _split_top(body)  # nested aggregates or strings: item by item
+    if "{" in body or '"' in body or "[" in body:
+        items = _split_top(body)  # nested aggregates or strings (NAME[] "text"): item by item
     else:
         items = None
     stop = end - 1
@@ -492,9 +495,12 @@ def parse_aggregate(
             continue
         m = _ITEM_RE.fullmatch(code, item_start, item_start + len(item))
         if m is None:
-            raise InputError(
-                f"cannot read aggregate component {item.strip()!r}", path, lineno, item_start + 1
-            )
+            key = _nested_item(code, item_start, item_start + len(item), path, lineno)
+            if key in numbers:
+                raise InputError(f"component {key} given twice", path, lineno, item_start + 1)
+            if key in CARTESIAN_KEYS or key in JOINT_KEYS:
+                reason = reason or f"component {key} is {item.strip()!r}, not a number"
+            continue
         key = m.group(1).upper()
         if key in numbers:
             raise InputError(f"component {key} given twice", path, lineno, m.start(2) + 1)
@@ -513,6 +519,19 @@ def parse_aggregate(
         elif key in CARTESIAN_KEYS or key in JOINT_KEYS:
             reason = reason or f"component {key} is {m.group(4).strip()!r}, not a number"
     return type_name, numbers, reason, end
+
+
+def _nested_item(code: str, start: int, stop: int, path: str | None, lineno: int) -> str:
+    """The key of the component ``code[start:stop]`` whose value is a "string" or a nested
+    aggregate (skipped: not a position of its own); InputError when it is neither."""
+    m = _NESTED_ITEM_RE.match(code, start, stop)
+    end = m.end() if m else start
+    if m and m.group(2) is None:
+        end = match_brace(code, m.end(), path, lineno)
+    if m is None or end > stop or code[end:stop].strip():
+        item = code[start:stop].strip()
+        raise InputError(f"cannot read aggregate component {item!r}", path, lineno, start + 1)
+    return m.group(1).upper()
 
 
 def _out_of_range(key: str, number: str, path: str | None, lineno: int, at: int) -> None:
