@@ -27,7 +27,8 @@ be placed, or a module where none is corrected, fails the job unless ``--allow-p
 robtarget is commanded when a motion goes to it or to a position derived from it: inline in a
 move, or named in a move, in an instruction named like one (``ArcL``, ``SearchL``,
 ``MyMoveL``) or a call of a routine of the module (a custom move), or as an ``Offs``/``RelTool``
-operand there; never-corrected data and robtargets no motion names do not count. A module without robtargets is an InputError too.
+operand there; never-corrected data and robtargets no motion names do not count. A module
+without robtargets is an InputError too.
 """
 
 from __future__ import annotations
