@@ -16,7 +16,8 @@ import pytest
 from conftest import EXAMPLES
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from rewrite_helpers import E_CONST, write_grid
+from rewrite_helpers import E_CONST, write_rapid_cell
+from rewrite_helpers import RAPID_BASE as BASE
 from scipy.spatial.transform import Rotation
 
 from accugrid.codegen.cli import main
@@ -154,18 +155,6 @@ CASES = {
     # placeap (line 7): the arm angle in eax_a, MoveJ placeap at line 53
     "bhomaidan1990_currLeft.mod": ("tool0", "wobjX", None, 7, "external axis eax_a"),
 }
-BASE = (400.0, -250.0, 300.0, 30.0, 10.0, -20.0)  # the test cell's base (wobj), mm and deg
-
-
-def _cell(folder: Path, tool: str, wobj: str) -> Path:
-    write_grid(folder / "grid.csv", (-6000,) * 3, (6000,) * 3, 3000.0, field="constant")
-    x, y, z, a, b, c = BASE
-    (folder / "cell.yaml").write_text(
-        "robot: irb6700\ngrid: grid.csv\ntool: {number: 1, x: 0, y: 0, z: 250, a: 0, b: 0, c: 0}\n"
-        f"base: {{number: 1, x: {x}, y: {y}, z: {z}, a: {a}, b: {b}, c: {c}}}\n"
-        f"rapid: {{tool: {tool}, wobj: {wobj}}}\n"
-    )
-    return folder / "cell.yaml"
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
@@ -174,7 +163,7 @@ def test_realworld_rapid_rewrite_changes_only_the_corrected_numbers(
 ):
     tool, wobj, frame, line, why = CASES[name]
     program = realworld / "rapid" / name
-    cell = _cell(tmp_path, tool, wobj)
+    cell = write_rapid_cell(tmp_path, tool, wobj)
     out, report = tmp_path / name, tmp_path / "r.csv"
     argv = ["rewrite", str(program), "--cell", str(cell), "-o", str(out)]
     assert main(argv) == 2
@@ -215,7 +204,7 @@ def test_realworld_rapid_rewrite_changes_only_the_corrected_numbers(
 def _rewrite(tmp_path, text: str, capsys, *extra: str) -> tuple[int, str, str]:
     program = tmp_path / "t.mod"
     program.write_bytes(text.encode("latin-1"))
-    cell = _cell(tmp_path, "tDrill", "wobjPanel")
+    cell = write_rapid_cell(tmp_path, "tDrill", "wobjPanel")
     out = tmp_path / "out.mod"
     report = tmp_path / "r.csv"
     code = main(
@@ -389,7 +378,7 @@ def test_rewrite_finds_every_robtarget_in_any_layout(tmp_path_factory, data, crl
     text = "".join(p for p, _ in pieces)
     program = tmp / "layout.mod"
     program.write_bytes(text.encode("latin-1"))
-    cell = _cell(tmp, "tDrill", "wobjPanel")
+    cell = write_rapid_cell(tmp, "tDrill", "wobjPanel")
     out = tmp / "out.mod"
     assert main(["rewrite", str(program), "--cell", str(cell), "-o", str(out)]) == 0
     new = out.read_bytes().decode("latin-1")
@@ -441,7 +430,7 @@ def test_header_goes_below_the_module_line_of_a_prg(tmp_path, capsys):
     )
     program = tmp_path / "t.prg"
     program.write_bytes(text.encode("latin-1"))
-    cell = _cell(tmp_path, "tDrill", "wobjPanel")
+    cell = write_rapid_cell(tmp_path, "tDrill", "wobjPanel")
     out = tmp_path / "out.prg"
     assert main(["rewrite", str(program), "--cell", str(cell), "-o", str(out), "--header"]) == 0
     lines = out.read_bytes().decode("latin-1").split("\r\n")
