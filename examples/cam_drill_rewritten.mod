@@ -6,6 +6,8 @@ MODULE CAM_DRILL
     ! grid step 200.000 x 200.000 x 200.000 mm
     ! largest correction 3.923 mm at pHole3 line 9
     ! positions corrected 2
+    ! not corrected: line 7 pHole1: used by Drill at line 15, not a move accugrid places
+    ! not corrected: line 8 pHole2: operand of Offs_..._ at line 16: the offset point is not a drilling position
     ! A small CAM-style drilling module for examples/cell_irb6700.yaml: the panel holes in the
     ! work object wobjPanel (the cell base frame), approach by Offs, a home joint target.
     PERS tooldata tDrill:=[TRUE,[[0,0,250],[1,0,0,0]],[25,[0,0,0],[1,0,0,0],0,0,0]];

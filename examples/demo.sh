@@ -19,7 +19,8 @@ accugrid gcode examples/wing_panel_points.csv --cell examples/cell.yaml --grid o
 # The same holes for an ABB IRB 6700 (examples/cell_irb6700.yaml): a simulated grid of that
 # robot (examples/irb6700_simulated.yaml: the nominal arm plus parameter errors), then the
 # corrected RAPID module (examples/WING.mod is its output) and the pre-flight rewrite of a RAPID
-# module (examples/cam_drill_rewritten.mod).
+# module (examples/cam_drill_rewritten.mod): its approach by Offs and its hole passed to the
+# routine Drill cannot be placed, so --allow-partial writes them as they are, named in the header.
 accugrid simulate --robot examples/irb6700_simulated.yaml --region 1600 2400 -600 600 1000 2000 \
     --step 200 --abc 0 90 0 --tool 0 0 250 0 0 0 --repeats 5 --noise-tracker 0.02 \
     --noise-repeat 0.03 --seed 1 -o out/grid_irb6700_200mm.csv --force
@@ -27,7 +28,7 @@ cmp out/grid_irb6700_200mm.csv examples/grid_irb6700_200mm.csv
 accugrid rapid examples/wing_panel_points.csv --cell examples/cell_irb6700.yaml -o out/WING.mod \
     --force
 accugrid rewrite examples/cam_drill.mod --cell examples/cell_irb6700.yaml --header \
-    -o out/cam_drill.mod --report out/cam_drill_rapid_report.csv --force
+    -o out/cam_drill.mod --report out/cam_drill_rapid_report.csv --force --allow-partial
 
 # The grid model on its own: the same holes in the robot frame -> corrected points CSV
 # (every input column, then x_cmd,y_cmd,z_cmd = P + e and ex,ey,ez = e, mm).

@@ -45,6 +45,22 @@ def write_grid(
     return path
 
 
+RAPID_BASE = (400.0, -250.0, 300.0, 30.0, 10.0, -20.0)  # the RAPID cell's base (wobj), mm, deg
+
+
+def write_rapid_cell(folder: Path, tool: str, wobj: str) -> Path:
+    """cell.yaml of an IRB 6700 with a constant error field over +-6 m, base ``RAPID_BASE`` and
+    the RAPID names of its tool and work object."""
+    write_grid(folder / "grid.csv", (-6000,) * 3, (6000,) * 3, 3000.0, field="constant")
+    x, y, z, a, b, c = RAPID_BASE
+    (folder / "cell.yaml").write_text(
+        "robot: irb6700\ngrid: grid.csv\ntool: {number: 1, x: 0, y: 0, z: 250, a: 0, b: 0, c: 0}\n"
+        f"base: {{number: 1, x: {x}, y: {y}, z: {z}, a: {a}, b: {b}, c: {c}}}\n"
+        f"rapid: {{tool: {tool}, wobj: {wobj}}}\n"
+    )
+    return folder / "cell.yaml"
+
+
 def write_cell(folder: Path, field="smooth", base_data=None, program_frame=None, **grid) -> Path:
     """cell.yaml + grid.csv in ``folder``; base 1 = robot frame unless ``base_data`` says more.
 

@@ -5,6 +5,7 @@ input, and the KRL and G-code outputs pinned to what they were before RAPID came
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import re
 from decimal import Decimal
@@ -15,7 +16,8 @@ import pytest
 from conftest import EXAMPLES
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from rewrite_helpers import E_CONST, write_grid
+from rewrite_helpers import E_CONST, write_rapid_cell
+from rewrite_helpers import RAPID_BASE as BASE
 from scipy.spatial.transform import Rotation
 
 from accugrid.codegen.cli import main
@@ -126,51 +128,57 @@ def test_module_name_over_32_characters_is_a_located_error(tmp_path, capsys):
 
 
 # file -> (the cell's rapid.tool and rapid.wobj, the frame its corrected robtargets are written
-# in: "robot" (wobj0) or "base" (the work object, the cell's base); None: nothing can be placed)
+# in: "robot" (wobj0) or "base" (the work object, the cell's base), None: nothing can be placed;
+# the line and reason of the first robtarget a motion commands that is left uncorrected, which
+# fails the job without --allow-partial; each read in the program)
 CASES = {
-    "robodk_Program.mod": ("Tool", "Frame2", "robot"),  # Frame2's literal frame is not the base
-    "harshbhatt99_Module1.mod": ("TCPMarker", "WobjWhiteboard", "base"),
-    "juanlopezp_Module1.mod": ("TVentosa", "WO", "robot"),  # MoveJ Target_10 .. \WObj:=wobj0
-    "edgarivanmm_MainModule.modx": ("gripperIvan", "wobjMesa", "robot"),  # moves without \WObj
-    "rparak_Module1.mod": ("tool0", "wobjX", None),  # only Offs(...) operands
-    "mcoffman1_AA_example_script.mod": ("INST_tool", "INST_workobject", None),  # oframe moved
-    "mjkkirschner_test02_001.prg": ("drill", "block", None),  # stationary drill, held block
-    "zwj12_WeldTestModule.mod": ("toolWeldGun", "wobjX", None),  # welding moves, external axes
-    "kangoananya_iGPS_SC_Acc_Exp.mod": ("tool0", "wobjX", None),  # reassigned, custom moves
-    "kangoananya_user.sys": ("tool0", "wobjX", None),  # no robtargets
-    "taeyangshim-stack_user.sys": ("tool0", "wobjX", None),  # joint targets only
-    "bhomaidan1990_currLeft.mod": ("tool0", "wobjX", None),  # arm angle in eax_a, Offs
+    # MoveL in Frame2 (line 25), whose literal frame is not the base
+    "robodk_Program.mod": ("Tool", "Frame2", "robot", 25, "wobjdata Frame2"),
+    # MoveC Target_860,Target_10 at line 144: Target_10 (line 5) is an arc's end point
+    "harshbhatt99_Module1.mod": ("TCPMarker", "WobjWhiteboard", "base", 5, "circular move"),
+    # Target_20 (line 3) goes to the custom routine Pick and to MoveL Offs(Target_20, ..)
+    "juanlopezp_Module1.mod": ("TVentosa", "WO", "robot", 3, "used by Pick at line 58"),
+    # acercamiento (line 10): MoveJ to it, and MoveL Offs(acercamiento, +92.5, 0, 0) at 193
+    "edgarivanmm_MainModule.modx": ("gripperIvan", "wobjMesa", "robot", 10, "Offs(...)"),
+    # MoveJ Offs(Target_TAB_CONV, ..) at line 143: the move goes to a derived position
+    "rparak_Module1.mod": ("tool0", "wobjX", None, 50, "Offs(...) at line 143"),
+    # INST_p10 (line 16) is moved in INST_workobject, whose oframe is not the base
+    "mcoffman1_AA_example_script.mod": ("INST_tool", "INST_workobject", None, 16, "wobjdata"),
+    # p00 (line 13) moved with the stationary drill
+    "mjkkirschner_test02_001.prg": ("drill", "block", None, 13, "stationary"),
+    # pWeldReady (line 2) has eax_a, eax_b, eax_c in use
+    "zwj12_WeldTestModule.mod": ("toolWeldGun", "wobjX", None, 2, "external axis eax_a"),
+    # targets{i}.extax := .. at line 85 reassigns the array declared at line 61
+    "kangoananya_iGPS_SC_Acc_Exp.mod": ("tool0", "wobjX", None, 61, "reassigned at run time"),
+    "kangoananya_user.sys": ("tool0", "wobjX", None, 1, "no robtarget"),
+    "taeyangshim-stack_user.sys": ("tool0", "wobjX", None, 1, "no robtarget"),  # joint targets
+    # placeap (line 7): the arm angle in eax_a, MoveJ placeap at line 53
+    "bhomaidan1990_currLeft.mod": ("tool0", "wobjX", None, 7, "external axis eax_a"),
 }
-BASE = (400.0, -250.0, 300.0, 30.0, 10.0, -20.0)  # the test cell's base (wobj), mm and deg
-
-
-def _cell(folder: Path, tool: str, wobj: str) -> Path:
-    write_grid(folder / "grid.csv", (-6000,) * 3, (6000,) * 3, 3000.0, field="constant")
-    x, y, z, a, b, c = BASE
-    (folder / "cell.yaml").write_text(
-        "robot: irb6700\ngrid: grid.csv\ntool: {number: 1, x: 0, y: 0, z: 250, a: 0, b: 0, c: 0}\n"
-        f"base: {{number: 1, x: {x}, y: {y}, z: {z}, a: {a}, b: {b}, c: {c}}}\n"
-        f"rapid: {{tool: {tool}, wobj: {wobj}}}\n"
-    )
-    return folder / "cell.yaml"
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_realworld_rapid_rewrite_changes_only_the_corrected_numbers(
     realworld, tmp_path, capsys, name
 ):
-    tool, wobj, frame = CASES[name]
+    tool, wobj, frame, line, why = CASES[name]
     program = realworld / "rapid" / name
-    cell = _cell(tmp_path, tool, wobj)
-    out = tmp_path / name
-    code = main(["rewrite", str(program), "--cell", str(cell), "-o", str(out)])
+    cell = write_rapid_cell(tmp_path, tool, wobj)
+    out, report = tmp_path / name, tmp_path / "r.csv"
+    argv = ["rewrite", str(program), "--cell", str(cell), "-o", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"{program}:{line}: " in err and why in err, err
+    if why != "no robtarget":
+        assert "not placed in the robot frame" in err, err
+    assert not out.exists()
+    assert main([*argv, "--allow-partial", "--report", str(report)]) == 0, capsys.readouterr().err
+    rows = list(csv.DictReader(report.open()))
+    assert all(r["reason"] for r in rows if r["status"] != "corrected")
     if frame is None:
-        assert code == 2
-        err = capsys.readouterr().err
-        assert re.search(rf"{re.escape(str(program))}:\d+: ", err), err
-        assert not out.exists()
+        assert out.read_bytes() == program.read_bytes()
+        assert not any(r["status"] == "corrected" for r in rows)
         return
-    assert code == 0
     old, new = program.read_bytes().decode("latin-1"), out.read_bytes().decode("latin-1")
     old_nums, new_nums = list(re.finditer(NUM, old)), list(re.finditer(NUM, new))
     assert re.split(NUM, old) == re.split(NUM, new)  # every other byte is the same
@@ -196,7 +204,7 @@ def test_realworld_rapid_rewrite_changes_only_the_corrected_numbers(
 def _rewrite(tmp_path, text: str, capsys, *extra: str) -> tuple[int, str, str]:
     program = tmp_path / "t.mod"
     program.write_bytes(text.encode("latin-1"))
-    cell = _cell(tmp_path, "tDrill", "wobjPanel")
+    cell = write_rapid_cell(tmp_path, "tDrill", "wobjPanel")
     out = tmp_path / "out.mod"
     report = tmp_path / "r.csv"
     code = main(
@@ -238,7 +246,10 @@ def test_non_unit_quaternion_external_axes_and_offs_are_reported(tmp_path, capsy
         + f"MoveL Offs(pOff,0,0,10), v10, fine, {MOVE}MoveL pOk, v10, fine, {MOVE}"
         + "ENDPROC\r\nENDMODULE\r\n"
     )
-    code, err, report = _rewrite(tmp_path, text, capsys)
+    code, err, _ = _rewrite(tmp_path, text, capsys)
+    assert code == 2 and "t.mod:2:" in err, err  # moves to all three: a partly corrected job
+    assert "3 position(s) cannot be corrected (3 not placed in the robot frame)" in err, err
+    code, err, report = _rewrite(tmp_path, text, capsys, "--allow-partial")
     assert code == 0, err
     rows = {line.split(",")[2]: line for line in report.splitlines()[1:]}
     assert "not a unit quaternion" in rows["pBadQ"]
@@ -367,7 +378,7 @@ def test_rewrite_finds_every_robtarget_in_any_layout(tmp_path_factory, data, crl
     text = "".join(p for p, _ in pieces)
     program = tmp / "layout.mod"
     program.write_bytes(text.encode("latin-1"))
-    cell = _cell(tmp, "tDrill", "wobjPanel")
+    cell = write_rapid_cell(tmp, "tDrill", "wobjPanel")
     out = tmp / "out.mod"
     assert main(["rewrite", str(program), "--cell", str(cell), "-o", str(out)]) == 0
     new = out.read_bytes().decode("latin-1")
@@ -419,7 +430,7 @@ def test_header_goes_below_the_module_line_of_a_prg(tmp_path, capsys):
     )
     program = tmp_path / "t.prg"
     program.write_bytes(text.encode("latin-1"))
-    cell = _cell(tmp_path, "tDrill", "wobjPanel")
+    cell = write_rapid_cell(tmp_path, "tDrill", "wobjPanel")
     out = tmp_path / "out.prg"
     assert main(["rewrite", str(program), "--cell", str(cell), "-o", str(out), "--header"]) == 0
     lines = out.read_bytes().decode("latin-1").split("\r\n")
@@ -434,7 +445,8 @@ def test_the_rewritten_example_is_what_rewrite_writes(tmp_path):
     out = tmp_path / "cam_drill.mod"
     cell = EXAMPLES / "cell_irb6700.yaml"
     args = ["rewrite", str(EXAMPLES / "cam_drill.mod"), "--cell", str(cell), "--header"]
-    assert main([*args, "-o", str(out)]) == 0
+    assert main([*args, "-o", str(out)]) == 2  # pHole1 (Drill pHole1), pHole2 (Offs) not placed
+    assert main([*args, "-o", str(out), "--allow-partial"]) == 0
     assert out.read_bytes() == (EXAMPLES / "cam_drill_rewritten.mod").read_bytes()
 
 
@@ -448,7 +460,8 @@ def test_a_robtarget_in_another_configuration_than_the_grid_is_refused(tmp_path,
     cell, out = EXAMPLES / "cell_irb6700.yaml", tmp_path / "out.mod"
     assert main(["rewrite", str(program), "--cell", str(cell), "-o", str(out)]) == 2
     err = capsys.readouterr().err
-    assert f"{program}:9:" in err and "Status" in err and not out.exists()
+    assert "(1 another Status than the grid's, 2 not placed in the robot frame)" in err
+    assert not out.exists()
     report = tmp_path / "r.csv"
     args = ["rewrite", str(program), "--cell", str(cell), "-o", str(out), "--report", str(report)]
     assert main([*args, "--allow-partial"]) == 0

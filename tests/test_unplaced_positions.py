@@ -1,14 +1,15 @@
 """The job rule for positions a rewrite cannot place in the robot frame: a Cartesian position a
 motion commands that is left uncorrected lands off by the robot's error, so it fails the job
 unless --allow-partial, like a position the policy refuses; a joint target, a frame or offset,
-tool data and data no motion uses are not positions to correct and do not count."""
+tool data and data no motion uses are not positions to correct and do not count. The same rule
+for KRL, G-code and RAPID."""
 
 from __future__ import annotations
 
 import csv
 
 import pytest
-from rewrite_helpers import write_cell
+from rewrite_helpers import write_cell, write_rapid_cell
 
 from accugrid.codegen.cli import main
 
@@ -118,3 +119,102 @@ def test_a_program_whose_holes_are_all_in_called_routines_is_not_a_silent_succes
     assert f"{program}: no position corrected" in err and not out.exists()
     assert main([*argv, "--allow-partial"]) == 0
     assert out.read_bytes() == program.read_bytes()
+
+
+# RAPID: a module with a corrected robtarget pOk (line 2), robtarget pA at line 3, main's body from
+# line 6; the cell's tool tDrill and work object wobjPanel
+ROB = "[[1,2,3],[1,0,0,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+CELL_MOVE = "v10, fine, tDrill\\WObj:=wobjPanel;"
+PA = f"CONST robtarget pA:={ROB};"
+DRILL = ["PROC Drill(robtarget p)", f"MoveL p, {CELL_MOVE}", "ENDPROC"]
+# case -> (pA's line, main's body, routines after main, the line and count of unplaced ones)
+RAPID_COUNTED = {
+    "offs_operand": (PA, [f"MoveL Offs(pA,0,0,10), {CELL_MOVE}"], [], 3, 1),
+    "reltool_operand": (PA, [f"MoveJ RelTool(pA,0,0,-10), {CELL_MOVE}"], [], 3, 1),
+    "other_work_object": (PA, ["MoveL pA, v10, fine, tDrill\\WObj:=wobjOther;"], [], 3, 1),
+    "other_tool": (PA, ["MoveL pA, v10, fine, tOther\\WObj:=wobjPanel;"], [], 3, 1),
+    "reassigned_at_run_time": (PA, ["pA := CRobT();", f"MoveL pA, {CELL_MOVE}"], [], 3, 1),
+    "external_axes": (PA.replace("[9E+09,", "[250,", 1), [f"MoveL pA, {CELL_MOVE}"], [], 3, 1),
+    "inline_in_other_work_object": (
+        PA,
+        [f"MoveL {ROB}, v10, fine, tDrill\\WObj:=wobjOther;"],
+        [],
+        6,
+        1,
+    ),
+    "work_object_changed": (
+        PA,
+        ["wobjPanel.oframe.trans.z := 5;", f"MoveL pA, {CELL_MOVE}"],
+        [],
+        2,
+        2,
+    ),
+    "custom_move_routine": (PA, ["Drill pA;"], DRILL, 3, 1),
+    "move_like_instruction": (
+        PA,
+        ["ArcL pA, v10, seam1, weld1, z5, tDrill\\WObj:=wobjPanel;"],
+        [],
+        3,
+        1,
+    ),
+}
+RAPID_NOT_COUNTED = {
+    "joint_target": (
+        "CONST jointtarget jHome:=[[0,0,0,0,30,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];",
+        ["MoveAbsJ jHome, v100, fine, tDrill;"],
+    ),
+    "tool_data": (
+        "PERS tooldata tOther:=[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,0],[1,0,0,0],0,0,0]];",
+        [],
+    ),
+    "work_object_data": (
+        'PERS wobjdata wobjOther:=[FALSE,TRUE,"",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];',
+        [],
+    ),
+    "pose": ("CONST pose peOff:=[[0,0,10],[1,0,0,0]];", []),
+    "unused_robtarget": (PA, []),
+    "robtarget_read_by_a_non_motion": (PA, ['TPWrite "at"\\Pos:=pA.trans;']),
+    "offs_operand_of_an_assignment": (PA, ["pB := Offs(pA,0,0,10);"]),
+}
+
+
+def _module(folder, decl, body, routines=()):
+    cell = write_rapid_cell(folder, "tDrill", "wobjPanel")
+    module = folder / "job.mod"
+    lines = ["MODULE JOB", f"CONST robtarget pOk:={ROB};", decl, "PROC main()"]
+    lines += [f"MoveL pOk, {CELL_MOVE}", *body, "ENDPROC", *routines, "ENDMODULE"]
+    module.write_text("\n".join(lines) + "\n")
+    return cell, module
+
+
+@pytest.mark.parametrize("case", sorted(RAPID_COUNTED))
+def test_an_unplaced_robtarget_a_motion_commands_fails_the_job_unless_allow_partial(
+    tmp_path, capsys, case
+):
+    decl, body, routines, line, count = RAPID_COUNTED[case]
+    cell, module = _module(tmp_path, decl, body, routines)
+    out, report = tmp_path / "out.mod", tmp_path / "r.csv"
+    argv = ["rewrite", str(module), "--cell", str(cell), "-o", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"job.mod:{line}:" in err and f"({count} not placed in the robot frame)" in err, err
+    assert not out.exists()
+    assert main([*argv, "--allow-partial", "--report", str(report)]) == 0
+    assert f"{count} not placed in the robot frame" in capsys.readouterr().err
+    rows = list(csv.DictReader(report.open()))
+    left = [r for r in rows if r["line"] == str(line)]
+    assert left and all(r["status"] == "skipped" and r["reason"] for r in left)
+    assert out.read_text().splitlines()[line - 1] == module.read_text().splitlines()[line - 1]
+
+
+@pytest.mark.parametrize("case", sorted(RAPID_NOT_COUNTED))
+def test_rapid_joint_targets_frames_and_unmoved_robtargets_do_not_fail_the_job(
+    tmp_path, capsys, case
+):
+    cell, module = _module(tmp_path, *RAPID_NOT_COUNTED[case])
+    out, report = tmp_path / "out.mod", tmp_path / "r.csv"
+    argv = ["rewrite", str(module), "--cell", str(cell), "-o", str(out), "--report", str(report)]
+    assert main(argv) == 0, capsys.readouterr().err
+    assert "left uncorrected" not in capsys.readouterr().err
+    rows = {r["name"]: r for r in csv.DictReader(report.open())}
+    assert rows["pOk"]["status"] == "corrected"

@@ -22,9 +22,13 @@ not unit, or with external axes in use (unless ``--ignore-external-axes``); and 
 x, y, z numbers of a corrected robtarget change (the input's decimals, at least 0.01 mm);
 orientation, confdata and every other byte stay. Whether a placed robtarget is corrected is
 the correction policy's verdict (``codegen.rewrite.correct_points``), and so is the job's rule
-(``partial_check``: a robtarget the policy does not correct, or a module where none is
-corrected, fails the job unless ``--allow-partial``); a module without robtargets is an
-InputError too.
+(``partial_check``: a robtarget the policy does not correct, one a motion commands that cannot
+be placed, or a module where none is corrected, fails the job unless ``--allow-partial``). A
+robtarget is commanded when a motion goes to it or to a position derived from it: inline in a
+move, or named in a move, in an instruction named like one (``ArcL``, ``SearchL``,
+``MyMoveL``) or a call of a routine of the module (a custom move), or as an ``Offs``/``RelTool``
+operand there; never-corrected data and robtargets no motion names do not count. A module
+without robtargets is an InputError too.
 """
 
 from __future__ import annotations
@@ -108,6 +112,10 @@ _DECL = re.compile(
 _ASSIGN = re.compile(r"\s*([A-Za-z]\w*)\s*(?:\{[^}]*\})?\s*(?:\.\s*\w+\s*)*:=")
 _INSTR = re.compile(r"\s*([A-Za-z]\w*)")
 _NAME = re.compile(r"(?<![.\w])([A-Za-z]\w*)(?:\s*\{\s*(\d+)\s*\}|\s*\{[^}]*\})?")  # p{3}: 3
+# a motion: the moves above, an instruction named like a move (ArcL, SearchL, MyMoveL) or a
+# routine of the module (a custom move: PROC Drill(robtarget p) .. MoveL p ..)
+_MOTION = re.compile(r"\w*move\w*|(?:arc|trigg|search)\w*", re.I)
+_PROC = re.compile(r"\bPROC\s+(\w+)\s*\(", re.I)
 _OFFSET_BEFORE = re.compile(r"\b(Offs|RelTool)\s*\(\s*\Z", re.I)
 _MODULE_LINE = re.compile(r"^[ \t]*MODULE\b.*$", re.I | re.M)
 
@@ -118,8 +126,9 @@ class _Target:
     the offsets (start, end) of its x, y, z numbers, x, y, z and the quaternion [q1..q4] as
     written (``values``, 7), the cfx of its confdata, why its own numbers keep it from
     correction (``own``), its frame
-    (0 robot, 1 the cell's work object, -1 none yet) and the reason it is left as it is (""
-    when placeable)."""
+    (0 robot, 1 the cell's work object, -1 none yet), the reason it is left as it is (""
+    when placeable) and whether a motion goes to it or to a position derived from it
+    (``commanded``)."""
 
     name: str
     line: int
@@ -129,6 +138,7 @@ class _Target:
     own: str = ""
     frame: int = -1
     reason: str = ""
+    commanded: bool = False
 
 
 @dataclass
@@ -162,6 +172,11 @@ class RapidPositions:
     def frame(self) -> np.ndarray:
         return np.array([t.frame for t in self.targets], dtype=np.int64)
 
+    @property
+    def commanded(self) -> np.ndarray:
+        """(N,) bool: a motion goes to the robtarget or to a position derived from it."""
+        return np.array([t.commanded for t in self.targets], dtype=bool)
+
 
 @dataclass
 class _Use:
@@ -169,6 +184,7 @@ class _Use:
     frame: int  # 0 robot, 1 the cell's work object, -1 not placeable
     reason: str
     index: int | None = None  # array element (1-based), None: every element
+    moved: bool = False  # in a motion instruction: the robot goes to it or to a derived position
 
 
 def _masked(text: str) -> str:
@@ -300,6 +316,7 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
     assigned: set[str] = set()
     moves: list[tuple[int, list[str], bool]] = []  # line, lower-case names or "#k", circular
     wobj, tool = section.wobj.lower(), section.tool.lower()
+    routines = {m.group(1).lower() for m in _PROC.finditer(_MASK.sub("", text))}
     unfit = _unfit_frames(data, section)
     for s, (at, stmt) in enumerate(statements):
         line = where(at + len(stmt) - len(stmt.lstrip()))[0]
@@ -342,12 +359,15 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
                         line,
                     )
                     target.frame, target.reason = (frame, why) if why else (frame, "")
+                    target.commanded = True
                     moves[-1][1].append(f"#{len(found.targets)}")
                     found.targets.append(target)
         elif instr and instr.group(1).lower() == "moveabsj":
             found.others.append((line, "MoveAbsJ", "joint target of MoveAbsJ, never corrected"))
         if not declared or s in decl_of and not stmt.count(":="):
             continue
+        called = instr.group(1) if instr and not assign else ""
+        motion = bool(move or _MOTION.fullmatch(called) or called.lower() in routines)
         for ref in _NAME.finditer(stmt):
             key = ref.group(1).lower()
             if key not in declared:
@@ -381,13 +401,15 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
                 use = _Use(
                     line, -1, f"used by {what} at line {line}, not a move accugrid places", index
                 )
+            use.moved = motion
             uses[key].append(use)
     _arc_starts(moves, uses, found)
     for key, targets in declared.items():
         for j, target in enumerate(targets, 1):
+            mine = [u for u in uses[key] if u.index is None or u.index == j]
+            target.commanded = any(u.moved for u in mine)
             if target.reason:
                 continue
-            mine = [u for u in uses[key] if u.index is None or u.index == j]
             if not mine:
                 target.reason = "not used by any move"
                 continue
@@ -519,6 +541,7 @@ def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
             found.reason,
             found.xyz,
         )
+        rows.commanded[:] = found.commanded  # partial_check counts those left uncorrected
         new = np.full((len(found.targets), 3), np.nan)
         at = np.flatnonzero(~np.fromiter(map(bool, found.reason), bool, len(found.targets)))
         if at.size:
