@@ -156,17 +156,10 @@ def _pose_measurement_csv(request: SimulateRequest, report: list[str]) -> str:
         f"{r.noise_repeat_mm:g} mm, seed {r.seed}",
         limit=400,
     )
-    lines = [f"# {header}", "id,x,y,z,a,b,c,s,a1,a2,a3,a4,a5,a6,x_meas,y_meas,z_meas"]
-    rows = np.repeat(np.arange(len(table)), r.repeats)
-    joints = np.degrees(q)
-    for row, meas in zip(rows, measured, strict=True):
-        pose_text = ",".join(fixed(v, 4) for v in xyzabc[row])
-        joint_text = ",".join(fixed(v, 4) for v in joints[row])
-        meas_text = ",".join(fixed(v, 4) for v in meas)
-        ident = comment_text(ids[row], limit=40).replace(",", " ")
-        lines.append(f"{ident},{pose_text},{status_of[row]},{joint_text},{meas_text}")
-    report.append(f"{robot.name}: {len(table)} poses x {r.repeats} repeats = {len(rows)} rows")
-    return "\n".join(lines) + "\n"
+    report.append(
+        f"{robot.name}: {len(table)} poses x {r.repeats} repeats = {len(table) * r.repeats} rows"
+    )
+    return _session_csv(header, ids, xyzabc, status_of, np.degrees(q), measured, r.repeats)
 
 
 def _measure_poses(
@@ -219,17 +212,38 @@ def _corrected_measurement_csv(request: SimulateRequest, report: list[str]) -> s
         f"{r.noise_tracker_mm:g} mm, repeat {r.noise_repeat_mm:g} mm, seed {r.seed}",
         limit=400,
     )
-    lines = [f"# {header}", "id,x,y,z,a,b,c,s,x_meas,y_meas,z_meas"]
-    rows = np.repeat(np.arange(len(points)), r.repeats)
-    for row, meas in zip(rows, measured, strict=True):
-        pose_text = ",".join(fixed(v, 4) for v in (*points.xyz[row], *abc[row]))
-        meas_text = ",".join(fixed(v, 4) for v in meas)
-        ident = comment_text(points.ids[row], limit=40).replace(",", " ")
-        lines.append(f"{ident},{pose_text},{status_of[row]},{meas_text}")
     report.append(
         f"{robot.name}: {len(points)} corrected points measured at their commands x {r.repeats} "
-        f"repeats = {len(rows)} rows (x,y,z: the targets)"
+        f"repeats = {len(points) * r.repeats} rows (x,y,z: the targets)"
     )
+    targets = np.hstack([points.xyz, abc])
+    return _session_csv(header, points.ids, targets, status_of, None, measured, r.repeats)
+
+
+def _session_csv(
+    header: str,
+    ids: list[str],
+    poses: np.ndarray,
+    status: np.ndarray,
+    joints_deg: np.ndarray | None,
+    measured: np.ndarray,
+    repeats: int,
+) -> str:
+    """The measurement CSV of a simulated session: the comment ``header``, then per pose
+    (``ids``, x,y,z,a,b,c ``poses`` (N, 6) mm and deg, KUKA ``status`` (N,), the controller's
+    ``joints_deg`` (N, 6) or None for no a1..a6 columns) its ``repeats`` consecutive rows of
+    ``measured`` (N * repeats, 3) mm, 4 decimals."""
+    columns = "id,x,y,z,a,b,c,s," + ("a1,a2,a3,a4,a5,a6," if joints_deg is not None else "")
+    lines = [f"# {header}", columns + "x_meas,y_meas,z_meas"]
+    rows = np.repeat(np.arange(len(poses)), repeats)
+    for row, meas in zip(rows, measured, strict=True):
+        pose_text = ",".join(fixed(v, 4) for v in poses[row])
+        joint_text = (
+            "" if joints_deg is None else ",".join(fixed(v, 4) for v in joints_deg[row]) + ","
+        )
+        meas_text = ",".join(fixed(v, 4) for v in meas)
+        ident = comment_text(ids[row], limit=40).replace(",", " ")
+        lines.append(f"{ident},{pose_text},{status[row]},{joint_text}{meas_text}")
     return "\n".join(lines) + "\n"
 
 
