@@ -18,7 +18,7 @@ from accugrid.kinematics.errors import InputError, printable
 from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification, Terms, identify, pose_set
 from accugrid.kinematics.inputfile import read_input_bytes
-from accugrid.kinematics.robot import Robot
+from accugrid.kinematics.robot import VALIDATED_MAX_KEYS, Robot
 from accugrid.kinematics.structure import Selection, identify_structure
 from accugrid.kinematics.validity import validity_section
 
@@ -122,12 +122,7 @@ def calibrate(
         )
     source = printable(Path(measurements).name)  # a non-UTF-8 byte: escaped text
     summary = identification_summary(result, robot, source, meas.sha256, selection)
-    if selection is not None and selection.nested is not None:  # the honest estimate
-        validated = selection.nested.max_mm
-    elif result.cross_validation is not None:
-        validated = result.cross_validation.max_mm
-    else:
-        validated = result.max_mm
+    validated = _validated_max(summary)  # the same claim the file's reader takes
     summary["validity"] = validity_section(data.commanded, data.rotations, data.q, validated)
     header = f"accugrid {__version__} identify: {robot.name} calibrated from {source}"
     files = {output: calibrated_yaml(result.robot, summary, header)}
@@ -142,6 +137,18 @@ def calibrate(
         extra = " (geometric part only: URDF has no joint errors)" if joint_terms else ""
         report += f"\nwrote {urdf}{extra}"
     return Calibration(result, files, report, selection)
+
+
+def _validated_max(summary: dict) -> np.ndarray:
+    """(3,) mm: the validated error the identification summary claims, found at the first of
+    ``robot.VALIDATED_MAX_KEYS`` it holds (the reader of the written file takes the same)."""
+    for key in VALIDATED_MAX_KEYS:
+        section = summary
+        for name in key:
+            section = section.get(name) if isinstance(section, dict) else None
+        if section is not None:
+            return np.array([section[axis] for axis in "xyz"], dtype=float)
+    raise ValueError("the identification summary holds no residual")
 
 
 def _per_axis(label: str, rms: np.ndarray, peak: np.ndarray) -> str:

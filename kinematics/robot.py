@@ -53,6 +53,7 @@ __all__ = [
     "JOINT_ERRORS_SCHEMA",
     "ROBOT_SCHEMA",
     "STRUCTURE_SCHEMA",
+    "VALIDATED_MAX_KEYS",
     "Robot",
     "load_robot",
 ]
@@ -363,16 +364,20 @@ def _robot_from_doc(doc: YamlDoc) -> Robot:
     )
 
 
+# where in ``identification:`` a calibrated file's validated error stands, the first found wins:
+# the nested estimate (a structure chosen from the data), the cross-validation, the fit
+VALIDATED_MAX_KEYS = (
+    ("structure", "nested", "held_out_max_mm"),
+    ("cross_validation", "predicted_max_mm"),
+    ("residual_max_mm",),
+)
+
+
 def _validated_max(doc: YamlDoc) -> np.ndarray | None:
     """(3,) mm from a calibrated file's ``identification:`` section (module ``calibrated``):
     the nested cross-validation's held-out max per axis (a structure chosen from the data), else
     the cross-validated held-out max, else the fit's residual max; None without."""
-    keys = (
-        ("structure", "nested", "held_out_max_mm"),
-        ("cross_validation", "predicted_max_mm"),
-        ("residual_max_mm",),
-    )
-    for key in keys:
+    for key in VALIDATED_MAX_KEYS:
         if doc.has("identification", *key):
             values = np.array([doc.number("identification", *key, axis) for axis in "xyz"])
             if np.any(values < 0):
