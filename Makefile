@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 .PHONY: demo test bench bytecode lint format clean
 
 # setuptools' editable finder always adds a note on folders named like the package: there is none
-# (the sources live in kinematics/, codegen/, ... mapped under accugrid), so that one note is muted.
+# (the sources live in kinematics/, codegen/, app/, infra/, ... mapped under accugrid), so that one note is muted.
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
@@ -18,7 +18,7 @@ $(STAMP): pyproject.toml
 # The editable install imports from these folders; with PYTHONDONTWRITEBYTECODE set (as on
 # these machines) every command would compile them again: write their bytecode once.
 bytecode:
-	$(BIN)/python -m compileall -q __init__.py codegen compensation kinematics
+	$(BIN)/python -m compileall -q __init__.py codegen compensation kinematics app infra
 
 demo: $(STAMP)
 	PATH=$(CURDIR)/$(BIN):$$PATH sh examples/demo.sh

@@ -1,18 +1,21 @@
 """accugrid: robot TCP error compensation for drilling, from laser-tracker measurements to
-corrected KUKA KRL and G-code programs.
+corrected KUKA KRL, ABB RAPID and G-code programs.
 
-The repository's top-level folders install as this one package (``pyproject.toml`` maps them):
-``accugrid.kinematics`` (robot models, IK, error model, frames), ``accugrid.compensation`` (grid
-model, plans, study), ``accugrid.codegen`` (points and cell files, program model, dialects, CLI) and
-``accugrid.templates`` (Jinja2 templates). The names in ``__all__`` are the library surface; each is
-imported on first use (``kinematics.exports``), so ``import accugrid`` (and the CLI's start-up)
+The repository's top-level folders install as this one package (``pyproject.toml`` maps them),
+one room per layer: ``accugrid.kinematics`` (robot models, IK, error model, frames,
+identification), ``accugrid.compensation`` (grid model, correction policy, plans, study),
+``accugrid.codegen`` (points and cell files, the neutral program model, one folder per dialect),
+``accugrid.app`` (the command line, jobs, reports, plots), ``accugrid.infra`` (errors, guarded
+input, YAML/CSV readers, atomic writes, safe text, digests, threads) and ``accugrid.templates``
+(Jinja2 templates). The names in ``__all__`` are the library surface; each is
+imported on first use (``infra.exports``), so ``import accugrid`` (and the CLI's start-up)
 stays cheap.
 """
 
 import os
 import sys
 
-from accugrid.kinematics.exports import lazy_namespace
+from accugrid.infra.exports import lazy_namespace
 
 
 def _version() -> str:
@@ -57,8 +60,8 @@ __version__ = _version()
 
 # the names a script needs, by the package that lists (and lazily imports) them
 _PUBLIC = {
+    "accugrid.infra": ("InputError", "TableFormat"),
     "accugrid.kinematics": (
-        "InputError",
         "Robot",
         "load_robot",
         "RobotModel",
@@ -74,7 +77,6 @@ _PUBLIC = {
         "Policy",
         "Measurements",
         "read_measurements",
-        "TableFormat",
         "model_correct",
         "residual_grid",
         "grid_plan",

@@ -3,7 +3,7 @@ FK, closed-form IK (all 8 candidates, Status/Turn selection, limits), the error-
 (IK in one Status + true FK + noise), and the error Jacobian of seed Eq. 3-7. The peer is
 Pinocchio's FK one pose at a time in a Python loop (10,000 poses, scaled to 100,000). The IK in
 blocks of 16,384 poses (as ``build_program`` runs it) on one thread and on the block threads of
-``kinematics.blocks`` (the CPUs this process may use, at most 4): their ratio is the threads'
+``infra.blocks`` (the CPUs this process may use, at most 4): their ratio is the threads'
 gain on this machine at this moment (a busy machine shares its cores).
 Targets: FK and IK under 0.5 s each.
 
@@ -20,7 +20,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from accugrid.kinematics.blocks import run_blocks, threads  # noqa: E402
+from accugrid.infra.blocks import run_blocks, threads  # noqa: E402
 from accugrid.kinematics.error_model import error_jacobian  # noqa: E402
 from accugrid.kinematics.frames import pose_from_xyzabc  # noqa: E402
 from accugrid.kinematics.robot import load_robot  # noqa: E402

@@ -8,7 +8,7 @@ only) with a 27-vertex residual grid of what it leaves of kr210-realistic. Targe
 the seed region X 1300-2100, Y -500-500, Z 1200-2000 mm, orientations A 0 B 90 C 0 tilted by up to
 25 deg, Status 6. Floor: one pass (nominal IK + calibrated FK of all targets), what any
 correction that checks its result must spend at least; on one thread, and in the correction's
-blocks on the threads of ``kinematics.blocks`` (as the correction runs). Landing: the commands
+blocks on the threads of ``infra.blocks`` (as the correction runs). Landing: the commands
 driven through the nominal IK and the calibrated FK, largest distance from the target. Issue 13
 target: < 1 s.
 
@@ -33,7 +33,7 @@ from accugrid.compensation.model_correction import (  # noqa: E402
     reached_by_model,
     residual_grid,
 )
-from accugrid.kinematics.blocks import run_blocks, threads  # noqa: E402
+from accugrid.infra.blocks import run_blocks, threads  # noqa: E402
 from accugrid.kinematics.frames import abc_to_matrix  # noqa: E402
 from accugrid.kinematics.joint_errors import JointErrors  # noqa: E402
 from accugrid.kinematics.robot import load_robot  # noqa: E402

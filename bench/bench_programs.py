@@ -22,15 +22,15 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from accugrid.app.cli import main as cli  # noqa: E402
 from accugrid.codegen.cell import load_cell  # noqa: E402
-from accugrid.codegen.cli import main as cli  # noqa: E402
 from accugrid.codegen.gcode.emit import render_gcode  # noqa: E402
 from accugrid.codegen.krl.emit import render_krl  # noqa: E402
 from accugrid.codegen.points import parse_points  # noqa: E402
 from accugrid.codegen.program import build_program  # noqa: E402
-from accugrid.codegen.textsafe import fixed_bytes, fixed_many  # noqa: E402
 from accugrid.compensation import GridModel  # noqa: E402
-from accugrid.kinematics.decimals import read_decimals, words_at  # noqa: E402
+from accugrid.infra.decimals import read_decimals, words_at  # noqa: E402
+from accugrid.infra.textsafe import fixed_bytes, fixed_many  # noqa: E402
 from accugrid.kinematics.robot import load_robot  # noqa: E402
 from bench.timing import measure, table  # noqa: E402
 
@@ -179,7 +179,7 @@ def number_table(n: int = NUMBERS) -> str:
         rows.append((name, f"{floor:.1f}", f"{fast:.1f}", f"{fast / floor:.1f}"))
     slow = ns(lambda: fixed_many(coordinates, 3), repeats=1)
     rows.append(("+-3000 mm, 3 places: %-formatting (fixed_many)", "", f"{slow:.1f}", ""))
-    # and back: kinematics.decimals.read_decimals of those texts, one per line; its floor the
+    # and back: infra.decimals.read_decimals of those texts, one per line; its floor the
     # gather of the 8 bytes that end each text (words_at), the least a reader touches
     cells, _ = fixed_bytes(coordinates, 3)
     text = np.concatenate([cells, np.full((n, 1), ord("\n"), np.uint8)], axis=1).ravel()

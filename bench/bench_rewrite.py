@@ -80,7 +80,7 @@ def gcode(folder: Path, n: int = N) -> list[Path]:
 
 CHILD = """
 import resource, sys, time
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 start = time.perf_counter()
 rc = main(sys.argv[1:])
 seconds = time.perf_counter() - start

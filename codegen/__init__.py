@@ -1,8 +1,9 @@
-"""File IO, the neutral program model, the dialects (KRL, G-code) and the CLI. The names of
-``__all__`` besides ``__version__`` are imported on first use."""
+"""Programs: the points and cell files, the neutral program model and the dialects (one folder
+each: KRL, G-code, RAPID). The names of ``__all__`` besides ``__version__`` are imported on
+first use."""
 
 from accugrid import __version__
-from accugrid.kinematics.exports import lazy_namespace
+from accugrid.infra.exports import lazy_namespace
 
 _API = {
     "Points": "accugrid.codegen.points",

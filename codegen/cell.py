@@ -1,6 +1,6 @@
 """The cell file: robot, grid, tool, base frames, and one typed record per concern, as YAML.
 
-Read with ``kinematics.yamlfile.load_yaml``; every key is validated and an error names the key
+Read with ``infra.yamlfile.load_yaml``; every key is validated and an error names the key
 (``tool.z``) with its file line. Paths in the file are relative to the file. Lengths mm, angles
 deg, speeds mm/s, times s. The commented reference is ``examples/cell.yaml``.
 
@@ -13,7 +13,7 @@ one frozen record per concern, each built and validated in one place:
   configuration changes, wrist-singularity margin, reference orientation);
 - ``cell.correction`` (``compensation.settings.CorrectionSettings``): ``correction:`` (method,
   power, iterations); ``correction.model`` is ``cell.model_path``, beside ``cell.grid_path``;
-- ``cell.tracker`` (``compensation.csvtable.TableFormat`` or None): ``tracker:`` (columns, units,
+- ``cell.tracker`` (``infra.csvtable.TableFormat`` or None): ``tracker:`` (columns, units,
   delimiter, decimal), how the cell's tracker software writes the grid file (the command line's
   ``--columns``/``--units``/... win over it);
 - ``cell.dialects[name]`` for every dialect of ``codegen.dialects.DIALECTS``, e.g. ``cell.krl``
@@ -37,11 +37,11 @@ import numpy as np
 
 from accugrid.codegen.cellfile import DISTANCE_MAX_MM, CellReader, SectionKeys
 from accugrid.codegen.dialects import DIALECTS
-from accugrid.compensation.csvtable import DECIMALS, DELIMITERS, UNITS, TableFormat
 from accugrid.compensation.interpolation import METHODS
 from accugrid.compensation.settings import CorrectionSettings
-from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.yamlfile import load_yaml
+from accugrid.infra.csvtable import DECIMALS, DELIMITERS, UNITS, TableFormat
+from accugrid.infra.errors import InputError
+from accugrid.infra.yamlfile import load_yaml
 
 if TYPE_CHECKING:  # read through DIALECTS: importing one dialect must not load another
     from accugrid.codegen.gcode.section import GcodeSection

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
+from accugrid.infra.yamlfile import YamlDoc, unknown_key
 from accugrid.kinematics.frames import pose_from_xyzabc
-from accugrid.kinematics.yamlfile import YamlDoc, unknown_key
 
 __all__ = [
     "ANGLE_MAX_DEG",

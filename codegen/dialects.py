@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 if TYPE_CHECKING:
     from accugrid.codegen.plugin import DialectPlugin

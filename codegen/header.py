@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen import __version__
-from accugrid.codegen.textsafe import comment_text, fixed
+from accugrid.infra.textsafe import comment_text, fixed
 
 __all__ = ["csv_comment", "grid_lines", "header_lines", "input_line"]
 

@@ -20,7 +20,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from accugrid.codegen.textsafe import fixed_bytes
+from accugrid.infra.textsafe import fixed_bytes
 
 __all__ = ["SLOT", "image_bytes", "line_image", "merge_images", "number_cells", "text_cells"]
 

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.compensation.csvtable import Table, TableFormat, parse_table, read_table
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.csvtable import Table, TableFormat, parse_table, read_table
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 
 __all__ = [

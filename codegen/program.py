@@ -46,12 +46,12 @@ import numpy as np
 
 from accugrid.codegen.cell import Cell
 from accugrid.codegen.points import Points
-from accugrid.codegen.textsafe import fixed_texts
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.policy import Verdict, singular_a5_deg
-from accugrid.kinematics.blocks import run_blocks
+from accugrid.infra.blocks import run_blocks
+from accugrid.infra.errors import InputError
+from accugrid.infra.textsafe import fixed_texts
 from accugrid.kinematics.configuration import Configuration, kuka_turn
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import (
     MAX_TILT_DEG,
     abc_to_matrix,
@@ -554,7 +554,7 @@ def _ik_blocks(
     robot: RobotModel, poses, holes: int, stages: int, status, turn, progress=None
 ) -> SimpleNamespace:
     """``robot.ik`` of the poses (holes * stages, 4, 4) that ``poses(slice)`` makes, in blocks of
-    about ``IK_BLOCK`` poses on a few threads (``kinematics.blocks``): the same result as one
+    about ``IK_BLOCK`` poses on a few threads (``infra.blocks``): the same result as one
     call, with the poses and the IK's (M, 8, ...) temporaries bounded in memory. ``progress``
     (a ``_Progress``) is handed the result arrays and told the holes done, block by block."""
     per = max(IK_BLOCK // stages, 1)

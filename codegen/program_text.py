@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen.textsafe import comment_text, fixed, fixed_many
-from accugrid.compensation.csvtable import decimals_of
-from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.inputfile import read_input_bytes
+from accugrid.infra.csvtable import decimals_of
+from accugrid.infra.errors import InputError
+from accugrid.infra.inputfile import read_input_bytes
+from accugrid.infra.textsafe import comment_text, fixed, fixed_many
 
 __all__ = [
     "MAX_BYTES",

@@ -1,7 +1,7 @@
 """The Jinja2 environment the program dialects are rendered with.
 
 StrictUndefined (a misspelt variable is an error, never an empty string), no autoescaping (the
-output is not HTML), and numbers and user text only through the ``codegen.textsafe`` filters:
+output is not HTML), and numbers and user text only through the ``infra.textsafe`` filters:
 ``fixed`` (numbers), ``comment`` (user text inside a comment), ``ident`` (KRL names). A template
 error (in a user's ``--templates`` copy) is an InputError naming the template file and line.
 """
@@ -18,9 +18,9 @@ from pathlib import Path
 import jinja2
 import jinja2.meta
 
-from accugrid.codegen.textsafe import comment_text, fixed, krl_identifier
-from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.inputfile import note_input
+from accugrid.infra.errors import InputError
+from accugrid.infra.inputfile import note_input
+from accugrid.infra.textsafe import comment_text, fixed, krl_identifier
 from accugrid.templates import TEMPLATE_DIR
 
 __all__ = [

@@ -29,8 +29,8 @@ from accugrid.compensation import GridModel
 from accugrid.compensation.policy import CORRECTED as POLICY_CORRECTED
 from accugrid.compensation.policy import NOT_PLACED, OUTSIDE_GRID, REASONS, Policy
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM, CorrectionSettings
-from accugrid.kinematics.digest import file_sha256
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.digest import file_sha256
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 
 if TYPE_CHECKING:  # loaded by the model's reader, only with --model

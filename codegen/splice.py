@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from accugrid.codegen.program_text import row_counts
-from accugrid.codegen.textsafe import fixed_bytes
+from accugrid.infra.textsafe import fixed_bytes
 
 __all__ = ["ByteSplicer", "literals", "texts_of"]
 

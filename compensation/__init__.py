@@ -2,7 +2,7 @@
 correction (Eq. 14), correction by a calibrated model, sampling plans, ISO 9283 / GB/T 12642 test
 points and the grid-step study. The names of ``__all__`` are imported on first use."""
 
-from accugrid.kinematics.exports import lazy_namespace
+from accugrid.infra.exports import lazy_namespace
 
 _API = {
     "GridModel": "accugrid.compensation.grid",
@@ -12,8 +12,6 @@ _API = {
     "Measurements": "accugrid.compensation.measurements",
     "read_measurements": "accugrid.compensation.measurements",
     "measurements_from_arrays": "accugrid.compensation.measurements",
-    "TableFormat": "accugrid.compensation.csvtable",
-    "read_table": "accugrid.compensation.csvtable",
     "ModelCorrection": "accugrid.compensation.model_correction",
     "model_correct": "accugrid.compensation.model_correction",
     "residual_grid": "accugrid.compensation.model_correction",

@@ -38,7 +38,7 @@ from accugrid.compensation.grid import GridModel
 from accugrid.compensation.model_correction import model_correct, residual_grid
 from accugrid.compensation.plans import identification_plan
 from accugrid.compensation.settings import CorrectionSettings
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, pose_from_xyzabc
 from accugrid.kinematics.identification import identify, pose_set
 from accugrid.kinematics.robot import Robot

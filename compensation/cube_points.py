@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 __all__ = ["DIAGONAL_FRACTION", "TEST_LABELS", "VERTEX_LABELS", "cube_test_points", "cube_vertices"]
 

@@ -15,7 +15,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.compensation.csvtable import TableFormat
 from accugrid.compensation.interpolation import METHODS, CellInterpolator
 from accugrid.compensation.measurements import (
     COORD_TOL_MM,
@@ -26,9 +25,10 @@ from accugrid.compensation.measurements import (
     read_measurements,
 )
 from accugrid.compensation.settings import MAX_CORRECTION_MM, OUTSIDE, CorrectionSettings
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.csvtable import TableFormat
+from accugrid.infra.errors import InputError
+from accugrid.infra.units import mm_text
 from accugrid.kinematics.frames import abc_to_matrix, axis_angle_deg, rotation_angle_deg
-from accugrid.kinematics.units import mm_text
 
 __all__ = [
     "BOX_TOL_MM",

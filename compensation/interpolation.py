@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 __all__ = [
     "CORNERS",

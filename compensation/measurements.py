@@ -13,12 +13,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.compensation.csvtable import Table, TableFormat, parse_table
-from accugrid.kinematics.digest import sha256_hex
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.csvtable import Table, TableFormat, parse_table
+from accugrid.infra.digest import sha256_hex
+from accugrid.infra.errors import InputError
+from accugrid.infra.inputfile import read_input_text
+from accugrid.infra.units import mm_text
 from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
-from accugrid.kinematics.inputfile import read_input_text
-from accugrid.kinematics.units import mm_text
 
 __all__ = [
     "COORD_MAX_MM",

@@ -26,8 +26,8 @@ import numpy as np
 
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.settings import CorrectionSettings
-from accugrid.kinematics.blocks import run_blocks
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.blocks import run_blocks
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 
 if TYPE_CHECKING:  # a grid-only rewrite or correct never loads the robot modules
@@ -45,7 +45,7 @@ __all__ = [
     "residual_grid",
 ]
 
-BLOCK = 16384  # targets iterated together, blocks on the threads of kinematics.blocks
+BLOCK = 16384  # targets iterated together, blocks on the threads of infra.blocks
 TOL_MM = 1e-3  # default: |P - reach(P')| below 0.001 mm
 MAX_ITERATIONS = 12
 SETUP_FACTOR = 2.0  # a residual grid's mean offset beyond this x the validated max: refused

@@ -27,7 +27,7 @@ from accugrid.compensation.cube_points import (
     cube_test_points,
     cube_vertices,
 )
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 
 if TYPE_CHECKING:

@@ -45,7 +45,7 @@ import numpy as np
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.model_correction import model_correct, residual_grid
 from accugrid.compensation.settings import CorrectionSettings
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 if TYPE_CHECKING:  # a grid-only correction never loads the robot modules
     from accugrid.kinematics.robot import Robot

@@ -7,7 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from accugrid.compensation.interpolation import MAX_POWER, method_named
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 __all__ = [
     "DEFAULT_TOLERANCE_MM",

@@ -34,7 +34,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.polynomial import Polynomial
 
-from accugrid.compensation.csvtable import read_table
 from accugrid.compensation.cube_points import (
     TEST_LABELS,
     VERTEX_LABELS,
@@ -44,11 +43,12 @@ from accugrid.compensation.cube_points import (
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.plans import grid_axes
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
+from accugrid.infra.csvtable import read_table
+from accugrid.infra.errors import InputError
+from accugrid.infra.units import mm_text
 from accugrid.kinematics.configuration import solve_in_one_status
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.model import RobotModel
 from accugrid.kinematics.simulation import commanded_poses, simulate_measurements
-from accugrid.kinematics.units import mm_text
 
 __all__ = [
     "AXES",

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 __all__ = [
     "FRAME_FACTOR",

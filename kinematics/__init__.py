@@ -2,13 +2,12 @@
 model identification and the calibrated robot file.
 
 This is the lowest layer of accugrid; it imports nothing from ``compensation`` or ``codegen``.
-The names of ``__all__`` are imported on first use (``kinematics.exports``).
+The names of ``__all__`` are imported on first use (``infra.exports``).
 """
 
-from accugrid.kinematics.exports import lazy_namespace
+from accugrid.infra.exports import lazy_namespace
 
 _API = {
-    "InputError": "accugrid.kinematics.errors",
     "Robot": "accugrid.kinematics.robot",
     "load_robot": "accugrid.kinematics.robot",
     "RobotModel": "accugrid.kinematics.model",

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.fitting import (
     CircleFit,
     PlaneFit,

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import yaml
 
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification
 from accugrid.kinematics.joint_errors import JointErrors
@@ -249,9 +249,9 @@ def chosen_structure(path, robot: Robot):
     """The joint-error structure a calibrated file (``path``) was fitted with, for planning more
     poses on ``robot`` (its nominal model): (compliance under masses, harmonics (axis, order),
     gravity groups of ``kinematics.candidates``). InputError when the file is of another robot."""
+    from accugrid.infra.yamlfile import load_yaml
     from accugrid.kinematics.candidates import gravity_terms
     from accugrid.kinematics.robot import load_robot
-    from accugrid.kinematics.yamlfile import load_yaml
 
     model = load_robot(path)
     check_same_robot(model, robot, str(path))

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 __all__ = [
     "COLLINEAR_RATIO",

@@ -36,10 +36,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.candidates import GravityTerm, reference_joints
 from accugrid.kinematics.dh import PARAMETERS, flange_poses
 from accugrid.kinematics.error_model import error_jacobian
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
 from accugrid.kinematics.joint_errors import MAX_ORDER, Harmonic, JointErrors, gravity_basis
 from accugrid.kinematics.robot import Robot

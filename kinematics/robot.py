@@ -24,6 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
+from accugrid.infra.errors import InputError
+from accugrid.infra.units import mm_text
+from accugrid.infra.yamlfile import Schema, YamlDoc, load_yaml
 from accugrid.kinematics import ik as closed
 from accugrid.kinematics.configuration import (
     IKSolution,
@@ -32,7 +35,6 @@ from accugrid.kinematics.configuration import (
     select_confdata,
 )
 from accugrid.kinematics.dh import DHTable, flange_poses
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import invert, pose_from_xyzabc, stack_times
 from accugrid.kinematics.joint_errors import (
     GRAVITY_MPS2,
@@ -42,9 +44,7 @@ from accugrid.kinematics.joint_errors import (
     PointMass,
     Thermal,
 )
-from accugrid.kinematics.units import mm_text
 from accugrid.kinematics.validity import KEYS as VALIDITY_KEYS
-from accugrid.kinematics.yamlfile import Schema, YamlDoc, load_yaml
 
 __all__ = [
     "BUILTIN",
@@ -249,7 +249,7 @@ def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:
 _XYZ: Schema = dict.fromkeys("xyz")
 _POSE: Schema = dict.fromkeys("xyzabc")
 # The ``identification:`` summary of a calibrated file (``calibrated.identification_summary``
-# writes it; ``_validated_max`` and ``codegen.correct_model`` read it). A key written there is
+# writes it; ``_validated_max`` and ``app.correct_model`` read it). A key written there is
 # declared here.
 # ``identification.structure`` (written by ``calibrated.structure_summary`` only)
 STRUCTURE_SCHEMA: Schema = {

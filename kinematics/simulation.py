@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.model import RobotModel
 

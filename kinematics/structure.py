@@ -54,9 +54,9 @@ import numpy as np
 from scipy.linalg import solve_triangular
 from scipy.stats import norm
 
-from accugrid.kinematics.blas import one_blas_thread
+from accugrid.infra.blas import one_blas_thread
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.candidates import GravityTerm, gravity_terms, harmonic_name
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.identification import (
     Identification,
     PoseSet,

@@ -27,12 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
+from accugrid.infra.errors import InputError
+from accugrid.infra.inputfile import note_input
+from accugrid.infra.yamlfile import Schema, YamlDoc
 from accugrid.kinematics.configuration import IKSolution
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.ik import wrap
-from accugrid.kinematics.inputfile import note_input
-from accugrid.kinematics.yamlfile import Schema, YamlDoc
 
 __all__ = ["URDF_ROBOT_SCHEMA", "UrdfRobot", "urdf_robot_from_doc"]
 

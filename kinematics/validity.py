@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.kinematics.yamlfile import YamlDoc
+from accugrid.infra.yamlfile import YamlDoc
 
 __all__ = ["KEYS", "SECTION", "Validity", "validity_section"]
 

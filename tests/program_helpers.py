@@ -13,8 +13,8 @@ import numpy as np
 
 from accugrid.codegen.cell import Cell, load_cell
 from accugrid.codegen.points import parse_points
-from accugrid.codegen.textsafe import fixed
 from accugrid.compensation import GridModel
+from accugrid.infra.textsafe import fixed
 from accugrid.kinematics.robot import load_robot
 
 ROOT = Path(__file__).resolve().parents[1]

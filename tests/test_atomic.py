@@ -14,11 +14,11 @@ from pathlib import Path
 import pytest
 from conftest import EXAMPLES, ROOT
 
-from accugrid.codegen import atomic
-from accugrid.codegen.atomic import check_targets, write_files
-from accugrid.codegen.cli import main
-from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.inputfile import read_input_bytes, track_inputs
+from accugrid.app.cli import main
+from accugrid.infra import atomic
+from accugrid.infra.atomic import check_targets, write_files
+from accugrid.infra.errors import InputError
+from accugrid.infra.inputfile import read_input_bytes, track_inputs
 
 
 @pytest.fixture
@@ -127,7 +127,7 @@ def test_fifo_and_dev_zero_inputs_are_refused_without_blocking(tmp_path):
     ]
     for argv in runs:
         proc = subprocess.run(
-            [sys.executable, "-m", "accugrid.codegen.cli", *map(str, argv)],
+            [sys.executable, "-m", "accugrid.app.cli", *map(str, argv)],
             capture_output=True,
             text=True,
             timeout=60,  # a guard against a hang, not a timing assertion
@@ -367,7 +367,7 @@ def test_temporaries_of_dead_processes_are_removed(tmp_path):
 
 SIGTERM_SCRIPT = """
 import sys, time
-from accugrid.codegen import atomic
+from accugrid.infra import atomic
 real = atomic._write_temp
 def slow(tmp, payload):
     real(tmp, payload)

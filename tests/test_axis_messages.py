@@ -9,8 +9,8 @@ import shutil
 import numpy as np
 from conftest import EXAMPLES
 
+from accugrid.app.cli import main
 from accugrid.codegen.cell import load_cell
-from accugrid.codegen.cli import main
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
 

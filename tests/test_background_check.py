@@ -22,11 +22,12 @@ from program_helpers import (
     robot,
 )
 
-from accugrid.codegen import atomic, program
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
+from accugrid.codegen import program
 from accugrid.codegen.points import parse_points
 from accugrid.codegen.program import build_program
-from accugrid.kinematics.errors import InputError
+from accugrid.infra import atomic
+from accugrid.infra.errors import InputError
 
 ROWS = [(x, y) for x in (-200.0, 0.0, 250.0) for y in (100.0, 300.0, 500.0)]
 

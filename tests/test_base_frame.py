@@ -13,8 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.base_frame import MAX_AXIS_TILT_DEG, fit_robot_frame
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import invert, transform_points
 from accugrid.kinematics.tracker_sim import simulate_tracker_points
 

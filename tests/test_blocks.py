@@ -1,4 +1,4 @@
-"""Block work on a few threads (kinematics.blocks): the serial loop's results and failures."""
+"""Block work on a few threads (infra.blocks): the serial loop's results and failures."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 from program_helpers import cell, cell_with, panel_points, robot
 
 from accugrid.codegen import program
-from accugrid.kinematics import blocks
-from accugrid.kinematics.errors import InputError
+from accugrid.infra import blocks
+from accugrid.infra.errors import InputError
 
 # 48 holes of the example panel (base x, y mm)
 ROWS = np.array([[x, y] for y in (150.0, 450.0) for x in np.arange(0.0, 576.0, 25.0)])

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES
 
+from accugrid.app.cli import main
 from accugrid.codegen.cell import load_cell
-from accugrid.codegen.cli import main
 from accugrid.codegen.points import parse_points
 from accugrid.compensation.measurements import build_grid, read_measurements
-from accugrid.kinematics.errors import InputError
-from accugrid.kinematics.yamlfile import YamlDoc
+from accugrid.infra.errors import InputError
+from accugrid.infra.yamlfile import YamlDoc
 
 POINTS = "id,x,y,z,i,j,k,feed\nH1,0,150,-10,0,0,-1,{feed}\n"
 

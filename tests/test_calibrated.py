@@ -9,8 +9,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.calibrated import calibrated_yaml, check_same_robot
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import Robot, load_robot
 

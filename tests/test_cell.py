@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from accugrid.codegen.cell import load_cell
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import transform_points
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "cell.yaml"

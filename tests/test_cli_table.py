@@ -7,15 +7,15 @@ import pkgutil
 import subprocess
 import sys
 
-from accugrid.codegen import commands
-from accugrid.codegen.commands import COMMANDS
+from accugrid.app import commands
+from accugrid.app.commands import COMMANDS
 
 
 def test_table_lists_every_command_module_under_its_name():
     modules = {m.name for m in pkgutil.iter_modules(commands.__path__)}
     assert {module for module, _ in COMMANDS.values()} == modules
     for name, (module, help_text) in COMMANDS.items():
-        loaded = importlib.import_module(f"accugrid.codegen.commands.{module}")
+        loaded = importlib.import_module(f"accugrid.app.commands.{module}")
         assert loaded.NAME == name and help_text
         assert callable(loaded.add_arguments) and callable(loaded.run)
 
@@ -23,12 +23,12 @@ def test_table_lists_every_command_module_under_its_name():
 def _imported_commands(*argv: str) -> set[str]:
     code = (
         "import sys\n"
-        "from accugrid.codegen.cli import main\n"
+        "from accugrid.app.cli import main\n"
         "try:\n"
         f"    main({list(argv)!r})\n"
         "except SystemExit:\n"
         "    pass\n"
-        "names = [m for m in sys.modules if m.startswith('accugrid.codegen.commands.')]\n"
+        "names = [m for m in sys.modules if m.startswith('accugrid.app.commands.')]\n"
         "print('IMPORTED', *names)\n"
     )
     out = subprocess.run(
@@ -40,4 +40,4 @@ def _imported_commands(*argv: str) -> set[str]:
 
 def test_help_imports_no_command_and_a_command_imports_only_itself():
     assert _imported_commands("--help") == set()
-    assert _imported_commands("correct", "--help") == {"accugrid.codegen.commands.correct"}
+    assert _imported_commands("correct", "--help") == {"accugrid.app.commands.correct"}

@@ -11,9 +11,9 @@ import re
 import pytest
 from conftest import EXAMPLES
 
-from accugrid.codegen.cli import build_parser, main
-from accugrid.codegen.cli_options import DEFAULT_ROBOT, DEFAULT_TILT_DEG
-from accugrid.codegen.commands import COMMANDS
+from accugrid.app.cli import build_parser, main
+from accugrid.app.cli_options import DEFAULT_ROBOT, DEFAULT_TILT_DEG
+from accugrid.app.commands import COMMANDS
 from accugrid.kinematics.robot import BUILTIN
 
 UNITS = ("mm", "deg", "mm/s", "s", "%", "MiB")  # a unit the help must name as a word

@@ -1,15 +1,15 @@
 """The domain calls behind the commands (issue 10: a command parses, calls one function, writes,
-prints): what moved out of codegen/commands/ keeps its rules, and a failing job prints nothing."""
+prints): what moved out of app/commands/ keeps its rules, and a failing job prints nothing."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from accugrid.codegen.cli import main
-from accugrid.codegen.study_report import StudyRequest, study_files
+from accugrid.app.cli import main
+from accugrid.app.study_report import StudyRequest, study_files
 from accugrid.compensation.plans import Plan, grid_vertices, reach_in_one_status
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.robot import load_robot
 
 

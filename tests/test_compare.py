@@ -10,7 +10,7 @@ import csv
 import numpy as np
 import pytest
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.compensation.comparison import (
     METHODS,
     grid_counts,

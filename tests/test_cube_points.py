@@ -12,7 +12,7 @@ from accugrid.compensation.cube_points import (
     cube_test_points,
     cube_vertices,
 )
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 CENTRE = np.array([[100.0, 200.0, 300.0]])
 STEP = 50.0

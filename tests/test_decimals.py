@@ -1,4 +1,4 @@
-"""The bulk decimal reader (kinematics.decimals) against Python's own ``float`` on the literal."""
+"""The bulk decimal reader (infra.decimals) against Python's own ``float`` on the literal."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from accugrid.kinematics.decimals import _BLOCK, read_decimals
+from accugrid.infra.decimals import _BLOCK, read_decimals
 
 PLAIN = re.compile(r"[+-]?(\d{0,8})(?:\.(\d{0,7}))?")
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.codegen.dialects import DIALECTS, dialect_of
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 
 @pytest.mark.parametrize(

@@ -10,16 +10,16 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from accugrid.codegen.corrected import DECIMALS, _plain_lines
-from accugrid.codegen.textsafe import _ready, comment_text, comment_texts, fixed, fixed_bytes
-from accugrid.compensation.csvtable import (
+from accugrid.app.corrected import DECIMALS, _plain_lines
+from accugrid.infra.csvtable import (
     _Cells,
     _parse_csv,
     _parse_simple,
     parse_number,
     parse_table,
 )
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
+from accugrid.infra.textsafe import _ready, comment_text, comment_texts, fixed, fixed_bytes
 
 _CELL = st.one_of(
     st.text(st.sampled_from(list("0123456789.+-eE _#abcXYZ\t")), max_size=8),

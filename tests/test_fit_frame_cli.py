@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES
 
-from accugrid.codegen.cli import main
-from accugrid.codegen.frame_file import load_frame
+from accugrid.app.cli import main
+from accugrid.app.frame_file import load_frame
 from accugrid.kinematics.frames import invert, pose_from_xyzabc, transform_points
 
 TRACKER = EXAMPLES / "tracker"

@@ -7,18 +7,18 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from accugrid.codegen.atomic import write_files
-from accugrid.codegen.cli import main
-from accugrid.codegen.textsafe import (
+from accugrid.app.cli import main
+from accugrid.infra.atomic import write_files
+from accugrid.infra.csvtable import parse_table
+from accugrid.infra.errors import InputError
+from accugrid.infra.textsafe import (
     comment_text,
     fixed,
     fixed_many,
     fixed_same,
     krl_identifier,
 )
-from accugrid.compensation.csvtable import parse_table
 from accugrid.kinematics import frames
-from accugrid.kinematics.errors import InputError
 
 
 def test_table_skips_comments_and_tracks_lines():

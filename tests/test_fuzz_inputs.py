@@ -24,14 +24,14 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from rewrite_helpers import write_cell
 
+from accugrid.app.cli import main
+from accugrid.app.frame_file import load_frame
 from accugrid.codegen.cell import load_cell
-from accugrid.codegen.cli import main
-from accugrid.codegen.frame_file import load_frame
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program_text import read_program
-from accugrid.compensation.csvtable import read_table
 from accugrid.compensation.measurements import build_grid, read_measurements
-from accugrid.kinematics.errors import MESSAGE_MAX, InputError
+from accugrid.infra.csvtable import read_table
+from accugrid.infra.errors import MESSAGE_MAX, InputError
 from accugrid.kinematics.robot import load_robot
 
 FUZZ = settings(

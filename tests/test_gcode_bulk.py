@@ -26,7 +26,7 @@ from accugrid.codegen.gcode.parse import gcode_moves
 from accugrid.codegen.gcode.rewrite import _bulk_block, _Commanded, _file_precision, _walk_block
 from accugrid.codegen.program_text import decimals_of, precision, split_lines
 from accugrid.codegen.rewrite import CORRECTED, Rows
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 NUMBER = st.one_of(
     st.floats(-900, 900, allow_nan=False).map(lambda v: f"{v:.3f}"),

@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from program_helpers import CELL, POINTS, ROOT, cell, cell_with, grid, panel_points, robot
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.codegen.gcode import emit
 from accugrid.codegen.gcode.emit import render_gcode
 from accugrid.codegen.gcode.parse import parse_gcode

@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from accugrid.codegen.gcode.parse import parse_gcode
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 
 def test_words_any_order_case_no_spaces_comments_and_spans():

@@ -21,7 +21,7 @@ from accugrid.compensation.interpolation import (
     trilinear_weights,
 )
 from accugrid.compensation.settings import CorrectionSettings
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 
 METHOD_POWERS = [("idw", 1.0), ("idw", 2.0), ("idw", 0.5), ("trilinear", 1.0)]

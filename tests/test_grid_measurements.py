@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from accugrid.compensation import GridModel
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 HEADER = "id,x,y,z,a,b,c,x_meas,y_meas,z_meas"
 

@@ -41,7 +41,7 @@ def rewrite(tmp_path, name: str, text: str, *extra: str) -> subprocess.Completed
     out.mkdir()
     argv = ["rewrite", str(program), "--cell", str(cell), "-o", str(out / name), *extra]
     return subprocess.run(
-        [sys.executable, "-m", "accugrid.codegen.cli", *argv],
+        [sys.executable, "-m", "accugrid.app.cli", *argv],
         capture_output=True,
         text=True,
         timeout=120,  # a hang guard, not a timing assertion
@@ -77,7 +77,7 @@ def test_a_krl_keyword_never_becomes_a_program_name(tmp_path):
     """Item 13: `plan --name END` wrote `DEF END( )`."""
     out = tmp_path / "plan"
     proc = subprocess.run(
-        [sys.executable, "-m", "accugrid.codegen.cli", "plan", "grid", "--step", "500"]
+        [sys.executable, "-m", "accugrid.app.cli", "plan", "grid", "--step", "500"]
         + ["--name", "END", "-o", str(out)],
         capture_output=True,
         text=True,

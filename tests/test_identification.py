@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.calibrated import calibrated_yaml
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import matrix_to_abc, pose_from_xyzabc
 from accugrid.kinematics.identification import (
     harmonic_terms,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import yaml
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.kinematics.configuration import status_turn
 from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
 from accugrid.kinematics.robot import load_robot

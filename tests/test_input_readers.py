@@ -11,14 +11,14 @@ from conftest import EXAMPLES
 from hypothesis import given
 from hypothesis import strategies as st
 
+from accugrid.app.cli import main
+from accugrid.app.frame_file import load_frame
 from accugrid.codegen.cell import load_cell
-from accugrid.codegen.cli import main
-from accugrid.codegen.frame_file import load_frame
-from accugrid.compensation.csvtable import parse_number, parse_table, read_table
-from accugrid.kinematics.errors import MESSAGE_MAX, InputError, printable
-from accugrid.kinematics.inputfile import read_input_bytes, read_input_text
+from accugrid.infra.csvtable import parse_number, parse_table, read_table
+from accugrid.infra.errors import MESSAGE_MAX, InputError, printable
+from accugrid.infra.inputfile import read_input_bytes, read_input_text
+from accugrid.infra.yamlfile import MAX_DEPTH, YamlDoc, load_yaml
 from accugrid.kinematics.robot import load_robot
-from accugrid.kinematics.yamlfile import MAX_DEPTH, YamlDoc, load_yaml
 
 # ---------------------------------------------------------------- the guarded reader
 
@@ -236,7 +236,7 @@ def test_numpy_warnings_do_not_precede_the_error(tmp_path, capsys):
 def test_library_warnings_are_held_back_on_error_and_shown_on_success(monkeypatch, capsys):
     import warnings
 
-    from accugrid.codegen.commands import correct
+    from accugrid.app.commands import correct
 
     def warns_then(fail):
         def run(args):
@@ -262,7 +262,7 @@ def test_library_warnings_are_held_back_on_error_and_shown_on_success(monkeypatc
 @pytest.mark.parametrize("name", ["END", "def", "Lin", "DECL"])
 def test_krl_keywords_are_no_program_names(tmp_path, name):
     """Item 13: `DEF END( )` must never be written."""
-    from accugrid.codegen.textsafe import krl_identifier
+    from accugrid.infra.textsafe import krl_identifier
 
     path = tmp_path / "cell.yaml"
     path.write_text((EXAMPLES / "cell.yaml").read_text().replace("WING_PANEL", name))

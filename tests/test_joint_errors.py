@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.joint_errors import GRAVITY_MPS2, Harmonic, JointErrors, PointMass
 from accugrid.kinematics.robot import load_robot
@@ -139,7 +139,7 @@ def test_bad_joint_errors_section_is_a_located_error(tmp_path, section, message)
 def test_realistic_robot_makes_the_seed_study_choose_the_seeds_step(tmp_path, capsys):
     # Seed Sec. 5 chose 200 mm on the real KR210 (thresholds 200-250 mm in X and Z); the
     # geometric-only kr210-paper chooses 440 mm. Default study settings = the seed's design.
-    from accugrid.codegen.cli import main
+    from accugrid.app.cli import main
 
     assert main(["study", "--robot", "kr210-realistic", "-o", str(tmp_path / "s")]) == 0
     out = capsys.readouterr().out

@@ -1,7 +1,7 @@
 """A job of several files is all old or all new after a SIGKILL at any file operation.
 
 A forked child runs the real command and SIGKILLs itself at the k-th temporary written, rename,
-removal or folder removal of ``codegen.atomic``, for every k the job has. Before any recovery the
+removal or folder removal of ``infra.atomic``, for every k the job has. Before any recovery the
 entry point (the KRL ``.src``, the rewritten program, the calibrated YAML) never stands beside a
 mix; after the recovery every accugrid write does first, the set is exactly the old or the new.
 """
@@ -16,8 +16,8 @@ import types
 import pytest
 from conftest import EXAMPLES
 
-from accugrid.codegen import atomic
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
+from accugrid.infra import atomic
 
 
 def visible(folders):
@@ -40,7 +40,7 @@ def restore(folders, state):
 
 
 def kill_at(at: int, argv) -> tuple[int, int]:
-    """Run ``main(argv)`` in a forked child whose ``codegen.atomic`` SIGKILLs the process at its
+    """Run ``main(argv)`` in a forked child whose ``infra.atomic`` SIGKILLs the process at its
     ``at``-th temporary written, rename, removal or folder removal (0: never). (exit code, -9
     when killed; the number of those operations the child made)."""
     read, write = os.pipe()

@@ -14,9 +14,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.configuration import Configuration, status_turn
 from accugrid.kinematics.dh import chain
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
 

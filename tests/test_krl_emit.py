@@ -12,12 +12,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from program_helpers import CELL, POINTS, ROOT, cell, cell_with, grid, panel_points, robot
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.codegen.krl import emit
 from accugrid.codegen.krl.emit import MeasureSettings, module_split, render_krl, render_measurement
 from accugrid.codegen.krl.parse import parse_krl
 from accugrid.codegen.program import build_program
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 
 ROWS = np.array([[x, y] for y in (150.0, 175.0, 450.0) for x in np.arange(0.0, 576.0, 25.0)])

@@ -1,7 +1,7 @@
 """The array paths of the KRL rewrite against the obvious ones they replace: literals formatted
 with array operations against ``fixed`` and ``float``, the byte splice against string slicing,
 and the rigid-layout reader against the regex reader on programs in (and near) the controller's
-layout (its numbers read by ``kinematics.decimals``, tested in ``test_decimals.py``)."""
+layout (its numbers read by ``infra.decimals``, tested in ``test_decimals.py``)."""
 
 from __future__ import annotations
 
@@ -19,9 +19,9 @@ from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.krl.rigid import PAD, text_bytes
 from accugrid.codegen.program_text import splice as splice_text
 from accugrid.codegen.rewrite import Options
-from accugrid.codegen.textsafe import fixed
 from accugrid.compensation import GridModel
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
+from accugrid.infra.textsafe import fixed
 
 VALUES = st.one_of(
     st.floats(-1e6, 1e6, allow_nan=False),

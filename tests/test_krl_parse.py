@@ -7,7 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from accugrid.codegen.krl.parse import BaseRef, parse_krl, scan_krl
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 
 def spans_ok(text, pos):

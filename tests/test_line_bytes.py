@@ -27,8 +27,8 @@ from accugrid.codegen.linebytes import (
 )
 from accugrid.codegen.points import Points
 from accugrid.codegen.program import STAGES, Program
-from accugrid.codegen.textsafe import comment_text, fixed
-from accugrid.compensation.csvtable import Table
+from accugrid.infra.csvtable import Table
+from accugrid.infra.textsafe import comment_text, fixed
 from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.frames import abc_to_matrix
 

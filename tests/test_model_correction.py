@@ -13,12 +13,12 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.model_correction import model_correct, residual_grid
 from accugrid.compensation.policy import F_SINGULAR, TOO_LONG, UNREACHABLE, Policy
 from accugrid.compensation.settings import CorrectionSettings
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, matrix_to_abc, pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
 

@@ -8,7 +8,7 @@ import csv
 
 import numpy as np
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
 

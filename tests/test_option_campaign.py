@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 from conftest import EXAMPLES
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 
 EXAMPLES_N = int(os.environ.get("ACCUGRID_FUZZ_EXAMPLES", "300"))
 TIME_LIMIT_S = 120  # a guard against a hang, not a timing assertion
@@ -255,7 +255,7 @@ def test_input_names_with_a_non_utf8_byte_work(tmp_path, inputs):
 
 
 def test_identify_refuses_more_rows_than_its_bound(tmp_path, monkeypatch):
-    from accugrid.codegen import calibration
+    from accugrid.app import calibration
 
     robot = ["--robot", "kr210", "--tool", "0", "0", "250", "0", "0", "0"]
     plan, meas = tmp_path / "plan", tmp_path / "meas.csv"

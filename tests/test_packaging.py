@@ -15,7 +15,7 @@ import pytest
 import accugrid
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGE_FOLDERS = ("kinematics", "compensation", "codegen", "templates")
+PACKAGE_FOLDERS = ("infra", "kinematics", "compensation", "codegen", "app", "templates")
 
 
 def _source_copy(tmp_path: Path) -> Path:

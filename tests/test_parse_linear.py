@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from accugrid.codegen.gcode.parse import _fast_line, _scan, parse_gcode
 from accugrid.codegen.krl.parse import scan_krl
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 RUN = 65536  # 64 KiB
 

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from accugrid.codegen.gcode.parse import _blank_comments, _fast_line, _plain_line
 from accugrid.codegen.krl.parse import scan_krl
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 NUMBER = st.one_of(
     st.floats(-5000, 5000, allow_nan=False).map(lambda v: f"{v:.3f}"),

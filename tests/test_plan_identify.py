@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from accugrid.codegen.cli import main
-from accugrid.compensation.csvtable import read_table
+from accugrid.app.cli import main
 from accugrid.compensation.plans import identification_plan
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.csvtable import read_table
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc, rotation_angle_deg
 from accugrid.kinematics.robot import load_robot
 

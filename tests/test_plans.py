@@ -5,7 +5,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from accugrid.compensation.csvtable import parse_table
 from accugrid.compensation.cube_points import cube_test_points, cube_vertices
 from accugrid.compensation.plans import (
     SEED_CENTRES,
@@ -16,7 +15,8 @@ from accugrid.compensation.plans import (
     path_length,
     serpentine_order,
 )
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.csvtable import parse_table
+from accugrid.infra.errors import InputError
 
 counts = st.integers(1, 6)
 
@@ -126,7 +126,7 @@ def test_grid_plan_bad_inputs():
 
 import re  # noqa: E402
 
-from accugrid.codegen.cli import main  # noqa: E402
+from accugrid.app.cli import main  # noqa: E402
 from accugrid.codegen.krl.parse import parse_krl  # noqa: E402
 
 

@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from accugrid.codegen.points import parse_points, read_points
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, orient_along_axes, too_tilted
 
 
@@ -134,7 +134,7 @@ odd_text = st.sampled_from(
 
 @given(st.lists(st.tuples(numbers, numbers, st.one_of(numbers, odd_text)), min_size=1, max_size=8))
 def test_fast_number_path_agrees_with_the_table_reader(rows):
-    from accugrid.compensation.csvtable import parse_table
+    from accugrid.infra.csvtable import parse_table
 
     text = "x,y,z\n" + "".join(f'{a},{b},"{c}"\n' for a, b, c in rows)
     try:

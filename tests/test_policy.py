@@ -15,7 +15,7 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.codegen.krl.parse import parse_krl
 from accugrid.codegen.points import parse_points
 from accugrid.codegen.program import build_program
@@ -204,7 +204,7 @@ def test_a_grid_records_its_status_and_one_in_two_statuses_is_refused(tmp_path):
     grid = _grid(tmp_path, robot="kr210-paper", status=6)
     assert _rows(grid)[0]["s"] == "6"
     from accugrid.compensation import GridModel
-    from accugrid.kinematics.errors import InputError
+    from accugrid.infra.errors import InputError
 
     assert GridModel.from_measurements(grid).status == 6
     lines = grid.read_text().splitlines()
@@ -474,7 +474,7 @@ def test_a_corrected_hole_that_takes_another_status_is_refused():
     # configuration.allow_change lets a hole take another Status; its correction was made for
     # the program's Status only (grid or model), so a corrected hole may not change
     from accugrid.codegen import program as program_module
-    from accugrid.kinematics.errors import InputError
+    from accugrid.infra.errors import InputError
     from tests.program_helpers import cell_with, panel_points, robot
 
     c = cell_with(configuration={"status": 0, "allow_change": True})

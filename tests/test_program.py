@@ -23,9 +23,9 @@ from program_helpers import (
 
 from accugrid.codegen.points import parse_points
 from accugrid.codegen.program import STAGES, _branch_jumps, build_program
-from accugrid.codegen.textsafe import fixed
 from accugrid.compensation.settings import CorrectionSettings
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
+from accugrid.infra.textsafe import fixed
 from accugrid.kinematics.frames import pose_from_xyzabc, transform_points
 
 ROWS = np.array([[x, y] for y in (150.0, 450.0) for x in np.arange(0.0, 576.0, 25.0)])

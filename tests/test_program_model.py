@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 from program_helpers import CELL, POINTS, cell, robot
 
+from accugrid.app.cli import main
 from accugrid.codegen.cell import load_cell
-from accugrid.codegen.cli import main
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program import build_program
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import transform_points
 from accugrid.kinematics.robot import load_robot
 

@@ -20,7 +20,7 @@ from rewrite_helpers import E_CONST, write_rapid_cell
 from rewrite_helpers import RAPID_BASE as BASE
 from scipy.spatial.transform import Rotation
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.codegen.rapid.rewrite import kuka_status_of
 from accugrid.kinematics.configuration import abb_confdata, status_turn
 from accugrid.kinematics.robot import load_robot

@@ -19,7 +19,7 @@ from rewrite_helpers import E_CONST, error_field, write_cell
 from scipy.spatial.transform import Rotation
 from test_gcode_rs274 import MOVE_RE, canonical
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.codegen.gcode.rewrite import rewrite_gcode
 from accugrid.codegen.krl.parse import scan_krl
 from accugrid.codegen.rewrite import Options

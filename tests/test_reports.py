@@ -10,7 +10,7 @@ from conftest import EXAMPLES
 from report_helpers import check_report
 from test_identify_cli import TOOL, joints, write_csv
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 
 GRID = EXAMPLES / "grid_200mm.csv"
 MAX_REPORT_BYTES = 2_000_000

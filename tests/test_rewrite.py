@@ -12,14 +12,14 @@ from hypothesis import strategies as st
 from rewrite_helpers import E_CONST, error_field, write_cell, write_grid
 from scipy.spatial.transform import Rotation
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.codegen.gcode.parse import parse_gcode
 from accugrid.codegen.gcode.rewrite import rewrite_gcode
 from accugrid.codegen.krl.parse import parse_krl
 from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.rewrite import Options
 from accugrid.compensation import GridModel
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 BASE2 = (100.0, 50.0, 0.0, 90.0, 0.0, 0.0)  # robot_T_base of BASE_DATA[2]
 R2 = Rotation.from_euler("ZYX", BASE2[3:], degrees=True).as_matrix()

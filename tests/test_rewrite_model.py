@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.codegen.krl.parse import parse_krl
 from accugrid.kinematics.frames import abc_to_matrix
 from accugrid.kinematics.robot import load_robot

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from rewrite_helpers import write_cell
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.codegen.gcode.parse import parse_gcode
 from accugrid.codegen.krl.parse import scan_krl
 

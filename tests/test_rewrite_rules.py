@@ -17,10 +17,10 @@ import numpy as np
 import pytest
 from rewrite_helpers import E_CONST, write_cell, write_grid
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.codegen.gcode.parse import parse_gcode
 from accugrid.codegen.krl.parse import parse_krl
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 
 GRID_ABC = (0.0, 90.0, 0.0)  # the orientation the test grids are measured at (robot frame)

@@ -24,7 +24,7 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 
 FUZZ = os.environ.get("ACCUGRID_FUZZ_EXAMPLES")
 CASES = {"rewrite": 200, "generate": 80}

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from conftest import ROOT
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
 from accugrid.kinematics.simulation import reached_positions

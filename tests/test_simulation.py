@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.configuration import status_turn
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.ik import wrap
 from accugrid.kinematics.robot import load_robot

@@ -8,10 +8,10 @@ import re
 import pytest
 from conftest import EXAMPLES
 
+from accugrid.app.cli import main
+from accugrid.app.frame_file import load_frame
 from accugrid.codegen.cell import load_cell
-from accugrid.codegen.cli import main
-from accugrid.codegen.frame_file import load_frame
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.robot import BUILTIN, load_robot
 
 ROBOT = ["--robot", "kr210-realistic", "--tool", "0", "0", "250", "0", "0", "0"]

@@ -12,10 +12,10 @@ import yaml
 from hypothesis import Phase, assume, given, settings
 from hypothesis import strategies as st
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.calibrated import calibrated_yaml
 from accugrid.kinematics.candidates import gravity_terms, reference_joints
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.frames import matrix_to_abc, pose_from_xyzabc
 from accugrid.kinematics.identification import identify, pose_set
 from accugrid.kinematics.joint_errors import Harmonic, JointErrors, PointMass, gravity_basis

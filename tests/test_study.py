@@ -3,7 +3,6 @@
 import numpy as np
 import pytest
 
-from accugrid.compensation.csvtable import parse_table
 from accugrid.compensation.plans import experiment_plan
 from accugrid.compensation.study import (
     Summary,
@@ -17,7 +16,8 @@ from accugrid.compensation.study import (
     simulate_validation,
     summarize,
 )
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.csvtable import parse_table
+from accugrid.infra.errors import InputError
 
 CENTRES = {"D": (1700.0, 0.0, 1500.0), "E": (2000.0, -350.0, 1800.0)}
 STEPS = np.array([20.0, 80.0, 140.0, 200.0, 260.0, 320.0, 380.0, 440.0, 500.0])
@@ -246,7 +246,7 @@ def test_decision_rule_on_the_seed_table_4_gives_the_seed_choice():
 
 # --- the `accugrid study` command ------------------------------------------------------------
 
-from accugrid.codegen.cli import main  # noqa: E402
+from accugrid.app.cli import main  # noqa: E402
 
 QUICK = ["--centre", "D", "1700", "0", "1500", "--steps", "20:380:120", "--repeats", "2"]
 QUICK += ["--validation-points", "30", "--region", "1500", "1900", "-200", "200", "1300", "1700"]

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from accugrid.codegen.textsafe import _CHUNK, fixed, fixed_bytes
+from accugrid.infra.textsafe import _CHUNK, fixed, fixed_bytes
 
 _NUMBER = st.one_of(
     st.floats(allow_nan=False, allow_infinity=False, width=64),

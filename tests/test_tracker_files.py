@@ -11,11 +11,11 @@ from conftest import EXAMPLES
 from hypothesis import given
 from hypothesis import strategies as st
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.codegen.points import parse_points
-from accugrid.compensation.csvtable import TableFormat, parse_table
 from accugrid.compensation.measurements import read_measurements
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.csvtable import TableFormat, parse_table
+from accugrid.infra.errors import InputError
 
 TRACKER = EXAMPLES / "tracker"
 CANONICAL = TRACKER / "grid_8.csv"
@@ -45,9 +45,9 @@ INSIDE = "id,x,y,z\nH1,1250.5,-550,1150\nH2,1333.25,-420.75,1280.125\nH3,1399,-4
 
 def _format(options: list[str]) -> TableFormat:
     """The TableFormat the CLI builds from ``options`` (parsed by the real parser)."""
-    from accugrid.codegen.cli import build_parser
-    from accugrid.codegen.cli_options import reading_format
-    from accugrid.compensation import csvtable
+    from accugrid.app.cli import build_parser
+    from accugrid.app.cli_options import reading_format
+    from accugrid.infra import csvtable
 
     args = build_parser("correct").parse_args(["correct", "P", "-o", "O", *options])
     with reading_format(args):

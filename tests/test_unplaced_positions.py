@@ -11,7 +11,7 @@ import csv
 import pytest
 from rewrite_helpers import write_cell, write_rapid_cell
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 
 GOOD = "LIN {X 1500,Y 100,Z 1400,A 0,B 90,C 0}"  # inside the grid, base 1 = robot frame
 

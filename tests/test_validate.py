@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from report_helpers import check_report
 
-from accugrid.codegen.cli import main
+from accugrid.app.cli import main
 from accugrid.compensation.validation import validate_positions
 
 TOOL = ["0", "0", "250", "0", "0", "0"]

@@ -1,7 +1,7 @@
 """The G-code dialect (RS274/NGC as LinuxCNC reads it): emitter, parser and rewrite. The names
 of ``__all__`` are imported on first use."""
 
-from accugrid.kinematics.exports import lazy_namespace
+from accugrid.infra.exports import lazy_namespace
 
 _API = {
     "render_gcode": "accugrid.codegen.gcode.emit",

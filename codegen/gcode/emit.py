@@ -44,7 +44,7 @@ from accugrid.codegen.render import (
     template_dir,
     template_uses,
 )
-from accugrid.codegen.textsafe import comment_texts, fixed, fixed_same, fixed_texts
+from accugrid.infra.textsafe import comment_texts, fixed, fixed_same, fixed_texts
 
 __all__ = ["BLOCK", "GcodeHole", "canned", "gcode_text", "render_gcode"]
 

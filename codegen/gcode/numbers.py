@@ -1,7 +1,7 @@
 """G-code number literals read in bulk: the value of every literal from its span in the text.
 
 A G-code literal (``parse._NUMBER``: an optional sign, digits, an optional point and digits, no
-exponent) is read by the one bulk decimal reader (``kinematics.decimals``), exactly as
+exponent) is read by the one bulk decimal reader (``infra.decimals``), exactly as
 ``float(literal)`` reads it, with its decimals; the few too long for it are read by ``float``.
 """
 
@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from accugrid.compensation.csvtable import decimals_of
-from accugrid.kinematics.decimals import read_decimals
+from accugrid.infra.csvtable import decimals_of
+from accugrid.infra.decimals import read_decimals
 
 __all__ = ["NUMBER_BYTES", "literal_values"]
 

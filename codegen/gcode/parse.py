@@ -31,7 +31,7 @@ import numpy as np
 
 from accugrid.codegen.gcode.numbers import NUMBER_BYTES, literal_values
 from accugrid.codegen.program_text import check_text, decimals_of, split_lines
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 __all__ = [
     "AXES",

@@ -39,7 +39,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
 )
 from accugrid.codegen.splice import ByteSplicer, texts_of
-from accugrid.codegen.textsafe import fixed, fixed_bytes
+from accugrid.infra.textsafe import fixed, fixed_bytes
 from accugrid.kinematics.frames import rows_times, transform_points
 
 __all__ = ["rewrite_gcode"]

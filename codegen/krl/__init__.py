@@ -1,7 +1,7 @@
 """The KUKA KRL dialect: emitter (program model to .src/.dat text), parser and rewrite. The
 names of ``__all__`` are imported on first use."""
 
-from accugrid.kinematics.exports import lazy_namespace
+from accugrid.infra.exports import lazy_namespace
 
 _API = {
     "render_krl": "accugrid.codegen.krl.emit",

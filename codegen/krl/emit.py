@@ -52,10 +52,10 @@ from accugrid.codegen.render import (
     template_dir,
     template_uses,
 )
-from accugrid.codegen.textsafe import KRL_NAME_MAX, comment_texts, fixed, fixed_texts
-from accugrid.compensation.csvtable import Table
+from accugrid.infra.csvtable import Table
+from accugrid.infra.errors import InputError
+from accugrid.infra.textsafe import KRL_NAME_MAX, comment_texts, fixed, fixed_texts
 from accugrid.kinematics.configuration import Configuration
-from accugrid.kinematics.errors import InputError
 
 __all__ = [
     "BLOCK",

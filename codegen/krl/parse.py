@@ -60,7 +60,7 @@ from accugrid.codegen.krl.tables import (
     use_columns,
 )
 from accugrid.codegen.program_text import check_text, decimals_of, distinct_ints, split_lines
-from accugrid.kinematics.errors import InputError
+from accugrid.infra.errors import InputError
 
 __all__ = [
     "CARTESIAN_KEYS",

@@ -9,13 +9,13 @@ spaces shown and an optional CR before the LF:
 - ``LIN|PTP|SLIN|SPTP name[ C_DIS|C_PTP|C_VEL|C_ORI]``
 
 ``name`` is ASCII (``[A-Za-z_][A-Za-z0-9_]*``, at most 32 characters); every number a plain
-decimal (``kinematics.decimals``: read exactly, what ``float`` gives). ``tail`` is empty
+decimal (``infra.decimals``: read exactly, what ``float`` gives). ``tail`` is empty
 or starts with a comma; the caller decides on each distinct tail (``distinct``). A line in these
 layouts reads as the regex reader (``parse._PLAIN_RE``) reads it; every other line is left to
 that reader.
 
 Offsets are byte (= character) offsets in the text, whose bytes ``text_bytes`` gives; bytes are
-compared eight at a time as one 64-bit word (``kinematics.decimals.words_at``).
+compared eight at a time as one 64-bit word (``infra.decimals.words_at``).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from accugrid.codegen.program_text import row_counts
-from accugrid.kinematics.decimals import read_decimals, words_at
+from accugrid.infra.decimals import read_decimals, words_at
 
 __all__ = [
     "PAD",

@@ -3,7 +3,7 @@
 (``rewrite``), the cell section (``section``) and RAPID names (``names``). The names of
 ``__all__`` are imported on first use."""
 
-from accugrid.kinematics.exports import lazy_namespace
+from accugrid.infra.exports import lazy_namespace
 
 _API = {
     "PLUGIN": "accugrid.codegen.rapid.plugin",

@@ -31,9 +31,9 @@ from accugrid.codegen.render import (
     render_around,
     template_dir,
 )
-from accugrid.codegen.textsafe import comment_texts, fixed, fixed_texts
+from accugrid.infra.errors import InputError
+from accugrid.infra.textsafe import comment_texts, fixed, fixed_texts
 from accugrid.kinematics.configuration import abb_confdata
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.robot import load_robot
 
 __all__ = ["BLOCK", "QUATERNION_DECIMALS", "module_name", "quaternions", "render_rapid"]

@@ -57,9 +57,9 @@ from accugrid.codegen.rewrite import (
     correct_points,
     partial_check,
 )
-from accugrid.codegen.textsafe import comment_text
+from accugrid.infra.errors import InputError
+from accugrid.infra.textsafe import comment_text
 from accugrid.kinematics.configuration import kuka_status
-from accugrid.kinematics.errors import InputError
 
 __all__ = ["RapidPositions", "add_header", "kuka_status_of", "rewrite_rapid", "scan", "splice"]
 

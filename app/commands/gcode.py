@@ -1,0 +1,42 @@
+"""Write a corrected RS274NGC (LinuxCNC) drilling program from a points CSV.
+
+Positions are the tool centre point in the cell's program frame (program_frame, default the BASE
+frame), mm; orientation as A B C words: the KUKA A, B, C of the tool in that frame, deg. Each hole:
+G0 to the approach point on the drill axis; where the drill axis is the program's -Z, a canned
+cycle (G81, G82 with the dwell, G83 with the cell's peck), else G1 moves along the drill axis at
+approach speed and feed, G4 dwell, G1 retract. Every hole is corrected with the grid (its point
+mapped to the robot frame, P' = P + e(P), and the same e applied to all its positions).
+
+Units: mm, deg, mm/s in the inputs; F in mm/min (G94) in the program. Exit 2 on bad input, with
+nothing written.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from accugrid.app.gcode_job import gcode_job
+from accugrid.app.job import add_job_arguments, summary, with_report
+from accugrid.infra.atomic import check_targets, write_files
+
+__all__ = ["NAME", "add_arguments", "run"]
+
+NAME = "gcode"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_job_arguments(parser)
+    parser.add_argument("-o", "--output", required=True, metavar="FILE", help="the .ngc to write")
+
+
+def run(args: argparse.Namespace) -> int:
+    out = Path(args.output)
+    report = [Path(args.report_html)] if args.report_html else []
+    inputs = [args.points, args.cell] + ([args.grid] if args.grid else [])
+    check_targets([out, *report], inputs, args.force)
+    job = gcode_job(args, out)
+    files = with_report(job, args.report_html, "G-code drilling program")
+    written = write_files(files, job.inputs, args.force, ready=job.finish)
+    print(summary(job, written))
+    return 0

@@ -1,0 +1,285 @@
+"""Write a measurement plan: the positions a laser-tracker operator measures, in order.
+
+  grid        vertices of a regular grid over a region, serpentine (boustrophedon) order: every
+              move goes to a neighbouring vertex, so the path is as short as a grid allows; the
+              path length is printed next to the naive raster order's.
+  cube        one cube's vertices C1..C8 and test points P1..P9 (GB/T 12642-2001 / ISO 9283:1998
+              test points plus the seed's P6..P9, seed Sec. 4.3), --repeats times.
+  experiment  the seed's step experiment (Sec. 4.2, 5): for every centre and step, the cube's 8
+              vertices and 9 test points, --repeats times each (default: seed Table 3 centres
+              D-H, steps 20..500 mm every 60, 5 repeats, A B C = 0 90 0).
+  identify    --count poses for `accugrid identify`: from --candidates random positions in
+              --region at orientations within --tilt deg of --abc, reachable in the Status with
+              |A5| >= 10 deg, the D-optimal set (greedy, most observable DH errors and TCP),
+              visited in nearest-neighbour order; a,b,c per row and column s (the Status).
+              --augment CAL.yaml: D-optimal for the structure a calibrated file was fitted
+              with (a second session for that model); it also prints which candidates of
+              identify's structure search the poses cannot separate.
+
+Outputs in DIR: NAME.csv (id,x,y,z,a,b,c[,centre,step,label,repeat],x_meas,y_meas,z_meas with
+the measured columns empty for the operator) and the KUKA KRL program NAME.src/NAME.dat that
+visits every row with LIN at the fixed orientation (first motion a complete PTP) and waits at
+each for the tracker: WAIT SEC (--wait-sec) or WAIT FOR $IN[n] (--wait-input). Positions are in
+the robot frame ($BASE = $NULLFRAME, i.e. $ROBROOT = $WORLD) unless --base-number names a
+BASE_DATA that equals the robot frame. Every position is checked with the robot's IK (--robot,
+--tool) in one KUKA Status for the whole plan (--status; default: the IK default at the first
+position), since LIN moves keep the first PTP's configuration; the IK also gives each E6POS its T.
+Lengths in mm, angles in deg, speeds in mm/s.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from accugrid.app.cli_options import (
+    COORDINATE_MAX,
+    MAX_CANDIDATES,
+    MAX_POSES,
+    MAX_REPEATS,
+    add_abc,
+    add_deprecated,
+    add_experiment_arguments,
+    add_harmonics,
+    add_robot,
+    add_status,
+    add_tilt,
+    add_tool,
+    harmonics_of,
+    number,
+    parse_centres,
+    parse_steps,
+    robot_with_tool,
+)
+from accugrid.app.measure_program import PlanRequest, plan_files, plan_targets
+from accugrid.compensation.plans import SEED_REGION, SEED_REPEATS
+from accugrid.infra.atomic import check_targets, write_files
+
+__all__ = ["NAME", "add_arguments", "run"]
+
+NAME = "plan"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    sub = parser.add_subparsers(dest="kind", metavar="KIND", required=True)
+    grid = sub.add_parser("grid", help="grid vertices over a region, serpentine order")
+    _add_region(grid)
+    grid.add_argument(
+        "--step",
+        type=number("mm", 0, COORDINATE_MAX, above=True),
+        required=True,
+        metavar="MM",
+        help="grid step, mm; a side that is not a whole number of steps gets the next "
+        "smaller step that is",
+    )
+    grid.add_argument(
+        "--order",
+        choices=["serpentine", "naive"],
+        default="serpentine",
+        help="visiting order (default: serpentine)",
+    )
+    grid.add_argument(
+        "--repeats",
+        type=number("", 1, MAX_REPEATS, whole=True),
+        default=1,
+        help="passes over the grid (default: 1)",
+    )
+    cube = sub.add_parser("cube", help="one cube's vertices C1..C8 and test points P1..P9")
+    cube.add_argument(
+        "--centre",
+        nargs=3,
+        type=number("mm", -COORDINATE_MAX, COORDINATE_MAX),
+        required=True,
+        metavar=("X", "Y", "Z"),
+        help="mm",
+    )
+    cube.add_argument(
+        "--step",
+        type=number("mm", 0, COORDINATE_MAX, above=True),
+        required=True,
+        metavar="MM",
+        help="cube edge, mm",
+    )
+    cube.add_argument(
+        "--repeats",
+        type=number("", 1, MAX_REPEATS, whole=True),
+        default=SEED_REPEATS,
+        help=f"passes over the cube (default: {SEED_REPEATS})",
+    )
+    exp = sub.add_parser("experiment", help="the seed's step experiment (Sec. 4.2, 5)")
+    add_experiment_arguments(exp)
+    ident = sub.add_parser("identify", help="D-optimal poses for a kinematic identification")
+    _add_region(ident)
+    ident.add_argument(
+        "--count",
+        type=number("poses", 1, MAX_POSES, whole=True),
+        required=True,
+        metavar="N",
+        help=f"number of poses to measure (at most {MAX_POSES})",
+    )
+    add_tilt(ident, "largest rotation from --abc")
+    ident.add_argument(
+        "--candidates",
+        type=number("candidate poses", 1, MAX_CANDIDATES, whole=True),
+        default=2000,
+        help=f"random candidate poses to choose from (default: 2000, at most {MAX_CANDIDATES})",
+    )
+    ident.add_argument(
+        "--repeats",
+        type=number("", 1, MAX_REPEATS, whole=True),
+        default=1,
+        help="passes over the poses (default: 1)",
+    )
+    ident.add_argument(
+        "--seed",
+        type=number("", 0, 2**32 - 1, whole=True),
+        default=0,
+        help="seed of the candidates (default: 0)",
+    )
+    ident.add_argument(
+        "--compliance",
+        action="store_true",
+        help="choose the poses for `identify --compliance` too (the robot's gravity model)",
+    )
+    add_harmonics(ident, "choose the poses for `identify --harmonics` with these terms too")
+    ident.add_argument(
+        "--augment",
+        metavar="CAL.yaml",
+        help="choose the poses for the structure a calibrated robot file was fitted with (its "
+        "harmonics, compliance and gravity groups): a second, short session for that model",
+    )
+    for p in (grid, cube, exp, ident):
+        _common(p)
+
+
+def _add_region(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--region",
+        nargs=6,
+        type=number("mm", -COORDINATE_MAX, COORDINATE_MAX),
+        metavar=("XMIN", "XMAX", "YMIN", "YMAX", "ZMIN", "ZMAX"),
+        default=[SEED_REGION[0][0], SEED_REGION[1][0], SEED_REGION[0][1], SEED_REGION[1][1]]
+        + [SEED_REGION[0][2], SEED_REGION[1][2]],
+        help="box in the robot frame, mm (default: the seed's 1000 x 1200 x 1000 mm region "
+        "placed at X 1200..2200, Y -600..600, Z 1100..2100)",
+    )
+
+
+def _common(parser: argparse.ArgumentParser) -> None:
+    add_abc(parser, "fixed TCP orientation")
+    add_robot(parser, "robot for the reach check and S/T (its nominal model)")
+    add_tool(parser, "measured point (SMR) on the flange")
+    add_status(
+        parser,
+        "KUKA Status 0..7 for every position (default: the IK default configuration "
+        "at the first position)",
+    )
+    parser.add_argument(
+        "--tool-number",
+        type=number("", 1, 32, whole=True),
+        default=1,
+        help="TOOL_DATA index in the program (default: 1)",
+    )
+    parser.add_argument(
+        "--base-number",
+        type=number("", 0, 32, whole=True),
+        default=0,
+        help="BASE_DATA index in the program; 0 = $NULLFRAME, the robot frame (default: 0)",
+    )
+    parser.add_argument(
+        "--ptp-percent",
+        type=number("%", 1, 100, whole=True),
+        default=20,
+        metavar="P",
+        help="speed of the first PTP, %% of maximum (default: 20)",
+    )
+    parser.add_argument(
+        "--speed",
+        type=number("mm/s", 0, 2000, above=True),
+        default=250.0,
+        metavar="MM_S",
+        help="LIN speed between positions ($VEL.CP in the program), mm/s (default: 250)",
+    )
+    add_deprecated(
+        parser,
+        "--vel",
+        "--speed",
+        "speed",
+        convert=lambda m_s: 1000.0 * m_s,
+        type=number("m/s", 0, 2, above=True),
+        metavar="M_S",
+    )
+    wait = parser.add_mutually_exclusive_group()
+    wait.add_argument(
+        "--wait-sec",
+        type=number("s", 0, 1e6),
+        default=3.0,
+        metavar="S",
+        help="dwell at each position for the tracker, s (default: 3)",
+    )
+    wait.add_argument(
+        "--wait-input",
+        type=number("", 1, 4096, whole=True),
+        metavar="N",
+        help="instead of a dwell, wait at each position until $IN[N] is TRUE",
+    )
+    parser.add_argument("--name", help="program and file name (default: measure_KIND)")
+    parser.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
+    parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    parser.add_argument(
+        "--templates",
+        type=Path,
+        help="copy of the templates folder (or of its krl/) with measure.src.j2 and "
+        "measure.dat.j2 (default: built-in)",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    check_targets(plan_targets(args.output, args.kind, args.name), force=args.force)
+    kind = args.kind
+    robot = robot_with_tool(args.robot, args.tool)
+    compliance = kind == "identify" and args.compliance
+    harmonics = harmonics_of(args) if kind == "identify" else ()
+    gravity = ()
+    if kind == "identify" and args.augment:
+        from accugrid.kinematics.calibrated import chosen_structure
+
+        chosen = chosen_structure(args.augment, robot)
+        compliance = compliance or chosen[0]
+        harmonics = tuple(dict.fromkeys(harmonics + chosen[1]))
+        gravity = chosen[2]
+    request = PlanRequest(
+        kind=kind,
+        robot=robot,
+        abc=tuple(args.abc),
+        status=args.status,
+        region=tuple(args.region) if kind in ("grid", "identify") else None,
+        step_mm=args.step if kind in ("grid", "cube") else None,
+        order=args.order if kind == "grid" else "serpentine",
+        repeats=args.repeats,
+        centre=tuple(args.centre) if kind == "cube" else None,
+        centres=parse_centres(args.centre) if kind == "experiment" else None,
+        steps=parse_steps(args.steps) if kind == "experiment" else None,
+        count=args.count if kind == "identify" else 0,
+        tilt_deg=args.tilt if kind == "identify" else 0.0,
+        candidates=args.candidates if kind == "identify" else 0,
+        seed=args.seed if kind == "identify" else 0,
+        compliance=compliance,
+        harmonics=harmonics,
+        gravity=gravity,
+        name=args.name,
+        tool_number=args.tool_number,
+        base_number=args.base_number,
+        ptp_percent=args.ptp_percent,
+        vel_m_s=args.speed / 1000.0,
+        wait_sec=args.wait_sec,
+        wait_input=args.wait_input,
+        templates=args.templates,
+    )
+    job = plan_files(request, args.output)
+    # a measurement program: its .src (what the controller runs) replaced last
+    main = [path for path in job.files if Path(path).suffix == ".src"]
+    write_files(job.files, force=args.force, main=main)
+    for line in job.lines:
+        print(line)
+    return 0

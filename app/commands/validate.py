@@ -1,0 +1,88 @@
+"""Check a calibrated model on points measured after correction (the last step of a calibration).
+
+MEAS is a measurement CSV taken after correction at new points (not the identification poses):
+x,y,z the targets, the nominal robot-frame positions the corrected program aimed at (the points
+CSV given to correct/krl/gcode/rewrite, not the corrected commands x_cmd..), and x_meas,y_meas,
+z_meas the TCP positions the laser tracker measured there (robot frame, mm); optional id, a,b,c,
+s. Rows with the same target are repeats of one pose. `accugrid simulate --poses CORRECTED.csv`
+writes such a file for a simulated robot.
+
+Printed: the deviation d = measured - target per axis (min, max, max |d|, mean, std) and of the
+3D distance, ISO 9283 positional accuracy AP (barycentre of a pose's measured positions minus its
+target) and repeatability RP (mean + 3 std of the distances from that barycentre; poses measured
+at least twice), the worst rows by file:line, and the verdict: PASS when every row lies within
++-TOL on X, Y and Z.
+
+Exit status: 0 PASS; 3 FAIL (the report is written all the same: a failed validation is a
+result to sign, not an error); 2 bad input, e.g. a file whose mean deviation is more than 10 x
+the model's validated error and at least 2 mm (measured in another base frame or with another
+tool than the model's: a constant offset no correction leaves).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from accugrid.app.cli_options import COORDINATE_MAX, add_table_format, number
+from accugrid.app.validate_job import ValidateRequest, validate_files
+from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
+from accugrid.infra.atomic import check_targets, write_files
+
+__all__ = ["EXIT_FAIL", "NAME", "add_arguments", "run"]
+
+NAME = "validate"
+EXIT_FAIL = 3  # the validation ran and failed (0: passed, 2: bad input, 1: internal error)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "measurements",
+        metavar="MEAS",
+        help="measurement CSV after correction: x,y,z targets, x_meas,y_meas,z_meas measured (mm)",
+    )
+    parser.add_argument(
+        "--model",
+        required=True,
+        metavar="CAL",
+        help="the calibrated robot YAML the correction used (accugrid identify)",
+    )
+    parser.add_argument(
+        "--grid",
+        metavar="G",
+        help="the residual grid the correction used: read as a grid, named with its SHA-256, "
+        "the poses outside its box counted",
+    )
+    parser.add_argument(
+        "--tolerance",
+        type=number("mm", 0, COORDINATE_MAX, above=True),
+        default=DEFAULT_TOLERANCE_MM,
+        metavar="MM",
+        help=f"pass when every row is within +-MM on X, Y and Z, mm "
+        f"(default: {DEFAULT_TOLERANCE_MM:g})",
+    )
+    parser.add_argument(
+        "--report-html",
+        metavar="FILE",
+        help="also write the self-contained HTML report (inputs with SHA-256, verdict, figures)",
+    )
+    add_table_format(parser)
+    parser.add_argument("--force", action="store_true", help="overwrite an existing report")
+
+
+def run(args: argparse.Namespace) -> int:
+    inputs = [args.measurements, args.model, args.grid]
+    if args.report_html:
+        check_targets([args.report_html], inputs, args.force)
+    request = ValidateRequest(
+        measurements=args.measurements,
+        model=args.model,
+        grid=args.grid,
+        tolerance_mm=args.tolerance,
+        report_html=args.report_html,
+    )
+    done = validate_files(request)
+    if done.job.files:
+        write_files(done.job.files, done.job.inputs, args.force)
+    for line in done.job.lines:
+        print(line)
+    return 0 if done.result.passed else EXIT_FAIL

@@ -1,0 +1,157 @@
+"""`accugrid correct --model CAL.yaml [--grid MEAS]`: correction by a calibrated robot model.
+
+Every point P (robot frame, mm) at its orientation gets the command P' that the calibrated arm,
+driven by the nominal controller in one KUKA Status, takes to P (``compensation.model_correction``,
+iterated to 0.001 mm); with ``--grid`` the grid holds the residual after the model and is added.
+Orientation: a,b,c columns as given; i,j,k drill axes oriented along the axis nearest ``--abc``;
+points without orientation at ``--abc``. The output CSV is the one of ``accugrid correct``.
+Tools: without --tool the points are where the SMR the model was measured with is to land (the
+file's identification.controller_tool on the controller, the identified TCP on the arm); with
+--tool they are where that tool's tip (the drill as taught) is to land, on the calibrated arm.
+The verdicts are the correction policy's (``compensation.policy``).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from accugrid.app.corrected import (
+    CorrectRequest,
+    check_added_columns,
+    corrected_file,
+    point_status,
+)
+from accugrid.codegen.header import grid_lines, input_line
+from accugrid.codegen.points import Points, read_points
+from accugrid.compensation.model_correction import TOL_MM
+from accugrid.compensation.policy import Policy
+from accugrid.infra.atomic import JobFiles
+from accugrid.infra.digest import file_sha256
+from accugrid.infra.errors import InputError
+from accugrid.infra.yamlfile import load_yaml
+from accugrid.kinematics.frames import (
+    abc_to_matrix,
+    matrix_to_abc,
+    orient_along_axes,
+    pose_from_xyzabc,
+    too_tilted,
+)
+from accugrid.kinematics.robot import Robot, load_robot
+
+if TYPE_CHECKING:
+    from accugrid.kinematics.validity import Validity
+
+__all__ = ["ModelFile", "correct_by_model", "point_orientations", "read_model"]
+
+_LISTED = 5
+
+
+def point_orientations(points: Points, reference_abc: np.ndarray) -> np.ndarray:
+    """KUKA A, B, C (N, 3) deg per point: its a,b,c; for i,j,k the rotation about the drill axis
+    nearest ``reference_abc`` (3,) deg; without orientation columns the reference itself."""
+    reference = abc_to_matrix(np.asarray(reference_abc, dtype=float))
+    if points.abc is not None:
+        return points.abc
+    if points.axis is None:
+        return np.tile(np.asarray(reference_abc, dtype=float), (len(points), 1))
+    tilted = np.flatnonzero(too_tilted(points.axis, reference))
+    if tilted.size:
+        i = int(tilted[0])
+        raise InputError(
+            f"{points.label(i)}: drill axis too far from the --abc tool Z axis to orient",
+            *points.table.where(i),
+        )
+    return matrix_to_abc(orient_along_axes(points.axis, reference))
+
+
+@dataclass(frozen=True)
+class ModelFile:
+    """A calibrated model as every command reads it: the robot (its ``true_robot()`` the arm,
+    its tool the identified TCP: the SMR it was measured with), where it holds (``validity``,
+    None without a record) and the controller's tool of its measurements (flange_T_tool (4, 4)
+    mm, None when the file does not record it)."""
+
+    path: str
+    robot: Robot
+    validity: Validity | None
+    measured_with: np.ndarray | None
+
+    @property
+    def smr_tools(self) -> tuple[np.ndarray | None, np.ndarray]:
+        """(controller, arm) tools that land the SMR the model was measured with."""
+        return self.measured_with, self.robot.flange_T_tool
+
+
+def read_model(path: str | os.PathLike[str], nominal: Robot | None = None) -> ModelFile:
+    """Load a calibrated robot YAML (or a built-in robot name) once for a job; with
+    ``nominal`` (the cell's robot) InputError unless it is a model of that robot."""
+    from accugrid.kinematics.calibrated import check_same_robot
+    from accugrid.kinematics.validity import Validity
+
+    text = os.fspath(path)
+    robot = load_robot(text)
+    if not hasattr(robot, "true_robot"):
+        raise InputError("a calibrated model must be a DH robot file (accugrid identify)", text)
+    if nominal is not None:
+        check_same_robot(robot, nominal, text)
+    validity, tool = None, None
+    if Path(text).is_file():
+        doc = load_yaml(text)
+        validity = Validity.from_doc(doc)
+        if doc.has("identification", "controller_tool"):
+            keys = ("identification", "controller_tool")
+            tool = pose_from_xyzabc([doc.number(*keys, k) for k in "xyzabc"])
+    return ModelFile(text, robot, validity, tool)
+
+
+def correct_by_model(request: CorrectRequest) -> JobFiles:
+    """The ``correct`` job with a model (``correct_points`` dispatches here): the corrected CSV
+    and the printed summary; InputError naming the first point not corrected (unless
+    ``allow_partial``)."""
+    settings, model_file = request.settings, request.model
+    is_file = Path(model_file).is_file()
+    model = read_model(model_file)
+    calibrated = model.robot
+    if request.tool is None:
+        tools = model.smr_tools
+    else:
+        given = pose_from_xyzabc(np.array(request.tool, dtype=float))
+        tools = (given, given)
+    points = read_points(request.points)
+    check_added_columns(points)
+    abc = point_orientations(points, np.array(request.abc, dtype=float))
+    policy = Policy.build(
+        settings,
+        request.grid,
+        calibrated,
+        request.status,
+        tools,
+        request.repeat_tol_mm,
+        points.xyz,
+        abc,
+        validity=model.validity,
+        **request.limits(),
+    )
+    grid, status = policy.grid, policy.status
+    own = point_status(points, None)
+    verdict = policy.decide(points.xyz, abc_to_matrix(abc).reshape(-1, 3, 3), status=own)
+    sources = [input_line("model", model_file, file_sha256(model_file) if is_file else "-")]
+    details = [f"robot {calibrated.name}, KUKA Status {status}"]
+    lines = []
+    if grid is not None:
+        sources += grid_lines(Path(request.grid).name, grid.source_sha256, grid.step)
+        details.append(f"residual grid: method {settings.method}, power {settings.power:g}")
+        lines.append(grid.describe().replace("grid       ", "residual   ", 1))
+        lines.append(policy.describe_status())
+    done = verdict.corrected
+    miss = np.nanmax(verdict.numbers.get("miss", [0.0]), initial=0.0)
+    lines += [
+        f"model      {model_file} ({calibrated.name}), KUKA Status {status}",
+        f"corrected  {int(done.sum())} point(s), largest miss {miss:.6f} mm (tolerance {TOL_MM:g})",
+    ]
+    return corrected_file(request, points, verdict, sources, details, lines)

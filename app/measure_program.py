@@ -1,0 +1,277 @@
+"""The measurement-plan job (``accugrid plan``): the positions a laser-tracker operator
+measures, in order, as a CSV skeleton (``Plan.csv_text``) and the KUKA KRL program that visits
+them (``krl.emit.render_measurement``), every position checked with the robot's IK in one KUKA
+Status (``compensation.plans.reach_in_one_status``). Lengths mm, angles deg, speeds m/s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from accugrid.codegen.header import header_lines
+from accugrid.codegen.krl.emit import MeasureSettings, render_measurement
+from accugrid.compensation.plans import (
+    SEED_REPEATS,
+    Plan,
+    cube_plan,
+    experiment_plan,
+    grid_plan,
+    identification_plan,
+    reach_in_one_status,
+)
+from accugrid.infra.atomic import JobFiles
+from accugrid.infra.errors import InputError
+from accugrid.infra.textsafe import fixed, krl_identifier
+from accugrid.kinematics.configuration import solve_in_one_status
+from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.robot import Robot
+
+__all__ = ["KINDS", "MAX_WAIT_SEC", "PlanRequest", "plan_files", "plan_targets"]
+
+KINDS = ("grid", "cube", "experiment", "identify")
+MAX_WAIT_SEC = 600.0
+
+
+@dataclass(frozen=True)
+class PlanRequest:
+    """One plan of ``kind`` for ``robot`` (its tool: the measured point, e.g. the SMR) at the
+    TCP orientation ``abc`` (KUKA deg) in one KUKA ``status`` (None: the IK default at the first
+    position; ``identify``: at the region's centre).
+
+    grid: ``region`` (xmin, xmax, ymin, ymax, zmin, zmax mm), ``step_mm``, ``order``
+    ("serpentine" or "naive"), ``repeats`` rounds; cube: ``centre`` (3,) mm, ``step_mm``,
+    ``repeats``; experiment: ``centres`` (name -> (3,) mm), ``steps`` (mm), ``repeats``;
+    identify: ``region``, ``count`` poses within ``tilt_deg`` of ``abc`` D-optimal among
+    ``candidates`` random ones (``seed``), ``repeats`` rounds, D-optimal for the model
+    ``identify`` will fit (``compliance``, ``harmonics`` as (axis, order) pairs, ``gravity``).
+    Program: ``name`` (default measure_KIND), TOOL_DATA ``tool_number``, BASE_DATA
+    ``base_number`` (0: the robot frame), first-PTP ``ptp_percent``, LIN ``vel_m_s``, and after
+    each position ``wait_input`` ($IN number) or ``wait_sec`` s; ``templates``: a folder with
+    measure.src.j2 and measure.dat.j2 (None: built-in)."""
+
+    kind: str
+    robot: Robot
+    abc: tuple[float, float, float]
+    status: int | None = None
+    region: tuple[float, ...] | None = None
+    step_mm: float | None = None
+    order: str = "serpentine"
+    repeats: int = SEED_REPEATS
+    centre: tuple[float, float, float] | None = None
+    centres: dict[str, tuple[float, float, float]] | None = None
+    steps: np.ndarray | None = None
+    count: int = 0
+    tilt_deg: float = 30.0
+    candidates: int = 2000
+    seed: int = 0
+    compliance: bool = False
+    harmonics: tuple[tuple[int, int], ...] = ()
+    gravity: tuple = ()  # mass-free gravity groups (kinematics.candidates.GravityTerm)
+    name: str | None = None
+    tool_number: int = 1
+    base_number: int = 0
+    ptp_percent: int = 20
+    vel_m_s: float = 0.25
+    wait_sec: float = 3.0
+    wait_input: int | None = None
+    templates: Path | None = None
+
+
+def _program_name(kind: str, name: str | None) -> str:
+    """The KRL module name: ``name`` (default measure_KIND) made a KRL identifier."""
+    return krl_identifier(name or f"measure_{kind}", prefix="M")
+
+
+def plan_targets(output: str | Path, kind: str, name: str | None) -> list[Path]:
+    """The files of the job in folder ``output``: NAME.csv, NAME.src, NAME.dat (lower case)."""
+    name = _program_name(kind, name)
+    return [Path(output) / f"{name.lower()}.{ext}" for ext in ("csv", "src", "dat")]
+
+
+def plan_files(request: PlanRequest, output: str | Path) -> JobFiles:
+    """The plan CSV and its KRL measurement program in folder ``output``, and the lines to
+    print (the plan's description, what was written). InputError on bad settings or a
+    position the robot cannot reach in the plan's Status."""
+    plan, info = _build(request)
+    name = _program_name(request.kind, request.name)
+    paths = plan_targets(output, request.kind, request.name)
+    status, turn, config = reach_in_one_status(plan, request.robot, request.status)
+    if request.wait_input is not None:
+        wait = f"WAIT FOR $IN[{request.wait_input}]"
+    else:
+        wait = f"WAIT SEC {fixed(request.wait_sec)}"
+    details = [
+        "inputs none, positions generated from the command-line settings",
+        *info,
+        _orientation_text(plan) + f", robot {request.robot.name}, Status {config}",
+    ]
+    moves = "each by PTP" if request.kind == "identify" else "first by PTP, then LIN"
+    closing = [f"{len(plan.points)} positions, {moves}, each followed by {wait}"]
+    header = header_lines(
+        f"plan {request.kind}",
+        details=details,
+        where=", measurement positions are not corrected",
+        closing=closing,
+    )
+    src, dat = _program(plan, status, turn, name, header, request)
+    files = {paths[0]: plan.csv_text(), paths[1]: src, paths[2]: dat}
+    return JobFiles(files, [], [*info, f"wrote {', '.join(str(p) for p in paths)}"])
+
+
+def _build(r: PlanRequest) -> tuple[Plan, list[str]]:
+    """The plan of the chosen kind and lines describing it."""
+    if r.kind == "grid":
+        box = r.region
+        lo, hi = (box[0], box[2], box[4]), (box[1], box[3], box[5])
+        plan = grid_plan(lo, hi, r.step_mm, r.abc)
+        naive = grid_plan(lo, hi, r.step_mm, r.abc, order="naive")
+        if r.order == "naive":
+            plan = naive
+        if int(r.repeats) < 1:
+            raise InputError(f"--repeats must be >= 1, got {r.repeats}")
+        steps = np.unique(np.round(np.diff(np.unique(plan.points[:, 0])), 6))
+        info = [
+            f"grid plan: {len(plan.points)} vertices, {r.order} order",
+            f"path {plan.path_length():.1f} mm (serpentine "
+            f"{grid_plan(lo, hi, r.step_mm, r.abc).path_length():.1f} mm, naive raster "
+            f"{naive.path_length():.1f} mm)",
+        ]
+        if len(steps) and abs(steps[0] - r.step_mm) > 1e-6:
+            info.append(f"note: step shrunk to partition the region exactly, X {steps[0]:.3f} mm")
+        if r.repeats > 1:
+            plan = Plan(
+                np.tile(plan.points, (r.repeats, 1)),
+                plan.abc,
+                [f"{i}_R{k + 1}" for k in range(r.repeats) for i in plan.ids],
+            )
+        return plan, info
+    if r.kind == "identify":
+        return _identification_plan(r)
+    if r.kind == "cube":
+        plan = cube_plan(r.centre, r.step_mm, r.repeats, r.abc)
+        return plan, [f"cube plan: 8 vertices + 9 test points x {r.repeats} repeats"]
+    centres, steps = r.centres, r.steps
+    plan = experiment_plan(centres, steps, r.repeats, r.abc)
+    info = [
+        f"experiment plan: {len(centres)} centres x {len(steps)} steps x 17 points x "
+        f"{r.repeats} repeats = {len(plan.points)} rows",
+        f"steps {', '.join(f'{s:g}' for s in steps)} mm, path {plan.path_length():.1f} mm",
+    ]
+    return plan, info
+
+
+def _identification_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
+    """The D-optimal identification plan in the region, in one Status (given, or the IK
+    default's at the region's centre), and lines describing it."""
+    box = r.region
+    lo, hi = (box[0], box[2], box[4]), (box[1], box[3], box[5])
+    robot = r.robot
+    centre = pose_from_xyzabc(np.concatenate([np.add(lo, hi) / 2, r.abc]))
+    status = solve_in_one_status(robot, centre, r.status)[1]  # default: IK at the centre
+    if status is None:
+        raise InputError(
+            f"the region's centre is not reachable at A B C {' '.join(map(fixed, r.abc))} "
+            "deg: give --status"
+        )
+    plan, o1, usable = identification_plan(
+        robot,
+        lo,
+        hi,
+        r.count,
+        r.tilt_deg,
+        r.abc,
+        status,
+        candidates=r.candidates,
+        repeats=r.repeats,
+        seed=r.seed,
+        compliance=r.compliance,
+        harmonics=r.harmonics,
+        gravity=r.gravity,
+    )
+    model = "DH errors, TCP" + (", compliance" if r.compliance else "")
+    model += f", {len(r.harmonics)} harmonics" if r.harmonics else ""
+    model += "".join(f", {g.name}" for g in r.gravity)
+    info = [
+        f"identification plan ({model}): {r.count} poses x {r.repeats} repeats chosen D-optimally "
+        f"from {usable} of {r.candidates} candidates (Status {status}, tilt up to "
+        f"{r.tilt_deg:g} deg, |A5| >= 10 deg); observability O1 {o1:.4f}",
+        f"path {plan.path_length():.1f} mm",
+    ]
+    info.append(_candidates_line(robot, plan, status))
+    return plan, info
+
+
+def _candidates_line(robot, plan: Plan, status: int) -> str:
+    """What the planned poses can tell ``identify``'s search: the harmonic orders resolved per
+    axis and the candidate groups they cannot separate from the DH errors and TCP."""
+    from accugrid.kinematics.structure import observability
+
+    poses = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
+    first = np.unique(np.column_stack([plan.points, plan.abc_rows()]), axis=0, return_index=True)[1]
+    q = robot.ik(poses[np.sort(first)], status=status).q
+    caps, hidden = observability(robot, q)
+    resolved = " ".join(f"A{a + 1}:{caps[a]}" for a in range(6))
+    orders: dict[str, list[str]] = {}
+    for name, _ in hidden:  # 'A6 k3' -> {'A6': ['3']}, a gravity group as it is
+        axis, _, order = name.partition(" k")
+        orders.setdefault(axis if order else name, []).append(order)
+    text = "; ".join(f"{key} orders {','.join(ks)}" if ks[0] else key for key, ks in orders.items())
+    text = text or "none"
+    return (
+        f"candidates for identify's structure search: harmonic orders up to {resolved}; "
+        f"not separable from the DH errors and TCP by these poses: {text}"
+    )
+
+
+def _program(
+    plan: Plan,
+    status: np.ndarray,
+    turn: np.ndarray,
+    name: str,
+    header: list[str],
+    r: PlanRequest,
+) -> tuple[str, str]:
+    """(.src, .dat) texts of the measurement program (``krl.emit.render_measurement``) after
+    checking the program options."""
+    if r.wait_input is not None and not 1 <= r.wait_input <= 4096:
+        raise InputError(f"--wait-input must be an input number 1..4096, got {r.wait_input}")
+    if not 0 <= r.wait_sec <= MAX_WAIT_SEC:
+        raise InputError(f"--wait-sec must be 0..{MAX_WAIT_SEC:g} s, got {r.wait_sec:g}")
+    if not 1 <= r.ptp_percent <= 100:
+        raise InputError(f"--ptp-percent must be 1..100, got {r.ptp_percent}")
+    if not 0 < r.vel_m_s <= 2.0:
+        raise InputError(f"--speed must be in (0, 2000] mm/s, got {1000 * r.vel_m_s:g}")
+    for option in ("tool_number", "base_number"):
+        value = getattr(r, option)
+        low = 1 if option == "tool_number" else 0
+        if not low <= value <= 32:
+            raise InputError(f"--{option.replace('_', '-')} must be {low}..32, got {value}")
+    settings = MeasureSettings(
+        tool=r.tool_number,
+        base=r.base_number,
+        ptp_percent=r.ptp_percent,
+        vel_cp=r.vel_m_s,
+        wait_sec=r.wait_sec,
+        wait_input=r.wait_input,
+        ptp_only=r.kind == "identify",  # reorienting between poses: PTP, not LIN
+    )
+    return render_measurement(
+        plan.points,
+        plan.abc_rows(),
+        plan.ids,
+        status,
+        turn,
+        name,
+        header,
+        settings,
+        r.templates,
+    )
+
+
+def _orientation_text(plan: Plan) -> str:
+    if np.ndim(plan.abc) == 1:
+        return f"orientation A B C {' '.join(fixed(v) for v in plan.abc)} deg"
+    return "orientation A B C per position (see the .dat)"

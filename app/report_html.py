@@ -1,0 +1,121 @@
+"""The one self-contained HTML report of a command (``--report-html FILE``, DESIGN.md "Reports").
+
+One Jinja page (``templates/report/report.html.j2``, autoescaped): the title and the verdict
+(PASS, FAIL, or INFO for a job without a pass criterion), the command line, the accugrid version,
+the tolerance, every input with its SHA-256, then the command's sections (text, tables,
+figures as inline base64 PNG: no network, a raster keeps a plot of 1e4 holes small). Print CSS
+lays it out on A4. The text is returned; the command writes it with its other files
+(``atomic.write_files``), so the report and the job's outputs are all old or all new.
+"""
+
+from __future__ import annotations
+
+import base64
+import os
+import shlex
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import jinja2
+
+from accugrid import __version__
+from accugrid.infra.digest import file_sha256
+from accugrid.infra.errors import printable
+from accugrid.templates import TEMPLATE_DIR
+
+__all__ = ["Figure", "Section", "Table", "report_html"]
+
+_VERDICTS = {"PASS": "PASS", "FAIL": "FAIL", "INFO": "no pass criterion"}
+
+
+@dataclass(frozen=True)
+class Figure:
+    """A PNG figure and its caption (also the image's alt text)."""
+
+    png: bytes
+    caption: str
+
+    @property
+    def base64(self) -> str:
+        return base64.b64encode(self.png).decode("ascii")
+
+
+@dataclass(frozen=True)
+class Table:
+    """A table: header cells and rows of text (numbers already formatted, with their unit in
+    the header)."""
+
+    header: list[str]
+    rows: list[list[str]]
+    title: str = ""
+
+
+@dataclass(frozen=True)
+class Section:
+    """A heading with paragraphs, tables and figures, in that order."""
+
+    title: str
+    lines: list[str] = field(default_factory=list)
+    tables: list[Table] = field(default_factory=list)
+    figures: list[Figure] = field(default_factory=list)
+
+
+def _environment() -> jinja2.Environment:
+    env = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(os.fspath(TEMPLATE_DIR / "report")),
+        undefined=jinja2.StrictUndefined,
+        autoescape=True,
+        trim_blocks=True,
+        lstrip_blocks=True,
+    )
+    env.tests["number_cell"] = _is_number
+    return env
+
+
+def _is_number(cell: object) -> bool:
+    """A cell right-aligned as a number: it parses as a float."""
+    try:
+        float(str(cell).replace("±", ""))
+    except ValueError:
+        return False
+    return True
+
+
+def report_html(
+    title: str,
+    verdict: str,
+    tolerance: str,
+    inputs: list[tuple[str, str | None]],
+    sections: list[Section],
+    facts: list[tuple[str, str]] | None = None,
+    argv: list[str] | None = None,
+) -> str:
+    """The report page. ``verdict``: PASS, FAIL or INFO; ``inputs``: (role, path) pairs (a
+    path None is left out; a name that is no file, e.g. a built-in robot, gets '-' as hash);
+    ``facts``: more (key, value) lines under the header; ``argv``: the command line (default:
+    this process's)."""
+    if verdict not in _VERDICTS:
+        raise ValueError(f"verdict must be one of {sorted(_VERDICTS)}")
+    rows = []
+    for role, path in inputs:
+        if path is None:
+            continue
+        digest = file_sha256(path) if Path(path).is_file() else "-"
+        rows.append({"role": role, "name": printable(path), "sha256": digest})
+    words = ["accugrid", *(sys.argv[1:] if argv is None else argv)]
+    return (
+        _environment()
+        .get_template("report.html.j2")
+        .render(
+            title=title,
+            verdict=verdict,
+            verdict_text=_VERDICTS[verdict],
+            command=printable(shlex.join(words), limit=2000),
+            version=__version__,
+            tolerance=tolerance,
+            facts=facts or [],
+            inputs=rows,
+            sections=sections,
+        )
+    )

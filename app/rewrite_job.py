@@ -1,0 +1,216 @@
+"""``accugrid rewrite`` as one call: from what the command line asks (``RewriteRequest``) to the
+bytes of every output file (``RewriteJob``). Reads the cell, the grid, the calibrated model and
+the programs, rewrites them (``codegen.krl.rewrite`` / ``codegen.gcode.rewrite``, or the
+dialect's plug-in, ``codegen.plugin``), adds the
+header and makes the report; the command only parses, calls ``rewrite_job``, writes and prints.
+"""
+
+from __future__ import annotations
+
+import gc
+import os
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from accugrid.codegen.cell import load_cell
+from accugrid.codegen.dialects import dialect_of, plugin_of
+from accugrid.codegen.program_text import add_header, read_program
+from accugrid.codegen.rewrite import (
+    CORRECTED,
+    OUTSIDE,
+    SKIPPED,
+    Options,
+    Result,
+    header_lines,
+    report_csv,
+    warning_lines,
+)
+from accugrid.compensation import GridModel
+from accugrid.compensation.policy import Policy
+from accugrid.infra.csvtable import declared_or
+
+__all__ = ["RewriteJob", "RewriteRequest", "rewrite_job"]
+
+
+@dataclass
+class RewriteRequest:
+    """What to rewrite: the programs (a KRL .src/.dat pair or one file) and the output path of
+    each, and the options of ``accugrid rewrite`` (``Options`` for their meaning)."""
+
+    outputs: dict[Path, Path]  # input program -> output file, the .src (what runs) first
+    cell: str
+    grid: str | None = None
+    model: str | None = None
+    report: Path | None = None
+    report_html: Path | None = None
+    config_dat: Path | None = None
+    header: bool = False
+    decimals: int | None = None
+    strict: bool = False
+    allow_partial: bool = False
+    outside: str = "error"  # CorrectionSettings.outside
+    base: int | None = None
+    trust_calls: bool = False
+    ignore_external_axes: bool = False
+    max_bytes: int = 64 * 2**20
+    orientation_tol: float = 0.0
+    orientation_limit: float = 0.0
+    allow_orientation: bool = False
+    tolerance_mm: float = 0.0
+
+
+@dataclass
+class RewriteJob:
+    """A rewrite done: the bytes of each output, the files read (never overwritten), the
+    result (texts and report rows) and the warnings to print."""
+
+    files: dict[Path, bytes | bytearray]
+    read: list[Path]
+    result: Result
+    warnings: list[str]
+
+    def summary(self) -> str:
+        """One line: how many positions were corrected, left outside, skipped."""
+        rows = self.result.rows
+        largest, _ = self.result.largest()
+        return (
+            f"rewrite: {rows.count(CORRECTED)} corrected (largest {largest:.3f} mm), "
+            f"{rows.count(OUTSIDE)} outside the grid, {rows.count(SKIPPED)} skipped"
+        )
+
+
+def rewrite_job(req: RewriteRequest) -> RewriteJob:
+    """Read everything ``req`` names, rewrite the programs and return what to write."""
+    inputs = list(req.outputs)
+    read = [*inputs, Path(req.cell)] + ([req.config_dat] if req.config_dat else [])
+    cell = load_cell(req.cell)
+    cell = replace(cell, correction=cell.correction.but(outside=req.outside))
+    model_file = Path(req.model) if req.model is not None else cell.model_path
+    grid = None  # a model corrects alone when neither --grid nor the cell names one
+    if model_file is None or req.grid is not None or cell.grid_path is not None:
+        grid = cell.grid_file(req.grid)
+    measured = None  # the grid file as the cell's tracker writes it
+    if grid is not None:
+        measured = GridModel.from_measurements(grid, fmt=declared_or(cell.tracker))
+    model = nominal = None
+    if model_file is not None or (measured is not None and measured.status is None):
+        from accugrid.kinematics.robot import load_robot
+
+        nominal = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
+    if model_file is not None:  # the arm; the tool is the cell's, never the model's TCP
+        from accugrid.app.correct_model import read_model
+
+        model = read_model(model_file, nominal)
+        read.append(model_file)
+    # the grid (a residual one with a model) holds in the Status it was measured in
+    policy = Policy.build(
+        cell.correction,
+        measured,
+        None if model is None else model.robot,
+        cell.configuration.status,
+        (cell.flange_T_tool, cell.flange_T_tool),
+        nominal=nominal,
+        validity=None if model is None else model.validity,
+        orientation_tol_deg=req.orientation_tol,
+        orientation_limit_deg=req.orientation_limit,
+        allow_orientation=req.allow_orientation,
+        strict=req.strict,
+    )
+    opts = Options(
+        model=policy.grid,
+        base_data=cell.base_data,
+        robot_T_program=cell.gcode.robot_T_program,
+        correction=cell.correction,
+        decimals=req.decimals,
+        allow_partial=req.allow_partial,
+        base_override=req.base,
+        tool_number=cell.tool_number,
+        trust_calls=req.trust_calls,
+        ignore_external_axes=req.ignore_external_axes,
+        max_bytes=req.max_bytes,
+        tolerance_mm=req.tolerance_mm,
+        policy=policy,
+        model_file=None if model_file is None else os.fspath(model_file),
+        reference_abc=cell.configuration.reference_abc if model is not None else None,
+    )
+    texts = {os.fspath(p): read_program(p, req.max_bytes) for p in inputs}
+    # The readers build their tables from many small strings and tuples; the cycle collector
+    # would walk them again and again while they are built, for nothing.
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        name = dialect_of(inputs[0])
+        plugin = plugin_of(name)
+        if plugin is not None:
+            result = plugin.rewrite(texts, opts, cell.dialects[name])
+        elif name == "krl":  # each dialect's reader imported when it is needed
+            from accugrid.codegen.krl.rewrite import rewrite_krl
+
+            config = read_program(req.config_dat, req.max_bytes) if req.config_dat else None
+            result = rewrite_krl(texts, opts, config)
+        else:
+            from accugrid.codegen.gcode.rewrite import rewrite_gcode
+
+            result = rewrite_gcode(os.fspath(inputs[0]), texts[os.fspath(inputs[0])], opts)
+    finally:
+        if collecting:
+            gc.enable()
+    del texts
+    files: dict[Path, bytes | bytearray] = {}
+    for path, target in req.outputs.items():
+        data = result.data.pop(os.fspath(path))  # the new program exists once, as bytes
+        if req.header:
+            lines = header_lines(result, os.fspath(path), os.fspath(req.cell), opts)
+            text, kind = data.decode("latin-1"), dialect_of(path)
+            plugin = plugin_of(kind)
+            if plugin is None:
+                text = add_header(text, lines, kind)
+            else:
+                text = plugin.add_header(text, lines)
+            data = text.encode("latin-1")
+        files[target] = data
+    if req.report is not None:
+        # a non-UTF-8 byte in a file name is written as an escape (\\udcff), not refused
+        files[req.report] = report_csv(result.rows).encode("utf-8", "backslashreplace")
+    warnings = []
+    if policy.grid_status is not None and measured is not None and measured.status is None:
+        warnings.append(f"the grid does not record its Status: {policy.describe_status()}")
+    read += [grid] if grid is not None else []
+    if req.report_html is not None:
+        files[req.report_html] = _html_report(req, result.rows, read).encode("utf-8")
+    return RewriteJob(files, read, result, warnings + warning_lines(result, opts))
+
+
+def _html_report(req: RewriteRequest, rows, read: list[Path]) -> str:
+    """The HTML report of the rewrite (``app.correction_report``): every position as
+    written and as rewritten (program frame), its status and reason."""
+    from accugrid.app.correction_report import (
+        CORRECTED,
+        FLAGGED,
+        NOT_CORRECTED,
+        SKIPPED,
+        correction_report,
+    )
+    from accugrid.codegen.rewrite import CORRECTED as DONE
+    from accugrid.codegen.rewrite import OUTSIDE
+
+    state = np.full(len(rows.line), SKIPPED, np.int8)
+    state[rows.status == OUTSIDE] = NOT_CORRECTED
+    done = rows.status == DONE
+    state[done] = CORRECTED
+    state[done & np.array([bool(r) for r in rows.reason], dtype=bool)] = FLAGGED
+    names = [Path(f).name for f in rows.files]
+
+    def label(i: int) -> str:
+        return f"{names[rows.file[i]]}:{rows.line[i]} {rows.name[i]}"
+
+    roles = [("program", os.fspath(p)) for p in req.outputs]
+    roles += [("cell", req.cell)] + [
+        ("grid or model", os.fspath(p)) for p in read[len(roles) + 1 :]
+    ]
+    new = np.where(np.isnan(rows.new), rows.old, rows.new)
+    return correction_report(
+        "Rewritten program", rows.old, new, state, rows.reason, label, roles, "program frame"
+    )

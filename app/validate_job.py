@@ -1,0 +1,264 @@
+"""`accugrid validate MEAS --model CAL [--grid G]`: the check after correction, as one call.
+
+MEAS is a measurement CSV taken after correction at new points: x,y,z the targets (the nominal
+positions the corrected program aimed at, robot frame, mm), x_meas,y_meas,z_meas where the
+tracker measured the TCP there (robot frame, mm); optional id, a,b,c, s. Statistics and verdict:
+``compensation.validation`` (deviation d = M - P). The model (and the residual grid, when the
+correction used one: read as a grid, the poses outside its box counted) are named with their
+SHA-256; the model's validated error decides whether the file can be from the model's base
+frame and tool (``check_same_frame``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from accugrid.app.plots import rows_png, validation_hist_png
+from accugrid.app.report_html import Figure, Section, Table, report_html
+from accugrid.compensation.measurements import read_measurements
+from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
+from accugrid.compensation.validation import (
+    ValidationResult,
+    check_same_frame,
+    validate_positions,
+)
+from accugrid.infra.atomic import JobFiles
+from accugrid.infra.csvtable import read_table
+from accugrid.infra.errors import InputError, printable
+from accugrid.infra.units import mm_text
+from accugrid.infra.yamlfile import load_yaml
+from accugrid.kinematics.validity import Validity
+
+__all__ = ["ValidateJob", "ValidateRequest", "validate_files"]
+
+_WORST = 10  # rows named in the summary and the report
+
+
+@dataclass(frozen=True)
+class ValidateRequest:
+    """The validation file, the calibrated model YAML, the residual grid (or None), the
+    tolerance per axis (mm) and the HTML report to write (or None)."""
+
+    measurements: str
+    model: str
+    grid: str | None = None
+    tolerance_mm: float = DEFAULT_TOLERANCE_MM
+    report_html: str | None = None
+
+
+@dataclass(frozen=True)
+class ValidateJob:
+    """The files to write (the report), the lines to print and the result."""
+
+    job: JobFiles
+    result: ValidationResult
+
+
+def _validated_error(path: str) -> np.ndarray | None:
+    """The model's validated error per axis (3,) mm (None: not recorded); InputError unless the
+    file is a calibrated model (it has an identification section)."""
+    doc = load_yaml(path)
+    if not doc.has("identification"):
+        raise InputError("not a calibrated model (no 'identification'; accugrid identify)", path)
+    validity = Validity.from_doc(doc)
+    return None if validity is None else validity.validated_max_mm
+
+
+def validate_files(request: ValidateRequest) -> ValidateJob:
+    """Read, check and summarise the validation; the report's text when asked for."""
+    validated = _validated_error(request.model)
+    meas = read_measurements(request.measurements)
+    name = printable(Path(request.measurements).name)
+    table = read_table(request.measurements)  # the ids (the reader of positions drops them)
+    ids = table.text("id") if table.has("id") else [""] * len(table)
+    labels = [
+        f"{name}:{meas.lines[r]}" + (f" {printable(ids[r], 40)}" if ids[r] else "")
+        for r in range(len(meas.commanded))
+    ]
+    result = validate_positions(meas.commanded, meas.measured, labels, request.tolerance_mm)
+    check_same_frame(result, validated, request.measurements)
+    lines = _summary(result, validated)
+    grid_note = None
+    if request.grid:  # read as a grid (a wrong file is refused); the rows outside its box told
+        from accugrid.compensation.grid import GridModel
+
+        grid = GridModel.from_measurements(request.grid)
+        outside = int((~grid.contains(np.unique(result.target, axis=0))).sum())
+        grid_note = (
+            f"residual grid {mm_text(grid.origin)} .. {mm_text(grid.upper)} mm, step "
+            f"{mm_text(grid.step)} mm: {outside} of {len(result.ap_mm)} poses outside its box"
+        )
+        lines.insert(-1, grid_note)
+    files: dict[str, str] = {}
+    if request.report_html:
+        files[request.report_html] = _report(request, result, validated, grid_note)
+        lines.append(f"wrote {request.report_html}")
+    inputs = [request.measurements, request.model, request.grid]
+    return ValidateJob(JobFiles(files, inputs, lines), result)
+
+
+def _axis_rows(result: ValidationResult) -> list[list[str]]:
+    """Rows X, Y, Z, |d|: min, max, max |d|, mean, std, mm (3 decimals)."""
+    s, n = result.axis_stats, result.distance_stats
+    rows = [
+        [axis]
+        + [f"{s[key][k]:+.3f}" for key in ("min", "max")]
+        + [f"{s['max_abs'][k]:.3f}"]
+        + [f"{s['mean'][k]:+.3f}", f"{s['std'][k]:.3f}"]
+        for k, axis in enumerate("XYZ")
+    ]
+    rows.append(["3D |d|", "", "", f"{n['max']:.3f}", f"{n['mean']:.3f}", f"{n['std']:.3f}"])
+    return rows
+
+
+def _iso_line(result: ValidationResult) -> str:
+    """ISO 9283 AP (worst pose) and RP (worst pose with repeats), one line."""
+    worst = int(np.argmax(result.ap_mm))
+    text = (
+        f"ISO 9283 positional accuracy AP: max {result.ap_mm[worst]:.3f} mm (pose of "
+        f"{result.labels[int(np.flatnonzero(result.pose == worst)[0])]}), mean "
+        f"{result.ap_mm.mean():.3f} mm over {len(result.ap_mm)} poses"
+    )
+    repeated = np.isfinite(result.rp_mm)
+    if repeated.any():
+        counts = sorted(set(result.repeats[repeated].tolist()))
+        return text + (
+            f"; repeatability RP: max {np.nanmax(result.rp_mm):.3f} mm over {int(repeated.sum())} "
+            f"poses with {'/'.join(map(str, counts))} repeats"
+        )
+    return text + "; repeatability RP: no repeated poses"
+
+
+def _summary(result: ValidationResult, validated: np.ndarray | None) -> list[str]:
+    """The lines printed: statistics, ISO 9283, worst rows, verdict."""
+    tol = result.tolerance_mm
+    lines = [
+        f"{len(result.deviation)} rows at {len(result.ap_mm)} poses; deviation d = measured - "
+        "target, mm:",
+        "  axis        min      max   max|d|     mean      std",
+    ]
+    lines += [
+        f"  {r[0]:<6} {r[1]:>8} {r[2]:>8} {r[3]:>8} {r[4]:>8} {r[5]:>8}" for r in _axis_rows(result)
+    ]
+    lines.append(_iso_line(result))
+    if validated is not None:
+        shown = " ".join(f"{v:.3f}" for v in validated)
+        lines.append(f"model's validated error (max per axis): {shown} mm")
+    worst = result.worst(3)
+    lines.append(
+        "worst rows: "
+        + "; ".join(
+            f"{result.labels[i]} ({' '.join(f'{v:+.3f}' for v in result.deviation[i])})"
+            for i in worst
+        )
+    )
+    outside = int(result.outside.sum())
+    verdict = "PASS" if result.passed else "FAIL"
+    lines.append(
+        f"{verdict}: {outside} of {len(result.deviation)} rows beyond ±{tol:g} mm on an axis"
+    )
+    return lines
+
+
+def _report(
+    request: ValidateRequest, result: ValidationResult, validated, grid_note: str | None
+) -> str:
+    """The HTML report of the validation."""
+    tol = result.tolerance_mm
+    stats = Table(
+        ["axis", "min (mm)", "max (mm)", "max |d| (mm)", "mean (mm)", "std (mm)"],
+        _axis_rows(result),
+        "Deviation d = measured - target, every row",
+    )
+    worst = result.worst(_WORST)
+    worst_table = Table(
+        ["where (file:line id)", "pose", "dx (mm)", "dy (mm)", "dz (mm)", "|d| (mm)", ""],
+        [
+            [result.labels[i], str(int(result.pose[i]) + 1)]
+            + [f"{v:+.3f}" for v in result.deviation[i]]
+            + [f"{result.distance_mm[i]:.3f}", "beyond" if result.outside[i] else "within"]
+            for i in worst
+        ],
+        f"The {len(worst)} rows with the largest axis deviation",
+    )
+    iso_rows = []
+    order = np.argsort(-result.ap_mm, kind="stable")[:_WORST]
+    for p in order:
+        first = int(np.flatnonzero(result.pose == p)[0])
+        rp = result.rp_mm[p]
+        iso_rows.append(
+            [result.labels[first], str(int(result.repeats[p]))]
+            + [f"{v:+.3f}" for v in result.ap_xyz[p]]
+            + [f"{result.ap_mm[p]:.3f}", "-" if np.isnan(rp) else f"{rp:.3f}"]
+        )
+    iso = Table(
+        [
+            "pose (first row, id)",
+            "repeats",
+            "APx (mm)",
+            "APy (mm)",
+            "APz (mm)",
+            "AP (mm)",
+            "RP (mm)",
+        ],
+        iso_rows,
+        f"ISO 9283 per pose, the {len(iso_rows)} largest AP",
+    )
+    notes = [
+        "Each row: a target x,y,z (the position the corrected program aimed at, robot frame) "
+        "and the position the laser tracker measured there after correction.",
+        _iso_line(result),
+        "AP: distance from the barycentre of a pose's measured positions to its target; "
+        "RP = mean + 3 std of the distances of its measured positions from that barycentre "
+        "(ISO 9283), for poses measured at least twice.",
+    ]
+    if validated is not None:
+        notes.append(
+            "The model's validated error (identification, max per axis): "
+            + " ".join(f"{v:.3f}" for v in validated)
+            + " mm."
+        )
+    if grid_note:
+        notes.append(grid_note[0].upper() + grid_note[1:] + ".")
+    outside = int(result.outside.sum())
+    facts = [
+        ("rows / poses", f"{len(result.deviation)} / {len(result.ap_mm)}"),
+        ("rows beyond tolerance", str(outside)),
+        ("criterion", f"PASS when every row is within ±{tol:g} mm on X, Y and Z"),
+    ]
+    sections = [
+        Section("Results", notes, [stats, iso, worst_table]),
+        Section(
+            "Figures",
+            figures=[
+                Figure(
+                    validation_hist_png(result.deviation, tol),
+                    f"Deviation per axis, every row; dashed: the tolerance ±{tol:g} mm.",
+                ),
+                Figure(
+                    rows_png(
+                        result.deviation,
+                        tol,
+                        "measured - target (mm)",
+                        "row of the validation file",
+                    ),
+                    "Deviation of every row in file order; dashed: the tolerance.",
+                ),
+            ],
+        ),
+    ]
+    return report_html(
+        "Validation after correction",
+        "PASS" if result.passed else "FAIL",
+        f"±{tol:g} mm per axis",
+        [
+            ("measurements after correction", request.measurements),
+            ("calibrated model", request.model),
+            ("residual grid", request.grid),
+        ],
+        sections,
+        facts,
+    )

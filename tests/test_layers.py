@@ -1,0 +1,44 @@
+"""The rooms import one way: infra <- kinematics <- compensation <- codegen <- app.
+
+Each top-level folder is one layer; a module may import its own room and the rooms below it,
+never one above (read from the source's import statements, so a lazy import counts too)."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+ORDER = ("infra", "kinematics", "compensation", "codegen", "app")
+
+
+def _imported_rooms(path: Path) -> set[tuple[str, int]]:
+    """(room, line) of every ``accugrid.ROOM`` module the file imports."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom) and node.module:
+            names = [node.module]
+        elif isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        else:
+            continue
+        for name in names:
+            parts = name.split(".")
+            if parts[0] == "accugrid" and len(parts) > 1 and parts[1] in ORDER:
+                found.add((parts[1], node.lineno))
+    return found
+
+
+@pytest.mark.parametrize("room", ORDER)
+def test_a_room_imports_only_itself_and_the_rooms_below(room):
+    allowed = set(ORDER[: ORDER.index(room) + 1])
+    wrong = [
+        f"{path.relative_to(ROOT)}:{line} imports accugrid.{other}"
+        for path in sorted((ROOT / room).rglob("*.py"))
+        for other, line in sorted(_imported_rooms(path))
+        if other not in allowed
+    ]
+    assert list((ROOT / room).rglob("*.py")), f"{room}/ holds no module"
+    assert not wrong, "\n".join(wrong)
