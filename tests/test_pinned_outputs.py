@@ -25,46 +25,11 @@ from pathlib import Path
 import pytest
 from conftest import EXAMPLES, ROOT
 from pins import digests, first_difference
-from rewrite_helpers import write_cell
+from rewrite_helpers import REALWORLD_BASE_DATA, REALWORLD_REWRITES, write_cell
 
 PINS = Path(__file__).parent / "data" / "pinned_outputs.json"
 REPIN = "ACCUGRID_REPIN"
 BENCH_POSITIONS = 2_000  # the bench's generators at this size (the bench itself uses 1e5)
-
-# ../shared/realworld: (programs, options) as tests/test_rewrite_realworld.py rewrites them, with
-# its cell (write_cell with BASE_DATA[11]); each is run as given and, where that is refused, again
-# with --allow-partial.
-REALWORLD = {
-    "robodk": (["krl/robodk_Program.src"], []),
-    "xpoints_alone": (["krl/chinamilling_xPoints.dat"], ["--base", "0"]),
-    "xpoints_no_base": (["krl/chinamilling_xPoints.dat"], []),
-    "st1_st2_pair": (
-        ["krl/chinamilling_st1_st2.src", "krl/chinamilling_xPoints.dat"],
-        ["--ignore-external-axes"],
-    ),
-    "job1_side1": (
-        ["krl/chinamilling_St1_Job1_Side1.src", "krl/chinamilling_St1_Job1_Side1.dat"],
-        ["--base", "11", "--trust-calls"],
-    ),
-    "job1_side1_strict_rules": (
-        ["krl/chinamilling_St1_Job1_Side1.src", "krl/chinamilling_St1_Job1_Side1.dat"],
-        [],
-    ),
-    "sample_program": (
-        ["krl/kukakrlmagic_sample_program.src", "krl/kukakrlmagic_sample_program.dat"],
-        ["--base", "0"],
-    ),
-    "cnc_struc": (
-        ["krl/chinamilling_CNC_LOOP.src", "krl/chinamilling_CNC1.dat"],
-        ["--base", "0", "--trust-calls"],
-    ),
-    "heatsink": (["gcode/norn93_1_heatsink_drill.gcode"], ["--decimals", "3"]),
-    "example3_inch": (["gcode/printhor_example3_inch.gcode"], []),
-    "lagun_parameters": (["gcode/lagun_HEMA-P005.cnc"], []),
-    "my100_inch": (["gcode/my100_MidLeftRightRail-Drill.125in.nc"], []),
-    "drill_practice": (["gcode/norn93_drill_practice.gcode"], []),
-    "vertical_slot": (["gcode/pygcode_vertical-slot.ngc"], []),
-}
 
 
 def accugrid(*argv) -> int:
@@ -157,9 +122,9 @@ def test_demo_model_program_is_pinned(tmp_path):
 def test_bench_outputs_are_pinned(tmp_path, monkeypatch):
     """The speed bench's inputs (bench/bench_commands.py: bench_programs.points_csv for krl and
     gcode, bench_rewrite.krl_pair and .gcode for rewrite; bench/bench_rewrite.py also
-    .krl_inline), made by the bench's own generators at 2,000 positions, and the krl, gcode and rewrite outputs of them with the bench's arguments
-    (and a report of each rewrite). The inputs are pinned too: a change there is not a change of
-    the programs."""
+    .krl_inline), made by the bench's own generators at 2,000 positions, and the krl, gcode and
+    rewrite outputs of them with the bench's arguments (and a report of each rewrite). The
+    inputs are pinned too: a change there is not a change of the programs."""
     monkeypatch.syspath_prepend(str(ROOT))
     from bench.bench_programs import points_csv
     from bench.bench_rewrite import gcode, krl_inline, krl_pair
@@ -199,13 +164,17 @@ def test_bench_outputs_are_pinned(tmp_path, monkeypatch):
 
 
 def test_realworld_rewrites_are_pinned(realworld, tmp_path):
-    """Every KRL and G-code program in ../shared/realworld rewritten: the exit code and the files
-    written (program and report) as given, and where that is refused (exit 2) with
+    """Every KRL and G-code program in ../shared/realworld rewritten with the options and cell of
+    tests/test_rewrite_realworld.py (rewrite_helpers.REALWORLD_REWRITES): the exit code and the
+    files written (program and report) as given, and where that is refused (exit 2) with
     --allow-partial as well."""
+    programs = {p.relative_to(realworld).as_posix() for p in realworld.glob("[kg]*/*")}
+    named = {name for names, _ in REALWORLD_REWRITES.values() for name in names}
+    assert programs == named, f"realworld programs without a pinned rewrite: {programs - named}"
     (tmp_path / "cell").mkdir()
-    cell = write_cell(tmp_path / "cell", base_data={11: (1200, -300, 700, 30, 0, 0)})
+    cell = write_cell(tmp_path / "cell", base_data=REALWORLD_BASE_DATA)
     actual = {}
-    for case, (names, options) in REALWORLD.items():
+    for case, (names, options) in REALWORLD_REWRITES.items():
         inputs = [realworld / name for name in names]
         for run, extra in (("as given", []), ("--allow-partial", ["--allow-partial"])):
             folder = tmp_path / case / run.strip("-")
