@@ -45,6 +45,42 @@ def write_grid(
     return path
 
 
+# ../shared/realworld programs and the options each is rewritten with, in the cell
+# write_cell(folder, base_data=REALWORLD_BASE_DATA): case -> (paths under realworld, options)
+REALWORLD_BASE_DATA = {11: (1200, -300, 700, 30, 0, 0)}
+REALWORLD_REWRITES = {
+    "robodk": (["krl/robodk_Program.src"], []),
+    "xpoints_alone": (["krl/chinamilling_xPoints.dat"], ["--base", "0"]),
+    "xpoints_no_base": (["krl/chinamilling_xPoints.dat"], []),
+    "st1_st2_pair": (
+        ["krl/chinamilling_st1_st2.src", "krl/chinamilling_xPoints.dat"],
+        ["--ignore-external-axes"],
+    ),
+    "job1_side1": (
+        ["krl/chinamilling_St1_Job1_Side1.src", "krl/chinamilling_St1_Job1_Side1.dat"],
+        ["--base", "11", "--trust-calls"],
+    ),
+    "job1_side1_strict_rules": (
+        ["krl/chinamilling_St1_Job1_Side1.src", "krl/chinamilling_St1_Job1_Side1.dat"],
+        [],
+    ),
+    "sample_program": (
+        ["krl/kukakrlmagic_sample_program.src", "krl/kukakrlmagic_sample_program.dat"],
+        ["--base", "0"],
+    ),
+    "cnc_struc": (
+        ["krl/chinamilling_CNC_LOOP.src", "krl/chinamilling_CNC1.dat"],
+        ["--base", "0", "--trust-calls"],
+    ),
+    "heatsink": (["gcode/norn93_1_heatsink_drill.gcode"], ["--decimals", "3"]),
+    "example3_inch": (["gcode/printhor_example3_inch.gcode"], []),
+    "lagun_parameters": (["gcode/lagun_HEMA-P005.cnc"], []),
+    "my100_inch": (["gcode/my100_MidLeftRightRail-Drill.125in.nc"], []),
+    "drill_practice": (["gcode/norn93_drill_practice.gcode"], []),
+    "vertical_slot": (["gcode/pygcode_vertical-slot.ngc"], []),
+}
+
+
 RAPID_BASE = (400.0, -250.0, 300.0, 30.0, 10.0, -20.0)  # the RAPID cell's base (wobj), mm, deg
 
 

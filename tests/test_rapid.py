@@ -6,7 +6,6 @@ input, and the KRL and G-code outputs pinned to what they were before RAPID came
 from __future__ import annotations
 
 import csv
-import hashlib
 import re
 from decimal import Decimal
 from pathlib import Path
@@ -16,6 +15,7 @@ import pytest
 from conftest import EXAMPLES
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from pins import digests, first_difference
 from rewrite_helpers import E_CONST, write_rapid_cell
 from rewrite_helpers import RAPID_BASE as BASE
 from scipy.spatial.transform import Rotation
@@ -319,8 +319,8 @@ def test_krl_and_gcode_outputs_are_byte_identical_to_before_rapid(tmp_path):
         )
         == 0
     )
-    digests = {name: hashlib.sha256((tmp_path / name).read_bytes()).hexdigest() for name in PINNED}
-    assert digests == PINNED
+    problem = first_difference(digests(tmp_path, list(PINNED)), PINNED)
+    assert problem is None, problem
 
 
 def _places(literal: str) -> int:

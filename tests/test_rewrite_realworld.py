@@ -15,7 +15,7 @@ import subprocess
 
 import numpy as np
 import pytest
-from rewrite_helpers import write_cell
+from rewrite_helpers import REALWORLD_BASE_DATA, REALWORLD_REWRITES, write_cell
 
 from accugrid.app.cli import main
 from accugrid.codegen.gcode.parse import parse_gcode
@@ -24,45 +24,27 @@ from accugrid.codegen.krl.parse import scan_krl
 TOKEN = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?|\s+|[^\d\s.+-]+|.", re.S)
 NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?$")
 
-# (inputs, extra options, how many positions must be corrected at least)
-CASES = {
-    "robodk": (["krl/robodk_Program.src"], [], 2),
-    "xpoints_alone": (["krl/chinamilling_xPoints.dat"], ["--base", "0"], 100),
-    "xpoints_no_base": (["krl/chinamilling_xPoints.dat"], [], 0),
-    "st1_st2_pair": (
-        ["krl/chinamilling_st1_st2.src", "krl/chinamilling_xPoints.dat"],
-        ["--ignore-external-axes"],
-        1,
-    ),
-    "job1_side1": (
-        ["krl/chinamilling_St1_Job1_Side1.src", "krl/chinamilling_St1_Job1_Side1.dat"],
-        ["--base", "11", "--trust-calls"],
-        6,  # 7 of the 13 it uses are also left operands of ':' (frames): never corrected
-    ),
-    "job1_side1_strict_rules": (
-        ["krl/chinamilling_St1_Job1_Side1.src", "krl/chinamilling_St1_Job1_Side1.dat"],
-        [],
-        0,
-    ),
-    "sample_program": (
-        ["krl/kukakrlmagic_sample_program.src", "krl/kukakrlmagic_sample_program.dat"],
-        ["--base", "0"],
-        0,  # tool and base frames, frames passed to a routine: nothing is a drilling position
-    ),
-    "cnc_struc": (
-        ["krl/chinamilling_CNC_LOOP.src", "krl/chinamilling_CNC1.dat"],
-        ["--base", "0", "--trust-calls"],
-        790,
-    ),
-    "heatsink": (["gcode/norn93_1_heatsink_drill.gcode"], ["--decimals", "3"], 40),
+# how many positions must be corrected at least, per case of REALWORLD_REWRITES
+AT_LEAST = {
+    "robodk": 2,
+    "xpoints_alone": 100,
+    "xpoints_no_base": 0,
+    "st1_st2_pair": 1,
+    "job1_side1": 6,  # 7 of the 13 it uses are also left operands of ':' (frames): never corrected
+    "job1_side1_strict_rules": 0,
+    "sample_program": 0,  # tool and base frames, frames passed to a routine: no drilling position
+    "cnc_struc": 790,
+    "heatsink": 40,
     # its G91 cycles repeated L3/L4 start at Z never set: not corrected, and neither are the 3
     # holes that set their start X and Y (one increment cannot undo a corrected start)
-    "example3_inch": (["gcode/printhor_example3_inch.gcode"], [], 5),
-    "lagun_parameters": (["gcode/lagun_HEMA-P005.cnc"], [], 0),
-    "my100_inch": (["gcode/my100_MidLeftRightRail-Drill.125in.nc"], [], 91),
-    "drill_practice": (["gcode/norn93_drill_practice.gcode"], [], 4),
-    "vertical_slot": (["gcode/pygcode_vertical-slot.ngc"], [], 4),
+    "example3_inch": 5,
+    "lagun_parameters": 0,
+    "my100_inch": 91,
+    "drill_practice": 4,
+    "vertical_slot": 4,
 }
+# (inputs, extra options, how many positions must be corrected at least)
+CASES = {case: (*REALWORLD_REWRITES[case], AT_LEAST[case]) for case in REALWORLD_REWRITES}
 
 
 KRL = (".src", ".dat")
@@ -95,7 +77,7 @@ def changed_lines(before: str, after: str, added_words: bool = False) -> set[int
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_realworld_rewrite(realworld, tmp_path, case):
     names, options, at_least = CASES[case]
-    cell = write_cell(tmp_path, base_data={11: (1200, -300, 700, 30, 0, 0)})
+    cell = write_cell(tmp_path, base_data=REALWORLD_BASE_DATA)
     inputs = [realworld / n for n in names]
     out = tmp_path / "out"
     target = out if len(inputs) == 2 else out / inputs[0].name  # a pair: -o is a folder
@@ -188,7 +170,7 @@ def test_realworld_gcode_through_rs274(realworld, tmp_path, rs274, case):
     same sequence of canonical commands (only their numbers differ) and the same ending (a few
     of these programs stop at a tool the interpreter's table lacks, or a missing subroutine)."""
     names, options, _ = CASES[case]
-    cell = write_cell(tmp_path, base_data={11: (1200, -300, 700, 30, 0, 0)})
+    cell = write_cell(tmp_path, base_data=REALWORLD_BASE_DATA)
     program = realworld / names[0]
     out = tmp_path / program.name
     argv = ["rewrite", "--allow-partial", str(program), "--cell", str(cell), "-o", str(out)]

@@ -1,0 +1,188 @@
+"""KRL and G-code outputs pinned byte for byte: the SHA-256 of every file the command line writes
+for the demo's jobs, the speed bench's inputs (made by the bench's own generators, at 2,000
+positions) and every KRL and G-code program in ../shared/realworld, with each command's exit
+code, recorded in tests/data/pinned_outputs.json (group -> input -> output name -> digest). The
+demo's programs and rewrites have the digests tests/test_rapid.py pinned before RAPID came in.
+
+Everything runs through the command line (``accugrid`` resolved from its console-script entry
+point and called in this process with argv), so moving modules between folders does not touch
+this test. A change to the pins must be explained in the commit message that makes it. To
+regenerate them on purpose (the outputs changed and that is intended):
+
+    ACCUGRID_REPIN=1 .venv/bin/python -m pytest -q tests/test_pinned_outputs.py
+
+which rewrites the JSON and then fails every test it ran, so regenerating can never pass; run
+the tests again without the variable and commit the JSON with the reason.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from importlib.metadata import entry_points
+from pathlib import Path
+
+import pytest
+from conftest import EXAMPLES, ROOT
+from pins import digests, first_difference
+from rewrite_helpers import REALWORLD_BASE_DATA, REALWORLD_REWRITES, write_cell
+
+PINS = Path(__file__).parent / "data" / "pinned_outputs.json"
+REPIN = "ACCUGRID_REPIN"
+BENCH_POSITIONS = 2_000  # the bench's generators at this size (the bench itself uses 1e5)
+
+
+def accugrid(*argv) -> int:
+    """Exit code of ``accugrid argv`` run in this process through the console script's entry
+    point (wherever the CLI module lives)."""
+    (script,) = entry_points(group="console_scripts", name="accugrid")
+    return script.load()([str(a) for a in argv])
+
+
+def job(folder: Path, *argv) -> dict:
+    """``accugrid argv`` (its outputs inside ``folder``, a new folder): {"exit": code, then
+    every file written under ``folder``: digest}."""
+    folder.mkdir(parents=True)
+    code = accugrid(*argv)
+    return {"exit": code, **digests(folder)}
+
+
+def check(group: str, actual: dict[str, dict]) -> None:
+    """``actual`` (input -> output name -> digest or exit code) equals the JSON's ``group``; with
+    ACCUGRID_REPIN=1 the JSON's ``group`` is replaced by ``actual`` and the test fails."""
+    pins = json.loads(PINS.read_text()) if PINS.exists() else {}
+    if os.environ.get(REPIN) == "1":
+        pins[group] = actual
+        PINS.parent.mkdir(exist_ok=True)
+        PINS.write_text(json.dumps(dict(sorted(pins.items())), indent=1) + "\n")
+        pytest.fail(f"{REPIN}=1: pins of {group} rewritten in {PINS}; run again without it")
+    pinned = pins.get(group, {})
+    for name in list(actual) + [n for n in pinned if n not in actual]:
+        problem = first_difference(actual.get(name, {}), pinned.get(name, {}))
+        if problem:
+            pytest.fail(f"{group}, {name}: {problem} (pins: {PINS}, see {Path(__file__).name})")
+
+
+def test_demo_outputs_are_pinned(tmp_path):
+    """The demo's drilling programs (examples/demo.sh; its grid is examples/grid_200mm.csv,
+    which the demo checks it simulates byte for byte), its pre-flight rewrites and its KRL
+    measurement program of the experiment plan."""
+    points, cell = EXAMPLES / "wing_panel_points.csv", EXAMPLES / "cell.yaml"
+    grid, cam = EXAMPLES / "grid_200mm.csv", EXAMPLES / "cam_drill"
+    program = [points, "--cell", cell, "--grid", grid]
+    krl, ngc, rewrite = tmp_path / "krl", tmp_path / "gcode", tmp_path / "rewrite"
+    plan = tmp_path / "plan"
+    actual = {
+        "krl wing_panel_points.csv": job(krl, "krl", *program, "-o", krl),
+        "gcode wing_panel_points.csv": job(ngc, "gcode", *program, "-o", ngc / "wing_panel.ngc"),
+        "rewrite cam_drill.src cam_drill.dat": job(
+            rewrite / "krl",
+            *("rewrite", f"{cam}.src", f"{cam}.dat", "--cell", cell, "-o", rewrite / "krl"),
+            *("--report", rewrite / "krl/cam_drill_krl_report.csv", "--allow-partial"),
+        ),
+        "rewrite cam_drill.ngc": job(
+            rewrite / "ngc",
+            *("rewrite", f"{cam}.ngc", "--cell", cell, "-o", rewrite / "ngc/cam_drill.ngc"),
+            *("--report", rewrite / "ngc/cam_drill_ngc_report.csv", "--allow-partial"),
+        ),
+        "plan experiment": job(
+            plan,
+            *("plan", "experiment", "--centre", "D", 1700, 0, 1500, "--steps", "20:380:120"),
+            *("--repeats", 3, "-o", plan),
+        ),
+    }
+    check("demo", actual)
+
+
+def test_demo_model_program_is_pinned(tmp_path):
+    """The demo's model-based job: the identification plan (a KRL measurement program), the
+    simulated session, the calibrated model and residual grid it identifies, and the drilling
+    program corrected by both (each step's files pinned, so a change is found where it starts)."""
+    model = tmp_path / "model"
+    tool = ["--tool", 0, 0, 250, 0, 0, 0]
+    robot = ["--robot", "kr210-realistic", *tool]
+    noise = ["--noise-tracker", 0.02, "--noise-repeat", 0.03]
+    calibrated, residual = model / "calibrated.yaml", model / "residual_27.csv"
+    steps = [
+        ("plan", "identify", *robot, "--count", 60, "--tilt", 25, "--name", "IDENT", "-o", model),
+        ("simulate", *robot, "--poses", model / "ident.csv", "--repeats", 3, *noise, "--seed", 2)
+        + ("-o", model / "ident_measured.csv"),
+        ("identify", model / "ident_measured.csv", *robot, "-o", calibrated),
+        ("simulate", *robot, "--region", 1200, 2200, -500, 500, 1100, 2100, "--step", 500)
+        + ("--abc", 0, 90, 0, "--repeats", 3, *noise, "--seed", 3, "-o", residual),
+        ("krl", EXAMPLES / "wing_panel_points.csv", "--cell", EXAMPLES / "cell.yaml")
+        + ("--model", calibrated, "--grid", residual, "-o", model / "krl"),
+    ]
+    model.mkdir()
+    codes = [accugrid(*argv) for argv in steps]
+    actual = {"plan identify .. krl --model": {"exit": codes, **digests(model)}}
+    check("demo model", actual)
+
+
+def test_bench_outputs_are_pinned(tmp_path, monkeypatch):
+    """The speed bench's inputs (bench/bench_commands.py: bench_programs.points_csv for krl and
+    gcode, bench_rewrite.krl_pair and .gcode for rewrite; bench/bench_rewrite.py also
+    .krl_inline), made by the bench's own generators at 2,000 positions, and the krl, gcode and
+    rewrite outputs of them with the bench's arguments (and a report of each rewrite). The
+    inputs are pinned too: a change there is not a change of the programs."""
+    monkeypatch.syspath_prepend(str(ROOT))
+    from bench.bench_programs import points_csv
+    from bench.bench_rewrite import gcode, krl_inline, krl_pair
+
+    n, cell = BENCH_POSITIONS, EXAMPLES / "cell.yaml"
+    inputs = tmp_path / "inputs"
+    (inputs / f"rewrite{n}").mkdir(parents=True)
+    holes = inputs / f"holes{n}.csv"
+    holes.write_text(points_csv(n))
+    pair = krl_pair(inputs / f"rewrite{n}", n)
+    (ngc,) = gcode(inputs / f"rewrite{n}", n)
+    (inline,) = krl_inline(inputs / f"rewrite{n}", n)
+    krl, gc = tmp_path / "krl", tmp_path / "gcode"
+    pair_out, ngc_out, inline_out = (tmp_path / k for k in ("pair", "ngc", "inline"))
+    big = ["--cell", cell, "--max-mb", 512]
+    actual = {
+        "inputs": digests(inputs),
+        f"krl holes{n}.csv": job(krl, "krl", holes, "--cell", cell, "-o", krl / f"krl{n}"),
+        f"gcode holes{n}.csv": job(gc, "gcode", holes, "--cell", cell, "-o", gc / f"holes{n}.ngc"),
+        "rewrite big.src big.dat": job(
+            pair_out,
+            *("rewrite", *pair, *big, "-o", pair_out / f"rewritten{n}"),
+            *("--report", pair_out / "report.csv"),
+        ),
+        "rewrite big.ngc": job(
+            ngc_out,
+            *("rewrite", ngc, *big, "-o", ngc_out / f"rewritten{n}.ngc"),
+            *("--report", ngc_out / "report.csv"),
+        ),
+        f"rewrite {inline.name}": job(
+            inline_out,
+            *("rewrite", inline, *big, "-o", inline_out / inline.name),
+            *("--report", inline_out / "report.csv"),
+        ),
+    }
+    check("bench", actual)
+
+
+def test_realworld_rewrites_are_pinned(realworld, tmp_path):
+    """Every KRL and G-code program in ../shared/realworld rewritten with the options and cell of
+    tests/test_rewrite_realworld.py (rewrite_helpers.REALWORLD_REWRITES): the exit code and the
+    files written (program and report) as given, and where that is refused (exit 2) with
+    --allow-partial as well."""
+    programs = {p.relative_to(realworld).as_posix() for p in realworld.glob("[kg]*/*")}
+    named = {name for names, _ in REALWORLD_REWRITES.values() for name in names}
+    assert programs == named, f"realworld programs without a pinned rewrite: {programs - named}"
+    (tmp_path / "cell").mkdir()
+    cell = write_cell(tmp_path / "cell", base_data=REALWORLD_BASE_DATA)
+    actual = {}
+    for case, (names, options) in REALWORLD_REWRITES.items():
+        inputs = [realworld / name for name in names]
+        for run, extra in (("as given", []), ("--allow-partial", ["--allow-partial"])):
+            folder = tmp_path / case / run.strip("-")
+            out = folder / "out"
+            target = out if len(inputs) == 2 else out / inputs[0].name  # a pair: -o is a folder
+            argv = ["rewrite", *inputs, "--cell", cell, "-o", target, *options, *extra]
+            result = job(folder, *argv, "--report", folder / "report.csv")
+            actual[f"{case} {run}"] = result
+            if result["exit"] != 2:
+                break
+    check("realworld", actual)
