@@ -82,7 +82,10 @@ def coverage(files: list[Path]) -> None:
 
 def g_code_files(folders: list[Path]) -> list[Path]:
     return sorted(
-        p for f in folders for p in f.rglob("*") if p.is_file() and p.suffix.lower() in DIALECTS["gcode"].suffixes
+        p
+        for f in folders
+        for p in f.rglob("*")
+        if p.is_file() and p.suffix.lower() in DIALECTS["gcode"].suffixes
     )
 
 
