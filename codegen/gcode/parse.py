@@ -87,6 +87,8 @@ _NINES = bytes.maketrans(b"0123456789", b"9" * 10)  # every digit as a 9
 _SHAPES_KEPT = 1 << 22  # characters of line shapes a reader keeps for the next chunks
 _CHUNK = 1 << 20  # characters per whole-text pass (bounds the per-line tuples held at once)
 _DIGITS_RE = re.compile(r"\d++")
+# a "%" tape mark after a sequence number (``N890 %``), read as a bare "%" line is
+_NUMBERED_PERCENT_RE = re.compile(r"[Nn]\s*+\d++\s*+%[^\n]*+")
 _FUNCTION_RE = re.compile(r"([A-Za-z]++)\s*+\[")  # a function's name and its opening bracket
 _OWORD_RE = re.compile(
     r"\s*+[Oo]\s*+(?:\d++|<[^>]*+>)\s*+(sub|endsub|if|elseif|else|endif|while|endwhile|do|call|"
@@ -855,7 +857,7 @@ class _Reader:
         if bom:  # a byte-order mark is not a word (offsets stay as in the file)
             raw = " " * len(self.bom) + raw[len(self.bom) :]
         stripped = raw.strip()
-        if not stripped or stripped.startswith("%"):
+        if not stripped or stripped.startswith("%") or _NUMBERED_PERCENT_RE.fullmatch(stripped):
             return
         if self.owords and _OWORD_RE.match(raw):
             state = self.state

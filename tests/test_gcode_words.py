@@ -1,0 +1,241 @@
+"""What the G-code reader takes of RS274NGC's words, each on its own minimal program: parameters
+and expressions in positions (evaluated where decidable before run time, reported where not),
+LinuxCNC's polar words ``@``/``^``, offsets on axes the correction does not touch (``G92 A0``,
+a printer's ``G92 E0``) and ``%`` tape marks with a sequence number.
+
+Expected positions come from LinuxCNC's ``rs274`` (the nominal moves of the input, and those of
+the rewritten program) and from the frame maths of a known error field (``corrected``), never
+from the code under test.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+from test_gcode_rs274 import canonical
+from test_real_programs import HALF, SMOOTH, corrected, gcode_rewrite
+
+from accugrid.codegen.gcode.parse import parse_gcode
+from accugrid.infra.errors import InputError
+
+
+def statuses(rows) -> list[tuple[int, str]]:
+    return [(r.line, r.status) for r in rows]
+
+
+# ---------------------------------------------------------------- offsets on other axes
+
+
+def test_an_offset_on_the_rotary_axis_leaves_x_y_z_known(rs274, tmp_path):
+    """`G92 A0` shifts the A axis only: the moves after it are corrected (X, Y, Z as
+    programmed are the program frame's), rs274 reaches each corrected point; `G92 X0` still
+    moves the frame and is reported until `G92.1`."""
+    text = (
+        "G21 G90 G17 F100\nG0 X100 Y50 Z20 A30\nG92 A0\nG1 X120 Y50 Z10 A5\nG1 X140 Z5\n"
+        "G92 X0\nG1 X10\nG92.1\nG0 X150 Y60 Z30\nM2\n"
+    )
+    nominal, out = canonical(rs274, tmp_path, text)
+    assert "SET_G92_OFFSET(0.0000, 0.0000, 0.0000, 30.0000" in out  # A only (rs274's own)
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert statuses(rows) == [
+        (2, "corrected"),
+        (4, "corrected"),
+        (5, "corrected"),
+        (7, "skipped"),
+        (9, "corrected"),
+    ]
+    assert "G92 offset (line 6)" in rows[3].reason
+    moves, _ = canonical(rs274, tmp_path, new)
+    for k in (0, 1, 2, 4):  # every axis written, or carried from a corrected move
+        np.testing.assert_allclose(moves[k, :3], corrected(SMOOTH, nominal[k, :3])[0], atol=HALF)
+    np.testing.assert_array_equal(moves[:, 3], nominal[:, 3])  # A as programmed
+
+
+def test_a_printers_extruder_reset_leaves_x_y_z_known():
+    """A 3D printer's `G92 E0` resets the extruder, not the frame: every later move is placed
+    and corrected (8,847 positions of one real printer file were lost to it)."""
+    text = "G21 G90\nG92 E0\nG1 X100 Y50 Z0.3 E1.5 F1200\nG1 X110 E2.1\nG92 E0\nG1 Y60 E0.4\n"
+    moves = parse_gcode(text)
+    assert [m.reason for m in moves] == ["", "", ""]
+    assert [m.target for m in moves] == [(100, 50, 0.3), (110, 50, 0.3), (110, 60, 0.3)]
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert [r.status for r in rows] == ["corrected"] * 3
+    want = corrected(SMOOTH, [[100, 50, 0.3], [110, 50, 0.3], [110, 60, 0.3]])
+    got = parse_gcode(new)
+    np.testing.assert_allclose(got[0].target, want[0], atol=HALF)
+    assert abs(got[1].x - want[1, 0]) <= HALF and abs(got[2].y - want[2, 1]) <= HALF
+    assert "E1.5" in new and "G92 E0" in new and new.count("E") == text.count("E")
+
+
+# ---------------------------------------------------------------- % after a sequence number
+
+
+def test_a_numbered_tape_mark_after_the_program_end_is_read(rs274, tmp_path):
+    """`N890 %` after M30 (where rs274 stops reading) was refused whole; it is a tape mark."""
+    text = "%\nN10 G21 G90 G17\nN20 G0 X100 Y50 Z20\nN30 G1 Z5 F100\nN40 M30\nN890 %\n"
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert statuses(rows) == [(3, "corrected"), (4, "corrected")]
+    assert new.endswith("N40 M30\nN890 %\n")
+    nominal, _ = canonical(rs274, tmp_path, text)
+    moves, _ = canonical(rs274, tmp_path, new)
+    want = corrected(SMOOTH, nominal[:, :3])
+    np.testing.assert_allclose(moves[0, :3], want[0], atol=HALF)
+    assert abs(moves[1, 2] - want[1, 2]) <= HALF  # the Z it writes
+
+
+# ---------------------------------------------------------------- parameters and expressions
+
+EXPRESSIONS = (
+    "G21 G90 G17 F100\n"
+    "G0 X100 Y0 Z20\n"
+    "#1=50 #<depth>=-3\n"
+    "G1 X#1 Y[#1*2] Z#<depth>\n"
+    "G1 x sin[30] Y#1\n"
+    "G1 X [1+2] Z[#<depth>*2]\n"
+    "#1=5 G0 X#1 #1=70\n"
+    "G0 X-#1 Y [ atan[1]/[1] + 2**3 mod 5 ]\n"
+    "M2\n"
+)
+
+
+def test_expressions_are_read_as_rs274_moves(rs274, tmp_path):
+    """The reader's targets are rs274's moves, including an assignment on a move's line
+    (taking effect after it) and operator precedence."""
+    nominal, _ = canonical(rs274, tmp_path, EXPRESSIONS)
+    moves = parse_gcode(EXPRESSIONS)
+    assert [m.reason for m in moves] == [""] * 6
+    np.testing.assert_allclose([m.target for m in moves], nominal[:, :3], atol=1e-4)
+    # line 7 reads #1 before its own assignments (50), the last one holds after it (70)
+    assert moves[4].x == 50 and moves[5].x == -70 and moves[5].y == 48
+
+
+def test_corrected_expression_words_become_numbers(rs274, tmp_path):
+    """A corrected word written as a parameter or an expression gets the corrected number in
+    the expression's place (the rest of the line as it was); rs274 reaches the independently
+    corrected points; the assignments stay as they are."""
+    nominal, _ = canonical(rs274, tmp_path, EXPRESSIONS)
+    new, rows = gcode_rewrite(EXPRESSIONS, SMOOTH)
+    assert [r.status for r in rows] == ["corrected"] * 6
+    lines = new.splitlines()
+    number = r"(-?\d+\.\d+)"
+    assert lines[2] == "#1=50 #<depth>=-3"
+    assert re.fullmatch(f"G1 X{number} Y{number} Z{number}", lines[3])
+    assert re.fullmatch(f"G1 x {number} Y{number}", lines[4])
+    assert re.fullmatch(f"G1 X {number} Z{number}", lines[5])
+    assert re.fullmatch(f"#1=5 G0 X{number} #1=70", lines[6])
+    assert re.fullmatch(f"G0 X{number} Y {number}", lines[7])
+    moves, _ = canonical(rs274, tmp_path, new)
+    want = corrected(SMOOTH, nominal[:, :3])
+    # each axis a line writes is the corrected one; the others are carried from the move before
+    written = [(0, 1, 2), (0, 1, 2), (0, 1), (0, 2), (0,), (0, 1)]
+    for k, axes in enumerate(written):
+        for i in axes:
+            assert abs(moves[k, i] - want[k, i]) <= HALF, (k, i)
+    assert np.abs(moves[:, :3] - nominal[:, :3]).max() > 0.1  # the field moves them
+
+
+@pytest.mark.parametrize(
+    ("line", "why"),
+    [
+        ("G1 X#<_x>", "#<_x> is a system parameter or not set: read at run time"),
+        ("G1 X#2", "#2 is not set before this line"),
+        ("G1 X#5221", "#5221 is a system parameter, read at run time"),
+        ("#3=[#5420+1]\nG1 X#3", "#3 is set from [#5420+1] (line 3): #5420 is a system"),
+        ("G1 X[sqrt[-1]]", "SQRT[-1] is not defined"),
+        ("G1 X[1/0]", "division by zero"),
+    ],
+)
+def test_words_not_decidable_before_run_time_are_reported(line, why):
+    """Per position, with the reason; the axis is unknown until written again, the line is
+    left as it is."""
+    text = f"G21 G90\nG0 X100 Y50 Z20\n{line}\nG1 Y60\nG1 X110\n"
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert [r.status for r in rows] == ["corrected", "skipped", "skipped", "corrected"]
+    assert why in rows[1].reason and "uses a parameter or an expression" in rows[1].reason
+    assert "X not known" in rows[2].reason
+    assert new.splitlines()[2:-2] == text.splitlines()[2:-2]
+
+
+def test_an_assignment_to_a_parameter_not_known_forgets_them_all():
+    text = "#1=5\n#[#5420]=2\nG0 X#1 Y0 Z0\n"
+    (move,) = parse_gcode(text)
+    assert "#1 is not known after #[#5420] = .." in move.reason
+
+
+def test_an_assignment_to_a_work_offset_moves_the_frame():
+    text = "G0 X1 Y2 Z3\n#5221=10\nG0 X4\n"
+    moves = parse_gcode(text)
+    assert moves[0].reason == "" and "#5221 assigned (line 2)" in moves[1].reason
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [("G1 X[1+]\n", "cannot read the expression"), ("G1 @1 X2\n", "polar words @ ^ with X")],
+)
+def test_malformed_words_are_located(text, message):
+    with pytest.raises(InputError) as err:
+        parse_gcode(text, "p.ngc")
+    assert message in str(err.value) and err.value.line == 1
+
+
+# ---------------------------------------------------------------- polar coordinates
+
+POLAR = (
+    "G21 G90 G17 F100\n"
+    "G0 X0 Y0 Z20\n"
+    "G1 @100 ^30\n"  # absolute: radius and angle about the origin
+    "G91 @5 ^10\n"  # incremental: added to the tool's own radius and angle
+    "@-3 ^-20\n"
+    "G90 G0 Z10\n"
+    "G0 @80.5 ^-90\n"
+    "M2\n"
+)
+
+
+def test_polar_words_are_read_as_rs274_moves(rs274, tmp_path):
+    nominal, _ = canonical(rs274, tmp_path, POLAR)
+    moves = parse_gcode(POLAR)
+    np.testing.assert_allclose([m.target for m in moves], nominal[:, :3], atol=1e-4)
+    r, a = 105.0, math.radians(40.0)  # after `G91 @5 ^10`
+    np.testing.assert_allclose(moves[2].target[:2], (r * math.cos(a), r * math.sin(a)))
+
+
+def test_corrected_polar_moves_land_on_their_corrections(rs274, tmp_path):
+    """A polar move that writes both words is corrected: its radius and angle are written
+    (under G91 as differences from where the rewritten program leaves the tool), and rs274's X,
+    Y are the independently corrected ones; the words keep their letters and places."""
+    nominal, _ = canonical(rs274, tmp_path, POLAR)
+    new, rows = gcode_rewrite(POLAR, SMOOTH)
+    assert [r.status for r in rows] == ["corrected"] * 6
+    lines = new.splitlines()
+    assert re.fullmatch(r"G1 @\d+\.\d{4} \^\d+\.\d+", lines[2])
+    assert re.fullmatch(r"G91 @\d\.\d{4} \^\d+\.\d+", lines[3])
+    assert re.fullmatch(r"@-\d\.\d{4} \^-\d+\.\d+", lines[4])
+    moves, _ = canonical(rs274, tmp_path, new)
+    want = corrected(SMOOTH, nominal[:, :3])
+    # rs274 prints 4 decimals; the rewrite rounds the radius to 4, the angle finer
+    np.testing.assert_allclose(moves[1:, :2][[0, 1, 2, 4]], want[1:, :2][[0, 1, 2, 4]], atol=2e-4)
+    assert np.abs(moves[1:4, :2] - nominal[1:4, :2]).max() > 0.1
+
+
+def test_a_polar_move_with_one_word_keeps_its_start(rs274, tmp_path):
+    """`^90` alone keeps the tool's radius: it is reported, and the move that sets its start is
+    not corrected, so rs274 ends it where the input does."""
+    text = "G21 G90 G17 F100\nG0 X100 Y0 Z20\n^90\nG0 X50 Y50\nM2\n"
+    nominal, _ = canonical(rs274, tmp_path, text)
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert statuses(rows) == [(2, "skipped"), (3, "skipped"), (4, "corrected")]
+    assert "polar ^ without @" in rows[1].reason and "line 3" in rows[0].reason
+    moves, _ = canonical(rs274, tmp_path, new)
+    np.testing.assert_allclose(moves[:2], nominal[:2], atol=1e-4)
+    np.testing.assert_allclose(moves[2, :2], corrected(SMOOTH, nominal[2:3, :3])[0, :2], atol=HALF)
+
+
+def test_a_polar_cycle_hole_is_reported():
+    text = "G21 G90 G17\nG0 X0 Y0 Z20\nG81 @50 ^45 R5 Z-3\nG80\nG91 G0 X10\n"
+    moves = parse_gcode(text)
+    assert "polar words @ ^ in a canned cycle" in moves[1].reason
+    assert math.isnan(moves[2].x)  # where the cycle leaves the tool is not known here
