@@ -6,13 +6,20 @@ with G98/G99 (G98 back to the initial level, the Z where the run of cycle blocks
 and R and, under G91, X and Y from the tool, R from the initial level, Z from R and L repeats, as
 LinuxCNC reads them), G90/G91 (incremental targets are made absolute), G20/G21
 (targets in mm; ``scale`` converts back), G17/G18/G19, N-numbers, ``( )`` and ``;`` comments,
-words in any order and case, with or without spaces, and parameter assignments (``#1 = 5``,
-``#<_z> = 0.4``). G54 is the program frame (the power-on default). Reported instead of guessed:
-anything that moves the program frame in a way the cell does not describe (G55-G59.3 until G54,
-G92/G52/G92.3 until G92.1/G92.2, G10, G68/G51 until G69/G50, cutter compensation until G40), a
-motion whose geometry is not known (G5 splines, G33 threading, G38 probing, any other G-code),
-a word that uses a parameter or an expression (that axis is unknown until written again), a
-position left unknown (G28/G30, G53) and O-word control flow.
+words in any order and case, with or without spaces, parameter assignments (``#1 = 5``,
+``#<_z> = 0.4``) and words written as parameters or expressions (``X#1``, ``X[#1*2]``,
+``x sin[30]``), evaluated where decidable before run time (``expressions``; a Word then holds
+the value and the expression's text and span), LinuxCNC's polar words ``@`` (radius) and ``^``
+(angle) in the XY plane (``polar_xy``; ``GcodeMoves.polar`` keeps their words), and ``%`` tape
+marks (``N890 %`` too). G54 is the program frame (the power-on default). Reported instead of
+guessed: anything that moves the program frame in a way the cell does not describe (G55-G59.3
+until G54, G92/G52/G92.3 on X, Y or Z until G92.1/G92.2 (on A/B/C/U/V/W or E only they do not
+move X, Y, Z), G10, an assigned work offset parameter, G68/G51 until G69/G50, cutter
+compensation until G40), a motion whose geometry is not known (G5 splines, G33 threading, G38
+probing, any other G-code), a word whose parameter or expression is not decidable before run
+time (with the reason; that axis is unknown until written again), a polar move with one word
+(the other is where the tool is), a position left unknown (G28/G30, G53) and O-word control
+flow.
 
 Every pattern is linear in its input (possessive quantifiers; comments and expressions are
 scanned by hand), so a hostile line cannot make the reader backtrack.

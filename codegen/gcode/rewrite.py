@@ -9,7 +9,9 @@ lands where it should, corrected or as programmed: a G91 cycle's X, Y from the t
 the initial level and its Z from R. A G91 cycle repeated L times has one increment for all its
 holes: corrected when their corrections agree within the written resolution, else it and the
 moves that set its start are not. A cycle line that writes no Z or R gets the words its hole
-needs. Arcs are not corrected, nor the moves that set an arc's start.
+needs. Arcs are not corrected, nor the moves that set an arc's start. A corrected word written
+as a parameter or an expression gets the corrected number in the expression's place (its value
+as read where it is kept); a polar move gets its corrected radius and angle (``_polar_edits``).
 """
 
 from __future__ import annotations
