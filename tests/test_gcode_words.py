@@ -15,6 +15,8 @@ import re
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from test_gcode_rs274 import canonical
 from test_real_programs import HALF, SMOOTH, corrected, gcode_rewrite
 
@@ -239,3 +241,56 @@ def test_a_polar_cycle_hole_is_reported():
     moves = parse_gcode(text)
     assert "polar words @ ^ in a canned cycle" in moves[1].reason
     assert math.isnan(moves[2].x)  # where the cycle leaves the tool is not known here
+
+
+FUNCTIONS = [
+    "[atan[1]/[1] + 2**3 mod 5]",
+    "[1+2*3-4/2]",
+    "[2**2**3]",
+    "[1 lt 2 and 0]",
+    "[-2**2]",
+    "[7 mod -3]",
+    "[-7 mod 3]",
+    "[round[-2.5]]",
+    "[fix[-2.5]]",
+    "[fup[-2.5]]",
+    "[1+1 eq 2]",
+    "[abs[-2] + sqrt[16] + exp[1] + ln[2]]",
+    "[acos[0.5] + asin[0.5] + tan[30] + cos[60]]",
+    "[3 gt 2 xor 1 or 0]",
+    "[5.5 ne 5.50001]",
+]
+
+
+def test_functions_and_operators_as_rs274_evaluates_them(rs274, tmp_path):
+    text = "G21 G90 G17 F100\nG0 X0 Y0 Z0\n" + "".join(f"G1 Z{f}\n" for f in FUNCTIONS) + "M2\n"
+    nominal, _ = canonical(rs274, tmp_path, text)
+    moves = parse_gcode(text)
+    assert [m.reason for m in moves] == [""] * len(moves)
+    np.testing.assert_allclose([m.z for m in moves[1:]], nominal[1:, 2], atol=1e-4)
+
+
+@st.composite
+def chains(draw):
+    """A chain of + - * over small integers, written without brackets: (text, Python's value)."""
+    numbers = draw(st.lists(st.integers(-50, 50), min_size=1, max_size=8))
+    ops = draw(
+        st.lists(st.sampled_from("+-*"), min_size=len(numbers) - 1, max_size=len(numbers) - 1)
+    )
+    text = str(numbers[0]) + "".join(f" {op} {n}" for op, n in zip(ops, numbers[1:], strict=True))
+    return text, eval(text)  # Python's precedence of + - * is RS274NGC's
+
+
+@given(chains(), st.integers(0, 2))
+@settings(max_examples=200, deadline=None)
+def test_arithmetic_follows_precedence(chain, set_by):
+    """`Z[a op b op c ..]`, directly or through a parameter set on an earlier line, is the value
+    of the chain with * before + and -, left to right."""
+    text, value = chain
+    if set_by == 0:
+        program = f"G0 X0 Y0 Z[{text}]\n"
+    else:
+        name = "#7" if set_by == 1 else "#<chain>"
+        program = f"{name} = [{text}]\nG0 X0 Y0 Z{name}\n"
+    (move,) = parse_gcode(program)
+    assert move.reason == "" and move.z == value
