@@ -18,7 +18,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_gcode_rs274 import canonical
-from test_real_programs import HALF, SMOOTH, corrected, gcode_rewrite
+from test_real_programs import HALF, SMOOTH, corrected, gcode_rewrite, holes
 
 from accugrid.codegen.gcode.parse import parse_gcode
 from accugrid.infra.errors import InputError
@@ -236,11 +236,54 @@ def test_a_polar_move_with_one_word_keeps_its_start(rs274, tmp_path):
     np.testing.assert_allclose(moves[2, :2], corrected(SMOOTH, nominal[2:3, :3])[0, :2], atol=HALF)
 
 
-def test_a_polar_cycle_hole_is_reported():
-    text = "G21 G90 G17\nG0 X0 Y0 Z20\nG81 @50 ^45 R5 Z-3\nG80\nG91 G0 X10\n"
-    moves = parse_gcode(text)
-    assert "polar words @ ^ in a canned cycle" in moves[1].reason
-    assert math.isnan(moves[2].x)  # where the cycle leaves the tool is not known here
+BOLT_CIRCLE = (
+    "G21 G17 G90 F100\n"
+    "G0 X40 Y0 Z10\n"
+    "G91 G81 R2.5 Z-12 ^60 L6\n"  # six holes, each turned 60 degrees about the origin
+    "G90 G80 G0 Z20\n"
+    "G0 X50 Y10\n"
+    "G81 @30 ^45 R2 Z-3\n"  # one hole at radius 30, 45 degrees
+    "G80 G0 Z20\n"
+    "M2\n"
+)
+
+
+def test_polar_cycles_are_read_as_rs274_drills_them(rs274, tmp_path):
+    """A bolt circle drilled by a G91 cycle turning `^60` six times, then a G90 polar hole: the
+    holes are where rs274 drills them, and the moves after them are placed."""
+    nominal, out = canonical(rs274, tmp_path, BOLT_CIRCLE)
+    bottoms = holes(nominal, out)[0]
+    turn = np.radians(60.0 * np.arange(1, 7))
+    circle = np.column_stack([40 * np.cos(turn), 40 * np.sin(turn), np.full(6, 0.5)])
+    np.testing.assert_allclose(bottoms[:6], circle, atol=1e-4)
+    moves = parse_gcode(BOLT_CIRCLE)
+    np.testing.assert_allclose(moves[1].target, circle[0], atol=1e-9)
+    np.testing.assert_allclose(moves[2].target, (40, 0, 20), atol=1e-9)  # after the sixth
+    np.testing.assert_allclose(moves[4].target, bottoms[6], atol=1e-4)
+
+
+def test_a_g90_polar_hole_is_corrected_and_the_g91_circle_drilled_as_programmed(rs274, tmp_path):
+    """The G91 polar cycle's holes depend on where it starts: reported, and the move that sets
+    its start is not corrected, so rs274 drills them as programmed; the G90 polar hole gets its
+    corrected radius and angle, and rs274 drills it on the independent correction."""
+    nominal, out = canonical(rs274, tmp_path, BOLT_CIRCLE)
+    new, rows = gcode_rewrite(BOLT_CIRCLE, SMOOTH)
+    assert statuses(rows) == [
+        (2, "skipped"),
+        (3, "skipped"),
+        (4, "corrected"),
+        (5, "corrected"),
+        (6, "corrected"),
+        (7, "corrected"),
+    ]
+    assert "G91 canned cycle with polar words" in rows[1].reason and "line 3" in rows[0].reason
+    moves, new_out = canonical(rs274, tmp_path, new)
+    bottoms = holes(moves, new_out)[0]
+    np.testing.assert_allclose(bottoms[:6], holes(nominal, out)[0][:6], atol=1e-4)
+    want = corrected(SMOOTH, holes(nominal, out)[0][6:])[0]
+    np.testing.assert_allclose(bottoms[6, :2], want[:2], atol=2e-4)  # @, ^ finer than Z
+    assert abs(bottoms[6, 2] - want[2]) <= HALF
+    assert re.search(r"G81 @\d+\.\d{4} \^\d+\.\d+ R", new)
 
 
 FUNCTIONS = [

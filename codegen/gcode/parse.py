@@ -1144,7 +1144,17 @@ class _Reader:
         reason = why or s.frame_reason()
         polar = not _POLAR_SET.isdisjoint(words) or not _POLAR_SET.isdisjoint(exprs)
         if polar:
-            reason = reason or f"polar words @ ^ in a canned cycle (line {lineno}): not read"
+            if s.incremental:  # each hole turns about the origin from the one before
+                reason = reason or (
+                    f"G91 canned cycle with polar words (line {lineno}): its holes are read, not "
+                    "corrected"
+                )
+            elif "@" not in words or "^" not in words:
+                given = "@" if "@" in words else "^"
+                reason = reason or (
+                    f"polar {given} alone in a canned cycle (line {lineno}): the other is where "
+                    "the tool is, not corrected"
+                )
             self.moves.polar[len(self.moves)] = (words.get("@"), words.get("^"))
         if "L" in words:
             count = words["L"].value
@@ -1165,8 +1175,15 @@ class _Reader:
                 value = axis_words[k].value * s.scale
                 step[i] = value if s.incremental else 0.0
                 first[i] = s.pos[i] + value if s.incremental else value
-            elif k in exprs or polar:
+            elif k in exprs:
                 first[i] = step[i] = math.nan
+        if polar:  # each repeat under G91 turns and stretches about the origin again
+            radius = words["@"].value * s.scale if "@" in words else None
+            angle = words["^"].value if "^" in words else None
+            if _POLAR_SET.isdisjoint(exprs):
+                first = list(polar_xy(s.pos, radius, angle, s.incremental))
+            else:
+                first = [math.nan, math.nan]
         first_of_run = s.cycle_il is None
         if first_of_run:
             s.cycle_il = s.pos[2]
@@ -1179,6 +1196,8 @@ class _Reader:
             reason = reason or "canned cycle without an R plane or Z depth"
         clear = r_level if s.retract == "G99" else max(s.cycle_il, r_level)
         last = [first[i] + (repeats - 1) * step[i] for i in range(2)]
+        if polar and s.incremental:
+            last = list(polar_xy(first, radius, angle, True, repeats - 1))
         if "L" in exprs or ("L" in words and repeats == 1 and words["L"].value != 1):
             repeats = 0  # not known: under G91 neither is where its holes end
             if s.incremental:
@@ -1192,15 +1211,20 @@ class _Reader:
 
 
 def polar_xy(
-    pos, radius: float | None, angle: float | None, incremental: bool
+    pos, radius: float | None, angle: float | None, incremental: bool, times: int = 1
 ) -> tuple[float, float]:
     """Where a polar move ends, X, Y mm, from the tool at ``pos`` (X, Y mm, program frame), as
     LinuxCNC reads ``@`` (``radius``, mm) and ``^`` (``angle``, degrees; None: not written)
     about the program origin: under G90 the values written, the tool's own radius or angle for
-    one not written; under G91 the tool's radius and angle plus the values written."""
+    one not written; under G91 the tool's radius and angle plus the values written, ``times``
+    over (a G91 cycle's repeats; 0: where it starts)."""
     x, y = pos[0], pos[1]
     r, a = math.hypot(x, y), math.degrees(math.atan2(y, x))
     if incremental:
+        if times != 1:
+            for _ in range(times):
+                x, y = polar_xy((x, y), radius, angle, True)
+            return x, y
         r, a = r + (radius or 0.0), a + (angle or 0.0)
     else:
         r = r if radius is None else radius

@@ -113,11 +113,12 @@ def _protect_arc_starts(moves: GcodeMoves, rows: Rows) -> None:
 
 def _protect_polar_starts(moves: GcodeMoves, rows: Rows) -> None:
     """A polar move that writes only its radius ``@`` or only its angle ``^`` takes the other
-    from where the tool is: the moves that set its start are not corrected, so it lands as
-    programmed."""
+    from where the tool is, and so do the holes of a G91 polar cycle: the moves that set its
+    start are not corrected, so it lands as programmed."""
     for i, (radius, angle) in moves.polar.items():
         if radius is not None and angle is not None:
-            continue
+            if not (moves.is_cycle[i] and moves.incremental[i]):
+                continue
         why = f"sets the start of the polar move at line {moves.line[i]}, which is not corrected"
         for j in moves.setters[i, :2].tolist():
             if j >= 0 and not rows.reason[j]:
@@ -131,12 +132,9 @@ def _polar_edits(text, edits, moves, i, where, goals, changed, places) -> None:
     written). Only a move that writes both is rewritten (one word alone keeps its words): under
     G90 the goal's radius and angle, under G91 their differences from the tool's; the radius
     gets one decimal more than the file, the angle as many as keep the arc it rounds to a tenth
-    of that, and each word keeps its text where its value does not change. A polar cycle's
-    hole is not read: its X, Y are not known."""
+    of that, and each word keeps its text where its value does not change. A G90 polar cycle
+    keeps its words."""
     cmd, end = where
-    if moves.is_cycle[i]:
-        end[0] = end[1] = math.nan
-        return
     radius, angle = moves.polar[i]
     scale, inc = float(moves.scale[i]), bool(moves.incremental[i])
     values = [None if w is None else w.value for w in (radius, angle)]
@@ -366,8 +364,11 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
             if changed:
                 walk.reached_rows.extend(reached)
                 walk.reached_at.append(first + b)
-            if first + b in moves.polar:  # a polar cycle's hole is not read
-                end = [math.nan, math.nan, end[2]]
+            if first + b in moves.polar:  # a polar cycle's holes turn about the origin
+                radius, angle = (None if w is None else w.value for w in moves.polar[first + b])
+                times = moves.repeats.get(first + b, 1)
+                xy = polar_xy(cmd, radius and radius * scale, angle, True, times) if times else None
+                end = [*(xy or (math.nan, math.nan)), end[2]]
             cmd = end
             continue
         incremental = inc and not is_cycle
