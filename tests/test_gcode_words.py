@@ -337,3 +337,21 @@ def test_arithmetic_follows_precedence(chain, set_by):
         program = f"{name} = [{text}]\nG0 X0 Y0 Z{name}\n"
     (move,) = parse_gcode(program)
     assert move.reason == "" and move.z == value
+
+
+def test_a_polar_continuation_hole_gets_its_own_depth_and_r_plane(rs274, tmp_path):
+    """A G90 cycle continued by a line of polar words only: that hole's corrected Z and R words
+    are added after its polar words, and rs274 drills every hole on its correction."""
+    text = "G21 G17 G90 F100\nG0 X0 Y0 Z20\nG81 @300 ^10 R2 Z-3\n@300 ^80\nG80 G0 Z20\nM2\n"
+    nominal, out = canonical(rs274, tmp_path, text)
+    new, rows = gcode_rewrite(text, SMOOTH)
+    assert [r.status for r in rows] == ["corrected"] * 4
+    assert re.fullmatch(r"@\d+\.\d{4} \^\d+\.\d+ Z-\d\.\d{3} R\d\.\d{3}", new.splitlines()[3])
+    moves, new_out = canonical(rs274, tmp_path, new)
+    bottoms, r_planes = holes(moves, new_out)
+    want = corrected(SMOOTH, holes(nominal, out)[0])
+    np.testing.assert_allclose(bottoms[:, :2], want[:, :2], atol=2e-4)
+    np.testing.assert_allclose(bottoms[:, 2], want[:, 2], atol=HALF)
+    want_r = corrected(SMOOTH, holes(nominal, out)[1])[:, 2]
+    np.testing.assert_allclose(r_planes[:, 2], want_r, atol=HALF)
+    assert abs(bottoms[1, 2] - bottoms[0, 2]) > 0.01  # the holes need their own depths

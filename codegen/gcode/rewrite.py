@@ -407,10 +407,14 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
             _polar_edits(text, edits, moves, first + b, (cmd, end), goals, changed, places)
         if walk.fill[first + b] and (starts[2] < 0 or starts[3] < 0):
             r_goal = r_planes[first + b] if changed else math.nan
+            spans = (starts, ends)
+            if first + b in moves.polar:  # added after the polar words too
+                polar = [w for w in moves.polar[first + b] if w is not None]
+                spans = (starts + [w.start for w in polar], ends + [w.end for w in polar])
             cycle_z, r_cmd = _added_words(
                 text,
                 edits,
-                (starts, ends),
+                spans,
                 (goals[2], r_mm if math.isnan(r_goal) else r_goal),
                 (cycle_z, r_cmd),
                 scale,
@@ -443,7 +447,8 @@ def _added_words(text, edits, spans, goals, sticky, scale, places):
     """The Z and R words a cycle's line needs but does not write: where the hole bottom and R
     plane it should reach (``goals``, absolute mm) differ from the depth and R plane in effect
     (``sticky``, mm, as written), `` Z..``/`` R..`` are added after its last position word (in
-    the case of its letters). ``spans``: the line's (starts, ends) of X, Y, Z, R. Adds the edit
+    the case of its letters). ``spans``: the line's (starts, ends) of X, Y, Z, R (and of its
+    polar words after them). Adds the edit
     to ``edits``; the depth and R plane now in effect (mm)."""
     starts, ends = spans
     sticky, added = list(sticky), []
