@@ -1221,11 +1221,12 @@ def polar_xy(
     x, y = pos[0], pos[1]
     r, a = math.hypot(x, y), math.degrees(math.atan2(y, x))
     if incremental:
-        if times != 1:
+        step = radius or 0.0
+        if times > 1 and r + times * step < 0:  # the radius turns negative on the way: each flips
             for _ in range(times):
                 x, y = polar_xy((x, y), radius, angle, True)
             return x, y
-        r, a = r + (radius or 0.0), a + (angle or 0.0)
+        r, a = r + times * step, a + times * (angle or 0.0)
     else:
         r = r if radius is None else radius
         a = a if angle is None else angle
