@@ -28,6 +28,11 @@ def statuses(rows) -> list[tuple[int, str]]:
     return [(r.line, r.status) for r in rows]
 
 
+def commands(out: str) -> list[str]:
+    """rs274's canonical commands without their numbers."""
+    return [line.split("N.....")[-1].split("(")[0] for line in out.splitlines()]
+
+
 # ---------------------------------------------------------------- offsets on other axes
 
 
@@ -118,9 +123,10 @@ def test_corrected_expression_words_become_numbers(rs274, tmp_path):
     """A corrected word written as a parameter or an expression gets the corrected number in
     the expression's place (the rest of the line as it was); rs274 reaches the independently
     corrected points; the assignments stay as they are."""
-    nominal, _ = canonical(rs274, tmp_path, EXPRESSIONS)
+    nominal, out = canonical(rs274, tmp_path, EXPRESSIONS)
     new, rows = gcode_rewrite(EXPRESSIONS, SMOOTH)
     assert [r.status for r in rows] == ["corrected"] * 6
+    assert commands(canonical(rs274, tmp_path, new)[1]) == commands(out)
     lines = new.splitlines()
     number = r"(-?\d+\.\d+)"
     assert lines[2] == "#1=50 #<depth>=-3"
@@ -209,9 +215,10 @@ def test_corrected_polar_moves_land_on_their_corrections(rs274, tmp_path):
     """A polar move that writes both words is corrected: its radius and angle are written
     (under G91 as differences from where the rewritten program leaves the tool), and rs274's X,
     Y are the independently corrected ones; the words keep their letters and places."""
-    nominal, _ = canonical(rs274, tmp_path, POLAR)
+    nominal, out = canonical(rs274, tmp_path, POLAR)
     new, rows = gcode_rewrite(POLAR, SMOOTH)
     assert [r.status for r in rows] == ["corrected"] * 6
+    assert commands(canonical(rs274, tmp_path, new)[1]) == commands(out)
     lines = new.splitlines()
     assert re.fullmatch(r"G1 @\d+\.\d{4} \^\d+\.\d+", lines[2])
     assert re.fullmatch(r"G91 @\d\.\d{4} \^\d+\.\d+", lines[3])
@@ -278,6 +285,7 @@ def test_a_g90_polar_hole_is_corrected_and_the_g91_circle_drilled_as_programmed(
     ]
     assert "G91 canned cycle with polar words" in rows[1].reason and "line 3" in rows[0].reason
     moves, new_out = canonical(rs274, tmp_path, new)
+    assert commands(new_out) == commands(out)
     bottoms = holes(moves, new_out)[0]
     np.testing.assert_allclose(bottoms[:6], holes(nominal, out)[0][:6], atol=1e-4)
     want = corrected(SMOOTH, holes(nominal, out)[0][6:])[0]
