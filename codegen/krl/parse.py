@@ -22,6 +22,9 @@ inline-form FOLD lines are comments). It finds:
   ``ENDSPLINE``). What cannot be decided is an ``unknown`` base with the reason: frame
   arithmetic ``:``, a variable, ``EK(...)``, the start of a routine (inherited from the caller),
   a call that may change it, a jump target, a branch or loop that changes it.
+- tool context, followed with the base (``BaseRef.tool``): ``$TOOL = TOOL_DATA[n]``,
+  ``$TOOL = $NULLFRAME`` (tool 0, the flange), ``BAS(#TOOL, n)``, an FDAT's ``TOOL_NO``; any other
+  ``$TOOL`` value, and a branch or loop that changes it, leaves the tool unknown with the reason.
 
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
 Every pattern is linear in its input (see the note above ``NUMBER``).
@@ -42,7 +45,7 @@ import math
 import os
 import re
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from itertools import compress
 from typing import NamedTuple
 
@@ -151,6 +154,7 @@ _ASSIGN_RE = re.compile(r"\s*+" + _NAME + r"\s*+=(?!=)\s*+")
 _INT_RE = re.compile(r"\s*+\+?(\d++)\s*+$")
 _BAS_RE = re.compile(r"\s*+BAS\s*+\(\s*+#\s*+(\w++)", re.I)
 _BASE_DATA_RE = re.compile(r"\s*+BASE_DATA\s*+\[\s*+(\d++)\s*+\]\s*+$", re.I)
+_TOOL_DATA_RE = re.compile(r"\s*+TOOL_DATA\s*+\[\s*+(\d++)\s*+\]\s*+$", re.I)
 _CALL_RE = re.compile(r"\s*+([A-Za-z_]\w*+)\s*+\(")
 _ROUTINE_RE = re.compile(
     r"\s*+(?:GLOBAL\s++)?(DEF|DEFFCT)\s++(?:\w++\s++)?([A-Za-z_]\w*+)\s*+\(", re.I
@@ -187,6 +191,8 @@ class BaseRef:
 
     kind: "number" (BASE_DATA[number]), "literal" (xyzabc given in the program), "fdat" (the
     BASE_NO of FDAT ``fdat``, resolved once every file is read), "unknown" (``reason`` says why).
+    tool: the TOOL_DATA number set with it (0: $NULLFRAME, the flange), a str: why the tool is
+    not known, None: not set (an FDAT's TOOL_NO for kind "fdat", else the cell's tool).
     """
 
     kind: str
@@ -196,6 +202,7 @@ class BaseRef:
     fdat: str | None = None
     reason: str = ""
     label: str | None = None  # set when the state was carried across a jump target
+    tool: int | str | None = None
 
     def describe(self) -> str:
         if self.kind == "number":
@@ -753,14 +760,20 @@ class _Flow:
         self.since = self.rows.mark()
 
     def set(self, base: BaseRef) -> None:
-        self.state = base
+        """A new base; the tool set before stays, unless an FDAT sets both."""
+        self.state = _with_tool(base, self.state)
+        self.sets_base = True
+
+    def set_tool(self, tool: int | str, line: int) -> None:
+        """``$TOOL`` set at ``line``: TOOL_DATA number, or why it is not known."""
+        self.state = replace(self.state, tool=f"{tool} (line {line})" if isinstance(tool, str) else tool)
         self.sets_base = True
 
     def open_spline(self, base: BaseRef | None) -> None:
         """A SPLINE/PTP_SPLINE block: its segments move in ``base`` (None: the base in effect)."""
         self.before_spline = self.state
         if base is not None:
-            self.state = base
+            self.state = _with_tool(base, self.state)
 
     def close_spline(self) -> None:
         """ENDSPLINE: the base in effect before the block again."""
@@ -768,10 +781,7 @@ class _Flow:
             self.state, self.before_spline = self.before_spline, None
 
     def label(self, name: str, line: int) -> None:
-        s = self.state
-        self.state = BaseRef(
-            s.kind, s.line, s.number, s.xyzabc, s.fdat, s.reason, f"{name} (line {line})"
-        )
+        self.state = replace(self.state, label=f"{name} (line {line})")
 
     def call(self, name: str, line: int) -> None:
         if not self.trust_calls:
@@ -805,6 +815,8 @@ class _Flow:
                 self.state = start
             elif all(e is ends[0] for e in ends):
                 self.state = ends[0]
+            elif all(_same_base(e, ends[0]) for e in ends):
+                self.state = replace(ends[0], tool=f"$TOOL set in one branch of {where} only")
             else:
                 self.state = BaseRef(
                     "unknown", line, reason=f"$BASE set in one branch of {where} only"
@@ -812,9 +824,26 @@ class _Flow:
             return
         if self.state is not start:  # a loop body that changes the base
             changed = BaseRef("unknown", line, reason=f"$BASE changes inside the loop {where}")
+            if _same_base(self.state, start):
+                changed = replace(start, tool=f"$TOOL changes inside the loop {where}")
             self.rows.ops.append(("swap", (block.mark, self.rows.mark()), start, changed))
             if block.keyword != "REPEAT":
                 self.state = changed
+
+
+def _with_tool(base: BaseRef | None, before: BaseRef) -> BaseRef:
+    """``base`` set where ``before`` was in effect (``before`` when None), with the tool set
+    before unless it sets one itself (an FDAT sets both)."""
+    if base is None:
+        return before
+    if base.tool is None and base.kind != "fdat" and before.tool is not None:
+        return replace(base, tool=before.tool)
+    return base
+
+
+def _same_base(a: BaseRef, b: BaseRef) -> bool:
+    """Whether two states have the same base (their tools may differ)."""
+    return replace(a, line=0, tool=None, label=None) == replace(b, line=0, tool=None, label=None)
 
 
 _OPENERS = {"IF", "SWITCH", "FOR", "WHILE", "LOOP", "REPEAT"}
@@ -1297,9 +1326,10 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
 
 
 def _bas(code: str, pos: int, lineno: int, flow: _Flow) -> None:
-    """``BAS(#BASE, n)`` sets BASE_DATA[n]; other BAS commands leave the base."""
+    """``BAS(#BASE, n)`` sets BASE_DATA[n], ``BAS(#TOOL, n)`` TOOL_DATA[n]; other BAS commands
+    leave them."""
     m = _BAS_RE.match(code, pos)
-    if m is None or m.group(1).upper() != "BASE":
+    if m is None or m.group(1).upper() not in ("BASE", "TOOL"):
         return
     rest = code[m.end() :].strip()
     if not rest.endswith(")"):
@@ -1310,7 +1340,9 @@ def _bas(code: str, pos: int, lineno: int, flow: _Flow) -> None:
     arg = inner[1:].strip()
     n = _INT_RE.match(arg)
     number = _small_int(n.group(1)) if n else None
-    if number is not None:
+    if m.group(1).upper() == "TOOL":
+        flow.set_tool(number if number is not None else f"BAS(#TOOL, {arg}): not a number", lineno)
+    elif number is not None:
         flow.set(BaseRef("number", lineno, number=number))
     else:
         flow.set(BaseRef("unknown", lineno, reason=f"BAS(#BASE, {arg}): not a number"))
@@ -1506,6 +1538,9 @@ def _assignment(
     if target == "$BASE" and not member:
         flow.set(_base_value(code, value_at, off, lineno, scan))
         return
+    if target == "$TOOL":
+        flow.set_tool(_tool_value(value, member), lineno)
+        return
     if target == "$BASE" or (target == "FDAT_ACT" and member):
         flow.set(BaseRef("unknown", lineno, reason=f"{code.strip()}: changes part of the base"))
         return
@@ -1513,7 +1548,7 @@ def _assignment(
         if value.startswith("{"):
             fdat = _fdat_values(code, value_at, scan.path, lineno)
             flow.set(
-                BaseRef("number", lineno, number=fdat.base_no)
+                BaseRef("number", lineno, number=fdat.base_no, tool=fdat.tool_no)
                 if fdat.base_no is not None
                 else BaseRef("unknown", lineno, reason=fdat.reason)
             )
@@ -1576,6 +1611,20 @@ def _base_value(code: str, at: int, off: int, lineno: int, scan: KrlScan) -> Bas
     if n:
         return _base_data_ref(n.group(1), lineno, "$BASE = ")
     return BaseRef("unknown", lineno, reason=f"$BASE = {value}: set from a variable")
+
+
+def _tool_value(value: str, member: str) -> int | str:
+    """The tool ``$TOOL[.member] = value`` sets: a TOOL_DATA number (0: $NULLFRAME), or why
+    it is not known."""
+    if member:
+        return f"$TOOL{member} = {value}: changes part of the tool"
+    if value.upper() == "$NULLFRAME":
+        return 0
+    n = _TOOL_DATA_RE.match(value)
+    number = _small_int(n.group(1)) if n else None
+    if number is not None:
+        return number
+    return f"$TOOL = {value[:40]}: not a TOOL_DATA number"
 
 
 def _base_data_ref(digits: str, lineno: int, what: str) -> BaseRef:
@@ -1661,7 +1710,7 @@ def _motion(
     relative = word.endswith("_REL")
     base = flow.state
     if "$" in code and "WITH" in code.upper():
-        base = _with_base(code, lineno) or base
+        base = _with_tool(_with_base(code, lineno), base)
     for _ in range(count):
         while at < len(code) and code[at] in " \t,":
             at += 1

@@ -141,6 +141,9 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
             else:
                 frame[i] = ctx.frame_id(f)
     rows = Rows([scan.path or ""], np.zeros(n, np.int64), t.line, t.name, reasons, old)
+    if ctx.frame_tools:
+        placed = frame >= 0
+        rows.tool[placed] = np.array(ctx.frame_tools, np.int64)[frame[placed]]
     for i in np.flatnonzero(frame < 0).tolist():  # not placed: does a motion command it?
         if t.reason[i] != JOINT_TARGET and not t.reason[i].startswith(FRAME_OPERAND):
             rows.commanded[i] = t.kind[i] == MOTION or ctx.moved_to(s, i)
@@ -263,6 +266,7 @@ class _Context:
         self.lone_dat = all(Path(s.path or "").suffix.lower() == ".dat" for s in scans)
         self._resolved: dict[BaseRef, tuple[object, np.ndarray | None, str]] = {}
         self.frames: list[np.ndarray] = []
+        self.frame_tools: list[int] = []  # the tool number of each of ``frames`` (-1: the cell's)
         self._frame_ids: dict[int, int] = {}
         self._blocked = set(self.frame_uses) | set(self.assigned)
 
@@ -281,19 +285,31 @@ class _Context:
         use_of.pop("", None)
         return use_of
 
-    def frame_id(self, frame: np.ndarray) -> int:
-        """Index of ``frame`` (one of the resolved frames) in ``frames``."""
-        found = self._frame_ids.get(id(frame))
+    def frame_id(self, placed: tuple[np.ndarray, int]) -> int:
+        """Index of ``placed`` (one of the resolved (frame, tool) pairs) in ``frames``."""
+        found = self._frame_ids.get(id(placed))
         if found is None:
-            found = self._frame_ids[id(frame)] = len(self.frames)
-            self.frames.append(frame)
+            found = self._frame_ids[id(placed)] = len(self.frames)
+            self.frames.append(placed[0])
+            self.frame_tools.append(placed[1])
         return found
 
-    def resolve(self, base: BaseRef) -> tuple[object, np.ndarray | None, str]:
-        """(identity key, robot_T_base or None, reason), once per distinct base."""
+    def resolve(self, base: BaseRef) -> tuple[object, tuple[np.ndarray, int] | None, str]:
+        """(identity key, (robot_T_base, tool number, -1: the cell's) or None, reason), once
+        per distinct base. Without ``Options.tool_data`` the tool is always the cell's."""
         found = self._resolved.get(base)
         if found is None:
-            found = self._resolved[base] = self._resolve(base)
+            ident, frame, reason = self._resolve(base)
+            tool = -1
+            if frame is not None and self.opts.tool_data is not None:
+                tool = base.tool if base.tool is not None else -1
+                if isinstance(tool, str):
+                    ident, frame, reason = None, None, f"tool unknown: {tool}"
+                elif base.kind == "fdat" and base.tool is None:
+                    tool = self.fdats[base.fdat or ""].tool_no
+                    tool = -1 if tool is None else tool
+            placed = None if frame is None else (frame, tool)
+            found = self._resolved[base] = ((ident, tool), placed, reason)
         return found
 
     def _resolve(self, base: BaseRef) -> tuple[object, np.ndarray | None, str]:
@@ -319,7 +335,9 @@ class _Context:
     def _fdat_reason(self, name: str, fdat: Fdat) -> str:
         if fdat.base_no is None:
             return f"FDAT {name}: {fdat.reason}"
-        tool = self.opts.tool_number
+        tool = self.opts.tool_number  # with the cell's tool_data, each FDAT's own tool
+        if self.opts.tool_data is not None:
+            return ""
         if tool is not None and fdat.tool_no is not None and fdat.tool_no != tool:
             return (
                 f"FDAT {name} (line {fdat.line}) has TOOL_NO {fdat.tool_no}: the cell's tool, "
