@@ -766,7 +766,9 @@ class _Flow:
 
     def set_tool(self, tool: int | str, line: int) -> None:
         """``$TOOL`` set at ``line``: TOOL_DATA number, or why it is not known."""
-        self.state = replace(self.state, tool=f"{tool} (line {line})" if isinstance(tool, str) else tool)
+        self.state = replace(
+            self.state, tool=f"{tool} (line {line})" if isinstance(tool, str) else tool
+        )
         self.sets_base = True
 
     def open_spline(self, base: BaseRef | None) -> None:
