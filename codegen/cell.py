@@ -87,10 +87,10 @@ class Cell:
     """A validated cell file. Poses are (4, 4) homogeneous transforms in mm: ``flange_T_tool``
     (the TCP, TOOL_DATA ``tool_number``), ``robot_T_base`` (the points' frame, BASE_DATA
     ``base_number``) and ``base_data`` (BASE_DATA number -> robot_T_frame, the base included).
-    ``tool_data`` (tool number -> flange_T_tool, the cell's tool included) is None when the
-    file has no ``tool_data:`` (a program is then corrected with the cell's tool alone);
-    ``tool_names``: the RAPID tooldata name (lower case) of each ``tool_data`` entry that has
-    one -> its number."""
+    ``tool_data`` (tool number -> flange_T_tool, the cell's tool and 0, the flange, included)
+    is None when the file has no ``tool_data:`` (a program is then corrected with the cell's
+    tool alone); ``tool_names``: the RAPID tooldata name (lower case) of each ``tool_data``
+    entry that has one (and ``tool0``) -> its number."""
 
     path: Path
     robot_name: str
@@ -214,11 +214,12 @@ def _base_data(r: CellReader, base_number: int, robot_T_base: np.ndarray) -> dic
 
 def _tool_data(r: CellReader, tool_number: int, flange_T_tool: np.ndarray) -> tuple:
     """``tool_data: {n: {x, y, z, a, b, c[, name]}}``: (number -> flange_T_tool with the cell's
-    tool, lower-case RAPID name -> number), (None, None) when the key is absent."""
+    tool and tool 0, the flange (KRL $NULLFRAME, RAPID tool0), lower-case RAPID name ->
+    number), (None, None) when the key is absent."""
     data = r.top.get("tool_data")
     if data is None:
         return None, None
-    tools, names = {tool_number: flange_T_tool}, {}
+    tools, names = {0: np.eye(4), tool_number: flange_T_tool}, {"tool0": 0}  # 0: the flange
     for n, frame in r.mapping(data, "tool_data", None).items():
         key = f"tool_data.{n}"
         try:

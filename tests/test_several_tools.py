@@ -279,11 +279,12 @@ def test_without_tool_data_other_tools_are_skipped_as_before(tmp_path):
 
 def test_cell_reads_tool_data(tmp_path):
     cell = load_cell(_grid_cell(tmp_path))
-    assert sorted(cell.tool_data) == [1, 2, 3]
+    assert sorted(cell.tool_data) == [0, 1, 2, 3]
     assert cell.tool_data[1] is cell.flange_T_tool
+    np.testing.assert_array_equal(cell.tool_data[0], np.eye(4))  # the flange
     for n, xyzabc in TOOLS.items():
         np.testing.assert_allclose(cell.tool_data[n], pose_from_xyzabc(np.array(xyzabc)))
-    assert cell.tool_names == {"tnear": 2, "tlong": 3}
+    assert cell.tool_names == {"tool0": 0, "tnear": 2, "tlong": 3}
     assert cell.correction.tool_distance_mm == 1.0
 
 
@@ -339,3 +340,66 @@ def test_a_grid_checks_the_orientation_of_its_own_tool(tmp_path):
     # C 30 of tool 4 is C 0 of the grid's tool: as measured; C 0 of tool 4 is 30 deg off
     assert rows[4]["status"] == "corrected" and not rows[4]["reason"]
     assert rows[5]["status"] == "skipped" and "orientation 30.0 deg" in rows[5]["reason"]
+
+
+PAIR_SRC = """DEF P()
+PDAT_ACT=PPDAT1
+FDAT_ACT=FP1
+BAS(#PTP_PARAMS,100)
+PTP XP1
+FDAT_ACT=FP2
+BAS(#CP_PARAMS,0.2)
+LIN XP2
+FDAT_ACT=FP3
+LIN XP3
+FDAT_ACT=FP1
+LIN XP3
+END
+"""
+PAIR_DAT = """DEFDAT P
+DECL E6POS XP1={X 1500,Y 0,Z 1500,A 0,B 90,C 0,S 6,T 2,E1 0,E2 0,E3 0,E4 0,E5 0,E6 0}
+DECL FDAT FP1={TOOL_NO 2,BASE_NO 1,IPO_FRAME #BASE}
+DECL E6POS XP2={X 1500,Y 100,Z 1500,A 0,B 90,C 0,S 6,T 2,E1 0,E2 0,E3 0,E4 0,E5 0,E6 0}
+DECL FDAT FP2={TOOL_NO 3,BASE_NO 1,IPO_FRAME #BASE}
+DECL E6POS XP3={X 1500,Y 200,Z 1500,A 0,B 90,C 0,S 6,T 2,E1 0,E2 0,E3 0,E4 0,E5 0,E6 0}
+DECL FDAT FP3={TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE}
+ENDDAT
+"""
+
+
+def test_krl_stored_positions_take_the_tool_of_their_motions(tmp_path):
+    cell = _grid_cell(tmp_path)
+    src, dat = tmp_path / "p.src", tmp_path / "p.dat"
+    src.write_text(PAIR_SRC)
+    dat.write_text(PAIR_DAT)
+    report = tmp_path / "r.csv"
+    argv = ["rewrite", str(src), str(dat), "--cell", str(cell), "--allow-partial"]
+    assert main([*argv, "--decimals", "4", "--report", str(report), "-o", str(tmp_path / "o")]) == 0
+    rows = _report(report)
+    assert rows[2]["status"] == "corrected"  # XP1: tool 2, 0.5 mm from the grid's tool
+    np.testing.assert_allclose(_new(rows[2]) - _old(rows[2]), E_CONST, atol=1e-9)
+    assert "tool 3: its TCP is 150.000 mm from" in rows[4]["reason"]  # XP2
+    assert rows[6]["reason"] == "XP3 is moved to with different tools (lines 10, 12)"
+
+
+def test_model_with_a_residual_grid_corrects_a_far_tool_by_the_model_alone(tmp_path):
+    """The residual grid (what the model leaves, measured with the cell's tool) is applied
+    to the near tool and not to the far one, which the model corrects alone, flagged."""
+    cell = _model_cell(tmp_path)
+    grid = tmp_path / "residual.csv"
+    simulate = ["simulate", "--robot", "kr210-realistic", "--region", "1200", "2200", "-500"]
+    simulate += ["500", "1100", "2100", "--step", "500", "--abc", "0", "90", "0", "--tool"]
+    assert main([*simulate, "0", "0", "250", "0", "0", "0", "-o", str(grid)]) == 0
+    src = tmp_path / "t.src"
+    src.write_text(KRL.replace("$TOOL=TOOL_DATA[7]", "$TOOL=TOOL_DATA[2]"))
+    report = tmp_path / "r.csv"
+    argv = ["rewrite", str(src), "--cell", str(cell), "--grid", str(grid), "--base", "1"]
+    assert main([*argv, "--decimals", "6", "--report", str(report), "-o", str(tmp_path / "o")]) == 0
+    rows = _report(report)
+    for line, tool in ((5, 2), (7, 3), (9, 2), (11, 1)):
+        row = rows[line]
+        assert row["status"] == "corrected", row
+        reached = _lands(tmp_path / "cal.yaml", tool, _new(row)[None], np.array([[0, 90, 0]]))
+        assert np.linalg.norm(reached[0] - _old(row)) < 2e-3, (line, reached, row)
+    assert rows[7]["reason"].startswith("flag: tool 3: corrected by the model alone")
+    assert "corrected by the model alone" not in rows[5]["reason"]

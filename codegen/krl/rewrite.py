@@ -182,8 +182,10 @@ class _Context:
     A stored position (declared or assigned with a literal) is a drilling position only if a
     motion uses it, or, in a .dat given alone with ``--base``, if it is a POS/E6POS. Never when it
     is a frame (assigned to $TOOL/$BASE/$LOAD/TOOL_DATA/BASE_DATA, an operand of ``:``) or
-    declared CONST. Its FDAT (``XP1`` <-> ``FP1``) wins over ``--base``; an FDAT with another
-    tool than the cell's, or an external TCP, leaves it uncorrected."""
+    declared CONST. Its FDAT (``XP1`` <-> ``FP1``) wins over ``--base``; an FDAT with an external
+    TCP leaves it uncorrected, and so does one with another tool than the cell's unless the
+    cell declares ``tool_data`` (then each position takes the tool of its motions: FDAT
+    ``TOOL_NO``, ``$TOOL``, ``BAS(#TOOL, n)``, one tool for all of them)."""
 
     def __init__(
         self, scans: list[KrlScan], config: KrlScan | None, initial: BaseRef | None, opts: Options
@@ -452,6 +454,8 @@ class _Context:
             frame = frame_i
         if len(keys) > 1:
             lines = ", ".join(str(at) for at in keys.values())
+            if len({ident[0] for ident in keys}) == 1:
+                return None, f"{name} is moved to with different tools (lines {lines})"
             return None, f"{name} is used under different bases (lines {lines})"
         return frame, ""
 
