@@ -65,6 +65,18 @@ def _report(path: Path) -> dict[int, dict]:
         return {int(r["line"]): r for r in csv.DictReader(f)}
 
 
+def _rewrite(tmp_path: Path, cell: Path, files: dict[str, str], *options: str) -> dict[int, dict]:
+    """Write ``files`` (name -> text) and rewrite them with ``--allow-partial``: the report's
+    rows by line."""
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    out = tmp_path / ("out" if len(files) > 1 else "out" + Path(next(iter(files))).suffix)
+    report = tmp_path / "r.csv"
+    argv = ["rewrite", *(str(tmp_path / n) for n in files), "--cell", str(cell), *options]
+    assert main([*argv, "--allow-partial", "--report", str(report), "-o", str(out)]) == 0
+    return _report(report)
+
+
 def _new(row: dict) -> np.ndarray:
     return np.array([float(row[k]) for k in ("x_new", "y_new", "z_new")])
 
@@ -110,29 +122,22 @@ def test_krl_fdat_tools_with_a_grid(tmp_path, capsys):
     assert "t.src:7:" in err and "another tool than the grid's" in err
     assert "not placed in the robot frame" in err  # tool 7
     assert not (tmp_path / "refused.src").exists()
-    report = tmp_path / "r.csv"
-    out = tmp_path / "out.src"
-    assert main([*argv, "--allow-partial", "--report", str(report), "-o", str(out)]) == 0
-    rows = _report(report)
+    rows = _rewrite(tmp_path, cell, {"t.src": KRL}, "--base", "1", "--decimals", "4")
     for line in (5, 11):  # tool 2 (0.5 mm from the grid's tool), tool 1 again
         assert rows[line]["status"] == "corrected"
         np.testing.assert_allclose(_new(rows[line]) - _old(rows[line]), E_CONST, atol=1e-9)
     assert rows[7]["status"] == "skipped"
     assert "tool 3: its TCP is 150.000 mm from" in rows[7]["reason"]
     assert rows[9]["reason"] == "tool 7 is not declared in the cell file (tool, tool_data)"
-    text = out.read_text()
+    text = (tmp_path / "out.src").read_text()
     assert "LIN {X 1500,Y 100,Z 1400,A 0,B 90,C 0}" in text  # tool 3 as written
     assert "LIN {X 1500,Y 200,Z 1500,A 0,B 90,C 0}" in text  # tool 7 as written
 
 
 def test_krl_tools_with_a_model_land_each_tcp_on_its_target(tmp_path):
     cell = _model_cell(tmp_path)
-    src = tmp_path / "t.src"
-    src.write_text(KRL.replace("$TOOL=TOOL_DATA[7]", "$TOOL=TOOL_DATA[2]"))
-    report = tmp_path / "r.csv"
-    argv = ["rewrite", str(src), "--cell", str(cell), "--base", "1", "--decimals", "6"]
-    assert main([*argv, "--report", str(report), "-o", str(tmp_path / "o.src")]) == 0
-    rows = _report(report)
+    program = {"t.src": KRL.replace("$TOOL=TOOL_DATA[7]", "$TOOL=TOOL_DATA[2]")}
+    rows = _rewrite(tmp_path, cell, program, "--base", "1", "--decimals", "6")
     for line, tool in ((5, 2), (7, 3), (9, 2), (11, 1)):
         row = rows[line]
         assert row["status"] == "corrected", row
@@ -145,15 +150,11 @@ def test_krl_tools_with_a_model_land_each_tcp_on_its_target(tmp_path):
 
 def test_krl_tool_set_in_one_branch_only_is_reported(tmp_path, capsys):
     cell = _grid_cell(tmp_path)
-    src = tmp_path / "t.src"
-    src.write_text(
+    program = (
         "DEF T()\nBAS(#TOOL,1)\nIF $IN[1] THEN\n$TOOL=TOOL_DATA[2]\nENDIF\n"
         "LIN {X 1500,Y 0,Z 1500,A 0,B 90,C 0}\nEND\n"
     )
-    report = tmp_path / "r.csv"
-    argv = ["rewrite", str(src), "--cell", str(cell), "--base", "1", "--allow-partial"]
-    assert main([*argv, "--report", str(report), "-o", str(tmp_path / "o.src")]) == 0
-    reason = _report(report)[6]["reason"]
+    reason = _rewrite(tmp_path, cell, {"t.src": program}, "--base", "1")[6]["reason"]
     assert reason.startswith("tool unknown: $TOOL set in one branch of IF at line 3")
 
 
@@ -178,12 +179,7 @@ M2
 
 def test_gcode_tools_with_a_grid(tmp_path):
     cell = _grid_cell(tmp_path)
-    ngc = tmp_path / "t.ngc"
-    ngc.write_text(GCODE)
-    report = tmp_path / "r.csv"
-    argv = ["rewrite", str(ngc), "--cell", str(cell), "--decimals", "4", "--allow-partial"]
-    assert main([*argv, "--report", str(report), "-o", str(tmp_path / "o.ngc")]) == 0
-    rows = _report(report)
+    rows = _rewrite(tmp_path, cell, {"t.ngc": GCODE}, "--decimals", "4")
     for line in (4, 6, 15):  # tool 1, tool 2 (near), no length offset: the cell's tool
         assert rows[line]["status"] == "corrected"
         np.testing.assert_allclose(_new(rows[line]) - _old(rows[line]), E_CONST, atol=1e-9)
@@ -196,12 +192,7 @@ def test_gcode_tools_with_a_grid(tmp_path):
 
 def test_gcode_tools_with_a_model(tmp_path):
     cell = _model_cell(tmp_path)
-    ngc = tmp_path / "t.ngc"
-    ngc.write_text(GCODE.replace("G43 H9", "G43 H3"))
-    report = tmp_path / "r.csv"
-    argv = ["rewrite", str(ngc), "--cell", str(cell), "--decimals", "6", "--allow-partial"]
-    assert main([*argv, "--report", str(report), "-o", str(tmp_path / "o.ngc")]) == 0
-    rows = _report(report)
+    rows = _rewrite(tmp_path, cell, {"t.ngc": GCODE.replace("G43 H9", "G43 H3")}, "--decimals", "6")
     # no A, B, C words: the cell's configuration.reference (default 0, 90, 0), robot frame
     for line, tool in ((4, 1), (6, 2), (8, 3), (10, 3), (15, 1)):
         row = rows[line]
@@ -246,12 +237,8 @@ def test_rapid_tooldata_names(tmp_path):
         f"    MoveL {target.format(x=x, y=y, z=z)}, v10, fine, {tool}\\WObj:=wobjPanel;\n"
         for tool, (x, y, z) in moves
     )
-    mod = tmp_path / "t.mod"
-    mod.write_text(f"MODULE T\n  PROC main()\n{body}  ENDPROC\nENDMODULE\n")
-    report = tmp_path / "r.csv"
-    argv = ["rewrite", str(mod), "--cell", str(cell), "--decimals", "4", "--allow-partial"]
-    assert main([*argv, "--report", str(report), "-o", str(tmp_path / "o.mod")]) == 0
-    rows = _report(report)
+    module = f"MODULE T\n  PROC main()\n{body}  ENDPROC\nENDMODULE\n"
+    rows = _rewrite(tmp_path, cell, {"t.mod": module}, "--decimals", "4")
     # the correction in the work object: R^T e with R the base's rotation
     expected = abc_to_matrix(np.array(RAPID_BASE[3:])).T @ E_CONST
     for line in (3, 4):
@@ -264,12 +251,7 @@ def test_rapid_tooldata_names(tmp_path):
 def test_without_tool_data_other_tools_are_skipped_as_before(tmp_path):
     cell = write_cell(tmp_path, field="constant")
     assert load_cell(cell).tool_data is None
-    src = tmp_path / "t.src"
-    src.write_text(KRL)
-    report = tmp_path / "r.csv"
-    argv = ["rewrite", str(src), "--cell", str(cell), "--base", "1", "--allow-partial"]
-    assert main([*argv, "--report", str(report), "-o", str(tmp_path / "o.src")]) == 0
-    rows = _report(report)
+    rows = _rewrite(tmp_path, cell, {"t.src": KRL}, "--base", "1")
     assert rows[5]["reason"] == (
         "FDAT F2 (line 2) has TOOL_NO 2: the cell's tool, which the grid holds for, is 1"
     )
@@ -328,15 +310,11 @@ def test_a_grid_checks_the_orientation_of_its_own_tool(tmp_path):
     cell = write_cell(tmp_path, field="constant")
     write_grid(tmp_path / "grid.csv", field="constant", abc=(0, 90, 0))
     cell.write_text(cell.read_text() + "tool_data:\n  4: {x: 0, y: 0, z: 250, a: 0, b: 0, c: 30}\n")
-    src = tmp_path / "t.src"
-    src.write_text(
+    program = (
         "DEF T()\nDECL FDAT F4={TOOL_NO 4,BASE_NO 1,IPO_FRAME #BASE}\nFDAT_ACT=F4\n"
         "LIN {X 1500,Y 0,Z 1500,A 0,B 90,C 30}\nLIN {X 1500,Y 0,Z 1400,A 0,B 90,C 0}\nEND\n"
     )
-    report = tmp_path / "r.csv"
-    argv = ["rewrite", str(src), "--cell", str(cell), "--base", "1", "--allow-partial"]
-    assert main([*argv, "--report", str(report), "-o", str(tmp_path / "o.src")]) == 0
-    rows = _report(report)
+    rows = _rewrite(tmp_path, cell, {"t.src": program}, "--base", "1")
     # C 30 of tool 4 is C 0 of the grid's tool: as measured; C 0 of tool 4 is 30 deg off
     assert rows[4]["status"] == "corrected" and not rows[4]["reason"]
     assert rows[5]["status"] == "skipped" and "orientation 30.0 deg" in rows[5]["reason"]
@@ -369,13 +347,7 @@ ENDDAT
 
 def test_krl_stored_positions_take_the_tool_of_their_motions(tmp_path):
     cell = _grid_cell(tmp_path)
-    src, dat = tmp_path / "p.src", tmp_path / "p.dat"
-    src.write_text(PAIR_SRC)
-    dat.write_text(PAIR_DAT)
-    report = tmp_path / "r.csv"
-    argv = ["rewrite", str(src), str(dat), "--cell", str(cell), "--allow-partial"]
-    assert main([*argv, "--decimals", "4", "--report", str(report), "-o", str(tmp_path / "o")]) == 0
-    rows = _report(report)
+    rows = _rewrite(tmp_path, cell, {"p.src": PAIR_SRC, "p.dat": PAIR_DAT}, "--decimals", "4")
     assert rows[2]["status"] == "corrected"  # XP1: tool 2, 0.5 mm from the grid's tool
     np.testing.assert_allclose(_new(rows[2]) - _old(rows[2]), E_CONST, atol=1e-9)
     assert "tool 3: its TCP is 150.000 mm from" in rows[4]["reason"]  # XP2
@@ -390,12 +362,8 @@ def test_model_with_a_residual_grid_corrects_a_far_tool_by_the_model_alone(tmp_p
     simulate = ["simulate", "--robot", "kr210-realistic", "--region", "1200", "2200", "-500"]
     simulate += ["500", "1100", "2100", "--step", "500", "--abc", "0", "90", "0", "--tool"]
     assert main([*simulate, "0", "0", "250", "0", "0", "0", "-o", str(grid)]) == 0
-    src = tmp_path / "t.src"
-    src.write_text(KRL.replace("$TOOL=TOOL_DATA[7]", "$TOOL=TOOL_DATA[2]"))
-    report = tmp_path / "r.csv"
-    argv = ["rewrite", str(src), "--cell", str(cell), "--grid", str(grid), "--base", "1"]
-    assert main([*argv, "--decimals", "6", "--report", str(report), "-o", str(tmp_path / "o")]) == 0
-    rows = _report(report)
+    program = {"t.src": KRL.replace("$TOOL=TOOL_DATA[7]", "$TOOL=TOOL_DATA[2]")}
+    rows = _rewrite(tmp_path, cell, program, "--grid", str(grid), "--base", "1", "--decimals", "6")
     for line, tool in ((5, 2), (7, 3), (9, 2), (11, 1)):
         row = rows[line]
         assert row["status"] == "corrected", row
