@@ -371,3 +371,25 @@ def test_model_with_a_residual_grid_corrects_a_far_tool_by_the_model_alone(tmp_p
         assert np.linalg.norm(reached[0] - _old(row)) < 2e-3, (line, reached, row)
     assert rows[7]["reason"].startswith("flag: tool 3: corrected by the model alone")
     assert "corrected by the model alone" not in rows[5]["reason"]
+
+
+def test_krl_tool_data_set_otherwise_than_the_cell_is_reported(tmp_path):
+    """A program (or its $config.dat) that sets TOOL_DATA[n] to another TCP than the cell's
+    tool n, or at run time, leaves the positions of tool n uncorrected; the same TCP is fine."""
+    cell = _grid_cell(tmp_path)
+    program = (
+        "DEF T()\nTOOL_DATA[2]={X 0.5,Y 0,Z 250,A 0,B 0,C 0}\nTOOL_DATA[3]={X 0,Y 0,Z 380,A 0,"
+        "B 0,C 10}\nBAS(#TOOL,2)\nLIN {X 1500,Y 0,Z 1500,A 0,B 90,C 0}\nBAS(#TOOL,3)\n"
+        "LIN {X 1500,Y 100,Z 1500,A 0,B 90,C 0}\nEND\n"
+    )
+    rows = _rewrite(tmp_path, cell, {"t.src": program}, "--base", "1", "--decimals", "4")
+    assert rows[5]["status"] == "corrected"
+    assert rows[7]["reason"] == "tool unknown: TOOL_DATA[3] (t.src:3) is not the cell's tool 3"
+    again = tmp_path / "again"
+    again.mkdir()
+    config = again / "config.dat"
+    config.write_text("DEFDAT $CONFIG\nTOOL_DATA[2].Z=260\nENDDAT\n")
+    rows = _rewrite(again, cell, {"t.src": program}, "--base", "1", "--config-dat", str(config))
+    assert rows[5]["reason"] == (
+        "tool unknown: TOOL_DATA[2] is set otherwise than as a literal frame ($config.dat:2)"
+    )

@@ -307,6 +307,8 @@ class KrlScan:
     fdats: dict[str, Fdat] = field(default_factory=dict)  # FDAT name (upper case) -> its values
     base_data: dict[int, tuple[tuple[float, ...], int]] = field(default_factory=dict)
     # BASE_DATA[n] = {..} in this file -> (xyzabc, line)
+    tool_data: dict[int, tuple[tuple[float, ...] | None, int]] = field(default_factory=dict)
+    # TOOL_DATA[n] (or a member of it) set in this file -> (xyzabc, None: not a literal; line)
     assigned: dict[str, int] = field(default_factory=dict)
     # names given a non-literal value at run time -> first line
     frame_uses: dict[str, FrameUse] = field(default_factory=dict)  # normalized name -> first use
@@ -1567,6 +1569,17 @@ def _assignment(
             if not reason and all(k in numbers for k in "XYZABC"):
                 xyzabc = tuple(numbers[k].value for k in "XYZABC")
                 scan.base_data[number] = (xyzabc, lineno)
+        return
+    if target == "TOOL_DATA":
+        n = _INDEX_RE.fullmatch(index)
+        number = _small_int(n.group(1)) if n else None
+        if number is not None:
+            xyzabc = None
+            if not member and value.startswith("{") and ":" not in value.replace("FRAME:", ""):
+                _, numbers, reason, _ = parse_aggregate(code, value_at, off, scan.path, lineno)
+                if not reason and all(k in numbers for k in "XYZABC"):
+                    xyzabc = tuple(numbers[k].value for k in "XYZABC")
+            scan.tool_data[number] = (xyzabc, lineno)
         return
     if target in _FRAME_TARGETS:
         return

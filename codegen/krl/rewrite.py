@@ -43,7 +43,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
 )
 from accugrid.codegen.splice import ByteSplicer, literals
-from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.frames import pose_from_xyzabc, rotation_angle_deg
 
 __all__ = ["rewrite_krl"]
 
@@ -198,6 +198,7 @@ class _Context:
         if config is not None:
             for n, (xyzabc, _) in config.base_data.items():
                 self.base_data[n] = pose_from_xyzabc(np.array(xyzabc))
+        self.tool_conflicts = _tool_conflicts(self.every, opts.tool_data)
         self.fdats: dict[str, Fdat] = {}
         self.frame_uses: dict[str, tuple[str, FrameUse]] = {}
         self.assigned: dict[str, tuple[str, int]] = {}
@@ -310,6 +311,8 @@ class _Context:
                 elif base.kind == "fdat" and base.tool is None:
                     tool = self.fdats[base.fdat or ""].tool_no
                     tool = -1 if tool is None else tool
+                if tool in self.tool_conflicts:
+                    ident, frame, reason = None, None, f"tool unknown: {self.tool_conflicts[tool]}"
             placed = None if frame is None else (frame, tool)
             found = self._resolved[base] = ((ident, tool), placed, reason)
         return found
@@ -519,6 +522,29 @@ class _Context:
                 "but given no literal value in the given files: it is set at run time"
             )
         return f"{text} is not declared in the given files"
+
+
+def _tool_conflicts(scans: list[KrlScan], tool_data: dict | None) -> dict[int, str]:
+    """The tools the files set otherwise than the cell declares them: TOOL_DATA number ->
+    why (a value not written as a literal, or another TCP than the cell's, by 0.001 mm or
+    0.001 deg)."""
+    out = {}
+    if tool_data is None:
+        return out
+    for scan in scans:
+        where = Path(scan.path or "").name
+        for n, (xyzabc, line) in scan.tool_data.items():
+            if n not in tool_data or n in out:
+                continue
+            if xyzabc is None:
+                out[n] = f"TOOL_DATA[{n}] is set otherwise than as a literal frame ({where}:{line})"
+                continue
+            mine = pose_from_xyzabc(np.array(xyzabc))
+            cell = tool_data[n]
+            turn = float(rotation_angle_deg(mine[None, :3, :3], cell[:3, :3])[0])
+            if np.linalg.norm(mine[:3, 3] - cell[:3, 3]) > 1e-3 or turn > 1e-3:
+                out[n] = f"TOOL_DATA[{n}] ({where}:{line}) is not the cell's tool {n}"
+    return out
 
 
 def _upper(names: list[str]) -> list[str]:
