@@ -246,6 +246,18 @@ def test_rapid_tooldata_names(tmp_path):
         np.testing.assert_allclose(_new(rows[line]) - _old(rows[line]), expected, atol=6e-5)
     assert "tool 3: its TCP is 150.000 mm from" in rows[5]["reason"]
     assert rows[6]["reason"].startswith("moved with tool tOther at line 6, which the cell does")
+    # the module's own tooldata: tNear as the cell gives it, tLong 20 mm shorter
+    declared = (
+        "  PERS tooldata tNear:=[TRUE,[[0.5,0,250],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\n"
+        "  PERS tooldata tLong:=[TRUE,[[0,0,380],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\n"
+    )
+    module = module.replace("MODULE T\n", "MODULE T\n" + declared)
+    again = tmp_path / "again"
+    again.mkdir()
+    rows = _rewrite(again, cell, {"t.mod": module}, "--decimals", "4")
+    assert rows[6]["status"] == "corrected"  # tNear, line 6 now
+    reason = "the module's tooldata tlong is not the TCP the cell gives it (line 7)"
+    assert rows[7]["reason"] == reason
 
 
 def test_without_tool_data_other_tools_are_skipped_as_before(tmp_path):

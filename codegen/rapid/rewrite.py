@@ -271,13 +271,13 @@ def scan(
     text: str,
     section,
     ignore_external_axes: bool = False,
-    tools: dict[str, int] | None = None,
+    tools: dict[str, tuple[int, np.ndarray]] | None = None,
 ) -> RapidPositions:
     """The robtargets of a RAPID module and the reason each is left alone ("" when it can be
     corrected), in the frames of ``section`` (``codegen.rapid.section.RapidSection``);
     ``ignore_external_axes``: external axes in use do not keep a robtarget from correction;
-    ``tools``: the tooldata names a move may use (lower case) -> tool number (-1: the cell's
-    tool), None: the cell's tool (``rapid.tool``) alone."""
+    ``tools``: the tooldata names a move may use (lower case) -> (tool number, -1: the cell's
+    tool; flange_T_tool (4, 4) mm), None: the cell's tool (``rapid.tool``) alone."""
     check_text(text, path)
     masked = _masked(text)
     newlines = [m.start() for m in re.finditer("\n", text)]
@@ -346,7 +346,7 @@ def scan(
             used_wobj = optional.get("wobj", "wobj0").lower()
             used_tool = positional[move[1]][1] if len(positional) > move[1] else ""
             if tools is not None:
-                tool_no = tools.get(used_tool.lower(), -1)
+                tool_no = tools.get(used_tool.lower(), (-1,))[0]
                 if used_tool.lower() not in tools:
                     why = (
                         f"moved with tool {used_tool or '?'} at line {line}, which the cell does "
@@ -454,10 +454,11 @@ def scan(
     return found
 
 
-def _unfit_frames(data: dict[str, str], section, tools: dict[str, int] | None) -> dict[str, str]:
+def _unfit_frames(data: dict[str, str], section, tools: dict | None) -> dict[str, str]:
     """The cell's tools and work object where the module declares them otherwise than the cell
-    (a stationary tool, a work object the robot holds, another user or object frame): lower-case
-    name -> why its moves are not placed."""
+    (a stationary tool, a tool with another TCP than the cell's ``tools``, a work object the
+    robot holds, another user or object frame): lower-case name -> why its moves are not
+    placed."""
     out = {}
     wobj = section.wobj.lower()
     names = {section.tool.lower(): section.tool}
@@ -465,6 +466,10 @@ def _unfit_frames(data: dict[str, str], section, tools: dict[str, int] | None) -
         if data.get(tool, "[TRUE").lstrip(" \t\r\n[").upper().startswith("FALSE"):
             name = names.get(tool, tool)
             out[tool] = f"tool {name} is stationary (robhold FALSE): the robot holds the part"
+        elif tools is not None and tool in data:
+            numbers = [float(n) for n in re.findall(_NUM, data[tool])[:7]]
+            if len(numbers) == 7 and not _same_pose(_pose(numbers), tools[tool][1]):
+                out[tool] = f"the module's tooldata {tool} is not the TCP the cell gives it"
     value = data.get(wobj)
     if value is None:
         return out
@@ -474,22 +479,28 @@ def _unfit_frames(data: dict[str, str], section, tools: dict[str, int] | None) -
     numbers = [float(n) for n in re.findall(_NUM, value.split(",", 3)[-1])]
     if len(numbers) != 14:
         return out
-    frames = []
-    for k in (0, 7):
-        pose = np.eye(4)
-        pose[:3, :3] = _matrices(np.array(numbers[k + 3 : k + 7]))[0]
-        pose[:3, 3] = numbers[k : k + 3]
-        frames.append(pose)
-    robot_T_wobj = frames[0] @ frames[1]
-    if not (
-        np.allclose(robot_T_wobj[:3, 3], section.robot_T_wobj[:3, 3], rtol=0, atol=0.01)
-        and np.allclose(robot_T_wobj[:3, :3], section.robot_T_wobj[:3, :3], rtol=0, atol=1e-6)
-    ):
+    robot_T_wobj = _pose(numbers[:7]) @ _pose(numbers[7:])
+    if not _same_pose(robot_T_wobj, section.robot_T_wobj):
         out[wobj] = (
             f"the module's wobjdata {section.wobj} (user and object frame) is not the cell's base "
             "frame"
         )
     return out
+
+
+def _pose(numbers: list[float]) -> np.ndarray:
+    """RAPID [x, y, z, q1, q2, q3, q4] (mm) as a pose (4, 4) mm."""
+    pose = np.eye(4)
+    pose[:3, :3] = _matrices(np.array(numbers[3:7]))[0]
+    pose[:3, 3] = numbers[:3]
+    return pose
+
+
+def _same_pose(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two poses (4, 4) mm agree within 0.01 mm and 1e-6 (rotation matrix elements)."""
+    return np.allclose(a[:3, 3], b[:3, 3], rtol=0, atol=0.01) and np.allclose(
+        a[:3, :3], b[:3, :3], rtol=0, atol=1e-6
+    )
 
 
 def _literal(name, lit, offset, where, ignore_external_axes, line=None) -> _Target:
@@ -561,7 +572,8 @@ def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
     frames = np.stack([np.eye(4), section.robot_T_wobj])
     tools = None
     if opts.tool_data is not None:
-        tools = {**(opts.tool_names or {}), section.tool.lower(): -1}
+        tools = {name: (n, opts.tool_data[n]) for name, n in (opts.tool_names or {}).items()}
+        tools[section.tool.lower()] = (-1, opts.tool_data[opts.tool_number])
     for path, text in texts.items():
         found = scan(path, text, section, opts.ignore_external_axes, tools)
         rows = Rows(
