@@ -16,11 +16,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from rewrite_helpers import E_CONST, RAPID_BASE, write_cell, write_grid, write_rapid_cell
 from test_gcode_rs274 import canonical
 
 from accugrid.app.cli import main
 from accugrid.codegen.cell import load_cell
+from accugrid.compensation import GridModel
+from accugrid.compensation.policy import ORIENTATION, OTHER_TOOL, Policy
+from accugrid.compensation.settings import CorrectionSettings
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
@@ -405,3 +410,57 @@ def test_krl_tool_data_set_otherwise_than_the_cell_is_reported(tmp_path):
     assert rows[5]["reason"] == (
         "tool unknown: TOOL_DATA[2] is set otherwise than as a literal frame ($config.dat:2)"
     )
+
+
+def _smooth_grid() -> GridModel:
+    """A 5 x 5 x 5 grid (robot frame, 250 mm step) of a smooth error field, measured at
+    A 0, B 90, C 0 with the cell's tool."""
+    axes = [np.arange(1000.0, 2001.0, 250.0), np.arange(-500.0, 501.0, 250.0)]
+    axes.append(np.arange(1000.0, 2001.0, 250.0))
+    commanded = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    x, y, z = commanded.T
+    error = np.stack([0.2 + 1e-4 * x, -0.1 + 2e-4 * z, 0.3 - 1e-4 * y], axis=1)
+    abc = np.tile([0.0, 90.0, 0.0], (len(commanded), 1))
+    return GridModel.from_measurements(commanded, commanded - error, abc)
+
+
+GRID = _smooth_grid()
+CELL_TOOL = pose_from_xyzabc(np.array(TOOLS[1]))
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    offset=st.tuples(*[st.floats(-1.5, 1.5)] * 3),
+    turn_deg=st.floats(0.0, 40.0),
+    points=st.lists(
+        st.tuples(st.floats(1010, 1990), st.floats(-490, 490), st.floats(1010, 1990)),
+        min_size=1,
+        max_size=5,
+    ),
+)
+def test_a_grid_corrects_another_tool_only_near_its_own(offset, turn_deg, points):
+    """Grid alone, correction.tool_distance 1 mm: a tool whose TCP is farther is refused for
+    every position (command = target); a nearer one gets the command the cell's tool gets at
+    the same target when it is written at the grid tool's orientation, and is refused for its
+    orientation when the grid's tool at the same flange pose turns beyond the 15 deg limit."""
+    policy = Policy.build(CorrectionSettings(), GRID, tools=(CELL_TOOL, CELL_TOOL))
+    tool = pose_from_xyzabc(np.array([*offset, 0.0, 0.0, 0.0]) + np.array(TOOLS[1]))
+    tool[:3, :3] = abc_to_matrix(np.array([0.0, 0.0, turn_deg]))  # turned about its X
+    targets = np.array(points, dtype=float)
+    grid_rotation = abc_to_matrix(np.array([0.0, 90.0, 0.0]))
+    # written so that the grid's tool (no turn) is at the grid's orientation: R_grid R_tool
+    as_measured = np.tile(grid_rotation @ tool[:3, :3], (len(targets), 1, 1))
+    written = np.tile(grid_rotation, (len(targets), 1, 1))
+    mine = policy.decide_tool(2, tool, targets, as_measured)
+    theirs = policy.decide(targets, written)
+    distance = float(np.linalg.norm(offset))
+    if distance > 1.0:
+        assert (mine.code == OTHER_TOOL).all()
+        np.testing.assert_array_equal(mine.command, targets)
+        return
+    assert (mine.code == 0).all() and (theirs.code == 0).all()
+    np.testing.assert_array_equal(mine.command, theirs.command)
+    turned = policy.decide_tool(2, tool, targets, written)
+    if abs(turn_deg - 15.0) > 1e-6:  # the limit itself: either, by rounding
+        assert (turned.code == ORIENTATION).all() == (turn_deg > 15.0)
+        assert (turned.code == 0).all() == (turn_deg < 15.0)
