@@ -464,3 +464,37 @@ def test_a_grid_corrects_another_tool_only_near_its_own(offset, turn_deg, points
     if abs(turn_deg - 15.0) > 1e-6:  # the limit itself: either, by rounding
         assert (turned.code == ORIENTATION).all() == (turn_deg > 15.0)
         assert (turned.code == 0).all() == (turn_deg < 15.0)
+
+
+BRANCHES = """DEF T()
+BAS(#TOOL,1)
+M1:
+LIN {X 1500,Y 0,Z 1500,A 0,B 90,C 0}
+IF $IN[1] THEN
+$TOOL=TOOL_DATA[2]
+ENDIF
+LIN {X 1500,Y 100,Z 1500,A 0,B 90,C 0}
+BAS(#TOOL,1)
+FOR I=1 TO 3
+LIN {X 1500,Y 200,Z 1500,A 0,B 90,C 0}
+BAS(#TOOL,2)
+LIN {X 1500,Y 300,Z 1500,A 0,B 90,C 0}
+ENDFOR
+END
+"""
+
+
+def test_krl_tool_changed_on_some_paths_only(tmp_path):
+    """Without tool_data $TOOL is not followed (the rows are as before this feature); with it,
+    a tool set in one branch, before a jump target or inside a loop is not known after it."""
+    plain = tmp_path / "plain"
+    plain.mkdir()
+    rows = _rewrite(plain, write_cell(plain, field="constant"), {"t.src": BRANCHES}, "--base", "1")
+    assert [rows[k]["status"] for k in (4, 8, 11, 13)] == ["corrected"] * 4
+    rows = _rewrite(tmp_path, _grid_cell(tmp_path), {"t.src": BRANCHES}, "--base", "1")
+    assert rows[4]["reason"] == (
+        "tool unknown: after jump target M1 (line 3): $TOOL depends on the path taken"
+    )
+    assert rows[8]["reason"] == "tool unknown: $TOOL set in one branch of IF at line 5 only"
+    assert rows[11]["reason"] == "tool unknown: $TOOL changes inside the loop FOR at line 10"
+    assert rows[13]["status"] == "corrected"  # tool 2 on every pass

@@ -203,6 +203,9 @@ class BaseRef:
     reason: str = ""
     label: str | None = None  # set when the state was carried across a jump target
     tool: int | str | None = None
+    tool_label: str | None = None  # the jump target the tool was carried across (``label``)
+    # the state whose base this one keeps, only its tool changed (None: its own base)
+    origin: BaseRef | None = field(default=None, compare=False, repr=False)
 
     def describe(self) -> str:
         if self.kind == "number":
@@ -630,7 +633,7 @@ class _Rows:
         self.uses = use_columns(lines)
         self.external: dict[int, tuple[str, float]] = {}
         self._ids: dict[int, int] = {}
-        self.ops: list[tuple] = []  # ("swap", marks, start, changed) | ("label", marks)
+        self.ops: list[tuple] = []  # ("swap", marks, start, changed) | ("label[_tool]", marks)
 
     def base_id(self, base: BaseRef | None) -> int:
         if base is None:
@@ -697,7 +700,11 @@ class _Rows:
                     continue
                 for old in distinct_ints(part[part >= 0]):
                     ref = scan.bases[old]
-                    if ref.label:
+                    if op[0] == "label_tool":
+                        if ref.tool_label and not isinstance(ref.tool, str):  # known so far
+                            why = f"after jump target {ref.tool_label}: $TOOL depends on the path"
+                            part[part == old] = self.base_id(_tool_changed(ref, why + " taken"))
+                    elif ref.label:
                         changed = BaseRef(
                             "unknown",
                             ref.line,
@@ -733,6 +740,7 @@ class _Flow:
         self.state = initial
         self.blocks: list[_Block] = []
         self.sets_base = False
+        self.sets_tool = False
         self.since = rows.mark()  # where the routine's rows start
         self.before_spline: BaseRef | None = None  # the base outside an open spline block
 
@@ -747,18 +755,21 @@ class _Flow:
         else:
             self.state = self.initial
         self.blocks = []
-        self.sets_base = False
+        self.sets_base = self.sets_tool = False
         self.since = self.rows.mark()
         self.before_spline = None
 
     def finish_routine(self) -> None:
-        """A jump target makes the base path-dependent when the routine sets the base anywhere."""
+        """A jump target makes the base (the tool) path-dependent when the routine sets the base
+        (the tool) anywhere."""
         if self.sets_base:
             self.rows.ops.append(("label", (self.since, self.rows.mark())))
+        elif self.sets_tool:
+            self.rows.ops.append(("label_tool", (self.since, self.rows.mark())))
 
     def end_routine(self) -> None:
         self.finish_routine()
-        self.sets_base = False
+        self.sets_base = self.sets_tool = False
         self.since = self.rows.mark()
 
     def set(self, base: BaseRef) -> None:
@@ -769,9 +780,10 @@ class _Flow:
     def set_tool(self, tool: int | str, line: int) -> None:
         """``$TOOL`` set at ``line``: TOOL_DATA number, or why it is not known."""
         self.state = replace(
-            self.state, tool=f"{tool} (line {line})" if isinstance(tool, str) else tool
+            _tool_changed(self.state, f"{tool} (line {line})" if isinstance(tool, str) else tool),
+            tool_label=None,
         )
-        self.sets_base = True
+        self.sets_tool = True
 
     def open_spline(self, base: BaseRef | None) -> None:
         """A SPLINE/PTP_SPLINE block: its segments move in ``base`` (None: the base in effect)."""
@@ -785,7 +797,8 @@ class _Flow:
             self.state, self.before_spline = self.before_spline, None
 
     def label(self, name: str, line: int) -> None:
-        self.state = replace(self.state, label=f"{name} (line {line})")
+        where = f"{name} (line {line})"
+        self.state = replace(self.state, label=where, tool_label=where)
 
     def call(self, name: str, line: int) -> None:
         if not self.trust_calls:
@@ -820,7 +833,7 @@ class _Flow:
             elif all(e is ends[0] for e in ends):
                 self.state = ends[0]
             elif all(_same_base(e, ends[0]) for e in ends):
-                self.state = replace(ends[0], tool=f"$TOOL set in one branch of {where} only")
+                self.state = _tool_changed(ends[0], f"$TOOL set in one branch of {where} only")
             else:
                 self.state = BaseRef(
                     "unknown", line, reason=f"$BASE set in one branch of {where} only"
@@ -829,7 +842,7 @@ class _Flow:
         if self.state is not start:  # a loop body that changes the base
             changed = BaseRef("unknown", line, reason=f"$BASE changes inside the loop {where}")
             if _same_base(self.state, start):
-                changed = replace(start, tool=f"$TOOL changes inside the loop {where}")
+                changed = _tool_changed(start, f"$TOOL changes inside the loop {where}")
             self.rows.ops.append(("swap", (block.mark, self.rows.mark()), start, changed))
             if block.keyword != "REPEAT":
                 self.state = changed
@@ -845,9 +858,14 @@ def _with_tool(base: BaseRef | None, before: BaseRef) -> BaseRef:
     return base
 
 
+def _tool_changed(state: BaseRef, tool: int | str) -> BaseRef:
+    """``state`` with another tool: the same base (``_same_base``)."""
+    return replace(state, tool=tool, origin=state.origin or state)
+
+
 def _same_base(a: BaseRef, b: BaseRef) -> bool:
-    """Whether two states have the same base (their tools may differ)."""
-    return replace(a, line=0, tool=None, label=None) == replace(b, line=0, tool=None, label=None)
+    """Whether two states have the same base, set at the same place (their tools may differ)."""
+    return (a.origin or a) is (b.origin or b)
 
 
 _OPENERS = {"IF", "SWITCH", "FOR", "WHILE", "LOOP", "REPEAT"}
