@@ -350,7 +350,6 @@ class Policy:
         else:
             verdict = Verdict(self, points, points.copy(), np.zeros(n, np.int8), np.zeros(n))
             verdict.refuse(np.arange(n), OTHER_TOOL, np.full(n, distance))
-            verdict.length = np.zeros(n)
         verdict.numbers["tool"] = np.full(n, float(number))
         return verdict
 
