@@ -22,6 +22,9 @@ inline-form FOLD lines are comments). It finds:
   ``ENDSPLINE``). What cannot be decided is an ``unknown`` base with the reason: frame
   arithmetic ``:``, a variable, ``EK(...)``, the start of a routine (inherited from the caller),
   a call that may change it, a jump target, a branch or loop that changes it.
+- tool context, followed with the base (``BaseRef.tool``): ``$TOOL = TOOL_DATA[n]``,
+  ``$TOOL = $NULLFRAME`` (tool 0, the flange), ``BAS(#TOOL, n)``, an FDAT's ``TOOL_NO``; any other
+  ``$TOOL`` value, and a branch or loop that changes it, leaves the tool unknown with the reason.
 
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
 Every pattern is linear in its input (see the note above ``NUMBER``).
@@ -42,7 +45,7 @@ import math
 import os
 import re
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from itertools import compress
 from typing import NamedTuple
 
@@ -151,6 +154,7 @@ _ASSIGN_RE = re.compile(r"\s*+" + _NAME + r"\s*+=(?!=)\s*+")
 _INT_RE = re.compile(r"\s*+\+?(\d++)\s*+$")
 _BAS_RE = re.compile(r"\s*+BAS\s*+\(\s*+#\s*+(\w++)", re.I)
 _BASE_DATA_RE = re.compile(r"\s*+BASE_DATA\s*+\[\s*+(\d++)\s*+\]\s*+$", re.I)
+_TOOL_DATA_RE = re.compile(r"\s*+TOOL_DATA\s*+\[\s*+(\d++)\s*+\]\s*+$", re.I)
 _CALL_RE = re.compile(r"\s*+([A-Za-z_]\w*+)\s*+\(")
 _ROUTINE_RE = re.compile(
     r"\s*+(?:GLOBAL\s++)?(DEF|DEFFCT)\s++(?:\w++\s++)?([A-Za-z_]\w*+)\s*+\(", re.I
@@ -187,6 +191,8 @@ class BaseRef:
 
     kind: "number" (BASE_DATA[number]), "literal" (xyzabc given in the program), "fdat" (the
     BASE_NO of FDAT ``fdat``, resolved once every file is read), "unknown" (``reason`` says why).
+    tool: the TOOL_DATA number set with it (0: $NULLFRAME, the flange), a str: why the tool is
+    not known, None: not set (an FDAT's TOOL_NO for kind "fdat", else the cell's tool).
     """
 
     kind: str
@@ -196,6 +202,10 @@ class BaseRef:
     fdat: str | None = None
     reason: str = ""
     label: str | None = None  # set when the state was carried across a jump target
+    tool: int | str | None = None
+    tool_label: str | None = None  # the jump target the tool was carried across (``label``)
+    # the state whose base this one keeps, only its tool changed (None: its own base)
+    origin: BaseRef | None = field(default=None, compare=False, repr=False)
 
     def describe(self) -> str:
         if self.kind == "number":
@@ -300,6 +310,8 @@ class KrlScan:
     fdats: dict[str, Fdat] = field(default_factory=dict)  # FDAT name (upper case) -> its values
     base_data: dict[int, tuple[tuple[float, ...], int]] = field(default_factory=dict)
     # BASE_DATA[n] = {..} in this file -> (xyzabc, line)
+    tool_data: dict[int, tuple[tuple[float, ...] | None, int]] = field(default_factory=dict)
+    # TOOL_DATA[n] (or a member of it) set in this file -> (xyzabc, None: not a literal; line)
     assigned: dict[str, int] = field(default_factory=dict)
     # names given a non-literal value at run time -> first line
     frame_uses: dict[str, FrameUse] = field(default_factory=dict)  # normalized name -> first use
@@ -621,7 +633,7 @@ class _Rows:
         self.uses = use_columns(lines)
         self.external: dict[int, tuple[str, float]] = {}
         self._ids: dict[int, int] = {}
-        self.ops: list[tuple] = []  # ("swap", marks, start, changed) | ("label", marks)
+        self.ops: list[tuple] = []  # ("swap", marks, start, changed) | ("label[_tool]", marks)
 
     def base_id(self, base: BaseRef | None) -> int:
         if base is None:
@@ -688,7 +700,11 @@ class _Rows:
                     continue
                 for old in distinct_ints(part[part >= 0]):
                     ref = scan.bases[old]
-                    if ref.label:
+                    if op[0] == "label_tool":
+                        if ref.tool_label and not isinstance(ref.tool, str):  # known so far
+                            why = f"after jump target {ref.tool_label}: $TOOL depends on the path"
+                            part[part == old] = self.base_id(_tool_changed(ref, why + " taken"))
+                    elif ref.label:
                         changed = BaseRef(
                             "unknown",
                             ref.line,
@@ -724,6 +740,7 @@ class _Flow:
         self.state = initial
         self.blocks: list[_Block] = []
         self.sets_base = False
+        self.sets_tool = False
         self.since = rows.mark()  # where the routine's rows start
         self.before_spline: BaseRef | None = None  # the base outside an open spline block
 
@@ -738,29 +755,41 @@ class _Flow:
         else:
             self.state = self.initial
         self.blocks = []
-        self.sets_base = False
+        self.sets_base = self.sets_tool = False
         self.since = self.rows.mark()
         self.before_spline = None
 
     def finish_routine(self) -> None:
-        """A jump target makes the base path-dependent when the routine sets the base anywhere."""
+        """A jump target makes the base (the tool) path-dependent when the routine sets the base
+        (the tool) anywhere."""
         if self.sets_base:
             self.rows.ops.append(("label", (self.since, self.rows.mark())))
+        elif self.sets_tool:
+            self.rows.ops.append(("label_tool", (self.since, self.rows.mark())))
 
     def end_routine(self) -> None:
         self.finish_routine()
-        self.sets_base = False
+        self.sets_base = self.sets_tool = False
         self.since = self.rows.mark()
 
     def set(self, base: BaseRef) -> None:
-        self.state = base
+        """A new base; the tool set before stays, unless an FDAT sets both."""
+        self.state = _with_tool(base, self.state)
         self.sets_base = True
+
+    def set_tool(self, tool: int | str, line: int) -> None:
+        """``$TOOL`` set at ``line``: TOOL_DATA number, or why it is not known."""
+        self.state = replace(
+            _tool_changed(self.state, f"{tool} (line {line})" if isinstance(tool, str) else tool),
+            tool_label=None,
+        )
+        self.sets_tool = True
 
     def open_spline(self, base: BaseRef | None) -> None:
         """A SPLINE/PTP_SPLINE block: its segments move in ``base`` (None: the base in effect)."""
         self.before_spline = self.state
         if base is not None:
-            self.state = base
+            self.state = _with_tool(base, self.state)
 
     def close_spline(self) -> None:
         """ENDSPLINE: the base in effect before the block again."""
@@ -768,10 +797,8 @@ class _Flow:
             self.state, self.before_spline = self.before_spline, None
 
     def label(self, name: str, line: int) -> None:
-        s = self.state
-        self.state = BaseRef(
-            s.kind, s.line, s.number, s.xyzabc, s.fdat, s.reason, f"{name} (line {line})"
-        )
+        where = f"{name} (line {line})"
+        self.state = replace(self.state, label=where, tool_label=where)
 
     def call(self, name: str, line: int) -> None:
         if not self.trust_calls:
@@ -805,6 +832,8 @@ class _Flow:
                 self.state = start
             elif all(e is ends[0] for e in ends):
                 self.state = ends[0]
+            elif all(_same_base(e, ends[0]) for e in ends):
+                self.state = _tool_changed(ends[0], f"$TOOL set in one branch of {where} only")
             else:
                 self.state = BaseRef(
                     "unknown", line, reason=f"$BASE set in one branch of {where} only"
@@ -812,9 +841,31 @@ class _Flow:
             return
         if self.state is not start:  # a loop body that changes the base
             changed = BaseRef("unknown", line, reason=f"$BASE changes inside the loop {where}")
+            if _same_base(self.state, start):
+                changed = _tool_changed(start, f"$TOOL changes inside the loop {where}")
             self.rows.ops.append(("swap", (block.mark, self.rows.mark()), start, changed))
             if block.keyword != "REPEAT":
                 self.state = changed
+
+
+def _with_tool(base: BaseRef | None, before: BaseRef) -> BaseRef:
+    """``base`` set where ``before`` was in effect (``before`` when None), with the tool set
+    before unless it sets one itself (an FDAT sets both)."""
+    if base is None:
+        return before
+    if base.tool is None and base.kind != "fdat" and before.tool is not None:
+        return replace(base, tool=before.tool)
+    return base
+
+
+def _tool_changed(state: BaseRef, tool: int | str) -> BaseRef:
+    """``state`` with another tool: the same base (``_same_base``)."""
+    return replace(state, tool=tool, origin=state.origin or state)
+
+
+def _same_base(a: BaseRef, b: BaseRef) -> bool:
+    """Whether two states have the same base, set at the same place (their tools may differ)."""
+    return (a.origin or a) is (b.origin or b)
 
 
 _OPENERS = {"IF", "SWITCH", "FOR", "WHILE", "LOOP", "REPEAT"}
@@ -1297,9 +1348,10 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
 
 
 def _bas(code: str, pos: int, lineno: int, flow: _Flow) -> None:
-    """``BAS(#BASE, n)`` sets BASE_DATA[n]; other BAS commands leave the base."""
+    """``BAS(#BASE, n)`` sets BASE_DATA[n], ``BAS(#TOOL, n)`` TOOL_DATA[n]; other BAS commands
+    leave them."""
     m = _BAS_RE.match(code, pos)
-    if m is None or m.group(1).upper() != "BASE":
+    if m is None or m.group(1).upper() not in ("BASE", "TOOL"):
         return
     rest = code[m.end() :].strip()
     if not rest.endswith(")"):
@@ -1310,7 +1362,9 @@ def _bas(code: str, pos: int, lineno: int, flow: _Flow) -> None:
     arg = inner[1:].strip()
     n = _INT_RE.match(arg)
     number = _small_int(n.group(1)) if n else None
-    if number is not None:
+    if m.group(1).upper() == "TOOL":
+        flow.set_tool(number if number is not None else f"BAS(#TOOL, {arg}): not a number", lineno)
+    elif number is not None:
         flow.set(BaseRef("number", lineno, number=number))
     else:
         flow.set(BaseRef("unknown", lineno, reason=f"BAS(#BASE, {arg}): not a number"))
@@ -1506,6 +1560,9 @@ def _assignment(
     if target == "$BASE" and not member:
         flow.set(_base_value(code, value_at, off, lineno, scan))
         return
+    if target == "$TOOL":
+        flow.set_tool(_tool_value(value, member), lineno)
+        return
     if target == "$BASE" or (target == "FDAT_ACT" and member):
         flow.set(BaseRef("unknown", lineno, reason=f"{code.strip()}: changes part of the base"))
         return
@@ -1513,7 +1570,7 @@ def _assignment(
         if value.startswith("{"):
             fdat = _fdat_values(code, value_at, scan.path, lineno)
             flow.set(
-                BaseRef("number", lineno, number=fdat.base_no)
+                BaseRef("number", lineno, number=fdat.base_no, tool=fdat.tool_no)
                 if fdat.base_no is not None
                 else BaseRef("unknown", lineno, reason=fdat.reason)
             )
@@ -1530,6 +1587,17 @@ def _assignment(
             if not reason and all(k in numbers for k in "XYZABC"):
                 xyzabc = tuple(numbers[k].value for k in "XYZABC")
                 scan.base_data[number] = (xyzabc, lineno)
+        return
+    if target == "TOOL_DATA":
+        n = _INDEX_RE.fullmatch(index)
+        number = _small_int(n.group(1)) if n else None
+        if number is not None:
+            xyzabc = None
+            if not member and value.startswith("{") and ":" not in value.replace("FRAME:", ""):
+                _, numbers, reason, _ = parse_aggregate(code, value_at, off, scan.path, lineno)
+                if not reason and all(k in numbers for k in "XYZABC"):
+                    xyzabc = tuple(numbers[k].value for k in "XYZABC")
+            scan.tool_data[number] = (xyzabc, lineno)
         return
     if target in _FRAME_TARGETS:
         return
@@ -1576,6 +1644,20 @@ def _base_value(code: str, at: int, off: int, lineno: int, scan: KrlScan) -> Bas
     if n:
         return _base_data_ref(n.group(1), lineno, "$BASE = ")
     return BaseRef("unknown", lineno, reason=f"$BASE = {value}: set from a variable")
+
+
+def _tool_value(value: str, member: str) -> int | str:
+    """The tool ``$TOOL[.member] = value`` sets: a TOOL_DATA number (0: $NULLFRAME), or why
+    it is not known."""
+    if member:
+        return f"$TOOL{member} = {value}: changes part of the tool"
+    if value.upper() == "$NULLFRAME":
+        return 0
+    n = _TOOL_DATA_RE.match(value)
+    number = _small_int(n.group(1)) if n else None
+    if number is not None:
+        return number
+    return f"$TOOL = {value[:40]}: not a TOOL_DATA number"
 
 
 def _base_data_ref(digits: str, lineno: int, what: str) -> BaseRef:
@@ -1661,7 +1743,7 @@ def _motion(
     relative = word.endswith("_REL")
     base = flow.state
     if "$" in code and "WITH" in code.upper():
-        base = _with_base(code, lineno) or base
+        base = _with_tool(_with_base(code, lineno), base)
     for _ in range(count):
         while at < len(code) and code[at] in " \t,":
             at += 1

@@ -43,7 +43,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
 )
 from accugrid.codegen.splice import ByteSplicer, literals
-from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.frames import pose_from_xyzabc, rotation_angle_deg
 
 __all__ = ["rewrite_krl"]
 
@@ -141,6 +141,9 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
             else:
                 frame[i] = ctx.frame_id(f)
     rows = Rows([scan.path or ""], np.zeros(n, np.int64), t.line, t.name, reasons, old)
+    if ctx.frame_tools:
+        placed = frame >= 0
+        rows.tool[placed] = np.array(ctx.frame_tools, np.int64)[frame[placed]]
     for i in np.flatnonzero(frame < 0).tolist():  # not placed: does a motion command it?
         if t.reason[i] != JOINT_TARGET and not t.reason[i].startswith(FRAME_OPERAND):
             rows.commanded[i] = t.kind[i] == MOTION or ctx.moved_to(s, i)
@@ -179,8 +182,10 @@ class _Context:
     A stored position (declared or assigned with a literal) is a drilling position only if a
     motion uses it, or, in a .dat given alone with ``--base``, if it is a POS/E6POS. Never when it
     is a frame (assigned to $TOOL/$BASE/$LOAD/TOOL_DATA/BASE_DATA, an operand of ``:``) or
-    declared CONST. Its FDAT (``XP1`` <-> ``FP1``) wins over ``--base``; an FDAT with another
-    tool than the cell's, or an external TCP, leaves it uncorrected."""
+    declared CONST. Its FDAT (``XP1`` <-> ``FP1``) wins over ``--base``; an FDAT with an external
+    TCP leaves it uncorrected, and so does one with another tool than the cell's unless the
+    cell declares ``tool_data`` (then each position takes the tool of its motions: FDAT
+    ``TOOL_NO``, ``$TOOL``, ``BAS(#TOOL, n)``, one tool for all of them)."""
 
     def __init__(
         self, scans: list[KrlScan], config: KrlScan | None, initial: BaseRef | None, opts: Options
@@ -193,6 +198,7 @@ class _Context:
         if config is not None:
             for n, (xyzabc, _) in config.base_data.items():
                 self.base_data[n] = pose_from_xyzabc(np.array(xyzabc))
+        self.tool_conflicts = _tool_conflicts(self.every, opts.tool_data)
         self.fdats: dict[str, Fdat] = {}
         self.frame_uses: dict[str, tuple[str, FrameUse]] = {}
         self.assigned: dict[str, tuple[str, int]] = {}
@@ -263,6 +269,7 @@ class _Context:
         self.lone_dat = all(Path(s.path or "").suffix.lower() == ".dat" for s in scans)
         self._resolved: dict[BaseRef, tuple[object, np.ndarray | None, str]] = {}
         self.frames: list[np.ndarray] = []
+        self.frame_tools: list[int] = []  # the tool number of each of ``frames`` (-1: the cell's)
         self._frame_ids: dict[int, int] = {}
         self._blocked = set(self.frame_uses) | set(self.assigned)
 
@@ -281,19 +288,33 @@ class _Context:
         use_of.pop("", None)
         return use_of
 
-    def frame_id(self, frame: np.ndarray) -> int:
-        """Index of ``frame`` (one of the resolved frames) in ``frames``."""
-        found = self._frame_ids.get(id(frame))
+    def frame_id(self, placed: tuple[np.ndarray, int]) -> int:
+        """Index of ``placed`` (one of the resolved (frame, tool) pairs) in ``frames``."""
+        found = self._frame_ids.get(id(placed))
         if found is None:
-            found = self._frame_ids[id(frame)] = len(self.frames)
-            self.frames.append(frame)
+            found = self._frame_ids[id(placed)] = len(self.frames)
+            self.frames.append(placed[0])
+            self.frame_tools.append(placed[1])
         return found
 
-    def resolve(self, base: BaseRef) -> tuple[object, np.ndarray | None, str]:
-        """(identity key, robot_T_base or None, reason), once per distinct base."""
+    def resolve(self, base: BaseRef) -> tuple[object, tuple[np.ndarray, int] | None, str]:
+        """(identity key, (robot_T_base, tool number, -1: the cell's) or None, reason), once
+        per distinct base. Without ``Options.tool_data`` the tool is always the cell's."""
         found = self._resolved.get(base)
         if found is None:
-            found = self._resolved[base] = self._resolve(base)
+            ident, frame, reason = self._resolve(base)
+            tool = -1
+            if frame is not None and self.opts.tool_data is not None:
+                tool = base.tool if base.tool is not None else -1
+                if isinstance(tool, str):
+                    ident, frame, reason = None, None, f"tool unknown: {tool}"
+                elif base.kind == "fdat" and base.tool is None:
+                    tool = self.fdats[base.fdat or ""].tool_no
+                    tool = -1 if tool is None else tool
+                if tool in self.tool_conflicts:
+                    ident, frame, reason = None, None, f"tool unknown: {self.tool_conflicts[tool]}"
+            placed = None if frame is None else (frame, tool)
+            found = self._resolved[base] = ((ident, tool), placed, reason)
         return found
 
     def _resolve(self, base: BaseRef) -> tuple[object, np.ndarray | None, str]:
@@ -319,7 +340,9 @@ class _Context:
     def _fdat_reason(self, name: str, fdat: Fdat) -> str:
         if fdat.base_no is None:
             return f"FDAT {name}: {fdat.reason}"
-        tool = self.opts.tool_number
+        tool = self.opts.tool_number  # with the cell's tool_data, each FDAT's own tool
+        if self.opts.tool_data is not None:
+            return ""
         if tool is not None and fdat.tool_no is not None and fdat.tool_no != tool:
             return (
                 f"FDAT {name} (line {fdat.line}) has TOOL_NO {fdat.tool_no}: the cell's tool, "
@@ -434,6 +457,8 @@ class _Context:
             frame = frame_i
         if len(keys) > 1:
             lines = ", ".join(str(at) for at in keys.values())
+            if len({ident[0] for ident in keys}) == 1:
+                return None, f"{name} is moved to with different tools (lines {lines})"
             return None, f"{name} is used under different bases (lines {lines})"
         return frame, ""
 
@@ -497,6 +522,29 @@ class _Context:
                 "but given no literal value in the given files: it is set at run time"
             )
         return f"{text} is not declared in the given files"
+
+
+def _tool_conflicts(scans: list[KrlScan], tool_data: dict | None) -> dict[int, str]:
+    """The tools the files set otherwise than the cell declares them: TOOL_DATA number ->
+    why (a value not written as a literal, or another TCP than the cell's, by 0.001 mm or
+    0.001 deg)."""
+    out = {}
+    if tool_data is None:
+        return out
+    for scan in scans:
+        where = Path(scan.path or "").name
+        for n, (xyzabc, line) in scan.tool_data.items():
+            if n not in tool_data or n in out:
+                continue
+            if xyzabc is None:
+                out[n] = f"TOOL_DATA[{n}] is set otherwise than as a literal frame ({where}:{line})"
+                continue
+            mine = pose_from_xyzabc(np.array(xyzabc))
+            cell = tool_data[n]
+            turn = float(rotation_angle_deg(mine[None, :3, :3], cell[:3, :3])[0])
+            if np.linalg.norm(mine[:3, 3] - cell[:3, 3]) > 1e-3 or turn > 1e-3:
+                out[n] = f"TOOL_DATA[{n}] ({where}:{line}) is not the cell's tool {n}"
+    return out
 
 
 def _upper(names: list[str]) -> list[str]:
