@@ -2,10 +2,10 @@
 ../shared/realworld, each with the cell and options the realworld tests use
 (``tests/rewrite_helpers.REALWORLD_REWRITES``, ``tests/test_rapid.CASES``), once with a grid and
 once with a calibrated model (``out/model/calibrated.yaml`` from ``make demo``; skipped when it
-is missing; RAPID cells are an ABB arm, so grid only). Per dialect: the motion positions (those a job
-must correct: what a motion commands, a lone .dat's POS/E6POS with --base), how many are
-corrected by default (``--allow-partial`` only so that the rest is counted) and the reasons left, with counts (numbers and names in a
-reason shown as ``#``).
+is missing; RAPID cells are an ABB arm, so grid only). Per dialect: the motion positions (those
+a job must correct: what a motion commands, a lone .dat's POS/E6POS with --base), how many are
+corrected by default (``--allow-partial`` only so that the rest is counted) and the reasons
+left, with counts (numbers and names in a reason shown as ``#``).
 
 Run: ``make bench ARGS=corpus`` (or ``.venv/bin/python bench/bench_corpus_coverage.py``).
 """
