@@ -77,6 +77,8 @@ __all__ = [
     "KrlScan",
     "KrlUse",
     "Number",
+    "RELATIVE",
+    "Relative",
     "code_part",
     "match_brace",
     "normalize_name",
@@ -97,6 +99,8 @@ JOINT_KEYS = frozenset("A1 A2 A3 A4 A5 A6 E1 E2 E3 E4 E5 E6".split())
 # the reason of an aggregate of joint angles: a target the robot reaches by its joints, never a
 # Cartesian position to correct
 JOINT_TARGET = "joint-space target (AXIS/E6AXIS): not a Cartesian position"
+# how the reason of a relative motion's aggregate begins (``KrlScan.relative`` says more)
+RELATIVE = "relative motion"
 # how the reason of an operand of ':' before the last (a frame or an offset) begins: the motion's
 # target is the last operand, which alone stands for the motion
 FRAME_OPERAND = "the frame operand of ':'"
@@ -160,6 +164,8 @@ _BASE_SET_RE = re.compile(r"\$BASE\s*+=\s*+", re.I)
 _NEXT_SYSVAR_RE = re.compile(r",\s*+\$")
 _APPROXIMATION_RE = re.compile(r"\s(?:C_(?:DIS|PTP|ORI|VEL|SPL)|WITH)\b", re.I)
 _INDEX_RE = re.compile(r"\[\s*+(\d++)\s*+\]")
+_TOOL_FRAME_RE = re.compile(r"#\s*+TOOL\b", re.I)  # a relative motion in the tool frame
+_PARTIAL = "partial aggregate"
 _IDENT_RE = re.compile(r"[A-Za-z_]\w*+")
 
 
@@ -272,6 +278,18 @@ class Fdat(NamedTuple):
     reason: str = ""
 
 
+class Relative(NamedTuple):
+    """A relative motion's aggregate (``LIN_REL {Z -50} #TOOL``): an increment from the position
+    the robot is at, in the base frame (``#BASE``, the default) or the tool frame at the start
+    (``#TOOL``). ``since`` and ``why``: the line of the last statement before it after which the
+    robot's position does not follow from the motions written before (a routine's start, a jump
+    target, a branch or loop, a call, a change of $BASE or $TOOL), and what it is."""
+
+    tool: bool  # #TOOL: the increment is in the tool frame at the start
+    since: int
+    why: str
+
+
 class Declared(NamedTuple):
     """A variable declaration: its type (upper case) and line."""
 
@@ -303,6 +321,7 @@ class KrlScan:
     assigned: dict[str, int] = field(default_factory=dict)
     # names given a non-literal value at run time -> first line
     frame_uses: dict[str, FrameUse] = field(default_factory=dict)  # normalized name -> first use
+    relative: dict[int, Relative] = field(default_factory=dict)  # table row of a _REL aggregate
     _declared: dict[str, Declared] = field(default_factory=dict, repr=False)  # statement reader
     _fast_decls: list[tuple[list, list, np.ndarray]] = field(default_factory=list, repr=False)
     # (names, types, lines) of each block of plain declarations the whole-text scanner read
@@ -605,7 +624,7 @@ def position_reason(type_name: str, numbers: dict[str, Number]) -> str:
     if missing:
         given = ",".join(k for k in "XYZABC" if k in keys) or "none"
         return (
-            f"partial aggregate (gives {given}; missing {','.join(missing)}): "
+            f"{_PARTIAL} (gives {given}; missing {','.join(missing)}): "
             "the correction would need components the program does not give"
         )
     return ""
@@ -726,6 +745,8 @@ class _Flow:
         self.sets_base = False
         self.since = rows.mark()  # where the routine's rows start
         self.before_spline: BaseRef | None = None  # the base outside an open spline block
+        # the last statement after which the robot's position is not the last motion's target
+        self.moved: tuple[int, str] = (0, "no motion before it")
 
     def start_routine(self, name: str, line: int) -> None:
         self.finish_routine()
@@ -741,6 +762,7 @@ class _Flow:
         self.sets_base = False
         self.since = self.rows.mark()
         self.before_spline = None
+        self.moved = (line, f"the start of routine {name} (line {line}), reached from its caller")
 
     def finish_routine(self) -> None:
         """A jump target makes the base path-dependent when the routine sets the base anywhere."""
@@ -755,25 +777,34 @@ class _Flow:
     def set(self, base: BaseRef) -> None:
         self.state = base
         self.sets_base = True
+        self.moved = (base.line, f"$BASE set at line {base.line}")
+
+    def breaks(self, line: int, why: str) -> None:
+        """After line ``line`` the robot's position does not follow from the motions before."""
+        self.moved = (line, why)
 
     def open_spline(self, base: BaseRef | None) -> None:
         """A SPLINE/PTP_SPLINE block: its segments move in ``base`` (None: the base in effect)."""
         self.before_spline = self.state
         if base is not None:
             self.state = base
+        self.moved = (self.state.line, "the start of a spline block")
 
     def close_spline(self) -> None:
         """ENDSPLINE: the base in effect before the block again."""
         if self.before_spline is not None:
             self.state, self.before_spline = self.before_spline, None
+        self.moved = (self.moved[0], "the end of a spline block")
 
     def label(self, name: str, line: int) -> None:
+        self.moved = (line, f"the jump target {name} (line {line})")
         s = self.state
         self.state = BaseRef(
             s.kind, s.line, s.number, s.xyzabc, s.fdat, s.reason, f"{name} (line {line})"
         )
 
     def call(self, name: str, line: int) -> None:
+        self.moved = (line, f"the call {name}() at line {line}, which may move the robot")
         if not self.trust_calls:
             self.state = BaseRef(
                 "unknown",
@@ -782,11 +813,13 @@ class _Flow:
             )
 
     def open(self, keyword: str, line: int) -> None:
+        self.moved = (line, f"{keyword} at line {line}")
         self.blocks.append(_Block(keyword, line, self.state, self.rows.mark()))
 
-    def branch(self) -> None:
+    def branch(self, line: int) -> None:
         if self.blocks:
             block = self.blocks[-1]
+            self.moved = (line, f"a branch of {block.keyword} at line {block.line}")
             block.ends.append(self.state)
             block.has_else = True
             self.state = block.start
@@ -797,6 +830,7 @@ class _Flow:
         block = self.blocks.pop()
         start = block.start
         where = f"{block.keyword} at line {block.line}"
+        self.moved = (line, f"the end of {where} (line {line})")
         if block.keyword in ("IF", "SWITCH"):
             ends = block.ends + [self.state]
             if not block.has_else:
@@ -1260,7 +1294,7 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
         flow.open(word, lineno)
         return
     if word in _BRANCHES:
-        flow.branch()
+        flow.branch(lineno)
         return
     if word in _CLOSERS:
         flow.close(lineno)
@@ -1299,6 +1333,8 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
 def _bas(code: str, pos: int, lineno: int, flow: _Flow) -> None:
     """``BAS(#BASE, n)`` sets BASE_DATA[n]; other BAS commands leave the base."""
     m = _BAS_RE.match(code, pos)
+    if m is not None and "TOOL" in m.group(1).upper():
+        flow.breaks(lineno, f"the tool set at line {lineno}")
     if m is None or m.group(1).upper() != "BASE":
         return
     rest = code[m.end() :].strip()
@@ -1503,6 +1539,8 @@ def _assignment(
             lineno,
             f"assigned to {m.group(1)}{index} at line {lineno}: a frame, not a drilling position",
         )
+    if target == "$TOOL":
+        flow.breaks(lineno, f"the tool set at line {lineno}")
     if target == "$BASE" and not member:
         flow.set(_base_value(code, value_at, off, lineno, scan))
         return
@@ -1659,6 +1697,7 @@ def _motion(
 ) -> None:
     count = 2 if word in ("CIRC", "SCIRC", "CIRC_REL", "SCIRC_REL") else 1
     relative = word.endswith("_REL")
+    tool = relative and _TOOL_FRAME_RE.search(code) is not None
     base = flow.state
     if "$" in code and "WITH" in code.upper():
         base = _with_base(code, lineno) or base
@@ -1674,7 +1713,7 @@ def _motion(
         for k, (kind, s, e) in enumerate(operands):
             if kind == "agg":
                 if relative:
-                    why = f"relative motion {word}: an offset, not a position"
+                    why = f"{RELATIVE} {word}: an offset, not a position"
                 elif arith and k < len(operands) - 1:
                     why = f"{FRAME_OPERAND} in {target_text}: an offset, not the target"
                 elif arith:
@@ -1684,6 +1723,8 @@ def _motion(
                 row, _, own, _ = _add_position(code, s, off, lineno, scan, MOTION, "", word, base)
                 if why and own != JOINT_TARGET:  # a joint target stays one, relative or not
                     scan._rows.positions.set(row, "reason", why)
+                    if relative and not arith and (not own or own.startswith(_PARTIAL)):
+                        scan.relative[row] = Relative(tool, *flow.moved)
             else:
                 operand = code[s:e].strip()
                 name = normalize_name(operand) if kind == "name" else ""
@@ -1692,7 +1733,7 @@ def _motion(
                 elif kind != "name":
                     why = f"target {operand!r} is an expression"
                 elif relative:
-                    why = f"relative motion {word}: an offset, not a position"
+                    why = f"{RELATIVE} {word}: an offset, not a position"
                 elif arith:
                     why = f"frame arithmetic ':' in {target_text}: computed at run time"
                     if k < len(operands) - 1:

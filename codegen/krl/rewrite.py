@@ -31,6 +31,7 @@ from accugrid.codegen.krl.parse import (
     scan_krl,
     wildcard,
 )
+from accugrid.codegen.krl.relative import Chains, resolve, write_increments
 from accugrid.codegen.krl.tables import MOTION, PositionTable
 from accugrid.codegen.program_text import MIN_PLACES_MM, distinct_ints, precision
 from accugrid.codegen.rewrite import (
@@ -67,6 +68,14 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
         rows, frames = _position_rows(ctx, s, scan, opts)
         parts.append(rows)
         placed.append(frames)
+    chains = None
+    if any(scan.relative for scan in scans):
+        chains = resolve(scans, placed, [p.reason for p in parts], ctx.stored_row)
+        for s, part in enumerate(parts):
+            for k, r in enumerate(chains.rows[s].tolist()):
+                part.commanded[r] = placed[s][r] < 0
+                if placed[s][r] >= 0:
+                    part.old[r] = chains.xyz[s][k]  # the position it reaches, as written
     parts += [_use_rows(ctx, scan) for scan in scans]
     rows = Rows.concat(parts)
     starts = np.cumsum([0] + [len(p) for p in parts[: len(scans)]])
@@ -76,18 +85,27 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
     if any(t.size for t in todo):
         frames = ctx.frames
         files = [(scan.path, scan.text, scan.table) for scan in scans]
+        relative = scans if chains is not None else []
         del scans, ctx, config  # the uses and names are done with: memory for what follows
         status = [
             aggregate_status(text, table.agg[t])
             for (_, text, table), t in zip(files, todo, strict=True)
         ]
-        targets = _correct(
-            [table for _, _, table in files], todo, placed, frames, rows, starts, opts, status
-        )
+        absolute = [(table.xyz, table.abc) for _, _, table in files]
+        if chains is not None:
+            absolute = _reached(chains, absolute)
+        targets = _correct(absolute, todo, placed, frames, rows, starts, opts, status)
+        places = [
+            opts.decimals if opts.decimals is not None else _places(table) for _, _, table in files
+        ]
+        extra: list[list] = [[] for _ in files]
+        if chains is not None:
+            extra = _increments(chains, relative, todo, targets, rows, starts, places)
         for s, (path, text, table) in enumerate(files):
             if todo[s].size:
-                places = opts.decimals if opts.decimals is not None else _places(table)
-                out[path] = _splice(text, table, todo[s], targets[s], rows, starts[s], places)
+                out[path] = _splice(
+                    text, table, todo[s], targets[s], rows, starts[s], places[s], extra[s]
+                )
     for path, text in texts.items():
         if out[path] is None:
             out[path] = text.encode("latin-1")  # nothing corrected in it
@@ -111,6 +129,8 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
     complete = ~np.isnan(t.xyz).any(axis=1)
     old = np.where(complete[:, None], t.xyz, np.nan)
     reasons = list(t.reason)
+    for i in scan.relative:  # placed where its start is known (``resolve``)
+        reasons[i] = ""
     if t.external and not opts.ignore_external_axes:
         for i, (key, value) in t.external.items():
             reasons[i] = reasons[i] or (
@@ -456,6 +476,16 @@ class _Context:
             why += f" (--base N applies to POS/E6POS only, this is {type_name or 'untyped'})"
         return None, why
 
+    def stored_row(self, name: str) -> tuple[int, int] | None:
+        """The (file, table row) of the stored position a motion to ``name`` (normalized) goes
+        to: defined once in the given files; None otherwise."""
+        if name in self.twice or "*" in name:
+            return None
+        for s, keys in enumerate(self.keys):
+            if name in keys:
+                return s, keys.index(name)
+        return None
+
     def moved_to(self, s: int, i: int) -> bool:
         """Whether a motion commands stored position row i of file s: a motion uses its name
         and it is not a frame or an offset (``:``, ``$TOOL``/``$BASE``, ...)."""
@@ -508,8 +538,57 @@ def _upper(names: list[str]) -> list[str]:
     return [k if k != n else n for k, n in zip(map(str.upper, names), names, strict=True)]
 
 
+def _reached(chains: Chains, absolute: list[tuple[np.ndarray, np.ndarray]]) -> list:
+    """``absolute`` (per file: X, Y, Z (n, 3) mm and A, B, C (n, 3) deg of each table row) with
+    the rows of the relative motions whose start is known replaced by where they reach."""
+    out = []
+    for s, (xyz, abc) in enumerate(absolute):
+        rows = chains.rows[s]
+        known = [k for k in range(len(rows)) if chains.start[s][k][0] >= 0]
+        if known:
+            xyz, abc = xyz.copy(), abc.copy()
+            xyz[rows[known]] = [chains.xyz[s][k] for k in known]
+            abc[rows[known]] = [chains.abc[s][k] for k in known]
+        out.append((xyz, abc))
+    return out
+
+
+def _increments(
+    chains: Chains,
+    scans: list[KrlScan],
+    todo: list[np.ndarray],
+    targets: list[np.ndarray],
+    rows: Rows,
+    starts: np.ndarray,
+    places: list[int],
+) -> list[list[tuple[int, int, str]]]:
+    """The edits of the relative motions (``relative.write_increments``), their report rows
+    set; their targets in ``targets`` set to NaN (the absolute splice leaves them)."""
+    goals, corrected = [], []
+    for scan, t, found in zip(scans, todo, targets, strict=True):
+        n = len(scan.table)
+        goal = np.full((n, 3), np.nan)
+        goal[t] = found
+        goals.append(goal)
+        corrected.append(np.isfinite(goal[:, 0]))
+    edits, reached = write_increments(chains, scans, goals, corrected, places)
+    for s, relative in enumerate(chains.rows):
+        known = np.array([chains.start[s][k][0] >= 0 for k in range(len(relative))], bool)
+        r = relative[known]
+        at = starts[s] + r
+        done = corrected[s][r]
+        rows.status[at[done]] = CORRECTED
+        rows.new[at] = reached[s][known]
+        want = np.where(done[:, None], goals[s][r], rows.old[at])
+        residual = np.linalg.norm(reached[s][known] - want, axis=1)
+        rows.residual_mm[at] = rows.rounding_mm[at] = residual
+        inside = np.searchsorted(todo[s], r)
+        targets[s][inside] = np.nan
+    return edits
+
+
 def _correct(
-    tables: list[PositionTable],
+    absolute: list[tuple[np.ndarray, np.ndarray]],
     todo: list[np.ndarray],
     placed: list[np.ndarray],
     frames: list[np.ndarray],
@@ -520,14 +599,15 @@ def _correct(
 ) -> list[np.ndarray]:
     """Correct every placed position of every file at once (one ``correct_points``).
 
-    ``todo[s]``: placed table rows of file s, ``placed[s][todo[s]]`` the index of each one's
+    ``absolute[s]``: X, Y, Z (n, 3) mm base frame and A, B, C (n, 3) deg of the table rows of
+    file s, ``todo[s]``: its placed table rows, ``placed[s][todo[s]]`` the index of each one's
     robot_T_base in ``frames``, ``starts[s]``: its first report row, ``status[s]`` each one's
     own KUKA Status (-1: none). Per file: the corrected targets (n, 3) mm base frame (NaN rows:
     not corrected)."""
     stack = np.array(frames)
     which = np.concatenate([placed[s][t] for s, t in enumerate(todo)])
-    base_xyz = np.concatenate([table.xyz[t] for table, t in zip(tables, todo, strict=True)])
-    abc = np.concatenate([table.abc[t] for table, t in zip(tables, todo, strict=True)])
+    base_xyz = np.concatenate([xyz[t] for (xyz, _), t in zip(absolute, todo, strict=True)])
+    abc = np.concatenate([abc[t] for (_, abc), t in zip(absolute, todo, strict=True)])
     at = np.concatenate([starts[s] + t for s, t in enumerate(todo)])
     n = len(which)
     robot = np.empty((n, 3))
@@ -592,15 +672,20 @@ def _splice(
     rows: Rows,
     first_row: int,
     places: int,
+    extra: list[tuple[int, int, str]] = (),
 ) -> bytearray:
     """The file's bytes with the X, Y, Z of its corrected positions replaced (``places``
     decimals; a number whose value does not change keeps its literal); their rows
     (``first_row`` + table row) updated.
 
     ``todo`` (n,): placed table rows, ``targets`` (n, 3) mm base frame, NaN rows where not
-    corrected."""
+    corrected; ``extra``: more edits (start, end, new text), spliced in their place."""
     inside = np.flatnonzero(np.isfinite(targets[:, 0]))
     out = ByteSplicer(text)
+    if len(extra):
+        extra = sorted(extra)
+        stops = [] if not len(inside) else t.span[todo[inside[_BLOCK::_BLOCK]], 0].tolist()
+        stops = [*stops, len(text)]  # where each block's edits end (the next block's first)
     for a in range(0, len(inside), _BLOCK):
         k = inside[a : a + _BLOCK]
         goal = targets[k]
@@ -614,5 +699,28 @@ def _splice(
         rows.rounding_mm[at] = residual
         changed = written.ravel() != t.xyz[todo[k]].ravel()
         spans = t.span[todo[k]].reshape(-1, 2)[changed]
-        out.add(spans[:, 0], spans[:, 1], new[np.repeat(changed, length)], length[changed])
+        new, length = new[np.repeat(changed, length)], length[changed]
+        if len(extra):
+            stop = stops[a // _BLOCK]
+            mine = [e for e in extra if e[0] < stop]
+            extra = extra[len(mine) :]
+            spans, new, length = _merged(spans, new, length, mine)
+        out.add(spans[:, 0], spans[:, 1], new, length)
+    if len(extra):
+        spans, new, length = _merged(np.zeros((0, 2), np.int64), np.zeros(0, np.uint8), [], extra)
+        out.add(spans[:, 0], spans[:, 1], new, length)
     return out.finish()
+
+
+def _merged(spans: np.ndarray, new: np.ndarray, length, edits: list[tuple[int, int, str]]):
+    """Spans (m, 2), new bytes and lengths (m,) with ``edits`` (start, end, text) added, sorted
+    by (start, end)."""
+    if not edits:
+        return spans, new, np.asarray(length, np.int64)
+    pieces = np.split(new, np.cumsum(length)[:-1]) if len(length) else []
+    every = [(int(a), int(b), bytes(p)) for (a, b), p in zip(spans.tolist(), pieces, strict=True)]
+    every += [(a, b, text.encode("ascii")) for a, b, text in edits]
+    every.sort(key=lambda e: (e[0], e[1]))
+    spans = np.array([(a, b) for a, b, _ in every], np.int64).reshape(-1, 2)
+    data = b"".join(p for _, _, p in every)
+    return spans, np.frombuffer(data, np.uint8), np.array([len(p) for *_, p in every], np.int64)

@@ -1,0 +1,198 @@
+"""KRL relative motions (LIN_REL, PTP_REL, CIRC_REL, ... in #BASE or #TOOL) in a rewrite: each
+lands where an absolute program's corrected position would; a start that is not known is
+reported, never guessed.
+
+Expected values: the absolute position a relative motion reaches is worked out here from the
+program text (start + increment, or start + R_start @ increment with #TOOL, R from scipy),
+corrected with the grid model itself (``GridModel.correct``, not the rewrite), and the rewritten
+increments are read back with this test's own reading of the aggregate.
+"""
+
+from __future__ import annotations
+
+import csv
+import re
+
+import numpy as np
+import pytest
+from rewrite_helpers import write_cell
+from scipy.spatial.transform import Rotation
+
+from accugrid.app.cli import main
+from accugrid.compensation import GridModel
+
+HALF = 0.5e-3 * np.sqrt(3) + 1e-9  # 3 decimals, each axis off by at most half a unit
+BASE2 = (300.0, -200.0, 100.0, 30.0, 0.0, 0.0)  # robot_T_base of BASE_DATA[2]
+AGG = re.compile(r"\{([^}]*)\}")
+
+
+def _rewrite(tmp_path, src: str, dat: str | None = None, *more):
+    """Rewrite ``src`` (and ``dat``) with the smooth-field cell; (exit code, output .src text,
+    report rows, the grid model)."""
+    cell = write_cell(tmp_path, field="smooth", base_data={2: BASE2})
+    (tmp_path / "p.src").write_text(src)
+    inputs = [tmp_path / "p.src"]
+    if dat is not None:
+        (tmp_path / "p.dat").write_text(dat)
+        inputs.append(tmp_path / "p.dat")
+    out = tmp_path / "out"
+    target = out if dat is not None else out / "p.src"
+    report = tmp_path / "r.csv"
+    args = [*map(str, inputs), "--cell", str(cell), "-o", str(target), "--report", str(report)]
+    code = main(["rewrite", *args, *more])
+    text = (out / "p.src").read_text() if code == 0 else ""
+    rows = list(csv.DictReader(report.open())) if code == 0 else []
+    return code, text, rows, GridModel.from_measurements(tmp_path / "grid.csv")
+
+
+def components(line: str, which: int = 0) -> dict[str, float]:
+    """The components of the ``which``-th aggregate of a line (this test's own reading)."""
+    body = AGG.findall(line)[which]
+    body = body.split(":", 1)[1] if ":" in body else body
+    return {k.upper(): float(v) for k, v in (p.split() for p in body.split(","))}
+
+
+def xyz(line: str, which: int = 0) -> np.ndarray:
+    """X, Y, Z of an aggregate, a component not given being 0."""
+    found = components(line, which)
+    return np.array([found.get(k, 0.0) for k in "XYZ"])
+
+
+def corrected_in(model: GridModel, base, points) -> np.ndarray:
+    """Corrected positions (N, 3) in the base frame ``base`` (x, y, z, a, b, c) of points given
+    in it."""
+    rotation = Rotation.from_euler("ZYX", base[3:], degrees=True).as_matrix()
+    robot = np.asarray(points, float) @ rotation.T + base[:3]
+    return (model.correct(robot) - base[:3]) @ rotation
+
+
+def rounded(values) -> np.ndarray:
+    return np.round(np.asarray(values, float), 3)
+
+
+def test_base_relative_chain_lands_on_the_corrected_absolute_positions(tmp_path):
+    """LIN_REL {Z -50} after a corrected LIN, then LIN_REL {X 10, Y 5}: each increment is the
+    difference of corrected positions; the X and Y the first one does not give are added."""
+    src = (
+        "DEF p( )\nBAS (#BASE,2)\n"
+        "LIN {X 1000.000,Y 100.000,Z 800.000,A 0.0,B 90.0,C 0.0}\n"
+        "LIN_REL {Z -50.000}\n"
+        "LIN_REL {X 10, Y 5} C_DIS\n"
+        "END\n"
+    )
+    code, text, rows, model = _rewrite(tmp_path, src)
+    assert code == 0
+    nominal = np.array([[1000, 100, 800], [1000, 100, 750], [1010, 105, 750]], float)
+    want = corrected_in(model, BASE2, nominal)
+    lines = text.splitlines()
+    start = xyz(lines[2])
+    np.testing.assert_allclose(start, rounded(want[0]), atol=1e-9)
+    first, second = xyz(lines[3]), xyz(lines[4])
+    assert set(components(lines[3])) == {"X", "Y", "Z"} and "{X " in lines[3]
+    assert ", Y " in lines[4]  # the aggregate's own separator is kept
+    np.testing.assert_allclose(start + first, want[1], atol=HALF)
+    np.testing.assert_allclose(start + first + second, want[2], atol=HALF)
+    assert lines[4].endswith("} C_DIS")
+    assert [r["status"] for r in rows] == ["corrected"] * 3
+    np.testing.assert_allclose([float(rows[2][k]) for k in ("x", "y", "z")], nominal[2])
+    assert not np.allclose(first, [0, 0, -50], atol=1e-3)  # the field varies: it changed
+
+
+def test_tool_relative_motion_is_in_the_tool_frame_of_its_start(tmp_path):
+    """#TOOL: the increment is in the tool frame at the start (A 20, B 70, C 10 in base 2)."""
+    abc = (20.0, 70.0, 10.0)
+    src = (
+        "DEF p( )\nBAS (#BASE,2)\n"
+        f"PTP {{X 900.000,Y -50.000,Z 700.000,A {abc[0]},B {abc[1]},C {abc[2]}}}\n"
+        "PTP_REL {Y 4.000,Z 30.000} #TOOL\n"
+        "END\n"
+    )
+    code, text, rows, model = _rewrite(tmp_path, src)
+    assert code == 0
+    tool = Rotation.from_euler("ZYX", abc, degrees=True).as_matrix()
+    start = np.array([900.0, -50.0, 700.0])
+    target = start + tool @ [0.0, 4.0, 30.0]
+    want = corrected_in(model, BASE2, [start, target])
+    lines = text.splitlines()
+    written = xyz(lines[2])
+    np.testing.assert_allclose(written + tool @ xyz(lines[3]), want[1], atol=HALF * 1.5)
+    np.testing.assert_allclose([float(rows[1][k]) for k in ("x", "y", "z")], target, atol=1e-4)
+
+
+def test_circ_rel_points_are_both_relative_to_the_start(tmp_path):
+    src = (
+        "DEF p( )\nBAS (#BASE,0)\n"
+        "LIN {X 1500.000,Y 0.000,Z 1000.000,A 0.0,B 90.0,C 0.0}\n"
+        "CIRC_REL {X 20.000,Y 20.000}, {X 40.000,Y 0.000,Z 0.000}\n"
+        "LIN_REL {Z 10.000}\n"
+        "END\n"
+    )
+    code, text, rows, model = _rewrite(tmp_path, src)
+    assert code == 0
+    start = np.array([1500.0, 0.0, 1000.0])
+    nominal = [start, start + [20, 20, 0], start + [40, 0, 0], start + [40, 0, 10]]
+    want = corrected_in(model, (0,) * 6, nominal)
+    lines = text.splitlines()
+    written = xyz(lines[2])
+    aux, end = xyz(lines[3], 0), xyz(lines[3], 1)
+    np.testing.assert_allclose(written + aux, want[1], atol=HALF)
+    np.testing.assert_allclose(written + end, want[2], atol=HALF)
+    np.testing.assert_allclose(written + end + xyz(lines[4]), want[3], atol=2 * HALF)
+    assert [r["status"] for r in rows] == ["corrected"] * 4
+
+
+def test_named_start_from_the_dat(tmp_path):
+    """PTP XP1 (declared in the .dat) then LIN_REL: the start is XP1 as corrected."""
+    src = "DEF p( )\nBAS (#BASE,0)\nPTP XP1\nLIN_REL {Z -20.000}\nEND\n"
+    dat = "DEFDAT p\nDECL E6POS XP1={X 1400.000,Y 200.000,Z 900.000,A 0.0,B 90.0,C 0.0}\nENDDAT\n"
+    code, text, rows, model = _rewrite(tmp_path, src, dat)
+    assert code == 0
+    want = corrected_in(model, (0,) * 6, [[1400, 200, 900], [1400, 200, 880]])
+    written = xyz((tmp_path / "out" / "p.dat").read_text().splitlines()[1])
+    np.testing.assert_allclose(written, rounded(want[0]), atol=1e-9)
+    np.testing.assert_allclose(written + xyz(text.splitlines()[3]), want[1], atol=HALF)
+
+
+def test_relative_motion_left_uncorrected_lands_as_programmed(tmp_path):
+    """The start is corrected, the relative target is outside the grid (x > 2500): with
+    --allow-partial it is left uncorrected, and its increment changes so that it still lands
+    where the program put it, not dragged by the start's correction."""
+    src = (
+        "DEF p( )\nBAS (#BASE,0)\n"
+        "LIN {X 2400.000,Y 0.000,Z 1000.000,A 0.0,B 90.0,C 0.0}\n"
+        "LIN_REL {X 200.000}\n"
+        "END\n"
+    )
+    code, text, rows, _ = _rewrite(tmp_path, src, None, "--allow-partial", "--outside", "refuse")
+    assert code == 0
+    assert [r["status"] for r in rows][0] == "corrected" and rows[1]["status"] != "corrected"
+    lines = text.splitlines()
+    np.testing.assert_allclose(xyz(lines[2]) + xyz(lines[3]), [2600, 0, 1000], atol=HALF)
+
+
+@pytest.mark.parametrize(
+    "before, why",
+    [
+        ("", "no motion before it"),
+        ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nIF $IN[1] THEN\n", "IF at line 4"),
+        ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nGO( )\n", "the call GO() at line 4"),
+        ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nM1:\n", "jump target M1"),
+        ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\n$TOOL = TOOL_DATA[2]\n", "the tool set at line 4"),
+        ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nBAS (#BASE,2)\n", "$BASE set at line 4"),
+        ("LIN P9\n", "P9 (line 3) is not known"),
+        ("LIN {X 1000,Y 0,Z 900}\n", "#TOOL: the orientation at its start (line 3)"),
+        ("LIN {X 1000,Y 0}\n", "partial aggregate"),
+        ("LIN $POS_ACT\n", "system variable $POS_ACT"),
+        ("PTP {A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0}\n", "joint-space target"),
+    ],
+)
+def test_relative_motion_whose_start_is_not_known_is_reported(tmp_path, capsys, before, why):
+    """Reported with the reason; the job fails without --allow-partial (a partial program)."""
+    src = f"DEF p( )\nBAS (#BASE,0)\n{before}LIN_REL {{Z -5.000}} #TOOL\nEND\n"
+    code, *_ = _rewrite(tmp_path, src)
+    assert code == 2
+    assert why in capsys.readouterr().err
+    code, text, rows, _ = _rewrite(tmp_path, src, None, "--allow-partial")
+    assert code == 0 and text.splitlines()[-2] == src.splitlines()[-2]
+    row = next(r for r in rows if r["name"] == "LIN_REL")
+    assert row["status"] == "skipped" and why in row["reason"]
