@@ -1587,10 +1587,9 @@ def _assignment(
             if not numbers or not set(numbers) & (CARTESIAN_KEYS | JOINT_KEYS):
                 scan._rows.pop_position()  # an aggregate of some other structure type
             return
-    key = normalize_name(name)  # a member assigned changes the variable
-    scan.assigned.setdefault(key, lineno)
-    if "[" in key:
-        scan.assigned.setdefault(wildcard(key), lineno)
+    # a member assigned changes the element (``fp[2].Y = 25``: fp[2], not fp[1]); a variable
+    # index is ``[*]`` already, which stands for every element
+    scan.assigned.setdefault(normalize_name(name), lineno)
 
 
 def _base_value(code: str, at: int, off: int, lineno: int, scan: KrlScan) -> BaseRef:
