@@ -180,7 +180,7 @@ def test_relative_motion_left_uncorrected_lands_as_programmed(tmp_path):
         ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\n$TOOL = TOOL_DATA[2]\n", "the tool set at line 4"),
         ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nBAS (#BASE,2)\n", "$BASE set at line 4"),
         ("LIN P9\n", "P9 (line 3) is not known"),
-        ("LIN {X 1000,Y 0,Z 900}\n", "#TOOL: the orientation at its start (line 3)"),
+        ("LIN {X 1000,Y 0,Z 900}\n", "#TOOL: the orientation at its start (LIN at p.src:3)"),
         ("LIN {X 1000,Y 0}\n", "partial aggregate"),
         ("LIN $POS_ACT\n", "system variable $POS_ACT"),
         ("PTP {A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0}\n", "joint-space target"),
@@ -196,3 +196,38 @@ def test_relative_motion_whose_start_is_not_known_is_reported(tmp_path, capsys, 
     assert code == 0 and text.splitlines()[-2] == src.splitlines()[-2]
     row = next(r for r in rows if r["name"] == "LIN_REL")
     assert row["status"] == "skipped" and why in row["reason"]
+
+
+def test_kss8_inline_form_start_and_settings_between(tmp_path):
+    """Forms real programs write: the KSS 8 inline form (SPTP XP1 WITH ..., $TOOL =
+    STOOL2(FP1), $BASE = SBASE(FP1.BASE_NO), ...), a relative spline motion with its own WITH
+    $BASE, and $VEL/$APO assignments, a TRIGGER and a WAIT between a start and a LIN_REL, which
+    do not move the robot."""
+    src = (
+        "DEF p( )\nBAS (#BASE,2)\n"
+        "SPTP XP1 WITH $VEL_AXIS[1] = SVEL_JOINT(100.0), $TOOL = STOOL2(FP1), "
+        "$BASE = SBASE(FP1.BASE_NO), $IPO_MODE = SIPO_MODE(FP1.IPO_FRAME), "
+        "$LOAD = SLOAD(FP1.TOOL_NO)\n"
+        "SLIN_REL {Z -25.000} WITH $BASE = SBASE(FP1.BASE_NO)\n"
+        "$VEL.CP=0.3\n$APO.CDIS=10.0\nTRIGGER WHEN PATH=-20 DELAY=0 DO SUCK() PRIO=-1\n"
+        "WAIT SEC 0\n"
+        "LIN_REL {X 12.000} C_DIS\n"
+        "END\n"
+    )
+    dat = (
+        "DEFDAT p\n"
+        'DECL FDAT FP1={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE,POINT2[] " "}\n'
+        "DECL E6POS XP1={X 1100.000,Y 300.000,Z 850.000,A 0.0,B 90.0,C 0.0,S 2,T 0,E1 0.0}\n"
+        "ENDDAT\n"
+    )
+    code, text, rows, model = _rewrite(tmp_path, src, dat)
+    assert code == 0
+    nominal = np.array([[1100, 300, 850], [1100, 300, 825], [1112, 300, 825]], float)
+    want = corrected_in(model, BASE2, nominal)
+    written = xyz((tmp_path / "out" / "p.dat").read_text().splitlines()[2])
+    lines = text.splitlines()
+    np.testing.assert_allclose(written + xyz(lines[3]), want[1], atol=HALF)
+    np.testing.assert_allclose(written + xyz(lines[3]) + xyz(lines[8]), want[2], atol=2 * HALF)
+    assert lines[3].endswith("} WITH $BASE = SBASE(FP1.BASE_NO)")
+    assert lines[8].endswith("} C_DIS")
+    assert all(r["status"] == "corrected" for r in rows)

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -49,13 +50,24 @@ class Chains:
     reason: list[list[str]] = field(default_factory=list)
 
 
-def resolve(scans: list[KrlScan], frames: list[np.ndarray], reasons: list[list[str]], named):
+def resolve(
+    scans: list[KrlScan],
+    frames: list[np.ndarray],
+    reasons: list[list[str]],
+    named,
+    poses: list[np.ndarray],
+) -> Chains:
     """Resolve the start of every relative motion (files in order, rows in order).
 
-    ``frames[s]`` (n_s,) the index of each table row's robot_T_base (-1: not placed) and
-    ``reasons[s]`` each row's reason so far, both of file s; ``named(name)``: the (file, row) of
-    the stored position a motion to ``name`` goes to, or None. A relative motion whose start is
-    not known gets its reason in ``reasons`` and frame -1."""
+    ``frames[s]`` (n_s,) the index in ``poses`` of each table row's robot_T_base (-1: not
+    placed) and ``reasons[s]`` each row's reason so far, both of file s; ``named(name)``: the
+    (file, row) of the stored position a motion to ``name`` goes to, or None. A relative motion
+    whose start is not known gets its reason in ``reasons`` and frame -1."""
+
+    def where(s: int, p: int) -> str:
+        table = scans[s].table
+        return f"{table.name[p]} at {Path(scans[s].path or '').name}:{table.line[p]}"
+
     chains = Chains([np.array(sorted(scan.relative), np.int64) for scan in scans])
     for s, scan in enumerate(scans):
         t, u = scan.table, scan.use_table
@@ -86,11 +98,11 @@ def resolve(scans: list[KrlScan], frames: list[np.ndarray], reasons: list[list[s
             if not why:
                 s2, p2 = start
                 if frames[s2][p2] < 0 or reasons[s2][p2] and p2 not in resolved:
-                    why = f"its start (line {scans[s2].table.line[p2]}) is not placed: " + (
+                    why = f"its start ({where(s2, p2)}) is not placed: " + (
                         reasons[s2][p2] or "no base"
                     )
-                elif frames[s2][p2] != frames[s][r]:
-                    why = f"its start (line {scans[s2].table.line[p2]}) is in another base"
+                elif not np.array_equal(poses[frames[s2][p2]], poses[frames[s][r]]):
+                    why = f"its start ({where(s2, p2)}) is in another base"
             xyz = abc = rotation = None
             if not why:
                 if s2 == s and p2 in resolved:
@@ -101,10 +113,7 @@ def resolve(scans: list[KrlScan], frames: list[np.ndarray], reasons: list[list[s
                 rotation = np.eye(3)
                 if info.tool:
                     if np.isnan(start_abc).any():
-                        why = (
-                            f"#TOOL: the orientation at its start (line "
-                            f"{scans[s2].table.line[p2]}) is not known"
-                        )
+                        why = f"#TOOL: the orientation at its start ({where(s2, p2)}) is not known"
                     else:
                         rotation = abc_to_matrix(start_abc)
                 increment = np.nan_to_num(t.xyz[r])

@@ -70,7 +70,8 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
         placed.append(frames)
     chains = None
     if any(scan.relative for scan in scans):
-        chains = resolve(scans, placed, [p.reason for p in parts], ctx.stored_row)
+        reasons = [p.reason for p in parts]
+        chains = resolve(scans, placed, reasons, ctx.stored_row, ctx.frames)
         for s, part in enumerate(parts):
             for k, r in enumerate(chains.rows[s].tolist()):
                 part.commanded[r] = placed[s][r] < 0
