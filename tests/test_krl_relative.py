@@ -15,10 +15,14 @@ import re
 
 import numpy as np
 import pytest
-from rewrite_helpers import write_cell
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from rewrite_helpers import error_field, write_cell
 from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import main
+from accugrid.codegen.krl.rewrite import rewrite_krl
+from accugrid.codegen.rewrite import Options
 from accugrid.compensation import GridModel
 
 HALF = 0.5e-3 * np.sqrt(3) + 1e-9  # 3 decimals, each axis off by at most half a unit
@@ -231,3 +235,55 @@ def test_kss8_inline_form_start_and_settings_between(tmp_path):
     assert lines[3].endswith("} WITH $BASE = SBASE(FP1.BASE_NO)")
     assert lines[8].endswith("} C_DIS")
     assert all(r["status"] == "corrected" for r in rows)
+
+
+def _field_grid() -> GridModel:
+    axes = [np.arange(600.0, 1401.0, 100.0)] * 3
+    points = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    return GridModel.from_measurements((points, points - error_field(points, "smooth")))
+
+
+FIELD = _field_grid()
+_MM = st.integers(-40_000, 40_000).map(lambda k: k / 1000)  # an increment, mm, 3 decimals
+_STEP = st.tuples(
+    st.booleans(),  # #TOOL
+    st.lists(st.sampled_from("XYZ"), min_size=1, max_size=3, unique=True),
+    st.tuples(_MM, _MM, _MM),
+)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    start=st.tuples(*[st.integers(900_000, 1_100_000).map(lambda k: k / 1000)] * 3),
+    abc=st.tuples(*[st.integers(-180, 180)] * 3),
+    steps=st.lists(_STEP, min_size=1, max_size=6),
+)
+def test_every_point_of_a_relative_chain_lands_on_its_correction(start, abc, steps):
+    """A start and a chain of LIN_REL (#BASE or #TOOL, some of X, Y, Z given) in the robot
+    frame: after the rewrite, walking the written increments from the written start reaches
+    each point's correction (the grid model's, worked out here) within the rounding of one
+    increment: the rounding does not add up along the chain."""
+    tool = Rotation.from_euler("ZYX", abc, degrees=True).as_matrix()
+    lines = [
+        "DEF p( )",
+        "BAS (#BASE,0)",
+        "LIN {{X {:.3f},Y {:.3f},Z {:.3f},A {},B {},C {}}}".format(*start, *abc),
+    ]
+    nominal = [np.array(start)]
+    for in_tool, keys, values in steps:
+        given_xyz = dict(zip("XYZ", values, strict=True))
+        body = ",".join(f"{k} {given_xyz[k]:.3f}" for k in "XYZ" if k in keys)
+        lines.append(f"LIN_REL {{{body}}}" + (" #TOOL" if in_tool else ""))
+        increment = np.array([given_xyz[k] if k in keys else 0.0 for k in "XYZ"])
+        nominal.append(nominal[-1] + (tool if in_tool else np.eye(3)) @ increment)
+    text = "\n".join([*lines, "END", ""])
+    opts = Options(model=FIELD, base_data={}, robot_T_program=np.eye(4), decimals=3)
+    result = rewrite_krl({"p.src": text}, opts)
+    assert (result.rows.status == 1).all()  # every point corrected
+    want = FIELD.correct(np.array(nominal))
+    out = result.texts["p.src"].splitlines()
+    reached = xyz(out[2])
+    np.testing.assert_allclose(reached, rounded(want[0]), atol=1e-9)
+    for k, (in_tool, _, _) in enumerate(steps, start=1):
+        reached = reached + (tool if in_tool else np.eye(3)) @ xyz(out[2 + k])
+        assert np.linalg.norm(reached - want[k]) <= HALF
