@@ -188,6 +188,11 @@ def test_relative_motion_left_uncorrected_lands_as_programmed(tmp_path):
         ("LIN {X 1000,Y 0}\n", "partial aggregate"),
         ("LIN $POS_ACT\n", "system variable $POS_ACT"),
         ("PTP {A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0}\n", "joint-space target"),
+        (
+            "LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nSPLINE WITH $BASE = BASE_DATA[2]\n"
+            "SLIN {X 1,Y 2,Z 3}\nENDSPLINE\n",
+            "its start (SLIN at p.src:5) is in another base",
+        ),
     ],
 )
 def test_relative_motion_whose_start_is_not_known_is_reported(tmp_path, capsys, before, why):
@@ -287,3 +292,35 @@ def test_every_point_of_a_relative_chain_lands_on_its_correction(start, abc, ste
     for k, (in_tool, _, _) in enumerate(steps, start=1):
         reached = reached + (tool if in_tool else np.eye(3)) @ xyz(out[2 + k])
         assert np.linalg.norm(reached - want[k]) <= HALF
+
+
+def test_relative_motion_that_sets_its_own_tool_is_reported(tmp_path):
+    src = (
+        "DEF p( )\nBAS (#BASE,0)\nLIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\n"
+        "SLIN_REL {Z -5.000} WITH $TOOL = TOOL_DATA[2]\nEND\n"
+    )
+    code, text, rows, _ = _rewrite(tmp_path, src, None, "--allow-partial")
+    assert code == 0 and text.splitlines()[3] == src.splitlines()[3]
+    assert "it sets its own tool (WITH $TOOL, line 4)" in rows[1]["reason"]
+
+
+def test_segments_of_a_spline_block_chain_in_the_blocks_base(tmp_path):
+    """SLIN_REL segments inside SPLINE WITH $BASE = BASE_DATA[2]: each from the segment
+    before, in base 2 (rotated 30 deg about Z)."""
+    src = (
+        "DEF p( )\nBAS (#BASE,0)\nSPLINE WITH $BASE = BASE_DATA[2]\n"
+        "  SLIN {X 800.000,Y 300.000,Z 700.000,A 0.0,B 90.0,C 0.0}\n"
+        "  SLIN_REL {X 30.000}\n"
+        "  SLIN_REL {Y -15.000,Z 5.000}\n"
+        "ENDSPLINE\nEND\n"
+    )
+    code, text, rows, model = _rewrite(tmp_path, src)
+    assert code == 0
+    nominal = np.array([[800, 300, 700], [830, 300, 700], [830, 285, 705]], float)
+    want = corrected_in(model, BASE2, nominal)
+    lines = text.splitlines()
+    reached = xyz(lines[3])
+    np.testing.assert_allclose(reached, rounded(want[0]), atol=1e-9)
+    reached = reached + xyz(lines[4])
+    np.testing.assert_allclose(reached, want[1], atol=HALF)
+    np.testing.assert_allclose(reached + xyz(lines[5]), want[2], atol=2 * HALF)

@@ -165,6 +165,7 @@ _NEXT_SYSVAR_RE = re.compile(r",\s*+\$")
 _APPROXIMATION_RE = re.compile(r"\s(?:C_(?:DIS|PTP|ORI|VEL|SPL)|WITH)\b", re.I)
 _INDEX_RE = re.compile(r"\[\s*+(\d++)\s*+\]")
 _TOOL_FRAME_RE = re.compile(r"#\s*+TOOL\b", re.I)  # a relative motion in the tool frame
+_WITH_TOOL_RE = re.compile(r"\bWITH\b.*\$TOOL\s*+=", re.I)
 _PARTIAL = "partial aggregate"
 _IDENT_RE = re.compile(r"[A-Za-z_]\w*+")
 
@@ -746,7 +747,7 @@ class _Flow:
         self.since = rows.mark()  # where the routine's rows start
         self.before_spline: BaseRef | None = None  # the base outside an open spline block
         # the last statement after which the robot's position is not the last motion's target
-        self.moved: tuple[int, str] = (0, "no motion before it")
+        self.moved: tuple[int, str] = (0, "the start of the file")
 
     def start_routine(self, name: str, line: int) -> None:
         self.finish_routine()
@@ -788,13 +789,11 @@ class _Flow:
         self.before_spline = self.state
         if base is not None:
             self.state = base
-        self.moved = (self.state.line, "the start of a spline block")
 
     def close_spline(self) -> None:
         """ENDSPLINE: the base in effect before the block again."""
         if self.before_spline is not None:
             self.state, self.before_spline = self.before_spline, None
-        self.moved = (self.moved[0], "the end of a spline block")
 
     def label(self, name: str, line: int) -> None:
         self.moved = (line, f"the jump target {name} (line {line})")
@@ -1697,6 +1696,7 @@ def _motion(
     count = 2 if word in ("CIRC", "SCIRC", "CIRC_REL", "SCIRC_REL") else 1
     relative = word.endswith("_REL")
     tool = relative and _TOOL_FRAME_RE.search(code) is not None
+    own_tool = relative and "$" in code and _WITH_TOOL_RE.search(code) is not None
     base = flow.state
     if "$" in code and "WITH" in code.upper():
         base = _with_base(code, lineno) or base
@@ -1723,7 +1723,10 @@ def _motion(
                 if why and own != JOINT_TARGET:  # a joint target stays one, relative or not
                     scan._rows.positions.set(row, "reason", why)
                     if relative and not arith and (not own or own.startswith(_PARTIAL)):
-                        scan.relative[row] = Relative(tool, *flow.moved)
+                        since, why = flow.moved[0], f"{flow.moved[1]} comes before it"
+                        if own_tool:
+                            since, why = lineno, f"it sets its own tool (WITH $TOOL, line {lineno})"
+                        scan.relative[row] = Relative(tool, since, why)
             else:
                 operand = code[s:e].strip()
                 name = normalize_name(operand) if kind == "name" else ""

@@ -86,7 +86,7 @@ def resolve(
             if frames[s][r] < 0:
                 why = reasons[s][r]
             elif max(use_line, int(t.line[p]) if p >= 0 else -1) <= info.since:
-                why = f"relative motion whose start is not known: {info.why} comes before it"
+                why = f"relative motion whose start is not known: {info.why}"
                 if p < 0 and use_line < 0:
                     why = "relative motion with no motion before it: its start is not known"
             elif p < 0 or use_line > t.line[p]:
