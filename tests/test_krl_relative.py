@@ -183,6 +183,7 @@ def test_relative_motion_left_uncorrected_lands_as_programmed(tmp_path):
         ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nM1:\n", "jump target M1"),
         ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\n$TOOL = TOOL_DATA[2]\n", "the tool set at line 4"),
         ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nBAS (#BASE,2)\n", "$BASE set at line 4"),
+        ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nFOR I=1 TO 20\n", "FOR at line 4"),
         ("LIN P9\n", "P9 (line 3) is not known"),
         ("LIN {X 1000,Y 0,Z 900}\n", "#TOOL: the orientation at its start (LIN at p.src:3)"),
         ("LIN {X 1000,Y 0}\n", "partial aggregate"),
@@ -324,3 +325,15 @@ def test_segments_of_a_spline_block_chain_in_the_blocks_base(tmp_path):
     reached = reached + xyz(lines[4])
     np.testing.assert_allclose(reached, want[1], atol=HALF)
     np.testing.assert_allclose(reached + xyz(lines[5]), want[2], atol=2 * HALF)
+
+
+def test_relative_motion_with_an_external_axis_is_reported(tmp_path):
+    """LIN_REL {Z 10, E1 360}: the external axis moves with it, so where the TCP lands in the
+    robot frame depends on the external kinematics: reported, not corrected."""
+    src = (
+        "DEF p( )\nBAS (#BASE,0)\nLIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\n"
+        "LIN_REL {Z 10, E1 360} C_DIS\nEND\n"
+    )
+    code, text, rows, _ = _rewrite(tmp_path, src, None, "--allow-partial")
+    assert code == 0 and text.splitlines()[3] == src.splitlines()[3]
+    assert rows[1]["status"] == "skipped" and "external axis E1 = 360" in rows[1]["reason"]
