@@ -28,6 +28,7 @@ import numpy as np
 
 from accugrid.codegen.krl.parse import KrlScan, Relative
 from accugrid.codegen.krl.tables import MOTION
+from accugrid.codegen.program_text import distinct_ints
 from accugrid.codegen.splice import literals
 from accugrid.kinematics.frames import abc_to_matrix
 
@@ -36,18 +37,21 @@ __all__ = ["Chains", "resolve", "write_increments"]
 
 @dataclass
 class Chains:
-    """The relative motions of every file (``rows[s]``: their table rows, ascending), resolved:
-    ``start[s][k]`` (file, row) of the k-th one's start ((-1, -1): not known, ``reason[s][k]``
-    says why), ``rotation[s][k]`` (3, 3) the frame its increment is in (base_R_increment),
-    ``xyz[s][k]`` (3,) mm base frame the absolute position it reaches, ``abc[s][k]`` (3,) deg the
-    orientation there (NaN: not known)."""
+    """The relative motions of every file, resolved; per file s, arrays over its k relative
+    motions in table order: ``rows[s]`` (k,) their table rows, ``start[s]`` (k, 2) the (file,
+    table row) of each one's start ((-1, -1): not known, its reason is in the rows'),
+    ``prior[s]`` (k,) the index among them of a start that is itself a relative motion (-1:
+    none), ``rotation[s]`` (k, 3, 3) the frame its increment is in (base_R_increment), ``xyz[s]``
+    (k, 3) mm base frame the absolute position it reaches, ``abc[s]`` (k, 3) deg the orientation
+    there (NaN: not known), ``generation[s]`` (k,) how many relative motions lead to it."""
 
     rows: list[np.ndarray]
-    start: list[list[tuple[int, int]]] = field(default_factory=list)
-    rotation: list[list[np.ndarray]] = field(default_factory=list)
-    xyz: list[list[np.ndarray]] = field(default_factory=list)
-    abc: list[list[np.ndarray]] = field(default_factory=list)
-    reason: list[list[str]] = field(default_factory=list)
+    start: list[np.ndarray] = field(default_factory=list)
+    prior: list[np.ndarray] = field(default_factory=list)
+    rotation: list[np.ndarray] = field(default_factory=list)
+    xyz: list[np.ndarray] = field(default_factory=list)
+    abc: list[np.ndarray] = field(default_factory=list)
+    generation: list[np.ndarray] = field(default_factory=list)
 
 
 def resolve(
@@ -57,85 +61,108 @@ def resolve(
     named,
     poses: list[np.ndarray],
 ) -> Chains:
-    """Resolve the start of every relative motion (files in order, rows in order).
+    """Resolve the start of every relative motion.
 
     ``frames[s]`` (n_s,) the index in ``poses`` of each table row's robot_T_base (-1: not
     placed) and ``reasons[s]`` each row's reason so far, both of file s; ``named(name)``: the
     (file, row) of the stored position a motion to ``name`` goes to, or None. A relative motion
-    whose start is not known gets its reason in ``reasons`` and frame -1."""
+    whose start is not known gets its reason in ``reasons`` and frame -1. The starts are found
+    row by row (list and dict look-ups), the positions a generation of a chain at a time."""
 
     def where(s: int, p: int) -> str:
         table = scans[s].table
         return f"{table.name[p]} at {Path(scans[s].path or '').name}:{table.line[p]}"
 
+    same_base: dict[tuple[int, int], bool] = {}
     chains = Chains([np.array(sorted(scan.relative), np.int64) for scan in scans])
+    known_abc = [(~np.isnan(scan.table.abc).any(axis=1)).tolist() for scan in scans]
     for s, scan in enumerate(scans):
         t, u = scan.table, scan.use_table
+        rel = chains.rows[s]
+        k = len(rel)
         motions = np.flatnonzero(t.kind == MOTION)
-        lines = t.line[motions]
-        starts, rotations, xyzs, abcs, whys = [], [], [], [], []
-        resolved: dict[int, int] = {}  # row -> k of the relative motions known so far
-        for r in chains.rows[s].tolist():
+        line = t.line[rel]
+        at = np.searchsorted(t.line[motions], line) - 1
+        prev = np.where(at >= 0, motions[np.maximum(at, 0)], -1).tolist()
+        prev_line = np.where(at >= 0, t.line[motions[np.maximum(at, 0)]], -1).tolist()
+        at_use = (np.searchsorted(u.line, line) - 1).tolist()
+        use_line = [int(u.line[j]) if j >= 0 else -1 for j in at_use]
+        turns = (np.nan_to_num(t.abc[rel]) != 0).any(axis=1).tolist()
+        index = {r: i for i, r in enumerate(rel.tolist())}
+        start = np.full((k, 2), -1, np.int64)
+        prior = np.full(k, -1, np.int64)
+        generation = np.zeros(k, np.int64)
+        oriented = [False] * k  # the orientation at the relative motion is known
+        tools = np.zeros(k, bool)
+        frame_s = frames[s]
+        for i, r in enumerate(rel.tolist()):
             info: Relative = scan.relative[r]
-            line = int(t.line[r])
-            k = int(np.searchsorted(lines, line)) - 1
-            p = int(motions[k]) if k >= 0 else -1
-            j = int(np.searchsorted(u.line, line)) - 1
-            use_line = int(u.line[j]) if j >= 0 else -1
-            start, why = (s, p), ""
-            if frames[s][r] < 0:
+            p, j = prev[i], at_use[i]
+            s2, p2, why = s, p, ""
+            if frame_s[r] < 0:
                 why = reasons[s][r]
-            elif max(use_line, int(t.line[p]) if p >= 0 else -1) <= info.since:
+            elif max(use_line[i], prev_line[i]) <= info.since:
                 why = f"relative motion whose start is not known: {info.why}"
-                if p < 0 and use_line < 0:
+                if p < 0 and use_line[i] < 0:
                     why = "relative motion with no motion before it: its start is not known"
-            elif p < 0 or use_line > t.line[p]:
+            elif p < 0 or use_line[i] > prev_line[i]:
                 found = None if u.reason[j] else named(u.name[j])
-                start = found if found is not None else (-1, -1)
                 if found is None:
                     why = u.reason[j] or f"{u.text[j]} is not a position given in these files"
-                    why = f"its start {u.text[j]} (line {use_line}) is not known: {why}"
+                    why = f"its start {u.text[j]} (line {use_line[i]}) is not known: {why}"
+                else:
+                    s2, p2 = found
+            before = index.get(p2, -1) if s2 == s else -1
             if not why:
-                s2, p2 = start
-                if frames[s2][p2] < 0 or reasons[s2][p2] and p2 not in resolved:
+                if frames[s2][p2] < 0 or reasons[s2][p2]:
                     why = f"its start ({where(s2, p2)}) is not placed: " + (
                         reasons[s2][p2] or "no base"
                     )
-                elif not np.array_equal(poses[frames[s2][p2]], poses[frames[s][r]]):
-                    why = f"its start ({where(s2, p2)}) is in another base"
-            xyz = abc = rotation = None
-            if not why:
-                if s2 == s and p2 in resolved:
-                    at = resolved[p2]
-                    start_xyz, start_abc = xyzs[at], abcs[at]
                 else:
-                    start_xyz, start_abc = scans[s2].table.xyz[p2], scans[s2].table.abc[p2]
-                rotation = np.eye(3)
-                if info.tool:
-                    if np.isnan(start_abc).any():
-                        why = f"#TOOL: the orientation at its start ({where(s2, p2)}) is not known"
-                    else:
-                        rotation = abc_to_matrix(start_abc)
-                increment = np.nan_to_num(t.xyz[r])
-                turn = np.nan_to_num(t.abc[r])
-                xyz = start_xyz + rotation @ increment
-                abc = start_abc if not turn.any() else np.full(3, np.nan)
+                    pair = (int(frames[s2][p2]), int(frame_s[r]))
+                    if pair not in same_base:
+                        same_base[pair] = np.array_equal(poses[pair[0]], poses[pair[1]])
+                    if not same_base[pair]:
+                        why = f"its start ({where(s2, p2)}) is in another base"
+            start_oriented = oriented[before] if before >= 0 else known_abc[s2][p2]
+            if not why and info.tool and not start_oriented:
+                why = f"#TOOL: the orientation at its start ({where(s2, p2)}) is not known"
             if why:
                 reasons[s][r] = why
-                frames[s][r] = -1
-                start = (-1, -1)
-            else:
-                resolved[r] = len(starts)
-            starts.append(start)
-            rotations.append(rotation)
-            xyzs.append(xyz)
-            abcs.append(abc)
-            whys.append(why)
-        chains.start.append(starts)
-        chains.rotation.append(rotations)
-        chains.xyz.append(xyzs)
-        chains.abc.append(abcs)
-        chains.reason.append(whys)
+                frame_s[r] = -1
+                continue
+            start[i] = s2, p2
+            tools[i] = info.tool
+            oriented[i] = start_oriented and not turns[i]
+            if before >= 0:
+                prior[i] = before
+                generation[i] = generation[before] + 1
+        xyz, abc = np.full((k, 3), np.nan), np.full((k, 3), np.nan)
+        rotation = np.tile(np.eye(3), (k, 1, 1))
+        increment = np.nan_to_num(t.xyz[rel])
+        for g in range(int(generation.max(initial=-1)) + 1):
+            now = np.flatnonzero((generation == g) & (start[:, 0] >= 0))
+            first = prior[now] < 0
+            from_xyz, from_abc = np.empty((len(now), 3)), np.empty((len(now), 3))
+            for f in distinct_ints(start[now[first], 0]):
+                mine = first & (start[now, 0] == f)
+                table = scans[f].table
+                from_xyz[mine] = table.xyz[start[now[mine], 1]]
+                from_abc[mine] = table.abc[start[now[mine], 1]]
+            from_xyz[~first] = xyz[prior[now[~first]]]
+            from_abc[~first] = abc[prior[now[~first]]]
+            tool = now[tools[now]]
+            if len(tool):
+                rotation[tool] = abc_to_matrix(from_abc[tools[now]])
+            xyz[now] = from_xyz + np.einsum("nij,nj->ni", rotation[now], increment[now])
+            turned = np.array([turns[i] for i in now.tolist()], bool).reshape(-1)
+            abc[now] = np.where(turned[:, None], np.nan, from_abc)
+        chains.start.append(start)
+        chains.prior.append(prior)
+        chains.rotation.append(rotation)
+        chains.xyz.append(xyz)
+        chains.abc.append(abc)
+        chains.generation.append(generation)
     return chains
 
 
@@ -154,35 +181,42 @@ def write_increments(
     ``goals[s]`` (n_s, 3) mm base frame: each table row's corrected target (NaN: not corrected),
     ``corrected[s]`` (n_s,) bool: whether it is written corrected, ``places[s]`` the decimals of
     file s. Returns per file the edits (start, end, new text) and ``reached`` (k_s, 3) mm: where
-    each relative motion lands (NaN: start not known)."""
-    written: dict[tuple[int, int], np.ndarray] = {}  # where a start lands as written
-
-    def lands(s: int, p: int) -> np.ndarray:
-        if (s, p) not in written:
-            table = scans[s].table
-            value = table.xyz[p]
-            if corrected[s][p]:
-                value = literals(goals[s][p], places[s])[2]
-            written[s, p] = value
-        return written[s, p]
-
+    each relative motion lands (NaN: start not known). A generation of the chains at a time."""
     edits: list[list[tuple[int, int, str]]] = []
     reached_all = []
     for s, rows in enumerate(chains.rows):
-        scan, mine = scans[s], []
+        start, prior = chains.start[s], chains.prior[s]
         reached = np.full((len(rows), 3), np.nan)
-        for k, r in enumerate(rows.tolist()):
-            s2, p2 = chains.start[s][k]
-            if s2 < 0:
-                continue
-            start = lands(s2, p2)
-            goal = goals[s][r] if corrected[s][r] else chains.xyz[s][k]
-            rotation = chains.rotation[s][k]
-            texts, lengths, values = literals(rotation.T @ (goal - start), places[s])
-            pieces = np.split(texts, np.cumsum(lengths)[:-1])
-            new = [bytes(piece).decode("ascii") for piece in pieces]
-            mine += _aggregate_edits(scan, r, new, values)
-            written[s, r] = reached[k] = start + rotation @ values
+        texts: list[list[str]] = [[] for _ in rows]
+        values = np.full((len(rows), 3), np.nan)
+        for g in range(int(chains.generation[s].max(initial=-1)) + 1):
+            now = np.flatnonzero((chains.generation[s] == g) & (start[:, 0] >= 0))
+            first = prior[now] < 0
+            lands = np.empty((len(now), 3))
+            for f in distinct_ints(start[now[first], 0]):
+                mine = np.flatnonzero(first & (start[now, 0] == f))
+                p = start[now[mine], 1]
+                lands[mine] = scans[f].table.xyz[p]
+                done = corrected[f][p]
+                if done.any():
+                    lands[mine[done]] = literals(goals[f][p[done]], places[f])[2].reshape(-1, 3)
+            lands[~first] = reached[prior[now[~first]]]
+            r = rows[now]
+            goal = np.where(corrected[s][r][:, None], goals[s][r], chains.xyz[s][now])
+            rotation = chains.rotation[s][now]
+            step = np.einsum("nji,nj->ni", rotation, goal - lands)  # R^T (goal - start)
+            data, lengths, written = literals(step.ravel(), places[s])
+            written = written.reshape(-1, 3)
+            reached[now] = lands + np.einsum("nij,nj->ni", rotation, written)
+            values[now] = written
+            cut = np.concatenate(([0], np.cumsum(lengths))).tolist()
+            joined = data.tobytes().decode("ascii")
+            pieces = [joined[a:b] for a, b in zip(cut[:-1], cut[1:], strict=True)]
+            for n, i in enumerate(now.tolist()):
+                texts[i] = pieces[3 * n : 3 * n + 3]
+        mine = []
+        for i in np.flatnonzero(start[:, 0] >= 0).tolist():
+            mine += _aggregate_edits(scans[s], int(rows[i]), texts[i], values[i])
         edits.append(mine)
         reached_all.append(reached)
     return edits, reached_all

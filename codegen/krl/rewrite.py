@@ -73,10 +73,10 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
         reasons = [p.reason for p in parts]
         chains = resolve(scans, placed, reasons, ctx.stored_row, ctx.frames)
         for s, part in enumerate(parts):
-            for k, r in enumerate(chains.rows[s].tolist()):
-                part.commanded[r] = placed[s][r] < 0
-                if placed[s][r] >= 0:
-                    part.old[r] = chains.xyz[s][k]  # the position it reaches, as written
+            relative = chains.rows[s]
+            known = chains.start[s][:, 0] >= 0
+            part.commanded[relative] = ~known
+            part.old[relative[known]] = chains.xyz[s][known]  # where it reaches, as written
     parts += [_use_rows(ctx, scan) for scan in scans]
     rows = Rows.concat(parts)
     starts = np.cumsum([0] + [len(p) for p in parts[: len(scans)]])
@@ -545,11 +545,11 @@ def _reached(chains: Chains, absolute: list[tuple[np.ndarray, np.ndarray]]) -> l
     out = []
     for s, (xyz, abc) in enumerate(absolute):
         rows = chains.rows[s]
-        known = [k for k in range(len(rows)) if chains.start[s][k][0] >= 0]
-        if known:
+        known = chains.start[s][:, 0] >= 0
+        if known.any():
             xyz, abc = xyz.copy(), abc.copy()
-            xyz[rows[known]] = [chains.xyz[s][k] for k in known]
-            abc[rows[known]] = [chains.abc[s][k] for k in known]
+            xyz[rows[known]] = chains.xyz[s][known]
+            abc[rows[known]] = chains.abc[s][known]
         out.append((xyz, abc))
     return out
 
@@ -574,7 +574,7 @@ def _increments(
         corrected.append(np.isfinite(goal[:, 0]))
     edits, reached = write_increments(chains, scans, goals, corrected, places)
     for s, relative in enumerate(chains.rows):
-        known = np.array([chains.start[s][k][0] >= 0 for k in range(len(relative))], bool)
+        known = chains.start[s][:, 0] >= 0
         r = relative[known]
         at = starts[s] + r
         done = corrected[s][r]
