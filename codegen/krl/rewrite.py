@@ -7,7 +7,8 @@ position (declared or assigned with a literal) is corrected only if a motion use
 motions that use it (its own FDAT wins over ``--base``) and is corrected once however many
 motions use it. BASE_DATA[n] comes from ``--config-dat`` (if it defines n), else from the cell's
 ``base`` and ``base_data``; base 0 ($NULLFRAME, BAS(#BASE,0)) is the robot frame ($WORLD =
-$ROBROOT).
+$ROBROOT). A relative motion (``LIN_REL``...) is corrected as the position it reaches and
+written back as an increment (``codegen.krl.relative``).
 """
 
 from __future__ import annotations
@@ -482,10 +483,17 @@ class _Context:
         to: defined once in the given files; None otherwise."""
         if name in self.twice or "*" in name:
             return None
+        return self.stored_rows.get(name)
+
+    @cached_property
+    def stored_rows(self) -> dict[str, tuple[int, int]]:
+        """Each stored position's key -> (file, table row) (of its first definition)."""
+        found: dict[str, tuple[int, int]] = {}
         for s, keys in enumerate(self.keys):
-            if name in keys:
-                return s, keys.index(name)
-        return None
+            for i, key in enumerate(keys):
+                if key:
+                    found.setdefault(key, (s, i))
+        return found
 
     def moved_to(self, s: int, i: int) -> bool:
         """Whether a motion commands stored position row i of file s: a motion uses its name
