@@ -65,9 +65,10 @@ def resolve(
 
     ``frames[s]`` (n_s,) the index in ``poses`` of each table row's robot_T_base (-1: not
     placed) and ``reasons[s]`` each row's reason so far, both of file s; ``named(name)``: the
-    (file, row) of the stored position a motion to ``name`` goes to, or None. A relative motion
-    whose start is not known gets its reason in ``reasons`` and frame -1. The starts are found
-    row by row (list and dict look-ups), the positions a generation of a chain at a time."""
+    (file, row) of the stored position a motion to ``name`` goes to, or why it is not known. A
+    relative motion whose start is not known gets its reason in ``reasons`` and frame -1. The
+    starts are found row by row (list and dict look-ups), the positions a generation of a chain
+    at a time."""
 
     def where(s: int, p: int) -> str:
         table = scans[s].table
@@ -106,10 +107,9 @@ def resolve(
                 if p < 0 and use_line[i] < 0:
                     why = "relative motion with no motion before it: its start is not known"
             elif p < 0 or use_line[i] > prev_line[i]:
-                found = None if u.reason[j] else named(u.name[j])
-                if found is None:
-                    why = u.reason[j] or f"{u.text[j]} is not a position given in these files"
-                    why = f"its start {u.text[j]} (line {use_line[i]}) is not known: {why}"
+                found = u.reason[j] or named(u.name[j])
+                if isinstance(found, str):
+                    why = f"its start {u.text[j]} (line {use_line[i]}) is not known: {found}"
                 else:
                     s2, p2 = found
             before = index.get(p2, -1) if s2 == s else -1

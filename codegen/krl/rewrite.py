@@ -478,12 +478,14 @@ class _Context:
             why += f" (--base N applies to POS/E6POS only, this is {type_name or 'untyped'})"
         return None, why
 
-    def stored_row(self, name: str) -> tuple[int, int] | None:
+    def stored_row(self, name: str) -> tuple[int, int] | str:
         """The (file, table row) of the stored position a motion to ``name`` (normalized) goes
-        to: defined once in the given files; None otherwise."""
-        if name in self.twice or "*" in name:
-            return None
-        return self.stored_rows.get(name)
+        to, defined once in the given files; otherwise why it is not known."""
+        if "*" in name:
+            return "its index is a variable"
+        if name in self.twice:
+            return "it is defined more than once"
+        return self.stored_rows.get(name, "it is not a position given in these files")
 
     @cached_property
     def stored_rows(self) -> dict[str, tuple[int, int]]:
