@@ -74,32 +74,53 @@ def rounded(values) -> np.ndarray:
     return np.round(np.asarray(values, float), 3)
 
 
-def test_base_relative_chain_lands_on_the_corrected_absolute_positions(tmp_path):
-    """LIN_REL {Z -50} after a corrected LIN, then LIN_REL {X 10, Y 5}: each increment is the
-    difference of corrected positions; the X and Y the first one does not give are added."""
-    src = (
+def assert_chain_lands(lines: list[str], want: np.ndarray) -> None:
+    """``lines``: an absolute aggregate, then #BASE relative ones; ``want`` (n, 3): where each
+    must land. The start is written rounded; walking the increments reaches each within the
+    rounding of one increment (a chain re-starts from where the motion before lands)."""
+    reached = xyz(lines[0])
+    np.testing.assert_allclose(reached, rounded(want[0]), atol=1e-9)
+    for line, goal in zip(lines[1:], want[1:], strict=True):
+        reached = reached + xyz(line)
+        assert np.linalg.norm(reached - goal) <= HALF
+
+
+CHAINS = {
+    # LIN_REL {Z -50} after a corrected LIN, then LIN_REL {X 10, Y 5} (its own ", " kept)
+    "after_an_absolute_motion": (
         "DEF p( )\nBAS (#BASE,2)\n"
         "LIN {X 1000.000,Y 100.000,Z 800.000,A 0.0,B 90.0,C 0.0}\n"
         "LIN_REL {Z -50.000}\n"
         "LIN_REL {X 10, Y 5} C_DIS\n"
-        "END\n"
-    )
+        "END\n",
+        [[1000, 100, 800], [1000, 100, 750], [1010, 105, 750]],
+    ),
+    # SLIN_REL segments of a SPLINE block in the block's base (2), each from the one before
+    "segments_of_a_spline_block": (
+        "DEF p( )\nBAS (#BASE,0)\nSPLINE WITH $BASE = BASE_DATA[2]\n"
+        "SLIN {X 800.000,Y 300.000,Z 700.000,A 0.0,B 90.0,C 0.0}\n"
+        "SLIN_REL {X 30.000}\n"
+        "SLIN_REL {Y -15.000,Z 5.000}\n"
+        "ENDSPLINE\nEND\n",
+        [[800, 300, 700], [830, 300, 700], [830, 285, 705]],
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CHAINS))
+def test_base_relative_chain_lands_on_the_corrected_absolute_positions(tmp_path, case):
+    """Each increment is the difference of corrected positions; a component the aggregate does
+    not give is added (``{X .., Y .., Z -49.9..}``)."""
+    src, nominal = CHAINS[case]
     code, text, rows, model = _rewrite(tmp_path, src)
-    assert code == 0
-    nominal = np.array([[1000, 100, 800], [1000, 100, 750], [1010, 105, 750]], float)
-    want = corrected_in(model, BASE2, nominal)
-    lines = text.splitlines()
-    start = xyz(lines[2])
-    np.testing.assert_allclose(start, rounded(want[0]), atol=1e-9)
-    first, second = xyz(lines[3]), xyz(lines[4])
-    assert set(components(lines[3])) == {"X", "Y", "Z"} and "{X " in lines[3]
-    assert ", Y " in lines[4]  # the aggregate's own separator is kept
-    np.testing.assert_allclose(start + first, want[1], atol=HALF)
-    np.testing.assert_allclose(start + first + second, want[2], atol=HALF)
-    assert lines[4].endswith("} C_DIS")
-    assert [r["status"] for r in rows] == ["corrected"] * 3
+    assert code == 0 and [r["status"] for r in rows] == ["corrected"] * 3
+    lines = [ln for ln in text.splitlines() if "{" in ln]
+    assert_chain_lands(lines, corrected_in(model, BASE2, nominal))
     np.testing.assert_allclose([float(rows[2][k]) for k in ("x", "y", "z")], nominal[2])
-    assert not np.allclose(first, [0, 0, -50], atol=1e-3)  # the field varies: it changed
+    assert not np.allclose(xyz(lines[1]), np.subtract(nominal[1], nominal[0]), atol=1e-3)
+    if case == "after_an_absolute_motion":  # X and Y added to {Z -50.000}; ", " kept
+        assert set(components(lines[1])) == {"X", "Y", "Z"} and "{X " in lines[1]
+        assert ", Y " in lines[2] and lines[2].endswith("} C_DIS")
 
 
 def test_tool_relative_motion_is_in_the_tool_frame_of_its_start(tmp_path):
@@ -304,28 +325,6 @@ def test_relative_motion_that_sets_its_own_tool_is_reported(tmp_path):
     code, text, rows, _ = _rewrite(tmp_path, src, None, "--allow-partial")
     assert code == 0 and text.splitlines()[3] == src.splitlines()[3]
     assert "it sets its own tool (WITH $TOOL, line 4)" in rows[1]["reason"]
-
-
-def test_segments_of_a_spline_block_chain_in_the_blocks_base(tmp_path):
-    """SLIN_REL segments inside SPLINE WITH $BASE = BASE_DATA[2]: each from the segment
-    before, in base 2 (rotated 30 deg about Z)."""
-    src = (
-        "DEF p( )\nBAS (#BASE,0)\nSPLINE WITH $BASE = BASE_DATA[2]\n"
-        "  SLIN {X 800.000,Y 300.000,Z 700.000,A 0.0,B 90.0,C 0.0}\n"
-        "  SLIN_REL {X 30.000}\n"
-        "  SLIN_REL {Y -15.000,Z 5.000}\n"
-        "ENDSPLINE\nEND\n"
-    )
-    code, text, rows, model = _rewrite(tmp_path, src)
-    assert code == 0
-    nominal = np.array([[800, 300, 700], [830, 300, 700], [830, 285, 705]], float)
-    want = corrected_in(model, BASE2, nominal)
-    lines = text.splitlines()
-    reached = xyz(lines[3])
-    np.testing.assert_allclose(reached, rounded(want[0]), atol=1e-9)
-    reached = reached + xyz(lines[4])
-    np.testing.assert_allclose(reached, want[1], atol=HALF)
-    np.testing.assert_allclose(reached + xyz(lines[5]), want[2], atol=2 * HALF)
 
 
 def test_relative_motion_with_an_external_axis_is_reported(tmp_path):
