@@ -117,7 +117,8 @@ def test_base_relative_chain_lands_on_the_corrected_absolute_positions(tmp_path,
     lines = [ln for ln in text.splitlines() if "{" in ln]
     assert_chain_lands(lines, corrected_in(model, BASE2, nominal))
     np.testing.assert_allclose([float(rows[2][k]) for k in ("x", "y", "z")], nominal[2])
-    assert not np.allclose(xyz(lines[1]), np.subtract(nominal[1], nominal[0]), atol=1e-3)
+    changed = np.abs(xyz(lines[1]) - np.subtract(nominal[1], nominal[0]))
+    assert changed.max() > 0.5e-3  # the field varies: the increment is not the programmed one
     if case == "after_an_absolute_motion":  # X and Y added to {Z -50.000}; ", " kept
         assert set(components(lines[1])) == {"X", "Y", "Z"} and "{X " in lines[1]
         assert ", Y " in lines[2] and lines[2].endswith("} C_DIS")
