@@ -80,6 +80,8 @@ __all__ = [
     "KrlScan",
     "KrlUse",
     "Number",
+    "RELATIVE",
+    "Relative",
     "code_part",
     "match_brace",
     "normalize_name",
@@ -100,6 +102,8 @@ JOINT_KEYS = frozenset("A1 A2 A3 A4 A5 A6 E1 E2 E3 E4 E5 E6".split())
 # the reason of an aggregate of joint angles: a target the robot reaches by its joints, never a
 # Cartesian position to correct
 JOINT_TARGET = "joint-space target (AXIS/E6AXIS): not a Cartesian position"
+# how the reason of a relative motion's aggregate begins (``KrlScan.relative`` says more)
+RELATIVE = "relative motion"
 # how the reason of an operand of ':' before the last (a frame or an offset) begins: the motion's
 # target is the last operand, which alone stands for the motion
 FRAME_OPERAND = "the frame operand of ':'"
@@ -164,6 +168,9 @@ _BASE_SET_RE = re.compile(r"\$BASE\s*+=\s*+", re.I)
 _NEXT_SYSVAR_RE = re.compile(r",\s*+\$")
 _APPROXIMATION_RE = re.compile(r"\s(?:C_(?:DIS|PTP|ORI|VEL|SPL)|WITH)\b", re.I)
 _INDEX_RE = re.compile(r"\[\s*+(\d++)\s*+\]")
+_TOOL_FRAME_RE = re.compile(r"#\s*+TOOL\b", re.I)  # a relative motion in the tool frame
+_WITH_TOOL_RE = re.compile(r"\bWITH\b.*\$TOOL\s*+=", re.I)
+_PARTIAL = "partial aggregate"
 _IDENT_RE = re.compile(r"[A-Za-z_]\w*+")
 
 
@@ -282,6 +289,18 @@ class Fdat(NamedTuple):
     reason: str = ""
 
 
+class Relative(NamedTuple):
+    """A relative motion's aggregate (``LIN_REL {Z -50} #TOOL``): an increment from the position
+    the robot is at, in the base frame (``#BASE``, the default) or the tool frame at the start
+    (``#TOOL``). ``since`` and ``why``: the line of the last statement before it after which the
+    robot's position does not follow from the motions written before (a routine's start, a jump
+    target, a branch or loop, a call, a change of $BASE or $TOOL), and what it is."""
+
+    tool: bool  # #TOOL: the increment is in the tool frame at the start
+    since: int
+    why: str
+
+
 class Declared(NamedTuple):
     """A variable declaration: its type (upper case) and line."""
 
@@ -315,6 +334,7 @@ class KrlScan:
     assigned: dict[str, int] = field(default_factory=dict)
     # names given a non-literal value at run time -> first line
     frame_uses: dict[str, FrameUse] = field(default_factory=dict)  # normalized name -> first use
+    relative: dict[int, Relative] = field(default_factory=dict)  # table row of a _REL aggregate
     _declared: dict[str, Declared] = field(default_factory=dict, repr=False)  # statement reader
     _fast_decls: list[tuple[list, list, np.ndarray]] = field(default_factory=list, repr=False)
     # (names, types, lines) of each block of plain declarations the whole-text scanner read
@@ -617,7 +637,7 @@ def position_reason(type_name: str, numbers: dict[str, Number]) -> str:
     if missing:
         given = ",".join(k for k in "XYZABC" if k in keys) or "none"
         return (
-            f"partial aggregate (gives {given}; missing {','.join(missing)}): "
+            f"{_PARTIAL} (gives {given}; missing {','.join(missing)}): "
             "the correction would need components the program does not give"
         )
     return ""
@@ -743,6 +763,8 @@ class _Flow:
         self.sets_tool = False
         self.since = rows.mark()  # where the routine's rows start
         self.before_spline: BaseRef | None = None  # the base outside an open spline block
+        # the last statement after which the robot's position is not the last motion's target
+        self.moved: tuple[int, str] = (0, "the start of the file")
 
     def start_routine(self, name: str, line: int) -> None:
         self.finish_routine()
@@ -758,6 +780,7 @@ class _Flow:
         self.sets_base = self.sets_tool = False
         self.since = self.rows.mark()
         self.before_spline = None
+        self.moved = (line, f"the start of routine {name} (line {line}), reached from its caller")
 
     def finish_routine(self) -> None:
         """A jump target makes the base (the tool) path-dependent when the routine sets the base
@@ -776,6 +799,11 @@ class _Flow:
         """A new base; the tool set before stays, unless an FDAT sets both."""
         self.state = _with_tool(base, self.state)
         self.sets_base = True
+        self.moved = (base.line, f"$BASE set at line {base.line}")
+
+    def breaks(self, line: int, why: str) -> None:
+        """After line ``line`` the robot's position does not follow from the motions before."""
+        self.moved = (line, why)
 
     def set_tool(self, tool: int | str, line: int) -> None:
         """``$TOOL`` set at ``line``: TOOL_DATA number, or why it is not known."""
@@ -797,10 +825,12 @@ class _Flow:
             self.state, self.before_spline = self.before_spline, None
 
     def label(self, name: str, line: int) -> None:
+        self.moved = (line, f"the jump target {name} (line {line})")
         where = f"{name} (line {line})"
         self.state = replace(self.state, label=where, tool_label=where)
 
     def call(self, name: str, line: int) -> None:
+        self.moved = (line, f"the call {name}() at line {line}, which may move the robot")
         if not self.trust_calls:
             self.state = BaseRef(
                 "unknown",
@@ -809,11 +839,13 @@ class _Flow:
             )
 
     def open(self, keyword: str, line: int) -> None:
+        self.moved = (line, f"{keyword} at line {line}")
         self.blocks.append(_Block(keyword, line, self.state, self.rows.mark()))
 
-    def branch(self) -> None:
+    def branch(self, line: int) -> None:
         if self.blocks:
             block = self.blocks[-1]
+            self.moved = (line, f"a branch of {block.keyword} at line {block.line}")
             block.ends.append(self.state)
             block.has_else = True
             self.state = block.start
@@ -824,6 +856,7 @@ class _Flow:
         block = self.blocks.pop()
         start = block.start
         where = f"{block.keyword} at line {block.line}"
+        self.moved = (line, f"the end of {where} (line {line})")
         if block.keyword in ("IF", "SWITCH"):
             ends = block.ends + [self.state]
             if not block.has_else:
@@ -1311,7 +1344,7 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
         flow.open(word, lineno)
         return
     if word in _BRANCHES:
-        flow.branch()
+        flow.branch(lineno)
         return
     if word in _CLOSERS:
         flow.close(lineno)
@@ -1351,6 +1384,8 @@ def _bas(code: str, pos: int, lineno: int, flow: _Flow) -> None:
     """``BAS(#BASE, n)`` sets BASE_DATA[n], ``BAS(#TOOL, n)`` TOOL_DATA[n]; other BAS commands
     leave them."""
     m = _BAS_RE.match(code, pos)
+    if m is not None and m.group(1).upper() == "TOOL":
+        flow.breaks(lineno, f"the tool set at line {lineno}")
     if m is None or m.group(1).upper() not in ("BASE", "TOOL"):
         return
     rest = code[m.end() :].strip()
@@ -1557,6 +1592,8 @@ def _assignment(
             lineno,
             f"assigned to {m.group(1)}{index} at line {lineno}: a frame, not a drilling position",
         )
+    if target == "$TOOL":
+        flow.breaks(lineno, f"the tool set at line {lineno}")
     if target == "$BASE" and not member:
         flow.set(_base_value(code, value_at, off, lineno, scan))
         return
@@ -1617,10 +1654,9 @@ def _assignment(
             if not numbers or not set(numbers) & (CARTESIAN_KEYS | JOINT_KEYS):
                 scan._rows.pop_position()  # an aggregate of some other structure type
             return
-    key = normalize_name(name)  # a member assigned changes the variable
-    scan.assigned.setdefault(key, lineno)
-    if "[" in key:
-        scan.assigned.setdefault(wildcard(key), lineno)
+    # a member assigned changes the element (``fp[2].Y = 25``: fp[2], not fp[1]); a variable
+    # index is ``[*]`` already, which stands for every element
+    scan.assigned.setdefault(normalize_name(name), lineno)
 
 
 def _base_value(code: str, at: int, off: int, lineno: int, scan: KrlScan) -> BaseRef:
@@ -1741,6 +1777,8 @@ def _motion(
 ) -> None:
     count = 2 if word in ("CIRC", "SCIRC", "CIRC_REL", "SCIRC_REL") else 1
     relative = word.endswith("_REL")
+    tool = relative and _TOOL_FRAME_RE.search(code) is not None
+    own_tool = relative and "$" in code and _WITH_TOOL_RE.search(code) is not None
     base = flow.state
     if "$" in code and "WITH" in code.upper():
         base = _with_tool(_with_base(code, lineno), base)
@@ -1756,7 +1794,7 @@ def _motion(
         for k, (kind, s, e) in enumerate(operands):
             if kind == "agg":
                 if relative:
-                    why = f"relative motion {word}: an offset, not a position"
+                    why = f"{RELATIVE} {word}: an offset, not a position"
                 elif arith and k < len(operands) - 1:
                     why = f"{FRAME_OPERAND} in {target_text}: an offset, not the target"
                 elif arith:
@@ -1766,6 +1804,11 @@ def _motion(
                 row, _, own, _ = _add_position(code, s, off, lineno, scan, MOTION, "", word, base)
                 if why and own != JOINT_TARGET:  # a joint target stays one, relative or not
                     scan._rows.positions.set(row, "reason", why)
+                    if relative and not arith and (not own or own.startswith(_PARTIAL)):
+                        since, why = flow.moved[0], f"{flow.moved[1]} comes before it"
+                        if own_tool:
+                            since, why = lineno, f"it sets its own tool (WITH $TOOL, line {lineno})"
+                        scan.relative[row] = Relative(tool, since, why)
             else:
                 operand = code[s:e].strip()
                 name = normalize_name(operand) if kind == "name" else ""
@@ -1774,7 +1817,7 @@ def _motion(
                 elif kind != "name":
                     why = f"target {operand!r} is an expression"
                 elif relative:
-                    why = f"relative motion {word}: an offset, not a position"
+                    why = f"{RELATIVE} {word}: an offset, not a position"
                 elif arith:
                     why = f"frame arithmetic ':' in {target_text}: computed at run time"
                     if k < len(operands) - 1:
