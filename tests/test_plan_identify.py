@@ -53,7 +53,9 @@ def test_plan_simulate_identify_round_trip(tmp_path, capsys):
         ]
     )
     assert code == 0
-    assert "chosen D-optimally" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "identification plan (DH errors, TCP + candidates: harmonic orders 1..16" in out
+    assert "chosen Bayesian D-optimally" in out
     csv = tmp_path / "plan" / "measure_identify.csv"
     src = (tmp_path / "plan" / "measure_identify.src").read_text()
     assert src.count("PTP XMP") == 72 and "LIN" not in src  # poses reorient: PTP with S/T
@@ -165,7 +167,7 @@ def test_poses_chosen_for_the_harmonic_model_identify_it(tmp_path, capsys):
     planned = ["plan", "identify", "--robot", "kr210-realistic", *tool, "--count", "40"]
     assert main([*planned, "--tilt", "25", *model, "-o", str(tmp_path / "plan")]) == 0
     out = capsys.readouterr().out
-    assert "identification plan (DH errors, TCP, compliance, 2 harmonics): 40 poses" in out
+    assert "identification plan (DH errors, TCP, compliance, 2 harmonics + candidates" in out
     meas, cal = tmp_path / "meas.csv", tmp_path / "cal.yaml"
     poses = str(tmp_path / "plan" / "measure_identify.csv")
     sim = ["simulate", "--robot", "kr210-realistic", "--poses", poses, *tool, "-o", str(meas)]
