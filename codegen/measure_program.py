@@ -209,14 +209,16 @@ def _identification_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
         f"{r.tilt_deg:g} deg, |A5| >= 10 deg); observability O1 {o1:.4f}",
         f"path {plan.path_length():.1f} mm",
     ]
-    info.append(_candidates_line(robot, plan, status))
+    info.append(_candidates_line(robot, plan, status, r))
     return plan, info
 
 
-def _candidates_line(robot, plan: Plan, status: int) -> str:
+def _candidates_line(robot, plan: Plan, status: int, r: PlanRequest) -> str:
     """What the planned poses can tell ``identify``'s search: the harmonic orders resolved per
-    axis and the candidate groups they cannot separate from the DH errors and TCP."""
-    from accugrid.kinematics.structure import observability
+    axis, the candidate groups they cannot separate from the DH errors and TCP, and the share of
+    the candidates' prior variance they remove (``pose_design.library_share``)."""
+    from accugrid.kinematics.pose_design import library_share
+    from accugrid.kinematics.structure import DEFAULT_MAX_ORDER, observability
 
     poses = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
     first = np.unique(np.column_stack([plan.points, plan.abc_rows()]), axis=0, return_index=True)[1]
@@ -229,9 +231,12 @@ def _candidates_line(robot, plan: Plan, status: int) -> str:
         orders.setdefault(axis if order else name, []).append(order)
     text = "; ".join(f"{key} orders {','.join(ks)}" if ks[0] else key for key, ks in orders.items())
     text = text or "none"
+    share = library_share(robot, q, DEFAULT_MAX_ORDER, r.harmonics, r.compliance)
     return (
         f"candidates for identify's structure search: harmonic orders up to {resolved}; "
-        f"not separable from the DH errors and TCP by these poses: {text}"
+        f"not separable from the DH errors and TCP by these poses: {text}; these poses remove "
+        f"{100 * share:.0f} % of the candidate terms' prior variance (mean; each term's prior "
+        "3 times the noise)"
     )
 
 
