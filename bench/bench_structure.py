@@ -16,13 +16,13 @@ Columns: the model's max |calibrated − true| FK position error over the target
   mass-free gravity groups);
 - dh: DH errors + TCP only (``--structure dh``);
 
-and the nested cross-validation estimate against the truth (the model's RMS, noise removed;
-the held-out max, noise included, against the true max). Then the two black-box tables: two
-family robots (seeds 100, 101) measured at 60 random poses tilted up to 25 deg (A) and at the 60
-poses of `plan identify` (B): plain identify against the fit told the true orders and compliance
-(with the true masses), on the targets inside the poses' joint ranges (random poses leave a fifth
-of the targets outside, where the fit extrapolates; their max is printed apart). Not timed tests;
-run ``make bench ARGS=structure`` (or ``.venv/bin/python bench/bench_structure.py --robots 20
+and the nested cross-validation estimate against the truth (the model's RMS, noise removed; the
+held-out max, noise included, against the true max). Then the two black-box tables: two family
+robots (seeds 100, 101) measured at 60 random poses tilted up to 25 deg (A) and at the 60 poses of
+`plan identify` (B, each design compared): plain identify against the fit told the true orders and
+compliance (with the true masses), on the targets inside the poses' joint ranges (random poses leave
+a fifth of the targets outside, where the fit extrapolates; their max is printed apart). Not timed
+tests; run ``make bench ARGS=structure`` (or ``.venv/bin/python bench/bench_structure.py --robots 20
 --design both``).
 """
 
@@ -223,7 +223,7 @@ def designs(summary: list[tuple[str, ...]], count: int) -> None:
     print(table(summary, columns))
 
 
-def black_boxes(design: str) -> None:
+def black_boxes(designs: list[str]) -> None:
     rows = []
     for seed in (100, 101):
         robot = random_robot(seed)
@@ -235,13 +235,13 @@ def black_boxes(design: str) -> None:
             nominal,
             joint_errors=JointErrors.from_compliance(np.zeros(6), robot.robot.joint_errors.masses),
         )
-        for label, q in (
-            ("A: 60 random poses tilted <= 25 deg", tilted_joints(nominal, status, POSES, 25.0, 3)),
-            (
-                f"B: 60 poses from plan identify --design {design}",
-                planned_joints(nominal, status, design),
-            ),
-        ):
+        poses = [
+            ("A: 60 random poses tilted <= 25 deg", tilted_joints(nominal, status, POSES, 25.0, 3))
+        ]
+        for design in designs:
+            label = f"B: 60 poses from plan identify --design {design}"
+            poses.append((label, planned_joints(nominal, status, design)))
+        for label, q in poses:
             data = measured(robot, q, 7)
             auto = identify_structure(nominal, data)[0]
             told = identify(masses, data, compliance=True, harmonics=harmonics, selected=True)
@@ -269,4 +269,4 @@ if __name__ == "__main__":
     compared = ["library", "dh"] if chosen == "both" else [chosen]
     summary = [family(count, design) for design in compared]
     designs(summary, count)
-    black_boxes(compared[0])
+    black_boxes(compared)
