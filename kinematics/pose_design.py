@@ -23,8 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.candidates import gravity_terms
-from accugrid.kinematics.errors import InputError
 from accugrid.kinematics.identification import Terms, planned_columns
 from accugrid.kinematics.robot import Robot
 
