@@ -9,8 +9,9 @@ The candidates (``kinematics.candidates``) are groups of linear parameters: redu
 2. **Grouped forward selection by K-fold cross-validation over the distinct poses** (repeats in
    one fold): each step adds the group whose least-squares fit (X and the groups so far refitted
    in every fold, by QR updates) gives the smallest held-out sum of squares; a group whose
-   columns lie within ``SEPARATE`` of the current model's span on the data (relative singular
-   value) cannot be told apart by these poses and is skipped; the path stops when no group
+   columns lie within ``SEPARATE`` (a harmonic) or ``SEPARATE_GRAVITY`` (a gravity group) of the
+   current model's span on the data (relative singular value) cannot be told apart by these
+   poses and is skipped; the path stops when no group
    lowers the held-out error, at ``MAX_SHARE`` of a fold's equations in parameters or after
    ``MAX_STEPS`` steps.
 3. **Keep steps while they beat their own uncertainty**: a step is kept when its held-out gain
@@ -24,6 +25,12 @@ The candidates (``kinematics.candidates``) are groups of linear parameters: redu
    Then each kept harmonic is swapped for a neighbouring order of its axis (k ± 1, 2) where that
    lowers the held-out error: over a narrow angle range neighbouring orders differ by a fraction
    of a period and the greedy step may take the wrong one.
+   **Second pass** (up to ``SECOND_PASSES`` rounds, after the screened orders below): drop the
+   groups whose removal lowers the held-out error, exchange groups one for one (any offered
+   group of the same size) while that lowers it, and continue the path from there (steps clear
+   their bar again; dropped groups are not offered back). A forward path never steps back: an
+   early group that later ones made redundant, or one order standing in for two true ones,
+   stays without it.
 4. **Nested cross-validation** for the accuracy to expect: in each outer fold the whole search
    (steps 2-3, on inner folds of the training poses) is repeated, the chosen groups are fitted
    on the training poses and the held-out poses are predicted; so the estimate is not the score
