@@ -356,7 +356,7 @@ def _identify_structure(
     replaced = [g for g, _ in path[1 : kept + 1] if g not in chosen]
     rejected = [g for g, _ in path[kept + 1 :] if g not in chosen]
     left_out += [
-        (names[g], "replaced: the model without it predicts the held-out poses better")
+        (names[g], "replaced: held-out error lower without it or with another term instead")
         for g in replaced
     ]
     left_out += [(names[g], "its held-out gain is within its uncertainty") for g in rejected]
