@@ -9,8 +9,9 @@ The candidates (``kinematics.candidates``) are groups of linear parameters: redu
 2. **Grouped forward selection by K-fold cross-validation over the distinct poses** (repeats in
    one fold): each step adds the group whose least-squares fit (X and the groups so far refitted
    in every fold, by QR updates) gives the smallest held-out sum of squares; a group whose
-   columns lie within ``SEPARATE`` of the current model's span on the data (relative singular
-   value) cannot be told apart by these poses and is skipped; the path stops when no group
+   columns lie within ``SEPARATE`` (a harmonic) or ``SEPARATE_GRAVITY`` (a gravity group) of the
+   current model's span on the data (relative singular value) cannot be told apart by these
+   poses and is skipped; the path stops when no group
    lowers the held-out error, at ``MAX_SHARE`` of a fold's equations in parameters or after
    ``MAX_STEPS`` steps.
 3. **Keep steps while they beat their own uncertainty**: a step is kept when its held-out gain
@@ -24,6 +25,12 @@ The candidates (``kinematics.candidates``) are groups of linear parameters: redu
    Then each kept harmonic is swapped for a neighbouring order of its axis (k ± 1, 2) where that
    lowers the held-out error: over a narrow angle range neighbouring orders differ by a fraction
    of a period and the greedy step may take the wrong one.
+   **Second pass** (up to ``SECOND_PASSES`` rounds, after the screened orders below): drop the
+   groups whose removal lowers the held-out error, exchange groups one for one (any offered
+   group of the same size) while that lowers it, and continue the path from there (steps clear
+   their bar again; dropped groups are not offered back). A forward path never steps back: an
+   early group that later ones made redundant, or one order standing in for two true ones,
+   stays without it.
 4. **Nested cross-validation** for the accuracy to expect: in each outer fold the whole search
    (steps 2-3, on inner folds of the training poses) is repeated, the chosen groups are fitted
    on the training poses and the held-out poses are predicted; so the estimate is not the score
@@ -77,7 +84,9 @@ __all__ = [
     "MAX_STEPS",
     "SCREEN_KEEP",
     "SCREEN_MAX_ORDER",
+    "SECOND_PASSES",
     "SEPARATE",
+    "SEPARATE_GRAVITY",
     "Nested",
     "Selection",
     "Step",
@@ -89,7 +98,9 @@ __all__ = [
 
 DEFAULT_MAX_ORDER = 16  # reducer output stages; a user may search further with --max-order
 GAPS_PER_PERIOD = 4.0  # an order's period must span this many median gaps between pose angles
-SEPARATE = 0.05  # a group whose columns keep less than this share beyond the model: inseparable
+SEPARATE = 0.05  # a harmonic whose columns keep less than this share beyond the model: inseparable
+SEPARATE_GRAVITY = 0.02  # the same for a gravity group (few, physical, large torques)
+SECOND_PASSES = 3  # rounds of dropping, exchanging and continuing after the path
 MAX_SHARE = 0.5  # parameters at most this share of a training fold's equations
 MAX_STEPS = 40  # groups one search adds at most
 FALSE_STEP = 0.05  # chance that a step on noise alone passes the bar (shared by the candidates)
@@ -233,6 +244,7 @@ def observability(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, list[tuple[s
     problem = _Problem(
         np.zeros(len(x0)), x0, columns, groups, np.repeat(np.arange(len(q)), 3), len(q)
     )
+    problem.separate[len(search) :] = SEPARATE_GRAVITY
     return caps, problem.reduce(names)
 
 
@@ -337,14 +349,15 @@ def _identify_structure(
         i: [index[(a, k + d)] for d in (-2, -1, 1, 2) if (a, k + d) in index]
         for i, (a, k) in enumerate(search)
     }
+    problem.separate[len(search) :] = SEPARATE_GRAVITY
     left_out = problem.reduce(names)
     fold = pose_folds(data.poses, folds)
-    path, kept, greedy, chosen = problem.search(fold, np.ones(data.poses, bool))
+    path, kept, chosen = problem.search(fold, np.ones(data.poses, bool))
+    replaced = [g for g, _ in path[1 : kept + 1] if g not in chosen]
     rejected = [g for g, _ in path[kept + 1 :] if g not in chosen]
     left_out += [
-        (names[g], f"swapped for {names[c]}: a neighbouring order, lower held-out error")
-        for g, c in zip(greedy, chosen, strict=False)
-        if g != c
+        (names[g], "replaced: held-out error lower without it or with another term instead")
+        for g in replaced
     ]
     left_out += [(names[g], "its held-out gain is within its uncertainty") for g in rejected]
     estimate = _nested(problem, fold, folds, names, data) if nested else None
@@ -408,6 +421,7 @@ class _Problem:
         self.screened = np.zeros(len(groups), bool)  # orders the periodogram offered
         self.offered = np.ones(len(groups), bool)  # False: a screened order's neighbour (swap)
         self.bars = np.full(len(groups), norm.isf(FALSE_STEP / max(len(groups), 1)))
+        self.separate = np.full(len(groups), SEPARATE)
 
     def reduce(self, names: list[str]) -> list[tuple[str, str]]:
         """Keep of each group only its directions the data separate from the DH + TCP (+ pinned)
@@ -427,7 +441,7 @@ class _Problem:
             cols = cols / norms
             rest = cols - q @ (q.T @ cols)
             _, sing, vt = np.linalg.svd(rest, full_matrices=False)
-            keep = sing >= SEPARATE * np.linalg.norm(cols, 2)
+            keep = sing >= self.separate[i] * np.linalg.norm(cols, 2)
             if not keep.any():
                 out.append(
                     (
@@ -452,20 +466,87 @@ class _Problem:
     def search(self, fold_of_pose: np.ndarray, use: np.ndarray):
         """The whole search on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,): the
         library's path, its kept steps refined (neighbouring orders), then the path on from there
-        with the screened orders offered too (their steps must clear the pool's bar). Returns
-        (path: start, library steps kept, the continuation; kept steps; the greedy library
-        groups kept; the chosen groups)."""
+        with the screened orders offered too (their steps must clear the pool's bar), then the
+        second pass. Returns (path: start, library steps kept, the continuation; kept steps; the
+        chosen groups)."""
         first = self.path(fold_of_pose, use, [], self.offered & ~self.screened)
         kept = self.one_standard_error(first)
         greedy = [g for g, _ in first[1 : kept + 1]]
         chosen = self.refine(greedy, fold_of_pose, use)
         if not self.screened.any():
-            return first, kept, greedy, chosen
+            return first, kept, self.second_pass(chosen, fold_of_pose, use)
         on = self.path(fold_of_pose, use, chosen, self.offered)
         more = self.one_standard_error(on)
         path = first[: kept + 1] + on[1:]
         added = chosen + [g for g, _ in on[1 : more + 1]]
-        return path, kept + more, greedy, self.refine(added, fold_of_pose, use, len(chosen))
+        chosen = self.refine(added, fold_of_pose, use, len(chosen))
+        return path, kept + more, self.second_pass(chosen, fold_of_pose, use)
+
+    def second_pass(self, chosen: list[int], fold_of_pose: np.ndarray, use: np.ndarray):
+        """``chosen`` revisited up to ``SECOND_PASSES`` times on the poses ``use`` (P,) bool with
+        folds ``fold_of_pose`` (P,): terms the model no longer needs are dropped, terms are
+        exchanged for others (``exchange``), and the path continues from there over the groups
+        not dropped (steps must clear their bar again). A forward path never takes a step back:
+        an early term that later ones made redundant, or an alias of two true terms, stays."""
+        offered = self.offered.copy()
+        for _ in range(SECOND_PASSES):
+            before = list(chosen)
+            changed = self.prune(chosen, fold_of_pose, use)
+            changed = self.exchange(changed, fold_of_pose, use, offered)
+            if changed == before:
+                break
+            offered[[g for g in before if g not in changed]] = False
+            on = self.path(fold_of_pose, use, changed, offered)
+            more = self.one_standard_error(on)
+            added = changed + [g for g, _ in on[1 : more + 1]]
+            chosen = self.refine(added, fold_of_pose, use, len(changed))
+        return chosen
+
+    def exchange(self, chosen: list[int], fold_of_pose, use, offered: np.ndarray) -> list[int]:
+        """``chosen`` with, one at a time, the swap of a chosen group for an ``offered`` (groups,)
+        bool group of the same size that most lowers the held-out sum of squares, while one does
+        (the model's size stays; each swap is scored by the QR-updated trial of a forward step)."""
+        fold, rows, folds = self._cv(fold_of_pose, use)
+        chosen = list(chosen)
+        best = np.nansum(self._held(chosen, fold, rows, folds) ** 2)
+        for _ in range(len(chosen)):
+            top, swap = best, None
+            for at, group in enumerate(chosen):
+                allowed = self.observable & offered & (self.size == self.size[group])
+                allowed[chosen] = False
+                if not allowed.any():
+                    continue
+                trial = self._trial(chosen[:at] + chosen[at + 1 :], allowed, fold, rows, folds)
+                other = int(np.argmin(trial))
+                if trial[other] < top:
+                    top, swap = trial[other], (at, other)
+            if swap is None:
+                break
+            chosen[swap[0]] = swap[1]
+            best = top
+        return chosen
+
+    def prune(self, chosen: list[int], fold_of_pose: np.ndarray, use: np.ndarray) -> list[int]:
+        """``chosen`` without, one at a time, the group whose removal most lowers the held-out sum
+        of squares, while a removal does."""
+        fold, rows, folds = self._cv(fold_of_pose, use)
+        chosen = list(chosen)
+        best = np.nansum(self._held(chosen, fold, rows, folds) ** 2)
+        while chosen:
+            trials = [
+                np.nansum(self._held(chosen[:i] + chosen[i + 1 :], fold, rows, folds) ** 2)
+                for i in range(len(chosen))
+            ]
+            at = int(np.argmin(trials))
+            if trials[at] >= best:
+                break
+            best = trials[at]
+            del chosen[at]
+        return chosen
+
+    def _cv(self, fold_of_pose: np.ndarray, use: np.ndarray):
+        """Per equation the fold (M,) and whether it is used (M,), and the folds used."""
+        return fold_of_pose[self.pose], use[self.pose], np.unique(fold_of_pose[use])
 
     def path(
         self, fold_of_pose: np.ndarray, use: np.ndarray, start: list[int], offered: np.ndarray
@@ -536,12 +617,12 @@ class _Problem:
             rest_gram = np.einsum("ngi,ngj->gij", rest_all[:, idx], rest_all[:, idx])
             own_gram = np.einsum("ngi,ngj->gij", c_all[:, idx], c_all[:, idx])
             ratio = np.linalg.eigvalsh(rest_gram)[:, 0] / np.linalg.eigvalsh(own_gram)[:, -1]
-            out[pairs[ratio < SEPARATE**2]] = np.inf
+            out[pairs[ratio < self.separate[pairs] ** 2]] = np.inf
         for i in self.others:
             if (
                 allowed[i]
                 and _relative_floor(rest_all[:, self.groups[i]], c_all[:, self.groups[i]])
-                < SEPARATE
+                < self.separate[i]
             ):
                 out[i] = np.inf
         pairs = self.pairs[np.isfinite(out[self.pairs])]
@@ -641,7 +722,7 @@ def _nested(problem: _Problem, fold: np.ndarray, folds: int, names, data: PoseSe
         use = fold != k
         inner = np.full(problem.poses, -1)
         inner[use] = pose_folds(int(use.sum()), folds, _NESTED_SEED + k)
-        chosen = problem.search(inner, use)[3]
+        chosen = problem.search(inner, use)[2]
         chosen_by_fold.append(tuple(names[g] for g in chosen))
         x = problem.design(chosen)
         train, test = use[problem.pose], ~use[problem.pose]
