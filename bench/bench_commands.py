@@ -23,6 +23,7 @@ sys.path.insert(0, str(ROOT))
 from bench.timing import table  # noqa: E402
 
 CELL = ROOT / "examples" / "cell.yaml"
+RAPID_CELL = ROOT / "examples" / "cell_irb6700.yaml"  # the same holes for an IRB 6700
 # Issue 14's measurements of the code before the speed work (wall s, peak RSS MiB; "-" where
 # the issue has none), printed beside each row's new numbers, and the issue's target per row.
 BEFORE = {
@@ -36,12 +37,14 @@ BEFORE = {
 }
 TARGET = {
     "accugrid --help": "<= 1.5x",
+    "accugrid rewrite, 1e5 RAPID module": "<= 5x",
     "accugrid correct, 1 point": "<= 1.2x",
     "1e5": "<= 1.0 s, <= 8x",
     "accugrid correct, 1e5 points": "<= 0.5 s, <= 8x",
     "1e6": "linear, <= 977 MiB",
 }
 GRID = ROOT / "examples" / "grid_200mm.csv"
+RAPID_GRID = ROOT / "examples" / "grid_irb6700_200mm.csv"
 # the accugrid executable timed: this environment's, or ACCUGRID_BENCH_EXE (e.g. a wrapper that
 # runs a checkout of an earlier commit, for a before/after table measured on the same machine)
 ACCUGRID = os.environ.get("ACCUGRID_BENCH_EXE") or str(Path(sys.executable).with_name("accugrid"))
@@ -147,15 +150,19 @@ def main(million: bool, only: str = "") -> None:
             rows.append(("accugrid correct, 1 point", seconds, peak, "import numpy, scipy", floor))
 
         sizes = [(100_000, 3)] + ([(1_000_000, 1)] if million else [])
-        for n, repeats in sizes if only in "accugrid krl gcode holes correct points" else ():
+        for n, repeats in sizes if only in "accugrid krl gcode rapid holes correct points" else ():
             label = f"{n:.0e}".replace("+0", "")
             (holes,) = make_input("bench.bench_programs.points_csv", tmp / f"holes{n}.csv", n)
-            for command, out in (("krl", tmp / f"krl{n}"), ("gcode", tmp / f"holes{n}.ngc")):
+            for command, out, cell, grid in (
+                ("krl", tmp / f"krl{n}", CELL, GRID),
+                ("gcode", tmp / f"holes{n}.ngc", CELL, GRID),
+                ("rapid", tmp / f"HOLES{n}.mod", RAPID_CELL, RAPID_GRID),
+            ):
                 if only not in f"accugrid {command} holes":
                     continue
-                args = [command, str(holes), "--cell", str(CELL), "-o", str(out)]
+                args = [command, str(holes), "--cell", str(cell), "-o", str(out)]
                 name = f"accugrid {command}, {label} holes"
-                rows.append(job_row(name, args, [holes, CELL, GRID], out, tmp, repeats))
+                rows.append(job_row(name, args, [holes, cell, grid], out, tmp, repeats))
             if only not in "accugrid correct points":
                 continue
             (robot_holes,) = make_input(
@@ -165,8 +172,8 @@ def main(million: bool, only: str = "") -> None:
             args = ["correct", str(robot_holes), "--grid", str(GRID), "-o", str(out)]
             name = f"accugrid correct, {label} points"
             rows.append(job_row(name, args, [robot_holes, GRID], out, tmp, repeats))
-        for n, repeats in sizes if only in "accugrid rewrite KRL pair G-code" else ():
-            # rewrite: a KRL .src/.dat pair and a G-code file of n positions
+        for n, repeats in sizes if only in "accugrid rewrite KRL pair G-code RAPID module" else ():
+            # rewrite: a KRL .src/.dat pair, a G-code file and a RAPID module of n positions
             label = f"{n:.0e}".replace("+0", "")
             folder = tmp / f"rewrite{n}"
             folder.mkdir()
@@ -182,7 +189,15 @@ def main(million: bool, only: str = "") -> None:
             args += ["--max-mb", "512"]
             name = f"accugrid rewrite, {label} G-code"
             rows.append(job_row(name, args, [ngc, CELL, GRID], out_ngc, tmp, repeats))
-            for path in [*pair, ngc]:
+            (module,) = make_input("bench.bench_rewrite.rapid_module", folder, n)
+            out_mod = tmp / f"rewritten{n}.mod"
+            args = ["rewrite", str(module), "--cell", str(RAPID_CELL), "-o", str(out_mod)]
+            args += ["--max-mb", "512"]
+            name = f"accugrid rewrite, {label} RAPID module"
+            rows.append(
+                job_row(name, args, [module, RAPID_CELL, RAPID_GRID], out_mod, tmp, repeats)
+            )
+            for path in [*pair, ngc, module]:
                 path.unlink()
     print(
         table(
