@@ -1,6 +1,7 @@
 """Whole commands against their I/O floor (issue 14): each row runs the real `accugrid` process
 and, in the same run, a floor: a bare Python process that imports what the row names or reads the
-same input files and writes the same number of files and bytes. Ratio = command / floor.
+same input files and writes the same number of files and bytes. Ratio = command / floor. The
+rewrite rows' floor also imports numpy (the rewrite speed bar: within 5x of that process).
 
 Medians of 5 runs (3 for the 1e5 jobs, 1 for the 1e6 jobs); peak RSS of the process from
 wait4. `python bench/bench_commands.py --million` adds the 1e6 rows (minutes, GiB);
@@ -37,7 +38,7 @@ BEFORE = {
 }
 TARGET = {
     "accugrid --help": "<= 1.5x",
-    "accugrid rewrite, 1e5 RAPID module": "<= 5x",
+    "accugrid rewrite, 1e5": "<= 5x",
     "accugrid correct, 1 point": "<= 1.2x",
     "1e5": "<= 1.0 s, <= 8x",
     "accugrid correct, 1e5 points": "<= 0.5 s, <= 8x",
@@ -54,6 +55,8 @@ ACCUGRID = os.environ.get("ACCUGRID_BENCH_EXE") or str(Path(sys.executable).with
 # or output size and path, one per line.
 FLOOR_IO = """
 import sys
+if sys.argv[2:] == ["numpy"]:
+    import numpy
 with open(sys.argv[1]) as manifest:
     entries = [line.rstrip("\\n").split("\\t") for line in manifest]
 for entry in entries:
@@ -114,20 +117,23 @@ def outputs_of(target: Path) -> list[Path]:
     return sorted(p for p in target.rglob("*") if p.is_file()) if target.is_dir() else [target]
 
 
-def io_floor(inputs: list[Path], written: list[Path], scratch: Path, repeats: int):
-    """The floor of a job that read ``inputs`` and wrote ``written`` (same count and sizes)."""
+def io_floor(inputs: list[Path], written: list[Path], scratch: Path, repeats: int, *imports):
+    """The floor of a job that read ``inputs`` and wrote ``written`` (same count and sizes),
+    after importing ``imports`` (only "numpy")."""
     scratch.mkdir(exist_ok=True)
     manifest = scratch.parent / "floor_manifest.txt"
     lines = [f"<\t{p}" for p in inputs]
     lines += [f"{p.stat().st_size}\t{scratch / f'f{i}'}" for i, p in enumerate(written)]
     manifest.write_text("\n".join(lines) + "\n")
-    return median_run([sys.executable, "-c", FLOOR_IO, str(manifest)], repeats)
+    return median_run([sys.executable, "-c", FLOOR_IO, str(manifest), *imports], repeats)
 
 
 def job_row(name, args, inputs, target, tmp, repeats):
     seconds, peak = median_run([ACCUGRID, *args, "--force"], repeats)
-    floor, _ = io_floor(inputs, outputs_of(target), tmp / "floor", repeats)
-    return name, seconds, peak, "same I/O in Python", floor
+    imports = ["numpy"] if args[0] == "rewrite" else []
+    floor, _ = io_floor(inputs, outputs_of(target), tmp / "floor", repeats, *imports)
+    what = "numpy + same I/O" if imports else "same I/O in Python"
+    return name, seconds, peak, what, floor
 
 
 def main(million: bool, only: str = "") -> None:
@@ -214,7 +220,7 @@ def main(million: bool, only: str = "") -> None:
 
 def target_of(name: str) -> str:
     """The issue's target for a row: by its name, else by its size."""
-    return TARGET.get(name) or next(t for size, t in TARGET.items() if size in name)
+    return TARGET.get(name) or next(t for key, t in TARGET.items() if key in name)
 
 
 if __name__ == "__main__":
