@@ -285,9 +285,9 @@ class _Rigid:
         removed = np.cumsum(ends - starts - 1)  # each line's text became one character
         self.marks = starts - np.concatenate([[0], removed[:-1]]).astype(np.int64)
         self.removed = np.concatenate([[0], removed]).astype(np.int64)
-        self.keys = [n.lower() for n in r.names]
+        self.keys = _lower(r.names)
         self.decl_of = dict(zip(self.keys, range(len(self.keys)), strict=True))
-        self.move_keys = [t.lower() for t in r.targets]
+        self.move_keys = _lower(r.targets)
         self.move_lines = r.move_line + 1
         self.move_decl = np.array([self.decl_of.get(k, -1) for k in self.move_keys], np.int64)
         self.handed = np.zeros(len(self.keys), bool)  # declarations judged by the statements
@@ -305,18 +305,19 @@ class _Rigid:
             words |= {"movel", "movej", "wobj"}
         for rest in self.r.rests:
             words |= {w.lower() for w in rest or () if w}
-        names = set(self.keys)
         return bool(
-            len(names) < len(self.keys)
-            or (names | set(self.move_keys) | words) & _KEYWORDS
-            or known & (names | words)
+            len(self.decl_of) < len(self.keys)
+            or not _KEYWORDS.isdisjoint(self.keys)
+            or not _KEYWORDS.isdisjoint(self.move_keys)
+            or words & _KEYWORDS
+            or known & words
+            or any(k in self.decl_of for k in known)
         )
 
-    def alone(self, masked: str) -> bool:
+    def alone(self, chars: np.ndarray) -> bool:
         """Whether every rigid line stands alone as a statement: its mark is still a ``;`` in the
-        masked ``rest`` (no ``%%%`` block, record or header covers it) and only blanks separate
-        it from the ``;`` before it."""
-        chars = np.frombuffer(masked.encode("latin-1"), np.uint8)
+        masked ``rest`` (``chars``, its bytes: no ``%%%`` block, record or header covers it) and
+        only blanks separate it from the ``;`` before it."""
         if (chars[self.marks] != 59).any():
             return False
         solid = np.flatnonzero(~_BLANK[chars])
@@ -417,24 +418,40 @@ class _Rigid:
         )
 
 
+def _lower(names: list[str]) -> list[str]:
+    """The names (no LF in any) lower-cased, in one call."""
+    return "\n".join(names).lower().split("\n") if names else []
+
+
+def _statements(masked: str, chars: np.ndarray, marks: np.ndarray | None) -> list:
+    """(offset, text) of every statement of the masked text (its bytes ``chars``) that is not
+    blank: the text before each ``;``, those ending at a mark of a rigid line (``marks``,
+    sorted; blank by ``_Rigid.alone``) left out."""
+    semis = np.flatnonzero(chars == 59)
+    starts = np.concatenate([[0], semis[:-1] + 1]).astype(np.int64)
+    if marks is not None and len(marks):
+        j = np.minimum(np.searchsorted(marks, semis), len(marks) - 1)
+        keep = marks[j] != semis
+        starts, semis = starts[keep], semis[keep]
+    pieces = map(masked.__getitem__, map(slice, starts.tolist(), semis.tolist()))
+    return [(a, piece) for a, piece in zip(starts.tolist(), pieces, strict=True) if piece.strip()]
+
+
 def _scan(path, text, section, ignore_external_axes, r) -> RapidPositions | None:
     """``scan`` with the rigid lines ``r`` (None: none); None when those do not stand alone."""
     rigid = _Rigid(text, r) if r is not None else None
     rest = rigid.rest if rigid is not None else text
     masked = _masked(rest)
-    if rigid is not None and not rigid.alone(masked):
+    chars = np.frombuffer(masked.encode("latin-1"), np.uint8)
+    if rigid is not None and not rigid.alone(chars):
         return None
-    newlines = [m.start() for m in re.finditer("\n", rest)]
+    newlines = np.flatnonzero(chars == 10).tolist()  # masking keeps every line ending
 
     def where(offset: int) -> tuple[int, int]:
         line = bisect.bisect_left(newlines, offset)
         return line + 1, offset - (newlines[line - 1] if line else -1)
 
-    statements, start = [], 0
-    for end in (m.start() for m in re.finditer(";", masked)):
-        if masked[start:end].strip():
-            statements.append((start, masked[start:end]))
-        start = end + 1
+    statements = _statements(masked, chars, rigid.marks if rigid is not None else None)
     inline: list[_Target] = []
     others: list[tuple[int, str, str]] = []
     declared: dict[str, list[_Target]] = {}  # lower-case robtarget name -> its targets
@@ -815,11 +832,19 @@ def kuka_status_of(cfx: np.ndarray) -> np.ndarray:
 
 
 def _matrices(quats: np.ndarray) -> np.ndarray:
-    """Rotation matrices (N, 3, 3) of RAPID quaternions [q1, q2, q3, q4] (N, 4), normalised."""
-    from scipy.spatial.transform import Rotation
-
-    q = np.asarray(quats, dtype=float).reshape(-1, 4)
-    return Rotation.from_quat(np.roll(q, -1, axis=1)).as_matrix().reshape(-1, 3, 3)
+    """Rotation matrices (N, 3, 3) of RAPID quaternions [q1, q2, q3, q4] (N, 4) (q1 the scalar),
+    normalised: the operations of scipy's ``Rotation.from_quat(..).as_matrix()`` in its order,
+    so the same bits, without importing ``scipy.spatial`` (a third of a rewrite's start-up)."""
+    w, x, y, z = np.asarray(quats, dtype=float).reshape(-1, 4).T
+    norm = np.sqrt(x * x + y * y + z * z + w * w)
+    w, x, y, z = w / norm, x / norm, y / norm, z / norm
+    x2, y2, z2, w2 = x * x, y * y, z * z, w * w
+    xy, zw, xz, yw, yz, xw = x * y, z * w, x * z, y * w, y * z, x * w
+    m = np.empty((len(w), 3, 3))
+    m[:, 0] = np.stack([x2 - y2 - z2 + w2, 2 * (xy - zw), 2 * (xz + yw)], axis=1)
+    m[:, 1] = np.stack([2 * (xy + zw), -x2 + y2 - z2 + w2, 2 * (yz - xw)], axis=1)
+    m[:, 2] = np.stack([2 * (xz - yw), 2 * (yz + xw), -x2 - y2 + z2 + w2], axis=1)
+    return m
 
 
 def _other_rows(path: str, found: RapidPositions) -> Rows:

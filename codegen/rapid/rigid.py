@@ -96,13 +96,16 @@ def _prefix(words: np.ndarray, literal: bytes) -> np.ndarray:
     return hit
 
 
-def _next(positions: np.ndarray, at: np.ndarray, count: int) -> np.ndarray:
-    """The first ``count`` of ``positions`` (sorted) at or after each offset ``at`` (k,):
-    (k, count), _FAR where there are fewer."""
-    j = np.searchsorted(positions, at)[:, None] + np.arange(count)
-    if not len(positions):
-        return np.full(j.shape, _FAR)
-    return np.where(j < len(positions), positions[np.minimum(j, len(positions) - 1)], _FAR)
+def _commas(positions: np.ndarray, at: np.ndarray, which: tuple[int, ...]) -> np.ndarray:
+    """The ``which``-th (0: the first) of ``positions`` (sorted) at or after each offset ``at``
+    (k,): (k, len(which)), _FAR where there are fewer."""
+    first = np.searchsorted(positions, at)
+    out = np.full((len(at), len(which)), _FAR)
+    for col, k in enumerate(which):
+        j = first + k
+        inside = np.flatnonzero(j < len(positions))
+        out[inside, col] = positions[j[inside]]
+    return out
 
 
 def _names_ok(buf: np.ndarray, at: np.ndarray, end: np.ndarray) -> np.ndarray:
@@ -156,11 +159,11 @@ def read_rigid(text: str) -> RigidModule | None:
 
 def _declarations(buf, text, body, lines, name_at, end, commas):
     colons = np.flatnonzero(body == 58)
-    colon = _next(colons, name_at, 1)[:, 0]
+    colon = _commas(colons, name_at, (0,))[:, 0]
     good = (colon < end) & _names_ok(buf, name_at, colon)
     good &= _prefix(_windows(buf, colon, 8).view(_U64), b":=[[")
-    c = _next(commas, colon, 16)
-    good &= c[:, 15] < end
+    c = _commas(commas, colon, (0, 1, 2, 15))  # after x, y, z and before e6
+    good &= c[:, 3] < end
     at = np.stack([colon + 4, c[:, 0] + 1, c[:, 1] + 1], axis=1)
     stop = np.stack([c[:, 0], c[:, 1], c[:, 2] - 1], axis=1)
     good &= np.take(buf, c[:, 2] - 1, mode="clip") == 93  # "]" after z
@@ -192,7 +195,7 @@ def _declarations(buf, text, body, lines, name_at, end, commas):
 
 
 def _moves(buf, text, lines, name_at, end, commas):
-    comma = _next(commas, name_at, 1)[:, 0]
+    comma = _commas(commas, name_at, (0,))[:, 0]
     keep = np.flatnonzero((comma < end) & _names_ok(buf, name_at, comma))
     rest_span = np.stack([comma[keep], end[keep]], axis=1)
     found, which = distinct(buf, rest_span, text) if len(keep) else ([], np.zeros(0, np.int64))
