@@ -330,14 +330,15 @@ class _Rigid:
         tool, wobj = speed_zone_tool_wobj[2:]
         return _move_frame(tool, wobj, int(self.move_lines[m]), section, unfit)
 
-    def merge_moves(self, moves: list) -> list:
+    def merge_moves(self, moves: list, known: set[str]) -> list:
         """The statement reader's moves and the rigid ones in the order of the module when a
-        circular move needs the move before it, else the statement reader's alone."""
+        circular move needs the move before it, else the statement reader's alone (``known``:
+        the robtargets the statements declare)."""
         if not any(circular for _, _, circular in moves):
             return moves
-        keys, known = self.move_keys, (self.move_decl >= 0).tolist()
+        keys = self.move_keys
         mine = [
-            (line, [keys[m]] if known[m] else [], False)
+            (line, [keys[m]] if keys[m] in known or keys[m] in self.decl_of else [], False)
             for m, line in enumerate(self.move_lines.tolist())
         ]
         return sorted(moves + mine, key=lambda move: move[0])
@@ -361,7 +362,10 @@ class _Rigid:
             line = int(r.decl_line[d]) + 1
             declared[key] = [_Target(r.names[d], line, spans, values, int(tail[7]), own)]
         added = set()
-        for m, key in enumerate(self.move_keys):
+        handed = np.append(self.handed, False)  # [-1]: not declared on a rigid line
+        maybe = (self.move_decl < 0) | handed[self.move_decl]
+        for m in np.flatnonzero(maybe).tolist():  # to a robtarget of the statements or handed
+            key = self.move_keys[m]
             if key in declared:
                 frame, why = self.why(m, section, unfit)
                 line = int(self.move_lines[m])
@@ -489,11 +493,10 @@ def _scan(path, text, section, ignore_external_axes, r) -> RapidPositions | None
                     f"{name}{{{j}}}" if array else name, lit, value_at, where, ignore_external_axes
                 )
             )
-    known = set(declared)  # the lower-case names of every robtarget declared
-    if rigid is not None:
-        if rigid.problem(known):
-            return None
-        known |= set(rigid.keys)
+    known = set(declared)  # the lower-case names of the robtargets the statements declare
+    rigid_keys = rigid.decl_of if rigid is not None else {}  # and those of the rigid lines
+    if rigid is not None and rigid.problem(known):
+        return None
     uses: dict[str, list[_Use]] = {}
     assigned: set[str] = set()
     moves: list[tuple[int, list[str], bool]] = []  # line, lower-case names or "#k", circular
@@ -533,13 +536,13 @@ def _scan(path, text, section, ignore_external_axes, r) -> RapidPositions | None
                     inline.append(target)
         elif instr and instr.group(1).lower() == "moveabsj":
             others.append((line, "MoveAbsJ", "joint target of MoveAbsJ, never corrected"))
-        if not known or s in decl_of and not stmt.count(":="):
+        if not (known or rigid_keys) or s in decl_of and not stmt.count(":="):
             continue
         called = instr.group(1) if instr and not assign else ""
         motion = bool(move or _MOTION.fullmatch(called) or called.lower() in routines)
         for ref in _NAME.finditer(stmt):
             key = ref.group(1).lower()
-            if key not in known:
+            if key not in known and key not in rigid_keys:
                 continue
             if decl_of.get(s) == key and ref.start() < stmt.find(":="):
                 continue  # the name in its own declaration
@@ -577,7 +580,7 @@ def _scan(path, text, section, ignore_external_axes, r) -> RapidPositions | None
         for target in targets:
             if target.spans:
                 target.spans = [tuple(s) for s in rigid.to_text(np.array(target.spans)).tolist()]
-        moves = rigid.merge_moves(moves)
+        moves = rigid.merge_moves(moves, known)
         rigid.hand_over(declared, uses, moves, section, unfit, ignore_external_axes)
     _arc_starts(moves, uses, inline)
     for key, targets in declared.items():

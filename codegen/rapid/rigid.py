@@ -48,7 +48,7 @@ _WORD[
 _LETTER = _WORD.copy()
 _LETTER[48:58] = False
 _LETTER[95] = False
-_FAR = np.iinfo(np.int64).max // 4
+_XYZ_MAX = 56  # bytes from "[[" to the "]" after z: three plain decimals of at most 17
 _U64 = np.dtype("<u8")
 
 
@@ -96,27 +96,11 @@ def _prefix(words: np.ndarray, literal: bytes) -> np.ndarray:
     return hit
 
 
-def _commas(positions: np.ndarray, at: np.ndarray, which: tuple[int, ...]) -> np.ndarray:
-    """The ``which``-th (0: the first) of ``positions`` (sorted) at or after each offset ``at``
-    (k,): (k, len(which)), _FAR where there are fewer."""
-    first = np.searchsorted(positions, at)
-    out = np.full((len(at), len(which)), _FAR)
-    for col, k in enumerate(which):
-        j = first + k
-        inside = np.flatnonzero(j < len(positions))
-        out[inside, col] = positions[j[inside]]
-    return out
-
-
-def _names_ok(buf: np.ndarray, at: np.ndarray, end: np.ndarray) -> np.ndarray:
-    """Whether each ``text[at:end]`` is an ASCII name of at most _NAME_MAX characters, followed
-    by a byte that is no name character."""
-    size = end - at
-    ok = (size >= 1) & (size <= _NAME_MAX) & _LETTER[np.take(buf, at, mode="clip")]
-    if not ok.any():
-        return ok
-    rows = _WORD[_windows(buf, at, _NAME_MAX + 1)]
-    return ok & (np.argmin(rows, axis=1) == size)  # the first byte no name has is at the end
+def _names(buf: np.ndarray, at: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The length of the name at each offset ``at`` (k,) (up to the first byte no name has) and
+    whether it is an ASCII name of 1 to _NAME_MAX characters."""
+    size = np.argmin(_WORD[_windows(buf, at, _NAME_MAX + 1)], axis=1)  # 0: none, or too long
+    return size, (size >= 1) & _LETTER[np.take(buf, at, mode="clip")]
 
 
 def read_rigid(text: str) -> RigidModule | None:
@@ -135,7 +119,6 @@ def read_rigid(text: str) -> RigidModule | None:
     blank = (head == 32) | (head == 9)
     s = line_start + np.where(blank.all(axis=1), _BLANKS, np.argmin(blank, axis=1))
     heads = _windows(buf, s, 16).view(_U64)
-    commas = np.flatnonzero(body == 44)
     decl = np.zeros(len(s), bool)
     name_at = s.copy()
     for prefix in _DECLS:
@@ -148,27 +131,35 @@ def read_rigid(text: str) -> RigidModule | None:
         move |= hit
         name_at[hit] += len(prefix)
     d = np.flatnonzero(decl)
-    decls = _declarations(buf, text, body, d, name_at[d], line_end[d], commas)
+    decls = _declarations(buf, text, d, name_at[d], line_end[d])
     m = np.flatnonzero(move)
-    moves = _moves(buf, text, m, name_at[m], line_end[m], commas)
+    moves = _moves(buf, text, m, name_at[m], line_end[m])
     rigid = np.zeros(len(s), bool)
     rigid[decls[0]] = True
     rigid[moves[0]] = True
     return RigidModule(line_start, line_end, rigid, *decls, *moves)
 
 
-def _declarations(buf, text, body, lines, name_at, end, commas):
-    colons = np.flatnonzero(body == 58)
-    colon = _commas(colons, name_at, (0,))[:, 0]
-    good = (colon < end) & _names_ok(buf, name_at, colon)
+def _declarations(buf, text, lines, name_at, end):
+    size, good = _names(buf, name_at)
+    colon = name_at + size
     good &= _prefix(_windows(buf, colon, 8).view(_U64), b":=[[")
-    c = _commas(commas, colon, (0, 1, 2, 15))  # after x, y, z and before e6
-    good &= c[:, 3] < end
-    at = np.stack([colon + 4, c[:, 0] + 1, c[:, 1] + 1], axis=1)
-    stop = np.stack([c[:, 0], c[:, 1], c[:, 2] - 1], axis=1)
-    good &= np.take(buf, c[:, 2] - 1, mode="clip") == 93  # "]" after z
+    # x, y, z: up to the first two commas and the "]" within _XYZ_MAX bytes of the "[["
+    first = colon + 4
+    window = _windows(buf, first, _XYZ_MAX)
+    rows = np.arange(len(first))
+    comma = window == 44
+    c0 = np.argmax(comma, axis=1)
+    good &= comma[rows, c0]
+    comma[rows, c0] = False
+    c1 = np.argmax(comma, axis=1)
+    good &= comma[rows, c1]
+    bracket = window == 93
+    c2 = np.argmax(bracket, axis=1)
+    good &= bracket[rows, c2] & (c1 < c2) & (first + c2 < end)
     keep = np.flatnonzero(good)
-    at, stop = at[keep], stop[keep]
+    at = first[keep, None] + np.stack([np.zeros_like(c0), c0 + 1, c1 + 1], axis=1)[keep]
+    stop = first[keep, None] + np.stack([c0, c1, c2], axis=1)[keep]
     values, places, plain = read_decimals(buf, at.ravel(), stop.ravel())
     span = np.stack([at, stop], axis=2)
     tail_span = np.stack([stop[:, 2], end[keep]], axis=1)
@@ -182,7 +173,7 @@ def _declarations(buf, text, body, lines, name_at, end, commas):
             parsed[i] = True
     ok = plain.reshape(-1, 3).all(axis=1) & parsed[which]
     rows = np.flatnonzero(ok)
-    names = strings(buf, name_at[keep][rows], (colon - name_at)[keep][rows])
+    names = strings(buf, name_at[keep][rows], size[keep][rows])
     return (
         lines[keep][rows],
         names,
@@ -194,15 +185,16 @@ def _declarations(buf, text, body, lines, name_at, end, commas):
     )
 
 
-def _moves(buf, text, lines, name_at, end, commas):
-    comma = _commas(commas, name_at, (0,))[:, 0]
-    keep = np.flatnonzero((comma < end) & _names_ok(buf, name_at, comma))
+def _moves(buf, text, lines, name_at, end):
+    size, good = _names(buf, name_at)
+    comma = name_at + size
+    keep = np.flatnonzero(good & (np.take(buf, comma, mode="clip") == 44))
     rest_span = np.stack([comma[keep], end[keep]], axis=1)
     found, which = distinct(buf, rest_span, text) if len(keep) else ([], np.zeros(0, np.int64))
     rests = [_REST.match(rest) for rest in found]
     ok = np.array([r is not None for r in rests], bool)[which] if len(keep) else np.zeros(0, bool)
     rows = np.flatnonzero(ok)
-    targets = strings(buf, name_at[keep][rows], (comma - name_at)[keep][rows])
+    targets = strings(buf, name_at[keep][rows], size[keep][rows])
     return (
         lines[keep][rows],
         targets,
