@@ -36,6 +36,7 @@ from __future__ import annotations
 import bisect
 import re
 from dataclasses import dataclass, field
+from itertools import repeat
 
 import numpy as np
 
@@ -271,30 +272,43 @@ _BLANK = np.array([chr(c).isspace() for c in range(256)])  # what str.strip() st
 
 class _Rigid:
     """The rigid lines of a module (``codegen.rapid.rigid.RigidModule``) and the text the
-    statement reader reads instead: each rigid line's text replaced by one ``;`` (``rest``; the
-    lines, their columns and the other statements stay), with the offsets of those ``;``
-    (``marks``); ``to_text`` maps an offset in ``rest`` back to the module's text."""
+    statement reader reads instead (``rest``): each run of rigid lines, from the first one's
+    text to the last one's, replaced by one ``;`` (the other statements, their lines' text and
+    columns stay), with the offsets of those ``;`` (``marks``); ``to_text`` maps an offset in
+    ``rest`` back to the module's text and ``line`` a line of ``rest`` to the module's."""
 
     def __init__(self, text: str, r: RigidModule) -> None:
         self.r = r
         lines = np.flatnonzero(r.rigid)
-        starts, ends = r.line_start[lines], r.line_end[lines]
+        run = np.concatenate([[True], np.diff(lines) != 1])  # the first line of each run
+        first, last = lines[run], lines[np.append(run[1:], True)]
+        starts, ends = r.line_start[first], r.line_end[last]
         cuts = np.concatenate([[0], np.stack([starts, ends], axis=1).ravel(), [len(text)]])
         pieces = map(text.__getitem__, map(slice, cuts[0::2].tolist(), cuts[1::2].tolist()))
         self.rest = ";".join(pieces)
-        removed = np.cumsum(ends - starts - 1)  # each line's text became one character
+        removed = np.cumsum(ends - starts - 1)  # each run's text became one character
         self.marks = starts - np.concatenate([[0], removed[:-1]]).astype(np.int64)
         self.removed = np.concatenate([[0], removed]).astype(np.int64)
+        gone = np.cumsum(last - first)  # lines of the module no longer in ``rest``
+        self.mark_lines = (first - np.concatenate([[0], gone[:-1]])).tolist()  # 0-based
+        self.gone = [0, *gone.tolist()]
         self.keys = _lower(r.names)
         self.decl_of = dict(zip(self.keys, range(len(self.keys)), strict=True))
         self.move_keys = _lower(r.targets)
         self.move_lines = r.move_line + 1
-        self.move_decl = np.array([self.decl_of.get(k, -1) for k in self.move_keys], np.int64)
+        self.move_decl = np.fromiter(
+            map(self.decl_of.get, self.move_keys, repeat(-1)), np.int64, len(self.move_keys)
+        )
         self.handed = np.zeros(len(self.keys), bool)  # declarations judged by the statements
 
     def to_text(self, offsets: np.ndarray) -> np.ndarray:
         """Offsets (any shape) in ``rest``, none at a mark, as offsets in the module's text."""
         return offsets + self.removed[np.searchsorted(self.marks, offsets)]
+
+    def line(self, line: int) -> int:
+        """The module's line (1-based) of the line ``line`` (1-based) of ``rest``, none a
+        mark's."""
+        return line + self.gone[bisect.bisect_left(self.mark_lines, line - 1)]
 
     def problem(self, known: set[str]) -> bool:
         """Whether the module must be read statement by statement: a robtarget declared twice,
@@ -453,7 +467,8 @@ def _scan(path, text, section, ignore_external_axes, r) -> RapidPositions | None
 
     def where(offset: int) -> tuple[int, int]:
         line = bisect.bisect_left(newlines, offset)
-        return line + 1, offset - (newlines[line - 1] if line else -1)
+        column = offset - (newlines[line - 1] if line else -1)
+        return (line + 1 if rigid is None else rigid.line(line + 1)), column
 
     statements = _statements(masked, chars, rigid.marks if rigid is not None else None)
     inline: list[_Target] = []
