@@ -163,26 +163,15 @@ def _declarations(buf, text, lines, name_at, end):
     values, places, plain = read_decimals(buf, at.ravel(), stop.ravel())
     span = np.stack([at, stop], axis=2)
     tail_span = np.stack([stop[:, 2], end[keep]], axis=1)
-    found, which = distinct(buf, tail_span, text) if len(keep) else ([], np.zeros(0, np.int64))
-    tails = np.full((len(found), 14), np.nan)
-    parsed = np.zeros(len(found), bool)
-    for i, tail in enumerate(found):
-        match = _TAIL.match(tail)
+    matches, parsed, which = _matched(buf, text, tail_span, _TAIL)
+    tails = np.full((len(matches), 14), np.nan)
+    for i, match in enumerate(matches):
         if match:
             tails[i] = [float(v) for v in match.groups()]
-            parsed[i] = True
-    ok = plain.reshape(-1, 3).all(axis=1) & parsed[which]
-    rows = np.flatnonzero(ok)
+    rows = np.flatnonzero(plain.reshape(-1, 3).all(axis=1) & parsed)
     names = strings(buf, name_at[keep][rows], size[keep][rows])
-    return (
-        lines[keep][rows],
-        names,
-        span[rows],
-        values.reshape(-1, 3)[rows],
-        places.reshape(-1, 3)[rows].max(axis=1),
-        which[rows],
-        tails,
-    )
+    xyz, places = values.reshape(-1, 3)[rows], places.reshape(-1, 3)[rows].max(axis=1)
+    return lines[keep][rows], names, span[rows], xyz, places, which[rows], tails
 
 
 def _moves(buf, text, lines, name_at, end):
@@ -190,14 +179,18 @@ def _moves(buf, text, lines, name_at, end):
     comma = name_at + size
     keep = np.flatnonzero(good & (np.take(buf, comma, mode="clip") == 44))
     rest_span = np.stack([comma[keep], end[keep]], axis=1)
-    found, which = distinct(buf, rest_span, text) if len(keep) else ([], np.zeros(0, np.int64))
-    rests = [_REST.match(rest) for rest in found]
-    ok = np.array([r is not None for r in rests], bool)[which] if len(keep) else np.zeros(0, bool)
-    rows = np.flatnonzero(ok)
+    matches, parsed, which = _matched(buf, text, rest_span, _REST)
+    rows = np.flatnonzero(parsed)
     targets = strings(buf, name_at[keep][rows], size[keep][rows])
-    return (
-        lines[keep][rows],
-        targets,
-        which[rows],
-        [r.groups() if r else None for r in rests],
-    )
+    return lines[keep][rows], targets, which[rows], [m.groups() if m else None for m in matches]
+
+
+def _matched(buf, text, spans, pattern) -> tuple[list, np.ndarray, np.ndarray]:
+    """``pattern`` matched once on each distinct text of the spans (k, 2): the match of each
+    distinct text (None where it does not match), whether each span's text matches (k,) and
+    the index of each span's text among the distinct ones (k,)."""
+    if not len(spans):
+        return [], np.zeros(0, bool), np.zeros(0, np.int64)
+    found, which = distinct(buf, spans, text)
+    matches = [pattern.match(t) for t in found]
+    return matches, np.array([m is not None for m in matches], bool)[which], which
