@@ -419,18 +419,23 @@ class _Rigid:
             reason[i] = self.why(int(first_bad[i]), section, unfit)[1]
         for i in np.flatnonzero(uses == 0).tolist():
             reason[i] = "not used by any move"
-        tails = r.tails[r.tail[keep]] if len(r.tails) else np.zeros((0, 14))
-        spans = r.span[keep]
+        names = r.names
+        if len(keep) < k:
+            names = [r.names[i] for i in keep.tolist()]
+            reason = [reason[i] for i in keep.tolist()]
+        else:
+            keep = slice(None)  # every one: views, no copies
+        tail = r.tail[keep]
         return RapidPositions(
             "",
             r.xyz[keep],
-            tails[:, :4],
-            tails[:, 7].astype(np.int64),
-            spans,
+            r.tails[:, :4][tail],
+            r.tails[:, 7].astype(np.int64)[tail],
+            r.span[keep],
             np.maximum(r.places[keep], MIN_PLACES_MM),
             r.decl_line[keep] + 1,
-            [r.names[i] for i in keep.tolist()],
-            [reason[i] for i in keep.tolist()],
+            names,
+            reason,
             frame[keep],
             uses[keep] > 0,
         )
@@ -653,15 +658,19 @@ def _columns(targets: list[_Target], text: str) -> RapidPositions:
 
 
 def _joined(path: str, parts: list[RapidPositions]) -> RapidPositions:
-    """The robtargets of ``parts`` in the order of the module (line, then offset)."""
-    columns = {}
-    for key in ("xyz", "quat", "cfx", "spans", "places", "line", "frame", "commanded"):
-        columns[key] = np.concatenate([getattr(p, key) for p in parts])
-    names = [n for p in parts for n in p.name]
-    reasons = [w for p in parts for w in p.reason]
+    """The robtargets of ``parts`` in the order of the module (line, then offset; stable)."""
+    parts = [p for p in parts if len(p.name)] or parts[:1]
+    keys = ("xyz", "quat", "cfx", "spans", "places", "line", "frame", "commanded")
+    if len(parts) == 1:
+        columns = {key: getattr(parts[0], key) for key in keys}
+        names, reasons = parts[0].name, parts[0].reason
+    else:
+        columns = {key: np.concatenate([getattr(p, key) for p in parts]) for key in keys}
+        names = [n for p in parts for n in p.name]
+        reasons = [w for p in parts for w in p.reason]
     start = np.maximum(columns["spans"][:, 0, 0], 0)  # none: 0
-    order = np.lexsort((start, columns["line"]))
-    if (order != np.arange(len(order))).any():
+    if (np.diff((columns["line"] << 40) | start) < 0).any():  # offsets below 2**40
+        order = np.lexsort((start, columns["line"]))
         columns = {key: value[order] for key, value in columns.items()}
         names = [names[i] for i in order.tolist()]
         reasons = [reasons[i] for i in order.tolist()]

@@ -48,6 +48,8 @@ _WORD[
 _LETTER = _WORD.copy()
 _LETTER[48:58] = False
 _LETTER[95] = False
+_LINES = 1 << 16  # lines read at a time
+_BYTES = 1 << 24  # bytes looked at at a time for line ends
 _XYZ_MAX = 56  # bytes from "[[" to the "]" after z: three plain decimals of at most 17
 _U64 = np.dtype("<u8")
 
@@ -103,18 +105,81 @@ def _names(buf: np.ndarray, at: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return size, (size >= 1) & _LETTER[np.take(buf, at, mode="clip")]
 
 
+class _Texts:
+    """The distinct texts of spans, across the blocks of a module, each matched by ``pattern``
+    once (``matches``: in order of first appearance, None where it does not match)."""
+
+    def __init__(self, pattern: re.Pattern) -> None:
+        self.pattern = pattern
+        self.index: dict[str, int] = {}
+        self.matches: list[re.Match | None] = []
+
+    def of(self, buf: np.ndarray, text: str, spans: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The index of each span's (k, 2) text among the distinct ones (k,) and whether it
+        matches (k,)."""
+        if not len(spans):
+            return np.zeros(0, np.int64), np.zeros(0, bool)
+        found, which = distinct(buf, spans, text)
+        ids = np.empty(len(found), np.int64)
+        for i, piece in enumerate(found):
+            ids[i] = self.index.setdefault(piece, len(self.index))
+            if ids[i] == len(self.matches):
+                self.matches.append(self.pattern.match(piece))
+        ok = np.array([m is not None for m in self.matches], bool)
+        return ids[which], ok[ids[which]]
+
+
 def read_rigid(text: str) -> RigidModule | None:
     """The rigid lines of a RAPID module; None when ``text`` is not latin-1 (never so for a
-    program read by ``read_program``)."""
+    program read by ``read_program``). Read a block of lines at a time: the temporaries stay
+    small beside the text."""
     buf = text_bytes(text)
     if buf is None:
         return None
     n = len(text)
-    body = buf[:n]
-    newlines = np.flatnonzero(body == 10)
-    line_start = np.concatenate([[0], newlines + 1])
-    line_end = np.concatenate([newlines, [n]])
+    newlines = [np.zeros(0, np.int64)]
+    for a in range(0, n, _BYTES):
+        newlines.append(np.flatnonzero(buf[a : min(a + _BYTES, n)] == 10) + a)
+    line_end = np.concatenate([*newlines, [n]]).astype(np.int64)
+    line_start = np.concatenate([[0], line_end[:-1] + 1])
     line_end -= (np.take(buf, line_end - 1, mode="clip") == 13) & (line_end > line_start)
+    tails, rests = _Texts(_TAIL), _Texts(_REST)
+    decls, moves = [], []
+    for a in range(0, len(line_start), _LINES):
+        b = min(a + _LINES, len(line_start))
+        d, m = _block(buf, text, a, line_start[a:b], line_end[a:b], tails, rests)
+        decls.append(d)
+        moves.append(m)
+    table = np.full((len(tails.matches), 14), np.nan)
+    for i, match in enumerate(tails.matches):
+        if match:
+            table[i] = [float(v) for v in match.groups()]
+    decl = [np.concatenate([part[k] for part in decls]) for k in (0, 2, 3, 4, 5)]
+    move = [np.concatenate([part[k] for part in moves]) for k in (0, 2)]
+    rigid = np.zeros(len(line_start), bool)
+    rigid[decl[0]] = True
+    rigid[move[0]] = True
+    names = [name for part in decls for name in part[1]]
+    targets = [name for part in moves for name in part[1]]
+    ends = [m.groups() if m else None for m in rests.matches]
+    return RigidModule(
+        line_start,
+        line_end,
+        rigid,
+        decl[0],
+        names,
+        *decl[1:],
+        table,
+        move[0],
+        targets,
+        *move[1:],
+        ends,
+    )
+
+
+def _block(buf, text, first, line_start, line_end, tails, rests):
+    """The rigid declarations and moves among the lines (their starts and ends), the first of
+    them the module's line ``first`` (0-based)."""
     head = _windows(buf, line_start, _BLANKS)
     blank = (head == 32) | (head == 9)
     s = line_start + np.where(blank.all(axis=1), _BLANKS, np.argmin(blank, axis=1))
@@ -131,16 +196,14 @@ def read_rigid(text: str) -> RigidModule | None:
         move |= hit
         name_at[hit] += len(prefix)
     d = np.flatnonzero(decl)
-    decls = _declarations(buf, text, d, name_at[d], line_end[d])
     m = np.flatnonzero(move)
-    moves = _moves(buf, text, m, name_at[m], line_end[m])
-    rigid = np.zeros(len(s), bool)
-    rigid[decls[0]] = True
-    rigid[moves[0]] = True
-    return RigidModule(line_start, line_end, rigid, *decls, *moves)
+    return (
+        _declarations(buf, text, d + first, name_at[d], line_end[d], tails),
+        _moves(buf, text, m + first, name_at[m], line_end[m], rests),
+    )
 
 
-def _declarations(buf, text, lines, name_at, end):
+def _declarations(buf, text, lines, name_at, end, tails):
     size, good = _names(buf, name_at)
     colon = name_at + size
     good &= _prefix(_windows(buf, colon, 8).view(_U64), b":=[[")
@@ -163,34 +226,17 @@ def _declarations(buf, text, lines, name_at, end):
     values, places, plain = read_decimals(buf, at.ravel(), stop.ravel())
     span = np.stack([at, stop], axis=2)
     tail_span = np.stack([stop[:, 2], end[keep]], axis=1)
-    matches, parsed, which = _matched(buf, text, tail_span, _TAIL)
-    tails = np.full((len(matches), 14), np.nan)
-    for i, match in enumerate(matches):
-        if match:
-            tails[i] = [float(v) for v in match.groups()]
+    which, parsed = tails.of(buf, text, tail_span)
     rows = np.flatnonzero(plain.reshape(-1, 3).all(axis=1) & parsed)
     names = strings(buf, name_at[keep][rows], size[keep][rows])
     xyz, places = values.reshape(-1, 3)[rows], places.reshape(-1, 3)[rows].max(axis=1)
-    return lines[keep][rows], names, span[rows], xyz, places, which[rows], tails
+    return lines[keep][rows], names, span[rows], xyz, places, which[rows]
 
 
-def _moves(buf, text, lines, name_at, end):
+def _moves(buf, text, lines, name_at, end, rests):
     size, good = _names(buf, name_at)
     comma = name_at + size
     keep = np.flatnonzero(good & (np.take(buf, comma, mode="clip") == 44))
-    rest_span = np.stack([comma[keep], end[keep]], axis=1)
-    matches, parsed, which = _matched(buf, text, rest_span, _REST)
+    which, parsed = rests.of(buf, text, np.stack([comma[keep], end[keep]], axis=1))
     rows = np.flatnonzero(parsed)
-    targets = strings(buf, name_at[keep][rows], size[keep][rows])
-    return lines[keep][rows], targets, which[rows], [m.groups() if m else None for m in matches]
-
-
-def _matched(buf, text, spans, pattern) -> tuple[list, np.ndarray, np.ndarray]:
-    """``pattern`` matched once on each distinct text of the spans (k, 2): the match of each
-    distinct text (None where it does not match), whether each span's text matches (k,) and
-    the index of each span's text among the distinct ones (k,)."""
-    if not len(spans):
-        return [], np.zeros(0, bool), np.zeros(0, np.int64)
-    found, which = distinct(buf, spans, text)
-    matches = [pattern.match(t) for t in found]
-    return matches, np.array([m is not None for m in matches], bool)[which], which
+    return lines[keep][rows], strings(buf, name_at[keep][rows], size[keep][rows]), which[rows]
