@@ -267,6 +267,7 @@ _KEYWORDS = frozenset(
 )
 
 
+_BLOCK = 1 << 16  # robtargets spliced at a time
 _BLANK = np.array([chr(c).isspace() for c in range(256)])  # what str.strip() strips
 
 
@@ -784,12 +785,13 @@ def _spliced(
     text: str, positions: RapidPositions, new_xyz: np.ndarray, opts: Options
 ) -> tuple[bytearray, np.ndarray]:
     """``splice`` and the values the new literals read as (N, 3) mm, NaN where not replaced; a
-    number whose value does not change keeps its literal."""
+    number whose value does not change keeps its literal. A block of robtargets at a time."""
     new_xyz = np.asarray(new_xyz, dtype=float).reshape(-1, 3)
-    rows = np.flatnonzero(~np.isnan(new_xyz[:, 0]))
     written = np.full(new_xyz.shape, np.nan)
     out = ByteSplicer(text)
-    if rows.size:
+    todo = np.flatnonzero(~np.isnan(new_xyz[:, 0]))
+    for a in range(0, len(todo), _BLOCK):
+        rows = todo[a : a + _BLOCK]
         places = (
             positions.places[rows] if opts.decimals is None else np.full(rows.size, opts.decimals)
         )
@@ -815,25 +817,12 @@ def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
     """Rewrite RAPID modules (path -> latin-1 text) in the frames of the cell's RAPID
     ``section``; InputError where a module has nothing that can be placed."""
     data, parts = {}, []
-    frames = np.stack([np.eye(4), section.robot_T_wobj])
     for path, text in texts.items():
         found = scan(path, text, section, opts.ignore_external_axes)
         n = len(found.name)
         rows = Rows([path], np.zeros(n, np.int64), found.line, found.name, found.reason, found.xyz)
         rows.commanded[:] = found.commanded  # partial_check counts those left uncorrected
-        new = np.full((n, 3), np.nan)
-        at = np.flatnonzero(~np.fromiter(map(bool, found.reason), bool, n))
-        if at.size:
-            t = frames[found.frame[at]]
-            xyz = found.xyz[at]
-            robot = np.einsum("nij,nj->ni", t[:, :3, :3], xyz) + t[:, :3, 3]
-            rotations = t[:, :3, :3] @ _matrices(found.quat[at])
-            status = kuka_status_of(found.cfx[at])
-            corrected = correct_points(robot, rows, at, opts, rotations, status=status)
-            back = np.einsum("nji,nj->ni", t[:, :3, :3], corrected - robot)  # R^T e
-            done = np.flatnonzero(np.isfinite(corrected[:, 0]))
-            new[at[done]] = xyz[done] + back[done]
-            rows.status[at[done]] = CORRECTED
+        new = _corrected(found, rows, opts, section)
         data[path], written = _spliced(text, found, new, opts)
         done = ~np.isnan(new[:, 0])
         rows.new[done] = written[done]
@@ -844,6 +833,27 @@ def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
         partial_check(rows, opts)  # the policy's job rule, over the robtargets
         parts += [rows, _other_rows(path, found)]
     return Result(data, Rows.concat(parts))
+
+
+def _corrected(found: RapidPositions, rows: Rows, opts: Options, section) -> np.ndarray:
+    """The corrected x, y, z (N, 3) mm in each robtarget's frame, NaN where not corrected (the
+    rows of those corrected marked so)."""
+    new = np.full((len(found.name), 3), np.nan)
+    at = np.flatnonzero(~np.fromiter(map(bool, found.reason), bool, len(found.name)))
+    if not at.size:
+        return new
+    frames = np.stack([np.eye(4), section.robot_T_wobj])
+    t = frames[found.frame[at]]
+    xyz = found.xyz[at]
+    robot = np.einsum("nij,nj->ni", t[:, :3, :3], xyz) + t[:, :3, 3]
+    rotations = t[:, :3, :3] @ _matrices(found.quat[at])
+    status = kuka_status_of(found.cfx[at])
+    corrected = correct_points(robot, rows, at, opts, rotations, status=status)
+    back = np.einsum("nji,nj->ni", t[:, :3, :3], corrected - robot)  # R^T e
+    done = np.flatnonzero(np.isfinite(corrected[:, 0]))
+    new[at[done]] = xyz[done] + back[done]
+    rows.status[at[done]] = CORRECTED
+    return new
 
 
 def kuka_status_of(cfx: np.ndarray) -> np.ndarray:
