@@ -117,13 +117,16 @@ def module(draw) -> str:
     return newline.join(lines) + newline
 
 
-def _both(text: str, ignore: bool):
+TOOLS = {"tdrill": (-1, np.eye(4)), "tother": (2, np.eye(4))}  # the cell's and tool 2
+
+
+def _both(text: str, ignore: bool, tools=None):
     """(scan as the module reader does it, scan by the statement reader alone); an InputError
     is compared by its message."""
     out = []
     for reader in (
-        lambda: rewrite.scan("m.mod", text, SECTION, ignore),
-        lambda: rewrite._scan("m.mod", text, SECTION, ignore, None),
+        lambda: rewrite.scan("m.mod", text, SECTION, ignore, tools),
+        lambda: rewrite._scan("m.mod", text, SECTION, ignore, None, tools),
     ):
         try:
             out.append(reader())
@@ -139,14 +142,14 @@ def _same(a, b) -> None:
     assert a.name == b.name
     assert a.reason == b.reason
     assert a.others == b.others
-    for key in ("xyz", "quat", "cfx", "spans", "places", "line", "frame", "commanded"):
+    for key in ("xyz", "quat", "cfx", "spans", "places", "line", "frame", "commanded", "tool"):
         np.testing.assert_array_equal(getattr(a, key), getattr(b, key), err_msg=key)
 
 
 @settings(max_examples=300, deadline=None)
-@given(module(), st.booleans(), st.integers(0, 3))
-def test_fast_lane_reads_as_the_statement_reader(text, ignore, decimals):
-    fast, slow = _both(text, ignore)
+@given(module(), st.booleans(), st.integers(0, 3), st.booleans())
+def test_fast_lane_reads_as_the_statement_reader(text, ignore, decimals, several_tools):
+    fast, slow = _both(text, ignore, TOOLS if several_tools else None)
     _same(fast, slow)
     if isinstance(fast, str):
         return

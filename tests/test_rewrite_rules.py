@@ -159,7 +159,9 @@ def test_integer_mm_krl_gets_hundredths_and_a_rounding_warning(tmp_path, cell, c
 # ---------------------------------------------------------------- item 5: parameters
 
 
-def test_parameter_assignments_are_read_and_parameter_words_reported(realworld, tmp_path, cell):
+def test_parameter_words_are_evaluated_or_reported(realworld, tmp_path, cell):
+    """Parameters assigned in straight-line code are evaluated in the words that use them; a
+    system parameter, one never set, or one set from either is reported with the reason."""
     lagun = realworld / "gcode" / "lagun_HEMA-P005.cnc"
     out = tmp_path / "lagun.cnc"
     assert rewrite(lagun, "--cell", cell, "-o", out) == 0
@@ -167,22 +169,24 @@ def test_parameter_assignments_are_read_and_parameter_words_reported(realworld, 
     program = (
         "#<_z_clearance> = 0.4\n#1=5 #<a> = [#1 + 2]\n"
         "G90 G0 X1000 Y0 Z1000\nG1 Z#<_z_clearance>\nG1 X1001 Y1\nG1 X1002 Y2 Z1002\n"
-        "G1 X[#1*2] Y3 Z1003\nG1 X1004 Y4 Z-#1\n"
+        "G1 X[#1*2] Y3 Z1003\nG1 X1004 Y4 Z-#1\nG1 X#<_x>\nG1 X1005 Y#2\n#3=[#5420+1]\n"
+        "G1 Y6 Z#3\n"
     )
     moves = parse_gcode(program)
-    assert [m.line for m in moves] == [3, 4, 5, 6, 7, 8]
-    assert "Z#<_z_clearance> uses a parameter" in moves[1].reason
-    assert "Z not known" in moves[2].reason  # Z is unknown until written again
-    assert moves[3].reason == "" and moves[3].target == (1002, 2, 1002)
-    assert "X[#1*2] uses a parameter" in moves[4].reason
-    assert "Z-#1 uses a parameter" in moves[5].reason
+    assert [m.line for m in moves] == [3, 4, 5, 6, 7, 8, 9, 10, 12]
+    assert [m.reason for m in moves[:6]] == [""] * 6
+    assert moves[1].target == (1000, 0, 0.4)
+    assert moves[4].target == (10, 3, 1003) and moves[5].target == (1004, 4, -5)
+    assert "X#<_x> uses a parameter" in moves[6].reason and "run time" in moves[6].reason
+    assert "Y#2 uses a parameter" in moves[7].reason and "not set before" in moves[7].reason
+    assert "#3 is set from [#5420+1] (line 11)" in moves[8].reason
+    assert "#5420 is a system parameter" in moves[8].reason
     ngc = tmp_path / "p.ngc"
     ngc.write_text(program)
     rep = tmp_path / "r.csv"
-    assert rewrite(ngc, "--cell", cell, "-o", tmp_path / "p2.ngc", "--report", rep) == 0
-    assert [r["status"] for r in report(rep)] == ["corrected"] + ["skipped"] * 2 + ["corrected"] + [
-        "skipped"
-    ] * 2
+    argv = ["--cell", cell, "-o", tmp_path / "p2.ngc", "--report", rep, "--allow-partial"]
+    assert rewrite(ngc, *argv) == 0
+    assert [r["status"] for r in report(rep)] == ["corrected"] * 6 + ["skipped"] * 3
 
 
 @pytest.mark.parametrize(
@@ -329,6 +333,34 @@ def test_frames_operands_and_constants_are_not_positions(tmp_path):
     # XP1 is a motion target and also the left operand of ':' (a frame) at line 7: never corrected
     assert "an operand of ':' at line 7" in rows["XP1"]["reason"]
     assert all(r["status"] == "skipped" for r in rows.values())
+
+
+def test_a_member_assigned_at_run_time_leaves_only_its_element(tmp_path, cell):
+    """``fp[2].Y = 25`` changes fp[2] alone: fp[1] and fp[3] are corrected (p + e, base 1 = the
+    robot frame), fp[2] is reported with the line that assigns it."""
+    src, dat = tmp_path / "j.src", tmp_path / "j.dat"
+    src.write_text(krl_src("LIN fp[1]", "fp[2].Y = 25", "LIN fp[2]", "LIN fp[3]"))
+    dat.write_text(
+        "DEFDAT j\nDECL E6POS fp[3]\n"
+        + "".join(
+            f"fp[{i}]={{X {1000 + 10 * i}.000,Y 0.000,Z 900.000,A 0.0,B 90.0,C 0.0}}\n"
+            for i in (1, 2, 3)
+        )
+        + "ENDDAT\n"
+    )
+    rep = tmp_path / "r.csv"
+    assert rewrite(src, dat, "--cell", cell, "-o", tmp_path / "o", "--report", rep) == 0
+    rows = {r["name"]: r for r in report(rep)}
+    assert rows["fp[2]"]["status"] == "skipped"
+    assert rows["fp[2]"]["reason"] == "fp[2] is assigned at run time (j.src:4)"
+    out = (tmp_path / "o" / "j.dat").read_text().splitlines()
+    for i in (1, 3):
+        assert rows[f"fp[{i}]"]["status"] == "corrected"
+        want = np.array([1000 + 10 * i, 0, 900]) + E_CONST
+        assert out[1 + i] == (
+            f"fp[{i}]={{X {want[0]:.3f},Y {want[1]:.3f},Z {want[2]:.3f},A 0.0,B 90.0,C 0.0}}"
+        )
+    assert out[3] == dat.read_text().splitlines()[3]
 
 
 def test_lone_dat_with_base_fdat_wins_and_only_pos(tmp_path):

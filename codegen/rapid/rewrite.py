@@ -132,6 +132,7 @@ class _Target:
     frame: int = -1
     reason: str = ""
     commanded: bool = False
+    tool: int = -1  # the tool number it is moved with (-1: the cell's, rapid.tool)
 
 
 @dataclass
@@ -156,6 +157,7 @@ class RapidPositions:
     reason: list[str]
     frame: np.ndarray
     commanded: np.ndarray
+    tool: np.ndarray
     others: list[tuple[int, str, str]] = field(default_factory=list)
 
 
@@ -166,6 +168,7 @@ class _Use:
     reason: str
     index: int | None = None  # array element (1-based), None: every element
     moved: bool = False  # in a motion instruction: the robot goes to it or to a derived position
+    tool: int = -1  # the tool number it is moved with (-1: the cell's)
 
 
 def _masked(text: str) -> str:
@@ -240,10 +243,18 @@ def _arguments(stmt: str, at: int) -> tuple[list[tuple[int, str]], dict[str, str
     return positional, optional
 
 
-def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> RapidPositions:
+def scan(
+    path: str,
+    text: str,
+    section,
+    ignore_external_axes: bool = False,
+    tools: dict[str, tuple[int, np.ndarray]] | None = None,
+) -> RapidPositions:
     """The robtargets of a RAPID module and the reason each is left alone ("" when it can be
     corrected), in the frames of ``section`` (``codegen.rapid.section.RapidSection``);
-    ``ignore_external_axes``: external axes in use do not keep a robtarget from correction.
+    ``ignore_external_axes``: external axes in use do not keep a robtarget from correction;
+    ``tools``: the tooldata names a move may use (lower case) -> (tool number, -1: the cell's
+    tool; flange_T_tool (4, 4) mm), None: the cell's tool (``rapid.tool``) alone.
 
     The lines in the layout ``codegen.rapid.rigid`` reads are read with array operations and the
     rest statement by statement; where one of those lines does not stand alone as a statement
@@ -252,10 +263,10 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
     check_text(text, path)
     rigid = read_rigid(text)
     if rigid is not None and rigid.rigid.any():
-        found = _scan(path, text, section, ignore_external_axes, rigid)
+        found = _scan(path, text, section, ignore_external_axes, rigid, tools)
         if found is not None:
             return found
-    return _scan(path, text, section, ignore_external_axes, None)
+    return _scan(path, text, section, ignore_external_axes, None, tools)
 
 
 # words that start a piece the statement reader sets aside: a module whose rigid lines hold one
@@ -301,6 +312,7 @@ class _Rigid:
             map(self.decl_of.get, self.move_keys, repeat(-1)), np.int64, len(self.move_keys)
         )
         self.handed = np.zeros(len(self.keys), bool)  # declarations judged by the statements
+        self.tools = None  # the module's tools (``scan``)
 
     def to_text(self, offsets: np.ndarray) -> np.ndarray:
         """Offsets (any shape) in ``rest``, none at a mark, as offsets in the module's text."""
@@ -339,11 +351,11 @@ class _Rigid:
         before = np.searchsorted(solid, self.marks) - 1
         return bool(((before < 0) | (chars[solid[np.maximum(before, 0)]] == 59)).all())
 
-    def why(self, m: int, section, unfit) -> tuple[int, str]:
-        """``_move_frame`` of the rigid move m."""
+    def why(self, m: int, section, unfit) -> tuple[int, str, int]:
+        """``_move_frame`` of the rigid move m (with the module's ``tools``)."""
         speed_zone_tool_wobj = self.r.rests[self.r.rest[m]]
         tool, wobj = speed_zone_tool_wobj[2:]
-        return _move_frame(tool, wobj, int(self.move_lines[m]), section, unfit)
+        return _move_frame(tool, wobj, int(self.move_lines[m]), section, unfit, self.tools)
 
     def merge_moves(self, moves: list, known: set[str]) -> list:
         """The statement reader's moves and the rigid ones in the order of the module when a
@@ -382,9 +394,9 @@ class _Rigid:
         for m in np.flatnonzero(maybe).tolist():  # to a robtarget of the statements or handed
             key = self.move_keys[m]
             if key in declared:
-                frame, why = self.why(m, section, unfit)
-                line = int(self.move_lines[m])
-                uses.setdefault(key, []).append(_Use(line, -1 if why else frame, why, None, True))
+                frame, why, tool = self.why(m, section, unfit)
+                use = _Use(int(self.move_lines[m]), -1 if why else frame, why, None, True, tool)
+                uses.setdefault(key, []).append(use)
                 added.add(key)
         for key in added:
             uses[key].sort(key=lambda u: u.line)  # stable: a statement's uses keep their order
@@ -395,9 +407,13 @@ class _Rigid:
         r = self.r
         keep = np.flatnonzero(~self.handed)
         k = len(r.names)
-        judged = [_move_frame(g[2], g[3], 0, section, unfit) if g else (-1, "") for g in r.rests]
-        rest_frame = np.array([f for f, _ in judged] or [0], np.int64)[r.rest]
-        rest_bad = np.array([bool(w) for _, w in judged] or [False], bool)[r.rest]
+        judged = [
+            _move_frame(g[2], g[3], 0, section, unfit, self.tools) if g else (-1, "", -1)
+            for g in r.rests
+        ]
+        rest_frame = np.array([f for f, _, _ in judged] or [0], np.int64)[r.rest]
+        rest_bad = np.array([bool(w) for _, w, _ in judged] or [False], bool)[r.rest]
+        rest_tool = np.array([t for _, _, t in judged] or [-1], np.int64)[r.rest]
         m = np.flatnonzero(self.move_decl >= 0)
         m = m[~self.handed[self.move_decl[m]]]
         d = self.move_decl[m]
@@ -408,14 +424,22 @@ class _Rigid:
         np.minimum.at(first_bad, self.move_decl[bad], bad)
         frame = np.where(in_wobj > 0, 1, 0)
         mixed = (in_wobj > 0) & (in_wobj < uses)
-        placed = (uses > 0) & (first_bad == len(self.move_keys)) & ~mixed
+        low, high = np.full(k, 1 << 40), np.full(k, -(1 << 40))
+        np.minimum.at(low, d, rest_tool[m])
+        np.maximum.at(high, d, rest_tool[m])
+        tools = (low < high) & ~mixed & (first_bad == len(self.move_keys))  # different tools
+        placed = (uses > 0) & (first_bad == len(self.move_keys)) & ~mixed & ~tools
         frame = np.where(placed, frame, -1)
+        tool = np.where(placed, low, -1)
         own_of_tail = [
             _own_reason([0.0, 0.0, 0.0, *tail], ignore_external_axes) for tail in r.tails.tolist()
         ]
         reason = [own_of_tail[t] for t in r.tail.tolist()]
         for i in np.flatnonzero(mixed & (first_bad == len(self.move_keys))).tolist():
             reason[i] = "used in the robot frame and in the work object"
+        for i in np.flatnonzero(tools).tolist():
+            lines = ", ".join(map(str, self.move_lines[m[d == i]].tolist()))
+            reason[i] = f"moved with different tools (lines {lines})"
         for i in np.flatnonzero(first_bad < len(self.move_keys)).tolist():
             reason[i] = self.why(int(first_bad[i]), section, unfit)[1]
         for i in np.flatnonzero(uses == 0).tolist():
@@ -439,6 +463,7 @@ class _Rigid:
             reason,
             frame[keep],
             uses[keep] > 0,
+            tool[keep],
         )
 
 
@@ -461,9 +486,11 @@ def _statements(masked: str, chars: np.ndarray, marks: np.ndarray | None) -> lis
     return [(a, piece) for a, piece in zip(starts.tolist(), pieces, strict=True) if piece.strip()]
 
 
-def _scan(path, text, section, ignore_external_axes, r) -> RapidPositions | None:
+def _scan(path, text, section, ignore_external_axes, r, tools=None) -> RapidPositions | None:
     """``scan`` with the rigid lines ``r`` (None: none); None when those do not stand alone."""
     rigid = _Rigid(text, r) if r is not None else None
+    if rigid is not None:
+        rigid.tools = tools
     rest = rigid.rest if rigid is not None else text
     masked = _masked(rest)
     chars = np.frombuffer(masked.encode("latin-1"), np.uint8)
@@ -523,7 +550,7 @@ def _scan(path, text, section, ignore_external_axes, r) -> RapidPositions | None
     moves: list[tuple[int, list[str], bool]] = []  # line, lower-case names or "#k", circular
     wobj = section.wobj.lower()
     routines = {m.group(1).lower() for m in _PROC.finditer(_MASK.sub("", rest))}
-    unfit = _unfit_frames(data, section)
+    unfit = _unfit_frames(data, section, tools)
     for s, (at, stmt) in enumerate(statements):
         line = where(at + len(stmt) - len(stmt.lstrip()))[0]
         assign = _ASSIGN.match(stmt)
@@ -532,10 +559,11 @@ def _scan(path, text, section, ignore_external_axes, r) -> RapidPositions | None
         instr = _INSTR.match(stmt)
         move = _MOVES.get(instr.group(1).lower()) if instr and not assign else None
         positional, optional = _arguments(stmt, instr.end()) if move else ([], {})
-        frame, why = 0, ""
+        frame, why, tool_no = 0, "", -1
         if move:
             used_tool = positional[move[1]][1] if len(positional) > move[1] else ""
-            frame, why = _move_frame(used_tool, optional.get("wobj"), line, section, unfit)
+            wobj_text = optional.get("wobj")
+            frame, why, tool_no = _move_frame(used_tool, wobj_text, line, section, unfit, tools)
             if move[2]:
                 why = why or f"a point of the circular move at line {line}: arcs are not corrected"
             points = [positional[i] for i in move[0] if i < len(positional)]
@@ -552,7 +580,7 @@ def _scan(path, text, section, ignore_external_axes, r) -> RapidPositions | None
                         line,
                     )
                     target.frame, target.reason = (frame, why) if why else (frame, "")
-                    target.commanded = True
+                    target.commanded, target.tool = True, tool_no
                     moves[-1][1].append(f"#{len(inline)}")
                     inline.append(target)
         elif instr and instr.group(1).lower() == "moveabsj":
@@ -587,7 +615,7 @@ def _scan(path, text, section, ignore_external_axes, r) -> RapidPositions | None
                 and arg == ref.group(0).strip()
                 and any(positional[i][0] == ref.start() for i in move[0] if i < len(positional))
             ):
-                use = _Use(line, -1 if why else frame, why, index)
+                use = _Use(line, -1 if why else frame, why, index, tool=tool_no)
                 moves[-1][1].append(key)
             else:
                 what = instr.group(1) if instr and not assign else "an expression"
@@ -618,8 +646,11 @@ def _scan(path, text, section, ignore_external_axes, r) -> RapidPositions | None
                 target.reason = bad.reason
             elif len({u.frame for u in mine}) > 1:
                 target.reason = "used in the robot frame and in the work object"
+            elif len({u.tool for u in mine}) > 1:
+                lines = ", ".join(str(u.line) for u in mine)
+                target.reason = f"moved with different tools (lines {lines})"
             else:
-                target.frame = mine[0].frame
+                target.frame, target.tool = mine[0].frame, mine[0].tool
     parts = [_columns(inline + [t for ts in declared.values() for t in ts], text)]
     if rigid is not None:
         parts.append(rigid.judged(section, unfit, ignore_external_axes))
@@ -655,13 +686,14 @@ def _columns(targets: list[_Target], text: str) -> RapidPositions:
         [t.reason or t.own for t in targets],
         np.array([t.frame for t in targets], np.int64),
         np.array([t.commanded for t in targets], bool),
+        np.array([t.tool for t in targets], np.int64),
     )
 
 
 def _joined(path: str, parts: list[RapidPositions]) -> RapidPositions:
     """The robtargets of ``parts`` in the order of the module (line, then offset; stable)."""
     parts = [p for p in parts if len(p.name)] or parts[:1]
-    keys = ("xyz", "quat", "cfx", "spans", "places", "line", "frame", "commanded")
+    keys = ("xyz", "quat", "cfx", "spans", "places", "line", "frame", "commanded", "tool")
     if len(parts) == 1:
         columns = {key: getattr(parts[0], key) for key in keys}
         names, reasons = parts[0].name, parts[0].reason
@@ -678,13 +710,21 @@ def _joined(path: str, parts: list[RapidPositions]) -> RapidPositions:
     return RapidPositions(path, name=names, reason=reasons, **columns)
 
 
-def _move_frame(tool_text: str, wobj_text: str | None, line: int, section, unfit) -> tuple:
-    """(frame, why) of a linear or joint move with the tool argument ``tool_text`` in the work
-    object ``wobj_text`` (None: no ``\\WObj``) at ``line``: frame 0 robot / 1 the cell's work
-    object; why "" when its targets can be placed."""
+def _move_frame(tool_text: str, wobj_text: str | None, line: int, section, unfit, tools) -> tuple:
+    """(frame, why, tool) of a linear or joint move with the tool argument ``tool_text`` in the
+    work object ``wobj_text`` (None: no ``\\WObj``) at ``line``: frame 0 robot / 1 the cell's
+    work object; why "" when its targets can be placed; the tool's number (-1: the cell's) among
+    ``tools`` (``scan``)."""
     used_wobj = ("wobj0" if wobj_text is None else wobj_text).lower()
-    why = ""
-    if tool_text.lower() != section.tool.lower():
+    why, tool_no = "", -1
+    if tools is not None:
+        tool_no = tools.get(tool_text.lower(), (-1,))[0]
+        if tool_text.lower() not in tools:
+            why = (
+                f"moved with tool {tool_text or '?'} at line {line}, which the cell does "
+                "not declare (rapid.tool, the names of tool_data)"
+            )
+    elif tool_text.lower() != section.tool.lower():
         why = (
             f"moved with tool {tool_text or '?'} at line {line}, not the cell's "
             f"(rapid.tool {section.tool}): the grid holds for the cell's TCP"
@@ -696,17 +736,25 @@ def _move_frame(tool_text: str, wobj_text: str | None, line: int, section, unfit
         )
     for what in (tool_text.lower(), used_wobj):
         why = why or (f"{unfit[what]} (line {line})" if what in unfit else "")
-    return (0 if used_wobj == "wobj0" else 1), why
+    return (0 if used_wobj == "wobj0" else 1), why, tool_no
 
 
-def _unfit_frames(data: dict[str, str], section) -> dict[str, str]:
-    """The cell's tool and work object where the module declares them otherwise than the cell
-    (a stationary tool, a work object the robot holds, another user or object frame): lower-case
-    name -> why its moves are not placed."""
+def _unfit_frames(data: dict[str, str], section, tools: dict | None) -> dict[str, str]:
+    """The cell's tools and work object where the module declares them otherwise than the cell
+    (a stationary tool, a tool with another TCP than the cell's ``tools``, a work object the
+    robot holds, another user or object frame): lower-case name -> why its moves are not
+    placed."""
     out = {}
-    tool, wobj = section.tool.lower(), section.wobj.lower()
-    if data.get(tool, "[TRUE").lstrip(" \t\r\n[").upper().startswith("FALSE"):
-        out[tool] = f"tool {section.tool} is stationary (robhold FALSE): the robot holds the part"
+    wobj = section.wobj.lower()
+    names = {section.tool.lower(): section.tool}
+    for tool in tools or names:
+        if data.get(tool, "[TRUE").lstrip(" \t\r\n[").upper().startswith("FALSE"):
+            name = names.get(tool, tool)
+            out[tool] = f"tool {name} is stationary (robhold FALSE): the robot holds the part"
+        elif tools is not None and tool in data:
+            numbers = [float(n) for n in re.findall(_NUM, data[tool])[:7]]
+            if len(numbers) == 7 and not _same_pose(_pose(numbers), tools[tool][1]):
+                out[tool] = f"the module's tooldata {tool} is not the TCP the cell gives it"
     value = data.get(wobj)
     if value is None:
         return out
@@ -716,22 +764,28 @@ def _unfit_frames(data: dict[str, str], section) -> dict[str, str]:
     numbers = [float(n) for n in re.findall(_NUM, value.split(",", 3)[-1])]
     if len(numbers) != 14:
         return out
-    frames = []
-    for k in (0, 7):
-        pose = np.eye(4)
-        pose[:3, :3] = _matrices(np.array(numbers[k + 3 : k + 7]))[0]
-        pose[:3, 3] = numbers[k : k + 3]
-        frames.append(pose)
-    robot_T_wobj = frames[0] @ frames[1]
-    if not (
-        np.allclose(robot_T_wobj[:3, 3], section.robot_T_wobj[:3, 3], rtol=0, atol=0.01)
-        and np.allclose(robot_T_wobj[:3, :3], section.robot_T_wobj[:3, :3], rtol=0, atol=1e-6)
-    ):
+    robot_T_wobj = _pose(numbers[:7]) @ _pose(numbers[7:])
+    if not _same_pose(robot_T_wobj, section.robot_T_wobj):
         out[wobj] = (
             f"the module's wobjdata {section.wobj} (user and object frame) is not the cell's base "
             "frame"
         )
     return out
+
+
+def _pose(numbers: list[float]) -> np.ndarray:
+    """RAPID [x, y, z, q1, q2, q3, q4] (mm) as a pose (4, 4) mm."""
+    pose = np.eye(4)
+    pose[:3, :3] = _matrices(np.array(numbers[3:7]))[0]
+    pose[:3, 3] = numbers[:3]
+    return pose
+
+
+def _same_pose(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two poses (4, 4) mm agree within 0.01 mm and 1e-6 (rotation matrix elements)."""
+    return np.allclose(a[:3, 3], b[:3, 3], rtol=0, atol=0.01) and np.allclose(
+        a[:3, :3], b[:3, :3], rtol=0, atol=1e-6
+    )
 
 
 def _literal(name, lit, offset, where, ignore_external_axes, line=None) -> _Target:
@@ -817,11 +871,16 @@ def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
     """Rewrite RAPID modules (path -> latin-1 text) in the frames of the cell's RAPID
     ``section``; InputError where a module has nothing that can be placed."""
     data, parts = {}, []
+    tools = None
+    if opts.tool_data is not None:
+        tools = {name: (n, opts.tool_data[n]) for name, n in (opts.tool_names or {}).items()}
+        tools[section.tool.lower()] = (-1, opts.tool_data[opts.tool_number])
     for path, text in texts.items():
-        found = scan(path, text, section, opts.ignore_external_axes)
+        found = scan(path, text, section, opts.ignore_external_axes, tools)
         n = len(found.name)
         rows = Rows([path], np.zeros(n, np.int64), found.line, found.name, found.reason, found.xyz)
         rows.commanded[:] = found.commanded  # partial_check counts those left uncorrected
+        rows.tool[:] = found.tool
         new = _corrected(found, rows, opts, section)
         data[path], written = _spliced(text, found, new, opts)
         done = ~np.isnan(new[:, 0])
