@@ -1,6 +1,7 @@
 """Whole commands against their I/O floor (issue 14): each row runs the real `accugrid` process
 and, in the same run, a floor: a bare Python process that imports what the row names or reads the
-same input files and writes the same number of files and bytes. Ratio = command / floor.
+same input files and writes the same number of files and bytes. Ratio = command / floor. The
+rewrite rows' floor also imports numpy (the rewrite speed bar: within 5x of that process).
 
 Medians of 5 runs (3 for the 1e5 jobs, 1 for the 1e6 jobs); peak RSS of the process from
 wait4. `python bench/bench_commands.py --million` adds the 1e6 rows (minutes, GiB);
@@ -23,6 +24,7 @@ sys.path.insert(0, str(ROOT))
 from bench.timing import table  # noqa: E402
 
 CELL = ROOT / "examples" / "cell.yaml"
+RAPID_CELL = ROOT / "examples" / "cell_irb6700.yaml"  # the same holes for an IRB 6700
 # Issue 14's measurements of the code before the speed work (wall s, peak RSS MiB; "-" where
 # the issue has none), printed beside each row's new numbers, and the issue's target per row.
 BEFORE = {
@@ -36,12 +38,14 @@ BEFORE = {
 }
 TARGET = {
     "accugrid --help": "<= 1.5x",
+    "accugrid rewrite, 1e5": "<= 5x",
     "accugrid correct, 1 point": "<= 1.2x",
     "1e5": "<= 1.0 s, <= 8x",
     "accugrid correct, 1e5 points": "<= 0.5 s, <= 8x",
     "1e6": "linear, <= 977 MiB",
 }
 GRID = ROOT / "examples" / "grid_200mm.csv"
+RAPID_GRID = ROOT / "examples" / "grid_irb6700_200mm.csv"
 # the accugrid executable timed: this environment's, or ACCUGRID_BENCH_EXE (e.g. a wrapper that
 # runs a checkout of an earlier commit, for a before/after table measured on the same machine)
 ACCUGRID = os.environ.get("ACCUGRID_BENCH_EXE") or str(Path(sys.executable).with_name("accugrid"))
@@ -51,6 +55,8 @@ ACCUGRID = os.environ.get("ACCUGRID_BENCH_EXE") or str(Path(sys.executable).with
 # or output size and path, one per line.
 FLOOR_IO = """
 import sys
+if sys.argv[2:] == ["numpy"]:
+    import numpy
 with open(sys.argv[1]) as manifest:
     entries = [line.rstrip("\\n").split("\\t") for line in manifest]
 for entry in entries:
@@ -111,20 +117,23 @@ def outputs_of(target: Path) -> list[Path]:
     return sorted(p for p in target.rglob("*") if p.is_file()) if target.is_dir() else [target]
 
 
-def io_floor(inputs: list[Path], written: list[Path], scratch: Path, repeats: int):
-    """The floor of a job that read ``inputs`` and wrote ``written`` (same count and sizes)."""
+def io_floor(inputs: list[Path], written: list[Path], scratch: Path, repeats: int, *imports):
+    """The floor of a job that read ``inputs`` and wrote ``written`` (same count and sizes),
+    after importing ``imports`` (only "numpy")."""
     scratch.mkdir(exist_ok=True)
     manifest = scratch.parent / "floor_manifest.txt"
     lines = [f"<\t{p}" for p in inputs]
     lines += [f"{p.stat().st_size}\t{scratch / f'f{i}'}" for i, p in enumerate(written)]
     manifest.write_text("\n".join(lines) + "\n")
-    return median_run([sys.executable, "-c", FLOOR_IO, str(manifest)], repeats)
+    return median_run([sys.executable, "-c", FLOOR_IO, str(manifest), *imports], repeats)
 
 
 def job_row(name, args, inputs, target, tmp, repeats):
     seconds, peak = median_run([ACCUGRID, *args, "--force"], repeats)
-    floor, _ = io_floor(inputs, outputs_of(target), tmp / "floor", repeats)
-    return name, seconds, peak, "same I/O in Python", floor
+    imports = ["numpy"] if args[0] == "rewrite" else []
+    floor, _ = io_floor(inputs, outputs_of(target), tmp / "floor", repeats, *imports)
+    what = "numpy + same I/O" if imports else "same I/O in Python"
+    return name, seconds, peak, what, floor
 
 
 def main(million: bool, only: str = "") -> None:
@@ -147,15 +156,19 @@ def main(million: bool, only: str = "") -> None:
             rows.append(("accugrid correct, 1 point", seconds, peak, "import numpy, scipy", floor))
 
         sizes = [(100_000, 3)] + ([(1_000_000, 1)] if million else [])
-        for n, repeats in sizes if only in "accugrid krl gcode holes correct points" else ():
+        for n, repeats in sizes if only in "accugrid krl gcode rapid holes correct points" else ():
             label = f"{n:.0e}".replace("+0", "")
             (holes,) = make_input("bench.bench_programs.points_csv", tmp / f"holes{n}.csv", n)
-            for command, out in (("krl", tmp / f"krl{n}"), ("gcode", tmp / f"holes{n}.ngc")):
+            for command, out, cell, grid in (
+                ("krl", tmp / f"krl{n}", CELL, GRID),
+                ("gcode", tmp / f"holes{n}.ngc", CELL, GRID),
+                ("rapid", tmp / f"HOLES{n}.mod", RAPID_CELL, RAPID_GRID),
+            ):
                 if only not in f"accugrid {command} holes":
                     continue
-                args = [command, str(holes), "--cell", str(CELL), "-o", str(out)]
+                args = [command, str(holes), "--cell", str(cell), "-o", str(out)]
                 name = f"accugrid {command}, {label} holes"
-                rows.append(job_row(name, args, [holes, CELL, GRID], out, tmp, repeats))
+                rows.append(job_row(name, args, [holes, cell, grid], out, tmp, repeats))
             if only not in "accugrid correct points":
                 continue
             (robot_holes,) = make_input(
@@ -165,8 +178,8 @@ def main(million: bool, only: str = "") -> None:
             args = ["correct", str(robot_holes), "--grid", str(GRID), "-o", str(out)]
             name = f"accugrid correct, {label} points"
             rows.append(job_row(name, args, [robot_holes, GRID], out, tmp, repeats))
-        for n, repeats in sizes if only in "accugrid rewrite KRL pair G-code" else ():
-            # rewrite: a KRL .src/.dat pair and a G-code file of n positions
+        for n, repeats in sizes if only in "accugrid rewrite KRL pair G-code RAPID module" else ():
+            # rewrite: a KRL .src/.dat pair, a G-code file and a RAPID module of n positions
             label = f"{n:.0e}".replace("+0", "")
             folder = tmp / f"rewrite{n}"
             folder.mkdir()
@@ -182,7 +195,15 @@ def main(million: bool, only: str = "") -> None:
             args += ["--max-mb", "512"]
             name = f"accugrid rewrite, {label} G-code"
             rows.append(job_row(name, args, [ngc, CELL, GRID], out_ngc, tmp, repeats))
-            for path in [*pair, ngc]:
+            (module,) = make_input("bench.bench_rewrite.rapid_module", folder, n)
+            out_mod = tmp / f"rewritten{n}.mod"
+            args = ["rewrite", str(module), "--cell", str(RAPID_CELL), "-o", str(out_mod)]
+            args += ["--max-mb", "512"]
+            name = f"accugrid rewrite, {label} RAPID module"
+            rows.append(
+                job_row(name, args, [module, RAPID_CELL, RAPID_GRID], out_mod, tmp, repeats)
+            )
+            for path in [*pair, ngc, module]:
                 path.unlink()
     print(
         table(
@@ -199,7 +220,7 @@ def main(million: bool, only: str = "") -> None:
 
 def target_of(name: str) -> str:
     """The issue's target for a row: by its name, else by its size."""
-    return TARGET.get(name) or next(t for size, t in TARGET.items() if size in name)
+    return TARGET.get(name) or next(t for key, t in TARGET.items() if key in name)
 
 
 if __name__ == "__main__":

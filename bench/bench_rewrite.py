@@ -1,9 +1,10 @@
 """`accugrid rewrite` on big programs: a 100,000-position KRL .src/.dat pair (E6POS declarations
 used by LIN motions, as a controller writes them), a 100,000-position KRL .src with inline
-aggregates, and a 100,000-line G-code program (G90 moves and G81 holes). The whole command is
-timed in a fresh process (cell and grid loading, parsing, correction, splicing, the atomic
-write), with the process's peak RSS. The whole command with its start-up, against the same I/O
-in Python (issue 14's target: <= 1.0 s and <= 8x that floor for 1e5 positions), is
+aggregates, a 100,000-line G-code program (G90 moves and G81 holes) and a 100,000-robtarget ABB
+RAPID module (CONST robtarget declarations used by MoveL, as RobotStudio writes them). The whole
+command is timed in a fresh process (cell and grid loading, parsing, correction, splicing, the
+atomic write), with the process's peak RSS. The whole command with its start-up, against the
+same I/O in Python (issue 14's target: <= 1.0 s and <= 8x that floor for 1e5 positions), is
 ``bench_commands.py --only=rewrite``.
 """
 
@@ -27,11 +28,12 @@ from bench.timing import table  # noqa: E402
 N = 100_000
 REPEATS = 3
 CELL = ROOT / "examples" / "cell.yaml"
+RAPID_CELL = ROOT / "examples" / "cell_irb6700.yaml"
 
 
-def positions(n: int, seed: int = 0) -> np.ndarray:
-    """Points inside the example grid (robot frame), in the example cell's base frame (mm)."""
-    cell = load_cell(CELL)
+def positions(n: int, seed: int = 0, cell_path: Path = CELL) -> np.ndarray:
+    """Points inside the grid of a cell (robot frame), in the cell's base frame (mm)."""
+    cell = load_cell(cell_path)
     grid = GridModel.from_measurements(cell.grid_path)
     rng = np.random.default_rng(seed)
     margin = 0.05 * (grid.upper - grid.origin)
@@ -78,6 +80,25 @@ def gcode(folder: Path, n: int = N) -> list[Path]:
     return [folder / "big.ngc"]
 
 
+def rapid_module(folder: Path, n: int = N) -> list[Path]:
+    """A RAPID module of n robtargets in the work object of examples/cell_irb6700.yaml (its base
+    frame), each declared on its line and moved to by MoveL with the cell's tool, as RobotStudio
+    writes a module (CRLF); the drill along the grid's orientation, in its arm configuration."""
+    p = positions(n, 3, RAPID_CELL)
+    orient = "[0,0.70710678,-0.70710678,0],[0,0,-1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
+    lines = ["MODULE BIG"]
+    lines += [
+        f"    CONST robtarget Target_{i}:=[[{x:.3f},{y:.3f},{z:.3f}],{orient}];"
+        for i, (x, y, z) in enumerate(p)
+    ]
+    lines += ["    PROC main()"]
+    lines += [f"        MoveL Target_{i},v100,fine,tDrill\\WObj:=wobjPanel;" for i in range(n)]
+    lines += ["    ENDPROC", "ENDMODULE"]
+    path = folder / "BIG.mod"
+    path.write_bytes(("\r\n".join(lines) + "\r\n").encode("latin-1"))
+    return [path]
+
+
 CHILD = """
 import resource, sys, time
 from accugrid.app.cli import main
@@ -110,13 +131,15 @@ def main_bench() -> None:
             ("KRL .src, 100k inline LIN", krl_inline),
             ("KRL .src/.dat, 100k E6POS", krl_pair),
             ("G-code, 100k lines", gcode),
+            ("RAPID .mod, 100k robtargets", rapid_module),
         )
         for i, (name, make) in enumerate(cases):
             inputs = make(folder)
             size = sum(p.stat().st_size for p in inputs) / 2**20
             out = folder / f"out{i}"
             target = out if len(inputs) == 2 else out / inputs[0].name
-            args = ["rewrite", *map(str, inputs), "--cell", str(CELL), "-o", str(target)]
+            cell = RAPID_CELL if inputs[0].suffix == ".mod" else CELL
+            args = ["rewrite", *map(str, inputs), "--cell", str(cell), "-o", str(target)]
             runs = [run_child([*args, "--force"]) for _ in range(REPEATS)]
             seconds = min(r[0] for r in runs)
             peak = max(r[1] for r in runs)

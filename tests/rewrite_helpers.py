@@ -82,6 +82,22 @@ REALWORLD_REWRITES = {
 
 
 RAPID_BASE = (400.0, -250.0, 300.0, 30.0, 10.0, -20.0)  # the RAPID cell's base (wobj), mm, deg
+# ../shared/realworld/rapid programs -> the rapid.tool and rapid.wobj of the cell each is
+# rewritten in (write_rapid_cell): a tool and a work object the program moves with
+REALWORLD_RAPID = {
+    "robodk_Program.mod": ("Tool", "Frame2"),
+    "harshbhatt99_Module1.mod": ("TCPMarker", "WobjWhiteboard"),
+    "juanlopezp_Module1.mod": ("TVentosa", "WO"),
+    "edgarivanmm_MainModule.modx": ("gripperIvan", "wobjMesa"),
+    "rparak_Module1.mod": ("tool0", "wobjX"),
+    "mcoffman1_AA_example_script.mod": ("INST_tool", "INST_workobject"),
+    "mjkkirschner_test02_001.prg": ("drill", "block"),
+    "zwj12_WeldTestModule.mod": ("toolWeldGun", "wobjX"),
+    "kangoananya_iGPS_SC_Acc_Exp.mod": ("tool0", "wobjX"),
+    "kangoananya_user.sys": ("tool0", "wobjX"),
+    "taeyangshim-stack_user.sys": ("tool0", "wobjX"),
+    "bhomaidan1990_currLeft.mod": ("tool0", "wobjX"),
+}
 
 
 def write_rapid_cell(folder: Path, tool: str, wobj: str) -> Path:

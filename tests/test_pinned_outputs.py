@@ -1,8 +1,9 @@
-"""KRL and G-code outputs pinned byte for byte: the SHA-256 of every file the command line writes
-for the demo's jobs, the speed bench's inputs (made by the bench's own generators, at 2,000
-positions) and every KRL and G-code program in ../shared/realworld, with each command's exit
-code, recorded in tests/data/pinned_outputs.json (group -> input -> output name -> digest). The
-demo's programs and rewrites have the digests tests/test_rapid.py pinned before RAPID came in.
+"""KRL, G-code and RAPID outputs pinned byte for byte: the SHA-256 of every file the command line
+writes for the demo's jobs, the speed bench's inputs (made by the bench's own generators, at 2,000
+positions) and every KRL, G-code and RAPID program in ../shared/realworld, with each command's
+exit code, recorded in tests/data/pinned_outputs.json (group -> input -> output name -> digest).
+The demo's KRL and G-code programs and rewrites have the digests tests/test_rapid.py pinned
+before RAPID came in.
 
 Everything runs through the command line (``accugrid`` resolved from its console-script entry
 point and called in this process with argv), so moving modules between folders does not touch
@@ -25,7 +26,13 @@ from pathlib import Path
 import pytest
 from conftest import EXAMPLES, ROOT
 from pins import digests, first_difference
-from rewrite_helpers import REALWORLD_BASE_DATA, REALWORLD_REWRITES, write_cell
+from rewrite_helpers import (
+    REALWORLD_BASE_DATA,
+    REALWORLD_RAPID,
+    REALWORLD_REWRITES,
+    write_cell,
+    write_rapid_cell,
+)
 
 PINS = Path(__file__).parent / "data" / "pinned_outputs.json"
 REPIN = "ACCUGRID_REPIN"
@@ -64,14 +71,15 @@ def check(group: str, actual: dict[str, dict]) -> None:
 
 
 def test_demo_outputs_are_pinned(tmp_path):
-    """The demo's drilling programs (examples/demo.sh; its grid is examples/grid_200mm.csv,
-    which the demo checks it simulates byte for byte), its pre-flight rewrites and its KRL
-    measurement program of the experiment plan."""
+    """The demo's drilling programs (examples/demo.sh; its grids are examples/grid_200mm.csv and
+    grid_irb6700_200mm.csv, which the demo checks it simulates byte for byte), its pre-flight
+    rewrites and its KRL measurement program of the experiment plan."""
     points, cell = EXAMPLES / "wing_panel_points.csv", EXAMPLES / "cell.yaml"
     grid, cam = EXAMPLES / "grid_200mm.csv", EXAMPLES / "cam_drill"
+    abb = EXAMPLES / "cell_irb6700.yaml"
     program = [points, "--cell", cell, "--grid", grid]
     krl, ngc, rewrite = tmp_path / "krl", tmp_path / "gcode", tmp_path / "rewrite"
-    plan = tmp_path / "plan"
+    plan, rapid = tmp_path / "plan", tmp_path / "rapid"
     actual = {
         "krl wing_panel_points.csv": job(krl, "krl", *program, "-o", krl),
         "gcode wing_panel_points.csv": job(ngc, "gcode", *program, "-o", ngc / "wing_panel.ngc"),
@@ -84,6 +92,22 @@ def test_demo_outputs_are_pinned(tmp_path):
             rewrite / "ngc",
             *("rewrite", f"{cam}.ngc", "--cell", cell, "-o", rewrite / "ngc/cam_drill.ngc"),
             *("--report", rewrite / "ngc/cam_drill_ngc_report.csv", "--allow-partial"),
+        ),
+        "rapid wing_panel_points.csv": job(
+            rapid, "rapid", points, "--cell", abb, "-o", rapid / "WING.mod"
+        ),
+        "rewrite cam_drill.mod": job(
+            rewrite / "mod",
+            *(
+                "rewrite",
+                f"{cam}.mod",
+                "--cell",
+                abb,
+                "--header",
+                "-o",
+                rewrite / "mod/cam_drill.mod",
+            ),
+            *("--report", rewrite / "mod/cam_drill_rapid_report.csv", "--allow-partial"),
         ),
         "plan experiment": job(
             plan,
@@ -120,16 +144,18 @@ def test_demo_model_program_is_pinned(tmp_path):
 
 
 def test_bench_outputs_are_pinned(tmp_path, monkeypatch):
-    """The speed bench's inputs (bench/bench_commands.py: bench_programs.points_csv for krl and
-    gcode, bench_rewrite.krl_pair and .gcode for rewrite; bench/bench_rewrite.py also
-    .krl_inline), made by the bench's own generators at 2,000 positions, and the krl, gcode and
-    rewrite outputs of them with the bench's arguments (and a report of each rewrite). The
-    inputs are pinned too: a change there is not a change of the programs."""
+    """The speed bench's inputs (bench/bench_commands.py: bench_programs.points_csv for krl,
+    gcode and rapid, bench_rewrite.krl_pair, .gcode and .rapid_module for rewrite;
+    bench/bench_rewrite.py also .krl_inline), made by the bench's own generators at 2,000
+    positions, and the krl, gcode, rapid and rewrite outputs of them with the bench's arguments
+    (and a report of each rewrite). The inputs are pinned too: a change there is not a change of
+    the programs."""
     monkeypatch.syspath_prepend(str(ROOT))
     from bench.bench_programs import points_csv
-    from bench.bench_rewrite import gcode, krl_inline, krl_pair
+    from bench.bench_rewrite import gcode, krl_inline, krl_pair, rapid_module
 
     n, cell = BENCH_POSITIONS, EXAMPLES / "cell.yaml"
+    abb = EXAMPLES / "cell_irb6700.yaml"
     inputs = tmp_path / "inputs"
     (inputs / f"rewrite{n}").mkdir(parents=True)
     holes = inputs / f"holes{n}.csv"
@@ -137,13 +163,16 @@ def test_bench_outputs_are_pinned(tmp_path, monkeypatch):
     pair = krl_pair(inputs / f"rewrite{n}", n)
     (ngc,) = gcode(inputs / f"rewrite{n}", n)
     (inline,) = krl_inline(inputs / f"rewrite{n}", n)
-    krl, gc = tmp_path / "krl", tmp_path / "gcode"
+    (module,) = rapid_module(inputs / f"rewrite{n}", n)
+    krl, gc, ra = tmp_path / "krl", tmp_path / "gcode", tmp_path / "rapid"
     pair_out, ngc_out, inline_out = (tmp_path / k for k in ("pair", "ngc", "inline"))
+    mod_out = tmp_path / "mod"
     big = ["--cell", cell, "--max-mb", 512]
     actual = {
         "inputs": digests(inputs),
         f"krl holes{n}.csv": job(krl, "krl", holes, "--cell", cell, "-o", krl / f"krl{n}"),
         f"gcode holes{n}.csv": job(gc, "gcode", holes, "--cell", cell, "-o", gc / f"holes{n}.ngc"),
+        f"rapid holes{n}.csv": job(ra, "rapid", holes, "--cell", abb, "-o", ra / f"HOLES{n}.mod"),
         "rewrite big.src big.dat": job(
             pair_out,
             *("rewrite", *pair, *big, "-o", pair_out / f"rewritten{n}"),
@@ -158,6 +187,11 @@ def test_bench_outputs_are_pinned(tmp_path, monkeypatch):
             inline_out,
             *("rewrite", inline, *big, "-o", inline_out / inline.name),
             *("--report", inline_out / "report.csv"),
+        ),
+        f"rewrite {module.name}": job(
+            mod_out,
+            *("rewrite", module, "--cell", abb, "--max-mb", 512, "-o", mod_out / module.name),
+            *("--report", mod_out / "report.csv"),
         ),
     }
     check("bench", actual)
@@ -186,3 +220,30 @@ def test_realworld_rewrites_are_pinned(realworld, tmp_path):
             if result["exit"] != 2:
                 break
     check("realworld", actual)
+
+
+def test_realworld_rapid_rewrites_are_pinned(realworld, tmp_path):
+    """Every RAPID program in ../shared/realworld/rapid rewritten in the cell of
+    rewrite_helpers.REALWORLD_RAPID (tests/test_rapid.py checks what changes): the exit code
+    and the files written (program and report) as given, where that is refused (exit 2) with
+    --allow-partial, and with --allow-partial --ignore-external-axes."""
+    programs = {p.name for p in (realworld / "rapid").iterdir()}
+    missing = programs ^ set(REALWORLD_RAPID)
+    assert not missing, f"realworld RAPID programs without a pinned rewrite: {missing}"
+    runs = (
+        ("as given", []),
+        ("--allow-partial", ["--allow-partial"]),
+        ("--ignore-external-axes", ["--allow-partial", "--ignore-external-axes"]),
+    )
+    actual = {}
+    for name, (tool, wobj) in sorted(REALWORLD_RAPID.items()):
+        (tmp_path / name).mkdir()
+        cell = write_rapid_cell(tmp_path / name, tool, wobj)
+        for run, extra in runs:
+            if run == "--allow-partial" and actual[f"{name} as given"]["exit"] != 2:
+                continue
+            folder = tmp_path / name / run.strip("-")
+            argv = ["rewrite", realworld / "rapid" / name, "--cell", cell, *extra]
+            result = job(folder, *argv, "-o", folder / name, "--report", folder / "report.csv")
+            actual[f"{name} {run}"] = result
+    check("realworld rapid", actual)

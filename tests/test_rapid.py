@@ -16,7 +16,7 @@ from conftest import EXAMPLES
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from pins import digests, first_difference
-from rewrite_helpers import E_CONST, write_rapid_cell
+from rewrite_helpers import E_CONST, REALWORLD_RAPID, write_rapid_cell
 from rewrite_helpers import RAPID_BASE as BASE
 from scipy.spatial.transform import Rotation
 
@@ -127,33 +127,33 @@ def test_module_name_over_32_characters_is_a_located_error(tmp_path, capsys):
     assert not long.exists()
 
 
-# file -> (the cell's rapid.tool and rapid.wobj, the frame its corrected robtargets are written
-# in: "robot" (wobj0) or "base" (the work object, the cell's base), None: nothing can be placed;
-# the line and reason of the first robtarget a motion commands that is left uncorrected, which
-# fails the job without --allow-partial; each read in the program)
+# file -> (the frame its corrected robtargets are written in: "robot" (wobj0) or "base" (the work
+# object, the cell's base), None: nothing can be placed; the line and reason of the first
+# robtarget a motion commands that is left uncorrected, which fails the job without
+# --allow-partial; each read in the program), in the cell of rewrite_helpers.REALWORLD_RAPID
 CASES = {
     # MoveL in Frame2 (line 25), whose literal frame is not the base
-    "robodk_Program.mod": ("Tool", "Frame2", "robot", 25, "wobjdata Frame2"),
+    "robodk_Program.mod": ("robot", 25, "wobjdata Frame2"),
     # MoveC Target_860,Target_10 at line 144: Target_10 (line 5) is an arc's end point
-    "harshbhatt99_Module1.mod": ("TCPMarker", "WobjWhiteboard", "base", 5, "circular move"),
+    "harshbhatt99_Module1.mod": ("base", 5, "circular move"),
     # Target_20 (line 3) goes to the custom routine Pick and to MoveL Offs(Target_20, ..)
-    "juanlopezp_Module1.mod": ("TVentosa", "WO", "robot", 3, "used by Pick at line 58"),
+    "juanlopezp_Module1.mod": ("robot", 3, "used by Pick at line 58"),
     # acercamiento (line 10): MoveJ to it, and MoveL Offs(acercamiento, +92.5, 0, 0) at 193
-    "edgarivanmm_MainModule.modx": ("gripperIvan", "wobjMesa", "robot", 10, "Offs(...)"),
+    "edgarivanmm_MainModule.modx": ("robot", 10, "Offs(...)"),
     # MoveJ Offs(Target_TAB_CONV, ..) at line 143: the move goes to a derived position
-    "rparak_Module1.mod": ("tool0", "wobjX", None, 50, "Offs(...) at line 143"),
+    "rparak_Module1.mod": (None, 50, "Offs(...) at line 143"),
     # INST_p10 (line 16) is moved in INST_workobject, whose oframe is not the base
-    "mcoffman1_AA_example_script.mod": ("INST_tool", "INST_workobject", None, 16, "wobjdata"),
+    "mcoffman1_AA_example_script.mod": (None, 16, "wobjdata"),
     # p00 (line 13) moved with the stationary drill
-    "mjkkirschner_test02_001.prg": ("drill", "block", None, 13, "stationary"),
+    "mjkkirschner_test02_001.prg": (None, 13, "stationary"),
     # pWeldReady (line 2) has eax_a, eax_b, eax_c in use
-    "zwj12_WeldTestModule.mod": ("toolWeldGun", "wobjX", None, 2, "external axis eax_a"),
+    "zwj12_WeldTestModule.mod": (None, 2, "external axis eax_a"),
     # targets{i}.extax := .. at line 85 reassigns the array declared at line 61
-    "kangoananya_iGPS_SC_Acc_Exp.mod": ("tool0", "wobjX", None, 61, "reassigned at run time"),
-    "kangoananya_user.sys": ("tool0", "wobjX", None, 1, "no robtarget"),
-    "taeyangshim-stack_user.sys": ("tool0", "wobjX", None, 1, "no robtarget"),  # joint targets
+    "kangoananya_iGPS_SC_Acc_Exp.mod": (None, 61, "reassigned at run time"),
+    "kangoananya_user.sys": (None, 1, "no robtarget"),
+    "taeyangshim-stack_user.sys": (None, 1, "no robtarget"),  # joint targets
     # placeap (line 7): the arm angle in eax_a, MoveJ placeap at line 53
-    "bhomaidan1990_currLeft.mod": ("tool0", "wobjX", None, 7, "external axis eax_a"),
+    "bhomaidan1990_currLeft.mod": (None, 7, "external axis eax_a"),
 }
 
 
@@ -161,9 +161,9 @@ CASES = {
 def test_realworld_rapid_rewrite_changes_only_the_corrected_numbers(
     realworld, tmp_path, capsys, name
 ):
-    tool, wobj, frame, line, why = CASES[name]
+    frame, line, why = CASES[name]
     program = realworld / "rapid" / name
-    cell = write_rapid_cell(tmp_path, tool, wobj)
+    cell = write_rapid_cell(tmp_path, *REALWORLD_RAPID[name])
     out, report = tmp_path / name, tmp_path / "r.csv"
     argv = ["rewrite", str(program), "--cell", str(cell), "-o", str(out)]
     assert main(argv) == 2

@@ -34,21 +34,14 @@ without robtargets is an InputError too.
 from __future__ import annotations
 
 import bisect
-import math
 import re
 from dataclasses import dataclass, field
+from itertools import repeat
 
 import numpy as np
 
-from accugrid.codegen.program_text import (
-    MIN_PLACES_MM,
-    check_text,
-    number_text,
-    precision,
-)
-from accugrid.codegen.program_text import (
-    splice as splice_text,
-)
+from accugrid.codegen.program_text import MIN_PLACES_MM, check_text, distinct_ints, precision
+from accugrid.codegen.rapid.rigid import RigidModule, read_rigid
 from accugrid.codegen.rewrite import (
     CORRECTED,
     Options,
@@ -57,8 +50,9 @@ from accugrid.codegen.rewrite import (
     correct_points,
     partial_check,
 )
+from accugrid.codegen.splice import ByteSplicer, texts_of
 from accugrid.infra.errors import InputError
-from accugrid.infra.textsafe import comment_text
+from accugrid.infra.textsafe import comment_text, fixed_bytes
 from accugrid.kinematics.configuration import kuka_status
 
 __all__ = ["RapidPositions", "add_header", "kuka_status_of", "rewrite_rapid", "scan", "splice"]
@@ -122,13 +116,12 @@ _MODULE_LINE = re.compile(r"^[ \t]*MODULE\b.*$", re.I | re.M)
 
 @dataclass
 class _Target:
-    """One robtarget: ``name`` (``p``, ``p{3}``, ``inline MoveL``), its statement's ``line``,
-    the offsets (start, end) of its x, y, z numbers, x, y, z and the quaternion [q1..q4] as
-    written (``values``, 7), the cfx of its confdata, why its own numbers keep it from
-    correction (``own``), its frame
-    (0 robot, 1 the cell's work object, -1 none yet), the reason it is left as it is (""
-    when placeable) and whether a motion goes to it or to a position derived from it
-    (``commanded``)."""
+    """One robtarget the statement reader found: ``name`` (``p``, ``p{3}``, ``inline MoveL``),
+    its statement's ``line``, the offsets (start, end) of its x, y, z numbers, x, y, z and the
+    quaternion [q1..q4] as written (``values``, 7), the cfx of its confdata, why its own numbers
+    keep it from correction (``own``), its frame (0 robot, 1 the cell's work object, -1 none
+    yet), the reason it is left as it is ("" when placeable) and whether a motion goes to it or
+    to a position derived from it (``commanded``)."""
 
     name: str
     line: int
@@ -144,44 +137,28 @@ class _Target:
 
 @dataclass
 class RapidPositions:
-    """What ``scan`` found: every robtarget (``targets``) and the rows of the report that are
-    no robtarget (``others``: never-corrected data, joint targets of moves); columns as
-    ``codegen.plugin.Positions`` (``xyz`` program frame mm, ``frame`` 0 robot / 1 work object)."""
+    """What ``scan`` found: every robtarget as columns, in the order of the module (as
+    ``codegen.plugin.Positions``: ``xyz`` (N, 3) mm as written, NaN where not literal, ``line``
+    (N,), ``name``, ``reason`` ("" where it can be placed), ``frame`` (N,) 0 robot / 1 work
+    object / -1 none), ``commanded`` (N,) bool (a motion goes to it or to a position derived
+    from it), ``quat`` (N, 4) [q1..q4], ``cfx`` (N,), ``spans`` (N, 3, 2) start/end offsets of
+    its x, y, z literals (-1: none), ``places`` (N,) the decimals a corrected x, y, z gets (its
+    literals' most, at least 0.01 mm); and the rows of the report that are no robtarget
+    (``others``: never-corrected data, joint targets of moves: line, name, reason)."""
 
     path: str
-    targets: list[_Target]
-    others: list[tuple[int, str, str]] = field(default_factory=list)  # line, name, reason
-
-    @property
-    def xyz(self) -> np.ndarray:
-        nan = [math.nan] * 3
-        return np.array([t.values[:3] or nan for t in self.targets], dtype=float).reshape(-1, 3)
-
-    @property
-    def line(self) -> np.ndarray:
-        return np.array([t.line for t in self.targets], dtype=np.int64)
-
-    @property
-    def name(self) -> list[str]:
-        return [t.name for t in self.targets]
-
-    @property
-    def reason(self) -> list[str]:
-        return [t.reason for t in self.targets]
-
-    @property
-    def frame(self) -> np.ndarray:
-        return np.array([t.frame for t in self.targets], dtype=np.int64)
-
-    @property
-    def tool(self) -> np.ndarray:
-        """(N,) the tool number each robtarget is moved with (-1: the cell's)."""
-        return np.array([t.tool for t in self.targets], dtype=np.int64)
-
-    @property
-    def commanded(self) -> np.ndarray:
-        """(N,) bool: a motion goes to the robtarget or to a position derived from it."""
-        return np.array([t.commanded for t in self.targets], dtype=bool)
+    xyz: np.ndarray
+    quat: np.ndarray
+    cfx: np.ndarray
+    spans: np.ndarray
+    places: np.ndarray
+    line: np.ndarray
+    name: list[str]
+    reason: list[str]
+    frame: np.ndarray
+    commanded: np.ndarray
+    tool: np.ndarray
+    others: list[tuple[int, str, str]] = field(default_factory=list)
 
 
 @dataclass
@@ -277,21 +254,258 @@ def scan(
     corrected), in the frames of ``section`` (``codegen.rapid.section.RapidSection``);
     ``ignore_external_axes``: external axes in use do not keep a robtarget from correction;
     ``tools``: the tooldata names a move may use (lower case) -> (tool number, -1: the cell's
-    tool; flange_T_tool (4, 4) mm), None: the cell's tool (``rapid.tool``) alone."""
+    tool; flange_T_tool (4, 4) mm), None: the cell's tool (``rapid.tool``) alone.
+
+    The lines in the layout ``codegen.rapid.rigid`` reads are read with array operations and the
+    rest statement by statement; where one of those lines does not stand alone as a statement
+    (inside a ``%%%`` block, a record, after an unfinished statement) or shares a name with the
+    words around it, the whole module is read statement by statement."""
     check_text(text, path)
-    masked = _masked(text)
-    newlines = [m.start() for m in re.finditer("\n", text)]
+    rigid = read_rigid(text)
+    if rigid is not None and rigid.rigid.any():
+        found = _scan(path, text, section, ignore_external_axes, rigid, tools)
+        if found is not None:
+            return found
+    return _scan(path, text, section, ignore_external_axes, None, tools)
+
+
+# words that start a piece the statement reader sets aside: a module whose rigid lines hold one
+# as a name is read statement by statement
+_KEYWORDS = frozenset(
+    "module local proc trap func record endrecord if elseif while for then do test case default"
+    " error endproc endfunc endtrap endmodule endif endfor endwhile endtest else backward"
+    " undo".split()
+)
+
+
+_BLOCK = 1 << 16  # robtargets spliced at a time
+_BLANK = np.array([chr(c).isspace() for c in range(256)])  # what str.strip() strips
+
+
+class _Rigid:
+    """The rigid lines of a module (``codegen.rapid.rigid.RigidModule``) and the text the
+    statement reader reads instead (``rest``): each run of rigid lines, from the first one's
+    text to the last one's, replaced by one ``;`` (the other statements, their lines' text and
+    columns stay), with the offsets of those ``;`` (``marks``); ``to_text`` maps an offset in
+    ``rest`` back to the module's text and ``line`` a line of ``rest`` to the module's."""
+
+    def __init__(self, text: str, r: RigidModule) -> None:
+        self.r = r
+        lines = np.flatnonzero(r.rigid)
+        run = np.concatenate([[True], np.diff(lines) != 1])  # the first line of each run
+        first, last = lines[run], lines[np.append(run[1:], True)]
+        starts, ends = r.line_start[first], r.line_end[last]
+        cuts = np.concatenate([[0], np.stack([starts, ends], axis=1).ravel(), [len(text)]])
+        pieces = map(text.__getitem__, map(slice, cuts[0::2].tolist(), cuts[1::2].tolist()))
+        self.rest = ";".join(pieces)
+        removed = np.cumsum(ends - starts - 1)  # each run's text became one character
+        self.marks = starts - np.concatenate([[0], removed[:-1]]).astype(np.int64)
+        self.removed = np.concatenate([[0], removed]).astype(np.int64)
+        gone = np.cumsum(last - first)  # lines of the module no longer in ``rest``
+        self.mark_lines = (first - np.concatenate([[0], gone[:-1]])).tolist()  # 0-based
+        self.gone = [0, *gone.tolist()]
+        self.keys = _lower(r.names)
+        self.decl_of = dict(zip(self.keys, range(len(self.keys)), strict=True))
+        self.move_keys = _lower(r.targets)
+        self.move_lines = r.move_line + 1
+        self.move_decl = np.fromiter(
+            map(self.decl_of.get, self.move_keys, repeat(-1)), np.int64, len(self.move_keys)
+        )
+        self.handed = np.zeros(len(self.keys), bool)  # declarations judged by the statements
+        self.tools = None  # the module's tools (``scan``)
+
+    def to_text(self, offsets: np.ndarray) -> np.ndarray:
+        """Offsets (any shape) in ``rest``, none at a mark, as offsets in the module's text."""
+        return offsets + self.removed[np.searchsorted(self.marks, offsets)]
+
+    def line(self, line: int) -> int:
+        """The module's line (1-based) of the line ``line`` (1-based) of ``rest``, none a
+        mark's."""
+        return line + self.gone[bisect.bisect_left(self.mark_lines, line - 1)]
+
+    def problem(self, known: set[str]) -> bool:
+        """Whether the module must be read statement by statement: a robtarget declared twice,
+        or a name of the rigid lines that is a keyword, or a robtarget (``known``: the lower-case
+        names the statements declare) named like a word of a rigid line (a tool, a speed ..)."""
+        words = {"const", "pers", "var", "robtarget"} if self.keys else set()
+        if self.move_keys:
+            words |= {"movel", "movej", "wobj"}
+        for rest in self.r.rests:
+            words |= {w.lower() for w in rest or () if w}
+        return bool(
+            len(self.decl_of) < len(self.keys)
+            or not _KEYWORDS.isdisjoint(self.keys)
+            or not _KEYWORDS.isdisjoint(self.move_keys)
+            or words & _KEYWORDS
+            or known & words
+            or any(k in self.decl_of for k in known)
+        )
+
+    def alone(self, chars: np.ndarray) -> bool:
+        """Whether every rigid line stands alone as a statement: its mark is still a ``;`` in the
+        masked ``rest`` (``chars``, its bytes: no ``%%%`` block, record or header covers it) and
+        only blanks separate it from the ``;`` before it."""
+        if (chars[self.marks] != 59).any():
+            return False
+        solid = np.flatnonzero(~_BLANK[chars])
+        before = np.searchsorted(solid, self.marks) - 1
+        return bool(((before < 0) | (chars[solid[np.maximum(before, 0)]] == 59)).all())
+
+    def why(self, m: int, section, unfit) -> tuple[int, str, int]:
+        """``_move_frame`` of the rigid move m (with the module's ``tools``)."""
+        speed_zone_tool_wobj = self.r.rests[self.r.rest[m]]
+        tool, wobj = speed_zone_tool_wobj[2:]
+        return _move_frame(tool, wobj, int(self.move_lines[m]), section, unfit, self.tools)
+
+    def merge_moves(self, moves: list, known: set[str]) -> list:
+        """The statement reader's moves and the rigid ones in the order of the module when a
+        circular move needs the move before it, else the statement reader's alone (``known``:
+        the robtargets the statements declare)."""
+        if not any(circular for _, _, circular in moves):
+            return moves
+        keys = self.move_keys
+        mine = [
+            (line, [keys[m]] if keys[m] in known or keys[m] in self.decl_of else [], False)
+            for m, line in enumerate(self.move_lines.tolist())
+        ]
+        return sorted(moves + mine, key=lambda move: move[0])
+
+    def hand_over(self, declared, uses, moves, section, unfit, ignore_external_axes) -> None:
+        """Give the statement reader each rigid declaration used in a statement or at the start
+        of an arc (``moves`` as merged) as a ``_Target``, and each rigid move to a robtarget it
+        judges as a ``_Use``, among the others in the order of the module."""
+        handed = {k for k in uses if k in self.decl_of}
+        for (_, _, circular), (_, prev, _) in zip(moves[1:], moves, strict=False):
+            if circular:
+                handed |= {k for k in prev if k in self.decl_of}
+        r = self.r
+        for key in handed:
+            d = self.decl_of[key]
+            self.handed[d] = True
+            tail = r.tails[r.tail[d]].tolist()
+            values = [*r.xyz[d].tolist(), *tail[:4]]
+            own = _own_reason([*values, *tail[4:]], ignore_external_axes)
+            spans = [tuple(span) for span in r.span[d].tolist()]
+            line = int(r.decl_line[d]) + 1
+            declared[key] = [_Target(r.names[d], line, spans, values, int(tail[7]), own)]
+        added = set()
+        handed = np.append(self.handed, False)  # [-1]: not declared on a rigid line
+        maybe = (self.move_decl < 0) | handed[self.move_decl]
+        for m in np.flatnonzero(maybe).tolist():  # to a robtarget of the statements or handed
+            key = self.move_keys[m]
+            if key in declared:
+                frame, why, tool = self.why(m, section, unfit)
+                use = _Use(int(self.move_lines[m]), -1 if why else frame, why, None, True, tool)
+                uses.setdefault(key, []).append(use)
+                added.add(key)
+        for key in added:
+            uses[key].sort(key=lambda u: u.line)  # stable: a statement's uses keep their order
+
+    def judged(self, section, unfit, ignore_external_axes) -> RapidPositions:
+        """The robtargets declared on rigid lines and moved to by rigid moves alone, judged as
+        the statement reader judges them (``_scan``), with array operations."""
+        r = self.r
+        keep = np.flatnonzero(~self.handed)
+        k = len(r.names)
+        judged = [
+            _move_frame(g[2], g[3], 0, section, unfit, self.tools) if g else (-1, "", -1)
+            for g in r.rests
+        ]
+        rest_frame = np.array([f for f, _, _ in judged] or [0], np.int64)[r.rest]
+        rest_bad = np.array([bool(w) for _, w, _ in judged] or [False], bool)[r.rest]
+        rest_tool = np.array([t for _, _, t in judged] or [-1], np.int64)[r.rest]
+        m = np.flatnonzero(self.move_decl >= 0)
+        m = m[~self.handed[self.move_decl[m]]]
+        d = self.move_decl[m]
+        uses = np.bincount(d, minlength=k)
+        in_wobj = np.bincount(d, weights=rest_frame[m] == 1, minlength=k).astype(np.int64)
+        first_bad = np.full(k, len(self.move_keys), np.int64)
+        bad = m[rest_bad[m]]
+        np.minimum.at(first_bad, self.move_decl[bad], bad)
+        frame = np.where(in_wobj > 0, 1, 0)
+        mixed = (in_wobj > 0) & (in_wobj < uses)
+        low, high = np.full(k, 1 << 40), np.full(k, -(1 << 40))
+        np.minimum.at(low, d, rest_tool[m])
+        np.maximum.at(high, d, rest_tool[m])
+        tools = (low < high) & ~mixed & (first_bad == len(self.move_keys))  # different tools
+        placed = (uses > 0) & (first_bad == len(self.move_keys)) & ~mixed & ~tools
+        frame = np.where(placed, frame, -1)
+        tool = np.where(placed, low, -1)
+        own_of_tail = [
+            _own_reason([0.0, 0.0, 0.0, *tail], ignore_external_axes) for tail in r.tails.tolist()
+        ]
+        reason = [own_of_tail[t] for t in r.tail.tolist()]
+        for i in np.flatnonzero(mixed & (first_bad == len(self.move_keys))).tolist():
+            reason[i] = "used in the robot frame and in the work object"
+        for i in np.flatnonzero(tools).tolist():
+            lines = ", ".join(map(str, self.move_lines[m[d == i]].tolist()))
+            reason[i] = f"moved with different tools (lines {lines})"
+        for i in np.flatnonzero(first_bad < len(self.move_keys)).tolist():
+            reason[i] = self.why(int(first_bad[i]), section, unfit)[1]
+        for i in np.flatnonzero(uses == 0).tolist():
+            reason[i] = "not used by any move"
+        names = r.names
+        if len(keep) < k:
+            names = [r.names[i] for i in keep.tolist()]
+            reason = [reason[i] for i in keep.tolist()]
+        else:
+            keep = slice(None)  # every one: views, no copies
+        tail = r.tail[keep]
+        return RapidPositions(
+            "",
+            r.xyz[keep],
+            r.tails[:, :4][tail],
+            r.tails[:, 7].astype(np.int64)[tail],
+            r.span[keep],
+            np.maximum(r.places[keep], MIN_PLACES_MM),
+            r.decl_line[keep] + 1,
+            names,
+            reason,
+            frame[keep],
+            uses[keep] > 0,
+            tool[keep],
+        )
+
+
+def _lower(names: list[str]) -> list[str]:
+    """The names (no LF in any) lower-cased, in one call."""
+    return "\n".join(names).lower().split("\n") if names else []
+
+
+def _statements(masked: str, chars: np.ndarray, marks: np.ndarray | None) -> list:
+    """(offset, text) of every statement of the masked text (its bytes ``chars``) that is not
+    blank: the text before each ``;``, those ending at a mark of a rigid line (``marks``,
+    sorted; blank by ``_Rigid.alone``) left out."""
+    semis = np.flatnonzero(chars == 59)
+    starts = np.concatenate([[0], semis[:-1] + 1]).astype(np.int64)
+    if marks is not None and len(marks):
+        j = np.minimum(np.searchsorted(marks, semis), len(marks) - 1)
+        keep = marks[j] != semis
+        starts, semis = starts[keep], semis[keep]
+    pieces = map(masked.__getitem__, map(slice, starts.tolist(), semis.tolist()))
+    return [(a, piece) for a, piece in zip(starts.tolist(), pieces, strict=True) if piece.strip()]
+
+
+def _scan(path, text, section, ignore_external_axes, r, tools=None) -> RapidPositions | None:
+    """``scan`` with the rigid lines ``r`` (None: none); None when those do not stand alone."""
+    rigid = _Rigid(text, r) if r is not None else None
+    if rigid is not None:
+        rigid.tools = tools
+    rest = rigid.rest if rigid is not None else text
+    masked = _masked(rest)
+    chars = np.frombuffer(masked.encode("latin-1"), np.uint8)
+    if rigid is not None and not rigid.alone(chars):
+        return None
+    newlines = np.flatnonzero(chars == 10).tolist()  # masking keeps every line ending
 
     def where(offset: int) -> tuple[int, int]:
         line = bisect.bisect_left(newlines, offset)
-        return line + 1, offset - (newlines[line - 1] if line else -1)
+        column = offset - (newlines[line - 1] if line else -1)
+        return (line + 1 if rigid is None else rigid.line(line + 1)), column
 
-    statements, start = [], 0
-    for end in (m.start() for m in re.finditer(";", masked)):
-        if masked[start:end].strip():
-            statements.append((start, masked[start:end]))
-        start = end + 1
-    found = RapidPositions(path, [])
+    statements = _statements(masked, chars, rigid.marks if rigid is not None else None)
+    inline: list[_Target] = []
+    others: list[tuple[int, str, str]] = []
     declared: dict[str, list[_Target]] = {}  # lower-case robtarget name -> its targets
     data: dict[str, str] = {}  # lower-case tooldata / wobjdata name -> its value (masked)
     decl_of: dict[int, str] = {}  # statement -> the robtarget it declares
@@ -303,7 +517,7 @@ def scan(
         kind, name = m.group(2).lower(), m.group(3)
         line = where(at + m.start(2))[0]
         if kind in NEVER:
-            found.others.append((line, name, f"{kind}: {_WHY_NEVER[kind]}, never corrected"))
+            others.append((line, name, f"{kind}: {_WHY_NEVER[kind]}, never corrected"))
         if kind in ("tooldata", "wobjdata") and m.group(5) is not None:
             data[name.lower()] = m.group(5)
         if kind != "robtarget":
@@ -316,8 +530,8 @@ def scan(
         value_at = at + m.start(5)
         value = m.group(5)
         literals = list(_ROBTARGET.finditer(value))
-        rest = _ROBTARGET.sub("", value)
-        if not literals or rest.strip(" \t\r\n[],"):
+        rest_value = _ROBTARGET.sub("", value)
+        if not literals or rest_value.strip(" \t\r\n[],"):
             targets.append(_Target(name, line, [], [], reason="its value is not literal numbers"))
             continue
         array = m.group(4) is not None
@@ -327,11 +541,15 @@ def scan(
                     f"{name}{{{j}}}" if array else name, lit, value_at, where, ignore_external_axes
                 )
             )
-    uses: dict[str, list[_Use]] = {n: [] for n in declared}
+    known = set(declared)  # the lower-case names of the robtargets the statements declare
+    rigid_keys = rigid.decl_of if rigid is not None else {}  # and those of the rigid lines
+    if rigid is not None and rigid.problem(known):
+        return None
+    uses: dict[str, list[_Use]] = {}
     assigned: set[str] = set()
     moves: list[tuple[int, list[str], bool]] = []  # line, lower-case names or "#k", circular
-    wobj, tool = section.wobj.lower(), section.tool.lower()
-    routines = {m.group(1).lower() for m in _PROC.finditer(_MASK.sub("", text))}
+    wobj = section.wobj.lower()
+    routines = {m.group(1).lower() for m in _PROC.finditer(_MASK.sub("", rest))}
     unfit = _unfit_frames(data, section, tools)
     for s, (at, stmt) in enumerate(statements):
         line = where(at + len(stmt) - len(stmt.lstrip()))[0]
@@ -343,28 +561,9 @@ def scan(
         positional, optional = _arguments(stmt, instr.end()) if move else ([], {})
         frame, why, tool_no = 0, "", -1
         if move:
-            used_wobj = optional.get("wobj", "wobj0").lower()
             used_tool = positional[move[1]][1] if len(positional) > move[1] else ""
-            if tools is not None:
-                tool_no = tools.get(used_tool.lower(), (-1,))[0]
-                if used_tool.lower() not in tools:
-                    why = (
-                        f"moved with tool {used_tool or '?'} at line {line}, which the cell does "
-                        "not declare (rapid.tool, the names of tool_data)"
-                    )
-            elif used_tool.lower() != tool:
-                why = (
-                    f"moved with tool {used_tool or '?'} at line {line}, not the cell's "
-                    f"(rapid.tool {section.tool}): the grid holds for the cell's TCP"
-                )
-            elif used_wobj != "wobj0" and used_wobj != wobj:
-                why = (
-                    f"moved in work object {optional['wobj']} at line {line}, not the cell's "
-                    f"(rapid.wobj {section.wobj}) nor wobj0"
-                )
-            frame = 0 if used_wobj == "wobj0" else 1
-            for what in (used_tool.lower(), used_wobj):
-                why = why or (f"{unfit[what]} (line {line})" if what in unfit else "")
+            wobj_text = optional.get("wobj")
+            frame, why, tool_no = _move_frame(used_tool, wobj_text, line, section, unfit, tools)
             if move[2]:
                 why = why or f"a point of the circular move at line {line}: arcs are not corrected"
             points = [positional[i] for i in move[0] if i < len(positional)]
@@ -382,17 +581,17 @@ def scan(
                     )
                     target.frame, target.reason = (frame, why) if why else (frame, "")
                     target.commanded, target.tool = True, tool_no
-                    moves[-1][1].append(f"#{len(found.targets)}")
-                    found.targets.append(target)
+                    moves[-1][1].append(f"#{len(inline)}")
+                    inline.append(target)
         elif instr and instr.group(1).lower() == "moveabsj":
-            found.others.append((line, "MoveAbsJ", "joint target of MoveAbsJ, never corrected"))
-        if not declared or s in decl_of and not stmt.count(":="):
+            others.append((line, "MoveAbsJ", "joint target of MoveAbsJ, never corrected"))
+        if not (known or rigid_keys) or s in decl_of and not stmt.count(":="):
             continue
         called = instr.group(1) if instr and not assign else ""
         motion = bool(move or _MOTION.fullmatch(called) or called.lower() in routines)
         for ref in _NAME.finditer(stmt):
             key = ref.group(1).lower()
-            if key not in declared:
+            if key not in known and key not in rigid_keys:
                 continue
             if decl_of.get(s) == key and ref.start() < stmt.find(":="):
                 continue  # the name in its own declaration
@@ -424,11 +623,18 @@ def scan(
                     line, -1, f"used by {what} at line {line}, not a move accugrid places", index
                 )
             use.moved = motion
-            uses[key].append(use)
-    _arc_starts(moves, uses, found)
+            uses.setdefault(key, []).append(use)
+    targets = inline + [t for ts in declared.values() for t in ts]
+    if rigid is not None:  # the statements' offsets in the module's text
+        for target in targets:
+            if target.spans:
+                target.spans = [tuple(s) for s in rigid.to_text(np.array(target.spans)).tolist()]
+        moves = rigid.merge_moves(moves, known)
+        rigid.hand_over(declared, uses, moves, section, unfit, ignore_external_axes)
+    _arc_starts(moves, uses, inline)
     for key, targets in declared.items():
         for j, target in enumerate(targets, 1):
-            mine = [u for u in uses[key] if u.index is None or u.index == j]
+            mine = [u for u in uses.get(key, ()) if u.index is None or u.index == j]
             target.commanded = any(u.moved for u in mine)
             if target.reason:
                 continue
@@ -445,13 +651,92 @@ def scan(
                 target.reason = f"moved with different tools (lines {lines})"
             else:
                 target.frame, target.tool = mine[0].frame, mine[0].tool
-        found.targets.extend(targets)
-    for target in found.targets:
-        target.reason = target.reason or target.own
-        if not target.reason and target.frame == 1 and wobj in assigned:
-            target.reason = f"work object {section.wobj} is changed at run time"
-    found.targets.sort(key=lambda t: (t.line, t.spans[0][0] if t.spans else 0))
+    parts = [_columns(inline + [t for ts in declared.values() for t in ts], text)]
+    if rigid is not None:
+        parts.append(rigid.judged(section, unfit, ignore_external_axes))
+    found = _joined(path, parts)
+    if wobj in assigned:
+        why = f"work object {section.wobj} is changed at run time"
+        for i in np.flatnonzero(found.frame == 1).tolist():
+            found.reason[i] = found.reason[i] or why
+    found.others = others
     return found
+
+
+def _columns(targets: list[_Target], text: str) -> RapidPositions:
+    """The statement reader's robtargets as columns (spans in ``text``), their reason the
+    reason found else their own (``_Target.own``)."""
+    n = len(targets)
+    xyz, quat = np.full((n, 3), np.nan), np.full((n, 4), np.nan)
+    spans, places = np.full((n, 3, 2), -1, np.int64), np.full(n, -1, np.int64)
+    for i, t in enumerate(targets):
+        if t.spans:
+            xyz[i], quat[i] = t.values[:3], t.values[3:7]
+            spans[i] = t.spans[:3]
+            places[i] = precision([text[a:b] for a, b in t.spans[:3]], MIN_PLACES_MM)
+    return RapidPositions(
+        "",
+        xyz,
+        quat,
+        np.array([t.cfx for t in targets], np.int64),
+        spans,
+        places,
+        np.array([t.line for t in targets], np.int64),
+        [t.name for t in targets],
+        [t.reason or t.own for t in targets],
+        np.array([t.frame for t in targets], np.int64),
+        np.array([t.commanded for t in targets], bool),
+        np.array([t.tool for t in targets], np.int64),
+    )
+
+
+def _joined(path: str, parts: list[RapidPositions]) -> RapidPositions:
+    """The robtargets of ``parts`` in the order of the module (line, then offset; stable)."""
+    parts = [p for p in parts if len(p.name)] or parts[:1]
+    keys = ("xyz", "quat", "cfx", "spans", "places", "line", "frame", "commanded", "tool")
+    if len(parts) == 1:
+        columns = {key: getattr(parts[0], key) for key in keys}
+        names, reasons = parts[0].name, parts[0].reason
+    else:
+        columns = {key: np.concatenate([getattr(p, key) for p in parts]) for key in keys}
+        names = [n for p in parts for n in p.name]
+        reasons = [w for p in parts for w in p.reason]
+    start = np.maximum(columns["spans"][:, 0, 0], 0)  # none: 0
+    if (np.diff((columns["line"] << 40) | start) < 0).any():  # offsets below 2**40
+        order = np.lexsort((start, columns["line"]))
+        columns = {key: value[order] for key, value in columns.items()}
+        names = [names[i] for i in order.tolist()]
+        reasons = [reasons[i] for i in order.tolist()]
+    return RapidPositions(path, name=names, reason=reasons, **columns)
+
+
+def _move_frame(tool_text: str, wobj_text: str | None, line: int, section, unfit, tools) -> tuple:
+    """(frame, why, tool) of a linear or joint move with the tool argument ``tool_text`` in the
+    work object ``wobj_text`` (None: no ``\\WObj``) at ``line``: frame 0 robot / 1 the cell's
+    work object; why "" when its targets can be placed; the tool's number (-1: the cell's) among
+    ``tools`` (``scan``)."""
+    used_wobj = ("wobj0" if wobj_text is None else wobj_text).lower()
+    why, tool_no = "", -1
+    if tools is not None:
+        tool_no = tools.get(tool_text.lower(), (-1,))[0]
+        if tool_text.lower() not in tools:
+            why = (
+                f"moved with tool {tool_text or '?'} at line {line}, which the cell does "
+                "not declare (rapid.tool, the names of tool_data)"
+            )
+    elif tool_text.lower() != section.tool.lower():
+        why = (
+            f"moved with tool {tool_text or '?'} at line {line}, not the cell's "
+            f"(rapid.tool {section.tool}): the grid holds for the cell's TCP"
+        )
+    elif used_wobj != "wobj0" and used_wobj != section.wobj.lower():
+        why = (
+            f"moved in work object {wobj_text} at line {line}, not the cell's "
+            f"(rapid.wobj {section.wobj}) nor wobj0"
+        )
+    for what in (tool_text.lower(), used_wobj):
+        why = why or (f"{unfit[what]} (line {line})" if what in unfit else "")
+    return (0 if used_wobj == "wobj0" else 1), why, tool_no
 
 
 def _unfit_frames(data: dict[str, str], section, tools: dict | None) -> dict[str, str]:
@@ -529,88 +814,105 @@ def _own_reason(numbers: list[float], ignore_external_axes: bool) -> str:
     return ""
 
 
-def _arc_starts(moves, uses, found: RapidPositions) -> None:
-    """The target of the move before a circular move is the arc's start: left alone."""
+def _arc_starts(moves, uses, inline: list[_Target]) -> None:
+    """The target of the move before a circular move is the arc's start: left alone (``#k``:
+    the k-th inline target)."""
     for (line, _, circular), (prev_line, prev, _) in zip(moves[1:], moves, strict=False):
         if not circular:
             continue
         why = f"the start of the circular move at line {line}: arcs are not corrected"
         for key in prev:
             if key.startswith("#"):
-                target = found.targets[int(key[1:])]
+                target = inline[int(key[1:])]
                 target.reason = target.reason or why
             else:
-                uses[key].append(_Use(prev_line, -1, why))
+                uses.setdefault(key, []).append(_Use(prev_line, -1, why))
 
 
 def splice(text: str, positions: RapidPositions, new_xyz: np.ndarray, opts: Options) -> bytearray:
     """``text`` with the x, y, z of every robtarget whose row of ``new_xyz`` (N, 3) mm is not
     NaN replaced (``opts.decimals``, else the robtarget's own decimals, at least 0.01 mm)."""
-    return splice_text(text, _edits(text, positions, new_xyz, opts))
+    return _spliced(text, positions, new_xyz, opts)[0]
 
 
-def _edits(text: str, positions: RapidPositions, new_xyz: np.ndarray, opts: Options) -> list:
-    """(start, end, new text) of the x, y, z of every robtarget with a new position, in the
-    order of the targets (three per target)."""
-    edits = []
-    for target, new in zip(positions.targets, np.asarray(new_xyz).tolist(), strict=True):
-        if math.isnan(new[0]):
-            continue
-        old = [text[a:b] for a, b in target.spans[:3]]
-        places = opts.decimals if opts.decimals is not None else precision(old, MIN_PLACES_MM)
-        for (a, b), old_text, old_value, value in zip(
-            target.spans[:3], old, target.values[:3], new, strict=True
-        ):
-            edits.append((a, b, number_text(old_text, old_value, value, places)))
-    return edits
+def _spliced(
+    text: str, positions: RapidPositions, new_xyz: np.ndarray, opts: Options
+) -> tuple[bytearray, np.ndarray]:
+    """``splice`` and the values the new literals read as (N, 3) mm, NaN where not replaced; a
+    number whose value does not change keeps its literal. A block of robtargets at a time."""
+    new_xyz = np.asarray(new_xyz, dtype=float).reshape(-1, 3)
+    written = np.full(new_xyz.shape, np.nan)
+    out = ByteSplicer(text)
+    todo = np.flatnonzero(~np.isnan(new_xyz[:, 0]))
+    for a in range(0, len(todo), _BLOCK):
+        rows = todo[a : a + _BLOCK]
+        places = (
+            positions.places[rows] if opts.decimals is None else np.full(rows.size, opts.decimals)
+        )
+        flat, each = new_xyz[rows].ravel(), np.repeat(places, 3)
+        blocks = []
+        for p in distinct_ints(each):
+            at = np.flatnonzero(each == p)
+            blocks.append((at, *fixed_bytes(flat[at], p)))
+        width = max(cells.shape[1] for _, cells, _ in blocks)
+        cells, values = np.zeros((len(flat), width), np.uint8), np.empty(len(flat))
+        for at, block, printed in blocks:  # NUL-padded on the left, as fixed_bytes pads
+            cells[at, width - block.shape[1] :] = block
+            values[at] = printed
+        written[rows] = values.reshape(-1, 3)
+        changed = values != positions.xyz[rows].ravel()
+        spans = positions.spans[rows].reshape(-1, 2)[changed]
+        new, lengths = texts_of(cells[changed])
+        out.add(spans[:, 0], spans[:, 1], new, lengths)
+    return out.finish(), written
 
 
 def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
     """Rewrite RAPID modules (path -> latin-1 text) in the frames of the cell's RAPID
     ``section``; InputError where a module has nothing that can be placed."""
     data, parts = {}, []
-    frames = np.stack([np.eye(4), section.robot_T_wobj])
     tools = None
     if opts.tool_data is not None:
         tools = {name: (n, opts.tool_data[n]) for name, n in (opts.tool_names or {}).items()}
         tools[section.tool.lower()] = (-1, opts.tool_data[opts.tool_number])
     for path, text in texts.items():
         found = scan(path, text, section, opts.ignore_external_axes, tools)
-        rows = Rows(
-            [path],
-            np.zeros(len(found.targets), np.int64),
-            found.line,
-            found.name,
-            found.reason,
-            found.xyz,
-        )
+        n = len(found.name)
+        rows = Rows([path], np.zeros(n, np.int64), found.line, found.name, found.reason, found.xyz)
         rows.commanded[:] = found.commanded  # partial_check counts those left uncorrected
         rows.tool[:] = found.tool
-        new = np.full((len(found.targets), 3), np.nan)
-        at = np.flatnonzero(~np.fromiter(map(bool, found.reason), bool, len(found.targets)))
-        if at.size:
-            t = frames[found.frame[at]]
-            xyz = found.xyz[at]
-            robot = np.einsum("nij,nj->ni", t[:, :3, :3], xyz) + t[:, :3, 3]
-            quats = np.array([found.targets[i].values[3:7] for i in at.tolist()])
-            rotations = t[:, :3, :3] @ _matrices(quats)
-            cfx = np.array([found.targets[i].cfx for i in at.tolist()])
-            corrected = correct_points(robot, rows, at, opts, rotations, status=kuka_status_of(cfx))
-            back = np.einsum("nji,nj->ni", t[:, :3, :3], corrected - robot)  # R^T e
-            done = np.flatnonzero(np.isfinite(corrected[:, 0]))
-            new[at[done]] = xyz[done] + back[done]
-            rows.status[at[done]] = CORRECTED
-        edits = _edits(text, found, new, opts)
-        data[path] = splice_text(text, edits)
+        new = _corrected(found, rows, opts, section)
+        data[path], written = _spliced(text, found, new, opts)
         done = ~np.isnan(new[:, 0])
-        rows.new[done] = np.array([float(e[2]) for e in edits]).reshape(-1, 3)
+        rows.new[done] = written[done]
         rows.rounding_mm[done] = np.linalg.norm(rows.new[done] - new[done], axis=1)
-        if not found.targets and not opts.allow_partial:
+        if not n and not opts.allow_partial:
             what = f"; {len(found.others)} data left as they are" if found.others else ""
             raise InputError(f"no robtarget in this module: nothing to correct{what}", path, 1)
         partial_check(rows, opts)  # the policy's job rule, over the robtargets
         parts += [rows, _other_rows(path, found)]
     return Result(data, Rows.concat(parts))
+
+
+def _corrected(found: RapidPositions, rows: Rows, opts: Options, section) -> np.ndarray:
+    """The corrected x, y, z (N, 3) mm in each robtarget's frame, NaN where not corrected (the
+    rows of those corrected marked so)."""
+    new = np.full((len(found.name), 3), np.nan)
+    at = np.flatnonzero(~np.fromiter(map(bool, found.reason), bool, len(found.name)))
+    if not at.size:
+        return new
+    frames = np.stack([np.eye(4), section.robot_T_wobj])
+    t = frames[found.frame[at]]
+    xyz = found.xyz[at]
+    robot = np.einsum("nij,nj->ni", t[:, :3, :3], xyz) + t[:, :3, 3]
+    rotations = t[:, :3, :3] @ _matrices(found.quat[at])
+    status = kuka_status_of(found.cfx[at])
+    corrected = correct_points(robot, rows, at, opts, rotations, status=status)
+    back = np.einsum("nji,nj->ni", t[:, :3, :3], corrected - robot)  # R^T e
+    done = np.flatnonzero(np.isfinite(corrected[:, 0]))
+    new[at[done]] = xyz[done] + back[done]
+    rows.status[at[done]] = CORRECTED
+    return new
 
 
 def kuka_status_of(cfx: np.ndarray) -> np.ndarray:
@@ -626,11 +928,19 @@ def kuka_status_of(cfx: np.ndarray) -> np.ndarray:
 
 
 def _matrices(quats: np.ndarray) -> np.ndarray:
-    """Rotation matrices (N, 3, 3) of RAPID quaternions [q1, q2, q3, q4] (N, 4), normalised."""
-    from scipy.spatial.transform import Rotation
-
-    q = np.asarray(quats, dtype=float).reshape(-1, 4)
-    return Rotation.from_quat(np.roll(q, -1, axis=1)).as_matrix().reshape(-1, 3, 3)
+    """Rotation matrices (N, 3, 3) of RAPID quaternions [q1, q2, q3, q4] (N, 4) (q1 the scalar),
+    normalised: the operations of scipy's ``Rotation.from_quat(..).as_matrix()`` in its order,
+    so the same bits, without importing ``scipy.spatial`` (a third of a rewrite's start-up)."""
+    w, x, y, z = np.asarray(quats, dtype=float).reshape(-1, 4).T
+    norm = np.sqrt(x * x + y * y + z * z + w * w)
+    w, x, y, z = w / norm, x / norm, y / norm, z / norm
+    x2, y2, z2, w2 = x * x, y * y, z * z, w * w
+    xy, zw, xz, yw, yz, xw = x * y, z * w, x * z, y * w, y * z, x * w
+    m = np.empty((len(w), 3, 3))
+    m[:, 0] = np.stack([x2 - y2 - z2 + w2, 2 * (xy - zw), 2 * (xz + yw)], axis=1)
+    m[:, 1] = np.stack([2 * (xy + zw), -x2 + y2 - z2 + w2, 2 * (yz - xw)], axis=1)
+    m[:, 2] = np.stack([2 * (xz - yw), 2 * (yz + xw), -x2 - y2 + z2 + w2], axis=1)
+    return m
 
 
 def _other_rows(path: str, found: RapidPositions) -> Rows:
