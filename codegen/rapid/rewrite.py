@@ -43,25 +43,26 @@ import numpy as np
 from accugrid.codegen.program_text import (
     MIN_PLACES_MM,
     check_text,
+    comment_block,
     number_text,
     precision,
 )
 from accugrid.codegen.program_text import (
     splice as splice_text,
 )
-from accugrid.codegen.rewrite import (
-    CORRECTED,
-    Options,
-    Result,
-    Rows,
-    correct_points,
-    partial_check,
-)
+from accugrid.codegen.rewrite import CORRECTED, Options, Rows, Scan
 from accugrid.infra.errors import InputError
-from accugrid.infra.textsafe import comment_text
 from accugrid.kinematics.configuration import kuka_status
 
-__all__ = ["RapidPositions", "add_header", "kuka_status_of", "rewrite_rapid", "scan", "splice"]
+__all__ = [
+    "RapidPlacement",
+    "RapidPositions",
+    "add_header",
+    "kuka_status_of",
+    "scan",
+    "scan_positions",
+    "splice_positions",
+]
 
 QUATERNION_TOL = 1e-3  # |  |q| - 1 | beyond this: not an orientation the controller accepts
 UNUSED_AXIS = 8.9e9  # 9E+09 marks an external axis not in use
@@ -504,12 +505,6 @@ def _arc_starts(moves, uses, found: RapidPositions) -> None:
                 uses[key].append(_Use(prev_line, -1, why))
 
 
-def splice(text: str, positions: RapidPositions, new_xyz: np.ndarray, opts: Options) -> bytearray:
-    """``text`` with the x, y, z of every robtarget whose row of ``new_xyz`` (N, 3) mm is not
-    NaN replaced (``opts.decimals``, else the robtarget's own decimals, at least 0.01 mm)."""
-    return splice_text(text, _edits(text, positions, new_xyz, opts))
-
-
 def _edits(text: str, positions: RapidPositions, new_xyz: np.ndarray, opts: Options) -> list:
     """(start, end, new text) of the x, y, z of every robtarget with a new position, in the
     order of the targets (three per target)."""
@@ -526,13 +521,28 @@ def _edits(text: str, positions: RapidPositions, new_xyz: np.ndarray, opts: Opti
     return edits
 
 
-def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
-    """Rewrite RAPID modules (path -> latin-1 text) in the frames of the cell's RAPID
-    ``section``; InputError where a module has nothing that can be placed."""
-    data, parts = {}, []
+@dataclass(frozen=True)
+class RapidPlacement:
+    """What places robtargets in the robot frame besides the module's text (the plug-in's
+    ``placement``): the cell's RAPID ``section`` (its tool and work object) and whether
+    robtargets with external axes in use are corrected (``ignore_external_axes``)."""
+
+    section: object
+    ignore_external_axes: bool = False
+
+
+def scan_positions(texts: dict[str, str], opts: Options, placement: RapidPlacement) -> Scan:
+    """The robtargets of RAPID modules (path -> latin-1 text) in the frames of the cell's RAPID
+    section; InputError where a module has no robtarget (unless ``opts.allow_partial``)."""
+    section = placement.section
     frames = np.stack([np.eye(4), section.robot_T_wobj])
+    parts, others, found_all, robot, rotations, status, at = [], [], [], [], [], [], []
+    start = 0
     for path, text in texts.items():
-        found = scan(path, text, section, opts.ignore_external_axes)
+        found = scan(path, text, section, placement.ignore_external_axes)
+        if not found.targets and not opts.allow_partial:
+            what = f"; {len(found.others)} data left as they are" if found.others else ""
+            raise InputError(f"no robtarget in this module: nothing to correct{what}", path, 1)
         rows = Rows(
             [path],
             np.zeros(len(found.targets), np.int64),
@@ -542,31 +552,52 @@ def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
             found.xyz,
         )
         rows.commanded[:] = found.commanded  # partial_check counts those left uncorrected
+        mine = np.flatnonzero(~np.fromiter(map(bool, found.reason), bool, len(found.targets)))
+        if mine.size:
+            t = frames[found.frame[mine]]
+            robot.append(np.einsum("nij,nj->ni", t[:, :3, :3], found.xyz[mine]) + t[:, :3, 3])
+            quats = np.array([found.targets[i].values[3:7] for i in mine.tolist()])
+            rotations.append(t[:, :3, :3] @ _matrices(quats))
+            cfx = np.array([found.targets[i].cfx for i in mine.tolist()])
+            status.append(kuka_status_of(cfx))
+            at.append(start + mine)
+        parts.append(rows)
+        others.append(_other_rows(path, found))
+        found_all.append((path, text, found, start, mine))
+        start += len(rows)
+    empty = [np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros(0, np.int64), np.zeros(0, np.int64)]
+    return Scan(
+        Rows.concat(parts),
+        np.concatenate(at or [empty[3]]),
+        np.concatenate(robot or [empty[0]]),
+        np.concatenate(rotations or [empty[1]]),
+        np.concatenate(status or [empty[2]]),
+        others=Rows.concat(others),
+        state=(frames, found_all),
+    )
+
+
+def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[str, bytearray]:
+    """Every module's bytes with the x, y, z of its corrected robtargets (``corrected`` (M, 3)
+    mm robot frame, NaN rows: not corrected) written back in their frames."""
+    frames, found_all = scan.state
+    rows, data, k = scan.rows, {}, 0
+    for path, text, found, start, mine in found_all:
         new = np.full((len(found.targets), 3), np.nan)
-        at = np.flatnonzero(~np.fromiter(map(bool, found.reason), bool, len(found.targets)))
-        if at.size:
-            t = frames[found.frame[at]]
-            xyz = found.xyz[at]
-            robot = np.einsum("nij,nj->ni", t[:, :3, :3], xyz) + t[:, :3, 3]
-            quats = np.array([found.targets[i].values[3:7] for i in at.tolist()])
-            rotations = t[:, :3, :3] @ _matrices(quats)
-            cfx = np.array([found.targets[i].cfx for i in at.tolist()])
-            corrected = correct_points(robot, rows, at, opts, rotations, status=kuka_status_of(cfx))
-            back = np.einsum("nji,nj->ni", t[:, :3, :3], corrected - robot)  # R^T e
-            done = np.flatnonzero(np.isfinite(corrected[:, 0]))
-            new[at[done]] = xyz[done] + back[done]
-            rows.status[at[done]] = CORRECTED
+        if mine.size:
+            t = frames[found.frame[mine]]
+            e = corrected[k : k + mine.size] - scan.robot[k : k + mine.size]
+            back = np.einsum("nji,nj->ni", t[:, :3, :3], e)  # R^T e
+            done = np.flatnonzero(np.isfinite(e[:, 0]))
+            new[mine[done]] = found.xyz[mine][done] + back[done]
+            rows.status[start + mine[done]] = CORRECTED
+            k += mine.size
         edits = _edits(text, found, new, opts)
         data[path] = splice_text(text, edits)
-        done = ~np.isnan(new[:, 0])
+        done = start + np.flatnonzero(~np.isnan(new[:, 0]))
         rows.new[done] = np.array([float(e[2]) for e in edits]).reshape(-1, 3)
-        rows.rounding_mm[done] = np.linalg.norm(rows.new[done] - new[done], axis=1)
-        if not found.targets and not opts.allow_partial:
-            what = f"; {len(found.others)} data left as they are" if found.others else ""
-            raise InputError(f"no robtarget in this module: nothing to correct{what}", path, 1)
-        partial_check(rows, opts)  # the policy's job rule, over the robtargets
-        parts += [rows, _other_rows(path, found)]
-    return Result(data, Rows.concat(parts))
+        rows.rounding_mm[done] = np.linalg.norm(rows.new[done] - new[done - start], axis=1)
+    return data
 
 
 def kuka_status_of(cfx: np.ndarray) -> np.ndarray:
@@ -604,13 +635,12 @@ def _other_rows(path: str, found: RapidPositions) -> Rows:
 def add_header(text: str, lines: list[str]) -> str:
     """The module with the header as ``!`` comments right after its ``MODULE`` line (at the
     top when it has none), in the module's line ending."""
-    newline = "\r\n" if "\r\n" in text else "\n"
-    block = "".join(f"    ! {comment_text(line, 200)}{newline}" for line in lines)
+    block = comment_block(text, lines, "    ! {}")
     m = _MODULE_LINE.search(text)
     if m is None:
         return block + text
     end = text.find("\n", m.end())
     at = len(text) if end < 0 else end + 1
     if end < 0:
-        block = newline + block
+        block = ("\r\n" if "\r\n" in text else "\n") + block
     return text[:at] + block + text[at:]
