@@ -12,6 +12,8 @@ moves that set its start are not. A cycle line that writes no Z or R gets the wo
 needs. Arcs are not corrected, nor the moves that set an arc's start. A corrected word written
 as a parameter or an expression gets the corrected number in the expression's place (its value
 as read where it is kept); a polar move gets its corrected radius and angle (``_polar_edits``).
+With the cell's ``tool_data`` each move is corrected with the tool whose length offset is in
+effect (G43), the cell's tool where none is.
 """
 
 from __future__ import annotations
@@ -71,6 +73,8 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: GcodeSection
         rows.commanded &= np.array([m != "G80" for m in moves.motion], bool)
     _protect_arc_starts(moves, rows)
     _protect_polar_starts(moves, rows)
+    if opts.tool_data is not None:
+        _tools(moves, rows)
     if any(rows.reason):  # the moves with no reason
         at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))
     else:
@@ -105,6 +109,17 @@ def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[s
 def add_header(text: str, lines: list[str]) -> str:
     """The program with the header as ``( )`` comments after its leading ``%`` lines."""
     return insert_after_lines(text, comment_block(text, lines, "({})"), "%")
+
+
+def _tools(moves: GcodeMoves, rows: Rows) -> None:
+    """Each move's tool (``GcodeMoves.tool_spans``); a move whose tool is not known is not
+    placed, with the reason."""
+    for start, stop, tool in moves.tool_spans():
+        if isinstance(tool, str):
+            for i in range(start, stop):
+                rows.reason[i] = rows.reason[i] or f"tool unknown: {tool}"
+        else:
+            rows.tool[start:stop] = tool
 
 
 def _protect_arc_starts(moves: GcodeMoves, rows: Rows) -> None:

@@ -46,7 +46,6 @@ class KrlPlugin(DialectFolder):
 
         return KrlPlacement(
             base_data=cell.base_data,
-            tool_number=cell.tool_number,
             base=context.base,
             trust_calls=context.trust_calls,
             ignore_external_axes=context.ignore_external_axes,

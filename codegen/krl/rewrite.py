@@ -7,13 +7,14 @@ position (declared or assigned with a literal) is corrected only if a motion use
 motions that use it (its own FDAT wins over ``--base``) and is corrected once however many
 motions use it. BASE_DATA[n] comes from ``--config-dat`` (if it defines n), else from the cell's
 ``base`` and ``base_data``; base 0 ($NULLFRAME, BAS(#BASE,0)) is the robot frame ($WORLD =
-$ROBROOT).
+$ROBROOT). A relative motion (``LIN_REL``...) is corrected as the position it reaches and
+written back as an increment (``codegen.krl.relative``).
 """
 
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import chain, repeat
 from pathlib import Path
@@ -32,6 +33,7 @@ from accugrid.codegen.krl.parse import (
     scan_krl,
     wildcard,
 )
+from accugrid.codegen.krl.relative import Chains, resolve, write_increments
 from accugrid.codegen.krl.tables import MOTION, PositionTable
 from accugrid.codegen.program_text import (
     MIN_PLACES_MM,
@@ -43,7 +45,7 @@ from accugrid.codegen.program_text import (
 )
 from accugrid.codegen.rewrite import CORRECTED, Options, Rows, Scan, rotations_of
 from accugrid.codegen.splice import ByteSplicer, literals
-from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.frames import pose_from_xyzabc, rotation_angle_deg
 
 __all__ = ["KrlPlacement", "add_header", "scan_positions", "splice_positions"]
 
@@ -54,13 +56,12 @@ _BLOCK = 1 << 16  # positions per block of corrected numbers formatted at once
 class KrlPlacement:
     """What places KRL positions in the robot frame besides the program's text (the plug-in's
     ``placement``): ``base_data`` BASE_DATA number -> robot_T_base (4, 4) mm (the cell's),
-    ``tool_number`` the cell's TOOL_DATA number (the TCP the grid holds for), ``base`` the base
-    in effect where a routine sets none (``--base``), ``trust_calls`` (calls keep $BASE),
+    ``base`` the base in effect where a routine sets none (``--base``), ``trust_calls`` (calls
+    keep $BASE),
     ``ignore_external_axes`` and ``config_dat``, the text of a $config.dat (its BASE_DATA,
     FDATs and declarations are read, it is not rewritten)."""
 
     base_data: dict[int, np.ndarray]
-    tool_number: int | None = None
     base: int | None = None
     trust_calls: bool = False
     ignore_external_axes: bool = False
@@ -71,7 +72,8 @@ class KrlPlacement:
 class _Files:
     """What the splice needs of a scan: each file's path, text and table, its placed rows
     (``todo``) and the index of each one's robot_T_base (``placed``), the frames, the first
-    report row of each file (``starts``) and the positions in their base frames."""
+    report row of each file (``starts``), the positions in their base frames (``which`` frame,
+    ``base_xyz``) and the chains of relative motions."""
 
     files: list[tuple[str | None, str, PositionTable]]
     todo: list[np.ndarray]
@@ -80,6 +82,8 @@ class _Files:
     starts: np.ndarray
     which: np.ndarray
     base_xyz: np.ndarray
+    chains: Chains | None = None  # the relative motions, with the scans they are in
+    relative: list[KrlScan] = field(default_factory=list)
 
 
 def scan_positions(texts: dict[str, str], opts: Options, placement: KrlPlacement) -> Scan:
@@ -91,12 +95,21 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: KrlPlacement
     ]
     config = placement.config_dat
     config = scan_krl(config, "$config.dat") if config is not None else None
-    ctx = _Context(scans, config, initial, placement)
+    ctx = _Context(scans, config, initial, placement, opts)
     parts, placed = [], []
     for s, scan in enumerate(scans):
         rows, frames = _position_rows(ctx, s, scan, placement)
         parts.append(rows)
         placed.append(frames)
+    chains = None
+    if any(scan.relative for scan in scans):
+        reasons = [p.reason for p in parts]
+        chains = resolve(scans, placed, reasons, ctx.stored_row, ctx.frames)
+        for s, part in enumerate(parts):
+            relative = chains.rows[s]
+            known = chains.start[s][:, 0] >= 0
+            part.commanded[relative] = ~known
+            part.old[relative[known]] = chains.xyz[s][known]  # where it reaches, as written
     parts += [_use_rows(ctx, scan) for scan in scans]
     rows = Rows.concat(parts)
     starts = np.cumsum([0] + [len(p) for p in parts[: len(scans)]])
@@ -104,15 +117,18 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: KrlPlacement
     todo = [np.flatnonzero(which >= 0) for which in placed]
     frames = np.array(ctx.frames) if ctx.frames else np.zeros((0, 4, 4))
     files = [(scan.path, scan.text, scan.table) for scan in scans]
+    relative = scans if chains is not None else []
     del scans, ctx, config  # the uses and names are done with: memory for what follows
     status = [
         aggregate_status(text, table.agg[t])
         for (_, text, table), t in zip(files, todo, strict=True)
     ]
-    tables = [table for _, _, table in files]
+    absolute = [(table.xyz, table.abc) for _, _, table in files]
+    if chains is not None:
+        absolute = _reached(chains, absolute)
     which = np.concatenate([placed[s][t] for s, t in enumerate(todo)])
-    base_xyz = np.concatenate([table.xyz[t] for table, t in zip(tables, todo, strict=True)])
-    abc = np.concatenate([table.abc[t] for table, t in zip(tables, todo, strict=True)])
+    base_xyz = np.concatenate([xyz[t] for (xyz, _), t in zip(absolute, todo, strict=True)])
+    abc = np.concatenate([abc[t] for (_, abc), t in zip(absolute, todo, strict=True)])
     at = np.concatenate([starts[s] + t for s, t in enumerate(todo)])
     n = len(which)
     robot = np.empty((n, 3))
@@ -129,13 +145,14 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: KrlPlacement
     rotations = None
     if n:
         rotations = rotations_of(frames[which[heads]][:, :3, :3], abc[heads])[np.cumsum(first) - 1]
-    state = _Files(files, todo, placed, frames, starts, which, base_xyz)
+    state = _Files(files, todo, placed, frames, starts, which, base_xyz, chains, relative)
     return Scan(rows, at, robot, rotations, np.concatenate(status), state=state)
 
 
 def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[str, bytearray]:
     """Every file's bytes with its corrected positions (``corrected`` (M, 3) mm robot frame,
-    NaN rows: not corrected) written back in its base frame; unchanged files as they were."""
+    NaN rows: not corrected) written back in its base frame, relative motions as increments;
+    unchanged files as they were."""
     state: _Files = scan.state
     frames, which, base_xyz, robot = state.frames, state.which, state.base_xyz, scan.robot
     targets = np.full((len(which), 3), np.nan)
@@ -146,13 +163,28 @@ def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[s
             "nji,nj->ni", f[:, :3, :3], e
         )  # R^T e
     bounds = np.cumsum([0] + [t.size for t in state.todo])
+    per_file = [targets[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+    places = [
+        opts.decimals if opts.decimals is not None else _places(table)
+        for _, _, table in state.files
+    ]
+    extra: list[list] = [[] for _ in state.files]
+    if state.chains is not None and len(which):
+        extra = _increments(
+            state.chains, state.relative, state.todo, per_file, scan.rows, state.starts, places
+        )
     out: dict[str, bytes | bytearray] = {}
     for s, (path, text, table) in enumerate(state.files):
         if state.todo[s].size:
-            places = opts.decimals if opts.decimals is not None else _places(table)
-            mine = targets[bounds[s] : bounds[s + 1]]
             out[path] = _splice(
-                text, table, state.todo[s], mine, scan.rows, state.starts[s], places
+                text,
+                table,
+                state.todo[s],
+                per_file[s],
+                scan.rows,
+                state.starts[s],
+                places[s],
+                extra[s],
             )
         else:
             out[path] = text.encode("latin-1")  # nothing corrected in it
@@ -177,6 +209,8 @@ def _position_rows(
     complete = ~np.isnan(t.xyz).any(axis=1)
     old = np.where(complete[:, None], t.xyz, np.nan)
     reasons = list(t.reason)
+    for i in scan.relative:  # placed where its start is known (``resolve``)
+        reasons[i] = ""
     if t.external and not placement.ignore_external_axes:
         for i, (key, value) in t.external.items():
             reasons[i] = reasons[i] or (
@@ -207,6 +241,9 @@ def _position_rows(
             else:
                 frame[i] = ctx.frame_id(f)
     rows = Rows([scan.path or ""], np.zeros(n, np.int64), t.line, t.name, reasons, old)
+    if ctx.frame_tools:
+        placed = frame >= 0
+        rows.tool[placed] = np.array(ctx.frame_tools, np.int64)[frame[placed]]
     for i in np.flatnonzero(frame < 0).tolist():  # not placed: does a motion command it?
         if t.reason[i] != JOINT_TARGET and not t.reason[i].startswith(FRAME_OPERAND):
             rows.commanded[i] = t.kind[i] == MOTION or ctx.moved_to(s, i)
@@ -245,8 +282,10 @@ class _Context:
     A stored position (declared or assigned with a literal) is a drilling position only if a
     motion uses it, or, in a .dat given alone with ``--base``, if it is a POS/E6POS. Never when it
     is a frame (assigned to $TOOL/$BASE/$LOAD/TOOL_DATA/BASE_DATA, an operand of ``:``) or
-    declared CONST. Its FDAT (``XP1`` <-> ``FP1``) wins over ``--base``; an FDAT with another
-    tool than the cell's, or an external TCP, leaves it uncorrected."""
+    declared CONST. Its FDAT (``XP1`` <-> ``FP1``) wins over ``--base``; an FDAT with an external
+    TCP leaves it uncorrected, and so does one with another tool than the cell's unless the
+    cell declares ``tool_data`` (then each position takes the tool of its motions: FDAT
+    ``TOOL_NO``, ``$TOOL``, ``BAS(#TOOL, n)``, one tool for all of them)."""
 
     def __init__(
         self,
@@ -254,8 +293,10 @@ class _Context:
         config: KrlScan | None,
         initial: BaseRef | None,
         placement: KrlPlacement,
+        opts: Options,
     ) -> None:
         self.placement = placement
+        self.opts = opts
         self.initial = initial
         self.scans = scans
         self.every = scans + ([config] if config is not None else [])
@@ -263,6 +304,7 @@ class _Context:
         if config is not None:
             for n, (xyzabc, _) in config.base_data.items():
                 self.base_data[n] = pose_from_xyzabc(np.array(xyzabc))
+        self.tool_conflicts = _tool_conflicts(self.every, opts.tool_data)
         self.fdats: dict[str, Fdat] = {}
         self.frame_uses: dict[str, tuple[str, FrameUse]] = {}
         self.assigned: dict[str, tuple[str, int]] = {}
@@ -333,6 +375,7 @@ class _Context:
         self.lone_dat = all(Path(s.path or "").suffix.lower() == ".dat" for s in scans)
         self._resolved: dict[BaseRef, tuple[object, np.ndarray | None, str]] = {}
         self.frames: list[np.ndarray] = []
+        self.frame_tools: list[int] = []  # the tool number of each of ``frames`` (-1: the cell's)
         self._frame_ids: dict[int, int] = {}
         self._blocked = set(self.frame_uses) | set(self.assigned)
 
@@ -351,19 +394,33 @@ class _Context:
         use_of.pop("", None)
         return use_of
 
-    def frame_id(self, frame: np.ndarray) -> int:
-        """Index of ``frame`` (one of the resolved frames) in ``frames``."""
-        found = self._frame_ids.get(id(frame))
+    def frame_id(self, placed: tuple[np.ndarray, int]) -> int:
+        """Index of ``placed`` (one of the resolved (frame, tool) pairs) in ``frames``."""
+        found = self._frame_ids.get(id(placed))
         if found is None:
-            found = self._frame_ids[id(frame)] = len(self.frames)
-            self.frames.append(frame)
+            found = self._frame_ids[id(placed)] = len(self.frames)
+            self.frames.append(placed[0])
+            self.frame_tools.append(placed[1])
         return found
 
-    def resolve(self, base: BaseRef) -> tuple[object, np.ndarray | None, str]:
-        """(identity key, robot_T_base or None, reason), once per distinct base."""
+    def resolve(self, base: BaseRef) -> tuple[object, tuple[np.ndarray, int] | None, str]:
+        """(identity key, (robot_T_base, tool number, -1: the cell's) or None, reason), once
+        per distinct base. Without ``Options.tool_data`` the tool is always the cell's."""
         found = self._resolved.get(base)
         if found is None:
-            found = self._resolved[base] = self._resolve(base)
+            ident, frame, reason = self._resolve(base)
+            tool = -1
+            if frame is not None and self.opts.tool_data is not None:
+                tool = base.tool if base.tool is not None else -1
+                if isinstance(tool, str):
+                    ident, frame, reason = None, None, f"tool unknown: {tool}"
+                elif base.kind == "fdat" and base.tool is None:
+                    tool = self.fdats[base.fdat or ""].tool_no
+                    tool = -1 if tool is None else tool
+                if tool in self.tool_conflicts:
+                    ident, frame, reason = None, None, f"tool unknown: {self.tool_conflicts[tool]}"
+            placed = None if frame is None else (frame, tool)
+            found = self._resolved[base] = ((ident, tool), placed, reason)
         return found
 
     def _resolve(self, base: BaseRef) -> tuple[object, np.ndarray | None, str]:
@@ -389,7 +446,9 @@ class _Context:
     def _fdat_reason(self, name: str, fdat: Fdat) -> str:
         if fdat.base_no is None:
             return f"FDAT {name}: {fdat.reason}"
-        tool = self.placement.tool_number
+        tool = self.opts.tool_number  # with the cell's tool_data, each FDAT's own tool
+        if self.opts.tool_data is not None:
+            return ""
         if tool is not None and fdat.tool_no is not None and fdat.tool_no != tool:
             return (
                 f"FDAT {name} (line {fdat.line}) has TOOL_NO {fdat.tool_no}: the cell's tool, "
@@ -504,6 +563,8 @@ class _Context:
             frame = frame_i
         if len(keys) > 1:
             lines = ", ".join(str(at) for at in keys.values())
+            if len({ident[0] for ident in keys}) == 1:
+                return None, f"{name} is moved to with different tools (lines {lines})"
             return None, f"{name} is used under different bases (lines {lines})"
         return frame, ""
 
@@ -525,6 +586,25 @@ class _Context:
         if self.lone_dat and in_dat and self.initial is not None:
             why += f" (--base N applies to POS/E6POS only, this is {type_name or 'untyped'})"
         return None, why
+
+    def stored_row(self, name: str) -> tuple[int, int] | str:
+        """The (file, table row) of the stored position a motion to ``name`` (normalized) goes
+        to, defined once in the given files; otherwise why it is not known."""
+        if "*" in name:
+            return "its index is a variable"
+        if name in self.twice:
+            return "it is defined more than once"
+        return self.stored_rows.get(name, "it is not a position given in these files")
+
+    @cached_property
+    def stored_rows(self) -> dict[str, tuple[int, int]]:
+        """Each stored position's key -> (file, table row) (of its first definition)."""
+        found: dict[str, tuple[int, int]] = {}
+        for s, keys in enumerate(self.keys):
+            for i, key in enumerate(keys):
+                if key:
+                    found.setdefault(key, (s, i))
+        return found
 
     def moved_to(self, s: int, i: int) -> bool:
         """Whether a motion commands stored position row i of file s: a motion uses its name
@@ -569,6 +649,29 @@ class _Context:
         return f"{text} is not declared in the given files"
 
 
+def _tool_conflicts(scans: list[KrlScan], tool_data: dict | None) -> dict[int, str]:
+    """The tools the files set otherwise than the cell declares them: TOOL_DATA number ->
+    why (a value not written as a literal, or another TCP than the cell's, by 0.001 mm or
+    0.001 deg)."""
+    out = {}
+    if tool_data is None:
+        return out
+    for scan in scans:
+        where = Path(scan.path or "").name
+        for n, (xyzabc, line) in scan.tool_data.items():
+            if n not in tool_data or n in out:
+                continue
+            if xyzabc is None:
+                out[n] = f"TOOL_DATA[{n}] is set otherwise than as a literal frame ({where}:{line})"
+                continue
+            mine = pose_from_xyzabc(np.array(xyzabc))
+            cell = tool_data[n]
+            turn = float(rotation_angle_deg(mine[None, :3, :3], cell[:3, :3])[0])
+            if np.linalg.norm(mine[:3, 3] - cell[:3, 3]) > 1e-3 or turn > 1e-3:
+                out[n] = f"TOOL_DATA[{n}] ({where}:{line}) is not the cell's tool {n}"
+    return out
+
+
 def _upper(names: list[str]) -> list[str]:
     """``normalize_name`` of plain names (a new list): upper case, the same str where a name is
     upper case already."""
@@ -576,6 +679,55 @@ def _upper(names: list[str]) -> list[str]:
     if joined.upper() == joined:
         return list(names)
     return [k if k != n else n for k, n in zip(map(str.upper, names), names, strict=True)]
+
+
+def _reached(chains: Chains, absolute: list[tuple[np.ndarray, np.ndarray]]) -> list:
+    """``absolute`` (per file: X, Y, Z (n, 3) mm and A, B, C (n, 3) deg of each table row) with
+    the rows of the relative motions whose start is known replaced by where they reach."""
+    out = []
+    for s, (xyz, abc) in enumerate(absolute):
+        rows = chains.rows[s]
+        known = chains.start[s][:, 0] >= 0
+        if known.any():
+            xyz, abc = xyz.copy(), abc.copy()
+            xyz[rows[known]] = chains.xyz[s][known]
+            abc[rows[known]] = chains.abc[s][known]
+        out.append((xyz, abc))
+    return out
+
+
+def _increments(
+    chains: Chains,
+    scans: list[KrlScan],
+    todo: list[np.ndarray],
+    targets: list[np.ndarray],
+    rows: Rows,
+    starts: np.ndarray,
+    places: list[int],
+) -> list[list[tuple[int, int, str]]]:
+    """The edits of the relative motions (``relative.write_increments``), their report rows
+    set; their targets in ``targets`` set to NaN (the absolute splice leaves them)."""
+    goals, corrected = [], []
+    for scan, t, found in zip(scans, todo, targets, strict=True):
+        n = len(scan.table)
+        goal = np.full((n, 3), np.nan)
+        goal[t] = found
+        goals.append(goal)
+        corrected.append(np.isfinite(goal[:, 0]))
+    edits, reached = write_increments(chains, scans, goals, corrected, places)
+    for s, relative in enumerate(chains.rows):
+        known = chains.start[s][:, 0] >= 0
+        r = relative[known]
+        at = starts[s] + r
+        done = corrected[s][r]
+        rows.status[at[done]] = CORRECTED
+        rows.new[at] = reached[s][known]
+        want = np.where(done[:, None], goals[s][r], rows.old[at])
+        residual = np.linalg.norm(reached[s][known] - want, axis=1)
+        rows.residual_mm[at] = rows.rounding_mm[at] = residual
+        inside = np.searchsorted(todo[s], r)
+        targets[s][inside] = np.nan
+    return edits
 
 
 _STATUS_RE = re.compile(r"[{,]\s*S\s+(?:'B([01]+)'|'H([0-9A-F]+)'|(\d+))", re.IGNORECASE)
@@ -615,15 +767,20 @@ def _splice(
     rows: Rows,
     first_row: int,
     places: int,
+    extra: list[tuple[int, int, str]] = (),
 ) -> bytearray:
     """The file's bytes with the X, Y, Z of its corrected positions replaced (``places``
     decimals; a number whose value does not change keeps its literal); their rows
     (``first_row`` + table row) updated.
 
     ``todo`` (n,): placed table rows, ``targets`` (n, 3) mm base frame, NaN rows where not
-    corrected."""
+    corrected; ``extra``: more edits (start, end, new text), spliced in their place."""
     inside = np.flatnonzero(np.isfinite(targets[:, 0]))
     out = ByteSplicer(text)
+    if len(extra):
+        extra = sorted(extra)
+        stops = [] if not len(inside) else t.span[todo[inside[_BLOCK::_BLOCK]], 0].tolist()
+        stops = [*stops, len(text)]  # where each block's edits end (the next block's first)
     for a in range(0, len(inside), _BLOCK):
         k = inside[a : a + _BLOCK]
         goal = targets[k]
@@ -637,8 +794,31 @@ def _splice(
         rows.rounding_mm[at] = residual
         changed = written.ravel() != t.xyz[todo[k]].ravel()
         spans = t.span[todo[k]].reshape(-1, 2)[changed]
-        out.add(spans[:, 0], spans[:, 1], new[np.repeat(changed, length)], length[changed])
+        new, length = new[np.repeat(changed, length)], length[changed]
+        if len(extra):
+            stop = stops[a // _BLOCK]
+            mine = [e for e in extra if e[0] < stop]
+            extra = extra[len(mine) :]
+            spans, new, length = _merged(spans, new, length, mine)
+        out.add(spans[:, 0], spans[:, 1], new, length)
+    if len(extra):
+        spans, new, length = _merged(np.zeros((0, 2), np.int64), np.zeros(0, np.uint8), [], extra)
+        out.add(spans[:, 0], spans[:, 1], new, length)
     return out.finish()
+
+
+def _merged(spans: np.ndarray, new: np.ndarray, length, edits: list[tuple[int, int, str]]):
+    """Spans (m, 2), new bytes and lengths (m,) with ``edits`` (start, end, text) added, sorted
+    by (start, end)."""
+    if not edits:
+        return spans, new, np.asarray(length, np.int64)
+    pieces = np.split(new, np.cumsum(length)[:-1]) if len(length) else []
+    every = [(int(a), int(b), bytes(p)) for (a, b), p in zip(spans.tolist(), pieces, strict=True)]
+    every += [(a, b, text.encode("ascii")) for a, b, text in edits]
+    every.sort(key=lambda e: (e[0], e[1]))
+    spans = np.array([(a, b) for a, b, _ in every], np.int64).reshape(-1, 2)
+    data = b"".join(p for _, _, p in every)
+    return spans, np.frombuffer(data, np.uint8), np.array([len(p) for *_, p in every], np.int64)
 
 
 def add_header(text: str, lines: list[str]) -> str:
