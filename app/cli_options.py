@@ -11,6 +11,7 @@ import math
 import sys
 from collections.abc import Callable, Sequence
 from contextlib import AbstractContextManager
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -20,6 +21,7 @@ from accugrid.infra.csvtable import DECIMALS, DELIMITERS, TableFormat, reading_a
 from accugrid.infra.errors import InputError
 
 if TYPE_CHECKING:
+    from accugrid.app.job import ProgramRequest
     from accugrid.kinematics.identification import Terms
     from accugrid.kinematics.robot import Robot
 
@@ -37,6 +39,7 @@ __all__ = [
     "add_experiment_arguments",
     "add_harmonics",
     "add_policy",
+    "add_program_arguments",
     "add_robot",
     "add_status",
     "add_table_format",
@@ -46,6 +49,7 @@ __all__ = [
     "number",
     "parse_centres",
     "parse_steps",
+    "program_request",
     "reading_format",
     "robot_with_tool",
 ]
@@ -401,4 +405,74 @@ def reading_format(args: argparse.Namespace) -> AbstractContextManager[None]:
             columns=args.columns,
             units=args.units,
         )
+    )
+
+
+def add_program_arguments(
+    parser: argparse.ArgumentParser, output_metavar: str, output: str
+) -> None:
+    """The options of every program command (``accugrid krl|gcode|rapid``); ``-o`` with the
+    command's metavar and help."""
+    parser.add_argument("points", metavar="POINTS", help="drilling points CSV (BASE frame, mm)")
+    parser.add_argument("--cell", required=True, metavar="CELL", help="cell YAML file")
+    parser.add_argument(
+        "--grid",
+        metavar="MEAS",
+        help="grid measurement CSV (robot frame, mm); overrides the cell file's grid",
+    )
+    parser.add_argument(
+        "--model",
+        metavar="CAL",
+        help="calibrated robot YAML (accugrid identify): correct by the model, the grid (if any) "
+        "then holds its residual; overrides the cell file's correction.model",
+    )
+    parser.add_argument(
+        "--no-correction",
+        action="store_true",
+        help="write the nominal (uncorrected) program; no grid is read",
+    )
+    parser.add_argument(
+        "--allow-config-change",
+        action="store_true",
+        help="let a hole that cannot reach the program's KUKA Status take another one "
+        "(same as configuration.allow_change in the cell file)",
+    )
+    parser.add_argument(
+        "--templates",
+        metavar="DIR",
+        help="folder with your copies of the templates (a copy of templates/ or of its "
+        "krl/ or gcode/ folder)",
+    )
+    add_policy(parser, "holes")
+    parser.add_argument(
+        "--report-html",
+        metavar="FILE",
+        help="also write the self-contained HTML report (inputs with SHA-256, a map of the "
+        "corrections, the holes flagged or not corrected with the reasons)",
+    )
+    parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    add_table_format(parser)
+    parser.add_argument("-o", "--output", required=True, metavar=output_metavar, help=output)
+
+
+def program_request(args: argparse.Namespace, dialect: str, title: str) -> ProgramRequest:
+    """The request of a program command's arguments (``add_program_arguments``); ``title``: the
+    HTML report's."""
+    from accugrid.app.job import ProgramRequest
+
+    return ProgramRequest(
+        dialect=dialect,
+        points=args.points,
+        cell=args.cell,
+        output=Path(args.output),
+        grid=args.grid,
+        model=args.model,
+        no_correction=args.no_correction,
+        allow_config_change=args.allow_config_change,
+        templates=args.templates,
+        outside=OUTSIDE_WORDS[args.outside],
+        allow_partial=args.allow_partial,
+        strict=args.strict,
+        report_html=Path(args.report_html) if args.report_html else None,
+        report_title=title,
     )

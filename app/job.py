@@ -1,28 +1,54 @@
-"""What ``accugrid krl`` and ``accugrid gcode`` share: read the inputs, build the corrected
-program, make the header, report warnings. Each dialect's ``job.py`` renders the files into the
-``Job``; the commands write them."""
+"""``accugrid krl``, ``gcode`` and ``rapid`` as one job over the dialect's plug-in
+(``codegen.plugin``): read the inputs, build the corrected program, make the header, render the
+files, write them (``write_program``). The commands only parse their arguments into a
+``ProgramRequest``."""
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from accugrid.app.cli_options import OUTSIDE_WORDS, add_policy, add_table_format
 from accugrid.codegen.cell import Cell, load_cell
+from accugrid.codegen.dialects import plugin_of
 from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program import Program, build_program
 from accugrid.compensation import GridModel
+from accugrid.infra.atomic import check_targets, write_files
 from accugrid.infra.csvtable import declared_or
 from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.robot import load_robot
 
-__all__ = ["Job", "add_job_arguments", "grid_path", "prepare", "summary", "with_report"]
+__all__ = ["Job", "ProgramRequest", "prepare", "program_job", "summary", "write_program"]
+
+
+@dataclass(frozen=True)
+class ProgramRequest:
+    """What ``accugrid krl|gcode|rapid`` asks: the dialect (a name of ``codegen.dialects``),
+    the points and cell files, the output (a folder or file, as the dialect writes), the grid
+    and model overriding the cell's (``no_correction``: neither), ``allow_config_change``
+    (configuration.allow_change), a templates folder, the policy (``outside``: the
+    ``CorrectionSettings.outside`` word, ``allow_partial``, ``strict``) and the HTML report
+    with its title."""
+
+    dialect: str
+    points: str
+    cell: str
+    output: Path
+    grid: str | None = None
+    model: str | None = None
+    no_correction: bool = False
+    allow_config_change: bool = False
+    templates: str | None = None
+    outside: str = "error"
+    allow_partial: bool = False
+    strict: bool = False
+    report_html: Path | None = None
+    report_title: str = ""
 
 
 @dataclass
@@ -48,93 +74,45 @@ class Job:
             print(f"accugrid {self.command}: warning: {warning}", file=sys.stderr)
 
 
-def add_job_arguments(parser: argparse.ArgumentParser) -> None:
-    """The options both dialect commands take (besides -o)."""
-    parser.add_argument("points", metavar="POINTS", help="drilling points CSV (BASE frame, mm)")
-    parser.add_argument("--cell", required=True, metavar="CELL", help="cell YAML file")
-    parser.add_argument(
-        "--grid",
-        metavar="MEAS",
-        help="grid measurement CSV (robot frame, mm); overrides the cell file's grid",
-    )
-    parser.add_argument(
-        "--model",
-        metavar="CAL",
-        help="calibrated robot YAML (accugrid identify): correct by the model, the grid (if any) "
-        "then holds its residual; overrides the cell file's correction.model",
-    )
-    parser.add_argument(
-        "--no-correction",
-        action="store_true",
-        help="write the nominal (uncorrected) program; no grid is read",
-    )
-    parser.add_argument(
-        "--allow-config-change",
-        action="store_true",
-        help="let a hole that cannot reach the program's KUKA Status take another one "
-        "(same as configuration.allow_change in the cell file)",
-    )
-    parser.add_argument(
-        "--templates",
-        metavar="DIR",
-        help="folder with your copies of the templates (a copy of templates/ or of its "
-        "krl/ or gcode/ folder)",
-    )
-    add_policy(parser, "holes")
-    parser.add_argument(
-        "--report-html",
-        metavar="FILE",
-        help="also write the self-contained HTML report (inputs with SHA-256, a map of the "
-        "corrections, the holes flagged or not corrected with the reasons)",
-    )
-    parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
-    add_table_format(parser)
-
-
-def model_path(args: argparse.Namespace, cell: Cell) -> Path | None:
+def _model_path(req: ProgramRequest, cell: Cell) -> Path | None:
     """The calibrated model to correct with: --model, else the cell's correction.model; None
     with --no-correction."""
-    if args.no_correction:
-        if args.model is not None:
+    if req.no_correction:
+        if req.model is not None:
             raise InputError("--model and --no-correction exclude each other")
         return None
-    return Path(args.model) if args.model is not None else cell.model_path
+    return Path(req.model) if req.model is not None else cell.model_path
 
 
-def grid_path(args: argparse.Namespace, cell: Cell, model: Path | None = None) -> Path | None:
+def _grid_path(req: ProgramRequest, cell: Cell, model: Path | None = None) -> Path | None:
     """The measurement to correct with: --grid, else the cell's; None with --no-correction, and
     None without one when a ``model`` corrects (the grid is then only its residual)."""
-    if args.no_correction:
-        if args.grid is not None:
+    if req.no_correction:
+        if req.grid is not None:
             raise InputError("--grid and --no-correction exclude each other")
         return None
-    if args.grid is None and cell.grid_path is None and model is not None:
+    if req.grid is None and cell.grid_path is None and model is not None:
         return None
-    return cell.grid_file(args.grid, ", or use --no-correction")
+    return cell.grid_file(req.grid, ", or use --no-correction")
 
 
-def prepare(
-    args: argparse.Namespace,
-    command: str,
-    check: Callable[[Cell, int, list[str]], None] | None = None,
-    cell: Cell | None = None,
-    joints: bool = False,
-) -> Job:
+def prepare(req: ProgramRequest, cell: Cell | None = None) -> tuple[Job, object]:
     """Read POINTS, CELL and the grid; build the corrected program, its IK check started in the
-    background (``Job.finish`` waits for it and prints the warnings).
-    ``check(cell, holes, header)``, when given, runs after reading and before the correction and IK
-    (the heavy work), with a header of as many lines as the job's: a dialect refuses there what
-    it could not write. ``cell``: CELL when the command already read it. ``joints``: the program
-    keeps the joint angles of every pose (``Program.joints``)."""
-    cell = load_cell(args.cell) if cell is None else cell
-    outside = OUTSIDE_WORDS[getattr(args, "outside", "refuse")]
-    cell = dataclasses.replace(cell, correction=cell.correction.but(outside=outside))
-    if args.allow_config_change:
+    background (``Job.finish`` waits for it and prints the warnings). The dialect's ``plan``
+    runs after reading and before the correction and IK (the heavy work), with a header of as
+    many lines as the job's: it refuses there what it could not write; its result is returned
+    with the job. ``cell``: CELL when already read. The program keeps the joint angles of every
+    pose where the dialect needs them (``Program.joints``)."""
+    plugin = plugin_of(req.dialect)
+    command = req.dialect
+    cell = load_cell(req.cell) if cell is None else cell
+    cell = dataclasses.replace(cell, correction=cell.correction.but(outside=req.outside))
+    if req.allow_config_change:
         configuration = dataclasses.replace(cell.configuration, allow_change=True)
         cell = dataclasses.replace(cell, configuration=configuration)
-    model_file = model_path(args, cell)
-    grid_file = grid_path(args, cell, model_file)
-    points = read_points(args.points)
+    model_file = _model_path(req, cell)
+    grid_file = _grid_path(req, cell, model_file)
+    points = read_points(req.points)
     grid = None
     if grid_file is not None:
         grid = GridModel.from_measurements(grid_file, fmt=declared_or(cell.tracker))
@@ -145,8 +123,8 @@ def prepare(
 
         found = read_model(model_file, robot)
         model, validity = found.robot, found.validity
-    inputs = [input_line("points", args.points, file_sha256(args.points))]
-    inputs.append(input_line("cell", args.cell, cell.sha256))
+    inputs = [input_line("points", req.points, file_sha256(req.points))]
+    inputs.append(input_line("cell", req.cell, cell.sha256))
     details = []
     if model_file is not None:
         sha = file_sha256(model_file) if model_file.is_file() else "built-in"
@@ -158,8 +136,9 @@ def prepare(
     elif grid is not None:
         inputs += grid_lines(Path(grid_file).name, grid.source_sha256, grid.step)
     closing = [f"holes {len(points)}"]
-    if check is not None:
-        check(cell, len(points), header_lines(command, inputs, details, 0.0, "", closing))
+    plan = plugin.plan(
+        cell, len(points), header_lines(command, inputs, details, 0.0, "", closing), req.templates
+    )
     program = build_program(
         points,
         cell,
@@ -168,20 +147,47 @@ def prepare(
         model,
         background=True,
         validity=validity,
-        allow_partial=getattr(args, "allow_partial", False),
-        strict=getattr(args, "strict", False),
-        keep_joints=joints,
+        allow_partial=req.allow_partial,
+        strict=req.strict,
+        keep_joints=plugin.joints,
     )
     largest, hole = program.largest_correction()
     where = f" at hole {points.ids[hole]}" if hole is not None else ""
     closing += program.uncorrected
     header = header_lines(command, inputs, details, largest, where, closing)
-    inputs = [Path(args.points), Path(args.cell)] + ([grid_file] if grid_file else [])
+    inputs = [Path(req.points), Path(req.cell)] + ([grid_file] if grid_file else [])
     inputs += [model_file] if model_file is not None and model_file.is_file() else []
-    return Job(program, header, inputs, command)
+    return Job(program, header, inputs, command), plan
 
 
-def with_report(job: Job, report: str | None, title: str) -> Mapping[Path, object]:
+def program_job(req: ProgramRequest, cell: Cell | None = None) -> Job:
+    """The whole job of ``req``: the corrected program rendered by its dialect into
+    ``req.output``, with the HTML report when asked for. The program's IK check still runs:
+    write with ``ready=job.finish``."""
+    job, plan = prepare(req, cell)
+    rendered = plugin_of(req.dialect).render(
+        job.program, job.header, req.templates, req.output, plan
+    )
+    job = dataclasses.replace(job, files=rendered.files, main=rendered.main, stale=rendered.stale)
+    return dataclasses.replace(job, files=with_report(job, req.report_html, req.report_title))
+
+
+def write_program(req: ProgramRequest, force: bool = False) -> str:
+    """Refuse existing outputs (without ``force``) before any work, make the job and write it
+    as one; the line to print."""
+    cell = load_cell(req.cell)
+    targets = plugin_of(req.dialect).targets(cell, req.output)
+    report = [req.report_html] if req.report_html else []
+    inputs = [req.points, req.cell] + ([req.grid] if req.grid else [])
+    check_targets(targets + report, inputs, force)
+    job = program_job(req, cell)
+    written = write_files(
+        job.files, job.inputs, force, ready=job.finish, main=job.main, stale=job.stale
+    )
+    return summary(job, written)
+
+
+def with_report(job: Job, report: Path | None, title: str) -> Mapping[Path, object]:
     """The job's files plus its HTML report (``app.correction_report``) at ``report``;
     the files alone without one. The program's files stay
     rendered on demand (a chain of mappings, not a copy). InputError for an uncorrected

@@ -120,7 +120,8 @@ def plan_files(request: PlanRequest, output: str | Path) -> JobFiles:
     )
     src, dat = _program(plan, status, turn, name, header, request)
     files = {paths[0]: plan.csv_text(), paths[1]: src, paths[2]: dat}
-    return JobFiles(files, [], [*info, f"wrote {', '.join(str(p) for p in paths)}"])
+    lines = [*info, f"wrote {', '.join(str(p) for p in paths)}"]
+    return JobFiles(files, [], lines, main=[paths[1]])  # the .src (what runs) replaced last
 
 
 def _build(r: PlanRequest) -> tuple[Plan, list[str]]:

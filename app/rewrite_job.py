@@ -1,8 +1,8 @@
 """``accugrid rewrite`` as one call: from what the command line asks (``RewriteRequest``) to the
 bytes of every output file (``RewriteJob``). Reads the cell, the grid, the calibrated model and
-the programs, rewrites them (``codegen.krl.rewrite`` / ``codegen.gcode.rewrite``, or the
-dialect's plug-in, ``codegen.plugin``), adds the
-header and makes the report; the command only parses, calls ``rewrite_job``, writes and prints.
+the programs, rewrites them over their dialect's plug-in (``codegen.rewrite.rewrite``,
+``codegen.plugin``), adds its header and makes the report; the command only parses, calls
+``rewrite_job``, writes and prints.
 """
 
 from __future__ import annotations
@@ -16,15 +16,17 @@ import numpy as np
 
 from accugrid.codegen.cell import load_cell
 from accugrid.codegen.dialects import dialect_of, plugin_of
-from accugrid.codegen.program_text import add_header, read_program
+from accugrid.codegen.program_text import read_program
 from accugrid.codegen.rewrite import (
     CORRECTED,
     OUTSIDE,
     SKIPPED,
     Options,
+    ProgramContext,
     Result,
     header_lines,
     report_csv,
+    rewrite,
     warning_lines,
 )
 from accugrid.compensation import GridModel
@@ -34,10 +36,11 @@ from accugrid.infra.csvtable import declared_or
 __all__ = ["RewriteJob", "RewriteRequest", "rewrite_job"]
 
 
-@dataclass
+@dataclass(frozen=True)
 class RewriteRequest:
-    """What to rewrite: the programs (a KRL .src/.dat pair or one file) and the output path of
-    each, and the options of ``accugrid rewrite`` (``Options`` for their meaning)."""
+    """What to rewrite: the programs (one file, or the two files of a dialect whose program is a
+    pair, e.g. a KRL .src/.dat) and the output path of each, and the options of ``accugrid
+    rewrite`` (``Options`` and ``ProgramContext`` for their meaning)."""
 
     outputs: dict[Path, Path]  # input program -> output file, the .src (what runs) first
     cell: str
@@ -120,17 +123,12 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     )
     opts = Options(
         model=policy.grid,
-        base_data=cell.base_data,
-        robot_T_program=cell.gcode.robot_T_program,
         correction=cell.correction,
         decimals=req.decimals,
         allow_partial=req.allow_partial,
-        base_override=req.base,
         tool_number=cell.tool_number,
         tool_data=cell.tool_data,
         tool_names=cell.tool_names,
-        trust_calls=req.trust_calls,
-        ignore_external_axes=req.ignore_external_axes,
         max_bytes=req.max_bytes,
         tolerance_mm=req.tolerance_mm,
         policy=policy,
@@ -138,40 +136,31 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
         reference_abc=cell.configuration.reference_abc if model is not None else None,
     )
     texts = {os.fspath(p): read_program(p, req.max_bytes) for p in inputs}
+    plugin = plugin_of(dialect_of(inputs[0]))
+    context = ProgramContext(
+        base=req.base,
+        trust_calls=req.trust_calls,
+        ignore_external_axes=req.ignore_external_axes,
+        controller_data=read_program(req.config_dat, req.max_bytes) if req.config_dat else None,
+    )
+    placement = plugin.placement(cell, context)
+    del context
     # The readers build their tables from many small strings and tuples; the cycle collector
     # would walk them again and again while they are built, for nothing.
     collecting = gc.isenabled()
     gc.disable()
     try:
-        name = dialect_of(inputs[0])
-        plugin = plugin_of(name)
-        if plugin is not None:
-            result = plugin.rewrite(texts, opts, cell.dialects[name])
-        elif name == "krl":  # each dialect's reader imported when it is needed
-            from accugrid.codegen.krl.rewrite import rewrite_krl
-
-            config = read_program(req.config_dat, req.max_bytes) if req.config_dat else None
-            result = rewrite_krl(texts, opts, config)
-        else:
-            from accugrid.codegen.gcode.rewrite import rewrite_gcode
-
-            result = rewrite_gcode(os.fspath(inputs[0]), texts[os.fspath(inputs[0])], opts)
+        result = rewrite(plugin, texts, opts, placement)
     finally:
         if collecting:
             gc.enable()
-    del texts
+    del texts, placement
     files: dict[Path, bytes | bytearray] = {}
     for path, target in req.outputs.items():
         data = result.data.pop(os.fspath(path))  # the new program exists once, as bytes
         if req.header:
             lines = header_lines(result, os.fspath(path), os.fspath(req.cell), opts)
-            text, kind = data.decode("latin-1"), dialect_of(path)
-            plugin = plugin_of(kind)
-            if plugin is None:
-                text = add_header(text, lines, kind)
-            else:
-                text = plugin.add_header(text, lines)
-            data = text.encode("latin-1")
+            data = plugin.add_header(data.decode("latin-1"), lines).encode("latin-1")
         files[target] = data
     if req.report is not None:
         # a non-UTF-8 byte in a file name is written as an escape (\\udcff), not refused

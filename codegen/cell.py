@@ -18,15 +18,14 @@ one frozen record per concern, each built and validated in one place:
   ``--columns``/``--units``/... win over it);
 - ``cell.dialects[name]`` for every dialect of ``codegen.dialects.DIALECTS``, e.g. ``cell.krl``
   (``codegen.krl.section.KrlSection``) and ``cell.gcode`` (``codegen.gcode.section.GcodeSection``):
-  what only that dialect reads. Each dialect's ``section.py`` holds its record and declares
-  the YAML keys it reads (``KEYS``) and its reader (``read_section(reader, robot_T_base)``), so
-  a new dialect brings its cell section in its own folder; a key may be read by several records
+  what only that dialect reads. Each dialect's plug-in (``codegen.plugin``) declares the YAML
+  keys it reads (``section_keys()``) and its reader (``read_section(reader, robot_T_base)``),
+  so a new dialect brings its cell section in its own folder; a key may be read by several records
   (``program.decimals`` by both dialects), any key no record reads is an error.
 """
 
 from __future__ import annotations
 
-import importlib
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -36,7 +35,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from accugrid.codegen.cellfile import DISTANCE_MAX_MM, FRAME_KEYS, CellReader, SectionKeys
-from accugrid.codegen.dialects import DIALECTS
+from accugrid.codegen.dialects import DIALECTS, plugin_of
 from accugrid.compensation.interpolation import METHODS
 from accugrid.compensation.settings import TOOL_DISTANCE_MM, CorrectionSettings
 from accugrid.infra.csvtable import DECIMALS, DELIMITERS, UNITS, TableFormat
@@ -155,10 +154,10 @@ def _sections(*declared: SectionKeys) -> dict[str, frozenset[str]]:
 
 def load_cell(path: str | os.PathLike[str]) -> Cell:
     """Read and validate a cell YAML file; InputError naming the key and line on any problem."""
-    sections = {name: _section_module(name) for name in DIALECTS}
+    sections = {name: plugin_of(name) for name in DIALECTS}
     path = Path(path)
     doc = load_yaml(path)
-    keys = _sections(_KEYS, *(module.KEYS for module in sections.values()))
+    keys = _sections(_KEYS, *(plugin.section_keys() for plugin in sections.values()))
     r = CellReader(path, doc, _TOP_KEYS, keys)
     if not r.top:
         raise InputError("empty cell file", os.fspath(path))
@@ -184,17 +183,12 @@ def load_cell(path: str | os.PathLike[str]) -> Cell:
         drilling=_drilling(r),
         configuration=_configuration(r),
         correction=_correction(r),
-        dialects={n: module.read_section(r, robot_T_base) for n, module in sections.items()},
+        dialects={n: plugin.read_section(r, robot_T_base) for n, plugin in sections.items()},
         sha256=doc.sha256,
         tracker=_tracker(r),
         tool_data=tool_data,
         tool_names=tool_names,
     )
-
-
-def _section_module(dialect: str):
-    """``accugrid.codegen.<dialect>.section``: KEYS and read_section of the dialect's record."""
-    return importlib.import_module(f"accugrid.codegen.{dialect}.section")
 
 
 def _base_data(r: CellReader, base_number: int, robot_T_base: np.ndarray) -> dict:

@@ -1,10 +1,9 @@
-"""The program dialects accugrid reads and writes, by name and file suffix.
+"""The program dialects accugrid reads and writes, by name and file suffix: the one registry.
 
-A dialect is a unit: ``codegen/<name>/`` (emit, parse, rewrite, and section: its record of
-the cell file, ``cell.dialects[name]``), ``templates/<name>/`` and a command. A dialect written
-as a plug-in (``codegen.plugin.DialectPlugin``, e.g. ABB RAPID) names its ``plugin`` module here
-and nothing else branches on its name: the rewrite job and the header go through the plug-in.
-A file whose suffix no dialect claims is refused instead of being guessed.
+A dialect is a plug-in (``codegen.plugin.DialectPlugin``): the folder ``codegen/<name>/`` (its
+``plugin.py`` with ``PLUGIN``, emitter, reader and rewrite, cell section), ``templates/<name>/``
+and a command. It is registered here by one line naming its ``plugin`` module; nothing else
+branches on its name. A file whose suffix no dialect claims is refused instead of being guessed.
 """
 
 from __future__ import annotations
@@ -25,12 +24,13 @@ __all__ = ["DIALECTS", "Dialect", "dialect_of", "plugin_of"]
 
 @dataclass(frozen=True)
 class Dialect:
-    """name (the ``codegen`` and ``templates`` folder), what it is, and its file suffixes."""
+    """name (the ``codegen`` and ``templates`` folder), what it is, its file suffixes and the
+    module holding its ``PLUGIN``."""
 
     name: str
     title: str
     suffixes: tuple[str, ...]
-    plugin: str | None = None  # module holding PLUGIN (a DialectPlugin)
+    plugin: str
 
     @classmethod
     def of_plugin(cls, module: str) -> Dialect:
@@ -41,20 +41,21 @@ class Dialect:
 
 
 DIALECTS = {
-    "krl": Dialect("krl", "KUKA KRL", (".src", ".dat", ".sub")),
-    "gcode": Dialect(
-        "gcode",
-        "RS274NGC / ISO G-code",
-        (".ngc", ".nc", ".gcode", ".gc", ".cnc", ".tap", ".iso", ".mpf", ".spf", ".eia"),
-    ),
-    "rapid": Dialect.of_plugin("accugrid.codegen.rapid.plugin"),
+    d.name: d
+    for d in map(
+        Dialect.of_plugin,
+        (
+            "accugrid.codegen.krl.plugin",
+            "accugrid.codegen.gcode.plugin",
+            "accugrid.codegen.rapid.plugin",
+        ),
+    )
 }
 
 
-def plugin_of(name: str) -> DialectPlugin | None:
-    """The plug-in of dialect ``name``, None for a dialect not yet written as one."""
-    module = DIALECTS[name].plugin
-    return None if module is None else importlib.import_module(module).PLUGIN
+def plugin_of(name: str) -> DialectPlugin:
+    """The plug-in of dialect ``name``."""
+    return importlib.import_module(DIALECTS[name].plugin).PLUGIN
 
 
 def dialect_of(path: str | os.PathLike[str]) -> str:

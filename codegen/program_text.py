@@ -1,5 +1,5 @@
 """Program text shared by the dialects' readers and rewriters: reading a program byte for byte,
-lines, number literals, precision, and replacing spans of text.
+lines, number literals, precision, replacing spans of text and comment blocks.
 
 Programs are handled as bytes decoded as latin-1 (one character per byte), so any encoding and any
 line ending survives a rewrite unchanged; offsets are character (= byte) offsets.
@@ -22,11 +22,13 @@ __all__ = [
     "MAX_BYTES",
     "MIN_PLACES_INCH",
     "MIN_PLACES_MM",
-    "add_header",
+    "UTF8_BOM",
     "check_text",
+    "comment_block",
     "decimals_of",
     "distinct_ints",
     "formatted",
+    "insert_after_lines",
     "number_text",
     "precision",
     "read_program",
@@ -38,6 +40,7 @@ __all__ = [
 MAX_BYTES = 64 * 2**20
 MIN_PLACES_MM = 2  # a corrected number is never coarser than 0.01 mm ...
 MIN_PLACES_INCH = 3  # ... or 0.001 in, unless the user asks (--decimals)
+UTF8_BOM = "\xef\xbb\xbf"  # as latin-1 text
 _FRACTION_RE = re.compile(r"\.(\d*+)")
 
 
@@ -134,41 +137,21 @@ def formatted(values: np.ndarray, places: np.ndarray | int) -> list[str | None]:
     return out
 
 
-def add_header(text: str, lines: list[str], kind: str) -> str:
-    """Insert comment lines: KRL right below the ``DEF``/``DEFDAT`` line (controller-written
-    files have only ``&`` lines above it), G-code after the leading ``%`` lines."""
+def comment_block(text: str, lines: list[str], form: str) -> str:
+    """The comment ``lines`` (made safe, at most 200 characters each) as ``form`` fills them
+    (``"; {}"``), one a line in ``text``'s line ending: a dialect's header block."""
     newline = "\r\n" if "\r\n" in text else "\n"
-    body = [comment_text(line, 200) for line in lines]
-    block = "".join((f"; {b}" if kind == "krl" else f"({b})") + newline for b in body)
-    pos = 3 if text.startswith("\xef\xbb\xbf") else 0  # after a UTF-8 byte-order mark
-    if kind == "krl":
-        at = _after_def_line(text, pos)
-        if at is not None:
-            return text[:at] + block + text[at:]
-    lead = "&" if kind == "krl" else "%"
+    return "".join(form.format(comment_text(line, 200)) + newline for line in lines)
+
+
+def insert_after_lines(text: str, block: str, lead: str) -> str:
+    """``text`` with ``block`` inserted after a UTF-8 byte-order mark and the lines that start
+    with ``lead`` (KRL ``&``, G-code ``%``); at the end, on a line of its own, when the last of
+    them has no line ending."""
+    pos = len(UTF8_BOM) if text.startswith(UTF8_BOM) else 0
     while text.startswith(lead, pos):
         nl = text.find("\n", pos)
         if nl < 0:
-            return text + newline + block
+            return text + ("\r\n" if "\r\n" in text else "\n") + block
         pos = nl + 1
     return text[:pos] + block + text[pos:]
-
-
-_DEF_LINE_RE = re.compile(r"[ \t]*+(?:GLOBAL[ \t]++)?+(?:DEF|DEFFCT|DEFDAT)\b", re.I)
-
-
-def _after_def_line(text: str, pos: int) -> int | None:
-    """Offset just after the first ``DEF``/``DEFFCT``/``DEFDAT`` line (None: none, or it is the
-    last line without an ending)."""
-    while pos < len(text):
-        nl = text.find("\n", pos)
-        end = len(text) if nl < 0 else nl
-        line = text[pos:end]
-        if line.strip() and not line.lstrip().startswith(("&", ";")):
-            if _DEF_LINE_RE.match(line):
-                return None if nl < 0 else nl + 1
-            return None
-        if nl < 0:
-            return None
-        pos = nl + 1
-    return None

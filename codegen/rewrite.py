@@ -1,6 +1,7 @@
-"""What a pre-flight rewrite is (``accugrid rewrite``), shared by the KRL and G-code rewriters
-(``codegen.krl.rewrite``, ``codegen.gcode.rewrite``): options, report rows, the correction of
-robot-frame points, the report CSV and the header.
+"""What a pre-flight rewrite is (``accugrid rewrite``), the same for every dialect: options, report
+rows, the correction of robot-frame points, the job rule, the report CSV and the header, and the
+rewrite itself over a dialect's plug-in (``rewrite``: its ``scan``, the one correction, its
+``splice``; ``codegen.plugin``).
 
 Each Cartesian position that can be placed in the robot frame is corrected with the grid model
 (P' = P + e, in the robot frame, converted back to the program's frame) and only its X, Y, Z
@@ -34,11 +35,13 @@ from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 
 if TYPE_CHECKING:  # loaded by the model's reader, only with --model
+    from accugrid.codegen.plugin import DialectPlugin
     from accugrid.kinematics.robot import Robot
 
 __all__ = [
     "REPORT_COLUMNS",
     "Options",
+    "ProgramContext",
     "Result",
     "Row",
     "Rows",
@@ -46,10 +49,12 @@ __all__ = [
     "OUTSIDE",
     "SKIPPED",
     "STATUSES",
+    "Scan",
     "correct_points",
     "header_lines",
     "partial_check",
     "report_csv",
+    "rewrite",
     "rotations_of",
     "warning_lines",
 ]
@@ -62,21 +67,17 @@ NAN3 = (math.nan, math.nan, math.nan)
 
 @dataclass
 class Options:
-    """How to rewrite. Frames are (4, 4) mm poses."""
+    """How to rewrite, whatever the dialect (what places a dialect's positions in the robot frame
+    is its own record: ``DialectPlugin.placement``)."""
 
     model: GridModel | None  # the grid (the residual grid with a model; None: the model alone)
-    base_data: dict[int, np.ndarray]  # BASE_DATA[n] -> robot_T_base
-    robot_T_program: np.ndarray  # G-code program frame
     correction: CorrectionSettings = CorrectionSettings()
     decimals: int | None = None  # None: the file's precision (see ``precision``)
     allow_partial: bool = False  # write although the policy leaves positions uncorrected
-    base_override: int | None = None
     tool_number: int | None = None  # the cell's TOOL_DATA number (the TCP the grid holds for)
     tool_data: dict[int, np.ndarray] | None = None  # tool number -> flange_T_tool (the cell's
     # tool_data with its tool; None: the cell's tool alone, every position corrected with it)
     tool_names: dict[str, int] | None = None  # RAPID tooldata name (lower case) -> tool number
-    trust_calls: bool = False
-    ignore_external_axes: bool = False
     max_bytes: int = MAX_BYTES
     tolerance_mm: float = DEFAULT_TOLERANCE_MM  # warn when rounding leaves more than a tenth
     policy: Policy | None = None  # decides every position (None: the grid's, default limits)
@@ -92,6 +93,21 @@ class Options:
     def calibrated(self) -> Robot | None:
         """The calibrated model the policy uses, None for the grid alone."""
         return self.policy.calibrated
+
+
+@dataclass(frozen=True)
+class ProgramContext:
+    """What the command line says about a program's frames that its own text does not; each
+    dialect's ``placement`` reads what applies to it. ``base``: the base (BASE_DATA number, 0
+    the robot frame) in effect where the program sets none; ``trust_calls``: calls to other
+    routines keep the base; ``ignore_external_axes``: positions with external axes in use are
+    corrected (the axes move neither robot nor base); ``controller_data``: the text of a
+    controller file with frame values (KRL ``$config.dat``), None without one."""
+
+    base: int | None = None
+    trust_calls: bool = False
+    ignore_external_axes: bool = False
+    controller_data: str | None = None
 
 
 @dataclass(slots=True)
@@ -225,6 +241,38 @@ class Result:
             if d > best:
                 best, where = d, i
         return best, None if where is None else rows[where]
+
+
+@dataclass
+class Scan:
+    """The positions a dialect's ``scan`` found in the programs of a rewrite. ``rows``: the
+    report rows the job rule judges (``partial_check``); ``at`` (M,): the rows of the positions
+    placed in the robot frame, ``robot`` (M, 3) mm where they are (robot frame), ``rotations``
+    (M, 3, 3) their orientations (robot frame; NaN rows or None: none), ``status`` (M,) their own
+    KUKA Status (-1 or None: the job's); ``others``: rows reported after them that are no
+    position to correct (data no motion uses); ``state``: what the dialect's ``splice`` needs."""
+
+    rows: Rows
+    at: np.ndarray
+    robot: np.ndarray
+    rotations: np.ndarray | None = None
+    status: np.ndarray | None = None
+    others: Rows | None = None
+    state: object = None
+
+
+def rewrite(plugin: DialectPlugin, texts: dict[str, str], opts: Options, placement) -> Result:
+    """Rewrite the programs ``texts`` (path -> latin-1 text) of one dialect: its ``scan``, the
+    one correction (``correct_points``), its ``splice``, the job rule (``partial_check``).
+    ``placement``: the dialect's record of the frames (``plugin.placement``)."""
+    scan = plugin.scan(texts, opts, placement)
+    corrected = correct_points(
+        scan.robot, scan.rows, scan.at, opts, scan.rotations, status=scan.status
+    )
+    data = plugin.splice(scan, corrected, opts)
+    partial_check(scan.rows, opts)
+    rows = scan.rows if scan.others is None else Rows.concat([scan.rows, scan.others])
+    return Result(data, rows)
 
 
 def correct_points(

@@ -80,12 +80,14 @@ PathLike = str | os.PathLike[str]
 class JobFiles:
     """What a command's domain call hands back: the files of the job (path -> text or bytes,
     written together by ``write_files``), the inputs they must never replace, and the lines
-    the command prints once they are written (``lines`` on stdout, ``warnings`` on stderr)."""
+    the command prints once they are written (``lines`` on stdout, ``warnings`` on stderr),
+    and ``main``: the files among them renamed last, in order (``write_files``)."""
 
     files: dict[PathLike, bytes | str]
     inputs: list[PathLike | None] = field(default_factory=list)
     lines: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    main: list[PathLike] = field(default_factory=list)
 
 
 def _input_identities(inputs: Iterable[PathLike | None]) -> set[tuple[int, int]]:

@@ -139,3 +139,23 @@ def write_cell(folder: Path, field="smooth", base_data=None, program_frame=None,
 
 def _frame(f) -> str:
     return ", ".join(f"{k}: {v}" for k, v in zip("xyzabc", f, strict=True))
+
+
+def rewrite_gcode(path: str, text: str, opts, robot_T_program: np.ndarray | None = None):
+    """One G-code program rewritten through its plug-in, in the program frame (default: the
+    robot frame)."""
+    from accugrid.codegen.dialects import plugin_of
+    from accugrid.codegen.gcode.section import GcodeSection
+    from accugrid.codegen.rewrite import rewrite
+
+    frame = np.eye(4) if robot_T_program is None else robot_T_program
+    return rewrite(plugin_of("gcode"), {path: text}, opts, GcodeSection(frame))
+
+
+def rewrite_krl(texts: dict[str, str], opts, base_data: dict | None = None):
+    """KRL files (path -> text) rewritten through their plug-in with BASE_DATA ``base_data``."""
+    from accugrid.codegen.dialects import plugin_of
+    from accugrid.codegen.krl.rewrite import KrlPlacement
+    from accugrid.codegen.rewrite import rewrite
+
+    return rewrite(plugin_of("krl"), texts, opts, KrlPlacement(base_data or {}))

@@ -45,3 +45,23 @@ def test_rewrite_refuses_an_unknown_suffix(tmp_path, capsys):
     code = main(["rewrite", str(program), "--cell", "examples/cell.yaml", "-o", str(out)])
     assert code == 2 and not out.exists()
     assert "unknown program type '.ls'" in capsys.readouterr().err
+
+
+def test_every_dialect_is_a_plugin_with_every_member_of_the_interface():
+    from accugrid.codegen.dialects import plugin_of
+    from accugrid.codegen.plugin import DialectPlugin
+
+    members = set(DialectPlugin.__annotations__) | {
+        k for k, v in vars(DialectPlugin).items() if callable(v) and not k.startswith("_")
+    }
+    assert {"suffixes", "render", "scan", "splice", "add_header", "read_section"} <= members
+    for name, dialect in DIALECTS.items():
+        plugin = plugin_of(name)
+        missing = {m for m in members if not hasattr(plugin, m)}
+        assert not missing, f"{name} lacks {sorted(missing)}"
+        assert (plugin.name, plugin.title, plugin.suffixes) == (
+            dialect.name,
+            dialect.title,
+            dialect.suffixes,
+        )
+        assert dialect.plugin == f"accugrid.codegen.{name}.plugin"  # its own folder

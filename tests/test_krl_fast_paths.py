@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from rewrite_helpers import rewrite_krl
 
 from accugrid.codegen import splice
 from accugrid.codegen.krl import parse
 from accugrid.codegen.krl import rewrite as krl_rewrite
-from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.krl.rigid import PAD, text_bytes
 from accugrid.codegen.program_text import splice as splice_text
 from accugrid.codegen.rewrite import Options
@@ -206,10 +206,8 @@ def test_pair_read_in_order_as_by_name(rows, order, shuffled):
         names = [names[j] for j in order if j < len(names)]
     src = ["DEF t( )", "$BASE = BASE_DATA[1]"] + [f"LIN {n}" for n in names] + ["END"]
     texts = {"t.src": "\n".join(src) + "\n", "t.dat": "\n".join(dat + ["ENDDAT"]) + "\n"}
-    opts = Options(
-        model=PAIR_MODEL, base_data={1: np.eye(4)}, robot_T_program=np.eye(4), allow_partial=True
-    )
-    fast = rewrite_krl(texts, opts)
+    opts = Options(model=PAIR_MODEL, allow_partial=True)
+    fast = rewrite_krl(texts, opts, {1: np.eye(4)})
     init = krl_rewrite._Context.__init__
 
     def by_name(self, *args):
@@ -220,6 +218,6 @@ def test_pair_read_in_order_as_by_name(rows, order, shuffled):
             self.used_twice = {n for i, n in enumerate(names) if n and self.use_of[n] != i}
 
     with mock.patch.object(krl_rewrite._Context, "__init__", by_name):
-        slow = rewrite_krl(texts, opts)
+        slow = rewrite_krl(texts, opts, {1: np.eye(4)})
     assert fast.data == slow.data
     assert [repr(r) for r in fast.rows] == [repr(r) for r in slow.rows]

@@ -17,11 +17,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from rewrite_helpers import error_field, write_cell
+from rewrite_helpers import error_field, rewrite_krl, write_cell
 from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import main
-from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.rewrite import Options
 from accugrid.compensation import GridModel
 
@@ -306,7 +305,7 @@ def test_every_point_of_a_relative_chain_lands_on_its_correction(start, abc, ste
         increment = np.array([given_xyz[k] if k in keys else 0.0 for k in "XYZ"])
         nominal.append(nominal[-1] + (tool if in_tool else np.eye(3)) @ increment)
     text = "\n".join([*lines, "END", ""])
-    opts = Options(model=FIELD, base_data={}, robot_T_program=np.eye(4), decimals=3)
+    opts = Options(model=FIELD, decimals=3)
     result = rewrite_krl({"p.src": text}, opts)
     assert (result.rows.status == 1).all()  # every point corrected
     want = FIELD.correct(np.array(nominal))

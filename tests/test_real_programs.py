@@ -15,12 +15,11 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from rewrite_helpers import E_CONST, error_field, write_cell
+from rewrite_helpers import E_CONST, error_field, rewrite_gcode, write_cell
 from scipy.spatial.transform import Rotation
 from test_gcode_rs274 import MOVE_RE, canonical
 
 from accugrid.app.cli import main
-from accugrid.codegen.gcode.rewrite import rewrite_gcode
 from accugrid.codegen.krl.parse import scan_krl
 from accugrid.codegen.rewrite import Options
 from accugrid.compensation import GridModel
@@ -169,10 +168,8 @@ def corrected(model: GridModel, program_xyz) -> np.ndarray:
 def gcode_rewrite(text: str, model: GridModel):
     """The rewritten text and its report rows; positions left uncorrected are kept and reported
     (allow_partial: these tests look at each position's outcome)."""
-    opts = Options(
-        model=model, base_data={}, robot_T_program=T_PROGRAM, decimals=3, allow_partial=True
-    )
-    result = rewrite_gcode("p.ngc", text, opts)
+    opts = Options(model=model, decimals=3, allow_partial=True)
+    result = rewrite_gcode("p.ngc", text, opts, T_PROGRAM)
     return result.texts["p.ngc"], list(result.rows)
 
 

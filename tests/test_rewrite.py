@@ -9,14 +9,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from rewrite_helpers import E_CONST, error_field, write_cell, write_grid
+from rewrite_helpers import E_CONST, error_field, rewrite_gcode, rewrite_krl, write_cell, write_grid
 from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import main
 from accugrid.codegen.gcode.parse import parse_gcode
-from accugrid.codegen.gcode.rewrite import rewrite_gcode
 from accugrid.codegen.krl.parse import parse_krl
-from accugrid.codegen.krl.rewrite import rewrite_krl
 from accugrid.codegen.rewrite import Options
 from accugrid.compensation import GridModel
 from accugrid.infra.errors import InputError
@@ -177,7 +175,7 @@ MODEL = _model()
 
 
 def _options(**kw):
-    return Options(model=MODEL, base_data={}, robot_T_program=np.eye(4), **kw)
+    return Options(model=MODEL, **kw)
 
 
 coord = st.integers(-500_000, 500_000).map(lambda v: v / 1000)
@@ -373,7 +371,7 @@ def test_krl_rewrite_changes_only_the_position_numbers(lines):
         agg = f"{{{w2}{prefix}X {x},{w1}y{w2} {y} ,Z {z}{w1},A 0.0,B 90.0,C 0.0}}"
         body.append(f"{w1}{kw}{w2} {agg}{tail}")
     text = "\r\n".join(body + ["END"]) + "\r\n"
-    opts = Options(model=CONST_MODEL, base_data={}, robot_T_program=np.eye(4))
+    opts = Options(model=CONST_MODEL)
     out = rewrite_krl({"r.src": text}, opts).texts["r.src"]
     assert NUM_TOKEN.split(out) == NUM_TOKEN.split(text)
     before, after = parse_krl(text, "r.src"), parse_krl(out, "r.src")

@@ -14,11 +14,9 @@ nothing written.
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from accugrid.app.gcode_job import gcode_job
-from accugrid.app.job import add_job_arguments, summary, with_report
-from accugrid.infra.atomic import check_targets, write_files
+from accugrid.app.cli_options import add_program_arguments, program_request
+from accugrid.app.job import write_program
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -26,17 +24,9 @@ NAME = "gcode"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    add_job_arguments(parser)
-    parser.add_argument("-o", "--output", required=True, metavar="FILE", help="the .ngc to write")
+    add_program_arguments(parser, "FILE", "the .ngc to write")
 
 
 def run(args: argparse.Namespace) -> int:
-    out = Path(args.output)
-    report = [Path(args.report_html)] if args.report_html else []
-    inputs = [args.points, args.cell] + ([args.grid] if args.grid else [])
-    check_targets([out, *report], inputs, args.force)
-    job = gcode_job(args, out)
-    files = with_report(job, args.report_html, "G-code drilling program")
-    written = write_files(files, job.inputs, args.force, ready=job.finish)
-    print(summary(job, written))
+    print(write_program(program_request(args, NAME, "G-code drilling program"), args.force))
     return 0

@@ -14,12 +14,9 @@ nothing written.
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from accugrid.app.job import add_job_arguments, summary, with_report
-from accugrid.app.krl_job import krl_job, krl_targets
-from accugrid.codegen.cell import load_cell
-from accugrid.infra.atomic import check_targets, write_files
+from accugrid.app.cli_options import add_program_arguments, program_request
+from accugrid.app.job import write_program
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -27,22 +24,9 @@ NAME = "krl"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    add_job_arguments(parser)
-    parser.add_argument(
-        "-o", "--output", required=True, metavar="DIR", help="folder for NAME.src and NAME.dat"
-    )
+    add_program_arguments(parser, "DIR", "folder for NAME.src and NAME.dat")
 
 
 def run(args: argparse.Namespace) -> int:
-    out = Path(args.output)
-    inputs = [args.points, args.cell] + ([args.grid] if args.grid else [])
-    cell = load_cell(args.cell)
-    report = [Path(args.report_html)] if args.report_html else []
-    check_targets(krl_targets(cell, out) + report, inputs, args.force)
-    job = krl_job(args, out, cell)
-    files = with_report(job, args.report_html, "KUKA KRL drilling program")
-    written = write_files(
-        files, job.inputs, args.force, ready=job.finish, main=job.main, stale=job.stale
-    )
-    print(summary(job, written))
+    print(write_program(program_request(args, NAME, "KUKA KRL drilling program"), args.force))
     return 0

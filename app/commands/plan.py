@@ -292,9 +292,7 @@ def run(args: argparse.Namespace) -> int:
         templates=args.templates,
     )
     job = plan_files(request, args.output)
-    # a measurement program: its .src (what the controller runs) replaced last
-    main = [path for path in job.files if Path(path).suffix == ".src"]
-    write_files(job.files, force=args.force, main=main)
+    write_files(job.files, force=args.force, main=job.main)
     for line in job.lines:
         print(line)
     return 0

@@ -15,14 +15,9 @@ written.
 from __future__ import annotations
 
 import argparse
-import dataclasses
-from pathlib import Path
 
-from accugrid.app.job import add_job_arguments, prepare, summary
-from accugrid.codegen.cell import load_cell
-from accugrid.codegen.dialects import plugin_of
-from accugrid.codegen.rapid.emit import module_name
-from accugrid.infra.atomic import check_targets, write_files
+from accugrid.app.cli_options import add_program_arguments, program_request
+from accugrid.app.job import write_program
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -30,21 +25,9 @@ NAME = "rapid"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    add_job_arguments(parser)
-    parser.add_argument(
-        "-o", "--output", required=True, metavar="FILE.mod", help="the module to write"
-    )
+    add_program_arguments(parser, "FILE.mod", "the module to write")
 
 
 def run(args: argparse.Namespace) -> int:
-    out = Path(args.output)
-    check_targets([out], [args.points, args.cell] + ([args.grid] if args.grid else []), args.force)
-    cell = load_cell(args.cell)
-    plugin = plugin_of(NAME)
-    module_name(cell.dialects[NAME].module, out)  # a name RAPID refuses: before any work
-    job = prepare(args, NAME, cell=cell, joints=True)  # confdata comes from the joint angles
-    files = plugin.render(job.program, job.header, args.templates, out)
-    job = dataclasses.replace(job, files=files)
-    written = write_files(job.files, job.inputs, args.force, ready=job.finish)
-    print(summary(job, written))
+    print(write_program(program_request(args, NAME, "ABB RAPID drilling program"), args.force))
     return 0

@@ -48,7 +48,7 @@ from accugrid.app.cli_options import (
     number,
 )
 from accugrid.app.rewrite_job import RewriteRequest, rewrite_job
-from accugrid.codegen.dialects import dialect_of
+from accugrid.codegen.dialects import DIALECTS, dialect_of, plugin_of
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.compensation.policy import GRID_ORIENTATION_TOL_DEG, ORIENTATION_LIMIT_DEG
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
@@ -150,26 +150,38 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _outputs(inputs: list[Path], output: str) -> dict[Path, Path]:
+def _outputs(inputs: list[Path], output: str, pair: tuple[str, str] | None) -> dict[Path, Path]:
     out = Path(output)
     if len(inputs) == 1:
         return {inputs[0]: out / inputs[0].name if out.is_dir() else out}
     if out.is_dir():  # an existing folder, whatever its name (out.v2)
         return {p: out / p.name for p in inputs}
-    if out.suffix.lower() == ".src":
+    if pair is not None and out.suffix.lower() == pair[0]:
         return {p: out.with_suffix(p.suffix) for p in inputs}
     if out.suffix:
-        raise InputError("for a .src/.dat pair -o must be a directory or a .src path", output)
+        raise InputError(
+            f"for a {'/'.join(pair)} pair -o must be a directory or a {pair[0]} path", output
+        )
     return {p: out / p.name for p in inputs}
+
+
+def _pair(inputs: list[Path]) -> tuple[str, str] | None:
+    """The suffixes of a program given as two files (``DialectPlugin.pair``), None for a
+    dialect whose programs are one file; InputError when two files are not one program's."""
+    kinds = [dialect_of(p) for p in inputs]
+    pair = plugin_of(kinds[0]).pair
+    if len(inputs) == 2 and (
+        pair is None or kinds[1] != kinds[0] or inputs[0].suffix.lower() == inputs[1].suffix.lower()
+    ):
+        pairs = [(d.title, plugin_of(d.name).pair) for d in DIALECTS.values()]
+        what = " or ".join(f"the {p[1]} of a {title} {p[0]}" for title, p in pairs if p)
+        raise InputError(f"the second file must be {what}", os.fspath(inputs[1]))
+    return pair
 
 
 def run(args: argparse.Namespace) -> int:
     inputs = [Path(args.program)] + ([Path(args.dat)] if args.dat else [])
-    kinds = {dialect_of(p) for p in inputs}
-    if len(inputs) == 2 and (
-        kinds != {"krl"} or inputs[0].suffix.lower() == inputs[1].suffix.lower()
-    ):
-        raise InputError("the second file must be the .dat of a KRL .src", args.dat)
+    pair = _pair(inputs)
     if not args.orientation_tol <= args.orientation_limit:
         raise InputError("need --orientation-tol <= --orientation-limit (deg)")
     if args.strict and args.model is None:
@@ -179,7 +191,7 @@ def run(args: argparse.Namespace) -> int:
             "positions outside a model's poses",
             file=sys.stderr,
         )
-    outputs = _outputs(inputs, args.output)
+    outputs = _outputs(inputs, args.output, pair)
     reports = [Path(r) for r in (args.report, args.report_html) if r]
     targets = list(outputs.values()) + reports
     if len(set(map(os.path.abspath, targets))) != len(targets):

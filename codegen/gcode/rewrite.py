@@ -24,11 +24,14 @@ from array import array
 import numpy as np
 
 from accugrid.codegen.gcode.parse import RESETS, GcodeMoves, gcode_moves, modal_fill, polar_xy
+from accugrid.codegen.gcode.section import GcodeSection
 from accugrid.codegen.program_text import (
     MIN_PLACES_INCH,
     MIN_PLACES_MM,
+    comment_block,
     distinct_ints,
     formatted,
+    insert_after_lines,
     number_text,
     precision,
 )
@@ -36,23 +39,24 @@ from accugrid.codegen.rewrite import (
     CORRECTED,
     SKIPPED,
     Options,
-    Result,
     Rows,
+    Scan,
     correct_points,
-    partial_check,
     rotations_of,
 )
 from accugrid.codegen.splice import ByteSplicer, texts_of
 from accugrid.infra.textsafe import fixed, fixed_bytes
 from accugrid.kinematics.frames import rows_times, transform_points
 
-__all__ = ["rewrite_gcode"]
+__all__ = ["add_header", "scan_positions", "splice_positions"]
 
 _BLOCK = 1 << 14  # moves per block of corrected numbers formatted and spliced at once
 
 
-def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
-    """Rewrite one RS274NGC program."""
+def scan_positions(texts: dict[str, str], opts: Options, placement: GcodeSection) -> Scan:
+    """The moves of one RS274NGC program (``texts``: one path and its text) in the cell's
+    program frame (``placement.robot_T_program``)."""
+    ((path, text),) = texts.items()
     moves = gcode_moves(text, path)
     rows = Rows(
         [path],
@@ -75,24 +79,36 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
         at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))
     else:
         at = np.arange(len(moves))
-    desired = moves.target.copy()
+    t = placement.robot_T_program
+    robot, rotations = np.zeros((0, 3)), None
     if len(at):
-        prog = desired[at]
-        t = opts.robot_T_program
-        robot = transform_points(t, prog)
+        robot = transform_points(t, moves.target[at])
         abc = np.array([[r.get(k, math.nan) for k in "ABC"] for r in moves.rotaries])
         # each distinct A/B/C once (a program has few), then one row per point
         rotations = rotations_of(t[:3, :3], abc.reshape(-1, 3))[moves.rotary_index[at]]
-        corrected = correct_points(robot, rows, at, opts, rotations)
-        back = rows_times(corrected - robot, t[:3, :3])  # R^T e, row-wise
+    return Scan(rows, at, robot, rotations, state=(path, text, moves, t))
+
+
+def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[str, bytearray]:
+    """The program's bytes with the corrected moves (``corrected`` (M, 3) mm robot frame, NaN
+    rows: not corrected) written in the program frame: their repeated G91 cycles, R planes and
+    the increments after them made to agree."""
+    path, text, moves, t = scan.state
+    rows, at = scan.rows, scan.at
+    desired = moves.target.copy()
+    if len(at):
+        back = rows_times(corrected - scan.robot, t[:3, :3])  # R^T e, row-wise
         done = np.flatnonzero(np.isfinite(corrected[:, 0]))
         rows.status[at[done]] = CORRECTED
-        desired[at[done]] = prog[done] + back[done]
-    _repeated_holes(moves, rows, desired, opts)
-    r_planes = _corrected_r_planes(moves, rows, opts)
-    out = _gcode_edits(text, moves, rows, desired, r_planes, opts)
-    partial_check(rows, opts)
-    return Result({path: out}, rows)
+        desired[at[done]] = desired[at][done] + back[done]
+    _repeated_holes(moves, rows, desired, opts, t)
+    r_planes = _corrected_r_planes(moves, rows, opts, t)
+    return {path: _gcode_edits(text, moves, rows, desired, r_planes, opts)}
+
+
+def add_header(text: str, lines: list[str]) -> str:
+    """The program with the header as ``( )`` comments after its leading ``%`` lines."""
+    return insert_after_lines(text, comment_block(text, lines, "({})"), "%")
 
 
 def _tools(moves: GcodeMoves, rows: Rows) -> None:
@@ -173,7 +189,9 @@ def _polar_edits(text, edits, moves, i, where, goals, changed, places) -> None:
     end[0], end[1] = polar_xy(cmd, r, values[1], inc)
 
 
-def _repeated_holes(moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Options) -> None:
+def _repeated_holes(
+    moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Options, t: np.ndarray
+) -> None:
     """A G91 cycle repeated L times moves by one increment to each hole: corrected only when
     every hole's correction is its first hole's within the written resolution. Otherwise it is
     not corrected (``desired`` back to the target; the reason says by how much they differ),
@@ -183,7 +201,6 @@ def _repeated_holes(moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Op
     if not repeated:
         return
     places = _places(moves, opts)
-    t = opts.robot_T_program
     for i in repeated:
         if rows.status[i] != CORRECTED:
             continue
@@ -223,8 +240,9 @@ def _repeated_holes(moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Op
                     todo.append(j)
 
 
-def _corrected_r_planes(moves: GcodeMoves, rows: Rows, opts: Options) -> np.ndarray:
-    """(N,) corrected R plane (mm) of each corrected cycle that writes R; NaN: keep R.
+def _corrected_r_planes(moves: GcodeMoves, rows: Rows, opts: Options, t: np.ndarray) -> np.ndarray:
+    """(N,) corrected R plane (mm) of each corrected cycle that writes R (program frame ``t``
+    (4, 4) in the robot frame); NaN: keep R.
 
     The R point is (X, Y, R) of the hole; only its Z correction can be written (in its R word,
     or one added to its line)."""
@@ -232,7 +250,6 @@ def _corrected_r_planes(moves: GcodeMoves, rows: Rows, opts: Options) -> np.ndar
     idx = np.flatnonzero(moves.is_cycle & ~np.isnan(moves.r_mm) & (rows.status == CORRECTED))
     if len(idx):
         pts = np.column_stack([moves.target[idx, 0], moves.target[idx, 1], moves.r_mm[idx]])
-        t = opts.robot_T_program
         robot = transform_points(t, pts)
         corrected = correct_points(robot, rows, idx, opts, mark=False)
         back = rows_times(corrected - robot, t[:3, :3])

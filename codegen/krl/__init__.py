@@ -1,11 +1,13 @@
-"""The KUKA KRL dialect: emitter (program model to .src/.dat text), parser and rewrite. The
-names of ``__all__`` are imported on first use."""
+"""The KUKA KRL dialect, a plug-in (``plugin.PLUGIN``, the interface of ``codegen.plugin``):
+emitter (program model to .src/.dat text), parser and rewrite, the cell section. The names of
+``__all__`` are imported on first use."""
 
 from accugrid.infra.exports import lazy_namespace
 
 _API = {
+    "PLUGIN": "accugrid.codegen.krl.plugin",
     "render_krl": "accugrid.codegen.krl.emit",
-    "rewrite_krl": "accugrid.codegen.krl.rewrite",
+    "KrlPlacement": "accugrid.codegen.krl.rewrite",
     "KrlSection": "accugrid.codegen.krl.section",
 }
 __all__ = list(_API)

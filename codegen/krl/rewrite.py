@@ -14,6 +14,7 @@ written back as an increment (``codegen.krl.relative``).
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import chain, repeat
 from pathlib import Path
@@ -34,39 +35,70 @@ from accugrid.codegen.krl.parse import (
 )
 from accugrid.codegen.krl.relative import Chains, resolve, write_increments
 from accugrid.codegen.krl.tables import MOTION, PositionTable
-from accugrid.codegen.program_text import MIN_PLACES_MM, distinct_ints, precision
-from accugrid.codegen.rewrite import (
-    CORRECTED,
-    Options,
-    Result,
-    Rows,
-    correct_points,
-    partial_check,
-    rotations_of,
+from accugrid.codegen.program_text import (
+    MIN_PLACES_MM,
+    UTF8_BOM,
+    comment_block,
+    distinct_ints,
+    insert_after_lines,
+    precision,
 )
+from accugrid.codegen.rewrite import CORRECTED, Options, Rows, Scan, rotations_of
 from accugrid.codegen.splice import ByteSplicer, literals
 from accugrid.kinematics.frames import pose_from_xyzabc, rotation_angle_deg
 
-__all__ = ["rewrite_krl"]
+__all__ = ["KrlPlacement", "add_header", "scan_positions", "splice_positions"]
 
 _BLOCK = 1 << 16  # positions per block of corrected numbers formatted at once
 
 
-def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = None) -> Result:
-    """Rewrite a KRL .src and/or .dat (texts by path); ``config_dat``: the text of a $config.dat
-    (its BASE_DATA, FDATs and declarations are read, it is not rewritten)."""
-    initial = (
-        BaseRef("number", 0, number=opts.base_override) if opts.base_override is not None else None
-    )
+@dataclass(frozen=True)
+class KrlPlacement:
+    """What places KRL positions in the robot frame besides the program's text (the plug-in's
+    ``placement``): ``base_data`` BASE_DATA number -> robot_T_base (4, 4) mm (the cell's),
+    ``base`` the base in effect where a routine sets none (``--base``), ``trust_calls`` (calls
+    keep $BASE),
+    ``ignore_external_axes`` and ``config_dat``, the text of a $config.dat (its BASE_DATA,
+    FDATs and declarations are read, it is not rewritten)."""
+
+    base_data: dict[int, np.ndarray]
+    base: int | None = None
+    trust_calls: bool = False
+    ignore_external_axes: bool = False
+    config_dat: str | None = None
+
+
+@dataclass
+class _Files:
+    """What the splice needs of a scan: each file's path, text and table, its placed rows
+    (``todo``) and the index of each one's robot_T_base (``placed``), the frames, the first
+    report row of each file (``starts``), the positions in their base frames (``which`` frame,
+    ``base_xyz``) and the chains of relative motions."""
+
+    files: list[tuple[str | None, str, PositionTable]]
+    todo: list[np.ndarray]
+    placed: list[np.ndarray]
+    frames: np.ndarray
+    starts: np.ndarray
+    which: np.ndarray
+    base_xyz: np.ndarray
+    chains: Chains | None = None  # the relative motions, with the scans they are in
+    relative: list[KrlScan] = field(default_factory=list)
+
+
+def scan_positions(texts: dict[str, str], opts: Options, placement: KrlPlacement) -> Scan:
+    """The positions of a KRL .src and/or .dat (texts by path), placed by ``placement``."""
+    initial = BaseRef("number", 0, number=placement.base) if placement.base is not None else None
     scans = [
-        scan_krl(text, path, initial_base=initial, trust_calls=opts.trust_calls)
+        scan_krl(text, path, initial_base=initial, trust_calls=placement.trust_calls)
         for path, text in texts.items()
     ]
-    config = scan_krl(config_dat, "$config.dat") if config_dat is not None else None
-    ctx = _Context(scans, config, initial, opts)
+    config = placement.config_dat
+    config = scan_krl(config, "$config.dat") if config is not None else None
+    ctx = _Context(scans, config, initial, placement, opts)
     parts, placed = [], []
     for s, scan in enumerate(scans):
-        rows, frames = _position_rows(ctx, s, scan, opts)
+        rows, frames = _position_rows(ctx, s, scan, placement)
         parts.append(rows)
         placed.append(frames)
     chains = None
@@ -82,37 +114,81 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
     rows = Rows.concat(parts)
     starts = np.cumsum([0] + [len(p) for p in parts[: len(scans)]])
     del parts
-    out: dict[str, bytes | bytearray | None] = dict.fromkeys(texts)
     todo = [np.flatnonzero(which >= 0) for which in placed]
-    if any(t.size for t in todo):
-        frames = ctx.frames
-        files = [(scan.path, scan.text, scan.table) for scan in scans]
-        relative = scans if chains is not None else []
-        del scans, ctx, config  # the uses and names are done with: memory for what follows
-        status = [
-            aggregate_status(text, table.agg[t])
-            for (_, text, table), t in zip(files, todo, strict=True)
-        ]
-        absolute = [(table.xyz, table.abc) for _, _, table in files]
-        if chains is not None:
-            absolute = _reached(chains, absolute)
-        targets = _correct(absolute, todo, placed, frames, rows, starts, opts, status)
-        places = [
-            opts.decimals if opts.decimals is not None else _places(table) for _, _, table in files
-        ]
-        extra: list[list] = [[] for _ in files]
-        if chains is not None:
-            extra = _increments(chains, relative, todo, targets, rows, starts, places)
-        for s, (path, text, table) in enumerate(files):
-            if todo[s].size:
-                out[path] = _splice(
-                    text, table, todo[s], targets[s], rows, starts[s], places[s], extra[s]
-                )
-    for path, text in texts.items():
-        if out[path] is None:
+    frames = np.array(ctx.frames) if ctx.frames else np.zeros((0, 4, 4))
+    files = [(scan.path, scan.text, scan.table) for scan in scans]
+    relative = scans if chains is not None else []
+    del scans, ctx, config  # the uses and names are done with: memory for what follows
+    status = [
+        aggregate_status(text, table.agg[t])
+        for (_, text, table), t in zip(files, todo, strict=True)
+    ]
+    absolute = [(table.xyz, table.abc) for _, _, table in files]
+    if chains is not None:
+        absolute = _reached(chains, absolute)
+    which = np.concatenate([placed[s][t] for s, t in enumerate(todo)])
+    base_xyz = np.concatenate([xyz[t] for (xyz, _), t in zip(absolute, todo, strict=True)])
+    abc = np.concatenate([abc[t] for (_, abc), t in zip(absolute, todo, strict=True)])
+    at = np.concatenate([starts[s] + t for s, t in enumerate(todo)])
+    n = len(which)
+    robot = np.empty((n, 3))
+    for a in range(0, n, _BLOCK):  # (N, 4, 4) frames a block at a time
+        f = frames[which[a : a + _BLOCK]]
+        robot[a : a + _BLOCK] = (
+            np.einsum("nij,nj->ni", f[:, :3, :3], base_xyz[a : a + _BLOCK]) + f[:, :3, 3]
+        )
+    # the orientation of each run of positions in one frame with the same A, B, C (a whole file,
+    # mostly) computed once, for its first position
+    first = np.ones(n, bool)
+    first[1:] = (which[1:] != which[:-1]) | (abc[1:] != abc[:-1]).any(axis=1)  # NaN: its own
+    heads = np.flatnonzero(first)
+    rotations = None
+    if n:
+        rotations = rotations_of(frames[which[heads]][:, :3, :3], abc[heads])[np.cumsum(first) - 1]
+    state = _Files(files, todo, placed, frames, starts, which, base_xyz, chains, relative)
+    return Scan(rows, at, robot, rotations, np.concatenate(status), state=state)
+
+
+def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[str, bytearray]:
+    """Every file's bytes with its corrected positions (``corrected`` (M, 3) mm robot frame,
+    NaN rows: not corrected) written back in its base frame, relative motions as increments;
+    unchanged files as they were."""
+    state: _Files = scan.state
+    frames, which, base_xyz, robot = state.frames, state.which, state.base_xyz, scan.robot
+    targets = np.full((len(which), 3), np.nan)
+    for a in range(0, len(which), _BLOCK):
+        f = frames[which[a : a + _BLOCK]]
+        e = corrected[a : a + _BLOCK] - robot[a : a + _BLOCK]
+        targets[a : a + _BLOCK] = base_xyz[a : a + _BLOCK] + np.einsum(
+            "nji,nj->ni", f[:, :3, :3], e
+        )  # R^T e
+    bounds = np.cumsum([0] + [t.size for t in state.todo])
+    per_file = [targets[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+    places = [
+        opts.decimals if opts.decimals is not None else _places(table)
+        for _, _, table in state.files
+    ]
+    extra: list[list] = [[] for _ in state.files]
+    if state.chains is not None and len(which):
+        extra = _increments(
+            state.chains, state.relative, state.todo, per_file, scan.rows, state.starts, places
+        )
+    out: dict[str, bytes | bytearray] = {}
+    for s, (path, text, table) in enumerate(state.files):
+        if state.todo[s].size:
+            out[path] = _splice(
+                text,
+                table,
+                state.todo[s],
+                per_file[s],
+                scan.rows,
+                state.starts[s],
+                places[s],
+                extra[s],
+            )
+        else:
             out[path] = text.encode("latin-1")  # nothing corrected in it
-    partial_check(rows, opts)
-    return Result(out, rows)
+    return out
 
 
 def _places(table: PositionTable) -> int:
@@ -123,7 +199,9 @@ def _places(table: PositionTable) -> int:
     return max(int(given.max()), MIN_PLACES_MM)
 
 
-def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple[Rows, np.ndarray]:
+def _position_rows(
+    ctx: _Context, s: int, scan: KrlScan, placement: KrlPlacement
+) -> tuple[Rows, np.ndarray]:
     """The report rows of a file's positions, and for each the index of its robot_T_base in
     ``ctx.frames`` (-1: not placed, the row says why)."""
     t = scan.table
@@ -133,7 +211,7 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
     reasons = list(t.reason)
     for i in scan.relative:  # placed where its start is known (``resolve``)
         reasons[i] = ""
-    if t.external and not opts.ignore_external_axes:
+    if t.external and not placement.ignore_external_axes:
         for i, (key, value) in t.external.items():
             reasons[i] = reasons[i] or (
                 f"external axis {key} = {value:g}: the robot frame depends on external "
@@ -210,13 +288,19 @@ class _Context:
     ``TOOL_NO``, ``$TOOL``, ``BAS(#TOOL, n)``, one tool for all of them)."""
 
     def __init__(
-        self, scans: list[KrlScan], config: KrlScan | None, initial: BaseRef | None, opts: Options
+        self,
+        scans: list[KrlScan],
+        config: KrlScan | None,
+        initial: BaseRef | None,
+        placement: KrlPlacement,
+        opts: Options,
     ) -> None:
+        self.placement = placement
         self.opts = opts
         self.initial = initial
         self.scans = scans
         self.every = scans + ([config] if config is not None else [])
-        self.base_data = dict(opts.base_data)
+        self.base_data = dict(placement.base_data)
         if config is not None:
             for n, (xyzabc, _) in config.base_data.items():
                 self.base_data[n] = pose_from_xyzabc(np.array(xyzabc))
@@ -646,54 +730,6 @@ def _increments(
     return edits
 
 
-def _correct(
-    absolute: list[tuple[np.ndarray, np.ndarray]],
-    todo: list[np.ndarray],
-    placed: list[np.ndarray],
-    frames: list[np.ndarray],
-    rows: Rows,
-    starts: np.ndarray,
-    opts: Options,
-    status: list[np.ndarray],
-) -> list[np.ndarray]:
-    """Correct every placed position of every file at once (one ``correct_points``).
-
-    ``absolute[s]``: X, Y, Z (n, 3) mm base frame and A, B, C (n, 3) deg of the table rows of
-    file s, ``todo[s]``: its placed table rows, ``placed[s][todo[s]]`` the index of each one's
-    robot_T_base in ``frames``, ``starts[s]``: its first report row, ``status[s]`` each one's
-    own KUKA Status (-1: none). Per file: the corrected targets (n, 3) mm base frame (NaN rows:
-    not corrected)."""
-    stack = np.array(frames)
-    which = np.concatenate([placed[s][t] for s, t in enumerate(todo)])
-    base_xyz = np.concatenate([xyz[t] for (xyz, _), t in zip(absolute, todo, strict=True)])
-    abc = np.concatenate([abc[t] for (_, abc), t in zip(absolute, todo, strict=True)])
-    at = np.concatenate([starts[s] + t for s, t in enumerate(todo)])
-    n = len(which)
-    robot = np.empty((n, 3))
-    for a in range(0, n, _BLOCK):  # (N, 4, 4) frames a block at a time
-        f = stack[which[a : a + _BLOCK]]
-        robot[a : a + _BLOCK] = (
-            np.einsum("nij,nj->ni", f[:, :3, :3], base_xyz[a : a + _BLOCK]) + f[:, :3, 3]
-        )
-    # the orientation of each run of positions in one frame with the same A, B, C (a whole file,
-    # mostly) computed once, for its first position
-    first = np.ones(n, bool)
-    first[1:] = (which[1:] != which[:-1]) | (abc[1:] != abc[:-1]).any(axis=1)  # NaN: its own
-    heads = np.flatnonzero(first)
-    rotations = rotations_of(stack[which[heads]][:, :3, :3], abc[heads])[np.cumsum(first) - 1]
-    corrected = correct_points(robot, rows, at, opts, rotations, status=np.concatenate(status))
-    del rotations
-    targets = np.full((n, 3), np.nan)
-    for a in range(0, n, _BLOCK):
-        f = stack[which[a : a + _BLOCK]]
-        e = corrected[a : a + _BLOCK] - robot[a : a + _BLOCK]
-        targets[a : a + _BLOCK] = base_xyz[a : a + _BLOCK] + np.einsum(
-            "nji,nj->ni", f[:, :3, :3], e
-        )  # R^T e
-    bounds = np.cumsum([0] + [t.size for t in todo])
-    return [targets[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
-
-
 _STATUS_RE = re.compile(r"[{,]\s*S\s+(?:'B([01]+)'|'H([0-9A-F]+)'|(\d+))", re.IGNORECASE)
 
 
@@ -783,3 +819,34 @@ def _merged(spans: np.ndarray, new: np.ndarray, length, edits: list[tuple[int, i
     spans = np.array([(a, b) for a, b, _ in every], np.int64).reshape(-1, 2)
     data = b"".join(p for _, _, p in every)
     return spans, np.frombuffer(data, np.uint8), np.array([len(p) for *_, p in every], np.int64)
+
+
+def add_header(text: str, lines: list[str]) -> str:
+    """The program with the header as ``;`` comments right below its ``DEF``/``DEFDAT`` line
+    (controller-written files have only ``&`` lines above it), else after the leading ``&``
+    lines."""
+    block = comment_block(text, lines, "; {}")
+    at = _after_def_line(text, len(UTF8_BOM) if text.startswith(UTF8_BOM) else 0)
+    if at is not None:
+        return text[:at] + block + text[at:]
+    return insert_after_lines(text, block, "&")
+
+
+_DEF_LINE_RE = re.compile(r"[ \t]*+(?:GLOBAL[ \t]++)?+(?:DEF|DEFFCT|DEFDAT)\b", re.I)
+
+
+def _after_def_line(text: str, pos: int) -> int | None:
+    """Offset just after the first ``DEF``/``DEFFCT``/``DEFDAT`` line (None: none, or it is the
+    last line without an ending)."""
+    while pos < len(text):
+        nl = text.find("\n", pos)
+        end = len(text) if nl < 0 else nl
+        line = text[pos:end]
+        if line.strip() and not line.lstrip().startswith(("&", ";")):
+            if _DEF_LINE_RE.match(line):
+                return None if nl < 0 else nl + 1
+            return None
+        if nl < 0:
+            return None
+        pos = nl + 1
+    return None

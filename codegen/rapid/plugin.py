@@ -4,41 +4,36 @@ first used."""
 
 from __future__ import annotations
 
+from accugrid.codegen.plugin import DialectFolder, Rendered
+
 __all__ = ["PLUGIN", "RapidPlugin"]
 
 
-class RapidPlugin:
+class RapidPlugin(DialectFolder):
     """ABB RAPID modules: ``.mod``, ``.modx`` (RobotWare 7), ``.prg`` (older RAPID programs),
-    ``.sys`` (system modules). Members as ``DialectPlugin`` says."""
+    ``.sys`` (system modules). A new program is one module, its confdata from every pose's
+    joint angles. Members as ``DialectPlugin`` says."""
 
     name = "rapid"
     title = "ABB RAPID"
     suffixes = (".mod", ".modx", ".prg", ".sys")
+    joints = True  # confdata comes from the joint angles
 
-    def render(self, program, header, templates, out):
+    def targets(self, cell, out):
+        from accugrid.codegen.rapid.emit import module_name
+
+        module_name(cell.dialects[self.name].module, out)  # a name RAPID refuses: before any work
+        return [out]
+
+    def render(self, program, header, templates, out, plan):
         from accugrid.codegen.rapid.emit import render_rapid
 
-        return render_rapid(program, header, templates, out)
+        return Rendered(render_rapid(program, header, templates, out))
 
-    def scan(self, path, text, section, ignore_external_axes=False):
-        from accugrid.codegen.rapid.rewrite import scan
+    def placement(self, cell, context):
+        from accugrid.codegen.rapid.rewrite import RapidPlacement
 
-        return scan(path, text, section, ignore_external_axes)
-
-    def splice(self, text, positions, new_xyz, opts):
-        from accugrid.codegen.rapid.rewrite import splice
-
-        return splice(text, positions, new_xyz, opts)
-
-    def rewrite(self, texts, opts, section):
-        from accugrid.codegen.rapid.rewrite import rewrite_rapid
-
-        return rewrite_rapid(texts, opts, section)
-
-    def add_header(self, text, lines):
-        from accugrid.codegen.rapid.rewrite import add_header
-
-        return add_header(text, lines)
+        return RapidPlacement(cell.dialects[self.name], context.ignore_external_axes)
 
 
 PLUGIN = RapidPlugin()

@@ -40,22 +40,30 @@ from itertools import repeat
 
 import numpy as np
 
-from accugrid.codegen.program_text import MIN_PLACES_MM, check_text, distinct_ints, precision
-from accugrid.codegen.rapid.rigid import RigidModule, read_rigid
-from accugrid.codegen.rewrite import (
-    CORRECTED,
-    Options,
-    Result,
-    Rows,
-    correct_points,
-    partial_check,
+from accugrid.codegen.program_text import (
+    MIN_PLACES_MM,
+    check_text,
+    comment_block,
+    distinct_ints,
+    precision,
 )
+from accugrid.codegen.rapid.rigid import RigidModule, read_rigid
+from accugrid.codegen.rewrite import CORRECTED, Options, Rows, Scan
 from accugrid.codegen.splice import ByteSplicer, texts_of
 from accugrid.infra.errors import InputError
-from accugrid.infra.textsafe import comment_text, fixed_bytes
+from accugrid.infra.textsafe import fixed_bytes
 from accugrid.kinematics.configuration import kuka_status
 
-__all__ = ["RapidPositions", "add_header", "kuka_status_of", "rewrite_rapid", "scan", "splice"]
+__all__ = [
+    "RapidPlacement",
+    "RapidPositions",
+    "add_header",
+    "kuka_status_of",
+    "scan",
+    "scan_positions",
+    "splice",
+    "splice_positions",
+]
 
 QUATERNION_TOL = 1e-3  # |  |q| - 1 | beyond this: not an orientation the controller accepts
 UNUSED_AXIS = 8.9e9  # 9E+09 marks an external axis not in use
@@ -867,52 +875,78 @@ def _spliced(
     return out.finish(), written
 
 
-def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
-    """Rewrite RAPID modules (path -> latin-1 text) in the frames of the cell's RAPID
-    ``section``; InputError where a module has nothing that can be placed."""
-    data, parts = {}, []
+@dataclass(frozen=True)
+class RapidPlacement:
+    """What places robtargets in the robot frame besides the module's text (the plug-in's
+    ``placement``): the cell's RAPID ``section`` (its tool and work object) and whether
+    robtargets with external axes in use are corrected (``ignore_external_axes``)."""
+
+    section: object
+    ignore_external_axes: bool = False
+
+
+def scan_positions(texts: dict[str, str], opts: Options, placement: RapidPlacement) -> Scan:
+    """The robtargets of RAPID modules (path -> latin-1 text) in the frames of the cell's RAPID
+    section; InputError where a module has no robtarget (unless ``opts.allow_partial``)."""
+    section = placement.section
+    frames = np.stack([np.eye(4), section.robot_T_wobj])
     tools = None
     if opts.tool_data is not None:
         tools = {name: (n, opts.tool_data[n]) for name, n in (opts.tool_names or {}).items()}
         tools[section.tool.lower()] = (-1, opts.tool_data[opts.tool_number])
+    parts, others, found_all, robot, rotations, status, at = [], [], [], [], [], [], []
+    start = 0
     for path, text in texts.items():
-        found = scan(path, text, section, opts.ignore_external_axes, tools)
+        found = scan(path, text, section, placement.ignore_external_axes, tools)
         n = len(found.name)
-        rows = Rows([path], np.zeros(n, np.int64), found.line, found.name, found.reason, found.xyz)
-        rows.commanded[:] = found.commanded  # partial_check counts those left uncorrected
-        rows.tool[:] = found.tool
-        new = _corrected(found, rows, opts, section)
-        data[path], written = _spliced(text, found, new, opts)
-        done = ~np.isnan(new[:, 0])
-        rows.new[done] = written[done]
-        rows.rounding_mm[done] = np.linalg.norm(rows.new[done] - new[done], axis=1)
         if not n and not opts.allow_partial:
             what = f"; {len(found.others)} data left as they are" if found.others else ""
             raise InputError(f"no robtarget in this module: nothing to correct{what}", path, 1)
-        partial_check(rows, opts)  # the policy's job rule, over the robtargets
-        parts += [rows, _other_rows(path, found)]
-    return Result(data, Rows.concat(parts))
+        rows = Rows([path], np.zeros(n, np.int64), found.line, found.name, found.reason, found.xyz)
+        rows.commanded[:] = found.commanded  # partial_check counts those left uncorrected
+        rows.tool[:] = found.tool
+        mine = np.flatnonzero(~np.fromiter(map(bool, found.reason), bool, n))
+        if mine.size:
+            t = frames[found.frame[mine]]
+            robot.append(np.einsum("nij,nj->ni", t[:, :3, :3], found.xyz[mine]) + t[:, :3, 3])
+            rotations.append(t[:, :3, :3] @ _matrices(found.quat[mine]))
+            status.append(kuka_status_of(found.cfx[mine]))
+            at.append(start + mine)
+        parts.append(rows)
+        others.append(_other_rows(path, found))
+        found_all.append((text, found, start, mine))
+        start += n
+    return Scan(
+        Rows.concat(parts),
+        np.concatenate(at or [np.zeros(0, np.int64)]),
+        np.concatenate(robot or [np.zeros((0, 3))]),
+        np.concatenate(rotations or [np.zeros((0, 3, 3))]),
+        np.concatenate(status or [np.zeros(0, np.int64)]),
+        others=Rows.concat(others),
+        state=(frames, found_all),
+    )
 
 
-def _corrected(found: RapidPositions, rows: Rows, opts: Options, section) -> np.ndarray:
-    """The corrected x, y, z (N, 3) mm in each robtarget's frame, NaN where not corrected (the
-    rows of those corrected marked so)."""
-    new = np.full((len(found.name), 3), np.nan)
-    at = np.flatnonzero(~np.fromiter(map(bool, found.reason), bool, len(found.name)))
-    if not at.size:
-        return new
-    frames = np.stack([np.eye(4), section.robot_T_wobj])
-    t = frames[found.frame[at]]
-    xyz = found.xyz[at]
-    robot = np.einsum("nij,nj->ni", t[:, :3, :3], xyz) + t[:, :3, 3]
-    rotations = t[:, :3, :3] @ _matrices(found.quat[at])
-    status = kuka_status_of(found.cfx[at])
-    corrected = correct_points(robot, rows, at, opts, rotations, status=status)
-    back = np.einsum("nji,nj->ni", t[:, :3, :3], corrected - robot)  # R^T e
-    done = np.flatnonzero(np.isfinite(corrected[:, 0]))
-    new[at[done]] = xyz[done] + back[done]
-    rows.status[at[done]] = CORRECTED
-    return new
+def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[str, bytearray]:
+    """Every module's bytes with the x, y, z of its corrected robtargets (``corrected`` (M, 3)
+    mm robot frame, NaN rows: not corrected) written back in their frames."""
+    frames, found_all = scan.state
+    rows, data, k = scan.rows, {}, 0
+    for text, found, start, mine in found_all:
+        new = np.full((len(found.name), 3), np.nan)
+        if mine.size:
+            t = frames[found.frame[mine]]
+            e = corrected[k : k + mine.size] - scan.robot[k : k + mine.size]
+            back = np.einsum("nji,nj->ni", t[:, :3, :3], e)  # R^T e
+            done = np.flatnonzero(np.isfinite(e[:, 0]))
+            new[mine[done]] = found.xyz[mine][done] + back[done]
+            rows.status[start + mine[done]] = CORRECTED
+            k += mine.size
+        data[found.path], written = _spliced(text, found, new, opts)
+        done = np.flatnonzero(~np.isnan(new[:, 0]))
+        rows.new[start + done] = written[done]
+        rows.rounding_mm[start + done] = np.linalg.norm(written[done] - new[done], axis=1)
+    return data
 
 
 def kuka_status_of(cfx: np.ndarray) -> np.ndarray:
@@ -958,13 +992,12 @@ def _other_rows(path: str, found: RapidPositions) -> Rows:
 def add_header(text: str, lines: list[str]) -> str:
     """The module with the header as ``!`` comments right after its ``MODULE`` line (at the
     top when it has none), in the module's line ending."""
-    newline = "\r\n" if "\r\n" in text else "\n"
-    block = "".join(f"    ! {comment_text(line, 200)}{newline}" for line in lines)
+    block = comment_block(text, lines, "    ! {}")
     m = _MODULE_LINE.search(text)
     if m is None:
         return block + text
     end = text.find("\n", m.end())
     at = len(text) if end < 0 else end + 1
     if end < 0:
-        block = newline + block
+        block = ("\r\n" if "\r\n" in text else "\n") + block
     return text[:at] + block + text[at:]
