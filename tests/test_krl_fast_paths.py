@@ -1,6 +1,6 @@
 """The array paths of the KRL rewrite against the obvious ones they replace: literals formatted
 with array operations against ``fixed`` and ``float``, the byte splice against string slicing,
-and the rigid-layout reader against the regex reader on programs in (and near) the controller's
+and the rigid-layout reader against the statement reader on programs in (and near) the controller's
 layout (its numbers read by ``infra.decimals``, tested in ``test_decimals.py``)."""
 
 from __future__ import annotations
@@ -146,8 +146,9 @@ def _scan(text: str):
     ),
     st.sampled_from(["\n", "\r\n"]),
 )
-def test_rigid_reader_reads_as_the_regex_reader(lines, ending):
-    """The same text read with the rigid lane and with the regex reader alone (the lane off)."""
+def test_rigid_reader_reads_as_the_statement_reader(lines, ending):
+    """The same text read with the rigid lane and with the statement reader alone (the lane
+    off)."""
     text = ending.join(lines)
     fast = _scan(text)
     original = parse.text_bytes
@@ -160,7 +161,7 @@ def test_rigid_reader_reads_as_the_regex_reader(lines, ending):
 
 
 def test_rigid_reader_takes_the_controller_layout():
-    """The layout of a controller-written pair is read by the rigid lane (not the regex)."""
+    """The layout of a controller-written pair is read by the rigid lane."""
     text = (
         "DECL E6POS XP1={X 1.5,Y -2,Z 3.25,A -90.000,B 0.000,C 180.000,S 'B010',T 'B000010',"
         "E1 0.0,E2 0.0,E3 0.0,E4 0.0,E5 0.0,E6 0.0}\r\nLIN XP1 C_DIS\r\n"

@@ -12,8 +12,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from accugrid.codegen.gcode.expressions import Parameters
-from accugrid.codegen.gcode.parse import _fast_line, _scan, parse_gcode
+from accugrid.codegen.gcode.parse import parse_gcode
 from accugrid.codegen.krl.parse import scan_krl
 from accugrid.infra.errors import InputError
 
@@ -108,27 +107,6 @@ def test_krl_long_runs_that_are_fine():
 
 
 NUMBERS = st.from_regex(r"[-+]?(\d{1,6}(\.\d{0,4})?|\.\d{1,4})", fullmatch=True)
-
-
-@given(
-    words=st.lists(
-        st.tuples(st.sampled_from("XYZABCRFSNT"), NUMBERS, st.sampled_from(["", " ", "\t", "  "])),
-        max_size=8,
-        unique_by=lambda w: w[0],
-    ),
-    gcodes=st.lists(st.sampled_from(["0", "1", "81", "90", "91", "20", "21", "54"]), max_size=3),
-    lower=st.booleans(),
-)
-def test_gcode_fast_and_word_by_word_readers_agree(words, gcodes, lower):
-    """Plain blocks take the one-regex path, blocks with parameters the word-by-word one: on a
-    plain block both must read the same words, G-codes and spans."""
-    line = " ".join(f"G{g}" for g in gcodes) + "".join(f" {k}{gap}{v}" for k, v, gap in words)
-    line = line.lower() if lower else line
-    fast = _fast_line(line, 7, None, 1)
-    slow = _scan(line, 7, None, 1, Parameters())
-    assert fast[:3] == slow[:3] and not slow.why and not slow.assigns
-    for word in (w for w in fast.words.values() if w is not None):
-        assert line[word.start - 7 : word.end - 7] == word.literal
 
 
 KEYS = ["X", "Y", "Z", "A", "B", "C", "E1", "S", "T"]

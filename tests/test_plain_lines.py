@@ -1,10 +1,9 @@
-"""The whole-text readers of plain lines agree with the statement-by-statement readers.
-
-KRL: ``scan_krl`` reads a text with ``\\n`` line endings by the whole-text scanner (plain
+"""The whole-text reader of plain KRL lines agrees with the statement-by-statement reader:
+``scan_krl`` reads a text with ``\\n`` line endings by the whole-text scanner (plain
 declarations and motions in bulk, the rest by the statement reader) and the same text with lone
 ``\\r`` endings line by line through the statement reader alone; both must find the same
-positions, uses, bases, declarations and errors. G-code: a line ``_plain_line`` reads must give
-what the general reader gives.
+positions, uses, bases, declarations and errors. (G-code's bulk reader against its line reader:
+``tests/test_gcode_bulk.py``.)
 """
 
 from __future__ import annotations
@@ -13,7 +12,6 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from accugrid.codegen.gcode.parse import _blank_comments, _fast_line, _plain_line
 from accugrid.codegen.krl.parse import scan_krl
 from accugrid.infra.errors import InputError
 
@@ -136,26 +134,3 @@ def test_krl_whole_text_scanner_reads_as_the_statement_reader(lines):
     bulk = _read("\n".join(lines))
     one_by_one = _read("\r".join(lines))
     assert bulk == one_by_one
-
-
-@given(
-    n=st.sampled_from(["", "N10 ", "N7  "]),
-    g=st.sampled_from(
-        ["", "G0 ", "G1 ", "G00 ", "G01 ", "G10 ", "G0\t", "G99 G81 ", "G98 G83 ", "G73 ", "G98 "]
-    ),
-    xyz=st.tuples(NUMBER, NUMBER, NUMBER),
-    r=st.sampled_from(["", " R5", " R-2.5", "  R.5", " R9e9"]),
-    f=st.sampled_from(["", " F300", " F1.5", "  F20"]),
-    comment=st.sampled_from(["", " (move 1)", "(x)", " (a;b)", " (a(b)"]),
-    lead=GAP,
-    cr=st.booleans(),
-)
-def test_gcode_plain_line_reads_as_the_general_reader(n, g, xyz, r, f, comment, lead, cr):
-    """A line the one-match reader takes gives the words, G-codes and spans of the general one."""
-    x, y, z = xyz
-    line = f"{lead}{n}{g}X{x} Y{y} Z{z}{r}{f}{comment}" + ("\r" if cr else "")
-    plain = _plain_line(line, 11)
-    if plain is None:
-        return
-    general = _fast_line(_blank_comments(line, None, 1), 11, None, 1)
-    assert plain == general

@@ -121,14 +121,14 @@ def test_spline_block_whose_base_is_not_known_is_reported(tmp_path):
 
 
 def test_spline_block_base_is_the_same_in_every_reading_lane():
-    """The whole-text lanes (rigid and regex lines between statements) and the line-by-line
-    reader (lone CR line endings) give every segment the block's base."""
+    """The whole-text reader (rigid lines between statements) and the line-by-line reader
+    (lone CR line endings) give every segment the block's base."""
     lines = [
         "DEF s( )",
         "BAS (#BASE,0)",
         "SPLINE WITH $BASE = BASE_DATA[2]",
         "SLIN XP1",  # the rigid layout
-        "SLIN  {X 1.0, Y 2.0, Z 3.0}",  # the regex lane
+        "SLIN  {X 1.0, Y 2.0, Z 3.0}",  # the statement reader, plain
         "SCIRC {X 1.0,Y 2.0,Z 3.0}, {X 2.0,Y 3.0,Z 3.0}",  # the statement reader
         "ENDSPLINE",
         "SLIN XP1",

@@ -68,16 +68,6 @@ __all__ = [
 
 _NUMBER = r"[-+]?+(?:\d++(?:\.\d*+)?+|\.\d++)"
 _NUMBER_RE = re.compile(_NUMBER)
-_WORD_RE = re.compile(r"([A-Za-z])\s*+(" + _NUMBER + ")")
-_LINE_RE = re.compile(r"(?:\s*+[A-Za-z]\s*+" + _NUMBER + r")*+\s*+")
-# The common CAM line, read in one match: [N..] [G98|G99] [G0|G1|G73|G81..G89] X.. Y.. Z.. [R..]
-# [F..] [(comment)]
-_PLAIN_RE = re.compile(
-    r"[ \t]*+(N\d++[ \t]++)?+(?:G(9[89])[ \t]++)?+(?:G(0?+[01]|0|8[1-9]|73)[ \t]++)?+"
-    r"X(" + _NUMBER + r")[ \t]++Y(" + _NUMBER + r")[ \t]++Z(" + _NUMBER + r")"
-    r"(?:[ \t]++R(" + _NUMBER + r"))?+([ \t]++F" + _NUMBER + r")?+[ \t]*+"
-    r"(?:\([^()\n;]*+\)[ \t]*+)?+\r?+"
-)
 # The whole-text scanner's line match, once per shape of line (``_Shapes``). A plain line is
 # ``[N..] [G98|G99] [G0|G1|G73|G81..G89] X.. Y.. Z.. [R..] [F..] [(comment)]`` where any one or two
 # of X, Y, Z may be left out, with single spaces between the position words. Its G-codes and first
@@ -640,8 +630,9 @@ def _evaluated(params: Parameters, text: str, path: str | None, lineno: int, at:
 
 
 def _scan(line: str, offset: int, path: str | None, lineno: int, params: Parameters) -> _Line:
-    """Read a comment-free block word by word (the slow path: parameters, expressions, polar
-    words, errors). Expressions are evaluated with ``params`` as it stands before the line.
+    """Read a comment-free block word by word (every line the bulk reader does not take:
+    parameters, expressions, polar words, errors). Expressions are evaluated with ``params`` as
+    it stands before the line.
 
     ``offset``: text offset of ``line[0]``. InputError at the first thing that is not a word or a
     parameter assignment."""
@@ -726,40 +717,6 @@ def _put(block: _Line, letter: str, number: str, at: int, end: int, offset: int,
         words[letter] = None
         if letter == "M" and (number.lstrip("+0") in ("6", "6.", "61", "61.")):
             words["M" + number.lstrip("+0").rstrip(".")] = None  # M6, M61: the tool changes
-
-
-def _plain_line(line: str, offset: int) -> _Line | None:
-    """A line ``_PLAIN_RE`` reads whole, as ``_fast_line`` would read it; None otherwise."""
-    m = _PLAIN_RE.fullmatch(line)
-    if m is None:
-        return None
-    n, retract, g, x, y, z, r, f = m.groups()
-    xv, yv, zv, rv = float(x), float(y), float(z), float(r or 0)
-    if xv - xv or yv - yv or zv - zv or rv - rv:  # beyond the float range: _put says where
-        return None
-    words: dict[str, Word | None] = {"N": None} if n else {}
-    words["X"] = _new_word(Word, ("X", xv, offset + m.start(4), offset + m.end(4), x))
-    words["Y"] = _new_word(Word, ("Y", yv, offset + m.start(5), offset + m.end(5), y))
-    words["Z"] = _new_word(Word, ("Z", zv, offset + m.start(6), offset + m.end(6), z))
-    if r:
-        words["R"] = _new_word(Word, ("R", rv, offset + m.start(7), offset + m.end(7), r))
-    if f:
-        words["F"] = None
-    gcodes = [retract] if retract else []
-    if g:
-        gcodes.append(g if len(g) == 2 and g[0] != "0" else g[-1])  # "01" -> "1", "81" -> "81"
-    return _Line(words, gcodes, {})
-
-
-def _fast_line(line: str, offset: int, path: str | None, lineno: int) -> _Line | None:
-    """A block of plain words read in one regex pass; None when it needs ``_scan``."""
-    if _LINE_RE.fullmatch(line) is None:
-        return None
-    block = _Line({}, [], {})
-    for m in _WORD_RE.finditer(line):
-        start, end = m.span(2)
-        _put(block, m.group(1).upper(), m.group(2), start, end, offset, path, lineno)
-    return block
 
 
 def _plain_codes(codes: str) -> int:
@@ -906,16 +863,10 @@ class _Reader:
             state = self.state
             state.flow = state.flow or f"O-word control flow from line {lineno}"
             return
-        block = _plain_line(raw, line_offset) if not bom else None
-        if block is not None:
-            self.block(block, lineno, line_offset)
-            return
         line = _blank_comments(raw, self.path, lineno)
         if self.slashes and line.lstrip().startswith("/"):
             line = line.replace("/", " ", 1)
-        block = _fast_line(line, line_offset, self.path, lineno)
-        if block is None:
-            block = _scan(line, line_offset, self.path, lineno, self.params)
+        block = _scan(line, line_offset, self.path, lineno, self.params)
         self.block(block, lineno, line_offset)
         if block.assigns:
             self._assign(block.assigns, lineno)

@@ -29,13 +29,12 @@ inline-form FOLD lines are comments). It finds:
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
 Every pattern is linear in its input (see the note above ``NUMBER``).
 
-Reading is whole-text first, a block of lines (``_CHUNK``) at a time, in three lanes: lines in
+Reading is whole-text first, a block of lines (``_CHUNK``) at a time, in two lanes: lines in
 the exact layout a controller writes (``codegen.krl.rigid``: array operations on the bytes, no
-regex), then one regex pass over the other lines picks out the plain ones (declarations and
-motions with a flat aggregate or to a name, ``_PLAIN_RE``, numbers converted a column at a
-time), and every other line goes through the statement reader. A rigid line is a plain line
-read the same way (``tests/test_krl_fast_paths.py``), and plain lines change no state, so a run
-of them takes the base in effect. What is read is kept in columns (``codegen.krl.tables``);
+regex; declarations with a flat aggregate and motions to a name) and every other line through
+the statement reader. A rigid line reads as the statement reader reads it
+(``tests/test_krl_fast_paths.py``), and rigid lines change no state, so a run of them takes the
+base in effect. What is read is kept in columns (``codegen.krl.tables``);
 ``KrlScan.positions`` and ``KrlScan.uses`` build objects on demand.
 """
 
@@ -44,9 +43,7 @@ from __future__ import annotations
 import math
 import os
 import re
-import sys
 from dataclasses import dataclass, field, replace
-from itertools import compress
 from typing import NamedTuple
 
 import numpy as np
@@ -906,23 +903,6 @@ _CLOSERS = {"ENDIF", "ENDSWITCH", "ENDFOR", "ENDWHILE", "ENDLOOP", "UNTIL"}
 _BRANCHES = {"ELSE", "CASE", "DEFAULT"}
 _EXTERNAL_AXES = ("E1", "E2", "E3", "E4", "E5", "E6")
 
-# The whole-text scanner: one match per line. Plain lines (a declaration of an E6POS/POS/FRAME
-# with a flat X,Y,Z[,A,B,C][, more] aggregate, a LIN/PTP/SLIN/SPTP to a name or to such an
-# aggregate, with an approximation clause and a comment without quotes) give their parts in
-# groups; any other line is the last group, for the statement reader. Plain lines change no state,
-# so a run of them takes the base in effect, and their numbers are converted column by column.
-_N = NUMBER
-_PLAIN_RE = re.compile(
-    r"^([ \t]*+(?:DECL[ \t]++(E6POS|POS|FRAME)[ \t]++([A-Za-z_]\w*+)[ \t]*+=[ \t]*+"
-    r"|(LIN|PTP|SLIN|SPTP)[ \t]++))(?:([A-Za-z_]\w*+)(?=[ \t\r;]|$))?+"
-    r"(?:(\{[ \t]*+X[ \t]++)(" + _N + r")([ \t]*+,[ \t]*+Y[ \t]++)(" + _N + r")"
-    r"([ \t]*+,[ \t]*+Z[ \t]++)(" + _N + r")"
-    r"(?:[ \t]*+,[ \t]*+A[ \t]++(" + _N + r")[ \t]*+,[ \t]*+B[ \t]++(" + _N + r")"
-    r"[ \t]*+,[ \t]*+C[ \t]++(" + _N + r"))?+((?:[ \t]*+,[^{}\n\";]*+)?+)[ \t]*+\})?+"
-    r"(?:[ \t]++C_(?:DIS|PTP|VEL|ORI))?+[ \t\r]*+(?:;[^\"\n]*+)?+$"
-    r"|^([^\n]*+)$",
-    re.M,
-)
 _CHUNK = 1 << 20  # characters per whole-text pass (bounds the per-line tuples held at once)
 _NOT_IN_TAIL = frozenset("X Y Z A B C".split()) | _JOINTS
 
@@ -1020,104 +1000,6 @@ class _Plain:
     texts: list[str]
 
 
-def _lengths(column, mask: list[bool]) -> np.ndarray:
-    return np.fromiter(map(len, compress(column, mask)), np.int64)
-
-
-def _floats(columns, mask: list[bool]) -> np.ndarray:
-    """The literals of each column at the rows ``mask``, converted in one pass: (rows, columns)."""
-    count = mask.count(True)
-    every = [literal for column in columns for literal in compress(column, mask)]
-    return np.fromiter(map(float, every), float, len(every)).reshape(len(columns), count).T
-
-
-def _places(column, mask: list[bool]) -> np.ndarray:
-    """``decimals_of`` of the literals of a column at the rows ``mask`` (int16, <= 32767)."""
-    literals = list(compress(column, mask))
-    if not literals:
-        return np.zeros(0, np.int16)
-    data = np.frombuffer(("\n".join(literals) + "\n").encode("latin-1", "replace"), np.uint8)
-    ends = np.flatnonzero(data == 10)
-    starts = np.concatenate(([0], ends[:-1] + 1))
-    points = np.flatnonzero(data == 46)
-    marks = np.flatnonzero((data == 101) | (data == 69))  # an exponent ends the decimals
-    point = np.append(points, len(data))[np.searchsorted(points, starts)]
-    mark = np.append(marks, len(data))[np.searchsorted(marks, starts)]
-    stop = np.minimum(mark, ends)
-    return np.where(point < stop, np.minimum(stop - point - 1, 32767), 0).astype(np.int16)
-
-
-def _regex_plain(lines: str, index: np.ndarray, line_at: np.ndarray, n: int) -> _Plain:
-    """The plain lines among the lines of ``lines`` by ``_PLAIN_RE``: they are lines ``index``
-    (count,) of a chunk of n lines and start at text offsets ``line_at`` (count,)."""
-    count = len(index)
-    matches = _PLAIN_RE.findall(lines)
-    del matches[count:]
-    (head, type_, name, motion, target, agg, x, sxy, y, syz, z, a, b, c, tail, _) = zip(
-        *matches, strict=True
-    )
-    del matches
-    is_decl = np.fromiter(map(bool, type_), bool, count)
-    has_agg = np.fromiter(map(bool, agg), bool, count)
-    has_target = np.fromiter(map(bool, target), bool, count)
-    is_motion = np.fromiter(map(bool, motion), bool, count)
-    plain = (is_decl & has_agg) | (is_motion & (has_agg ^ has_target))
-    info = {}
-    if has_agg.any():  # components after X..C: each distinct tail read once
-        info = {t: _tail_info(t) for t in set(compress(tail, has_agg.tolist()))}
-        if not all(ok for ok, _ in info.values()):
-            plain &= np.fromiter((info.get(t, (True,))[0] for t in tail), bool, count)
-    aggs = np.flatnonzero(plain & has_agg)
-    mask = (plain & has_agg).tolist()
-    xyz = _floats((x, y, z), mask)
-    has_abc = np.fromiter(map(bool, compress(a, mask)), bool, len(aggs))
-    abc = np.full((len(aggs), 3), np.nan)
-    if has_abc.any():
-        abc_mask = plain & has_agg
-        abc_mask[aggs[~has_abc]] = False
-        abc[has_abc] = _floats((a, b, c), abc_mask.tolist())
-    finite = np.isfinite(xyz).all(axis=1) & (np.isfinite(abc) | np.isnan(abc)).all(axis=1)
-    if not finite.all():  # a literal beyond the float range: the statement reader says where
-        plain[aggs[~finite]] = False
-        aggs, xyz, abc = aggs[finite], xyz[finite], abc[finite]
-        mask = (plain & has_agg).tolist()
-    at = _lengths(head, mask)  # the "{"
-    xo = at + _lengths(agg, mask)
-    xe = xo + _lengths(x, mask)
-    yo = xe + _lengths(sxy, mask)
-    ye = yo + _lengths(y, mask)
-    zo = ye + _lengths(syz, mask)
-    ze = zo + _lengths(z, mask)
-    starts = line_at[aggs]
-    span = (np.stack([xo, xe, yo, ye, zo, ze], axis=1) + starts[:, None]).reshape(-1, 3, 2)
-    external = {}
-    if any(moving is not None for _, moving in info.values()):
-        for k, t in enumerate(compress(tail, mask)):
-            if t and info[t][1] is not None:
-                external[k] = info[t][1]
-    tmask = (plain & has_target).tolist()
-    spread = np.zeros(n, bool)
-    spread[index] = plain
-    return _Plain(
-        plain=spread,
-        line=index[aggs],
-        decl=is_decl[aggs],
-        brace=starts + at,
-        column=at + 1,
-        xyz=xyz,
-        abc=abc,
-        span=span,
-        places=np.maximum.reduce([_places(col, mask) for col in (x, y, z)]),
-        types=list(map(sys.intern, compress(type_, mask))),  # one str per type, not per row
-        names=[n or m for n, m in zip(compress(name, mask), compress(motion, mask), strict=True)],
-        external=external,
-        use_line=index[np.flatnonzero(plain & has_target)],
-        use_column=_lengths(head, tmask) + 1,
-        motions=list(map(sys.intern, compress(motion, tmask))),
-        texts=list(compress(target, tmask)),
-    )
-
-
 _TAIL_REFUSED = re.compile(r"[{}\";\n]")
 
 
@@ -1125,7 +1007,7 @@ def _rigid_plain(
     buf: np.ndarray, text: str, starts: np.ndarray, ends: np.ndarray, count: int
 ) -> _Plain:
     """The lines ``text[starts[i]:ends[i]]`` (without CR LF) in the rigid layouts
-    (``codegen.krl.rigid``) as plain lines, their tails read as ``_PLAIN_RE`` reads them."""
+    (``codegen.krl.rigid``) as plain lines, their tails read as the statement reader reads them."""
     r = read_rigid(buf, starts, ends, text)
     external = {}
     if len(r.tail):
@@ -1165,54 +1047,12 @@ def _rigid_plain(
     )
 
 
-def _merged(a: _Plain, b: _Plain) -> _Plain:
-    """The plain lines of two readers of the same chunk (distinct lines), in line order."""
-    if not b.plain.any():
-        return a
-    plain = a.plain | b.plain
-    line = np.concatenate([a.line, b.line])
-    order = np.argsort(line, kind="stable")
-    use_line = np.concatenate([a.use_line, b.use_line])
-    use_order = np.argsort(use_line, kind="stable").tolist()
-    rank = np.empty(len(order), np.int64)
-    rank[order] = np.arange(len(order))
-    external = dict(a.external)
-    external.update((len(a.line) + k, v) for k, v in b.external.items())
-
-    def rows(x, y, by):
-        both = np.concatenate([x, y])
-        return both[by]
-
-    def items(x, y, by):
-        both = x + y
-        return [both[i] for i in by]
-
-    return _Plain(
-        plain=plain,
-        line=line[order],
-        decl=rows(a.decl, b.decl, order),
-        brace=rows(a.brace, b.brace, order),
-        column=rows(a.column, b.column, order),
-        xyz=rows(a.xyz, b.xyz, order),
-        abc=rows(a.abc, b.abc, order),
-        span=rows(a.span, b.span, order),
-        places=rows(a.places, b.places, order),
-        types=items(a.types, b.types, order.tolist()),
-        names=items(a.names, b.names, order.tolist()),
-        external={int(rank[k]): v for k, v in external.items()},
-        use_line=use_line[use_order],
-        use_column=rows(a.use_column, b.use_column, use_order),
-        motions=items(a.motions, b.motions, use_order),
-        texts=items(a.texts, b.texts, use_order),
-    )
-
-
 def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _Flow) -> int:
     """Read the lines of ``text[start:stop]`` (whole lines); the number of the next line.
 
     Offsets are read in the chunk (``part``) and moved to the text's when the rows are added."""
     part = text[start:stop]
-    buf = text_bytes(part)  # None (beyond latin-1): the regex reader alone
+    buf = text_bytes(part)  # None: beyond latin-1
     data = buf[: len(part)] if buf is not None else None
     if data is None:
         data = np.frombuffer(part.encode("latin-1", "replace"), np.uint8)
@@ -1222,19 +1062,12 @@ def _chunk(text: str, start: int, stop: int, lineno: int, scan: KrlScan, flow: _
         return lineno
     starts = np.concatenate(([0], newlines + 1))[:count]
     ends = np.append(newlines, len(part))[:count]
-    rest = np.arange(count)
-    if buf is not None:
-        bare = ends - ((buf[np.maximum(ends - 1, 0)] == 13) & (ends > starts))
-        rigid = _rigid_plain(buf, part, starts, bare, count)
-        rest = np.flatnonzero(~rigid.plain)
-    if len(rest) == count:
-        found = _regex_plain(part, rest, starts, count)
-    elif len(rest):
-        cut = zip(starts[rest].tolist(), ends[rest].tolist(), strict=True)
-        lines = "\n".join([part[a:b] for a, b in cut])
-        found = _merged(rigid, _regex_plain(lines, rest, starts[rest], count))
-    else:
-        found = rigid
+    if buf is None:  # beyond latin-1: every line to the statement reader
+        for i in range(count):
+            _line(part[starts[i] : ends[i]], start + int(starts[i]), lineno + i, scan, flow)
+        return lineno + count
+    bare = ends - ((buf[np.maximum(ends - 1, 0)] == 13) & (ends > starts))
+    found = _rigid_plain(buf, part, starts, bare, count)
     del buf, data
     plain = found.plain
     aggs, targets = found.line, found.use_line

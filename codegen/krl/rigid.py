@@ -11,8 +11,7 @@ spaces shown and an optional CR before the LF:
 ``name`` is ASCII (``[A-Za-z_][A-Za-z0-9_]*``, at most 32 characters); every number a plain
 decimal (``infra.decimals``: read exactly, what ``float`` gives). ``tail`` is empty
 or starts with a comma; the caller decides on each distinct tail (``distinct``). A line in these
-layouts reads as the regex reader (``parse._PLAIN_RE``) reads it; every other line is left to
-that reader.
+layouts reads as the statement reader reads it; every other line is left to that reader.
 
 Offsets are byte (= character) offsets in the text, whose bytes ``text_bytes`` gives; bytes are
 compared eight at a time as one 64-bit word (``infra.decimals.words_at``).
@@ -42,7 +41,7 @@ PAD = 64  # NUL bytes after the text, so that every window read (at most PAD wid
 _DECLS = ((b"DECL E6POS ", "E6POS"), (b"DECL POS ", "POS"), (b"DECL FRAME ", "FRAME"))
 _MOTIONS = ((b"LIN ", "LIN"), (b"PTP ", "PTP"), (b"SLIN ", "SLIN"), (b"SPTP ", "SPTP"))
 _CLAUSES = (b" C_DIS", b" C_PTP", b" C_VEL", b" C_ORI")
-_NAME_MAX = 32  # longer names (KRL allows 24) are left to the regex reader
+_NAME_MAX = 32  # longer names (KRL allows 24) are left to the statement reader
 _U64 = np.dtype("<u8")
 _WORD = np.zeros(256, bool)
 _WORD[np.frombuffer(b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_", np.uint8)] = True
