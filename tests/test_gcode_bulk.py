@@ -194,7 +194,7 @@ def cases(draw):
 def _walked(step, case):
     text, moves, corrected, desired, r_planes, places = case
     read = np.array([not r for r in moves.reason], bool)
-    walk = _Commanded(moves.is_cycle & read)  # may get Z, R words added
+    walk = _Commanded(moves.is_cycle & read, {})  # may get Z, R words added
     walk.cmd, walk.r_cmd = [1.0, 2.0, 50.0], 7.0  # as a previous block may leave it
     found = step(text, moves, slice(0, len(moves)), corrected, desired, r_planes, places, walk)
     edits = [np.asarray(column).tolist() for column in found]  # starts, ends, bytes, lengths
@@ -280,7 +280,8 @@ def test_edits_in_stretches_are_the_move_by_move_edits(lines, data, min_bulk, de
             mock.patch.object(rewrite, "_stretches", stretches),
             mock.patch.object(rewrite, "_MIN_BULK", min_bulk),
         ):
-            out = rewrite._gcode_edits(text, moves, rows, desired, r_planes, opts)
+            goals = (desired, desired)
+            out = rewrite._gcode_edits(text, moves, rows, goals, r_planes, opts, {})
         results.append((bytes(out), rows.new, rows.residual_mm, rows.rounding_mm))
     (a, *columns_a), (b, *columns_b) = results
     assert a == b

@@ -29,6 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from accugrid.codegen.gcode.arc import Arc, arc_of
 from accugrid.codegen.gcode.numbers import NUMBER_BYTES, literal_values
 from accugrid.codegen.program_text import check_text, decimals_of, split_lines
 from accugrid.infra.errors import InputError
@@ -106,7 +107,7 @@ _RETRACT_NAMES[[98, 99]] = "G98", "G99"
 _NAME_OBJECTS = [*_MOTION_NAMES.tolist(), *_RETRACT_NAMES[[0, 98, 99]].tolist()]  # those str
 INCH_MM = 25.4
 _ROTARY_SET = frozenset(ROTARY)
-_KEPT = frozenset(AXES + ROTARY + "RL")  # letters whose Word a move (or G10) needs
+_KEPT = frozenset(AXES + ROTARY + "RLIJKP")  # letters whose Word a move (or G10, an arc) needs
 _POSITION_LETTERS = frozenset(AXES + ROTARY + "R")
 _NONMODAL = frozenset("4 10 28 28.1 30 30.1 52 53 92 92.1 92.2 92.3".split())
 _PARAMETER_CODES = frozenset("10 28.1 30.1 52 92 92.1 92.2 92.3".split())
@@ -224,6 +225,7 @@ class GcodeMoves:
         self.repeats: dict[
             int, int
         ] = {}  # row -> a cycle's L repeat count where not 1 (0: unknown)
+        self.arcs: dict[int, Arc] = {}  # row -> the centre, plane and turns of a G2/G3 arc
 
     def __len__(self) -> int:
         return len(self.motion)
@@ -393,6 +395,7 @@ class _Modal:
     incremental: bool = False
     scale: float = 1.0
     plane: str = "17"
+    arc_absolute: bool = False  # G90.1: an arc's I, J, K are absolute (G91.1: from its start)
     retract: str = "G98"
     cycle_z: float = math.nan
     cycle_r: float = math.nan
@@ -423,6 +426,8 @@ class _Modal:
             self.scale = INCH_MM if g == "20" else 1.0
         elif g == "90" or g == "91":
             self.incremental = g == "91"
+        elif g == "90.1" or g == "91.1":
+            self.arc_absolute = g == "90.1"
         elif g in ("17", "18", "19"):
             self.plane = g
         elif g in ("98", "99"):
@@ -914,7 +919,7 @@ class _Reader:
         if state.motion in CYCLES:
             self._cycle(lineno, column, axis_words, words, block.exprs)
         else:
-            self._straight(lineno, column, axis_words, block.exprs)
+            self._straight(lineno, column, axis_words, block.exprs, words)
 
     def _rotary(self, block: _Line) -> bool:
         """Take the block's A/B/C/U/V/W (NaN when from an expression); True if it has any."""
@@ -949,7 +954,7 @@ class _Reader:
                 state.setter[i] = index
         state.pos = end
 
-    def _straight(self, lineno, column, axis_words, exprs) -> None:
+    def _straight(self, lineno, column, axis_words, exprs, words) -> None:
         s = self.state
         target = list(s.pos)
         for i, k in enumerate(AXES):
@@ -965,9 +970,9 @@ class _Reader:
             reason = reason or "axis words with G80 (no motion mode)"
             target = [math.nan] * 3
         elif s.motion in ("2", "3"):
-            reason = reason or (
-                f"arc G{s.motion}: its end point and centre would have to move together"
-            )
+            arc, why = arc_of(words, exprs, s.plane, s.arc_absolute, lineno, s.motion == "2")
+            reason = reason or why
+            self.moves.arcs[len(self.moves)] = arc
         elif s.unknown_motion:
             target = [math.nan] * 3  # where an unknown motion ends is not known either
         self._add(move, reason, target, set(axis_words) | set(exprs))

@@ -9,7 +9,7 @@ lands where it should, corrected or as programmed: a G91 cycle's X, Y from the t
 the initial level and its Z from R. A G91 cycle repeated L times has one increment for all its
 holes: corrected when their corrections agree within the written resolution, else it and the
 moves that set its start are not. A cycle line that writes no Z or R gets the words its hole
-needs. Arcs are not corrected, nor the moves that set an arc's start.
+needs. An arc moves rigidly with the moves that set its start (``codegen.gcode.arc_shift``).
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from array import array
 
 import numpy as np
 
+from accugrid.codegen.gcode.arc_shift import shift_arcs
 from accugrid.codegen.gcode.parse import RESETS, GcodeMoves, gcode_moves, modal_fill
 from accugrid.codegen.program_text import (
     MIN_PLACES_INCH,
@@ -63,7 +64,6 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
     rows.commanded[:] = ~moves.resets
     if "G80" in moves.motion:
         rows.commanded &= np.array([m != "G80" for m in moves.motion], bool)
-    _protect_arc_starts(moves, rows)
     if any(rows.reason):  # the moves with no reason
         at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))
     else:
@@ -82,30 +82,12 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
         rows.status[at[done]] = CORRECTED
         desired[at[done]] = prog[done] + back[done]
     _repeated_holes(moves, rows, desired, opts)
+    own = desired.copy()  # where each corrected move should land: its own correction
+    centre_edits = shift_arcs(moves, rows, desired, _places(moves, opts), opts)
     r_planes = _corrected_r_planes(moves, rows, opts)
-    out = _gcode_edits(text, moves, rows, desired, r_planes, opts)
+    out = _gcode_edits(text, moves, rows, (desired, own), r_planes, opts, centre_edits)
     partial_check(rows, opts)
     return Result({path: out}, rows)
-
-
-def _protect_arc_starts(moves: GcodeMoves, rows: Rows) -> None:
-    """An arc keeps its start point: the moves that set it are not corrected either."""
-    reasons = rows.reason
-    if "G2" not in moves.motion and "G3" not in moves.motion:
-        return
-    arcs = [i for i, m in enumerate(moves.motion) if m == "G2" or m == "G3"]
-    for i in arcs:
-        line = int(moves.line[i])
-        if moves.incremental[i]:
-            for j in range(i):
-                reasons[j] = reasons[j] or (
-                    f"precedes the incremental arc at line {line}, whose start must not move"
-                )
-            continue
-        why = f"sets the start of the arc at line {line}, which is not corrected"
-        for j in moves.setters[i].tolist():
-            if j >= 0 and not reasons[j]:
-                reasons[j] = why
 
 
 def _repeated_holes(moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Options) -> None:
@@ -177,12 +159,14 @@ def _corrected_r_planes(moves: GcodeMoves, rows: Rows, opts: Options) -> np.ndar
 
 class _Commanded:
     """The walk's state between moves: ``cmd`` where the rewritten program leaves the tool (mm,
-    NaN: unknown), the sticky cycle depth ``cycle_z`` and R plane ``r_cmd`` as written (mm), and
-    where each corrected move reaches (``reached_rows``, 3 per move, of the moves ``reached_at``).
+    NaN: unknown), the sticky cycle depth ``cycle_z`` and R plane ``r_cmd`` as written (mm),
+    where each corrected move reaches (``reached_rows``, 3 per move, of the moves ``reached_at``)
+    and the other edits of some moves (``extra``).
     """
 
-    def __init__(self, fill: np.ndarray) -> None:
+    def __init__(self, fill: np.ndarray, extra: dict) -> None:
         self.fill = fill  # (N,) cycles read without a reason: may get Z, R words added
+        self.extra = extra  # move -> its other edits [(start, end, new text)]
         self.cmd = [math.nan] * 3
         self.il = math.nan  # the initial level of the run of cycles (mm, as commanded)
         self.cycle_z = self.r_cmd = math.nan
@@ -194,29 +178,38 @@ def _gcode_edits(
     text: str,
     moves: GcodeMoves,
     rows: Rows,
-    desired: np.ndarray,
+    goals: tuple[np.ndarray, np.ndarray],
     r_planes: np.ndarray,
     opts: Options,
+    extra: dict[int, list[tuple[int, int, str]]],
 ) -> bytearray:
     """Walk the program with the commanded (rewritten) position; the new program's bytes.
 
-    ``desired`` (N, 3) mm: where each move should land (program frame); ``r_planes`` (N,) mm:
-    corrected R planes (NaN: keep). Stretches of absolute moves (none a G28/G30/G53) are done
-    in bulk (``_bulk_block``), the rest move by move (``_walk_block``), where increments (which
-    depend on what was written before) are formatted on the way."""
+    ``goals``: (desired, own) (N, 3) mm each: where each move's written axes should land and
+    where it should land by its own correction (program frame; they differ where an arc's shift
+    moves it), which the report's residual is measured from; ``r_planes`` (N,) mm: corrected R
+    planes (NaN: keep); ``extra``: other edits by move, (start, end, new text) each (an arc's
+    centre words). Stretches of absolute moves (none a G28/G30/G53, none with ``extra`` edits)
+    are done in bulk (``_bulk_block``), the rest move by move (``_walk_block``), where
+    increments (which depend on what was written before) are formatted on the way."""
+    desired, own = goals
     out = ByteSplicer(text)
     places = _places(moves, opts)
     corrected = rows.status == CORRECTED
     read = np.fromiter(map(bool, moves.reason), bool, len(moves)) if any(moves.reason) else False
-    walk = _Commanded(moves.is_cycle & ~read)
+    walk = _Commanded(moves.is_cycle & ~read, extra)
+    walked = moves.incremental | moves.resets
+    if extra:
+        walked = walked.copy()
+        walked[list(extra)] = True
     for first in range(0, len(moves), _BLOCK):
-        for part, step in _stretches(moves, slice(first, first + _BLOCK)):
+        for part, step in _stretches(walked, slice(first, first + _BLOCK)):
             out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
     if walk.reached_at:
         at = np.frombuffer(walk.reached_at, dtype=np.int64)
         reached = np.frombuffer(walk.reached_rows, dtype=float).reshape(-1, 3)
         off = np.abs(reached - desired[at])
-        residual = np.linalg.norm(off, axis=1)
+        residual = np.linalg.norm(reached - own[at], axis=1)
         wrote = moves.word_start[at, :3] >= 0
         off_written = np.where(wrote, off, 0.0)
         rounding = np.maximum(np.maximum(off_written[:, 0], off_written[:, 1]), off_written[:, 2])
@@ -229,11 +222,11 @@ def _gcode_edits(
 _MIN_BULK = 256  # moves: a shorter stretch of absolute moves is walked with its neighbours
 
 
-def _stretches(moves: GcodeMoves, block: slice):
+def _stretches(walked: np.ndarray, block: slice):
     """(slice, step) of each stretch of the moves ``block``, in order: ``_bulk_block`` for runs
-    of at least ``_MIN_BULK`` absolute moves that do not reset the position, ``_walk_block`` for
-    the moves between them."""
-    walked = moves.incremental[block] | moves.resets[block]
+    of at least ``_MIN_BULK`` moves not ``walked`` (N,) (absolute moves that do not reset the
+    position, without other edits), ``_walk_block`` for the moves between them."""
+    walked = walked[block]
     n = len(walked)
     runs = np.flatnonzero(np.diff(walked, prepend=True, append=True)).reshape(-1, 2)
     done = 0
@@ -289,6 +282,8 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         if motion in RESETS:
             cmd = [math.nan] * 3
             continue
+        if walk.extra and first + b in walk.extra:
+            edits.extend(walk.extra[first + b])
         if is_cycle and moves.first_cycle[first + b]:
             walk.il = cmd[2]
         if is_cycle and inc:
