@@ -1,19 +1,29 @@
-"""Arcs and circles, each on its own minimal program: KRL ``CIRC``/``SCIRC`` auxiliary and end
+"""Arcs and circles, each on its own minimal program: G2/G3 arcs and helices in the three planes
+(I/J/K from the start or absolute, R format, P turns), chained arcs, an orbital hole, arcs after
+G91 moves, an arc whose correction varies too much; KRL ``CIRC``/``SCIRC`` auxiliary and end
 points (points, each corrected at its own position).
 
 Expected values are recomputed here from the grid's own interpolation of each point (``GridModel``
-read from the grid file the cell names), never from the rewrite under test.
+read from the grid file the cell names, or built here), the arc's centre worked out by hand from
+its words, and, for G-code, LinuxCNC's ``rs274``: its ARC_FEED gives each arc's end and centre
+as it reads the rewritten program; never from the rewrite under test.
 """
 
 from __future__ import annotations
 
 import csv
+import re
+import subprocess
 from pathlib import Path
 
 import numpy as np
+import pytest
 from rewrite_helpers import write_cell
+from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import main
+from accugrid.codegen.gcode.rewrite import rewrite_gcode
+from accugrid.codegen.rewrite import Options
 from accugrid.compensation import GridModel
 
 
@@ -81,3 +91,205 @@ def test_krl_circ_aux_and_end_points_are_each_corrected_at_their_own_position(tm
         if "CIRC" in r["name"] or r["name"] in ("XAUX", "XEND")
     ]
     assert len(rows) == 8 and all(r["status"] == "corrected" for r in rows)
+
+
+# ---------------------------------------------------------------- G-code arcs
+
+T_PROGRAM = np.eye(4)  # robot_T_program: Z down, X reversed, away from the robot's origin
+T_PROGRAM[:3, :3] = Rotation.from_euler("ZYX", [0.0, 180.0, 0.0], degrees=True).as_matrix()
+T_PROGRAM[:3, 3] = [500.0, -200.0, 100.0]
+HALF = 0.5e-3 + 1e-9  # half the last written decimal (3 decimals), mm
+PLANE_AXES = {"G17": (0, 1, 2), "G18": (2, 0, 1), "G19": (1, 2, 0)}  # rs274's ARC_FEED order
+ARC_RE = re.compile(r"ARC_FEED\(([^)]*)\)")
+PLANE_RE = re.compile(r"SELECT_PLANE\(CANON_PLANE_(XY|XZ|YZ)\)")
+MOVE_RE = re.compile(r"(STRAIGHT_TRAVERSE|STRAIGHT_FEED|ARC_FEED)\(([^)]*)\)")
+CANON_PLANES = {"XY": "G17", "XZ": "G18", "YZ": "G19"}
+
+
+def _grid(gradient: float) -> GridModel:
+    """A grid over +-600 mm (100 mm step) of e(P) = (0.25, -0.125, 0.375) mm plus a linear
+    field of ``gradient`` mm/mm."""
+    axes = [np.arange(-600.0, 601.0, 100.0)] * 3
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    x, y, z = pts.T
+    e = np.array([0.25, -0.125, 0.375]) + gradient * np.stack([x + z, 2 * z - y, -y], axis=1)
+    return GridModel.from_measurements((pts, pts - e))
+
+
+GENTLE, STEEP = _grid(1e-5), _grid(2e-4)
+
+
+def corrected(model: GridModel, program_xyz) -> np.ndarray:
+    """Where program-frame points (N, 3) must be commanded: p + R^T e(T p), e from the grid."""
+    p = np.atleast_2d(np.asarray(program_xyz, float))
+    robot = p @ T_PROGRAM[:3, :3].T + T_PROGRAM[:3, 3]
+    return p + (model.correct(robot) - robot) @ T_PROGRAM[:3, :3]
+
+
+def gcode_rewrite(text: str, model: GridModel):
+    """The rewritten text and its report rows (3 decimals; positions left uncorrected are kept
+    and reported)."""
+    opts = Options(
+        model=model, base_data={}, robot_T_program=T_PROGRAM, decimals=3, allow_partial=True
+    )
+    result = rewrite_gcode("p.ngc", text, opts)
+    return result.texts["p.ngc"], list(result.rows)
+
+
+def run_rs274(rs274, folder: Path, text: str) -> str:
+    path = folder / "arc.ngc"
+    path.write_text(text)
+    run = subprocess.run(
+        [rs274, "-g", str(path)], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert run.returncode == 0 and "PROGRAM_END()" in run.stdout, run.stdout[-800:] + run.stderr
+    assert "USE_LENGTH_UNITS(CANON_UNITS_MM)" in run.stdout
+    return run.stdout
+
+
+def arcs_of(out: str) -> list[dict]:
+    """Each ARC_FEED of rs274's output: its plane, start (the previous move's end), end and
+    centre (3 mm each; the centre's helix coordinate NaN), turns; and the command names."""
+    plane, pos, arcs = "G17", np.full(3, np.nan), []
+    for line in out.splitlines():
+        found = PLANE_RE.search(line)
+        if found:
+            plane = CANON_PLANES[found.group(1)]
+        move = MOVE_RE.search(line)
+        if not move:
+            continue
+        values = [float(v) for v in move.group(2).split(",")]
+        if move.group(1) != "ARC_FEED":
+            pos = np.array(values[:3])
+            continue
+        a, b, h = PLANE_AXES[plane]
+        end, centre = np.empty(3), np.full(3, np.nan)
+        end[[a, b, h]] = values[0], values[1], values[5]
+        centre[[a, b]] = values[2], values[3]
+        arcs.append({"plane": plane, "start": pos, "end": end, "centre": centre})
+        arcs[-1]["turns"] = int(values[4])
+        pos = end
+    return arcs
+
+
+def commands(out: str) -> list[str]:
+    """The canonical commands rs274 printed, by name, in order."""
+    return [line.split("N.....")[-1].split("(")[0].strip() for line in out.splitlines()]
+
+
+def radii(arc: dict) -> tuple[float, float]:
+    a, b, _ = PLANE_AXES[arc["plane"]]
+    c = arc["centre"][[a, b]]
+    return float(np.hypot(*(arc["start"][[a, b]] - c))), float(np.hypot(*(arc["end"][[a, b]] - c)))
+
+
+def check_rigid(rs274, tmp_path, text: str, atol: float = HALF) -> list[dict]:
+    """Rewrite ``text``: every move corrected; rs274 runs the same commands; each arc's start,
+    centre and end after rewriting are those before plus the correction at its centre (the
+    helix axis halfway from start to end) within ``atol`` (half the written resolution for an
+    arc of its own; the resolution for arcs that share one shift), its radii those before
+    exactly. The arcs after."""
+    model = GENTLE
+    before = run_rs274(rs274, tmp_path, text)
+    new, rows = gcode_rewrite(text, model)
+    assert all(r.status == "corrected" for r in rows), [(r.line, r.reason) for r in rows]
+    after = run_rs274(rs274, tmp_path, new)
+    assert commands(after) == commands(before)
+    old_arcs, new_arcs = arcs_of(before), arcs_of(after)
+    assert len(old_arcs) == len(new_arcs) > 0
+    for old, arc in zip(old_arcs, new_arcs, strict=True):
+        h = PLANE_AXES[old["plane"]][2]
+        centre = old["centre"].copy()
+        centre[h] = (old["start"][h] + old["end"][h]) / 2
+        shift = corrected(model, centre)[0] - centre
+        for key in ("start", "end"):
+            np.testing.assert_allclose(arc[key], old[key] + shift, atol=atol)
+        keep = ~np.isnan(old["centre"])
+        np.testing.assert_allclose(arc["centre"][keep], (old["centre"] + shift)[keep], atol=atol)
+        assert radii(arc) == pytest.approx(radii(old), abs=1e-9)  # rs274 prints 4 decimals
+        assert arc["turns"] == old["turns"]
+        assert np.abs(shift).max() > 0.1  # the field moves it measurably
+    return new_arcs
+
+
+@pytest.mark.parametrize(
+    "arc",
+    [
+        "G17 G2 X320 Y110 I10 J0",  # a half circle, I J from the start
+        "G17 G3 X310 Y120 I0 J10 Z-20 P2",  # a helix of 1.25 turns down to Z-20
+        "G17 G90.1 G2 X320 Y110 I310 J110",  # absolute centre
+        "G17 G2 X310 Y120 R10",  # R format, a quarter circle
+        "G17 G3 X310 Y120 R-10",  # R format, three quarters
+        "G18 G2 X310 Z-30 I0 K-10 Y115 P3",  # XZ plane, helix along Y
+        "G18 G90.1 G3 X320 Z-20 I310 K-20",
+        "G19 G3 Y130 Z-20 J10 K0 X305",  # YZ plane, helix along X
+        "G19 G2 Y100 Z-20 R10",
+    ],
+)
+def test_arc_moves_rigidly_by_the_correction_at_its_centre(rs274, tmp_path, arc):
+    """One arc (or helix) after the moves that set its start at (300, 110, -20): start, centre
+    and end shifted by one vector, the correction at its centre, radius kept exactly."""
+    text = f"G21 G90 F100\nG0 X300 Y110 Z5\nG1 Z-20\n{arc}\nG0 Z10\nM2\n"
+    check_rigid(rs274, tmp_path, text)
+
+
+def test_an_orbital_hole_moves_as_one(rs274, tmp_path):
+    """Helical (orbital) drilling of a 20 mm hole at (300, 100): a plunge to the top, three
+    helix turns of 2 mm down, a full circle at the bottom with no end words, back to the centre:
+    every arc chained to the last, one shift for the whole hole (the correction at its centre),
+    the centre words as written."""
+    text = (
+        "G21 G90 G17 F200\nG0 X310 Y100 Z5\nG1 Z0\nG2 X310 Y100 Z-2 I-10 J0\n"
+        "G2 X310 Y100 Z-4 I-10 J0\nG2 X310 Y100 Z-6 I-10 J0\nG2 I-10 J0\nG1 X300 Y100\n"
+        "G0 Z5\nM2\n"
+    )
+    arcs = check_rigid(rs274, tmp_path, text)
+    assert len(arcs) == 4
+    shifts = np.array([a["centre"][:2] - [300.0, 100.0] for a in arcs])
+    assert np.ptp(shifts, axis=0).max() == 0.0  # one shift for all
+    new, _ = gcode_rewrite(text, GENTLE)
+    assert new.count("I-10 J0") == 4
+
+
+ENDS = [[280.0, 105.0, -20.0], [300.0, 105.0, -20.0], [310.0, 115.0, -20.0], [300.0, 125.0, -20.0]]
+
+
+def test_chained_arcs_and_incremental_moves(rs274, tmp_path):
+    """An S of two arcs (the second starts where the first ends) reached by G91 moves, then a
+    G91 arc and a G91 arc with an absolute (G90.1) centre: all land rigidly shifted, the
+    increments rewritten from the shifted positions."""
+    text = (
+        "G21 G90 G17 F100\nG0 X250 Y100 Z5\nG91 G0 X10 Y5\nG1 Z-25\n"
+        "G90 G2 X280 Y105 I10 J0\nG3 X300 Y105 I10 J0\n"
+        "G91 G2 X10 Y10 I10 J0\nG90.1 G3 X-10 Y10 I300 J115\nG91.1 G90 G0 Z5\nM2\n"
+    )
+    arcs = check_rigid(rs274, tmp_path, text, atol=1e-3 + 1e-9)
+    # chained end to start and at one depth: one shift, each arc within 0.001 mm of its own
+    shifts = [arc["end"] - end for arc, end in zip(arcs, ENDS, strict=True)]
+    np.testing.assert_allclose(shifts, [shifts[0]] * 4, atol=1e-9)
+
+
+def test_an_arc_whose_correction_varies_too_much_is_reported(rs274, tmp_path):
+    """Where the correction varies across an arc by more than the written resolution, it is not
+    corrected, nor are the moves that set its start: the report says by how much, and rs274
+    cuts the same arc as before. The move after it is corrected."""
+    text = "G21 G90 G17 F100\nG0 X300 Y110 Z5\nG1 Z-20\nG2 X340 Y110 I20 J0\nG0 Z10\nM2\n"
+    new, rows = gcode_rewrite(text, STEEP)
+    assert [r.status for r in rows] == ["skipped", "skipped", "skipped", "corrected"]
+    assert "correction varies by" in rows[2].reason and " mm across the arc" in rows[2].reason
+    assert "sets the start of the arc at line 4" in rows[0].reason
+    assert new.splitlines()[:4] == text.splitlines()[:4]
+    assert arcs_of(run_rs274(rs274, tmp_path, new)) and all(
+        np.array_equal(a[k], b[k], equal_nan=True)
+        for a, b in zip(
+            arcs_of(run_rs274(rs274, tmp_path, new)),
+            arcs_of(run_rs274(rs274, tmp_path, text)),
+            strict=True,
+        )
+        for k in ("start", "end", "centre")
+    )
+    # independently: the correction at its farthest points differs from the centre's by more
+    # than 0.001 mm (what 3 decimals can write)
+    ends = corrected(STEEP, [[300.0, 110.0, -20.0], [340.0, 110.0, -20.0], [320.0, 110.0, -20.0]])
+    spread = ends - [[300.0, 110.0, -20.0], [340.0, 110.0, -20.0], [320.0, 110.0, -20.0]]
+    assert np.abs(spread[:2] - spread[2]).max() > 0.001
