@@ -293,3 +293,25 @@ def test_an_arc_whose_correction_varies_too_much_is_reported(rs274, tmp_path):
     ends = corrected(STEEP, [[300.0, 110.0, -20.0], [340.0, 110.0, -20.0], [320.0, 110.0, -20.0]])
     spread = ends - [[300.0, 110.0, -20.0], [340.0, 110.0, -20.0], [320.0, 110.0, -20.0]]
     assert np.abs(spread[:2] - spread[2]).max() > 0.001
+
+
+def test_the_side_an_arc_sweeps_decides(tmp_path):
+    """Two half circles between the same points about the same centre: the correction is
+    constant where robot y >= 0 (program y >= 200) and varies below. G3 sweeps the constant
+    side and is corrected; G2 sweeps the other side and is reported (its ends and centre alone
+    would not tell them apart)."""
+    axes = [np.arange(-600.0, 601.0, 100.0)] * 3
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    e = np.tile([0.25, -0.125, 0.375], (len(pts), 1))
+    e[:, 2] += 2e-4 * np.minimum(pts[:, 1], 0.0)
+    half = GridModel.from_measurements((pts, pts - e))
+    ends = corrected(half, [[320.0, 200.0, -20.0], [280.0, 200.0, -20.0], [300.0, 200.0, -20.0]])
+    assert np.ptp(ends[:, 2]) == pytest.approx(0.0, abs=1e-12)  # ends and centre agree
+    for arc, status in (("G3", "corrected"), ("G2", "skipped")):
+        text = f"G21 G90 G17 F100\nG0 X320 Y200 Z5\nG1 Z-20\n{arc} X280 Y200 I-20 J0\nM2\n"
+        rows = gcode_rewrite(text, half)[1]
+        assert rows[2].status == status, rows[2].reason
+    bottom = corrected(half, [[300.0, 180.0, -20.0]])[0, 2] - (-20.0)  # the lowest point
+    spread = abs(bottom - (ends[2, 2] + 20.0))
+    assert f"the Z correction varies by {spread:.4f} mm across the arc" in rows[2].reason
+    assert spread > 0.002
