@@ -315,3 +315,50 @@ def test_the_side_an_arc_sweeps_decides(tmp_path):
     spread = abs(bottom - (ends[2, 2] + 20.0))
     assert f"the Z correction varies by {spread:.4f} mm across the arc" in rows[2].reason
     assert spread > 0.002
+
+
+# ---------------------------------------------------------------- G18/G19 canned cycles
+
+
+def feeds(out: str) -> tuple[np.ndarray, np.ndarray]:
+    """The hole bottoms (STRAIGHT_FEED ends) of rs274's cycle expansion and the point each feed
+    starts from (its R plane)."""
+    moves = [
+        (m.group(1), [float(v) for v in m.group(2).split(",")[:3]]) for m in MOVE_RE.finditer(out)
+    ]
+    at = [i for i, (kind, _) in enumerate(moves) if kind == "STRAIGHT_FEED"]
+    return np.array([moves[i][1] for i in at]), np.array([moves[i - 1][1] for i in at])
+
+
+@pytest.mark.parametrize(
+    ("plane", "axis", "lines", "atol"),
+    [
+        ("G18", 1, ["G81 X320 Z-10 Y-5 R2", "X330 Z-20", "G91 X5 Z5 Y-4 R-3", "X5 Z-5"], HALF),
+        ("G19", 0, ["G82 P0.2 Y110 Z-10 X-5 R2", "Y120 Z-20 X-8", "G91 Y5 Z5 R-3"], HALF),
+        # one increment for the 3 holes of L3: their corrections agree within 0.001 mm
+        ("G18", 1, ["G99 G81 X310 Z-15 Y-5 R2", "G98 X340 R4", "G91 G99 X5 Y-2 R-1 L3"], 1e-3),
+    ],
+)
+def test_side_plane_cycles_drill_their_corrected_holes(rs274, tmp_path, plane, axis, lines, atol):
+    """Canned cycles in G18 (the cycle's axis Y: holes at X, Z) and G19 (axis X: holes at Y, Z),
+    absolute and G91, continuation lines with and without a depth: the holes and R planes rs274
+    drills for the rewritten program are the independent corrections of those it drills for
+    the original (each hole on all three axes, the R plane along the cycle's axis), within half
+    the written resolution (the resolution for the holes of one repeated G91 block)."""
+    text = (
+        "\n".join(
+            [f"G21 G90 {plane} G98 F100", "G0 X300 Y100 Z10", *lines, "G80", "G90 G0 X300", "M2"]
+        )
+        + "\n"
+    )
+    before = run_rs274(rs274, tmp_path, text)
+    bottoms, r_points = feeds(before)
+    new, rows = gcode_rewrite(text, GENTLE)
+    assert all(r.status == "corrected" for r in rows), [(r.line, r.reason) for r in rows]
+    after = run_rs274(rs274, tmp_path, new)
+    new_bottoms, new_r = feeds(after)
+    assert len(new_bottoms) == len(bottoms)
+    np.testing.assert_allclose(new_bottoms, corrected(GENTLE, bottoms), atol=atol + 1e-9)
+    want_r = corrected(GENTLE, r_points)[:, axis]
+    np.testing.assert_allclose(new_r[:, axis], want_r, atol=atol + 1e-9)
+    assert np.abs(new_bottoms - bottoms).max() > 0.1

@@ -210,7 +210,8 @@ def test_bulk_walk_walks_as_the_move_by_move_walk(case):
     if case is None:
         return
     moves = case[1]
-    if not len(moves) or moves.incremental.any() or {"G28", "G30", "G53"} & set(moves.motion):
+    walked = moves.incremental.any() or (moves.cycle_axis != 2).any()  # G91, G18/G19 cycles
+    if not len(moves) or walked or {"G28", "G30", "G53"} & set(moves.motion):
         return  # no block, or one _gcode_edits walks move by move
     bulk, slow = _walked(_bulk_block, case), _walked(_walk_block, case)
     assert bulk[0] == slow[0]

@@ -76,7 +76,7 @@ def test_g98_retracts_to_the_initial_level_of_the_run():
         ("G0 X0 Y0 Z0\nG3 X0 Y0 I5 P0.5\n", "not a number of turns"),
         ("G0 X0 Y0 Z0\nG41 D1 G1 X10\n", "cutter compensation"),
         ("G0 Z5\n", "X,Y not known"),
-        ("G0 X0 Y0 Z0\nG18 G81 X1 Z-1 R1\n", "plane G18"),
+        ("G0 X0 Y0 Z0\nG18 G81 X1 Z-1 R1\n", "without an R plane or Y depth"),
         ("G0 X0 Y0 Z0\nG28\nG91 G81 X1 Y1 Z-1 R1\n", "X,Y,Z not known"),
         ("G0 X0 Y0 Z0\nG91 G81 X1 Y1 Z-1 R1 L0.5\n", "not a repeat count"),
         ("G0 X0 Y0 Z0\nG91 G81 X1 Y1 Z-1 R1 L1000000000\n", "more than 10000 repeats"),

@@ -4,9 +4,10 @@ each number, for pre-flight correction.
 Follows the modal state a CAM post relies on: motion mode (G0/G1/G2/G3, canned cycles G73/G81-G89
 with G98/G99 (G98 back to the initial level, the Z where the run of cycle blocks began), sticky Z
 and R and, under G91, X and Y from the tool, R from the initial level, Z from R and L repeats, as
-LinuxCNC reads them), G90/G91 (incremental targets are made absolute), G20/G21
-(targets in mm; ``scale`` converts back), G17/G18/G19, N-numbers, ``( )`` and ``;`` comments,
-words in any order and case, with or without spaces, and parameter assignments (``#1 = 5``,
+LinuxCNC reads them; in G18 and G19 the cycle's axis is Y and X), arcs (their centre, plane and
+turns, ``codegen.gcode.arc``; G90.1/G91.1), G90/G91 (incremental targets are made absolute),
+G20/G21 (targets in mm; ``scale`` converts back), G17/G18/G19, N-numbers, ``( )`` and ``;``
+comments, words in any order and case, with or without spaces, and parameter assignments (``#1 = 5``,
 ``#<_z> = 0.4``). G54 is the program frame (the power-on default). Reported instead of guessed:
 anything that moves the program frame in a way the cell does not describe (G55-G59.3 until G54,
 G92/G52/G92.3 until G92.1/G92.2, G10, G68/G51 until G69/G50, cutter compensation until G40), a
@@ -37,6 +38,7 @@ from accugrid.infra.errors import InputError
 __all__ = [
     "AXES",
     "CYCLES",
+    "CYCLE_AXIS",
     "RESETS",
     "INCH_MM",
     "ROTARY",
@@ -139,6 +141,8 @@ MAX_REPEATS = 10_000  # a canned cycle's L beyond this is reported (each hole is
 WORD_LETTERS = "XYZR"  # the words a move keeps, in the order its ``words`` dict lists them
 RESETS = frozenset(("G28", "G30", "G53"))  # moves after which the position is not known
 _F_INCREMENTAL, _F_CYCLE, _F_RESETS, _F_G99, _F_FIRST = 1, 2, 4, 8, 16  # ``GcodeMoves`` flags
+_F_G18, _F_G19 = 32, 64  # a canned cycle in the XZ plane (its axis Y) or the YZ plane (X)
+CYCLE_AXIS = {"17": 2, "18": 1, "19": 0}  # a canned cycle's axis (depth, R) in each plane
 
 
 class Word(NamedTuple):
@@ -197,7 +201,8 @@ class GcodeMoves:
     the program frame (NaN where unknown); ``scale`` and ``r_mm`` (N,) mm; ``incremental``,
     ``is_cycle``, ``resets`` (a G28/G30/G53 move, after which the position is not known),
     ``g99`` (a cycle retracting to R) and ``first_cycle`` (the first cycle block of a run: it sets
-    the initial level) (N,) bool; ``setters`` (N, 3) int (-1: none);
+    the initial level) (N,) bool; ``cycle_axis`` (N,) a cycle's axis (2: Z in G17, 1: Y in
+    G18, 0: X in G19; 2 for other moves); ``setters`` (N, 3) int (-1: none);
     ``word_start``, ``word_end`` (N, 4) text offsets of the X, Y, Z, R numbers (-1: not written)
     and ``word_value`` (N, 4) their values in program units; ``rotary_index`` (N,) int into
     ``rotaries`` (the distinct rotary dicts, each once); ``motion``, ``reason``, ``retract``
@@ -296,6 +301,7 @@ class GcodeMoves:
             state.incremental * _F_INCREMENTAL
             + bool(cycle) * _F_CYCLE
             + (cycle == 2) * _F_FIRST
+            + bool(cycle) * (_F_G18 * (state.plane == "18") + _F_G19 * (state.plane == "19"))
             + (motion in RESETS) * _F_RESETS
             + (retract == "G99") * _F_G99
         )
@@ -341,6 +347,7 @@ class GcodeMoves:
         self.first_cycle = (flags & _F_FIRST) != 0
         self.resets = (flags & _F_RESETS) != 0
         self.g99 = (flags & _F_G99) != 0
+        self.cycle_axis = np.where(flags & _F_G18, 1, np.where(flags & _F_G19, 0, 2))
         self.rotary_index = self._rotary[:n]
         return self
 
@@ -978,12 +985,16 @@ class _Reader:
         self._add(move, reason, target, set(axis_words) | set(exprs))
 
     def _cycle(self, lineno, column, axis_words, words, exprs) -> None:
-        """A canned-cycle block: its (first) hole. Under G91, X and Y are increments from where
-        the tool is (repeated L times), R from the current Z and Z from R (as LinuxCNC)."""
+        """A canned-cycle block: its (first) hole. The cycle's axis is Z in G17, Y in G18, X in
+        G19 (its word the depth, R a level on it), the hole's position the other two axes (as
+        LinuxCNC reads them). Under G91 those two are increments from where the tool is
+        (repeated L times), R from the initial level and the depth from R."""
         s = self.state
-        if "Z" in axis_words:
-            s.cycle_z = axis_words["Z"].value * s.scale
-        elif "Z" in exprs:
+        axis = CYCLE_AXIS[s.plane]
+        depth = AXES[axis]
+        if depth in axis_words:
+            s.cycle_z = axis_words[depth].value * s.scale
+        elif depth in exprs:
             s.cycle_z = math.nan
         move_words = dict(axis_words)
         if "R" in words:
@@ -1005,9 +1016,11 @@ class _Reader:
                 reason = reason or f"canned cycle L{words['L'].literal}: not a repeat count"
         if "L" in exprs:
             reason = reason or f"canned cycle {exprs['L']}: the repeat count is not known"
-        step = [0.0, 0.0]  # X, Y increment of each repeat (G91)
-        first = list(s.pos[:2])
-        for i, k in enumerate("XY"):
+        step = [0.0, 0.0, 0.0]  # the increment of each repeat (G91), 0 on the cycle's axis
+        first = list(s.pos)
+        for i, k in enumerate(AXES):
+            if i == axis:
+                continue
             if k in axis_words:
                 value = axis_words[k].value * s.scale
                 step[i] = value if s.incremental else 0.0
@@ -1016,26 +1029,25 @@ class _Reader:
                 first[i] = step[i] = math.nan
         first_of_run = s.cycle_il is None
         if first_of_run:
-            s.cycle_il = s.pos[2]
+            s.cycle_il = s.pos[axis]
         r_level = s.cycle_il + s.cycle_r if s.incremental else s.cycle_r
         bottom = r_level + s.cycle_z if s.incremental else s.cycle_z
-        target = (first[0], first[1], bottom)
-        if s.plane != "17":
-            reason = reason or f"canned cycle in plane G{s.plane} (only G17 is read)"
-        elif math.isnan(s.cycle_r) or math.isnan(s.cycle_z):
-            reason = reason or "canned cycle without an R plane or Z depth"
+        first[axis] = bottom
+        if math.isnan(s.cycle_r) or math.isnan(s.cycle_z):
+            reason = reason or f"canned cycle without an R plane or {depth} depth"
         clear = r_level if s.retract == "G99" else max(s.cycle_il, r_level)
-        last = [first[i] + (repeats - 1) * step[i] for i in range(2)]
+        last = [first[i] + (repeats - 1) * step[i] for i in range(3)]
         if "L" in exprs or ("L" in words and repeats == 1 and words["L"].value != 1):
             repeats = 0  # not known: under G91 neither is where its holes end
             if s.incremental:
-                last = [math.nan, math.nan]
+                last = [math.nan] * 3
+        last[axis] = clear
         if repeats != 1:
             self.moves.repeats[len(self.moves)] = repeats
-        move = (lineno, column, "G" + s.motion, target, move_words)
-        written = set(axis_words) | set(exprs) | {"Z"}
+        move = (lineno, column, "G" + s.motion, tuple(first), move_words)
+        written = set(axis_words) | set(exprs) | {depth}
         cycle = 2 if first_of_run else 1
-        self._add(move, reason, [last[0], last[1], clear], written, cycle=cycle, r_mm=r_level)
+        self._add(move, reason, last, written, cycle=cycle, r_mm=r_level)
 
 
 def _expression_reason(exprs: dict[str, str], lineno: int) -> str:

@@ -104,9 +104,10 @@ def _repeated_holes(moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Op
     for i in repeated:
         if rows.status[i] != CORRECTED:
             continue
-        step = np.nan_to_num(moves.word_value[i, :2]) * moves.scale[i]
+        step = np.nan_to_num(moves.word_value[i, :3]) * moves.scale[i]
+        step[moves.cycle_axis[i]] = 0.0  # the hole's position moves, not its depth
         k = np.arange(1, moves.repeats[i])[:, None]
-        holes = moves.target[i] + np.column_stack([k * step, np.zeros(len(k))])
+        holes = moves.target[i] + k * step
         robot = transform_points(t, holes)
         abc = np.array([moves.rotaries[moves.rotary_index[i]].get(k, math.nan) for k in "ABC"])
         rotations = np.repeat(rotations_of(t[:3, :3], abc[None]), len(holes), axis=0)
@@ -131,7 +132,8 @@ def _repeated_holes(moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Op
             f"sets the start of the G91 cycle at line {moves.line[i]}, repeated {count}, which is "
             "not corrected"
         )
-        for j in moves.setters[i, :2].tolist():
+        axes = [k for k in range(3) if k != moves.cycle_axis[i]]
+        for j in moves.setters[i, axes].tolist():
             if j >= 0 and rows.status[j] == CORRECTED:
                 rows.status[j] = SKIPPED
                 rows.reason[j] = why
@@ -143,17 +145,19 @@ def _repeated_holes(moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Op
 def _corrected_r_planes(moves: GcodeMoves, rows: Rows, opts: Options) -> np.ndarray:
     """(N,) corrected R plane (mm) of each corrected cycle that writes R; NaN: keep R.
 
-    The R point is (X, Y, R) of the hole; only its Z correction can be written (in its R word,
-    or one added to its line)."""
+    The R point is the hole's with R on the cycle's axis (Z in G17: (X, Y, R)); only its
+    correction along that axis can be written (in its R word, or one added to its line)."""
     out = np.full(len(moves), np.nan)
     idx = np.flatnonzero(moves.is_cycle & ~np.isnan(moves.r_mm) & (rows.status == CORRECTED))
     if len(idx):
-        pts = np.column_stack([moves.target[idx, 0], moves.target[idx, 1], moves.r_mm[idx]])
+        pts = moves.target[idx].copy()
+        k, axis = np.arange(len(idx)), moves.cycle_axis[idx]
+        pts[k, axis] = moves.r_mm[idx]
         t = opts.robot_T_program
         robot = transform_points(t, pts)
         corrected = correct_points(robot, rows, idx, opts, mark=False)
         back = rows_times(corrected - robot, t[:3, :3])
-        out[idx] = pts[:, 2] + back[:, 2]  # NaN where the R point is outside: R kept
+        out[idx] = pts[k, axis] + back[k, axis]  # NaN where the R point is outside: R kept
     return out
 
 
@@ -198,9 +202,8 @@ def _gcode_edits(
     corrected = rows.status == CORRECTED
     read = np.fromiter(map(bool, moves.reason), bool, len(moves)) if any(moves.reason) else False
     walk = _Commanded(moves.is_cycle & ~read, extra)
-    walked = moves.incremental | moves.resets
+    walked = moves.incremental | moves.resets | (moves.cycle_axis != 2)  # G18/G19 cycles too
     if extra:
-        walked = walked.copy()
         walked[list(extra)] = True
     for first in range(0, len(moves), _BLOCK):
         for part, step in _stretches(walked, slice(first, first + _BLOCK)):
@@ -263,6 +266,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         desired[block].tolist(),
         moves.r_mm[block].tolist(),
         moves.retract[block],
+        moves.cycle_axis[block].tolist(),
         strict=True,
     )
     cmd, cycle_z, r_cmd = walk.cmd, walk.cycle_z, walk.r_cmd
@@ -278,6 +282,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         goals,
         r_mm,
         retract,
+        axis,
     ) in enumerate(columns):
         if motion in RESETS:
             cmd = [math.nan] * 3
@@ -285,7 +290,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         if walk.extra and first + b in walk.extra:
             edits.extend(walk.extra[first + b])
         if is_cycle and moves.first_cycle[first + b]:
-            walk.il = cmd[2]
+            walk.il = cmd[axis]
         if is_cycle and inc:
             r_goal = r_planes[first + b] if changed else math.nan
             reached, end, cycle_z, r_cmd = _incremental_cycle(
@@ -299,6 +304,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
                 (cycle_z, r_cmd, walk.il),
                 changed,
                 walk.fill[first + b],
+                axis,
             )
             if changed:
                 walk.reached_rows.extend(reached)
@@ -324,7 +330,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
             if new_text != old_text:
                 edits.append((start, ends[i], new_text))
             written = float(new_text) * scale
-            if is_cycle and i == 2:
+            if is_cycle and i == axis:
                 cycle_z = written
             elif incremental:
                 end[i] = cmd[i] + written
@@ -336,25 +342,25 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
                 new_text = r_texts[b]
                 edits.append((starts[3], ends[3], new_text))
             r_cmd = float(new_text) * scale
-        if walk.fill[first + b] and (starts[2] < 0 or starts[3] < 0):
+        if walk.fill[first + b] and (starts[axis] < 0 or starts[3] < 0):
             r_goal = r_planes[first + b] if changed else math.nan
             cycle_z, r_cmd = _added_words(
                 text,
                 edits,
                 (starts, ends),
-                (goals[2], r_mm if math.isnan(r_goal) else r_goal),
+                (goals[axis], r_mm if math.isnan(r_goal) else r_goal),
                 (cycle_z, r_cmd),
-                scale,
-                int(places[first + b]),
+                (scale, int(places[first + b]), axis),
             )
         if is_cycle:
-            reached = [end[0], end[1], cycle_z]
+            reached = list(end)
+            reached[axis] = cycle_z
             if inc or math.isnan(r_mm):
-                end = [end[0], end[1], math.nan]
+                end[axis] = math.nan
             elif retract == "G99":
-                end = [end[0], end[1], r_cmd]
+                end[axis] = r_cmd
             else:
-                end = [end[0], end[1], max(walk.il, r_cmd)]
+                end[axis] = max(walk.il, r_cmd)
         else:
             reached = end
         if changed:
@@ -370,21 +376,23 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     return starts, ends, np.frombuffer("".join(texts).encode("ascii"), np.uint8), lengths
 
 
-def _added_words(text, edits, spans, goals, sticky, scale, places):
-    """The Z and R words a cycle's line needs but does not write: where the hole bottom and R
-    plane it should reach (``goals``, absolute mm) differ from the depth and R plane in effect
-    (``sticky``, mm, as written), `` Z..``/`` R..`` are added after its last position word (in
-    the case of its letters). ``spans``: the line's (starts, ends) of X, Y, Z, R. Adds the edit
-    to ``edits``; the depth and R plane now in effect (mm)."""
+def _added_words(text, edits, spans, goals, sticky, how):
+    """The depth and R words a cycle's line needs but does not write: where the hole bottom and
+    R plane it should reach (``goals``, absolute mm) differ from the depth and R plane in effect
+    (``sticky``, mm, as written), `` Z..``/`` R..`` (the depth's letter: the cycle's axis) are
+    added after its last position word (in the case of its letters). ``spans``: the line's
+    (starts, ends) of X, Y, Z, R; ``how``: (mm per unit, decimals, the cycle's axis). Adds the
+    edit to ``edits``; the depth and R plane now in effect (mm)."""
     starts, ends = spans
+    scale, places, axis = how
     sticky, added = list(sticky), []
-    for k, letter in ((2, "Z"), (3, "R")):
-        if starts[k] >= 0 or math.isnan(goals[k - 2]):
+    for n, (k, letter) in enumerate(((axis, "XYZ"[axis]), (3, "R"))):
+        if starts[k] >= 0 or math.isnan(goals[n]):
             continue
-        new_text = fixed(goals[k - 2] / scale, places)
-        if float(new_text) * scale != sticky[k - 2]:
+        new_text = fixed(goals[n] / scale, places)
+        if float(new_text) * scale != sticky[n]:
             added.append(letter + new_text)
-            sticky[k - 2] = float(new_text) * scale
+            sticky[n] = float(new_text) * scale
     if added:  # one edit: " Z.. R.." after the line's last position word
         words = " " + " ".join(added)
         lower = _lower_case(text, np.asarray(starts))
@@ -392,11 +400,12 @@ def _added_words(text, edits, spans, goals, sticky, scale, places):
     return sticky[0], sticky[1]
 
 
-def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, changed, fill):
+def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, changed, fill, axis):
     """One G91 canned-cycle block, written so that its first hole reaches ``goal`` and its R
     plane ``r_goal`` (absolute mm, program frame) from where the rewritten program leaves the
-    tool (``cmd``): X, Y as increments from ``cmd``, R from the initial level, Z from R (as
-    LinuxCNC reads them). ``words``: the block's (starts, ends, values) of X, Y, Z, R; ``how``:
+    tool (``cmd``): the hole's position (X, Y in G17) as increments from ``cmd``, R from the
+    initial level, the depth (Z in G17; on the cycle's ``axis``) from R (as LinuxCNC reads
+    them). ``words``: the block's (starts, ends, values) of X, Y, Z, R; ``how``:
     (mm per unit, decimals, retract, L repeats); ``sticky``: the Z and R words in effect (mm, as
     written) and the initial level (mm).
     A repeated block not ``changed`` (corrected) keeps its X, Y step as written; with ``fill``
@@ -431,22 +440,25 @@ def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, chang
         return float(new_text) * scale
 
     step = [
-        (values[i] * scale if fixed_step else write(i, cmd[i], goal[i])) if starts[i] >= 0 else 0.0
-        for i in range(2)
+        (values[i] * scale if fixed_step else write(i, cmd[i], goal[i]))
+        if starts[i] >= 0 and i != axis
+        else 0.0
+        for i in range(3)
     ]
     if starts[3] >= 0:
         r_cmd = write(3, il, r_goal)
     else:
         r_cmd = add("R", il, r_goal, r_cmd)
     level = il + r_cmd  # the R plane reached
-    if starts[2] >= 0:
-        cycle_z = write(2, level, goal[2])
+    if starts[axis] >= 0:
+        cycle_z = write(axis, level, goal[axis])
     else:
-        cycle_z = add("Z", level, goal[2], cycle_z)
-    hole = [cmd[0] + step[0], cmd[1] + step[1], level + cycle_z]
-    clear = level if retract == "G99" else max(il, level)
+        cycle_z = add("XYZ"[axis], level, goal[axis], cycle_z)
+    hole = [cmd[i] + step[i] for i in range(3)]
+    hole[axis] = level + cycle_z
     times = repeats if repeats else math.nan  # 0: not known
-    end = [cmd[0] + times * step[0], cmd[1] + times * step[1], clear]
+    end = [cmd[i] + times * step[i] for i in range(3)]
+    end[axis] = level if retract == "G99" else max(il, level)
     return hole, end, cycle_z, r_cmd
 
 
