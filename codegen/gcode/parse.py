@@ -7,8 +7,8 @@ and R and, under G91, X and Y from the tool, R from the initial level, Z from R 
 LinuxCNC reads them; in G18 and G19 the cycle's axis is Y and X), arcs (their centre, plane and
 turns, ``codegen.gcode.arc``; G90.1/G91.1), G90/G91 (incremental targets are made absolute),
 G20/G21 (targets in mm; ``scale`` converts back), G17/G18/G19, N-numbers, ``( )`` and ``;``
-comments, words in any order and case, with or without spaces, and parameter assignments (``#1 =
-5``, ``#<_z> = 0.4``). G54 is the program frame (the power-on default). Reported instead of
+comments, words in any order and case, with or without spaces, and parameter assignments
+(``#1 = 5``, ``#<_z> = 0.4``). G54 is the program frame (the power-on default). Reported instead of
 guessed: anything that moves the program frame in a way the cell does not describe (G55-G59.3 until
 G54, G92/G52/G92.3 until G92.1/G92.2, G10, G68/G51 until G69/G50, cutter compensation until G40), a
 motion whose geometry is not known (G5 splines, G33 threading, G38 probing, any other G-code), a
