@@ -50,12 +50,15 @@ def shift_arcs(
         for k in range(3):
             j = int(moves.setters[i, k])
             nodes.join((i, k), (j, k) if j >= 0 else (i, k))
-    groups = _Nodes()  # components (their roots) joined through the arcs: moved or not as one
-    for i in arcs:
-        roots = [nodes.root((i, k)) for k in range(3)]
-        groups.join(roots[0], roots[1])
-        groups.join(roots[0], roots[2])
-    fit = _ArcFit(moves, rows, [i for i in arcs if rows.status[i] == CORRECTED], opts)
+    # components (their roots) joined through the moves they hold (an arc's three axes, the axes
+    # a move sets for different arcs): a group moves as one or stays as programmed as one
+    groups = _Nodes()
+    first_root: dict[int, tuple] = {}
+    for node in list(nodes.parent):
+        root = nodes.root(node)
+        groups.join(first_root.setdefault(node[0], root), root)
+    known = [i for i in arcs if np.isfinite(moves.start[i]).all()]
+    fit = _ArcFit(moves, rows, [i for i in known if rows.status[i] == CORRECTED], opts)
     members: dict = {}  # component root -> its nodes
     for node in nodes.parent:
         members.setdefault(nodes.root(node), []).append(node)
@@ -152,6 +155,8 @@ def _component_shift(moves, rows, places, fit, members, axis):
         if j in moves.arcs:
             if rows.status[j] != CORRECTED:
                 return math.nan, rows.reason[j] or "not corrected", j
+            if not np.isfinite(moves.start[j]).all():
+                return math.nan, "its start is not known", j
             if j not in fit.low:
                 return math.nan, "part of the arc is outside the grid or refused by the policy", j
         elif rows.status[j] != CORRECTED or moves.is_cycle[j]:
