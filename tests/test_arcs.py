@@ -362,3 +362,48 @@ def test_side_plane_cycles_drill_their_corrected_holes(rs274, tmp_path, plane, a
     want_r = corrected(GENTLE, r_points)[:, axis]
     np.testing.assert_allclose(new_r[:, axis], want_r, atol=atol + 1e-9)
     assert np.abs(new_bottoms - bottoms).max() > 0.1
+
+
+# ---------------------------------------------------------------- LinuxCNC's radius tolerance
+
+
+def accepted(rs274, folder: Path, text: str) -> bool:
+    path = folder / "tol.ngc"
+    path.write_text(text)
+    run = subprocess.run([rs274, "-g", str(path)], capture_output=True, text=True, check=False)
+    return run.returncode == 0 and "PROGRAM_END()" in run.stdout
+
+
+@pytest.mark.parametrize(
+    ("units", "end", "i", "ok"),
+    [
+        ("G21", "2.028", "1", True),  # 0.028 mm: within 2 * 0.01 * sqrt(2) mm
+        ("G21", "2.029", "1", False),  # beyond it, and 2.8 % of the radius
+        ("G21", "2000.99", "1000", True),  # 0.99 mm, but 0.099 % of the radius
+        ("G21", "2001.01", "1000", False),  # 1.01 mm and 0.1009 %
+        ("G20", "2.0028", "1", True),  # 0.0028 in: within 2 * 0.001 * sqrt(2) in
+        ("G20", "2.0029", "1", False),
+    ],
+)
+def test_linuxcnc_radius_tolerance(rs274, tmp_path, units, end, i, ok):
+    """What rs274 (LinuxCNC's interp_arc.cc, arc_data_ijk) accepts of an I/J/K arc whose end
+    radius differs from its start radius: refused only when the difference is more than
+    2 * 0.01 * sqrt(2) mm (2 * 0.001 * sqrt(2) in) and more than 0.1 % of the larger radius.
+    An arc of a small orbital hole (radius 1 mm) tolerates 0.028 mm: moving its end by a
+    correction of some 0.3 mm without its start and centre would break it; the rigid shift
+    keeps both radii exactly."""
+    text = f"{units} G90 G17 F100\nG0 X0 Y0 Z0\nG2 X{end} Y0 I{i} J0\nM2\n"
+    assert accepted(rs274, tmp_path, text) is ok
+
+
+def test_a_small_arc_near_the_tolerance_keeps_its_radii(rs274, tmp_path):
+    """A 1 mm arc whose end radius is already 0.028 mm off (as a CAM post may round it): moved
+    rigidly, both radii stay as written and rs274 accepts it; its end moved alone by the same
+    correction (start and centre kept) is refused."""
+    text = "G21 G90 G17 F100\nG0 X299 Y100 Z-5\nG2 X301.028 Y100 I1 J0\nG0 Z5\nM2\n"
+    assert accepted(rs274, tmp_path, text)
+    arc = check_rigid(rs274, tmp_path, text)[0]
+    assert radii(arc) == pytest.approx((1.0, 1.028), abs=1e-9)
+    shift = corrected(GENTLE, [[300.0, 100.0, -5.0]])[0] - [300.0, 100.0, -5.0]
+    moved = text.replace("X301.028 Y100", f"X{301.028 + shift[0]:.3f} Y{100 + shift[1]:.3f}")
+    assert not accepted(rs274, tmp_path, moved)
