@@ -18,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from rewrite_helpers import write_cell
 from scipy.spatial.transform import Rotation
 
@@ -407,3 +409,81 @@ def test_a_small_arc_near_the_tolerance_keeps_its_radii(rs274, tmp_path):
     shift = corrected(GENTLE, [[300.0, 100.0, -5.0]])[0] - [300.0, 100.0, -5.0]
     moved = text.replace("X301.028 Y100", f"X{301.028 + shift[0]:.3f} Y{100 + shift[1]:.3f}")
     assert not accepted(rs274, tmp_path, moved)
+
+
+# ---------------------------------------------------------------- any arc
+
+
+@st.composite
+def arc_programs(draw):
+    """A program with one random arc or helix after the moves that set its start (300, 100,
+    -10): plane, direction, I/J/K from the start, absolute (G90.1) or R format, G90 or G91
+    end words, P turns, a radius of 1 to 40 mm."""
+    plane = draw(st.sampled_from(["G17", "G18", "G19"]))
+    a, b, h = PLANE_AXES[plane]
+    radius = draw(st.sampled_from([1.0, 2.5, 7.0, 15.0, 40.0]))
+    to_centre = draw(st.floats(0, 2 * np.pi))
+    to_end = draw(st.floats(0, 2 * np.pi))
+    form = draw(st.sampled_from(["ijk", "absolute", "r"]))
+    start = np.array([300.0, 100.0, -10.0])
+    centre, end = start.copy(), start.copy()
+    centre[[a, b]] += radius * np.array([np.cos(to_centre), np.sin(to_centre)])
+    end[[a, b]] = centre[[a, b]] + radius * np.array([np.cos(to_end), np.sin(to_end)])
+    end[h] += draw(st.sampled_from([0.0, -2.0, -5.0]))
+    end = np.round(end, 3)
+    incremental = draw(st.booleans())
+    values = end - start if incremental else end
+    words = [f"{'XYZ'[k]}{values[k]:.3f}" for k in (a, b, h)]
+    if form == "r":
+        chord = np.hypot(*(end - start)[[a, b]])
+        if chord < 0.5 or chord > 1.99 * radius:
+            return None
+        words.append(f"R{draw(st.sampled_from([1, -1])) * radius:.3f}")
+    else:
+        offset = centre if form == "absolute" else centre - start
+        words += [f"{'IJK'[k]}{offset[k]:.3f}" for k in (a, b)]
+        words.append(f"P{draw(st.sampled_from([1, 2]))}")
+    arc = draw(st.sampled_from(["G2", "G3"]))
+    mode = ("G91 " if incremental else "") + ("G90.1 " if form == "absolute" else "")
+    return (
+        f"G21 G90 {plane} F100\nG0 X300 Y100 Z5\nG1 Z-10\n{mode}{arc} {' '.join(words)}\n"
+        "G90 G91.1 G0 Z20\nM2\n"
+    )
+
+
+@settings(max_examples=25, deadline=None)
+@given(arc_programs())
+def test_any_arc_moves_rigidly_or_stays(rs274, tmp_path_factory, text):
+    """Whatever the arc: rs274 runs the rewritten program with the same commands; a corrected
+    arc's start, centre and end moved by one shift written exactly, within the written 0.001 mm
+    of the correction at its start, centre and end, its radii as before; an arc not corrected
+    (its correction varies too much) is cut exactly as programmed."""
+    if text is None:
+        return
+    folder = tmp_path_factory.mktemp("arc")
+    if not accepted(rs274, folder, text):
+        return  # rs274 refuses it as written (e.g. an R arc it cannot reach)
+    before_out = run_rs274(rs274, folder, text)
+    before = arcs_of(before_out)
+    new, rows = gcode_rewrite(text, GENTLE)
+    after_out = run_rs274(rs274, folder, new)
+    assert commands(after_out) == commands(before_out)
+    (old,), (arc,) = before, arcs_of(after_out)
+    row = rows[2]
+    keep = ~np.isnan(old["centre"])
+    if row.status != "corrected":
+        assert "correction varies by" in row.reason, row.reason
+        for key in ("start", "end"):
+            np.testing.assert_array_equal(arc[key], old[key])
+        np.testing.assert_array_equal(arc["centre"][keep], old["centre"][keep])
+        return
+    shift = arc["end"] - old["end"]
+    np.testing.assert_allclose(arc["start"] - old["start"], shift, atol=1e-9)
+    np.testing.assert_allclose((arc["centre"] - old["centre"])[keep], shift[keep], atol=1e-9)
+    np.testing.assert_allclose(shift, np.round(shift, 3), atol=1e-9)  # written exactly
+    h = PLANE_AXES[old["plane"]][2]
+    centre = old["centre"].copy()
+    centre[h] = (old["start"][h] + old["end"][h]) / 2
+    points = np.array([old["start"], old["end"], centre])
+    np.testing.assert_allclose(corrected(GENTLE, points) - points, [shift] * 3, atol=1e-3 + 1e-9)
+    assert radii(arc) == pytest.approx(radii(old), abs=1e-9)
