@@ -138,12 +138,16 @@ def gcode_rewrite(text: str, model: GridModel):
     return result.texts["p.ngc"], list(result.rows)
 
 
-def run_rs274(rs274, folder: Path, text: str) -> str:
+def run_rs274(rs274, folder: Path, text: str, complete: bool = True) -> str:
+    """rs274's canonical commands for ``text``; ``complete``: it must run to the program's end
+    without an error."""
     path = folder / "arc.ngc"
     path.write_text(text)
     run = subprocess.run(
         [rs274, "-g", str(path)], capture_output=True, text=True, timeout=60, check=False
     )
+    if not complete:
+        return run.stdout
     assert run.returncode == 0 and "PROGRAM_END()" in run.stdout, run.stdout[-800:] + run.stderr
     assert "USE_LENGTH_UNITS(CANON_UNITS_MM)" in run.stdout
     return run.stdout
@@ -487,3 +491,34 @@ def test_any_arc_moves_rigidly_or_stays(rs274, tmp_path_factory, text):
     points = np.array([old["start"], old["end"], centre])
     np.testing.assert_allclose(corrected(GENTLE, points) - points, [shift] * 3, atol=1e-3 + 1e-9)
     assert radii(arc) == pytest.approx(radii(old), abs=1e-9)
+
+
+def test_realworld_slot_arcs_move_rigidly(realworld, rs274, tmp_path):
+    """LinuxCNC's vertical-slot.ngc (two passes of a slot: 8 arcs, each pass one chain at one
+    depth) rewritten by the command line: all its arcs are corrected, and in rs274's reading
+    each arc's start, centre and end moved by one shift, the same for every arc of the slot,
+    with its radii exactly as before."""
+    program = realworld / "gcode" / "pygcode_vertical-slot.ngc"
+    cell = write_cell(tmp_path, field="smooth")
+    out, report_csv = tmp_path / "slot.ngc", tmp_path / "r.csv"
+    argv = ["rewrite", program, "--cell", cell, "-o", out, "--report", report_csv]
+    assert main([str(a) for a in [*argv, "--allow-partial"]]) == 0
+    rows = [r for r in report(report_csv) if r["name"] in ("G2", "G3")]
+    assert len(rows) == 8 and all(r["status"] == "corrected" for r in rows)
+
+    # rs274 stops at a tool change (it has no tool table): read both without those lines
+    def no_tool_change(text: str) -> str:
+        return "".join(line for line in text.splitlines(True) if "M06" not in line)
+
+    before = arcs_of(run_rs274(rs274, tmp_path, no_tool_change(program.read_text()), False))
+    after = arcs_of(run_rs274(rs274, tmp_path, no_tool_change(out.read_text()), False))
+    assert len(before) == len(after) == 8
+    shifts = []
+    for old, arc in zip(before, after, strict=True):
+        shift = arc["end"] - old["end"]
+        np.testing.assert_allclose(arc["start"] - old["start"], shift, atol=1e-9)
+        np.testing.assert_allclose(arc["centre"][:2] - old["centre"][:2], shift[:2], atol=1e-9)
+        assert radii(arc) == pytest.approx(radii(old), abs=1e-9)
+        shifts.append(shift)
+    np.testing.assert_allclose(shifts, [shifts[0]] * 8, atol=1e-9)
+    assert np.abs(shifts[0]).max() > 0.1
