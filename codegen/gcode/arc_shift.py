@@ -2,17 +2,19 @@
 shifted together by one vector written exactly in the program's decimals, so its radius is kept
 exactly (as ``rs274`` checks it) and its shape is the programmed one.
 
-The shift of an arc is the correction at its centre, rounded to the written resolution (``q``,
-one unit of the last decimal), provided every point of the arc (start, end, centre and points
-along it: ``arc.arc_samples``), moved by it, lands within ``q`` of its own correction, per axis;
-otherwise the arc is reported with by how much its correction varies. The moves that set the
-arc's start (the last move to write each of X, Y, Z before it) get the same shift on that axis,
-so arcs chained end to start, helices of an orbital hole and arcs that share one plunge move
-share their shift on the axes they share: where those arcs' corrections cannot agree on one
+The shift of an arc is the correction at its centre (the helix axis halfway), rounded to the
+written resolution (``q``, one unit of the last decimal), provided every point of the arc (start,
+end, centre and points along it: ``arc.arc_samples``), moved by it, lands within ``q`` of its own
+correction, per axis; otherwise the arc is reported with by how much its correction varies. Arcs
+that share an axis (below) take the mean of their centres' corrections on it, rounded and, where
+needed, moved to the nearest value that holds every point of each of them within ``q``. The moves
+that set the arc's start (the last move to write each of X, Y, Z before it) get the same shift on
+that axis, so arcs chained end to start, helices of an orbital hole and arcs that share one plunge
+move share their shift on the axes they share: where those arcs' corrections cannot agree on one
 value, they are all reported, and so are the moves that set their start (which then stay as
-programmed, like the arcs). Under G90.1 the centre words (absolute) get the shift too; under
-G91.1 (from the start) they stay as written. Under G91 the increments are those of the shifted
-positions (``codegen.gcode.rewrite`` recomputes them). Arcs are not split.
+programmed, like the arcs). Under G90.1 the centre words (absolute) get the shift too; under G91.1
+(from the start) they stay as written. Under G91 the increments are those of the shifted positions
+(``codegen.gcode.rewrite`` recomputes them). Arcs are not split.
 """
 
 from __future__ import annotations
