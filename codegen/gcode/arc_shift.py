@@ -22,8 +22,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 from accugrid.codegen.gcode.arc import PLANE_AXES, arc_centres, arc_samples
+from accugrid.codegen.gcode.numbers import literal_values
 from accugrid.codegen.gcode.parse import AXES, GcodeMoves
 from accugrid.codegen.program_text import decimals_of
 from accugrid.codegen.rewrite import CORRECTED, SKIPPED, Options, Rows, correct_points, rotations_of
@@ -43,94 +46,147 @@ def shift_arcs(
     start (the arcs' and those moves' own corrections, as decided, are in ``goals`` on entry);
     arcs that cannot move and the moves that set their start get status skipped, the reason,
     and their programmed position back. ``places`` (N,): decimals written per move. The edits
-    of G90.1 centre words, by move: [(start, end, new text)]."""
-    arcs = sorted(moves.arcs)
-    if not arcs:
+    of G90.1 centre words, by move: [(start, end, new text)].
+
+    The nodes are (move, axis): an arc's end on each axis and the move that sets its start
+    there, joined into components that move by one value; the components that share a move are
+    one group, corrected or left as one (``_Nodes``). Every check is done on arrays; only the
+    groups left get their reasons one by one."""
+    arcs = np.array(sorted(moves.arcs), np.int64)
+    if not len(arcs):
         return {}
-    nodes = _Nodes()
-    for i in arcs:
-        for k in range(3):
-            j = int(moves.setters[i, k])
-            nodes.join((i, k), (j, k) if j >= 0 else (i, k))
-    # components (their roots) joined through the moves they hold (an arc's three axes, the axes
-    # a move sets for different arcs): a group moves as one or stays as programmed as one
-    groups = _Nodes()
-    first_root: dict[int, tuple] = {}
-    for node in list(nodes.parent):
-        root = nodes.root(node)
-        groups.join(first_root.setdefault(node[0], root), root)
-    known = [i for i in arcs if np.isfinite(moves.start[i]).all()]
-    fit = _ArcFit(moves, rows, [i for i in known if rows.status[i] == CORRECTED], opts)
-    members: dict = {}  # component root -> its nodes
-    for node in nodes.parent:
-        members.setdefault(nodes.root(node), []).append(node)
-    by_group: dict = {}
-    for root in members:
-        by_group.setdefault(groups.root(root), []).append(root)
+    nodes = _Nodes(moves, arcs)
+    fit = _ArcFit(moves, rows, arcs, opts)
+    move, axis, comp = nodes.move, nodes.axis, nodes.comp
+    at = np.minimum(np.searchsorted(arcs, move), len(arcs) - 1)
+    is_arc = arcs[at] == move
+    at = np.where(is_arc, at, 0)  # the arc's row of an arc's node
+    ok = (rows.status[move] == CORRECTED) & np.where(is_arc, fit.ok[at], ~moves.is_cycle[move])
+    scale, written = moves.scale[move], places[move]
+    starts, ends = moves.word_start[move, axis], moves.word_end[move, axis]
+    has_word = starts >= 0
+    decimals = np.zeros(len(move), np.int64)
+    if has_word.any():
+        data = moves.text.encode("latin-1", "replace")
+        decimals[has_word] = literal_values(data, starts[has_word], ends[has_word])[1]
+    ok &= decimals <= written
+    count = nodes.count
+    comp_ok = np.ones(count, bool)
+    np.logical_and.at(comp_ok, comp, ok)
+    for column in (scale, written):  # one unit and one count of decimals per component
+        low, high = np.full(count, np.inf), np.full(count, -np.inf)
+        np.minimum.at(low, comp, column)
+        np.maximum.at(high, comp, column)
+        comp_ok &= low == high
+    comp_q = np.ones(count)
+    comp_q[comp] = 10.0 ** -written.astype(float)
+    # the shifts every point of every arc of a component allows, and its centres' mean
+    top, bottom = np.full(count, -np.inf), np.full(count, np.inf)
+    total, arcs_in = np.zeros(count), np.zeros(count)
+    on_arc = np.flatnonzero(is_arc)
+    c_arc, a_arc, k_arc = comp[on_arc], at[on_arc], axis[on_arc]
+    np.maximum.at(top, c_arc, np.nan_to_num(fit.high[a_arc, k_arc], nan=np.inf))
+    np.minimum.at(bottom, c_arc, np.nan_to_num(fit.low[a_arc, k_arc], nan=-np.inf))
+    np.add.at(total, c_arc, np.nan_to_num(fit.centre[a_arc, k_arc]))
+    np.add.at(arcs_in, c_arc, 1.0)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        lo = np.ceil((top - comp_q) / comp_q - _EPS)
+        hi = np.floor((bottom + comp_q) / comp_q + _EPS)
+        value = np.clip(np.round(total / arcs_in / comp_q), lo, hi) * comp_q
+    comp_ok &= lo <= hi
+    group_ok = np.ones(nodes.groups, bool)
+    np.logical_and.at(group_ok, nodes.group_of_comp, comp_ok)
+    group = nodes.group_of_comp[comp]  # of each node
     edits: dict[int, list[tuple[int, int, str]]] = {}
-    for components in by_group.values():
-        shifts, why, at = {}, "", -1
-        for root in sorted(components, key=lambda r: min(members[r])):
-            value, why, at = _component_shift(moves, rows, places, fit, members[root], root[1])
+    absolute = [j for j in arcs.tolist() if moves.arcs[j].absolute]
+    if absolute:  # G90.1 centres: their words move too
+        for g in sorted(set(group[np.isin(move, absolute) & group_ok[group]].tolist())):
+            mine = np.flatnonzero((group == g) & is_arc)
+            keys = zip(move[mine].tolist(), axis[mine].tolist(), strict=True)
+            shift = dict(zip(keys, value[comp[mine]].tolist(), strict=True))
+            found: dict[int, list[tuple[int, int, str]]] = {}
+            why, culprit = _centre_edits(moves, places, sorted(shift), shift, found)
             if why:
+                group_ok[g] = False
+                _leave(moves, rows, goals, nodes.members(g), why, culprit)
+            else:
+                edits.update(found)
+    good = group_ok[group]
+    goals[move[good], axis[good]] = (
+        moves.target[move[good], axis[good]] + value[comp[good]] * scale[good]
+    )
+    for g in np.flatnonzero(~group_ok).tolist():  # their reasons, one by one
+        members = nodes.members(g)
+        for c in sorted(set(comp[group == g].tolist()), key=nodes.first_move):
+            mine = nodes.component(c)
+            why, culprit = _component_why(moves, rows, places, fit, mine, mine[0][1])
+            if why:
+                _leave(moves, rows, goals, members, why, culprit)
                 break
-            shifts[root] = value
-        group = sorted({node for root in components for node in members[root]})
-        shift = {node: shifts[nodes.root(node)] for node in group} if not why else {}
-        centre_edits: dict[int, list[tuple[int, int, str]]] = {}
-        if not why:
-            why, at = _centre_edits(moves, places, group, shift, centre_edits)
-        if why:
-            _leave(moves, rows, goals, group, why, at)
-            continue
-        for (j, k), value in shift.items():
-            goals[j, k] = moves.target[j, k] + value * moves.scale[j]
-        edits.update(centre_edits)
     return edits
 
 
 class _Nodes:
-    """Union-find of hashable nodes."""
+    """The nodes (move, axis) of the arcs ``arcs`` (move indices, sorted) and of the moves that
+    set their starts: ``move``, ``axis`` (M,) and ``comp`` (M,) the component of each (what
+    moves by one value: an arc's start and end on an axis, an end that is the next arc's start,
+    a move that sets the start of several arcs), ``count`` components, each in one of
+    ``groups`` groups (``group_of_comp``): components that share a move are one group."""
 
-    def __init__(self) -> None:
-        self.parent: dict = {}
+    def __init__(self, moves: GcodeMoves, arcs: np.ndarray) -> None:
+        setters = moves.setters[arcs]  # (A, 3)
+        ends = 3 * arcs[:, None] + np.arange(3)
+        begins = np.where(setters >= 0, 3 * setters + np.arange(3), ends)
+        both = np.concatenate([ends.ravel(), begins.ravel()])
+        ids, inverse = np.unique(both, return_inverse=True)
+        m, half = len(ids), len(ends.ravel())
+        self.move, self.axis = ids // 3, ids % 3
+        edges = coo_matrix((np.ones(half), (inverse[:half], inverse[half:])), shape=(m, m))
+        self.count, self.comp = connected_components(edges, directed=False)
+        first = np.unique(self.move, return_index=True)[1]  # one node of each move
+        mate = first[np.searchsorted(self.move[first], self.move)]
+        shared = (np.ones(m), (self.comp[mate], self.comp))
+        self.groups, self.group_of_comp = connected_components(
+            coo_matrix(shared, shape=(self.count, self.count)), directed=False
+        )
 
-    def root(self, node):
-        parent = self.parent.setdefault(node, node)
-        while parent != node:
-            grand = self.parent[parent]
-            self.parent[node] = grand
-            node, parent = parent, grand
-        return node
+    def members(self, g: int) -> list[tuple[int, int]]:
+        """The nodes of group ``g`` as (move, axis), in order."""
+        k = np.flatnonzero(self.group_of_comp[self.comp] == g)
+        return sorted(zip(self.move[k].tolist(), self.axis[k].tolist(), strict=True))
 
-    def join(self, a, b) -> None:
-        ra, rb = self.root(a), self.root(b)
-        if ra != rb:
-            self.parent[max(ra, rb)] = min(ra, rb)
+    def component(self, c: int) -> list[tuple[int, int]]:
+        """The nodes of component ``c`` as (move, axis), in order."""
+        k = np.flatnonzero(self.comp == c)
+        return sorted(zip(self.move[k].tolist(), self.axis[k].tolist(), strict=True))
+
+    def first_move(self, c: int) -> int:
+        return int(self.move[self.comp == c].min())
 
 
 class _ArcFit:
-    """The corrections across the arcs ``arcs`` (indices of moves, whose own end correction the
-    policy accepted), in program units on each program axis: ``low``, ``high`` (3,) the smallest
-    and largest over each arc's samples and ``centre`` (3,) at its centre (the helix axis
-    halfway), by move; an arc with a sample not corrected has none (absent)."""
+    """The corrections across the arcs ``arcs`` (move indices, sorted), in program units on each
+    program axis: ``low``, ``high`` (A, 3) the smallest and largest over each arc's samples,
+    ``centre`` (A, 3) at its centre (the helix axis halfway); ``ok`` (A,): its start is known,
+    its own end correction accepted and every sample corrected (NaN rows otherwise)."""
 
-    def __init__(self, moves: GcodeMoves, rows: Rows, arcs: list[int], opts: Options) -> None:
-        self.low: dict[int, np.ndarray] = {}
-        self.high: dict[int, np.ndarray] = {}
-        self.centre: dict[int, np.ndarray] = {}
-        if not arcs:
+    def __init__(self, moves: GcodeMoves, rows: Rows, arcs: np.ndarray, opts: Options) -> None:
+        self.arcs = arcs
+        self.ok = np.isfinite(moves.start[arcs]).all(axis=1) & (rows.status[arcs] == CORRECTED)
+        self.low, self.high, self.centre = (np.full((len(arcs), 3), np.nan) for _ in range(3))
+        use = np.flatnonzero(self.ok)
+        if not len(use):
             return
-        idx = np.array(arcs, np.int64)
-        words = [moves.arcs[i] for i in arcs]
+        idx = arcs[use]
+        words = [moves.arcs[i] for i in idx.tolist()]
         start, end, scale = moves.start[idx], moves.target[idx], moves.scale[idx]
         centre = arc_centres(words, start, end, scale)
         helix = np.array([PLANE_AXES[a.plane][2] for a in words])
-        rows_n = np.arange(len(idx))
-        centre[rows_n, helix] = (start[rows_n, helix] + end[rows_n, helix]) / 2
+        n = np.arange(len(idx))
+        centre[n, helix] = (start[n, helix] + end[n, helix]) / 2
         points, owner = arc_samples(words, start, end, centre)
         points = np.concatenate([centre, points])
-        owner = np.concatenate([rows_n, owner])
+        owner = np.concatenate([n, owner])
         t = opts.robot_T_program
         robot = transform_points(t, points)
         abc = np.array([[r.get(k, math.nan) for k in "ABC"] for r in moves.rotaries])
@@ -143,31 +199,36 @@ class _ArcFit:
         high = np.full((len(idx), 3), -np.inf)
         np.minimum.at(low, owner, shift)
         np.maximum.at(high, owner, shift)
-        for n, i in enumerate(arcs):
-            if not bad[n]:
-                self.low[i], self.high[i], self.centre[i] = low[n], high[n], shift[n]
+        fine = ~bad
+        self.low[use[fine]], self.high[use[fine]] = low[fine], high[fine]
+        self.centre[use[fine]] = shift[: len(idx)][fine]
+        self.ok[use[bad]] = False
+
+    def row(self, arc: int) -> int:
+        """The row of the arc (a move index) ``arc``."""
+        return int(np.searchsorted(self.arcs, arc))
 
 
-def _component_shift(moves, rows, places, fit, members, axis):
-    """The shift (program units) of one axis's component: the nodes (move, axis) that must move
-    by one value (the arcs' ends and the moves that set their starts); (value, "", -1) or
-    (nan, why, the arc it is about)."""
+def _component_why(moves, rows, places, fit, members, axis):
+    """Why one axis's component (the nodes (move, axis) that must move by one value: the arcs'
+    ends and the moves that set their starts) cannot move, and the arc (move index) it is
+    about; ("", -1) when it can."""
     arcs = sorted({j for j, _ in members if j in moves.arcs})
     for j, _ in sorted(members):
         if j in moves.arcs:
             if rows.status[j] != CORRECTED:
-                return math.nan, rows.reason[j] or "not corrected", j
+                return rows.reason[j] or "not corrected", j
             if not np.isfinite(moves.start[j]).all():
-                return math.nan, "its start is not known", j
-            if j not in fit.low:
-                return math.nan, "part of the arc is outside the grid or refused by the policy", j
+                return "its start is not known", j
+            if not fit.ok[fit.row(j)]:
+                return "part of the arc is outside the grid or refused by the policy", j
         elif rows.status[j] != CORRECTED or moves.is_cycle[j]:
             what = "a canned cycle" if moves.is_cycle[j] else "not corrected"
-            return math.nan, f"its start is set at line {moves.line[j]}, {what}", arcs[0]
+            return f"its start is set at line {moves.line[j]}, {what}", arcs[0]
     scales = {float(moves.scale[j]) for j, _ in members}
     decimals = {int(places[j]) for j, _ in members}
     if len(scales) > 1 or len(decimals) > 1:
-        return math.nan, "its start is written in other units or decimals", arcs[0]
+        return "its start is written in other units or decimals", arcs[0]
     scale, written = scales.pop(), decimals.pop()
     q = 10.0**-written
     text = moves.text
@@ -178,9 +239,9 @@ def _component_shift(moves, rows, places, fit, members, axis):
                 f"{AXES[k]}{text[a:b]} at line {moves.line[j]} has more decimals than the "
                 f"{written} written: the arc cannot move exactly"
             )
-            return math.nan, why, arcs[0]
-    top = max(fit.high[i][axis] for i in arcs)
-    bottom = min(fit.low[i][axis] for i in arcs)
+            return why, arcs[0]
+    top = max(fit.high[fit.row(i), axis] for i in arcs)
+    bottom = min(fit.low[fit.row(i), axis] for i in arcs)
     lo, hi = math.ceil((top - q) / q - _EPS), math.floor((bottom + q) / q + _EPS)
     if lo > hi:
         what = "the arc" if len(arcs) == 1 else f"the {len(arcs)} arcs that share this axis"
@@ -188,9 +249,8 @@ def _component_shift(moves, rows, places, fit, members, axis):
             f"the {AXES[axis]} correction varies by {(top - bottom) * scale:.4f} mm across "
             f"{what}: no one shift holds every point within the written {q * scale:g} mm"
         )
-        return math.nan, why, arcs[0]
-    centre = sum(fit.centre[i][axis] for i in arcs) / len(arcs)
-    return min(max(round(centre / q), lo), hi) * q, "", -1
+        return why, arcs[0]
+    return "", -1
 
 
 def _centre_edits(moves, places, group, shift, edits):
