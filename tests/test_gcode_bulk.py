@@ -276,7 +276,7 @@ def test_edits_in_stretches_are_the_move_by_move_edits(lines, data, min_bulk, de
     for whole in (False, True):
         rows = Rows(["p"], np.zeros(n, np.int64), moves.line, [], [], moves.target)
         rows.status[np.array(status, bool)] = CORRECTED
-        stretches = (lambda m, b: [(b, _walk_block)]) if whole else rewrite._stretches
+        stretches = (lambda m, b, w: [(b, _walk_block)]) if whole else rewrite._stretches
         with (
             mock.patch.object(rewrite, "_stretches", stretches),
             mock.patch.object(rewrite, "_MIN_BULK", min_bulk),

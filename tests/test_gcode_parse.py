@@ -70,7 +70,7 @@ def test_g98_retracts_to_the_initial_level_of_the_run():
     [
         ("G0 X0 Y0 Z0\nG55 G0 X1 Y1 Z1\n", "G55"),
         ("G0 X0 Y0 Z0\nG92 X0 Y0\nG0 X1 Y1 Z1\n", "G92"),
-        ("G0 X0 Y0 Z0\n#1=5\nG2 X10 Y0 I#1 J0\n", "arc I#1 uses a parameter"),
+        ("G0 X0 Y0 Z0\nG2 X10 Y0 I#5420 J0\n", "arc I#5420 uses a parameter"),
         ("G0 X0 Y0 Z0\nG2 X10 Y0\n", "arc without a centre (I, J) or a radius R"),
         ("G0 X0 Y0 Z0\nG18 G3 X10 Z0 R5 K1\n", "arc with both R and K/I"),
         ("G0 X0 Y0 Z0\nG3 X0 Y0 I5 P0.5\n", "not a number of turns"),

@@ -12,6 +12,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from accugrid.codegen.gcode.expressions import Parameters
 from accugrid.codegen.gcode.parse import _fast_line, _scan, parse_gcode
 from accugrid.codegen.krl.parse import scan_krl
 from accugrid.infra.errors import InputError
@@ -124,8 +125,8 @@ def test_gcode_fast_and_word_by_word_readers_agree(words, gcodes, lower):
     line = " ".join(f"G{g}" for g in gcodes) + "".join(f" {k}{gap}{v}" for k, v, gap in words)
     line = line.lower() if lower else line
     fast = _fast_line(line, 7, None, 1)
-    slow = _scan(line, 7, None, 1)
-    assert fast == slow
+    slow = _scan(line, 7, None, 1, Parameters())
+    assert fast[:3] == slow[:3] and not slow.why and not slow.assigns
     for word in (w for w in fast.words.values() if w is not None):
         assert line[word.start - 7 : word.end - 7] == word.literal
 

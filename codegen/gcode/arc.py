@@ -40,18 +40,20 @@ class Arc(NamedTuple):
     absolute: bool
 
 
-def arc_of(words: dict, exprs: dict, plane: str, absolute: bool, lineno: int, clockwise: bool):
-    """The ``Arc`` of a G2/G3 block (``words`` letter -> Word or None, ``exprs`` letter -> text
-    of the words written with a parameter or an expression) and why it cannot be placed ("":
-    it can)."""
+def arc_of(block, plane: str, absolute: bool, lineno: int, clockwise: bool):
+    """The ``Arc`` of a G2/G3 block (the reader's ``_Line``: ``words`` letter -> Word or None,
+    ``exprs`` letter -> text of the words whose parameter or expression is not decidable,
+    ``why`` letter -> why not) and why it cannot be placed ("": it can)."""
+    words, exprs = block.words, block.exprs
     first, second, _ = PLANE_AXES[plane]
     letters = _CENTRE_LETTERS[first] + _CENTRE_LETTERS[second]
     centre = tuple(words.get(k) for k in _CENTRE_LETTERS)
     radius = words.get("R")
     turns, why = 1, ""
-    used = [exprs[k] for k in "IJKP" if k in exprs]
+    used = [k for k in "IJKP" if k in exprs]
     if used:
-        why = f"arc {used[0]} uses a parameter or an expression (line {lineno}): not guessed"
+        k = used[0]
+        why = f"arc {exprs[k]} uses a parameter or an expression: {block.why[k]} (line {lineno})"
     elif "P" in words:
         p = words["P"].value
         if p == int(p) and 1 <= p <= _MAX_TURNS:

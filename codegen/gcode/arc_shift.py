@@ -26,9 +26,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from accugrid.codegen.gcode.arc import PLANE_AXES, arc_centres, arc_samples
-from accugrid.codegen.gcode.numbers import literal_values
 from accugrid.codegen.gcode.parse import AXES, GcodeMoves
-from accugrid.codegen.program_text import decimals_of
 from accugrid.codegen.rewrite import CORRECTED, SKIPPED, Options, Rows, correct_points, rotations_of
 from accugrid.infra.textsafe import fixed
 from accugrid.kinematics.frames import rows_times, transform_points
@@ -63,13 +61,7 @@ def shift_arcs(
     at = np.where(is_arc, at, 0)  # the arc's row of an arc's node
     ok = (rows.status[move] == CORRECTED) & np.where(is_arc, fit.ok[at], ~moves.is_cycle[move])
     scale, written = moves.scale[move], places[move]
-    starts, ends = moves.word_start[move, axis], moves.word_end[move, axis]
-    has_word = starts >= 0
-    decimals = np.zeros(len(move), np.int64)
-    if has_word.any():
-        data = moves.text.encode("latin-1", "replace")
-        decimals[has_word] = literal_values(data, starts[has_word], ends[has_word])[1]
-    ok &= decimals <= written
+    ok &= _exact(moves.word_value[move, axis], written)
     count = nodes.count
     comp_ok = np.ones(count, bool)
     np.logical_and.at(comp_ok, comp, ok)
@@ -124,6 +116,13 @@ def shift_arcs(
                 _leave(moves, rows, goals, members, why, culprit)
                 break
     return edits
+
+
+def _exact(values, places):
+    """Whether each word value (program units; NaN: none written) is a whole number of units of
+    its ``places``-th decimal (a shift by such a number writes it exactly)."""
+    scaled = np.asarray(values) * 10.0 ** np.asarray(places, float)
+    return np.isnan(scaled) | (np.abs(scaled - np.round(scaled)) < 1e-6)
 
 
 class _Nodes:
@@ -233,8 +232,8 @@ def _component_why(moves, rows, places, fit, members, axis):
     q = 10.0**-written
     text = moves.text
     for j, k in members:
-        a, b = int(moves.word_start[j, k]), int(moves.word_end[j, k])
-        if a >= 0 and decimals_of(text[a:b]) > written:
+        if not _exact(moves.word_value[j, k], written):
+            a, b = int(moves.word_start[j, k]), int(moves.word_end[j, k])
             why = (
                 f"{AXES[k]}{text[a:b]} at line {moves.line[j]} has more decimals than the "
                 f"{written} written: the arc cannot move exactly"

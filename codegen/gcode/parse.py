@@ -7,13 +7,20 @@ and R and, under G91, X and Y from the tool, R from the initial level, Z from R 
 LinuxCNC reads them; in G18 and G19 the cycle's axis is Y and X), arcs (their centre, plane and
 turns, ``codegen.gcode.arc``; G90.1/G91.1), G90/G91 (incremental targets are made absolute),
 G20/G21 (targets in mm; ``scale`` converts back), G17/G18/G19, N-numbers, ``( )`` and ``;``
-comments, words in any order and case, with or without spaces, and parameter assignments
-(``#1 = 5``, ``#<_z> = 0.4``). G54 is the program frame (the power-on default). Reported instead of
-guessed: anything that moves the program frame in a way the cell does not describe (G55-G59.3 until
-G54, G92/G52/G92.3 until G92.1/G92.2, G10, G68/G51 until G69/G50, cutter compensation until G40), a
-motion whose geometry is not known (G5 splines, G33 threading, G38 probing, any other G-code), a
-word that uses a parameter or an expression (that axis is unknown until written again), a position
-left unknown (G28/G30, G53) and O-word control flow.
+comments, words in any order and case, with or without spaces, parameter assignments (``#1 = 5``,
+``#<_z> = 0.4``) and words written as parameters or expressions (``X#1``, ``X[#1*2]``,
+``x sin[30]``), evaluated where decidable before run time (``expressions``; a Word then holds
+the value and the expression's text and span), LinuxCNC's polar words ``@`` (radius) and ``^``
+(angle) in the XY plane (``polar_xy``; ``GcodeMoves.polar`` keeps their words), and ``%`` tape
+marks (``N890 %`` too). G54 is the program frame (the power-on default). Reported instead of
+guessed: anything that moves the program frame in a way the cell does not describe (G55-G59.3
+until G54, G92/G52/G92.3 on X, Y or Z until G92.1/G92.2 (on A/B/C/U/V/W or E only they do not
+move X, Y, Z), G10, an assigned work offset parameter, G68/G51 until G69/G50, cutter
+compensation until G40), a motion whose geometry is not known (G5 splines, G33 threading, G38
+probing, any other G-code), a word whose parameter or expression is not decidable before run
+time (with the reason; that axis is unknown until written again), a polar move with one word
+(the other is where the tool is), a position left unknown (G28/G30, G53) and O-word control
+flow.
 
 Every pattern is linear in its input (possessive quantifiers; comments and expressions are
 scanned by hand), so a hostile line cannot make the reader backtrack.
@@ -31,6 +38,7 @@ from typing import NamedTuple
 import numpy as np
 
 from accugrid.codegen.gcode.arc import Arc, arc_of
+from accugrid.codegen.gcode.expressions import Parameters, Undecided
 from accugrid.codegen.gcode.numbers import NUMBER_BYTES, literal_values
 from accugrid.codegen.program_text import check_text, decimals_of, split_lines
 from accugrid.infra.errors import InputError
@@ -41,6 +49,7 @@ __all__ = [
     "CYCLE_AXIS",
     "RESETS",
     "INCH_MM",
+    "POLAR",
     "ROTARY",
     "WORD_LETTERS",
     "GcodeMove",
@@ -49,6 +58,7 @@ __all__ = [
     "gcode_moves",
     "modal_fill",
     "parse_gcode",
+    "polar_xy",
 ]
 
 _NUMBER = r"[-+]?+(?:\d++(?:\.\d*+)?+|\.\d++)"
@@ -87,6 +97,9 @@ _NINES = bytes.maketrans(b"0123456789", b"9" * 10)  # every digit as a 9
 _SHAPES_KEPT = 1 << 22  # characters of line shapes a reader keeps for the next chunks
 _CHUNK = 1 << 20  # characters per whole-text pass (bounds the per-line tuples held at once)
 _DIGITS_RE = re.compile(r"\d++")
+# a "%" tape mark after a sequence number (``N890 %``), read as a bare "%" line is
+_NUMBERED_PERCENT_RE = re.compile(r"[Nn]\s*+\d++\s*+%[^\n]*+")
+_FUNCTION_RE = re.compile(r"([A-Za-z]++)\s*+\[")  # a function's name and its opening bracket
 _OWORD_RE = re.compile(
     r"\s*+[Oo]\s*+(?:\d++|<[^>]*+>)\s*+(sub|endsub|if|elseif|else|endif|while|endwhile|do|call|"
     r"return|repeat|endrepeat|break|continue)\b",
@@ -109,8 +122,18 @@ _RETRACT_NAMES[[98, 99]] = "G98", "G99"
 _NAME_OBJECTS = [*_MOTION_NAMES.tolist(), *_RETRACT_NAMES[[0, 98, 99]].tolist()]  # those str
 INCH_MM = 25.4
 _ROTARY_SET = frozenset(ROTARY)
-_KEPT = frozenset(AXES + ROTARY + "RLIJKP")  # letters whose Word a move (or G10, an arc) needs
-_POSITION_LETTERS = frozenset(AXES + ROTARY + "R")
+POLAR = "@^"  # LinuxCNC's polar radius and angle (degrees) in the XY plane
+_POLAR_SET = frozenset(POLAR)
+_KEPT = frozenset(AXES + ROTARY + POLAR + "RLIJKP")  # the letters whose Word a move needs
+_POSITION_LETTERS = frozenset(AXES + ROTARY + POLAR + "R")
+# the axis words a G92/G52 offset may name: one on X, Y or Z (or a polar word) moves the program
+# frame; one on A, B, C, U, V, W (or a printer's extruder E) does not
+_OFFSET_LETTERS = frozenset(AXES + ROTARY + POLAR + "E")
+_FRAME_LETTERS = frozenset(AXES + POLAR)
+_ORIENTATION = frozenset("ABC")
+# numbered parameters that hold the G92 offsets and the work offset tables (#5211-#5390):
+# assigning one changes the program frame
+_OFFSET_PARAMETERS = range(5211, 5391)
 _NONMODAL = frozenset("4 10 28 28.1 30 30.1 52 53 92 92.1 92.2 92.3".split())
 _PARAMETER_CODES = frozenset("10 28.1 30.1 52 92 92.1 92.2 92.3".split())
 # G-codes that neither move nor change where a programmed position lands (or whose effect is
@@ -230,6 +253,8 @@ class GcodeMoves:
         self.repeats: dict[
             int, int
         ] = {}  # row -> a cycle's L repeat count where not 1 (0: unknown)
+        # row -> its polar words (@ radius, ^ angle; None: not written), X and Y not written
+        self.polar: dict[int, tuple[Word | None, Word | None]] = {}
         self.arcs: dict[int, Arc] = {}  # row -> the centre, plane and turns of a G2/G3 arc
 
     def __len__(self) -> int:
@@ -261,7 +286,7 @@ class GcodeMoves:
         get = words.get
         x, y, z, r = get("X"), get("Y"), get("Z"), get("R")
         for word in (x, y, z):
-            if word is not None:
+            if word is not None and _NUMBER_RE.fullmatch(word.literal):  # not an expression
                 self.places = max(self.places, decimals_of(word.literal))
         s0, s1, s2 = state.setter
         self._ints[i] = (
@@ -383,12 +408,17 @@ class GcodeMoves:
 
 
 class _Line(NamedTuple):
-    """One block read: its words (None for letters that are never a position), G numbers, and
-    the letters written with a parameter or an expression (letter -> text as written)."""
+    """One block read: its words (None for letters that are never a position; a word whose
+    parameter or expression was evaluated holds the value, its ``literal`` the text), G
+    numbers, the letters whose parameter or expression is not decidable (letter -> text as
+    written, ``why`` letter -> the reason) and the line's parameter assignments (key, value or
+    the reason it is not known), which take effect after the line."""
 
     words: dict[str, Word | None]
     gcodes: list[str]
     exprs: dict[str, str]
+    why: dict[str, str] | None = None
+    assigns: list[tuple[int | str, float | str]] | None = None
 
 
 @dataclass(slots=True)
@@ -415,6 +445,9 @@ class _Modal:
     flow: str = ""  # control flow / unknown modal state: for the rest of the program
     wcs: str = ""  # G55-G59.3 (cleared by G54)
     offset: str = ""  # G92/G52/G92.3 (cleared by G92.1/G92.2)
+    # A/B/C offset by G92/G52 (cleared by G92.1/G92.2): their words are no longer the tool's
+    # orientation (X, Y, Z are not moved)
+    turned: frozenset[str] = frozenset()
     table: str = ""  # G10 changed the work offsets or tool table: for the rest of the program
     transform: str = ""  # G68/G51 (cleared by G69/G50)
     comp: str = ""  # cutter compensation G41/G42 (cleared by G40)
@@ -423,8 +456,9 @@ class _Modal:
     def frame_reason(self) -> str:
         return self.flow or self.wcs or self.offset or self.table or self.transform or self.comp
 
-    def apply(self, g: str, lineno: int, l_word: Word | None) -> None:
-        """One G-code of a block (its number as text: "1", "91.1"); ``l_word``: the block's L."""
+    def apply(self, g: str, lineno: int, l_word: Word | None, axes=frozenset()) -> None:
+        """One G-code of a block (its number as text: "1", "91.1"); ``l_word``: the block's L,
+        ``axes``: the axis letters the block writes (``_OFFSET_LETTERS``)."""
         if g in MOTION_MODES:
             self.motion, self.unknown_motion = g, ""
             if g not in CYCLES:
@@ -443,10 +477,12 @@ class _Modal:
             self.wcs = ""  # back to the cell's frame; offsets, tables, rotations still apply
         elif g in _WCS:
             self.wcs = f"work offset G{g} (line {lineno}): the cell gives only G54"
+        elif g in ("92", "52") and axes and _FRAME_LETTERS.isdisjoint(axes):
+            self.turned = self.turned | (axes & _ORIENTATION)  # U, V, W, E: nothing to follow
         elif g in ("92", "52", "92.3"):
             self.offset = f"G{g} offset (line {lineno}) moves the program frame"
         elif g in ("92.1", "92.2"):
-            self.offset = ""
+            self.offset, self.turned = "", frozenset()
         elif g == "10":
             what = f"G10 L{l_word.literal}" if l_word is not None else "G10"
             table = "work offsets" if l_word is None or l_word.value in (2, 20) else "tool table"
@@ -514,28 +550,46 @@ def _skip_blank(line: str, i: int) -> int:
     return i
 
 
+def _bracket_end(line: str, i: int, path: str | None, lineno: int) -> int:
+    """End of the ``[...]`` that opens at ``line[i]``."""
+    depth = 0
+    for j in range(i, len(line)):
+        if line[j] == "[":
+            depth += 1
+        elif line[j] == "]":
+            depth -= 1
+            if depth == 0:
+                return j + 1
+    raise InputError("unclosed '[' expression", path, lineno, i + 1)
+
+
 def _expression_end(line: str, i: int, path: str | None, lineno: int) -> int:
-    """End of the parameter reference (``#1``, ``##2``, ``#<name>``) or ``[expression]`` that
-    starts at ``line[i]`` (after an optional sign)."""
+    """End of the parameter reference (``#1``, ``##2``, ``#<name>``), ``[expression]`` or
+    function (``sin[30]``, ``atan[1]/[2]``) that starts at ``line[i]`` (after an optional
+    sign)."""
     if line[i] in "+-":
         i = _skip_blank(line, i + 1)
     while i < len(line) and line[i] == "#":
         i = _skip_blank(line, i + 1)
     if i < len(line) and line[i] == "[":
-        depth = 0
-        for j in range(i, len(line)):
-            if line[j] == "[":
-                depth += 1
-            elif line[j] == "]":
-                depth -= 1
-                if depth == 0:
-                    return j + 1
-        raise InputError("unclosed '[' expression", path, lineno, i + 1)
+        return _bracket_end(line, i, path, lineno)
     if i < len(line) and line[i] == "<":
         close = line.find(">", i)
         if close < 0:
             raise InputError("unclosed '<' parameter name", path, lineno, i + 1)
         return close + 1
+    m = _FUNCTION_RE.match(line, i)
+    if m is not None:
+        end = _bracket_end(line, m.end() - 1, path, lineno)
+        if m.group(1).lower() == "atan":  # ATAN[y]/[x]
+            slash = _skip_blank(line, end)
+            if line[slash : slash + 1] != "/":
+                raise InputError("ATAN[y] without /[x]", path, lineno, slash + 1)
+            at = _skip_blank(line, slash + 1)
+            if line[at : at + 1] != "[":
+                raise InputError("ATAN[y]/ without [x]", path, lineno, at + 1)
+            end = _bracket_end(line, at, path, lineno)
+        return end
     m = _DIGITS_RE.match(line, i)
     if m is None:
         raise InputError("cannot read this parameter or expression", path, lineno, i + 1)
@@ -545,15 +599,34 @@ def _expression_end(line: str, i: int, path: str | None, lineno: int) -> int:
 def _is_expression(line: str, i: int) -> bool:
     if i < len(line) and line[i] in "+-":
         i = _skip_blank(line, i + 1)
-    return i < len(line) and line[i] in "#["
+    return i < len(line) and (line[i] in "#[" or _FUNCTION_RE.match(line, i) is not None)
 
 
-def _scan(line: str, offset: int, path: str | None, lineno: int) -> _Line:
-    """Read a comment-free block word by word (the slow path: parameters, expressions, errors).
+def _evaluated(params: Parameters, text: str, path: str | None, lineno: int, at: int):
+    """The value of a word's or an assignment's ``text`` (starting at ``line[at]``), or the
+    reason (str) it is not decidable before run time; InputError where it is not RS274NGC."""
+    try:
+        value = params.evaluate(text)
+    except Undecided as why:
+        return str(why)
+    except ValueError as bad:
+        raise InputError(
+            f"cannot read the expression {text.strip()!r}", path, lineno, at + 1
+        ) from bad
+    except OverflowError:
+        return f"{text.strip()} overflows"
+    if not math.isfinite(value):
+        return f"{text.strip()} is not a finite number"
+    return value
+
+
+def _scan(line: str, offset: int, path: str | None, lineno: int, params: Parameters) -> _Line:
+    """Read a comment-free block word by word (the slow path: parameters, expressions, polar
+    words, errors). Expressions are evaluated with ``params`` as it stands before the line.
 
     ``offset``: text offset of ``line[0]``. InputError at the first thing that is not a word or a
     parameter assignment."""
-    block = _Line({}, [], {})
+    block = _Line({}, [], {}, {}, [])
     i, n = 0, len(line)
     while True:
         i = _skip_blank(line, i)
@@ -568,9 +641,22 @@ def _scan(line: str, offset: int, path: str | None, lineno: int) -> _Line:
             m = _NUMBER_RE.match(line, value)
             if m is None and not _is_expression(line, value):
                 raise InputError("cannot read the parameter's value", path, lineno, value + 1)
-            i = m.end() if m else _expression_end(line, value, path, lineno)
+            after = m.end() if m else _expression_end(line, value, path, lineno)
+            try:
+                key = params.key_of(line[i:end])
+            except Undecided as why:  # which parameter it sets is not known
+                block.assigns.append((None, f"{line[i:end].strip()} = ..: {why}"))
+                i = after
+                continue
+            except ValueError as bad:
+                raise InputError("cannot read this parameter", path, lineno, i + 1) from bad
+            got = _evaluated(params, line[value:after], path, lineno, value)
+            if isinstance(got, str):
+                got = f"is set from {line[value:after].strip()} (line {lineno}): {got}"
+            block.assigns.append((key, got))
+            i = after
             continue
-        if ch not in _LETTERS:
+        if ch not in _LETTERS and ch not in POLAR:
             bad = line[i:].split()[0]
             raise InputError(f"cannot read {bad!r} as a G-code word", path, lineno, i + 1)
         letter = ch.upper()
@@ -582,11 +668,23 @@ def _scan(line: str, offset: int, path: str | None, lineno: int) -> _Line:
         if m is not None:
             end = m.end()
             _put(block, letter, m.group(), at, end, offset, path, lineno)
-        else:
-            end = _expression_end(line, at, path, lineno)
-            if (letter in block.words or letter in block.exprs) and letter != "M":
-                raise InputError(f"word {letter} given twice", path, lineno, at + 1)
+            i = end
+            continue
+        end = _expression_end(line, at, path, lineno)
+        if (letter in block.words or letter in block.exprs) and letter != "M":
+            raise InputError(f"word {letter} given twice", path, lineno, at + 1)
+        got = _evaluated(params, line[at:end], path, lineno, at)
+        if isinstance(got, str):
             block.exprs[letter] = line[i:end]
+            block.why[letter] = got
+        elif letter == "G":
+            block.gcodes.append(_G_NAMES.get(got) or _gnum(got))
+        elif letter in _KEPT:
+            block.words[letter] = _new_word(
+                Word, (letter, got, offset + at, offset + end, line[at:end])
+            )
+        else:
+            block.words[letter] = None
         i = end
 
 
@@ -770,6 +868,7 @@ class _Reader:
         self.slashes = "/" in text
         self.bom = next((b for b in _BOMS if text.startswith(b)), "")
         self.shapes = _Shapes()
+        self.params = Parameters()
 
     def line(self, raw: str, lineno: int, line_offset: int) -> None:
         """Read one line (without its ending) that starts at text offset ``line_offset``."""
@@ -777,7 +876,7 @@ class _Reader:
         if bom:  # a byte-order mark is not a word (offsets stay as in the file)
             raw = " " * len(self.bom) + raw[len(self.bom) :]
         stripped = raw.strip()
-        if not stripped or stripped.startswith("%"):
+        if not stripped or stripped.startswith("%") or _NUMBERED_PERCENT_RE.fullmatch(stripped):
             return
         if self.owords and _OWORD_RE.match(raw):
             state = self.state
@@ -792,8 +891,26 @@ class _Reader:
             line = line.replace("/", " ", 1)
         block = _fast_line(line, line_offset, self.path, lineno)
         if block is None:
-            block = _scan(line, line_offset, self.path, lineno)
+            block = _scan(line, line_offset, self.path, lineno, self.params)
         self.block(block, lineno, line_offset)
+        if block.assigns:
+            self._assign(block.assigns, lineno)
+
+    def _assign(self, assigns: list[tuple[int | str | None, float | str]], lineno: int) -> None:
+        """A line's parameter assignments (key, value or the reason it is not known), after the
+        line. One whose parameter is not known (key None) may have set any: every parameter is
+        unknown from here on; one that sets a work offset (#5211-#5390) moves the program
+        frame."""
+        state = self.state
+        for key, value in assigns:
+            if key is None:
+                self.params.forget(f"is not known after {value} (line {lineno})")
+                continue
+            if isinstance(key, int) and key in _OFFSET_PARAMETERS:
+                state.table = state.table or (
+                    f"#{key} assigned (line {lineno}) changes the work offsets"
+                )
+            self.params.values[key] = value
 
     def plain_run(self, run: _PlainRun) -> tuple[int, int]:
         """Take the plain lines of ``run`` in bulk, as ``block`` would take them one by one, as
@@ -892,8 +1009,9 @@ class _Reader:
         gcodes = block.gcodes
         if len(gcodes) > 1:  # a known motion first: an unknown code on the same line wins
             gcodes = sorted(gcodes, key=lambda g: g not in MOTION_MODES)
+        axes = _OFFSET_LETTERS & (words.keys() | block.exprs.keys()) if gcodes else frozenset()
         for g in gcodes:
-            state.apply(g, lineno, words.get("L"))
+            state.apply(g, lineno, words.get("L"), axes)
         if "G" in block.exprs:
             state.flow = state.flow or (
                 f"G-code from an expression {block.exprs['G']} (line {lineno}): the modal state "
@@ -905,13 +1023,20 @@ class _Reader:
         if nonmodal and nonmodal[0] in _PARAMETER_CODES:
             return  # the axis words are parameters, not a move
         axis_words = {k: words[k] for k in AXES if k in words}
+        polar = {k: words[k] for k in POLAR if k in words}
         moving = [k for k in block.exprs if k in _POSITION_LETTERS]
         home = nonmodal[:1] == ["28"] or nonmodal[:1] == ["30"]  # goes home even without words
         circle = state.motion in ("2", "3") and not _ARC_WORDS.isdisjoint(words)  # full circle
-        if not axis_words and not has_rotary and not moving and not home and not circle:
-            return
-        if axis_words:
-            column = min(w.start for w in axis_words.values()) - line_offset + 1
+        if not axis_words and not polar and not has_rotary and not moving and not home:
+            if not circle:
+                return
+        if (polar or not _POLAR_SET.isdisjoint(block.exprs)) and not (
+            {"X", "Y"}.isdisjoint(words) and {"X", "Y"}.isdisjoint(block.exprs)
+        ):
+            raise InputError("polar words @ ^ with X or Y in one block", self.path, lineno, 1)
+        placed = [*axis_words.values(), *polar.values()]
+        if placed:
+            column = min(w.start for w in placed) - line_offset + 1
         else:
             column = 1
         if nonmodal:  # G28/G30 (via a point) or G53 (machine coordinates)
@@ -923,10 +1048,11 @@ class _Reader:
                 AXES,
             )
             return
+        why = _expression_reason(block, lineno)
         if state.motion in CYCLES:
-            self._cycle(lineno, column, axis_words, words, block.exprs)
+            self._cycle(lineno, column, axis_words, words, block.exprs, why)
         else:
-            self._straight(lineno, column, axis_words, block.exprs, words)
+            self._straight(lineno, column, axis_words, block, why, polar)
 
     def _rotary(self, block: _Line) -> bool:
         """Take the block's A/B/C/U/V/W (NaN when from an expression); True if it has any."""
@@ -935,9 +1061,10 @@ class _Reader:
         if not (written or computed):
             return False
         rotary = dict(self.state.rotary)  # a new dict: moves share the one in effect when read
+        turned = self.state.turned  # offset by G92/G52: not the tool's orientation
         for letter in ROTARY:
             if letter in block.words:
-                rotary[letter] = block.words[letter].value
+                rotary[letter] = math.nan if letter in turned else block.words[letter].value
             elif letter in block.exprs:
                 rotary[letter] = math.nan
         self.state.rotary = rotary
@@ -961,8 +1088,8 @@ class _Reader:
                 state.setter[i] = index
         state.pos = end
 
-    def _straight(self, lineno, column, axis_words, exprs, words) -> None:
-        s = self.state
+    def _straight(self, lineno, column, axis_words, block, why, polar) -> None:
+        s, exprs = self.state, block.exprs
         target = list(s.pos)
         for i, k in enumerate(AXES):
             word = axis_words.get(k)
@@ -971,20 +1098,47 @@ class _Reader:
                 target[i] = s.pos[i] + value if s.incremental else value
             elif k in exprs:
                 target[i] = math.nan
+        written = set(axis_words) | set(exprs)
+        alone = ""
+        if polar or not _POLAR_SET.isdisjoint(exprs):
+            target[0], target[1], alone = self._polar_xy(polar, exprs, lineno)
+            written |= {"X", "Y"}
+            if polar:
+                self.moves.polar[len(self.moves)] = (polar.get("@"), polar.get("^"))
         move = (lineno, column, "G" + s.motion, tuple(target), axis_words)
-        reason = _expression_reason(exprs, lineno) or s.frame_reason() or s.unknown_motion
+        reason = why or s.frame_reason() or s.unknown_motion
         if s.motion == "80":
             reason = reason or "axis words with G80 (no motion mode)"
             target = [math.nan] * 3
         elif s.motion in ("2", "3"):
-            arc, why = arc_of(words, exprs, s.plane, s.arc_absolute, lineno, s.motion == "2")
-            reason = reason or why
+            arc, arc_why = arc_of(block, s.plane, s.arc_absolute, lineno, s.motion == "2")
+            reason = reason or arc_why
             self.moves.arcs[len(self.moves)] = arc
         elif s.unknown_motion:
             target = [math.nan] * 3  # where an unknown motion ends is not known either
-        self._add(move, reason, target, set(axis_words) | set(exprs))
+        self._add(move, reason or alone, target, written)
 
-    def _cycle(self, lineno, column, axis_words, words, exprs) -> None:
+    def _polar_xy(self, polar: dict[str, Word], exprs, lineno: int) -> tuple[float, float, str]:
+        """X, Y (mm) a polar move reaches, as LinuxCNC reads ``@`` (radius) and ``^`` (angle,
+        degrees) about the program origin: under G90 the words written, the tool's own radius or
+        angle for the one not written; under G91 the tool's radius and angle plus the words.
+        The third item says why it is not corrected ("" when it can be): with one word, the
+        other is where the tool is."""
+        if not _POLAR_SET.isdisjoint(exprs):
+            return math.nan, math.nan, ""  # the expression's reason is the move's
+        s = self.state
+        r = polar["@"].value * s.scale if "@" in polar else None
+        a = polar["^"].value if "^" in polar else None
+        alone = ""
+        if r is None or a is None:
+            given, other = ("^", "radius") if r is None else ("@", "angle")
+            alone = (
+                f"polar {given} without {'@' if r is None else '^'} (line {lineno}): its {other} "
+                "is where the tool is, not corrected"
+            )
+        return (*polar_xy(s.pos, r, a, s.incremental), alone)
+
+    def _cycle(self, lineno, column, axis_words, words, exprs, why) -> None:
         """A canned-cycle block: its (first) hole. The cycle's axis is Z in G17, Y in G18, X in
         G19 (its word the depth, R a level on it), the hole's position the other two axes (as
         LinuxCNC reads them). Under G91 those two are increments from where the tool is
@@ -1003,7 +1157,25 @@ class _Reader:
         elif "R" in exprs:
             s.cycle_r = math.nan
         repeats = 1
-        reason = _expression_reason(exprs, lineno) or s.frame_reason()
+        reason = why or s.frame_reason()
+        polar = not _POLAR_SET.isdisjoint(words) or not _POLAR_SET.isdisjoint(exprs)
+        if polar:
+            if axis != 2:
+                reason = reason or (
+                    f"polar words in a canned cycle in G{s.plane} (line {lineno}): not read"
+                )
+            elif s.incremental:  # each hole turns about the origin from the one before
+                reason = reason or (
+                    f"G91 canned cycle with polar words (line {lineno}): its holes are read, not "
+                    "corrected"
+                )
+            elif "@" not in words or "^" not in words:
+                given = "@" if "@" in words else "^"
+                reason = reason or (
+                    f"polar {given} alone in a canned cycle (line {lineno}): the other is where "
+                    "the tool is, not corrected"
+                )
+            self.moves.polar[len(self.moves)] = (words.get("@"), words.get("^"))
         if "L" in words:
             count = words["L"].value
             if count > MAX_REPEATS:
@@ -1027,6 +1199,13 @@ class _Reader:
                 first[i] = s.pos[i] + value if s.incremental else value
             elif k in exprs:
                 first[i] = step[i] = math.nan
+        if polar:  # each repeat under G91 turns and stretches about the origin again
+            radius = words["@"].value * s.scale if "@" in words else None
+            angle = words["^"].value if "^" in words else None
+            if _POLAR_SET.isdisjoint(exprs) and axis == 2:
+                first[:2] = polar_xy(s.pos, radius, angle, s.incremental)
+            else:
+                first[0] = first[1] = math.nan
         first_of_run = s.cycle_il is None
         if first_of_run:
             s.cycle_il = s.pos[axis]
@@ -1037,6 +1216,8 @@ class _Reader:
             reason = reason or f"canned cycle without an R plane or {depth} depth"
         clear = r_level if s.retract == "G99" else max(s.cycle_il, r_level)
         last = [first[i] + (repeats - 1) * step[i] for i in range(3)]
+        if polar and s.incremental and axis == 2:
+            last[:2] = polar_xy(first, radius, angle, True, repeats - 1)
         if "L" in exprs or ("L" in words and repeats == 1 and words["L"].value != 1):
             repeats = 0  # not known: under G91 neither is where its holes end
             if s.incremental:
@@ -1045,16 +1226,43 @@ class _Reader:
         if repeats != 1:
             self.moves.repeats[len(self.moves)] = repeats
         move = (lineno, column, "G" + s.motion, tuple(first), move_words)
-        written = set(axis_words) | set(exprs) | {depth}
+        written = set(axis_words) | set(exprs) | ({"X", "Y", depth} if polar else {depth})
         cycle = 2 if first_of_run else 1
         self._add(move, reason, last, written, cycle=cycle, r_mm=r_level)
 
 
-def _expression_reason(exprs: dict[str, str], lineno: int) -> str:
-    used = [text for k, text in exprs.items() if k in _POSITION_LETTERS]
+def polar_xy(
+    pos, radius: float | None, angle: float | None, incremental: bool, times: int = 1
+) -> tuple[float, float]:
+    """Where a polar move ends, X, Y mm, from the tool at ``pos`` (X, Y mm, program frame), as
+    LinuxCNC reads ``@`` (``radius``, mm) and ``^`` (``angle``, degrees; None: not written)
+    about the program origin: under G90 the values written, the tool's own radius or angle for
+    one not written; under G91 the tool's radius and angle plus the values written, ``times``
+    over (a G91 cycle's repeats; 0: where it starts)."""
+    x, y = pos[0], pos[1]
+    r, a = math.hypot(x, y), math.degrees(math.atan2(y, x))
+    if incremental:
+        step = radius or 0.0
+        if times > 1 and r + times * step < 0:  # the radius turns negative on the way: each flips
+            for _ in range(times):
+                x, y = polar_xy((x, y), radius, angle, True)
+            return x, y
+        r, a = r + times * step, a + times * (angle or 0.0)
+    else:
+        r = r if radius is None else radius
+        a = a if angle is None else angle
+    turn = math.radians(a)
+    return r * math.cos(turn), r * math.sin(turn)
+
+
+def _expression_reason(block: _Line, lineno: int) -> str:
+    """Why a position word's parameter or expression is not decidable before run time ("":
+    every one is)."""
+    used = [k for k in block.exprs if k in _POSITION_LETTERS]
     if not used:
         return ""
-    return f"{used[0]} uses a parameter or an expression (line {lineno}): not guessed"
+    k = used[0]
+    return f"{block.exprs[k]} uses a parameter or an expression: {block.why[k]} (line {lineno})"
 
 
 def parse_gcode(text: str, path: str | os.PathLike[str] | None = None) -> list[GcodeMove]:

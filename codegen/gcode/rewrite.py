@@ -9,7 +9,10 @@ lands where it should, corrected or as programmed: a G91 cycle's X, Y from the t
 the initial level and its Z from R. A G91 cycle repeated L times has one increment for all its
 holes: corrected when their corrections agree within the written resolution, else it and the
 moves that set its start are not. A cycle line that writes no Z or R gets the words its hole
-needs. An arc moves rigidly with the moves that set its start (``codegen.gcode.arc_shift``).
+needs. An arc moves rigidly with the moves that set its start (``codegen.gcode.arc_shift``);
+in G18/G19 a cycle's axis is Y/X instead of Z. A corrected word written
+as a parameter or an expression gets the corrected number in the expression's place (its value
+as read where it is kept); a polar move gets its corrected radius and angle (``_polar_edits``).
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from array import array
 import numpy as np
 
 from accugrid.codegen.gcode.arc_shift import shift_arcs
-from accugrid.codegen.gcode.parse import RESETS, GcodeMoves, gcode_moves, modal_fill
+from accugrid.codegen.gcode.parse import RESETS, GcodeMoves, gcode_moves, modal_fill, polar_xy
 from accugrid.codegen.program_text import (
     MIN_PLACES_INCH,
     MIN_PLACES_MM,
@@ -64,6 +67,7 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
     rows.commanded[:] = ~moves.resets
     if "G80" in moves.motion:
         rows.commanded &= np.array([m != "G80" for m in moves.motion], bool)
+    _protect_polar_starts(moves, rows)
     if any(rows.reason):  # the moves with no reason
         at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))
     else:
@@ -88,6 +92,53 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
     out = _gcode_edits(text, moves, rows, (desired, own), r_planes, opts, centre_edits)
     partial_check(rows, opts)
     return Result({path: out}, rows)
+
+
+def _protect_polar_starts(moves: GcodeMoves, rows: Rows) -> None:
+    """A polar move that writes only its radius ``@`` or only its angle ``^`` takes the other
+    from where the tool is, and so do the holes of a G91 polar cycle: the moves that set its
+    start are not corrected, so it lands as programmed."""
+    for i, (radius, angle) in moves.polar.items():
+        if radius is not None and angle is not None:
+            if not (moves.is_cycle[i] and moves.incremental[i]):
+                continue
+        why = f"sets the start of the polar move at line {moves.line[i]}, which is not corrected"
+        for j in moves.setters[i, :2].tolist():
+            if j >= 0 and not rows.reason[j]:
+                rows.reason[j] = why
+
+
+def _polar_edits(text, edits, moves, i, where, goals, changed, places) -> None:
+    """The ``@`` radius and ``^`` angle of polar move ``i``, written so that it reaches
+    ``goals`` (X, Y, Z mm, program frame) from ``cmd``, where the rewritten program leaves the
+    tool (``where``: cmd and the move's end, whose X, Y are set here as LinuxCNC reads the words
+    written). Only a move that writes both is rewritten (one word alone keeps its words): under
+    G90 the goal's radius and angle, under G91 their differences from the tool's; the radius
+    gets one decimal more than the file, the angle as many as keep the arc it rounds to a tenth
+    of that, and each word keeps its text where its value does not change. A G90 polar cycle
+    keeps its words."""
+    cmd, end = where
+    radius, angle = moves.polar[i]
+    scale, inc = float(moves.scale[i]), bool(moves.incremental[i])
+    values = [None if w is None else w.value for w in (radius, angle)]
+    known = not (math.isnan(cmd[0]) or math.isnan(cmd[1]) or math.isnan(goals[0]))
+    if radius is not None and angle is not None and known and (changed or inc):
+        r_base = math.hypot(cmd[0], cmd[1]) if inc else 0.0
+        a_base = math.degrees(math.atan2(cmd[1], cmd[0])) if inc else 0.0
+        r_goal = math.hypot(goals[0], goals[1])
+        r_new = (r_goal - r_base) / scale
+        # the angle nearest the one written (no turn of 360 degrees added or lost)
+        a_goal = math.degrees(math.atan2(goals[1], goals[0])) - a_base
+        a_new = angle.value + (a_goal - angle.value + 180.0) % 360.0 - 180.0
+        p = int(places[i]) + 1
+        a_places = p + max(0, math.ceil(math.log10(max(r_goal / scale, 1e-9) * math.pi / 180)))
+        for word, new, decimals, k in ((radius, r_new, p, 0), (angle, a_new, a_places, 1)):
+            new_text = number_text(word.literal, word.value, new, decimals)
+            if new_text is not word.literal:
+                edits.append((word.start, word.end, new_text))
+                values[k] = float(new_text)
+    r = None if values[0] is None else values[0] * scale
+    end[0], end[1] = polar_xy(cmd, r, values[1], inc)
 
 
 def _repeated_holes(moves: GcodeMoves, rows: Rows, desired: np.ndarray, opts: Options) -> None:
@@ -193,9 +244,9 @@ def _gcode_edits(
     where it should land by its own correction (program frame; they differ where an arc's shift
     moves it), which the report's residual is measured from; ``r_planes`` (N,) mm: corrected R
     planes (NaN: keep); ``extra``: other edits by move, (start, end, new text) each (an arc's
-    centre words). Stretches of absolute moves (none a G28/G30/G53, none with ``extra`` edits)
-    are done in bulk (``_bulk_block``), the rest move by move (``_walk_block``), where
-    increments (which depend on what was written before) are formatted on the way."""
+    centre words). Stretches of absolute moves (none a G28/G30/G53, a G18/G19 cycle or one with
+    ``extra`` edits) are done in bulk (``_bulk_block``), the rest move by move (``_walk_block``),
+    where increments (which depend on what was written before) are formatted on the way."""
     desired, own = goals
     out = ByteSplicer(text)
     places = _places(moves, opts)
@@ -206,7 +257,7 @@ def _gcode_edits(
     if extra:
         walked[list(extra)] = True
     for first in range(0, len(moves), _BLOCK):
-        for part, step in _stretches(walked, slice(first, first + _BLOCK)):
+        for part, step in _stretches(moves, slice(first, first + _BLOCK), walked):
             out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
     if walk.reached_at:
         at = np.frombuffer(walk.reached_at, dtype=np.int64)
@@ -214,6 +265,8 @@ def _gcode_edits(
         off = np.abs(reached - desired[at])
         residual = np.linalg.norm(reached - own[at], axis=1)
         wrote = moves.word_start[at, :3] >= 0
+        if moves.polar:  # X and Y of a polar move are written (as @ and ^)
+            wrote[:, :2] |= np.isin(at, np.fromiter(moves.polar, np.int64))[:, None]
         off_written = np.where(wrote, off, 0.0)
         rounding = np.maximum(np.maximum(off_written[:, 0], off_written[:, 1]), off_written[:, 2])
         rows.new[at] = reached
@@ -225,11 +278,15 @@ def _gcode_edits(
 _MIN_BULK = 256  # moves: a shorter stretch of absolute moves is walked with its neighbours
 
 
-def _stretches(walked: np.ndarray, block: slice):
+def _stretches(moves: GcodeMoves, block: slice, walked: np.ndarray):
     """(slice, step) of each stretch of the moves ``block``, in order: ``_bulk_block`` for runs
     of at least ``_MIN_BULK`` moves not ``walked`` (N,) (absolute moves that do not reset the
-    position, without other edits), ``_walk_block`` for the moves between them."""
-    walked = walked[block]
+    position, nor polar), ``_walk_block`` for the moves between them."""
+    walked = walked[block].copy()
+    if moves.polar:  # polar moves are written from where the tool is
+        polar = np.fromiter(moves.polar, np.int64, len(moves.polar))
+        polar = polar[(polar >= block.start) & (polar < block.stop)] - block.start
+        walked[polar] = True
     n = len(walked)
     runs = np.flatnonzero(np.diff(walked, prepend=True, append=True)).reshape(-1, 2)
     done = 0
@@ -309,6 +366,11 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
             if changed:
                 walk.reached_rows.extend(reached)
                 walk.reached_at.append(first + b)
+            if first + b in moves.polar:  # a polar cycle's holes turn about the origin
+                radius, angle = (None if w is None else w.value for w in moves.polar[first + b])
+                times = moves.repeats.get(first + b, 1)
+                xy = polar_xy(cmd, radius and radius * scale, angle, True, times) if times else None
+                end = [*(xy or (math.nan, math.nan)), end[2]]
             cmd = end
             continue
         incremental = inc and not is_cycle
@@ -329,7 +391,8 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
                     new_text = old_text
             if new_text != old_text:
                 edits.append((start, ends[i], new_text))
-            written = float(new_text) * scale
+            # a word kept as written may be a parameter or an expression: its value as read
+            written = (values[i] if new_text is old_text else float(new_text)) * scale
             if is_cycle and i == axis:
                 cycle_z = written
             elif incremental:
@@ -337,17 +400,23 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
             else:
                 end[i] = written
         if is_cycle and starts[3] >= 0:
-            new_text = text[starts[3] : ends[3]]
+            r_value = values[3]
             if r_texts[b] is not None and float(r_texts[b]) != values[3]:
-                new_text = r_texts[b]
-                edits.append((starts[3], ends[3], new_text))
-            r_cmd = float(new_text) * scale
+                r_value = float(r_texts[b])
+                edits.append((starts[3], ends[3], r_texts[b]))
+            r_cmd = r_value * scale
+        if first + b in moves.polar:
+            _polar_edits(text, edits, moves, first + b, (cmd, end), goals, changed, places)
         if walk.fill[first + b] and (starts[axis] < 0 or starts[3] < 0):
             r_goal = r_planes[first + b] if changed else math.nan
+            spans = (starts, ends)
+            if first + b in moves.polar:  # added after the polar words too
+                polar = [w for w in moves.polar[first + b] if w is not None]
+                spans = (starts + [w.start for w in polar], ends + [w.end for w in polar])
             cycle_z, r_cmd = _added_words(
                 text,
                 edits,
-                (starts, ends),
+                spans,
                 (goals[axis], r_mm if math.isnan(r_goal) else r_goal),
                 (cycle_z, r_cmd),
                 (scale, int(places[first + b]), axis),
@@ -381,8 +450,9 @@ def _added_words(text, edits, spans, goals, sticky, how):
     R plane it should reach (``goals``, absolute mm) differ from the depth and R plane in effect
     (``sticky``, mm, as written), `` Z..``/`` R..`` (the depth's letter: the cycle's axis) are
     added after its last position word (in the case of its letters). ``spans``: the line's
-    (starts, ends) of X, Y, Z, R; ``how``: (mm per unit, decimals, the cycle's axis). Adds the
-    edit to ``edits``; the depth and R plane now in effect (mm)."""
+    (starts, ends) of X, Y, Z, R (and of its polar words after them); ``how``: (mm per unit,
+    decimals, the cycle's axis). Adds the edit to ``edits``; the depth and R plane now in effect
+    (mm)."""
     starts, ends = spans
     scale, places, axis = how
     sticky, added = list(sticky), []
@@ -423,7 +493,7 @@ def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, chang
             new_text = number_text(old_text, values[i], (want - base) / scale, places)
         if new_text != old_text:
             edits.append((starts[i], ends[i], new_text))
-        return float(new_text) * scale
+        return (values[i] if new_text is old_text else float(new_text)) * scale
 
     fixed_step = repeats != 1 and not changed  # its start is as programmed: so is its step
 
