@@ -2,7 +2,7 @@
 ``accugrid rewrite`` corrects in real G-code programs (../shared/realworld/gcode, plus any
 programs given as arguments), with the example cell (its measured-like grid, 200 mm step).
 
-    .venv/bin/python bench/arc_coverage.py [PROGRAM ...]
+    .venv/bin/python bench/arc_coverage.py [--decimals N] [PROGRAM ...]
 
 Each program is rewritten by the command line with ``--allow-partial --report``; the report has
 one row per move the reader finds, in order, so the rows are matched with the reader's moves:
@@ -42,12 +42,13 @@ def planes(text: str) -> list[str]:
     return out
 
 
-def coverage(program: Path, folder: Path) -> dict[str, list[int]]:
-    """[corrected, all] of arcs, arc starts, G18/G19 cycles and every move of one program."""
+def coverage(program: Path, folder: Path, options: list[str]) -> dict[str, list[int]]:
+    """[corrected, all] of arcs, arc starts, G18/G19 cycles and every move of one program
+    (``options``: more options of the command)."""
     out, report = folder / program.name, folder / (program.name + ".csv")
     run = subprocess.run(
         [str(ACCUGRID), "rewrite", "--allow-partial", str(program), "--cell", str(CELL)]
-        + ["-o", str(out), "--report", str(report), "--force"],
+        + ["-o", str(out), "--report", str(report), "--force", *options],
         capture_output=True,
         text=True,
         check=False,
@@ -69,12 +70,13 @@ def coverage(program: Path, folder: Path) -> dict[str, list[int]]:
     return {k: [sum(done[i] for i in v), len(v)] for k, v in count.items()}
 
 
-def main(paths: list[str]) -> None:
-    programs = sorted(REALWORLD.iterdir()) + [Path(p) for p in paths]
+def main(args: list[str]) -> None:
+    options = args[:2] if args[:1] == ["--decimals"] else []
+    programs = sorted(REALWORLD.iterdir()) + [Path(p) for p in args[len(options) :]]
     totals: dict[str, list[int]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         for program in programs:
-            numbers = coverage(program, Path(tmp))
+            numbers = coverage(program, Path(tmp), options)
             if numbers:
                 shown = ", ".join(f"{k} {a}/{b}" for k, (a, b) in numbers.items())
                 print(f"{program.name}: {shown}")
