@@ -109,12 +109,14 @@ def shift_arcs(
     )
     for g in np.flatnonzero(~group_ok).tolist():  # their reasons, one by one
         members = nodes.members(g)
+        why, culprit = "its arcs cannot move as one", min(j for j, _ in members if j in moves.arcs)
         for c in sorted(set(comp[group == g].tolist()), key=nodes.first_move):
             mine = nodes.component(c)
-            why, culprit = _component_why(moves, rows, places, fit, mine, mine[0][1])
-            if why:
-                _leave(moves, rows, goals, members, why, culprit)
+            found = _component_why(moves, rows, places, fit, mine, mine[0][1])
+            if found[0]:
+                why, culprit = found
                 break
+        _leave(moves, rows, goals, members, why, culprit)  # every one left goes back
     return edits
 
 
