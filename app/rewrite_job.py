@@ -127,6 +127,8 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
         allow_partial=req.allow_partial,
         base_override=req.base,
         tool_number=cell.tool_number,
+        tool_data=cell.tool_data,
+        tool_names=cell.tool_names,
         trust_calls=req.trust_calls,
         ignore_external_axes=req.ignore_external_axes,
         max_bytes=req.max_bytes,

@@ -35,10 +35,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from accugrid.codegen.cellfile import DISTANCE_MAX_MM, CellReader, SectionKeys
+from accugrid.codegen.cellfile import DISTANCE_MAX_MM, FRAME_KEYS, CellReader, SectionKeys
 from accugrid.codegen.dialects import DIALECTS
 from accugrid.compensation.interpolation import METHODS
-from accugrid.compensation.settings import CorrectionSettings
+from accugrid.compensation.settings import TOOL_DISTANCE_MM, CorrectionSettings
 from accugrid.infra.csvtable import DECIMALS, DELIMITERS, UNITS, TableFormat
 from accugrid.infra.errors import InputError
 from accugrid.infra.yamlfile import load_yaml
@@ -86,7 +86,11 @@ class ConfigurationSection:
 class Cell:
     """A validated cell file. Poses are (4, 4) homogeneous transforms in mm: ``flange_T_tool``
     (the TCP, TOOL_DATA ``tool_number``), ``robot_T_base`` (the points' frame, BASE_DATA
-    ``base_number``) and ``base_data`` (BASE_DATA number -> robot_T_frame, the base included)."""
+    ``base_number``) and ``base_data`` (BASE_DATA number -> robot_T_frame, the base included).
+    ``tool_data`` (tool number -> flange_T_tool, the cell's tool and 0, the flange, included)
+    is None when the file has no ``tool_data:`` (a program is then corrected with the cell's
+    tool alone); ``tool_names``: the RAPID tooldata name (lower case) of each ``tool_data``
+    entry that has one (and ``tool0``) -> its number."""
 
     path: Path
     robot_name: str
@@ -103,6 +107,8 @@ class Cell:
     dialects: Mapping[str, object]  # dialect name -> its section record
     sha256: str = ""
     tracker: TableFormat | None = None  # how the grid file is written (tracker:), None: found
+    tool_data: dict[int, np.ndarray] | None = None
+    tool_names: dict[str, int] | None = None
 
     @property
     def krl(self) -> KrlSection:
@@ -131,10 +137,11 @@ _KEYS: SectionKeys = {
     "speeds": frozenset({"travel", "approach", "feed"}),
     "drilling": frozenset({"approach", "clearance", "retract", "depth", "dwell", "peck"}),
     "configuration": frozenset({"status", "turn", "allow_change", "singular_a5", "reference"}),
-    "correction": frozenset({"method", "iterations", "power", "model"}),
+    "correction": frozenset({"method", "iterations", "power", "model", "tool_distance"}),
     "tracker": frozenset({"columns", "units", "delimiter", "decimal"}),
 }
-_TOP_KEYS = {"robot", "grid", "tool", "base", "base_data"}
+_TOP_KEYS = {"robot", "grid", "tool", "base", "base_data", "tool_data"}
+TOOL_NUMBER_MAX = 9999  # tool_data keys: KRL TOOL_DATA (1..32), G-code T numbers
 
 
 def _sections(*declared: SectionKeys) -> dict[str, frozenset[str]]:
@@ -163,6 +170,7 @@ def load_cell(path: str | os.PathLike[str]) -> Cell:
     grid_path = r.file_path("", "grid", "a file path")
     tool_number, flange_T_tool = r.frame(r.top.get("tool"), "tool", True)
     base_number, robot_T_base = r.frame(r.top.get("base"), "base", True)
+    tool_data, tool_names = _tool_data(r, tool_number, flange_T_tool)
     return Cell(
         path=path,
         robot_name=robot,
@@ -179,6 +187,8 @@ def load_cell(path: str | os.PathLike[str]) -> Cell:
         dialects={n: module.read_section(r, robot_T_base) for n, module in sections.items()},
         sha256=doc.sha256,
         tracker=_tracker(r),
+        tool_data=tool_data,
+        tool_names=tool_names,
     )
 
 
@@ -200,6 +210,36 @@ def _base_data(r: CellReader, base_number: int, robot_T_base: np.ndarray) -> dic
             raise r.error(f"base_data.{n}", "repeats base.number; define it in base")
         base_data[number] = r.frame(frame, f"base_data.{n}", False)[1]
     return base_data
+
+
+def _tool_data(r: CellReader, tool_number: int, flange_T_tool: np.ndarray) -> tuple:
+    """``tool_data: {n: {x, y, z, a, b, c[, name]}}``: (number -> flange_T_tool with the cell's
+    tool and tool 0, the flange (KRL $NULLFRAME, RAPID tool0), lower-case RAPID name ->
+    number), (None, None) when the key is absent."""
+    data = r.top.get("tool_data")
+    if data is None:
+        return None, None
+    tools, names = {0: np.eye(4), tool_number: flange_T_tool}, {"tool0": 0}  # 0: the flange
+    for n, frame in r.mapping(data, "tool_data", None).items():
+        key = f"tool_data.{n}"
+        try:
+            number = int(n)
+        except ValueError:
+            raise r.error(key, "key must be a tool number (TOOL_DATA[n], T n)") from None
+        if not 1 <= number <= TOOL_NUMBER_MAX:
+            raise r.error(key, f"tool number must be 1..{TOOL_NUMBER_MAX}")
+        if number == tool_number:
+            raise r.error(key, "repeats tool.number; define it in tool")
+        d = r.mapping(frame, key, {*FRAME_KEYS, "name"})
+        name = d.pop("name", None)
+        if name is not None:
+            if not isinstance(name, str) or not name.isidentifier() or not name.isascii():
+                raise r.error(f"{key}.name", f"must be a RAPID tooldata name, got {name!r}")
+            if name.lower() in names:
+                raise r.error(f"{key}.name", f"{name} names tool {names[name.lower()]} already")
+            names[name.lower()] = number
+        tools[number] = r.frame(d, key, False)[1]
+    return tools, names
 
 
 def _drilling(r: CellReader) -> DrillingSection:
@@ -259,4 +299,7 @@ def _correction(r: CellReader) -> CorrectionSettings:
         method=r.choice("correction", "method", "idw", METHODS),
         iterations=r.integer("correction", "iterations", 1, 1, 10),
         power=r.number("correction", "power", 1.0, 0.0, 10.0, True),
+        tool_distance_mm=r.number(
+            "correction", "tool_distance", TOOL_DISTANCE_MM, 0.0, DISTANCE_MAX_MM
+        ),
     )

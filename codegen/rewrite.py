@@ -24,7 +24,7 @@ import numpy as np
 
 from accugrid.codegen.header import grid_lines, input_line
 from accugrid.codegen.header import header_lines as make_header
-from accugrid.codegen.program_text import MAX_BYTES
+from accugrid.codegen.program_text import MAX_BYTES, distinct_ints
 from accugrid.compensation import GridModel
 from accugrid.compensation.policy import CORRECTED as POLICY_CORRECTED
 from accugrid.compensation.policy import NOT_PLACED, OUTSIDE_GRID, REASONS, Policy
@@ -72,6 +72,9 @@ class Options:
     allow_partial: bool = False  # write although the policy leaves positions uncorrected
     base_override: int | None = None
     tool_number: int | None = None  # the cell's TOOL_DATA number (the TCP the grid holds for)
+    tool_data: dict[int, np.ndarray] | None = None  # tool number -> flange_T_tool (the cell's
+    # tool_data with its tool; None: the cell's tool alone, every position corrected with it)
+    tool_names: dict[str, int] | None = None  # RAPID tooldata name (lower case) -> tool number
     trust_calls: bool = False
     ignore_external_axes: bool = False
     max_bytes: int = MAX_BYTES
@@ -117,7 +120,9 @@ class Rows:
     (N,) mm, ``code`` (N,) the policy's reason code of a position it did not correct
     (``compensation.policy.REASONS``, 0: none), ``commanded`` (N,) bool: a Cartesian position a
     motion of the program commands (set by the dialect's reader; ``partial_check`` counts those
-    left uncorrected). Iterating gives ``Row`` objects (copies)."""
+    left uncorrected), ``tool`` (N,) the tool number each position is commanded with (-1: the
+    cell's tool; set by the dialect's reader with ``Options.tool_data``). Iterating gives
+    ``Row`` objects (copies)."""
 
     def __init__(
         self,
@@ -137,6 +142,7 @@ class Rows:
         self.status = np.zeros(n, np.int8)
         self.code = np.zeros(n, np.int8)
         self.commanded = np.zeros(n, bool)
+        self.tool = np.full(n, -1, np.int64)
         self.old = np.asarray(old, dtype=float).reshape(n, 3)
         self.new = np.full((n, 3), math.nan)
         self.residual_mm = np.full(n, math.nan)
@@ -158,7 +164,7 @@ class Rows:
             list(chain.from_iterable(p.reason for p in parts)),
             np.concatenate([p.old for p in parts] or [np.zeros((0, 3))]),
         )
-        for key in ("status", "code", "commanded", "new", "residual_mm", "rounding_mm"):
+        for key in ("status", "code", "commanded", "tool", "new", "residual_mm", "rounding_mm"):
             setattr(out, key, np.concatenate([getattr(p, key) for p in parts] or [out.status]))
         return out
 
@@ -250,7 +256,41 @@ def correct_points(
         else:
             given = np.isfinite(rotations[:, 0, 0])
             rotations = np.where(given[:, None, None], rotations, reference)
-    verdict = opts.policy.decide(points_robot, rotations, status=status)
+    tools = rows.tool[at] if opts.tool_data is not None else np.zeros(0, np.int64)
+    if not (tools >= 0).any():  # the cell's tool alone
+        _decide(points_robot, rows, at, opts, rotations, mark, status, -1, out)
+        return out
+    for number in (k - 1 for k in distinct_ints(tools + 1)):
+        sub = np.flatnonzero(tools == number)
+        _decide(
+            points_robot[sub],
+            rows,
+            at[sub],
+            opts,
+            None if rotations is None else rotations[sub],
+            mark,
+            None if status is None else np.asarray(status)[sub],
+            number,
+            out,
+            sub,
+        )
+    return out
+
+
+def _decide(points, rows, at, opts, rotations, mark, status, tool, out, sub=slice(None)) -> None:
+    """``correct_points`` for the points of one tool (-1: the cell's), written to ``out[sub]``."""
+    if tool < 0 or tool == opts.tool_number:
+        verdict = opts.policy.decide(points, rotations, status=status)
+    elif tool not in opts.tool_data:
+        if mark:  # not placed: where its TCP is is not known
+            rows.code[at] = NOT_PLACED
+            for i in at.tolist():
+                rows.reason[i] = f"tool {tool} is not declared in the cell file (tool, tool_data)"
+        return
+    else:
+        verdict = opts.policy.decide_tool(
+            tool, opts.tool_data[tool], points, rotations, status=status
+        )
     verdict.enforce(
         lambda i: rows.name[at[i]], lambda i: rows.where(at[i]), allow_partial=True
     )  # only the safety limit: the rows' verdicts are counted for the whole job
@@ -262,9 +302,8 @@ def correct_points(
         for i in np.union1d(refused, flagged).tolist():
             words = verdict.reason(i)
             rows.reason[at[i]] = words if verdict.code[i] else f"flag: {words}"
-    use = verdict.code == POLICY_CORRECTED
-    out[use] = verdict.command[use]
-    return out
+    use = np.flatnonzero(verdict.code == POLICY_CORRECTED)
+    out[np.arange(len(out))[sub][use]] = verdict.command[use]
 
 
 def rotations_of(frames: np.ndarray, abc: np.ndarray) -> np.ndarray:

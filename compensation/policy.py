@@ -32,12 +32,21 @@ Tools: a calibrated model is the arm; its identified TCP is the SMR it was measu
 Programs are corrected with the cell's tool (the drill as taught) as both ``controller_tool``
 and ``arm_tool``; ``accugrid correct`` without ``--tool`` lands the SMR (the file's
 ``identification.controller_tool`` on the controller, the identified TCP on the arm).
+
+Several tools (``decide_tool``): a position of another tool than the job's (``tool``, the one
+the grid was measured with) is corrected by a model with that tool's own TCP. A grid holds the
+position error of one TCP: at another TCP of the same flange pose the error differs by the
+arm's orientation error times the distance between the TCPs, which no grid measures. So a grid
+(or a residual grid) corrects another tool's positions only when its TCP is within
+``settings.tool_distance_mm`` of the grid's tool's (its orientation, for the grid's orientation
+check, is that of the grid's tool at the same flange pose); beyond it the grid alone refuses
+them (``OTHER_TOOL``) and a model corrects them without the residual grid (flagged ``F_TOOL``).
 """
 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -58,11 +67,13 @@ __all__ = [
     "F_ORIENTATION",
     "F_REGION",
     "F_SINGULAR",
+    "F_TOOL",
     "GRID_ORIENTATION_TOL_DEG",
     "NO_CONVERGENCE",
     "NO_ORIENTATION",
     "NOT_PLACED",
     "ORIENTATION",
+    "OTHER_TOOL",
     "ORIENTATION_LIMIT_DEG",
     "OUTSIDE_GRID",
     "OUTSIDE_MODEL",
@@ -87,6 +98,7 @@ UNREACHABLE, NO_CONVERGENCE, OUTSIDE_MODEL, TOO_LONG = 5, 6, 7, 8
 # variable, an offset, an unknown start): never given to ``decide``, it lands off by the robot's
 # error all the same, so it counts in the job rule like any position not corrected
 NOT_PLACED = 9
+OTHER_TOOL = 10  # a grid's positions of a tool whose TCP is far from the grid's tool's
 # code -> (short words for counts, the reason's words; fields: see ``Verdict.reason``)
 REASONS = {
     OUTSIDE_GRID: ("outside the grid", "outside the {grid} box by {value:.3f} mm"),
@@ -112,14 +124,24 @@ REASONS = {
         "correction of {value:.3f} mm exceeds the safety limit of {max:g} mm",
     ),
     NOT_PLACED: ("not placed in the robot frame", "not placed in the robot frame: {why}"),
+    OTHER_TOOL: (
+        "another tool than the grid's",
+        "tool {tool:.0f}: its TCP is {value:.3f} mm from that of the tool the {grid} was "
+        "measured with, beyond correction.tool_distance ({tool_distance:g} mm): a grid holds the "
+        "error of its own TCP only (a calibrated model, --model, corrects each tool)",
+    ),
 }
 # flags (bits): corrected, but worth a look
-F_ORIENTATION, F_CLAMPED, F_REGION, F_SINGULAR = 1, 2, 4, 8
+F_ORIENTATION, F_CLAMPED, F_REGION, F_SINGULAR, F_TOOL = 1, 2, 4, 8, 16
 FLAGS = {
     F_ORIENTATION: "orientation {angle:.1f} deg from the {grid}'s",
     F_CLAMPED: "outside the {grid} box by {clamp:.3f} mm: the nearest cell's error used",
     F_REGION: "outside the poses the model was identified from ({region})",
     F_SINGULAR: "|A5| {a5:.1f} deg, within {singular:g} deg of the wrist singularity",
+    F_TOOL: (
+        "tool {tool:.0f}: corrected by the model alone, its TCP {tool_mm:.3f} mm from that of "
+        "the tool the residual grid was measured with (beyond correction.tool_distance)"
+    ),
 }
 _LISTED = 5
 
@@ -136,7 +158,8 @@ class Policy:
     (no model) or the residual grid after ``calibrated`` (None: none); ``status``: the job's KUKA
     Status (positions without their own); ``grid_status``: the Status the grid holds in (None:
     unknown, not checked); ``controller_tool``/``arm_tool`` (4, 4) mm (None: the calibrated TCP);
-    ``validity``: where the model holds (None: no record)."""
+    ``validity``: where the model holds (None: no record); ``tool``: the job's tool, the one the
+    grid was measured with (flange_T_tool (4, 4) mm, None: not given)."""
 
     settings: CorrectionSettings
     grid: GridModel | None
@@ -152,6 +175,7 @@ class Policy:
     allow_orientation: bool = False
     strict: bool = False
     singular_deg: float = SINGULAR_A5_DEG
+    tool: np.ndarray | None = None
 
     @classmethod
     def build(
@@ -190,7 +214,15 @@ class Policy:
         grid_status, source = _grid_status(measured, solver)
         if calibrated is None:
             return cls(
-                settings, measured, None, status, grid_status, source, validity=validity, **limits
+                settings,
+                measured,
+                None,
+                status,
+                grid_status,
+                source,
+                validity=validity,
+                tool=controller_tool,
+                **limits,
             )
         if measured is not None and grid_status is None and measured.orientation_abc is not None:
             raise InputError(  # a residual grid is computed in its own Status only
@@ -222,6 +254,7 @@ class Policy:
             controller_tool,
             arm_tool,
             validity,
+            tool=controller_tool,
             **limits,
         )
 
@@ -283,6 +316,42 @@ class Policy:
         v.command[v.code != CORRECTED] = points[v.code != CORRECTED]
         v.length = np.where(v.code == CORRECTED, length, 0.0)
         return v
+
+    def decide_tool(
+        self,
+        number: int,
+        flange_T_tool: np.ndarray,
+        points: np.ndarray,
+        rotations: np.ndarray | None = None,
+        status: int | np.ndarray | None = None,
+    ) -> Verdict:
+        """``decide`` for targets P (N, 3) mm robot frame of tool ``number`` (TCP
+        ``flange_T_tool`` (4, 4) mm), their rotations (N, 3, 3) that tool's frame (NaN rows:
+        none) and Status; the module docstring says when another tool than ``tool`` is
+        corrected."""
+        own = self.tool if self.tool is not None else self.controller_tool
+        tool = np.asarray(flange_T_tool, dtype=float)
+        if own is not None and np.array_equal(tool, own):
+            return self.decide(points, rotations, status=status)
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        n = len(points)
+        distance = np.inf if own is None else float(np.linalg.norm(tool[:3, 3] - own[:3, 3]))
+        near = distance <= self.settings.tool_distance_mm
+        if self.calibrated is not None:
+            grid = self.grid if near else None
+            mine = replace(self, grid=grid, controller_tool=tool, arm_tool=tool, tool=tool)
+            verdict = mine.decide(points, rotations, status=status)
+            if grid is None and self.grid is not None:
+                verdict.flag(np.flatnonzero(verdict.corrected), F_TOOL, "tool_mm", distance)
+        elif near:  # the grid's tool at the same flange pose: its orientation for the check
+            if rotations is not None and own is not None:
+                rotations = rotations @ (tool[:3, :3].T @ own[:3, :3])
+            verdict = self.decide(points, rotations, status=status)
+        else:
+            verdict = Verdict(self, points, points.copy(), np.zeros(n, np.int8), np.zeros(n))
+            verdict.refuse(np.arange(n), OTHER_TOOL, np.full(n, distance))
+        verdict.numbers["tool"] = np.full(n, float(number))
+        return verdict
 
     def _statuses(self, status, n: int) -> np.ndarray | None:
         """Each position's Status (N,) (-1: none), or None when neither it nor the job has one."""
@@ -422,6 +491,7 @@ class Verdict:
                 "limit": p.orientation_limit_deg,
                 "max": p.settings.max_correction_mm or 0.0,
                 "singular": p.singular_deg,
+                "tool_distance": p.settings.tool_distance_mm,
                 "region": "",
             }
         return dict(self.__dict__["_shared"])

@@ -335,6 +335,34 @@ def test_frames_operands_and_constants_are_not_positions(tmp_path):
     assert all(r["status"] == "skipped" for r in rows.values())
 
 
+def test_a_member_assigned_at_run_time_leaves_only_its_element(tmp_path, cell):
+    """``fp[2].Y = 25`` changes fp[2] alone: fp[1] and fp[3] are corrected (p + e, base 1 = the
+    robot frame), fp[2] is reported with the line that assigns it."""
+    src, dat = tmp_path / "j.src", tmp_path / "j.dat"
+    src.write_text(krl_src("LIN fp[1]", "fp[2].Y = 25", "LIN fp[2]", "LIN fp[3]"))
+    dat.write_text(
+        "DEFDAT j\nDECL E6POS fp[3]\n"
+        + "".join(
+            f"fp[{i}]={{X {1000 + 10 * i}.000,Y 0.000,Z 900.000,A 0.0,B 90.0,C 0.0}}\n"
+            for i in (1, 2, 3)
+        )
+        + "ENDDAT\n"
+    )
+    rep = tmp_path / "r.csv"
+    assert rewrite(src, dat, "--cell", cell, "-o", tmp_path / "o", "--report", rep) == 0
+    rows = {r["name"]: r for r in report(rep)}
+    assert rows["fp[2]"]["status"] == "skipped"
+    assert rows["fp[2]"]["reason"] == "fp[2] is assigned at run time (j.src:4)"
+    out = (tmp_path / "o" / "j.dat").read_text().splitlines()
+    for i in (1, 3):
+        assert rows[f"fp[{i}]"]["status"] == "corrected"
+        want = np.array([1000 + 10 * i, 0, 900]) + E_CONST
+        assert out[1 + i] == (
+            f"fp[{i}]={{X {want[0]:.3f},Y {want[1]:.3f},Z {want[2]:.3f},A 0.0,B 90.0,C 0.0}}"
+        )
+    assert out[3] == dat.read_text().splitlines()[3]
+
+
 def test_lone_dat_with_base_fdat_wins_and_only_pos(tmp_path):
     cell = write_cell(tmp_path, field="constant", base_data={2: (0, 0, 0, 90, 0, 0)})
     dat = tmp_path / "cfg.dat"

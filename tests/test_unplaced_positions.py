@@ -19,7 +19,7 @@ GOOD = "LIN {X 1500,Y 100,Z 1400,A 0,B 90,C 0}"  # inside the grid, base 1 = rob
 COUNTED = {
     "unknown_base": (["$BASE=BASE_DATA[7]", GOOD], [], 5),
     "base_from_a_variable": (["$BASE=MYFRAME", GOOD], [], 5),
-    "relative_motion": (["LIN_REL {Z 10}"], [], 4),
+    "relative_motion_start_not_known": (["IF $IN[1] THEN", "LIN_REL {Z 10}", "ENDIF"], [], 5),
     "frame_arithmetic": (["LIN XOFF:{X 1500,Y 100,Z 1400,A 0,B 90,C 0}"], [], 4),
     "variable_set_at_run_time": (["LIN XRUN"], ["DECL E6POS XRUN"], 4),
     "undeclared_name": (["LIN XNOWHERE"], [], 4),

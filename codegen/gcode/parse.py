@@ -22,6 +22,14 @@ time (with the reason; that axis is unknown until written again), a polar move w
 (the other is where the tool is), a position left unknown (G28/G30, G53) and O-word control
 flow.
 
+The tool each move is programmed with (``GcodeMoves.tool_spans``), as LinuxCNC applies it: ``T n``
+selects, ``M6`` loads the selected tool (``M61 Q n`` sets the loaded one), ``G43`` applies the
+length offset of the loaded tool and ``G43 H n`` that of tool n, so the programmed point is that
+tool's tip; ``G49`` (or ``G43 H0``) cancels the offset (-1: the programmed point is the cell's
+tool). Left unknown, with the reason: ``G43.1``/``G43.2``, a G43 with no tool loaded in the
+program, a tool loaded while the offset of another one stays in effect (LinuxCNC keeps the old
+offset until the next G43), T or H from an expression.
+
 Every pattern is linear in its input (possessive quantifiers; comments and expressions are
 scanned by hand), so a hostile line cannot make the reader backtrack.
 """
@@ -124,7 +132,9 @@ INCH_MM = 25.4
 _ROTARY_SET = frozenset(ROTARY)
 POLAR = "@^"  # LinuxCNC's polar radius and angle (degrees) in the XY plane
 _POLAR_SET = frozenset(POLAR)
-_KEPT = frozenset(AXES + ROTARY + POLAR + "RLIJKP")  # the letters whose Word a move needs
+_KEPT = frozenset(AXES + ROTARY + POLAR + "RLTHQIJKP")  # the Words a move, G10 or a tool needs
+_TOOL_WORDS = frozenset(("T", "H", "M6", "M61"))  # a block that may change the tool
+_TOOL_CODES = frozenset(("43", "43.1", "43.2", "49"))
 _POSITION_LETTERS = frozenset(AXES + ROTARY + POLAR + "R")
 # the axis words a G92/G52 offset may name: one on X, Y or Z (or a polar word) moves the program
 # frame; one on A, B, C, U, V, W (or a printer's extruder E) does not
@@ -255,6 +265,9 @@ class GcodeMoves:
         ] = {}  # row -> a cycle's L repeat count where not 1 (0: unknown)
         # row -> its polar words (@ radius, ^ angle; None: not written), X and Y not written
         self.polar: dict[int, tuple[Word | None, Word | None]] = {}
+        # (first row, tool) where the programmed tool changes: a tool number, -1 the cell's,
+        # a str why it is not known
+        self.tool_changes: list[tuple[int, int | str]] = []
         self.arcs: dict[int, Arc] = {}  # row -> the centre, plane and turns of a G2/G3 arc
 
     def __len__(self) -> int:
@@ -375,6 +388,14 @@ class GcodeMoves:
         self.cycle_axis = np.where(flags & _F_G18, 1, np.where(flags & _F_G19, 0, 2))
         self.rotary_index = self._rotary[:n]
         return self
+
+    def tool_spans(self) -> list[tuple[int, int, int | str]]:
+        """(first row, end row, tool) of each run of moves programmed with one tool: a tool
+        number (its length offset in effect), -1 (none: the cell's tool) or why it is not
+        known; the rows before the first change are the cell's tool's."""
+        changes = [(0, -1), *self.tool_changes]
+        ends = [row for row, _ in changes[1:]] + [len(self.motion)]
+        return [(a, b, tool) for (a, tool), b in zip(changes, ends, strict=True) if b > a]
 
     def move(self, i: int) -> GcodeMove:
         """Move ``i`` as a ``GcodeMove`` (as the reader built it; after ``finish``)."""
@@ -503,6 +524,16 @@ class _Modal:
             self.unknown_motion = (
                 f"{what} (line {lineno}): its geometry is not known to accugrid, not corrected"
             )
+
+
+def _tool_number(word: Word | None, expr: str | None, lineno: int) -> int | str:
+    """The tool number of a T, H or Q word, or why it is not one."""
+    if word is None:
+        return f"tool number {expr} at line {lineno}: an expression"
+    value = word.value
+    if value < 0 or value != int(value) or value > 1e9:
+        return f"tool number {word.letter}{word.literal} at line {lineno}: not a tool number"
+    return int(value)
 
 
 def _blank_comments(line: str, path: str | None, lineno: int) -> str:
@@ -703,8 +734,10 @@ def _put(block: _Line, letter: str, number: str, at: int, end: int, offset: int,
             shown = number if len(number) <= 20 else number[:20] + "..."
             raise InputError(f"word {letter}{shown}: number out of range", path, lineno, at + 1)
         words[letter] = _new_word(Word, (letter, value, offset + at, offset + end, number))
-    else:  # N, F, S, M, T, ...: only seen (a second one is an error), never a position
+    else:  # N, F, S, M, ...: only seen (a second one is an error), never a position
         words[letter] = None
+        if letter == "M" and (number.lstrip("+0") in ("6", "6.", "61", "61.")):
+            words["M" + number.lstrip("+0").rstrip(".")] = None  # M6, M61: the tool changes
 
 
 def _plain_line(line: str, offset: int) -> _Line | None:
@@ -869,6 +902,9 @@ class _Reader:
         self.bom = next((b for b in _BOMS if text.startswith(b)), "")
         self.shapes = _Shapes()
         self.params = Parameters()
+        self.selected: int | str = "no T word before M6"  # the tool T selected
+        self.loaded: int | str = "no tool loaded by the program (T n M6)"
+        self.offset: int | str = -1  # whose length offset is in effect (-1: none)
 
     def line(self, raw: str, lineno: int, line_offset: int) -> None:
         """Read one line (without its ending) that starts at text offset ``line_offset``."""
@@ -1007,6 +1043,8 @@ class _Reader:
         state = self.state
         words = block.words
         gcodes = block.gcodes
+        if not _TOOL_WORDS.isdisjoint(words) or gcodes and not _TOOL_CODES.isdisjoint(gcodes):
+            self._tool(block, lineno)
         if len(gcodes) > 1:  # a known motion first: an unknown code on the same line wins
             gcodes = sorted(gcodes, key=lambda g: g not in MOTION_MODES)
         axes = _OFFSET_LETTERS & (words.keys() | block.exprs.keys()) if gcodes else frozenset()
@@ -1053,6 +1091,46 @@ class _Reader:
             self._cycle(lineno, column, axis_words, words, block.exprs, why)
         else:
             self._straight(lineno, column, axis_words, block, why, polar)
+
+    def _tool(self, block: _Line, lineno: int) -> None:
+        """The tool changes of a block, in LinuxCNC's order: T, M6/M61, then G43/G49."""
+        words, exprs = block.words, block.exprs
+        if "T" in words or "T" in exprs:
+            self.selected = _tool_number(words.get("T"), exprs.get("T"), lineno)
+        loaded = None
+        if "M6" in words:
+            loaded = self.selected
+        if "M61" in words:
+            loaded = _tool_number(words.get("Q"), exprs.get("Q"), lineno)
+        if loaded is not None:
+            self.loaded = loaded
+            if self.offset != -1 and self.offset != loaded:
+                self.offset = (
+                    f"tool {loaded} loaded at line {lineno} while the length offset of tool "
+                    f"{self.offset} stays in effect: the programmed point is neither tip (G43 "
+                    "after the tool change)"
+                )
+        for g in block.gcodes:
+            if g == "49":
+                self.offset = -1
+            elif g == "43":
+                if "H" in words or "H" in exprs:
+                    tool = _tool_number(words.get("H"), exprs.get("H"), lineno)
+                elif isinstance(self.loaded, str):
+                    tool = f"G43 at line {lineno} without H: {self.loaded}"
+                else:
+                    tool = self.loaded
+                self.offset = -1 if tool == 0 else tool
+            elif g in ("43.1", "43.2"):
+                self.offset = (
+                    f"G{g} at line {lineno}: a tool length offset from words, not a cell tool"
+                )
+        changes = self.moves.tool_changes
+        row = len(self.moves)
+        if not changes or changes[-1][1] != self.offset:
+            if changes and changes[-1][0] == row:
+                changes.pop()
+            changes.append((row, self.offset))
 
     def _rotary(self, block: _Line) -> bool:
         """Take the block's A/B/C/U/V/W (NaN when from an expression); True if it has any."""

@@ -13,6 +13,8 @@ needs. An arc moves rigidly with the moves that set its start (``codegen.gcode.a
 in G18/G19 a cycle's axis is Y/X instead of Z. A corrected word written
 as a parameter or an expression gets the corrected number in the expression's place (its value
 as read where it is kept); a polar move gets its corrected radius and angle (``_polar_edits``).
+With the cell's ``tool_data`` each move is corrected with the tool whose length offset is in
+effect (G43), the cell's tool where none is.
 """
 
 from __future__ import annotations
@@ -68,6 +70,8 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
     if "G80" in moves.motion:
         rows.commanded &= np.array([m != "G80" for m in moves.motion], bool)
     _protect_polar_starts(moves, rows)
+    if opts.tool_data is not None:
+        _tools(moves, rows)
     if any(rows.reason):  # the moves with no reason
         at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))
     else:
@@ -92,6 +96,17 @@ def rewrite_gcode(path: str, text: str, opts: Options) -> Result:
     out = _gcode_edits(text, moves, rows, (desired, own), r_planes, opts, centre_edits)
     partial_check(rows, opts)
     return Result({path: out}, rows)
+
+
+def _tools(moves: GcodeMoves, rows: Rows) -> None:
+    """Each move's tool (``GcodeMoves.tool_spans``); a move whose tool is not known is not
+    placed, with the reason."""
+    for start, stop, tool in moves.tool_spans():
+        if isinstance(tool, str):
+            for i in range(start, stop):
+                rows.reason[i] = rows.reason[i] or f"tool unknown: {tool}"
+        else:
+            rows.tool[start:stop] = tool
 
 
 def _protect_polar_starts(moves: GcodeMoves, rows: Rows) -> None:

@@ -22,6 +22,9 @@ inline-form FOLD lines are comments). It finds:
   ``ENDSPLINE``). What cannot be decided is an ``unknown`` base with the reason: frame
   arithmetic ``:``, a variable, ``EK(...)``, the start of a routine (inherited from the caller),
   a call that may change it, a jump target, a branch or loop that changes it.
+- tool context, followed with the base (``BaseRef.tool``): ``$TOOL = TOOL_DATA[n]``,
+  ``$TOOL = $NULLFRAME`` (tool 0, the flange), ``BAS(#TOOL, n)``, an FDAT's ``TOOL_NO``; any other
+  ``$TOOL`` value, and a branch or loop that changes it, leaves the tool unknown with the reason.
 
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
 Every pattern is linear in its input (see the note above ``NUMBER``).
@@ -42,7 +45,7 @@ import math
 import os
 import re
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from itertools import compress
 from typing import NamedTuple
 
@@ -77,6 +80,8 @@ __all__ = [
     "KrlScan",
     "KrlUse",
     "Number",
+    "RELATIVE",
+    "Relative",
     "code_part",
     "match_brace",
     "normalize_name",
@@ -97,6 +102,8 @@ JOINT_KEYS = frozenset("A1 A2 A3 A4 A5 A6 E1 E2 E3 E4 E5 E6".split())
 # the reason of an aggregate of joint angles: a target the robot reaches by its joints, never a
 # Cartesian position to correct
 JOINT_TARGET = "joint-space target (AXIS/E6AXIS): not a Cartesian position"
+# how the reason of a relative motion's aggregate begins (``KrlScan.relative`` says more)
+RELATIVE = "relative motion"
 # how the reason of an operand of ':' before the last (a frame or an offset) begins: the motion's
 # target is the last operand, which alone stands for the motion
 FRAME_OPERAND = "the frame operand of ':'"
@@ -151,6 +158,7 @@ _ASSIGN_RE = re.compile(r"\s*+" + _NAME + r"\s*+=(?!=)\s*+")
 _INT_RE = re.compile(r"\s*+\+?(\d++)\s*+$")
 _BAS_RE = re.compile(r"\s*+BAS\s*+\(\s*+#\s*+(\w++)", re.I)
 _BASE_DATA_RE = re.compile(r"\s*+BASE_DATA\s*+\[\s*+(\d++)\s*+\]\s*+$", re.I)
+_TOOL_DATA_RE = re.compile(r"\s*+TOOL_DATA\s*+\[\s*+(\d++)\s*+\]\s*+$", re.I)
 _CALL_RE = re.compile(r"\s*+([A-Za-z_]\w*+)\s*+\(")
 _ROUTINE_RE = re.compile(
     r"\s*+(?:GLOBAL\s++)?(DEF|DEFFCT)\s++(?:\w++\s++)?([A-Za-z_]\w*+)\s*+\(", re.I
@@ -160,6 +168,9 @@ _BASE_SET_RE = re.compile(r"\$BASE\s*+=\s*+", re.I)
 _NEXT_SYSVAR_RE = re.compile(r",\s*+\$")
 _APPROXIMATION_RE = re.compile(r"\s(?:C_(?:DIS|PTP|ORI|VEL|SPL)|WITH)\b", re.I)
 _INDEX_RE = re.compile(r"\[\s*+(\d++)\s*+\]")
+_TOOL_FRAME_RE = re.compile(r"#\s*+TOOL\b", re.I)  # a relative motion in the tool frame
+_WITH_TOOL_RE = re.compile(r"\bWITH\b.*\$TOOL\s*+=", re.I)
+_PARTIAL = "partial aggregate"
 _IDENT_RE = re.compile(r"[A-Za-z_]\w*+")
 
 
@@ -187,6 +198,8 @@ class BaseRef:
 
     kind: "number" (BASE_DATA[number]), "literal" (xyzabc given in the program), "fdat" (the
     BASE_NO of FDAT ``fdat``, resolved once every file is read), "unknown" (``reason`` says why).
+    tool: the TOOL_DATA number set with it (0: $NULLFRAME, the flange), a str: why the tool is
+    not known, None: not set (an FDAT's TOOL_NO for kind "fdat", else the cell's tool).
     """
 
     kind: str
@@ -196,6 +209,10 @@ class BaseRef:
     fdat: str | None = None
     reason: str = ""
     label: str | None = None  # set when the state was carried across a jump target
+    tool: int | str | None = None
+    tool_label: str | None = None  # the jump target the tool was carried across (``label``)
+    # the state whose base this one keeps, only its tool changed (None: its own base)
+    origin: BaseRef | None = field(default=None, compare=False, repr=False)
 
     def describe(self) -> str:
         if self.kind == "number":
@@ -272,6 +289,18 @@ class Fdat(NamedTuple):
     reason: str = ""
 
 
+class Relative(NamedTuple):
+    """A relative motion's aggregate (``LIN_REL {Z -50} #TOOL``): an increment from the position
+    the robot is at, in the base frame (``#BASE``, the default) or the tool frame at the start
+    (``#TOOL``). ``since`` and ``why``: the line of the last statement before it after which the
+    robot's position does not follow from the motions written before (a routine's start, a jump
+    target, a branch or loop, a call, a change of $BASE or $TOOL), and what it is."""
+
+    tool: bool  # #TOOL: the increment is in the tool frame at the start
+    since: int
+    why: str
+
+
 class Declared(NamedTuple):
     """A variable declaration: its type (upper case) and line."""
 
@@ -300,9 +329,12 @@ class KrlScan:
     fdats: dict[str, Fdat] = field(default_factory=dict)  # FDAT name (upper case) -> its values
     base_data: dict[int, tuple[tuple[float, ...], int]] = field(default_factory=dict)
     # BASE_DATA[n] = {..} in this file -> (xyzabc, line)
+    tool_data: dict[int, tuple[tuple[float, ...] | None, int]] = field(default_factory=dict)
+    # TOOL_DATA[n] (or a member of it) set in this file -> (xyzabc, None: not a literal; line)
     assigned: dict[str, int] = field(default_factory=dict)
     # names given a non-literal value at run time -> first line
     frame_uses: dict[str, FrameUse] = field(default_factory=dict)  # normalized name -> first use
+    relative: dict[int, Relative] = field(default_factory=dict)  # table row of a _REL aggregate
     _declared: dict[str, Declared] = field(default_factory=dict, repr=False)  # statement reader
     _fast_decls: list[tuple[list, list, np.ndarray]] = field(default_factory=list, repr=False)
     # (names, types, lines) of each block of plain declarations the whole-text scanner read
@@ -605,7 +637,7 @@ def position_reason(type_name: str, numbers: dict[str, Number]) -> str:
     if missing:
         given = ",".join(k for k in "XYZABC" if k in keys) or "none"
         return (
-            f"partial aggregate (gives {given}; missing {','.join(missing)}): "
+            f"{_PARTIAL} (gives {given}; missing {','.join(missing)}): "
             "the correction would need components the program does not give"
         )
     return ""
@@ -621,7 +653,7 @@ class _Rows:
         self.uses = use_columns(lines)
         self.external: dict[int, tuple[str, float]] = {}
         self._ids: dict[int, int] = {}
-        self.ops: list[tuple] = []  # ("swap", marks, start, changed) | ("label", marks)
+        self.ops: list[tuple] = []  # ("swap", marks, start, changed) | ("label[_tool]", marks)
 
     def base_id(self, base: BaseRef | None) -> int:
         if base is None:
@@ -688,7 +720,11 @@ class _Rows:
                     continue
                 for old in distinct_ints(part[part >= 0]):
                     ref = scan.bases[old]
-                    if ref.label:
+                    if op[0] == "label_tool":
+                        if ref.tool_label and not isinstance(ref.tool, str):  # known so far
+                            why = f"after jump target {ref.tool_label}: $TOOL depends on the path"
+                            part[part == old] = self.base_id(_tool_changed(ref, why + " taken"))
+                    elif ref.label:
                         changed = BaseRef(
                             "unknown",
                             ref.line,
@@ -724,8 +760,11 @@ class _Flow:
         self.state = initial
         self.blocks: list[_Block] = []
         self.sets_base = False
+        self.sets_tool = False
         self.since = rows.mark()  # where the routine's rows start
         self.before_spline: BaseRef | None = None  # the base outside an open spline block
+        # the last statement after which the robot's position is not the last motion's target
+        self.moved: tuple[int, str] = (0, "the start of the file")
 
     def start_routine(self, name: str, line: int) -> None:
         self.finish_routine()
@@ -738,29 +777,47 @@ class _Flow:
         else:
             self.state = self.initial
         self.blocks = []
-        self.sets_base = False
+        self.sets_base = self.sets_tool = False
         self.since = self.rows.mark()
         self.before_spline = None
+        self.moved = (line, f"the start of routine {name} (line {line}), reached from its caller")
 
     def finish_routine(self) -> None:
-        """A jump target makes the base path-dependent when the routine sets the base anywhere."""
+        """A jump target makes the base (the tool) path-dependent when the routine sets the base
+        (the tool) anywhere."""
         if self.sets_base:
             self.rows.ops.append(("label", (self.since, self.rows.mark())))
+        elif self.sets_tool:
+            self.rows.ops.append(("label_tool", (self.since, self.rows.mark())))
 
     def end_routine(self) -> None:
         self.finish_routine()
-        self.sets_base = False
+        self.sets_base = self.sets_tool = False
         self.since = self.rows.mark()
 
     def set(self, base: BaseRef) -> None:
-        self.state = base
+        """A new base; the tool set before stays, unless an FDAT sets both."""
+        self.state = _with_tool(base, self.state)
         self.sets_base = True
+        self.moved = (base.line, f"$BASE set at line {base.line}")
+
+    def breaks(self, line: int, why: str) -> None:
+        """After line ``line`` the robot's position does not follow from the motions before."""
+        self.moved = (line, why)
+
+    def set_tool(self, tool: int | str, line: int) -> None:
+        """``$TOOL`` set at ``line``: TOOL_DATA number, or why it is not known."""
+        self.state = replace(
+            _tool_changed(self.state, f"{tool} (line {line})" if isinstance(tool, str) else tool),
+            tool_label=None,
+        )
+        self.sets_tool = True
 
     def open_spline(self, base: BaseRef | None) -> None:
         """A SPLINE/PTP_SPLINE block: its segments move in ``base`` (None: the base in effect)."""
         self.before_spline = self.state
         if base is not None:
-            self.state = base
+            self.state = _with_tool(base, self.state)
 
     def close_spline(self) -> None:
         """ENDSPLINE: the base in effect before the block again."""
@@ -768,12 +825,12 @@ class _Flow:
             self.state, self.before_spline = self.before_spline, None
 
     def label(self, name: str, line: int) -> None:
-        s = self.state
-        self.state = BaseRef(
-            s.kind, s.line, s.number, s.xyzabc, s.fdat, s.reason, f"{name} (line {line})"
-        )
+        self.moved = (line, f"the jump target {name} (line {line})")
+        where = f"{name} (line {line})"
+        self.state = replace(self.state, label=where, tool_label=where)
 
     def call(self, name: str, line: int) -> None:
+        self.moved = (line, f"the call {name}() at line {line}, which may move the robot")
         if not self.trust_calls:
             self.state = BaseRef(
                 "unknown",
@@ -782,11 +839,13 @@ class _Flow:
             )
 
     def open(self, keyword: str, line: int) -> None:
+        self.moved = (line, f"{keyword} at line {line}")
         self.blocks.append(_Block(keyword, line, self.state, self.rows.mark()))
 
-    def branch(self) -> None:
+    def branch(self, line: int) -> None:
         if self.blocks:
             block = self.blocks[-1]
+            self.moved = (line, f"a branch of {block.keyword} at line {block.line}")
             block.ends.append(self.state)
             block.has_else = True
             self.state = block.start
@@ -797,6 +856,7 @@ class _Flow:
         block = self.blocks.pop()
         start = block.start
         where = f"{block.keyword} at line {block.line}"
+        self.moved = (line, f"the end of {where} (line {line})")
         if block.keyword in ("IF", "SWITCH"):
             ends = block.ends + [self.state]
             if not block.has_else:
@@ -805,6 +865,8 @@ class _Flow:
                 self.state = start
             elif all(e is ends[0] for e in ends):
                 self.state = ends[0]
+            elif all(_same_base(e, ends[0]) for e in ends):
+                self.state = _tool_changed(ends[0], f"$TOOL set in one branch of {where} only")
             else:
                 self.state = BaseRef(
                     "unknown", line, reason=f"$BASE set in one branch of {where} only"
@@ -812,9 +874,31 @@ class _Flow:
             return
         if self.state is not start:  # a loop body that changes the base
             changed = BaseRef("unknown", line, reason=f"$BASE changes inside the loop {where}")
+            if _same_base(self.state, start):
+                changed = _tool_changed(start, f"$TOOL changes inside the loop {where}")
             self.rows.ops.append(("swap", (block.mark, self.rows.mark()), start, changed))
             if block.keyword != "REPEAT":
                 self.state = changed
+
+
+def _with_tool(base: BaseRef | None, before: BaseRef) -> BaseRef:
+    """``base`` set where ``before`` was in effect (``before`` when None), with the tool set
+    before unless it sets one itself (an FDAT sets both)."""
+    if base is None:
+        return before
+    if base.tool is None and base.kind != "fdat" and before.tool is not None:
+        return replace(base, tool=before.tool)
+    return base
+
+
+def _tool_changed(state: BaseRef, tool: int | str) -> BaseRef:
+    """``state`` with another tool: the same base (``_same_base``)."""
+    return replace(state, tool=tool, origin=state.origin or state)
+
+
+def _same_base(a: BaseRef, b: BaseRef) -> bool:
+    """Whether two states have the same base, set at the same place (their tools may differ)."""
+    return (a.origin or a) is (b.origin or b)
 
 
 _OPENERS = {"IF", "SWITCH", "FOR", "WHILE", "LOOP", "REPEAT"}
@@ -1260,7 +1344,7 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
         flow.open(word, lineno)
         return
     if word in _BRANCHES:
-        flow.branch()
+        flow.branch(lineno)
         return
     if word in _CLOSERS:
         flow.close(lineno)
@@ -1297,9 +1381,12 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
 
 
 def _bas(code: str, pos: int, lineno: int, flow: _Flow) -> None:
-    """``BAS(#BASE, n)`` sets BASE_DATA[n]; other BAS commands leave the base."""
+    """``BAS(#BASE, n)`` sets BASE_DATA[n], ``BAS(#TOOL, n)`` TOOL_DATA[n]; other BAS commands
+    leave them."""
     m = _BAS_RE.match(code, pos)
-    if m is None or m.group(1).upper() != "BASE":
+    if m is not None and m.group(1).upper() == "TOOL":
+        flow.breaks(lineno, f"the tool set at line {lineno}")
+    if m is None or m.group(1).upper() not in ("BASE", "TOOL"):
         return
     rest = code[m.end() :].strip()
     if not rest.endswith(")"):
@@ -1310,7 +1397,9 @@ def _bas(code: str, pos: int, lineno: int, flow: _Flow) -> None:
     arg = inner[1:].strip()
     n = _INT_RE.match(arg)
     number = _small_int(n.group(1)) if n else None
-    if number is not None:
+    if m.group(1).upper() == "TOOL":
+        flow.set_tool(number if number is not None else f"BAS(#TOOL, {arg}): not a number", lineno)
+    elif number is not None:
         flow.set(BaseRef("number", lineno, number=number))
     else:
         flow.set(BaseRef("unknown", lineno, reason=f"BAS(#BASE, {arg}): not a number"))
@@ -1503,8 +1592,13 @@ def _assignment(
             lineno,
             f"assigned to {m.group(1)}{index} at line {lineno}: a frame, not a drilling position",
         )
+    if target == "$TOOL":
+        flow.breaks(lineno, f"the tool set at line {lineno}")
     if target == "$BASE" and not member:
         flow.set(_base_value(code, value_at, off, lineno, scan))
+        return
+    if target == "$TOOL":
+        flow.set_tool(_tool_value(value, member), lineno)
         return
     if target == "$BASE" or (target == "FDAT_ACT" and member):
         flow.set(BaseRef("unknown", lineno, reason=f"{code.strip()}: changes part of the base"))
@@ -1513,7 +1607,7 @@ def _assignment(
         if value.startswith("{"):
             fdat = _fdat_values(code, value_at, scan.path, lineno)
             flow.set(
-                BaseRef("number", lineno, number=fdat.base_no)
+                BaseRef("number", lineno, number=fdat.base_no, tool=fdat.tool_no)
                 if fdat.base_no is not None
                 else BaseRef("unknown", lineno, reason=fdat.reason)
             )
@@ -1530,6 +1624,17 @@ def _assignment(
             if not reason and all(k in numbers for k in "XYZABC"):
                 xyzabc = tuple(numbers[k].value for k in "XYZABC")
                 scan.base_data[number] = (xyzabc, lineno)
+        return
+    if target == "TOOL_DATA":
+        n = _INDEX_RE.fullmatch(index)
+        number = _small_int(n.group(1)) if n else None
+        if number is not None:
+            xyzabc = None
+            if not member and value.startswith("{") and ":" not in value.replace("FRAME:", ""):
+                _, numbers, reason, _ = parse_aggregate(code, value_at, off, scan.path, lineno)
+                if not reason and all(k in numbers for k in "XYZABC"):
+                    xyzabc = tuple(numbers[k].value for k in "XYZABC")
+            scan.tool_data[number] = (xyzabc, lineno)
         return
     if target in _FRAME_TARGETS:
         return
@@ -1549,10 +1654,9 @@ def _assignment(
             if not numbers or not set(numbers) & (CARTESIAN_KEYS | JOINT_KEYS):
                 scan._rows.pop_position()  # an aggregate of some other structure type
             return
-    key = normalize_name(name)  # a member assigned changes the variable
-    scan.assigned.setdefault(key, lineno)
-    if "[" in key:
-        scan.assigned.setdefault(wildcard(key), lineno)
+    # a member assigned changes the element (``fp[2].Y = 25``: fp[2], not fp[1]); a variable
+    # index is ``[*]`` already, which stands for every element
+    scan.assigned.setdefault(normalize_name(name), lineno)
 
 
 def _base_value(code: str, at: int, off: int, lineno: int, scan: KrlScan) -> BaseRef:
@@ -1576,6 +1680,20 @@ def _base_value(code: str, at: int, off: int, lineno: int, scan: KrlScan) -> Bas
     if n:
         return _base_data_ref(n.group(1), lineno, "$BASE = ")
     return BaseRef("unknown", lineno, reason=f"$BASE = {value}: set from a variable")
+
+
+def _tool_value(value: str, member: str) -> int | str:
+    """The tool ``$TOOL[.member] = value`` sets: a TOOL_DATA number (0: $NULLFRAME), or why
+    it is not known."""
+    if member:
+        return f"$TOOL{member} = {value}: changes part of the tool"
+    if value.upper() == "$NULLFRAME":
+        return 0
+    n = _TOOL_DATA_RE.match(value)
+    number = _small_int(n.group(1)) if n else None
+    if number is not None:
+        return number
+    return f"$TOOL = {value[:40]}: not a TOOL_DATA number"
 
 
 def _base_data_ref(digits: str, lineno: int, what: str) -> BaseRef:
@@ -1659,9 +1777,11 @@ def _motion(
 ) -> None:
     count = 2 if word in ("CIRC", "SCIRC", "CIRC_REL", "SCIRC_REL") else 1
     relative = word.endswith("_REL")
+    tool = relative and _TOOL_FRAME_RE.search(code) is not None
+    own_tool = relative and "$" in code and _WITH_TOOL_RE.search(code) is not None
     base = flow.state
     if "$" in code and "WITH" in code.upper():
-        base = _with_base(code, lineno) or base
+        base = _with_tool(_with_base(code, lineno), base)
     for _ in range(count):
         while at < len(code) and code[at] in " \t,":
             at += 1
@@ -1674,7 +1794,7 @@ def _motion(
         for k, (kind, s, e) in enumerate(operands):
             if kind == "agg":
                 if relative:
-                    why = f"relative motion {word}: an offset, not a position"
+                    why = f"{RELATIVE} {word}: an offset, not a position"
                 elif arith and k < len(operands) - 1:
                     why = f"{FRAME_OPERAND} in {target_text}: an offset, not the target"
                 elif arith:
@@ -1684,6 +1804,11 @@ def _motion(
                 row, _, own, _ = _add_position(code, s, off, lineno, scan, MOTION, "", word, base)
                 if why and own != JOINT_TARGET:  # a joint target stays one, relative or not
                     scan._rows.positions.set(row, "reason", why)
+                    if relative and not arith and (not own or own.startswith(_PARTIAL)):
+                        since, why = flow.moved[0], f"{flow.moved[1]} comes before it"
+                        if own_tool:
+                            since, why = lineno, f"it sets its own tool (WITH $TOOL, line {lineno})"
+                        scan.relative[row] = Relative(tool, since, why)
             else:
                 operand = code[s:e].strip()
                 name = normalize_name(operand) if kind == "name" else ""
@@ -1692,7 +1817,7 @@ def _motion(
                 elif kind != "name":
                     why = f"target {operand!r} is an expression"
                 elif relative:
-                    why = f"relative motion {word}: an offset, not a position"
+                    why = f"{RELATIVE} {word}: an offset, not a position"
                 elif arith:
                     why = f"frame arithmetic ':' in {target_text}: computed at run time"
                     if k < len(operands) - 1:

@@ -7,7 +7,8 @@ position (declared or assigned with a literal) is corrected only if a motion use
 motions that use it (its own FDAT wins over ``--base``) and is corrected once however many
 motions use it. BASE_DATA[n] comes from ``--config-dat`` (if it defines n), else from the cell's
 ``base`` and ``base_data``; base 0 ($NULLFRAME, BAS(#BASE,0)) is the robot frame ($WORLD =
-$ROBROOT).
+$ROBROOT). A relative motion (``LIN_REL``...) is corrected as the position it reaches and
+written back as an increment (``codegen.krl.relative``).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from accugrid.codegen.krl.parse import (
     scan_krl,
     wildcard,
 )
+from accugrid.codegen.krl.relative import Chains, resolve, write_increments
 from accugrid.codegen.krl.tables import MOTION, PositionTable
 from accugrid.codegen.program_text import MIN_PLACES_MM, distinct_ints, precision
 from accugrid.codegen.rewrite import (
@@ -43,7 +45,7 @@ from accugrid.codegen.rewrite import (
     rotations_of,
 )
 from accugrid.codegen.splice import ByteSplicer, literals
-from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.frames import pose_from_xyzabc, rotation_angle_deg
 
 __all__ = ["rewrite_krl"]
 
@@ -67,6 +69,15 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
         rows, frames = _position_rows(ctx, s, scan, opts)
         parts.append(rows)
         placed.append(frames)
+    chains = None
+    if any(scan.relative for scan in scans):
+        reasons = [p.reason for p in parts]
+        chains = resolve(scans, placed, reasons, ctx.stored_row, ctx.frames)
+        for s, part in enumerate(parts):
+            relative = chains.rows[s]
+            known = chains.start[s][:, 0] >= 0
+            part.commanded[relative] = ~known
+            part.old[relative[known]] = chains.xyz[s][known]  # where it reaches, as written
     parts += [_use_rows(ctx, scan) for scan in scans]
     rows = Rows.concat(parts)
     starts = np.cumsum([0] + [len(p) for p in parts[: len(scans)]])
@@ -76,18 +87,27 @@ def rewrite_krl(texts: dict[str, str], opts: Options, config_dat: str | None = N
     if any(t.size for t in todo):
         frames = ctx.frames
         files = [(scan.path, scan.text, scan.table) for scan in scans]
+        relative = scans if chains is not None else []
         del scans, ctx, config  # the uses and names are done with: memory for what follows
         status = [
             aggregate_status(text, table.agg[t])
             for (_, text, table), t in zip(files, todo, strict=True)
         ]
-        targets = _correct(
-            [table for _, _, table in files], todo, placed, frames, rows, starts, opts, status
-        )
+        absolute = [(table.xyz, table.abc) for _, _, table in files]
+        if chains is not None:
+            absolute = _reached(chains, absolute)
+        targets = _correct(absolute, todo, placed, frames, rows, starts, opts, status)
+        places = [
+            opts.decimals if opts.decimals is not None else _places(table) for _, _, table in files
+        ]
+        extra: list[list] = [[] for _ in files]
+        if chains is not None:
+            extra = _increments(chains, relative, todo, targets, rows, starts, places)
         for s, (path, text, table) in enumerate(files):
             if todo[s].size:
-                places = opts.decimals if opts.decimals is not None else _places(table)
-                out[path] = _splice(text, table, todo[s], targets[s], rows, starts[s], places)
+                out[path] = _splice(
+                    text, table, todo[s], targets[s], rows, starts[s], places[s], extra[s]
+                )
     for path, text in texts.items():
         if out[path] is None:
             out[path] = text.encode("latin-1")  # nothing corrected in it
@@ -111,6 +131,8 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
     complete = ~np.isnan(t.xyz).any(axis=1)
     old = np.where(complete[:, None], t.xyz, np.nan)
     reasons = list(t.reason)
+    for i in scan.relative:  # placed where its start is known (``resolve``)
+        reasons[i] = ""
     if t.external and not opts.ignore_external_axes:
         for i, (key, value) in t.external.items():
             reasons[i] = reasons[i] or (
@@ -141,6 +163,9 @@ def _position_rows(ctx: _Context, s: int, scan: KrlScan, opts: Options) -> tuple
             else:
                 frame[i] = ctx.frame_id(f)
     rows = Rows([scan.path or ""], np.zeros(n, np.int64), t.line, t.name, reasons, old)
+    if ctx.frame_tools:
+        placed = frame >= 0
+        rows.tool[placed] = np.array(ctx.frame_tools, np.int64)[frame[placed]]
     for i in np.flatnonzero(frame < 0).tolist():  # not placed: does a motion command it?
         if t.reason[i] != JOINT_TARGET and not t.reason[i].startswith(FRAME_OPERAND):
             rows.commanded[i] = t.kind[i] == MOTION or ctx.moved_to(s, i)
@@ -179,8 +204,10 @@ class _Context:
     A stored position (declared or assigned with a literal) is a drilling position only if a
     motion uses it, or, in a .dat given alone with ``--base``, if it is a POS/E6POS. Never when it
     is a frame (assigned to $TOOL/$BASE/$LOAD/TOOL_DATA/BASE_DATA, an operand of ``:``) or
-    declared CONST. Its FDAT (``XP1`` <-> ``FP1``) wins over ``--base``; an FDAT with another
-    tool than the cell's, or an external TCP, leaves it uncorrected."""
+    declared CONST. Its FDAT (``XP1`` <-> ``FP1``) wins over ``--base``; an FDAT with an external
+    TCP leaves it uncorrected, and so does one with another tool than the cell's unless the
+    cell declares ``tool_data`` (then each position takes the tool of its motions: FDAT
+    ``TOOL_NO``, ``$TOOL``, ``BAS(#TOOL, n)``, one tool for all of them)."""
 
     def __init__(
         self, scans: list[KrlScan], config: KrlScan | None, initial: BaseRef | None, opts: Options
@@ -193,6 +220,7 @@ class _Context:
         if config is not None:
             for n, (xyzabc, _) in config.base_data.items():
                 self.base_data[n] = pose_from_xyzabc(np.array(xyzabc))
+        self.tool_conflicts = _tool_conflicts(self.every, opts.tool_data)
         self.fdats: dict[str, Fdat] = {}
         self.frame_uses: dict[str, tuple[str, FrameUse]] = {}
         self.assigned: dict[str, tuple[str, int]] = {}
@@ -263,6 +291,7 @@ class _Context:
         self.lone_dat = all(Path(s.path or "").suffix.lower() == ".dat" for s in scans)
         self._resolved: dict[BaseRef, tuple[object, np.ndarray | None, str]] = {}
         self.frames: list[np.ndarray] = []
+        self.frame_tools: list[int] = []  # the tool number of each of ``frames`` (-1: the cell's)
         self._frame_ids: dict[int, int] = {}
         self._blocked = set(self.frame_uses) | set(self.assigned)
 
@@ -281,19 +310,33 @@ class _Context:
         use_of.pop("", None)
         return use_of
 
-    def frame_id(self, frame: np.ndarray) -> int:
-        """Index of ``frame`` (one of the resolved frames) in ``frames``."""
-        found = self._frame_ids.get(id(frame))
+    def frame_id(self, placed: tuple[np.ndarray, int]) -> int:
+        """Index of ``placed`` (one of the resolved (frame, tool) pairs) in ``frames``."""
+        found = self._frame_ids.get(id(placed))
         if found is None:
-            found = self._frame_ids[id(frame)] = len(self.frames)
-            self.frames.append(frame)
+            found = self._frame_ids[id(placed)] = len(self.frames)
+            self.frames.append(placed[0])
+            self.frame_tools.append(placed[1])
         return found
 
-    def resolve(self, base: BaseRef) -> tuple[object, np.ndarray | None, str]:
-        """(identity key, robot_T_base or None, reason), once per distinct base."""
+    def resolve(self, base: BaseRef) -> tuple[object, tuple[np.ndarray, int] | None, str]:
+        """(identity key, (robot_T_base, tool number, -1: the cell's) or None, reason), once
+        per distinct base. Without ``Options.tool_data`` the tool is always the cell's."""
         found = self._resolved.get(base)
         if found is None:
-            found = self._resolved[base] = self._resolve(base)
+            ident, frame, reason = self._resolve(base)
+            tool = -1
+            if frame is not None and self.opts.tool_data is not None:
+                tool = base.tool if base.tool is not None else -1
+                if isinstance(tool, str):
+                    ident, frame, reason = None, None, f"tool unknown: {tool}"
+                elif base.kind == "fdat" and base.tool is None:
+                    tool = self.fdats[base.fdat or ""].tool_no
+                    tool = -1 if tool is None else tool
+                if tool in self.tool_conflicts:
+                    ident, frame, reason = None, None, f"tool unknown: {self.tool_conflicts[tool]}"
+            placed = None if frame is None else (frame, tool)
+            found = self._resolved[base] = ((ident, tool), placed, reason)
         return found
 
     def _resolve(self, base: BaseRef) -> tuple[object, np.ndarray | None, str]:
@@ -319,7 +362,9 @@ class _Context:
     def _fdat_reason(self, name: str, fdat: Fdat) -> str:
         if fdat.base_no is None:
             return f"FDAT {name}: {fdat.reason}"
-        tool = self.opts.tool_number
+        tool = self.opts.tool_number  # with the cell's tool_data, each FDAT's own tool
+        if self.opts.tool_data is not None:
+            return ""
         if tool is not None and fdat.tool_no is not None and fdat.tool_no != tool:
             return (
                 f"FDAT {name} (line {fdat.line}) has TOOL_NO {fdat.tool_no}: the cell's tool, "
@@ -434,6 +479,8 @@ class _Context:
             frame = frame_i
         if len(keys) > 1:
             lines = ", ".join(str(at) for at in keys.values())
+            if len({ident[0] for ident in keys}) == 1:
+                return None, f"{name} is moved to with different tools (lines {lines})"
             return None, f"{name} is used under different bases (lines {lines})"
         return frame, ""
 
@@ -455,6 +502,25 @@ class _Context:
         if self.lone_dat and in_dat and self.initial is not None:
             why += f" (--base N applies to POS/E6POS only, this is {type_name or 'untyped'})"
         return None, why
+
+    def stored_row(self, name: str) -> tuple[int, int] | str:
+        """The (file, table row) of the stored position a motion to ``name`` (normalized) goes
+        to, defined once in the given files; otherwise why it is not known."""
+        if "*" in name:
+            return "its index is a variable"
+        if name in self.twice:
+            return "it is defined more than once"
+        return self.stored_rows.get(name, "it is not a position given in these files")
+
+    @cached_property
+    def stored_rows(self) -> dict[str, tuple[int, int]]:
+        """Each stored position's key -> (file, table row) (of its first definition)."""
+        found: dict[str, tuple[int, int]] = {}
+        for s, keys in enumerate(self.keys):
+            for i, key in enumerate(keys):
+                if key:
+                    found.setdefault(key, (s, i))
+        return found
 
     def moved_to(self, s: int, i: int) -> bool:
         """Whether a motion commands stored position row i of file s: a motion uses its name
@@ -499,6 +565,29 @@ class _Context:
         return f"{text} is not declared in the given files"
 
 
+def _tool_conflicts(scans: list[KrlScan], tool_data: dict | None) -> dict[int, str]:
+    """The tools the files set otherwise than the cell declares them: TOOL_DATA number ->
+    why (a value not written as a literal, or another TCP than the cell's, by 0.001 mm or
+    0.001 deg)."""
+    out = {}
+    if tool_data is None:
+        return out
+    for scan in scans:
+        where = Path(scan.path or "").name
+        for n, (xyzabc, line) in scan.tool_data.items():
+            if n not in tool_data or n in out:
+                continue
+            if xyzabc is None:
+                out[n] = f"TOOL_DATA[{n}] is set otherwise than as a literal frame ({where}:{line})"
+                continue
+            mine = pose_from_xyzabc(np.array(xyzabc))
+            cell = tool_data[n]
+            turn = float(rotation_angle_deg(mine[None, :3, :3], cell[:3, :3])[0])
+            if np.linalg.norm(mine[:3, 3] - cell[:3, 3]) > 1e-3 or turn > 1e-3:
+                out[n] = f"TOOL_DATA[{n}] ({where}:{line}) is not the cell's tool {n}"
+    return out
+
+
 def _upper(names: list[str]) -> list[str]:
     """``normalize_name`` of plain names (a new list): upper case, the same str where a name is
     upper case already."""
@@ -508,8 +597,57 @@ def _upper(names: list[str]) -> list[str]:
     return [k if k != n else n for k, n in zip(map(str.upper, names), names, strict=True)]
 
 
+def _reached(chains: Chains, absolute: list[tuple[np.ndarray, np.ndarray]]) -> list:
+    """``absolute`` (per file: X, Y, Z (n, 3) mm and A, B, C (n, 3) deg of each table row) with
+    the rows of the relative motions whose start is known replaced by where they reach."""
+    out = []
+    for s, (xyz, abc) in enumerate(absolute):
+        rows = chains.rows[s]
+        known = chains.start[s][:, 0] >= 0
+        if known.any():
+            xyz, abc = xyz.copy(), abc.copy()
+            xyz[rows[known]] = chains.xyz[s][known]
+            abc[rows[known]] = chains.abc[s][known]
+        out.append((xyz, abc))
+    return out
+
+
+def _increments(
+    chains: Chains,
+    scans: list[KrlScan],
+    todo: list[np.ndarray],
+    targets: list[np.ndarray],
+    rows: Rows,
+    starts: np.ndarray,
+    places: list[int],
+) -> list[list[tuple[int, int, str]]]:
+    """The edits of the relative motions (``relative.write_increments``), their report rows
+    set; their targets in ``targets`` set to NaN (the absolute splice leaves them)."""
+    goals, corrected = [], []
+    for scan, t, found in zip(scans, todo, targets, strict=True):
+        n = len(scan.table)
+        goal = np.full((n, 3), np.nan)
+        goal[t] = found
+        goals.append(goal)
+        corrected.append(np.isfinite(goal[:, 0]))
+    edits, reached = write_increments(chains, scans, goals, corrected, places)
+    for s, relative in enumerate(chains.rows):
+        known = chains.start[s][:, 0] >= 0
+        r = relative[known]
+        at = starts[s] + r
+        done = corrected[s][r]
+        rows.status[at[done]] = CORRECTED
+        rows.new[at] = reached[s][known]
+        want = np.where(done[:, None], goals[s][r], rows.old[at])
+        residual = np.linalg.norm(reached[s][known] - want, axis=1)
+        rows.residual_mm[at] = rows.rounding_mm[at] = residual
+        inside = np.searchsorted(todo[s], r)
+        targets[s][inside] = np.nan
+    return edits
+
+
 def _correct(
-    tables: list[PositionTable],
+    absolute: list[tuple[np.ndarray, np.ndarray]],
     todo: list[np.ndarray],
     placed: list[np.ndarray],
     frames: list[np.ndarray],
@@ -520,14 +658,15 @@ def _correct(
 ) -> list[np.ndarray]:
     """Correct every placed position of every file at once (one ``correct_points``).
 
-    ``todo[s]``: placed table rows of file s, ``placed[s][todo[s]]`` the index of each one's
+    ``absolute[s]``: X, Y, Z (n, 3) mm base frame and A, B, C (n, 3) deg of the table rows of
+    file s, ``todo[s]``: its placed table rows, ``placed[s][todo[s]]`` the index of each one's
     robot_T_base in ``frames``, ``starts[s]``: its first report row, ``status[s]`` each one's
     own KUKA Status (-1: none). Per file: the corrected targets (n, 3) mm base frame (NaN rows:
     not corrected)."""
     stack = np.array(frames)
     which = np.concatenate([placed[s][t] for s, t in enumerate(todo)])
-    base_xyz = np.concatenate([table.xyz[t] for table, t in zip(tables, todo, strict=True)])
-    abc = np.concatenate([table.abc[t] for table, t in zip(tables, todo, strict=True)])
+    base_xyz = np.concatenate([xyz[t] for (xyz, _), t in zip(absolute, todo, strict=True)])
+    abc = np.concatenate([abc[t] for (_, abc), t in zip(absolute, todo, strict=True)])
     at = np.concatenate([starts[s] + t for s, t in enumerate(todo)])
     n = len(which)
     robot = np.empty((n, 3))
@@ -592,15 +731,20 @@ def _splice(
     rows: Rows,
     first_row: int,
     places: int,
+    extra: list[tuple[int, int, str]] = (),
 ) -> bytearray:
     """The file's bytes with the X, Y, Z of its corrected positions replaced (``places``
     decimals; a number whose value does not change keeps its literal); their rows
     (``first_row`` + table row) updated.
 
     ``todo`` (n,): placed table rows, ``targets`` (n, 3) mm base frame, NaN rows where not
-    corrected."""
+    corrected; ``extra``: more edits (start, end, new text), spliced in their place."""
     inside = np.flatnonzero(np.isfinite(targets[:, 0]))
     out = ByteSplicer(text)
+    if len(extra):
+        extra = sorted(extra)
+        stops = [] if not len(inside) else t.span[todo[inside[_BLOCK::_BLOCK]], 0].tolist()
+        stops = [*stops, len(text)]  # where each block's edits end (the next block's first)
     for a in range(0, len(inside), _BLOCK):
         k = inside[a : a + _BLOCK]
         goal = targets[k]
@@ -614,5 +758,28 @@ def _splice(
         rows.rounding_mm[at] = residual
         changed = written.ravel() != t.xyz[todo[k]].ravel()
         spans = t.span[todo[k]].reshape(-1, 2)[changed]
-        out.add(spans[:, 0], spans[:, 1], new[np.repeat(changed, length)], length[changed])
+        new, length = new[np.repeat(changed, length)], length[changed]
+        if len(extra):
+            stop = stops[a // _BLOCK]
+            mine = [e for e in extra if e[0] < stop]
+            extra = extra[len(mine) :]
+            spans, new, length = _merged(spans, new, length, mine)
+        out.add(spans[:, 0], spans[:, 1], new, length)
+    if len(extra):
+        spans, new, length = _merged(np.zeros((0, 2), np.int64), np.zeros(0, np.uint8), [], extra)
+        out.add(spans[:, 0], spans[:, 1], new, length)
     return out.finish()
+
+
+def _merged(spans: np.ndarray, new: np.ndarray, length, edits: list[tuple[int, int, str]]):
+    """Spans (m, 2), new bytes and lengths (m,) with ``edits`` (start, end, text) added, sorted
+    by (start, end)."""
+    if not edits:
+        return spans, new, np.asarray(length, np.int64)
+    pieces = np.split(new, np.cumsum(length)[:-1]) if len(length) else []
+    every = [(int(a), int(b), bytes(p)) for (a, b), p in zip(spans.tolist(), pieces, strict=True)]
+    every += [(a, b, text.encode("ascii")) for a, b, text in edits]
+    every.sort(key=lambda e: (e[0], e[1]))
+    spans = np.array([(a, b) for a, b, _ in every], np.int64).reshape(-1, 2)
+    data = b"".join(p for _, _, p in every)
+    return spans, np.frombuffer(data, np.uint8), np.array([len(p) for *_, p in every], np.int64)

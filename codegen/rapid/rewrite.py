@@ -139,6 +139,7 @@ class _Target:
     frame: int = -1
     reason: str = ""
     commanded: bool = False
+    tool: int = -1  # the tool number it is moved with (-1: the cell's, rapid.tool)
 
 
 @dataclass
@@ -173,6 +174,11 @@ class RapidPositions:
         return np.array([t.frame for t in self.targets], dtype=np.int64)
 
     @property
+    def tool(self) -> np.ndarray:
+        """(N,) the tool number each robtarget is moved with (-1: the cell's)."""
+        return np.array([t.tool for t in self.targets], dtype=np.int64)
+
+    @property
     def commanded(self) -> np.ndarray:
         """(N,) bool: a motion goes to the robtarget or to a position derived from it."""
         return np.array([t.commanded for t in self.targets], dtype=bool)
@@ -185,6 +191,7 @@ class _Use:
     reason: str
     index: int | None = None  # array element (1-based), None: every element
     moved: bool = False  # in a motion instruction: the robot goes to it or to a derived position
+    tool: int = -1  # the tool number it is moved with (-1: the cell's)
 
 
 def _masked(text: str) -> str:
@@ -259,10 +266,18 @@ def _arguments(stmt: str, at: int) -> tuple[list[tuple[int, str]], dict[str, str
     return positional, optional
 
 
-def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> RapidPositions:
+def scan(
+    path: str,
+    text: str,
+    section,
+    ignore_external_axes: bool = False,
+    tools: dict[str, tuple[int, np.ndarray]] | None = None,
+) -> RapidPositions:
     """The robtargets of a RAPID module and the reason each is left alone ("" when it can be
     corrected), in the frames of ``section`` (``codegen.rapid.section.RapidSection``);
-    ``ignore_external_axes``: external axes in use do not keep a robtarget from correction."""
+    ``ignore_external_axes``: external axes in use do not keep a robtarget from correction;
+    ``tools``: the tooldata names a move may use (lower case) -> (tool number, -1: the cell's
+    tool; flange_T_tool (4, 4) mm), None: the cell's tool (``rapid.tool``) alone."""
     check_text(text, path)
     masked = _masked(text)
     newlines = [m.start() for m in re.finditer("\n", text)]
@@ -317,7 +332,7 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
     moves: list[tuple[int, list[str], bool]] = []  # line, lower-case names or "#k", circular
     wobj, tool = section.wobj.lower(), section.tool.lower()
     routines = {m.group(1).lower() for m in _PROC.finditer(_MASK.sub("", text))}
-    unfit = _unfit_frames(data, section)
+    unfit = _unfit_frames(data, section, tools)
     for s, (at, stmt) in enumerate(statements):
         line = where(at + len(stmt) - len(stmt.lstrip()))[0]
         assign = _ASSIGN.match(stmt)
@@ -326,11 +341,18 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
         instr = _INSTR.match(stmt)
         move = _MOVES.get(instr.group(1).lower()) if instr and not assign else None
         positional, optional = _arguments(stmt, instr.end()) if move else ([], {})
-        frame, why = 0, ""
+        frame, why, tool_no = 0, "", -1
         if move:
             used_wobj = optional.get("wobj", "wobj0").lower()
             used_tool = positional[move[1]][1] if len(positional) > move[1] else ""
-            if used_tool.lower() != tool:
+            if tools is not None:
+                tool_no = tools.get(used_tool.lower(), (-1,))[0]
+                if used_tool.lower() not in tools:
+                    why = (
+                        f"moved with tool {used_tool or '?'} at line {line}, which the cell does "
+                        "not declare (rapid.tool, the names of tool_data)"
+                    )
+            elif used_tool.lower() != tool:
                 why = (
                     f"moved with tool {used_tool or '?'} at line {line}, not the cell's "
                     f"(rapid.tool {section.tool}): the grid holds for the cell's TCP"
@@ -359,7 +381,7 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
                         line,
                     )
                     target.frame, target.reason = (frame, why) if why else (frame, "")
-                    target.commanded = True
+                    target.commanded, target.tool = True, tool_no
                     moves[-1][1].append(f"#{len(found.targets)}")
                     found.targets.append(target)
         elif instr and instr.group(1).lower() == "moveabsj":
@@ -394,7 +416,7 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
                 and arg == ref.group(0).strip()
                 and any(positional[i][0] == ref.start() for i in move[0] if i < len(positional))
             ):
-                use = _Use(line, -1 if why else frame, why, index)
+                use = _Use(line, -1 if why else frame, why, index, tool=tool_no)
                 moves[-1][1].append(key)
             else:
                 what = instr.group(1) if instr and not assign else "an expression"
@@ -418,8 +440,11 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
                 target.reason = bad.reason
             elif len({u.frame for u in mine}) > 1:
                 target.reason = "used in the robot frame and in the work object"
+            elif len({u.tool for u in mine}) > 1:
+                lines = ", ".join(str(u.line) for u in mine)
+                target.reason = f"moved with different tools (lines {lines})"
             else:
-                target.frame = mine[0].frame
+                target.frame, target.tool = mine[0].frame, mine[0].tool
         found.targets.extend(targets)
     for target in found.targets:
         target.reason = target.reason or target.own
@@ -429,14 +454,22 @@ def scan(path: str, text: str, section, ignore_external_axes: bool = False) -> R
     return found
 
 
-def _unfit_frames(data: dict[str, str], section) -> dict[str, str]:
-    """The cell's tool and work object where the module declares them otherwise than the cell
-    (a stationary tool, a work object the robot holds, another user or object frame): lower-case
-    name -> why its moves are not placed."""
+def _unfit_frames(data: dict[str, str], section, tools: dict | None) -> dict[str, str]:
+    """The cell's tools and work object where the module declares them otherwise than the cell
+    (a stationary tool, a tool with another TCP than the cell's ``tools``, a work object the
+    robot holds, another user or object frame): lower-case name -> why its moves are not
+    placed."""
     out = {}
-    tool, wobj = section.tool.lower(), section.wobj.lower()
-    if data.get(tool, "[TRUE").lstrip(" \t\r\n[").upper().startswith("FALSE"):
-        out[tool] = f"tool {section.tool} is stationary (robhold FALSE): the robot holds the part"
+    wobj = section.wobj.lower()
+    names = {section.tool.lower(): section.tool}
+    for tool in tools or names:
+        if data.get(tool, "[TRUE").lstrip(" \t\r\n[").upper().startswith("FALSE"):
+            name = names.get(tool, tool)
+            out[tool] = f"tool {name} is stationary (robhold FALSE): the robot holds the part"
+        elif tools is not None and tool in data:
+            numbers = [float(n) for n in re.findall(_NUM, data[tool])[:7]]
+            if len(numbers) == 7 and not _same_pose(_pose(numbers), tools[tool][1]):
+                out[tool] = f"the module's tooldata {tool} is not the TCP the cell gives it"
     value = data.get(wobj)
     if value is None:
         return out
@@ -446,22 +479,28 @@ def _unfit_frames(data: dict[str, str], section) -> dict[str, str]:
     numbers = [float(n) for n in re.findall(_NUM, value.split(",", 3)[-1])]
     if len(numbers) != 14:
         return out
-    frames = []
-    for k in (0, 7):
-        pose = np.eye(4)
-        pose[:3, :3] = _matrices(np.array(numbers[k + 3 : k + 7]))[0]
-        pose[:3, 3] = numbers[k : k + 3]
-        frames.append(pose)
-    robot_T_wobj = frames[0] @ frames[1]
-    if not (
-        np.allclose(robot_T_wobj[:3, 3], section.robot_T_wobj[:3, 3], rtol=0, atol=0.01)
-        and np.allclose(robot_T_wobj[:3, :3], section.robot_T_wobj[:3, :3], rtol=0, atol=1e-6)
-    ):
+    robot_T_wobj = _pose(numbers[:7]) @ _pose(numbers[7:])
+    if not _same_pose(robot_T_wobj, section.robot_T_wobj):
         out[wobj] = (
             f"the module's wobjdata {section.wobj} (user and object frame) is not the cell's base "
             "frame"
         )
     return out
+
+
+def _pose(numbers: list[float]) -> np.ndarray:
+    """RAPID [x, y, z, q1, q2, q3, q4] (mm) as a pose (4, 4) mm."""
+    pose = np.eye(4)
+    pose[:3, :3] = _matrices(np.array(numbers[3:7]))[0]
+    pose[:3, 3] = numbers[:3]
+    return pose
+
+
+def _same_pose(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two poses (4, 4) mm agree within 0.01 mm and 1e-6 (rotation matrix elements)."""
+    return np.allclose(a[:3, 3], b[:3, 3], rtol=0, atol=0.01) and np.allclose(
+        a[:3, :3], b[:3, :3], rtol=0, atol=1e-6
+    )
 
 
 def _literal(name, lit, offset, where, ignore_external_axes, line=None) -> _Target:
@@ -531,8 +570,12 @@ def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
     ``section``; InputError where a module has nothing that can be placed."""
     data, parts = {}, []
     frames = np.stack([np.eye(4), section.robot_T_wobj])
+    tools = None
+    if opts.tool_data is not None:
+        tools = {name: (n, opts.tool_data[n]) for name, n in (opts.tool_names or {}).items()}
+        tools[section.tool.lower()] = (-1, opts.tool_data[opts.tool_number])
     for path, text in texts.items():
-        found = scan(path, text, section, opts.ignore_external_axes)
+        found = scan(path, text, section, opts.ignore_external_axes, tools)
         rows = Rows(
             [path],
             np.zeros(len(found.targets), np.int64),
@@ -542,6 +585,7 @@ def rewrite_rapid(texts: dict[str, str], opts: Options, section) -> Result:
             found.xyz,
         )
         rows.commanded[:] = found.commanded  # partial_check counts those left uncorrected
+        rows.tool[:] = found.tool
         new = np.full((len(found.targets), 3), np.nan)
         at = np.flatnonzero(~np.fromiter(map(bool, found.reason), bool, len(found.targets)))
         if at.size:
