@@ -44,9 +44,10 @@ class PlanRequest:
     grid: ``region`` (xmin, xmax, ymin, ymax, zmin, zmax mm), ``step_mm``, ``order``
     ("serpentine" or "naive"), ``repeats`` rounds; cube: ``centre`` (3,) mm, ``step_mm``,
     ``repeats``; experiment: ``centres`` (name -> (3,) mm), ``steps`` (mm), ``repeats``;
-    identify: ``region``, ``count`` poses within ``tilt_deg`` of ``abc`` D-optimal among
-    ``candidates`` random ones (``seed``), ``repeats`` rounds, D-optimal for the model
-    ``identify`` will fit (``compliance``, ``harmonics`` as (axis, order) pairs, ``gravity``).
+    identify: ``region``, ``count`` poses within ``tilt_deg`` of ``abc`` among ``candidates``
+    random ones (``seed``), ``repeats`` rounds, ``design`` "library" (for the structure search's
+    candidates, ``compliance`` and ``harmonics`` as (axis, order) pairs pinned) or "dh"
+    (D-optimal for the model given by ``compliance``, ``harmonics``, ``gravity``).
     Program: ``name`` (default measure_KIND), TOOL_DATA ``tool_number``, BASE_DATA
     ``base_number`` (0: the robot frame), first-PTP ``ptp_percent``, LIN ``vel_m_s``, and after
     each position ``wait_input`` ($IN number) or ``wait_sec`` s; ``templates``: a folder with
@@ -70,6 +71,7 @@ class PlanRequest:
     compliance: bool = False
     harmonics: tuple[tuple[int, int], ...] = ()
     gravity: tuple = ()  # mass-free gravity groups (kinematics.candidates.GravityTerm)
+    design: str = "library"  # identify: "library" or "dh" (compensation.plans)
     name: str | None = None
     tool_number: int = 1
     base_number: int = 0
@@ -190,24 +192,33 @@ def _identification_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
         compliance=r.compliance,
         harmonics=r.harmonics,
         gravity=r.gravity,
+        design=r.design,
     )
     model = "DH errors, TCP" + (", compliance" if r.compliance else "")
     model += f", {len(r.harmonics)} harmonics" if r.harmonics else ""
     model += "".join(f", {g.name}" for g in r.gravity)
+    how = "D-optimally"
+    if r.design == "library":
+        from accugrid.kinematics.structure import DEFAULT_MAX_ORDER
+
+        model += f" + candidates: harmonic orders 1..{DEFAULT_MAX_ORDER} per axis, gravity A2/A3"
+        how = "Bayesian D-optimally"
     info = [
-        f"identification plan ({model}): {r.count} poses x {r.repeats} repeats chosen D-optimally "
+        f"identification plan ({model}): {r.count} poses x {r.repeats} repeats chosen {how} "
         f"from {usable} of {r.candidates} candidates (Status {status}, tilt up to "
         f"{r.tilt_deg:g} deg, |A5| >= 10 deg); observability O1 {o1:.4f}",
         f"path {plan.path_length():.1f} mm",
     ]
-    info.append(_candidates_line(robot, plan, status))
+    info.append(_candidates_line(robot, plan, status, r))
     return plan, info
 
 
-def _candidates_line(robot, plan: Plan, status: int) -> str:
+def _candidates_line(robot, plan: Plan, status: int, r: PlanRequest) -> str:
     """What the planned poses can tell ``identify``'s search: the harmonic orders resolved per
-    axis and the candidate groups they cannot separate from the DH errors and TCP."""
-    from accugrid.kinematics.structure import observability
+    axis, the candidate groups they cannot separate from the DH errors and TCP, and the share of
+    the candidates' prior variance they remove (``pose_design.library_share``)."""
+    from accugrid.kinematics.pose_design import library_share
+    from accugrid.kinematics.structure import DEFAULT_MAX_ORDER, observability
 
     poses = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
     first = np.unique(np.column_stack([plan.points, plan.abc_rows()]), axis=0, return_index=True)[1]
@@ -220,9 +231,12 @@ def _candidates_line(robot, plan: Plan, status: int) -> str:
         orders.setdefault(axis if order else name, []).append(order)
     text = "; ".join(f"{key} orders {','.join(ks)}" if ks[0] else key for key, ks in orders.items())
     text = text or "none"
+    share = library_share(robot, q, DEFAULT_MAX_ORDER, r.harmonics, r.compliance)
     return (
         f"candidates for identify's structure search: harmonic orders up to {resolved}; "
-        f"not separable from the DH errors and TCP by these poses: {text}"
+        f"not separable from the DH errors and TCP by these poses: {text}; these poses remove "
+        f"{100 * share:.0f} % of the candidate terms' prior variance (mean; each term's prior "
+        "3 times the noise)"
     )
 
 

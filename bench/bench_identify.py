@@ -177,7 +177,7 @@ def pose_choice() -> None:
         nominal, true = robot.with_tool(TOOL), true_of(robot)
         status = int(nominal.ik(pose_from_xyzabc([1500.0, 0.0, 1700.0, *DRILL])).status[0])
         targets = tilted_poses(nominal, 200, 25.0, 5, status)
-        plan = identification_plan(nominal, *REGION, 60, 30.0, DRILL, status)[0]
+        plan = identification_plan(nominal, *REGION, 60, 30.0, DRILL, status, design="dh")[0]
         planned = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
         for label, q in (
             ("random", tilted_poses(nominal, 60, 30.0, 3, status)),

@@ -2,11 +2,13 @@
 
 Each robot of ``kinematics.robot_family`` (seeds 0..N-1, ``--robots N``, default 20; DH errors of
 seed Table 1's magnitude, 0-4 reducer harmonics per axis of orders <= 16, gravity compliance of
-random masses, an SMR up to 1 mm off the declared 0/0/250 mm TCP), and the built-in
-kr210-realistic and kr210-paper with a TCP off by (0.4, -0.3, 0.6) mm: 60 poses from `plan
-identify` (the seed's region, tilted up to 30 deg, D-optimal among 2000 candidates, the IK default's
-Status at the region's centre) measured 3 times (repeatability 0.03, tracker 0.02 mm, the joints
-the controller logs); 200 held-out targets in the region (50 mm margin) tilted up to 25 deg.
+random masses, an SMR up to 1 mm off the declared 0/0/250 mm TCP), and the built-in kr210-realistic
+and kr210-paper with a TCP off by (0.4, -0.3, 0.6) mm: 60 poses from `plan identify` (the seed's
+region, tilted up to 30 deg, chosen among 2000 candidates, the IK default's Status at the region's
+centre; ``--design library`` (the default, for the candidate library), ``dh`` (D-optimal for DH +
+TCP) or ``both``, the default here: the same robots, noise and targets for each, then a table
+comparing the designs) measured 3 times (repeatability 0.03, tracker 0.02 mm, the joints the
+controller logs); 200 held-out targets in the region (50 mm margin) tilted up to 25 deg.
 Columns: the model's max |calibrated − true| FK position error over the targets (mm) for
 
 - auto: plain ``identify`` (the structure chosen by cross-validation, ``kinematics.structure``);
@@ -14,13 +16,14 @@ Columns: the model's max |calibrated − true| FK position error over the target
   mass-free gravity groups);
 - dh: DH errors + TCP only (``--structure dh``);
 
-and the nested cross-validation estimate against the truth (the model's RMS, noise removed;
-the held-out max, noise included, against the true max). Then the two black-box tables: two
-family robots (seeds 100, 101) measured at 60 random poses tilted up to 25 deg (A) and at the 60
-poses of `plan identify` (B): plain identify against the fit told the true orders and compliance
-(with the true masses), on the targets inside the poses' joint ranges (random poses leave a fifth
-of the targets outside, where the fit extrapolates; their max is printed apart). Not timed tests;
-run ``make bench ARGS=structure`` (or ``.venv/bin/python bench/bench_structure.py --robots 20``).
+and the nested cross-validation estimate against the truth (the model's RMS, noise removed; the
+held-out max, noise included, against the true max). Then the two black-box tables: two family
+robots (seeds 100, 101) measured at 60 random poses tilted up to 25 deg (A) and at the 60 poses of
+`plan identify` (B, each design compared): plain identify against the fit told the true orders and
+compliance (with the true masses), on the targets inside the poses' joint ranges (random poses leave
+a fifth of the targets outside, where the fit extrapolates; their max is printed apart). Not timed
+tests; run ``make bench ARGS=structure`` (or ``.venv/bin/python bench/bench_structure.py --robots 20
+--design both``).
 """
 
 from __future__ import annotations
@@ -62,8 +65,8 @@ def status_of(nominal) -> int:
     return int(nominal.ik(pose_from_xyzabc([*(LO + HI) / 2, *DRILL])).status[0])
 
 
-def planned_joints(nominal, status: int) -> np.ndarray:
-    plan = identification_plan(nominal, LO, HI, POSES, TILT_PLAN, DRILL, status)[0]
+def planned_joints(nominal, status: int, design: str = "library") -> np.ndarray:
+    plan = identification_plan(nominal, LO, HI, POSES, TILT_PLAN, DRILL, status, design=design)[0]
     poses = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
     return nominal.ik(poses, status=status).q
 
@@ -136,13 +139,15 @@ def one_robot(robot: FamilyRobot, q: np.ndarray, targets: np.ndarray, seed: int)
     }
 
 
-def family(count: int) -> None:
+def family(count: int, design: str) -> tuple[str, ...]:
+    """The family table for the poses of ``plan identify --design design``; returns the
+    summary row of the designs' comparison."""
     rows, ratios, estimates = [], [], []
-    seconds = []
+    seconds, autos, tolds = [], [], []
     for seed in [*range(count), "kr210-realistic", "kr210-paper"]:
         robot = random_robot(seed) if isinstance(seed, int) else named(seed)
         status = status_of(robot.nominal)
-        q = planned_joints(robot.nominal, status)
+        q = planned_joints(robot.nominal, status, design)
         targets = tilted_joints(robot.nominal, status, TARGETS, TILT_TARGETS, 5)
         out = one_robot(robot, q, targets, 1000 + (seed if isinstance(seed, int) else 0))
         auto, told, dh = out["max"]
@@ -150,6 +155,8 @@ def family(count: int) -> None:
             ratios.append(auto / told)
             estimates.append(out["est_rms"] / out["true_rms"])
             seconds.append(out["seconds"])
+            autos.append(auto)
+            tolds.append(told)
         rows.append(
             (
                 str(seed),
@@ -165,7 +172,8 @@ def family(count: int) -> None:
             )
         )
     print(
-        f"{POSES} poses x {REPEATS} from plan identify, {TARGETS} targets tilted up to "
+        f"\n{POSES} poses x {REPEATS} from plan identify --design {design}, {TARGETS} targets "
+        f"tilted up to "
         f"{TILT_TARGETS:g} deg; max |model - true| mm (g: gravity group A2/A3 upper arm, "
         "forearm, wrist)"
     )
@@ -191,9 +199,31 @@ def family(count: int) -> None:
         f"median {np.median(estimates):.2f} (range {min(estimates):.2f}-{max(estimates):.2f}); "
         f"search + nested estimate {np.median(seconds):.1f} s median, {max(seconds):.1f} s max"
     )
+    return (
+        design,
+        f"{np.median(ratios):.2f}",
+        ", ".join(f"{r:.2f}" for r in worst),
+        f"{np.median(autos):.3f} / {max(autos):.3f}",
+        f"{np.median(tolds):.3f} / {max(tolds):.3f}",
+    )
 
 
-def black_boxes() -> None:
+def designs(summary: list[tuple[str, ...]], count: int) -> None:
+    print(
+        f"\nPose designs of plan identify on the same {count} family robots (same noise seeds, "
+        "same targets): auto / true-structure max and the absolute max |model - true| mm"
+    )
+    columns = (
+        "--design",
+        "auto / true median",
+        "worst tenth",
+        "auto max: median / worst",
+        "true-structure max: median / worst",
+    )
+    print(table(summary, columns))
+
+
+def black_boxes(designs: list[str]) -> None:
     rows = []
     for seed in (100, 101):
         robot = random_robot(seed)
@@ -205,10 +235,13 @@ def black_boxes() -> None:
             nominal,
             joint_errors=JointErrors.from_compliance(np.zeros(6), robot.robot.joint_errors.masses),
         )
-        for label, q in (
-            ("A: 60 random poses tilted <= 25 deg", tilted_joints(nominal, status, POSES, 25.0, 3)),
-            ("B: 60 poses from plan identify", planned_joints(nominal, status)),
-        ):
+        poses = [
+            ("A: 60 random poses tilted <= 25 deg", tilted_joints(nominal, status, POSES, 25.0, 3))
+        ]
+        for design in designs:
+            label = f"B: 60 poses from plan identify --design {design}"
+            poses.append((label, planned_joints(nominal, status, design)))
+        for label, q in poses:
             data = measured(robot, q, 7)
             auto = identify_structure(nominal, data)[0]
             told = identify(masses, data, compliance=True, harmonics=harmonics, selected=True)
@@ -232,5 +265,8 @@ def black_boxes() -> None:
 if __name__ == "__main__":
     args = sys.argv[1:]
     count = int(args[args.index("--robots") + 1]) if "--robots" in args else 20
-    family(count)
-    black_boxes()
+    chosen = args[args.index("--design") + 1] if "--design" in args else "both"
+    compared = ["library", "dh"] if chosen == "both" else [chosen]
+    summary = [family(count, design) for design in compared]
+    designs(summary, count)
+    black_boxes(compared)

@@ -8,8 +8,9 @@ Status, the true FK, seeded repeatability and tracker noise). For each budget N 
 
 - grid only: the regular grid over the region with at most N vertices and near-equal steps, at
   the grid orientation, P' = P + e(P) (IDW, seed Eq. 12-14; trilinear);
-- model only: the N poses ``accugrid plan identify`` chooses (``identification_plan``: D-optimal
-  among random candidates in the region tilted up to ``tilt_deg`` from the grid orientation);
+- model only: the N poses ``accugrid plan identify --design dh`` chooses
+  (``identification_plan``: D-optimal among random candidates in the region tilted up to
+  ``tilt_deg`` from the grid orientation);
   ``identify`` (DH errors, TCP, A2/A3 compliance when the robot has a gravity model);
   ``model_correct`` of each target at its own orientation, the controller keeping its tool;
 - model + residual grid: that model plus a 27-vertex (3 x 3 x 3) residual grid measured at the
@@ -377,6 +378,7 @@ def _calibrate(cell, lo, hi, budget, abc, seed, compliance, harmonics, options):
         seed=seed,
         compliance=compliance,
         harmonics=harmonics,
+        design="dh",  # the model is given: D-optimal for it
     )
     poses_p, poses_abc = plan.points, plan.abc_rows()
     _, measured = simulate_pose_measurements(

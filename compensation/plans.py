@@ -5,9 +5,11 @@
   (N - 1) * step, the shortest possible for N vertices spaced one step apart.
 - Experiment plan (seed Sec. 4.2 / 5): for every centre and every step, the cube's 8 vertices
   C1..C8 and its 9 test points P1..P9 (compensation.cube_points), measured ``repeats`` times.
-- Identification plan: the poses of a kinematic identification, chosen D-optimally
-  (``kinematics.identification.select_poses``) from random candidates in a region at
-  orientations within a tilt of the drilling orientation, reachable in one Status.
+- Identification plan: the poses of a kinematic identification, chosen from random candidates
+  in a region at orientations within a tilt of the drilling orientation, reachable in one Status:
+  Bayesian D-optimal for the structure search's candidate library
+  (``kinematics.pose_design.library_poses``) or D-optimal for a given model
+  (``kinematics.identification.select_poses``).
 
 A plan is a list of commanded positions (robot frame, mm) at one fixed orientation (KUKA ABC deg;
 an identification plan has one per row) with an id per row and, for experiments, the centre
@@ -310,25 +312,34 @@ def identification_plan(
     compliance: bool = False,
     harmonics: tuple[tuple[int, int], ...] = (),
     gravity: tuple = (),
+    design: str = "library",
+    max_order: int | None = None,
 ) -> tuple[Plan, float, int]:
     """``count`` poses for ``accugrid identify``: ``candidates`` random positions in the box
     lo..hi (mm) at random orientations within ``tilt_deg`` (rotation angle) of ``abc`` (deg),
     kept where the nominal IK in KUKA ``status`` is within the joint limits and |A5| >=
-    ``min_a5_deg`` (away from the wrist singularity), then the D-optimal ``count`` of them,
-    visited in a nearest-neighbour order, ``repeats`` rounds. Column ``s`` holds the Status.
-    ``compliance``, ``harmonics``, ``gravity`` (mass-free gravity groups): the model to be
-    identified (``identification.identify``).
-    Returns (plan, O1 of the chosen set, number of usable candidates)."""
+    ``min_a5_deg`` (away from the wrist singularity), then ``count`` of them, visited in a
+    nearest-neighbour order, ``repeats`` rounds. Column ``s`` holds the Status.
+    ``design`` "library": Bayesian D-optimal for the structure search's candidate library
+    (``kinematics.pose_design``, harmonic orders 1..``max_order``, default the search's K) with
+    the ``harmonics`` and, with ``compliance``, the gravity groups pinned; "dh": D-optimal for
+    the model given by ``compliance``, ``harmonics``, ``gravity`` (mass-free gravity groups) only
+    (``identification.select_poses``). Returns (plan, O1 of the chosen set for DH + TCP and the
+    given terms, number of usable candidates)."""
     from scipy.spatial.transform import Rotation
 
     from accugrid.kinematics.frames import xyzabc_from_pose
-    from accugrid.kinematics.identification import select_poses
+    from accugrid.kinematics.identification import pose_o1, select_poses
+    from accugrid.kinematics.pose_design import library_poses
+    from accugrid.kinematics.structure import DEFAULT_MAX_ORDER
 
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     if not np.all(lo < hi):
         raise InputError("the region's minimum must be below its maximum on every axis")
     if not 0.0 <= tilt_deg <= 90.0:
         raise InputError(f"--tilt must be 0..90 deg, got {tilt_deg:g}")
+    if design not in ("library", "dh"):
+        raise InputError(f"the design must be 'library' or 'dh', got {design!r}")
     if repeats < 1 or candidates < count:
         raise InputError(f"need repeats >= 1 and candidates >= count, got {repeats}, {candidates}")
     rng = np.random.default_rng(seed)
@@ -348,9 +359,14 @@ def identification_plan(
             f"{status} with |A5| >= {min_a5_deg:g} deg; need {count}: move or enlarge the "
             "region, change the tilt or lower the count"
         )
-    chosen, o1 = select_poses(
-        robot, sol.q[usable], count, compliance=compliance, harmonics=harmonics, gravity=gravity
-    )
+    if design == "library":
+        order = DEFAULT_MAX_ORDER if max_order is None else max_order
+        chosen = library_poses(robot, sol.q[usable], count, order, harmonics, compliance)
+        o1 = pose_o1(robot, sol.q[usable][chosen], compliance, harmonics, gravity)
+    else:
+        chosen, o1 = select_poses(
+            robot, sol.q[usable], count, compliance=compliance, harmonics=harmonics, gravity=gravity
+        )
     rows = usable[chosen][_nearest_neighbour_order(points[usable[chosen]])]
     xyzabc = xyzabc_from_pose(poses[rows])
     ids = [

@@ -59,6 +59,7 @@ __all__ = [
     "linearised",
     "planned_columns",
     "pose_folds",
+    "pose_o1",
     "pose_set",
     "select_poses",
 ]
@@ -482,9 +483,30 @@ def select_poses(
         j = rows[best]
         middle = np.linalg.inv(np.eye(3) + j @ inverse @ j.T)
         inverse = inverse - inverse @ j.T @ middle @ j @ inverse  # Woodbury
-    sing = np.linalg.svd(rows[chosen].reshape(-1, rank), compute_uv=False)
-    o1 = float(np.exp(np.mean(np.log(np.maximum(sing, 1e-300)))) / np.sqrt(count))
-    return np.array(chosen), o1
+    return np.array(chosen), _o1(rows[chosen])
+
+
+def pose_o1(
+    robot: Robot,
+    q: np.ndarray,
+    compliance: bool = False,
+    harmonics: Terms = (),
+    gravity: tuple[GravityTerm, ...] = (),
+) -> float:
+    """Sun & Hollerbach's O1 of poses q (P, 6) rad for the model ``select_poses`` would choose
+    them for: of the column-scaled identification Jacobian in the robot's identifiable subspace."""
+    model = _Model(robot, False, np.eye(4), compliance, harmonics, gravity)
+    reference = _subspace(
+        model.jacobian(np.zeros(model.n), reference_joints(robot, _REFERENCE_POSES)), RTOL
+    )
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    return _o1((model.jacobian(np.zeros(model.n), q) / reference.scale) @ reference.basis)
+
+
+def _o1(rows: np.ndarray) -> float:
+    """O1 = (σ1 … σr)^(1/r) / √P of the poses' rows (P, 3, r) in identifiable coordinates."""
+    sing = np.linalg.svd(rows.reshape(-1, rows.shape[2]), compute_uv=False)
+    return float(np.exp(np.mean(np.log(np.maximum(sing, 1e-300)))) / np.sqrt(len(rows)))
 
 
 def identify(

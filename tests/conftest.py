@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shlex
 import shutil
 from pathlib import Path
 
@@ -28,11 +29,19 @@ def realworld() -> Path:
 
 
 @pytest.fixture(scope="module")
-def rs274() -> str:
+def rs274(tmp_path_factory: pytest.TempPathFactory) -> str:
     """LinuxCNC's standalone RS274NGC interpreter; skipped where it is not installed and CI is
-    not set (on CI a missing rs274 is a failure)."""
+    not set (on CI a missing rs274 is a failure).
+
+    rs274 memory-maps a tool table at ``$HOME/.tool.mmap`` and truncates it at start, so two runs
+    sharing a home (two test processes at once) kill each other with SIGBUS: the path returned is
+    a wrapper that gives each test module's runs a home of their own."""
     if RS274 is None:
         if os.environ.get("CI"):
             pytest.fail("rs274 (LinuxCNC) is not installed, and CI is set: .ci/run must install it")
         pytest.skip("rs274 (LinuxCNC's standalone interpreter) is not installed; CI runs this")
-    return RS274
+    home = tmp_path_factory.mktemp("rs274_home")
+    wrapper = home / "rs274"
+    wrapper.write_text(f'#!/bin/sh\nHOME={shlex.quote(str(home))} exec {shlex.quote(RS274)} "$@"\n')
+    wrapper.chmod(0o755)
+    return str(wrapper)

@@ -53,7 +53,9 @@ def test_plan_simulate_identify_round_trip(tmp_path, capsys):
         ]
     )
     assert code == 0
-    assert "chosen D-optimally" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "identification plan (DH errors, TCP + candidates: harmonic orders 1..16" in out
+    assert "chosen Bayesian D-optimally" in out
     csv = tmp_path / "plan" / "measure_identify.csv"
     src = (tmp_path / "plan" / "measure_identify.src").read_text()
     assert src.count("PTP XMP") == 72 and "LIN" not in src  # poses reorient: PTP with S/T
@@ -165,7 +167,7 @@ def test_poses_chosen_for_the_harmonic_model_identify_it(tmp_path, capsys):
     planned = ["plan", "identify", "--robot", "kr210-realistic", *tool, "--count", "40"]
     assert main([*planned, "--tilt", "25", *model, "-o", str(tmp_path / "plan")]) == 0
     out = capsys.readouterr().out
-    assert "identification plan (DH errors, TCP, compliance, 2 harmonics): 40 poses" in out
+    assert "identification plan (DH errors, TCP, compliance, 2 harmonics + candidates" in out
     meas, cal = tmp_path / "meas.csv", tmp_path / "cal.yaml"
     poses = str(tmp_path / "plan" / "measure_identify.csv")
     sim = ["simulate", "--robot", "kr210-realistic", "--poses", poses, *tool, "-o", str(meas)]
@@ -187,3 +189,17 @@ def test_poses_chosen_for_the_harmonic_model_identify_it(tmp_path, capsys):
     assert terms.keys() == {(2, 7), (3, 7)}
     # the other reducer terms (orders 1, 40, 150, 160) leak a little into the fit
     assert abs(terms[(2, 7)] - 1.8e-4) < 0.4e-4 and abs(terms[(3, 7)] - 8e-5) < 0.4e-4
+
+
+def test_design_dh_keeps_the_d_optimal_dh_design_and_an_unknown_design_is_refused(tmp_path, capsys):
+    common = ["plan", "identify", "--count", "30", "--candidates", "300", "--tool", *TOOL]
+    assert main([*common, "--design", "dh", "-o", str(tmp_path / "dh")]) == 0
+    assert "identification plan (DH errors, TCP): 30 poses x 1 repeats chosen D-optimally" in (
+        capsys.readouterr().out
+    )
+    plan = read_table(tmp_path / "dh" / "measure_identify.csv").floats(["x", "y", "z"])
+    expected = identification_plan(ROBOT, LO, HI, 30, 25.0, (0, 90, 0), 6, 300, design="dh")[0]
+    np.testing.assert_allclose(plan, expected.points, atol=5e-4)
+    with pytest.raises(SystemExit) as exit_info:
+        main([*common, "--design", "optimal", "-o", str(tmp_path / "bad")])
+    assert exit_info.value.code == 2 and not (tmp_path / "bad").exists()

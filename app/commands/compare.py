@@ -1,17 +1,17 @@
 """Which correction, from how many measured points: grid only (IDW, trilinear), model only and
 model + residual grid, held out on a simulated robot (--robot; compensation.comparison).
 
-For each budget N of measured points (--budgets): the grid over --region with at most N vertices
-at the grid orientation (--abc), corrected P' = P + e(P) by IDW and by trilinear interpolation;
-the model identified (DH errors, TCP, A2/A3 compliance when the robot has a gravity model) from
-the N poses `plan identify` chooses (D-optimal among --candidates random poses tilted up to
---tilt deg); the model plus a 27-vertex residual grid at the grid orientation (trilinear); the
-model plus its residual at the poses interpolated in joint space (A1-A3, thin-plate spline; its
-5-fold cross-validation over the poses is printed); with --harmonics a model that also identifies
-those reducer harmonics, alone and with the residual grid. Every measurement is a simulated tracker
+For each budget N of measured points (--budgets): the grid over --region with at most N vertices at
+the grid orientation (--abc), corrected P' = P + e(P) by IDW and by trilinear interpolation; the
+model identified (DH errors, TCP, A2/A3 compliance when the robot has a gravity model) from the N
+poses `plan identify --design dh` chooses (D-optimal among --candidates random poses tilted up to
+--tilt deg); the model plus a 27-vertex residual grid at the grid orientation (trilinear); the model
+plus its residual at the poses interpolated in joint space (A1-A3, thin-plate spline; its 5-fold
+cross-validation over the poses is printed); with --harmonics a model that also identifies those
+reducer harmonics, alone and with the residual grid. Every measurement is a simulated tracker
 session (one KUKA Status, --repeats per point, seeded noise per budget). Scored on --targets
-held-out targets at the grid orientation and --targets tilted up to --target-tilt deg: where the
-arm lands when commanded P' (noise-free), max |P - M| and std per axis, mm.
+held-out targets at the grid orientation and --targets tilted up to --target-tilt deg: where the arm
+lands when commanded P' (noise-free), max |P - M| and std per axis, mm.
 
 Output: the table on stdout, DIR/comparison.csv (one row per budget, target set and method) and
 DIR/comparison_max.png and DIR/comparison_std.png (the tolerance, or the std limit, as a line).

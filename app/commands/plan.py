@@ -10,8 +10,11 @@
               D-H, steps 20..500 mm every 60, 5 repeats, A B C = 0 90 0).
   identify    --count poses for `accugrid identify`: from --candidates random positions in
               --region at orientations within --tilt deg of --abc, reachable in the Status with
-              |A5| >= 10 deg, the D-optimal set (greedy, most observable DH errors and TCP),
-              visited in nearest-neighbour order; a,b,c per row and column s (the Status).
+              |A5| >= 10 deg, the set that best tells apart the terms identify's structure
+              search chooses from (--design library, the default: Bayesian D-optimal for DH
+              errors, TCP, reducer harmonics of orders 1..16 per axis and the gravity groups;
+              --design dh: D-optimal for DH errors and TCP, with --compliance/--harmonics those
+              too), visited in nearest-neighbour order; a,b,c per row and column s (the Status).
               --augment CAL.yaml: D-optimal for the structure a calibrated file was fitted
               with (a second session for that model); it also prints which candidates of
               identify's structure search the poses cannot separate.
@@ -108,7 +111,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     exp = sub.add_parser("experiment", help="the seed's step experiment (Sec. 4.2, 5)")
     add_experiment_arguments(exp)
-    ident = sub.add_parser("identify", help="D-optimal poses for a kinematic identification")
+    ident = sub.add_parser("identify", help="poses for a kinematic identification")
     _add_region(ident)
     ident.add_argument(
         "--count",
@@ -143,10 +146,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_harmonics(ident, "choose the poses for `identify --harmonics` with these terms too")
     ident.add_argument(
+        "--design",
+        choices=["library", "dh"],
+        default="library",
+        help="library: poses that tell apart the joint-error terms identify's structure search "
+        "chooses from (Bayesian D-optimal, default); dh: D-optimal for DH errors and TCP (and "
+        "--compliance, --harmonics) only",
+    )
+    ident.add_argument(
         "--augment",
         metavar="CAL.yaml",
-        help="choose the poses for the structure a calibrated robot file was fitted with (its "
-        "harmonics, compliance and gravity groups): a second, short session for that model",
+        help="choose the poses D-optimal for the structure a calibrated robot file was fitted "
+        "with (its harmonics, compliance and gravity groups; --design does not apply): a "
+        "second, short session for that model",
     )
     for p in (grid, cube, exp, ident):
         _common(p)
@@ -241,7 +253,9 @@ def run(args: argparse.Namespace) -> int:
     compliance = kind == "identify" and args.compliance
     harmonics = harmonics_of(args) if kind == "identify" else ()
     gravity = ()
+    design = args.design if kind == "identify" else "dh"
     if kind == "identify" and args.augment:
+        design = "dh"
         from accugrid.kinematics.calibrated import chosen_structure
 
         chosen = chosen_structure(args.augment, robot)
@@ -267,6 +281,7 @@ def run(args: argparse.Namespace) -> int:
         compliance=compliance,
         harmonics=harmonics,
         gravity=gravity,
+        design=design,
         name=args.name,
         tool_number=args.tool_number,
         base_number=args.base_number,
