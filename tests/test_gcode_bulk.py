@@ -194,7 +194,7 @@ def cases(draw):
 def _walked(step, case):
     text, moves, corrected, desired, r_planes, places = case
     read = np.array([not r for r in moves.reason], bool)
-    walk = _Commanded(moves.is_cycle & read)  # may get Z, R words added
+    walk = _Commanded(moves.is_cycle & read, {})  # may get Z, R words added
     walk.cmd, walk.r_cmd = [1.0, 2.0, 50.0], 7.0  # as a previous block may leave it
     found = step(text, moves, slice(0, len(moves)), corrected, desired, r_planes, places, walk)
     edits = [np.asarray(column).tolist() for column in found]  # starts, ends, bytes, lengths
@@ -210,7 +210,8 @@ def test_bulk_walk_walks_as_the_move_by_move_walk(case):
     if case is None:
         return
     moves = case[1]
-    if not len(moves) or moves.incremental.any() or {"G28", "G30", "G53"} & set(moves.motion):
+    walked = moves.incremental.any() or (moves.cycle_axis != 2).any()  # G91, G18/G19 cycles
+    if not len(moves) or walked or {"G28", "G30", "G53"} & set(moves.motion):
         return  # no block, or one _gcode_edits walks move by move
     bulk, slow = _walked(_bulk_block, case), _walked(_walk_block, case)
     assert bulk[0] == slow[0]
@@ -275,12 +276,13 @@ def test_edits_in_stretches_are_the_move_by_move_edits(lines, data, min_bulk, de
     for whole in (False, True):
         rows = Rows(["p"], np.zeros(n, np.int64), moves.line, [], [], moves.target)
         rows.status[np.array(status, bool)] = CORRECTED
-        stretches = (lambda m, b: [(b, _walk_block)]) if whole else rewrite._stretches
+        stretches = (lambda m, b, w: [(b, _walk_block)]) if whole else rewrite._stretches
         with (
             mock.patch.object(rewrite, "_stretches", stretches),
             mock.patch.object(rewrite, "_MIN_BULK", min_bulk),
         ):
-            out = rewrite._gcode_edits(text, moves, rows, desired, r_planes, opts)
+            goals = (desired, desired)
+            out = rewrite._gcode_edits(text, moves, rows, goals, r_planes, opts, {})
         results.append((bytes(out), rows.new, rows.residual_mm, rows.rounding_mm))
     (a, *columns_a), (b, *columns_b) = results
     assert a == b

@@ -17,7 +17,6 @@ from accugrid.codegen.gcode.parse import parse_gcode
 from accugrid.codegen.krl.parse import parse_krl
 from accugrid.codegen.rewrite import Options
 from accugrid.compensation import GridModel
-from accugrid.infra.errors import InputError
 
 BASE2 = (100.0, 50.0, 0.0, 90.0, 0.0, 0.0)  # robot_T_base of BASE_DATA[2]
 R2 = Rotation.from_euler("ZYX", BASE2[3:], degrees=True).as_matrix()
@@ -215,15 +214,17 @@ def test_incremental_program_lands_where_its_absolute_twin_does(points):
     np.testing.assert_allclose(a_new[full], want, atol=6e-4)
 
 
-def test_arc_start_is_protected():
+def test_arc_and_its_start_move_by_one_shift():
+    """The arc, the plunge that sets its start Z and the move that sets its start X, Y move by
+    one vector on the axes they set (I, J from the start stay as written)."""
     text = "G90 G0 X0 Y0 Z10\nG1 Z-1\nG2 X20 Y0 I10 J0\nG1 X40\n"
-    with pytest.raises(InputError, match="3 not placed in the robot frame"):
-        rewrite_gcode("arc.ngc", text, _options())  # the arc and its start: left off
-    result = rewrite_gcode("arc.ngc", text, _options(allow_partial=True))
-    status = [(r.status, r.reason.split(" ")[0]) for r in result.rows]
-    assert status[0][1] == "sets" and status[1][1] == "sets" and status[2][1] == "arc"
-    assert status[3][0] == "corrected"
-    assert result.texts["arc.ngc"].splitlines()[:3] == text.splitlines()[:3]
+    result = rewrite_gcode("arc.ngc", text, _options())
+    assert [r.status for r in result.rows] == ["corrected"] * 4
+    new = parse_gcode(result.texts["arc.ngc"])
+    shift = np.array(new[2].target) - [20.0, 0.0, -1.0]
+    np.testing.assert_allclose(np.array(new[2].start) - [0.0, 0.0, -1.0], shift, atol=1e-12)
+    assert "I10 J0" in result.texts["arc.ngc"].splitlines()[2]
+    assert np.abs(shift).max() > 0.05
 
 
 def test_krl_reparse_gives_the_report(job):

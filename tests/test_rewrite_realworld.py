@@ -35,13 +35,14 @@ AT_LEAST = {
     "sample_program": 0,  # tool and base frames, frames passed to a routine: no drilling position
     "cnc_struc": 790,
     "heatsink": 40,
-    # its G91 cycles repeated L3/L4 start at Z never set: not corrected, and neither are the 3
-    # holes that set their start X and Y (one increment cannot undo a corrected start)
-    "example3_inch": 5,
+    # its G91 cycles repeated L3/L4 start at a level never set: not corrected, and neither are
+    # the 5 holes that set their start (one increment cannot undo a corrected start); its
+    # absolute cycles in G18 and G19 are
+    "example3_inch": 15,
     "lagun_parameters": 0,
     "my100_inch": 91,
     "drill_practice": 4,
-    "vertical_slot": 4,
+    "vertical_slot": 21,  # its 8 arcs move rigidly with the moves that start them
 }
 # (inputs, extra options, how many positions must be corrected at least)
 CASES = {case: (*REALWORLD_REWRITES[case], AT_LEAST[case]) for case in REALWORLD_REWRITES}

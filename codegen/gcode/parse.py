@@ -4,9 +4,10 @@ each number, for pre-flight correction.
 Follows the modal state a CAM post relies on: motion mode (G0/G1/G2/G3, canned cycles G73/G81-G89
 with G98/G99 (G98 back to the initial level, the Z where the run of cycle blocks began), sticky Z
 and R and, under G91, X and Y from the tool, R from the initial level, Z from R and L repeats, as
-LinuxCNC reads them), G90/G91 (incremental targets are made absolute), G20/G21
-(targets in mm; ``scale`` converts back), G17/G18/G19, N-numbers, ``( )`` and ``;`` comments,
-words in any order and case, with or without spaces, parameter assignments (``#1 = 5``,
+LinuxCNC reads them; in G18 and G19 the cycle's axis is Y and X), arcs (their centre, plane and
+turns, ``codegen.gcode.arc``; G90.1/G91.1), G90/G91 (incremental targets are made absolute),
+G20/G21 (targets in mm; ``scale`` converts back), G17/G18/G19, N-numbers, ``( )`` and ``;``
+comments, words in any order and case, with or without spaces, parameter assignments (``#1 = 5``,
 ``#<_z> = 0.4``) and words written as parameters or expressions (``X#1``, ``X[#1*2]``,
 ``x sin[30]``), evaluated where decidable before run time (``expressions``; a Word then holds
 the value and the expression's text and span), LinuxCNC's polar words ``@`` (radius) and ``^``
@@ -44,6 +45,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from accugrid.codegen.gcode.arc import Arc, arc_of
 from accugrid.codegen.gcode.expressions import Parameters, Undecided
 from accugrid.codegen.gcode.numbers import NUMBER_BYTES, literal_values
 from accugrid.codegen.program_text import check_text, decimals_of, split_lines
@@ -52,6 +54,7 @@ from accugrid.infra.errors import InputError
 __all__ = [
     "AXES",
     "CYCLES",
+    "CYCLE_AXIS",
     "RESETS",
     "INCH_MM",
     "POLAR",
@@ -119,7 +122,7 @@ INCH_MM = 25.4
 _ROTARY_SET = frozenset(ROTARY)
 POLAR = "@^"  # LinuxCNC's polar radius and angle (degrees) in the XY plane
 _POLAR_SET = frozenset(POLAR)
-_KEPT = frozenset(AXES + ROTARY + POLAR + "RLTHQ")  # letters whose Word a move, G10 or a tool needs
+_KEPT = frozenset(AXES + ROTARY + POLAR + "RLTHQIJKP")  # the Words a move, G10 or a tool needs
 _TOOL_WORDS = frozenset(("T", "H", "M6", "M61"))  # a block that may change the tool
 _TOOL_CODES = frozenset(("43", "43.1", "43.2", "49"))
 _POSITION_LETTERS = frozenset(AXES + ROTARY + POLAR + "R")
@@ -161,6 +164,8 @@ MAX_REPEATS = 10_000  # a canned cycle's L beyond this is reported (each hole is
 WORD_LETTERS = "XYZR"  # the words a move keeps, in the order its ``words`` dict lists them
 RESETS = frozenset(("G28", "G30", "G53"))  # moves after which the position is not known
 _F_INCREMENTAL, _F_CYCLE, _F_RESETS, _F_G99, _F_FIRST = 1, 2, 4, 8, 16  # ``GcodeMoves`` flags
+_F_G18, _F_G19 = 32, 64  # a canned cycle in the XZ plane (its axis Y) or the YZ plane (X)
+CYCLE_AXIS = {"17": 2, "18": 1, "19": 0}  # a canned cycle's axis (depth, R) in each plane
 
 
 class Word(NamedTuple):
@@ -219,7 +224,8 @@ class GcodeMoves:
     the program frame (NaN where unknown); ``scale`` and ``r_mm`` (N,) mm; ``incremental``,
     ``is_cycle``, ``resets`` (a G28/G30/G53 move, after which the position is not known),
     ``g99`` (a cycle retracting to R) and ``first_cycle`` (the first cycle block of a run: it sets
-    the initial level) (N,) bool; ``setters`` (N, 3) int (-1: none);
+    the initial level) (N,) bool; ``cycle_axis`` (N,) a cycle's axis (2: Z in G17, 1: Y in
+    G18, 0: X in G19; 2 for other moves); ``setters`` (N, 3) int (-1: none);
     ``word_start``, ``word_end`` (N, 4) text offsets of the X, Y, Z, R numbers (-1: not written)
     and ``word_value`` (N, 4) their values in program units; ``rotary_index`` (N,) int into
     ``rotaries`` (the distinct rotary dicts, each once); ``motion``, ``reason``, ``retract``
@@ -252,6 +258,7 @@ class GcodeMoves:
         # (first row, tool) where the programmed tool changes: a tool number, -1 the cell's,
         # a str why it is not known
         self.tool_changes: list[tuple[int, int | str]] = []
+        self.arcs: dict[int, Arc] = {}  # row -> the centre, plane and turns of a G2/G3 arc
 
     def __len__(self) -> int:
         return len(self.motion)
@@ -322,6 +329,7 @@ class GcodeMoves:
             state.incremental * _F_INCREMENTAL
             + bool(cycle) * _F_CYCLE
             + (cycle == 2) * _F_FIRST
+            + bool(cycle) * (_F_G18 * (state.plane == "18") + _F_G19 * (state.plane == "19"))
             + (motion in RESETS) * _F_RESETS
             + (retract == "G99") * _F_G99
         )
@@ -367,6 +375,7 @@ class GcodeMoves:
         self.first_cycle = (flags & _F_FIRST) != 0
         self.resets = (flags & _F_RESETS) != 0
         self.g99 = (flags & _F_G99) != 0
+        self.cycle_axis = np.where(flags & _F_G18, 1, np.where(flags & _F_G19, 0, 2))
         self.rotary_index = self._rotary[:n]
         return self
 
@@ -434,6 +443,7 @@ class _Modal:
     incremental: bool = False
     scale: float = 1.0
     plane: str = "17"
+    arc_absolute: bool = False  # G90.1: an arc's I, J, K are absolute (G91.1: from its start)
     retract: str = "G98"
     cycle_z: float = math.nan
     cycle_r: float = math.nan
@@ -468,6 +478,8 @@ class _Modal:
             self.scale = INCH_MM if g == "20" else 1.0
         elif g == "90" or g == "91":
             self.incremental = g == "91"
+        elif g == "90.1" or g == "91.1":
+            self.arc_absolute = g == "90.1"
         elif g in ("17", "18", "19"):
             self.plane = g
         elif g in ("98", "99"):
@@ -1029,7 +1041,7 @@ class _Reader:
         if state.motion in CYCLES:
             self._cycle(lineno, column, axis_words, words, block.exprs, why)
         else:
-            self._straight(lineno, column, axis_words, block.exprs, why, polar)
+            self._straight(lineno, column, axis_words, block, why, polar)
 
     def _tool(self, block: _Line, lineno: int) -> None:
         """The tool changes of a block, in LinuxCNC's order: T, M6/M61, then G43/G49."""
@@ -1105,8 +1117,8 @@ class _Reader:
                 state.setter[i] = index
         state.pos = end
 
-    def _straight(self, lineno, column, axis_words, exprs, why, polar) -> None:
-        s = self.state
+    def _straight(self, lineno, column, axis_words, block, why, polar) -> None:
+        s, exprs = self.state, block.exprs
         target = list(s.pos)
         for i, k in enumerate(AXES):
             word = axis_words.get(k)
@@ -1128,9 +1140,9 @@ class _Reader:
             reason = reason or "axis words with G80 (no motion mode)"
             target = [math.nan] * 3
         elif s.motion in ("2", "3"):
-            reason = reason or (
-                f"arc G{s.motion}: its end point and centre would have to move together"
-            )
+            arc, arc_why = arc_of(block, s.plane, s.arc_absolute, lineno, s.motion == "2")
+            reason = reason or arc_why
+            self.moves.arcs[len(self.moves)] = arc
         elif s.unknown_motion:
             target = [math.nan] * 3  # where an unknown motion ends is not known either
         self._add(move, reason or alone, target, written)
@@ -1156,12 +1168,16 @@ class _Reader:
         return (*polar_xy(s.pos, r, a, s.incremental), alone)
 
     def _cycle(self, lineno, column, axis_words, words, exprs, why) -> None:
-        """A canned-cycle block: its (first) hole. Under G91, X and Y are increments from where
-        the tool is (repeated L times), R from the current Z and Z from R (as LinuxCNC)."""
+        """A canned-cycle block: its (first) hole. The cycle's axis is Z in G17, Y in G18, X in
+        G19 (its word the depth, R a level on it), the hole's position the other two axes (as
+        LinuxCNC reads them). Under G91 those two are increments from where the tool is
+        (repeated L times), R from the initial level and the depth from R."""
         s = self.state
-        if "Z" in axis_words:
-            s.cycle_z = axis_words["Z"].value * s.scale
-        elif "Z" in exprs:
+        axis = CYCLE_AXIS[s.plane]
+        depth = AXES[axis]
+        if depth in axis_words:
+            s.cycle_z = axis_words[depth].value * s.scale
+        elif depth in exprs:
             s.cycle_z = math.nan
         move_words = dict(axis_words)
         if "R" in words:
@@ -1173,7 +1189,11 @@ class _Reader:
         reason = why or s.frame_reason()
         polar = not _POLAR_SET.isdisjoint(words) or not _POLAR_SET.isdisjoint(exprs)
         if polar:
-            if s.incremental:  # each hole turns about the origin from the one before
+            if axis != 2:
+                reason = reason or (
+                    f"polar words in a canned cycle in G{s.plane} (line {lineno}): not read"
+                )
+            elif s.incremental:  # each hole turns about the origin from the one before
                 reason = reason or (
                     f"G91 canned cycle with polar words (line {lineno}): its holes are read, not "
                     "corrected"
@@ -1197,9 +1217,11 @@ class _Reader:
                 reason = reason or f"canned cycle L{words['L'].literal}: not a repeat count"
         if "L" in exprs:
             reason = reason or f"canned cycle {exprs['L']}: the repeat count is not known"
-        step = [0.0, 0.0]  # X, Y increment of each repeat (G91)
-        first = list(s.pos[:2])
-        for i, k in enumerate("XY"):
+        step = [0.0, 0.0, 0.0]  # the increment of each repeat (G91), 0 on the cycle's axis
+        first = list(s.pos)
+        for i, k in enumerate(AXES):
+            if i == axis:
+                continue
             if k in axis_words:
                 value = axis_words[k].value * s.scale
                 step[i] = value if s.incremental else 0.0
@@ -1209,34 +1231,33 @@ class _Reader:
         if polar:  # each repeat under G91 turns and stretches about the origin again
             radius = words["@"].value * s.scale if "@" in words else None
             angle = words["^"].value if "^" in words else None
-            if _POLAR_SET.isdisjoint(exprs):
-                first = list(polar_xy(s.pos, radius, angle, s.incremental))
+            if _POLAR_SET.isdisjoint(exprs) and axis == 2:
+                first[:2] = polar_xy(s.pos, radius, angle, s.incremental)
             else:
-                first = [math.nan, math.nan]
+                first[0] = first[1] = math.nan
         first_of_run = s.cycle_il is None
         if first_of_run:
-            s.cycle_il = s.pos[2]
+            s.cycle_il = s.pos[axis]
         r_level = s.cycle_il + s.cycle_r if s.incremental else s.cycle_r
         bottom = r_level + s.cycle_z if s.incremental else s.cycle_z
-        target = (first[0], first[1], bottom)
-        if s.plane != "17":
-            reason = reason or f"canned cycle in plane G{s.plane} (only G17 is read)"
-        elif math.isnan(s.cycle_r) or math.isnan(s.cycle_z):
-            reason = reason or "canned cycle without an R plane or Z depth"
+        first[axis] = bottom
+        if math.isnan(s.cycle_r) or math.isnan(s.cycle_z):
+            reason = reason or f"canned cycle without an R plane or {depth} depth"
         clear = r_level if s.retract == "G99" else max(s.cycle_il, r_level)
-        last = [first[i] + (repeats - 1) * step[i] for i in range(2)]
-        if polar and s.incremental:
-            last = list(polar_xy(first, radius, angle, True, repeats - 1))
+        last = [first[i] + (repeats - 1) * step[i] for i in range(3)]
+        if polar and s.incremental and axis == 2:
+            last[:2] = polar_xy(first, radius, angle, True, repeats - 1)
         if "L" in exprs or ("L" in words and repeats == 1 and words["L"].value != 1):
             repeats = 0  # not known: under G91 neither is where its holes end
             if s.incremental:
-                last = [math.nan, math.nan]
+                last = [math.nan] * 3
+        last[axis] = clear
         if repeats != 1:
             self.moves.repeats[len(self.moves)] = repeats
-        move = (lineno, column, "G" + s.motion, target, move_words)
-        written = set(axis_words) | set(exprs) | ({"X", "Y", "Z"} if polar else {"Z"})
+        move = (lineno, column, "G" + s.motion, tuple(first), move_words)
+        written = set(axis_words) | set(exprs) | ({"X", "Y", depth} if polar else {depth})
         cycle = 2 if first_of_run else 1
-        self._add(move, reason, [last[0], last[1], clear], written, cycle=cycle, r_mm=r_level)
+        self._add(move, reason, last, written, cycle=cycle, r_mm=r_level)
 
 
 def polar_xy(

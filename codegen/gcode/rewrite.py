@@ -9,7 +9,8 @@ lands where it should, corrected or as programmed: a G91 cycle's X, Y from the t
 the initial level and its Z from R. A G91 cycle repeated L times has one increment for all its
 holes: corrected when their corrections agree within the written resolution, else it and the
 moves that set its start are not. A cycle line that writes no Z or R gets the words its hole
-needs. Arcs are not corrected, nor the moves that set an arc's start. A corrected word written
+needs. An arc moves rigidly with the moves that set its start (``codegen.gcode.arc_shift``);
+in G18/G19 a cycle's axis is Y/X instead of Z. A corrected word written
 as a parameter or an expression gets the corrected number in the expression's place (its value
 as read where it is kept); a polar move gets its corrected radius and angle (``_polar_edits``).
 With the cell's ``tool_data`` each move is corrected with the tool whose length offset is in
@@ -23,6 +24,7 @@ from array import array
 
 import numpy as np
 
+from accugrid.codegen.gcode.arc_shift import shift_arcs
 from accugrid.codegen.gcode.parse import RESETS, GcodeMoves, gcode_moves, modal_fill, polar_xy
 from accugrid.codegen.gcode.section import GcodeSection
 from accugrid.codegen.program_text import (
@@ -71,7 +73,6 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: GcodeSection
     rows.commanded[:] = ~moves.resets
     if "G80" in moves.motion:
         rows.commanded &= np.array([m != "G80" for m in moves.motion], bool)
-    _protect_arc_starts(moves, rows)
     _protect_polar_starts(moves, rows)
     if opts.tool_data is not None:
         _tools(moves, rows)
@@ -92,7 +93,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: GcodeSection
 def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[str, bytearray]:
     """The program's bytes with the corrected moves (``corrected`` (M, 3) mm robot frame, NaN
     rows: not corrected) written in the program frame: their repeated G91 cycles, R planes and
-    the increments after them made to agree."""
+    the increments after them made to agree, arcs shifted rigidly (``arc_shift``)."""
     path, text, moves, t = scan.state
     rows, at = scan.rows, scan.at
     desired = moves.target.copy()
@@ -102,8 +103,10 @@ def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[s
         rows.status[at[done]] = CORRECTED
         desired[at[done]] = desired[at][done] + back[done]
     _repeated_holes(moves, rows, desired, opts, t)
+    own = desired.copy()  # where each corrected move should land: its own correction
+    centre_edits = shift_arcs(moves, rows, desired, _places(moves, opts), opts, t)
     r_planes = _corrected_r_planes(moves, rows, opts, t)
-    return {path: _gcode_edits(text, moves, rows, desired, r_planes, opts)}
+    return {path: _gcode_edits(text, moves, rows, (desired, own), r_planes, opts, centre_edits)}
 
 
 def add_header(text: str, lines: list[str]) -> str:
@@ -120,26 +123,6 @@ def _tools(moves: GcodeMoves, rows: Rows) -> None:
                 rows.reason[i] = rows.reason[i] or f"tool unknown: {tool}"
         else:
             rows.tool[start:stop] = tool
-
-
-def _protect_arc_starts(moves: GcodeMoves, rows: Rows) -> None:
-    """An arc keeps its start point: the moves that set it are not corrected either."""
-    reasons = rows.reason
-    if "G2" not in moves.motion and "G3" not in moves.motion:
-        return
-    arcs = [i for i, m in enumerate(moves.motion) if m == "G2" or m == "G3"]
-    for i in arcs:
-        line = int(moves.line[i])
-        if moves.incremental[i]:
-            for j in range(i):
-                reasons[j] = reasons[j] or (
-                    f"precedes the incremental arc at line {line}, whose start must not move"
-                )
-            continue
-        why = f"sets the start of the arc at line {line}, which is not corrected"
-        for j in moves.setters[i].tolist():
-            if j >= 0 and not reasons[j]:
-                reasons[j] = why
 
 
 def _protect_polar_starts(moves: GcodeMoves, rows: Rows) -> None:
@@ -204,9 +187,10 @@ def _repeated_holes(
     for i in repeated:
         if rows.status[i] != CORRECTED:
             continue
-        step = np.nan_to_num(moves.word_value[i, :2]) * moves.scale[i]
+        step = np.nan_to_num(moves.word_value[i, :3]) * moves.scale[i]
+        step[moves.cycle_axis[i]] = 0.0  # the hole's position moves, not its depth
         k = np.arange(1, moves.repeats[i])[:, None]
-        holes = moves.target[i] + np.column_stack([k * step, np.zeros(len(k))])
+        holes = moves.target[i] + k * step
         robot = transform_points(t, holes)
         abc = np.array([moves.rotaries[moves.rotary_index[i]].get(k, math.nan) for k in "ABC"])
         rotations = np.repeat(rotations_of(t[:3, :3], abc[None]), len(holes), axis=0)
@@ -231,7 +215,8 @@ def _repeated_holes(
             f"sets the start of the G91 cycle at line {moves.line[i]}, repeated {count}, which is "
             "not corrected"
         )
-        for j in moves.setters[i, :2].tolist():
+        axes = [k for k in range(3) if k != moves.cycle_axis[i]]
+        for j in moves.setters[i, axes].tolist():
             if j >= 0 and rows.status[j] == CORRECTED:
                 rows.status[j] = SKIPPED
                 rows.reason[j] = why
@@ -244,27 +229,31 @@ def _corrected_r_planes(moves: GcodeMoves, rows: Rows, opts: Options, t: np.ndar
     """(N,) corrected R plane (mm) of each corrected cycle that writes R (program frame ``t``
     (4, 4) in the robot frame); NaN: keep R.
 
-    The R point is (X, Y, R) of the hole; only its Z correction can be written (in its R word,
-    or one added to its line)."""
+    The R point is the hole's with R on the cycle's axis (Z in G17: (X, Y, R)); only its
+    correction along that axis can be written (in its R word, or one added to its line)."""
     out = np.full(len(moves), np.nan)
     idx = np.flatnonzero(moves.is_cycle & ~np.isnan(moves.r_mm) & (rows.status == CORRECTED))
     if len(idx):
-        pts = np.column_stack([moves.target[idx, 0], moves.target[idx, 1], moves.r_mm[idx]])
+        pts = moves.target[idx].copy()
+        k, axis = np.arange(len(idx)), moves.cycle_axis[idx]
+        pts[k, axis] = moves.r_mm[idx]
         robot = transform_points(t, pts)
         corrected = correct_points(robot, rows, idx, opts, mark=False)
         back = rows_times(corrected - robot, t[:3, :3])
-        out[idx] = pts[:, 2] + back[:, 2]  # NaN where the R point is outside: R kept
+        out[idx] = pts[k, axis] + back[k, axis]  # NaN where the R point is outside: R kept
     return out
 
 
 class _Commanded:
     """The walk's state between moves: ``cmd`` where the rewritten program leaves the tool (mm,
-    NaN: unknown), the sticky cycle depth ``cycle_z`` and R plane ``r_cmd`` as written (mm), and
-    where each corrected move reaches (``reached_rows``, 3 per move, of the moves ``reached_at``).
+    NaN: unknown), the sticky cycle depth ``cycle_z`` and R plane ``r_cmd`` as written (mm),
+    where each corrected move reaches (``reached_rows``, 3 per move, of the moves ``reached_at``)
+    and the other edits of some moves (``extra``).
     """
 
-    def __init__(self, fill: np.ndarray) -> None:
+    def __init__(self, fill: np.ndarray, extra: dict) -> None:
         self.fill = fill  # (N,) cycles read without a reason: may get Z, R words added
+        self.extra = extra  # move -> its other edits [(start, end, new text)]
         self.cmd = [math.nan] * 3
         self.il = math.nan  # the initial level of the run of cycles (mm, as commanded)
         self.cycle_z = self.r_cmd = math.nan
@@ -276,29 +265,37 @@ def _gcode_edits(
     text: str,
     moves: GcodeMoves,
     rows: Rows,
-    desired: np.ndarray,
+    goals: tuple[np.ndarray, np.ndarray],
     r_planes: np.ndarray,
     opts: Options,
+    extra: dict[int, list[tuple[int, int, str]]],
 ) -> bytearray:
     """Walk the program with the commanded (rewritten) position; the new program's bytes.
 
-    ``desired`` (N, 3) mm: where each move should land (program frame); ``r_planes`` (N,) mm:
-    corrected R planes (NaN: keep). Stretches of absolute moves (none a G28/G30/G53) are done
-    in bulk (``_bulk_block``), the rest move by move (``_walk_block``), where increments (which
-    depend on what was written before) are formatted on the way."""
+    ``goals``: (desired, own) (N, 3) mm each: where each move's written axes should land and
+    where it should land by its own correction (program frame; they differ where an arc's shift
+    moves it), which the report's residual is measured from; ``r_planes`` (N,) mm: corrected R
+    planes (NaN: keep); ``extra``: other edits by move, (start, end, new text) each (an arc's
+    centre words). Stretches of absolute moves (none a G28/G30/G53, a G18/G19 cycle or one with
+    ``extra`` edits) are done in bulk (``_bulk_block``), the rest move by move (``_walk_block``),
+    where increments (which depend on what was written before) are formatted on the way."""
+    desired, own = goals
     out = ByteSplicer(text)
     places = _places(moves, opts)
     corrected = rows.status == CORRECTED
     read = np.fromiter(map(bool, moves.reason), bool, len(moves)) if any(moves.reason) else False
-    walk = _Commanded(moves.is_cycle & ~read)
+    walk = _Commanded(moves.is_cycle & ~read, extra)
+    walked = moves.incremental | moves.resets | (moves.cycle_axis != 2)  # G18/G19 cycles too
+    if extra:
+        walked[list(extra)] = True
     for first in range(0, len(moves), _BLOCK):
-        for part, step in _stretches(moves, slice(first, first + _BLOCK)):
+        for part, step in _stretches(moves, slice(first, first + _BLOCK), walked):
             out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
     if walk.reached_at:
         at = np.frombuffer(walk.reached_at, dtype=np.int64)
         reached = np.frombuffer(walk.reached_rows, dtype=float).reshape(-1, 3)
         off = np.abs(reached - desired[at])
-        residual = np.linalg.norm(off, axis=1)
+        residual = np.linalg.norm(reached - own[at], axis=1)
         wrote = moves.word_start[at, :3] >= 0
         if moves.polar:  # X and Y of a polar move are written (as @ and ^)
             wrote[:, :2] |= np.isin(at, np.fromiter(moves.polar, np.int64))[:, None]
@@ -313,11 +310,11 @@ def _gcode_edits(
 _MIN_BULK = 256  # moves: a shorter stretch of absolute moves is walked with its neighbours
 
 
-def _stretches(moves: GcodeMoves, block: slice):
+def _stretches(moves: GcodeMoves, block: slice, walked: np.ndarray):
     """(slice, step) of each stretch of the moves ``block``, in order: ``_bulk_block`` for runs
-    of at least ``_MIN_BULK`` absolute moves that do not reset the position, ``_walk_block`` for
-    the moves between them."""
-    walked = moves.incremental[block] | moves.resets[block]
+    of at least ``_MIN_BULK`` moves not ``walked`` (N,) (absolute moves that do not reset the
+    position, nor polar), ``_walk_block`` for the moves between them."""
+    walked = walked[block].copy()
     if moves.polar:  # polar moves are written from where the tool is
         polar = np.fromiter(moves.polar, np.int64, len(moves.polar))
         polar = polar[(polar >= block.start) & (polar < block.stop)] - block.start
@@ -358,6 +355,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         desired[block].tolist(),
         moves.r_mm[block].tolist(),
         moves.retract[block],
+        moves.cycle_axis[block].tolist(),
         strict=True,
     )
     cmd, cycle_z, r_cmd = walk.cmd, walk.cycle_z, walk.r_cmd
@@ -373,12 +371,15 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
         goals,
         r_mm,
         retract,
+        axis,
     ) in enumerate(columns):
         if motion in RESETS:
             cmd = [math.nan] * 3
             continue
+        if walk.extra and first + b in walk.extra:
+            edits.extend(walk.extra[first + b])
         if is_cycle and moves.first_cycle[first + b]:
-            walk.il = cmd[2]
+            walk.il = cmd[axis]
         if is_cycle and inc:
             r_goal = r_planes[first + b] if changed else math.nan
             reached, end, cycle_z, r_cmd = _incremental_cycle(
@@ -392,6 +393,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
                 (cycle_z, r_cmd, walk.il),
                 changed,
                 walk.fill[first + b],
+                axis,
             )
             if changed:
                 walk.reached_rows.extend(reached)
@@ -423,7 +425,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
                 edits.append((start, ends[i], new_text))
             # a word kept as written may be a parameter or an expression: its value as read
             written = (values[i] if new_text is old_text else float(new_text)) * scale
-            if is_cycle and i == 2:
+            if is_cycle and i == axis:
                 cycle_z = written
             elif incremental:
                 end[i] = cmd[i] + written
@@ -437,7 +439,7 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
             r_cmd = r_value * scale
         if first + b in moves.polar:
             _polar_edits(text, edits, moves, first + b, (cmd, end), goals, changed, places)
-        if walk.fill[first + b] and (starts[2] < 0 or starts[3] < 0):
+        if walk.fill[first + b] and (starts[axis] < 0 or starts[3] < 0):
             r_goal = r_planes[first + b] if changed else math.nan
             spans = (starts, ends)
             if first + b in moves.polar:  # added after the polar words too
@@ -447,19 +449,19 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
                 text,
                 edits,
                 spans,
-                (goals[2], r_mm if math.isnan(r_goal) else r_goal),
+                (goals[axis], r_mm if math.isnan(r_goal) else r_goal),
                 (cycle_z, r_cmd),
-                scale,
-                int(places[first + b]),
+                (scale, int(places[first + b]), axis),
             )
         if is_cycle:
-            reached = [end[0], end[1], cycle_z]
+            reached = list(end)
+            reached[axis] = cycle_z
             if inc or math.isnan(r_mm):
-                end = [end[0], end[1], math.nan]
+                end[axis] = math.nan
             elif retract == "G99":
-                end = [end[0], end[1], r_cmd]
+                end[axis] = r_cmd
             else:
-                end = [end[0], end[1], max(walk.il, r_cmd)]
+                end[axis] = max(walk.il, r_cmd)
         else:
             reached = end
         if changed:
@@ -475,22 +477,24 @@ def _walk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     return starts, ends, np.frombuffer("".join(texts).encode("ascii"), np.uint8), lengths
 
 
-def _added_words(text, edits, spans, goals, sticky, scale, places):
-    """The Z and R words a cycle's line needs but does not write: where the hole bottom and R
-    plane it should reach (``goals``, absolute mm) differ from the depth and R plane in effect
-    (``sticky``, mm, as written), `` Z..``/`` R..`` are added after its last position word (in
-    the case of its letters). ``spans``: the line's (starts, ends) of X, Y, Z, R (and of its
-    polar words after them). Adds the edit
-    to ``edits``; the depth and R plane now in effect (mm)."""
+def _added_words(text, edits, spans, goals, sticky, how):
+    """The depth and R words a cycle's line needs but does not write: where the hole bottom and
+    R plane it should reach (``goals``, absolute mm) differ from the depth and R plane in effect
+    (``sticky``, mm, as written), `` Z..``/`` R..`` (the depth's letter: the cycle's axis) are
+    added after its last position word (in the case of its letters). ``spans``: the line's
+    (starts, ends) of X, Y, Z, R (and of its polar words after them); ``how``: (mm per unit,
+    decimals, the cycle's axis). Adds the edit to ``edits``; the depth and R plane now in effect
+    (mm)."""
     starts, ends = spans
+    scale, places, axis = how
     sticky, added = list(sticky), []
-    for k, letter in ((2, "Z"), (3, "R")):
-        if starts[k] >= 0 or math.isnan(goals[k - 2]):
+    for n, (k, letter) in enumerate(((axis, "XYZ"[axis]), (3, "R"))):
+        if starts[k] >= 0 or math.isnan(goals[n]):
             continue
-        new_text = fixed(goals[k - 2] / scale, places)
-        if float(new_text) * scale != sticky[k - 2]:
+        new_text = fixed(goals[n] / scale, places)
+        if float(new_text) * scale != sticky[n]:
             added.append(letter + new_text)
-            sticky[k - 2] = float(new_text) * scale
+            sticky[n] = float(new_text) * scale
     if added:  # one edit: " Z.. R.." after the line's last position word
         words = " " + " ".join(added)
         lower = _lower_case(text, np.asarray(starts))
@@ -498,11 +502,12 @@ def _added_words(text, edits, spans, goals, sticky, scale, places):
     return sticky[0], sticky[1]
 
 
-def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, changed, fill):
+def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, changed, fill, axis):
     """One G91 canned-cycle block, written so that its first hole reaches ``goal`` and its R
     plane ``r_goal`` (absolute mm, program frame) from where the rewritten program leaves the
-    tool (``cmd``): X, Y as increments from ``cmd``, R from the initial level, Z from R (as
-    LinuxCNC reads them). ``words``: the block's (starts, ends, values) of X, Y, Z, R; ``how``:
+    tool (``cmd``): the hole's position (X, Y in G17) as increments from ``cmd``, R from the
+    initial level, the depth (Z in G17; on the cycle's ``axis``) from R (as LinuxCNC reads
+    them). ``words``: the block's (starts, ends, values) of X, Y, Z, R; ``how``:
     (mm per unit, decimals, retract, L repeats); ``sticky``: the Z and R words in effect (mm, as
     written) and the initial level (mm).
     A repeated block not ``changed`` (corrected) keeps its X, Y step as written; with ``fill``
@@ -537,22 +542,25 @@ def _incremental_cycle(text, edits, cmd, words, goal, r_goal, how, sticky, chang
         return float(new_text) * scale
 
     step = [
-        (values[i] * scale if fixed_step else write(i, cmd[i], goal[i])) if starts[i] >= 0 else 0.0
-        for i in range(2)
+        (values[i] * scale if fixed_step else write(i, cmd[i], goal[i]))
+        if starts[i] >= 0 and i != axis
+        else 0.0
+        for i in range(3)
     ]
     if starts[3] >= 0:
         r_cmd = write(3, il, r_goal)
     else:
         r_cmd = add("R", il, r_goal, r_cmd)
     level = il + r_cmd  # the R plane reached
-    if starts[2] >= 0:
-        cycle_z = write(2, level, goal[2])
+    if starts[axis] >= 0:
+        cycle_z = write(axis, level, goal[axis])
     else:
-        cycle_z = add("Z", level, goal[2], cycle_z)
-    hole = [cmd[0] + step[0], cmd[1] + step[1], level + cycle_z]
-    clear = level if retract == "G99" else max(il, level)
+        cycle_z = add("XYZ"[axis], level, goal[axis], cycle_z)
+    hole = [cmd[i] + step[i] for i in range(3)]
+    hole[axis] = level + cycle_z
     times = repeats if repeats else math.nan  # 0: not known
-    end = [cmd[0] + times * step[0], cmd[1] + times * step[1], clear]
+    end = [cmd[i] + times * step[i] for i in range(3)]
+    end[axis] = level if retract == "G99" else max(il, level)
     return hole, end, cycle_z, r_cmd
 
 
