@@ -128,14 +128,21 @@ def _scan(text: str):
     except InputError as exc:
         return str(exc)
     t, u = scan.table, scan.use_table
-    arrays = (t.line, t.column, t.kind, t.agg, t.base, t.span, t.places, u.line, u.column, u.base)
+    arrays = (t.line, t.column, t.kind, t.agg, t.span, t.places, u.line, u.column)
+
+    def bases(index: np.ndarray) -> list:
+        """Each row's base (None: none); ``scan.bases`` is the lookup table the rows index,
+        which may hold a base no row uses."""
+        return [scan.bases[i] if i >= 0 else None for i in index.tolist()]
+
     return (
         [a.tolist() for a in arrays],
         np.nan_to_num(t.xyz, nan=1e300).tolist(),
         np.nan_to_num(t.abc, nan=1e300).tolist(),
         np.signbit(t.xyz).tolist(),
         (t.type, t.name, t.reason, t.external, u.motion, u.name, u.text, u.reason),
-        (scan.declared, scan.bases, scan.fdats, scan.frame_uses, scan.assigned),
+        (bases(t.base), bases(u.base)),
+        (scan.declared, scan.fdats, scan.frame_uses, scan.assigned),
     )
 
 
