@@ -72,6 +72,7 @@ class Options:
     allow_partial: bool = False  # write although the policy leaves positions uncorrected
     base_override: int | None = None
     tool_number: int | None = None  # the cell's TOOL_DATA number (the TCP the grid holds for)
+    flange_T_tool: np.ndarray | None = None  # the cell's tool (None: not given, not checked)
     tool_data: dict[int, np.ndarray] | None = None  # tool number -> flange_T_tool (the cell's
     # tool_data with its tool; None: the cell's tool alone, every position corrected with it)
     tool_names: dict[str, int] | None = None  # RAPID tooldata name (lower case) -> tool number

@@ -23,8 +23,10 @@ inline-form FOLD lines are comments). It finds:
   arithmetic ``:``, a variable, ``EK(...)``, the start of a routine (inherited from the caller),
   a call that may change it, a jump target, a branch or loop that changes it.
 - tool context, followed with the base (``BaseRef.tool``): ``$TOOL = TOOL_DATA[n]``,
-  ``$TOOL = $NULLFRAME`` (tool 0, the flange), ``BAS(#TOOL, n)``, an FDAT's ``TOOL_NO``; any other
-  ``$TOOL`` value, and a branch or loop that changes it, leaves the tool unknown with the reason.
+  ``$TOOL = $NULLFRAME`` (tool 0, the flange), ``BAS(#TOOL, n)``, an FDAT's ``TOOL_NO``,
+  ``$TOOL = {FRAME: X .., C ..}`` (a ``ToolFrame``, matched against the cell's tools when the
+  files are resolved); any other ``$TOOL`` value, and a branch or loop that changes it, leaves
+  the tool unknown with the reason.
 
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
 Every pattern is linear in its input (see the note above ``NUMBER``).
@@ -82,6 +84,7 @@ __all__ = [
     "Number",
     "RELATIVE",
     "Relative",
+    "ToolFrame",
     "code_part",
     "match_brace",
     "normalize_name",
@@ -189,6 +192,15 @@ class Number(NamedTuple):
         return -1 if self.literal[:1] == "'" else decimals_of(self.literal)
 
 
+class ToolFrame(NamedTuple):
+    """A tool set as a literal frame (``$TOOL = {FRAME: X -30, ...}``): its X, Y, Z mm and A, B,
+    C deg as written, half a unit of each one's last written decimal (the same order), the line."""
+
+    xyzabc: tuple[float, ...]
+    half_units: tuple[float, ...]
+    line: int
+
+
 _new_number = tuple.__new__  # a Number without the NamedTuple constructor's Python frame
 
 
@@ -198,8 +210,9 @@ class BaseRef:
 
     kind: "number" (BASE_DATA[number]), "literal" (xyzabc given in the program), "fdat" (the
     BASE_NO of FDAT ``fdat``, resolved once every file is read), "unknown" (``reason`` says why).
-    tool: the TOOL_DATA number set with it (0: $NULLFRAME, the flange), a str: why the tool is
-    not known, None: not set (an FDAT's TOOL_NO for kind "fdat", else the cell's tool).
+    tool: the TOOL_DATA number set with it (0: $NULLFRAME, the flange), a ``ToolFrame`` (a
+    literal frame), a str: why the tool is not known, None: not set (an FDAT's TOOL_NO for kind
+    "fdat", else the cell's tool).
     """
 
     kind: str
@@ -209,7 +222,7 @@ class BaseRef:
     fdat: str | None = None
     reason: str = ""
     label: str | None = None  # set when the state was carried across a jump target
-    tool: int | str | None = None
+    tool: int | ToolFrame | str | None = None
     tool_label: str | None = None  # the jump target the tool was carried across (``label``)
     # the state whose base this one keeps, only its tool changed (None: its own base)
     origin: BaseRef | None = field(default=None, compare=False, repr=False)
@@ -805,8 +818,8 @@ class _Flow:
         """After line ``line`` the robot's position does not follow from the motions before."""
         self.moved = (line, why)
 
-    def set_tool(self, tool: int | str, line: int) -> None:
-        """``$TOOL`` set at ``line``: TOOL_DATA number, or why it is not known."""
+    def set_tool(self, tool: int | ToolFrame | str, line: int) -> None:
+        """``$TOOL`` set at ``line``: TOOL_DATA number, literal frame, or why it is not known."""
         self.state = replace(
             _tool_changed(self.state, f"{tool} (line {line})" if isinstance(tool, str) else tool),
             tool_label=None,
@@ -1598,7 +1611,7 @@ def _assignment(
         flow.set(_base_value(code, value_at, off, lineno, scan))
         return
     if target == "$TOOL":
-        flow.set_tool(_tool_value(value, member), lineno)
+        flow.set_tool(_tool_value(code, value_at, off, lineno, scan, member), lineno)
         return
     if target == "$BASE" or (target == "FDAT_ACT" and member):
         flow.set(BaseRef("unknown", lineno, reason=f"{code.strip()}: changes part of the base"))
@@ -1682,11 +1695,24 @@ def _base_value(code: str, at: int, off: int, lineno: int, scan: KrlScan) -> Bas
     return BaseRef("unknown", lineno, reason=f"$BASE = {value}: set from a variable")
 
 
-def _tool_value(value: str, member: str) -> int | str:
-    """The tool ``$TOOL[.member] = value`` sets: a TOOL_DATA number (0: $NULLFRAME), or why
-    it is not known."""
+def _tool_value(
+    code: str, at: int, off: int, lineno: int, scan: KrlScan, member: str
+) -> int | ToolFrame | str:
+    """The tool ``$TOOL[.member] = value`` (the value at ``code[at:]``) sets: a TOOL_DATA number
+    (0: $NULLFRAME), a literal frame, or why it is not known."""
+    value = code[at:].strip()
     if member:
         return f"$TOOL{member} = {value}: changes part of the tool"
+    if value.startswith("{"):
+        end = match_brace(code, at, scan.path, lineno)
+        if code[end:].strip():
+            return f"$TOOL = {value[:40]}: frame arithmetic"
+        _, numbers, reason, _ = parse_aggregate(code, at, off, scan.path, lineno)
+        if reason or not all(k in numbers for k in "XYZABC"):
+            return "$TOOL literal without all of X,Y,Z,A,B,C"
+        written = [numbers[k] for k in "XYZABC"]
+        half = tuple(0.5 * 10.0 ** -max(n.decimals, 0) for n in written)
+        return ToolFrame(tuple(n.value for n in written), half, lineno)
     if value.upper() == "$NULLFRAME":
         return 0
     n = _TOOL_DATA_RE.match(value)

@@ -1,0 +1,109 @@
+"""Positions a program commands with a tool the rewrite cannot prove to be the one it corrects
+for are reported, never corrected with the cell's tool: a ``$TOOL`` literal frame, another
+TOOL_DATA number, ``BAS(#TOOL, n)``, an FDAT's TOOL_NO (KRL), ``T n M6 G43`` (G-code), a move's
+tooldata (RAPID).
+
+Expected statuses follow from the programs as written: the cell's tool is TOOL_DATA[1], X 0,
+Y 0, Z 250 mm, A 0, B 0, C 0; with the constant grid a corrected position moves by E_CONST."""
+
+from __future__ import annotations
+
+import numpy as np
+from rewrite_helpers import E_CONST, write_cell
+from test_several_tools import TOOL_DATA, _new, _old, _rewrite
+
+# line: the tool each LIN is commanded with, as the program selects it
+KRL = """DEF T()
+LIN {X 1500,Y 0,Z 1500,A 0,B 90,C 0}
+$TOOL={FRAME: X -30.000,Y 0.000,Z 40.000,A 0.000,B -60.000,C 0.000}
+LIN {X 1500,Y 100,Z 1500,A 0,B 90,C 0}
+$TOOL={X 0.0,Y 0.0,Z 250.0,A 0.0,B 0.0,C 0.0}
+LIN {X 1500,Y 200,Z 1500,A 0,B 90,C 0}
+$TOOL={X 0.5,Y 0,Z 250,A 0,B 0,C 0}
+LIN {X 1500,Y 300,Z 1500,A 0,B 90,C 0}
+$TOOL=TOOL_DATA[2]
+LIN {X 1500,Y 400,Z 1500,A 0,B 90,C 0}
+$TOOL=TOOL_DATA[1]
+LIN {X 1500,Y 500,Z 1500,A 0,B 90,C 0}
+BAS(#TOOL,3)
+LIN {X 1500,Y 600,Z 1500,A 0,B 90,C 0}
+$TOOL=$NULLFRAME
+LIN {X 1500,Y 700,Z 1500,A 0,B 90,C 0}
+FDAT_ACT={TOOL_NO 2,BASE_NO 1,IPO_FRAME #BASE}
+LIN {X 1500,Y 800,Z 1500,A 0,B 90,C 0}
+FDAT_ACT={TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE}
+LIN {X 1500,Y 900,Z 1500,A 0,B 90,C 0}
+END
+"""
+CELL_TOOL = (2, 6, 12, 20)  # no tool set yet, X 0 Y 0 Z 250 (its decimals), TOOL_DATA[1], TOOL_NO 1
+
+
+def _corrected(row: dict) -> None:
+    assert row["status"] == "corrected", row
+    np.testing.assert_allclose(_new(row) - _old(row), E_CONST, atol=1e-9)
+
+
+def test_krl_without_tool_data_reports_every_other_tool(tmp_path):
+    cell = write_cell(tmp_path, field="constant")
+    rows = _rewrite(tmp_path, cell, {"t.src": KRL}, "--base", "1", "--decimals", "4")
+    for line in CELL_TOOL:
+        _corrected(rows[line])
+    unproven = {
+        4: "tool unknown: $TOOL set to a literal frame (line 3) that is not the cell's tool",
+        8: "tool unknown: $TOOL set to a literal frame (line 7) that is not the cell's tool",
+        10: "tool 2 is not the cell's tool 1",
+        14: "tool 3 is not the cell's tool 1",
+        16: "tool 0 is not the cell's tool 1",
+        18: "tool 2 is not the cell's tool 1",
+    }
+    for line, reason in unproven.items():
+        assert rows[line]["status"] == "skipped", rows[line]
+        assert rows[line]["reason"].startswith(reason), rows[line]
+    text = (tmp_path / "out.src").read_text()
+    for line in unproven:  # as written
+        assert KRL.splitlines()[line - 1] in text.splitlines()
+
+
+def test_krl_tool_literal_within_its_written_decimals(tmp_path):
+    """The cell's tool 0.0004 mm off X 0: ``X 0`` (half a unit: 0.5 mm) is that tool,
+    ``X 0.000`` (0.0005 mm) is, ``X 0.0000`` (0.00005 mm) is not."""
+    cell = write_cell(tmp_path, field="constant")
+    cell.write_text(
+        cell.read_text().replace("tool: {number: 1, x: 0,", "tool: {number: 1, x: 0.0004,")
+    )
+    program = (
+        "DEF T()\n"
+        + "".join(
+            f"$TOOL={{X {x},Y 0,Z 250,A 0,B 0,C 0}}\nLIN {{X 1500,Y {k},Z 1500,A 0,B 90,C 0}}\n"
+            for k, x in enumerate(("0", "0.000", "0.0000"))
+        )
+        + "END\n"
+    )
+    rows = _rewrite(tmp_path, cell, {"t.src": program}, "--base", "1", "--decimals", "4")
+    _corrected(rows[3])
+    _corrected(rows[5])
+    assert rows[7]["status"] == "skipped"
+    assert rows[7]["reason"].startswith("tool unknown: $TOOL set to a literal frame (line 6)")
+
+
+def test_krl_tool_literal_selects_the_declared_tool(tmp_path):
+    """With ``tool_data`` a literal frame equal to a declared tool is that tool: 2 (0.5 mm from
+    the cell's, corrected by the grid), 3 (150 mm further out, refused by the grid); a frame
+    that is none of them is reported."""
+    cell = write_cell(tmp_path, field="constant")
+    cell.write_text(cell.read_text() + TOOL_DATA)
+    program = """DEF T()
+$TOOL={FRAME: X 0.5,Y 0,Z 250,A 0,B 0,C 0}
+LIN {X 1500,Y 0,Z 1500,A 0,B 90,C 0}
+$TOOL={X 0,Y 0,Z 400,A 0,B 0,C 10}
+LIN {X 1500,Y 100,Z 1500,A 0,B 90,C 0}
+$TOOL={X -30,Y 0,Z 40,A 0,B -60,C 0}
+LIN {X 1500,Y 200,Z 1500,A 0,B 90,C 0}
+END
+"""
+    rows = _rewrite(tmp_path, cell, {"t.src": program}, "--base", "1", "--decimals", "4")
+    _corrected(rows[3])
+    assert "tool 3: its TCP is 150.000 mm from" in rows[5]["reason"]
+    assert rows[7]["reason"].startswith(
+        "tool unknown: $TOOL set to a literal frame (line 6) that is not any tool of the cell"
+    )
