@@ -89,6 +89,16 @@ class Options:
         if self.policy is None:
             self.policy = Policy(self.correction, self.model)
 
+    def other_tool(self, tool: int) -> str:
+        """Without ``tool_data``: why the positions a program commands with tool number ``tool``
+        (-1: none selected, the cell's) are not corrected, "" when it is the cell's tool."""
+        if tool < 0 or self.tool_number is None or tool == self.tool_number:
+            return ""
+        return (
+            f"tool {tool} is not the cell's tool {self.tool_number}, which the grid holds for "
+            "(declare it in the cell file's tool_data)"
+        )
+
     @property
     def calibrated(self) -> Robot | None:
         """The calibrated model the policy uses, None for the grid alone."""

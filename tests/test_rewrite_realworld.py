@@ -41,7 +41,7 @@ AT_LEAST = {
     "lagun_parameters": 0,
     "my100_inch": 91,
     "drill_practice": 4,
-    "vertical_slot": 4,
+    "vertical_slot": 0,  # T5 M06 G43: every move is tool 5's tip, not the cell's tool 1
 }
 # (inputs, extra options, how many positions must be corrected at least)
 CASES = {case: (*REALWORLD_REWRITES[case], AT_LEAST[case]) for case in REALWORLD_REWRITES}

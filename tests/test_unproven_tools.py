@@ -9,7 +9,7 @@ Y 0, Z 250 mm, A 0, B 0, C 0; with the constant grid a corrected position moves 
 from __future__ import annotations
 
 import numpy as np
-from rewrite_helpers import E_CONST, write_cell
+from rewrite_helpers import E_CONST, write_cell, write_rapid_cell
 from test_several_tools import TOOL_DATA, _new, _old, _rewrite
 
 # line: the tool each LIN is commanded with, as the program selects it
@@ -107,3 +107,51 @@ END
     assert rows[7]["reason"].startswith(
         "tool unknown: $TOOL set to a literal frame (line 6) that is not any tool of the cell"
     )
+
+
+# line: the tool whose length offset is in effect (LinuxCNC: T selects, M6 loads, G43 applies)
+GCODE = """G21 G90 G17
+G0 X1500 Y0 Z1500
+T2 M6 G43
+G0 X1500 Y100 Z1500
+G49
+G0 X1500 Y200 Z1500
+T1 M6 G43 H1
+G0 X1500 Y300 Z1500
+G43.1 Z10
+G0 X1500 Y400 Z1500
+M2
+"""
+
+
+def test_gcode_without_tool_data_reports_another_tools_offset(tmp_path):
+    """Lines 2 (no offset), 6 (G49) and 8 (tool 1's) are the cell's tool; line 4 moves tool 2's
+    tip, line 10 a length offset given in words."""
+    cell = write_cell(tmp_path, field="constant")
+    rows = _rewrite(tmp_path, cell, {"t.ngc": GCODE}, "--decimals", "4")
+    for line in (2, 6, 8):
+        _corrected(rows[line])
+    assert rows[4]["status"] == "skipped"
+    assert rows[4]["reason"].startswith("tool 2 is not the cell's tool 1")
+    assert rows[10]["status"] == "skipped"
+    assert rows[10]["reason"].startswith("tool unknown: G43.1 at line 9")
+    lines = (tmp_path / "out.ngc").read_text().splitlines()
+    assert lines[3] == "G0 X1500 Y100 Z1500" and lines[9] == "G0 X1500 Y400 Z1500"
+
+
+def test_rapid_without_tool_data_reports_another_tooldata(tmp_path):
+    """A move with the cell's tooldata (rapid.tool tDrill) is corrected, one with another
+    tooldata is reported and written as given."""
+    cell = write_rapid_cell(tmp_path, "tDrill", "wobjPanel")
+    target = "[[{y},50,30],[0.5,0,0.866025404,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+    module = (
+        "MODULE T\n  PROC main()\n"
+        f"    MoveL {target.format(y=100)}, v10, fine, tDrill\\WObj:=wobjPanel;\n"
+        f"    MoveL {target.format(y=120)}, v10, fine, tOther\\WObj:=wobjPanel;\n"
+        "  ENDPROC\nENDMODULE\n"
+    )
+    rows = _rewrite(tmp_path, cell, {"t.mod": module}, "--decimals", "4")
+    assert rows[3]["status"] == "corrected"
+    assert rows[4]["status"] == "skipped"
+    assert rows[4]["reason"].startswith("moved with tool tOther at line 4, not the cell's")
+    assert "MoveL [[120,50,30]," in (tmp_path / "out.mod").read_text()

@@ -363,12 +363,7 @@ class _Context:
                 )
             tool = number
         if tools is None:
-            if cell is None or tool == cell:
-                return -1, ""
-            return -1, (
-                f"tool {tool} is not the cell's tool {cell}, which the grid holds for "
-                "(declare it in the cell file's tool_data)"
-            )
+            return -1, self.opts.other_tool(tool)
         if tool in self.tool_conflicts:
             return -1, f"tool unknown: {self.tool_conflicts[tool]}"
         return tool, ""
