@@ -1246,6 +1246,13 @@ class _Reader:
                 reason = reason or f"canned cycle L{words['L'].literal}: not a repeat count"
         if "L" in exprs:
             reason = reason or f"canned cycle {exprs['L']}: the repeat count is not known"
+        repeat_k = s.motion != "87" and ("K" in words or "K" in exprs)
+        if repeat_k:  # Fanuc-like controls repeat the cycle K times; RS274NGC rejects K here
+            reason = reason or (
+                f"canned cycle G{s.motion} with a K word (line {lineno}): K is no word of "
+                "this cycle in RS274NGC and a repeat count on Fanuc-like controls, so its holes "
+                "are not known"
+            )
         step = [0.0, 0.0]  # X, Y increment of each repeat (G91)
         first = list(s.pos[:2])
         for i, k in enumerate("XY"):
@@ -1276,7 +1283,7 @@ class _Reader:
         last = [first[i] + (repeats - 1) * step[i] for i in range(2)]
         if polar and s.incremental:
             last = list(polar_xy(first, radius, angle, True, repeats - 1))
-        if "L" in exprs or ("L" in words and repeats == 1 and words["L"].value != 1):
+        if repeat_k or "L" in exprs or ("L" in words and repeats == 1 and words["L"].value != 1):
             repeats = 0  # not known: under G91 neither is where its holes end
             if s.incremental:
                 last = [math.nan, math.nan]
