@@ -155,3 +155,28 @@ def test_rapid_without_tool_data_reports_another_tooldata(tmp_path):
     assert rows[4]["status"] == "skipped"
     assert rows[4]["reason"].startswith("moved with tool tOther at line 4, not the cell's")
     assert "MoveL [[120,50,30]," in (tmp_path / "out.mod").read_text()
+
+
+def test_krl_fdat_tool_not_a_number_is_reported(tmp_path):
+    """An FDAT whose TOOL_NO is a variable selects a tool not known before run time, with or
+    without tool_data; its base alone does not place the position."""
+    program = """DEF T()
+DECL FDAT F1={TOOL_NO nTool,BASE_NO 1,IPO_FRAME #BASE}
+FDAT_ACT=F1
+LIN {X 1500,Y 0,Z 1500,A 0,B 90,C 0}
+FDAT_ACT={TOOL_NO nTool,BASE_NO 1,IPO_FRAME #BASE}
+LIN {X 1500,Y 100,Z 1500,A 0,B 90,C 0}
+FDAT_ACT={TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE}
+LIN {X 1500,Y 200,Z 1500,A 0,B 90,C 0}
+END
+"""
+    for declared in (False, True):
+        folder = tmp_path / str(declared)
+        folder.mkdir()
+        cell = write_cell(folder, field="constant")
+        if declared:
+            cell.write_text(cell.read_text() + TOOL_DATA)
+        rows = _rewrite(folder, cell, {"t.src": program}, "--base", "1", "--decimals", "4")
+        assert rows[4]["reason"] == "tool unknown: FDAT TOOL_NO nTool (line 2): not a number"
+        assert rows[6]["reason"] == "tool unknown: FDAT TOOL_NO nTool (line 5): not a number"
+        _corrected(rows[8])

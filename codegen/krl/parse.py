@@ -294,10 +294,10 @@ class KrlUse:
 class Fdat(NamedTuple):
     """An FDAT (``DECL FDAT FP1={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE}``) as far as it places a
     position: the base (None with ``reason`` when it is not a BASE_DATA number, e.g. an external
-    TCP) and the tool (None when not given or not a number)."""
+    TCP) and the tool (None when not given, a str: why it is not known)."""
 
     base_no: int | None
-    tool_no: int | None
+    tool_no: int | str | None
     line: int
     reason: str = ""
 
@@ -1475,7 +1475,11 @@ def _fdat_values(code: str, at: int, path: str | None, lineno: int) -> Fdat:
         if len(parts) == 2:
             fields[parts[0].upper().rstrip(":")] = parts[1].strip()
     tool = fields.get("TOOL_NO", "")
-    tool_no = int(tool) if tool.isascii() and tool.isdigit() and len(tool) <= 3 else None
+    tool_no: int | str | None = None
+    if tool.isascii() and tool.isdigit() and len(tool) <= 3:
+        tool_no = int(tool)
+    elif tool:
+        tool_no = f"FDAT TOOL_NO {tool[:40]} (line {lineno}): not a number"
     ipo = fields.get("IPO_FRAME", "#BASE").replace(" ", "").upper()
     if ipo != "#BASE":
         return Fdat(

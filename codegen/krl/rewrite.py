@@ -394,7 +394,7 @@ class _Context:
         tool = self.opts.tool_number  # with the cell's tool_data, each FDAT's own tool
         if self.opts.tool_data is not None:
             return ""
-        if tool is not None and fdat.tool_no is not None and fdat.tool_no != tool:
+        if tool is not None and isinstance(fdat.tool_no, int) and fdat.tool_no != tool:
             return (
                 f"FDAT {name} (line {fdat.line}) has TOOL_NO {fdat.tool_no}: the cell's tool, "
                 f"which the grid holds for, is {tool}"
