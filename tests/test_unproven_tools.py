@@ -180,3 +180,40 @@ END
         assert rows[4]["reason"] == "tool unknown: FDAT TOOL_NO nTool (line 2): not a number"
         assert rows[6]["reason"] == "tool unknown: FDAT TOOL_NO nTool (line 5): not a number"
         _corrected(rows[8])
+
+
+WITH_TOOL = """DEF T()
+DECL FDAT F3={TOOL_NO 3,BASE_NO 1,IPO_FRAME #BASE}
+LIN {X 1500,Y 0,Z 1500,A 0,B 90,C 0} WITH $TOOL = TOOL_DATA[2]
+SPLINE WITH $TOOL = TOOL_DATA[2]
+SLIN {X 1500,Y 100,Z 1500,A 0,B 90,C 0}
+ENDSPLINE
+SLIN {X 1500,Y 200,Z 1500,A 0,B 90,C 0} WITH $TOOL = STOOL2(F3), $BASE = SBASE(F3.BASE_NO)
+SLIN {X 1500,Y 300,Z 1500,A 0,B 90,C 0} WITH $TOOL = tVar
+LIN {X 1500,Y 400,Z 1500,A 0,B 90,C 0}
+END
+"""
+
+
+def test_krl_motion_with_its_own_tool(tmp_path):
+    """A motion's (a spline block's) ``WITH $TOOL = ...`` is its tool, for it alone: tool 2 on
+    lines 3 and 5, FDAT F3's tool 3 on line 7, a variable on line 8; line 9 is the cell's
+    tool again. Without tool_data only line 9 is corrected; with it tool 2 (0.5 mm from the
+    cell's) is corrected too, tool 3 (150 mm further out) is refused by the grid."""
+    plain = tmp_path / "plain"
+    plain.mkdir()
+    cell = write_cell(plain, field="constant")
+    rows = _rewrite(plain, cell, {"t.src": WITH_TOOL}, "--base", "1", "--decimals", "4")
+    for line in (3, 5):
+        assert rows[line]["reason"].startswith("tool 2 is not the cell's tool 1"), rows[line]
+    assert rows[7]["reason"].startswith("FDAT F3 (line 2) has TOOL_NO 3")
+    unknown = "tool unknown: WITH $TOOL = tVar (line 8): not a TOOL_DATA number"
+    assert rows[8]["reason"] == unknown
+    _corrected(rows[9])
+    cell = write_cell(tmp_path, field="constant")
+    cell.write_text(cell.read_text() + TOOL_DATA)
+    rows = _rewrite(tmp_path, cell, {"t.src": WITH_TOOL}, "--base", "1", "--decimals", "4")
+    for line in (3, 5, 9):
+        _corrected(rows[line])
+    assert "tool 3: its TCP is 150.000 mm from" in rows[7]["reason"]
+    assert rows[8]["reason"] == unknown

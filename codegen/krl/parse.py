@@ -25,7 +25,8 @@ inline-form FOLD lines are comments). It finds:
 - tool context, followed with the base (``BaseRef.tool``): ``$TOOL = TOOL_DATA[n]``,
   ``$TOOL = $NULLFRAME`` (tool 0, the flange), ``BAS(#TOOL, n)``, an FDAT's ``TOOL_NO``,
   ``$TOOL = {FRAME: X .., C ..}`` (a ``ToolFrame``, matched against the cell's tools when the
-  files are resolved); any other ``$TOOL`` value, and a branch or loop that changes it, leaves
+  files are resolved), a motion's or spline block's own ``WITH $TOOL = ...``; any other
+  ``$TOOL`` value, and a branch or loop that changes it, leaves
   the tool unknown with the reason.
 
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
@@ -1367,6 +1368,9 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
         return
     if word in ("SPLINE", "PTP_SPLINE"):
         flow.open_spline(_spline_base(code, word, lineno))
+        own = _with_tool_value(code, lineno, flow.state) if "$" in code else None
+        if own is not None:  # the block's segments move that tool (until ENDSPLINE)
+            flow.state = _tool_changed(flow.state, own)
         return
     if word == "ENDSPLINE":
         flow.close_spline()
@@ -1758,6 +1762,35 @@ def _with_base(code: str, lineno: int) -> BaseRef | None:
     return BaseRef("unknown", lineno, reason=f"WITH $BASE = {value}: not a BASE_DATA number")
 
 
+_TOOL_SET_RE = re.compile(r"\$TOOL\s*+=\s*+", re.I)
+_STOOL_RE = re.compile(r"STOOL2\s*+\(\s*+([A-Za-z_]\w*+)\s*+\)$", re.I)
+_APPROX_TAIL_RE = re.compile(r"\s++C_\w++$", re.I)
+
+
+def _with_tool_value(code: str, lineno: int, base: BaseRef) -> int | str | None:
+    """The tool a motion (a spline block) sets for itself with ``WITH $TOOL = ...``, ``base``
+    the base it moves in: a TOOL_DATA number (0: $NULLFRAME); None when the WITH part does not
+    set it, or sets ``STOOL2(F)`` of the FDAT F whose base it takes (F's TOOL_NO); else why it
+    is not known."""
+    with_m = _WITH_RE.search(code)
+    tool_m = _TOOL_SET_RE.search(code, with_m.end()) if with_m else None
+    if tool_m is None:
+        return None
+    stop = _NEXT_SYSVAR_RE.search(code, tool_m.end())
+    value = code[tool_m.end() : stop.start() if stop else len(code)].strip()
+    value = _APPROX_TAIL_RE.sub("", value)
+    if value.upper() == "$NULLFRAME":
+        return 0
+    n = _TOOL_DATA_RE.match(value)
+    number = _small_int(n.group(1)) if n else None
+    if number is not None:
+        return number
+    stool = _STOOL_RE.match(value)
+    if stool and base.kind == "fdat" and base.fdat == stool.group(1).upper():
+        return None
+    return f"WITH $TOOL = {value[:40]} (line {lineno}): not a TOOL_DATA number"
+
+
 def _spline_base(code: str, word: str, lineno: int) -> BaseRef | None:
     """The base a SPLINE/PTP_SPLINE block sets for its segments (``SPLINE WITH $BASE =
     BASE_DATA[2]``, ``$BASE = SBASE(FS1.BASE_NO)``); None when the block does not set it."""
@@ -1812,6 +1845,9 @@ def _motion(
     base = flow.state
     if "$" in code and "WITH" in code.upper():
         base = _with_tool(_with_base(code, lineno), base)
+        own = _with_tool_value(code, lineno, base)
+        if own is not None:
+            base = _tool_changed(base, own)
     for _ in range(count):
         while at < len(code) and code[at] in " \t,":
             at += 1
