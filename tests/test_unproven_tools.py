@@ -217,3 +217,30 @@ def test_krl_motion_with_its_own_tool(tmp_path):
         _corrected(rows[line])
     assert "tool 3: its TCP is 150.000 mm from" in rows[7]["reason"]
     assert rows[8]["reason"] == unknown
+
+
+def test_krl_program_that_redefines_the_cells_tool_number(tmp_path):
+    """TOOL_DATA[1] written by the program 150 mm longer than the cell's tool 1: the tool the
+    program then selects with that number is not the cell's, with or without tool_data."""
+    program = """DEF T()
+TOOL_DATA[1]={X 0,Y 0,Z 400,A 0,B 0,C 0}
+$TOOL=TOOL_DATA[1]
+LIN {X 1500,Y 0,Z 1500,A 0,B 90,C 0}
+END
+"""
+    cell = write_cell(tmp_path, field="constant")
+    rows = _rewrite(tmp_path, cell, {"t.src": program}, "--base", "1", "--decimals", "4")
+    assert rows[4]["reason"] == "tool unknown: TOOL_DATA[1] (t.src:2) is not the cell's tool 1"
+    same = program.replace("Z 400", "Z 250")
+    again = tmp_path / "same"
+    again.mkdir()
+    rows = _rewrite(
+        again,
+        write_cell(again, field="constant"),
+        {"t.src": same},
+        "--base",
+        "1",
+        "--decimals",
+        "4",
+    )
+    _corrected(rows[4])

@@ -221,7 +221,11 @@ class _Context:
         if config is not None:
             for n, (xyzabc, _) in config.base_data.items():
                 self.base_data[n] = pose_from_xyzabc(np.array(xyzabc))
-        self.tool_conflicts = _tool_conflicts(self.every, opts.tool_data)
+        # number -> flange_T_tool of every tool the cell gives (without tool_data: its tool)
+        self.cell_tools = opts.tool_data
+        if self.cell_tools is None and opts.flange_T_tool is not None:
+            self.cell_tools = {opts.tool_number: opts.flange_T_tool}
+        self.tool_conflicts = _tool_conflicts(self.every, self.cell_tools)
         self.fdats: dict[str, Fdat] = {}
         self.frame_uses: dict[str, tuple[str, FrameUse]] = {}
         self.assigned: dict[str, tuple[str, int]] = {}
@@ -351,10 +355,7 @@ class _Context:
         tools = self.opts.tool_data
         cell = self.opts.tool_number
         if isinstance(tool, ToolFrame):
-            known = tools if tools is not None else {}
-            if tools is None and self.opts.flange_T_tool is not None:
-                known = {cell: self.opts.flange_T_tool}
-            number = _tool_frame_number(tool, known, cell)
+            number = _tool_frame_number(tool, self.cell_tools or {}, cell)
             if number is None:
                 which = "any tool of the cell file" if tools is not None else "the cell's tool"
                 return -1, (
@@ -362,10 +363,10 @@ class _Context:
                     f"{which} within its written decimals"
                 )
             tool = number
-        if tools is None:
-            return -1, self.opts.other_tool(tool)
         if tool in self.tool_conflicts:
             return -1, f"tool unknown: {self.tool_conflicts[tool]}"
+        if tools is None:
+            return -1, self.opts.other_tool(tool)
         return tool, ""
 
     def _resolve(self, base: BaseRef) -> tuple[object, np.ndarray | None, str]:
