@@ -127,6 +127,7 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
         decimals=req.decimals,
         allow_partial=req.allow_partial,
         tool_number=cell.tool_number,
+        flange_T_tool=cell.flange_T_tool,
         tool_data=cell.tool_data,
         tool_names=cell.tool_names,
         max_bytes=req.max_bytes,

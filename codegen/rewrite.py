@@ -75,6 +75,7 @@ class Options:
     decimals: int | None = None  # None: the file's precision (see ``precision``)
     allow_partial: bool = False  # write although the policy leaves positions uncorrected
     tool_number: int | None = None  # the cell's TOOL_DATA number (the TCP the grid holds for)
+    flange_T_tool: np.ndarray | None = None  # the cell's tool (None: not given, not checked)
     tool_data: dict[int, np.ndarray] | None = None  # tool number -> flange_T_tool (the cell's
     # tool_data with its tool; None: the cell's tool alone, every position corrected with it)
     tool_names: dict[str, int] | None = None  # RAPID tooldata name (lower case) -> tool number
@@ -88,6 +89,16 @@ class Options:
     def __post_init__(self) -> None:
         if self.policy is None:
             self.policy = Policy(self.correction, self.model)
+
+    def other_tool(self, tool: int) -> str:
+        """Without ``tool_data``: why the positions a program commands with tool number ``tool``
+        (-1: none selected, the cell's) are not corrected, "" when it is the cell's tool."""
+        if tool < 0 or self.tool_number is None or tool == self.tool_number:
+            return ""
+        return (
+            f"tool {tool} is not the cell's tool {self.tool_number}, which the grid holds for "
+            "(declare it in the cell file's tool_data)"
+        )
 
     @property
     def calibrated(self) -> Robot | None:

@@ -497,11 +497,13 @@ def test_any_arc_moves_rigidly_or_stays(rs274, tmp_path_factory, text):
 
 def test_realworld_slot_arcs_move_rigidly(realworld, rs274, tmp_path):
     """LinuxCNC's vertical-slot.ngc (two passes of a slot: 8 arcs, each pass one chain at one
-    depth) rewritten by the command line: all its arcs are corrected, and in rs274's reading
+    depth) rewritten by the command line in a cell whose tool is the program's: all its arcs are corrected, and in rs274's reading
     each arc's start, centre and end moved by one shift, the same for every arc of the slot,
     with its radii exactly as before."""
     program = realworld / "gcode" / "pygcode_vertical-slot.ngc"
     cell = write_cell(tmp_path, field="smooth")
+    # the program drills with T5 M06 G43: the cell's tool is tool 5
+    cell.write_text(cell.read_text().replace("tool: {number: 1,", "tool: {number: 5,"))
     out, report_csv = tmp_path / "slot.ngc", tmp_path / "r.csv"
     argv = ["rewrite", program, "--cell", cell, "-o", out, "--report", report_csv]
     assert main([str(a) for a in [*argv, "--allow-partial"]]) == 0

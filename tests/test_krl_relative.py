@@ -202,7 +202,8 @@ def test_relative_motion_left_uncorrected_lands_as_programmed(tmp_path):
         ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nIF $IN[1] THEN\n", "IF at line 4"),
         ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nGO( )\n", "the call GO() at line 4"),
         ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nM1:\n", "jump target M1"),
-        ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\n$TOOL = TOOL_DATA[2]\n", "the tool set at line 4"),
+        # the cell's tool (TOOL_DATA[1]): the only reason is the chain broken by setting it
+        ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\n$TOOL = TOOL_DATA[1]\n", "the tool set at line 4"),
         ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nBAS (#BASE,2)\n", "$BASE set at line 4"),
         ("LIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\nFOR I=1 TO 20\n", "FOR at line 4"),
         ("LIN P9\n", "P9 (line 3) is not known: it is not a position given in these files"),
@@ -320,8 +321,8 @@ def test_every_point_of_a_relative_chain_lands_on_its_correction(start, abc, ste
 def test_relative_motion_that_sets_its_own_tool_is_reported(tmp_path):
     src = (
         "DEF p( )\nBAS (#BASE,0)\nLIN {X 1000,Y 0,Z 900,A 0,B 90,C 0}\n"
-        "SLIN_REL {Z -5.000} WITH $TOOL = TOOL_DATA[2]\nEND\n"
-    )
+        "SLIN_REL {Z -5.000} WITH $TOOL = TOOL_DATA[1]\nEND\n"
+    )  # the cell's tool: the reason is the relative motion's own (another tool: the tool's)
     code, text, rows, _ = _rewrite(tmp_path, src, None, "--allow-partial")
     assert code == 0 and text.splitlines()[3] == src.splitlines()[3]
     assert "it sets its own tool (WITH $TOOL, line 4)" in rows[1]["reason"]

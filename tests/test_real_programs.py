@@ -281,6 +281,31 @@ def test_incremental_cycle_with_a_repeat_count_not_read_keeps_its_start(tmp_path
     assert new.splitlines()[:3] == text.splitlines()[:3]
 
 
+@pytest.mark.parametrize("mode", ["G90", "G91"])
+def test_cycle_with_a_k_word_is_reported(tmp_path, mode):
+    """``G81 ... K2`` (Fanuc and Masso: K repeats the cycle; RS274NGC has no K on G81): its
+    holes are not known, so it is reported and kept as written. Under G91 its holes move with
+    their start: the move that sets it is not corrected either, and what follows under G91 is
+    not known; under G90 the move before it is corrected, as is the absolute move after it."""
+    text = f"G21 G90 G17 G98 F100\nG0 X250 Y0 Z50\n{mode} G81 X25 Y25 Z-50 R-25 K2\n"
+    text += "G80 G0 X5\nG90 G0 X10 Y10 Z10\nM2\n"
+    new, rows = gcode_rewrite(text, SMOOTH)
+    incremental = mode == "G91"
+    assert [r.status for r in rows] == [
+        "skipped" if incremental else "corrected",
+        "skipped",
+        "skipped" if incremental else "corrected",
+        "corrected",
+    ]
+    assert rows[1].reason.startswith("canned cycle G81 with a K word (line 3)")
+    lines, written = new.splitlines(), text.splitlines()
+    assert lines[2] == written[2]
+    if incremental:
+        assert "sets the start of the G91 cycle at line 3" in rows[0].reason
+        assert "not known" in rows[2].reason
+        assert lines[:4] == written[:4]
+
+
 # ---------------------------------------------------------------- G-code: modal canned cycles
 
 

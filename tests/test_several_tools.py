@@ -485,12 +485,14 @@ END
 
 
 def test_krl_tool_changed_on_some_paths_only(tmp_path):
-    """Without tool_data $TOOL is not followed (the rows are as before this feature); with it,
-    a tool set in one branch, before a jump target or inside a loop is not known after it."""
+    """A tool set in one branch, before a jump target or inside a loop is not known after it,
+    with or without tool_data; without it, tool 2 is not the cell's tool either."""
     plain = tmp_path / "plain"
     plain.mkdir()
     rows = _rewrite(plain, write_cell(plain, field="constant"), {"t.src": BRANCHES}, "--base", "1")
-    assert [rows[k]["status"] for k in (4, 8, 11, 13)] == ["corrected"] * 4
+    assert rows[8]["reason"] == "tool unknown: $TOOL set in one branch of IF at line 5 only"
+    assert rows[13]["reason"].startswith("tool 2 is not the cell's tool 1")
+    assert [rows[k]["status"] for k in (4, 8, 11, 13)] == ["skipped"] * 4
     rows = _rewrite(tmp_path, _grid_cell(tmp_path), {"t.src": BRANCHES}, "--base", "1")
     assert rows[4]["reason"] == (
         "tool unknown: after jump target M1 (line 3): $TOOL depends on the path taken"

@@ -1217,6 +1217,13 @@ class _Reader:
                 reason = reason or f"canned cycle L{words['L'].literal}: not a repeat count"
         if "L" in exprs:
             reason = reason or f"canned cycle {exprs['L']}: the repeat count is not known"
+        repeat_k = s.motion != "87" and ("K" in words or "K" in exprs)
+        if repeat_k:  # Fanuc-like controls repeat the cycle K times; RS274NGC rejects K here
+            reason = reason or (
+                f"canned cycle G{s.motion} with a K word (line {lineno}): K is no word of "
+                "this cycle in RS274NGC and a repeat count on Fanuc-like controls, so its holes "
+                "are not known"
+            )
         step = [0.0, 0.0, 0.0]  # the increment of each repeat (G91), 0 on the cycle's axis
         first = list(s.pos)
         for i, k in enumerate(AXES):
@@ -1247,7 +1254,7 @@ class _Reader:
         last = [first[i] + (repeats - 1) * step[i] for i in range(3)]
         if polar and s.incremental and axis == 2:
             last[:2] = polar_xy(first, radius, angle, True, repeats - 1)
-        if "L" in exprs or ("L" in words and repeats == 1 and words["L"].value != 1):
+        if repeat_k or "L" in exprs or ("L" in words and repeats == 1 and words["L"].value != 1):
             repeats = 0  # not known: under G91 neither is where its holes end
             if s.incremental:
                 last = [math.nan] * 3

@@ -14,7 +14,8 @@ in G18/G19 a cycle's axis is Y/X instead of Z. A corrected word written
 as a parameter or an expression gets the corrected number in the expression's place (its value
 as read where it is kept); a polar move gets its corrected radius and angle (``_polar_edits``).
 With the cell's ``tool_data`` each move is corrected with the tool whose length offset is in
-effect (G43), the cell's tool where none is.
+effect (G43), the cell's tool where none is; without it a move under the length offset of
+another tool than the cell's, or of a tool not known, is reported.
 """
 
 from __future__ import annotations
@@ -74,8 +75,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: GcodeSection
     if "G80" in moves.motion:
         rows.commanded &= np.array([m != "G80" for m in moves.motion], bool)
     _protect_polar_starts(moves, rows)
-    if opts.tool_data is not None:
-        _tools(moves, rows)
+    _tools(moves, rows, opts)
     if any(rows.reason):  # the moves with no reason
         at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))
     else:
@@ -114,15 +114,19 @@ def add_header(text: str, lines: list[str]) -> str:
     return insert_after_lines(text, comment_block(text, lines, "({})"), "%")
 
 
-def _tools(moves: GcodeMoves, rows: Rows) -> None:
+def _tools(moves: GcodeMoves, rows: Rows, opts: Options) -> None:
     """Each move's tool (``GcodeMoves.tool_spans``); a move whose tool is not known is not
-    placed, with the reason."""
+    placed, with the reason, nor, without the cell's ``tool_data``, one whose length offset is
+    another tool's than the cell's."""
     for start, stop, tool in moves.tool_spans():
-        if isinstance(tool, str):
-            for i in range(start, stop):
-                rows.reason[i] = rows.reason[i] or f"tool unknown: {tool}"
-        else:
+        why = f"tool unknown: {tool}" if isinstance(tool, str) else ""
+        if opts.tool_data is None:
+            why = why or opts.other_tool(tool)
+        elif not why:
             rows.tool[start:stop] = tool
+        if why:
+            for i in range(start, stop):
+                rows.reason[i] = rows.reason[i] or why
 
 
 def _protect_polar_starts(moves: GcodeMoves, rows: Rows) -> None:

@@ -23,8 +23,11 @@ inline-form FOLD lines are comments). It finds:
   arithmetic ``:``, a variable, ``EK(...)``, the start of a routine (inherited from the caller),
   a call that may change it, a jump target, a branch or loop that changes it.
 - tool context, followed with the base (``BaseRef.tool``): ``$TOOL = TOOL_DATA[n]``,
-  ``$TOOL = $NULLFRAME`` (tool 0, the flange), ``BAS(#TOOL, n)``, an FDAT's ``TOOL_NO``; any other
-  ``$TOOL`` value, and a branch or loop that changes it, leaves the tool unknown with the reason.
+  ``$TOOL = $NULLFRAME`` (tool 0, the flange), ``BAS(#TOOL, n)``, an FDAT's ``TOOL_NO``,
+  ``$TOOL = {FRAME: X .., C ..}`` (a ``ToolFrame``, matched against the cell's tools when the
+  files are resolved), a motion's or spline block's own ``WITH $TOOL = ...``; any other
+  ``$TOOL`` value, and a branch or loop that changes it, leaves
+  the tool unknown with the reason.
 
 Numbers are spans into the text given (character offsets), so a rewrite replaces only them.
 Every pattern is linear in its input (see the note above ``NUMBER``).
@@ -79,6 +82,7 @@ __all__ = [
     "Number",
     "RELATIVE",
     "Relative",
+    "ToolFrame",
     "code_part",
     "match_brace",
     "normalize_name",
@@ -186,6 +190,15 @@ class Number(NamedTuple):
         return -1 if self.literal[:1] == "'" else decimals_of(self.literal)
 
 
+class ToolFrame(NamedTuple):
+    """A tool set as a literal frame (``$TOOL = {FRAME: X -30, ...}``): its X, Y, Z mm and A, B,
+    C deg as written, half a unit of each one's last written decimal (the same order), the line."""
+
+    xyzabc: tuple[float, ...]
+    half_units: tuple[float, ...]
+    line: int
+
+
 _new_number = tuple.__new__  # a Number without the NamedTuple constructor's Python frame
 
 
@@ -195,8 +208,9 @@ class BaseRef:
 
     kind: "number" (BASE_DATA[number]), "literal" (xyzabc given in the program), "fdat" (the
     BASE_NO of FDAT ``fdat``, resolved once every file is read), "unknown" (``reason`` says why).
-    tool: the TOOL_DATA number set with it (0: $NULLFRAME, the flange), a str: why the tool is
-    not known, None: not set (an FDAT's TOOL_NO for kind "fdat", else the cell's tool).
+    tool: the TOOL_DATA number set with it (0: $NULLFRAME, the flange), a ``ToolFrame`` (a
+    literal frame), a str: why the tool is not known, None: not set (an FDAT's TOOL_NO for kind
+    "fdat", else the cell's tool).
     """
 
     kind: str
@@ -206,7 +220,7 @@ class BaseRef:
     fdat: str | None = None
     reason: str = ""
     label: str | None = None  # set when the state was carried across a jump target
-    tool: int | str | None = None
+    tool: int | ToolFrame | str | None = None
     tool_label: str | None = None  # the jump target the tool was carried across (``label``)
     # the state whose base this one keeps, only its tool changed (None: its own base)
     origin: BaseRef | None = field(default=None, compare=False, repr=False)
@@ -278,10 +292,10 @@ class KrlUse:
 class Fdat(NamedTuple):
     """An FDAT (``DECL FDAT FP1={TOOL_NO 1,BASE_NO 2,IPO_FRAME #BASE}``) as far as it places a
     position: the base (None with ``reason`` when it is not a BASE_DATA number, e.g. an external
-    TCP) and the tool (None when not given or not a number)."""
+    TCP) and the tool (None when not given, a str: why it is not known)."""
 
     base_no: int | None
-    tool_no: int | None
+    tool_no: int | str | None
     line: int
     reason: str = ""
 
@@ -802,8 +816,8 @@ class _Flow:
         """After line ``line`` the robot's position does not follow from the motions before."""
         self.moved = (line, why)
 
-    def set_tool(self, tool: int | str, line: int) -> None:
-        """``$TOOL`` set at ``line``: TOOL_DATA number, or why it is not known."""
+    def set_tool(self, tool: int | ToolFrame | str, line: int) -> None:
+        """``$TOOL`` set at ``line``: TOOL_DATA number, literal frame, or why it is not known."""
         self.state = replace(
             _tool_changed(self.state, f"{tool} (line {line})" if isinstance(tool, str) else tool),
             tool_label=None,
@@ -1187,6 +1201,9 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
         return
     if word in ("SPLINE", "PTP_SPLINE"):
         flow.open_spline(_spline_base(code, word, lineno))
+        own = _with_tool_value(code, lineno, flow.state) if "$" in code else None
+        if own is not None:  # the block's segments move that tool (until ENDSPLINE)
+            flow.state = _tool_changed(flow.state, own)
         return
     if word == "ENDSPLINE":
         flow.close_spline()
@@ -1295,7 +1312,11 @@ def _fdat_values(code: str, at: int, path: str | None, lineno: int) -> Fdat:
         if len(parts) == 2:
             fields[parts[0].upper().rstrip(":")] = parts[1].strip()
     tool = fields.get("TOOL_NO", "")
-    tool_no = int(tool) if tool.isascii() and tool.isdigit() and len(tool) <= 3 else None
+    tool_no: int | str | None = None
+    if tool.isascii() and tool.isdigit() and len(tool) <= 3:
+        tool_no = int(tool)
+    elif tool:
+        tool_no = f"FDAT TOOL_NO {tool[:40]} (line {lineno}): not a number"
     ipo = fields.get("IPO_FRAME", "#BASE").replace(" ", "").upper()
     if ipo != "#BASE":
         return Fdat(
@@ -1431,7 +1452,7 @@ def _assignment(
         flow.set(_base_value(code, value_at, off, lineno, scan))
         return
     if target == "$TOOL":
-        flow.set_tool(_tool_value(value, member), lineno)
+        flow.set_tool(_tool_value(code, value_at, off, lineno, scan, member), lineno)
         return
     if target == "$BASE" or (target == "FDAT_ACT" and member):
         flow.set(BaseRef("unknown", lineno, reason=f"{code.strip()}: changes part of the base"))
@@ -1515,11 +1536,24 @@ def _base_value(code: str, at: int, off: int, lineno: int, scan: KrlScan) -> Bas
     return BaseRef("unknown", lineno, reason=f"$BASE = {value}: set from a variable")
 
 
-def _tool_value(value: str, member: str) -> int | str:
-    """The tool ``$TOOL[.member] = value`` sets: a TOOL_DATA number (0: $NULLFRAME), or why
-    it is not known."""
+def _tool_value(
+    code: str, at: int, off: int, lineno: int, scan: KrlScan, member: str
+) -> int | ToolFrame | str:
+    """The tool ``$TOOL[.member] = value`` (the value at ``code[at:]``) sets: a TOOL_DATA number
+    (0: $NULLFRAME), a literal frame, or why it is not known."""
+    value = code[at:].strip()
     if member:
         return f"$TOOL{member} = {value}: changes part of the tool"
+    if value.startswith("{"):
+        end = match_brace(code, at, scan.path, lineno)
+        if code[end:].strip():
+            return f"$TOOL = {value[:40]}: frame arithmetic"
+        _, numbers, reason, _ = parse_aggregate(code, at, off, scan.path, lineno)
+        if reason or not all(k in numbers for k in "XYZABC"):
+            return "$TOOL literal without all of X,Y,Z,A,B,C"
+        written = [numbers[k] for k in "XYZABC"]
+        half = tuple(0.5 * 10.0 ** -max(n.decimals, 0) for n in written)
+        return ToolFrame(tuple(n.value for n in written), half, lineno)
     if value.upper() == "$NULLFRAME":
         return 0
     n = _TOOL_DATA_RE.match(value)
@@ -1559,6 +1593,35 @@ def _with_base(code: str, lineno: int) -> BaseRef | None:
     if n:
         return _base_data_ref(n.group(1), lineno, "WITH $BASE = ")
     return BaseRef("unknown", lineno, reason=f"WITH $BASE = {value}: not a BASE_DATA number")
+
+
+_TOOL_SET_RE = re.compile(r"\$TOOL\s*+=\s*+", re.I)
+_STOOL_RE = re.compile(r"STOOL2\s*+\(\s*+([A-Za-z_]\w*+)\s*+\)$", re.I)
+_APPROX_TAIL_RE = re.compile(r"\s++C_\w++$", re.I)
+
+
+def _with_tool_value(code: str, lineno: int, base: BaseRef) -> int | str | None:
+    """The tool a motion (a spline block) sets for itself with ``WITH $TOOL = ...``, ``base``
+    the base it moves in: a TOOL_DATA number (0: $NULLFRAME); None when the WITH part does not
+    set it, or sets ``STOOL2(F)`` of the FDAT F whose base it takes (F's TOOL_NO); else why it
+    is not known."""
+    with_m = _WITH_RE.search(code)
+    tool_m = _TOOL_SET_RE.search(code, with_m.end()) if with_m else None
+    if tool_m is None:
+        return None
+    stop = _NEXT_SYSVAR_RE.search(code, tool_m.end())
+    value = code[tool_m.end() : stop.start() if stop else len(code)].strip()
+    value = _APPROX_TAIL_RE.sub("", value)
+    if value.upper() == "$NULLFRAME":
+        return 0
+    n = _TOOL_DATA_RE.match(value)
+    number = _small_int(n.group(1)) if n else None
+    if number is not None:
+        return number
+    stool = _STOOL_RE.match(value)
+    if stool and base.kind == "fdat" and base.fdat == stool.group(1).upper():
+        return None
+    return f"WITH $TOOL = {value[:40]} (line {lineno}): not a TOOL_DATA number"
 
 
 def _spline_base(code: str, word: str, lineno: int) -> BaseRef | None:
@@ -1615,6 +1678,9 @@ def _motion(
     base = flow.state
     if "$" in code and "WITH" in code.upper():
         base = _with_tool(_with_base(code, lineno), base)
+        own = _with_tool_value(code, lineno, base)
+        if own is not None:
+            base = _tool_changed(base, own)
     for _ in range(count):
         while at < len(code) and code[at] in " \t,":
             at += 1

@@ -29,6 +29,7 @@ from accugrid.codegen.krl.parse import (
     Fdat,
     FrameUse,
     KrlScan,
+    ToolFrame,
     normalize_name,
     scan_krl,
     wildcard,
@@ -304,7 +305,11 @@ class _Context:
         if config is not None:
             for n, (xyzabc, _) in config.base_data.items():
                 self.base_data[n] = pose_from_xyzabc(np.array(xyzabc))
-        self.tool_conflicts = _tool_conflicts(self.every, opts.tool_data)
+        # number -> flange_T_tool of every tool the cell gives (without tool_data: its tool)
+        self.cell_tools = opts.tool_data
+        if self.cell_tools is None and opts.flange_T_tool is not None:
+            self.cell_tools = {opts.tool_number: opts.flange_T_tool}
+        self.tool_conflicts = _tool_conflicts(self.every, self.cell_tools)
         self.fdats: dict[str, Fdat] = {}
         self.frame_uses: dict[str, tuple[str, FrameUse]] = {}
         self.assigned: dict[str, tuple[str, int]] = {}
@@ -410,18 +415,43 @@ class _Context:
         if found is None:
             ident, frame, reason = self._resolve(base)
             tool = -1
-            if frame is not None and self.opts.tool_data is not None:
-                tool = base.tool if base.tool is not None else -1
-                if isinstance(tool, str):
-                    ident, frame, reason = None, None, f"tool unknown: {tool}"
-                elif base.kind == "fdat" and base.tool is None:
-                    tool = self.fdats[base.fdat or ""].tool_no
-                    tool = -1 if tool is None else tool
-                if tool in self.tool_conflicts:
-                    ident, frame, reason = None, None, f"tool unknown: {self.tool_conflicts[tool]}"
+            if frame is not None:
+                tool, why = self._tool_of(base)
+                if why:
+                    ident, frame, reason = None, None, why
             placed = None if frame is None else (frame, tool)
             found = self._resolved[base] = ((ident, tool), placed, reason)
         return found
+
+    def _tool_of(self, base: BaseRef) -> tuple[int, str]:
+        """The tool the motions under ``base`` (a placed base) command (-1: the cell's; with
+        ``Options.tool_data`` its number), or why their positions cannot be corrected: a tool
+        not known, or, without ``tool_data``, another than the cell's (a TOOL_DATA number, an
+        FDAT's ``TOOL_NO``, a literal frame that differs from the cell's tool by more than its
+        written decimals)."""
+        tool = base.tool
+        if tool is None and base.kind == "fdat":
+            tool = self.fdats[base.fdat or ""].tool_no
+        if tool is None:
+            return -1, ""
+        if isinstance(tool, str):
+            return -1, f"tool unknown: {tool}"
+        tools = self.opts.tool_data
+        cell = self.opts.tool_number
+        if isinstance(tool, ToolFrame):
+            number = _tool_frame_number(tool, self.cell_tools or {}, cell)
+            if number is None:
+                which = "any tool of the cell file" if tools is not None else "the cell's tool"
+                return -1, (
+                    f"tool unknown: $TOOL set to a literal frame (line {tool.line}) that is not "
+                    f"{which} within its written decimals"
+                )
+            tool = number
+        if tool in self.tool_conflicts:
+            return -1, f"tool unknown: {self.tool_conflicts[tool]}"
+        if tools is None:
+            return -1, self.opts.other_tool(tool)
+        return tool, ""
 
     def _resolve(self, base: BaseRef) -> tuple[object, np.ndarray | None, str]:
         if base.kind == "fdat":
@@ -449,7 +479,7 @@ class _Context:
         tool = self.opts.tool_number  # with the cell's tool_data, each FDAT's own tool
         if self.opts.tool_data is not None:
             return ""
-        if tool is not None and fdat.tool_no is not None and fdat.tool_no != tool:
+        if tool is not None and isinstance(fdat.tool_no, int) and fdat.tool_no != tool:
             return (
                 f"FDAT {name} (line {fdat.line}) has TOOL_NO {fdat.tool_no}: the cell's tool, "
                 f"which the grid holds for, is {tool}"
@@ -670,6 +700,22 @@ def _tool_conflicts(scans: list[KrlScan], tool_data: dict | None) -> dict[int, s
             if np.linalg.norm(mine[:3, 3] - cell[:3, 3]) > 1e-3 or turn > 1e-3:
                 out[n] = f"TOOL_DATA[{n}] ({where}:{line}) is not the cell's tool {n}"
     return out
+
+
+def _tool_frame_number(frame: ToolFrame, tools: dict[int, np.ndarray], cell: int | None):
+    """The number of the tool in ``tools`` (number -> flange_T_tool (4, 4) mm) that the literal
+    ``frame`` is within its written decimals (each of X, Y, Z within half a unit of its last
+    decimal; the rotation within the sum of those of A, B, C, a bound on the angle three such
+    Euler angle errors make), the cell's tool ``cell`` first, None when none is."""
+    written = pose_from_xyzabc(np.array(frame.xyzabc))
+    half = np.array(frame.half_units)
+    for number in sorted(tools, key=lambda n: (n != cell, n)):
+        pose = tools[number]
+        turn = float(rotation_angle_deg(written[None, :3, :3], pose[:3, :3])[0])
+        near = np.abs(written[:3, 3] - pose[:3, 3]) <= half[:3] * (1 + 1e-9) + 1e-12
+        if near.all() and turn <= half[3:].sum() * (1 + 1e-9) + 1e-9:
+            return number
+    return None
 
 
 def _upper(names: list[str]) -> list[str]:
