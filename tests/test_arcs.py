@@ -497,9 +497,9 @@ def test_any_arc_moves_rigidly_or_stays(rs274, tmp_path_factory, text):
 
 def test_realworld_slot_arcs_move_rigidly(realworld, rs274, tmp_path):
     """LinuxCNC's vertical-slot.ngc (two passes of a slot: 8 arcs, each pass one chain at one
-    depth) rewritten by the command line in a cell whose tool is the program's: all its arcs are corrected, and in rs274's reading
-    each arc's start, centre and end moved by one shift, the same for every arc of the slot,
-    with its radii exactly as before."""
+    depth) rewritten by the command line in a cell whose tool is the program's: all its arcs
+    are corrected, and in rs274's reading each arc's start, centre and end moved by one shift,
+    the same for every arc of the slot, with its radii exactly as before."""
     program = realworld / "gcode" / "pygcode_vertical-slot.ngc"
     cell = write_cell(tmp_path, field="smooth")
     # the program drills with T5 M06 G43: the cell's tool is tool 5
