@@ -14,9 +14,9 @@ from hypothesis import strategies as st
 from rewrite_helpers import rewrite_krl
 
 from accugrid.codegen import splice
+from accugrid.codegen.bytescan import PAD, text_bytes
 from accugrid.codegen.krl import parse
 from accugrid.codegen.krl import rewrite as krl_rewrite
-from accugrid.codegen.krl.rigid import PAD, text_bytes
 from accugrid.codegen.program_text import splice as splice_text
 from accugrid.codegen.rewrite import Options
 from accugrid.compensation import GridModel

@@ -42,3 +42,29 @@ def test_a_room_imports_only_itself_and_the_rooms_below(room):
     ]
     assert list((ROOT / room).rglob("*.py")), f"{room}/ holds no module"
     assert not wrong, "\n".join(wrong)
+
+
+def _dialect_folders() -> list[str]:
+    """The folders under codegen/ that are packages (one per dialect)."""
+    return sorted(p.parent.name for p in (ROOT / "codegen").glob("*/__init__.py"))
+
+
+@pytest.mark.parametrize("dialect", _dialect_folders())
+def test_a_dialect_folder_imports_no_other_dialect(dialect):
+    others = set(_dialect_folders()) - {dialect}
+    wrong = []
+    for path in sorted((ROOT / "codegen" / dialect).rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = (
+                [node.module or ""]
+                if isinstance(node, ast.ImportFrom)
+                else [a.name for a in node.names]
+                if isinstance(node, ast.Import)
+                else []
+            )
+            for name in names:
+                parts = name.split(".")
+                if parts[:2] == ["accugrid", "codegen"] and len(parts) > 2 and parts[2] in others:
+                    wrong.append(f"{path.relative_to(ROOT)}:{node.lineno} imports {name}")
+    assert len(others) >= 2, "the registry's dialects are folders under codegen/"
+    assert not wrong, "\n".join(wrong)

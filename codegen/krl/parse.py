@@ -51,7 +51,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from accugrid.codegen.krl.rigid import distinct, read_rigid, text_bytes
+from accugrid.codegen.bytescan import distinct, text_bytes
+from accugrid.codegen.krl.rigid import read_rigid
 from accugrid.codegen.krl.tables import (
     ASSIGN,
     DECL,

@@ -13,7 +13,7 @@ decimal (``infra.decimals``: read exactly, what ``float`` gives). ``tail`` is em
 or starts with a comma; the caller decides on each distinct tail (``distinct``). A line in these
 layouts reads as the statement reader reads it; every other line is left to that reader.
 
-Offsets are byte (= character) offsets in the text, whose bytes ``text_bytes`` gives; bytes are
+Offsets are byte (= character) offsets in the text, whose bytes ``codegen.bytescan.text_bytes`` gives; bytes are
 compared eight at a time as one 64-bit word (``infra.decimals.words_at``).
 """
 
@@ -22,42 +22,23 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 
+from accugrid.codegen.bytescan import U64, strings, windows
 from accugrid.codegen.program_text import row_counts
 from accugrid.infra.decimals import read_decimals, words_at
 
-__all__ = [
-    "PAD",
-    "RigidLines",
-    "distinct",
-    "read_rigid",
-    "strings",
-    "text_bytes",
-]
+__all__ = ["RigidLines", "read_rigid"]
 
-PAD = 64  # NUL bytes after the text, so that every window read (at most PAD wide) exists
 
 _DECLS = ((b"DECL E6POS ", "E6POS"), (b"DECL POS ", "POS"), (b"DECL FRAME ", "FRAME"))
 _MOTIONS = ((b"LIN ", "LIN"), (b"PTP ", "PTP"), (b"SLIN ", "SLIN"), (b"SPTP ", "SPTP"))
 _CLAUSES = (b" C_DIS", b" C_PTP", b" C_VEL", b" C_ORI")
 _NAME_MAX = 32  # longer names (KRL allows 24) are left to the statement reader
-_U64 = np.dtype("<u8")
 _WORD = np.zeros(256, bool)
 _WORD[np.frombuffer(b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_", np.uint8)] = True
 _WORD[48:58] = True
 _DIGIT = np.zeros(256, bool)
 _DIGIT[48:58] = True
-
-
-def text_bytes(text: str) -> np.ndarray | None:
-    """The latin-1 bytes of ``text`` and PAD NUL bytes after them (uint8); None when ``text``
-    has a character beyond latin-1 (never so for a program read by ``read_program``)."""
-    try:
-        data = text.encode("latin-1")
-    except UnicodeEncodeError:
-        return None
-    return np.frombuffer(data + bytes(PAD), np.uint8)
 
 
 @dataclass
@@ -108,12 +89,6 @@ class RigidLines:
         )
 
 
-def _windows(buf: np.ndarray, at: np.ndarray, width: int) -> np.ndarray:
-    """``buf[at[i] : at[i] + width]`` of every i, (len(at), width) uint8 (a copy); an offset
-    out of ``buf`` reads its first or last ``width`` bytes."""
-    return sliding_window_view(buf, width)[np.clip(at, 0, len(buf) - width)]
-
-
 def _at(buf: np.ndarray, at: np.ndarray) -> np.ndarray:
     """``buf[at]`` with offsets out of ``buf`` reading its first or last byte."""
     return np.take(buf, at, mode="clip")
@@ -121,8 +96,8 @@ def _at(buf: np.ndarray, at: np.ndarray) -> np.ndarray:
 
 def _is(buf: np.ndarray, at: np.ndarray, literal: bytes) -> np.ndarray:
     """Whether ``literal`` (at most 8 bytes) is at each offset ``at`` (k,)."""
-    pattern = np.frombuffer(literal.ljust(8, b"\0"), _U64)[0]
-    mask = np.frombuffer((b"\xff" * len(literal)).ljust(8, b"\0"), _U64)[0]
+    pattern = np.frombuffer(literal.ljust(8, b"\0"), U64)[0]
+    mask = np.frombuffer((b"\xff" * len(literal)).ljust(8, b"\0"), U64)[0]
     return (words_at(buf, at) & mask) == pattern
 
 
@@ -138,71 +113,21 @@ def _following(positions: np.ndarray, at: np.ndarray, count: int) -> np.ndarray:
     return np.where(j < len(positions), positions[np.minimum(j, len(positions) - 1)], _FAR)
 
 
-def strings(buf: np.ndarray, at: np.ndarray, length: np.ndarray) -> list[str]:
-    """``text[at[i] : at[i] + length[i]]`` of every i (1 <= length < PAD, no LF)."""
-    if not len(at):
-        return []
-    width = int(length.max()) + 1
-    cut = _windows(buf, at, width)
-    column = np.arange(width)
-    cut[np.arange(len(at)), length] = 10  # each string and a LF, one after another
-    joined = cut[column <= length[:, None]].tobytes().decode("latin-1")
-    return joined.split("\n")[:-1]
-
-
-def _same(buf: np.ndarray, at: np.ndarray, first: int, size: int) -> np.ndarray:
-    """Whether ``buf[a : a + size]`` equals ``buf[first : first + size]`` for each a in ``at``."""
-    equal = np.ones(len(at), bool)
-    for a in range(0, size, PAD):
-        width = min(PAD, size - a)
-        words, rest = divmod(width, 8)
-        if words:
-            rows = _windows(buf, at + a, 8 * words).view(_U64)
-            equal &= row_counts(rows != buf[first + a : first + a + 8 * words].view(_U64)) == 0
-        if rest:
-            lo = first + a + 8 * words
-            rows = _windows(buf, at + a + 8 * words, rest)
-            equal &= row_counts(rows != buf[lo : lo + rest]) == 0
-    return equal
-
-
-def distinct(buf: np.ndarray, span: np.ndarray, text: str) -> tuple[list[str], np.ndarray]:
-    """The distinct strings ``text[start:end]`` of the spans (k, 2), in order of first
-    appearance, and the index of each span's string among them (k,)."""
-    which = np.full(len(span), -1, np.int64)
-    found: list[str] = []
-    length = span[:, 1] - span[:, 0]
-    for _ in range(4):  # the common case: one or a few tails, compared as bytes
-        left = np.flatnonzero(which < 0)
-        if not left.size:
-            return found, which
-        first = left[0]
-        size = int(length[first])
-        same = left[length[left] == size]
-        same = same[_same(buf, span[same, 0], int(span[first, 0]), size)]
-        which[same] = len(found)
-        found.append(text[span[first, 0] : span[first, 1]])
-    index: dict[str, int] = {s: i for i, s in enumerate(found)}
-    for i in np.flatnonzero(which < 0).tolist():
-        which[i] = index.setdefault(text[span[i, 0] : span[i, 1]], len(index))
-    return list(index), which
-
-
 def read_rigid(buf: np.ndarray, starts: np.ndarray, ends: np.ndarray, text: str) -> RigidLines:
     """The rigid lines among the lines ``text[starts[i]:ends[i]]`` (n,) (without their CR LF);
     ``buf``: ``text_bytes(text)``."""
     s = starts.copy()
     indented = np.flatnonzero((_at(buf, s) == 32) | (_at(buf, s) == 9))
     if indented.size:
-        head = _windows(buf, s[indented], 16)
+        head = windows(buf, s[indented], 16)
         blank = (head == 32) | (head == 9)
         s[indented] += np.where(blank.all(axis=1), 0, np.argmin(blank, axis=1))
-    words = _windows(buf, s, 16).view(_U64)
+    words = windows(buf, s, 16).view(U64)
     kind = np.zeros(len(starts), np.int8)  # 1..3: a declaration, 4..7: a motion
     length = np.zeros(len(starts), np.int64)
     for code, (prefix, _) in enumerate(_DECLS + _MOTIONS, start=1):
-        pattern = np.frombuffer(prefix.ljust(16, b"\0"), _U64)
-        mask = np.frombuffer((b"\xff" * len(prefix)).ljust(16, b"\0"), _U64)
+        pattern = np.frombuffer(prefix.ljust(16, b"\0"), U64)
+        mask = np.frombuffer((b"\xff" * len(prefix)).ljust(16, b"\0"), U64)
         hit = ((words[:, 0] & mask[0]) == pattern[0]) & ((words[:, 1] & mask[1]) == pattern[1])
         kind[hit] = code
         length[hit] = len(prefix)
@@ -221,7 +146,7 @@ def _name_ok(buf: np.ndarray, at: np.ndarray, size: np.ndarray) -> np.ndarray:
     if not ok.any():
         return ok
     width = int(size[ok].max())
-    rows = _windows(buf, at, width)
+    rows = windows(buf, at, width)
     return ok & (row_counts(~_WORD[rows] & (np.arange(width) < size[:, None])) == 0)
 
 

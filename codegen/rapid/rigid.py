@@ -11,7 +11,7 @@ blank, and an optional CR before the LF:
 Every name ASCII (``[A-Za-z][A-Za-z0-9_]*``, at most 32 characters); x, y, z plain decimals
 (``infra.decimals``: read exactly, what ``float`` gives). What follows z (orientation, confdata,
 external axes) and what follows a move's target are read once per distinct text
-(``codegen.krl.rigid.distinct``: mostly one for the whole module). A line in these layouts reads
+(``codegen.bytescan.distinct``: mostly one for the whole module). A line in these layouts reads
 as the statement reader reads it; every other line is left to that reader, which also decides
 whether each of these lines stands alone as a statement (``codegen.rapid.rewrite``).
 
@@ -24,9 +24,8 @@ import re
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 
-from accugrid.codegen.krl.rigid import distinct, strings, text_bytes
+from accugrid.codegen.bytescan import U64, distinct, strings, text_bytes, windows
 from accugrid.infra.decimals import read_decimals
 
 __all__ = ["RigidModule", "read_rigid"]
@@ -51,7 +50,6 @@ _LETTER[95] = False
 _LINES = 1 << 16  # lines read at a time
 _BYTES = 1 << 24  # bytes looked at at a time for line ends
 _XYZ_MAX = 56  # bytes from "[[" to the "]" after z: three plain decimals of at most 17
-_U64 = np.dtype("<u8")
 
 
 @dataclass
@@ -82,15 +80,11 @@ class RigidModule:
     rests: list[tuple[str, str, str, str | None]]
 
 
-def _windows(buf: np.ndarray, at: np.ndarray, width: int) -> np.ndarray:
-    return sliding_window_view(buf, width)[np.clip(at, 0, len(buf) - width)]
-
-
 def _prefix(words: np.ndarray, literal: bytes) -> np.ndarray:
     """Whether each row of ``words`` (n, k) uint64 (8 k bytes) starts with ``literal``."""
     size = words.shape[1] * 8
-    pattern = np.frombuffer(literal.ljust(size, b"\0"), _U64)
-    mask = np.frombuffer((b"\xff" * len(literal)).ljust(size, b"\0"), _U64)
+    pattern = np.frombuffer(literal.ljust(size, b"\0"), U64)
+    mask = np.frombuffer((b"\xff" * len(literal)).ljust(size, b"\0"), U64)
     hit = np.ones(len(words), bool)
     for k in range(words.shape[1]):
         if mask[k]:
@@ -101,7 +95,7 @@ def _prefix(words: np.ndarray, literal: bytes) -> np.ndarray:
 def _names(buf: np.ndarray, at: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The length of the name at each offset ``at`` (k,) (up to the first byte no name has) and
     whether it is an ASCII name of 1 to _NAME_MAX characters."""
-    size = np.argmin(_WORD[_windows(buf, at, _NAME_MAX + 1)], axis=1)  # 0: none, or too long
+    size = np.argmin(_WORD[windows(buf, at, _NAME_MAX + 1)], axis=1)  # 0: none, or too long
     return size, (size >= 1) & _LETTER[np.take(buf, at, mode="clip")]
 
 
@@ -180,10 +174,10 @@ def read_rigid(text: str) -> RigidModule | None:
 def _block(buf, text, first, line_start, line_end, tails, rests):
     """The rigid declarations and moves among the lines (their starts and ends), the first of
     them the module's line ``first`` (0-based)."""
-    head = _windows(buf, line_start, _BLANKS)
+    head = windows(buf, line_start, _BLANKS)
     blank = (head == 32) | (head == 9)
     s = line_start + np.where(blank.all(axis=1), _BLANKS, np.argmin(blank, axis=1))
-    heads = _windows(buf, s, 16).view(_U64)
+    heads = windows(buf, s, 16).view(U64)
     decl = np.zeros(len(s), bool)
     name_at = s.copy()
     for prefix in _DECLS:
@@ -206,10 +200,10 @@ def _block(buf, text, first, line_start, line_end, tails, rests):
 def _declarations(buf, text, lines, name_at, end, tails):
     size, good = _names(buf, name_at)
     colon = name_at + size
-    good &= _prefix(_windows(buf, colon, 8).view(_U64), b":=[[")
+    good &= _prefix(windows(buf, colon, 8).view(U64), b":=[[")
     # x, y, z: up to the first two commas and the "]" within _XYZ_MAX bytes of the "[["
     first = colon + 4
-    window = _windows(buf, first, _XYZ_MAX)
+    window = windows(buf, first, _XYZ_MAX)
     rows = np.arange(len(first))
     comma = window == 44
     c0 = np.argmax(comma, axis=1)
