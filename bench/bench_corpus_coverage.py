@@ -1,6 +1,6 @@
 """Corpus coverage: `accugrid rewrite` over every KRL, G-code and RAPID program in
 ../shared/realworld, each with the cell and options the realworld tests use
-(``tests/rewrite_helpers.REALWORLD_REWRITES``, ``tests/test_rapid.CASES``), once with a grid and
+(``tests/rewrite_helpers.REALWORLD_REWRITES``, ``REALWORLD_RAPID``), once with a grid and
 once with a calibrated model (``out/model/calibrated.yaml`` from ``make demo``; skipped when it
 is missing; RAPID cells are an ABB arm, so grid only). Per dialect: the motion positions (those
 a job must correct: what a motion commands, a lone .dat's POS/E6POS with --base), how many are
@@ -24,6 +24,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from rewrite_helpers import (  # noqa: E402
     REALWORLD_BASE_DATA,
+    REALWORLD_RAPID,
     REALWORLD_REWRITES,
     write_cell,
     write_rapid_cell,
@@ -60,9 +61,7 @@ def _cases(folder: Path):
     for case, (names, options) in sorted(REALWORLD_REWRITES.items()):
         kind = "KRL" if names[0].startswith("krl/") else "G-code"
         yield case, kind, [REALWORLD / n for n in names], options, "grid"
-    from test_rapid import CASES as RAPID_CASES
-
-    for name, (tool, wobj, *_) in sorted(RAPID_CASES.items()):
+    for name, (tool, wobj) in sorted(REALWORLD_RAPID.items()):
         yield name, "RAPID", [REALWORLD / "rapid" / name], [], (tool, wobj)
 
 
