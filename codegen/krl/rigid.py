@@ -13,8 +13,8 @@ decimal (``infra.decimals``: read exactly, what ``float`` gives). ``tail`` is em
 or starts with a comma; the caller decides on each distinct tail (``distinct``). A line in these
 layouts reads as the statement reader reads it; every other line is left to that reader.
 
-Offsets are byte (= character) offsets in the text, whose bytes ``codegen.bytescan.text_bytes`` gives; bytes are
-compared eight at a time as one 64-bit word (``infra.decimals.words_at``).
+Offsets are byte (= character) offsets in the text, whose bytes ``codegen.bytescan.text_bytes``
+gives; bytes are compared eight at a time as one 64-bit word (``infra.decimals.words_at``).
 """
 
 from __future__ import annotations
