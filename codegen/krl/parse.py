@@ -1555,13 +1555,19 @@ def _tool_value(
         written = [numbers[k] for k in "XYZABC"]
         half = tuple(0.5 * 10.0 ** -max(n.decimals, 0) for n in written)
         return ToolFrame(tuple(n.value for n in written), half, lineno)
-    if value.upper() == "$NULLFRAME":
-        return 0
-    n = _TOOL_DATA_RE.match(value)
-    number = _small_int(n.group(1)) if n else None
+    number = _tool_number(value)
     if number is not None:
         return number
     return f"$TOOL = {value[:40]}: not a TOOL_DATA number"
+
+
+def _tool_number(value: str) -> int | None:
+    """The TOOL_DATA number a ``$TOOL`` value names (0: ``$NULLFRAME``, the flange); None when
+    it is not ``TOOL_DATA[n]`` or ``$NULLFRAME``."""
+    if value.upper() == "$NULLFRAME":
+        return 0
+    n = _TOOL_DATA_RE.match(value)
+    return _small_int(n.group(1)) if n else None
 
 
 def _base_data_ref(digits: str, lineno: int, what: str) -> BaseRef:
@@ -1613,10 +1619,7 @@ def _with_tool_value(code: str, lineno: int, base: BaseRef) -> int | str | None:
     stop = _NEXT_SYSVAR_RE.search(code, tool_m.end())
     value = code[tool_m.end() : stop.start() if stop else len(code)].strip()
     value = _APPROX_TAIL_RE.sub("", value)
-    if value.upper() == "$NULLFRAME":
-        return 0
-    n = _TOOL_DATA_RE.match(value)
-    number = _small_int(n.group(1)) if n else None
+    number = _tool_number(value)
     if number is not None:
         return number
     stool = _STOOL_RE.match(value)
