@@ -88,8 +88,7 @@ class Cell:
     ``base_number``) and ``base_data`` (BASE_DATA number -> robot_T_frame, the base included).
     ``tool_data`` (tool number -> flange_T_tool, the cell's tool and 0, the flange, included)
     is None when the file has no ``tool_data:`` (a program is then corrected with the cell's
-    tool alone); ``tool_names``: the RAPID tooldata name (lower case) of each ``tool_data``
-    entry that has one (and ``tool0``) -> its number."""
+    tool alone)."""
 
     path: Path
     robot_name: str
@@ -107,7 +106,6 @@ class Cell:
     sha256: str = ""
     tracker: TableFormat | None = None  # how the grid file is written (tracker:), None: found
     tool_data: dict[int, np.ndarray] | None = None
-    tool_names: dict[str, int] | None = None
 
     @property
     def krl(self) -> KrlSection:
@@ -169,7 +167,7 @@ def load_cell(path: str | os.PathLike[str]) -> Cell:
     grid_path = r.file_path("", "grid", "a file path")
     tool_number, flange_T_tool = r.frame(r.top.get("tool"), "tool", True)
     base_number, robot_T_base = r.frame(r.top.get("base"), "base", True)
-    tool_data, tool_names = _tool_data(r, tool_number, flange_T_tool)
+    tool_data = _tool_data(r, tool_number, flange_T_tool)
     return Cell(
         path=path,
         robot_name=robot,
@@ -187,7 +185,6 @@ def load_cell(path: str | os.PathLike[str]) -> Cell:
         sha256=doc.sha256,
         tracker=_tracker(r),
         tool_data=tool_data,
-        tool_names=tool_names,
     )
 
 
@@ -206,14 +203,14 @@ def _base_data(r: CellReader, base_number: int, robot_T_base: np.ndarray) -> dic
     return base_data
 
 
-def _tool_data(r: CellReader, tool_number: int, flange_T_tool: np.ndarray) -> tuple:
-    """``tool_data: {n: {x, y, z, a, b, c[, name]}}``: (number -> flange_T_tool with the cell's
-    tool and tool 0, the flange (KRL $NULLFRAME, RAPID tool0), lower-case RAPID name ->
-    number), (None, None) when the key is absent."""
+def _tool_data(r: CellReader, tool_number: int, flange_T_tool: np.ndarray) -> dict | None:
+    """``tool_data: {n: {x, y, z, a, b, c[, name]}}``: number -> flange_T_tool with the cell's
+    tool and tool 0 (the flange), None when the key is absent. ``name`` (the tool's name on its
+    controller) is read by the dialects that name their tools."""
     data = r.top.get("tool_data")
     if data is None:
-        return None, None
-    tools, names = {0: np.eye(4), tool_number: flange_T_tool}, {"tool0": 0}  # 0: the flange
+        return None
+    tools = {0: np.eye(4), tool_number: flange_T_tool}  # 0: the flange
     for n, frame in r.mapping(data, "tool_data", None).items():
         key = f"tool_data.{n}"
         try:
@@ -225,15 +222,9 @@ def _tool_data(r: CellReader, tool_number: int, flange_T_tool: np.ndarray) -> tu
         if number == tool_number:
             raise r.error(key, "repeats tool.number; define it in tool")
         d = r.mapping(frame, key, {*FRAME_KEYS, "name"})
-        name = d.pop("name", None)
-        if name is not None:
-            if not isinstance(name, str) or not name.isidentifier() or not name.isascii():
-                raise r.error(f"{key}.name", f"must be a RAPID tooldata name, got {name!r}")
-            if name.lower() in names:
-                raise r.error(f"{key}.name", f"{name} names tool {names[name.lower()]} already")
-            names[name.lower()] = number
+        d.pop("name", None)
         tools[number] = r.frame(d, key, False)[1]
-    return tools, names
+    return tools
 
 
 def _drilling(r: CellReader) -> DrillingSection:
