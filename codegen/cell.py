@@ -16,12 +16,12 @@ one frozen record per concern, each built and validated in one place:
 - ``cell.tracker`` (``infra.csvtable.TableFormat`` or None): ``tracker:`` (columns, units,
   delimiter, decimal), how the cell's tracker software writes the grid file (the command line's
   ``--columns``/``--units``/... win over it);
-- ``cell.dialects[name]`` for every dialect of ``codegen.dialects.DIALECTS``, e.g. ``cell.krl``
-  (``codegen.krl.section.KrlSection``) and ``cell.gcode`` (``codegen.gcode.section.GcodeSection``):
-  what only that dialect reads. Each dialect's plug-in (``codegen.plugin``) declares the YAML
-  keys it reads (``section_keys()``) and its reader (``read_section(reader, robot_T_base)``),
-  so a new dialect brings its cell section in its own folder; a key may be read by several records
-  (``program.decimals`` by both dialects), any key no record reads is an error.
+- ``cell.dialects[name]`` for every dialect ``name`` of ``codegen.dialects.DIALECTS`` (the record
+  of ``codegen/<name>/section.py``): what only that dialect reads. Each dialect's plug-in
+  (``codegen.plugin``) declares the YAML keys it reads (``section_keys()``) and its reader
+  (``read_section(reader, robot_T_base)``), so a new dialect brings its cell section in its own
+  folder; a key may be read by several records (``program.decimals`` by every dialect), any key
+  no record reads is an error.
 """
 
 from __future__ import annotations
@@ -30,7 +30,6 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -41,10 +40,6 @@ from accugrid.compensation.settings import TOOL_DISTANCE_MM, CorrectionSettings
 from accugrid.infra.csvtable import DECIMALS, DELIMITERS, UNITS, TableFormat
 from accugrid.infra.errors import InputError
 from accugrid.infra.yamlfile import load_yaml
-
-if TYPE_CHECKING:  # read through DIALECTS: importing one dialect must not load another
-    from accugrid.codegen.gcode.section import GcodeSection
-    from accugrid.codegen.krl.section import KrlSection
 
 __all__ = ["Cell", "ConfigurationSection", "DrillingSection", "load_cell"]
 
@@ -106,16 +101,6 @@ class Cell:
     sha256: str = ""
     tracker: TableFormat | None = None  # how the grid file is written (tracker:), None: found
     tool_data: dict[int, np.ndarray] | None = None
-
-    @property
-    def krl(self) -> KrlSection:
-        """What the KUKA KRL emitter reads."""
-        return self.dialects["krl"]
-
-    @property
-    def gcode(self) -> GcodeSection:
-        """What the G-code emitter and rewrite read."""
-        return self.dialects["gcode"]
 
     def grid_file(self, override: str | os.PathLike[str] | None = None, hint: str = "") -> Path:
         """The measurement to correct with: ``override`` (--grid), else the cell's ``grid``;

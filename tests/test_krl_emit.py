@@ -59,7 +59,7 @@ def check_round_trip(program, files):
     same_ret = program.cell.drilling.retract_mm == program.cell.drilling.approach_mm
     stages = ("APP", "CLR", "BOT") if same_ret else ("APP", "CLR", "BOT", "RET")
     assert len(parsed) == len(program) * len(stages)
-    half = 0.5 * 10.0**-program.cell.krl.decimals + 1e-9
+    half = 0.5 * 10.0 ** -program.cell.dialects["krl"].decimals + 1e-9
     status, turn = program.configuration.to_kuka()
     for i in range(len(program)):
         for k, stage in enumerate(stages):

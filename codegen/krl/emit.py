@@ -238,7 +238,7 @@ class KrlFiles(Mapping):
     def __init__(self, files, modules: list[str], per_part: int, holes: int, cell: Cell) -> None:
         self._files, self._modules, self._holes, self._cell = files, modules, holes, cell
         self._per_part = per_part
-        name = cell.krl.name
+        name = cell.dialects["krl"].name
         self._pairs = [*modules, name] if modules else [name]
         self._index = {f"{m}{ext}": (k, ext) for ext in _EXTS for k, m in enumerate(modules)}
         self._index |= {f"{name}{ext}": (len(modules), ext) for ext in _EXTS}
@@ -283,7 +283,7 @@ class KrlFiles(Mapping):
             pieces, lines = self._files(name, "part", lo, hi, ext)
         else:
             pieces, lines = self._files(name, "main", 0, 0, ext, modules)
-        limit = self._cell.krl.lines_per_file
+        limit = self._cell.dialects["krl"].lines_per_file
         if lines > limit:
             raise InputError(
                 f"{name}{ext} would have {lines} lines, more than program.lines_per_file "
@@ -301,21 +301,22 @@ def _file_renderer(cell: Cell, header: list[str], records: _Records, templates):
     holes lo..hi-1 in pieces of UTF-8, and its number of lines. Where the template prints its
     per-hole lines as they are, its text is rendered around them and they stay bytes."""
     env = environment(template_dir("krl", templates), newline="\r\n")
+    krl = cell.dialects["krl"]
     common = {
         "header": header,
-        "decimals": cell.krl.decimals,
+        "decimals": krl.decimals,
         "base": cell.base_number,
         "tool": cell.tool_number,
-        "ptp_percent": cell.krl.ptp_percent,
-        "apo_cdis": cell.krl.apo_cdis_mm,
-        "apo_cptp": cell.krl.apo_ptp_percent,
-        "spindle": cell.krl.spindle_output,
-        "clamp": cell.krl.clamp_output,
-        "travel": cell.krl.travel_motion,
+        "ptp_percent": krl.ptp_percent,
+        "apo_cdis": krl.apo_cdis_mm,
+        "apo_cptp": krl.apo_ptp_percent,
+        "spindle": krl.spindle_output,
+        "clamp": krl.clamp_output,
+        "travel": krl.travel_motion,
         "travel_m_s": cell.drilling.travel_mm_s / 1000.0,
         "approach_m_s": cell.drilling.approach_mm_s / 1000.0,
         "dwell": cell.drilling.dwell_s,
-        "ext": cell.krl.external_axes,
+        "ext": krl.external_axes,
     }
     kinds = {}  # ext -> template, its variables (None: any), its lines variable, printed as is
     for ext, lines in ((".src", "hole_lines"), (".dat", "position_lines")):
@@ -350,7 +351,8 @@ def _modules(files, cell: Cell, n: int) -> tuple[list[str], int]:
     numbered NAME_001.. (more digits past 999 modules, as long as the name stays a KRL name of
     at most 24 characters); InputError when they cannot be named or the main program cannot
     call them all within the line limit."""
-    name, limit = cell.krl.name, cell.krl.lines_per_file
+    krl = cell.dialects["krl"]
+    name, limit = krl.name, krl.lines_per_file
     if n < 2 or n <= _capacity(files, name, "single", limit):
         return [], n
     per_part = _capacity(files, f"{name}_001", "part", limit)
@@ -429,14 +431,15 @@ class _Records:
     def __init__(self, program: Program) -> None:
         self.program = program
         cell = program.cell
-        self.decimals = cell.krl.decimals
+        krl = cell.dialects["krl"]
+        self.decimals = krl.decimals
         self.stages = (
             [0, 1, 2] if cell.drilling.retract_mm == cell.drilling.approach_mm else [0, 1, 2, 3]
         )
         self.names = [STAGES[k] for k in self.stages]
         self._block: tuple = (0, 0, None)
         ext = "".join(
-            f",E{k + 1} {fixed(v, cell.krl.decimals)}" for k, v in enumerate(cell.krl.external_axes)
+            f",E{k + 1} {fixed(v, krl.decimals)}" for k, v in enumerate(krl.external_axes)
         )
         self.position_template = "".join(
             f"DECL E6POS XH{SLOT}_{s}={{X {SLOT},Y {SLOT},Z {SLOT},A {SLOT},B {SLOT},C {SLOT},"
@@ -567,7 +570,8 @@ def _hole_template(cell, stages: list[str]) -> str:
     hole number, hole number, feed, hole number, hole number), with the cell's settings filled
     in; CRLF line ends."""
     approach = f"$VEL.CP = {fixed(cell.drilling.approach_mm_s / 1000.0, 4)}"
-    if cell.krl.travel_motion == "ptp":
+    krl = cell.dialects["krl"]
+    if krl.travel_motion == "ptp":
         travel = [f"PTP XH{SLOT}_APP C_PTP"]
     else:
         travel = [
@@ -575,9 +579,9 @@ def _hole_template(cell, stages: list[str]) -> str:
             f"LIN XH{SLOT}_APP C_DIS",
         ]
     clamp = unclamp = []
-    if cell.krl.clamp_output is not None:
-        clamp = [f"$OUT_C[{fixed(cell.krl.clamp_output, 0)}] = TRUE ; clamp"]
-        unclamp = [f"$OUT[{fixed(cell.krl.clamp_output, 0)}] = FALSE ; unclamp"]
+    if krl.clamp_output is not None:
+        clamp = [f"$OUT_C[{fixed(krl.clamp_output, 0)}] = TRUE ; clamp"]
+        unclamp = [f"$OUT[{fixed(krl.clamp_output, 0)}] = FALSE ; unclamp"]
     lines = [
         f"; hole {SLOT}",
         *travel,
