@@ -1,5 +1,6 @@
 """KUKA KRL for a Program: ``NAME.src`` (motion) and ``NAME.dat`` (the E6POS of every hole); and
-the laser-tracker measurement program of a plan (``render_measurement``, the same convention).
+the laser-tracker measurement program of a plan (``render_measurement``, the same convention;
+``MEASUREMENT``, the plug-in's ``measurement()``).
 
 Templates ``program.src.j2`` and ``program.dat.j2`` (``templates/krl/``), rendered with CRLF line
 ends as the controller's own files have. Position names are ``XH<n>_APP|CLR|BOT|RET`` (n = hole
@@ -32,7 +33,6 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 from typing import NamedTuple
@@ -41,6 +41,7 @@ import numpy as np
 
 from accugrid.codegen.cell import Cell
 from accugrid.codegen.linebytes import SLOT, image_bytes, line_image, number_cells, text_cells
+from accugrid.codegen.plugin import MeasureSettings, Rendered
 from accugrid.codegen.points import Points
 from accugrid.codegen.program import STAGES, Program
 from accugrid.codegen.render import (
@@ -54,17 +55,24 @@ from accugrid.codegen.render import (
 )
 from accugrid.infra.csvtable import Table
 from accugrid.infra.errors import InputError
-from accugrid.infra.textsafe import KRL_NAME_MAX, comment_texts, fixed, fixed_texts
+from accugrid.infra.textsafe import (
+    KRL_NAME_MAX,
+    comment_texts,
+    fixed,
+    fixed_texts,
+    krl_identifier,
+)
 from accugrid.kinematics.configuration import Configuration
 
 __all__ = [
     "BLOCK",
+    "MEASUREMENT",
     "MODULE_DIGITS",
     "KrlFiles",
     "KrlHole",
+    "KrlMeasurement",
     "KrlPosition",
     "MeasureMove",
-    "MeasureSettings",
     "module_split",
     "render_krl",
     "render_measurement",
@@ -106,20 +114,6 @@ class MeasureMove(NamedTuple):
     label: str
 
 
-@dataclass(frozen=True)
-class MeasureSettings:
-    """TOOL_DATA and BASE_DATA numbers (base 0: the robot frame), PTP %, $VEL.CP m/s, and the
-    wait after each position: ``wait_input`` ($IN number) or ``wait_sec`` s."""
-
-    tool: int
-    base: int
-    ptp_percent: float
-    vel_cp: float
-    wait_sec: float
-    wait_input: int | None
-    ptp_only: bool = False  # every move PTP (poses that reorient), else PTP to the first, then LIN
-
-
 def render_measurement(
     points: np.ndarray,
     abc: np.ndarray,
@@ -136,7 +130,8 @@ def render_measurement(
     Turn (N,); one E6POS ``XMP<k>`` per distinct pose (0.0001 mm / deg) in order of first visit,
     then a PTP to the first row and LIN (or PTP with ``settings.ptp_only``) to every other, each
     followed by the wait. Numbers are formatted here (mm and deg with 3 decimals, S and T as
-    integers)."""
+    integers). ``settings``: TOOL_DATA and BASE_DATA numbers (base 0: $NULLFRAME), PTP %,
+    $VEL.CP (``speed_m_s``), ``WAIT FOR $IN[wait_input]`` or ``WAIT SEC wait_sec``."""
     points = np.asarray(points, dtype=float)
     abc = np.broadcast_to(np.asarray(abc, dtype=float), points.shape)
     key = np.round(np.column_stack([points, abc]), 4)
@@ -174,7 +169,7 @@ def render_measurement(
         "tool": settings.tool,
         "base": settings.base,
         "ptp_percent": settings.ptp_percent,
-        "vel_cp": settings.vel_cp,
+        "vel_cp": settings.speed_m_s,
         "wait_sec": settings.wait_sec,
         "wait_input": settings.wait_input,
         "ptp_only": settings.ptp_only,
@@ -183,6 +178,38 @@ def render_measurement(
 
 
 _ZERO_E = ",E1 0.000,E2 0.000,E3 0.000,E4 0.000,E5 0.000,E6 0.000"  # no external axes
+
+
+class KrlMeasurement:
+    """The KRL measurement program as the plug-in's ``measurement()``
+    (``codegen.plugin.MeasurementWriter``): ``NAME.src`` and ``NAME.dat`` (lower-case file
+    names), NAME a KRL name (prefixed M where it would not be one); the .src renamed last."""
+
+    listing = "the .dat"
+
+    def name(self, requested: str) -> str:
+        return krl_identifier(requested, prefix="M")
+
+    def targets(self, out: Path, name: str) -> list[Path]:
+        return [out / f"{name.lower()}{ext}" for ext in _EXTS]
+
+    def motion(self, settings: MeasureSettings) -> str:
+        if settings.wait_input is not None:
+            wait = f"WAIT FOR $IN[{settings.wait_input}]"
+        else:
+            wait = f"WAIT SEC {fixed(settings.wait_sec)}"
+        moves = "each by PTP" if settings.ptp_only else "first by PTP, then LIN"
+        return f"{moves}, each followed by {wait}"
+
+    def render(self, points, abc, ids, status, turn, name, header, settings, templates, out):
+        src, dat = render_measurement(
+            points, abc, ids, status, turn, name, header, settings, templates
+        )
+        paths = self.targets(out, name)
+        return Rendered({paths[0]: src, paths[1]: dat}, [paths[0]])
+
+
+MEASUREMENT = KrlMeasurement()
 
 
 def _move_lines(targets: list[str], ids: list[str], settings: MeasureSettings) -> str:
