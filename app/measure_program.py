@@ -135,16 +135,7 @@ def plan_files(request: PlanRequest, output: str | Path) -> JobFiles:
     )
     _check_program(request)
     program = writer.render(
-        plan.points,
-        plan.abc_rows(),
-        plan.ids,
-        status,
-        turn,
-        name,
-        header,
-        settings,
-        request.templates,
-        Path(output),
+        plan, status, turn, name, header, settings, request.templates, Path(output)
     )
     files = {csv: plan.csv_text(), **program.files}
     lines = [*info, f"wrote {', '.join(str(p) for p in files)}"]

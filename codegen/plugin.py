@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from accugrid.codegen.cellfile import CellReader, SectionKeys
     from accugrid.codegen.program import Program
     from accugrid.codegen.rewrite import Options, ProgramContext, Scan
+    from accugrid.compensation.plans import Plan
 
 __all__ = ["DialectFolder", "DialectPlugin", "MeasureSettings", "MeasurementWriter", "Rendered"]
 
@@ -69,10 +70,10 @@ class MeasurementWriter(Protocol):
       its controller accepts); ``targets(out, name)``: its files in folder ``out``;
     - ``motion(settings)``: how it moves and waits, as its header says ("first by PTP, then
       LIN, each followed by WAIT SEC 3.000"); ``listing``: where it lists its positions;
-    - ``render(points, abc, ids, status, turn, name, header, settings, templates, out)``: its
-      files (``Rendered``) for positions (N, 3) mm in the robot frame (or ``settings.base``'s)
-      at KUKA A, B, C ((3,) or (N, 3) deg) in KUKA Status and Turn (N,), ``ids`` (N,) the plan's
-      row ids; numbers through ``infra.textsafe`` only.
+    - ``render(plan, status, turn, name, header, settings, templates, out)``: its files
+      (``Rendered``) visiting the rows of ``plan`` (``compensation.plans.Plan``: N positions mm
+      in the robot frame, or ``settings.base``'s, KUKA A, B, C deg, ids) in KUKA Status and Turn
+      (N,); numbers through ``infra.textsafe`` only.
     """
 
     listing: str
@@ -85,9 +86,7 @@ class MeasurementWriter(Protocol):
 
     def render(
         self,
-        points: np.ndarray,
-        abc: np.ndarray,
-        ids: list[str],
+        plan: Plan,
         status: np.ndarray,
         turn: np.ndarray,
         name: str,

@@ -201,10 +201,9 @@ class KrlMeasurement:
         moves = "each by PTP" if settings.ptp_only else "first by PTP, then LIN"
         return f"{moves}, each followed by {wait}"
 
-    def render(self, points, abc, ids, status, turn, name, header, settings, templates, out):
-        src, dat = render_measurement(
-            points, abc, ids, status, turn, name, header, settings, templates
-        )
+    def render(self, plan, status, turn, name, header, settings, templates, out):
+        rows = (plan.points, plan.abc_rows(), plan.ids, status, turn)
+        src, dat = render_measurement(*rows, name, header, settings, templates)
         paths = self.targets(out, name)
         return Rendered({paths[0]: src, paths[1]: dat}, [paths[0]])
 
