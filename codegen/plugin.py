@@ -173,7 +173,8 @@ class DialectPlugin(Protocol):
 class DialectFolder:
     """The members of ``DialectPlugin`` a dialect folder gives by its modules' names, imported
     when first used: ``section.py`` (``KEYS``, ``read_section``) and ``rewrite.py``
-    (``scan_positions``, ``splice_positions``, ``add_header``). A plug-in derives from it and
+    (``scan_positions``, ``splice_positions``, ``add_header``); the names in ``exports`` are
+    its ``emit.py``'s (none by default). A plug-in derives from it and
     adds its name, suffixes, ``targets``, ``plan``, ``render`` and ``placement`` (and
     ``measurement`` when it writes measurement programs)."""
 
