@@ -1,7 +1,8 @@
 """The measurement-plan job (``accugrid plan``): the positions a laser-tracker operator
-measures, in order, as a CSV skeleton (``Plan.csv_text``) and the KUKA KRL program that visits
-them (``krl.emit.render_measurement``), every position checked with the robot's IK in one KUKA
-Status (``compensation.plans.reach_in_one_status``). Lengths mm, angles deg, speeds m/s.
+measures, in order, as a CSV skeleton (``Plan.csv_text``) and the robot program that visits them
+(the measurement program of a dialect's plug-in, ``codegen.plugin.MeasurementWriter``; the
+command writes KUKA KRL), every position checked with the robot's IK in one KUKA Status
+(``compensation.plans.reach_in_one_status``). Lengths mm, angles deg, speeds m/s.
 """
 
 from __future__ import annotations
@@ -11,8 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
+from accugrid.codegen.dialects import plugin_of
 from accugrid.codegen.header import header_lines
-from accugrid.codegen.krl.emit import MeasureSettings, render_measurement
+from accugrid.codegen.plugin import MeasurementWriter, MeasureSettings
 from accugrid.compensation.plans import (
     SEED_REPEATS,
     Plan,
@@ -24,15 +26,16 @@ from accugrid.compensation.plans import (
 )
 from accugrid.infra.atomic import JobFiles
 from accugrid.infra.errors import InputError
-from accugrid.infra.textsafe import fixed, krl_identifier
+from accugrid.infra.textsafe import fixed
 from accugrid.kinematics.configuration import solve_in_one_status
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import Robot
 
-__all__ = ["KINDS", "MAX_WAIT_SEC", "PlanRequest", "plan_files", "plan_targets"]
+__all__ = ["DIALECT", "KINDS", "MAX_WAIT_SEC", "PlanRequest", "plan_files", "plan_targets"]
 
 KINDS = ("grid", "cube", "experiment", "identify")
 MAX_WAIT_SEC = 600.0
+DIALECT = "krl"  # the language of the measurement program ``accugrid plan`` writes
 
 
 @dataclass(frozen=True)
@@ -48,10 +51,11 @@ class PlanRequest:
     random ones (``seed``), ``repeats`` rounds, ``design`` "library" (for the structure search's
     candidates, ``compliance`` and ``harmonics`` as (axis, order) pairs pinned) or "dh"
     (D-optimal for the model given by ``compliance``, ``harmonics``, ``gravity``).
-    Program: ``name`` (default measure_KIND), TOOL_DATA ``tool_number``, BASE_DATA
-    ``base_number`` (0: the robot frame), first-PTP ``ptp_percent``, LIN ``vel_m_s``, and after
-    each position ``wait_input`` ($IN number) or ``wait_sec`` s; ``templates``: a folder with
-    measure.src.j2 and measure.dat.j2 (None: built-in)."""
+    Program: in ``dialect`` (a registered dialect that writes measurement programs), ``name``
+    (default measure_KIND), TOOL_DATA ``tool_number``, BASE_DATA ``base_number`` (0: the robot
+    frame), first-PTP ``ptp_percent``, LIN ``vel_m_s``, and after each position ``wait_input``
+    ($IN number) or ``wait_sec`` s; ``templates``: a folder with the dialect's measurement
+    templates (KRL: measure.src.j2 and measure.dat.j2; None: built-in)."""
 
     kind: str
     robot: Robot
@@ -80,48 +84,62 @@ class PlanRequest:
     wait_sec: float = 3.0
     wait_input: int | None = None
     templates: Path | None = None
+    dialect: str = DIALECT
 
 
-def _program_name(kind: str, name: str | None) -> str:
-    """The KRL module name: ``name`` (default measure_KIND) made a KRL identifier."""
-    return krl_identifier(name or f"measure_{kind}", prefix="M")
+def _program(dialect: str, kind: str, name: str | None) -> tuple[MeasurementWriter, str]:
+    """The measurement program of ``dialect`` (InputError when it writes none) and its name:
+    ``name`` (default measure_KIND) made one the dialect accepts."""
+    writer = plugin_of(dialect).measurement()
+    return writer, writer.name(name or f"measure_{kind}")
 
 
-def plan_targets(output: str | Path, kind: str, name: str | None) -> list[Path]:
-    """The files of the job in folder ``output``: NAME.csv, NAME.src, NAME.dat (lower case)."""
-    name = _program_name(kind, name)
-    return [Path(output) / f"{name.lower()}.{ext}" for ext in ("csv", "src", "dat")]
+def plan_targets(
+    output: str | Path, kind: str, name: str | None, dialect: str = DIALECT
+) -> list[Path]:
+    """The files of the job in folder ``output``: the plan CSV (named as the program's first
+    file), then the measurement program's (KRL: NAME.csv, NAME.src, NAME.dat, lower case)."""
+    writer, name = _program(dialect, kind, name)
+    files = writer.targets(Path(output), name)
+    return [files[0].with_suffix(".csv"), *files]
 
 
 def plan_files(request: PlanRequest, output: str | Path) -> JobFiles:
-    """The plan CSV and its KRL measurement program in folder ``output``, and the lines to
-    print (the plan's description, what was written). InputError on bad settings or a
-    position the robot cannot reach in the plan's Status."""
+    """The plan CSV and its measurement program in folder ``output``, and the lines to print
+    (the plan's description, what was written). InputError on bad settings or a position the
+    robot cannot reach in the plan's Status."""
     plan, info = _build(request)
-    name = _program_name(request.kind, request.name)
-    paths = plan_targets(output, request.kind, request.name)
+    writer, name = _program(request.dialect, request.kind, request.name)
+    csv = plan_targets(output, request.kind, request.name, request.dialect)[0]
     status, turn, config = reach_in_one_status(plan, request.robot, request.status)
-    if request.wait_input is not None:
-        wait = f"WAIT FOR $IN[{request.wait_input}]"
-    else:
-        wait = f"WAIT SEC {fixed(request.wait_sec)}"
+    settings = MeasureSettings(
+        tool=request.tool_number,
+        base=request.base_number,
+        ptp_percent=request.ptp_percent,
+        speed_m_s=request.vel_m_s,
+        wait_sec=request.wait_sec,
+        wait_input=request.wait_input,
+        ptp_only=request.kind == "identify",  # reorienting between poses: PTP, not LIN
+    )
     details = [
         "inputs none, positions generated from the command-line settings",
         *info,
-        _orientation_text(plan) + f", robot {request.robot.name}, Status {config}",
+        _orientation_text(plan, writer.listing) + f", robot {request.robot.name}, Status {config}",
     ]
-    moves = "each by PTP" if request.kind == "identify" else "first by PTP, then LIN"
-    closing = [f"{len(plan.points)} positions, {moves}, each followed by {wait}"]
+    closing = [f"{len(plan.points)} positions, {writer.motion(settings)}"]
     header = header_lines(
         f"plan {request.kind}",
         details=details,
         where=", measurement positions are not corrected",
         closing=closing,
     )
-    src, dat = _program(plan, status, turn, name, header, request)
-    files = {paths[0]: plan.csv_text(), paths[1]: src, paths[2]: dat}
-    lines = [*info, f"wrote {', '.join(str(p) for p in paths)}"]
-    return JobFiles(files, [], lines, main=[paths[1]])  # the .src (what runs) replaced last
+    _check_program(request)
+    program = writer.render(
+        plan, status, turn, name, header, settings, request.templates, Path(output)
+    )
+    files = {csv: plan.csv_text(), **program.files}
+    lines = [*info, f"wrote {', '.join(str(p) for p in files)}"]
+    return JobFiles(files, [], lines, main=program.main)  # what runs replaced last
 
 
 def _build(r: PlanRequest) -> tuple[Plan, list[str]]:
@@ -241,16 +259,8 @@ def _candidates_line(robot, plan: Plan, status: int, r: PlanRequest) -> str:
     )
 
 
-def _program(
-    plan: Plan,
-    status: np.ndarray,
-    turn: np.ndarray,
-    name: str,
-    header: list[str],
-    r: PlanRequest,
-) -> tuple[str, str]:
-    """(.src, .dat) texts of the measurement program (``krl.emit.render_measurement``) after
-    checking the program options."""
+def _check_program(r: PlanRequest) -> None:
+    """InputError naming the option of a program setting out of its range."""
     if r.wait_input is not None and not 1 <= r.wait_input <= 4096:
         raise InputError(f"--wait-input must be an input number 1..4096, got {r.wait_input}")
     if not 0 <= r.wait_sec <= MAX_WAIT_SEC:
@@ -264,29 +274,10 @@ def _program(
         low = 1 if option == "tool_number" else 0
         if not low <= value <= 32:
             raise InputError(f"--{option.replace('_', '-')} must be {low}..32, got {value}")
-    settings = MeasureSettings(
-        tool=r.tool_number,
-        base=r.base_number,
-        ptp_percent=r.ptp_percent,
-        vel_cp=r.vel_m_s,
-        wait_sec=r.wait_sec,
-        wait_input=r.wait_input,
-        ptp_only=r.kind == "identify",  # reorienting between poses: PTP, not LIN
-    )
-    return render_measurement(
-        plan.points,
-        plan.abc_rows(),
-        plan.ids,
-        status,
-        turn,
-        name,
-        header,
-        settings,
-        r.templates,
-    )
 
 
-def _orientation_text(plan: Plan) -> str:
+def _orientation_text(plan: Plan, listing: str) -> str:
+    """The plan's orientation, or where the program (``listing``) lists one per position."""
     if np.ndim(plan.abc) == 1:
         return f"orientation A B C {' '.join(fixed(v) for v in plan.abc)} deg"
-    return "orientation A B C per position (see the .dat)"
+    return f"orientation A B C per position (see {listing})"

@@ -129,7 +129,6 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
         tool_number=cell.tool_number,
         flange_T_tool=cell.flange_T_tool,
         tool_data=cell.tool_data,
-        tool_names=cell.tool_names,
         max_bytes=req.max_bytes,
         tolerance_mm=req.tolerance_mm,
         policy=policy,

@@ -80,9 +80,9 @@ def numbers_floor(program, krl: bool) -> int:
     and the S and T of each position, NULs dropped."""
     cell = program.cell
     frame, places = (
-        (cell.robot_T_base, cell.krl.decimals)
+        (cell.robot_T_base, cell.dialects["krl"].decimals)
         if krl
-        else (cell.gcode.robot_T_program, cell.gcode.decimals)
+        else (cell.dialects["gcode"].robot_T_program, cell.dialects["gcode"].decimals)
     )
     stages = [0, 1, 2, 3]
     if krl and cell.drilling.retract_mm == cell.drilling.approach_mm:
@@ -144,7 +144,7 @@ def main() -> None:
     size = sum(len(t) for t in files.values()) / 2**20
     print(
         f"{HOLES} holes; KRL: {len(files)} files, {size:.1f} MiB; lines_per_file "
-        f"{cell.krl.lines_per_file}"
+        f"{cell.dialects['krl'].lines_per_file}"
     )
     print(table(rows, ("stage", "best s", "peak MiB")))
     best = {name: float(seconds) for name, seconds, _ in rows}

@@ -16,12 +16,12 @@ one frozen record per concern, each built and validated in one place:
 - ``cell.tracker`` (``infra.csvtable.TableFormat`` or None): ``tracker:`` (columns, units,
   delimiter, decimal), how the cell's tracker software writes the grid file (the command line's
   ``--columns``/``--units``/... win over it);
-- ``cell.dialects[name]`` for every dialect of ``codegen.dialects.DIALECTS``, e.g. ``cell.krl``
-  (``codegen.krl.section.KrlSection``) and ``cell.gcode`` (``codegen.gcode.section.GcodeSection``):
-  what only that dialect reads. Each dialect's plug-in (``codegen.plugin``) declares the YAML
-  keys it reads (``section_keys()``) and its reader (``read_section(reader, robot_T_base)``),
-  so a new dialect brings its cell section in its own folder; a key may be read by several records
-  (``program.decimals`` by both dialects), any key no record reads is an error.
+- ``cell.dialects[name]`` for every dialect ``name`` of ``codegen.dialects.DIALECTS`` (the record
+  of ``codegen/<name>/section.py``): what only that dialect reads. Each dialect's plug-in
+  (``codegen.plugin``) declares the YAML keys it reads (``section_keys()``) and its reader
+  (``read_section(reader, robot_T_base)``), so a new dialect brings its cell section in its own
+  folder; a key may be read by several records (``program.decimals`` by every dialect), any key
+  no record reads is an error.
 """
 
 from __future__ import annotations
@@ -30,7 +30,6 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -41,10 +40,6 @@ from accugrid.compensation.settings import TOOL_DISTANCE_MM, CorrectionSettings
 from accugrid.infra.csvtable import DECIMALS, DELIMITERS, UNITS, TableFormat
 from accugrid.infra.errors import InputError
 from accugrid.infra.yamlfile import load_yaml
-
-if TYPE_CHECKING:  # read through DIALECTS: importing one dialect must not load another
-    from accugrid.codegen.gcode.section import GcodeSection
-    from accugrid.codegen.krl.section import KrlSection
 
 __all__ = ["Cell", "ConfigurationSection", "DrillingSection", "load_cell"]
 
@@ -88,8 +83,7 @@ class Cell:
     ``base_number``) and ``base_data`` (BASE_DATA number -> robot_T_frame, the base included).
     ``tool_data`` (tool number -> flange_T_tool, the cell's tool and 0, the flange, included)
     is None when the file has no ``tool_data:`` (a program is then corrected with the cell's
-    tool alone); ``tool_names``: the RAPID tooldata name (lower case) of each ``tool_data``
-    entry that has one (and ``tool0``) -> its number."""
+    tool alone)."""
 
     path: Path
     robot_name: str
@@ -107,17 +101,6 @@ class Cell:
     sha256: str = ""
     tracker: TableFormat | None = None  # how the grid file is written (tracker:), None: found
     tool_data: dict[int, np.ndarray] | None = None
-    tool_names: dict[str, int] | None = None
-
-    @property
-    def krl(self) -> KrlSection:
-        """What the KUKA KRL emitter reads."""
-        return self.dialects["krl"]
-
-    @property
-    def gcode(self) -> GcodeSection:
-        """What the G-code emitter and rewrite read."""
-        return self.dialects["gcode"]
 
     def grid_file(self, override: str | os.PathLike[str] | None = None, hint: str = "") -> Path:
         """The measurement to correct with: ``override`` (--grid), else the cell's ``grid``;
@@ -169,7 +152,7 @@ def load_cell(path: str | os.PathLike[str]) -> Cell:
     grid_path = r.file_path("", "grid", "a file path")
     tool_number, flange_T_tool = r.frame(r.top.get("tool"), "tool", True)
     base_number, robot_T_base = r.frame(r.top.get("base"), "base", True)
-    tool_data, tool_names = _tool_data(r, tool_number, flange_T_tool)
+    tool_data = _tool_data(r, tool_number, flange_T_tool)
     return Cell(
         path=path,
         robot_name=robot,
@@ -187,7 +170,6 @@ def load_cell(path: str | os.PathLike[str]) -> Cell:
         sha256=doc.sha256,
         tracker=_tracker(r),
         tool_data=tool_data,
-        tool_names=tool_names,
     )
 
 
@@ -206,14 +188,14 @@ def _base_data(r: CellReader, base_number: int, robot_T_base: np.ndarray) -> dic
     return base_data
 
 
-def _tool_data(r: CellReader, tool_number: int, flange_T_tool: np.ndarray) -> tuple:
-    """``tool_data: {n: {x, y, z, a, b, c[, name]}}``: (number -> flange_T_tool with the cell's
-    tool and tool 0, the flange (KRL $NULLFRAME, RAPID tool0), lower-case RAPID name ->
-    number), (None, None) when the key is absent."""
+def _tool_data(r: CellReader, tool_number: int, flange_T_tool: np.ndarray) -> dict | None:
+    """``tool_data: {n: {x, y, z, a, b, c[, name]}}``: number -> flange_T_tool with the cell's
+    tool and tool 0 (the flange), None when the key is absent. ``name`` (the tool's name on its
+    controller) is read by the dialects that name their tools."""
     data = r.top.get("tool_data")
     if data is None:
-        return None, None
-    tools, names = {0: np.eye(4), tool_number: flange_T_tool}, {"tool0": 0}  # 0: the flange
+        return None
+    tools = {0: np.eye(4), tool_number: flange_T_tool}  # 0: the flange
     for n, frame in r.mapping(data, "tool_data", None).items():
         key = f"tool_data.{n}"
         try:
@@ -225,15 +207,9 @@ def _tool_data(r: CellReader, tool_number: int, flange_T_tool: np.ndarray) -> tu
         if number == tool_number:
             raise r.error(key, "repeats tool.number; define it in tool")
         d = r.mapping(frame, key, {*FRAME_KEYS, "name"})
-        name = d.pop("name", None)
-        if name is not None:
-            if not isinstance(name, str) or not name.isidentifier() or not name.isascii():
-                raise r.error(f"{key}.name", f"must be a RAPID tooldata name, got {name!r}")
-            if name.lower() in names:
-                raise r.error(f"{key}.name", f"{name} names tool {names[name.lower()]} already")
-            names[name.lower()] = number
+        d.pop("name", None)
         tools[number] = r.frame(d, key, False)[1]
-    return tools, names
+    return tools
 
 
 def _drilling(r: CellReader) -> DrillingSection:

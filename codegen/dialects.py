@@ -4,6 +4,8 @@ A dialect is a plug-in (``codegen.plugin.DialectPlugin``): the folder ``codegen/
 ``plugin.py`` with ``PLUGIN``, emitter, reader and rewrite, cell section), ``templates/<name>/``
 and a command. It is registered here by one line naming its ``plugin`` module; nothing else
 branches on its name. A file whose suffix no dialect claims is refused instead of being guessed.
+The library names a dialect's folder defines (its plug-in's ``exports``, e.g. ``render_krl``)
+are resolved here, so ``accugrid.codegen`` lists them without naming a dialect's module.
 """
 
 from __future__ import annotations
@@ -51,6 +53,16 @@ DIALECTS = {
         ),
     )
 }
+
+
+def __getattr__(name: str) -> object:
+    """The library name ``name`` some dialect's plug-in exports, from that dialect's ``emit``
+    module (PEP 562)."""
+    for dialect in DIALECTS.values():
+        if name in plugin_of(dialect.name).exports:
+            folder = dialect.plugin.rpartition(".")[0]
+            return getattr(importlib.import_module(f"{folder}.emit"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def plugin_of(name: str) -> DialectPlugin:

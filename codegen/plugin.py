@@ -5,9 +5,10 @@ the members below, light to import (its emitter and reader are imported when fir
 ``codegen.dialects.DIALECTS`` names the module (the one registry). The jobs go through the
 plug-in only: ``app.job`` writes a new program (``targets``, ``plan``, ``render``),
 ``codegen.rewrite.rewrite`` corrects an existing one (``placement``, ``scan``, ``splice``),
-``codegen.cell`` reads its cell section (``section_keys``, ``read_section``). Program text is
-latin-1 decoded bytes (one character per byte, offsets are byte offsets), so a rewrite keeps any
-encoding and line ending.
+``codegen.cell`` reads its cell section (``section_keys``, ``read_section``), and
+``app.measure_program`` writes a laser-tracker measurement program (``measurement``, a
+capability a dialect may lack). Program text is latin-1 decoded bytes (one character per byte,
+offsets are byte offsets), so a rewrite keeps any encoding and line ending.
 """
 
 from __future__ import annotations
@@ -19,6 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
+from accugrid.infra.errors import InputError
+
 if TYPE_CHECKING:
     import numpy as np
 
@@ -26,8 +29,9 @@ if TYPE_CHECKING:
     from accugrid.codegen.cellfile import CellReader, SectionKeys
     from accugrid.codegen.program import Program
     from accugrid.codegen.rewrite import Options, ProgramContext, Scan
+    from accugrid.compensation.plans import Plan
 
-__all__ = ["DialectFolder", "DialectPlugin", "Rendered"]
+__all__ = ["DialectFolder", "DialectPlugin", "MeasureSettings", "MeasurementWriter", "Rendered"]
 
 
 @dataclass
@@ -41,6 +45,58 @@ class Rendered:
     stale: list[Path] = field(default_factory=list)
 
 
+@dataclass(frozen=True)
+class MeasureSettings:
+    """How a measurement program moves and waits: the tool and base numbers of the controller
+    (base 0: the robot frame), the speed of the first joint move (% of the maximum), the linear
+    speed between positions (m/s), the wait after each position: until digital input
+    ``wait_input`` is on, else ``wait_sec`` s; ``ptp_only``: every move a joint move (poses that
+    reorient), else a joint move to the first position and linear moves on."""
+
+    tool: int
+    base: int
+    ptp_percent: float
+    speed_m_s: float
+    wait_sec: float
+    wait_input: int | None
+    ptp_only: bool = False
+
+
+class MeasurementWriter(Protocol):
+    """A dialect's laser-tracker measurement program (``DialectPlugin.measurement()``): the
+    positions of a plan visited in order, waiting at each for the tracker.
+
+    - ``name(requested)``: the program name the dialect writes for ``requested`` (made a name
+      its controller accepts); ``targets(out, name)``: its files in folder ``out``;
+    - ``motion(settings)``: how it moves and waits, as its header says ("first by PTP, then
+      LIN, each followed by WAIT SEC 3.000"); ``listing``: where it lists its positions;
+    - ``render(plan, status, turn, name, header, settings, templates, out)``: its files
+      (``Rendered``) visiting the rows of ``plan`` (``compensation.plans.Plan``: N positions mm
+      in the robot frame, or ``settings.base``'s, KUKA A, B, C deg, ids) in KUKA Status and Turn
+      (N,); numbers through ``infra.textsafe`` only.
+    """
+
+    listing: str
+
+    def name(self, requested: str) -> str: ...
+
+    def targets(self, out: Path, name: str) -> list[Path]: ...
+
+    def motion(self, settings: MeasureSettings) -> str: ...
+
+    def render(
+        self,
+        plan: Plan,
+        status: np.ndarray,
+        turn: np.ndarray,
+        name: str,
+        header: list[str],
+        settings: MeasureSettings,
+        templates: str | os.PathLike[str] | None,
+        out: Path,
+    ) -> Rendered: ...
+
+
 class DialectPlugin(Protocol):
     """What a dialect provides.
 
@@ -48,7 +104,9 @@ class DialectPlugin(Protocol):
       ``suffixes``: the file suffixes it reads and writes (lower case, with the dot);
       ``pair``: the suffixes of a program given as two files (what runs, then its data, e.g.
       a KRL ``.src`` and ``.dat``), None when one file is a program; ``joints``: its
-      configuration words need every pose's joint angles (``Program.joints``).
+      configuration words need every pose's joint angles (``Program.joints``); ``exports``:
+      the names of its ``emit`` module the library exports (``accugrid.render_krl``), resolved
+      through the registry.
     - ``section_keys()``, ``read_section(reader, robot_T_base)``: the YAML keys of its cell
       section and its record (``cell.dialects[name]``), InputError naming the key.
     - ``targets(cell, out)``: the files a new program into ``out`` writes that must not exist
@@ -65,6 +123,8 @@ class DialectPlugin(Protocol):
       rows of what it wrote.
     - ``add_header(text, lines)``: the program with the comment header inserted where its
       controller accepts comments.
+    - ``measurement()``: its laser-tracker measurement program (``MeasurementWriter``), a
+      capability a dialect may lack: InputError then.
     """
 
     name: str
@@ -72,6 +132,7 @@ class DialectPlugin(Protocol):
     suffixes: tuple[str, ...]
     pair: tuple[str, str] | None
     joints: bool
+    exports: tuple[str, ...]
 
     def section_keys(self) -> SectionKeys: ...
 
@@ -106,16 +167,22 @@ class DialectPlugin(Protocol):
 
     def add_header(self, text: str, lines: list[str]) -> str: ...
 
+    def measurement(self) -> MeasurementWriter: ...
+
 
 class DialectFolder:
     """The members of ``DialectPlugin`` a dialect folder gives by its modules' names, imported
     when first used: ``section.py`` (``KEYS``, ``read_section``) and ``rewrite.py``
-    (``scan_positions``, ``splice_positions``, ``add_header``). A plug-in derives from it and
-    adds its name, suffixes, ``targets``, ``plan``, ``render`` and ``placement``."""
+    (``scan_positions``, ``splice_positions``, ``add_header``); the names in ``exports`` are
+    its ``emit.py``'s (none by default). A plug-in derives from it and
+    adds its name, suffixes, ``targets``, ``plan``, ``render`` and ``placement`` (and
+    ``measurement`` when it writes measurement programs)."""
 
     name: str
+    title: str
     pair: tuple[str, str] | None = None
     joints: bool = False
+    exports: tuple[str, ...] = ()
 
     def _module(self, part: str):
         return importlib.import_module(f"accugrid.codegen.{self.name}.{part}")
@@ -137,3 +204,6 @@ class DialectFolder:
 
     def add_header(self, text: str, lines: list[str]) -> str:
         return self._module("rewrite").add_header(text, lines)
+
+    def measurement(self) -> MeasurementWriter:
+        raise InputError(f"accugrid writes no laser-tracker measurement program in {self.title}")

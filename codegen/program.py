@@ -173,7 +173,7 @@ class Program:
         self, robot_T_frame: np.ndarray, lo: int = 0, hi: int | None = None
     ) -> tuple[np.ndarray, np.ndarray]:
         """Positions (n, 4, 3) mm and KUKA A,B,C (n, 3) deg of holes lo..hi-1 in another frame
-        given in the robot frame (e.g. ``cell.gcode.robot_T_program`` for G-code)."""
+        given in the robot frame (e.g. ``cell.dialects["gcode"].robot_T_program`` for G-code)."""
         frame_T_base = invert(robot_T_frame) @ self.cell.robot_T_base
         rot = frame_T_base[:3, :3]
         pos = rows_times(self.positions[lo:hi].reshape(-1, 3), rot.T).reshape(-1, 4, 3)

@@ -78,7 +78,6 @@ class Options:
     flange_T_tool: np.ndarray | None = None  # the cell's tool (None: not given, not checked)
     tool_data: dict[int, np.ndarray] | None = None  # tool number -> flange_T_tool (the cell's
     # tool_data with its tool; None: the cell's tool alone, every position corrected with it)
-    tool_names: dict[str, int] | None = None  # RAPID tooldata name (lower case) -> tool number
     max_bytes: int = MAX_BYTES
     tolerance_mm: float = DEFAULT_TOLERANCE_MM  # warn when rounding leaves more than a tenth
     policy: Policy | None = None  # decides every position (None: the grid's, default limits)

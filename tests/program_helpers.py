@@ -56,7 +56,8 @@ def cell_with(c: Cell | None = None, **sections: dict) -> Cell:
     """The example cell (or ``c``) with fields of its section records changed, e.g.
     ``cell_with(drilling={"peck_mm": 2.0}, gcode={"canned_cycles": False})``."""
     c = cell() if c is None else c
-    changed = {k: dataclasses.replace(getattr(c, k), **v) for k, v in sections.items()}
+    record = {**c.dialects, **{k: getattr(c, k) for k in sections if k not in c.dialects}}
+    changed = {k: dataclasses.replace(record[k], **v) for k, v in sections.items()}
     dialects = {k: changed.pop(k, v) for k, v in c.dialects.items()}
     return dataclasses.replace(c, dialects=dialects, **changed)
 

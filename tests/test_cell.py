@@ -39,7 +39,7 @@ def test_example_cell_frames():
     )
     np.testing.assert_allclose(cell.flange_T_tool[:3, 3], [0, 0, 250])
     assert cell.base_data[1] is cell.robot_T_base
-    np.testing.assert_array_equal(cell.gcode.robot_T_program, cell.robot_T_base)
+    np.testing.assert_array_equal(cell.dialects["gcode"].robot_T_program, cell.robot_T_base)
 
 
 def test_defaults_and_relative_paths(tmp_path):
@@ -48,7 +48,10 @@ def test_defaults_and_relative_paths(tmp_path):
     assert sorted(cell.base_data) == [2, 5]
     np.testing.assert_allclose(cell.base_data[5][:3, 3], [10, 0, 0])
     assert cell.drilling.retract_mm == cell.drilling.approach_mm
-    assert cell.krl.name == "ACCUGRID" and cell.krl.decimals == 3 == cell.gcode.decimals
+    assert (
+        cell.dialects["krl"].name == "ACCUGRID"
+        and cell.dialects["krl"].decimals == 3 == cell.dialects["gcode"].decimals
+    )
     assert cell.configuration.status is None and not cell.configuration.allow_change
     assert cell.configuration.reference_abc == (0.0, 90.0, 0.0)
 
@@ -62,7 +65,7 @@ def test_correction_section_is_one_settings_value(tmp_path):
 
 def test_program_frame_overrides_base(tmp_path):
     cell = load_cell(write(tmp_path, MINIMAL + "program_frame: {x: 1, y: 2, z: 3}\n"))
-    np.testing.assert_allclose(cell.gcode.robot_T_program[:3, 3], [1, 2, 3])
+    np.testing.assert_allclose(cell.dialects["gcode"].robot_T_program[:3, 3], [1, 2, 3])
     np.testing.assert_allclose(cell.robot_T_base[:3, 3], [1500, 0, 1000])
 
 
@@ -163,12 +166,12 @@ def test_every_key_lands_in_its_section_record(tmp_path):
     assert (d.approach_mm, d.clearance_mm, d.retract_mm, d.depth_mm) == (20, 3, 25, 7)
     assert (d.dwell_s, d.peck_mm) == (0.2, 1.5)
     assert (d.travel_mm_s, d.approach_mm_s, d.feed_mm_s) == (400, 40, 4)
-    k = cell.krl
+    k = cell.dialects["krl"]
     assert (k.name, k.lines_per_file, k.decimals, k.travel_motion) == ("PANEL_7", 900, 4, "lin")
     assert (k.ptp_percent, k.apo_cdis_mm, k.apo_ptp_percent) == (30, 2, 40)
     assert (k.spindle_output, k.clamp_output) == (3, 4)
     assert k.external_axes == (100, 0, 0, 0, 0, -5.5)
-    g = cell.gcode
+    g = cell.dialects["gcode"]
     assert (g.decimals, g.spindle_rpm, g.canned_cycles) == (4, 9000, False)
     np.testing.assert_allclose(g.robot_T_program[:3, 3], [5, 0, 0])
     f = cell.configuration
@@ -183,7 +186,13 @@ def test_section_records_are_frozen():
     import dataclasses
 
     cell = load_cell(EXAMPLE)
-    for record in (cell, cell.drilling, cell.configuration, cell.correction, cell.krl, cell.gcode):
+    for record in (
+        cell,
+        cell.drilling,
+        cell.configuration,
+        cell.correction,
+        *cell.dialects.values(),
+    ):
         with pytest.raises(dataclasses.FrozenInstanceError):
             record.sha256 = "x"
 
@@ -200,5 +209,9 @@ def test_every_dialect_brings_its_own_section():
         module = importlib.import_module(f"accugrid.codegen.{name}.section")
         assert type(cell.dialects[name]).__module__ == module.__name__
         assert module.KEYS and all(isinstance(v, frozenset) for v in module.KEYS.values())
-    assert cell.krl is cell.dialects["krl"] and cell.gcode is cell.dialects["gcode"]
-    assert (cell.krl.name, cell.krl.decimals, cell.gcode.spindle_rpm) == ("WING_PANEL", 3, 6000)
+    assert not [name for name in DIALECTS if hasattr(cell, name)]  # the cell names no dialect
+    assert (
+        cell.dialects["krl"].name,
+        cell.dialects["krl"].decimals,
+        cell.dialects["gcode"].spindle_rpm,
+    ) == ("WING_PANEL", 3, 6000)

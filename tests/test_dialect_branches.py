@@ -1,16 +1,21 @@
 """A dialect is its folder: no module outside ``codegen/<dialect>/`` branches on a dialect's name
-or file suffix, and no job below the command modules takes an ``argparse.Namespace``.
+or file suffix or imports a dialect folder's module (the registry, ``codegen/dialects.py``,
+excepted), and no job below the command modules takes an ``argparse.Namespace``.
 
 The source of every module is read as a syntax tree. A branch is a comparison (``==``, ``!=``,
 ``in``, ``not in``, ``is``) with a string that is a registered dialect name or suffix (case
 ignored, also inside a tuple, list, set or dict literal, or a module-level constant holding
 one), a ``match`` case on such a string, or ``endswith``/``startswith``/``removesuffix`` with one.
-The detector is tried on snippets of every such form first, so that it is shown to fail.
+An import is an ``import``/``from`` statement anywhere in the module (a lazy one too, a relative
+one resolved) or a string that is such a module's dotted name (``importlib.import_module``, a
+lazy export table). The detectors are tried on snippets of every such form first, so that they
+are shown to fail.
 """
 
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -24,6 +29,8 @@ WORDS = {name.lower() for name in DIALECTS} | {
     suffix.lower() for d in DIALECTS.values() for suffix in d.suffixes
 }
 SUFFIX_CALLS = {"endswith", "startswith", "removesuffix", "removeprefix"}
+REGISTRY = ROOT / "codegen" / "dialects.py"
+DIALECT_MODULE = re.compile(rf"accugrid\.codegen\.({'|'.join(map(re.escape, DIALECTS))})(\.\w+)*")
 
 
 def _strings(node: ast.AST, constants: dict[str, str]) -> list[str]:
@@ -106,6 +113,74 @@ def test_the_detector_finds_every_form_of_branch(snippet):
 )
 def test_the_detector_passes_what_is_no_branch(snippet):
     assert not branches(snippet), snippet
+
+
+def dialect_imports(source: str, package: str) -> list[tuple[int, str]]:
+    """(line, module) of every import of a dialect folder's module in ``source``, a module of
+    ``package`` (for relative imports)."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        names: list[str] = []
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = package.split(".")[: len(package.split(".")) - node.level + 1]
+            module = ".".join([*base, node.module or ""] if node.level else [node.module or ""])
+            module = module.rstrip(".")
+            names = [module, *(f"{module}.{alias.name}" for alias in node.names)]
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            names = [node.value]
+        found += [(node.lineno, name) for name in names if DIALECT_MODULE.fullmatch(name)]
+    return sorted(set(found))
+
+
+@pytest.mark.parametrize(
+    ("snippet", "package"),
+    [
+        ("from accugrid.codegen.krl.emit import render_krl", "accugrid.app"),
+        ("import accugrid.codegen.gcode.parse as p", "accugrid.app"),
+        ("from accugrid.codegen import rapid", "accugrid.app"),
+        ("from accugrid.codegen.krl import emit", "accugrid.codegen"),
+        ("def f():\n    from accugrid.codegen.krl.section import KrlSection", "accugrid.codegen"),
+        ("if TYPE_CHECKING:\n    from accugrid.codegen.gcode.section import S", "accugrid.codegen"),
+        ("m = importlib.import_module('accugrid.codegen.rapid.rewrite')", "accugrid.app"),
+        ("API = {'render_krl': 'accugrid.codegen.krl.emit'}", "accugrid.codegen"),
+        ("from .krl import emit", "accugrid.codegen"),
+        ("from . import krl", "accugrid.codegen"),
+        ("from ..codegen.gcode.emit import render_gcode", "accugrid.app"),
+    ],
+)
+def test_the_detector_finds_every_import_of_a_dialect_module(snippet, package):
+    assert dialect_imports(snippet, package), snippet
+
+
+@pytest.mark.parametrize(
+    ("snippet", "package"),
+    [
+        ("from accugrid.codegen.dialects import plugin_of", "accugrid.app"),
+        ("from accugrid.codegen import cell, plugin", "accugrid.app"),
+        ("from accugrid.codegen.krl_like import x", "accugrid.app"),
+        ("from . import rewrite", "accugrid.codegen"),
+        ("text = 'see accugrid.codegen.krl.emit for the KRL'", "accugrid.app"),
+        ('"""The reader: codegen.krl.emit."""', "accugrid.codegen"),
+    ],
+)
+def test_the_detector_passes_what_is_no_import_of_a_dialect_module(snippet, package):
+    assert not dialect_imports(snippet, package), snippet
+
+
+def test_no_module_outside_a_dialect_folder_imports_one_but_the_registry():
+    """The jobs, the cell and the library reach a dialect through the registry's plug-in."""
+    found = []
+    for path in _modules():
+        if path == REGISTRY:
+            continue
+        rel = path.relative_to(ROOT)
+        package = ".".join(["accugrid", *rel.parts[:-1]])
+        for line, name in dialect_imports(path.read_text(encoding="utf-8"), package):
+            found.append(f"{rel}:{line}: {name}")
+    assert REGISTRY in _modules()
+    assert not found, "dialect modules imported outside their folders:\n" + "\n".join(found)
 
 
 def _modules() -> list[Path]:

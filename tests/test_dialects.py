@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from accugrid.app.cli import main
@@ -65,3 +67,60 @@ def test_every_dialect_is_a_plugin_with_every_member_of_the_interface():
             dialect.suffixes,
         )
         assert dialect.plugin == f"accugrid.codegen.{name}.plugin"  # its own folder
+
+
+def test_the_measurement_program_is_a_capability_a_dialect_may_lack(tmp_path):
+    """The plan job reaches the measurement program through the plug-in: KRL writes one (a .src
+    and .dat beside the plan CSV); asking a dialect without one is a one-line InputError naming
+    it, and nothing is written."""
+    from accugrid.app.measure_program import PlanRequest, plan_files, plan_targets
+    from accugrid.codegen.dialects import plugin_of
+    from accugrid.kinematics.robot import load_robot
+
+    names = [p.name for p in plan_targets(tmp_path, "cube", "Probe 1", "krl")]
+    assert names == ["probe_1.csv", "probe_1.src", "probe_1.dat"]
+    lacking = []
+    for name, dialect in DIALECTS.items():
+        try:
+            plugin_of(name).measurement()
+        except InputError as exc:
+            assert (
+                str(exc)
+                == f"accugrid writes no laser-tracker measurement program in {dialect.title}"
+            )
+            lacking.append(name)
+    assert "krl" not in lacking and {"gcode", "rapid"} <= set(lacking)
+    request = PlanRequest(
+        "cube", load_robot("kr210"), (0.0, 90.0, 0.0), centre=(1700.0, 0.0, 1500.0), step_mm=100.0
+    )
+    for name in lacking:
+        with pytest.raises(InputError, match="no laser-tracker measurement program"):
+            plan_targets(tmp_path, "cube", None, name)
+        with pytest.raises(InputError, match=DIALECTS[name].title):
+            plan_files(dataclasses.replace(request, dialect=name), tmp_path)
+    assert not list(tmp_path.iterdir())
+    job = plan_files(request, tmp_path)  # the default: KRL
+    assert [p.name for p in job.files] == [
+        "measure_cube.csv",
+        "measure_cube.src",
+        "measure_cube.dat",
+    ]
+    assert job.main == [tmp_path / "measure_cube.src"]
+    assert job.files[tmp_path / "measure_cube.src"].startswith("&ACCESS")
+
+
+def test_the_library_names_a_dialect_exports_resolve_through_the_registry():
+    """``accugrid.codegen`` lists a dialect's renderer by the registry, not by its module."""
+    import accugrid
+    import accugrid.codegen as codegen
+    from accugrid.codegen.dialects import plugin_of
+    from accugrid.codegen.krl.emit import render_krl
+
+    exported = {name for d in DIALECTS for name in plugin_of(d).exports}
+    assert exported == {n for n, m in codegen._API.items() if m == "accugrid.codegen.dialects"}
+    assert exported <= set(accugrid.__all__)
+    assert accugrid.render_krl is codegen.render_krl is render_krl
+    import accugrid.codegen.dialects as registry
+
+    with pytest.raises(AttributeError, match="render_fanuc"):
+        registry.render_fanuc  # noqa: B018

@@ -56,10 +56,10 @@ def expected_points(program, frame):
 
 
 def check_round_trip(program, text, frame=None):
-    frame = program.cell.gcode.robot_T_program if frame is None else frame
+    frame = program.cell.dialects["gcode"].robot_T_program if frame is None else frame
     pts = visited(parse_gcode(text, "p.ngc"))
     pos, rot = expected_points(program, frame)
-    half = 0.5 * 10.0**-program.cell.gcode.decimals + 1e-9
+    half = 0.5 * 10.0 ** -program.cell.dialects["gcode"].decimals + 1e-9
     at = 0
     for i in range(len(program)):
         for k in range(4):

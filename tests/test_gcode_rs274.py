@@ -70,7 +70,7 @@ def test_example_program_through_rs274(rs274, tmp_path):
     moves, out = canonical(rs274, tmp_path, text)
     assert "DWELL(0.5000)" in out and "START_SPINDLE_CLOCKWISE" in out
     assert len(moves) >= 4 * len(program) - 1
-    check_against_program(moves, program, cell().gcode.robot_T_program)
+    check_against_program(moves, program, cell().dialects["gcode"].robot_T_program)
 
 
 @pytest.mark.parametrize(
@@ -92,4 +92,4 @@ def test_variants_through_rs274(rs274, tmp_path, change):
     c = cell_with(**change)
     program = build_program(panel_points(ROWS[20:30]), c, robot(), grid())
     moves, _ = canonical(rs274, tmp_path, render_gcode(program, ["variant"]))
-    check_against_program(moves, program, c.gcode.robot_T_program)
+    check_against_program(moves, program, c.dialects["gcode"].robot_T_program)

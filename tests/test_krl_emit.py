@@ -14,8 +14,9 @@ from program_helpers import CELL, POINTS, ROOT, cell, cell_with, grid, panel_poi
 
 from accugrid.app.cli import main
 from accugrid.codegen.krl import emit
-from accugrid.codegen.krl.emit import MeasureSettings, module_split, render_krl, render_measurement
+from accugrid.codegen.krl.emit import module_split, render_krl, render_measurement
 from accugrid.codegen.krl.parse import parse_krl
+from accugrid.codegen.plugin import MeasureSettings
 from accugrid.codegen.program import build_program
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
@@ -59,7 +60,7 @@ def check_round_trip(program, files):
     same_ret = program.cell.drilling.retract_mm == program.cell.drilling.approach_mm
     stages = ("APP", "CLR", "BOT") if same_ret else ("APP", "CLR", "BOT", "RET")
     assert len(parsed) == len(program) * len(stages)
-    half = 0.5 * 10.0**-program.cell.krl.decimals + 1e-9
+    half = 0.5 * 10.0 ** -program.cell.dialects["krl"].decimals + 1e-9
     status, turn = program.configuration.to_kuka()
     for i in range(len(program)):
         for k, stage in enumerate(stages):
@@ -356,7 +357,9 @@ def test_a_job_the_modules_cannot_hold_is_refused_before_the_correction(tmp_path
 @pytest.mark.parametrize(
     "settings_",
     [
-        MeasureSettings(tool=1, base=0, ptp_percent=30, vel_cp=0.2, wait_sec=1.5, wait_input=None),
+        MeasureSettings(
+            tool=1, base=0, ptp_percent=30, speed_m_s=0.2, wait_sec=1.5, wait_input=None
+        ),
         MeasureSettings(1, 2, 50, 0.25, 0.0, 7, ptp_only=True),
     ],
 )

@@ -182,8 +182,8 @@ def programs(draw):
 def gcode_hole_lines(program: Program) -> str:
     """Every hole's G-code lines, one f-string per line (``gcode.emit`` docstring)."""
     c, dr = program.cell, program.cell.drilling
-    d = c.gcode.decimals
-    pos, abc = program.in_frame(c.gcode.robot_T_program)
+    d = c.dialects["gcode"].decimals
+    pos, abc = program.in_frame(c.dialects["gcode"].robot_T_program)
     approach = fixed(dr.approach_mm_s * 60.0, 1)
     out = []
     for i, label in enumerate(program.labels()):
@@ -194,7 +194,7 @@ def gcode_hole_lines(program: Program) -> str:
         out.append(f"G0 X{app[0]} Y{app[1]} Z{app[2]} A{a} B{b} C{cc}\n")
         z = pos[i, :, 2]
         same_xy = all(p[:2] == app[:2] for p in (clr, bot, ret))
-        if c.gcode.canned_cycles and same_xy and z[0] > z[1] > z[2] and z[3] > z[1]:
+        if c.dialects["gcode"].canned_cycles and same_xy and z[0] > z[1] > z[2] and z[3] > z[1]:
             if dr.peck_mm > 0:
                 cycle = f"G83 X{bot[0]} Y{bot[1]} Z{bot[2]} R{clr[2]} Q{fixed(dr.peck_mm, d)}"
             elif dr.dwell_s > 0:
@@ -216,27 +216,27 @@ def gcode_hole_lines(program: Program) -> str:
 def krl_lines(program: Program) -> tuple[str, str]:
     """Every hole's .src lines and .dat lines, one f-string per line (``krl.emit`` docstring)."""
     c, dr = program.cell, program.cell.drilling
-    d = c.krl.decimals
+    d = c.dialects["krl"].decimals
     stages = STAGES[:3] if dr.retract_mm == dr.approach_mm else STAGES
     pos, abc = program.in_frame(c.robot_T_base)
     status, turn = program.configuration.to_kuka()
-    ext = "".join(f",E{k + 1} {fixed(v, d)}" for k, v in enumerate(c.krl.external_axes))
+    ext = "".join(f",E{k + 1} {fixed(v, d)}" for k, v in enumerate(c.dialects["krl"].external_axes))
     approach = f"$VEL.CP = {fixed(dr.approach_mm_s / 1000.0, 4)}"
     src, dat = [], []
     for i, label in enumerate(program.labels()):
         n = i + 1
         src.append(f"; hole {comment_text(label)}")
-        if c.krl.travel_motion == "ptp":
+        if c.dialects["krl"].travel_motion == "ptp":
             src.append(f"PTP XH{n}_APP C_PTP")
         else:
             src += [f"$VEL.CP = {fixed(dr.travel_mm_s / 1000.0, 4)}", f"LIN XH{n}_APP C_DIS"]
         src += [approach, f"LIN XH{n}_CLR"]
-        if c.krl.clamp_output is not None:
-            src.append(f"$OUT_C[{c.krl.clamp_output}] = TRUE ; clamp")
+        if c.dialects["krl"].clamp_output is not None:
+            src.append(f"$OUT_C[{c.dialects['krl'].clamp_output}] = TRUE ; clamp")
         src.append(f"$VEL.CP = {fixed(program.feed_mm_s[i] / 1000.0, 4)}")
         src += [f"LIN XH{n}_BOT", f"WAIT SEC {fixed(dr.dwell_s, 3)}"]
-        if c.krl.clamp_output is not None:
-            src.append(f"$OUT[{c.krl.clamp_output}] = FALSE ; unclamp")
+        if c.dialects["krl"].clamp_output is not None:
+            src.append(f"$OUT[{c.dialects['krl'].clamp_output}] = FALSE ; unclamp")
         src += [approach, f"LIN XH{n}_{stages[-1] if len(stages) == 4 else 'APP'} C_DIS"]
         a, b, cc = (fixed(v, d) for v in abc[i])
         for stage in stages:
@@ -266,7 +266,7 @@ def test_gcode_hole_lines_are_the_lines_written_out(program, block):
     (canned with and without a retract move, explicit), every decimals, cycle and dwell."""
     with mock.patch.object(gcode_emit, "BLOCK", block):
         text = gcode_emit.render_gcode(program, ["h"])
-    head = f"M3 S{fixed(program.cell.gcode.spindle_rpm, 0)}\n"
+    head = f"M3 S{fixed(program.cell.dialects['gcode'].spindle_rpm, 0)}\n"
     assert text.count(head) == 1
     assert text.split(head)[1] == gcode_hole_lines(program) + "M5\nM2\n"
 
@@ -286,7 +286,7 @@ def test_krl_hole_and_position_lines_are_the_lines_written_out(bare_templates, p
     assert "".join(texts[".src"]) == src and "".join(texts[".dat"]) == dat
     single = cell_with(program.cell, krl={"lines_per_file": 100000})
     files = krl_emit.render_krl(dataclasses.replace(program, cell=single), ["h"])
-    name = single.krl.name
+    name = single.dialects["krl"].name
     assert files[f"{name}.src"].split("; spindle on\r\n")[1].rsplit("WAIT SEC 0\r\n", 1)[0] == src
     assert files[f"{name}.dat"].split("; h\r\n")[1] == dat + "ENDDAT\r\n"
 

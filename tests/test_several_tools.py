@@ -283,7 +283,7 @@ def test_cell_reads_tool_data(tmp_path):
     np.testing.assert_array_equal(cell.tool_data[0], np.eye(4))  # the flange
     for n, xyzabc in TOOLS.items():
         np.testing.assert_allclose(cell.tool_data[n], pose_from_xyzabc(np.array(xyzabc)))
-    assert cell.tool_names == {"tool0": 0, "tnear": 2, "tlong": 3}
+    assert cell.dialects["rapid"].tool_names == {"tool0": 0, "tnear": 2, "tlong": 3}
     assert cell.correction.tool_distance_mm == 1.0
 
 

@@ -1,14 +1,14 @@
 """RS274NGC (LinuxCNC dialect) for a Program: one ``.ngc`` from ``templates/gcode/program.ngc.j2``.
 
-Positions are the TCP in the program frame (``cell.gcode.robot_T_program``, default BASE), mm;
-orientation as A B C words = the KUKA A, B, C of the tool in that frame, deg (stated in the file
-header). Per hole: ``G0`` to the approach point with A B C; where the drill axis is the program's
--Z (all four positions of the hole share X and Y at the printed precision) and
+Positions are the TCP in the program frame (``robot_T_program`` of the cell's G-code section,
+default BASE), mm; orientation as A B C words = the KUKA A, B, C of the tool in that frame, deg
+(stated in the file header). Per hole: ``G0`` to the approach point with A B C; where the drill axis
+is the program's -Z (all four positions of the hole share X and Y at the printed precision) and
 ``gcode.canned_cycles`` is on, a canned cycle from the clearance plane R: ``G83`` with peck Q when
 ``drilling.peck`` > 0, else ``G82`` with the dwell P, else ``G81``; ``G98`` returns to the approach
-height, then ``G0 Z`` to the retract point if that differs. Otherwise explicit moves along the
-drill axis: ``G1`` to the clearance point at approach speed, ``G1`` to the bottom at the feed,
-``G4`` dwell, ``G1`` back to the retract point at approach speed. Feeds are mm/min (``G94``).
+height, then ``G0 Z`` to the retract point if that differs. Otherwise explicit moves along the drill
+axis: ``G1`` to the clearance point at approach speed, ``G1`` to the bottom at the feed, ``G4``
+dwell, ``G1`` back to the retract point at approach speed. Feeds are mm/min (``G94``).
 
 Numbers go through ``fixed`` only: per-hole numbers are formatted once in Python
 (``program.decimals`` for mm and deg, 1 decimal for F; ``textsafe.fixed_bytes`` for the hole
@@ -89,8 +89,8 @@ def gcode_text(program: Program, header: list[str], templates=None) -> Iterator[
     uses = template_uses(env, "program.ngc.j2")
     context = {
         "header": header,
-        "decimals": cell.gcode.decimals,
-        "spindle_rpm": cell.gcode.spindle_rpm,
+        "decimals": cell.dialects["gcode"].decimals,
+        "spindle_rpm": cell.dialects["gcode"].spindle_rpm,
         "approach_mm_min": cell.drilling.approach_mm_s * 60.0,
         "dwell": cell.drilling.dwell_s,
         "peck": cell.drilling.peck_mm,
@@ -98,7 +98,7 @@ def gcode_text(program: Program, header: list[str], templates=None) -> Iterator[
     if uses is None or "holes" in uses:  # a template that loops over the holes: all at once
         blocks = [_holes(program, lo) for lo in range(0, len(program), BLOCK)]
         context["holes"] = [
-            hole for block in blocks for hole in _records(block, cell.gcode.decimals)
+            hole for block in blocks for hole in _records(block, cell.dialects["gcode"].decimals)
         ]
         context["hole_lines"] = b"".join(_lines(block, cell) for block in blocks).decode("ascii")
         return iter([render(env, "program.ngc.j2", **context).encode()])
@@ -144,9 +144,9 @@ def _holes(program: Program, lo: int) -> _Holes:
     """Holes lo..lo+BLOCK-1."""
     cell = program.cell
     hi = min(lo + BLOCK, len(program))
-    pos, abc = program.in_frame(cell.gcode.robot_T_program, lo, hi)
-    d = cell.gcode.decimals
-    cycle = canned(pos, d) if cell.gcode.canned_cycles else np.zeros(len(pos), bool)
+    pos, abc = program.in_frame(cell.dialects["gcode"].robot_T_program, lo, hi)
+    d = cell.dialects["gcode"].decimals
+    cycle = canned(pos, d) if cell.dialects["gcode"].canned_cycles else np.zeros(len(pos), bool)
     retract_move = ~fixed_same(pos[:, 3, 2], pos[:, 0, 2], d)
     feed = program.feed_mm_s[lo:hi] * 60.0
     return _Holes(pos, abc, cycle, retract_move, program.labels(lo, hi), feed)
@@ -176,7 +176,7 @@ def _lines(holes: _Holes, cell: Cell) -> bytes:
         return b""
     numbers = number_cells(
         np.concatenate([holes.pos[:, 0], holes.abc, holes.pos[:, 1:].reshape(n, 9)], axis=1),
-        cell.gcode.decimals,
+        cell.dialects["gcode"].decimals,
     )
     comments = text_cells(comment_texts(holes.labels, prefix="hole "))
     feeds = number_cells(holes.feed_mm_min, 1)
@@ -210,7 +210,7 @@ def _hole_templates(cell: Cell) -> list[tuple[str, list[int]]]:
     start = (f"({SLOT})\nG0 {xyz} A{SLOT} B{SLOT} C{SLOT}\n", [0, 1, 2, 3, 4, 5, 6])
     wait = f"P{fixed(cell.drilling.dwell_s, 3)}"
     if cell.drilling.peck_mm > 0:
-        peck = fixed(cell.drilling.peck_mm, cell.gcode.decimals)
+        peck = fixed(cell.drilling.peck_mm, cell.dialects["gcode"].decimals)
         cycle = f"G98 G83 {xyz} R{SLOT} Q{peck} F{SLOT}\nG80\n"
     elif cell.drilling.dwell_s > 0:
         cycle = f"G98 G82 {xyz} R{SLOT} {wait} F{SLOT}\nG80\n"

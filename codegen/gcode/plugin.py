@@ -17,6 +17,7 @@ class GcodePlugin(DialectFolder):
     name = "gcode"
     title = "RS274NGC / ISO G-code"
     suffixes = (".ngc", ".nc", ".gcode", ".gc", ".cnc", ".tap", ".iso", ".mpf", ".spf", ".eia")
+    exports = ("render_gcode",)
 
     def targets(self, cell, out):
         return [out]

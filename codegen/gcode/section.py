@@ -1,4 +1,5 @@
-"""The G-code section of the cell: what only the G-code emitter and rewrite read (``cell.gcode``).
+"""The G-code section of the cell: what only the G-code emitter and rewrite read
+(``cell.dialects["gcode"]``).
 
 The YAML keys stay where the cell file has them (``gcode:``, ``program.decimals``,
 ``program_frame:``); ``KEYS`` declares them for the cell reader, and ``read_section``

@@ -1,5 +1,6 @@
 """KUKA KRL for a Program: ``NAME.src`` (motion) and ``NAME.dat`` (the E6POS of every hole); and
-the laser-tracker measurement program of a plan (``render_measurement``, the same convention).
+the laser-tracker measurement program of a plan (``render_measurement``, the same convention;
+``MEASUREMENT``, the plug-in's ``measurement()``).
 
 Templates ``program.src.j2`` and ``program.dat.j2`` (``templates/krl/``), rendered with CRLF line
 ends as the controller's own files have. Position names are ``XH<n>_APP|CLR|BOT|RET`` (n = hole
@@ -32,7 +33,6 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 from typing import NamedTuple
@@ -41,6 +41,7 @@ import numpy as np
 
 from accugrid.codegen.cell import Cell
 from accugrid.codegen.linebytes import SLOT, image_bytes, line_image, number_cells, text_cells
+from accugrid.codegen.plugin import MeasureSettings, Rendered
 from accugrid.codegen.points import Points
 from accugrid.codegen.program import STAGES, Program
 from accugrid.codegen.render import (
@@ -54,17 +55,24 @@ from accugrid.codegen.render import (
 )
 from accugrid.infra.csvtable import Table
 from accugrid.infra.errors import InputError
-from accugrid.infra.textsafe import KRL_NAME_MAX, comment_texts, fixed, fixed_texts
+from accugrid.infra.textsafe import (
+    KRL_NAME_MAX,
+    comment_texts,
+    fixed,
+    fixed_texts,
+    krl_identifier,
+)
 from accugrid.kinematics.configuration import Configuration
 
 __all__ = [
     "BLOCK",
+    "MEASUREMENT",
     "MODULE_DIGITS",
     "KrlFiles",
     "KrlHole",
+    "KrlMeasurement",
     "KrlPosition",
     "MeasureMove",
-    "MeasureSettings",
     "module_split",
     "render_krl",
     "render_measurement",
@@ -106,20 +114,6 @@ class MeasureMove(NamedTuple):
     label: str
 
 
-@dataclass(frozen=True)
-class MeasureSettings:
-    """TOOL_DATA and BASE_DATA numbers (base 0: the robot frame), PTP %, $VEL.CP m/s, and the
-    wait after each position: ``wait_input`` ($IN number) or ``wait_sec`` s."""
-
-    tool: int
-    base: int
-    ptp_percent: float
-    vel_cp: float
-    wait_sec: float
-    wait_input: int | None
-    ptp_only: bool = False  # every move PTP (poses that reorient), else PTP to the first, then LIN
-
-
 def render_measurement(
     points: np.ndarray,
     abc: np.ndarray,
@@ -136,7 +130,8 @@ def render_measurement(
     Turn (N,); one E6POS ``XMP<k>`` per distinct pose (0.0001 mm / deg) in order of first visit,
     then a PTP to the first row and LIN (or PTP with ``settings.ptp_only``) to every other, each
     followed by the wait. Numbers are formatted here (mm and deg with 3 decimals, S and T as
-    integers)."""
+    integers). ``settings``: TOOL_DATA and BASE_DATA numbers (base 0: $NULLFRAME), PTP %,
+    $VEL.CP (``speed_m_s``), ``WAIT FOR $IN[wait_input]`` or ``WAIT SEC wait_sec``."""
     points = np.asarray(points, dtype=float)
     abc = np.broadcast_to(np.asarray(abc, dtype=float), points.shape)
     key = np.round(np.column_stack([points, abc]), 4)
@@ -174,7 +169,7 @@ def render_measurement(
         "tool": settings.tool,
         "base": settings.base,
         "ptp_percent": settings.ptp_percent,
-        "vel_cp": settings.vel_cp,
+        "vel_cp": settings.speed_m_s,
         "wait_sec": settings.wait_sec,
         "wait_input": settings.wait_input,
         "ptp_only": settings.ptp_only,
@@ -183,6 +178,37 @@ def render_measurement(
 
 
 _ZERO_E = ",E1 0.000,E2 0.000,E3 0.000,E4 0.000,E5 0.000,E6 0.000"  # no external axes
+
+
+class KrlMeasurement:
+    """The KRL measurement program as the plug-in's ``measurement()``
+    (``codegen.plugin.MeasurementWriter``): ``NAME.src`` and ``NAME.dat`` (lower-case file
+    names), NAME a KRL name (prefixed M where it would not be one); the .src renamed last."""
+
+    listing = "the .dat"
+
+    def name(self, requested: str) -> str:
+        return krl_identifier(requested, prefix="M")
+
+    def targets(self, out: Path, name: str) -> list[Path]:
+        return [out / f"{name.lower()}{ext}" for ext in _EXTS]
+
+    def motion(self, settings: MeasureSettings) -> str:
+        if settings.wait_input is not None:
+            wait = f"WAIT FOR $IN[{settings.wait_input}]"
+        else:
+            wait = f"WAIT SEC {fixed(settings.wait_sec)}"
+        moves = "each by PTP" if settings.ptp_only else "first by PTP, then LIN"
+        return f"{moves}, each followed by {wait}"
+
+    def render(self, plan, status, turn, name, header, settings, templates, out):
+        rows = (plan.points, plan.abc_rows(), plan.ids, status, turn)
+        src, dat = render_measurement(*rows, name, header, settings, templates)
+        paths = self.targets(out, name)
+        return Rendered({paths[0]: src, paths[1]: dat}, [paths[0]])
+
+
+MEASUREMENT = KrlMeasurement()
 
 
 def _move_lines(targets: list[str], ids: list[str], settings: MeasureSettings) -> str:
@@ -238,7 +264,7 @@ class KrlFiles(Mapping):
     def __init__(self, files, modules: list[str], per_part: int, holes: int, cell: Cell) -> None:
         self._files, self._modules, self._holes, self._cell = files, modules, holes, cell
         self._per_part = per_part
-        name = cell.krl.name
+        name = cell.dialects["krl"].name
         self._pairs = [*modules, name] if modules else [name]
         self._index = {f"{m}{ext}": (k, ext) for ext in _EXTS for k, m in enumerate(modules)}
         self._index |= {f"{name}{ext}": (len(modules), ext) for ext in _EXTS}
@@ -283,7 +309,7 @@ class KrlFiles(Mapping):
             pieces, lines = self._files(name, "part", lo, hi, ext)
         else:
             pieces, lines = self._files(name, "main", 0, 0, ext, modules)
-        limit = self._cell.krl.lines_per_file
+        limit = self._cell.dialects["krl"].lines_per_file
         if lines > limit:
             raise InputError(
                 f"{name}{ext} would have {lines} lines, more than program.lines_per_file "
@@ -301,21 +327,22 @@ def _file_renderer(cell: Cell, header: list[str], records: _Records, templates):
     holes lo..hi-1 in pieces of UTF-8, and its number of lines. Where the template prints its
     per-hole lines as they are, its text is rendered around them and they stay bytes."""
     env = environment(template_dir("krl", templates), newline="\r\n")
+    krl = cell.dialects["krl"]
     common = {
         "header": header,
-        "decimals": cell.krl.decimals,
+        "decimals": krl.decimals,
         "base": cell.base_number,
         "tool": cell.tool_number,
-        "ptp_percent": cell.krl.ptp_percent,
-        "apo_cdis": cell.krl.apo_cdis_mm,
-        "apo_cptp": cell.krl.apo_ptp_percent,
-        "spindle": cell.krl.spindle_output,
-        "clamp": cell.krl.clamp_output,
-        "travel": cell.krl.travel_motion,
+        "ptp_percent": krl.ptp_percent,
+        "apo_cdis": krl.apo_cdis_mm,
+        "apo_cptp": krl.apo_ptp_percent,
+        "spindle": krl.spindle_output,
+        "clamp": krl.clamp_output,
+        "travel": krl.travel_motion,
         "travel_m_s": cell.drilling.travel_mm_s / 1000.0,
         "approach_m_s": cell.drilling.approach_mm_s / 1000.0,
         "dwell": cell.drilling.dwell_s,
-        "ext": cell.krl.external_axes,
+        "ext": krl.external_axes,
     }
     kinds = {}  # ext -> template, its variables (None: any), its lines variable, printed as is
     for ext, lines in ((".src", "hole_lines"), (".dat", "position_lines")):
@@ -350,7 +377,8 @@ def _modules(files, cell: Cell, n: int) -> tuple[list[str], int]:
     numbered NAME_001.. (more digits past 999 modules, as long as the name stays a KRL name of
     at most 24 characters); InputError when they cannot be named or the main program cannot
     call them all within the line limit."""
-    name, limit = cell.krl.name, cell.krl.lines_per_file
+    krl = cell.dialects["krl"]
+    name, limit = krl.name, krl.lines_per_file
     if n < 2 or n <= _capacity(files, name, "single", limit):
         return [], n
     per_part = _capacity(files, f"{name}_001", "part", limit)
@@ -429,14 +457,15 @@ class _Records:
     def __init__(self, program: Program) -> None:
         self.program = program
         cell = program.cell
-        self.decimals = cell.krl.decimals
+        krl = cell.dialects["krl"]
+        self.decimals = krl.decimals
         self.stages = (
             [0, 1, 2] if cell.drilling.retract_mm == cell.drilling.approach_mm else [0, 1, 2, 3]
         )
         self.names = [STAGES[k] for k in self.stages]
         self._block: tuple = (0, 0, None)
         ext = "".join(
-            f",E{k + 1} {fixed(v, cell.krl.decimals)}" for k, v in enumerate(cell.krl.external_axes)
+            f",E{k + 1} {fixed(v, krl.decimals)}" for k, v in enumerate(krl.external_axes)
         )
         self.position_template = "".join(
             f"DECL E6POS XH{SLOT}_{s}={{X {SLOT},Y {SLOT},Z {SLOT},A {SLOT},B {SLOT},C {SLOT},"
@@ -567,7 +596,8 @@ def _hole_template(cell, stages: list[str]) -> str:
     hole number, hole number, feed, hole number, hole number), with the cell's settings filled
     in; CRLF line ends."""
     approach = f"$VEL.CP = {fixed(cell.drilling.approach_mm_s / 1000.0, 4)}"
-    if cell.krl.travel_motion == "ptp":
+    krl = cell.dialects["krl"]
+    if krl.travel_motion == "ptp":
         travel = [f"PTP XH{SLOT}_APP C_PTP"]
     else:
         travel = [
@@ -575,9 +605,9 @@ def _hole_template(cell, stages: list[str]) -> str:
             f"LIN XH{SLOT}_APP C_DIS",
         ]
     clamp = unclamp = []
-    if cell.krl.clamp_output is not None:
-        clamp = [f"$OUT_C[{fixed(cell.krl.clamp_output, 0)}] = TRUE ; clamp"]
-        unclamp = [f"$OUT[{fixed(cell.krl.clamp_output, 0)}] = FALSE ; unclamp"]
+    if krl.clamp_output is not None:
+        clamp = [f"$OUT_C[{fixed(krl.clamp_output, 0)}] = TRUE ; clamp"]
+        unclamp = [f"$OUT[{fixed(krl.clamp_output, 0)}] = FALSE ; unclamp"]
     lines = [
         f"; hole {SLOT}",
         *travel,

@@ -20,6 +20,7 @@ class KrlPlugin(DialectFolder):
     title = "KUKA KRL"
     suffixes = (".src", ".dat", ".sub")
     pair = (".src", ".dat")
+    exports = ("render_krl",)
 
     def targets(self, cell, out):
         name = cell.dialects[self.name].name
@@ -51,6 +52,12 @@ class KrlPlugin(DialectFolder):
             ignore_external_axes=context.ignore_external_axes,
             config_dat=context.controller_data,
         )
+
+    def measurement(self):
+        """The laser-tracker measurement program (``krl.emit.KrlMeasurement``)."""
+        from accugrid.codegen.krl.emit import MEASUREMENT
+
+        return MEASUREMENT
 
 
 PLUGIN = KrlPlugin()

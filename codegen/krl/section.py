@@ -1,4 +1,4 @@
-"""The KRL section of the cell: what only the KUKA KRL emitter reads (``cell.krl``).
+"""The KRL section of the cell: what only the KUKA KRL emitter reads (``cell.dialects["krl"]``).
 
 The YAML keys stay where the cell file has them (``program:``, ``speeds.ptp_percent``,
 ``drilling.travel_motion``/``apo_*``, ``outputs:``, ``external_axes:``); ``KEYS`` declares them

@@ -892,7 +892,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: RapidPlaceme
     frames = np.stack([np.eye(4), section.robot_T_wobj])
     tools = None
     if opts.tool_data is not None:
-        tools = {name: (n, opts.tool_data[n]) for name, n in (opts.tool_names or {}).items()}
+        tools = {name: (n, opts.tool_data[n]) for name, n in (section.tool_names or {}).items()}
         tools[section.tool.lower()] = (-1, opts.tool_data[opts.tool_number])
     parts, others, found_all, robot, rotations, status, at = [], [], [], [], [], [], []
     start = 0

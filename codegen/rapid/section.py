@@ -1,6 +1,7 @@
 """The RAPID section of the cell: what only the ABB RAPID dialect reads (``cell.dialects
-["rapid"]``), from ``rapid:`` and ``program.decimals``. ``KEYS`` declares the keys for the cell
-reader; ``read_section`` builds and validates the record."""
+["rapid"]``), from ``rapid:``, ``program.decimals`` and the tooldata names of ``tool_data:``.
+``KEYS`` declares the keys for the cell reader; ``read_section`` builds and validates the
+record."""
 
 from __future__ import annotations
 
@@ -25,7 +26,9 @@ class RapidSection:
     tooldata (the cell's tool, TCP in the flange frame) and the wobjdata (the cell's base frame,
     ``robot_T_wobj`` (4, 4) mm) the program moves with, and that ``rewrite`` accepts; tool_mass:
     the tool load, kg; spindle: the digital output switching the spindle; zone_mm: the zonedata
-    TCP radius of travel and retract moves, mm; decimals of positions (mm)."""
+    TCP radius of travel and retract moves, mm; decimals of positions (mm); tool_names: the
+    tooldata name (lower case) of each ``tool_data:`` entry that has one (``name:``, and tool0,
+    the flange) -> its tool number, None when the cell has no ``tool_data:``."""
 
     robot_T_wobj: np.ndarray
     module: str | None = None
@@ -35,6 +38,7 @@ class RapidSection:
     spindle: str = "doSpindle"
     zone_mm: float = 5.0
     decimals: int = 3
+    tool_names: dict[str, int] | None = None
 
 
 def read_section(r: CellReader, robot_T_base: np.ndarray) -> RapidSection:
@@ -60,5 +64,27 @@ def read_section(r: CellReader, robot_T_base: np.ndarray) -> RapidSection:
         tool_mass=r.number("rapid", "tool_mass", 5.0, 0.0, 10000.0, True),
         zone_mm=r.number("rapid", "zone", 5.0, 0.0, DISTANCE_MAX_MM),
         decimals=r.integer("program", "decimals", 3, 1, 6),
+        tool_names=_tool_names(r),
         **names,
     )
+
+
+def _tool_names(r: CellReader) -> dict[str, int] | None:
+    """The tooldata names the cell's ``tool_data:`` entries give (its keys and frames already
+    checked by the cell's reader): lower-case name -> tool number, tool0 (the flange) 0; None
+    without ``tool_data:``."""
+    data = r.top.get("tool_data")
+    if data is None:
+        return None
+    names = {"tool0": 0}
+    for n, entry in data.items():
+        name = entry.get("name")
+        if name is None:
+            continue
+        key = f"tool_data.{n}.name"
+        if not isinstance(name, str) or not name.isidentifier() or not name.isascii():
+            raise r.error(key, f"must be a RAPID tooldata name, got {name!r}")
+        if name.lower() in names:
+            raise r.error(key, f"{name} names tool {names[name.lower()]} already")
+        names[name.lower()] = int(n)
+    return names
