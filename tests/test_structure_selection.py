@@ -176,8 +176,7 @@ def test_family_robots_are_drawn_within_their_stated_ranges_and_repeat_per_seed(
         unique_by=lambda t: (t[0], t[1]),
     )
 )
-@pytest.mark.parametrize("method", ["search", "ard"])
-def test_dominant_harmonics_are_found(method, terms):
+def test_dominant_harmonics_are_found(terms):
     """Harmonics of 2e-4 rad on A1-A3 whose effect beyond what the DH errors and TCP can absorb
     is at least 4x the noise floor (the DH + TCP fit to the term alone, noise-free, leaves an
     RMS of >= 4 x 0.02 mm) are all chosen."""
@@ -190,7 +189,7 @@ def test_dominant_harmonics_are_found(method, terms):
         left = identify(NOMINAL, clean).rms_mm
         assume(np.sqrt(np.mean(left**2)) >= 4 * NOISE_MM)
     data = session(arm(harmonics), q, seed=12)
-    result, selection = identify_structure(NOMINAL, data, nested=False, method=method)
+    result, selection = identify_structure(NOMINAL, data, nested=False)
     for a, k, _ in terms:
         assert f"A{a} k{k}" in selection.chosen
     assert len(selection.chosen) <= len(terms) + 2
@@ -205,10 +204,7 @@ def test_dominant_harmonics_are_found(method, terms):
     st.floats(1e-4, 3e-4),
     st.floats(0.0, 2 * np.pi),
 )
-@pytest.mark.parametrize("method", ["search", "ard"])
-def test_a_dominant_high_order_harmonic_beyond_the_library_is_found(
-    method, axis, order, amplitude, phase
-):
+def test_a_dominant_high_order_harmonic_beyond_the_library_is_found(axis, order, amplitude, phase):
     """One reducer harmonic of order 30..120 (beyond the orders the median-gap rule searches) on
     any axis, whose effect beyond the DH errors and TCP is at least 4x the noise floor, is found
     at its order by the periodogram screen and kept by the cross-validated selection; the
@@ -219,7 +215,7 @@ def test_a_dominant_high_order_harmonic_beyond_the_library_is_found(
     left = identify(NOMINAL, session(alone, q, repeats=1, noise_mm=0.0)).rms_mm
     assume(np.sqrt(np.mean(left**2)) >= 4 * NOISE_MM)
     data = session(arm([h]), q, seed=13)
-    result, selection = identify_structure(NOMINAL, data, nested=False, method=method)
+    result, selection = identify_structure(NOMINAL, data, nested=False)
     assert f"A{axis} k{order}" in selection.chosen
     assert len(selection.chosen) <= 3
     # inside the poses' joint ranges the model predicts the arm (extrapolating a high order
@@ -233,22 +229,19 @@ def test_a_dominant_high_order_harmonic_beyond_the_library_is_found(
 @pytest.mark.slow
 @settings(max_examples=3, deadline=None, derandomize=True, phases=(Phase.generate,))
 @given(st.integers(0, 1000))
-@pytest.mark.parametrize("method", ["search", "ard"])
-def test_noise_only_data_choose_nothing(method, seed):
+def test_noise_only_data_choose_nothing(seed):
     """A robot with DH errors and a TCP offset only: the search adds no joint-error term."""
     data = session(arm(), joints(50, seed), seed=seed + 1)
-    result, selection = identify_structure(NOMINAL, data, nested=False, method=method)
+    result, selection = identify_structure(NOMINAL, data, nested=False)
     assert selection.chosen == ()
     assert result.robot.joint_errors is None
     assert selection.kept == 0 and len(selection.curve) >= 1
 
 
-@pytest.mark.parametrize("method", ["search", "ard"])
-def test_pinned_terms_are_kept_and_the_same_input_gives_the_same_model(method):
+def test_pinned_terms_are_kept_and_the_same_input_gives_the_same_model():
     data = session(arm([Harmonic(2, 3, 1.5e-4, 1.0)]), joints(40, 21), seed=22)
-    pin = dict(harmonics=((5, 2),), max_order=4, method=method)
-    first, selection = identify_structure(NOMINAL, data, **pin)
-    again, same = identify_structure(NOMINAL, data, **pin)
+    first, selection = identify_structure(NOMINAL, data, harmonics=((5, 2),), max_order=4)
+    again, same = identify_structure(NOMINAL, data, harmonics=((5, 2),), max_order=4)
     assert "A5 k2" in selection.pinned and (5, 2) in selection.harmonics
     assert "harmonic_a5_k2_sin" in first.names
     assert "A5 k2" not in selection.chosen
