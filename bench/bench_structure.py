@@ -23,7 +23,9 @@ robots (seeds 100, 101) measured at 60 random poses tilted up to 25 deg (A) and 
 compliance (with the true masses), on the targets inside the poses' joint ranges (random poses leave
 a fifth of the targets outside, where the fit extrapolates; their max is printed apart). Not timed
 tests; run ``make bench ARGS=structure`` (or ``.venv/bin/python bench/bench_structure.py --robots 20
---design both``).
+--design both``). ``--method ard``: the structure chosen by group sparse Bayesian learning instead
+of the search (``identify_structure(method=...)``); ``--seeds 7,18,kr210-realistic``: only these
+rows (family seeds and built-in names), without the black boxes.
 """
 
 from __future__ import annotations
@@ -114,11 +116,14 @@ def short(names) -> str:
     )
 
 
+METHOD = "search"  # --method: the structure selection (kinematics.structure)
+
+
 def one_robot(robot: FamilyRobot, q: np.ndarray, targets: np.ndarray, seed: int):
     nominal, truth = robot.nominal, robot.true_robot()
     data = measured(robot, q, seed)
     started = time.perf_counter()
-    auto, selection = identify_structure(nominal, data)
+    auto, selection = identify_structure(nominal, data, method=METHOD)
     seconds = time.perf_counter() - started
     harmonics, compliant = true_terms(robot)
     gravity = gravity_terms(nominal) if compliant else ()
@@ -139,12 +144,12 @@ def one_robot(robot: FamilyRobot, q: np.ndarray, targets: np.ndarray, seed: int)
     }
 
 
-def family(count: int, design: str) -> tuple[str, ...]:
-    """The family table for the poses of ``plan identify --design design``; returns the
-    summary row of the designs' comparison."""
+def family(seeds: list, design: str) -> tuple[str, ...]:
+    """The family table (family seeds and built-in names ``seeds``) for the poses of ``plan
+    identify --design design``; returns the summary row of the designs' comparison."""
     rows, ratios, estimates = [], [], []
     seconds, autos, tolds = [], [], []
-    for seed in [*range(count), "kr210-realistic", "kr210-paper"]:
+    for seed in seeds:
         robot = random_robot(seed) if isinstance(seed, int) else named(seed)
         status = status_of(robot.nominal)
         q = planned_joints(robot.nominal, status, design)
@@ -190,6 +195,8 @@ def family(count: int, design: str) -> tuple[str, ...]:
         "search s",
     )
     print(table(rows, columns))
+    if not ratios:
+        return (design, "-", "-", "-", "-")
     ratios = np.sort(ratios)
     worst = ratios[int(0.9 * len(ratios)) :]
     print(
@@ -243,7 +250,7 @@ def black_boxes(designs: list[str]) -> None:
             poses.append((label, planned_joints(nominal, status, design)))
         for label, q in poses:
             data = measured(robot, q, 7)
-            auto = identify_structure(nominal, data)[0]
+            auto = identify_structure(nominal, data, method=METHOD)[0]
             told = identify(masses, data, compliance=True, harmonics=harmonics, selected=True)
             # a model fitted at these poses is only known inside their joint ranges: targets
             # beyond them extrapolate high-order harmonics (the told fit reached 0.9 mm there)
@@ -266,7 +273,14 @@ if __name__ == "__main__":
     args = sys.argv[1:]
     count = int(args[args.index("--robots") + 1]) if "--robots" in args else 20
     chosen = args[args.index("--design") + 1] if "--design" in args else "both"
+    METHOD = args[args.index("--method") + 1] if "--method" in args else METHOD
     compared = ["library", "dh"] if chosen == "both" else [chosen]
-    summary = [family(count, design) for design in compared]
+    seeds = [*range(count), "kr210-realistic", "kr210-paper"]
+    if (
+        "--seeds" in args
+    ):  # a subset for iterating: family seeds and built-in names, comma-separated
+        seeds = [int(s) if s.isdigit() else s for s in args[args.index("--seeds") + 1].split(",")]
+    summary = [family(seeds, design) for design in compared]
     designs(summary, count)
-    black_boxes(compared)
+    if "--seeds" not in args:
+        black_boxes(compared)

@@ -74,6 +74,7 @@ from accugrid.kinematics.identification import (
     pose_folds,
 )
 from accugrid.kinematics.robot import Robot
+from accugrid.kinematics.sparse_bayes import ard_choice
 
 __all__ = [
     "DEFAULT_MAX_ORDER",
@@ -257,6 +258,7 @@ def identify_structure(
     max_order: int | None = None,
     folds: int = 5,
     nested: bool = True,
+    method: str = "search",
 ) -> tuple[Identification, Selection]:
     """Choose the joint-error groups by cross-validation (module docstring) and fit them.
 
@@ -264,15 +266,20 @@ def identify_structure(
     ``max_order``: the highest order searched (default: ``DEFAULT_MAX_ORDER`` clamped to what
     the poses resolve, with the reason in ``Selection.max_order_rule``; a larger one given is
     refused naming the limit). ``folds`` >= 2: the cross-validation folds (also the nested
-    estimate's outer folds). InputError for too few poses, a bad ``max_order`` or ``folds``."""
+    estimate's outer folds). ``method``: "search" (forward selection, module docstring) or
+    "ard" (group sparse Bayesian learning over the same candidates, ``sparse_bayes``: every
+    group's prior precision by maximum evidence, each paying log m; the groups kept are fitted
+    as the search's are). InputError for too few poses, a bad ``max_order`` or ``folds``."""
+    if method not in ("search", "ard"):
+        raise ValueError(f"unknown structure selection method {method!r}")
     with one_blas_thread():  # thousands of small solves: BLAS threads only wait on each other
         return _identify_structure(
-            robot, data, base_frame, compliance, harmonics, max_order, folds, nested
+            robot, data, base_frame, compliance, harmonics, max_order, folds, nested, method
         )
 
 
 def _identify_structure(
-    robot, data, base_frame, compliance, harmonics, max_order, folds, nested
+    robot, data, base_frame, compliance, harmonics, max_order, folds, nested, method
 ) -> tuple[Identification, Selection]:
     if folds < 2 or folds > data.poses:
         raise InputError(f"--folds must be between 2 and the {data.poses} poses, got {folds}")
@@ -351,8 +358,9 @@ def _identify_structure(
     }
     problem.separate[len(search) :] = SEPARATE_GRAVITY
     left_out = problem.reduce(names)
+    problem.method = method
     fold = pose_folds(data.poses, folds)
-    path, kept, chosen = problem.search(fold, np.ones(data.poses, bool))
+    path, kept, chosen = problem.choose(fold, np.ones(data.poses, bool))
     replaced = [g for g, _ in path[1 : kept + 1] if g not in chosen]
     rejected = [g for g, _ in path[kept + 1 :] if g not in chosen]
     left_out += [
@@ -422,6 +430,7 @@ class _Problem:
         self.offered = np.ones(len(groups), bool)  # False: a screened order's neighbour (swap)
         self.bars = np.full(len(groups), norm.isf(FALSE_STEP / max(len(groups), 1)))
         self.separate = np.full(len(groups), SEPARATE)
+        self.method = "search"  # or "ard": group sparse Bayesian learning (``choose``)
 
     def reduce(self, names: list[str]) -> list[tuple[str, str]]:
         """Keep of each group only its directions the data separate from the DH + TCP (+ pinned)
@@ -462,6 +471,25 @@ class _Problem:
         self.pairs = np.array([i for i, g in enumerate(groups) if len(g) == 2], dtype=int)
         self.others = [i for i, g in enumerate(groups) if len(g) not in (0, 2)]
         return out
+
+    def choose(self, fold_of_pose: np.ndarray, use: np.ndarray):
+        """``search`` (method "search") or group ARD (method "ard", ``sparse_bayes``) on the
+        poses ``use`` (P,) bool: (path, kept steps, chosen groups). ARD's prior against a group
+        is log m, m the candidates a step is the best of as its bar counts them (the library,
+        or the screen's whole pool); its path adds the groups kept, largest effect first."""
+        if self.method == "search":
+            return self.search(fold_of_pose, use)
+        rows = use[self.pose]
+        live = self.observable & self.offered
+        groups = [g if live[i] else g[:0] for i, g in enumerate(self.groups)]
+        penalty = np.log(FALSE_STEP / norm.sf(self.bars))
+        chosen = ard_choice(self.y[rows], self.x0[rows], self.c[rows], groups, None, penalty)[0]
+        fold, rows, folds = self._cv(fold_of_pose, use)
+        path = [
+            (chosen[i - 1] if i else None, self._held(chosen[:i], fold, rows, folds))
+            for i in range(len(chosen) + 1)
+        ]
+        return path, len(chosen), chosen
 
     def search(self, fold_of_pose: np.ndarray, use: np.ndarray):
         """The whole search on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,): the
@@ -722,7 +750,7 @@ def _nested(problem: _Problem, fold: np.ndarray, folds: int, names, data: PoseSe
         use = fold != k
         inner = np.full(problem.poses, -1)
         inner[use] = pose_folds(int(use.sum()), folds, _NESTED_SEED + k)
-        chosen = problem.search(inner, use)[2]
+        chosen = problem.choose(inner, use)[2]
         chosen_by_fold.append(tuple(names[g] for g in chosen))
         x = problem.design(chosen)
         train, test = use[problem.pose], ~use[problem.pose]
