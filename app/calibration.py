@@ -25,7 +25,8 @@ from accugrid.kinematics.validity import validity_section
 __all__ = ["MAX_ROWS", "STRUCTURES", "Calibration", "IdentifyOptions", "calibrate"]
 
 MAX_ROWS = 100_000  # measurement rows identify takes (a tracker session has hundreds)
-STRUCTURES = ("auto", "dh")  # --structure: chosen by cross-validation, or DH + TCP (+ pinned)
+STRUCTURES = ("auto", "search", "dh")  # --structure: ARD, forward search, DH + TCP (+ pinned)
+_METHOD = {"auto": "ard", "search": "search"}  # the selection method of each chosen structure
 
 
 @dataclass(frozen=True)
@@ -79,13 +80,14 @@ def calibrate(
     if options.structure not in STRUCTURES:
         raise InputError(
             f"--structure {options.structure!r}: one of {', '.join(STRUCTURES)} (auto: the "
-            "joint-error terms chosen by cross-validation; dh: DH errors and TCP only)"
+            "joint-error terms chosen by sparse Bayesian learning; search: by forward "
+            "selection; dh: DH errors and TCP only)"
         )
-    auto = options.structure == "auto"
+    auto = options.structure in _METHOD
     if auto and options.folds == 0:
         raise InputError("--folds 0: choosing the structure needs folds; add --structure dh")
     if not auto and options.max_order is not None:
-        raise InputError("--max-order chooses the harmonics searched by --structure auto")
+        raise InputError("--max-order chooses the harmonics searched by --structure auto or search")
     meas = read_measurements(measurements)
     status = meas.status if meas.status is not None else options.status
     data = pose_set(
@@ -110,6 +112,7 @@ def calibrate(
             harmonics=options.harmonics,
             max_order=options.max_order,
             folds=options.folds,
+            method=_METHOD[options.structure],
         )
     else:
         result = identify(

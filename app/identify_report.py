@@ -99,7 +99,7 @@ def identify_report(
         f"tolerance ±{tolerance_mm:g} mm.",
     )
     tables = [parameters, null]
-    if structure.get("mode") == "auto":
+    if structure.get("mode") in ("auto", "search"):
         tables.insert(0, _structure_table(structure))
     return report_html(
         "Robot model identification",

@@ -23,9 +23,9 @@ robots (seeds 100, 101) measured at 60 random poses tilted up to 25 deg (A) and 
 compliance (with the true masses), on the targets inside the poses' joint ranges (random poses leave
 a fifth of the targets outside, where the fit extrapolates; their max is printed apart). Not timed
 tests; run ``make bench ARGS=structure`` (or ``.venv/bin/python bench/bench_structure.py --robots 20
---design both``). ``--method ard``: the structure chosen by group sparse Bayesian learning instead
-of the search (``identify_structure(method=...)``); ``--seeds 7,18,kr210-realistic``: only these
-rows (family seeds and built-in names), without the black boxes.
+--design both``). ``--method search``: the structure chosen by the forward search instead of group
+sparse Bayesian learning (the default; ``identify_structure(method=...)``); ``--seeds
+7,18,kr210-realistic``: only these rows (family seeds and built-in names), without the black boxes.
 """
 
 from __future__ import annotations
@@ -116,7 +116,7 @@ def short(names) -> str:
     )
 
 
-METHOD = "search"  # --method: the structure selection (kinematics.structure)
+METHOD = "ard"  # --method: the structure selection (kinematics.structure)
 
 
 def one_robot(robot: FamilyRobot, q: np.ndarray, targets: np.ndarray, seed: int):

@@ -90,16 +90,16 @@ def identification_summary(
 
 
 def structure_summary(selection: Selection | None) -> dict:
-    """``identification.structure``: the mode ('dh' or 'auto'), and for 'auto' the search (the
-    highest order and why, folds, number of candidate groups), the pinned and chosen groups, what
-    was left out and why, the cross-validation curve (held-out RMS and max per axis, mm, against
-    the groups added; the first ``kept_steps`` steps are the chosen model) and the nested
-    estimate (mm). Keys: ``robot.STRUCTURE_SCHEMA``."""
+    """``identification.structure``: the mode (the ``--structure`` word: 'dh', 'auto' or 'search'),
+    and unless 'dh' the search (the highest order and why, folds, number of candidate groups), the
+    pinned and chosen groups, what was left out and why, the cross-validation curve (held-out RMS
+    and max per axis, mm, against the groups added; the first ``kept_steps`` steps are the chosen
+    model) and the nested estimate (mm). Keys: ``robot.STRUCTURE_SCHEMA``."""
     if selection is None:
         return {"mode": "dh"}
     nested = selection.nested
     out = {
-        "mode": "auto",
+        "mode": {"ard": "auto"}.get(selection.method, selection.method),
         "max_order": selection.max_order,
         "max_order_rule": selection.max_order_rule,
         "folds": selection.folds,

@@ -1,7 +1,12 @@
 """Choosing the joint-error structure of a calibrated model from the measurements.
 
 The candidates (``kinematics.candidates``) are groups of linear parameters: reducer harmonics
-(axis, order 1..K) and the mass-free gravity parts of A2 and A3. The search:
+(axis, order 1..K) and the mass-free gravity parts of A2 and A3. By default (method "ard") step
+2-3 below is replaced by group sparse Bayesian learning over every candidate at once
+(``kinematics.sparse_bayes``: each group's prior precision by maximum evidence, each group paying
+log m of evidence for being the best of m; its curve adds the groups kept, largest effect first,
+scored by the same cross-validation): near-alias orders share the evidence instead of a greedy
+step committing to one. Method "search" (``--structure search``):
 
 1. Fit DH errors + TCP (+ the tracker frame, ``--compliance`` with masses and the pinned
    harmonics, which are always kept) with the full nonlinear model; linearise there: residuals y,
@@ -159,6 +164,7 @@ class Selection:
     folds: int
     candidates: int
     nested: Nested | None
+    method: str = "ard"  # how the groups were chosen: "ard" or "search" (``identify_structure``)
 
 
 def max_order_of(q: np.ndarray) -> np.ndarray:
@@ -258,18 +264,18 @@ def identify_structure(
     max_order: int | None = None,
     folds: int = 5,
     nested: bool = True,
-    method: str = "search",
+    method: str = "ard",
 ) -> tuple[Identification, Selection]:
-    """Choose the joint-error groups by cross-validation (module docstring) and fit them.
+    """Choose the joint-error groups from the data (module docstring) and fit them.
 
     ``harmonics`` and ``compliance`` (with the robot's masses) are pinned: always in the model.
-    ``max_order``: the highest order searched (default: ``DEFAULT_MAX_ORDER`` clamped to what
-    the poses resolve, with the reason in ``Selection.max_order_rule``; a larger one given is
-    refused naming the limit). ``folds`` >= 2: the cross-validation folds (also the nested
-    estimate's outer folds). ``method``: "search" (forward selection, module docstring) or
-    "ard" (group sparse Bayesian learning over the same candidates, ``sparse_bayes``: every
-    group's prior precision by maximum evidence, each paying log m; the groups kept are fitted
-    as the search's are). InputError for too few poses, a bad ``max_order`` or ``folds``."""
+    ``max_order``: the highest order searched (default: ``DEFAULT_MAX_ORDER`` clamped to what the
+    poses resolve, with the reason in ``Selection.max_order_rule``; a larger one given is refused
+    naming the limit). ``folds`` >= 2: the cross-validation folds (also the nested estimate's outer
+    folds). ``method``: "ard" (the default: group sparse Bayesian learning over the same candidates,
+    ``sparse_bayes``: every group's prior precision by maximum evidence, each paying log m; the
+    groups kept are fitted as the search's are) or "search" (forward selection, module docstring).
+    InputError for too few poses, a bad ``max_order`` or ``folds``."""
     if method not in ("search", "ard"):
         raise ValueError(f"unknown structure selection method {method!r}")
     with one_blas_thread():  # thousands of small solves: BLAS threads only wait on each other
@@ -403,6 +409,7 @@ def _identify_structure(
         folds=folds,
         candidates=len(names),
         nested=estimate,
+        method=method,
     )
     return result, selection
 
@@ -430,7 +437,7 @@ class _Problem:
         self.offered = np.ones(len(groups), bool)  # False: a screened order's neighbour (swap)
         self.bars = np.full(len(groups), norm.isf(FALSE_STEP / max(len(groups), 1)))
         self.separate = np.full(len(groups), SEPARATE)
-        self.method = "search"  # or "ard": group sparse Bayesian learning (``choose``)
+        self.method = "ard"  # or "search": group sparse Bayesian learning (``choose``)
 
     def reduce(self, names: list[str]) -> list[tuple[str, str]]:
         """Keep of each group only its directions the data separate from the DH + TCP (+ pinned)

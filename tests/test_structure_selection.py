@@ -314,7 +314,7 @@ def test_structure_dh_is_the_geometric_fit(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
-        (("--structure", "magic"), "--structure 'magic': one of auto, dh"),
+        (("--structure", "magic"), "--structure 'magic': one of auto, search, dh"),
         (("--folds", "0"), "--folds 0: choosing the structure needs folds"),
         (("--max-order", "4", "--structure", "dh"), "--max-order chooses the harmonics"),
         (("--max-order", "9999"), "--max-order 9999: these 40 poses resolve harmonic orders"),

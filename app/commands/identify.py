@@ -11,8 +11,11 @@ errors of seed Eq. 2 (Δa, Δd mm; Δα, Δθ rad), the TCP offset in the flange
 --base-frame the tracker-to-robot frame (then x_meas.. may be in tracker coordinates), and the
 joint errors the measurements show (--structure auto, the default; kinematics.structure): reducer
 harmonics s*sin(k*A)+c*cos(k*A) per axis and order k <= --max-order, and the gravity compliance
-of A2 and A3 without masses (compliance x first moments of the links), chosen by cross-validation
-over the distinct poses, with an accuracy estimate by nested cross-validation. --harmonics pins
+of A2 and A3 without masses (compliance x first moments of the links), chosen from the data: every
+candidate group weighed at once by sparse Bayesian learning (each group's prior by maximum
+evidence; --structure search: forward selection on the held-out error instead), with the
+cross-validation curve and an accuracy estimate by nested cross-validation over the distinct
+poses. --harmonics pins
 orders known from the reducers' data sheets and --compliance the compliance of A2 and A3 under the
 robot YAML's gravity model (joint_errors.masses): always kept. --structure dh fits the DH errors
 and TCP (and the pinned terms) only. Directions the data cannot see (SVD of the column-scaled
@@ -69,7 +72,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="auto",
         metavar="WORD",
         help="auto (default): choose the joint-error terms (reducer harmonics, gravity "
-        "compliance) by cross-validation; dh: DH errors and TCP (and pinned terms) only",
+        "compliance) by sparse Bayesian learning, checked by cross-validation; search: by "
+        "forward selection on the cross-validated error; dh: DH errors and TCP (and pinned "
+        "terms) only",
     )
     parser.add_argument(
         "--max-order",
