@@ -144,7 +144,10 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: KrlPlacement
     first[1:] = (which[1:] != which[:-1]) | (abc[1:] != abc[:-1]).any(axis=1)  # NaN: its own
     heads = np.flatnonzero(first)
     rotations = None
-    if n:
+    if len(heads) == 1:  # one orientation for all: a read-only view, not N copies of it
+        one = rotations_of(frames[which[heads]][:, :3, :3], abc[heads])
+        rotations = np.broadcast_to(one, (n, 3, 3))
+    elif n:
         rotations = rotations_of(frames[which[heads]][:, :3, :3], abc[heads])[np.cumsum(first) - 1]
     state = _Files(files, todo, placed, frames, starts, which, base_xyz, chains, relative)
     return Scan(rows, at, robot, rotations, np.concatenate(status), state=state)
