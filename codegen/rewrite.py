@@ -16,6 +16,7 @@ corrects nothing.
 from __future__ import annotations
 
 import math
+from copy import copy
 from dataclasses import dataclass
 from itertools import chain
 from pathlib import Path
@@ -178,9 +179,17 @@ class Rows:
 
     @classmethod
     def concat(cls, parts: list[Rows]) -> Rows:
-        """The rows of each part, in order."""
+        """The rows of each part, in order (the arrays of the one part with rows, not copies,
+        when the others have none: a part is not used after it is concatenated)."""
         files = sorted({f for p in parts for f in p.files})
         index = {f: i for i, f in enumerate(files)}
+        full = [p for p in parts if len(p)]
+        if len(full) == 1:
+            (one,) = full
+            out = copy(one)
+            out.files = files
+            out.file = np.array([index[f] for f in one.files], np.int64)[one.file]
+            return out
         out = cls(
             files,
             np.concatenate(
