@@ -74,7 +74,7 @@ class _Files:
     """What the splice needs of a scan: each file's path, text and table, its placed rows
     (``todo``) and the index of each one's robot_T_base (``placed``), the frames, the first
     report row of each file (``starts``), the positions in their base frames (``which`` frame,
-    ``base_xyz``) and the chains of relative motions."""
+    ``base_xyz``; the splice takes both) and the chains of relative motions."""
 
     files: list[tuple[str | None, str, PositionTable]]
     todo: list[np.ndarray]
@@ -158,14 +158,15 @@ def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[s
     NaN rows: not corrected) written back in its base frame, relative motions as increments;
     unchanged files as they were."""
     state: _Files = scan.state
-    frames, which, base_xyz, robot = state.frames, state.which, state.base_xyz, scan.robot
-    targets = np.full((len(which), 3), np.nan)
+    frames, which, targets, robot = state.frames, state.which, state.base_xyz, scan.robot
+    # the positions in their base frames become the targets, in place; the robot-frame points
+    # and frame indices are done with: the memory they free holds the new text
+    state.which = state.base_xyz = scan.robot = None
     for a in range(0, len(which), _BLOCK):
         f = frames[which[a : a + _BLOCK]]
         e = corrected[a : a + _BLOCK] - robot[a : a + _BLOCK]
-        targets[a : a + _BLOCK] = base_xyz[a : a + _BLOCK] + np.einsum(
-            "nji,nj->ni", f[:, :3, :3], e
-        )  # R^T e
+        targets[a : a + _BLOCK] += np.einsum("nji,nj->ni", f[:, :3, :3], e)  # R^T e
+    del which, robot
     bounds = np.cumsum([0] + [t.size for t in state.todo])
     per_file = [targets[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
     places = [
@@ -173,7 +174,7 @@ def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[s
         for _, _, table in state.files
     ]
     extra: list[list] = [[] for _ in state.files]
-    if state.chains is not None and len(which):
+    if state.chains is not None and len(targets):
         extra = _increments(
             state.chains, state.relative, state.todo, per_file, scan.rows, state.starts, places
         )
