@@ -913,7 +913,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: RapidPlaceme
                 k, b = mine[a : a + _BLOCK], slice(a, a + _BLOCK)
                 t = frames[found.frame[k]]
                 robot[-1][b] = np.einsum("nij,nj->ni", t[:, :3, :3], found.xyz[k]) + t[:, :3, 3]
-                rotations[-1][b] = t[:, :3, :3] @ _matrices(found.quat[k])
+                rotations[-1][b] = _rotations(frames, found.frame[k], found.quat[k])
             status.append(kuka_status_of(found.cfx[mine]))
             at.append(start + mine)
         parts.append(rows)
@@ -966,6 +966,17 @@ def kuka_status_of(cfx: np.ndarray) -> np.ndarray:
     cfx = np.asarray(cfx, dtype=np.int64)
     status = kuka_status((cfx >> 2) & 1, 1 - ((cfx >> 1) & 1), cfx & 1)
     return np.where((cfx >= 0) & (cfx <= 7), status, -1)
+
+
+def _rotations(frames: np.ndarray, frame: np.ndarray, quats: np.ndarray) -> np.ndarray:
+    """Robot-frame orientations (N, 3, 3) of quaternions (N, 4) written in ``frames[frame]``
+    (frames (F, 4, 4), frame (N,)): each run of rows with the same frame and quaternion (a whole
+    module, mostly) computed once, for its first row."""
+    first = np.ones(len(frame), bool)
+    first[1:] = (frame[1:] != frame[:-1]) | (quats[1:] != quats[:-1]).any(axis=1)  # NaN: its own
+    heads = np.flatnonzero(first)
+    found = frames[frame[heads], :3, :3] @ _matrices(quats[heads])
+    return found[np.cumsum(first) - 1]
 
 
 def _matrices(quats: np.ndarray) -> np.ndarray:
