@@ -16,6 +16,7 @@ corrects nothing.
 from __future__ import annotations
 
 import math
+from copy import copy
 from dataclasses import dataclass
 from itertools import chain
 from pathlib import Path
@@ -28,7 +29,7 @@ from accugrid.codegen.header import header_lines as make_header
 from accugrid.codegen.program_text import MAX_BYTES, distinct_ints
 from accugrid.compensation import GridModel
 from accugrid.compensation.policy import CORRECTED as POLICY_CORRECTED
-from accugrid.compensation.policy import NOT_PLACED, OUTSIDE_GRID, REASONS, Policy
+from accugrid.compensation.policy import NOT_PLACED, OUTSIDE_GRID, REASONS, TOO_LONG, Policy
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM, CorrectionSettings
 from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import InputError
@@ -63,6 +64,7 @@ REPORT_COLUMNS = (
     "file,line,name,status,reason,x,y,z,x_new,y_new,z_new,dx,dy,dz,correction_mm,residual_mm"
 )
 NAN3 = (math.nan, math.nan, math.nan)
+_DECIDE = 1 << 16  # positions the policy decides at a time
 
 
 @dataclass
@@ -176,9 +178,17 @@ class Rows:
 
     @classmethod
     def concat(cls, parts: list[Rows]) -> Rows:
-        """The rows of each part, in order."""
+        """The rows of each part, in order (the arrays of the one part with rows, not copies,
+        when the others have none: a part is not used after it is concatenated)."""
         files = sorted({f for p in parts for f in p.files})
         index = {f: i for i, f in enumerate(files)}
+        full = [p for p in parts if len(p)]
+        if len(full) == 1:
+            (one,) = full
+            out = copy(one)
+            out.files = files
+            out.file = np.array([index[f] for f in one.files], np.int64)[one.file]
+            return out
         out = cls(
             files,
             np.concatenate(
@@ -279,6 +289,7 @@ def rewrite(plugin: DialectPlugin, texts: dict[str, str], opts: Options, placeme
     corrected = correct_points(
         scan.robot, scan.rows, scan.at, opts, scan.rotations, status=scan.status
     )
+    scan.rotations = scan.status = None  # the splice needs neither: memory for its output
     data = plugin.splice(scan, corrected, opts)
     partial_check(scan.rows, opts)
     rows = scan.rows if scan.others is None else Rows.concat([scan.rows, scan.others])
@@ -336,32 +347,56 @@ def correct_points(
 
 
 def _decide(points, rows, at, opts, rotations, mark, status, tool, out, sub=slice(None)) -> None:
-    """``correct_points`` for the points of one tool (-1: the cell's), written to ``out[sub]``."""
-    if tool < 0 or tool == opts.tool_number:
-        verdict = opts.policy.decide(points, rotations, status=status)
-    elif tool not in opts.tool_data:
+    """``correct_points`` for the points of one tool (-1: the cell's), written to ``out[sub]``:
+    the policy's verdicts a block of ``_DECIDE`` points at a time (its temporaries, a few arrays
+    of (N, 8) and (N, 3, 3) at a million points, stay those of one block)."""
+    if tool >= 0 and tool != opts.tool_number and tool not in opts.tool_data:
         if mark:  # not placed: where its TCP is is not known
             rows.code[at] = NOT_PLACED
             for i in at.tolist():
                 rows.reason[i] = f"tool {tool} is not declared in the cell file (tool, tool_data)"
         return
-    else:
-        verdict = opts.policy.decide_tool(
-            tool, opts.tool_data[tool], points, rotations, status=status
+    index = np.arange(len(out))[sub]
+    worst = None  # (value, verdict, first point) of the block with the longest correction over
+    for a in range(0, len(points), _DECIDE):  # the safety limit
+        b = slice(a, a + _DECIDE)
+        verdict = _verdict(
+            opts,
+            tool,
+            points[b],
+            None if rotations is None else rotations[b],
+            None if status is None or np.ndim(status) == 0 else status[b],
         )
-    verdict.enforce(
-        lambda i: rows.name[at[i]], lambda i: rows.where(at[i]), allow_partial=True
-    )  # only the safety limit: the rows' verdicts are counted for the whole job
-    if mark:
-        refused = verdict.refused
-        rows.code[at[refused]] = verdict.code[refused]
-        rows.status[at[refused[verdict.code[refused] == OUTSIDE_GRID]]] = OUTSIDE
-        flagged = np.flatnonzero(verdict.flags != 0)
-        for i in np.union1d(refused, flagged).tolist():
-            words = verdict.reason(i)
-            rows.reason[at[i]] = words if verdict.code[i] else f"flag: {words}"
-    use = np.flatnonzero(verdict.code == POLICY_CORRECTED)
-    out[np.arange(len(out))[sub][use]] = verdict.command[use]
+        over = np.flatnonzero(verdict.code == TOO_LONG)
+        if over.size and (worst is None or verdict.value[over].max() > worst[0]):
+            worst = (verdict.value[over].max(), verdict, a)
+        if worst is not None:
+            continue  # the job fails: what is left is only looked at for a longer correction
+        block = at[b]
+        if mark:
+            refused = verdict.refused
+            rows.code[block[refused]] = verdict.code[refused]
+            rows.status[block[refused[verdict.code[refused] == OUTSIDE_GRID]]] = OUTSIDE
+            # refused or flagged (``np.union1d`` would import numpy.ma, 10 ms of start-up)
+            either = (verdict.code != POLICY_CORRECTED) | (verdict.flags != 0)
+            for i in np.flatnonzero(either).tolist():
+                words = verdict.reason(i)
+                rows.reason[block[i]] = words if verdict.code[i] else f"flag: {words}"
+        use = np.flatnonzero(verdict.code == POLICY_CORRECTED)
+        out[index[b][use]] = verdict.command[use]
+    if worst is not None:  # the safety limit (the rows' verdicts are counted for the whole job)
+        _, verdict, a = worst
+        verdict.enforce(
+            lambda i: rows.name[at[a + i]], lambda i: rows.where(at[a + i]), allow_partial=True
+        )
+
+
+def _verdict(opts: Options, tool: int, points, rotations, status):
+    """The policy's verdict on points (n, 3) mm robot frame of tool number ``tool`` (-1: the
+    cell's), their rotations (n, 3, 3) or None and Status (n,) or None."""
+    if tool < 0 or tool == opts.tool_number:
+        return opts.policy.decide(points, rotations, status=status)
+    return opts.policy.decide_tool(tool, opts.tool_data[tool], points, rotations, status=status)
 
 
 def rotations_of(frames: np.ndarray, abc: np.ndarray) -> np.ndarray:

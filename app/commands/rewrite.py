@@ -54,6 +54,7 @@ from accugrid.compensation.policy import GRID_ORIENTATION_TOL_DEG, ORIENTATION_L
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.infra.atomic import check_targets, write_files
 from accugrid.infra.errors import InputError
+from accugrid.infra.memory import map_large_buffers
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -180,6 +181,7 @@ def _pair(inputs: list[Path]) -> tuple[str, str] | None:
 
 
 def run(args: argparse.Namespace) -> int:
+    map_large_buffers()  # a program's columns freed go back to the system (peak memory)
     inputs = [Path(args.program)] + ([Path(args.dat)] if args.dat else [])
     pair = _pair(inputs)
     if not args.orientation_tol <= args.orientation_limit:

@@ -74,7 +74,7 @@ class _Files:
     """What the splice needs of a scan: each file's path, text and table, its placed rows
     (``todo``) and the index of each one's robot_T_base (``placed``), the frames, the first
     report row of each file (``starts``), the positions in their base frames (``which`` frame,
-    ``base_xyz``) and the chains of relative motions."""
+    ``base_xyz``; the splice takes both) and the chains of relative motions."""
 
     files: list[tuple[str | None, str, PositionTable]]
     todo: list[np.ndarray]
@@ -144,7 +144,10 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: KrlPlacement
     first[1:] = (which[1:] != which[:-1]) | (abc[1:] != abc[:-1]).any(axis=1)  # NaN: its own
     heads = np.flatnonzero(first)
     rotations = None
-    if n:
+    if len(heads) == 1:  # one orientation for all: a read-only view, not N copies of it
+        one = rotations_of(frames[which[heads]][:, :3, :3], abc[heads])
+        rotations = np.broadcast_to(one, (n, 3, 3))
+    elif n:
         rotations = rotations_of(frames[which[heads]][:, :3, :3], abc[heads])[np.cumsum(first) - 1]
     state = _Files(files, todo, placed, frames, starts, which, base_xyz, chains, relative)
     return Scan(rows, at, robot, rotations, np.concatenate(status), state=state)
@@ -155,14 +158,15 @@ def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[s
     NaN rows: not corrected) written back in its base frame, relative motions as increments;
     unchanged files as they were."""
     state: _Files = scan.state
-    frames, which, base_xyz, robot = state.frames, state.which, state.base_xyz, scan.robot
-    targets = np.full((len(which), 3), np.nan)
+    frames, which, targets, robot = state.frames, state.which, state.base_xyz, scan.robot
+    # the positions in their base frames become the targets, in place; the robot-frame points
+    # and frame indices are done with: the memory they free holds the new text
+    state.which = state.base_xyz = scan.robot = None
     for a in range(0, len(which), _BLOCK):
         f = frames[which[a : a + _BLOCK]]
         e = corrected[a : a + _BLOCK] - robot[a : a + _BLOCK]
-        targets[a : a + _BLOCK] = base_xyz[a : a + _BLOCK] + np.einsum(
-            "nji,nj->ni", f[:, :3, :3], e
-        )  # R^T e
+        targets[a : a + _BLOCK] += np.einsum("nji,nj->ni", f[:, :3, :3], e)  # R^T e
+    del which, robot
     bounds = np.cumsum([0] + [t.size for t in state.todo])
     per_file = [targets[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
     places = [
@@ -170,7 +174,7 @@ def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[s
         for _, _, table in state.files
     ]
     extra: list[list] = [[] for _ in state.files]
-    if state.chains is not None and len(which):
+    if state.chains is not None and len(targets):
         extra = _increments(
             state.chains, state.relative, state.todo, per_file, scan.rows, state.starts, places
         )

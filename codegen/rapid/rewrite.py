@@ -907,9 +907,13 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: RapidPlaceme
         rows.tool[:] = found.tool
         mine = np.flatnonzero(~np.fromiter(map(bool, found.reason), bool, n))
         if mine.size:
-            t = frames[found.frame[mine]]
-            robot.append(np.einsum("nij,nj->ni", t[:, :3, :3], found.xyz[mine]) + t[:, :3, 3])
-            rotations.append(t[:, :3, :3] @ _matrices(found.quat[mine]))
+            robot.append(np.empty((mine.size, 3)))
+            rotations.append(np.empty((mine.size, 3, 3)))
+            for a in range(0, mine.size, _BLOCK):  # (n, 4, 4) frames a block at a time
+                k, b = mine[a : a + _BLOCK], slice(a, a + _BLOCK)
+                t = frames[found.frame[k]]
+                robot[-1][b] = np.einsum("nij,nj->ni", t[:, :3, :3], found.xyz[k]) + t[:, :3, 3]
+                rotations[-1][b] = _rotations(frames, found.frame[k], found.quat[k])
             status.append(kuka_status_of(found.cfx[mine]))
             at.append(start + mine)
         parts.append(rows)
@@ -919,8 +923,8 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: RapidPlaceme
     return Scan(
         Rows.concat(parts),
         np.concatenate(at or [np.zeros(0, np.int64)]),
-        np.concatenate(robot or [np.zeros((0, 3))]),
-        np.concatenate(rotations or [np.zeros((0, 3, 3))]),
+        robot[0] if len(robot) == 1 else np.concatenate(robot or [np.zeros((0, 3))]),
+        rotations[0] if len(rotations) == 1 else np.concatenate(rotations or [np.zeros((0, 3, 3))]),
         np.concatenate(status or [np.zeros(0, np.int64)]),
         others=Rows.concat(others),
         state=(frames, found_all),
@@ -934,18 +938,21 @@ def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[s
     rows, data, k = scan.rows, {}, 0
     for text, found, start, mine in found_all:
         new = np.full((len(found.name), 3), np.nan)
-        if mine.size:
-            t = frames[found.frame[mine]]
-            e = corrected[k : k + mine.size] - scan.robot[k : k + mine.size]
+        for a in range(0, mine.size, _BLOCK):  # (n, 4, 4) frames a block at a time
+            m = mine[a : a + _BLOCK]
+            t = frames[found.frame[m]]
+            e = corrected[k : k + m.size] - scan.robot[k : k + m.size]
             back = np.einsum("nji,nj->ni", t[:, :3, :3], e)  # R^T e
             done = np.flatnonzero(np.isfinite(e[:, 0]))
-            new[mine[done]] = found.xyz[mine][done] + back[done]
-            rows.status[start + mine[done]] = CORRECTED
-            k += mine.size
+            new[m[done]] = found.xyz[m][done] + back[done]
+            rows.status[start + m[done]] = CORRECTED
+            k += m.size
         data[found.path], written = _spliced(text, found, new, opts)
         done = np.flatnonzero(~np.isnan(new[:, 0]))
-        rows.new[start + done] = written[done]
-        rows.rounding_mm[start + done] = np.linalg.norm(written[done] - new[done], axis=1)
+        for a in range(0, done.size, _BLOCK):
+            d = done[a : a + _BLOCK]
+            rows.new[start + d] = written[d]
+            rows.rounding_mm[start + d] = np.linalg.norm(written[d] - new[d], axis=1)
     return data
 
 
@@ -959,6 +966,17 @@ def kuka_status_of(cfx: np.ndarray) -> np.ndarray:
     cfx = np.asarray(cfx, dtype=np.int64)
     status = kuka_status((cfx >> 2) & 1, 1 - ((cfx >> 1) & 1), cfx & 1)
     return np.where((cfx >= 0) & (cfx <= 7), status, -1)
+
+
+def _rotations(frames: np.ndarray, frame: np.ndarray, quats: np.ndarray) -> np.ndarray:
+    """Robot-frame orientations (N, 3, 3) of quaternions (N, 4) written in ``frames[frame]``
+    (frames (F, 4, 4), frame (N,)): each run of rows with the same frame and quaternion (a whole
+    module, mostly) computed once, for its first row."""
+    first = np.ones(len(frame), bool)
+    first[1:] = (frame[1:] != frame[:-1]) | (quats[1:] != quats[:-1]).any(axis=1)  # NaN: its own
+    heads = np.flatnonzero(first)
+    found = frames[frame[heads], :3, :3] @ _matrices(quats[heads])
+    return found[np.cumsum(first) - 1]
 
 
 def _matrices(quats: np.ndarray) -> np.ndarray:
