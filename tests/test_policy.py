@@ -159,6 +159,16 @@ def test_krl_status_words_are_read_per_aggregate():
 _STATUS_WORD = re.compile(r"[{,]\s*S\s+(?:'B([01]+)'|'H([0-9A-F]+)'|(\d+))", re.IGNORECASE)
 
 
+def test_krl_status_words_past_int64_read_as_the_largest_int64():
+    from accugrid.codegen.krl.rewrite import aggregate_status
+
+    top = 2**63 - 1
+    text = "{S 9223372036854775806}{S 99999999999999999999}"
+    text += "{S 'H7FFFFFFFFFFFFFFF'}{S 'HFFFFFFFFFFFFFFFFF'}"
+    agg = np.array([i for i, c in enumerate(text) if c == "{"])
+    assert aggregate_status(text, agg).tolist() == [top - 1, top, top, top]
+
+
 # texts of S words and near misses: what may stand before the S, blanks, S, blanks, a word
 _BLANKS = st.sampled_from(["", " ", "  ", "\t\n", "\x1c", "\xa0"])
 _STATUS_TEXT = st.lists(

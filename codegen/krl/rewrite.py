@@ -16,7 +16,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 from functools import cached_property
-from itertools import chain, repeat
+from itertools import chain, count, repeat
 from pathlib import Path
 
 import numpy as np
@@ -789,6 +789,7 @@ _DIGIT = np.full(256, 99, np.int64)
 _DIGIT[48:58] = range(10)
 _DIGIT[65:71] = _DIGIT[97:103] = range(10, 16)
 _MAX = np.iinfo(np.int64).max  # a Status too large for int64 reads as this
+_EXACT = 15  # digits that fit int64 in any base up to 16 (16**15 < 2**63)
 _SCAN = 1 << 18  # bytes looked at at a time for S words
 
 
@@ -812,8 +813,8 @@ def aggregate_status(text: str, agg: np.ndarray) -> np.ndarray:
     letter = buf[word + quoted] | 32  # b or h after the quote
     base = np.where(quoted, np.where(letter == 98, 2, np.where(letter == 104, 16, 0)), 10)
     digits = word + 2 * quoted
-    value, count = _digits(buf, digits, base)
-    found = (count > 0) & (~quoted | (buf[digits + count] == 39))
+    value, length = _digits(buf, digits, base)
+    found = (length > 0) & (~quoted | (buf[digits + length] == 39))
     at, value = start[found], value[found]
     order = np.argsort(agg, kind="stable")
     starts = agg[order]
@@ -850,21 +851,21 @@ def _skip_blanks(buf: np.ndarray, at: np.ndarray, step: int) -> np.ndarray:
 
 def _digits(buf: np.ndarray, at: np.ndarray, base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The number the digits of ``base`` (k,) (2, 10 or 16; 0: none) from each offset ``at``
-    (k,) write and their count (k,), both int64 (the number at most _MAX); ``buf`` ends with
-    NULs."""
+    (k,) write and how many there are (k,), both int64 (the number at most _MAX), all of them a
+    digit place at a time; ``buf`` ends with NULs."""
     value = np.zeros(len(at), np.int64)
-    count = np.zeros(len(at), np.int64)
-    left = np.arange(len(at))
-    while True:  # once per digit of the longest number
-        digit = _DIGIT[buf[at[left] + count[left]]]
-        more = digit < base[left]
-        left, digit = left[more], digit[more]
-        if not left.size:
-            return value, count
-        b = base[left]
-        grown = value[left] * b + digit  # wraps where it exceeds _MAX: replaced below
-        value[left] = np.where(value[left] > (_MAX - digit) // b, _MAX, grown)
-        count[left] += 1
+    length = np.zeros(len(at), np.int64)
+    going = np.ones(len(at), bool)
+    for place in count():  # once per digit of the longest number
+        digit = _DIGIT[buf[np.minimum(at + place, len(buf) - 1)]]
+        going &= digit < base
+        if not going.any():
+            return value, length
+        grown = value * base + digit  # wraps past _MAX, which only a 16th digit can pass
+        if place >= _EXACT:
+            grown = np.where(value > (_MAX - digit) // np.maximum(base, 1), _MAX, grown)
+        value = np.where(going, grown, value)
+        length += going
 
 
 def _splice(
