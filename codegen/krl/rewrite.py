@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from accugrid.codegen.bytescan import PAD, text_bytes
 from accugrid.codegen.krl.parse import (
     FRAME_OPERAND,
     JOINT_TARGET,
@@ -801,8 +802,10 @@ def aggregate_status(text: str, agg: np.ndarray) -> np.ndarray:
     out = np.full(len(agg), -1, np.int64)
     if not len(agg):
         return out
-    # the text's bytes and two NULs: they end every run of blanks or digits, offset -1 reads one
-    buf = np.frombuffer(text.encode("latin-1", "replace") + b"\0\0", np.uint8)
+    # the text's bytes and NULs: they end every run of blanks or digits, offset -1 reads one
+    buf = text_bytes(text)
+    if buf is None:  # beyond latin-1: those characters read as "?"
+        buf = np.frombuffer(text.encode("latin-1", "replace") + bytes(PAD), np.uint8)
     s, braces = _s_and_braces(buf)
     s = s[_BLANK[buf[s + 1]]]
     start = _skip_blanks(buf, s - 1, -1)  # the "{" or "," before it
