@@ -14,16 +14,21 @@ __all__ = ["PAD", "U64", "distinct", "strings", "text_bytes", "windows"]
 
 PAD = 64  # NUL bytes after the text, so that every window read (at most PAD wide) exists
 U64 = np.dtype("<u8")  # eight bytes compared as one word
+_ENCODE = 1 << 22  # characters encoded at a time
 
 
 def text_bytes(text: str) -> np.ndarray | None:
     """The latin-1 bytes of ``text`` and PAD NUL bytes after them (uint8); None when ``text``
-    has a character beyond latin-1 (never so for a program read by ``read_program``)."""
+    has a character beyond latin-1 (never so for a program read by ``read_program``). Encoded a
+    block at a time into the one array: the whole text's bytes exist once, not twice."""
+    buf = np.zeros(len(text) + PAD, np.uint8)
     try:
-        data = text.encode("latin-1")
+        for a in range(0, len(text), _ENCODE):
+            part = text[a : a + _ENCODE].encode("latin-1")
+            buf[a : a + len(part)] = memoryview(part)
     except UnicodeEncodeError:
         return None
-    return np.frombuffer(data + bytes(PAD), np.uint8)
+    return buf
 
 
 def windows(buf: np.ndarray, at: np.ndarray, width: int) -> np.ndarray:

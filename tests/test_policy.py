@@ -6,6 +6,7 @@ the nominal controller's IK with the commanded tool, then the true arm's forward
 from __future__ import annotations
 
 import csv
+import re
 from importlib import resources
 from pathlib import Path
 
@@ -153,6 +154,54 @@ def test_krl_status_words_are_read_per_aggregate():
     )
     agg = np.array([text.index("{"), text.index("={") + 1, text.index("{X 2"), text.index("{X 3")])
     assert aggregate_status(text, agg).tolist() == [6, 2, -1, 5]
+
+
+_STATUS_WORD = re.compile(r"[{,]\s*S\s+(?:'B([01]+)'|'H([0-9A-F]+)'|(\d+))", re.IGNORECASE)
+
+
+def test_krl_status_words_past_int64_read_as_the_largest_int64():
+    from accugrid.codegen.krl.rewrite import aggregate_status
+
+    top = 2**63 - 1
+    text = "{S 9223372036854775806}{S 99999999999999999999}"
+    text += "{S 'H7FFFFFFFFFFFFFFF'}{S 'HFFFFFFFFFFFFFFFFF'}"
+    agg = np.array([i for i, c in enumerate(text) if c == "{"])
+    assert aggregate_status(text, agg).tolist() == [top - 1, top, top, top]
+
+
+# texts of S words and near misses: what may stand before the S, blanks, S, blanks, a word
+_BLANKS = st.sampled_from(["", " ", "  ", "\t\n", "\x1c", "\xa0"])
+_STATUS_TEXT = st.lists(
+    st.tuples(
+        st.sampled_from(["{", ",", "}", ";", "X 1", ""]),
+        _BLANKS,
+        st.sampled_from(["S", "s", "X"]),
+        _BLANKS,
+        st.sampled_from(
+            ["7", "12", "'B101'", "'b01'", "'H1aF'", "'h9'", "'B12'", "'Hg'", "'", "}", ""]
+        ),
+    ).map("".join),
+    max_size=6,
+).map("".join)
+
+
+@settings(max_examples=300, deadline=None)
+@given(_STATUS_TEXT, st.data())
+def test_krl_status_words_read_as_the_pattern_reads_them(text, data):
+    # reference: the grammar as a regular expression, each match (non-overlapping, in text
+    # order) given to the aggregate whose "{" is the last at or before it, if before its "}"
+    from accugrid.codegen.krl.rewrite import aggregate_status
+
+    opens = [i for i, c in enumerate(text) if c == "{"]
+    agg = data.draw(st.lists(st.sampled_from(opens), unique=True) if opens else st.just([]))
+    want = [-1] * len(agg)
+    for m in _STATUS_WORD.finditer(text):
+        b, h, d = m.groups()
+        value = int(b, 2) if b else int(h, 16) if h else int(d)
+        owner = max((a for a in agg if a <= m.start()), default=None)
+        if owner is not None and "}" not in text[owner : m.start()]:
+            want[agg.index(owner)] = value
+    assert aggregate_status(text, np.array(agg, np.int64)).tolist() == want
 
 
 def test_grid_only_rewrite_leaves_a_position_in_another_status_and_says_why(tmp_path, capsys):

@@ -662,9 +662,11 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
     order = np.argsort(starts, kind="stable")
     at = at[order]
     # the new texts in the edits' order, as rows of cells (NULs are dropped): a number's cells
-    # end at column 2 + width; added words are " Z" and its cells, then " R" and its cells
+    # end at column 2 + width; added words are " Z" and its cells, then " R" and its cells (the
+    # rows only as wide as a number's where no word is added: half the cells to read back)
     width = max((c.shape[1] for c in cells_of), default=1)
-    rows = np.zeros((len(at), 4 + 2 * width), np.uint8)
+    adds = np.flatnonzero(at % 6 == 4)
+    rows = np.zeros((len(at), 4 + 2 * width if len(adds) else 2 + width), np.uint8)
 
     def put(mine: np.ndarray, numbers: np.ndarray, stop: int) -> None:
         """The cells of the numbers ``numbers`` (flat indices) into ``rows[mine]``, ending at
@@ -675,7 +677,6 @@ def _bulk_block(text, moves, block, corrected, desired, r_planes, places, walk):
 
     words = np.flatnonzero(at % 6 < 4)
     put(words, at[words], 2 + width)
-    adds = np.flatnonzero(at % 6 == 4)
     if len(adds):
         k = at[adds] // 6
         lower = 32 * _lower_cases(text, moves, block.start + k)

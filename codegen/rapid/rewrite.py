@@ -316,9 +316,12 @@ class _Rigid:
         self.decl_of = dict(zip(self.keys, range(len(self.keys)), strict=True))
         self.move_keys = _lower(r.targets)
         self.move_lines = r.move_line + 1
-        self.move_decl = np.fromiter(
-            map(self.decl_of.get, self.move_keys, repeat(-1)), np.int64, len(self.move_keys)
-        )
+        if len(self.decl_of) == len(self.keys) and self.move_keys == self.keys:
+            self.move_decl = np.arange(len(self.keys))  # the k-th move to the k-th robtarget
+        else:  # the declaration each move names (-1: none)
+            self.move_decl = np.fromiter(
+                map(self.decl_of.get, self.move_keys, repeat(-1)), np.int64, len(self.move_keys)
+            )
         self.handed = np.zeros(len(self.keys), bool)  # declarations judged by the statements
         self.tools = None  # the module's tools (``scan``)
 
