@@ -28,7 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import cho_factor, cho_solve
+from scipy.linalg import LinAlgError, cho_factor, cho_solve
 
 __all__ = ["PRUNE", "GroupArd", "ard_choice", "group_ard", "projected_statistics"]
 
@@ -92,8 +92,7 @@ class _Fit:
         g_of = self.column_group[cols]
         precision = self.gram[np.ix_(cols, cols)] / self.sigma2
         precision[np.diag_indices_from(precision)] += self.alpha[g_of]
-        factor = cho_factor(precision)
-        sigma = cho_solve(factor, np.eye(cols.size))
+        sigma = cho_solve(_cholesky(precision), np.eye(cols.size))
         mu = sigma @ self.rhs[cols] / self.sigma2
         self.mean[:] = 0.0
         self.mean[cols] = mu
@@ -156,6 +155,23 @@ class _Fit:
             q = (alpha + lam) * (u.T @ q_bar) / alpha
             out[i] = 0.5 * float(np.sum(np.log(alpha / (alpha + lam)) + q**2 / (alpha + lam)))
         return out
+
+
+def _cholesky(precision: np.ndarray):
+    """The Cholesky factor of a posterior precision (a, a). Where columns of the candidates are
+    (nearly) dependent and their groups' α tiny, rounding leaves it not quite positive definite:
+    then a jitter of 1e-12, 1e-10, .. 1e-6 × its mean diagonal is added, as Gaussian-process
+    codes do; the posterior moves by far less than the noise."""
+    try:
+        return cho_factor(precision)
+    except LinAlgError:
+        scale = float(np.mean(np.diag(precision)))
+        for jitter in (1e-12, 1e-10, 1e-8, 1e-6):
+            try:
+                return cho_factor(precision + jitter * scale * np.eye(len(precision)))
+            except LinAlgError:
+                continue
+        raise
 
 
 def group_ard(

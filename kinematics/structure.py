@@ -437,7 +437,7 @@ class _Problem:
         self.offered = np.ones(len(groups), bool)  # False: a screened order's neighbour (swap)
         self.bars = np.full(len(groups), norm.isf(FALSE_STEP / max(len(groups), 1)))
         self.separate = np.full(len(groups), SEPARATE)
-        self.method = "ard"  # or "search": group sparse Bayesian learning (``choose``)
+        self.method = "ard"  # "ard" (group sparse Bayesian learning) or "search" (``choose``)
 
     def reduce(self, names: list[str]) -> list[tuple[str, str]]:
         """Keep of each group only its directions the data separate from the DH + TCP (+ pinned)
@@ -490,13 +490,26 @@ class _Problem:
         live = self.observable & self.offered
         groups = [g if live[i] else g[:0] for i, g in enumerate(self.groups)]
         penalty = np.log(FALSE_STEP / norm.sf(self.bars))
-        chosen = ard_choice(self.y[rows], self.x0[rows], self.c[rows], groups, None, penalty)[0]
+        mean = self._pose_means(rows)
+        chosen = ard_choice(mean @ self.y, mean @ self.x0, mean @ self.c, groups, None, penalty)[0]
         fold, rows, folds = self._cv(fold_of_pose, use)
         path = [
             (chosen[i - 1] if i else None, self._held(chosen[:i], fold, rows, folds))
             for i in range(len(chosen) + 1)
         ]
         return path, len(chosen), chosen
+
+    def _pose_means(self, rows: np.ndarray) -> np.ndarray:
+        """The (K, M) matrix that averages the equations ``rows`` (M,) bool of each distinct
+        pose and axis (K of them; equation e is axis e % 3 of a row). ARD weighs equations as
+        independent: repeats of a pose share its joints (identical without logged joints) and
+        its tracker error, so counted one by one they would make a pose's error look like
+        evidence; the search keeps them in one fold instead."""
+        key = self.pose * 3 + np.arange(len(self.pose)) % 3
+        _, inverse, counts = np.unique(key[rows], return_inverse=True, return_counts=True)
+        mean = np.zeros((len(counts), len(key)))
+        mean[inverse, np.flatnonzero(rows)] = 1.0 / counts[inverse]
+        return mean
 
     def search(self, fold_of_pose: np.ndarray, use: np.ndarray):
         """The whole search on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,): the
