@@ -71,14 +71,17 @@ def projected_statistics(
 class _Fit:
     """The fixed-point state on projected statistics (``group_ard``)."""
 
-    def __init__(self, gram, rhs, yy, dof, groups, noise_var) -> None:
+    def __init__(self, gram, rhs, yy, dof, groups, noise_var, noise_floor) -> None:
         self.gram, self.rhs, self.yy, self.dof, self.groups = gram, rhs, yy, dof, groups
         self.size = np.array([len(g) for g in groups])
         self.column_group = np.full(gram.shape[0], -1)
         for i, g in enumerate(groups):
             self.column_group[g] = i
         self.estimate = noise_var is None
-        self.sigma2 = float(noise_var) if noise_var is not None else max(yy / max(dof, 1), 1e-300)
+        self.floor = max(float(noise_floor), 1e-300)
+        self.sigma2 = (
+            float(noise_var) if noise_var is not None else max(yy / max(dof, 1), self.floor)
+        )
         # start: each group's prior RMS effect per unit column equal to the noise
         self.alpha = np.where(self.size > 0, 1.0 / self.sigma2, np.inf)
         self.mean = np.zeros(gram.shape[0])
@@ -122,7 +125,7 @@ class _Fit:
             if self.estimate:
                 explained = mu @ self.rhs[cols]
                 fitted = self.yy - 2 * explained + mu @ self.gram[np.ix_(cols, cols)] @ mu
-                new_sigma2 = max(float(fitted) / max(self.dof - self.gamma.sum(), 1.0), 1e-300)
+                new_sigma2 = max(float(fitted) / max(self.dof - self.gamma.sum(), 1.0), self.floor)
                 change = max(change, abs(new_sigma2 - self.sigma2) / self.sigma2)
                 self.sigma2 = new_sigma2
             pruned = bool(np.any(active & ~np.isfinite(new)))
@@ -182,14 +185,16 @@ def group_ard(
     groups: list[np.ndarray],
     noise_var: float | None = None,
     penalty: np.ndarray | None = None,
+    noise_floor: float = 0.0,
 ) -> GroupArd:
     """Group ARD on projected statistics (``projected_statistics``): ``gram`` CᵀC (m, m),
     ``rhs`` Cᵀy (m,), ``yy`` yᵀy, ``dof`` the equations left after the flat-prior columns,
     ``groups`` the column indices (into m) of each group (empty: never relevant).
-    ``noise_var``: σ² fixed (e.g. from repeated poses), else estimated with the precisions.
+    ``noise_var``: σ² fixed (e.g. from repeated poses), else estimated with the precisions, never
+    below ``noise_floor`` (e.g. what the repeats' scatter alone puts in a mean of them).
     ``penalty`` (G,): log prior odds against each group (default 0: plain ARD); groups whose
     log-evidence gain stays below it are pruned one at a time, the smallest margin first."""
-    fit = _Fit(gram, rhs, yy, dof, groups, noise_var)
+    fit = _Fit(gram, rhs, yy, dof, groups, noise_var, noise_floor)
     fit.converge()
     gain = fit.gains()
     if penalty is not None:
@@ -220,11 +225,12 @@ def ard_choice(
     groups: list[np.ndarray],
     noise_var: float | None = None,
     penalty: np.ndarray | None = None,
+    noise_floor: float = 0.0,
 ) -> tuple[list[int], GroupArd]:
     """The groups (indices into ``groups``) group ARD keeps for residuals y (M,), flat-prior
     columns x (M, r) and candidate columns c (M, m) (``group_ard``), largest posterior effect
-    |μ_g|² first, with the fit."""
-    fit = group_ard(*projected_statistics(y, x, c), groups, noise_var, penalty)
+    |μ_g|² first, with the fit (``noise_floor``: ``group_ard``)."""
+    fit = group_ard(*projected_statistics(y, x, c), groups, noise_var, penalty, noise_floor)
     power = np.array([float(fit.mean[g] @ fit.mean[g]) for g in groups])
     chosen = [int(i) for i in np.flatnonzero(fit.relevant)]
     return sorted(chosen, key=lambda i: (-power[i], i)), fit

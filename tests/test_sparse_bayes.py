@@ -53,7 +53,7 @@ def test_a_groups_gain_is_the_log_evidence_it_adds(seed, amplitude):
     """For every group kept, the gain the pruning compares with its penalty equals the dense
     log marginal likelihood with the group at its precision minus without it."""
     y, x, c = problem(seed, {0: amplitude, 3: amplitude / 2, 8: amplitude})
-    fit = _Fit(*projected_statistics(y, x, c), GROUPS, 0.25)
+    fit = _Fit(*projected_statistics(y, x, c), GROUPS, 0.25, 0.0)
     fit.converge()
     gains = fit.gains()
     whole = log_evidence(y, x, c, fit.alpha, 0.25)
