@@ -208,10 +208,14 @@ def _structure_report(selection: Selection) -> str:
     """The lines on the chosen structure: terms, the cross-validation curve, what was left out,
     the nested estimate of the accuracy."""
     chosen = ", ".join(selection.chosen) or "none (DH errors and TCP only)"
+    how = {
+        "ard": "sparse Bayesian learning (each group's evidence over the poses' means)",
+        "search": f"forward selection by {selection.folds}-fold cross-validation over the poses",
+    }[selection.method]
     lines = [
-        f"  structure chosen by {selection.folds}-fold cross-validation over the distinct poses "
-        f"from {selection.candidates} candidate groups (harmonic orders 1..{selection.max_order}: "
-        f"{selection.max_order_rule}; gravity of A2, A3 without masses): {chosen}"
+        f"  structure chosen by {how} from {selection.candidates} candidate groups (harmonic "
+        f"orders 1..{selection.max_order}: {selection.max_order_rule}; gravity of A2, A3 "
+        f"without masses): {chosen}"
     ]
     if selection.pinned:
         lines.append("  pinned (always kept): " + ", ".join(selection.pinned))
@@ -234,7 +238,7 @@ def _structure_report(selection: Selection) -> str:
         rms = " ".join(f"{v:.4f}" for v in nested.rms_mm)
         peak = " ".join(f"{v:.4f}" for v in nested.max_mm)
         line = (
-            f"  expected accuracy (nested {nested.folds}-fold cross-validation, the search "
+            f"  expected accuracy (nested {nested.folds}-fold cross-validation, the selection "
             f"repeated inside each fold), held-out measured - model: RMS X Y Z {rms}  max {peak}"
         )
         if nested.model_rms_mm is not None:

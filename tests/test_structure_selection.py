@@ -287,7 +287,7 @@ def test_plain_identify_records_the_chosen_structure_in_the_yaml(tmp_path, capsy
     csv = write_csv(tmp_path / "meas.csv", arm([Harmonic(2, 5, 2e-4, 0.5)]), joints(40, 41))
     assert run(tmp_path, csv, "--max-order", "6") == 0
     printed = capsys.readouterr().out
-    assert "structure chosen by 5-fold cross-validation" in printed
+    assert "structure chosen by sparse Bayesian learning" in printed
     assert "expected accuracy (nested 5-fold" in printed
     doc = yaml.safe_load((tmp_path / "cal.yaml").read_text())
     structure = doc["identification"]["structure"]
@@ -300,6 +300,17 @@ def test_plain_identify_records_the_chosen_structure_in_the_yaml(tmp_path, capsy
     loaded = load_robot(tmp_path / "cal.yaml")
     nested = structure["nested"]["held_out_max_mm"]
     np.testing.assert_allclose(loaded.validated_max_mm, [nested[k] for k in "xyz"])
+
+
+def test_structure_search_is_the_forward_selection_and_finds_the_dominant_harmonic(
+    tmp_path, capsys
+):
+    csv = write_csv(tmp_path / "meas.csv", arm([Harmonic(2, 5, 2e-4, 0.5)]), joints(40, 41))
+    assert run(tmp_path, csv, "--max-order", "6", "--structure", "search") == 0
+    assert "structure chosen by forward selection by 5-fold" in capsys.readouterr().out
+    structure = yaml.safe_load((tmp_path / "cal.yaml").read_text())["identification"]["structure"]
+    assert structure["mode"] == "search"
+    assert "A2 k5" in structure["chosen"]
 
 
 def test_structure_dh_is_the_geometric_fit(tmp_path, capsys):
