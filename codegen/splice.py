@@ -83,9 +83,6 @@ def _spliced(
     out = bytearray().join(pieces)
     shift = np.concatenate(([0], np.cumsum(delta)))  # of the text after edit k: shift[k + 1]
     first = starts + shift[:-1] - np.concatenate(([0], np.cumsum(lengths)[:-1]))
-    # where each new byte goes (int32 below 2 GiB: half the index bytes to write and read)
-    kind = np.int32 if len(out) < 2**31 else np.int64
-    into = np.repeat(first.astype(kind), lengths)
-    into += np.arange(len(new), dtype=kind)
+    into = np.repeat(first, lengths) + np.arange(len(new))  # where each new byte goes
     np.frombuffer(out, np.uint8)[into] = new
     return out
