@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.codegen.bytescan import U64, ascii_word, strings, windows
+from accugrid.codegen.bytescan import U64, strings, windows
 from accugrid.codegen.program_text import row_counts
 from accugrid.infra.decimals import read_decimals, words_at
 
@@ -34,6 +34,9 @@ _DECLS = ((b"DECL E6POS ", "E6POS"), (b"DECL POS ", "POS"), (b"DECL FRAME ", "FR
 _MOTIONS = ((b"LIN ", "LIN"), (b"PTP ", "PTP"), (b"SLIN ", "SLIN"), (b"SPTP ", "SPTP"))
 _CLAUSES = (b" C_DIS", b" C_PTP", b" C_VEL", b" C_ORI")
 _NAME_MAX = 32  # longer names (KRL allows 24) are left to the statement reader
+_WORD = np.zeros(256, bool)
+_WORD[np.frombuffer(b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_", np.uint8)] = True
+_WORD[48:58] = True
 _DIGIT = np.zeros(256, bool)
 _DIGIT[48:58] = True
 
@@ -144,7 +147,7 @@ def _name_ok(buf: np.ndarray, at: np.ndarray, size: np.ndarray) -> np.ndarray:
         return ok
     width = int(size[ok].max())
     rows = windows(buf, at, width)
-    return ok & (row_counts(~ascii_word(rows) & (np.arange(width) < size[:, None])) == 0)
+    return ok & (row_counts(~_WORD[rows] & (np.arange(width) < size[:, None])) == 0)
 
 
 def _literals(
