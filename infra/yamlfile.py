@@ -15,7 +15,6 @@ one ("erors: unknown key; did you mean errors?").
 
 from __future__ import annotations
 
-import difflib
 import math
 import os
 import re
@@ -41,6 +40,8 @@ Schema = Mapping[str, Union["Schema", list, None]]
 
 def unknown_key(name: str, key: object, allowed: Collection[str]) -> str:
     """'NAME: unknown key; did you mean X?' (else the allowed keys) for ``key`` at ``name``."""
+    import difflib  # only for a message: not on every command's start-up (~1 ms)
+
     near = difflib.get_close_matches(str(key), sorted(allowed), n=1, cutoff=0.6)
     if near:
         return f"{name}: unknown key; did you mean {near[0]}?"

@@ -314,7 +314,8 @@ class _Rigid:
         self.gone = [0, *gone.tolist()]
         self.keys = _lower(r.names)
         self.decl_of = dict(zip(self.keys, range(len(self.keys)), strict=True))
-        self.move_keys = _lower(r.targets)
+        # the same names in the same order (as RobotStudio writes them): lower-cased once
+        self.move_keys = self.keys if r.targets == r.names else _lower(r.targets)
         self.move_lines = r.move_line + 1
         if len(self.decl_of) == len(self.keys) and self.move_keys == self.keys:
             self.move_decl = np.arange(len(self.keys))  # the k-th move to the k-th robtarget

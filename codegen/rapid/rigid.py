@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.codegen.bytescan import U64, distinct, strings, text_bytes, windows
+from accugrid.codegen.bytescan import U64, ascii_word, distinct, strings, text_bytes, windows
 from accugrid.infra.decimals import read_decimals
 
 __all__ = ["RigidModule", "read_rigid"]
@@ -40,14 +40,10 @@ _TAIL = re.compile(
     r"" + ",".join([_NUM] * 6) + r"\]\];\Z"
 )
 _REST = re.compile(r",([A-Za-z]\w*),([A-Za-z]\w*),([A-Za-z]\w*)(?:\\WObj:=([A-Za-z]\w*))?;\Z", re.A)
-_WORD = np.zeros(256, bool)
-_WORD[
-    np.frombuffer(b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_0123456789", np.uint8)
-] = True
-_LETTER = _WORD.copy()
-_LETTER[48:58] = False
-_LETTER[95] = False
+_LETTER = np.zeros(256, bool)  # ASCII letters, by byte
+_LETTER[65:91] = _LETTER[97:123] = True
 _LINES = 1 << 16  # lines read at a time
+_NAMES = 1 << 13  # names measured at a time
 _BYTES = 1 << 24  # bytes looked at at a time for line ends
 _XYZ_MAX = 56  # bytes from "[[" to the "]" after z: three plain decimals of at most 17
 
@@ -94,8 +90,12 @@ def _prefix(words: np.ndarray, literal: bytes) -> np.ndarray:
 
 def _names(buf: np.ndarray, at: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The length of the name at each offset ``at`` (k,) (up to the first byte no name has) and
-    whether it is an ASCII name of 1 to _NAME_MAX characters."""
-    size = np.argmin(_WORD[windows(buf, at, _NAME_MAX + 1)], axis=1)  # 0: none, or too long
+    whether it is an ASCII name of 1 to _NAME_MAX characters. A block of offsets at a time:
+    the windows and their masks stay small beside the text."""
+    size = np.empty(len(at), np.int64)  # 0: none, or too long
+    for a in range(0, len(at), _NAMES):
+        window = windows(buf, at[a : a + _NAMES], _NAME_MAX + 1)
+        size[a : a + _NAMES] = np.argmin(ascii_word(window), axis=1)
     return size, (size >= 1) & _LETTER[np.take(buf, at, mode="clip")]
 
 
