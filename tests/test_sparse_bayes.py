@@ -1,6 +1,6 @@
 """Group sparse Bayesian learning: the evidence gains it prunes by are the marginal likelihood's,
 dominant groups are kept, noise alone rarely keeps one once each group pays log m, the same
-input gives the same fit; and the structure selection it offers (``method="ard"``)."""
+input gives the same fit; and the forward search that ``method="search"`` keeps beside it."""
 
 from __future__ import annotations
 
@@ -108,7 +108,7 @@ def test_the_same_input_gives_the_same_fit_and_the_posterior_mean_is_near_the_tr
     np.testing.assert_allclose(np.abs(fit.mean[GROUPS[5]]), 1.0, atol=0.2)
 
 
-# -- the structure search's alternative (identify_structure(method="ard")) ------------------------
+# -- the forward search, the alternative to ARD (identify_structure(method="search")) ------------
 
 
 @pytest.mark.slow
@@ -121,9 +121,9 @@ def test_the_same_input_gives_the_same_fit_and_the_posterior_mean_is_near_the_tr
         unique_by=lambda t: (t[0], t[1]),
     )
 )
-def test_ard_structure_keeps_the_dominant_harmonics(terms):
+def test_search_structure_keeps_the_dominant_harmonics(terms):
     """Harmonics of 2e-4 rad on A1-A3 whose effect beyond the DH errors and TCP is at least 4x
-    the noise floor (as in the search's test) are all kept by ARD, with at most two more."""
+    the noise floor (as in the default's test) are all kept by the search, with at most two more."""
     harmonics = [Harmonic(a, k, 2e-4, phase) for a, k, phase in terms]
     q = joints(50, 11)
     for h in harmonics:
@@ -131,30 +131,30 @@ def test_ard_structure_keeps_the_dominant_harmonics(terms):
         left = identify(NOMINAL, session(alone, q, repeats=1, noise_mm=0.0)).rms_mm
         assume(np.sqrt(np.mean(left**2)) >= 4 * NOISE_MM)
     data = session(arm(harmonics), q, seed=12)
-    _, selection = identify_structure(NOMINAL, data, nested=False, method="ard")
+    _, selection = identify_structure(NOMINAL, data, nested=False, method="search")
     assert {f"A{a} k{k}" for a, k, _ in terms} <= set(selection.chosen)
     assert len(selection.chosen) <= len(terms) + 2
 
 
 @pytest.mark.slow
-def test_ard_structure_on_noise_only_data_rarely_keeps_a_term():
-    """A robot with DH errors and a TCP offset only, 10 sessions: ARD keeps a joint-error term
-    in at most one (measured: none of seeds 0-9, one of 0-19)."""
+def test_search_structure_on_noise_only_data_rarely_keeps_a_term():
+    """A robot with DH errors and a TCP offset only, 10 sessions: the search keeps a joint-error
+    term in at most two (measured: seeds 3 and 7 of 0-19, screened high orders; ARD on pose
+    means, the default: none of 0-19, ``test_structure_selection``)."""
     kept = []
     for seed in range(10):
         data = session(arm(), joints(50, seed), seed=seed + 1)
-        result, selection = identify_structure(NOMINAL, data, nested=False, method="ard")
+        result, selection = identify_structure(NOMINAL, data, nested=False, method="search")
         kept.append(bool(selection.chosen))
         assert (result.robot.joint_errors is None) == (not selection.chosen)
-    assert sum(kept) <= 1
+    assert sum(kept) <= 2
 
 
-def test_ard_structure_keeps_pinned_terms_and_repeats_itself():
+def test_search_structure_keeps_pinned_terms_and_repeats_itself():
     data = session(arm([Harmonic(2, 3, 1.5e-4, 1.0)]), joints(40, 21), seed=22)
-    first, selection = identify_structure(
-        NOMINAL, data, harmonics=((5, 2),), max_order=4, method="ard"
-    )
-    again, same = identify_structure(NOMINAL, data, harmonics=((5, 2),), max_order=4, method="ard")
+    kwargs = {"harmonics": ((5, 2),), "max_order": 4, "method": "search"}
+    first, selection = identify_structure(NOMINAL, data, **kwargs)
+    again, same = identify_structure(NOMINAL, data, **kwargs)
     assert "A5 k2" in selection.pinned and (5, 2) in selection.harmonics
     assert "A5 k2" not in selection.chosen and "A2 k3" in selection.chosen
     np.testing.assert_array_equal(first.x, again.x)
