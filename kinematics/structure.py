@@ -490,8 +490,7 @@ class _Problem:
         live = self.observable & self.offered
         groups = [g if live[i] else g[:0] for i, g in enumerate(self.groups)]
         penalty = np.log(FALSE_STEP / norm.sf(self.bars))
-        mean, floor = self._pose_means(rows)
-        y, x, c = mean @ self.y, mean @ self.x0, mean @ self.c
+        y, x, c, floor = self._pose_means(rows)
         chosen = ard_choice(y, x, c, groups, None, penalty, floor)[0]
         fold, rows, folds = self._cv(fold_of_pose, use)
         path = [
@@ -500,21 +499,28 @@ class _Problem:
         ]
         return path, len(chosen), chosen
 
-    def _pose_means(self, rows: np.ndarray) -> tuple[np.ndarray, float]:
-        """The (K, M) matrix that averages the equations ``rows`` (M,) bool of each distinct
-        pose and axis (K of them; equation e is axis e % 3 of a row), and the variance the
+    def _pose_means(self, rows: np.ndarray):
+        """The equations ``rows`` (M,) bool averaged over each distinct pose and axis (K of them;
+        equation e is axis e % 3 of a row): y (K,), X (K, r), C (K, m), and the variance the
         repeats' own scatter puts in such a mean (pooled; 0 without repeats), a floor for the
         noise of the means. ARD weighs equations as independent: repeats of a pose share its
         joints (identical without logged joints) and its tracker error, so counted one by one
         they would make a pose's error look like evidence; the search keeps them in one fold."""
         key = self.pose * 3 + np.arange(len(self.pose)) % 3
-        _, inverse, counts = np.unique(key[rows], return_inverse=True, return_counts=True)
-        mean = np.zeros((len(counts), len(key)))
-        mean[inverse, np.flatnonzero(rows)] = 1.0 / counts[inverse]
-        scatter = self.y[rows] - (mean @ self.y)[inverse]
+        at = np.flatnonzero(rows)
+        at = at[np.argsort(key[at], kind="stable")]
+        starts = np.flatnonzero(np.diff(key[at], prepend=-1))
+        counts = np.diff(starts, append=len(at))
+
+        def mean(a: np.ndarray) -> np.ndarray:
+            sums = np.add.reduceat(a[at], starts, axis=0)
+            return sums / counts.reshape(-1, *(1,) * (a.ndim - 1))
+
+        y = mean(self.y)
+        scatter = self.y[at] - np.repeat(y, counts)
         dof = int(np.sum(counts - 1))
         floor = float(scatter @ scatter) / dof / float(np.mean(counts)) if dof else 0.0
-        return mean, floor
+        return y, mean(self.x0), mean(self.c), floor
 
     def search(self, fold_of_pose: np.ndarray, use: np.ndarray):
         """The whole search on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,): the
