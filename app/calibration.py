@@ -19,14 +19,14 @@ from accugrid.kinematics.calibrated import calibrated_yaml, identification_summa
 from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification, Terms, identify, pose_set
 from accugrid.kinematics.robot import VALIDATED_MAX_KEYS, Robot
-from accugrid.kinematics.structure import Selection, identify_structure
+from accugrid.kinematics.structure import STRUCTURE_WORD, Selection, identify_structure
 from accugrid.kinematics.validity import validity_section
 
 __all__ = ["MAX_ROWS", "STRUCTURES", "Calibration", "IdentifyOptions", "calibrate"]
 
 MAX_ROWS = 100_000  # measurement rows identify takes (a tracker session has hundreds)
-STRUCTURES = ("auto", "search", "dh")  # --structure: ARD, forward search, DH + TCP (+ pinned)
-_METHOD = {"auto": "ard", "search": "search"}  # the selection method of each chosen structure
+_METHOD = {word: method for method, word in STRUCTURE_WORD.items()}  # --structure -> method
+STRUCTURES = (*_METHOD, "dh")  # --structure: chosen by ARD or the forward search; DH + TCP only
 
 
 @dataclass(frozen=True)

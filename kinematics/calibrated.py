@@ -18,7 +18,7 @@ from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification
 from accugrid.kinematics.joint_errors import JointErrors
 from accugrid.kinematics.robot import Robot
-from accugrid.kinematics.structure import Selection
+from accugrid.kinematics.structure import STRUCTURE_WORD, Selection
 
 __all__ = [
     "calibrated_yaml",
@@ -99,7 +99,7 @@ def structure_summary(selection: Selection | None) -> dict:
         return {"mode": "dh"}
     nested = selection.nested
     out = {
-        "mode": {"ard": "auto"}.get(selection.method, selection.method),
+        "mode": STRUCTURE_WORD[selection.method],
         "max_order": selection.max_order,
         "max_order_rule": selection.max_order_rule,
         "folds": selection.folds,

@@ -93,6 +93,7 @@ __all__ = [
     "SECOND_PASSES",
     "SEPARATE",
     "SEPARATE_GRAVITY",
+    "STRUCTURE_WORD",
     "Nested",
     "Selection",
     "Step",
@@ -101,6 +102,10 @@ __all__ = [
     "observability",
     "screen_limit",
 ]
+
+# each selection method of ``identify_structure`` and the ``--structure`` word that asks for it
+# (the calibrated YAML's ``identification.structure.mode``)
+STRUCTURE_WORD = {"ard": "auto", "search": "search"}
 
 DEFAULT_MAX_ORDER = 16  # reducer output stages; a user may search further with --max-order
 GAPS_PER_PERIOD = 4.0  # an order's period must span this many median gaps between pose angles
@@ -276,7 +281,7 @@ def identify_structure(
     ``sparse_bayes``: every group's prior precision by maximum evidence, each paying log m; the
     groups kept are fitted as the search's are) or "search" (forward selection, module docstring).
     InputError for too few poses, a bad ``max_order`` or ``folds``."""
-    if method not in ("search", "ard"):
+    if method not in STRUCTURE_WORD:
         raise ValueError(f"unknown structure selection method {method!r}")
     with one_blas_thread():  # thousands of small solves: BLAS threads only wait on each other
         return _identify_structure(
