@@ -31,6 +31,7 @@ from accugrid.compensation.validation import (
 )
 from accugrid.infra.atomic import JobFiles
 from accugrid.infra.csvtable import read_table
+from accugrid.infra.digest import sha256_hex
 from accugrid.infra.errors import InputError, printable
 from accugrid.infra.units import mm_text
 from accugrid.infra.yamlfile import load_yaml
@@ -111,12 +112,13 @@ def validate_files(request: ValidateRequest) -> ValidateJob:
         )
         lines.insert(-1, grid_note)
     files: dict[str, str] = {}
-    if request.report_html:
-        files[request.report_html] = _report(request, result, validated, offset, grid_note)
-        lines.append(f"wrote {request.report_html}")
     if request.report_csv:
         files[request.report_csv] = rows_csv(result, meas.lines, ids)
         lines.append(f"wrote {request.report_csv}")
+    if request.report_html:
+        outputs = [(path, sha256_hex(text.encode("utf-8"))) for path, text in files.items()]
+        files[request.report_html] = _report(request, result, validated, offset, grid_note, outputs)
+        lines.append(f"wrote {request.report_html}")
     inputs = [request.measurements, request.model, request.grid]
     return ValidateJob(JobFiles(files, inputs, lines), result, offset)
 
@@ -224,8 +226,9 @@ def _report(
     validated,
     offset: MeanOffset,
     grid_note: str | None,
+    outputs: list[tuple[str, str]],
 ) -> str:
-    """The HTML report of the validation."""
+    """The HTML report of the validation; ``outputs`` (path, SHA-256) of the files beside it."""
     tol = result.tolerance_mm
     stats = Table(
         ["axis", "min (mm)", "max (mm)", "max |d| (mm)", "mean (mm)", "std (mm)"],
@@ -329,4 +332,5 @@ def _report(
         ],
         sections,
         facts,
+        outputs=outputs,
     )

@@ -5,6 +5,7 @@ checked against a computation written here, the HTML report's structure, the ref
 from __future__ import annotations
 
 import csv
+import hashlib
 import math
 import shlex
 import statistics
@@ -177,6 +178,8 @@ def test_a_file_from_another_tool_fails_with_its_reports_and_what_the_offset_sug
     assert f"Mean deviation (measured - target) {shown} mm" in text
     assert "along the tool axis" in text
     assert len(rows.read_text().splitlines()) == 73
+    digest = hashlib.sha256(rows.read_bytes()).hexdigest()
+    assert f"{rows} {digest}" in " ".join(text.split())  # the CSV beside it, named with its hash
     # an offset of a few tenths is a failed validation, not another frame
     assert run("validate", shifted(cell, "drift.csv", 0.5), "--model", cell / "cal.yaml") == 3
     assert "no sign of another base frame or tool" in capsys.readouterr().out
