@@ -145,3 +145,18 @@ def test_rewrite_help_says_arcs_move_rigidly():
     untouched = text.split(" is left untouched")[0].rsplit("Anything that cannot be placed", 1)[1]
     assert "arc" not in untouched
     assert "A G-code arc (G2/G3) moves rigidly" in text
+
+
+HISTORY = ("this round", "load average", "(before)", "earlier code", "earlier run", "not kept")
+
+
+def test_the_docs_state_the_current_method_and_numbers_not_their_history():
+    """README and docs/ describe what the product does and measures now; how it got there is the
+    CHANGELOG's."""
+    found = [
+        f"{_page_id(page)}: {phrase}"
+        for page in PAGES
+        for phrase in HISTORY
+        if phrase in page.read_text().lower()
+    ]
+    assert not found, found
