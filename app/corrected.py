@@ -1,5 +1,5 @@
-"""``accugrid correct`` (``correct_points``): the corrected-points CSV (DESIGN.md "Corrected
-points") both jobs (grid here, model in ``correct_model``) write from the correction policy's
+"""``accugrid correct`` (``correct_points``): the corrected-points CSV (docs/formats.md)
+both jobs (grid here, model in ``correct_model``) write from the correction policy's
 verdict (``compensation.policy``): every input column untouched, then x_cmd,y_cmd,z_cmd (the
 command, mm), ex,ey,ez (the correction applied, P' - P, mm; 4 decimals) and flag (why a point
 deserves a look, or "not corrected: ..." with --allow-partial)."""

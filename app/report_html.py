@@ -1,4 +1,4 @@
-"""The one self-contained HTML report of a command (``--report-html FILE``, DESIGN.md "Reports").
+"""The one self-contained HTML report of a command (``--report-html FILE``, docs/validation.md).
 
 One Jinja page (``templates/report/report.html.j2``, autoescaped): the title and the verdict
 (PASS, FAIL, or INFO for a job without a pass criterion; a job may say in its own words what

@@ -3,7 +3,7 @@
 A validation row is a target P (the nominal position the corrected program aimed at, robot
 frame, mm) and the position M the tracker measured there after correction. The **deviation** is
 d = M - P (attained minus commanded, as ISO 9283 and metrology reports state it; the opposite
-sign of the correction error e = P - M of DESIGN.md). Rows with the same target (to 0.001 mm)
+sign of the correction error e = P - M, docs/layout.md). Rows with the same target (to 0.001 mm)
 are repeats of one pose.
 
 Per pose j with n_j rows x_ji (ISO 9283:1998, 7.2.1 and 7.2.2):
