@@ -51,19 +51,18 @@ def verdict_states(verdict: Verdict) -> tuple[np.ndarray, list[str]]:
 
 def cell_setup(cell) -> list[tuple[str, str]]:
     """The robot, tool, base and cell file of a ``codegen.cell.Cell``: (key, text) lines, the
-    tool and base as x, y, z mm and KUKA a, b, c deg."""
+    tool (flange_T_tool) and base (robot_T_base) as their number in the cell, x, y, z mm and
+    a, b, c deg as the cell file writes them."""
     from accugrid.kinematics.frames import xyzabc_from_pose
 
-    def pose(name: str, number: int, matrix: np.ndarray) -> str:
+    def pose(number: int, matrix: np.ndarray) -> str:
         x, y, z, a, b, c = xyzabc_from_pose(matrix)
-        return (
-            f"{name}[{number}]: x {x:.3f} y {y:.3f} z {z:.3f} mm, a {a:.3f} b {b:.3f} c {c:.3f} deg"
-        )
+        return f"{number}: x {x:.3f} y {y:.3f} z {z:.3f} mm, a {a:.3f} b {b:.3f} c {c:.3f} deg"
 
     return [
         ("robot", cell.robot_name),
-        ("tool", pose("TOOL_DATA", cell.tool_number, cell.flange_T_tool)),
-        ("base", pose("BASE_DATA", cell.base_number, cell.robot_T_base)),
+        ("tool", pose(cell.tool_number, cell.flange_T_tool)),
+        ("base", pose(cell.base_number, cell.robot_T_base)),
         ("cell", str(cell.path)),
     ]
 

@@ -223,7 +223,7 @@ def with_report(job: Job, report: Path | None, title: str) -> Mapping[Path, obje
             reasons,
             job.program.points.label,
             list(zip(roles, [str(p) for p in job.inputs], strict=True)),
-            f"base frame BASE_DATA[{cell.base_number}]",
+            f"base frame {cell.base_number}",
             outputs=outputs,
             setup=cell_setup(cell),
             checked=checks_text(verdict.policy),

@@ -101,7 +101,7 @@ def cell_pose_text(pose: dict) -> str:
     """A cell's tool or base record as the report writes it, formatted here."""
     xyz = " ".join(f"{k} {float(pose[k]):.3f}" for k in "xyz")
     abc = " ".join(f"{k} {float(pose[k]):.3f}" for k in "abc")
-    return f"[{pose['number']}]: {xyz} mm, {abc} deg"
+    return f"{pose['number']}: {xyz} mm, {abc} deg"
 
 
 @pytest.mark.parametrize("dialect", ["krl", "gcode"])
@@ -130,8 +130,8 @@ def test_program_report_beside_the_same_program_bytes(tmp_path, dialect, monkeyp
         assert f"{path} {digest}" in " ".join(" ".join(page.text).split())
     doc = yaml.safe_load(cell.read_text())
     assert "robot kr210-paper" in " ".join(text.split())
-    assert "TOOL_DATA" + cell_pose_text(doc["tool"]) in text
-    assert "BASE_DATA" + cell_pose_text(doc["base"]) in text
+    assert "tool " + cell_pose_text(doc["tool"]) in " ".join(text.split())
+    assert "base " + cell_pose_text(doc["base"]) in " ".join(text.split())
     assert f"cell {cell}" in " ".join(text.split())
     assert "date 1970-01-02 00:00:00 UTC" in " ".join(text.split())
     assert "Checked for every drilling position before writing: inside the grid box" in text
