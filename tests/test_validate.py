@@ -273,6 +273,10 @@ def test_bad_report_paths_and_models_are_located_errors(cell, capsys):
         assert code == 2
         assert str(target) in capsys.readouterr().err
     assert meas.read_bytes() == before
+    same = cell / "same.out"  # one path for both reports: refused, nothing written
+    assert run("validate", meas, "--model", cell / "cal.yaml", "--report", same,
+               "--report-html", same) == 2  # fmt: skip
+    assert "name the same file" in capsys.readouterr().err and not same.exists()
     assert run("validate", meas, "--model", cell / "plan" / "ident.csv") == 2
     assert run("validate", meas, "--model", cell / "targets.csv") == 2  # not a calibrated model
     # a --grid that is no grid measurement

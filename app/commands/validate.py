@@ -25,11 +25,13 @@ result to sign, not an error); 2 bad input.
 from __future__ import annotations
 
 import argparse
+import os
 
 from accugrid.app.cli_options import COORDINATE_MAX, add_table_format, number
 from accugrid.app.validate_job import ValidateRequest, validate_files
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.infra.atomic import check_targets, write_files
+from accugrid.infra.errors import InputError
 
 __all__ = ["EXIT_FAIL", "NAME", "add_arguments", "run"]
 
@@ -82,6 +84,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     inputs = [args.measurements, args.model, args.grid]
     reports = [r for r in (args.report, args.report_html) if r]
+    if len(set(map(os.path.abspath, reports))) != len(reports):
+        raise InputError("--report and --report-html name the same file", args.report_html)
     if reports:
         check_targets(reports, inputs, args.force)
     request = ValidateRequest(
