@@ -3,7 +3,7 @@
 Every module in ``app/commands/`` is one subcommand: it defines ``NAME``,
 ``add_arguments(parser)`` and ``run(args) -> int``; ``commands.COMMANDS`` lists them with their
 help. Only the module of the command that runs is imported (``accugrid --help`` imports none).
-Exit codes (DESIGN.md): 0 success, 2 bad input or arguments (one line naming file, line and
+Exit codes (docs/guarantees.md): 0 success, 2 bad input or arguments (one line naming file, line and
 column, no traceback), 1 internal error.
 """
 

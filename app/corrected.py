@@ -1,5 +1,5 @@
-"""``accugrid correct`` (``correct_points``): the corrected-points CSV (DESIGN.md "Corrected
-points") both jobs (grid here, model in ``correct_model``) write from the correction policy's
+"""``accugrid correct`` (``correct_points``): the corrected-points CSV (docs/formats.md)
+both jobs (grid here, model in ``correct_model``) write from the correction policy's
 verdict (``compensation.policy``): every input column untouched, then x_cmd,y_cmd,z_cmd (the
 command, mm), ex,ey,ez (the correction applied, P' - P, mm; 4 decimals) and flag (why a point
 deserves a look, or "not corrected: ..." with --allow-partial)."""
@@ -171,13 +171,30 @@ def corrected_file(
     model = request.model if request.model and Path(request.model).is_file() else None
     files = {request.output: text}
     if request.report_html:
-        from accugrid.app.correction_report import correction_report, verdict_states
+        from accugrid.app.correction_report import (
+            ReportedFiles,
+            checks_text,
+            correction_report,
+            verdict_states,
+        )
 
         roles = [("points", request.points), ("model", request.model), ("grid", request.grid)]
         state, reasons = verdict_states(verdict)
-        files[request.report_html] = correction_report(
-            "Corrected points", points.xyz, verdict.command, state, reasons, points.label, roles
-        )
+
+        def page(outputs: list[tuple[str, str]]) -> str:
+            return correction_report(
+                "Corrected points",
+                points.xyz,
+                verdict.command,
+                state,
+                reasons,
+                points.label,
+                roles,
+                outputs=outputs,
+                checked=checks_text(verdict.policy),
+            )
+
+        files = ReportedFiles(files, request.report_html, page)
         lines.append(f"wrote {request.report_html}")
     return JobFiles(files, [request.points, request.grid, model], lines, warnings)
 

@@ -11,6 +11,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from accugrid.codegen.cell import Cell, load_cell
 from accugrid.codegen.dialects import plugin_of
 from accugrid.codegen.header import grid_lines, header_lines, input_line
@@ -188,31 +190,46 @@ def write_program(req: ProgramRequest, force: bool = False) -> str:
 
 
 def with_report(job: Job, report: Path | None, title: str) -> Mapping[Path, object]:
-    """The job's files plus its HTML report (``app.correction_report``) at ``report``;
-    the files alone without one. The program's files stay
-    rendered on demand (a chain of mappings, not a copy). InputError for an uncorrected
-    program (--no-correction: no correction to report)."""
+    """The job's files plus its HTML report (``app.correction_report``) at ``report``, written
+    last and naming each of them with its SHA-256; the files alone without one. The program's
+    files stay rendered on demand (hashed as they are written, not copied). The plan view is in
+    the cell's base frame, the points' frame. InputError for an uncorrected program
+    (--no-correction: no correction to report)."""
     if not report:
         return job.files
     if job.program.verdict is None:
         raise InputError("--report-html reports the corrections; --no-correction makes none")
-    from collections import ChainMap
-
-    from accugrid.app.correction_report import correction_report, verdict_states
+    from accugrid.app.correction_report import (
+        ReportedFiles,
+        cell_setup,
+        checks_text,
+        correction_report,
+        verdict_states,
+    )
+    from accugrid.kinematics.frames import transform_points
 
     roles = ["points", "cell"] + ["grid or model"] * (len(job.inputs) - 2)
     verdict = job.program.verdict
+    cell = job.program.cell
     state, reasons = verdict_states(verdict)
-    page = correction_report(
-        title,
-        verdict.points,
-        verdict.command,
-        state,
-        reasons,
-        job.program.points.label,
-        list(zip(roles, [str(p) for p in job.inputs], strict=True)),
-    )
-    return ChainMap({Path(report): page}, job.files)
+    base_T_robot = np.linalg.inv(cell.robot_T_base)
+
+    def page(outputs: list[tuple[str, str]]) -> str:
+        return correction_report(
+            title,
+            transform_points(base_T_robot, verdict.points),
+            transform_points(base_T_robot, verdict.command),
+            state,
+            reasons,
+            job.program.points.label,
+            list(zip(roles, [str(p) for p in job.inputs], strict=True)),
+            f"base frame {cell.base_number}",
+            outputs=outputs,
+            setup=cell_setup(cell),
+            checked=checks_text(verdict.policy),
+        )
+
+    return ReportedFiles(job.files, Path(report), page)
 
 
 def summary(job: Job, written: list[Path]) -> str:

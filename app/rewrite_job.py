@@ -170,25 +170,29 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
         warnings.append(f"the grid does not record its Status: {policy.describe_status()}")
     read += [grid] if grid is not None else []
     if req.report_html is not None:
-        files[req.report_html] = _html_report(req, result.rows, read).encode("utf-8")
+        files[req.report_html] = _html_report(req, result.rows, read, files, cell, policy)
     return RewriteJob(files, read, result, warnings + warning_lines(result, opts))
 
 
-def _html_report(req: RewriteRequest, rows, read: list[Path]) -> str:
-    """The HTML report of the rewrite (``app.correction_report``): every position as
-    written and as rewritten (program frame), its status and reason."""
+def _html_report(req: RewriteRequest, rows, read: list[Path], files, cell, policy) -> bytes:
+    """The HTML report of the rewrite (``app.correction_report``): the ``files`` written with
+    their SHA-256, the ``cell``'s robot, tool and base, what the ``policy`` checked, every
+    position as written and as rewritten (program frame), its status and reason."""
     from accugrid.app.correction_report import (
         CORRECTED,
         FLAGGED,
         NOT_CORRECTED,
         SKIPPED,
+        cell_setup,
+        checks_text,
         correction_report,
     )
     from accugrid.codegen.rewrite import CORRECTED as DONE
     from accugrid.codegen.rewrite import OUTSIDE
+    from accugrid.infra.digest import sha256_hex
 
     state = np.full(len(rows.line), SKIPPED, np.int8)
-    state[rows.status == OUTSIDE] = NOT_CORRECTED
+    state[(rows.status == OUTSIDE) | (rows.code != 0)] = NOT_CORRECTED  # as the job rule counts
     done = rows.status == DONE
     state[done] = CORRECTED
     state[done & np.array([bool(r) for r in rows.reason], dtype=bool)] = FLAGGED
@@ -203,5 +207,15 @@ def _html_report(req: RewriteRequest, rows, read: list[Path]) -> str:
     ]
     new = np.where(np.isnan(rows.new), rows.old, rows.new)
     return correction_report(
-        "Rewritten program", rows.old, new, state, rows.reason, label, roles, "program frame"
-    )
+        "Rewritten program",
+        rows.old,
+        new,
+        state,
+        rows.reason,
+        label,
+        roles,
+        "program frame",
+        outputs=[(os.fspath(p), sha256_hex(data)) for p, data in files.items()],
+        setup=cell_setup(cell),
+        checked=checks_text(policy),
+    ).encode("utf-8")

@@ -5,13 +5,15 @@ Every Cartesian position that can be placed in the robot frame is corrected with
 with the input's decimal places but never coarser than 0.01 mm (0.001 in). Every other byte
 (spacing, comments, line endings, encoding) is kept. Anything that cannot be placed (frame
 arithmetic ':', a base from a variable or a call, EK(), AXIS/E6AXIS targets, $POS_ACT,
-G55-G59/G92 offsets, arcs, unknown motions, parameter words) is left untouched. A placed
-position the grid or model does not correct (outside the grid unless --outside clamp, more than
---orientation-limit from the grid's orientation, another KUKA Status than the grid's: the S of a
-KRL position, the cell's configuration for G-code) fails the job, and so does a rewrite that
-corrects nothing, unless --allow-partial, which leaves them as they are, counts them by reason on
-stderr and marks them in the report and the --header. The report lists each position with its
-status and reason.
+G55-G59/G92 offsets, unknown motions, parameter words) is left untouched. A G-code arc (G2/G3)
+moves rigidly, start, centre and end by one shift (the correction at its centre), where that
+shift holds along the whole arc to the program's written resolution; otherwise the arc is left
+as written and reported. A placed position the grid or model does not correct (outside the
+grid unless --outside clamp, more than --orientation-limit from the grid's orientation, another
+KUKA Status than the grid's: the S of a KRL position, the cell's configuration for G-code) fails
+the job, and so does a rewrite that corrects nothing, unless --allow-partial, which leaves them
+as they are, counts them by reason on stderr and marks them in the report and the --header. The
+report lists each position with its status and reason.
 
 KRL: PROGRAM is a .src or .dat; give the .dat beside it as the second argument. A stored position
 is corrected only if a motion uses it (never a frame given to $TOOL/$BASE/$LOAD, an operand of
