@@ -683,3 +683,44 @@ def test_krl_model_after_a_one_millimetre_tool_change_lands_the_new_tool(tmp_pat
     abc = np.array([[0.0, 90.0, 0.0]])
     old = model_correct(load_robot(cal), target, abc, 6, None, controller_tool=tool)
     assert abs(np.linalg.norm(old.command[0] - hole) - 1.0) < 0.05
+
+
+def _rewrite_model_job(tmp_path: Path, motions: str, status=None) -> tuple[int, Path]:
+    """Rewrite a KRL .src of ``motions`` (base 1: the robot frame) with a model-only cell (no
+    grid; ``status``: its configuration.status); the exit code and the report."""
+    _calibrated(tmp_path / "cal.yaml")
+    src = tmp_path / "job.src"
+    src.write_text(f"DEF job( )\n$BASE=BASE_DATA[1]\n{motions}END\n")
+    cell = _cell(tmp_path, model="cal.yaml", status=status)
+    out, report = tmp_path / "out.src", tmp_path / "r.csv"
+    argv = ["rewrite", str(src), "--cell", str(cell), "-o", str(out), "--decimals", "6"]
+    return main([*argv, "--report", str(report)]), report
+
+
+def test_rewrite_model_takes_the_programs_last_status_for_a_position_without_s(tmp_path, capsys):
+    # finding: an inline position with no S was corrected in Status 0 although the program's
+    # own positions before it are Status 6 (a LIN keeps the Status the robot is in)
+    first = "X 1500.0,Y 100.0,Z 1400.0,A 0.0,B 90.0,C 0.0"
+    second = "X 1550.0,Y 120.0,Z 1380.0,A 0.0,B 90.0,C 0.0"
+    code, report = _rewrite_model_job(tmp_path, f"PTP {{{first},S 6,T 27}}\nLIN {{{second}}}\n")
+    assert code == 0, capsys.readouterr().err
+    rows = _rows(report)
+    assert [r["status"] for r in rows] == ["corrected", "corrected"]
+    new = np.array([[float(r[k]) for k in ("x_new", "y_new", "z_new")] for r in rows])
+    landed = _landed(tmp_path / "cal.yaml", new, np.tile([0.0, 90.0, 0.0], (2, 1)), 6)
+    assert np.abs(landed - [[1500.0, 100.0, 1400.0], [1550.0, 120.0, 1380.0]]).max() < 1e-3
+
+
+def test_rewrite_model_without_any_status_names_configuration_status(tmp_path, capsys):
+    # finding: the error proposed --allow-partial where the cell's configuration.status is the fix
+    pose = "X 1550.0,Y 120.0,Z 1380.0,A 0.0,B 90.0,C 0.0"
+    code, _ = _rewrite_model_job(tmp_path, f"LIN {{{pose}}}\n")
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "job.src:3" in err and "no KUKA Status" in err and "configuration.status" in err
+    assert "--allow-partial" not in err and "\n" not in err.strip()
+    code, report = _rewrite_model_job(tmp_path, f"LIN {{{pose}}}\n", status=6)
+    assert code == 0, capsys.readouterr().err
+    new = np.array([[float(r[k]) for k in ("x_new", "y_new", "z_new")] for r in _rows(report)])
+    landed = _landed(tmp_path / "cal.yaml", new, [[0.0, 90.0, 0.0]], 6)
+    assert np.abs(landed - [1550.0, 120.0, 1380.0]).max() < 1e-3
