@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from accugrid.codegen.cell import Cell, load_cell
-from accugrid.codegen.dialects import plugin_of
+from accugrid.codegen.dialects import check_serves, plugin_of
 from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program import Program, build_program
@@ -117,6 +117,7 @@ def prepare(req: ProgramRequest, cell: Cell | None = None) -> tuple[Job, object]
     if grid_file is not None:
         grid = GridModel.from_measurements(grid_file, fmt=declared_or(cell.tracker))
     robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
+    check_serves(req.dialect, robot, req.cell)
     model = validity = None
     if model_file is not None:  # the arm; the tool is the cell's, never the model's TCP
         from accugrid.app.correct_model import read_model  # model jobs only

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.cell import load_cell
-from accugrid.codegen.dialects import dialect_of, plugin_of
+from accugrid.codegen.dialects import check_serves, dialect_of, plugin_of
 from accugrid.codegen.program_text import read_program
 from accugrid.codegen.rewrite import (
     CORRECTED,
@@ -102,6 +102,7 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
         from accugrid.kinematics.robot import load_robot
 
         nominal = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
+        check_serves(dialect_of(inputs[0]), nominal, req.cell)
     if model_file is not None:  # the arm; the tool is the cell's, never the model's TCP
         from accugrid.app.correct_model import read_model
 
