@@ -2,12 +2,12 @@
 
 A robot is YAML data (``kinematics/robots/*.yaml`` for the built-ins, or a user file): six DH rows
 ``{a_mm, alpha_deg, d_mm, theta_offset_deg, sign}`` with theta = sign * A + theta_offset, joint
-limits ``limits_deg`` ([min, max] per axis), an optional ``tool`` {x, y, z, a, b, c} (flange_T_tool)
-the maker of its controller ``controller`` (``kuka``, ``abb``: which program dialects serve it;
-absent: not said, any dialect) and optional ``errors`` (per row Δa mm, Δd mm, Δα rad, Δθ rad) and ``joint_errors`` (compliance
-under gravity, transmission harmonics, thermal growth; ``kinematics.joint_errors``) that define the
-"true" robot. A YAML file may instead name a URDF (``urdf: file``, ``tip: frame``), see
-``kinematics.urdf``.
+limits ``limits_deg`` ([min, max] per axis), an optional ``tool`` {x, y, z, a, b, c}
+(flange_T_tool), ``controller``, the maker of its controller (``kuka``, ``abb``: which program
+dialects drive it; absent: any), and optional ``errors`` (per row Δa mm, Δd mm, Δα rad, Δθ rad)
+and ``joint_errors`` (compliance under gravity, transmission harmonics, thermal growth;
+``kinematics.joint_errors``) that define the "true" robot. A YAML file may instead name a URDF
+(``urdf: file``, ``tip: frame``), see ``kinematics.urdf``.
 
 Joint vectors are the controller's axis angles in radians (KUKA A1..A6; ABB axes 1..6 for
 ``irb6700``, as a RAPID jointtarget holds them), shape (N, 6); poses are (N, 4, 4) mm.

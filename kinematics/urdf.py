@@ -182,7 +182,8 @@ def _native_stderr() -> Iterator[list[str]]:
 
 
 def urdf_robot_from_doc(doc: YamlDoc, folder: Path) -> UrdfRobot:
-    """The UrdfRobot a robot YAML describes (keys: name, urdf, tip, optional tool, description, controller)."""
+    """The UrdfRobot a robot YAML describes (keys: name, urdf, tip, optional tool, description,
+    controller)."""
     import pinocchio as pin
 
     doc.check_keys(URDF_ROBOT_SCHEMA)
