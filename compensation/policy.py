@@ -85,6 +85,7 @@ __all__ = [
     "TOO_LONG",
     "UNREACHABLE",
     "Policy",
+    "PolicyRequest",
     "Verdict",
     "singular_a5_deg",
 ]
@@ -161,6 +162,37 @@ def singular_a5_deg(q: np.ndarray) -> np.ndarray:
     """|A5| (...) deg of joint vectors q (..., 6) rad: the distance from the wrist singularity,
     compared with ``SINGULAR_A5_DEG`` (or the cell's ``configuration.singular_a5``)."""
     return np.degrees(np.abs(np.asarray(q)[..., 4]))
+
+
+@dataclass(frozen=True)
+class PolicyRequest:
+    """What a command asks of the policy, the same options in every command (``correct``,
+    ``krl``, ``gcode``, ``rapid``, ``rewrite``): positions outside the grid box (``outside``, the
+    ``CorrectionSettings.outside`` word), the orientation against the grid's (flagged beyond
+    ``orientation_tol_deg``, refused beyond ``orientation_limit_deg`` unless
+    ``allow_orientation``; deg), ``strict`` (a model's positions outside its poses refused, not
+    flagged) and the job rule (``allow_partial``: ``Verdict.enforce``)."""
+
+    outside: str = "error"
+    orientation_tol_deg: float = GRID_ORIENTATION_TOL_DEG
+    orientation_limit_deg: float = ORIENTATION_LIMIT_DEG
+    allow_orientation: bool = False
+    strict: bool = False
+    allow_partial: bool = False
+
+    def check(self) -> None:
+        """InputError unless 0 <= orientation_tol_deg <= orientation_limit_deg."""
+        if not 0 <= self.orientation_tol_deg <= self.orientation_limit_deg:
+            raise InputError("need 0 <= --orientation-tol <= --orientation-limit (deg)")
+
+    def limits(self) -> dict:
+        """The fields of ``Policy`` it sets (``Policy.build``'s ``limits``)."""
+        return {
+            "orientation_tol_deg": self.orientation_tol_deg,
+            "orientation_limit_deg": self.orientation_limit_deg,
+            "allow_orientation": self.allow_orientation,
+            "strict": self.strict,
+        }
 
 
 @dataclass(frozen=True)
