@@ -8,7 +8,8 @@ arithmetic ':', a base from a variable or a call, EK(), AXIS/E6AXIS targets, $PO
 G55-G59/G92 offsets, arcs, unknown motions, parameter words) is left untouched. A placed
 position the grid or model does not correct (outside the grid unless --outside clamp, more than
 --orientation-limit from the grid's orientation, another KUKA Status than the grid's: the S of a
-KRL position, the cell's configuration for G-code) fails the job, and so does a rewrite that
+KRL position, else the last S written before it in its file, else the cell's
+configuration.status, the cell's configuration for G-code) fails the job, and so does a rewrite that
 corrects nothing, unless --allow-partial, which leaves them as they are, counts them by reason on
 stderr and marks them in the report and the --header. The report lists each position with its
 status and reason.
