@@ -504,3 +504,11 @@ def test_rewrite_by_a_model_refuses_a_rapid_program_on_a_kuka_cell(tmp_path, cap
     err = capsys.readouterr().err.strip()
     assert "robot kr210-paper has a KUKA controller" in err and "accugrid krl" in err
     assert not out.exists()
+
+
+def test_a_calibrated_robot_keeps_its_controller(tmp_path):
+    from accugrid.kinematics.calibrated import calibrated_yaml
+
+    model = tmp_path / "cal.yaml"
+    model.write_text(calibrated_yaml(load_robot("irb6700")))
+    assert load_robot(model).controller == "abb" and load_robot("kr210").controller == "kuka"
