@@ -128,6 +128,10 @@ def main(argv: list[str] | None = None) -> int:
         return _ended(_command(argv), ended.signum)
     except KeyboardInterrupt:  # SIGINT where no handler of ours was installed
         return _ended(_command(argv), signal.SIGINT)
+    except SystemExit as stop:  # ``infra.atomic`` ends a write on a signal with 128 + it
+        if stop.code in {128 + sig for sig in _SIGNALS}:
+            return _ended(_command(argv), stop.code - 128)
+        raise
 
 
 def _run(argv: list[str]) -> int:

@@ -26,6 +26,13 @@ if when == "import":
                 os.kill(os.getpid(), sig)
             return None
     sys.meta_path.insert(0, SignalOnImport())
+elif when == "write":
+    import accugrid.infra.atomic as atomic
+    real_write = atomic._write_temp
+    def write_temp(*args):  # the signal arrives while the first temporary is written
+        os.kill(os.getpid(), sig)
+        return real_write(*args)
+    atomic._write_temp = write_temp
 else:
     import accugrid.kinematics.identification as identification
     real, calls = identification.identify, []
@@ -55,3 +62,19 @@ def test_a_signal_ends_identify_with_128_plus_its_number_and_one_line(tmp_path, 
     assert proc.returncode == 128 + sig, proc.stderr
     assert proc.stderr == f"accugrid identify: interrupted ({sig.name})\n"
     assert not out.exists()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_while_writing_ends_the_command_with_one_line_and_the_old_output(tmp_path, sig):
+    out = tmp_path / "grid.csv"
+    out.write_text("before\n")
+    argv = ["simulate", "--region", "1200", "2200", "-500", "500", "1100", "2100", "--step", "500"]
+    proc = subprocess.run(
+        [sys.executable, "-c", CHILD, str(int(sig)), "write", *argv, "-o", str(out), "--force"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 128 + sig, proc.stderr
+    assert proc.stderr == f"accugrid simulate: interrupted ({sig.name})\n"
+    assert out.read_text() == "before\n" and [p.name for p in tmp_path.iterdir()] == ["grid.csv"]
