@@ -307,7 +307,7 @@ def build_program(
     if model is FROM_CELL:
         model = cell_model(cell)
     elif model is not None and not isinstance(model, ModelFile):
-        model = ModelFile(model.source or model.name, model, validity, None)
+        model = ModelFile(getattr(model, "source", None) or model.name, model, validity, None)
     n = len(points)
     if n == 0:
         raise InputError("no drilling points in the file", points.path)
