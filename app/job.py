@@ -14,13 +14,13 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.cell import Cell, load_cell
-from accugrid.codegen.dialects import plugin_of
+from accugrid.codegen.correction import cell_grid, read_model
+from accugrid.codegen.dialects import check_serves, plugin_of
 from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
-from accugrid.codegen.program import Program, build_program
-from accugrid.compensation import GridModel
+from accugrid.codegen.program import NOT_CORRECTED, Program, build_program
+from accugrid.compensation.policy import PolicyRequest
 from accugrid.infra.atomic import check_targets, write_files
-from accugrid.infra.csvtable import declared_or
 from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.robot import load_robot
@@ -33,9 +33,8 @@ class ProgramRequest:
     """What ``accugrid krl|gcode|rapid`` asks: the dialect (a name of ``codegen.dialects``),
     the points and cell files, the output (a folder or file, as the dialect writes), the grid
     and model overriding the cell's (``no_correction``: neither), ``allow_config_change``
-    (configuration.allow_change), a templates folder, the policy (``outside``: the
-    ``CorrectionSettings.outside`` word, ``allow_partial``, ``strict``) and the HTML report
-    with its title."""
+    (configuration.allow_change), a templates folder, the policy's options (``policy``) and the
+    HTML report with its title."""
 
     dialect: str
     points: str
@@ -46,9 +45,7 @@ class ProgramRequest:
     no_correction: bool = False
     allow_config_change: bool = False
     templates: str | None = None
-    outside: str = "error"
-    allow_partial: bool = False
-    strict: bool = False
+    policy: PolicyRequest = PolicyRequest()
     report_html: Path | None = None
     report_title: str = ""
 
@@ -108,23 +105,17 @@ def prepare(req: ProgramRequest, cell: Cell | None = None) -> tuple[Job, object]
     plugin = plugin_of(req.dialect)
     command = req.dialect
     cell = load_cell(req.cell) if cell is None else cell
-    cell = dataclasses.replace(cell, correction=cell.correction.but(outside=req.outside))
     if req.allow_config_change:
         configuration = dataclasses.replace(cell.configuration, allow_change=True)
         cell = dataclasses.replace(cell, configuration=configuration)
     model_file = _model_path(req, cell)
     grid_file = _grid_path(req, cell, model_file)
     points = read_points(req.points)
-    grid = None
-    if grid_file is not None:
-        grid = GridModel.from_measurements(grid_file, fmt=declared_or(cell.tracker))
+    grid = None if grid_file is None else cell_grid(cell, grid_file)
     robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
-    model = validity = None
-    if model_file is not None:  # the arm; the tool is the cell's, never the model's TCP
-        from accugrid.app.correct_model import read_model  # model jobs only
-
-        found = read_model(model_file, robot)
-        model, validity = found.robot, found.validity
+    check_serves(req.dialect, robot, req.cell)
+    # the arm; the tool is the cell's, never the model's TCP
+    model = None if model_file is None else read_model(model_file, robot)
     inputs = [input_line("points", req.points, file_sha256(req.points))]
     inputs.append(input_line("cell", req.cell, cell.sha256))
     details = []
@@ -132,9 +123,9 @@ def prepare(req: ProgramRequest, cell: Cell | None = None) -> tuple[Job, object]
         sha = file_sha256(model_file) if model_file.is_file() else "built-in"
         inputs.append(input_line("model", model_file, sha))
         residual = "" if grid is None else " and the residual grid"
-        details.append(f"corrected by model {model.name}{residual}")
+        details.append(f"corrected by model {model.robot.name}{residual}")
     if grid is None and model is None:
-        details = ["grid none (--no-correction): positions are not corrected"]
+        details = [NOT_CORRECTED]
     elif grid is not None:
         inputs += grid_lines(Path(grid_file).name, grid.source_sha256, grid.step)
     closing = [f"holes {len(points)}"]
@@ -148,9 +139,7 @@ def prepare(req: ProgramRequest, cell: Cell | None = None) -> tuple[Job, object]
         grid,
         model,
         background=True,
-        validity=validity,
-        allow_partial=req.allow_partial,
-        strict=req.strict,
+        request=req.policy,
         keep_joints=plugin.joints,
     )
     largest, hole = program.largest_correction()

@@ -33,6 +33,7 @@ from rewrite_helpers import (  # noqa: E402
 from accugrid.app.rewrite_job import RewriteRequest, rewrite_job  # noqa: E402
 from accugrid.codegen.rewrite import CORRECTED  # noqa: E402
 from accugrid.compensation.policy import CORRECTED as POLICY_CORRECTED  # noqa: E402
+from accugrid.compensation.policy import PolicyRequest  # noqa: E402
 from bench.timing import table  # noqa: E402
 
 REALWORLD = ROOT.parent / "shared" / "realworld"
@@ -45,7 +46,7 @@ _VARYING = re.compile(r"'[^']*'|\"[^\"]*\"|\b\w*\d[\w.]*|\w+\[[^\]]*\](?:\.\w+)*
 
 def _request(cell: Path, inputs: list[Path], options: list[str], out: Path, model) -> dict:
     """The RewriteRequest fields of one case (the realworld tests' command-line options)."""
-    fields = {"cell": str(cell), "allow_partial": True, "model": model}
+    fields = {"cell": str(cell), "policy": PolicyRequest(allow_partial=True), "model": model}
     it = iter(options)
     for option in it:
         if option in _FLAGS:

@@ -582,6 +582,7 @@ def identify(
         f"{robot.name} calibrated by accugrid identify from {data.poses} poses",
         arm.fk_joint_errors,
         validated_max_mm=np.abs(residuals).max(axis=0) if cv is None else cv.max_mm,
+        controller=robot.controller,
     )
     return Identification(
         robot=calibrated,
