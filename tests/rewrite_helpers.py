@@ -70,7 +70,7 @@ REALWORLD_REWRITES = {
     ),
     "cnc_struc": (
         ["krl/chinamilling_CNC_LOOP.src", "krl/chinamilling_CNC1.dat"],
-        ["--base", "0", "--trust-calls"],
+        ["--base", "0"],
     ),
     "heatsink": (["gcode/norn93_1_heatsink_drill.gcode"], ["--decimals", "3"]),
     "example3_inch": (["gcode/printhor_example3_inch.gcode"], []),

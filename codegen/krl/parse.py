@@ -83,6 +83,7 @@ __all__ = [
     "Number",
     "RELATIVE",
     "Relative",
+    "Routine",
     "ToolFrame",
     "code_part",
     "match_brace",
@@ -328,6 +329,20 @@ class FrameUse(NamedTuple):
 
 
 @dataclass
+class Routine:
+    """A routine (``DEF``/``DEFFCT``) of a file as far as $BASE and $TOOL go: its name (upper
+    case), line, whether other modules can call it (``GLOBAL``, or the module's main routine,
+    the first of its .src), what in it changes $BASE or $TOOL itself ("" when nothing; the
+    first such statement) and the routines it calls as statements (name upper case, line)."""
+
+    name: str
+    line: int
+    public: bool
+    sets: str = ""
+    calls: list[tuple[str, int]] = field(default_factory=list)
+
+
+@dataclass
 class KrlScan:
     """Everything read from one file. Positions and uses are kept column by column
     (``table``, ``use_table``, their bases in ``bases``); ``positions`` and ``uses`` give them as
@@ -347,6 +362,7 @@ class KrlScan:
     # names given a non-literal value at run time -> first line
     frame_uses: dict[str, FrameUse] = field(default_factory=dict)  # normalized name -> first use
     relative: dict[int, Relative] = field(default_factory=dict)  # table row of a _REL aggregate
+    routines: list[Routine] = field(default_factory=list)  # in file order
     _declared: dict[str, Declared] = field(default_factory=dict, repr=False)  # statement reader
     _fast_decls: list[tuple[list, list, np.ndarray]] = field(default_factory=list, repr=False)
     # (names, types, lines) of each block of plain declarations the whole-text scanner read
@@ -763,12 +779,28 @@ class _Block:
 
 
 class _Flow:
-    """$BASE through a routine: conditionals, loops, jump targets and calls."""
+    """$BASE through a routine: conditionals, loops, jump targets and calls; what each routine
+    of the file changes of $BASE and $TOOL and which routines it calls (``KrlScan.routines``).
 
-    def __init__(self, initial: BaseRef, trust_calls: bool, rows: _Rows) -> None:
+    A call keeps $BASE and $TOOL when ``trust_calls``, when ``calls`` (called name, upper case
+    -> why it may change them, "" when it keeps them: ``codegen.krl.routines``) says so, and in
+    a KUKA inline form that has set its own FDAT (``_Form``)."""
+
+    def __init__(
+        self,
+        initial: BaseRef,
+        trust_calls: bool,
+        rows: _Rows,
+        routines: list[Routine],
+        calls: dict[str, str] | None = None,
+    ) -> None:
         self.initial = initial
         self.trust_calls = trust_calls
+        self.calls = calls or {}
         self.rows = rows
+        self.routines = routines
+        self.routine: Routine | None = None  # the routine being read
+        self.folds: list[_Form | None] = []  # the open ;FOLDs, inline forms as _Form
         self.state = initial
         self.blocks: list[_Block] = []
         self.sets_base = False
@@ -778,13 +810,18 @@ class _Flow:
         # the last statement after which the robot's position is not the last motion's target
         self.moved: tuple[int, str] = (0, "the start of the file")
 
-    def start_routine(self, name: str, line: int) -> None:
+    def start_routine(self, name: str, line: int, public: bool) -> None:
+        """``DEF``/``DEFFCT name`` at ``line``; ``public``: GLOBAL (the module's main routine,
+        the first of the file, is public whatever it says)."""
         self.finish_routine()
+        self.routine = Routine(name.upper(), line, public or not self.routines)
+        self.routines.append(self.routine)
         if self.initial.kind == "unknown":
             self.state = BaseRef(
                 "unknown",
                 line,
-                reason=f"start of routine {name} (line {line}): $BASE is inherited from the caller",
+                reason=f"start of routine {name} (line {line}): $BASE is inherited from the caller "
+                "(--base N states it)",
             )
         else:
             self.state = self.initial
@@ -804,13 +841,20 @@ class _Flow:
 
     def end_routine(self) -> None:
         self.finish_routine()
+        self.routine = None
         self.sets_base = self.sets_tool = False
         self.since = self.rows.mark()
+
+    def changes(self, line: int, what: str) -> None:
+        """The routine being read changes $BASE or $TOOL at ``line`` (``what`` says how)."""
+        if self.routine is not None and not self.routine.sets:
+            self.routine.sets = f"{what} at line {line}"
 
     def set(self, base: BaseRef) -> None:
         """A new base; the tool set before stays, unless an FDAT sets both."""
         self.state = _with_tool(base, self.state)
         self.sets_base = True
+        self.changes(base.line, "$BASE set")
         self.moved = (base.line, f"$BASE set at line {base.line}")
 
     def breaks(self, line: int, why: str) -> None:
@@ -824,6 +868,7 @@ class _Flow:
             tool_label=None,
         )
         self.sets_tool = True
+        self.changes(line, "$TOOL set")
 
     def open_spline(self, base: BaseRef | None) -> None:
         """A SPLINE/PTP_SPLINE block: its segments move in ``base`` (None: the base in effect)."""
@@ -841,14 +886,55 @@ class _Flow:
         where = f"{name} (line {line})"
         self.state = replace(self.state, label=where, tool_label=where)
 
-    def call(self, name: str, line: int) -> None:
+    def call(self, name: str, line: int, frames_passed: bool) -> None:
+        """A call of routine ``name`` as a statement; ``frames_passed``: $BASE or $TOOL is
+        among its arguments (an ``:OUT`` parameter may change it)."""
         self.moved = (line, f"the call {name}() at line {line}, which may move the robot")
-        if not self.trust_calls:
+        key = name.upper()
+        if self.routine is not None:
+            self.routine.calls.append((key, line))
+        if self.trust_calls:
+            return
+        why = self.calls.get(key)
+        form = self.form()
+        if why is None and form is not None and form.applied is self.state:
+            why = ""  # a routine not given, in KUKA's own statements of an inline form
+        if frames_passed:
+            why = "has $BASE or $TOOL among its arguments"
+        if why != "":
             self.state = BaseRef(
                 "unknown",
                 line,
-                reason=f"after the call {name}() at line {line}, which may change $BASE",
+                reason=f"after the call {name}() at line {line}, which {why or 'may change $BASE'}",
             )
+
+    def form(self) -> _Form | None:
+        """The innermost open inline form."""
+        for fold in reversed(self.folds):
+            if fold is not None:
+                return fold
+        return None
+
+    def open_fold(self, comment: str) -> None:
+        """A ``;FOLD`` line (``comment``: from its ``;``)."""
+        self.folds.append(_inline_form(comment))
+
+    def close_fold(self) -> None:
+        """A ``;ENDFOLD`` line."""
+        if self.folds:
+            self.folds.pop()
+
+    def activate(self, fdat: str) -> None:
+        """``FDAT_ACT = fdat`` has set the state: an inline form's own FDAT, if it is."""
+        form = self.form()
+        if form is not None and fdat in form.fdats:
+            form.own = self.state
+
+    def apply_fdat(self) -> None:
+        """``BAS(#PTP_PARAMS|#CP_PARAMS|#FRAMES, ..)``: $BASE and $TOOL from FDAT_ACT."""
+        form = self.form()
+        if form is not None and form.own is self.state:
+            form.applied = self.state
 
     def open(self, keyword: str, line: int) -> None:
         self.moved = (line, f"{keyword} at line {line}")
@@ -891,6 +977,45 @@ class _Flow:
             self.rows.ops.append(("swap", (block.mark, self.rows.mark()), start, changed))
             if block.keyword != "REPEAT":
                 self.state = changed
+
+
+@dataclass(slots=True)
+class _Form:
+    """An open KUKA inline form of a motion (``;FOLD PTP P1 CONT Vel=100 % PDAT1 Tool[1]
+    Base[2];%{PE}..`` up to its ``;ENDFOLD``): the FDAT names that are its own (``FP1`` of the
+    point ``P1`` or ``XP1``), the state its ``FDAT_ACT = FP1`` set (``own``) and that state once
+    its ``BAS(#PTP_PARAMS, ..)`` or ``BAS(#CP_PARAMS, ..)`` applied it (``applied``).
+
+    KUKA's BAS.SRC: ``#PTP_PARAMS`` and ``#CP_PARAMS`` call ``FRAMES()``, which sets $TOOL
+    (``TOOL(FDAT_ACT.TOOL_NO)``) and $BASE (``BASE(FDAT_ACT.BASE_NO)``: BASE_DATA[n]) from
+    FDAT_ACT (public copy: github.com/HugoDanielson/ChinaMilling, KRC/R1/System/bas.src). What
+    the controller writes after it in the form, before the motion (``SET_CD_PARAMS (0)`` on
+    KSS 8.3, triggers of technology packages) sets neither: a call there keeps the state."""
+
+    fdats: frozenset[str]
+    own: BaseRef | None = None
+    applied: BaseRef | None = None
+
+
+_FORM_RE = re.compile(r";\s*+FOLD\s++(?:PTP|LIN|CIRC)\s++([^;]*+);?%\{PE\}", re.I)
+
+
+def _inline_form(line: str) -> _Form | None:
+    """The inline form a ``;FOLD`` line opens (None: another fold). Its points are the names
+    after the motion word, up to ``Vel=``; ``XP1`` or ``P1`` has the FDAT ``FP1``."""
+    m = _FORM_RE.match(line)
+    if m is None:
+        return None
+    fdats = set()
+    for word in m.group(1).split():
+        if "=" in word or word.upper().startswith("VEL"):
+            break
+        if _IDENT_RE.fullmatch(word):
+            word = word.upper()
+            fdats.add("F" + word)
+            if word.startswith("X"):
+                fdats.add("F" + word[1:])
+    return _Form(frozenset(fdats))
 
 
 def _with_tool(base: BaseRef | None, before: BaseRef) -> BaseRef:
@@ -945,17 +1070,22 @@ def scan_krl(
     *,
     initial_base: BaseRef | None = None,
     trust_calls: bool = False,
+    calls: dict[str, str] | None = None,
 ) -> KrlScan:
     """Read one KRL file (.src, .dat or $config.dat text).
 
     ``initial_base``: the base in effect at the start of each routine (default: unknown, it is
     the caller's). ``trust_calls``: assume a call to another routine does not change $BASE.
+    ``calls``: what the routines this file calls do to $BASE and $TOOL (name, upper case ->
+    "" when they keep both, else why not; ``codegen.krl.routines``); a call of a routine not in
+    it may change them.
     """
     path = None if path is None else os.fspath(path)
     check_text(text, path)
     scan = KrlScan(path, text)
     rows = scan._rows = _Rows(scan, text.count("\n") + 1)
-    flow = _Flow(initial_base or BaseRef("unknown", 0, reason="no $BASE set"), trust_calls, rows)
+    initial = initial_base or BaseRef("unknown", 0, reason="no $BASE set")
+    flow = _Flow(initial, trust_calls, rows, scan.routines, calls)
     if "\n" not in text:  # one line, or lone CR line endings: line by line
         offset = 0
         for lineno, line in enumerate(split_lines(text), start=1):
@@ -979,6 +1109,13 @@ def _line(line: str, offset: int, lineno: int, scan: KrlScan, flow: _Flow) -> No
     """One line of any kind (``offset``: of its first character in the text)."""
     code = code_part(line, scan.path, lineno)
     if not code or code.isspace() or code.lstrip()[:1] == "&":
+        if len(code) < len(line):  # a comment: ;FOLD and ;ENDFOLD open and close folds
+            comment = line[len(code) :]
+            word = comment[1:8].upper()
+            if word == "ENDFOLD":
+                flow.close_fold()
+            elif word[:4] == "FOLD" and word[4:5] in (" ", "\t", ""):
+                flow.open_fold(comment)
         return
     if code.count("{") != code.count("}"):
         col = code.find("{") if code.count("{") > code.count("}") else code.find("}")
@@ -1183,7 +1320,7 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
     if word in ("DEF", "DEFFCT", "GLOBAL") and not _GLOBAL_DECL_RE.match(code, pos):
         routine = _ROUTINE_RE.match(code, pos)
         if routine:
-            flow.start_routine(routine.group(2), lineno)
+            flow.start_routine(routine.group(2), lineno, word == "GLOBAL")
         return
     if word in ("END", "ENDFCT", "DEFDAT", "ENDDAT"):
         flow.end_routine()
@@ -1201,10 +1338,13 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
         _motion(code, rest_at, word, off, lineno, scan, flow)
         return
     if word in ("SPLINE", "PTP_SPLINE"):
-        flow.open_spline(_spline_base(code, word, lineno))
+        base = _spline_base(code, word, lineno)
+        flow.open_spline(base)
         own = _with_tool_value(code, lineno, flow.state) if "$" in code else None
         if own is not None:  # the block's segments move that tool (until ENDSPLINE)
             flow.state = _tool_changed(flow.state, own)
+        if base is not None or own is not None:
+            flow.changes(lineno, f"{word} WITH $BASE or $TOOL")
         return
     if word == "ENDSPLINE":
         flow.close_spline()
@@ -1226,15 +1366,32 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
         return
     call = _CALL_RE.match(code, pos)
     if call and word not in _NOT_CALLS:
-        flow.call(call.group(1), lineno)
+        args = code[call.end() :].upper()
+        flow.call(call.group(1), lineno, "$BASE" in args or "$TOOL" in args)
     elif word not in _NOT_CALLS and _DECL_RE.match(code, pos):
         _declare(code, pos, lineno, scan)  # a local declaration: "INT i", "sCNC1 gs[4]"
 
 
+# The BAS commands that set neither $BASE nor $TOOL (KUKA's BAS.SRC: velocities, accelerations,
+# approximation, outputs, the axis group; public copy: github.com/HugoDanielson/ChinaMilling,
+# KRC/R1/System/bas.src). #INITMOV sets $BASE = $WORLD and $TOOL = TOOL_DATA[1]; #FRAMES,
+# #PTP_PARAMS and #CP_PARAMS set both from FDAT_ACT; #BASE, #TOOL, #EX_BASE set them.
+_BAS_KEEPS = frozenset(
+    "ACC_CP ACC_GLUE ACC_PTP VEL_CP VEL_PTP CP_DAT PTP_DAT OUT_SYNC OUT_ASYNC GROUP".split()
+)
+_BAS_FDAT = frozenset(("FRAMES", "PTP_PARAMS", "CP_PARAMS"))  # $BASE, $TOOL from FDAT_ACT
+
+
 def _bas(code: str, pos: int, lineno: int, flow: _Flow) -> None:
     """``BAS(#BASE, n)`` sets BASE_DATA[n], ``BAS(#TOOL, n)`` TOOL_DATA[n]; other BAS commands
-    leave them."""
+    leave them in the flow (``FDAT_ACT = F`` sets the FDAT's), but a routine that runs one of
+    them other than ``_BAS_KEEPS`` changes them."""
     m = _BAS_RE.match(code, pos)
+    command = m.group(1).upper() if m is not None else ""
+    if command not in _BAS_KEEPS:
+        flow.changes(lineno, f"BAS(#{command}, ..)" if command else "BAS() of a variable command")
+    if command in _BAS_FDAT:
+        flow.apply_fdat()
     if m is not None and m.group(1).upper() == "TOOL":
         flow.breaks(lineno, f"the tool set at line {lineno}")
     if m is None or m.group(1).upper() not in ("BASE", "TOOL"):
@@ -1468,6 +1625,7 @@ def _assignment(
             )
         elif _IDENT_RE.fullmatch(value):
             flow.set(BaseRef("fdat", lineno, fdat=value.upper()))
+            flow.activate(value.upper())
         else:
             flow.set(BaseRef("unknown", lineno, reason=f"FDAT_ACT = {value}: not a name"))
         return
@@ -1681,10 +1839,13 @@ def _motion(
     own_tool = relative and "$" in code and _WITH_TOOL_RE.search(code) is not None
     base = flow.state
     if "$" in code and "WITH" in code.upper():
-        base = _with_tool(_with_base(code, lineno), base)
+        with_base = _with_base(code, lineno)
+        base = _with_tool(with_base, base)
         own = _with_tool_value(code, lineno, base)
         if own is not None:
             base = _tool_changed(base, own)
+        if with_base is not None or own is not None:
+            flow.changes(lineno, f"{word} WITH $BASE or $TOOL")
     for _ in range(count):
         while at < len(code) and code[at] in " \t,":
             at += 1

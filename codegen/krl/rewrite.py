@@ -7,8 +7,9 @@ position (declared or assigned with a literal) is corrected only if a motion use
 motions that use it (its own FDAT wins over ``--base``) and is corrected once however many
 motions use it. BASE_DATA[n] comes from ``--config-dat`` (if it defines n), else from the cell's
 ``base`` and ``base_data``; base 0 ($NULLFRAME, BAS(#BASE,0)) is the robot frame ($WORLD =
-$ROBROOT). A relative motion (``LIN_REL``...) is corrected as the position it reaches and
-written back as an increment (``codegen.krl.relative``).
+$ROBROOT). A call of a routine of the given files that keeps $BASE and $TOOL keeps them
+(``codegen.krl.routines``). A relative motion (``LIN_REL``...) is corrected as the position it
+reaches and written back as an increment (``codegen.krl.relative``).
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from accugrid.codegen.krl.parse import (
     wildcard,
 )
 from accugrid.codegen.krl.relative import Chains, resolve, write_increments
+from accugrid.codegen.krl.routines import call_effects
 from accugrid.codegen.krl.tables import MOTION, PositionTable
 from accugrid.codegen.program_text import (
     MIN_PLACES_MM,
@@ -95,6 +97,12 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: KrlPlacement
         scan_krl(text, path, initial_base=initial, trust_calls=placement.trust_calls)
         for path, text in texts.items()
     ]
+    if not placement.trust_calls:  # read again the files that call routines of the files
+        for s, effects in enumerate(call_effects(scans)):
+            if effects is not None:
+                scans[s] = scan_krl(
+                    scans[s].text, scans[s].path, initial_base=initial, calls=effects
+                )
     config = placement.config_dat
     config = scan_krl(config, "$config.dat") if config is not None else None
     ctx = _Context(scans, config, initial, placement, opts)
