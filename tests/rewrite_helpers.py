@@ -141,6 +141,15 @@ def _frame(f) -> str:
     return ", ".join(f"{k}: {v}" for k, v in zip("xyzabc", f, strict=True))
 
 
+def const_model():
+    """A grid model over +-600 mm whose error is E_CONST everywhere (corrected = P + E_CONST)."""
+    from accugrid.compensation import GridModel
+
+    axes = [np.arange(-600.0, 601.0, 300.0)] * 3
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    return GridModel.from_measurements((pts, pts - E_CONST))
+
+
 def rewrite_gcode(path: str, text: str, opts, robot_T_program: np.ndarray | None = None):
     """One G-code program rewritten through its plug-in, in the program frame (default: the
     robot frame)."""

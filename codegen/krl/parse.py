@@ -333,7 +333,7 @@ class Routine:
     """A routine (``DEF``/``DEFFCT``) of a file as far as $BASE and $TOOL go: its name (upper
     case), line, whether other modules can call it (``GLOBAL``, or the module's main routine,
     the first of its .src), what in it changes $BASE or $TOOL itself ("" when nothing; the
-    first such statement) and the routines it calls as statements (name upper case, line)."""
+    first such statement) and the routines it calls as statements (name as written, line)."""
 
     name: str
     line: int
@@ -890,12 +890,11 @@ class _Flow:
         """A call of routine ``name`` as a statement; ``frames_passed``: $BASE or $TOOL is
         among its arguments (an ``:OUT`` parameter may change it)."""
         self.moved = (line, f"the call {name}() at line {line}, which may move the robot")
-        key = name.upper()
         if self.routine is not None:
-            self.routine.calls.append((key, line))
+            self.routine.calls.append((name, line))
         if self.trust_calls:
             return
-        why = self.calls.get(key)
+        why = self.calls.get(name.upper())
         form = self.form()
         if why is None and form is not None and form.applied is self.state:
             why = ""  # a routine not given, in KUKA's own statements of an inline form

@@ -63,7 +63,7 @@ def call_effects(scans: list[KrlScan]) -> list[dict[str, str] | None]:
                 if why[id(r)]:
                     continue
                 for name, line in r.calls:
-                    callee = resolve(s, name)
+                    callee = resolve(s, name.upper())
                     if isinstance(callee, str) or why[id(callee)]:
                         file = where[id(r)][1]
                         why[id(r)] = f"calls {name}() ({file}:{line}), which " + (
@@ -73,7 +73,7 @@ def call_effects(scans: list[KrlScan]) -> list[dict[str, str] | None]:
                         break
     out: list[dict[str, str] | None] = []
     for s, scan in enumerate(scans):
-        called = {name for r in scan.routines for name, _ in r.calls}
+        called = {name.upper() for r in scan.routines for name, _ in r.calls}
         effects = {}
         for name in called:
             callee = resolve(s, name)
