@@ -219,3 +219,30 @@ def test_a_call_outside_an_applied_inline_form_leaves_the_frames_unknown(change,
         f"used at line {motion} where the base unknown: after the call {call}, which may change "
         "$BASE"
     )
+
+
+SHIFT = ["DEFFCT INT Shift(k :IN)", "INT k", "$BASE = BASE_DATA[k]", "RETURN k", "ENDFCT"]
+
+
+def test_a_function_of_the_given_files_called_in_an_expression_is_followed():
+    """A function that changes $BASE leaves it unknown after the statement that calls it, and
+    makes a routine that calls it one that changes it; a built-in function (not in the given
+    files) changes nothing."""
+    src = "\r\n".join(["DEF p( )", "BAS (#BASE,0)", "n = Shift(2)", LIN, "END", "", *SHIFT, ""])
+    texts, rows = rewritten({"p.src": src})
+    assert texts["p.src"] == src
+    assert rows.reason[0] == (
+        "base unknown: after the call Shift() at line 3, which changes $BASE or $TOOL ($BASE set "
+        "at line 9 of p.src)"
+    )
+    src = program("DEF Sub(v :IN)", "REAL v", "IF Shift(2) > 0 THEN", "ENDIF", "END", "", *SHIFT)
+    texts, rows = rewritten({"p.src": src})
+    assert texts["p.src"] == src
+    assert rows.reason[0] == (
+        "base unknown: after the call Sub() at line 3, which calls Shift() (p.src:9), which "
+        "changes $BASE or $TOOL"
+    )
+    pure = [*SHIFT[:2], "k = k * 2 + SIN(30)", *SHIFT[3:]]
+    src = program("DEF Sub(v :IN)", "REAL v", "v = Shift(2)", "END", "", *pure)
+    texts, _ = rewritten({"p.src": src})
+    assert texts["p.src"] == src.replace(LIN, LIN_CORRECTED)

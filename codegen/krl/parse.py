@@ -163,6 +163,11 @@ _BAS_RE = re.compile(r"\s*+BAS\s*+\(\s*+#\s*+(\w++)", re.I)
 _BASE_DATA_RE = re.compile(r"\s*+BASE_DATA\s*+\[\s*+(\d++)\s*+\]\s*+$", re.I)
 _TOOL_DATA_RE = re.compile(r"\s*+TOOL_DATA\s*+\[\s*+(\d++)\s*+\]\s*+$", re.I)
 _CALL_RE = re.compile(r"\s*+([A-Za-z_]\w*+)\s*+\(")
+_CALLED_RE = re.compile(r"(?<![\w$#.])([A-Za-z_]\w*+)\s*+\(")  # a name called anywhere
+# statements whose "name(" are declarations or asynchronous calls (a trigger's, an interrupt's)
+_NO_EXPRESSION_CALLS = frozenset(
+    "DEF DEFFCT GLOBAL EXT EXTFCT EXTP EXTFCTP DECL TRIGGER INTERRUPT SIGNAL STRUC ENUM".split()
+)
 _ROUTINE_RE = re.compile(
     r"\s*+(?:GLOBAL\s++)?(DEF|DEFFCT)\s++(?:\w++\s++)?([A-Za-z_]\w*+)\s*+\(", re.I
 )
@@ -333,13 +338,15 @@ class Routine:
     """A routine (``DEF``/``DEFFCT``) of a file as far as $BASE and $TOOL go: its name (upper
     case), line, whether other modules can call it (``GLOBAL``, or the module's main routine,
     the first of its .src), what in it changes $BASE or $TOOL itself ("" when nothing; the
-    first such statement) and the routines it calls as statements (name as written, line)."""
+    first such statement), the routines it calls as statements and the names it calls in
+    expressions (functions, built-in ones too), each (name as written, line)."""
 
     name: str
     line: int
     public: bool
     sets: str = ""
     calls: list[tuple[str, int]] = field(default_factory=list)
+    uses: list[tuple[str, int]] = field(default_factory=list)
 
 
 @dataclass
@@ -907,6 +914,22 @@ class _Flow:
                 reason=f"after the call {name}() at line {line}, which {why or 'may change $BASE'}",
             )
 
+    def expression_calls(self, code: str, start: int, line: int) -> None:
+        """The names called in the expressions of a statement (``code[start:]``, without its
+        own call): recorded for the routine; a function of the given files that changes $BASE
+        or $TOOL (``calls``) makes them unknown."""
+        for m in _CALLED_RE.finditer(code, start):
+            name = m.group(1)
+            if name.upper() in _NOT_CALLS:
+                continue
+            if self.routine is not None:
+                self.routine.uses.append((name, line))
+            why = self.calls.get(name.upper())
+            if why and not self.trust_calls:
+                self.state = BaseRef(
+                    "unknown", line, reason=f"after the call {name}() at line {line}, which {why}"
+                )
+
     def form(self) -> _Form | None:
         """The innermost open inline form."""
         for fold in reversed(self.folds):
@@ -1324,6 +1347,9 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
     if word in ("END", "ENDFCT", "DEFDAT", "ENDDAT"):
         flow.end_routine()
         return
+    if "(" in code and word not in _NO_EXPRESSION_CALLS:
+        call = _CALL_RE.match(code, pos) if word not in _NOT_CALLS else None
+        flow.expression_calls(code, call.end() if call else rest_at, lineno)
     if word in _OPENERS:
         flow.open(word, lineno)
         return

@@ -3,9 +3,12 @@
 A routine keeps both when nothing in it changes them (``KrlScan.routines``: ``$BASE =``,
 ``$TOOL =``, ``FDAT_ACT =``, a ``BAS`` command other than the velocity, acceleration,
 approximation, output and group ones, a motion's or spline block's ``WITH $BASE``/``$TOOL``)
-and every routine it calls as a statement is in the given files and keeps both. The routines
-that call each other (recursion) keep both unless one of them changes them: the answer is the
-largest set of routines that call only routines of the set and change nothing themselves.
+and every routine it calls as a statement is in the given files and keeps both, and so does
+every routine of the given files it calls in an expression (a function; a name called there
+that is not in the given files is taken for a built-in one, as the statement reader takes it).
+The routines that call each other (recursion) keep both unless one of them changes them: the
+answer is the largest set of routines that call only routines of the set and change nothing
+themselves.
 
 A call resolves as KRL resolves it: to a routine of the caller's own file (its module), else to
 the one routine of that name among those other modules can call (``GLOBAL``, or a module's main
@@ -20,6 +23,8 @@ from accugrid.codegen.krl.parse import KrlScan, Routine
 
 __all__ = ["call_effects"]
 
+_NOT_GIVEN = "may change $BASE"  # why a call of a routine not in the given files may change it
+
 
 def call_effects(scans: list[KrlScan]) -> list[dict[str, str] | None]:
     """Per scan, what each routine it calls does to $BASE and $TOOL: called name (upper case) ->
@@ -31,11 +36,7 @@ def call_effects(scans: list[KrlScan]) -> list[dict[str, str] | None]:
         for r in scan.routines:
             if r.public:
                 public.setdefault(r.name, []).append((s, r))
-    where = {
-        id(r): (s, Path(scan.path or "").name)
-        for s, scan in enumerate(scans)
-        for r in scan.routines
-    }
+    file = {id(r): Path(scan.path or "").name for scan in scans for r in scan.routines}
 
     def resolve(s: int, name: str) -> Routine | str:
         """The routine a call of ``name`` in scan s runs, or why it is not known."""
@@ -46,40 +47,49 @@ def call_effects(scans: list[KrlScan]) -> list[dict[str, str] | None]:
         if len(others) == 1:
             return others[0]
         if others:
-            files = ", ".join(where[id(r)][1] for r in others)
+            files = ", ".join(file[id(r)] for r in others)
             return f"is defined in more than one of the given files ({files})"
-        return "may change $BASE"
+        return _NOT_GIVEN
 
+    # why each routine that is no keeper changes them: its own statement, else a call of a
+    # routine not known, else (spread from callee to caller) a call of a routine that does
     why = {
-        id(r): f"changes $BASE or $TOOL ({r.sets} of {where[id(r)][1]})" if r.sets else ""
+        id(r): f"changes $BASE or $TOOL ({r.sets} of {file[id(r)]})"
         for scan in scans
         for r in scan.routines
+        if r.sets
     }
-    changed = True
-    while changed:  # drop the keepers that call a routine that is not one, until none does
-        changed = False
-        for s, scan in enumerate(scans):
-            for r in scan.routines:
-                if why[id(r)]:
-                    continue
-                for name, line in r.calls:
-                    callee = resolve(s, name.upper())
-                    if isinstance(callee, str) or why[id(callee)]:
-                        file = where[id(r)][1]
-                        why[id(r)] = f"calls {name}() ({file}:{line}), which " + (
-                            callee if isinstance(callee, str) else "changes $BASE or $TOOL"
-                        )
-                        changed = True
-                        break
+    callers: dict[int, list[tuple[Routine, str, int]]] = {}
+    for s, scan in enumerate(scans):
+        for r in scan.routines:
+            calls = [(name, line, True) for name, line in r.calls]
+            calls += [(name, line, False) for name, line in r.uses]
+            for name, line, statement in calls:
+                callee = resolve(s, name.upper())
+                if isinstance(callee, Routine):
+                    callers.setdefault(id(callee), []).append((r, name, line))
+                elif statement or callee != _NOT_GIVEN:  # else a built-in function
+                    why.setdefault(id(r), f"calls {name}() ({file[id(r)]}:{line}), which {callee}")
+    spread = [r for scan in scans for r in scan.routines if id(r) in why]
+    while spread:
+        callee = spread.pop()
+        for r, name, line in callers.get(id(callee), ()):
+            if id(r) not in why:
+                why[id(r)] = f"calls {name}() ({file[id(r)]}:{line}), which changes $BASE or $TOOL"
+                spread.append(r)
     out: list[dict[str, str] | None] = []
     for s, scan in enumerate(scans):
-        called = {name.upper() for r in scan.routines for name, _ in r.calls}
         effects = {}
-        for name in called:
+        for name in {name.upper() for r in scan.routines for name, _ in r.calls}:
             callee = resolve(s, name)
-            if not isinstance(callee, str):
-                effects[name] = why[id(callee)]
-            elif callee != "may change $BASE":
+            if isinstance(callee, Routine):
+                effects[name] = why.get(id(callee), "")
+            elif callee != _NOT_GIVEN:
                 effects[name] = callee
+        for name in {name.upper() for r in scan.routines for name, _ in r.uses}:
+            callee = resolve(s, name)
+            found = why.get(id(callee), "") if isinstance(callee, Routine) else callee
+            if found and found != _NOT_GIVEN:
+                effects[name] = found
         out.append(effects or None)
     return out
