@@ -246,3 +246,12 @@ def test_a_function_of_the_given_files_called_in_an_expression_is_followed():
     src = program("DEF Sub(v :IN)", "REAL v", "v = Shift(2)", "END", "", *pure)
     texts, _ = rewritten({"p.src": src})
     assert texts["p.src"] == src.replace(LIN, LIN_CORRECTED)
+
+
+def test_initmov_sets_the_world_base_and_tool_1():
+    """KUKA's BAS(#INITMOV, 0) (BAS.SRC INITMOV: base corrections off, BASE(0), $TOOL =
+    TOOL_DATA[1]): a motion after it is in base 0, not in the BASE_DATA[2] set before."""
+    src = "\r\n".join(["DEF p( )", "BAS (#BASE,2)", "BAS (#INITMOV,0 )", LIN, "END", ""])
+    texts, rows = rewritten({"p.src": src})
+    assert texts["p.src"] == src.replace(LIN, LIN_CORRECTED)
+    assert rows.status.tolist() == [CORRECTED]

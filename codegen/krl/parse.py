@@ -1399,7 +1399,8 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
 
 # The BAS commands that set neither $BASE nor $TOOL (KUKA's BAS.SRC: velocities, accelerations,
 # approximation, outputs, the axis group; public copy: github.com/HugoDanielson/ChinaMilling,
-# KRC/R1/System/bas.src). #INITMOV sets $BASE = $WORLD and $TOOL = TOOL_DATA[1]; #FRAMES,
+# KRC/R1/System/bas.src). #INITMOV turns the base and tool corrections off and, on a robot
+# ($KINCLASS not #NONE), sets $BASE = $WORLD (BASE(0)) and $TOOL = TOOL_DATA[1]; #FRAMES,
 # #PTP_PARAMS and #CP_PARAMS set both from FDAT_ACT; #BASE, #TOOL, #EX_BASE set them.
 _BAS_KEEPS = frozenset(
     "ACC_CP ACC_GLUE ACC_PTP VEL_CP VEL_PTP CP_DAT PTP_DAT OUT_SYNC OUT_ASYNC GROUP".split()
@@ -1408,15 +1409,19 @@ _BAS_FDAT = frozenset(("FRAMES", "PTP_PARAMS", "CP_PARAMS"))  # $BASE, $TOOL fro
 
 
 def _bas(code: str, pos: int, lineno: int, flow: _Flow) -> None:
-    """``BAS(#BASE, n)`` sets BASE_DATA[n], ``BAS(#TOOL, n)`` TOOL_DATA[n]; other BAS commands
-    leave them in the flow (``FDAT_ACT = F`` sets the FDAT's), but a routine that runs one of
-    them other than ``_BAS_KEEPS`` changes them."""
+    """``BAS(#BASE, n)`` sets BASE_DATA[n], ``BAS(#TOOL, n)`` TOOL_DATA[n], ``BAS(#INITMOV, ..)``
+    base 0 ($WORLD) and TOOL_DATA[1]; other BAS commands leave them in the flow (``FDAT_ACT = F``
+    sets the FDAT's), but a routine that runs one of them other than ``_BAS_KEEPS`` changes
+    them."""
     m = _BAS_RE.match(code, pos)
     command = m.group(1).upper() if m is not None else ""
     if command not in _BAS_KEEPS:
         flow.changes(lineno, f"BAS(#{command}, ..)" if command else "BAS() of a variable command")
     if command in _BAS_FDAT:
         flow.apply_fdat()
+    if command == "INITMOV":  # BAS.SRC INITMOV: BASE(0) with the base corrections off, tool 1
+        flow.set(BaseRef("number", lineno, number=0, tool=1))
+        return
     if m is not None and m.group(1).upper() == "TOOL":
         flow.breaks(lineno, f"the tool set at line {lineno}")
     if m is None or m.group(1).upper() not in ("BASE", "TOOL"):
