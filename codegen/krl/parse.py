@@ -16,12 +16,16 @@ inline-form FOLD lines are comments). It finds:
   motion to a local variable is reported as such), FDATs (``BASE_NO``, ``TOOL_NO``,
   ``IPO_FRAME``);
 - base frame context, followed in program order: ``$BASE = BASE_DATA[n]``, ``$BASE = {FRAME: ..}``,
-  ``$BASE = $NULLFRAME``, ``BAS(#BASE, n)``, ``FDAT_ACT = Fname`` (``BASE_NO`` of the FDAT
-  declaration), for one spline motion ``WITH $BASE = SBASE(Fname.BASE_NO)`` and for the
-  segments of a ``SPLINE``/``PTP_SPLINE`` block the block's own ``WITH $BASE = ...`` (until
-  ``ENDSPLINE``). What cannot be decided is an ``unknown`` base with the reason: frame
-  arithmetic ``:``, a variable, ``EK(...)``, the start of a routine (inherited from the caller),
-  a call that may change it, a jump target, a branch or loop that changes it.
+  ``$BASE = $NULLFRAME``, ``BAS(#BASE, n)``, ``BAS(#INITMOV, ..)`` (base 0, tool 1),
+  ``FDAT_ACT = Fname`` (``BASE_NO`` of the FDAT declaration), for one spline motion
+  ``WITH $BASE = SBASE(Fname.BASE_NO)`` and for the segments of a ``SPLINE``/``PTP_SPLINE``
+  block the block's own ``WITH $BASE = ...`` (until ``ENDSPLINE``). What cannot be decided is
+  an ``unknown`` base with the reason: frame arithmetic ``:``, a variable, ``EK(...)``, the
+  start of a routine (inherited from the caller), a call that may change it (``_Flow``: a call
+  keeps it when ``scan_krl``'s ``calls`` says its routine does, or in an inline form that
+  applied its own FDAT, ``_Form``), a jump target, a branch or loop that changes it.
+- routines (``KrlScan.routines``): what each changes of $BASE and $TOOL and what it calls, for
+  ``codegen.krl.routines``;
 - tool context, followed with the base (``BaseRef.tool``): ``$TOOL = TOOL_DATA[n]``,
   ``$TOOL = $NULLFRAME`` (tool 0, the flange), ``BAS(#TOOL, n)``, an FDAT's ``TOOL_NO``,
   ``$TOOL = {FRAME: X .., C ..}`` (a ``ToolFrame``, matched against the cell's tools when the
