@@ -1016,7 +1016,8 @@ class _Form:
     (``TOOL(FDAT_ACT.TOOL_NO)``) and $BASE (``BASE(FDAT_ACT.BASE_NO)``: BASE_DATA[n]) from
     FDAT_ACT (public copy: github.com/HugoDanielson/ChinaMilling, KRC/R1/System/bas.src). What
     the controller writes after it in the form, before the motion (``SET_CD_PARAMS (0)`` on
-    KSS 8.3, triggers of technology packages) sets neither: a call there keeps the state."""
+    KSS 8.3, as github.com/zserub/TeachPos-Generator reproduces the form; triggers of technology
+    packages) sets neither: a call there keeps the state."""
 
     fdats: frozenset[str]
     own: BaseRef | None = None
