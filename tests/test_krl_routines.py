@@ -255,3 +255,44 @@ def test_initmov_sets_the_world_base_and_tool_1():
     texts, rows = rewritten({"p.src": src})
     assert texts["p.src"] == src.replace(LIN, LIN_CORRECTED)
     assert rows.status.tolist() == [CORRECTED]
+
+
+IN_BASE_2 = "LIN {X 100.000,Y 50.000,Z 200.000,A 0.000,B 90.000,C 0.000}"
+IN_BASE_2_CORRECTED = "LIN {X 100.154,Y 49.767,Z 200.375,A 0.000,B 90.000,C 0.000}"
+
+
+def local_routine(*main: str, drill: str = "DEF Drill( )", more=()) -> str:
+    return "\r\n".join(["DEF p( )", *main, "END", "", drill, IN_BASE_2, "END", *more, ""])
+
+
+def test_a_local_routine_starts_in_the_base_of_every_call_of_it():
+    """Drill (neither GLOBAL nor the module's main routine) runs only where p calls it."""
+    src = local_routine("BAS (#BASE,2)", "Drill()", "Drill()")
+    texts, _ = rewritten({"p.src": src})
+    assert texts["p.src"] == src.replace(IN_BASE_2, IN_BASE_2_CORRECTED)
+    # through another local routine that keeps the base: found one round later
+    src = local_routine("BAS (#BASE,2)", "Pass()", more=["", "DEF Pass( )", "Drill()", "END"])
+    texts, _ = rewritten({"p.src": src})
+    assert texts["p.src"] == src.replace(IN_BASE_2, IN_BASE_2_CORRECTED)
+
+
+@pytest.mark.parametrize(
+    ("main", "drill"),
+    [
+        (["BAS (#BASE,2)", "Drill()", "BAS (#BASE,0)", "Drill()"], "DEF Drill( )"),  # two bases
+        (["BAS (#BASE,2)", "Drill()", "BAS (#TOOL,2)", "Drill()"], "DEF Drill( )"),  # two tools
+        (["Drill()"], "DEF Drill( )"),  # p's own base is its caller's
+        (["BAS (#BASE,2)", "Drill()"], "GLOBAL DEF Drill( )"),  # other modules may call it
+        # a trigger runs it wherever the robot is
+        (["BAS (#BASE,2)", "Drill()", "TRIGGER WHEN DISTANCE=0 DELAY=0 DO Drill() PRIO=-1"], ""),
+    ],
+)
+def test_a_routine_whose_calls_do_not_tell_its_base_starts_in_its_callers(main, drill):
+    src = local_routine(*main, drill=drill or "DEF Drill( )")
+    texts, rows = rewritten({"p.src": src})
+    assert texts["p.src"] == src
+    line = src.split("\r\n").index("DEF Drill( )" if not drill else drill) + 1
+    assert rows.reason[0] == (
+        f"base unknown: start of routine Drill (line {line}): $BASE is inherited from the caller "
+        "(--base N states it)"
+    )

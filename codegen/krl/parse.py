@@ -167,6 +167,7 @@ _BAS_RE = re.compile(r"\s*+BAS\s*+\(\s*+#\s*+(\w++)", re.I)
 _BASE_DATA_RE = re.compile(r"\s*+BASE_DATA\s*+\[\s*+(\d++)\s*+\]\s*+$", re.I)
 _TOOL_DATA_RE = re.compile(r"\s*+TOOL_DATA\s*+\[\s*+(\d++)\s*+\]\s*+$", re.I)
 _CALL_RE = re.compile(r"\s*+([A-Za-z_]\w*+)\s*+\(")
+_DO_RE = re.compile(r"\bDO\s++([A-Za-z_]\w*+)\s*+\(", re.I)  # what a trigger or interrupt runs
 _CALLED_RE = re.compile(r"(?<![\w$#.])([A-Za-z_]\w*+)\s*+\(")  # a name called anywhere
 # statements whose "name(" are declarations or asynchronous calls (a trigger's, an interrupt's)
 _NO_EXPRESSION_CALLS = frozenset(
@@ -374,6 +375,10 @@ class KrlScan:
     frame_uses: dict[str, FrameUse] = field(default_factory=dict)  # normalized name -> first use
     relative: dict[int, Relative] = field(default_factory=dict)  # table row of a _REL aggregate
     routines: list[Routine] = field(default_factory=list)  # in file order
+    # every call (name upper case, line, the base in effect there), and the routines a TRIGGER
+    # or an INTERRUPT runs (names upper case): they run wherever the robot is
+    call_sites: list[tuple[str, int, BaseRef]] = field(default_factory=list)
+    async_calls: set[str] = field(default_factory=set)
     _declared: dict[str, Declared] = field(default_factory=dict, repr=False)  # statement reader
     _fast_decls: list[tuple[list, list, np.ndarray]] = field(default_factory=list, repr=False)
     # (names, types, lines) of each block of plain declarations the whole-text scanner read
@@ -693,6 +698,8 @@ class _Rows:
         self.external: dict[int, tuple[str, float]] = {}
         self._ids: dict[int, int] = {}
         self.ops: list[tuple] = []  # ("swap", marks, start, changed) | ("label[_tool]", marks)
+        self.sites: list[int] = []  # the base id at each call, and the name called and line
+        self.site_names: list[tuple[str, int]] = []
 
     def base_id(self, base: BaseRef | None) -> int:
         if base is None:
@@ -703,8 +710,13 @@ class _Rows:
             self.scan.bases.append(base)
         return found
 
-    def mark(self) -> tuple[int, int]:
-        return self.positions.count, self.uses.count
+    def mark(self) -> tuple[int, int, int]:
+        return self.positions.count, self.uses.count, len(self.sites)
+
+    def site(self, name: str, line: int, base: BaseRef) -> None:
+        """A call of ``name`` (upper case) at ``line`` under ``base``."""
+        self.sites.append(self.base_id(base))
+        self.site_names.append((name, line))
 
     def add_position(
         self, lineno, column, kind, agg, base, numbers: dict[str, Number], type_name, name, reason
@@ -750,9 +762,10 @@ class _Rows:
         scan = self.scan
         p = self.positions.finish()
         u = self.uses.finish()
+        sites = np.array(self.sites, np.int64)
         for op in self.ops:
-            (pa, ua), (pb, ub) = op[1]
-            for column, lo, hi in ((p["base"], pa, pb), (u["base"], ua, ub)):
+            (pa, ua, sa), (pb, ub, sb) = op[1]
+            for column, lo, hi in ((p["base"], pa, pb), (u["base"], ua, ub), (sites, sa, sb)):
                 part = column[lo:hi]
                 if op[0] == "swap":
                     part[part == self.base_id(op[2])] = self.base_id(op[3])
@@ -773,6 +786,9 @@ class _Rows:
                         part[part == old] = self.base_id(changed)
         scan.table = PositionTable(external=self.external, **p)
         scan.use_table = UseTable(**u)
+        bases = scan.bases
+        names, ids = self.site_names, sites.tolist()
+        scan.call_sites = [(n, at, bases[b]) for (n, at), b in zip(names, ids, strict=True)]
         scan._rows = None
 
 
@@ -784,7 +800,7 @@ class _Block:
     keyword: str
     line: int
     start: BaseRef
-    mark: tuple[int, int]
+    mark: tuple[int, int, int]
     ends: list[BaseRef] = field(default_factory=list)
     has_else: bool = False
 
@@ -804,10 +820,12 @@ class _Flow:
         rows: _Rows,
         routines: list[Routine],
         calls: dict[str, str] | None = None,
+        starts: dict[str, BaseRef] | None = None,
     ) -> None:
         self.initial = initial
         self.trust_calls = trust_calls
         self.calls = calls or {}
+        self.starts = starts or {}
         self.rows = rows
         self.routines = routines
         self.routine: Routine | None = None  # the routine being read
@@ -827,7 +845,10 @@ class _Flow:
         self.finish_routine()
         self.routine = Routine(name.upper(), line, public or not self.routines)
         self.routines.append(self.routine)
-        if self.initial.kind == "unknown":
+        start = self.starts.get(self.routine.name)
+        if start is not None:  # the base every call of this local routine has
+            self.state = replace(start, line=line)
+        elif self.initial.kind == "unknown":
             self.state = BaseRef(
                 "unknown",
                 line,
@@ -901,6 +922,7 @@ class _Flow:
         """A call of routine ``name`` as a statement; ``frames_passed``: $BASE or $TOOL is
         among its arguments (an ``:OUT`` parameter may change it)."""
         self.moved = (line, f"the call {name}() at line {line}, which may move the robot")
+        self.rows.site(name.upper(), line, self.state)
         if self.routine is not None:
             self.routine.calls.append((name, line))
         if self.trust_calls:
@@ -928,6 +950,7 @@ class _Flow:
                 continue
             if self.routine is not None:
                 self.routine.uses.append((name, line))
+            self.rows.site(name.upper(), line, self.state)
             why = self.calls.get(name.upper())
             if why and not self.trust_calls:
                 self.state = BaseRef(
@@ -1098,6 +1121,7 @@ def scan_krl(
     initial_base: BaseRef | None = None,
     trust_calls: bool = False,
     calls: dict[str, str] | None = None,
+    starts: dict[str, BaseRef] | None = None,
 ) -> KrlScan:
     """Read one KRL file (.src, .dat or $config.dat text).
 
@@ -1105,14 +1129,15 @@ def scan_krl(
     the caller's). ``trust_calls``: assume a call to another routine does not change $BASE.
     ``calls``: what the routines this file calls do to $BASE and $TOOL (name, upper case ->
     "" when they keep both, else why not; ``codegen.krl.routines``); a call of a routine not in
-    it may change them.
+    it may change them. ``starts``: the base at the start of local routines (name, upper case ->
+    the base of every call of it, ``codegen.krl.routines``), over ``initial_base``.
     """
     path = None if path is None else os.fspath(path)
     check_text(text, path)
     scan = KrlScan(path, text)
     rows = scan._rows = _Rows(scan, text.count("\n") + 1)
     initial = initial_base or BaseRef("unknown", 0, reason="no $BASE set")
-    flow = _Flow(initial, trust_calls, rows, scan.routines, calls)
+    flow = _Flow(initial, trust_calls, rows, scan.routines, calls, starts)
     if "\n" not in text:  # one line, or lone CR line endings: line by line
         offset = 0
         for lineno, line in enumerate(split_lines(text), start=1):
@@ -1344,6 +1369,10 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
     word = word_m.group(1).upper()
     rest_at = word_m.end()
 
+    if word in ("TRIGGER", "INTERRUPT", "GLOBAL"):
+        run = _DO_RE.search(code, rest_at)
+        if run is not None:
+            scan.async_calls.add(run.group(1).upper())
     if word in ("DEF", "DEFFCT", "GLOBAL") and not _GLOBAL_DECL_RE.match(code, pos):
         routine = _ROUTINE_RE.match(code, pos)
         if routine:

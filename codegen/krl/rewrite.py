@@ -7,9 +7,10 @@ position (declared or assigned with a literal) is corrected only if a motion use
 motions that use it (its own FDAT wins over ``--base``) and is corrected once however many
 motions use it. BASE_DATA[n] comes from ``--config-dat`` (if it defines n), else from the cell's
 ``base`` and ``base_data``; base 0 ($NULLFRAME, BAS(#BASE,0)) is the robot frame ($WORLD =
-$ROBROOT). A call of a routine of the given files that keeps $BASE and $TOOL keeps them
-(``codegen.krl.routines``). A relative motion (``LIN_REL``...) is corrected as the position it
-reaches and written back as an increment (``codegen.krl.relative``).
+$ROBROOT). A call of a routine of the given files that keeps $BASE and $TOOL keeps them, and a
+local routine starts in the base every call of it has (``codegen.krl.routines``). A relative
+motion (``LIN_REL``...) is corrected as the position it reaches and written back as an
+increment (``codegen.krl.relative``).
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from accugrid.codegen.krl.parse import (
     wildcard,
 )
 from accugrid.codegen.krl.relative import Chains, resolve, write_increments
-from accugrid.codegen.krl.routines import call_effects
+from accugrid.codegen.krl.routines import call_effects, routine_starts
 from accugrid.codegen.krl.tables import MOTION, PositionTable
 from accugrid.codegen.program_text import (
     MIN_PLACES_MM,
@@ -97,12 +98,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: KrlPlacement
         scan_krl(text, path, initial_base=initial, trust_calls=placement.trust_calls)
         for path, text in texts.items()
     ]
-    if not placement.trust_calls:  # read again the files that call routines of the files
-        for s, effects in enumerate(call_effects(scans)):
-            if effects is not None:
-                scans[s] = scan_krl(
-                    scans[s].text, scans[s].path, initial_base=initial, calls=effects
-                )
+    scans = _with_calls(scans, initial, placement.trust_calls)
     config = placement.config_dat
     config = scan_krl(config, "$config.dat") if config is not None else None
     ctx = _Context(scans, config, initial, placement, opts)
@@ -160,6 +156,31 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: KrlPlacement
         rotations = rotations_of(frames[which[heads]][:, :3, :3], abc[heads])[np.cumsum(first) - 1]
     state = _Files(files, todo, placed, frames, starts, which, base_xyz, chains, relative)
     return Scan(rows, at, robot, rotations, np.concatenate(status), state=state)
+
+
+def _with_calls(scans: list[KrlScan], initial: BaseRef | None, trust: bool) -> list[KrlScan]:
+    """``scans`` read again where what their calls do is known (``codegen.krl.routines``): the
+    routines of the files they call (unless ``trust``: every call keeps $BASE and $TOOL), and
+    the base their local routines start in; until that base is known for no more of them (each
+    round knows it for more, or stops)."""
+    effects = [None] * len(scans) if trust else call_effects(scans)
+    starts: list[dict[str, BaseRef]] = [{} for _ in scans]
+    redo = [e is not None for e in effects]
+    while any(redo):
+        for s in np.flatnonzero(redo).tolist():
+            text, path = scans[s].text, scans[s].path
+            scans[s] = scan_krl(
+                text,
+                path,
+                initial_base=initial,
+                trust_calls=trust,
+                calls=effects[s],
+                starts=starts[s],
+            )
+        found = routine_starts(scans)
+        redo = [new != old for new, old in zip(found, starts, strict=True)]
+        starts = found
+    return scans
 
 
 def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[str, bytearray]:

@@ -13,15 +13,21 @@ themselves.
 A call resolves as KRL resolves it: to a routine of the caller's own file (its module), else to
 the one routine of that name among those other modules can call (``GLOBAL``, or a module's main
 routine: the first of its .src). A routine not in the given files may change both.
+
+A local routine (neither ``GLOBAL`` nor its module's main routine) runs only where its module
+calls it: when every call of it has the same known base and tool, and no ``TRIGGER`` or
+``INTERRUPT`` runs it (they run it wherever the robot is), it starts in them
+(``routine_starts``); otherwise its start is its caller's, not known here.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
-from accugrid.codegen.krl.parse import KrlScan, Routine
+from accugrid.codegen.krl.parse import BaseRef, KrlScan, Routine
 
-__all__ = ["call_effects"]
+__all__ = ["call_effects", "routine_starts"]
 
 _NOT_GIVEN = "may change $BASE"  # why a call of a routine not in the given files may change it
 
@@ -93,3 +99,28 @@ def call_effects(scans: list[KrlScan]) -> list[dict[str, str] | None]:
                 effects[name] = found
         out.append(effects or None)
     return out
+
+
+def routine_starts(scans: list[KrlScan]) -> list[dict[str, BaseRef]]:
+    """Per scan, the base each of its local routines starts in (name, upper case -> the base
+    and tool in effect at every call of it, when they are one and known)."""
+    out = []
+    for scan in scans:
+        at: dict[str, set[BaseRef]] = {}
+        for name, _, base in scan.call_sites:
+            at.setdefault(name, set()).add(_start(base))
+        starts = {}
+        for r in scan.routines:
+            found = at.get(r.name)
+            if r.public or r.name in scan.async_calls or found is None or len(found) != 1:
+                continue
+            (base,) = found
+            if base.kind != "unknown":
+                starts[r.name] = base
+        out.append(starts)
+    return out
+
+
+def _start(base: BaseRef) -> BaseRef:
+    """``base`` as a routine's start: what it is, not where it was set."""
+    return replace(base, line=0, reason="", label=None, tool_label=None, origin=None)
