@@ -15,7 +15,9 @@ import numpy as np
 import pytest
 from rewrite_helpers import const_model, rewrite_krl
 
-from accugrid.codegen.rewrite import CORRECTED, Options
+from accugrid.codegen.dialects import plugin_of
+from accugrid.codegen.krl.rewrite import KrlPlacement
+from accugrid.codegen.rewrite import CORRECTED, Options, rewrite
 from accugrid.kinematics.frames import pose_from_xyzabc
 
 OPTS = Options(model=const_model(), tool_number=1, allow_partial=True)
@@ -296,3 +298,14 @@ def test_a_routine_whose_calls_do_not_tell_its_base_starts_in_its_callers(main, 
         f"base unknown: start of routine Drill (line {line}): $BASE is inherited from the caller "
         "(--base N states it)"
     )
+
+
+def test_a_local_routine_starts_in_its_calls_base_with_trust_calls_too():
+    """--trust-calls: the call of a routine not given keeps the base the local routine's call
+    then has."""
+    src = local_routine("BAS (#BASE,2)", "Other()", "Drill()")
+    trusted = KrlPlacement(BASE_DATA, trust_calls=True)
+    texts = rewrite(plugin_of("krl"), {"p.src": src}, OPTS, trusted).texts
+    assert texts["p.src"] == src.replace(IN_BASE_2, IN_BASE_2_CORRECTED)
+    texts, rows = rewritten({"p.src": src})  # without: Other() may change it
+    assert texts["p.src"] == src and "start of routine Drill" in rows.reason[0]

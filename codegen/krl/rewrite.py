@@ -166,7 +166,12 @@ def _with_calls(scans: list[KrlScan], initial: BaseRef | None, trust: bool) -> l
     effects = [None] * len(scans) if trust else call_effects(scans)
     starts: list[dict[str, BaseRef]] = [{} for _ in scans]
     redo = [e is not None for e in effects]
-    while any(redo):
+    for _ in range(2 + sum(len(scan.routines) for scan in scans)):  # one more known a round
+        found = routine_starts(scans)
+        redo = [r or new != old for r, new, old in zip(redo, found, starts, strict=True)]
+        starts = found
+        if not any(redo):
+            break
         for s in np.flatnonzero(redo).tolist():
             text, path = scans[s].text, scans[s].path
             scans[s] = scan_krl(
@@ -177,9 +182,7 @@ def _with_calls(scans: list[KrlScan], initial: BaseRef | None, trust: bool) -> l
                 calls=effects[s],
                 starts=starts[s],
             )
-        found = routine_starts(scans)
-        redo = [new != old for new, old in zip(found, starts, strict=True)]
-        starts = found
+        redo = [False] * len(scans)
     return scans
 
 
