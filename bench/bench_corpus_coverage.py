@@ -5,7 +5,9 @@ once with a calibrated model (``out/model/calibrated.yaml`` from ``make demo``; 
 is missing; RAPID cells are an ABB arm, so grid only). Per dialect: the motion positions (those
 a job must correct: what a motion commands, a lone .dat's POS/E6POS with --base), how many are
 corrected by default (``--allow-partial`` only so that the rest is counted) and the reasons
-left, with counts (numbers and names in a reason shown as ``#``).
+left, with counts (numbers and names in a reason shown as ``#``). "KRL, no options" is every KRL
+program (each set of files once) rewritten without ``--base``/``--trust-calls``/
+``--ignore-external-axes``: what a user gets who states nothing the program does not.
 
 Run: ``make bench ARGS=corpus`` (or ``.venv/bin/python bench/bench_corpus_coverage.py``).
 """
@@ -59,9 +61,13 @@ def _request(cell: Path, inputs: list[Path], options: list[str], out: Path, mode
 
 def _cases(folder: Path):
     """(dialect, inputs, options, cell) of every program in the corpus."""
+    plain = set()
     for case, (names, options) in sorted(REALWORLD_REWRITES.items()):
         kind = "KRL" if names[0].startswith("krl/") else "G-code"
         yield case, kind, [REALWORLD / n for n in names], options, "grid"
+        if kind == "KRL" and tuple(names) not in plain:
+            plain.add(tuple(names))
+            yield case, "KRL, no options", [REALWORLD / n for n in names], [], "grid"
     for name, (tool, wobj) in sorted(REALWORLD_RAPID.items()):
         yield name, "RAPID", [REALWORLD / "rapid" / name], [], (tool, wobj)
 

@@ -104,7 +104,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--trust-calls",
         action="store_true",
-        help="KRL: assume calls to other routines do not change $BASE",
+        help="KRL: assume no call changes $BASE or $TOOL (without it, a call keeps them when its "
+        "routine is in the given files and changes neither)",
     )
     parser.add_argument(
         "--ignore-external-axes",
