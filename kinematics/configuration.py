@@ -138,9 +138,14 @@ def status_turn(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _wrist_points(robot: Robot, q: np.ndarray) -> np.ndarray:
-    """Wrist points (N, 3) mm, robot frame, of joint vectors q (N, 6) rad."""
-    base_T_3 = chain(robot.dh, q, links=3)[2]  # the wrist point is the origin of frame 4
-    dh, theta4 = robot.dh, robot.dh.theta(q)[:, 3]
+    """Wrist points (N, 3) mm, robot frame, of joint vectors q (N, 6) rad: the origin of DH
+    frame 5, where axes 5 and 6 cross the common normal of axis 5 (of frame 4 where that is
+    the same point: a spherical wrist, a5 = d5 = 0)."""
+    dh = robot.dh
+    if dh.a[4] or dh.d[4]:  # a wrist with an offset (a UR's): the chain to frame 5
+        return chain(dh, q, links=5)[4][:, :3, 3]
+    base_T_3 = chain(dh, q, links=3)[2]  # the wrist point is the origin of frame 4
+    theta4 = dh.theta(q)[:, 3]
     offset = np.stack(
         [dh.a[3] * np.cos(theta4), dh.a[3] * np.sin(theta4), np.full_like(theta4, dh.d[3])]
     )
@@ -151,7 +156,7 @@ def _arm_bits(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> tuple[np.ndarra
     """Shoulder, elbow, wrist flags (N,) of joint vectors q (N, 6) rad with wrist points (N, 3)."""
     a1 = robot.dh.sign[0] * q[:, 0] + robot.dh.theta_offset[0]
     x_a1 = wrist[:, 0] * np.cos(a1) + wrist[:, 1] * np.sin(a1)
-    return x_a1 < 0, q[:, 2] >= robot.phi_rad, q[:, 4] < 0
+    return x_a1 < 0, closed.wrap(q[:, 2] - robot.phi_rad) >= 0, closed.wrap(q[:, 4]) < 0
 
 
 def _arm_status(robot: Robot, th1: np.ndarray, th3: np.ndarray, wrist: np.ndarray) -> np.ndarray:

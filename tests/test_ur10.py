@@ -7,8 +7,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
+from accugrid.kinematics.configuration import status_turn
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
 
@@ -67,3 +70,96 @@ def test_ur10_nominal_fk_of_logged_joints_reproduces_the_commanded_tcp(series_c)
     goal_rot = Rotation.from_euler("xyz", rpy).as_matrix()
     cos_angle = (np.einsum("nij,nij->n", tcp[:, :3, :3], goal_rot) - 1) / 2
     assert np.degrees(np.arccos(np.clip(cos_angle, -1, 1))).max() <= 0.1
+
+
+# --- inverse kinematics: the UR has no spherical wrist, so ``Robot.ik`` solves it numerically
+
+UR10 = load_robot("ur10").with_tool(TMAC)
+MARGIN_RAD = 0.1  # |sin| of A3 and A5 at least this: away from the stretched arm and wrist flip
+SHOULDER_MARGIN_MM = 50.0  # wrist point at least this outside the cylinder axis 1 cannot reach
+
+
+def regular(q: np.ndarray) -> np.ndarray:
+    """(N,) bool: joint vectors (N, 6) rad off the UR's singularities by the margins above."""
+    from accugrid.kinematics.configuration import _wrist_points
+
+    radius = np.hypot(*_wrist_points(UR10, q)[:, :2].T)
+    return (
+        (np.abs(np.sin(q[:, 2])) >= MARGIN_RAD)
+        & (np.abs(np.sin(q[:, 4])) >= MARGIN_RAD)
+        & (radius - UR10.dh.d[3] >= SHOULDER_MARGIN_MM)
+    )
+
+
+def assert_same_pose(reached: np.ndarray, wanted: np.ndarray) -> None:
+    np.testing.assert_allclose(reached[:, :3, 3], wanted[:, :3, 3], rtol=0, atol=1e-6)
+    turn = np.einsum("nji,njk->nik", reached[:, :3, :3], wanted[:, :3, :3])
+    angle = np.degrees(Rotation.from_matrix(turn).magnitude())
+    assert angle.max() <= 1e-6
+
+
+LOW = np.arcsin(MARGIN_RAD) + 1e-9
+
+
+@st.composite
+def joint_vectors(draw) -> np.ndarray:
+    """UR joint vectors (6,) rad in (-360, 360) deg, none 0 (its Turn bit is then clear either
+    way), A3 and A5 at |sin| >= MARGIN_RAD (their angle mod 180 deg in [LOW, 180 deg - LOW])."""
+    q = np.empty(6)
+    for axis in range(6):
+        low = LOW if axis in (2, 4) else 1e-3
+        angle = draw(st.floats(low, np.pi - low))  # (0, 180) deg
+        if draw(st.booleans()):
+            angle -= np.pi  # (-180, 0): the other half turn
+        if draw(st.booleans()):
+            angle += 2 * np.pi if angle < 0 else -2 * np.pi  # the same angle one turn off
+        q[axis] = angle
+    return q
+
+
+@settings(max_examples=40)
+@given(joint_vectors())
+def test_ur10_ik_returns_the_joints_of_the_asked_configuration(q):
+    """IK(FK(q)) in q's configuration (shoulder, elbow, wrist) and turns is q itself."""
+    q = q[None]
+    assume(regular(q)[0])  # the shoulder margin
+    status, turn = status_turn(UR10, q)
+    pose = UR10.fk(q)
+    sol = UR10.ik(pose, status=status, turn=turn)
+    assert sol.ok[0], sol.reason[0]
+    np.testing.assert_allclose(sol.q, q, rtol=0, atol=1e-9)
+    assert sol.status[0] == status[0] and sol.turn[0] == turn[0]
+    assert_same_pose(UR10.fk(sol.q), pose)
+
+
+def test_ur10_ik_batch_every_regular_pose_in_its_configuration():
+    """500 random regular joint vectors at once: every one found again in its configuration."""
+    q = np.random.default_rng(7).uniform(-np.pi, np.pi, (2000, 6))
+    q = q[regular(q)][:500]
+    status, turn = status_turn(UR10, q)
+    sol = UR10.ik(UR10.fk(q), status=status)
+    assert sol.ok.all(), set(sol.reason[~sol.ok])
+    np.testing.assert_allclose(sol.q, q, rtol=0, atol=1e-9)  # (-180, 180] without turns
+
+
+def test_ur10_ik_eight_configurations_are_eight_solutions():
+    """A pose in the middle of the workspace has 8 solutions, one per configuration code
+    (shoulder + 2 elbow + 4 wrist), each reaching the pose; without a status, the one nearest
+    the reference joints is taken."""
+    pose = UR10.fk(np.radians([[10.0, -80.0, 100.0, -110.0, -80.0, 30.0]]))
+    solutions = []
+    for code in range(8):
+        sol = UR10.ik(pose, status=code)
+        assert sol.ok[0] and sol.status[0] == code, (code, sol.reason[0])
+        assert_same_pose(UR10.fk(sol.q), pose)
+        solutions.append(sol.q[0])
+    assert len({tuple(np.round(s, 6)) for s in solutions}) == 8
+    reference = solutions[5] + 0.05
+    nearest = UR10.ik(pose, reference=reference)
+    np.testing.assert_allclose(nearest.q[0], solutions[5], atol=1e-9)
+
+
+def test_ur10_ik_unreachable_pose_is_named():
+    pose = pose_from_xyzabc([3000.0, 0.0, 500.0, 0.0, 0.0, 0.0])[None]
+    sol = UR10.ik(pose, status=0)
+    assert not sol.ok[0] and sol.reason[0] == "unreachable" and np.isnan(sol.q).all()
