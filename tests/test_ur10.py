@@ -3,6 +3,9 @@ logged reproduces the positions it was commanded to (Series C of ../shared/reald
 
 from __future__ import annotations
 
+import csv
+import re
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +14,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
+from accugrid.app.cli import main
 from accugrid.kinematics.configuration import status_turn
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
@@ -163,3 +167,57 @@ def test_ur10_ik_unreachable_pose_is_named():
     pose = pose_from_xyzabc([3000.0, 0.0, 500.0, 0.0, 0.0, 0.0])[None]
     sol = UR10.ik(pose, status=0)
     assert not sol.ok[0] and sol.reason[0] == "unreachable" and np.isnan(sol.q).all()
+
+
+# --- the model path end to end through the CLI, as for the KUKA and ABB arms
+
+TOOL = ["--tool", "0", "0", "109", "0", "0", "0"]
+# DH errors of the size of seed Table 1 (mm, mm, rad, rad per row): the simulated "true" UR10
+ERRORS = """errors:
+  - {da_mm: 0.41, dd_mm: -1.2, dalpha_rad: 3.0e-5, dtheta_rad: -2.5e-4}
+  - {da_mm: -1.1, dd_mm: 0.0, dalpha_rad: 4.0e-5, dtheta_rad: 1.2e-3}
+  - {da_mm: 0.65, dd_mm: 0.0, dalpha_rad: 1.8e-4, dtheta_rad: -6.0e-4}
+  - {da_mm: -0.2, dd_mm: -0.35, dalpha_rad: -7.0e-5, dtheta_rad: 1.4e-4}
+  - {da_mm: 0.03, dd_mm: 0.0, dalpha_rad: -5.0e-4, dtheta_rad: -5.0e-4}
+  - {da_mm: 0.0, dd_mm: 0.08, dalpha_rad: 4.0e-4, dtheta_rad: 0.0}
+"""
+TARGETS = "id,x,y,z,a,b,c\nH1,700,100,400,0,180,0\nH2,800,-200,500,12,170,-8\n"
+
+
+def test_ur10_plan_identify_correct_validate(tmp_path, capsys):
+    """plan identify -> simulate (a UR10 with DH errors) -> identify --robot ur10 -> correct
+    --model -> simulate the corrected commands on the true arm -> validate: the true arm lands
+    on the targets (noise-free data: within microns), and uncorrected it misses by about 1 mm."""
+    nominal = resources.files("accugrid.kinematics").joinpath("robots", "ur10.yaml")
+    robot_file = tmp_path / "ur10_true.yaml"
+    robot_file.write_text(nominal.read_text().replace("name: ur10", "name: ur10-true") + ERRORS)
+    region = ["--region", "500", "900", "-300", "300", "200", "600", "--count", "40"]
+    plan = ["plan", "identify", "--robot", "ur10", *TOOL, *region, "--abc", "0", "180", "0"]
+    assert main([*plan, "--tilt", "25", "-o", str(tmp_path)]) == 0, capsys.readouterr().err
+    status = re.search(r"Status (\d)", capsys.readouterr().out).group(1)
+    meas, cal = tmp_path / "meas.csv", tmp_path / "cal.yaml"
+    poses = ["--poses", str(tmp_path / "measure_identify.csv")]
+    assert main(["simulate", "--robot", str(robot_file), *poses, *TOOL, "-o", str(meas)]) == 0
+    assert main(["identify", str(meas), "--robot", "ur10", *TOOL, "-o", str(cal)]) == 0
+    assert "ur10 calibrated from 40 poses" in capsys.readouterr().out
+    targets, out = tmp_path / "targets.csv", tmp_path / "out.csv"
+    targets.write_text(TARGETS)
+    argv = ["correct", str(targets), "--model", str(cal), "--status", status, "-o", str(out)]
+    assert main(argv) == 0, capsys.readouterr().err
+    for source, name in ((out, "after.csv"), (targets, "plain.csv")):
+        sim = ["simulate", "--robot", str(robot_file), "--poses", str(source), *TOOL]
+        assert main([*sim, "--status", status, "-o", str(tmp_path / name)]) == 0
+    capsys.readouterr()
+    assert main(["validate", str(tmp_path / "after.csv"), "--model", str(cal)]) == 0
+    assert "PASS" in capsys.readouterr().out
+    missed = read_measured(tmp_path / "plain.csv")
+    assert np.linalg.norm(missed[:, 3:] - missed[:, :3], axis=1).min() > 0.5
+    reached = read_measured(tmp_path / "after.csv")
+    assert np.abs(reached[:, 3:] - reached[:, :3]).max() < 0.005
+
+
+def read_measured(path: Path) -> np.ndarray:
+    """(N, 6): x, y, z (targets) and x_meas, y_meas, z_meas of a simulated measurement CSV."""
+    rows = list(csv.DictReader(line for line in path.open() if not line.startswith("#")))
+    keys = ("x", "y", "z", "x_meas", "y_meas", "z_meas")
+    return np.array([[float(row[k]) for k in keys] for row in rows])
