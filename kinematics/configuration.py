@@ -7,7 +7,8 @@ stretched; -1.957 deg for the KR 210, -atan(41/1200); 0 for a UR), the wrist (A5
 and, per axis, whether the angle is negative (the sign of each axis' turn). A3 - phi and A5 are
 taken mod 360 deg (a whole turn does not change the configuration); the wrist point is DH frame
 5's origin (frame 4's on a spherical wrist), so on a UR the 8 solutions of a pose are the 8
-codes: shoulder left/right, elbow up/down, wrist flipped or not. Each controller's words come from it:
+codes: shoulder left/right, elbow up/down, wrist flipped or not. Each controller's words come
+from it:
 ``to_kuka`` gives the KUKA Status and Turn (DESIGN.md, checked against the KUKA/Siemens/Beckhoff
 descriptions: Status bit 0 shoulder, bit 1 elbow, bit 2 wrist; Turn bit i set when A(i+1) < 0).
 
