@@ -293,6 +293,7 @@ IDENTIFICATION_SCHEMA: Schema = {
     "controller_tool": _POSE,
     "poses": None,
     "rows": None,
+    "controller_mismatch": dict.fromkeys(("mean_mm", "max_mm", "rows")),
     "identifiable_parameters": None,
     "unidentifiable_directions": None,
     "condition_number": None,

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
@@ -221,3 +222,48 @@ def read_measured(path: Path) -> np.ndarray:
     rows = list(csv.DictReader(line for line in path.open() if not line.startswith("#")))
     keys = ("x", "y", "z", "x_meas", "y_meas", "z_meas")
     return np.array([[float(row[k]) for k in keys] for row in rows])
+
+
+# --- the controller's own calibration on real data: identify goes on from the logged joints
+
+
+def series_c_csv(series: dict[str, np.ndarray], rows: np.ndarray, path: Path) -> Path:
+    """Rows of Series C as a measurement CSV: commanded x, y, z (the Goal, m -> mm, robot
+    frame), the tracker's x_meas, y_meas, z_meas (mm, tracker frame) and the logged joints
+    a1..a6 (rad -> deg)."""
+    q, goal = commanded(series)
+    measured = np.stack([series[f"measurement_{axis}"] for axis in "xyz"], axis=1)
+    table = np.column_stack([goal, measured, np.degrees(q)])[rows]
+    lines = ["id,x,y,z,x_meas,y_meas,z_meas,a1,a2,a3,a4,a5,a6"]
+    lines += [
+        f"C{r}," + ",".join(f"{v:.6f}" for v in row) for r, row in zip(rows, table, strict=True)
+    ]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_series_c_controller_mismatch_is_reported_and_the_arm_identified(
+    series_c, tmp_path, capsys
+):
+    """80 poses of the real UR10: the commanded positions are the controller's calibrated
+    model's, 0.04-0.15 mm from the nominal FK of the logged joints; identify reports that and
+    identifies the arm (DH + TCP + tracker frame) from the joints: 200 poses it never saw are
+    predicted to well under a mm (the nominal model with a fitted tracker frame: 5.3 mm)."""
+    rows = np.arange(0, 2773, 34)[:80]
+    csv = series_c_csv(series_c, rows, tmp_path / "c80.csv")
+    out = tmp_path / "cal.yaml"
+    argv = ["identify", str(csv), "--robot", "ur10", "--tool", "0", "0", "109", "0", "0", "0"]
+    assert main([*argv, "--base-frame", "--structure", "dh", "-o", str(out)]) == 0
+    assert "identified from the logged joints" in capsys.readouterr().out
+    summary = yaml.safe_load(out.read_text())["identification"]
+    mismatch = summary["controller_mismatch"]
+    assert mismatch["rows"] == 80
+    assert 0.04 <= mismatch["mean_mm"] <= 0.15 and mismatch["max_mm"] <= 0.45
+    held_out = np.setdiff1d(np.arange(2773), rows)[::12][:200]
+    q, _ = commanded(series_c)
+    robot_T_tcp = load_robot(out).true_robot().fk(q[held_out])
+    tracker_T_robot = pose_from_xyzabc([summary["tracker_T_robot"][k] for k in "xyzabc"])
+    predicted = robot_T_tcp[:, :3, 3] @ tracker_T_robot[:3, :3].T + tracker_T_robot[:3, 3]
+    measured = np.stack([series_c[f"measurement_{k}"] for k in "xyz"], axis=1)[held_out]
+    miss = np.linalg.norm(predicted - measured, axis=1)
+    assert miss.mean() < 0.8 and np.percentile(miss, 95) < 1.5, (miss.mean(), miss.max())
