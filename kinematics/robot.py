@@ -231,9 +231,9 @@ class Robot:
         return IKSolution(q, ok, reason, np.where(found, s, -1), np.where(found, t, -1))
 
     def ik_all(self, robot_T_tcp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """All 8 solutions (N, 8, 6) rad in (-pi, pi] and their reachability mask (N, 8)."""
-        poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
-        return closed.all_solutions(self.dh, stack_times(poses, invert(self.flange_T_tool)))
+        """All 8 closed-form solutions (N, 8, 6) rad in (-pi, pi] and their reachability mask
+        (N, 8); InputError for a DH structure without the closed-form inverse."""
+        return closed.all_solutions(self.dh, self._flange_wrist(robot_T_tcp)[0])
 
 
 def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:

@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import main
+from accugrid.infra.errors import InputError
 from accugrid.kinematics.configuration import status_turn
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
@@ -267,3 +268,12 @@ def test_series_c_controller_mismatch_is_reported_and_the_arm_identified(
     measured = np.stack([series_c[f"measurement_{k}"] for k in "xyz"], axis=1)[held_out]
     miss = np.linalg.norm(predicted - measured, axis=1)
     assert miss.mean() < 0.8 and np.percentile(miss, 95) < 1.5, (miss.mean(), miss.max())
+
+
+def test_ur10_has_no_closed_form_or_confdata_ik():
+    """The closed form's 8 candidates and ABB confdata need a spherical wrist: asked of the UR10
+    they are refused with the reason, not answered with another arm's solutions."""
+    pose = UR10.fk(np.radians([[10.0, -80.0, 100.0, -110.0, -80.0, 30.0]]))
+    for ask in (lambda: UR10.ik_all(pose), lambda: UR10.ik_confdata(pose, [0, 0, 0, 0])):
+        with pytest.raises(InputError, match="no closed-form inverse"):
+            ask()
