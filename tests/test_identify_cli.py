@@ -188,11 +188,13 @@ def test_controller_calibration_is_reported_and_identified_from_the_joints(tmp_p
 
 def test_without_logged_joints_identify_says_what_to_log(tmp_path, capsys):
     csv = write_csv(tmp_path / "meas.csv", joints(40, 4), logged=False, status=True)
-    code, out = identify(tmp_path, csv, "--structure", "dh")
+    report = tmp_path / "report.html"
+    code, out = identify(tmp_path, csv, "--structure", "dh", "--report-html", str(report))
     printed = capsys.readouterr().out
     assert code == 0
     assert "joints not logged" in printed
     assert "log the controller's actual joint angles as columns a1..a6" in printed
+    assert "log the controller&#39;s actual joint angles as columns a1..a6" in report.read_text()
     assert "controller_mismatch" not in yaml.safe_load(out.read_text())["identification"]
 
 
