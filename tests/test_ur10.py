@@ -1,5 +1,8 @@
-"""The built-in UR10 against real data: the nominal model's FK of the joints the UR controller
-logged reproduces the positions it was commanded to (Series C of ../shared/realdata/ipa-ur10)."""
+"""The built-in UR10, an arm without a spherical wrist: its nominal FK against the real data
+(Series C of ../shared/realdata/ipa-ur10: the FK of the joints the UR controller logged
+reproduces the positions it was commanded to), its numerical IK in the neutral configuration
+words, the model path through the CLI, and identify on the real data, whose controller has its
+own calibration."""
 
 from __future__ import annotations
 
@@ -17,7 +20,7 @@ from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import main
 from accugrid.infra.errors import InputError
-from accugrid.kinematics.configuration import status_turn
+from accugrid.kinematics.configuration import _wrist_points, status_turn
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
 
@@ -87,8 +90,6 @@ SHOULDER_MARGIN_MM = 50.0  # wrist point at least this outside the cylinder axis
 
 def regular(q: np.ndarray) -> np.ndarray:
     """(N,) bool: joint vectors (N, 6) rad off the UR's singularities by the margins above."""
-    from accugrid.kinematics.configuration import _wrist_points
-
     radius = np.hypot(*_wrist_points(UR10, q)[:, :2].T)
     return (
         (np.abs(np.sin(q[:, 2])) >= MARGIN_RAD)
@@ -142,7 +143,7 @@ def test_ur10_ik_batch_every_regular_pose_in_its_configuration():
     """500 random regular joint vectors at once: every one found again in its configuration."""
     q = np.random.default_rng(7).uniform(-np.pi, np.pi, (2000, 6))
     q = q[regular(q)][:500]
-    status, turn = status_turn(UR10, q)
+    status = status_turn(UR10, q)[0]
     sol = UR10.ik(UR10.fk(q), status=status)
     assert sol.ok.all(), set(sol.reason[~sol.ok])
     np.testing.assert_allclose(sol.q, q, rtol=0, atol=1e-9)  # (-180, 180] without turns
