@@ -170,7 +170,8 @@ class Robot:
             flange, wrist = self._flange_wrist(robot_T_tcp)
             q, found, reach = select(self, flange, wrist, status, reference)
         else:  # no spherical wrist: numerical
-            flange = stack_times(np.reshape(robot_T_tcp, (-1, 4, 4)), invert(self.flange_T_tool))
+            poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
+            flange = stack_times(poses, invert(self.flange_T_tool))
             q, found, reach = numeric.select(self, flange, status, reference)
             wrist = None
         n = len(flange)
