@@ -145,8 +145,8 @@ def _summary(
     else:
         worst = int(np.nanargmax(fit.loo_ratio))
         lines.append(
-            f"largest miss: datum {names[worst]}, {fit.loo_ratio[worst]:.1f}x the others' RMS "
-            "residual (a moved datum is refused from 10x)"
+            f"largest miss: datum {names[worst]}, {fit.loo_ratio[worst]:.1f}x what the others' "
+            "residuals lead to expect (a moved datum is refused from 10x)"
         )
     if unmeasured:
         lines.append(f"not measured: {', '.join(unmeasured)}")

@@ -14,14 +14,15 @@ bound on the length uses the Satterthwaite approximation of the norm (|e|^2 ~ g 
 since sigma is estimated, the F distribution (|e|^2 / (g h) ~ F(h, dof)).
 
 A moved datum: the fit without datum i predicts it; when that prediction misses it by more than
-``MOVED_RATIO`` times the RMS residual of the others (and more than ``MOVED_MIN_MM``), datum i is
-named as moved (4 datums or more; with 3 no datum can be told from the others).
+``MOVED_RATIO`` times the miss the others' residuals lead to expect there (their noise and their
+frame's uncertainty at datum i) and by more than ``MOVED_MIN_MM``, datum i is named as moved
+(4 datums or more; with 3 no datum can be told from the others).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -48,7 +49,7 @@ on one line: the rotation about that line is not defined."""
 MOVED_RATIO = 10.0
 MOVED_MIN_MM = 0.1
 """A datum is called moved when its prediction by the others misses it by ``MOVED_RATIO`` times
-their RMS residual and by at least this much (a tracker's noise is a few 0.01 mm)."""
+the expected miss and by at least this much (a tracker's noise is a few 0.01 mm)."""
 REFERENCE_TEMPERATURE_C = 20.0  # ISO 1: CAD dimensions hold at 20 degC
 _COVERAGE = 0.95
 
@@ -66,7 +67,8 @@ class PartFit:
     ``robot_T_base`` (4, 4) mm, rigid; ``scale`` the part's isotropic scale (1: rigid);
     ``fitted`` (N, 3) mm: the datums' CAD points mapped into the robot frame; ``residuals_mm``
     (N,) the length of measured minus fitted; ``loo_mm`` (N,) how far the fit without each datum
-    misses it and ``loo_ratio`` (N,) that over the others' RMS residual (NaN with 3 datums);
+    misses it and ``loo_ratio`` (N,) that over the miss the others' residuals lead to expect
+    (NaN with 3 datums);
     ``sigma_mm`` the per-axis noise estimated from the residuals with ``dof`` degrees of freedom;
     ``centroid`` (3,) mm the datums' mean in the robot frame and ``nominal_centroid`` (3,) their
     CAD mean; ``covariance`` (k, k) of (translation at the centroid mm, rotation rad[, scale]).
@@ -160,6 +162,33 @@ def _check_geometry(nominal: np.ndarray, ids: Sequence[str], where: Sequence[tup
         )
 
 
+def _fit(nominal: np.ndarray, measured: np.ndarray, scale: float | None) -> PartFit:
+    """The least-squares frame of datums (N, 3) mm with its covariance; no moved-datum test."""
+    pose, fitted_scale = _similarity(nominal, measured, scale)
+    fitted = _apply(pose, fitted_scale, nominal)
+    residual = measured - fitted
+    k = 6 if scale is not None else 7
+    dof = 3 * len(nominal) - k
+    sigma = float(np.sqrt(np.sum(residual**2) / dof))
+    nan = np.full(len(nominal), np.nan)
+    fit = PartFit(
+        robot_T_base=pose,
+        scale=fitted_scale,
+        scale_fitted=scale is None,
+        fitted=fitted,
+        residuals_mm=np.linalg.norm(residual, axis=1),
+        loo_mm=nan,
+        loo_ratio=nan,
+        sigma_mm=sigma,
+        dof=dof,
+        centroid=fitted.mean(axis=0),
+        nominal_centroid=nominal.mean(axis=0),
+        covariance=np.zeros((k, k)),
+    )
+    jac = fit._jacobian(nominal).reshape(-1, k)
+    return replace(fit, covariance=sigma**2 * np.linalg.inv(jac.T @ jac))
+
+
 def fit_part_frame(
     nominal: np.ndarray,
     measured: np.ndarray,
@@ -175,36 +204,14 @@ def fit_part_frame(
     measured = np.asarray(measured, dtype=float)
     where = list(where) or [()] * len(nominal)
     _check_geometry(nominal, ids, where)
-    pose, fitted_scale = _similarity(nominal, measured, scale)
-    fitted = _apply(pose, fitted_scale, nominal)
-    residual = measured - fitted
-    k = 6 if scale is not None else 7
-    dof = 3 * len(nominal) - k
-    sigma = float(np.sqrt(np.sum(residual**2) / dof))
     loo_mm, loo_ratio = _leave_one_out(nominal, measured, scale)
-    fit = PartFit(
-        robot_T_base=pose,
-        scale=fitted_scale,
-        scale_fitted=scale is None,
-        fitted=fitted,
-        residuals_mm=np.linalg.norm(residual, axis=1),
-        loo_mm=loo_mm,
-        loo_ratio=loo_ratio,
-        sigma_mm=sigma,
-        dof=dof,
-        centroid=fitted.mean(axis=0),
-        nominal_centroid=nominal.mean(axis=0),
-        covariance=np.zeros((k, k)),
-    )
-    jac = fit._jacobian(nominal).reshape(-1, k)
-    info = jac.T @ jac
-    fit = PartFit(**{**fit.__dict__, "covariance": sigma**2 * np.linalg.inv(info)})
+    fit = replace(_fit(nominal, measured, scale), loo_mm=loo_mm, loo_ratio=loo_ratio)
     moved = fit.moved
     if moved is not None:
         raise InputError(
             f"datum {ids[moved]} is {loo_mm[moved]:.3f} mm from where the other datums put it, "
-            f"{loo_ratio[moved]:.0f}x their RMS residual: it moved, or is not the CAD point of "
-            "that id; remeasure it or leave it out",
+            f"{loo_ratio[moved]:.0f}x what their residuals lead to expect: it moved, or is not "
+            "the CAD point of that id; remeasure it or leave it out",
             *where[moved],
         )
     return fit
@@ -213,8 +220,9 @@ def fit_part_frame(
 def _leave_one_out(
     nominal: np.ndarray, measured: np.ndarray, scale: float | None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """For each datum: how far the fit of the others misses it (N,) mm, and that over the RMS
-    residual of the others (N,); NaN where the others cannot define a frame."""
+    """For each datum: how far the fit of the others misses it (N,) mm, and that over the miss
+    their residuals lead to expect (N,): sqrt(3 sigma^2 + the trace of their frame's covariance
+    at the datum), sigma from their residuals. NaN where the others cannot define a frame."""
     n = len(nominal)
     miss, ratio = np.full(n, np.nan), np.full(n, np.nan)
     if n <= MIN_DATUMS:
@@ -224,11 +232,12 @@ def _leave_one_out(
         spread = np.linalg.svd(nominal[keep] - nominal[keep].mean(axis=0), compute_uv=False)
         if spread[1] <= COLLINEAR_RATIO * spread[0]:
             continue
-        pose, s = _similarity(nominal[keep], measured[keep], scale)
-        others = np.linalg.norm(measured[keep] - _apply(pose, s, nominal[keep]), axis=1)
-        miss[i] = float(np.linalg.norm(measured[i] - _apply(pose, s, nominal[i : i + 1])))
-        rms = float(np.sqrt(np.mean(others**2)))
-        ratio[i] = miss[i] / rms if rms > 0.0 else np.inf
+        others = _fit(nominal[keep], measured[keep], scale)
+        predicted = _apply(others.robot_T_base, others.scale, nominal[i : i + 1])[0]
+        miss[i] = float(np.linalg.norm(measured[i] - predicted))
+        per_axis = others.sigma_at(nominal[i : i + 1])[0][0]
+        expected = np.sqrt(3.0 * others.sigma_mm**2 + np.sum(per_axis**2))
+        ratio[i] = miss[i] / expected if expected > 0.0 else np.inf
     return miss, ratio
 
 
