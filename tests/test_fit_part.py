@@ -274,3 +274,47 @@ def test_base_lines_of_each_dialect_byte_for_byte():
     assert plugin_of("gcode").base_line(12, flat) == (
         "G10 L2 P12 X10.000 Y-20.000 Z0.500 R30.0000 (work offsets are P1..P9)"
     )
+
+
+def test_tracker_frame_datums_with_frame_file_give_the_robot_frame_part(tmp_path, capsys):
+    """The example datums moved into a tracker frame, read as an export with semicolons,
+    decimal commas and the tracker's own column names: --frame and the reading options give
+    the part of the robot-frame file."""
+    tracker_T_robot = pose_from_xyzabc(np.array([-2500.0, 1200.0, -300.0, 35.0, 0.4, -0.3]))
+    frame = tmp_path / "frame.yaml"
+    frame.write_text("tracker_T_robot: {x: -2500, y: 1200, z: -300, a: 35, b: 0.4, c: -0.3}\n")
+    text = DATUMS.read_text().splitlines()
+    rows = [line.split(",") for line in text if line and not line.startswith(("#", "id"))]
+    robot = np.array([[float(v) for v in r[1:]] for r in rows])
+    tracker = transform_points(tracker_T_robot, robot)
+    export = tmp_path / "export.csv"
+    export.write_text(
+        "Point;X [mm];Y [mm];Z [mm]\n"
+        + "".join(
+            f"{r[0]};" + ";".join(f"{v:.6f}".replace(".", ",") for v in p) + "\n"
+            for r, p in zip(rows, tracker, strict=True)
+        )
+    )
+    code, direct = _fit_part(tmp_path, DATUMS)
+    assert code == 0
+    out = tmp_path / "via_tracker.yaml"
+    argv = ["fit-part", str(export), "--nominal", str(NOMINAL), "--frame", str(frame)]
+    argv += ["--columns", "id=Point,x=X [mm],y=Y [mm],z=Z [mm]", "-o", str(out)]
+    argv += ["--delimiter", "semicolon", "--decimal", "comma"]
+    assert main(argv) == 0, capsys.readouterr().err
+    np.testing.assert_allclose(
+        load_part(out).robot_T_base, load_part(direct).robot_T_base, atol=2e-5
+    )
+
+
+def test_cell_names_the_bad_key_of_a_part_file(tmp_path, capsys):
+    code, part = _fit_part(tmp_path, DATUMS)
+    assert code == 0
+    capsys.readouterr()
+    part.write_text(part.read_text().replace("  z: ", "  zz: ", 1))
+    cell = _cell(tmp_path, "base: {file: ../part.yaml, number: 1}")
+    out = tmp_path / "krl"
+    args = ["krl", str(EXAMPLES / "wing_panel_points.csv"), "--cell", str(cell), "-o", str(out)]
+    assert main(args) == 2
+    assert re.search(r"part\.yaml:8:3: base\.zz: unknown key; did you mean z\?", _one_line(capsys))
+    assert not out.exists()
