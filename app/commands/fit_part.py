@@ -4,11 +4,12 @@ DATUMS.csv: columns id, x, y, z (mm) of datum features (tooling balls, reference
 by the laser tracker, in the robot frame, or in the tracker frame with --frame (the file written
 by fit-frame). A datum measured several times (one id on several rows) is averaged.
 NOMINAL.csv: columns id, x, y, z (mm) of the same datums in the part's CAD frame. At least 3
-datums not on one line are needed; with 4 or more, a datum that the others put 10x their RMS
-residual off (and at least 0.1 mm) is named as moved and refused.
+datums not on one line are needed; with 4 or more, a datum that the others put 10 times farther
+off than their residuals lead to expect (and at least 0.1 mm) is named as moved and refused.
 
 The part file holds base: {x, y, z (mm), a, b, c (KUKA ABC, deg)}, the scale, the noise sigma
-estimated from the residuals and the frame's covariance. A cell uses it as
+estimated from the residuals and the frame's covariance. The base is rigid: a part scaled by
+--scale fit or --cte needs its holes' CAD coordinates scaled by the printed scale. A cell uses it as
 base: {file: PART.yaml, number: N}. The command prints each datum's residual, the frame's 95 %
 bound at the datums and the line that sets the base frame on each controller (KRL BASE_DATA,
 RAPID wobjdata, G-code G10 L2).
