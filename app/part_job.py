@@ -64,6 +64,12 @@ def _nominal(path: str) -> tuple[dict[str, int], np.ndarray]:
     return rows, xyz
 
 
+def _few(ids, most: int = 12) -> str:
+    """The first ``most`` ids, comma-separated, "..." when there are more."""
+    ids = list(ids)
+    return ", ".join(ids[:most]) + (", ..." if len(ids) > most else "")
+
+
 def _scale(req: PartRequest) -> tuple[float | None, str]:
     """The scale to fit with (None: fit it) and its source word."""
     if (req.cte_per_k is None) != (req.temperature_c is None):
@@ -92,9 +98,8 @@ def fit_part_files(req: PartRequest) -> JobFiles:
     group = np.argsort(order)[group]
     for name, r in zip(names, first, strict=True):
         if name not in cad_rows:
-            known = ", ".join(list(cad_rows)[:12]) + (", ..." if len(cad_rows) > 12 else "")
             raise InputError(
-                f"datum {name} is not in {Path(req.nominal).name} (its ids: {known})",
+                f"datum {name} is not in {Path(req.nominal).name} (its ids: {_few(cad_rows)})",
                 *table.where(int(r), "id"),
             )
     counts = np.bincount(group, minlength=len(names))
@@ -141,7 +146,10 @@ def _summary(
             + (f" ({counts[i]} measurements averaged)" if counts[i] > 1 else "")
         )
     if np.isnan(fit.loo_mm).all():
-        lines.append("3 datums: a moved datum cannot be told from the others (measure 4 or more)")
+        lines.append(
+            f"{len(names)} datums: a moved datum cannot be told from the others (measure 4 or "
+            "more, any 3 of them off one line)"
+        )
     else:
         worst = int(np.nanargmax(fit.loo_ratio))
         lines.append(
@@ -149,7 +157,7 @@ def _summary(
             "residuals lead to expect (a moved datum is refused from 10x)"
         )
     if unmeasured:
-        lines.append(f"not measured: {', '.join(unmeasured)}")
+        lines.append(f"not measured: {_few(unmeasured)}")
     for name, dialect in DIALECTS.items():
         lines.append(f"{dialect.title}: {plugin_of(name).base_line(req.number, fit.robot_T_base)}")
     lines.append(f"cell: base: {{file: {os.fspath(req.output)}, number: {req.number}}}")
