@@ -156,6 +156,11 @@ def _summary(
             f"largest miss: datum {names[worst]}, {fit.loo_ratio[worst]:.1f}x what the others' "
             "residuals lead to expect (a moved datum is refused from 10x)"
         )
+    if fit.scale != 1.0:
+        lines.append(
+            f"the part is {fit.scale:.9f} times its CAD size: scale the x, y, z of its points "
+            "file by it before programming (a cell's base is rigid)"
+        )
     if unmeasured:
         lines.append(f"not measured: {_few(unmeasured)}")
     for name, dialect in DIALECTS.items():

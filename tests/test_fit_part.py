@@ -125,7 +125,9 @@ def test_known_scale_and_fitted_scale(tmp_path, capsys):
     datums = _csv(tmp_path / "d.csv", [[i, *p] for i, p in zip(ids, measured, strict=True)])
     code, out = _fit_part(tmp_path, datums, NOMINAL, "--scale", "fit")
     assert code == 0
-    assert "scale 1.000200000" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "scale 1.000200000" in printed
+    assert "the part is 1.000200000 times its CAD size: scale the x, y, z" in printed
     np.testing.assert_allclose(load_part(out).robot_T_base, EXAMPLE_TRUE, atol=1e-5)
     # 1 + 20e-6 * (30 - 20) = 1.0002
     code, out = _fit_part(
