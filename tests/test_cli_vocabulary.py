@@ -16,7 +16,7 @@ from accugrid.app.cli_options import DEFAULT_ROBOT, DEFAULT_TILT_DEG
 from accugrid.app.commands import COMMANDS
 from accugrid.kinematics.robot import BUILTIN
 
-UNITS = ("mm", "deg", "mm/s", "s", "%", "MiB")  # a unit the help must name as a word
+UNITS = ("mm", "deg", "mm/s", "s", "%", "MiB", "1/K", "degC")  # a unit the help must name as a word
 # numbers without a unit: counts, indices, seeds, ratios, choices of a small integer
 UNITLESS = {
     "--base",
@@ -28,6 +28,7 @@ UNITLESS = {
     "--folds",
     "--iterations",
     "--max-order",
+    "--number",
     "--power",
     "--repeats",
     "--seed",
