@@ -48,11 +48,12 @@ PART_SCHEMA: Schema = {
 @dataclass(frozen=True)
 class PartFile:
     """``robot_T_base`` (4, 4) mm of a part file, its datums' ``ids`` and ``measured`` points
-    (N, 3) mm in the robot frame."""
+    (N, 3) mm in the robot frame, and the part's ``scale`` (its size over its CAD size)."""
 
     robot_T_base: np.ndarray
     ids: list[str]
     measured: np.ndarray
+    scale: float = 1.0
 
 
 def part_yaml(
@@ -117,7 +118,11 @@ def load_part(path: str | os.PathLike[str]) -> PartFile:
     measured = np.array(
         [[doc.number("datums", i, "measured", k) for k in range(3)] for i in range(len(datums))]
     ).reshape(-1, 3)
-    return PartFile(pose_from_xyzabc(xyzabc), ids, measured)
+    scale = doc.number("scale", default=1.0)
+    return PartFile(pose_from_xyzabc(xyzabc), ids, measured, scale)
+
+
+SCALE_LIMIT_MM = 0.005  # the largest datum move by a part's scale a rigid cell base may ignore
 
 
 def read_base(
@@ -147,5 +152,16 @@ def read_base(
             f"{Path(name).name}: {what} lies {far[worst]:.0f} mm from the robot's origin, "
             f"beyond its reach ({reach:.0f} mm): was the part measured in the tracker frame "
             "without fit-part --frame?",
+        )
+    # A cell's base is rigid: a part of another size than its CAD (a fitted or thermal scale)
+    # would put every hole off by (scale - 1) x its distance from the part's origin.
+    spread = np.linalg.norm(points - part.robot_T_base[:3, 3], axis=1).max()
+    if abs(part.scale - 1.0) * spread > SCALE_LIMIT_MM:
+        raise r.error(
+            "base.file",
+            f"{Path(name).name}: the part is {part.scale:.6f} times its CAD size, which moves its "
+            f"datums by up to {abs(part.scale - 1.0) * spread:.3f} mm; a cell's base is rigid: "
+            "multiply the CAD coordinates of the datums and the holes by the scale and fit the "
+            "part again without --scale/--cte",
         )
     return number, part.robot_T_base

@@ -257,6 +257,26 @@ def test_cell_refuses_a_part_out_of_the_robots_reach(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_cell_refuses_a_part_of_another_size_than_its_cad(tmp_path, capsys):
+    """A cell's base is rigid: a part fitted 0.2 mm/m larger than its CAD would put every hole
+    off by its distance from the origin x 2e-4, so the cell refuses it naming the fix."""
+    nominal = np.loadtxt(NOMINAL, delimiter=",", skiprows=3, usecols=(1, 2, 3))
+    measured = transform_points(EXAMPLE_TRUE, 1.0002 * nominal)
+    ids = [f"TB{i + 1}" for i in range(len(nominal))]
+    datums = _csv(tmp_path / "d.csv", [[i, *p] for i, p in zip(ids, measured, strict=True)])
+    code, part = _fit_part(tmp_path, datums, NOMINAL, "--scale", "fit")
+    assert code == 0
+    capsys.readouterr()
+    cell = _cell(tmp_path, "base: {file: ../part.yaml, number: 1}")
+    out = tmp_path / "krl"
+    args = ["krl", str(EXAMPLES / "wing_panel_points.csv"), "--cell", str(cell), "-o", str(out)]
+    assert main(args) == 2
+    line = _one_line(capsys)
+    assert re.search(r"cell\.yaml:\d+: base\.file: part\.yaml: the part is 1\.000200 times", line)
+    assert "fit the part again without --scale/--cte" in line
+    assert not out.exists()
+
+
 def test_base_lines_of_each_dialect_byte_for_byte():
     """The example cell's base (x 1700, y 300, z 1000, a -90, b 0, c 90): Rz(-90) Rx(90) is the
     quaternion [0.5, 0.5, -0.5, -0.5]."""
