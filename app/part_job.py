@@ -159,7 +159,8 @@ def _summary(
     if fit.scale != 1.0:
         lines.append(
             f"the part is {fit.scale:.9f} times its CAD size: scale the x, y, z of its points "
-            "file by it before programming (a cell's base is rigid)"
+            "file and of its datums' CAD file by it and fit again without --scale/--cte for a "
+            "cell (a cell's base is rigid and refuses a scaled part)"
         )
     if unmeasured:
         lines.append(f"not measured: {_few(unmeasured)}")

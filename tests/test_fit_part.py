@@ -128,6 +128,7 @@ def test_known_scale_and_fitted_scale(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "scale 1.000200000" in printed
     assert "the part is 1.000200000 times its CAD size: scale the x, y, z" in printed
+    assert "fit again without --scale/--cte for a cell" in printed
     np.testing.assert_allclose(load_part(out).robot_T_base, EXAMPLE_TRUE, atol=1e-5)
     # 1 + 20e-6 * (30 - 20) = 1.0002
     code, out = _fit_part(
