@@ -75,6 +75,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: GcodeSection
     if "G80" in moves.motion:
         rows.commanded &= np.array([m != "G80" for m in moves.motion], bool)
     _protect_polar_starts(moves, rows)
+    _protect_flow_start(moves, rows)
     _tools(moves, rows, opts)
     if any(rows.reason):  # the moves with no reason
         at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))
@@ -141,6 +142,31 @@ def _protect_polar_starts(moves: GcodeMoves, rows: Rows) -> None:
         for j in moves.setters[i, :2].tolist():
             if j >= 0 and not rows.reason[j]:
                 rows.reason[j] = why
+
+
+def _protect_flow_start(moves: GcodeMoves, rows: Rows) -> None:
+    """The moves read under O-word control flow (or a modal state not known) are left as
+    written: a loop runs them again from where the last one ends, a subroutine from where it is
+    called. So that they land as programmed, the moves that set where they start (each axis;
+    for a canned cycle they continue, the block before them, whose depth and R words are in
+    effect, and the move that set the run's initial level) are not corrected either."""
+    first = moves.flow_from
+    if first >= len(moves):
+        return
+    setters = set(moves.setters[first].tolist())
+    if moves.is_cycle[first] and not moves.first_cycle[first]:
+        run = first - 1
+        setters.add(run)
+        while run > 0 and not moves.first_cycle[run]:
+            run -= 1
+        setters.add(int(moves.setters[run, moves.cycle_axis[run]]))
+    why = (
+        f"sets the start of line {moves.line[first]}, read under control flow and left as "
+        "written (it and the moves after it may run from elsewhere or again)"
+    )
+    for j in sorted(setters - {-1}):
+        if not rows.reason[j]:
+            rows.reason[j] = why
 
 
 def _polar_edits(text, edits, moves, i, where, goals, changed, places) -> None:
@@ -284,31 +310,58 @@ def _gcode_edits(
     ``extra`` edits) are done in bulk (``_bulk_block``), the rest move by move (``_walk_block``),
     where increments (which depend on what was written before) are formatted on the way."""
     desired, own = goals
-    out = ByteSplicer(text)
     places = _places(moves, opts)
     corrected = rows.status == CORRECTED
     read = np.fromiter(map(bool, moves.reason), bool, len(moves)) if any(moves.reason) else False
-    walk = _Commanded(moves.is_cycle & ~read, extra)
+    # the moves read under control flow are left as written (``_protect_flow_start``)
+    flow = moves.flow_from
+    extra = {i: e for i, e in extra.items() if i < flow}
     walked = moves.incremental | moves.resets | (moves.cycle_axis != 2)  # G18/G19 cycles too
     if extra:
         walked[list(extra)] = True
-    for first in range(0, len(moves), _BLOCK):
-        for part, step in _stretches(moves, slice(first, first + _BLOCK), walked):
-            out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
-    if walk.reached_at:
+    while True:  # again without the moves that land farther than the tolerance (rare)
+        out = ByteSplicer(text)
+        walk = _Commanded(moves.is_cycle & ~read, extra)
+        for first in range(0, flow, _BLOCK):
+            for part, step in _stretches(moves, slice(first, min(first + _BLOCK, flow)), walked):
+                out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
+        if not walk.reached_at:
+            return out.finish()
         at = np.frombuffer(walk.reached_at, dtype=np.int64)
         reached = np.frombuffer(walk.reached_rows, dtype=float).reshape(-1, 3)
-        off = np.abs(reached - desired[at])
         residual = np.linalg.norm(reached - own[at], axis=1)
         wrote = moves.word_start[at, :3] >= 0
         if moves.polar:  # X and Y of a polar move are written (as @ and ^)
             wrote[:, :2] |= np.isin(at, np.fromiter(moves.polar, np.int64))[:, None]
-        off_written = np.where(wrote, off, 0.0)
-        rounding = np.maximum(np.maximum(off_written[:, 0], off_written[:, 1]), off_written[:, 2])
-        rows.new[at] = reached
-        rows.residual_mm[at] = residual
-        rows.rounding_mm[at] = rounding
+        far = np.flatnonzero((residual > opts.tolerance_mm) & (rows.status[at] == CORRECTED))
+        if not len(far):
+            break
+        kept = _left_as_written(moves, rows, at[far], residual[far], wrote[far], opts)
+        corrected[kept] = False
+        desired, r_planes = desired.copy(), r_planes.copy()
+        desired[kept], r_planes[kept] = moves.target[kept], math.nan
+    off_written = np.where(wrote, np.abs(reached - desired[at]), 0.0)
+    rows.new[at] = reached
+    rows.residual_mm[at] = residual
+    rows.rounding_mm[at] = off_written.max(axis=1)
     return out.finish()
+
+
+def _left_as_written(moves, rows, far, residual, wrote, opts) -> np.ndarray:
+    """Corrected moves ``far`` (M,) that land ``residual`` (M,) mm from their correction, more
+    than the tolerance, because of the axes their lines do not write (``wrote`` (M, 3)): not
+    corrected, with the reason. Those whose words are then left as written (all but an arc,
+    which moves with its start)."""
+    for i, r, written in zip(far.tolist(), residual.tolist(), wrote.tolist(), strict=True):
+        axes = ", ".join(k for k, w in zip("XYZ", written, strict=True) if not w) or "none"
+        rows.status[i] = SKIPPED
+        rows.reason[i] = (
+            f"would land {r:.3f} mm from its correction, more than the tolerance "
+            f"({opts.tolerance_mm:g} mm): axes not written on its line ({axes}) stay where the "
+            "moves before it leave them; "
+            + ("moved with its start" if i in moves.arcs else "left as written")
+        )
+    return np.array([i for i in far.tolist() if i not in moves.arcs], np.int64)
 
 
 _MIN_BULK = 256  # moves: a shorter stretch of absolute moves is walked with its neighbours
