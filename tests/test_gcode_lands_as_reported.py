@@ -46,19 +46,26 @@ def written_axes(line: str) -> list[int]:
 
 
 def check_straight_moves(text, new, rows, model, tolerance, rs274, tmp_path):
-    """Programs of straight moves only, one rs274 move per row: each row's move where it says."""
-    nominal, out = canonical(rs274, tmp_path, text)
-    moves, new_out = canonical(rs274, tmp_path, new)
+    """Programs of straight moves only, one rs274 move per row: each row's move where it says.
+    Corrected: within the tolerance of its correction; not corrected because it would land
+    farther ("lands ..."): the axes its line writes corrected, at the distance it reports;
+    otherwise the axes its line writes as programmed."""
+    nominal, _ = canonical(rs274, tmp_path, text)
+    moves, _ = canonical(rs274, tmp_path, new)
     assert len(nominal) == len(moves) == len(rows)
     lines = text.splitlines()
     for k, row in enumerate(rows):
         axes = written_axes(lines[row.line - 1])
-        if row.status == "corrected":
-            want = corrected(model, nominal[k, :3])[0]
-            assert np.linalg.norm(moves[k, :3] - want) <= tolerance, (row.line, moves[k], want)
-            np.testing.assert_allclose(moves[k, axes], want[axes], atol=HALF)
-        else:
+        if row.status != "corrected" and not row.reason.startswith("lands"):
             np.testing.assert_allclose(moves[k, axes], nominal[k, axes], atol=HALF)
+            continue
+        want = corrected(model, nominal[k, :3])[0]
+        np.testing.assert_allclose(moves[k, axes], want[axes], atol=HALF)
+        off = np.linalg.norm(moves[k, :3] - want)
+        if row.status == "corrected":
+            assert off <= tolerance, (row.line, moves[k], want)
+        else:  # rs274 prints 4 decimals
+            assert off > tolerance and abs(off - row.residual_mm) < 2e-4, (row.reason, off)
     return nominal, moves
 
 
@@ -128,13 +135,46 @@ def test_a_canned_cycle_continued_in_a_loop_keeps_its_programmed_depth(rs274, tm
     np.testing.assert_allclose(holes(moves, new_out)[0], want, atol=1e-4)
 
 
+# ---------------------------------------------------------------- canned cycles in polar words
+
+
+@pytest.mark.parametrize(
+    ("line", "turns"),
+    [("G91 @5 ^20", [(55.0, 30.0)]), ("G91 ^30 L3", [(50.0, 40.0), (50.0, 70.0), (50.0, 100.0)])],
+)
+def test_g91_polar_holes_after_a_first_hole_keep_their_programmed_depth(
+    rs274, tmp_path, line, turns
+):
+    """A G91 polar cycle continues a G90 first hole: its holes turn about the origin from where
+    the tool is, R from the run's initial level (the Z before the first hole), Z from R. They
+    are reported, so the moves that set their start, depth, R words and initial level are not
+    corrected either: rs274 drills every hole as programmed, none at a corrected depth."""
+    text = (
+        f"G21 G90 G17 G98 F100\nG0 X60 Y0 Z20\nG81 @50 ^10 Z-5 R2\n{line}\n"
+        "G90 G80 G0 X0 Y0 Z30\nM2\n"
+    )
+    nominal, out = canonical(rs274, tmp_path, text)
+    polar = np.array([(50.0, 10.0), *turns])
+    depth = [-5.0] + [20 + 2 - 5.0] * len(turns)  # G91: R from the initial level, Z from R
+    turn = np.radians(polar[:, 1])
+    want = np.column_stack([polar[:, 0] * np.cos(turn), polar[:, 0] * np.sin(turn), depth])
+    np.testing.assert_allclose(holes(nominal, out)[0], want, atol=1e-4)
+    new, rows = gcode_rewrite(text, STEEP)
+    moves, new_out = canonical(rs274, tmp_path, new)
+    np.testing.assert_allclose(holes(moves, new_out)[0], want, atol=1e-4)
+    assert [r.status for r in rows] == ["skipped"] * 3 + ["corrected"]
+    assert "G91 canned cycle with polar words" in rows[2].reason
+    assert all("sets the start of the polar move at line 4" in r.reason for r in rows[:2])
+
+
 # ---------------------------------------------------------------- axes a line does not write
 
 
 def test_a_g91_move_whose_unwritten_axis_would_land_off_is_reported(rs274, tmp_path):
-    """`G91 G1 Y300` writes no Z: it keeps the Z of the corrected line before it, whose
-    correction differs from its own by more than the tolerance. It is reported and drilled as
-    programmed, not called corrected; the next G91 line, which writes every axis, is corrected."""
+    """`G91 G1 Y300` writes no X, Z: it keeps those of the corrected line before it, whose
+    correction differs from its own by more than the tolerance. Its Y is corrected, but it is
+    reported with the distance rs274 puts it from its correction, not called corrected; the next
+    G91 line, which writes every axis, is corrected."""
     text = "G21 G90 G17 F100\nG0 X100 Y-300 Z20\nG91 G1 Y300\nX-50 Y0 Z0\nG90 G0 X50 Y0 Z30\nM2\n"
     new, rows = gcode_rewrite(text, STEEPER)
     nominal, _ = check_straight_moves(text, new, rows, STEEPER, 0.3, rs274, tmp_path)
@@ -143,23 +183,22 @@ def test_a_g91_move_whose_unwritten_axis_would_land_off_is_reported(rs274, tmp_p
     # independently: the Z it would keep is farther than the tolerance from its own
     keep = corrected(STEEPER, nominal[0, :3])[0, 2]
     assert abs(keep - corrected(STEEPER, nominal[1, :3])[0, 2]) > 0.3
-    assert "would land" in rows[1].reason and "(X, Z)" in rows[1].reason
+    assert "tolerance (0.3 mm)" in rows[1].reason and "(X, Z)" in rows[1].reason
 
 
 def test_a_plunge_that_writes_z_alone_under_an_uncorrected_move_is_not_called_corrected(
     rs274, tmp_path
 ):
-    """`G1 Z20` below a move outside the grid (left as programmed): only its Z could be
-    corrected, its X, Y would stay 1.3 mm from its correction: reported and left as written,
-    so it lands as programmed; a later move that writes every axis is corrected."""
+    """`G1 Z20` below a move outside the grid (left as programmed): only its Z can be
+    corrected, its X, Y stay 1.3 mm from its correction: reported with that distance, not
+    called corrected; a later move that writes every axis is corrected."""
     text = "G21 G90 G17 F100\nG0 X100 Y0 Z2000\nG1 Z20\nG0 X150 Y50 Z30\nM2\n"
     new, rows = gcode_rewrite(text, STEEPER)
     nominal, _ = check_straight_moves(text, new, rows, STEEPER, 0.3, rs274, tmp_path)
     assert [r.status for r in rows] == ["outside", "skipped", "corrected"]
     off = corrected(STEEPER, nominal[1, :3])[0] - nominal[1, :3]
     assert math.hypot(*off[:2]) > 1.0  # what it would have been off by in X, Y
-    assert "would land" in rows[1].reason and "(X, Y)" in rows[1].reason
-    assert new.splitlines()[2] == "G1 Z20"
+    assert "tolerance (0.3 mm)" in rows[1].reason and "(X, Y)" in rows[1].reason
 
 
 def test_the_tolerance_decides_what_is_called_corrected(rs274, tmp_path):

@@ -132,41 +132,49 @@ def _tools(moves: GcodeMoves, rows: Rows, opts: Options) -> None:
 
 def _protect_polar_starts(moves: GcodeMoves, rows: Rows) -> None:
     """A polar move that writes only its radius ``@`` or only its angle ``^`` takes the other
-    from where the tool is, and so do the holes of a G91 polar cycle: the moves that set its
-    start are not corrected, so it lands as programmed."""
+    from where the tool is, and so do the holes of a G91 polar cycle (their depth too: R from
+    the initial level, Z from R): the moves that set its start (``_start_setters``) are not
+    corrected, so it lands as programmed."""
     for i, (radius, angle) in moves.polar.items():
-        if radius is not None and angle is not None:
-            if not (moves.is_cycle[i] and moves.incremental[i]):
-                continue
+        g91_cycle = bool(moves.is_cycle[i] and moves.incremental[i])
+        if radius is not None and angle is not None and not g91_cycle:
+            continue
         why = f"sets the start of the polar move at line {moves.line[i]}, which is not corrected"
-        for j in moves.setters[i, :2].tolist():
-            if j >= 0 and not rows.reason[j]:
+        for j in _start_setters(moves, i, [0, 1, 2] if g91_cycle else [0, 1]):
+            if not rows.reason[j]:
                 rows.reason[j] = why
 
 
 def _protect_flow_start(moves: GcodeMoves, rows: Rows) -> None:
     """The moves read under O-word control flow (or a modal state not known) are left as
     written: a loop runs them again from where the last one ends, a subroutine from where it is
-    called. So that they land as programmed, the moves that set where they start (each axis;
-    for a canned cycle they continue, the block before them, whose depth and R words are in
-    effect, and the move that set the run's initial level) are not corrected either."""
+    called. So that they land as programmed, the moves that set where they start
+    (``_start_setters``) are not corrected either."""
     first = moves.flow_from
     if first >= len(moves):
         return
-    setters = set(moves.setters[first].tolist())
-    if moves.is_cycle[first] and not moves.first_cycle[first]:
-        run = first - 1
-        setters.add(run)
-        while run > 0 and not moves.first_cycle[run]:
-            run -= 1
-        setters.add(int(moves.setters[run, moves.cycle_axis[run]]))
     why = (
         f"sets the start of line {moves.line[first]}, read under control flow and left as "
         "written (it and the moves after it may run from elsewhere or again)"
     )
-    for j in sorted(setters - {-1}):
+    for j in _start_setters(moves, first, [0, 1, 2]):
         if not rows.reason[j]:
             rows.reason[j] = why
+
+
+def _start_setters(moves: GcodeMoves, i: int, axes: list[int]) -> list[int]:
+    """The moves that set where move ``i`` starts on ``axes`` (0, 1, 2: X, Y, Z) and, for a
+    canned-cycle block that continues a run, those that set its depth and R plane: the block
+    before it (whose depth and R words are in effect) and the move that set the run's initial
+    level (G98's retract, a G91 R's base)."""
+    out = set(moves.setters[i, axes].tolist())
+    if moves.is_cycle[i] and not moves.first_cycle[i]:
+        run = i - 1
+        out.add(run)
+        while run > 0 and not moves.first_cycle[run]:
+            run -= 1
+        out.add(int(moves.setters[run, moves.cycle_axis[run]]))
+    return sorted(out - {-1})
 
 
 def _polar_edits(text, edits, moves, i, where, goals, changed, places) -> None:
@@ -319,49 +327,46 @@ def _gcode_edits(
     walked = moves.incremental | moves.resets | (moves.cycle_axis != 2)  # G18/G19 cycles too
     if extra:
         walked[list(extra)] = True
-    while True:  # again without the moves that land farther than the tolerance (rare)
-        out = ByteSplicer(text)
-        walk = _Commanded(moves.is_cycle & ~read, extra)
-        for first in range(0, flow, _BLOCK):
-            for part, step in _stretches(moves, slice(first, min(first + _BLOCK, flow)), walked):
-                out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
-        if not walk.reached_at:
-            return out.finish()
+    out = ByteSplicer(text)
+    walk = _Commanded(moves.is_cycle & ~read, extra)
+    for first in range(0, flow, _BLOCK):
+        for part, step in _stretches(moves, slice(first, min(first + _BLOCK, flow)), walked):
+            out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
+    if walk.reached_at:
         at = np.frombuffer(walk.reached_at, dtype=np.int64)
         reached = np.frombuffer(walk.reached_rows, dtype=float).reshape(-1, 3)
+        off = np.abs(reached - desired[at])
         residual = np.linalg.norm(reached - own[at], axis=1)
         wrote = moves.word_start[at, :3] >= 0
         if moves.polar:  # X and Y of a polar move are written (as @ and ^)
             wrote[:, :2] |= np.isin(at, np.fromiter(moves.polar, np.int64))[:, None]
-        far = np.flatnonzero((residual > opts.tolerance_mm) & (rows.status[at] == CORRECTED))
-        if not len(far):
-            break
-        kept = _left_as_written(moves, rows, at[far], residual[far], wrote[far], opts)
-        corrected[kept] = False
-        desired, r_planes = desired.copy(), r_planes.copy()
-        desired[kept], r_planes[kept] = moves.target[kept], math.nan
-    off_written = np.where(wrote, np.abs(reached - desired[at]), 0.0)
-    rows.new[at] = reached
-    rows.residual_mm[at] = residual
-    rows.rounding_mm[at] = off_written.max(axis=1)
+        off_written = np.where(wrote, off, 0.0)
+        rounding = np.maximum(np.maximum(off_written[:, 0], off_written[:, 1]), off_written[:, 2])
+        rows.new[at] = reached
+        rows.residual_mm[at] = residual
+        rows.rounding_mm[at] = rounding
+        far = np.flatnonzero(residual > opts.tolerance_mm)
+        if len(far):
+            _too_far(rows, at[far], residual[far], wrote[far], opts.tolerance_mm)
     return out.finish()
 
 
-def _left_as_written(moves, rows, far, residual, wrote, opts) -> np.ndarray:
-    """Corrected moves ``far`` (M,) that land ``residual`` (M,) mm from their correction, more
-    than the tolerance, because of the axes their lines do not write (``wrote`` (M, 3)): not
-    corrected, with the reason. Those whose words are then left as written (all but an arc,
-    which moves with its start)."""
+def _too_far(rows: Rows, far: np.ndarray, residual: np.ndarray, wrote: np.ndarray, tol) -> None:
+    """Moves ``far`` (M,) whose axes written are corrected but that land ``residual`` (M,) mm
+    from their correction, more than the tolerance ``tol`` (mm), because of the axes their lines
+    do not write (``wrote`` (M, 3) bool): not called corrected, with the reason."""
     for i, r, written in zip(far.tolist(), residual.tolist(), wrote.tolist(), strict=True):
-        axes = ", ".join(k for k, w in zip("XYZ", written, strict=True) if not w) or "none"
+        axes = ", ".join(k for k, w in zip("XYZ", written, strict=True) if not w)
+        why = (
+            f"the axes its line does not write ({axes}) stay where the moves before it leave "
+            "them (those it writes are corrected)"
+            if axes
+            else "it moves with the moves that set its start"
+        )
         rows.status[i] = SKIPPED
         rows.reason[i] = (
-            f"would land {r:.3f} mm from its correction, more than the tolerance "
-            f"({opts.tolerance_mm:g} mm): axes not written on its line ({axes}) stay where the "
-            "moves before it leave them; "
-            + ("moved with its start" if i in moves.arcs else "left as written")
+            f"lands {r:.3f} mm from its correction, more than the tolerance ({tol:g} mm): {why}"
         )
-    return np.array([i for i in far.tolist() if i not in moves.arcs], np.int64)
 
 
 _MIN_BULK = 256  # moves: a shorter stretch of absolute moves is walked with its neighbours
