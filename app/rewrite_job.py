@@ -31,6 +31,7 @@ from accugrid.codegen.rewrite import (
 )
 from accugrid.compensation import GridModel
 from accugrid.compensation.policy import Policy
+from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.infra.csvtable import declared_or
 
 __all__ = ["RewriteJob", "RewriteRequest", "rewrite_job"]
@@ -61,7 +62,7 @@ class RewriteRequest:
     orientation_tol: float = 0.0
     orientation_limit: float = 0.0
     allow_orientation: bool = False
-    tolerance_mm: float = 0.0
+    tolerance_mm: float = DEFAULT_TOLERANCE_MM  # a hole's tolerance (mm), as ``Options``
 
 
 @dataclass

@@ -16,12 +16,13 @@ import re
 
 import numpy as np
 import pytest
-from rewrite_helpers import rewrite_gcode
+from rewrite_helpers import rewrite_gcode, write_cell
 from test_arcs import STEEP, linear_grid
 from test_gcode_rs274 import canonical
 from test_real_programs import HALF, T_PROGRAM, corrected, gcode_rewrite, holes
 
-from accugrid.codegen.rewrite import Options
+from accugrid.app.rewrite_job import RewriteRequest, rewrite_job
+from accugrid.codegen.rewrite import STATUSES, Options
 
 STEEPER = linear_grid(2e-3)  # corrections that differ by 1.2 mm over 300 mm
 LOOPS = 40
@@ -210,3 +211,15 @@ def test_the_tolerance_decides_what_is_called_corrected(rs274, tmp_path):
     assert [r.status for r in rows] == ["outside", "corrected"]
     assert 1.0 < rows[1].residual_mm <= 2.0
     check_straight_moves(text, new, rows, STEEPER, 2.0, rs274, tmp_path)
+
+
+def test_a_rewrite_request_holds_holes_to_the_default_tolerance(tmp_path):
+    """The API's request, like the command, holds holes to the default tolerance (0.3 mm): a
+    plunge whose X, Y stay a few hundredths from its correction is corrected."""
+    program = tmp_path / "p.ngc"
+    program.write_text("G21 G90 G17\nG0 X1000 Y0 Z500\nG1 Z400\nM2\n")
+    cell = write_cell(tmp_path)
+    request = RewriteRequest(outputs={program: tmp_path / "out.ngc"}, cell=str(cell))
+    rows = rewrite_job(request).result.rows
+    assert [STATUSES[s] for s in rows.status] == ["corrected", "corrected"]
+    assert 0.0 < rows.residual_mm[1] < 0.3
