@@ -3,7 +3,10 @@
 G-code positions are in the cell's program frame (G54); A, B, C words are the tool orientation
 (as ``accugrid gcode`` writes them) and stay as written. A canned cycle's hole (X, Y, Z) is
 corrected, and its R plane by the Z correction at (X, Y, R). Axes a line does not write keep their
-commanded value; the report gives the remaining difference (``residual_mm``). Under G91 the
+commanded value; the report gives the remaining difference (``residual_mm``), and a move it
+leaves farther than the tolerance from its correction is reported, not called corrected. The
+moves read under O-word control flow are left as written, and the moves that set where they
+start are not corrected (``_protect_flow_start``). Under G91 the
 increments are recomputed from the commanded (rewritten) previous position, so every later move
 lands where it should, corrected or as programmed: a G91 cycle's X, Y from the tool, its R from
 the initial level and its Z from R. A G91 cycle repeated L times has one increment for all its
@@ -364,8 +367,10 @@ def _too_far(rows: Rows, far: np.ndarray, residual: np.ndarray, wrote: np.ndarra
             else "it moves with the moves that set its start"
         )
         rows.status[i] = SKIPPED
+        flag = rows.reason[i] and f"; {rows.reason[i]}"  # what the policy flagged
         rows.reason[i] = (
-            f"lands {r:.3f} mm from its correction, more than the tolerance ({tol:g} mm): {why}"
+            f"lands {r:.3f} mm from its correction, more than the tolerance ({tol:g} mm): "
+            f"{why}{flag}"
         )
 
 
