@@ -50,7 +50,8 @@ def check_straight_moves(text, new, rows, model, tolerance, rs274, tmp_path):
     """Programs of straight moves only, one rs274 move per row: each row's move where it says.
     Corrected: within the tolerance of its correction; not corrected because it would land
     farther ("lands ..."): the axes its line writes corrected, at the distance it reports;
-    otherwise the axes its line writes as programmed."""
+    otherwise the axes its line writes as programmed, and the move within the tolerance of
+    where it is programmed unless its reason gives the distance."""
     nominal, _ = canonical(rs274, tmp_path, text)
     moves, _ = canonical(rs274, tmp_path, new)
     assert len(nominal) == len(moves) == len(rows)
@@ -59,6 +60,9 @@ def check_straight_moves(text, new, rows, model, tolerance, rs274, tmp_path):
         axes = written_axes(lines[row.line - 1])
         if row.status != "corrected" and not row.reason.startswith("lands"):
             np.testing.assert_allclose(moves[k, axes], nominal[k, axes], atol=HALF)
+            off = np.linalg.norm(moves[k, :3] - nominal[k, :3])
+            reported = re.search(r"lands (\d+\.\d+) mm from where it is programmed", row.reason)
+            assert off <= tolerance if reported is None else abs(off - float(reported[1])) < 6e-4
             continue
         want = corrected(model, nominal[k, :3])[0]
         np.testing.assert_allclose(moves[k, axes], want[axes], atol=HALF)
@@ -200,6 +204,18 @@ def test_a_plunge_that_writes_z_alone_under_an_uncorrected_move_is_not_called_co
     off = corrected(STEEPER, nominal[1, :3])[0] - nominal[1, :3]
     assert math.hypot(*off[:2]) > 1.0  # what it would have been off by in X, Y
     assert "tolerance (0.3 mm)" in rows[1].reason and "(X, Y)" in rows[1].reason
+
+
+def test_a_move_left_as_programmed_under_a_corrected_one_says_how_far_it_lands(rs274, tmp_path):
+    """`G1 Z2000` (outside the grid, not corrected) keeps the X, Y of the corrected move before
+    it, 1.3 mm from where it is programmed: its reason gives that distance, in G90 and in G91."""
+    for mode in ("", "G91 "):
+        text = f"G21 G90 G17 F100\nG0 X100 Y0 Z20\n{mode}G1 Z{2000 - 20 * bool(mode)}\nM2\n"
+        new, rows = gcode_rewrite(text, STEEPER)
+        assert [r.status for r in rows] == ["corrected", "outside"]
+        assert "mm from where it is programmed" in rows[1].reason
+        assert "(X, Y) stay where corrected moves" in rows[1].reason
+        check_straight_moves(text, new, rows, STEEPER, 0.3, rs274, tmp_path)
 
 
 def test_the_tolerance_decides_what_is_called_corrected(rs274, tmp_path):

@@ -340,9 +340,7 @@ def _gcode_edits(
         reached = np.frombuffer(walk.reached_rows, dtype=float).reshape(-1, 3)
         off = np.abs(reached - desired[at])
         residual = np.linalg.norm(reached - own[at], axis=1)
-        wrote = moves.word_start[at, :3] >= 0
-        if moves.polar:  # X and Y of a polar move are written (as @ and ^)
-            wrote[:, :2] |= np.isin(at, np.fromiter(moves.polar, np.int64))[:, None]
+        wrote = _written(moves, at)
         off_written = np.where(wrote, off, 0.0)
         rounding = np.maximum(np.maximum(off_written[:, 0], off_written[:, 1]), off_written[:, 2])
         rows.new[at] = reached
@@ -351,7 +349,42 @@ def _gcode_edits(
         far = np.flatnonzero(residual > opts.tolerance_mm)
         if len(far):
             _too_far(rows, at[far], residual[far], wrote[far], opts.tolerance_mm)
+        _dragged(moves, rows, flow, opts.tolerance_mm)
     return out.finish()
+
+
+def _written(moves: GcodeMoves, at: np.ndarray) -> np.ndarray:
+    """(M, 3) bool: the axes the lines of moves ``at`` (M,) write (a polar move writes X, Y)."""
+    wrote = moves.word_start[at, :3] >= 0
+    if moves.polar:
+        wrote[:, :2] |= np.isin(at, np.fromiter(moves.polar, np.int64))[:, None]
+    return wrote
+
+
+def _dragged(moves: GcodeMoves, rows: Rows, flow: int, tol: float) -> None:
+    """A move not corrected lands as programmed on the axes its line writes; one it does not
+    write stays where the move that last wrote it left it. Where that move's words were
+    rewritten (``rows.new`` known) and this leaves a commanded move (before control flow, row
+    < ``flow``) farther than the tolerance ``tol`` (mm) from where it is programmed, its reason
+    says so. A canned cycle's own axis after it (its retract level) is not counted."""
+    idx = np.flatnonzero((rows.status[:flow] != CORRECTED) & rows.commanded[:flow])
+    if not len(idx):
+        return
+    axes = np.arange(3)
+    setter = np.where(_written(moves, idx), -1, moves.setters[idx])
+    known = (setter >= 0) & np.isfinite(rows.new[np.maximum(setter, 0), axes])
+    j = np.where(known, setter, 0)
+    known &= ~(moves.is_cycle[j] & (moves.cycle_axis[j] == axes))
+    off = np.where(known, rows.new[j, axes] - moves.target[j, axes], 0.0)
+    distance = np.linalg.norm(off, axis=1)
+    for k in np.flatnonzero(distance > tol).tolist():
+        i = int(idx[k])
+        letters = ", ".join(a for a, d in zip("XYZ", known[k].tolist(), strict=True) if d)
+        dragged = (
+            f"lands {distance[k]:.3f} mm from where it is programmed: the axes its line does not "
+            f"write ({letters}) stay where corrected moves before it leave them"
+        )
+        rows.reason[i] = "; ".join(filter(None, (rows.reason[i], dragged)))
 
 
 def _too_far(rows: Rows, far: np.ndarray, residual: np.ndarray, wrote: np.ndarray, tol) -> None:
