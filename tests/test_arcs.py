@@ -107,7 +107,7 @@ MOVE_RE = re.compile(r"(STRAIGHT_TRAVERSE|STRAIGHT_FEED|ARC_FEED)\(([^)]*)\)")
 CANON_PLANES = {"XY": "G17", "XZ": "G18", "YZ": "G19"}
 
 
-def _grid(gradient: float) -> GridModel:
+def linear_grid(gradient: float) -> GridModel:
     """A grid over +-600 mm (100 mm step) of e(P) = (0.25, -0.125, 0.375) mm plus a linear
     field of ``gradient`` mm/mm."""
     axes = [np.arange(-600.0, 601.0, 100.0)] * 3
@@ -117,7 +117,7 @@ def _grid(gradient: float) -> GridModel:
     return GridModel.from_measurements((pts, pts - e))
 
 
-GENTLE, STEEP = _grid(1e-5), _grid(2e-4)
+GENTLE, STEEP = linear_grid(1e-5), linear_grid(2e-4)
 
 
 def corrected(model: GridModel, program_xyz) -> np.ndarray:
@@ -280,8 +280,9 @@ def test_chained_arcs_and_incremental_moves(rs274, tmp_path):
 def test_an_arc_whose_correction_varies_too_much_is_reported(rs274, tmp_path):
     """Where the correction varies across an arc by more than the written resolution, it is not
     corrected, nor are the moves that set its start: the report says by how much, and rs274
-    cuts the same arc as before. The move after it is corrected."""
-    text = "G21 G90 G17 F100\nG0 X300 Y110 Z5\nG1 Z-20\nG2 X340 Y110 I20 J0\nG0 Z10\nM2\n"
+    cuts the same arc as before. The move after it is corrected (it writes X, Y and Z: one that
+    wrote Z alone would stay at the arc's uncorrected end, farther than the tolerance)."""
+    text = "G21 G90 G17 F100\nG0 X300 Y110 Z5\nG1 Z-20\nG2 X340 Y110 I20 J0\nG0 X340 Y110 Z10\nM2\n"
     new, rows = gcode_rewrite(text, STEEP)
     assert [r.status for r in rows] == ["skipped", "skipped", "skipped", "corrected"]
     assert "correction varies by" in rows[2].reason and " mm across the arc" in rows[2].reason

@@ -233,7 +233,7 @@ def test_corrected_polar_moves_land_on_their_corrections(rs274, tmp_path):
 def test_a_polar_move_with_one_word_keeps_its_start(rs274, tmp_path):
     """`^90` alone keeps the tool's radius: it is reported, and the move that sets its start is
     not corrected, so rs274 ends it where the input does."""
-    text = "G21 G90 G17 F100\nG0 X100 Y0 Z20\n^90\nG0 X50 Y50\nM2\n"
+    text = "G21 G90 G17 F100\nG0 X100 Y0 Z20\n^90\nG0 X50 Y50 Z20\nM2\n"
     nominal, _ = canonical(rs274, tmp_path, text)
     new, rows = gcode_rewrite(text, SMOOTH)
     assert statuses(rows) == [(2, "skipped"), (3, "skipped"), (4, "corrected")]

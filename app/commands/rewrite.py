@@ -132,8 +132,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=number("mm", 0, COORDINATE_MAX, above=True),
         default=DEFAULT_TOLERANCE_MM,
         metavar="MM",
-        help="hole position tolerance, mm: warn when rounding to the written decimals leaves "
-        f"more than a tenth of it (default: {DEFAULT_TOLERANCE_MM:g})",
+        help="hole position tolerance, mm: a move that the axes its line does not write leave "
+        "farther than this from its correction is reported, not corrected; warn when rounding to "
+        f"the written decimals leaves more than a tenth of it (default: {DEFAULT_TOLERANCE_MM:g})",
     )
 
 

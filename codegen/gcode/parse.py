@@ -259,6 +259,10 @@ class GcodeMoves:
         # a str why it is not known
         self.tool_changes: list[tuple[int, int | str]] = []
         self.arcs: dict[int, Arc] = {}  # row -> the centre, plane and turns of a G2/G3 arc
+        # the first row read under control flow or a modal state not known (every row from it
+        # on is: O-word loops, branches and subroutines run their moves elsewhere or again);
+        # ``finish`` sets the number of rows where there is none
+        self.flow_from = -1
 
     def __len__(self) -> int:
         return len(self.motion)
@@ -377,6 +381,8 @@ class GcodeMoves:
         self.g99 = (flags & _F_G99) != 0
         self.cycle_axis = np.where(flags & _F_G18, 1, np.where(flags & _F_G19, 0, 2))
         self.rotary_index = self._rotary[:n]
+        if self.flow_from < 0:
+            self.flow_from = n
         return self
 
     def tool_spans(self) -> list[tuple[int, int, int | str]]:
@@ -872,8 +878,7 @@ class _Reader:
         if not stripped or stripped.startswith("%") or _NUMBERED_PERCENT_RE.fullmatch(stripped):
             return
         if self.owords and _OWORD_RE.match(raw):
-            state = self.state
-            state.flow = state.flow or f"O-word control flow from line {lineno}"
+            self._flow(f"O-word control flow from line {lineno}")
             return
         line = _blank_comments(raw, self.path, lineno)
         if self.slashes and line.lstrip().startswith("/"):
@@ -882,6 +887,13 @@ class _Reader:
         self.block(block, lineno, line_offset)
         if block.assigns:
             self._assign(block.assigns, lineno)
+
+    def _flow(self, why: str) -> None:
+        """Control flow or a modal state not known from here on (``why``): the moves read after
+        this are reported with it (``GcodeMoves.flow_from``)."""
+        if not self.state.flow:
+            self.state.flow = why
+            self.moves.flow_from = len(self.moves)
 
     def _assign(self, assigns: list[tuple[int | str | None, float | str]], lineno: int) -> None:
         """A line's parameter assignments (key, value or the reason it is not known), after the
@@ -1002,7 +1014,7 @@ class _Reader:
         for g in gcodes:
             state.apply(g, lineno, words.get("L"), axes)
         if "G" in block.exprs:
-            state.flow = state.flow or (
+            self._flow(
                 f"G-code from an expression {block.exprs['G']} (line {lineno}): the modal state "
                 "is not known"
             )

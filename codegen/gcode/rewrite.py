@@ -3,7 +3,10 @@
 G-code positions are in the cell's program frame (G54); A, B, C words are the tool orientation
 (as ``accugrid gcode`` writes them) and stay as written. A canned cycle's hole (X, Y, Z) is
 corrected, and its R plane by the Z correction at (X, Y, R). Axes a line does not write keep their
-commanded value; the report gives the remaining difference (``residual_mm``). Under G91 the
+commanded value; the report gives the remaining difference (``residual_mm``), and a move it
+leaves farther than the tolerance from its correction is reported, not called corrected. The
+moves read under O-word control flow are left as written, and the moves that set where they
+start are not corrected (``_protect_flow_start``). Under G91 the
 increments are recomputed from the commanded (rewritten) previous position, so every later move
 lands where it should, corrected or as programmed: a G91 cycle's X, Y from the tool, its R from
 the initial level and its Z from R. A G91 cycle repeated L times has one increment for all its
@@ -75,6 +78,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: GcodeSection
     if "G80" in moves.motion:
         rows.commanded &= np.array([m != "G80" for m in moves.motion], bool)
     _protect_polar_starts(moves, rows)
+    _protect_flow_start(moves, rows)
     _tools(moves, rows, opts)
     if any(rows.reason):  # the moves with no reason
         at = np.flatnonzero(~np.fromiter(map(bool, rows.reason), bool, len(moves)))
@@ -131,16 +135,49 @@ def _tools(moves: GcodeMoves, rows: Rows, opts: Options) -> None:
 
 def _protect_polar_starts(moves: GcodeMoves, rows: Rows) -> None:
     """A polar move that writes only its radius ``@`` or only its angle ``^`` takes the other
-    from where the tool is, and so do the holes of a G91 polar cycle: the moves that set its
-    start are not corrected, so it lands as programmed."""
+    from where the tool is, and so do the holes of a G91 polar cycle (their depth too: R from
+    the initial level, Z from R): the moves that set its start (``_start_setters``) are not
+    corrected, so it lands as programmed."""
     for i, (radius, angle) in moves.polar.items():
-        if radius is not None and angle is not None:
-            if not (moves.is_cycle[i] and moves.incremental[i]):
-                continue
+        g91_cycle = bool(moves.is_cycle[i] and moves.incremental[i])
+        if radius is not None and angle is not None and not g91_cycle:
+            continue
         why = f"sets the start of the polar move at line {moves.line[i]}, which is not corrected"
-        for j in moves.setters[i, :2].tolist():
-            if j >= 0 and not rows.reason[j]:
+        for j in _start_setters(moves, i, [0, 1, 2] if g91_cycle else [0, 1]):
+            if not rows.reason[j]:
                 rows.reason[j] = why
+
+
+def _protect_flow_start(moves: GcodeMoves, rows: Rows) -> None:
+    """The moves read under O-word control flow (or a modal state not known) are left as
+    written: a loop runs them again from where the last one ends, a subroutine from where it is
+    called. So that they land as programmed, the moves that set where they start
+    (``_start_setters``) are not corrected either."""
+    first = moves.flow_from
+    if first >= len(moves):
+        return
+    why = (
+        f"sets the start of line {moves.line[first]}, read under control flow and left as "
+        "written (it and the moves after it may run from elsewhere or again)"
+    )
+    for j in _start_setters(moves, first, [0, 1, 2]):
+        if not rows.reason[j]:
+            rows.reason[j] = why
+
+
+def _start_setters(moves: GcodeMoves, i: int, axes: list[int]) -> list[int]:
+    """The moves that set where move ``i`` starts on ``axes`` (0, 1, 2: X, Y, Z) and, for a
+    canned-cycle block that continues a run, those that set its depth and R plane: the block
+    before it (whose depth and R words are in effect) and the move that set the run's initial
+    level (G98's retract, a G91 R's base)."""
+    out = set(moves.setters[i, axes].tolist())
+    if moves.is_cycle[i] and not moves.first_cycle[i]:
+        run = i - 1
+        out.add(run)
+        while run > 0 and not moves.first_cycle[run]:
+            run -= 1
+        out.add(int(moves.setters[run, moves.cycle_axis[run]]))
+    return sorted(out - {-1})
 
 
 def _polar_edits(text, edits, moves, i, where, goals, changed, places) -> None:
@@ -284,31 +321,90 @@ def _gcode_edits(
     ``extra`` edits) are done in bulk (``_bulk_block``), the rest move by move (``_walk_block``),
     where increments (which depend on what was written before) are formatted on the way."""
     desired, own = goals
-    out = ByteSplicer(text)
     places = _places(moves, opts)
     corrected = rows.status == CORRECTED
     read = np.fromiter(map(bool, moves.reason), bool, len(moves)) if any(moves.reason) else False
-    walk = _Commanded(moves.is_cycle & ~read, extra)
+    # the moves read under control flow are left as written (``_protect_flow_start``)
+    flow = moves.flow_from
+    extra = {i: e for i, e in extra.items() if i < flow}
     walked = moves.incremental | moves.resets | (moves.cycle_axis != 2)  # G18/G19 cycles too
     if extra:
         walked[list(extra)] = True
-    for first in range(0, len(moves), _BLOCK):
-        for part, step in _stretches(moves, slice(first, first + _BLOCK), walked):
+    out = ByteSplicer(text)
+    walk = _Commanded(moves.is_cycle & ~read, extra)
+    for first in range(0, flow, _BLOCK):
+        for part, step in _stretches(moves, slice(first, min(first + _BLOCK, flow)), walked):
             out.add(*step(text, moves, part, corrected, desired, r_planes, places, walk))
     if walk.reached_at:
         at = np.frombuffer(walk.reached_at, dtype=np.int64)
         reached = np.frombuffer(walk.reached_rows, dtype=float).reshape(-1, 3)
         off = np.abs(reached - desired[at])
         residual = np.linalg.norm(reached - own[at], axis=1)
-        wrote = moves.word_start[at, :3] >= 0
-        if moves.polar:  # X and Y of a polar move are written (as @ and ^)
-            wrote[:, :2] |= np.isin(at, np.fromiter(moves.polar, np.int64))[:, None]
+        wrote = _written(moves, at)
         off_written = np.where(wrote, off, 0.0)
         rounding = np.maximum(np.maximum(off_written[:, 0], off_written[:, 1]), off_written[:, 2])
         rows.new[at] = reached
         rows.residual_mm[at] = residual
         rows.rounding_mm[at] = rounding
+        far = np.flatnonzero(residual > opts.tolerance_mm)
+        if len(far):
+            _too_far(rows, at[far], residual[far], wrote[far], opts.tolerance_mm)
+        _dragged(moves, rows, flow, opts.tolerance_mm)
     return out.finish()
+
+
+def _written(moves: GcodeMoves, at: np.ndarray) -> np.ndarray:
+    """(M, 3) bool: the axes the lines of moves ``at`` (M,) write (a polar move writes X, Y)."""
+    wrote = moves.word_start[at, :3] >= 0
+    if moves.polar:
+        wrote[:, :2] |= np.isin(at, np.fromiter(moves.polar, np.int64))[:, None]
+    return wrote
+
+
+def _dragged(moves: GcodeMoves, rows: Rows, flow: int, tol: float) -> None:
+    """A move not corrected lands as programmed on the axes its line writes; one it does not
+    write stays where the move that last wrote it left it. Where that move's words were
+    rewritten (``rows.new`` known) and this leaves a commanded move (before control flow, row
+    < ``flow``) farther than the tolerance ``tol`` (mm) from where it is programmed, its reason
+    says so. A canned cycle's own axis after it (its retract level) is not counted."""
+    idx = np.flatnonzero((rows.status[:flow] != CORRECTED) & rows.commanded[:flow])
+    if not len(idx):
+        return
+    axes = np.arange(3)
+    setter = np.where(_written(moves, idx), -1, moves.setters[idx])
+    known = (setter >= 0) & np.isfinite(rows.new[np.maximum(setter, 0), axes])
+    j = np.where(known, setter, 0)
+    known &= ~(moves.is_cycle[j] & (moves.cycle_axis[j] == axes))
+    off = np.where(known, rows.new[j, axes] - moves.target[j, axes], 0.0)
+    distance = np.linalg.norm(off, axis=1)
+    for k in np.flatnonzero(distance > tol).tolist():
+        i = int(idx[k])
+        letters = ", ".join(a for a, d in zip("XYZ", known[k].tolist(), strict=True) if d)
+        dragged = (
+            f"lands {distance[k]:.3f} mm from where it is programmed: the axes its line does not "
+            f"write ({letters}) stay where corrected moves before it leave them"
+        )
+        rows.reason[i] = "; ".join(filter(None, (rows.reason[i], dragged)))
+
+
+def _too_far(rows: Rows, far: np.ndarray, residual: np.ndarray, wrote: np.ndarray, tol) -> None:
+    """Moves ``far`` (M,) whose axes written are corrected but that land ``residual`` (M,) mm
+    from their correction, more than the tolerance ``tol`` (mm), because of the axes their lines
+    do not write (``wrote`` (M, 3) bool): not called corrected, with the reason."""
+    for i, r, written in zip(far.tolist(), residual.tolist(), wrote.tolist(), strict=True):
+        axes = ", ".join(k for k, w in zip("XYZ", written, strict=True) if not w)
+        why = (
+            f"the axes its line does not write ({axes}) stay where the moves before it leave "
+            "them (those it writes are corrected)"
+            if axes
+            else "it moves with the moves that set its start"
+        )
+        rows.status[i] = SKIPPED
+        flag = rows.reason[i] and f"; {rows.reason[i]}"  # what the policy flagged
+        rows.reason[i] = (
+            f"lands {r:.3f} mm from its correction, more than the tolerance ({tol:g} mm): "
+            f"{why}{flag}"
+        )
 
 
 _MIN_BULK = 256  # moves: a shorter stretch of absolute moves is walked with its neighbours
