@@ -227,13 +227,13 @@ def _yaml_with(tmp_path: Path, old: str, new: str) -> Path:
 @pytest.mark.parametrize(
     ("old", "new", "message"),
     [
-        ("d_mm: 675.0", "d_mm: abc", r"10:36: 'dh\[0\]\.d_mm' must be a finite number, got 'abc'"),
-        ("a_mm: 1150.0, ", "", r"11:5: missing key 'dh\[1\]\.a_mm'"),
+        ("d_mm: 675.0", "d_mm: abc", r"11:36: 'dh\[0\]\.d_mm' must be a finite number, got 'abc'"),
+        ("a_mm: 1150.0, ", "", r"12:5: missing key 'dh\[1\]\.a_mm'"),
         ("sign: -1}", "sign: 2}", r"'dh\[0\]\.sign' must be 1 or -1"),
         (
             "  - [-140.0, -5.0]\n",
             "  - [-5.0, -140.0]\n",
-            r"19:5: 'limits_deg\[1\]': min must be below max",
+            r"20:5: 'limits_deg\[1\]': min must be below max",
         ),
         ("  - [-125.0, 125.0]\n", "", r"'limits_deg' must have 6 entries, has 5"),
         ("name: kr210\n", "", "missing key 'name'"),
@@ -251,7 +251,7 @@ def test_robot_yaml_error_carries_the_line(tmp_path):
     path = _yaml_with(tmp_path, "d_mm: 1200.0", "d_mm: .nan")
     with pytest.raises(InputError) as info:
         load_robot(path)
-    assert info.value.line == 13  # the dh[3] row
+    assert info.value.line == 14  # the dh[3] row
 
 
 def test_neutral_configuration_names_the_branches_and_round_trips_kuka():

@@ -288,7 +288,8 @@ def test_krl_hole_and_position_lines_are_the_lines_written_out(bare_templates, p
     files = krl_emit.render_krl(dataclasses.replace(program, cell=single), ["h"])
     name = single.dialects["krl"].name
     assert files[f"{name}.src"].split("; spindle on\r\n")[1].rsplit("WAIT SEC 0\r\n", 1)[0] == src
-    assert files[f"{name}.dat"].split("; h\r\n")[1] == dat + "ENDDAT\r\n"
+    uncorrected = "; h\r\n; grid none, model none: positions are not corrected\r\n"
+    assert files[f"{name}.dat"].split(uncorrected)[1] == dat + "ENDDAT\r\n"
 
 
 @pytest.fixture(scope="module")
