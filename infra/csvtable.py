@@ -333,15 +333,16 @@ class Table:
         return np.array(columns, dtype=float).reshape(len(names), len(self)).T
 
     def check_bounds(
-        self, values: np.ndarray, names: Sequence[str], limit: float, unit: str
+        self, values: np.ndarray, names: Sequence[str], limit: float, unit: str, hint: str = ""
     ) -> None:
         """InputError at the first cell of ``values`` (N, len(names)), read from the columns
-        ``names``, beyond +-``limit`` (in ``unit``)."""
+        ``names``, beyond +-``limit`` (in ``unit``); ``hint`` ends the message."""
         rows, cols = np.nonzero(np.abs(values) > limit)
         if rows.size:
             r, name = int(rows[0]), names[int(cols[0])]
             raise InputError(
-                f"{name} {values[r, cols[0]]:g} {unit} is beyond the limit of {limit:g} {unit}",
+                f"{name} {values[r, cols[0]]:g} {unit} is beyond the limit of {limit:g} {unit}"
+                + hint,
                 *self.where(r, name),
             )
 
@@ -739,8 +740,8 @@ def _read_units(table: Table, fmt: TableFormat) -> None:
         declared, (written, named) = fmt.declared_unit(key), table.named.get(key, (name, None))
         if named and unit_kind(named) != kind:
             raise InputError(
-                f"column '{written}' ({key}, an {kind}) names the unit {named}, which is not "
-                f"one of {'mm, m, in' if kind == 'length' else 'deg, rad'}",
+                f"column '{written}' names the unit {named}, but {key} holds {kind}s "
+                f"({'mm, m, in' if kind == 'length' else 'deg, rad'})",
                 table.path,
                 table.header_line,
                 i + 1,

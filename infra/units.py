@@ -125,12 +125,14 @@ def check_scale(
     points_mm: np.ndarray,
     reach_mm: float,
     what: str,
-    where: Sequence[tuple[str | None, int | None]],
+    path: str | None = None,
+    lines: Sequence[int] | None = None,
 ) -> None:
     """InputError when every position of ``points_mm`` (N, 3) mm (robot frame) lies nearer the
-    robot's base than a tenth of its reach ``reach_mm``: no job is inside the robot's own base,
-    a file of lengths in m or inch read as mm is. The message names the farthest position's
-    ``where`` (path, line) and the unit that puts it in reach. ``what``: 'target', 'position'."""
+    robot's base than a tenth of its reach ``reach_mm``: no job lies inside the robot's own
+    base, a file of lengths in m or inch read as mm does. The message names the farthest
+    position (at ``path``, ``lines[row]``) and the unit that puts it in reach. ``what``: how
+    the message names a position ('target', 'commanded position')."""
     if not len(points_mm):
         return
     distance = np.linalg.norm(points_mm, axis=1)
@@ -138,19 +140,20 @@ def check_scale(
     if distance[far] >= _REACH_SHARE * reach_mm:
         return
     likely = [
-        (word, f"--units {word}")
+        word
         for word, scale in (("m", 1000.0), ("in", 25.4))
         if _REACH_SHARE * reach_mm <= distance[far] * scale <= 1.2 * reach_mm
     ]
     hint = (
-        f": are the file's lengths in {likely[0][0]}? (read them with {likely[0][1]})"
+        f"are the file's lengths in {likely[0]}? (read them with --units {likely[0]})"
         if likely
-        else ": check the file's length unit (--units)"
+        else "check the file's length unit (--units)"
     )
     raise InputError(
-        f"every {what} is within {distance[far]:.1f} mm of the robot base, the farthest "
-        f"{mm_text(points_mm[far], 1)} mm, while the robot reaches {reach_mm:.0f} mm{hint}",
-        *where[far],
+        f"every {what} lies within {distance[far]:.1f} mm of the robot base (the farthest "
+        f"{mm_text(points_mm[far], 1)} mm) while the robot reaches {reach_mm:.0f} mm: {hint}",
+        path,
+        None if lines is None else int(lines[far]),
     )
 
 
