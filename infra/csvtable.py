@@ -687,14 +687,13 @@ def _decimal_points(table: Table) -> None:
 
 
 def _name_columns(table: Table, fmt: TableFormat) -> bool:
-    """Rename the file's columns to accugrid's: by ``fmt.columns`` (a mapped HEADER matches the
-    header as written or without the unit it names) when the file has any of the mapped names,
-    and a header that names a unit (``x [m]``) as the column it names; keep each column's
-    header unit in ``table.named``. True when the file is the export ``fmt`` describes (it
-    has a mapped name, or there is no mapping); InputError at the header for a mapped name it
-    lacks while having others."""
+    """Rename the file's columns to accugrid's by ``fmt.columns`` (a mapped HEADER matches the
+    header as written or without the unit it names) when the file has any of the mapped names;
+    a header that names a unit (``x [m]``, ``step_mm``) also answers to the column it names
+    (``x``); keep the header units in ``table.named`` (column -> (index, header, unit)). True
+    when the file is the export ``fmt`` describes (it has a mapped name, or there is no
+    mapping); InputError at the header for a mapped name it lacks while having others."""
     parsed = [header_unit(name) for name in table.header]
-    table.named = {}
     wanted = {source.lower(): name for name, source in (fmt.columns or {}).items()}
     mapped = [
         wanted.get(name.strip().lower()) or wanted.get(bare.strip().lower())
@@ -712,32 +711,34 @@ def _name_columns(table: Table, fmt: TableFormat) -> bool:
                 table.path,
                 table.header_line,
             )
-    header = []
-    for name, (bare, unit), target in zip(table.header, parsed, mapped, strict=True):
-        if target is None and unit and column_kind(bare.strip().lower()):
-            target = bare.strip()
-        if target is not None and unit:
-            table.named[target.lower()] = (name, unit)
-        header.append(name if target is None else target)
+    original = table.header
+    header = [name if to is None else to for name, to in zip(original, mapped, strict=True)]
     if header != table.header:
         _check_header(header, table.path, table.header_line)
         table.header = header
         table._index = {name.strip().lower(): i for i, name in enumerate(header)}
+    for i, (bare, unit) in enumerate(parsed):
+        key = (mapped[i] or bare).strip().lower()
+        if unit and column_kind(key) and (mapped[i] or key not in table._index):
+            table.named[key] = (i, original[i], unit)
+            table._index.setdefault(key, i)
     return export
 
 
 def _read_units(table: Table, fmt: TableFormat) -> None:
     """Convert the length and angle columns to mm and deg in place, each in its unit: the one
     ``fmt`` declares, else the one its header names (``table.named``), else mm or deg; record
-    the units that are not (``table.units``). InputError at a header whose unit contradicts the
-    declared one or is not of the column's kind."""
+    the units that are not (``table.units``) and name a converted column by its bare name (its
+    header's unit no longer holds). InputError at a header whose unit contradicts the declared
+    one or is not of the column's kind."""
+    columns = {name.strip().lower(): (i, name, None) for i, name in enumerate(table.header)}
+    columns.update(table.named)
     lengths, angles = {}, {}
-    for i, name in enumerate(table.header):
-        key = name.strip().lower()
+    for key, (i, written, named) in columns.items():
         kind = column_kind(key)
-        if kind is None:
+        if kind is None or table._index.get(key) != i:
             continue
-        declared, (written, named) = fmt.declared_unit(key), table.named.get(key, (name, None))
+        declared = fmt.declared_unit(key)
         if named and unit_kind(named) != kind:
             raise InputError(
                 f"column '{written}' names the unit {named}, but {key} holds {kind}s "
@@ -761,6 +762,8 @@ def _read_units(table: Table, fmt: TableFormat) -> None:
             angles[i] = unit
         if unit:
             table.units[key] = unit
+        if unit in ("m", "in", "rad") and table.header[i].strip().lower() != key:
+            table.header[i] = key  # now in mm or deg: not the unit its header named
     if lengths:
         _scale_lengths(table, lengths)
     if angles:

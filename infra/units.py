@@ -140,12 +140,12 @@ def check_scale(
     if distance[far] >= _REACH_SHARE * reach_mm:
         return
     likely = [
-        word
-        for word, scale in (("m", 1000.0), ("in", 25.4))
+        (word, name)
+        for word, name, scale in (("m", "metres", 1000.0), ("in", "inches", 25.4))
         if _REACH_SHARE * reach_mm <= distance[far] * scale <= 1.2 * reach_mm
     ]
     hint = (
-        f"are the file's lengths in {likely[0]}? (read them with --units {likely[0]})"
+        f"are the file's lengths in {likely[0][1]}? (read them with --units {likely[0][0]})"
         if likely
         else "check the file's length unit (--units)"
     )

@@ -250,7 +250,7 @@ def test_an_inch_file_is_read_in_inch_or_refused_naming_the_unit(cell, capsys):
     assert run("validate", plain, "--model", cell / "cal.yaml") == 2
     err = capsys.readouterr().err
     assert err.startswith(f"accugrid validate: error: {plain}:") and len(err.splitlines()) == 1
-    assert "are the file's lengths in in? (read them with --units in)" in err
+    assert "are the file's lengths in inches? (read them with --units in)" in err
     assert run("validate", cell / "after.csv", "--model", cell / "cal.yaml") == 0
     mm_lines = capsys.readouterr().out.splitlines()
     named = in_inch(cell, "inch_named.csv", header_units=True)
