@@ -51,8 +51,8 @@ if TYPE_CHECKING:
 __all__ = [
     "DECIMALS",
     "DELIMITERS",
-    "Table",
     "FORMAT_KEYS",
+    "Table",
     "TableFormat",
     "decimals_of",
     "declared_or",
@@ -142,7 +142,7 @@ def table_format_of(doc: YamlDoc, *keys: Any) -> TableFormat:
     doc.check_keys(dict.fromkeys(FORMAT_KEYS), *keys)
 
     def fail(message: str, *inner: Any) -> InputError:
-        return doc.error(f"{doc.keyname(*keys, *inner)} {message}", *keys, *inner)
+        return doc.error(f"{doc.keyname(*keys, *inner)}: {message}", *keys, *inner)
 
     def word(key: str, words: Mapping[str, str]) -> str | None:
         value = doc.get(*keys, key, default=None)
@@ -162,16 +162,17 @@ def table_format_of(doc: YamlDoc, *keys: Any) -> TableFormat:
             raise ValueError(f"must be text such as m,rad or a mapping, got {units!r}")
         unit_spec(units)
     except ValueError as exc:
-        raise fail(f": {exc}", "units") from None
+        raise fail(str(exc), "units") from None
+    delimiter, decimal = word("delimiter", DELIMITERS), word("decimal", DECIMALS)
     try:
         return TableFormat(
-            delimiter=word("delimiter", DELIMITERS),
-            decimal=word("decimal", DECIMALS),
+            delimiter=delimiter,
+            decimal=decimal,
             columns={str(name): header for name, header in columns.items()},
             units=units,
         )
     except ValueError as exc:  # two names for one column, a decimal comma with commas
-        raise fail(f": {exc}") from None
+        raise fail(str(exc)) from None
 
 
 def read_table_format(path: str | os.PathLike[str]) -> TableFormat:

@@ -82,6 +82,8 @@ def unit_spec(spec: str | Mapping[str, str] | None) -> dict[str, str]:
     items = spec.items() if isinstance(spec, Mapping) else _spec_items(spec)
     declared: dict[str, str] = {}
     for key, word in items:
+        if not isinstance(key, str) or not isinstance(word, str):
+            raise ValueError(f"{key}: {word!r} is not a unit word")
         unit = _SPELLINGS.get(word.strip().lower(), word.strip().lower())
         kind = unit_kind(unit)
         key = key.strip().lower()

@@ -402,3 +402,23 @@ def test_transform_maps_a_ur10_series_and_keeps_its_layout(realdata, tmp_path):
         expected = [tracker[1] + 200, -(tracker[0] - 100), tracker[2] - 50]
         mapped = [float(got[r][i].replace(",", ".")) for i in index]
         np.testing.assert_allclose(mapped, expected, atol=5e-5)
+
+
+@pytest.mark.parametrize(
+    ("text", "line", "message"),
+    [
+        ("delimiter: semicolon\nunits: {length: m, x_meas: 3}\n", 2, "'units': x_meas: 3 is not"),
+        ("decimal: comma\ndelimiter: colon\n", 2, "'delimiter': must be comma or semicolon or tab"),
+        ("delimiter: semicolon\nunit: m\n", 2, "unit: unknown key; did you mean units?"),
+        ("columns: {x: Goal x, y: 3}\n", 1, "'columns.y': must be the file's column name"),
+    ],
+)
+def test_a_bad_format_file_is_a_located_error(tmp_path, capsys, text, line, message):
+    fmt = tmp_path / "fmt.yaml"
+    fmt.write_text(text)
+    out = tmp_path / "o.csv"
+    argv = ["transform", str(CANONICAL), "--frame", "f.yaml", "-o", str(out), "--format", str(fmt)]
+    assert main(argv) == 2 and not out.exists()
+    err = capsys.readouterr().err
+    assert err.startswith(f"accugrid transform: error: {fmt}:{line}:") and message in err
+    assert len(err.splitlines()) == 1
