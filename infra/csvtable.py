@@ -796,7 +796,12 @@ def _scale_angles(table: Table, units: dict[int, str]) -> None:
         scale = ANGLE_UNITS[unit]
         cells = [row[i] for row in rows]
         table.printed[i] = np.array([decimals_of(c) for c in cells], float) - math.log10(scale)
-        for row, cell in zip(rows, cells, strict=True):
+        values = _fast_column(cells, allow_empty=False)  # every cell a number: one pass
+        if values is not None:
+            for row, value in zip(rows, (values * scale).tolist(), strict=True):
+                row[i] = repr(value)
+            continue
+        for row, cell in zip(rows, cells, strict=True):  # the others stay for floats() to name
             text = cell.strip(_BLANKS)
             if _DECIMAL.fullmatch(text) and not text[-1].isalpha():  # not nan, inf
                 row[i] = repr(float(text) * scale)
