@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import EXAMPLES, REALDATA
+from hypothesis import given
+from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import build_parser, main
@@ -422,3 +424,42 @@ def test_a_bad_format_file_is_a_located_error(tmp_path, capsys, text, line, mess
     err = capsys.readouterr().err
     assert err.startswith(f"accugrid transform: error: {fmt}:{line}:") and message in err
     assert len(err.splitlines()) == 1
+
+
+_MM = st.decimals(min_value=-3000, max_value=3000, places=4, allow_nan=False)
+_RAD = st.floats(min_value=-6.3, max_value=6.3, allow_nan=False)
+_WRITTEN = {"[": "{} [{}]", "(": "{} ({})", "_": "{}_{}"}
+
+
+@given(
+    rows=st.lists(st.tuples(*[_MM] * 3, _RAD), min_size=1, max_size=8),
+    length=st.sampled_from(["mm", "m", "in"]),
+    angle=st.sampled_from(["deg", "rad"]),
+    how=st.sampled_from(["declared", *_WRITTEN]),
+)
+def test_a_unit_named_by_the_header_reads_as_the_same_unit_declared(rows, length, angle, how):
+    """A column's unit said by its header (``x [m]``, ``x (m)``, ``x_m``) or by the declaration
+    reads to the same numbers: lengths exactly as the mm value of their decimal text, angles
+    within a rounding of the rad -> deg product."""
+    per_mm = {"mm": Decimal(1), "m": Decimal(1000), "in": Decimal("25.4")}[length]
+    exported = [[v.scaleb(-4) if length != "mm" else v for v in row[:3]] for row in rows]
+    names = ["x", "y", "z", "a1"]
+    units = [length] * 3 + [angle]
+    if how == "declared":
+        header, fmt = names, TableFormat(units=f"{length},{angle}")
+    else:
+        header = [_WRITTEN[how].format(n, u) for n, u in zip(names, units, strict=True)]
+        fmt = None
+    text = (
+        ",".join(header)
+        + "\n"
+        + "".join(
+            ",".join([*(format(v, "f") for v in xyz), repr(row[3])]) + "\n"
+            for xyz, row in zip(exported, rows, strict=True)
+        )
+    )
+    table = parse_table(text, "u.csv", fmt)
+    expected = [[float(v * per_mm) for v in xyz] for xyz in exported]
+    assert table.floats(["x", "y", "z"]).tolist() == expected
+    degrees = [row[3] * (180 / np.pi if angle == "rad" else 1) for row in rows]
+    np.testing.assert_allclose(table.floats(["a1"])[:, 0], degrees, rtol=1e-15, atol=0)
