@@ -2,11 +2,12 @@
 
 A robot is YAML data (``kinematics/robots/*.yaml`` for the built-ins, or a user file): six DH rows
 ``{a_mm, alpha_deg, d_mm, theta_offset_deg, sign}`` with theta = sign * A + theta_offset, joint
-limits ``limits_deg`` ([min, max] per axis), an optional ``tool`` {x, y, z, a, b, c} (flange_T_tool)
-and optional ``errors`` (per row Δa mm, Δd mm, Δα rad, Δθ rad) and ``joint_errors`` (compliance
-under gravity, transmission harmonics, thermal growth; ``kinematics.joint_errors``) that define the
-"true" robot. A YAML file may instead name a URDF (``urdf: file``, ``tip: frame``), see
-``kinematics.urdf``.
+limits ``limits_deg`` ([min, max] per axis), an optional ``tool`` {x, y, z, a, b, c}
+(flange_T_tool), ``controller``, the maker of its controller (``kuka``, ``abb``: which program
+dialects drive it; absent: any), and optional ``errors`` (per row Δa mm, Δd mm, Δα rad, Δθ rad)
+and ``joint_errors`` (compliance under gravity, transmission harmonics, thermal growth;
+``kinematics.joint_errors``) that define the "true" robot. A YAML file may instead name a URDF
+(``urdf: file``, ``tip: frame``), see ``kinematics.urdf``.
 
 Joint vectors are the controller's axis angles in radians (KUKA A1..A6; ABB axes 1..6 for
 ``irb6700``, as a RAPID jointtarget holds them), shape (N, 6); poses are (N, 4, 4) mm.
@@ -28,11 +29,13 @@ from accugrid.infra.errors import InputError
 from accugrid.infra.units import mm_text
 from accugrid.infra.yamlfile import Schema, YamlDoc, load_yaml
 from accugrid.kinematics import ik as closed
+from accugrid.kinematics import numeric_ik as numeric
 from accugrid.kinematics.configuration import (
     IKSolution,
     kuka_words,
     select,
     select_confdata,
+    status_turn,
 )
 from accugrid.kinematics.dh import DHTable, flange_poses
 from accugrid.kinematics.frames import invert, pose_from_xyzabc, stack_times
@@ -58,7 +61,7 @@ __all__ = [
     "load_robot",
 ]
 
-BUILTIN = ("kr210", "kr210-paper", "kr210-realistic", "irb6700")
+BUILTIN = ("kr210", "kr210-paper", "kr210-realistic", "irb6700", "ur10")
 _LIMIT_TOL = 1e-9
 
 
@@ -78,6 +81,7 @@ class Robot:
     # file's cross-validated max, else its fit residual max); None: the model makes no claim
     validated_max_mm: np.ndarray | None = None
     source: str | None = None  # the robot file (for messages); None: built in code
+    controller: str = ""  # the maker of its controller, lower case ("kuka", "abb"; "": not said)
 
     def __repr__(self) -> str:
         parts = [repr(self.name)]
@@ -120,8 +124,10 @@ class Robot:
 
     @property
     def phi_rad(self) -> float:
-        """A3 angle (rad) at which the A2 axis, A3 axis and wrist point are in line (stretched)."""
+        """A3 angle (rad) at which the A2 axis, A3 axis and wrist point are in line (stretched):
+        the forearm (a3 along x3, d4 along z3) points where the upper arm (a2 along x2) does."""
         beta = np.arctan2(-np.sin(self.dh.alpha[2]) * self.dh.d[3], self.dh.a[2])
+        beta -= np.arctan2(0.0, self.dh.a[1])  # pi for an upper arm along -x2 (a UR's)
         return float(closed.wrap(self.dh.axis_angles(np.array([0, 0, -beta, 0, 0, 0]))[2]))
 
     def fk(self, q: np.ndarray) -> np.ndarray:
@@ -158,10 +164,19 @@ class Robot:
         Per pose this choice still switches branch somewhere (any per-pose rule must); to keep
         one configuration along a path or a grid, give one ``status`` for all poses.
         ``turn=None``: every angle in (-180, 180] (closest to 0).
+        An arm without a spherical wrist (a UR) is solved numerically (``kinematics.numeric_ik``):
+        ``status`` is then its configuration code (``Configuration``: shoulder + 2 elbow +
+        4 wrist) and ``status=None`` takes, of all its solutions, the one nearest ``reference``.
         """
-        flange, wrist = self._flange_wrist(robot_T_tcp)
+        if closed.closed_form_supported(self.dh):
+            flange, wrist = self._flange_wrist(robot_T_tcp)
+            q, found, reach = select(self, flange, wrist, status, reference)
+        else:  # no spherical wrist: numerical
+            poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
+            flange = stack_times(poses, invert(self.flange_T_tool))
+            q, found, reach = numeric.select(self, flange, status, reference)
+            wrist = None
         n = len(flange)
-        q, found, reach = select(self, flange, wrist, status, reference)
         reason = np.full(n, "", dtype=object)
         reason[~found] = "unreachable"
         reason[~found & reach] = "no solution with the requested status"
@@ -199,7 +214,8 @@ class Robot:
 
     def _within_limits(self, q, found, reason, wrist) -> IKSolution:
         """The IKSolution of the chosen joints q (N, 6) rad (found (N,) bool, ``reason`` (N,)
-        object, changed in place) with the joint limits applied; wrist centres (N, 3) mm."""
+        object, changed in place) with the joint limits applied; wrist centres (N, 3) mm (None:
+        from q)."""
         lo, hi = np.radians(self.joint_limits_deg).T
         outside = (q < lo - _LIMIT_TOL) | (q > hi + _LIMIT_TOL)  # NaN (not found): False
         beyond = outside[:, 0].copy()
@@ -214,13 +230,13 @@ class Robot:
         ok[beyond] = False
         # after Turn: A3, A5 may have moved by 360 deg
         final = q if found.all() else np.where(found[:, None], q, 0.0)
-        s, t = kuka_words(self, final, wrist)
+        s, t = status_turn(self, final) if wrist is None else kuka_words(self, final, wrist)
         return IKSolution(q, ok, reason, np.where(found, s, -1), np.where(found, t, -1))
 
     def ik_all(self, robot_T_tcp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """All 8 solutions (N, 8, 6) rad in (-pi, pi] and their reachability mask (N, 8)."""
-        poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
-        return closed.all_solutions(self.dh, stack_times(poses, invert(self.flange_T_tool)))
+        """All 8 closed-form solutions (N, 8, 6) rad in (-pi, pi] and their reachability mask
+        (N, 8); InputError for a DH structure without the closed-form inverse."""
+        return closed.all_solutions(self.dh, self._flange_wrist(robot_T_tcp)[0])
 
 
 def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:
@@ -280,6 +296,7 @@ IDENTIFICATION_SCHEMA: Schema = {
     "controller_tool": _POSE,
     "poses": None,
     "rows": None,
+    "controller_mismatch": dict.fromkeys(("mean_mm", "max_mm", "rows")),
     "identifiable_parameters": None,
     "unidentifiable_directions": None,
     "condition_number": None,
@@ -308,6 +325,7 @@ ERROR_KEYS = ("da_mm", "dd_mm", "dalpha_rad", "dtheta_rad")  # one ``errors:`` r
 ROBOT_SCHEMA: Schema = {
     "name": None,
     "description": None,
+    "controller": None,
     "dh": [dict.fromkeys(("a_mm", "alpha_deg", "d_mm", "theta_offset_deg", "sign"))],
     "limits_deg": None,
     "tool": _POSE,
@@ -361,6 +379,7 @@ def _robot_from_doc(doc: YamlDoc) -> Robot:
         joint_errors,
         validated_max_mm=validated,
         source=doc.path,
+        controller=doc.string("controller", default="").strip().lower(),
     )
 
 

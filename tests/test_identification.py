@@ -264,25 +264,42 @@ def test_poses_in_one_plane():
         identify(NOMINAL, data)
 
 
-def test_logged_joints_of_another_tool_are_refused_naming_the_rows():
+def logged_pose_set(offset_mm: float):
+    """30 rows whose logged joints (4 decimals) reach their commanded position, except rows 4
+    and 9, commanded ``offset_mm`` higher than their joints reach."""
     q = random_joints(30, 18)
     nominal = NOMINAL.fk(q)
     commanded = nominal[:, :3, 3].copy()
-    commanded[[4, 9]] += [0.0, 0.0, 0.5]  # two rows commanded elsewhere than their joints
-    labels = [f"line {i + 2}" for i in range(30)]
+    commanded[[4, 9]] += [0.0, 0.0, offset_mm]  # two rows commanded elsewhere than their joints
+    return pose_set(
+        NOMINAL,
+        commanded,
+        commanded,
+        matrix_to_abc(nominal[:, :3, :3]),
+        np.round(np.degrees(q), 4),
+        joint_decimals=np.full((30, 6), 4),
+        position_decimals=np.full((30, 3), 4),
+        labels=[f"line {i + 2}" for i in range(30)],
+    )
+
+
+def test_logged_joints_off_by_a_controller_calibration_are_measured():
+    """Tenths of a mm between the commanded positions and the nominal FK of the logged joints:
+    a controller's own calibration, measured (mean and max over the rows, the rows beyond
+    the round-off) and taken as what the robot did."""
+    data = logged_pose_set(0.5)
+    assert data.controller.rows == 2
+    # the joints' 4 printed decimals move the TCP by up to a few microns
+    assert data.controller.max_mm == pytest.approx(0.5, abs=0.005)
+    assert data.controller.mean_mm == pytest.approx(1.0 / 30, abs=0.005)
+
+
+def test_logged_joints_far_off_are_refused_naming_the_rows():
     with pytest.raises(
-        InputError, match=r"2 of 30 rows.*line 6 \(0\.\d+ mm\), line 11 .*robot, the --tool"
+        InputError,
+        match=r"2 of 30 rows.*line 6 \((49\.99|50\.00)\d\d mm\), line 11 .*robot or the base wrong",
     ):
-        pose_set(
-            NOMINAL,
-            commanded,
-            commanded,
-            matrix_to_abc(nominal[:, :3, :3]),
-            np.round(np.degrees(q), 4),
-            joint_decimals=np.full((30, 6), 4),
-            position_decimals=np.full((30, 3), 4),
-            labels=labels,
-        )
+        logged_pose_set(50.0)
 
 
 def test_logged_joints_rounded_to_their_decimals_pass():
@@ -297,7 +314,7 @@ def test_logged_joints_rounded_to_their_decimals_pass():
         joint_decimals=np.full((30, 6), 3),
         position_decimals=np.full((30, 3), 4),
     )
-    assert len(data) == 30
+    assert len(data) == 30 and data.controller.rows == 0
 
 
 def test_rank_loss_beyond_the_structural_directions_is_named():
@@ -497,3 +514,35 @@ def test_harmonic_terms_are_checked():
         harmonic_terms([(2, 100_001)])
     with pytest.raises(InputError, match="more than 60 harmonic terms"):
         harmonic_terms((2, k) for k in range(1, 1_000_000))  # refused at the 61st
+
+
+@settings(max_examples=25)
+@given(st.permutations(range(4)), st.lists(st.sampled_from([-1.0, 1.0]), min_size=4, max_size=4))
+def test_unidentifiable_directions_come_in_one_order_whatever_the_svd_gives(order, signs):
+    """The SVD orders directions whose singular values are all ~0 by rounding noise, which differs
+    between CPUs and BLAS kernels: their readable basis comes out in the order of its pivots'
+    parameters whatever order and signs the null-space basis arrives in."""
+    from accugrid.kinematics.identification import _readable_null
+
+    null = np.zeros((8, 4))
+    null[[0, 1], 0] = [1.0, -1.0]  # da1 - dd1
+    null[[2, 5], 1] = [0.6, 0.8]
+    null[4, 2] = 1.0
+    null[[3, 6, 7], 3] = [0.2, 0.9, -0.3]
+    null /= np.linalg.norm(null, axis=0)
+    expected = _readable_null(null)
+    shuffled = _readable_null(null[:, list(order)] * np.array(signs))
+    assert [int(np.argmax(np.abs(c) > 0.05)) for c in expected.T] == [0, 2, 3, 4]
+    assert np.allclose(shuffled, expected, atol=1e-12)
+
+
+def test_an_unidentifiable_pair_reads_the_same_whichever_of_its_equal_components_leads():
+    """da6 - tool_x: which of the two equal components is the larger is rounding noise."""
+    from accugrid.kinematics.identification import _direction_text, _readable_null
+
+    names = ["da6", "tool_x"]
+    texts = {
+        _direction_text(_readable_null(np.array([[a], [b]]) / np.hypot(a, b))[:, 0], names)
+        for a, b in ((1.0, -1.0 + 1e-15), (1.0 - 1e-15, -1.0), (-1.0, 1.0 - 1e-15))
+    }
+    assert texts == {"+1.000 da6 -1.000 tool_x"}
