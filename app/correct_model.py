@@ -32,6 +32,7 @@ from accugrid.compensation.policy import Policy
 from accugrid.infra.atomic import JobFiles
 from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import InputError
+from accugrid.infra.units import check_scale
 from accugrid.kinematics.frames import (
     abc_to_matrix,
     matrix_to_abc,
@@ -39,6 +40,7 @@ from accugrid.kinematics.frames import (
     pose_from_xyzabc,
     too_tilted,
 )
+from accugrid.kinematics.model import reach_mm
 
 if TYPE_CHECKING:
     pass
@@ -80,6 +82,7 @@ def correct_by_model(request: CorrectRequest) -> JobFiles:
         given = pose_from_xyzabc(np.array(request.tool, dtype=float))
         tools = (given, given)
     points = read_points(request.points)
+    check_scale(points.xyz, reach_mm(calibrated), "target", points.path, points.lines)
     check_added_columns(points)
     abc = point_orientations(points, np.array(request.abc, dtype=float))
     policy = Policy.build(

@@ -23,6 +23,9 @@ from accugrid.compensation.policy import PolicyRequest
 from accugrid.infra.atomic import check_targets, write_files
 from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import InputError
+from accugrid.infra.units import check_scale
+from accugrid.kinematics.frames import transform_points
+from accugrid.kinematics.model import reach_mm
 from accugrid.kinematics.robot import load_robot
 
 __all__ = ["Job", "ProgramRequest", "prepare", "program_job", "summary", "write_program"]
@@ -113,6 +116,8 @@ def prepare(req: ProgramRequest, cell: Cell | None = None) -> tuple[Job, object]
     points = read_points(req.points)
     grid = None if grid_file is None else cell_grid(cell, grid_file)
     robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
+    in_robot = transform_points(cell.robot_T_base, points.xyz)
+    check_scale(in_robot, reach_mm(robot), "target", points.path, points.lines)
     check_serves(req.dialect, robot, req.cell)
     # the arm; the tool is the cell's, never the model's TCP
     model = None if model_file is None else read_model(model_file, robot)
