@@ -145,8 +145,9 @@ def calibrate(
     if support is not None:
         limit = support["loo_leverage_max"]
         report += (
-            f"\n  support: targets whose prediction leverage exceeds {limit:.3g} (the largest leave-one-out leverage of these poses) are flagged and corrected by the "
-            "DH-only fit of the same poses, recorded beside the model (--strict refuses them)"
+            f"\n  support: targets whose prediction leverage exceeds {limit:.3g} (the largest "
+            "leave-one-out leverage of these poses) are flagged and corrected by the DH-only fit "
+            "of the same poses, recorded beside the model (--strict refuses them)"
         )
     if urdf:
         from accugrid.kinematics.urdf_export import urdf_text
