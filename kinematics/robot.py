@@ -58,7 +58,7 @@ __all__ = [
     "load_robot",
 ]
 
-BUILTIN = ("kr210", "kr210-paper", "kr210-realistic", "irb6700")
+BUILTIN = ("kr210", "kr210-paper", "kr210-realistic", "irb6700", "ur10")
 _LIMIT_TOL = 1e-9
 
 
