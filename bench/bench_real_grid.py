@@ -13,9 +13,9 @@ e - e_pred per axis: max, min, standard deviation, and the 3D mean and max. Row 
 itself (no correction). As the seed's ``--measured`` study: one session, r = e - e_pred, the
 correction's effect to first order.
 
-Table 2: the 100 mm grid at A's other orientations, grouped by their angle from the grid's, against
-the calibrated model: ``identify`` (the default structure, tracker frame identified) from 300
-random poses of Series C (another session), its tracker frame for Series A fitted with the model
+Table 2: the 100 mm grid at A's other orientations (the grid's own rows left out), grouped by
+their angle from the grid's, against the calibrated model: ``identify`` (the default structure,
+tracker frame identified) from 300 random poses of Series C (another session), its tracker frame for Series A fitted with the model
 on the grid orientation's rows (the same measurements the grid has). Remaining 3D error, mean and
 p95 mm: without correction, with the grid, with the model, and with the model where the model
 has support and its DH-only fit where not (``kinematics.support``), the share of positions
@@ -38,6 +38,7 @@ import numpy as np
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.interpolation import CORNERS
 from accugrid.infra.csvtable import TableFormat, read_table
+from accugrid.infra.yamlfile import YamlDoc
 from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
 from accugrid.kinematics.identification import identify, pose_set, rigid_fit
 from accugrid.kinematics.robot import load_robot
@@ -192,14 +193,8 @@ def calibrated_from_c(poses: int):
     structure = Structure(True, False, tuple(selection.harmonics), tuple(selection.gravity))
     dh = identify(robot, data, base_frame=True)
     section = support_section(result.robot, data.q, data.group, structure, dh)
-    fallback = dh.robot
-    support = Support(
-        structure,
-        result.robot,
-        np.array(section["leverage_map"]),
-        section["loo_leverage_max"],
-        fallback,
-    )
+    doc = YamlDoc({"identification": {"support": section}}, {}, "identify")
+    support = Support.from_doc(doc, result.robot, structure)
     return result, support, len(selection.chosen)
 
 
@@ -241,7 +236,7 @@ def orientations_table(a, index, orient, o_grid, e, grid: GridModel, poses: int)
     )
     print("|---|---|---|---|---|---|---|")
     for lo, hi in zip(ANGLE_BINS[:-1], ANGLE_BINS[1:], strict=True):
-        rows = inside & (angle >= lo) & (angle < hi)
+        rows = inside & ~own & (angle >= lo) & (angle < hi)
         if not rows.any():
             continue
         cells = [np.linalg.norm(e[rows], axis=1), grid_r[rows], model_r[rows], guarded[rows]]

@@ -15,7 +15,18 @@ model's prediction at q in units of the measurement noise. Its yardstick comes f
 themselves: a pose left out of its own fit has the leave-one-out leverage h/(1-h) (block form
 trace(H (I - H)⁻¹), H the pose's (3, 3) hat block), which is what a new target drawn like the
 calibration poses gets. A target whose leverage exceeds the largest leave-one-out leverage of the
-calibration poses (``ratio`` > 1) lies where the model extrapolates: it has no support.
+calibration poses lies where the model extrapolates.
+
+Leverage trusts the model's own form: a harmonic term is periodic, so the linearised model sees
+no risk at an angle its poses never reached if other angles pinned its coefficients, while a
+fitted high order extrapolates whatever it was fitted to. The second measure asks only the
+poses: the distance of a target's joints to the nearest calibration pose, in TCP millimetres,
+
+    d(q, q') = sqrt(sum_i (lever_i · 2 sin((q_i - q'_i) / 2))²),
+
+lever_i (mm/rad) the RMS over the calibration poses of |∂p/∂A_i| (each joint's effect on the TCP;
+the chord keeps angles periodic). Its yardstick is the largest distance of a calibration pose to
+its nearest other one. A target beyond either yardstick (``ratio`` > 1) has no support.
 
 ``accugrid identify`` records both in the calibrated YAML (``identification.support``, written by
 ``support_section``, the only writer):
@@ -23,7 +34,10 @@ calibration poses (``ratio`` > 1) lies where the model extrapolates: it has no s
 - ``parameters``: the names of the Jacobian's columns (``identification.parameter_names``);
 - ``leverage_map``: (k, p) rows W with h(q) = |W J(q)ᵀ|² (the whitened inverse of Jᵀ J in its k
   identifiable directions), 7 significant digits;
-- ``loo_leverage_max``: the largest leave-one-out leverage of the calibration poses; ``poses``;
+- ``loo_leverage_max``: the largest leave-one-out leverage of the calibration poses;
+- ``joints_deg``: (n, 6) the distinct calibration poses' joints, KUKA deg, 3 decimals;
+  ``lever_mm_per_rad``: (6,) the levers; ``loo_distance_max_mm``: the largest nearest-pose
+  distance among them, mm;
 - ``fallback``: the DH-only fit of the same poses (``errors``: six rows Δa mm, Δd mm, Δα rad,
   Δθ rad; ``tool``: its TCP x, y, z mm, a, b, c deg; with a tracker frame identified, that fit's
   ``tracker_T_robot``), which corrects the targets without support (``Support.fallback``): it
@@ -36,8 +50,10 @@ with the fallback (``--strict``: refuses them).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from accugrid.infra.yamlfile import YamlDoc
 from accugrid.kinematics.calibrated import pose_dict
@@ -58,7 +74,9 @@ SUPPORT_SCHEMA = {
     "parameters": None,
     "leverage_map": None,
     "loo_leverage_max": None,
-    "poses": None,
+    "joints_deg": None,
+    "lever_mm_per_rad": None,
+    "loo_distance_max_mm": None,
     "fallback": {
         "errors": [dict.fromkeys(ERROR_KEYS)],
         "tool": dict.fromkeys("xyzabc"),
@@ -104,6 +122,12 @@ def _whitened(jac: np.ndarray) -> np.ndarray:
     return vt[keep] / s[keep, None] / scale
 
 
+def _embedded(q: np.ndarray, lever: np.ndarray) -> np.ndarray:
+    """(N, 12) points whose Euclidean distances are d(q, q') (module docstring), mm, of joints
+    q (N, 6) rad and levers (6,) mm/rad."""
+    return np.concatenate([lever * np.cos(q), lever * np.sin(q)], axis=1)
+
+
 def _hat_blocks(w: np.ndarray, jac: np.ndarray) -> np.ndarray:
     """(N, 3, 3) J(q) (Jᵀ J)⁺ J(q)ᵀ of Jacobians jac (N, 3, p)."""
     z = np.einsum("kp,nap->nak", w, jac)
@@ -113,16 +137,29 @@ def _hat_blocks(w: np.ndarray, jac: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True)
 class Support:
     """A model's support (module docstring): its ``structure`` and nominal ``robot`` (the
-    Jacobian's), the leverage map W (k, p), the largest leave-one-out leverage of its poses and
-    the DH-only ``fallback`` (a calibrated robot: its ``true_robot()`` the DH-only arm, its tool
-    that fit's TCP) and that fit's tracker frame (4, 4) mm (None: not identified)."""
+    Jacobian's), the leverage map W (k, p), the largest leave-one-out leverage of its poses,
+    their joints (n, 6) rad, the levers (6,) mm/rad, their largest nearest-pose distance mm, the
+    DH-only ``fallback`` (a calibrated robot: its ``true_robot()`` the DH-only arm, its tool that
+    fit's TCP) and that fit's tracker frame (4, 4) mm (None: not identified)."""
 
     structure: Structure
     robot: Robot
     leverage_map: np.ndarray
     loo_max: float
+    joints: np.ndarray
+    lever: np.ndarray
+    loo_distance_mm: float
     fallback: Robot
     fallback_frame: np.ndarray | None = None
+
+    @cached_property
+    def _tree(self) -> cKDTree:
+        return cKDTree(_embedded(self.joints, self.lever))
+
+    def distance(self, q: np.ndarray) -> np.ndarray:
+        """d (N,) mm from targets with joints q (N, 6) rad to the nearest calibration pose."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        return self._tree.query(_embedded(q, self.lever))[0] if len(q) else np.zeros(0)
 
     def leverage(self, q: np.ndarray) -> np.ndarray:
         """h (N,) of targets with joints q (N, 6) rad (noise units; NaN rows give NaN)."""
@@ -133,9 +170,9 @@ class Support:
         return np.einsum("naa->n", blocks)
 
     def ratio(self, q: np.ndarray) -> np.ndarray:
-        """h (N,) over the calibration poses' largest leave-one-out leverage: above 1, no
-        support."""
-        return self.leverage(q) / self.loo_max
+        """(N,) the larger of h over the calibration poses' largest leave-one-out leverage and
+        d over their largest nearest-pose distance: above 1, no support."""
+        return np.maximum(self.leverage(q) / self.loo_max, self.distance(q) / self.loo_distance_mm)
 
     @classmethod
     def from_doc(cls, doc: YamlDoc, robot: Robot, structure: Structure) -> Support | None:
@@ -154,20 +191,12 @@ class Support:
                 *key,
                 "parameters",
             )
-        rows = doc.sequence(*key, "leverage_map")
-        try:
-            w = np.array(rows, dtype=float)
-        except (TypeError, ValueError):
-            w = np.zeros((0, 0))
-        if w.ndim != 2 or w.shape[1] != len(names) or not np.isfinite(w).all() or not len(w):
-            raise doc.error(
-                f"{doc.keyname(*key, 'leverage_map')} must be rows of {len(names)} numbers",
-                *key,
-                "leverage_map",
-            )
-        loo = doc.number(*key, "loo_leverage_max")
-        if not loo > 0:
-            raise doc.error(f"{doc.keyname(*key, 'loo_leverage_max')} must be > 0", *key)
+        w = _rows(doc, (*key, "leverage_map"), len(names))
+        loo, far = (doc.number(*key, k) for k in ("loo_leverage_max", "loo_distance_max_mm"))
+        if not (loo > 0 and far > 0):
+            raise doc.error("loo_leverage_max and loo_distance_max_mm must be > 0", *key)
+        joints = _rows(doc, (*key, "joints_deg"), 6)
+        lever = _rows(doc, key, 6, "lever_mm_per_rad")[0]
         fb = (*key, "fallback")
         doc.sequence(*fb, "errors", length=6)
         errors = np.array([[doc.number(*fb, "errors", i, k) for k in ERROR_KEYS] for i in range(6)])
@@ -178,7 +207,21 @@ class Support:
         frame = None
         if doc.has(*fb, "tracker_T_robot"):
             frame = pose_from_xyzabc([doc.number(*fb, "tracker_T_robot", k) for k in "xyzabc"])
-        return cls(structure, robot, w, loo, fallback, frame)
+        return cls(structure, robot, w, loo, np.radians(joints), lever, far, fallback, frame)
+
+
+def _rows(doc: YamlDoc, key: tuple, width: int, last: str | None = None) -> np.ndarray:
+    """The numbers (n, width) at ``key`` (a list of rows; ``last``: one row named so),
+    InputError naming the key unless finite and of that width."""
+    keys = (*key, last) if last else key
+    value = doc.get(*keys)
+    try:
+        rows = np.array([value] if last else value, dtype=float)
+    except (TypeError, ValueError):
+        rows = np.zeros((0, 0))
+    if rows.ndim != 2 or rows.shape[1] != width or not len(rows) or not np.isfinite(rows).all():
+        raise doc.error(f"{doc.keyname(*keys)} must be rows of {width} numbers", *keys)
+    return rows
 
 
 def support_section(
@@ -194,12 +237,19 @@ def support_section(
     hat = _hat_blocks(w, jac)
     loo = np.einsum("nab,nba->n", hat, np.linalg.inv(np.eye(3) - hat))
     rounded = [[float(f"{v:.{_DIGITS}g}") for v in row] for row in w]
+    theta = [4 * i + 3 for i in range(6)]  # the Δθ columns: ∂p/∂A_i up to the axis' sign
+    lever = np.sqrt(np.mean(np.sum(jac[:, :, theta] ** 2, axis=1), axis=0))
+    joints = np.round(np.degrees(q[first]), 3)
+    points = _embedded(np.radians(joints), lever)
+    nearest = cKDTree(points).query(points, k=2)[0][:, 1]  # the nearest other pose
     frame = dh.tracker_T_robot
     return {
         "parameters": structure.names,
         "leverage_map": rounded,
         "loo_leverage_max": float(loo.max()),
-        "poses": len(first),
+        "joints_deg": [[float(v) for v in row] for row in joints],
+        "lever_mm_per_rad": [float(v) for v in lever],
+        "loo_distance_max_mm": float(nearest.max()),
         "fallback": {
             "errors": [
                 {k: float(v) for k, v in zip(ERROR_KEYS, row, strict=True)}

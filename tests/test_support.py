@@ -88,7 +88,7 @@ def write_points(path, q: np.ndarray):
 
 def test_the_file_records_the_leverage_map_and_the_dh_only_fit(calibrated):
     support = yaml.safe_load(open(calibrated))["identification"]["support"]
-    assert support["poses"] == 80
+    assert len(support["joints_deg"]) == 80 and len(support["lever_mm_per_rad"]) == 6
     assert support["parameters"][-4:] == [
         "harmonic_a4_k2_sin",
         "harmonic_a4_k2_cos",
@@ -96,6 +96,7 @@ def test_the_file_records_the_leverage_map_and_the_dh_only_fit(calibrated):
         "harmonic_a5_k2_cos",
     ]
     assert len(support["leverage_map"][0]) == 27 + 4 and support["loo_leverage_max"] > 0
+    assert support["loo_distance_max_mm"] > 0
     fallback = read_model(calibrated).validity.support.fallback
     assert fallback.joint_errors is None and fallback.errors.shape == (6, 4)
 
