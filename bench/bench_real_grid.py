@@ -16,10 +16,10 @@ correction's effect to first order.
 Table 2: the 100 mm grid at A's other orientations (the grid's own rows left out), grouped by
 their angle from the grid's, against the calibrated model: ``identify`` (the default structure,
 tracker frame identified) from 300 random poses of Series C (another session), its tracker frame
-for Series A fitted with the model on the grid orientation's rows (the measurements the grid has). Remaining 3D error, mean and
-p95 mm: without correction, with the grid, with the model, and with the model where the model
-has support and its DH-only fit where not (``kinematics.support``), the share of positions
-without support.
+for Series A fitted with the model on the grid orientation's rows (the measurements the grid
+has). Remaining 3D error, mean and p95 mm: without correction, with the grid, with the model,
+and with the model where it has support and its DH-only fit where not (``kinematics.support``),
+and the share of positions without support.
 
 Not a timed test: ``make bench ARGS=real`` (or ``.venv/bin/python bench/bench_real_grid.py``);
 ``--poses N`` changes the Series C poses of the model (default 300).
