@@ -181,21 +181,24 @@ def table4(a: dict, index: np.ndarray, orient: np.ndarray, o_grid: int, e: np.nd
     return models
 
 
-def calibrated_from_c(poses: int):
-    """The default identification from ``poses`` random Series C poses (the same seed each run)
-    and its support record: (identification, Support)."""
-    c = read_series("Series_C/measurements_random_poses.csv")
+def calibrated(series: dict, pick: np.ndarray):
+    """The default identification (tracker frame identified) from the rows ``pick`` of a
+    series and its support record: (identification, selection, Support)."""
     robot = load_robot("ur10").with_tool(_tcp())
-    pick = np.random.default_rng(0).permutation(len(c["p"]))[:poses]
-    commanded = robot.fk(c["q"][pick])[:, :3, 3]  # the controller's model is not the nominal one
-    data = pose_set(robot, commanded, c["m"][pick], joints_deg=np.degrees(c["q"][pick]))
+    q = series["q"][pick]
+    commanded = robot.fk(q)[:, :3, 3]  # the controller's own model is not the nominal one
+    data = pose_set(robot, commanded, series["m"][pick], joints_deg=np.degrees(q))
     result, selection = identify_structure(robot, data, base_frame=True)
     structure = Structure(True, False, tuple(selection.harmonics), tuple(selection.gravity))
     dh = identify(robot, data, base_frame=True)
     section = support_section(result.robot, data.q, data.group, structure, dh)
     doc = YamlDoc({"identification": {"support": section}}, {}, "identify")
-    support = Support.from_doc(doc, result.robot, structure)
-    return result, support, len(selection.chosen)
+    return result, selection, Support.from_doc(doc, result.robot, structure)
+
+
+def random_pick(rows: int, poses: int) -> np.ndarray:
+    """``poses`` random row indices of ``rows`` (the same each run)."""
+    return np.random.default_rng(0).permutation(rows)[:poses]
 
 
 def _tcp() -> np.ndarray:
@@ -207,8 +210,9 @@ def _tcp() -> np.ndarray:
 def orientations_table(a, index, orient, o_grid, e, grid: GridModel, poses: int) -> None:
     """Table 2 (printed)."""
     t0 = time.perf_counter()
-    result, support, groups = calibrated_from_c(poses)
-    took = time.perf_counter() - t0
+    c = read_series("Series_C/measurements_random_poses.csv")
+    result, selection, support = calibrated(c, random_pick(len(c["p"]), poses))
+    took, groups = time.perf_counter() - t0, len(selection.chosen)
     own = orient == o_grid
     arm, fallback = result.robot.true_robot(), support.fallback.true_robot()
     model_p, dh_p = arm.fk(a["q"])[:, :3, 3], fallback.fk(a["q"])[:, :3, 3]
