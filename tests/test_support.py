@@ -1,5 +1,6 @@
-"""Where a calibrated model has support (``kinematics.support``): the leverage flag, the DH-only
-fallback in the correction policy and ``--strict``.
+"""Where a calibrated model has support (``kinematics.support``): the flag, the DH-only fallback
+in the correction policy and ``--strict``, on a simulated arm and on the real UR10 data
+(``../shared/realdata/ipa-ur10``).
 
 The simulated arm (kr210-paper with second-order reducer harmonics on A4 and A5) is calibrated
 on two clusters of poses: A4 near 0 deg with A5 near 30 deg, and A4 near 90 deg with A5 near
@@ -19,10 +20,14 @@ import yaml
 from accugrid.app.cli import main
 from accugrid.app.correct_model import read_model
 from accugrid.compensation.model_correction import model_correct
+from accugrid.infra.csvtable import TableFormat, read_table
+from accugrid.infra.yamlfile import YamlDoc
 from accugrid.kinematics.configuration import status_turn
 from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
+from accugrid.kinematics.identification import identify, pose_set
 from accugrid.kinematics.joint_errors import Harmonic, JointErrors
 from accugrid.kinematics.robot import load_robot
+from accugrid.kinematics.support import Structure, Support, support_section
 
 TOOL = ["20", "-10", "250", "0", "0", "0"]
 PAPER = load_robot("kr210-paper").with_tool(pose_from_xyzabc([20.0, -10.0, 250.0, 0, 0, 0]))
@@ -175,3 +180,36 @@ def test_strict_refuses_targets_without_support(calibrated, tmp_path, capsys):
     assert "points.csv:5:" in err[0]  # the first crossed target: header line + 3 rows + 1
     assert "2 without the model's support" in err[0]
     assert "without support in the poses the model was identified from" in err[0]
+
+
+def _series(path) -> tuple[np.ndarray, np.ndarray]:
+    """Joints (N, 6) rad and measured positions (N, 3) mm (tracker frame) of a UR10 series file
+    as it comes (semicolon, decimal comma)."""
+    table = read_table(path, TableFormat(delimiter=";", decimal=","))
+    joints = ["shoulder_pan", "shoulder_lift", "elbow", "wrist_1", "wrist_2", "wrist_3"]
+    q = table.floats([f"{name}_joint" for name in joints])
+    return q, table.floats(["measurement_x", "measurement_y", "measurement_z"])
+
+
+def test_real_ur10_poses_of_another_series_have_no_support(realdata):
+    """Calibrated on 300 random poses of Series C (the UR10's random poses), the model has no
+    support at Series A's grid poses (other shoulder angles and configurations) and has it at
+    the rest of C; its fallback is the DH-only fit of the same poses."""
+    folder = realdata / "ipa-ur10"
+    q_c, m_c = _series(folder / "Series_C" / "measurements_random_poses.csv")
+    q_a, _ = _series(folder / "Series_A" / "measurements_grid.csv")
+    robot = load_robot("ur10").with_tool(pose_from_xyzabc([0, 0, 109.0, 0, 0, 0]))
+    pick = np.random.default_rng(0).permutation(len(q_c))[:300]
+    commanded = robot.fk(q_c[pick])[:, :3, 3]  # the controller's own model is not the nominal
+    data = pose_set(robot, commanded, m_c[pick], joints_deg=np.degrees(q_c[pick]))
+    structure = Structure(base_frame=True, harmonics=((2, 2), (3, 2), (2, 3), (3, 3)))
+    full = identify(robot, data, base_frame=True, harmonics=structure.harmonics)
+    dh = identify(robot, data, base_frame=True)
+    section = support_section(full.robot, data.q, data.group, structure, dh)
+    doc = YamlDoc.parse(yaml.safe_dump({"identification": {"support": section}}), "cal.yaml")
+    support = Support.from_doc(doc, full.robot, structure)
+    assert (support.ratio(q_a) > 1.0).all()
+    rest = np.setdiff1d(np.arange(len(q_c)), pick)
+    assert (support.ratio(q_c[rest]) > 1.0).mean() < 0.02  # measured: 0.4 %
+    fallback = support.fallback.true_robot().fk(q_a)[:, :3, 3]
+    np.testing.assert_allclose(fallback, dh.robot.true_robot().fk(q_a)[:, :3, 3], atol=1e-9)
