@@ -29,7 +29,14 @@ from accugrid.kinematics.structure import STRUCTURE_WORD, Selection, identify_st
 from accugrid.kinematics.support import Structure, support_section
 from accugrid.kinematics.validity import validity_section
 
-__all__ = ["MAX_ROWS", "STRUCTURES", "Calibration", "IdentifyOptions", "calibrate"]
+__all__ = [
+    "MAX_ROWS",
+    "STRUCTURES",
+    "Calibration",
+    "IdentifyOptions",
+    "calibrate",
+    "controller_text",
+]
 
 MAX_ROWS = 100_000  # measurement rows identify takes (a tracker session has hundreds)
 _METHOD = {word: method for method, word in STRUCTURE_WORD.items()}  # --structure -> method
@@ -57,6 +64,7 @@ class Calibration:
     files: dict[str, str]
     report: str
     selection: Selection | None = None
+    controller: str = ""  # controller_text: the logged joints' mismatch, or what to log
 
 
 def _data_lines(path: str | Path) -> int:
@@ -131,7 +139,7 @@ def calibrate(
             harmonics=options.harmonics,
         )
     source = printable(Path(measurements).name)  # a non-UTF-8 byte: escaped text
-    summary = identification_summary(result, robot, source, meas.sha256, selection)
+    summary = identification_summary(result, robot, source, meas.sha256, selection, data.controller)
     validated = _validated_max(summary)  # the same claim the file's reader takes
     summary["validity"] = validity_section(data.commanded, data.rotations, data.q, validated)
     support = _support(robot, data, options, result, selection)
@@ -140,6 +148,9 @@ def calibrate(
     header = f"accugrid {__version__} identify: {robot.name} calibrated from {source}"
     files = {output: calibrated_yaml(result.robot, summary, header)}
     report = _report(output, robot, result)
+    controller = controller_text(robot, data)
+    if controller:
+        report += "\n" + controller
     if selection is not None:
         report += "\n" + _structure_report(selection)
     if support is not None:
@@ -156,7 +167,29 @@ def calibrate(
         joint_terms = result.robot.joint_errors is not None
         extra = " (geometric part only: URDF has no joint errors)" if joint_terms else ""
         report += f"\nwrote {urdf}{extra}"
-    return Calibration(result, files, report, selection)
+    return Calibration(result, files, report, selection, controller)
+
+
+def controller_text(robot: Robot, data: PoseSet) -> str:
+    """One line on the controller's own kinematics: how far the commanded positions lie from the
+    nominal model's FK of the logged joints (where some row misses beyond its printed
+    decimals), or, without logged joints, what to log; "" when the joints agree."""
+    mismatch = data.controller
+    if mismatch is None:
+        return (
+            "  joints not logged: identified at the nominal IK of the commanded poses; a "
+            "controller with its own calibration (factory or absolute-accuracy option) moves "
+            "its TCP by tenths of a mm from that model, which then enters the identified "
+            "errors: log the controller's actual joint angles as columns a1..a6"
+        )
+    if not mismatch.rows:
+        return ""
+    return (
+        f"  controller: its commanded positions differ from the nominal {robot.name}'s FK of "
+        f"the logged joints by {mismatch.mean_mm:.4f} mm mean, {mismatch.max_mm:.4f} max "
+        f"({mismatch.rows} of {len(data)} rows beyond their printed decimals): the "
+        "controller's own calibration; identified from the logged joints (what the robot did)"
+    )
 
 
 def _support(

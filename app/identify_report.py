@@ -47,9 +47,11 @@ def identify_report(
     residuals: np.ndarray,
     inputs: list[tuple[str, str | None]],
     tolerance_mm: float = DEFAULT_TOLERANCE_MM,
+    controller: str = "",
 ) -> str:
     """The report page: ``yaml_text`` the calibrated robot YAML written, ``residuals`` (N, 3)
-    mm measured - model per row, ``inputs`` (role, path)."""
+    mm measured - model per row, ``inputs`` (role, path), ``controller`` the line on the
+    controller's own kinematics (``calibration.controller_text``; "" for none)."""
     summary = yaml.safe_load(yaml_text)["identification"]
     structure = summary.get("structure") or {}
     nested = structure.get("nested")
@@ -108,6 +110,7 @@ def identify_report(
         inputs,
         [
             Section("Validation", lines),
+            *([Section("Controller", [controller.strip()])] if controller else []),
             Section("Residuals", figures=[figure]),
             Section("Model", tables=tables),
         ],

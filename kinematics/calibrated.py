@@ -15,7 +15,7 @@ import yaml
 
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import xyzabc_from_pose
-from accugrid.kinematics.identification import Identification
+from accugrid.kinematics.identification import ControllerMismatch, Identification
 from accugrid.kinematics.joint_errors import JointErrors
 from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.structure import STRUCTURE_WORD, Selection
@@ -46,10 +46,13 @@ def identification_summary(
     source: str | None = None,
     sha256: str | None = None,
     selection: Selection | None = None,
+    controller: ControllerMismatch | None = None,
 ) -> dict:
     """The ``identification:`` section: plain data (mm, rad, deg as named) for the YAML;
     ``selection``: the structure chosen by cross-validation (None: DH + TCP and the pinned
-    terms, ``--structure dh``)."""
+    terms, ``--structure dh``); ``controller``: the logged joints' mismatch with the commanded
+    positions, written as ``controller_mismatch`` {mean_mm, max_mm, rows} when some row misses
+    by more than its printed decimals."""
     parameters = [
         {
             "name": name,
@@ -68,6 +71,14 @@ def identification_summary(
         "controller_tool": pose_dict(nominal.flange_T_tool),
         "poses": result.poses,
         "rows": result.rows,
+    }
+    if controller is not None and controller.rows:
+        summary["controller_mismatch"] = {
+            "mean_mm": controller.mean_mm,
+            "max_mm": controller.max_mm,
+            "rows": controller.rows,
+        }
+    summary |= {
         "identifiable_parameters": result.rank,
         "unidentifiable_directions": list(result.unidentifiable_text),
         "condition_number": float(result.condition_number),

@@ -3,8 +3,12 @@
 A ``Configuration`` is the robot-neutral value, computed from joint angles: per joint vector the
 shoulder (the wrist point behind the A1 axis: the overhead area), the elbow (A3 at or beyond
 phi, the A3 angle at which the A2 axis, the A3 axis and the wrist point are in line, arm
-stretched; -1.957 deg for the KR 210, -atan(41/1200)), the wrist (A5 < 0, flipped) and, per axis,
-whether the angle is negative (the sign of each axis' turn). Each controller's words come from it:
+stretched; -1.957 deg for the KR 210, -atan(41/1200); 0 for a UR), the wrist (A5 < 0, flipped)
+and, per axis, whether the angle is negative (the sign of each axis' turn). A3 - phi and A5 are
+taken mod 360 deg (a whole turn does not change the configuration); the wrist point is DH frame
+5's origin (frame 4's on a spherical wrist), so on a UR the 8 solutions of a pose are the 8
+codes: shoulder left/right, elbow up/down, wrist flipped or not. Each controller's words come
+from it:
 ``to_kuka`` gives the KUKA Status and Turn (DESIGN.md, checked against the KUKA/Siemens/Beckhoff
 descriptions: Status bit 0 shoulder, bit 1 elbow, bit 2 wrist; Turn bit i set when A(i+1) < 0).
 
@@ -138,9 +142,14 @@ def status_turn(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _wrist_points(robot: Robot, q: np.ndarray) -> np.ndarray:
-    """Wrist points (N, 3) mm, robot frame, of joint vectors q (N, 6) rad."""
-    base_T_3 = chain(robot.dh, q, links=3)[2]  # the wrist point is the origin of frame 4
-    dh, theta4 = robot.dh, robot.dh.theta(q)[:, 3]
+    """Wrist points (N, 3) mm, robot frame, of joint vectors q (N, 6) rad: the origin of DH
+    frame 5, where axes 5 and 6 cross the common normal of axis 5 (of frame 4 where that is
+    the same point: a spherical wrist, a5 = d5 = 0)."""
+    dh = robot.dh
+    if dh.a[4] or dh.d[4]:  # a wrist with an offset (a UR's): the chain to frame 5
+        return chain(dh, q, links=5)[4][:, :3, 3]
+    base_T_3 = chain(dh, q, links=3)[2]  # the wrist point is the origin of frame 4
+    theta4 = dh.theta(q)[:, 3]
     offset = np.stack(
         [dh.a[3] * np.cos(theta4), dh.a[3] * np.sin(theta4), np.full_like(theta4, dh.d[3])]
     )
@@ -151,7 +160,7 @@ def _arm_bits(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> tuple[np.ndarra
     """Shoulder, elbow, wrist flags (N,) of joint vectors q (N, 6) rad with wrist points (N, 3)."""
     a1 = robot.dh.sign[0] * q[:, 0] + robot.dh.theta_offset[0]
     x_a1 = wrist[:, 0] * np.cos(a1) + wrist[:, 1] * np.sin(a1)
-    return x_a1 < 0, q[:, 2] >= robot.phi_rad, q[:, 4] < 0
+    return x_a1 < 0, closed.wrap(q[:, 2] - robot.phi_rad) >= 0, closed.wrap(q[:, 4]) < 0
 
 
 def _arm_status(robot: Robot, th1: np.ndarray, th3: np.ndarray, wrist: np.ndarray) -> np.ndarray:

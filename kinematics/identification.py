@@ -46,8 +46,10 @@ from accugrid.kinematics.robot import Robot
 
 __all__ = [
     "COMPLIANT_AXES",
+    "CONTROLLER_MISMATCH_MAX_MM",
     "MAX_HARMONICS",
     "RTOL",
+    "ControllerMismatch",
     "CrossValidation",
     "Identification",
     "PoseSet",
@@ -72,6 +74,9 @@ OUTLIER_SIGMA = 3.0  # a row is an outlier when an axis residual is beyond this 
 OUTLIER_FLOOR_MM = 1e-3  # ... and beyond this (below any tracker's resolution)
 PLANE_RATIO = 0.02  # positions whose thinnest principal spread is below this share: one plane
 ONE_ORIENTATION_DEG = 1.0  # every pose within this of the first: one orientation
+# logged joints farther than this from their commanded position under the nominal model: the
+# robot, tool, base or joint columns are wrong (a controller's own calibration: tenths of a mm)
+CONTROLLER_MISMATCH_MAX_MM = 5.0
 _HUBER = 1.345  # Huber threshold in robust sigmas (95 % efficiency for Gaussian residuals)
 _MAD = 1.4826  # MAD to sigma for Gaussian residuals
 _FD_RAD = 1e-5  # central-difference step of the tracker-frame rotation columns
@@ -139,6 +144,19 @@ def harmonic_terms(spec: Sequence[tuple[int, int]]) -> Terms:
 
 
 @dataclass(frozen=True)
+class ControllerMismatch:
+    """How far the commanded positions lie from the nominal model's FK of the joints the
+    controller logged: mean and max over the rows (mm) and how many rows miss by more than the
+    round-off of their printed decimals. A controller with its own calibration (a UR's factory
+    calibration, a KUKA's absolute-accuracy option, a re-mastered arm) commands its TCP through
+    a model that is not the nominal one: the logged joints are what the robot did."""
+
+    mean_mm: float
+    max_mm: float
+    rows: int
+
+
+@dataclass(frozen=True)
 class PoseSet:
     """Identification data: joints q (N, 6) rad, measured TCP positions (N, 3) mm, the pose group
     of each row (N,) int (repeats of one commanded pose share it), commanded positions (N, 3) mm
@@ -151,6 +169,7 @@ class PoseSet:
     rotations: np.ndarray
     labels: tuple[str, ...]
     path: str | None = None
+    controller: ControllerMismatch | None = None  # None: no logged joints
 
     def __len__(self) -> int:
         return len(self.q)
@@ -173,18 +192,22 @@ def pose_set(
     labels: list[str] | None = None,
     path: str | None = None,
 ) -> PoseSet:
-    """The joints of each measured row: the logged a1..a6 (KUKA deg, (N, 6)) when given, checked
-    against the commanded positions (N, 3) mm under the nominal model with the robot's tool,
-    else the nominal IK of the commanded pose (needs a,b,c (N, 3) deg) in ``status`` (one int or
-    (N,) ints; None: the IK default per pose). ``*_decimals``: digits printed per cell (the
-    round-off the check allows; default: exact). InputError naming rows when a row fails."""
+    """The joints of each measured row: the logged a1..a6 (KUKA deg, (N, 6)) when given, their
+    mismatch with the commanded positions (N, 3) mm under the nominal model with the robot's
+    tool measured (``ControllerMismatch``; InputError naming rows and the likely fix beyond
+    ``CONTROLLER_MISMATCH_MAX_MM``), else the nominal IK of the commanded pose (needs a,b,c
+    (N, 3) deg) in ``status`` (one int or (N,) ints; None: the IK default per pose).
+    ``*_decimals``: digits printed per cell (the round-off the mismatch allows; default:
+    exact). InputError naming rows when a row fails."""
     commanded = np.asarray(commanded, dtype=float).reshape(-1, 3)
     measured = np.asarray(measured, dtype=float).reshape(-1, 3)
     n = len(commanded)
     labels = tuple(labels) if labels is not None else tuple(f"row {i}" for i in range(n))
     if joints_deg is not None:
         q = np.radians(np.asarray(joints_deg, dtype=float).reshape(-1, 6))
-        _check_logged_joints(robot, q, commanded, joint_decimals, position_decimals, labels, path)
+        controller = _controller_mismatch(
+            robot, q, commanded, joint_decimals, position_decimals, labels, path
+        )
         rotations = robot.fk(q)[:, :3, :3]
         if abc_deg is not None:
             rotations = abc_to_matrix(np.asarray(abc_deg, dtype=float).reshape(-1, 3))
@@ -211,31 +234,59 @@ def pose_set(
             )
         q = sol.q
         key = np.column_stack([commanded / _GROUP_MM, abc / _GROUP_DEG])
+        controller = None
     _, group = np.unique(np.round(key), axis=0, return_inverse=True)
-    return PoseSet(q, measured, group.reshape(-1), commanded, rotations, labels, path)
+    group = group.reshape(-1)
+    return PoseSet(q, measured, group, commanded, rotations, labels, path, controller)
 
 
-def _check_logged_joints(robot, q, commanded, joint_decimals, position_decimals, labels, path):
-    """InputError naming the rows whose logged joints miss their commanded position by more
-    than the round-off of the printed joints and positions explains (first-order bound)."""
-    reached = robot.fk(q)[:, :3, 3]
-    off = np.linalg.norm(reached - commanded, axis=1)
+def _controller_mismatch(
+    robot, q, commanded, joint_decimals, position_decimals, labels, path
+) -> ControllerMismatch:
+    """The mismatch between the commanded positions (N, 3) mm and the nominal FK of the logged
+    joints q (N, 6) rad; rows count where it exceeds the round-off of the printed joints and
+    positions (first-order bound). InputError naming the rows and the likely fix where it
+    exceeds ``CONTROLLER_MISMATCH_MAX_MM``: no controller calibration is that far off."""
+    reached = robot.fk(q)
+    off = np.linalg.norm(reached[:, :3, 3] - commanded, axis=1)
     half = np.zeros(q.shape) if joint_decimals is None else 0.5 * 10.0**-joint_decimals
     lever = np.linalg.norm(error_jacobian(robot, q)[:, :3, 3::4], axis=1)  # (N, 6) mm/rad
     allowed = (lever * np.radians(half)).sum(axis=1)
     if position_decimals is not None:
         allowed += np.linalg.norm(0.5 * 10.0 ** -np.asarray(position_decimals), axis=1)
     allowed = 1.5 * allowed + 1e-6
-    bad = np.flatnonzero(off > allowed)
-    if bad.size:
-        rows = ", ".join(f"{labels[r]} ({off[r]:.4f} mm)" for r in bad[:_SHOW])
+    far = np.flatnonzero(off > CONTROLLER_MISMATCH_MAX_MM)
+    if far.size:
+        rows = ", ".join(f"{labels[r]} ({off[r]:.4f} mm)" for r in far[:_SHOW])
         raise InputError(
-            f"the logged joints a1..a6 of {bad.size} of {len(q)} rows do not reproduce the "
-            f"commanded position under the nominal {robot.name} with this tool beyond the "
-            f"round-off of their printed decimals: {rows}; is the robot, the --tool or the base "
-            "wrong (commanded positions must be in the robot frame)?",
+            f"the logged joints a1..a6 of {far.size} of {len(q)} rows miss their commanded "
+            f"position under the nominal {robot.name} with this tool by more than "
+            f"{CONTROLLER_MISMATCH_MAX_MM:g} mm (a controller's own calibration differs by "
+            f"tenths): {rows}; {_likely_fix(robot, reached, commanded)}",
             path,
         )
+    return ControllerMismatch(float(off.mean()), float(off.max()), int((off > allowed).sum()))
+
+
+def _likely_fix(robot: Robot, reached: np.ndarray, commanded: np.ndarray) -> str:
+    """What to check when the logged joints miss their commanded positions (N, 3) mm by far:
+    the tool when one tool translation (flange frame, least squares over the TCP poses
+    ``reached`` (N, 4, 4) mm) brings every row within a tenth of the limit, else the rest."""
+    flange = reached @ np.linalg.inv(robot.flange_T_tool)
+    rot = flange[:, :3, :3]
+    gap = commanded - flange[:, :3, 3]
+    tool, *_ = np.linalg.lstsq(rot.reshape(-1, 3), gap.reshape(-1), rcond=None)
+    left = np.linalg.norm(gap - rot @ tool, axis=1).max()
+    if left <= 0.1 * CONTROLLER_MISMATCH_MAX_MM:
+        x, y, z = tool
+        return (
+            f"a tool at x {x:.3f} y {y:.3f} z {z:.3f} mm on the flange brings every row within "
+            f"{left:.3f} mm: is the --tool wrong?"
+        )
+    return (
+        "is the robot or the base wrong (commanded positions must be in the robot frame), or "
+        "are the joint columns in another order or unit (a1..a6 in degrees)?"
+    )
 
 
 def identification_jacobian(

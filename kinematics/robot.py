@@ -28,11 +28,13 @@ from accugrid.infra.errors import InputError
 from accugrid.infra.units import mm_text
 from accugrid.infra.yamlfile import Schema, YamlDoc, load_yaml
 from accugrid.kinematics import ik as closed
+from accugrid.kinematics import numeric_ik as numeric
 from accugrid.kinematics.configuration import (
     IKSolution,
     kuka_words,
     select,
     select_confdata,
+    status_turn,
 )
 from accugrid.kinematics.dh import DHTable, flange_poses
 from accugrid.kinematics.frames import invert, pose_from_xyzabc, stack_times
@@ -120,8 +122,10 @@ class Robot:
 
     @property
     def phi_rad(self) -> float:
-        """A3 angle (rad) at which the A2 axis, A3 axis and wrist point are in line (stretched)."""
+        """A3 angle (rad) at which the A2 axis, A3 axis and wrist point are in line (stretched):
+        the forearm (a3 along x3, d4 along z3) points where the upper arm (a2 along x2) does."""
         beta = np.arctan2(-np.sin(self.dh.alpha[2]) * self.dh.d[3], self.dh.a[2])
+        beta -= np.arctan2(0.0, self.dh.a[1])  # pi for an upper arm along -x2 (a UR's)
         return float(closed.wrap(self.dh.axis_angles(np.array([0, 0, -beta, 0, 0, 0]))[2]))
 
     def fk(self, q: np.ndarray) -> np.ndarray:
@@ -158,10 +162,18 @@ class Robot:
         Per pose this choice still switches branch somewhere (any per-pose rule must); to keep
         one configuration along a path or a grid, give one ``status`` for all poses.
         ``turn=None``: every angle in (-180, 180] (closest to 0).
+        An arm without a spherical wrist (a UR) is solved numerically (``kinematics.numeric_ik``):
+        ``status`` is then its configuration code (``Configuration``: shoulder + 2 elbow +
+        4 wrist) and ``status=None`` takes, of all its solutions, the one nearest ``reference``.
         """
-        flange, wrist = self._flange_wrist(robot_T_tcp)
+        if closed.closed_form_supported(self.dh):
+            flange, wrist = self._flange_wrist(robot_T_tcp)
+            q, found, reach = select(self, flange, wrist, status, reference)
+        else:  # no spherical wrist: numerical
+            flange = stack_times(np.reshape(robot_T_tcp, (-1, 4, 4)), invert(self.flange_T_tool))
+            q, found, reach = numeric.select(self, flange, status, reference)
+            wrist = None
         n = len(flange)
-        q, found, reach = select(self, flange, wrist, status, reference)
         reason = np.full(n, "", dtype=object)
         reason[~found] = "unreachable"
         reason[~found & reach] = "no solution with the requested status"
@@ -199,7 +211,8 @@ class Robot:
 
     def _within_limits(self, q, found, reason, wrist) -> IKSolution:
         """The IKSolution of the chosen joints q (N, 6) rad (found (N,) bool, ``reason`` (N,)
-        object, changed in place) with the joint limits applied; wrist centres (N, 3) mm."""
+        object, changed in place) with the joint limits applied; wrist centres (N, 3) mm (None:
+        from q)."""
         lo, hi = np.radians(self.joint_limits_deg).T
         outside = (q < lo - _LIMIT_TOL) | (q > hi + _LIMIT_TOL)  # NaN (not found): False
         beyond = outside[:, 0].copy()
@@ -214,13 +227,13 @@ class Robot:
         ok[beyond] = False
         # after Turn: A3, A5 may have moved by 360 deg
         final = q if found.all() else np.where(found[:, None], q, 0.0)
-        s, t = kuka_words(self, final, wrist)
+        s, t = status_turn(self, final) if wrist is None else kuka_words(self, final, wrist)
         return IKSolution(q, ok, reason, np.where(found, s, -1), np.where(found, t, -1))
 
     def ik_all(self, robot_T_tcp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """All 8 solutions (N, 8, 6) rad in (-pi, pi] and their reachability mask (N, 8)."""
-        poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
-        return closed.all_solutions(self.dh, stack_times(poses, invert(self.flange_T_tool)))
+        """All 8 closed-form solutions (N, 8, 6) rad in (-pi, pi] and their reachability mask
+        (N, 8); InputError for a DH structure without the closed-form inverse."""
+        return closed.all_solutions(self.dh, self._flange_wrist(robot_T_tcp)[0])
 
 
 def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:
@@ -280,6 +293,7 @@ IDENTIFICATION_SCHEMA: Schema = {
     "controller_tool": _POSE,
     "poses": None,
     "rows": None,
+    "controller_mismatch": dict.fromkeys(("mean_mm", "max_mm", "rows")),
     "identifiable_parameters": None,
     "unidentifiable_directions": None,
     "condition_number": None,

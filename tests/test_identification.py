@@ -264,25 +264,42 @@ def test_poses_in_one_plane():
         identify(NOMINAL, data)
 
 
-def test_logged_joints_of_another_tool_are_refused_naming_the_rows():
+def logged_pose_set(offset_mm: float):
+    """30 rows whose logged joints (4 decimals) reach their commanded position, except rows 4
+    and 9, commanded ``offset_mm`` higher than their joints reach."""
     q = random_joints(30, 18)
     nominal = NOMINAL.fk(q)
     commanded = nominal[:, :3, 3].copy()
-    commanded[[4, 9]] += [0.0, 0.0, 0.5]  # two rows commanded elsewhere than their joints
-    labels = [f"line {i + 2}" for i in range(30)]
+    commanded[[4, 9]] += [0.0, 0.0, offset_mm]  # two rows commanded elsewhere than their joints
+    return pose_set(
+        NOMINAL,
+        commanded,
+        commanded,
+        matrix_to_abc(nominal[:, :3, :3]),
+        np.round(np.degrees(q), 4),
+        joint_decimals=np.full((30, 6), 4),
+        position_decimals=np.full((30, 3), 4),
+        labels=[f"line {i + 2}" for i in range(30)],
+    )
+
+
+def test_logged_joints_off_by_a_controller_calibration_are_measured():
+    """Tenths of a mm between the commanded positions and the nominal FK of the logged joints:
+    a controller's own calibration, measured (mean and max over the rows, the rows beyond
+    the round-off) and taken as what the robot did."""
+    data = logged_pose_set(0.5)
+    assert data.controller.rows == 2
+    # the joints' 4 printed decimals move the TCP by up to a few microns
+    assert data.controller.max_mm == pytest.approx(0.5, abs=0.005)
+    assert data.controller.mean_mm == pytest.approx(1.0 / 30, abs=0.005)
+
+
+def test_logged_joints_far_off_are_refused_naming_the_rows():
     with pytest.raises(
-        InputError, match=r"2 of 30 rows.*line 6 \(0\.\d+ mm\), line 11 .*robot, the --tool"
+        InputError,
+        match=r"2 of 30 rows.*line 6 \((49\.99|50\.00)\d\d mm\), line 11 .*robot or the base wrong",
     ):
-        pose_set(
-            NOMINAL,
-            commanded,
-            commanded,
-            matrix_to_abc(nominal[:, :3, :3]),
-            np.round(np.degrees(q), 4),
-            joint_decimals=np.full((30, 6), 4),
-            position_decimals=np.full((30, 3), 4),
-            labels=labels,
-        )
+        logged_pose_set(50.0)
 
 
 def test_logged_joints_rounded_to_their_decimals_pass():
@@ -297,7 +314,7 @@ def test_logged_joints_rounded_to_their_decimals_pass():
         joint_decimals=np.full((30, 6), 3),
         position_decimals=np.full((30, 3), 4),
     )
-    assert len(data) == 30
+    assert len(data) == 30 and data.controller.rows == 0
 
 
 def test_rank_loss_beyond_the_structural_directions_is_named():

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import yaml
@@ -105,30 +107,109 @@ def test_too_few_poses(tmp_path, capsys):
     refused(capsys, code, tmp_path, "meas.csv: 12 distinct poses for 22 identifiable parameters")
 
 
-def test_wrong_tool_message_names_lines(tmp_path, capsys):
+def test_wrong_tool_message_names_lines_and_the_tool(tmp_path, capsys):
+    """Logged joints 50 mm off their commanded positions: no controller calibration is that
+    far off; refused, naming the rows and the tool the rows were commanded with."""
     csv = write_csv(tmp_path / "meas.csv", joints(30, 7))
     out = tmp_path / "cal.yaml"
-    code = main(
-        [
-            "identify",
-            str(csv),
-            "--robot",
-            "kr210",
-            "--tool",
-            "20",
-            "-10",
-            "251",
-            "0",
-            "0",
-            "0",
-            "-o",
-            str(out),
-        ]
-    )
+    wrong = ["--tool", "20", "-10", "300", "0", "0", "0"]
+    code = main(["identify", str(csv), "--robot", "kr210", *wrong, "-o", str(out)])
     err = capsys.readouterr().err
-    assert code == 2 and "30 of 30 rows do not reproduce the commanded position" in err
-    assert "line 3 (1.0000 mm), line 4 (1.0000 mm)" in err and "--tool" in err
+    assert code == 2 and err.count("\n") == 1
+    assert "30 of 30 rows miss their commanded position" in err
+    assert "line 3 (50.0000 mm), line 4 (50.0000 mm)" in err
+    assert "a tool at x 20.000 y -10.000 z 250.000 mm on the flange brings every row" in err
+    assert "is the --tool wrong?" in err
     assert not out.exists()
+
+
+def test_swapped_joint_columns_are_refused_naming_them(tmp_path, capsys):
+    csv = write_csv(tmp_path / "meas.csv", joints(30, 7))
+    lines = csv.read_text().splitlines()
+    lines[1] = lines[1].replace("a2,a3", "a3,a2")  # the header names the columns the other way
+    csv.write_text("\n".join(lines) + "\n")
+    code, _ = identify(tmp_path, csv)
+    refused(capsys, code, tmp_path, "is the robot or the base wrong")
+
+
+def controller_csv(tmp_path, q):
+    """kr210-paper's session as a controller with its own calibration logs it: the commanded
+    positions are its calibrated model's FK of the joints (tenths of a mm from the nominal),
+    the joints and the measured positions those of the real arm."""
+    own = replace(PAPER, dh=PAPER.dh.with_errors(CONTROLLER_ERRORS))
+    csv = write_csv(tmp_path / "meas.csv", q)
+    lines = csv.read_text().splitlines()
+    commanded = own.fk(q)[:, :3, 3]
+    for i in range(len(q)):
+        cells = lines[2 + i].split(",")
+        cells[1:4] = [f"{v:.4f}" for v in commanded[i]]
+        lines[2 + i] = ",".join(cells)
+    csv.write_text("\n".join(lines) + "\n")
+    mismatch = np.linalg.norm(np.round(commanded, 4) - PAPER.fk(q)[:, :3, 3], axis=1)
+    return csv, mismatch
+
+
+# the controller's own model against the nominal: per DH row da mm, dd mm, dalpha rad, dtheta rad
+CONTROLLER_ERRORS = np.array(
+    [
+        [0.05, -0.1, 2e-5, 3e-5],
+        [0.1, 0.0, -1e-5, -4e-5],
+        [-0.08, 0.0, 3e-5, 2e-5],
+        [0.0, 0.06, 0.0, 5e-5],
+        [0.0, 0.0, -4e-5, 0.0],
+        [0.0, 0.02, 0.0, 0.0],
+    ]
+)
+
+
+def test_controller_calibration_is_reported_and_identified_from_the_joints(tmp_path, capsys):
+    """A controller whose own model is tenths of a mm from the nominal: identify measures the
+    mismatch, prints and records it, and identifies the arm from the logged joints."""
+    q = joints(60, 1)
+    csv, mismatch = controller_csv(tmp_path, q)
+    assert 0.05 < mismatch.mean() < 0.5  # a factory calibration's size
+    report = tmp_path / "report.html"
+    code, out = identify(tmp_path, csv, "--structure", "dh", "--report-html", str(report))
+    printed = capsys.readouterr().out
+    assert code == 0
+    expected = f"by {mismatch.mean():.4f} mm mean, {mismatch.max():.4f} max (60 of 60 rows"
+    assert expected in printed and "identified from the logged joints" in printed
+    summary = yaml.safe_load(out.read_text())["identification"]
+    recorded = summary["controller_mismatch"]
+    assert recorded["rows"] == 60
+    assert recorded["mean_mm"] == pytest.approx(mismatch.mean(), abs=1e-9)
+    assert recorded["max_mm"] == pytest.approx(mismatch.max(), abs=1e-9)
+    assert "controller mismatch" in report.read_text() and "own calibration" in report.read_text()
+    # identified from the joints: the calibrated arm predicts the real one, not the controller
+    q_new = joints(50, 5)
+    true = PAPER.true_robot().fk(q_new)[:, :3, 3]
+    assert np.abs(load_robot(out).true_robot().fk(q_new)[:, :3, 3] - true).max() < 1e-3
+
+
+def test_without_logged_joints_identify_says_what_to_log(tmp_path, capsys):
+    csv = write_csv(tmp_path / "meas.csv", joints(40, 4), logged=False, status=True)
+    report = tmp_path / "report.html"
+    code, out = identify(tmp_path, csv, "--structure", "dh", "--report-html", str(report))
+    printed = capsys.readouterr().out
+    assert code == 0
+    assert "joints not logged" in printed
+    assert "log the controller's actual joint angles as columns a1..a6" in printed
+    assert "log the controller&#39;s actual joint angles as columns a1..a6" in report.read_text()
+    assert "controller_mismatch" not in yaml.safe_load(out.read_text())["identification"]
+
+
+def test_logged_joints_that_agree_add_no_controller_line(tmp_path, capsys):
+    code, out = identify(
+        tmp_path,
+        write_csv(tmp_path / "meas.csv", joints(40, 3)),
+        "--folds",
+        "0",
+        "--structure",
+        "dh",
+    )
+    printed = capsys.readouterr().out
+    assert code == 0 and "controller" not in printed and "joints not logged" not in printed
+    assert "controller_mismatch" not in yaml.safe_load(out.read_text())["identification"]
 
 
 def test_orientation_missing(tmp_path, capsys):

@@ -143,7 +143,10 @@ def run(args: argparse.Namespace) -> int:
 
         roles = [("measurements", args.measurements), ("nominal robot", args.robot)]
         calibration.files[args.report_html] = identify_report(
-            calibration.files[args.output], calibration.result.residuals, roles
+            calibration.files[args.output],
+            calibration.result.residuals,
+            roles,
+            controller=calibration.controller,
         )
     write_files(calibration.files, inputs, args.force, main=[args.output])  # the YAML last
     print(calibration.report)
