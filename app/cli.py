@@ -81,10 +81,11 @@ def main(argv: list[str] | None = None) -> int:
         if isinstance(stream, io.TextIOWrapper):
             stream.reconfigure(errors="backslashreplace")
     args = build_parser(_command(argv)).parse_args(argv)
-    with warnings.catch_warnings(record=True) as held, track_inputs(), _reading_format(args):
+    with warnings.catch_warnings(record=True) as held, track_inputs():
         warnings.simplefilter("default")
         try:
-            code = int(args.handler(args) or EXIT_OK)
+            with _reading_format(args):  # inside: a --format file's error is an input error
+                code = int(args.handler(args) or EXIT_OK)
         except InputError as exc:
             print(f"accugrid {args.command}: error: {exc}", file=sys.stderr)
             return EXIT_INPUT
