@@ -158,11 +158,12 @@ def calibrate(
     if selection is not None:
         report += "\n" + _structure_report(selection)
     if support is not None:
-        limit = support["loo_leverage_max"]
+        leverage, distance = support["loo_leverage_max"], support["loo_distance_max_mm"]
         report += (
-            f"\n  support: targets whose prediction leverage exceeds {limit:.3g} (the largest "
-            "leave-one-out leverage of these poses) are flagged and corrected by the DH-only fit "
-            "of the same poses, recorded beside the model (--strict refuses them)"
+            f"\n  support: targets of a prediction leverage above {leverage:.4g} or farther than "
+            f"{distance:.1f} mm (TCP motion) in joint space from every pose (the largest among "
+            "these poses, left out in turn) are flagged and corrected by the DH-only fit of the "
+            "same poses, recorded beside the model (--strict refuses them)"
         )
     if urdf:
         from accugrid.kinematics.urdf_export import urdf_text

@@ -127,8 +127,8 @@ REASONS = {
     ),
     NO_SUPPORT: (
         "without the model's support",
-        "without support in the poses the model was identified from: prediction leverage "
-        "{value:.2f} x the largest of those poses' (--strict refuses)",
+        "without support in the poses the model was identified from: {value:.2f} x the largest "
+        "prediction leverage or joint-space distance among them (--strict refuses)",
     ),
     TOO_LONG: (
         "beyond the safety limit",
@@ -154,9 +154,9 @@ FLAGS = {
         "the tool the residual grid was measured with (beyond correction.tool_distance)"
     ),
     F_SUPPORT: (
-        "without support in the poses the model was identified from (prediction leverage "
-        "{support:.2f} x the largest of those poses'): corrected by the DH-only fit of the same "
-        "poses"
+        "without support in the poses the model was identified from ({support:.2f} x the "
+        "largest prediction leverage or joint-space distance among them): corrected by the "
+        "DH-only fit of the same poses"
     ),
 }
 _LISTED = 5
