@@ -4,11 +4,12 @@ Models identified (the default structure, tracker frame identified) from 300 pos
 (``../shared/realdata/ipa-ur10``, read as it comes; the commanded positions are the nominal FK of
 the logged joints, the controller's own model not being the nominal one) and scored on poses they
 never saw: the rest of C (each model's own identified tracker frame), Series A (its tracker frame
-fitted with each model on all its rows), and the shifted distributions of C's joint-space halves
-(A1 or A4 below their median for calibration, above for scoring). Per row, 3D errors in mm: the
-model's mean and max, the DH-only fit's mean (the fallback, ``--structure dh`` on the same poses),
-the share of poses without support, how many of the poses the model misses by more than twice
-its own nested estimate are flagged, and on the flagged poses the model's mean against the
+fitted with each model on all its rows), the shifted distributions of C's joint-space halves (A1
+or A4 below their median for calibration, above for scoring) and Series A's elbow configurations
+(300 poses with the elbow angle above 0, scored on those below). Per row, 3D errors in mm: the
+model's mean and max, the DH-only fit's mean (the fallback, ``--structure dh`` on the same
+poses), the share of poses without support, how many of the poses the model misses by more than
+twice its own nested estimate are flagged, and on the flagged poses the model's mean against the
 fallback's. Not a timed test: ``make bench ARGS=real`` (or
 ``.venv/bin/python bench/bench_real_support.py``).
 """
@@ -76,6 +77,13 @@ def main() -> None:
         inside = np.setdiff1d(half, pick)
         print(row(f"{name} → the rest of that half", model, c, inside, True), flush=True)
         print(row(f"{name} → the other half", model, c, np.flatnonzero(~low), True), flush=True)
+    up = np.flatnonzero(a["q"][:, 2] > 0)  # Series A, elbow angle above 0: one configuration
+    pick = up[random_pick(len(up), POSES)]
+    model = calibrated(a, pick)
+    name = f"{POSES} of A with the elbow above 0"
+    others = np.flatnonzero(a["q"][:, 2] <= 0)
+    print(row(f"{name} → the rest of them", model, a, np.setdiff1d(up, pick), True), flush=True)
+    print(row(f"{name} → A with the elbow below", model, a, others, True), flush=True)
 
 
 if __name__ == "__main__":
