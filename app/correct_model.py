@@ -103,24 +103,25 @@ def read_model(path: str | os.PathLike[str], nominal: Robot | None = None) -> Mo
     validity, tool = None, None
     if Path(text).is_file():
         doc = load_yaml(text)
-        validity = _validity(doc, robot, text)
+        validity = _validity(doc, robot)
         if doc.has("identification", "controller_tool"):
             keys = ("identification", "controller_tool")
             tool = pose_from_xyzabc([doc.number(*keys, k) for k in "xyzabc"])
     return ModelFile(text, robot, validity, tool)
 
 
-def _validity(doc, robot: Robot, path: str) -> Validity | None:
+def _validity(doc, robot: Robot) -> Validity | None:
     """Where the calibrated file's model holds: its poses' region and, when it records one,
     its support among them (``kinematics.support``)."""
-    from accugrid.kinematics.calibrated import chosen_structure
+    from accugrid.kinematics.calibrated import model_structure
     from accugrid.kinematics.support import Structure, Support
     from accugrid.kinematics.validity import Validity
 
     validity = Validity.from_doc(doc)
     if validity is None or not doc.has("identification", "support"):
         return validity
-    compliance, harmonics, gravity = chosen_structure(path, robot)
+    chosen = doc.get("identification", "structure", "chosen", default=[]) or []
+    compliance, harmonics, gravity = model_structure(robot, chosen)
     base_frame = doc.has("identification", "tracker_T_robot")
     structure = Structure(base_frame, compliance, harmonics, gravity)
     return replace(validity, support=Support.from_doc(doc, robot, structure))

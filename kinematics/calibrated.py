@@ -25,6 +25,7 @@ __all__ = [
     "check_same_robot",
     "chosen_structure",
     "identification_summary",
+    "model_structure",
     "pose_dict",
 ]
 
@@ -263,14 +264,21 @@ def chosen_structure(path, robot: Robot):
     poses on ``robot`` (its nominal model): (compliance under masses, harmonics (axis, order),
     gravity groups of ``kinematics.candidates``). InputError when the file is of another robot."""
     from accugrid.infra.yamlfile import load_yaml
-    from accugrid.kinematics.candidates import gravity_terms
     from accugrid.kinematics.robot import load_robot
 
     model = load_robot(path)
     check_same_robot(model, robot, str(path))
+    chosen = load_yaml(path).get("identification", "structure", "chosen", default=[]) or []
+    return model_structure(model, chosen)
+
+
+def model_structure(model: Robot, chosen: list[str]):
+    """(compliance under masses, harmonics (axis, order), gravity groups) of a calibrated
+    ``model`` whose file names the groups ``chosen`` (``identification.structure.chosen``)."""
+    from accugrid.kinematics.candidates import gravity_terms
+
     moves = model.joint_errors
     harmonics = tuple((h.axis, h.order) for h in moves.harmonics) if moves else ()
     compliance = bool(moves is not None and moves.masses and np.any(moves.compliance))
-    chosen = load_yaml(path).get("identification", "structure", "chosen", default=[]) or []
-    gravity = tuple(t for t in gravity_terms(robot) if t.name in chosen)
+    gravity = tuple(t for t in gravity_terms(model) if t.name in chosen)
     return compliance, harmonics, gravity

@@ -33,9 +33,11 @@ its nearest other one. A target beyond either yardstick (``ratio`` > 1) has no s
 
 - ``parameters``: the names of the Jacobian's columns (``identification.parameter_names``);
 - ``leverage_map``: (k, p) rows W with h(q) = |W J(q)ᵀ|² (the whitened inverse of Jᵀ J in its k
-  identifiable directions), 7 significant digits;
+  identifiable directions), 7 significant digits, each row one text of numbers separated by
+  blanks (a file of 3,000 poses stays quick to read);
 - ``loo_leverage_max``: the largest leave-one-out leverage of the calibration poses;
-- ``joints_deg``: (n, 6) the distinct calibration poses' joints, KUKA deg, 3 decimals;
+- ``joints_deg``: (n, 6) the distinct calibration poses' joints, KUKA deg, 3 decimals, rows as
+  ``leverage_map``'s;
   ``lever_mm_per_rad``: (6,) the levers; ``loo_distance_max_mm``: the largest nearest-pose
   distance among them, mm;
 - ``fallback``: the DH-only fit of the same poses (``errors``: six rows Δa mm, Δd mm, Δα rad,
@@ -84,6 +86,7 @@ SUPPORT_SCHEMA = {
     },
 }
 _DIGITS = 7  # significant digits of the leverage map in the file
+_BLOCK = 4096  # targets per Jacobian block
 
 
 @dataclass(frozen=True)
@@ -162,12 +165,14 @@ class Support:
         return self._tree.query(_embedded(q, self.lever))[0] if len(q) else np.zeros(0)
 
     def leverage(self, q: np.ndarray) -> np.ndarray:
-        """h (N,) of targets with joints q (N, 6) rad (noise units; NaN rows give NaN)."""
+        """h (N,) of targets with joints q (N, 6) rad (noise units; NaN rows give NaN), in
+        blocks of ``_BLOCK`` targets (the Jacobian is (block, 3, p))."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
-        if not len(q):
-            return np.zeros(0)
-        blocks = _hat_blocks(self.leverage_map, self.structure.jacobian(self.robot, q))
-        return np.einsum("naa->n", blocks)
+        out = np.empty(len(q))
+        for lo in range(0, len(q), _BLOCK):
+            jac = self.structure.jacobian(self.robot, q[lo : lo + _BLOCK])
+            out[lo : lo + _BLOCK] = np.einsum("naa->n", _hat_blocks(self.leverage_map, jac))
+        return out
 
     def ratio(self, q: np.ndarray) -> np.ndarray:
         """(N,) the larger of h over the calibration poses' largest leave-one-out leverage and
@@ -196,7 +201,8 @@ class Support:
         if not (loo > 0 and far > 0):
             raise doc.error("loo_leverage_max and loo_distance_max_mm must be > 0", *key)
         joints = _rows(doc, (*key, "joints_deg"), 6)
-        lever = _rows(doc, key, 6, "lever_mm_per_rad")[0]
+        doc.sequence(*key, "lever_mm_per_rad", length=6)
+        lever = np.array([doc.number(*key, "lever_mm_per_rad", i) for i in range(6)])
         fb = (*key, "fallback")
         doc.sequence(*fb, "errors", length=6)
         errors = np.array([[doc.number(*fb, "errors", i, k) for k in ERROR_KEYS] for i in range(6)])
@@ -210,18 +216,22 @@ class Support:
         return cls(structure, robot, w, loo, np.radians(joints), lever, far, fallback, frame)
 
 
-def _rows(doc: YamlDoc, key: tuple, width: int, last: str | None = None) -> np.ndarray:
-    """The numbers (n, width) at ``key`` (a list of rows; ``last``: one row named so),
-    InputError naming the key unless finite and of that width."""
-    keys = (*key, last) if last else key
-    value = doc.get(*keys)
+def _rows(doc: YamlDoc, key: tuple, width: int) -> np.ndarray:
+    """The numbers (n, width) at ``key``: a list of rows, each a text of ``width`` numbers
+    separated by blanks; InputError naming the key unless so and finite."""
+    value = doc.get(*key)
     try:
-        rows = np.array([value] if last else value, dtype=float)
+        rows = np.array([np.array(str(r).split(), dtype=float) for r in value])
     except (TypeError, ValueError):
         rows = np.zeros((0, 0))
     if rows.ndim != 2 or rows.shape[1] != width or not len(rows) or not np.isfinite(rows).all():
-        raise doc.error(f"{doc.keyname(*keys)} must be rows of {width} numbers", *keys)
+        raise doc.error(f"{doc.keyname(*key)} must be rows of {width} numbers", *key)
     return rows
+
+
+def _row_texts(rows: np.ndarray, form: str) -> list[str]:
+    """Rows (n, m) as texts of m numbers in ``form`` (a format spec) separated by blanks."""
+    return [" ".join(format(float(v), form) for v in row) for row in rows]
 
 
 def support_section(
@@ -236,7 +246,6 @@ def support_section(
     w = _whitened(jac.reshape(-1, jac.shape[2]))
     hat = _hat_blocks(w, jac)
     loo = np.einsum("nab,nba->n", hat, np.linalg.inv(np.eye(3) - hat))
-    rounded = [[float(f"{v:.{_DIGITS}g}") for v in row] for row in w]
     theta = [4 * i + 3 for i in range(6)]  # the Δθ columns: ∂p/∂A_i up to the axis' sign
     lever = np.sqrt(np.mean(np.sum(jac[:, :, theta] ** 2, axis=1), axis=0))
     joints = np.round(np.degrees(q[first]), 3)
@@ -245,9 +254,9 @@ def support_section(
     frame = dh.tracker_T_robot
     return {
         "parameters": structure.names,
-        "leverage_map": rounded,
+        "leverage_map": _row_texts(w, f".{_DIGITS}g"),
         "loo_leverage_max": float(loo.max()),
-        "joints_deg": [[float(v) for v in row] for row in joints],
+        "joints_deg": _row_texts(joints, ".3f"),
         "lever_mm_per_rad": [float(v) for v in lever],
         "loo_distance_max_mm": float(nearest.max()),
         "fallback": {
