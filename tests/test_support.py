@@ -213,3 +213,18 @@ def test_real_ur10_poses_of_another_series_have_no_support(realdata):
     assert (support.ratio(q_c[rest]) > 1.0).mean() < 0.02  # measured: 0.4 %
     fallback = support.fallback.true_robot().fk(q_a)[:, :3, 3]
     np.testing.assert_allclose(fallback, dh.robot.true_robot().fk(q_a)[:, :3, 3], atol=1e-9)
+
+
+def test_a_damaged_support_record_is_a_located_error(calibrated, tmp_path, capsys):
+    text = open(calibrated).read()
+    at = text.index("  leverage_map:")
+    damaged = tmp_path / "cal.yaml"
+    assert text[at:].startswith("  leverage_map: [")  # rows of numbers as texts, flow style
+    damaged.write_text(text.replace("leverage_map: [", "leverage_map: [oops ", 1))
+    write_points(tmp_path / "points.csv", CALIBRATION[:1])
+    argv = ["correct", str(tmp_path / "points.csv"), "--model", str(damaged), "--tool", *TOOL]
+    assert main([*argv, "-o", str(tmp_path / "out.csv")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "support.leverage_map' must be rows of 31 numbers" in err[0]
+    line = text[:at].count("\n") + 1
+    assert f"cal.yaml:{line}:" in err[0]
