@@ -1,7 +1,7 @@
 """`accugrid identify` as one call: a measurement CSV in, the calibrated robot files and the
 report text out (``kinematics.identification`` does the fit, ``kinematics.calibrated`` the YAML).
 
-Lengths in mm, angles in rad where named, else deg; the measurement CSV is DESIGN.md's.
+Lengths in mm, angles in rad where named, else deg; the measurement CSV of docs/formats.md.
 """
 
 from __future__ import annotations

@@ -3,8 +3,10 @@
 Every module in ``app/commands/`` is one subcommand: it defines ``NAME``,
 ``add_arguments(parser)`` and ``run(args) -> int``; ``commands.COMMANDS`` lists them with their
 help. Only the module of the command that runs is imported (``accugrid --help`` imports none).
-Exit codes (DESIGN.md): 0 success, 2 bad input or arguments (one line naming file, line and
-column, no traceback), 1 internal error.
+Exit codes (docs/guarantees.md): 0 success, 2 bad input or arguments (one line naming file, line and
+column, no traceback), 1 internal error, 128 + the signal's number when SIGINT, SIGTERM or SIGHUP
+ends the command (one line, no traceback, from the first statement of ``main`` on: the imports of
+the command's modules included).
 """
 
 from __future__ import annotations
@@ -14,8 +16,10 @@ import contextlib
 import importlib
 import io
 import os
+import signal
 import sys
 import warnings
+from collections.abc import Iterator
 
 from accugrid import __version__
 from accugrid.app.commands import COMMANDS
@@ -23,6 +27,9 @@ from accugrid.infra.errors import InputError, printable
 from accugrid.infra.inputfile import track_inputs
 
 EXIT_OK, EXIT_INTERNAL, EXIT_INPUT = 0, 1, 2
+_SIGNALS = tuple(
+    getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)
+)
 
 
 __all__ = ["EXIT_INPUT", "EXIT_INTERNAL", "EXIT_OK", "build_parser", "main"]
@@ -69,6 +76,43 @@ def _reading_format(args: argparse.Namespace) -> contextlib.AbstractContextManag
     return reading_format(args)
 
 
+class _Ended(BaseException):
+    """A termination signal arrived while the command ran."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _end(signum: int, frame: object) -> None:
+    raise _Ended(signum)
+
+
+@contextlib.contextmanager
+def _signals_end_command() -> Iterator[None]:
+    """SIGINT, SIGTERM and SIGHUP raise ``_Ended`` in the main thread while the command runs
+    (``infra.atomic`` takes them over while it writes); the handlers before are restored
+    after. Called from another thread, the handlers are left alone."""
+    previous = {}
+    try:
+        for sig in _SIGNALS:
+            previous[sig] = signal.signal(sig, _end)
+    except ValueError:  # not the main thread
+        pass
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def _ended(command: str | None, signum: int) -> int:
+    """The one line of a command ended by signal ``signum``, and its exit code 128 + signum."""
+    prog = f"accugrid {command}" if command else "accugrid"
+    print(f"{prog}: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
+    return 128 + signum
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the process exit code (also used by the console script).
 
@@ -77,6 +121,21 @@ def main(argv: list[str] | None = None) -> int:
     as an input that no output may replace (``infra.atomic``).
     """
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    try:
+        with _signals_end_command():
+            return _run(argv)
+    except _Ended as ended:
+        return _ended(_command(argv), ended.signum)
+    except KeyboardInterrupt:  # SIGINT where no handler of ours was installed
+        return _ended(_command(argv), signal.SIGINT)
+    except SystemExit as stop:  # ``infra.atomic`` ends a write on a signal with 128 + it
+        if stop.code in {128 + sig for sig in _SIGNALS}:
+            return _ended(_command(argv), stop.code - 128)
+        raise
+
+
+def _run(argv: list[str]) -> int:
+    """``main`` within its signal handlers."""
     for stream in (sys.stdout, sys.stderr):  # a non-UTF-8 byte of a file name prints as \udcff
         if isinstance(stream, io.TextIOWrapper):
             stream.reconfigure(errors="backslashreplace")
@@ -89,9 +148,6 @@ def main(argv: list[str] | None = None) -> int:
         except InputError as exc:
             print(f"accugrid {args.command}: error: {exc}", file=sys.stderr)
             return EXIT_INPUT
-        except KeyboardInterrupt:
-            print(f"accugrid {args.command}: interrupted", file=sys.stderr)
-            return EXIT_INTERNAL
         except BrokenPipeError:  # the reader of stdout left (`accugrid ... | head`)
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no 2nd error at exit
             print(f"accugrid {args.command}: standard output closed early", file=sys.stderr)

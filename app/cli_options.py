@@ -29,6 +29,7 @@ from accugrid.infra.units import unit_spec
 
 if TYPE_CHECKING:
     from accugrid.app.job import ProgramRequest
+    from accugrid.compensation.policy import PolicyRequest
     from accugrid.kinematics.identification import Terms
     from accugrid.kinematics.robot import Robot
 
@@ -56,6 +57,7 @@ __all__ = [
     "number",
     "parse_centres",
     "parse_steps",
+    "policy_request",
     "program_request",
     "reading_format",
     "robot_with_tool",
@@ -326,9 +328,13 @@ def parse_centres(items: list[list[str]] | None) -> dict[str, tuple[float, float
 
 
 def add_policy(parser: argparse.ArgumentParser, what: str) -> None:
-    """``--allow-partial``, ``--strict`` and ``--outside``, the correction policy
-    (``compensation.policy``) of every command that corrects; ``what`` names its positions.
-    ``--outside`` is a word of ``OUTSIDE_WORDS`` (``error``: its former spelling of refuse)."""
+    """The options of the correction policy (``compensation.policy.PolicyRequest``), the same in
+    every command that corrects: ``--allow-partial``, ``--strict``, ``--outside`` (a word of
+    ``OUTSIDE_WORDS``; ``error``: its former spelling of refuse) and the orientation against the
+    grid's (``--orientation-tol``, ``--orientation-limit``, ``--allow-orientation``); ``what``
+    names the command's positions. ``policy_request`` gives the record."""
+    from accugrid.compensation.policy import GRID_ORIENTATION_TOL_DEG, ORIENTATION_LIMIT_DEG
+
     parser.add_argument(
         "--allow-partial",
         action="store_true",
@@ -353,6 +359,42 @@ def add_policy(parser: argparse.ArgumentParser, what: str) -> None:
         metavar="{refuse,clamp}",
         help=f"{what} outside the grid box: refuse, i.e. not corrected (the job is refused "
         "unless --allow-partial), or clamp: the nearest cell's error, flagged (default: refuse)",
+    )
+    parser.add_argument(
+        "--orientation-tol",
+        type=number("deg", 0, 180),
+        default=GRID_ORIENTATION_TOL_DEG,
+        metavar="DEG",
+        help=f"flag {what} whose orientation differs from the grid's by more, deg "
+        f"(default: {GRID_ORIENTATION_TOL_DEG:g})",
+    )
+    parser.add_argument(
+        "--orientation-limit",
+        type=number("deg", 0, 180),
+        default=ORIENTATION_LIMIT_DEG,
+        metavar="DEG",
+        help=f"without a model: {what} whose orientation differs from the grid's by more are "
+        "not corrected (the job is refused unless --allow-partial), deg "
+        f"(default: {ORIENTATION_LIMIT_DEG:g})",
+    )
+    parser.add_argument(
+        "--allow-orientation",
+        action="store_true",
+        help=f"correct (and flag) {what} beyond --orientation-limit",
+    )
+
+
+def policy_request(args: argparse.Namespace) -> PolicyRequest:
+    """The policy's options of a command's arguments (``add_policy``)."""
+    from accugrid.compensation.policy import PolicyRequest
+
+    return PolicyRequest(
+        outside=OUTSIDE_WORDS[args.outside],
+        orientation_tol_deg=args.orientation_tol,
+        orientation_limit_deg=args.orientation_limit,
+        allow_orientation=args.allow_orientation,
+        strict=args.strict,
+        allow_partial=args.allow_partial,
     )
 
 
@@ -500,9 +542,7 @@ def program_request(args: argparse.Namespace, dialect: str, title: str) -> Progr
         no_correction=args.no_correction,
         allow_config_change=args.allow_config_change,
         templates=args.templates,
-        outside=OUTSIDE_WORDS[args.outside],
-        allow_partial=args.allow_partial,
-        strict=args.strict,
+        policy=policy_request(args),
         report_html=Path(args.report_html) if args.report_html else None,
         report_title=title,
     )

@@ -13,8 +13,6 @@ The verdicts are the correction policy's (``compensation.policy``).
 
 from __future__ import annotations
 
-import os
-from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -26,6 +24,7 @@ from accugrid.app.corrected import (
     corrected_file,
     point_status,
 )
+from accugrid.codegen.correction import read_model
 from accugrid.codegen.header import grid_lines, input_line
 from accugrid.codegen.points import Points, read_points
 from accugrid.compensation.model_correction import TOL_MM
@@ -34,7 +33,6 @@ from accugrid.infra.atomic import JobFiles
 from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import InputError
 from accugrid.infra.units import check_scale
-from accugrid.infra.yamlfile import load_yaml
 from accugrid.kinematics.frames import (
     abc_to_matrix,
     matrix_to_abc,
@@ -43,12 +41,11 @@ from accugrid.kinematics.frames import (
     too_tilted,
 )
 from accugrid.kinematics.model import reach_mm
-from accugrid.kinematics.robot import Robot, load_robot
 
 if TYPE_CHECKING:
-    from accugrid.kinematics.validity import Validity
+    pass
 
-__all__ = ["ModelFile", "correct_by_model", "point_orientations", "read_model"]
+__all__ = ["correct_by_model", "point_orientations"]
 
 _LISTED = 5
 
@@ -71,67 +68,11 @@ def point_orientations(points: Points, reference_abc: np.ndarray) -> np.ndarray:
     return matrix_to_abc(orient_along_axes(points.axis, reference))
 
 
-@dataclass(frozen=True)
-class ModelFile:
-    """A calibrated model as every command reads it: the robot (its ``true_robot()`` the arm,
-    its tool the identified TCP: the SMR it was measured with), where it holds (``validity``,
-    None without a record) and the controller's tool of its measurements (flange_T_tool (4, 4)
-    mm, None when the file does not record it)."""
-
-    path: str
-    robot: Robot
-    validity: Validity | None
-    measured_with: np.ndarray | None
-
-    @property
-    def smr_tools(self) -> tuple[np.ndarray | None, np.ndarray]:
-        """(controller, arm) tools that land the SMR the model was measured with."""
-        return self.measured_with, self.robot.flange_T_tool
-
-
-def read_model(path: str | os.PathLike[str], nominal: Robot | None = None) -> ModelFile:
-    """Load a calibrated robot YAML (or a built-in robot name) once for a job; with
-    ``nominal`` (the cell's robot) InputError unless it is a model of that robot."""
-    from accugrid.kinematics.calibrated import check_same_robot
-
-    text = os.fspath(path)
-    robot = load_robot(text)
-    if not hasattr(robot, "true_robot"):
-        raise InputError("a calibrated model must be a DH robot file (accugrid identify)", text)
-    if nominal is not None:
-        check_same_robot(robot, nominal, text)
-    validity, tool = None, None
-    if Path(text).is_file():
-        doc = load_yaml(text)
-        validity = _validity(doc, robot)
-        if doc.has("identification", "controller_tool"):
-            keys = ("identification", "controller_tool")
-            tool = pose_from_xyzabc([doc.number(*keys, k) for k in "xyzabc"])
-    return ModelFile(text, robot, validity, tool)
-
-
-def _validity(doc, robot: Robot) -> Validity | None:
-    """Where the calibrated file's model holds: its poses' region and, when it records one,
-    its support among them (``kinematics.support``)."""
-    from accugrid.kinematics.calibrated import model_structure
-    from accugrid.kinematics.support import Structure, Support
-    from accugrid.kinematics.validity import Validity
-
-    validity = Validity.from_doc(doc)
-    if validity is None or not doc.has("identification", "support"):
-        return validity
-    chosen = doc.get("identification", "structure", "chosen", default=[]) or []
-    compliance, harmonics, gravity = model_structure(robot, chosen)
-    base_frame = doc.has("identification", "tracker_T_robot")
-    structure = Structure(base_frame, compliance, harmonics, gravity)
-    return replace(validity, support=Support.from_doc(doc, robot, structure))
-
-
 def correct_by_model(request: CorrectRequest) -> JobFiles:
     """The ``correct`` job with a model (``correct_points`` dispatches here): the corrected CSV
     and the printed summary; InputError naming the first point not corrected (unless
     ``allow_partial``)."""
-    settings, model_file = request.settings, request.model
+    settings, model_file = request.correction, request.model
     is_file = Path(model_file).is_file()
     model = read_model(model_file)
     calibrated = model.robot
@@ -154,7 +95,7 @@ def correct_by_model(request: CorrectRequest) -> JobFiles:
         points.xyz,
         abc,
         validity=model.validity,
-        **request.limits(),
+        **request.policy.limits(),
     )
     grid, status = policy.grid, policy.status
     own = point_status(points, None)

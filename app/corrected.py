@@ -1,5 +1,5 @@
-"""``accugrid correct`` (``correct_points``): the corrected-points CSV (DESIGN.md "Corrected
-points") both jobs (grid here, model in ``correct_model``) write from the correction policy's
+"""``accugrid correct`` (``correct_points``): the corrected-points CSV (docs/formats.md)
+both jobs (grid here, model in ``correct_model``) write from the correction policy's
 verdict (``compensation.policy``): every input column untouched, then x_cmd,y_cmd,z_cmd (the
 command, mm), ex,ey,ez (the correction applied, P' - P, mm; 4 decimals) and flag (why a point
 deserves a look, or "not corrected: ..." with --allow-partial)."""
@@ -19,12 +19,7 @@ from accugrid.codegen.header import csv_comment, grid_lines, header_lines, input
 from accugrid.codegen.linebytes import SLOT, image_bytes, line_image, number_cells
 from accugrid.codegen.points import Points, read_points
 from accugrid.compensation.measurements import REPEAT_TOL_MM
-from accugrid.compensation.policy import (
-    GRID_ORIENTATION_TOL_DEG,
-    ORIENTATION_LIMIT_DEG,
-    Policy,
-    Verdict,
-)
+from accugrid.compensation.policy import Policy, PolicyRequest, Verdict
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.infra.atomic import JobFiles
 from accugrid.infra.digest import file_sha256
@@ -143,7 +138,7 @@ def corrected_file(
     and the summary every correct job ends with (largest correction, flagged points) to print,
     and the partial job's counts for stderr."""
     warnings = verdict.enforce(
-        points.label, points.table.where, request.allow_partial, what="point"
+        points.label, points.table.where, request.policy.allow_partial, what="point"
     )
     correction = verdict.command - points.xyz
     length = verdict.length
@@ -171,13 +166,30 @@ def corrected_file(
     model = request.model if request.model and Path(request.model).is_file() else None
     files = {request.output: text}
     if request.report_html:
-        from accugrid.app.correction_report import correction_report, verdict_states
+        from accugrid.app.correction_report import (
+            ReportedFiles,
+            checks_text,
+            correction_report,
+            verdict_states,
+        )
 
         roles = [("points", request.points), ("model", request.model), ("grid", request.grid)]
         state, reasons = verdict_states(verdict)
-        files[request.report_html] = correction_report(
-            "Corrected points", points.xyz, verdict.command, state, reasons, points.label, roles
-        )
+
+        def page(outputs: list[tuple[str, str]]) -> str:
+            return correction_report(
+                "Corrected points",
+                points.xyz,
+                verdict.command,
+                state,
+                reasons,
+                points.label,
+                roles,
+                outputs=outputs,
+                checked=checks_text(verdict.policy),
+            )
+
+        files = ReportedFiles(files, request.report_html, page)
         lines.append(f"wrote {request.report_html}")
     return JobFiles(files, [request.points, request.grid, model], lines, warnings)
 
@@ -185,36 +197,28 @@ def corrected_file(
 @dataclass(frozen=True)
 class CorrectRequest:
     """One ``accugrid correct`` job: POINTS (robot frame) to OUTPUT, by a grid measurement
-    and/or a calibrated model (paths), with the correction ``settings``. Orientation: flag
-    beyond ``orientation_tol_deg``, refuse beyond ``orientation_limit_deg`` (grid only) unless
-    ``allow_orientation``; ``repeat_tol_mm`` merges repeated grid vertices. With a model:
-    ``status`` (KUKA, None: the default rule), ``abc`` (KUKA deg, orientation of points without
-    one, reference for i,j,k), ``tool`` (the controller's x, y, z, a, b, c; None: the file's)."""
+    and/or a calibrated model (paths), with the correction ``settings`` (their ``outside`` is
+    ``policy.outside``) and the policy's options (``policy``); ``repeat_tol_mm`` merges repeated
+    grid vertices. With a model: ``status`` (KUKA, None: the default rule), ``abc`` (KUKA deg,
+    orientation of points without one, reference for i,j,k), ``tool`` (the controller's x, y,
+    z, a, b, c; None: the file's)."""
 
     points: str
     output: str
     grid: str | None
     model: str | None
     settings: CorrectionSettings
-    orientation_tol_deg: float = GRID_ORIENTATION_TOL_DEG
-    orientation_limit_deg: float = ORIENTATION_LIMIT_DEG
-    allow_orientation: bool = False
+    policy: PolicyRequest = PolicyRequest()
     repeat_tol_mm: float = REPEAT_TOL_MM
     status: int | None = None
     abc: tuple[float, float, float] = (0.0, 90.0, 0.0)
     tool: tuple[float, ...] | None = None
-    strict: bool = False
-    allow_partial: bool = False
     report_html: str | None = None  # the HTML report to write beside the CSV
 
-    def limits(self) -> dict:
-        """The policy's orientation and strictness fields (``Policy.build``)."""
-        return {
-            "orientation_tol_deg": self.orientation_tol_deg,
-            "orientation_limit_deg": self.orientation_limit_deg,
-            "allow_orientation": self.allow_orientation,
-            "strict": self.strict,
-        }
+    @property
+    def correction(self) -> CorrectionSettings:
+        """The correction settings with the policy's ``outside``."""
+        return self.settings.but(outside=self.policy.outside)
 
 
 def correct_points(request: CorrectRequest) -> JobFiles:
@@ -222,21 +226,20 @@ def correct_points(request: CorrectRequest) -> JobFiles:
     InputError (nothing to write) on bad input, a correction beyond the safety limit, or a
     point the policy does not correct (outside the grid, orientation beyond the limit, another
     Status than the grid's) unless ``allow_partial``."""
-    if not 0 <= request.orientation_tol_deg <= request.orientation_limit_deg:
-        raise InputError("need 0 <= --orientation-tol <= --orientation-limit (deg)")
+    request.policy.check()
     if request.model is not None:
         from accugrid.app.correct_model import correct_by_model  # only when asked: slower
 
         return correct_by_model(request)
     if request.grid is None:
         raise InputError("give --grid MEAS, --model CAL.yaml or both")
-    settings = request.settings
+    settings = request.correction
     policy = Policy.build(
         settings,
         request.grid,
         status=request.status,
         repeat_tol_mm=request.repeat_tol_mm,
-        **request.limits(),
+        **request.policy.limits(),
     )
     model = policy.grid
     points = read_points(request.points)

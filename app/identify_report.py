@@ -19,11 +19,24 @@ from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 
 __all__ = ["identify_report"]
 
-_SHOWN = (
+_IN_TABLES = (  # the summary keys the report's own tables show; any other is listed as it is
+    "robot",
+    "measurements",
+    "controller_tool",
+    "tracker_T_robot",
+    "poses",
+    "rows",
+    "identifiable_parameters",
+    "condition_number",
+    "observability_o1",
+    "robust_sigma_mm",
+    "outliers",
+    "residual_rms_mm",
+    "residual_max_mm",
+    "cross_validation",
+    "validity",
     "parameters",
     "unidentifiable_directions",
-    "cross_validation",
-    "measurements",
     "structure",
 )
 
@@ -40,6 +53,80 @@ def _axes_text(value: object) -> str:
     if isinstance(value, float):
         return f"{value:.6g}"
     return str(value)
+
+
+def _pose_text(pose: dict) -> str:
+    """{x, y, z, a, b, c} as 'x .. y .. z .. mm, a .. b .. c .. deg'."""
+    return (
+        " ".join(f"{k} {float(pose[k]):.3f}" for k in "xyz")
+        + " mm, "
+        + " ".join(f"{k} {float(pose[k]):.3f}" for k in "abc")
+        + " deg"
+    )
+
+
+def _summary_tables(summary: dict, held_out: dict | None, what: str) -> list[Table]:
+    """The identification's summary as tables: the fit, the errors per axis, where the model
+    holds."""
+    n_params = len(summary.get("parameters", []))
+    fit = [
+        ["controller tool", _pose_text(summary["controller_tool"])],
+        ["poses / rows measured", f"{summary.get('poses')} / {summary.get('rows')}"],
+        ["identifiable parameters", f"{summary.get('identifiable_parameters')} of {n_params}"],
+        ["condition number", f"{float(summary['condition_number']):.6g}"],
+        ["observability O1", f"{float(summary['observability_o1']):.6g}"],
+        ["robust sigma of the residuals (mm)", f"{float(summary['robust_sigma_mm']):.4f}"],
+        ["outlier rows", ", ".join(map(str, summary.get("outliers") or [])) or "none"],
+    ]
+    if "tracker_T_robot" in summary:
+        fit.insert(2, ["robot base in the tracker frame", _pose_text(summary["tracker_T_robot"])])
+    fit += [
+        [str(key).replace("_", " "), _axes_text(value)]
+        for key, value in summary.items()
+        if key not in _IN_TABLES
+    ]
+    errors = [
+        ["residual RMS (fit)", summary["residual_rms_mm"]],
+        ["residual max (fit)", summary["residual_max_mm"]],
+    ]
+    if held_out is not None:
+        errors += [[f"held-out RMS ({what})", held_out["rms"]]]
+        errors += [[f"held-out max ({what})", held_out["max"]]]
+    validity = summary.get("validity") or {}
+    if validity.get("validated_max_mm"):
+        errors.append(["validated error (max)", validity["validated_max_mm"]])
+    tables = [
+        Table(["quantity", "value"], fit, "Identification"),
+        Table(
+            ["error", "X (mm)", "Y (mm)", "Z (mm)"],
+            [[name] + [f"{float(v[k]):.4f}" for k in "xyz"] for name, v in errors],
+            "Errors per axis, measured - model",
+        ),
+    ]
+    return tables + (_validity_tables(validity) if validity else [])
+
+
+def _validity_tables(validity: dict) -> list[Table]:
+    """Where the model holds: the box of the poses, the tool axis and the tilt from it, the
+    axis ranges."""
+    box = [
+        ["box min (mm)"] + [f"{float(v):.3f}" for v in validity["box_min_mm"]],
+        ["box max (mm)"] + [f"{float(v):.3f}" for v in validity["box_max_mm"]],
+        ["mean tool Z (unit vector)"] + [f"{float(v):+.4f}" for v in validity["tool_axis"]],
+    ]
+    joints = [
+        [f"A{i}", f"{float(lo):.2f}", f"{float(hi):.2f}"]
+        for i, (lo, hi) in enumerate(validity["joints_deg"], 1)
+    ]
+    return [
+        Table(
+            ["", "X", "Y", "Z"],
+            box,
+            "Where the model holds: the identification poses (tool Z within "
+            f"{float(validity['tilt_deg']):.2f} deg of their mean)",
+        ),
+        Table(["axis", "min (deg)", "max (deg)"], joints, "Axis ranges of the poses (KUKA)"),
+    ]
 
 
 def identify_report(
@@ -76,11 +163,11 @@ def identify_report(
         worst = max(float(held_out[k]) for k in "xyz")
         verdict = "PASS" if worst <= tolerance_mm else "FAIL"
         lines = [f"{what} PASS when the held-out max is within ±{tolerance_mm:g} mm on every axis."]
-    facts = [
-        (str(key).replace("_", " "), _axes_text(value))
-        for key, value in summary.items()
-        if key not in _SHOWN
-    ]
+    summary_tables = _summary_tables(
+        summary,
+        None if held_out is None else {"rms": rms, "max": held_out},
+        "nested cross-validation" if nested is not None else "cross-validation",
+    )
     parameters = Table(
         ["parameter", "value", "std", "unit", "identifiable alone"],
         [
@@ -109,12 +196,12 @@ def identify_report(
         f"±{tolerance_mm:g} mm per axis (held-out max)",
         inputs,
         [
-            Section("Validation", lines),
+            Section("Validation", lines, summary_tables),
             *([Section("Controller", [controller.strip()])] if controller else []),
             Section("Residuals", figures=[figure]),
             Section("Model", tables=tables),
         ],
-        facts,
+        [("robot", str(summary.get("robot", "")))],
     )
 
 
@@ -126,18 +213,29 @@ def _structure_table(structure: dict) -> Table:
         [
             step["added"],
             str(step["parameters"]),
-            _axes_text(step["held_out_rms_mm"]),
-            _axes_text(step["held_out_max_mm"]),
+            _slashed(step["held_out_rms_mm"]),
+            _slashed(step["held_out_max_mm"]),
             "chosen" if i <= kept else "left out",
         ]
         for i, step in enumerate(structure.get("cv_curve", []))
     ]
     pinned = ", ".join(structure.get("pinned") or []) or "none"
     return Table(
-        ["group added", "parameters", "held-out RMS (mm)", "held-out max (mm)", ""],
+        [
+            "group added",
+            "parameters",
+            "held-out RMS X / Y / Z (mm)",
+            "held-out max X / Y / Z (mm)",
+            "",
+        ],
         rows,
         f"Joint-error structure chosen from the data (pinned: {pinned})",
     )
+
+
+def _slashed(value: dict) -> str:
+    """{x, y, z} mm as 'x / y / z', 4 decimals."""
+    return " / ".join(f"{float(value[k]):.4f}" for k in "xyz")
 
 
 def _yes(flag: bool) -> str:

@@ -11,14 +11,16 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from accugrid.codegen.cell import Cell, load_cell
-from accugrid.codegen.dialects import plugin_of
+from accugrid.codegen.correction import cell_grid, read_model
+from accugrid.codegen.dialects import check_serves, plugin_of
 from accugrid.codegen.header import grid_lines, header_lines, input_line
 from accugrid.codegen.points import read_points
-from accugrid.codegen.program import Program, build_program
-from accugrid.compensation import GridModel
+from accugrid.codegen.program import NOT_CORRECTED, Program, build_program
+from accugrid.compensation.policy import PolicyRequest
 from accugrid.infra.atomic import check_targets, write_files
-from accugrid.infra.csvtable import declared_or
 from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import InputError
 from accugrid.infra.units import check_scale
@@ -34,9 +36,8 @@ class ProgramRequest:
     """What ``accugrid krl|gcode|rapid`` asks: the dialect (a name of ``codegen.dialects``),
     the points and cell files, the output (a folder or file, as the dialect writes), the grid
     and model overriding the cell's (``no_correction``: neither), ``allow_config_change``
-    (configuration.allow_change), a templates folder, the policy (``outside``: the
-    ``CorrectionSettings.outside`` word, ``allow_partial``, ``strict``) and the HTML report
-    with its title."""
+    (configuration.allow_change), a templates folder, the policy's options (``policy``) and the
+    HTML report with its title."""
 
     dialect: str
     points: str
@@ -47,9 +48,7 @@ class ProgramRequest:
     no_correction: bool = False
     allow_config_change: bool = False
     templates: str | None = None
-    outside: str = "error"
-    allow_partial: bool = False
-    strict: bool = False
+    policy: PolicyRequest = PolicyRequest()
     report_html: Path | None = None
     report_title: str = ""
 
@@ -109,25 +108,19 @@ def prepare(req: ProgramRequest, cell: Cell | None = None) -> tuple[Job, object]
     plugin = plugin_of(req.dialect)
     command = req.dialect
     cell = load_cell(req.cell) if cell is None else cell
-    cell = dataclasses.replace(cell, correction=cell.correction.but(outside=req.outside))
     if req.allow_config_change:
         configuration = dataclasses.replace(cell.configuration, allow_change=True)
         cell = dataclasses.replace(cell, configuration=configuration)
     model_file = _model_path(req, cell)
     grid_file = _grid_path(req, cell, model_file)
     points = read_points(req.points)
-    grid = None
-    if grid_file is not None:
-        grid = GridModel.from_measurements(grid_file, fmt=declared_or(cell.tracker))
+    grid = None if grid_file is None else cell_grid(cell, grid_file)
     robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
     in_robot = transform_points(cell.robot_T_base, points.xyz)
     check_scale(in_robot, reach_mm(robot), "target", points.path, points.lines)
-    model = validity = None
-    if model_file is not None:  # the arm; the tool is the cell's, never the model's TCP
-        from accugrid.app.correct_model import read_model  # model jobs only
-
-        found = read_model(model_file, robot)
-        model, validity = found.robot, found.validity
+    check_serves(req.dialect, robot, req.cell)
+    # the arm; the tool is the cell's, never the model's TCP
+    model = None if model_file is None else read_model(model_file, robot)
     inputs = [input_line("points", req.points, file_sha256(req.points))]
     inputs.append(input_line("cell", req.cell, cell.sha256))
     details = []
@@ -135,9 +128,9 @@ def prepare(req: ProgramRequest, cell: Cell | None = None) -> tuple[Job, object]
         sha = file_sha256(model_file) if model_file.is_file() else "built-in"
         inputs.append(input_line("model", model_file, sha))
         residual = "" if grid is None else " and the residual grid"
-        details.append(f"corrected by model {model.name}{residual}")
+        details.append(f"corrected by model {model.robot.name}{residual}")
     if grid is None and model is None:
-        details = ["grid none (--no-correction): positions are not corrected"]
+        details = [NOT_CORRECTED]
     elif grid is not None:
         inputs += grid_lines(Path(grid_file).name, grid.source_sha256, grid.step)
     closing = [f"holes {len(points)}"]
@@ -151,9 +144,7 @@ def prepare(req: ProgramRequest, cell: Cell | None = None) -> tuple[Job, object]
         grid,
         model,
         background=True,
-        validity=validity,
-        allow_partial=req.allow_partial,
-        strict=req.strict,
+        request=req.policy,
         keep_joints=plugin.joints,
     )
     largest, hole = program.largest_correction()
@@ -193,31 +184,46 @@ def write_program(req: ProgramRequest, force: bool = False) -> str:
 
 
 def with_report(job: Job, report: Path | None, title: str) -> Mapping[Path, object]:
-    """The job's files plus its HTML report (``app.correction_report``) at ``report``;
-    the files alone without one. The program's files stay
-    rendered on demand (a chain of mappings, not a copy). InputError for an uncorrected
-    program (--no-correction: no correction to report)."""
+    """The job's files plus its HTML report (``app.correction_report``) at ``report``, written
+    last and naming each of them with its SHA-256; the files alone without one. The program's
+    files stay rendered on demand (hashed as they are written, not copied). The plan view is in
+    the cell's base frame, the points' frame. InputError for an uncorrected program
+    (--no-correction: no correction to report)."""
     if not report:
         return job.files
     if job.program.verdict is None:
         raise InputError("--report-html reports the corrections; --no-correction makes none")
-    from collections import ChainMap
-
-    from accugrid.app.correction_report import correction_report, verdict_states
+    from accugrid.app.correction_report import (
+        ReportedFiles,
+        cell_setup,
+        checks_text,
+        correction_report,
+        verdict_states,
+    )
+    from accugrid.kinematics.frames import transform_points
 
     roles = ["points", "cell"] + ["grid or model"] * (len(job.inputs) - 2)
     verdict = job.program.verdict
+    cell = job.program.cell
     state, reasons = verdict_states(verdict)
-    page = correction_report(
-        title,
-        verdict.points,
-        verdict.command,
-        state,
-        reasons,
-        job.program.points.label,
-        list(zip(roles, [str(p) for p in job.inputs], strict=True)),
-    )
-    return ChainMap({Path(report): page}, job.files)
+    base_T_robot = np.linalg.inv(cell.robot_T_base)
+
+    def page(outputs: list[tuple[str, str]]) -> str:
+        return correction_report(
+            title,
+            transform_points(base_T_robot, verdict.points),
+            transform_points(base_T_robot, verdict.command),
+            state,
+            reasons,
+            job.program.points.label,
+            list(zip(roles, [str(p) for p in job.inputs], strict=True)),
+            f"base frame {cell.base_number}",
+            outputs=outputs,
+            setup=cell_setup(cell),
+            checked=checks_text(verdict.policy),
+        )
+
+    return ReportedFiles(job.files, Path(report), page)
 
 
 def summary(job: Job, written: list[Path]) -> str:

@@ -326,12 +326,13 @@ def correction_map_png(
     correction: np.ndarray,
     corrected: np.ndarray,
     flagged: np.ndarray,
-    frame: str = "robot frame",
+    plane: str = "robot frame",
 ) -> bytes:
-    """Plan view (X-Y in ``frame``) of the positions (N, 3) mm coloured by the length of the
-    correction (N, 3) mm applied, arrows along it (at most 400, scaled to the plot), the
-    positions not corrected (``corrected`` (N,) False) as black crosses and the flagged ones
-    (``flagged`` (N,) bool) ringed in orange; rasterised, small for 1e4 holes."""
+    """Plan view of the positions (N, 2) mm in a plane's axes u, v (named by ``plane``)
+    coloured by the length of the correction (N, 3) mm applied (its u, v, n components), arrows
+    along its in-plane part (at most 400, scaled to the plot), the positions not corrected
+    (``corrected`` (N,) False) as black crosses and the flagged ones (``flagged`` (N,) bool)
+    ringed in orange; rasterised, small for 1e4 holes."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(10, 5.2), layout="constrained")
     length = np.linalg.norm(correction, axis=1)
@@ -354,7 +355,7 @@ def correction_map_png(
             scale=scale,
             width=0.002,
             color="tab:red",
-            label=f"XY correction (1 mm drawn as {1.0 / scale:.0f} mm)",
+            label=f"in-plane correction (1 mm drawn as {1.0 / scale:.0f} mm)",
         )
     skipped = np.flatnonzero(~corrected)
     if skipped.size:
@@ -365,8 +366,8 @@ def correction_map_png(
             points[ringed, 0], points[ringed, 1], "o", mfc="none", mec="tab:orange", ms=9,
             label="flagged",
         )  # fmt: skip
-    ax.set_xlabel(f"X {frame} (mm)")
-    ax.set_ylabel(f"Y {frame} (mm)")
+    ax.set_xlabel(f"u (mm), {plane}")
+    ax.set_ylabel("v (mm)")
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(alpha=0.3)
     if ax.get_legend_handles_labels()[1]:

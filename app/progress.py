@@ -1,4 +1,4 @@
-"""Progress bars for long work: shown on a terminal, silent in pipes and files (DESIGN.md, CLI)."""
+"""Progress bars for long work: shown on a terminal, silent in pipes and files (docs/cli.md)."""
 
 from __future__ import annotations
 

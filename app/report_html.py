@@ -1,11 +1,15 @@
-"""The one self-contained HTML report of a command (``--report-html FILE``, DESIGN.md "Reports").
+"""The one self-contained HTML report of a command (``--report-html FILE``, docs/validation.md).
 
 One Jinja page (``templates/report/report.html.j2``, autoescaped): the title and the verdict
-(PASS, FAIL, or INFO for a job without a pass criterion), the command line, the accugrid version,
-the tolerance, every input with its SHA-256, then the command's sections (text, tables,
-figures as inline base64 PNG: no network, a raster keeps a plot of 1e4 holes small). Print CSS
-lays it out on A4. The text is returned; the command writes it with its other files
-(``atomic.write_files``), so the report and the job's outputs are all old or all new.
+(PASS, FAIL, or INFO for a job without a pass criterion; a job may say in its own words what
+the box holds), the command line, the accugrid version, the date, the tolerance, every input
+and output with its SHA-256, then the command's sections (text, tables, figures as inline
+base64 PNG: no network, a raster keeps a plot of 1e4 holes small). Print CSS lays it out on A4.
+The text is returned; the command writes it with its other files (``atomic.write_files``), so
+the report and the job's outputs are all old or all new.
+
+The date is the time of the run (UTC), or ``SOURCE_DATE_EPOCH`` (seconds since 1970, the
+reproducible-builds convention) when set, so the same inputs can give the same bytes.
 """
 
 from __future__ import annotations
@@ -14,6 +18,7 @@ import base64
 import os
 import shlex
 import sys
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,7 +29,7 @@ from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import printable
 from accugrid.templates import TEMPLATE_DIR
 
-__all__ = ["Figure", "Section", "Table", "report_html"]
+__all__ = ["Figure", "Section", "Table", "report_date", "report_html"]
 
 _VERDICTS = {"PASS": "PASS", "FAIL": "FAIL", "INFO": "no pass criterion"}
 
@@ -82,6 +87,16 @@ def _is_number(cell: object) -> bool:
     return True
 
 
+def report_date() -> str:
+    """The report's date and time, UTC: ``SOURCE_DATE_EPOCH`` when set, else now."""
+    epoch = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
+    try:
+        seconds = float(epoch) if epoch else time.time()
+    except ValueError:
+        seconds = time.time()  # as the reproducible-builds convention: a bad value is ignored
+    return time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime(seconds))
+
+
 def report_html(
     title: str,
     verdict: str,
@@ -90,11 +105,15 @@ def report_html(
     sections: list[Section],
     facts: list[tuple[str, str]] | None = None,
     argv: list[str] | None = None,
+    outputs: list[tuple[str, str]] | None = None,
+    verdict_text: str | None = None,
 ) -> str:
-    """The report page. ``verdict``: PASS, FAIL or INFO; ``inputs``: (role, path) pairs (a
-    path None is left out; a name that is no file, e.g. a built-in robot, gets '-' as hash);
-    ``facts``: more (key, value) lines under the header; ``argv``: the command line (default:
-    this process's)."""
+    """The report page. ``verdict``: PASS, FAIL or INFO (its box's colour), ``verdict_text``
+    what the box says (default: the verdict's word); ``inputs``: (role, path) pairs (a path
+    None is left out; a name that is no file, e.g. a built-in robot, gets '-' as hash);
+    ``outputs``: (path, SHA-256) of the files the job wrote beside the report; ``facts``: more
+    (key, value) lines under the header; ``argv``: the command line (default: this
+    process's)."""
     if verdict not in _VERDICTS:
         raise ValueError(f"verdict must be one of {sorted(_VERDICTS)}")
     rows = []
@@ -110,12 +129,14 @@ def report_html(
         .render(
             title=title,
             verdict=verdict,
-            verdict_text=_VERDICTS[verdict],
+            verdict_text=verdict_text or _VERDICTS[verdict],
             command=printable(shlex.join(words), limit=2000),
             version=__version__,
+            date=report_date(),
             tolerance=tolerance,
             facts=facts or [],
             inputs=rows,
+            outputs=[{"name": printable(path), "sha256": sha} for path, sha in outputs or []],
             sections=sections,
         )
     )

@@ -15,7 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.codegen.cell import load_cell
-from accugrid.codegen.dialects import dialect_of, plugin_of
+from accugrid.codegen.correction import cell_grid, policy_for, read_model
+from accugrid.codegen.dialects import check_serves, dialect_of, plugin_of
 from accugrid.codegen.program_text import read_program
 from accugrid.codegen.rewrite import (
     CORRECTED,
@@ -29,9 +30,8 @@ from accugrid.codegen.rewrite import (
     rewrite,
     warning_lines,
 )
-from accugrid.compensation import GridModel
-from accugrid.compensation.policy import Policy
-from accugrid.infra.csvtable import declared_or
+from accugrid.compensation.policy import PolicyRequest
+from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 
 __all__ = ["RewriteJob", "RewriteRequest", "rewrite_job"]
 
@@ -40,7 +40,8 @@ __all__ = ["RewriteJob", "RewriteRequest", "rewrite_job"]
 class RewriteRequest:
     """What to rewrite: the programs (one file, or the two files of a dialect whose program is a
     pair, e.g. a KRL .src/.dat) and the output path of each, and the options of ``accugrid
-    rewrite`` (``Options`` and ``ProgramContext`` for their meaning)."""
+    rewrite`` (``Options`` and ``ProgramContext`` for their meaning; ``policy``: the policy's
+    options, ``compensation.policy.PolicyRequest``)."""
 
     outputs: dict[Path, Path]  # input program -> output file, the .src (what runs) first
     cell: str
@@ -51,17 +52,12 @@ class RewriteRequest:
     config_dat: Path | None = None
     header: bool = False
     decimals: int | None = None
-    strict: bool = False
-    allow_partial: bool = False
-    outside: str = "error"  # CorrectionSettings.outside
+    policy: PolicyRequest = PolicyRequest()
     base: int | None = None
     trust_calls: bool = False
     ignore_external_axes: bool = False
     max_bytes: int = 64 * 2**20
-    orientation_tol: float = 0.0
-    orientation_limit: float = 0.0
-    allow_orientation: bool = False
-    tolerance_mm: float = 0.0
+    tolerance_mm: float = DEFAULT_TOLERANCE_MM
 
 
 @dataclass
@@ -89,43 +85,28 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
     inputs = list(req.outputs)
     read = [*inputs, Path(req.cell)] + ([req.config_dat] if req.config_dat else [])
     cell = load_cell(req.cell)
-    cell = replace(cell, correction=cell.correction.but(outside=req.outside))
+    cell = replace(cell, correction=cell.correction.but(outside=req.policy.outside))
     model_file = Path(req.model) if req.model is not None else cell.model_path
     grid = None  # a model corrects alone when neither --grid nor the cell names one
     if model_file is None or req.grid is not None or cell.grid_path is not None:
         grid = cell.grid_file(req.grid)
-    measured = None  # the grid file as the cell's tracker writes it
-    if grid is not None:
-        measured = GridModel.from_measurements(grid, fmt=declared_or(cell.tracker))
+    measured = None if grid is None else cell_grid(cell, grid)
     model = nominal = None
     if model_file is not None or (measured is not None and measured.status is None):
         from accugrid.kinematics.robot import load_robot
 
         nominal = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
+        check_serves(dialect_of(inputs[0]), nominal, req.cell)
     if model_file is not None:  # the arm; the tool is the cell's, never the model's TCP
-        from accugrid.app.correct_model import read_model
-
-        model = read_model(model_file, nominal)
+        model = read_model(model_file)
         read.append(model_file)
     # the grid (a residual one with a model) holds in the Status it was measured in
-    policy = Policy.build(
-        cell.correction,
-        measured,
-        None if model is None else model.robot,
-        cell.configuration.status,
-        (cell.flange_T_tool, cell.flange_T_tool),
-        nominal=nominal,
-        validity=None if model is None else model.validity,
-        orientation_tol_deg=req.orientation_tol,
-        orientation_limit_deg=req.orientation_limit,
-        allow_orientation=req.allow_orientation,
-        strict=req.strict,
-    )
+    policy = policy_for(cell, measured, model, req.policy, nominal)
     opts = Options(
         model=policy.grid,
         correction=cell.correction,
         decimals=req.decimals,
-        allow_partial=req.allow_partial,
+        allow_partial=req.policy.allow_partial,
         tool_number=cell.tool_number,
         flange_T_tool=cell.flange_T_tool,
         tool_data=cell.tool_data,
@@ -170,25 +151,29 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
         warnings.append(f"the grid does not record its Status: {policy.describe_status()}")
     read += [grid] if grid is not None else []
     if req.report_html is not None:
-        files[req.report_html] = _html_report(req, result.rows, read).encode("utf-8")
+        files[req.report_html] = _html_report(req, result.rows, read, files, cell, policy)
     return RewriteJob(files, read, result, warnings + warning_lines(result, opts))
 
 
-def _html_report(req: RewriteRequest, rows, read: list[Path]) -> str:
-    """The HTML report of the rewrite (``app.correction_report``): every position as
-    written and as rewritten (program frame), its status and reason."""
+def _html_report(req: RewriteRequest, rows, read: list[Path], files, cell, policy) -> bytes:
+    """The HTML report of the rewrite (``app.correction_report``): the ``files`` written with
+    their SHA-256, the ``cell``'s robot, tool and base, what the ``policy`` checked, every
+    position as written and as rewritten (program frame), its status and reason."""
     from accugrid.app.correction_report import (
         CORRECTED,
         FLAGGED,
         NOT_CORRECTED,
         SKIPPED,
+        cell_setup,
+        checks_text,
         correction_report,
     )
     from accugrid.codegen.rewrite import CORRECTED as DONE
     from accugrid.codegen.rewrite import OUTSIDE
+    from accugrid.infra.digest import sha256_hex
 
     state = np.full(len(rows.line), SKIPPED, np.int8)
-    state[rows.status == OUTSIDE] = NOT_CORRECTED
+    state[(rows.status == OUTSIDE) | (rows.code != 0)] = NOT_CORRECTED  # as the job rule counts
     done = rows.status == DONE
     state[done] = CORRECTED
     state[done & np.array([bool(r) for r in rows.reason], dtype=bool)] = FLAGGED
@@ -203,5 +188,15 @@ def _html_report(req: RewriteRequest, rows, read: list[Path]) -> str:
     ]
     new = np.where(np.isnan(rows.new), rows.old, rows.new)
     return correction_report(
-        "Rewritten program", rows.old, new, state, rows.reason, label, roles, "program frame"
-    )
+        "Rewritten program",
+        rows.old,
+        new,
+        state,
+        rows.reason,
+        label,
+        roles,
+        "program frame",
+        outputs=[(os.fspath(p), sha256_hex(data)) for p, data in files.items()],
+        setup=cell_setup(cell),
+        checked=checks_text(policy),
+    ).encode("utf-8")

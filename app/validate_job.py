@@ -6,11 +6,14 @@ tracker measured the TCP there (robot frame, mm); optional id, a,b,c, s. Statist
 ``compensation.validation`` (deviation d = M - P). The model (and the residual grid, when the
 correction used one: read as a grid, the poses outside its box counted) are named with their
 SHA-256; the model's validated error decides whether the file can be from the model's base
-frame and tool (``check_same_frame``).
+frame and tool (``mean_offset``): a mean deviation too long for them fails the validation, and
+the report says what the offset suggests.
 """
 
 from __future__ import annotations
 
+import csv
+import io
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -21,12 +24,14 @@ from accugrid.app.report_html import Figure, Section, Table, report_html
 from accugrid.compensation.measurements import read_measurements
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.compensation.validation import (
+    MeanOffset,
     ValidationResult,
-    check_same_frame,
+    mean_offset,
     validate_positions,
 )
 from accugrid.infra.atomic import JobFiles
 from accugrid.infra.csvtable import read_table
+from accugrid.infra.digest import sha256_hex
 from accugrid.infra.errors import InputError, printable
 from accugrid.infra.units import check_scale, mm_text
 from accugrid.infra.yamlfile import load_yaml
@@ -36,27 +41,41 @@ from accugrid.kinematics.validity import Validity
 
 __all__ = ["ValidateJob", "ValidateRequest", "validate_files"]
 
-_WORST = 10  # rows named in the summary and the report
+_WORST = 10  # rows named in the report when every row is within the tolerance
+_PRINTED = 3  # rows named in the printed summary
 
 
 @dataclass(frozen=True)
 class ValidateRequest:
     """The validation file, the calibrated model YAML, the residual grid (or None), the
-    tolerance per axis (mm) and the HTML report to write (or None)."""
+    tolerance per axis (mm), the HTML report and the per-row CSV report to write (or None)."""
 
     measurements: str
     model: str
     grid: str | None = None
     tolerance_mm: float = DEFAULT_TOLERANCE_MM
     report_html: str | None = None
+    report_csv: str | None = None
 
 
 @dataclass(frozen=True)
 class ValidateJob:
-    """The files to write (the report), the lines to print and the result."""
+    """The files to write (the reports), the lines to print, the result and what its mean
+    offset says; ``passed``: every row within the tolerance and no sign of another base frame or
+    tool."""
 
     job: JobFiles
     result: ValidationResult
+    offset: MeanOffset
+
+    @property
+    def passed(self) -> bool:
+        return _passed(self.result, self.offset)
+
+
+def _passed(result: ValidationResult, offset: MeanOffset) -> bool:
+    """Every row within the tolerance and no sign of another base frame or tool."""
+    return result.passed and not offset.other_frame
 
 
 def _validated_error(path: str) -> np.ndarray | None:
@@ -83,8 +102,8 @@ def validate_files(request: ValidateRequest) -> ValidateJob:
         for r in range(len(meas.commanded))
     ]
     result = validate_positions(meas.commanded, meas.measured, labels, request.tolerance_mm)
-    check_same_frame(result, validated, request.measurements)
-    lines = _summary(result, validated)
+    offset = mean_offset(result, validated, meas.abc)
+    lines = _summary(result, validated, offset)
     grid_note = None
     if request.grid:  # read as a grid (a wrong file is refused); the rows outside its box told
         from accugrid.compensation.grid import GridModel
@@ -97,11 +116,38 @@ def validate_files(request: ValidateRequest) -> ValidateJob:
         )
         lines.insert(-1, grid_note)
     files: dict[str, str] = {}
+    if request.report_csv:
+        files[request.report_csv] = rows_csv(result, meas.lines, ids)
+        lines.append(f"wrote {request.report_csv}")
     if request.report_html:
-        files[request.report_html] = _report(request, result, validated, grid_note)
+        outputs = [(path, sha256_hex(text.encode("utf-8"))) for path, text in files.items()]
+        files[request.report_html] = _report(request, result, validated, offset, grid_note, outputs)
         lines.append(f"wrote {request.report_html}")
     inputs = [request.measurements, request.model, request.grid]
-    return ValidateJob(JobFiles(files, inputs, lines), result)
+    return ValidateJob(JobFiles(files, inputs, lines), result, offset)
+
+
+# the per-row CSV report (``--report``): mm, d = measured - target
+ROWS_CSV_COLUMNS = "line,id,pose,x,y,z,x_meas,y_meas,z_meas,dx,dy,dz,distance,result"
+
+
+def rows_csv(result: ValidationResult, lines: np.ndarray, ids: list[str]) -> str:
+    """Every row of the validation in file order: its line in the file (``lines`` (N,)), id
+    (``ids`` (N)), pose (1-based), target, measured, deviation d and |d| (mm, 4 decimals), and
+    ``beyond`` or ``within`` the tolerance."""
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(ROWS_CSV_COLUMNS.split(","))
+    numbers = np.column_stack(
+        [result.target, result.measured, result.deviation, result.distance_mm]
+    )
+    for r in range(len(numbers)):
+        writer.writerow(
+            [int(lines[r]), ids[r], int(result.pose[r]) + 1]
+            + [f"{v:.4f}" for v in numbers[r]]
+            + ["beyond" if result.outside[r] else "within"]
+        )
+    return out.getvalue()
 
 
 def _axis_rows(result: ValidationResult) -> list[list[str]]:
@@ -136,9 +182,10 @@ def _iso_line(result: ValidationResult) -> str:
     return text + "; repeatability RP: no repeated poses"
 
 
-def _summary(result: ValidationResult, validated: np.ndarray | None) -> list[str]:
-    """The lines printed: statistics, ISO 9283, worst rows, verdict."""
-    tol = result.tolerance_mm
+def _summary(
+    result: ValidationResult, validated: np.ndarray | None, offset: MeanOffset
+) -> list[str]:
+    """The lines printed: statistics, ISO 9283, the mean offset, worst rows, verdict."""
     lines = [
         f"{len(result.deviation)} rows at {len(result.ap_mm)} poses; deviation d = measured - "
         "target, mm:",
@@ -151,7 +198,8 @@ def _summary(result: ValidationResult, validated: np.ndarray | None) -> list[str
     if validated is not None:
         shown = " ".join(f"{v:.3f}" for v in validated)
         lines.append(f"model's validated error (max per axis): {shown} mm")
-    worst = result.worst(3)
+    lines.append(offset.words())
+    worst = result.worst(_PRINTED)
     lines.append(
         "worst rows: "
         + "; ".join(
@@ -159,34 +207,51 @@ def _summary(result: ValidationResult, validated: np.ndarray | None) -> list[str
             for i in worst
         )
     )
-    outside = int(result.outside.sum())
-    verdict = "PASS" if result.passed else "FAIL"
-    lines.append(
-        f"{verdict}: {outside} of {len(result.deviation)} rows beyond ±{tol:g} mm on an axis"
-    )
+    lines.append(_verdict_line(result, offset))
     return lines
 
 
+def _verdict_line(result: ValidationResult, offset: MeanOffset) -> str:
+    """PASS or FAIL: the rows beyond the tolerance, and another frame or tool."""
+    outside = int(result.outside.sum())
+    verdict = "PASS" if _passed(result, offset) else "FAIL"
+    text = (
+        f"{verdict}: {outside} of {len(result.deviation)} rows beyond "
+        f"±{result.tolerance_mm:g} mm on an axis"
+    )
+    if offset.other_frame:
+        text += "; the mean deviation is too long for the model's base frame and tool"
+    return text
+
+
 def _report(
-    request: ValidateRequest, result: ValidationResult, validated, grid_note: str | None
+    request: ValidateRequest,
+    result: ValidationResult,
+    validated,
+    offset: MeanOffset,
+    grid_note: str | None,
+    outputs: list[tuple[str, str]],
 ) -> str:
-    """The HTML report of the validation."""
+    """The HTML report of the validation; ``outputs`` (path, SHA-256) of the files beside it."""
     tol = result.tolerance_mm
     stats = Table(
         ["axis", "min (mm)", "max (mm)", "max |d| (mm)", "mean (mm)", "std (mm)"],
         _axis_rows(result),
         "Deviation d = measured - target, every row",
     )
-    worst = result.worst(_WORST)
-    worst_table = Table(
+    beyond = np.flatnonzero(result.outside)
+    listed = result.worst(len(result.labels))[: max(len(beyond), _WORST)]
+    rows_table = Table(
         ["where (file:line id)", "pose", "dx (mm)", "dy (mm)", "dz (mm)", "|d| (mm)", ""],
         [
             [result.labels[i], str(int(result.pose[i]) + 1)]
             + [f"{v:+.3f}" for v in result.deviation[i]]
             + [f"{result.distance_mm[i]:.3f}", "beyond" if result.outside[i] else "within"]
-            for i in worst
+            for i in listed
         ],
-        f"The {len(worst)} rows with the largest axis deviation",
+        f"Every row beyond ±{tol:g} mm ({len(beyond)}), largest axis deviation first"
+        if len(beyond)
+        else f"No row beyond ±{tol:g} mm; the {len(listed)} with the largest axis deviation",
     )
     iso_rows = []
     order = np.argsort(-result.ap_mm, kind="stable")[:_WORST]
@@ -227,14 +292,20 @@ def _report(
         )
     if grid_note:
         notes.append(grid_note[0].upper() + grid_note[1:] + ".")
-    outside = int(result.outside.sum())
+    offset_text = offset.words()
     facts = [
         ("rows / poses", f"{len(result.deviation)} / {len(result.ap_mm)}"),
-        ("rows beyond tolerance", str(outside)),
-        ("criterion", f"PASS when every row is within ±{tol:g} mm on X, Y and Z"),
+        ("rows beyond tolerance", str(len(beyond))),
+        ("mean offset", offset_text[0].upper() + offset_text[1:] + "."),
+        (
+            "criterion",
+            f"PASS when every row is within ±{tol:g} mm on X, Y and Z and the mean deviation is "
+            f"within {offset.limit_mm:.3f} mm (longer: another base frame or tool than the "
+            "model's)",
+        ),
     ]
     sections = [
-        Section("Results", notes, [stats, iso, worst_table]),
+        Section("Results", notes, [stats, iso, rows_table]),
         Section(
             "Figures",
             figures=[
@@ -256,7 +327,7 @@ def _report(
     ]
     return report_html(
         "Validation after correction",
-        "PASS" if result.passed else "FAIL",
+        "PASS" if _passed(result, offset) else "FAIL",
         f"±{tol:g} mm per axis",
         [
             ("measurements after correction", request.measurements),
@@ -265,4 +336,5 @@ def _report(
         ],
         sections,
         facts,
+        outputs=outputs,
     )

@@ -5,7 +5,9 @@ once with a calibrated model (``out/model/calibrated.yaml`` from ``make demo``; 
 is missing; RAPID cells are an ABB arm, so grid only). Per dialect: the motion positions (those
 a job must correct: what a motion commands, a lone .dat's POS/E6POS with --base), how many are
 corrected by default (``--allow-partial`` only so that the rest is counted) and the reasons
-left, with counts (numbers and names in a reason shown as ``#``).
+left, with counts (numbers and names in a reason shown as ``#``). "KRL, no options" is every KRL
+program (each set of files once) rewritten without ``--base``/``--trust-calls``/
+``--ignore-external-axes``: what a user gets who states nothing the program does not.
 
 Run: ``make bench ARGS=corpus`` (or ``.venv/bin/python bench/bench_corpus_coverage.py``).
 """
@@ -33,6 +35,7 @@ from rewrite_helpers import (  # noqa: E402
 from accugrid.app.rewrite_job import RewriteRequest, rewrite_job  # noqa: E402
 from accugrid.codegen.rewrite import CORRECTED  # noqa: E402
 from accugrid.compensation.policy import CORRECTED as POLICY_CORRECTED  # noqa: E402
+from accugrid.compensation.policy import PolicyRequest  # noqa: E402
 from bench.timing import table  # noqa: E402
 
 REALWORLD = ROOT.parent / "shared" / "realworld"
@@ -45,7 +48,7 @@ _VARYING = re.compile(r"'[^']*'|\"[^\"]*\"|\b\w*\d[\w.]*|\w+\[[^\]]*\](?:\.\w+)*
 
 def _request(cell: Path, inputs: list[Path], options: list[str], out: Path, model) -> dict:
     """The RewriteRequest fields of one case (the realworld tests' command-line options)."""
-    fields = {"cell": str(cell), "allow_partial": True, "model": model}
+    fields = {"cell": str(cell), "policy": PolicyRequest(allow_partial=True), "model": model}
     it = iter(options)
     for option in it:
         if option in _FLAGS:
@@ -58,9 +61,13 @@ def _request(cell: Path, inputs: list[Path], options: list[str], out: Path, mode
 
 def _cases(folder: Path):
     """(dialect, inputs, options, cell) of every program in the corpus."""
+    plain = set()
     for case, (names, options) in sorted(REALWORLD_REWRITES.items()):
         kind = "KRL" if names[0].startswith("krl/") else "G-code"
         yield case, kind, [REALWORLD / n for n in names], options, "grid"
+        if kind == "KRL" and tuple(names) not in plain:
+            plain.add(tuple(names))
+            yield case, "KRL, no options", [REALWORLD / n for n in names], [], "grid"
     for name, (tool, wobj) in sorted(REALWORLD_RAPID.items()):
         yield name, "RAPID", [REALWORLD / "rapid" / name], [], (tool, wobj)
 

@@ -20,8 +20,9 @@ from accugrid.infra.errors import InputError
 
 if TYPE_CHECKING:
     from accugrid.codegen.plugin import DialectPlugin
+    from accugrid.kinematics.model import RobotModel
 
-__all__ = ["DIALECTS", "Dialect", "dialect_of", "plugin_of"]
+__all__ = ["DIALECTS", "Dialect", "check_serves", "dialect_of", "plugin_of"]
 
 
 @dataclass(frozen=True)
@@ -80,4 +81,21 @@ def dialect_of(path: str | os.PathLike[str]) -> str:
     known = "; ".join(f"{d.title} {' '.join(d.suffixes)}" for d in DIALECTS.values())
     raise InputError(
         f"unknown program type {suffix or '(no suffix)'!r}: known are {known}", os.fspath(path)
+    )
+
+
+def check_serves(name: str, robot: RobotModel, where: str | os.PathLike[str] = "") -> None:
+    """InputError (at ``where``, the file naming the robot) unless dialect ``name``'s plug-in
+    serves ``robot`` (``DialectPlugin.serves``), naming the robot, its controller and the
+    commands whose programs drive it."""
+    if plugin_of(name).serves(robot):
+        return
+    others = [d for d in DIALECTS.values() if plugin_of(d.name).serves(robot)]
+    commands = " or ".join(f"accugrid {d.name} ({d.title})" for d in others)
+    write = "writes" if len(others) == 1 else "write"
+    raise InputError(
+        f"robot {robot.name} has a {robot.controller.upper()} controller, which "
+        f"{DIALECTS[name].title} programs do not drive: "
+        + (f"{commands} {write} its programs" if others else "no dialect writes its programs"),
+        os.fspath(where) if where else None,
     )

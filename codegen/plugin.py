@@ -30,6 +30,7 @@ if TYPE_CHECKING:
     from accugrid.codegen.program import Program
     from accugrid.codegen.rewrite import Options, ProgramContext, Scan
     from accugrid.compensation.plans import Plan
+    from accugrid.kinematics.model import RobotModel
 
 __all__ = ["DialectFolder", "DialectPlugin", "MeasureSettings", "MeasurementWriter", "Rendered"]
 
@@ -106,7 +107,9 @@ class DialectPlugin(Protocol):
       a KRL ``.src`` and ``.dat``), None when one file is a program; ``joints``: its
       configuration words need every pose's joint angles (``Program.joints``); ``exports``:
       the names of its ``emit`` module the library exports (``accugrid.render_krl``), resolved
-      through the registry.
+      through the registry; ``serves(robot)``: whether its programs drive ``robot`` (by the
+      maker of the robot's controller, ``RobotModel.controller``; a robot that does not say is
+      served).
     - ``section_keys()``, ``read_section(reader, robot_T_base)``: the YAML keys of its cell
       section and its record (``cell.dialects[name]``), InputError naming the key.
     - ``targets(cell, out)``: the files a new program into ``out`` writes that must not exist
@@ -133,6 +136,8 @@ class DialectPlugin(Protocol):
     pair: tuple[str, str] | None
     joints: bool
     exports: tuple[str, ...]
+
+    def serves(self, robot: RobotModel) -> bool: ...
 
     def section_keys(self) -> SectionKeys: ...
 
@@ -174,7 +179,9 @@ class DialectFolder:
     """The members of ``DialectPlugin`` a dialect folder gives by its modules' names, imported
     when first used: ``section.py`` (``KEYS``, ``read_section``) and ``rewrite.py``
     (``scan_positions``, ``splice_positions``, ``add_header``); the names in ``exports`` are
-    its ``emit.py``'s (none by default). A plug-in derives from it and
+    its ``emit.py``'s (none by default); ``controllers``: the makers of the robot controllers
+    its programs drive (``RobotModel.controller``, lower case; none: every robot). A plug-in
+    derives from it and
     adds its name, suffixes, ``targets``, ``plan``, ``render`` and ``placement`` (and
     ``measurement`` when it writes measurement programs)."""
 
@@ -183,6 +190,10 @@ class DialectFolder:
     pair: tuple[str, str] | None = None
     joints: bool = False
     exports: tuple[str, ...] = ()
+    controllers: tuple[str, ...] = ()
+
+    def serves(self, robot: RobotModel) -> bool:
+        return not self.controllers or not robot.controller or robot.controller in self.controllers
 
     def _module(self, part: str):
         return importlib.import_module(f"accugrid.codegen.{self.name}.{part}")

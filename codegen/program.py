@@ -15,8 +15,11 @@ weighting over the 8 vertices of a cell jumps where the positions straddle a cel
 the example grid's Y = 0 plane). One vector per hole keeps the axis straight and the hole where
 the grid says. Orientation is not corrected.
 
-With a calibrated model (``correction.model``, ``--model``) the vector is P' - P of the
-correction policy (``compensation.policy``) at the hole point and its own orientation (the
+The grid and the model are the cell's (``grid``, ``correction.model``) unless the call names
+others (``None``: none), as the command line reads them (``codegen.correction``); a program
+corrected by neither says so in its header (``Program.header``). With a calibrated model the
+vector is P' - P of the correction policy (``compensation.policy``, built by
+``codegen.correction.policy_for``) at the hole point and its own orientation (the
 controller's IK with the cell's tool in the program's Status, the calibrated arm carrying the
 cell's tool), plus the grid as the residual after the model when one is given. The policy also
 decides which holes are not corrected (outside the grid, orientation, Status, ...): the job is
@@ -45,9 +48,16 @@ from types import SimpleNamespace
 import numpy as np
 
 from accugrid.codegen.cell import Cell
+from accugrid.codegen.correction import (
+    FROM_CELL,
+    ModelFile,
+    cell_grid,
+    cell_model,
+    policy_for,
+)
 from accugrid.codegen.points import Points
 from accugrid.compensation.grid import GridModel
-from accugrid.compensation.policy import Verdict, singular_a5_deg
+from accugrid.compensation.policy import PolicyRequest, Verdict, singular_a5_deg
 from accugrid.infra.blocks import run_blocks
 from accugrid.infra.errors import InputError
 from accugrid.infra.textsafe import fixed_texts
@@ -69,6 +79,7 @@ from accugrid.kinematics.robot import Robot
 __all__ = [
     "IK_BLOCK",
     "MAX_AXIS_JUMP_DEG",
+    "NOT_CORRECTED",
     "IKCheck",
     "STAGES",
     "Program",
@@ -79,6 +90,7 @@ STAGES = ("APP", "CLR", "BOT", "RET")
 _LISTED = 5  # holes named in one message
 IK_BLOCK = 16384  # poses per IK call
 MAX_AXIS_JUMP_DEG = 180.0  # a larger joint move between consecutive poses: a wrist flip or wrap
+NOT_CORRECTED = "grid none, model none: positions are not corrected"  # a header line
 
 
 @dataclass
@@ -144,6 +156,14 @@ class Program:
             raise ValueError("the program was built without keep_joints")
         q = joints[lo:hi]
         return q if q.shape[1] == 4 else np.concatenate([q, q[:, :1]], axis=1)
+
+    def header(self, lines: list[str]) -> list[str]:
+        """The header of a program file: ``lines`` (the caller's), then what the program says of
+        itself that they do not: that nothing is corrected (``NOT_CORRECTED``), the holes left
+        uncorrected (``uncorrected``)."""
+        own = self.uncorrected if self.corrected else [NOT_CORRECTED]
+        given = set(lines)
+        return [*lines, *(line for line in own if line not in given)]
 
     def largest_correction(self) -> tuple[float, int | None]:
         """(length mm, hole index) of the largest correction; (0, None) for no holes."""
@@ -263,24 +283,31 @@ def build_program(
     points: Points,
     cell: Cell,
     robot: RobotModel,
-    grid: GridModel | None = None,
-    model: Robot | None = None,
+    grid: GridModel | None = FROM_CELL,
+    model: Robot | ModelFile | None = FROM_CELL,
     background: bool = False,
     validity=None,
-    allow_partial: bool = False,
-    strict: bool = False,
+    request: PolicyRequest | None = None,
     keep_joints: bool = False,
 ) -> Program:
-    """Corrected, IK-checked program for ``points`` in ``cell`` (``grid``: None for no
-    correction; ``robot`` with the cell's tool; ``model``: a calibrated Robot, then ``grid`` is
-    the measured grid whose residual after the model is added, or None; ``validity``: where the
-    model holds (``kinematics.validity``); ``allow_partial``, ``strict``: the policy's job rule,
-    ``compensation.policy``). ``background``: the
+    """Corrected, IK-checked program for ``points`` in ``cell``, corrected as the command line
+    corrects it: ``grid`` the measured grid and ``model`` the calibrated model (a Robot, with
+    ``validity`` where it holds, ``kinematics.validity``; or a ``ModelFile``), each by default
+    the cell's (``grid``, ``correction.model``), None for none; with a model the grid holds its
+    residual. ``robot``: the controller's, with the cell's tool. ``request``: the policy's
+    options and job rule (``compensation.policy``; None: the defaults). ``background``: the
     IK check (Status, Turn, reach, limits, branch jumps, the wrist singularity) runs on a
     background thread while the caller goes on with what needs only the positions (a G-code
     program, the .src of a KRL job); ``Program.wait()`` joins it. ``keep_joints``: keep the
     joint angles of every pose (``Program.joints``, 144 bytes a hole: only for a dialect whose
     configuration words need more than KUKA Status/Turn, e.g. ABB confdata)."""
+    request = PolicyRequest() if request is None else request
+    if grid is FROM_CELL:
+        grid = cell_grid(cell)
+    if model is FROM_CELL:
+        model = cell_model(cell)
+    elif model is not None and not isinstance(model, ModelFile):
+        model = ModelFile(getattr(model, "source", None) or model.name, model, validity, None)
     n = len(points)
     if n == 0:
         raise InputError("no drilling points in the file", points.path)
@@ -307,11 +334,9 @@ def build_program(
             robot,
             grid,
             model,
-            validity,
             holes_robot,
             times_stack(base_rot, rotations),
-            allow_partial,
-            strict,
+            request,
         )
     positions = _nominal(cell, points.xyz, axis, depth)
     positions += rows_times(correction, base_rot)[:, None, :]  # e in the BASE frame
@@ -399,45 +424,26 @@ def _correct(
     cell: Cell,
     robot: RobotModel,
     grid: GridModel | None,
-    model: Robot | None,
-    validity,
+    model: ModelFile | None,
     holes_robot: np.ndarray,
     rotations: np.ndarray,
-    allow_partial: bool,
-    strict: bool,
+    request: PolicyRequest,
 ) -> tuple[np.ndarray, list[str], int | None, list[str], Verdict]:
-    """The correction policy (``compensation.policy``) at every hole point (N, 3) mm with its
-    rotation (N, 3, 3), robot frame: e = P' - P (N, 3) (0 for holes left uncorrected), the
-    warnings, the KUKA Status the program runs in (the cell's; else the one the model corrected
-    in, or the grid's), the header lines marking each hole left uncorrected and the verdict
-    (for the report). The tool is the
-    cell's (the drill as taught) on the controller and on the calibrated arm. InputError (the
-    policy's job rule) unless every hole is corrected or ``allow_partial``."""
-    from accugrid.compensation.policy import Policy
-
+    """The correction policy (``compensation.policy``, ``codegen.correction.policy_for``) at
+    every hole point (N, 3) mm with its rotation (N, 3, 3), robot frame: e = P' - P (N, 3) (0
+    for holes left uncorrected), the warnings, the KUKA Status the program runs in (the cell's;
+    else the one the model corrected in, or the grid's), the header lines marking each hole left
+    uncorrected and the verdict (for the report). InputError (the policy's job rule) unless
+    every hole is corrected or ``request.allow_partial``."""
     status = cell.configuration.status
-    tools = (cell.flange_T_tool, cell.flange_T_tool)
-    kwargs = {"singular_deg": cell.configuration.singular_a5_deg, "strict": strict}
-    abc = None
+    targets = None
     if model is not None:  # the A,B,C only for the model's Status rule
-        abc = matrix_to_abc(rotations)
-    policy = Policy.build(
-        cell.correction,
-        grid,
-        model,
-        status,
-        tools,
-        points=holes_robot,
-        abc_deg=abc,
-        turn=cell.configuration.turn,
-        nominal=robot if isinstance(robot, Robot) else None,
-        validity=validity,
-        **kwargs,
-    )
+        targets = (holes_robot, matrix_to_abc(rotations))
+    policy = policy_for(cell, grid, model, request, robot, targets)
     if status is None:
         status = policy.status if model is not None else policy.grid_status
     verdict = policy.decide(holes_robot, rotations, status=status)
-    warnings = verdict.enforce(points.label, points.table.where, allow_partial, "hole")
+    warnings = verdict.enforce(points.label, points.table.where, request.allow_partial, "hole")
     warnings += verdict.flag_lines(points.label, "hole")
     if policy.grid is not None and policy.grid.status is None and policy.grid_status is not None:
         warnings.append(f"the grid does not record its Status: {policy.describe_status()}")

@@ -29,7 +29,14 @@ from accugrid.codegen.header import header_lines as make_header
 from accugrid.codegen.program_text import MAX_BYTES, distinct_ints
 from accugrid.compensation import GridModel
 from accugrid.compensation.policy import CORRECTED as POLICY_CORRECTED
-from accugrid.compensation.policy import NOT_PLACED, OUTSIDE_GRID, REASONS, TOO_LONG, Policy
+from accugrid.compensation.policy import (
+    FIXES,
+    NOT_PLACED,
+    OUTSIDE_GRID,
+    REASONS,
+    TOO_LONG,
+    Policy,
+)
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM, CorrectionSettings
 from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import InputError
@@ -53,6 +60,7 @@ __all__ = [
     "Scan",
     "correct_points",
     "header_lines",
+    "last_known",
     "partial_check",
     "report_csv",
     "rewrite",
@@ -286,14 +294,29 @@ def rewrite(plugin: DialectPlugin, texts: dict[str, str], opts: Options, placeme
     one correction (``correct_points``), its ``splice``, the job rule (``partial_check``).
     ``placement``: the dialect's record of the frames (``plugin.placement``)."""
     scan = plugin.scan(texts, opts, placement)
-    corrected = correct_points(
-        scan.robot, scan.rows, scan.at, opts, scan.rotations, status=scan.status
-    )
+    status = None if scan.status is None else last_known(scan.status, scan.rows.file[scan.at])
+    corrected = correct_points(scan.robot, scan.rows, scan.at, opts, scan.rotations, status=status)
     scan.rotations = scan.status = None  # the splice needs neither: memory for its output
     data = plugin.splice(scan, corrected, opts)
     partial_check(scan.rows, opts)
     rows = scan.rows if scan.others is None else Rows.concat([scan.rows, scan.others])
     return Result(data, rows)
+
+
+def last_known(status: np.ndarray, file: np.ndarray) -> np.ndarray:
+    """Each position's KUKA Status (M,) from its own (M,) (-1: none) or, where it has none, the
+    last one written before it in its file (a motion without S keeps the Status the robot is
+    in), -1 where none is; ``file`` (M,) the file of each, the positions of a file together in
+    text order."""
+    n = len(status)
+    status = np.asarray(status)
+    if not n:
+        return status
+    start = np.ones(n, bool)
+    start[1:] = file[1:] != file[:-1]
+    source = np.where((status >= 0) | start, np.arange(n), 0)
+    np.maximum.accumulate(source, out=source)
+    return status[source]
 
 
 def correct_points(
@@ -462,10 +485,13 @@ def partial_check(rows: Rows, opts: Options) -> None:
     refused = np.flatnonzero(rows.code != POLICY_CORRECTED)
     if refused.size:
         i = int(refused[0])
+        fix = FIXES.get(
+            int(rows.code[i]),
+            "--allow-partial writes the program with them as they are, marked in the report",
+        )
         raise InputError(
             f"{refused.size} position(s) cannot be corrected ({_counts(rows)}); first "
-            f"{rows.name[i]}: {rows.reason[i]} (--allow-partial writes the program with them "
-            "as they are, marked in the report)",
+            f"{rows.name[i]}: {rows.reason[i]} ({fix})",
             *rows.where(i),
         )
     if not len(rows):  # a program of calls, or of data only: its holes are elsewhere

@@ -65,6 +65,7 @@ if TYPE_CHECKING:  # a grid-only correction never loads the robot modules
 
 __all__ = [
     "CORRECTED",
+    "FIXES",
     "FLAGS",
     "F_CLAMPED",
     "F_ORIENTATION",
@@ -77,6 +78,7 @@ __all__ = [
     "NO_ORIENTATION",
     "NO_SUPPORT",
     "NOT_PLACED",
+    "NO_STATUS",
     "ORIENTATION",
     "OTHER_TOOL",
     "ORIENTATION_LIMIT_DEG",
@@ -88,6 +90,7 @@ __all__ = [
     "TOO_LONG",
     "UNREACHABLE",
     "Policy",
+    "PolicyRequest",
     "Verdict",
     "singular_a5_deg",
 ]
@@ -104,7 +107,8 @@ UNREACHABLE, NO_CONVERGENCE, OUTSIDE_MODEL, TOO_LONG = 5, 6, 7, 8
 # error all the same, so it counts in the job rule like any position not corrected
 NOT_PLACED = 9
 OTHER_TOOL = 10  # a grid's positions of a tool whose TCP is far from the grid's tool's
-NO_SUPPORT = 11  # --strict: the model extrapolates there (``kinematics.support``)
+NO_STATUS = 11  # a model's position with no Status of its own, and the job has none
+NO_SUPPORT = 12  # --strict: the model extrapolates there (``kinematics.support``)
 # code -> (short words for counts, the reason's words; fields: see ``Verdict.reason``)
 REASONS = {
     OUTSIDE_GRID: ("outside the grid", "outside the {grid} box by {value:.3f} mm"),
@@ -141,7 +145,15 @@ REASONS = {
         "measured with, beyond correction.tool_distance ({tool_distance:g} mm): a grid holds the "
         "error of its own TCP only (a calibrated model, --model, corrects each tool)",
     ),
+    NO_STATUS: (
+        "no KUKA Status",
+        "no KUKA Status: the position has no S, none is written before it and the cell sets "
+        "no configuration.status; the model corrects a position in the Status the robot runs "
+        "it in",
+    ),
 }
+# what fixes a job refused for a reason, where --allow-partial (uncorrected) is not the answer
+FIXES = {NO_STATUS: "set configuration.status in the cell file: the Status the robot runs in"}
 # flags (bits): corrected, but worth a look
 F_ORIENTATION, F_CLAMPED, F_REGION, F_SINGULAR, F_TOOL, F_SUPPORT = 1, 2, 4, 8, 16, 32
 FLAGS = {
@@ -166,6 +178,37 @@ def singular_a5_deg(q: np.ndarray) -> np.ndarray:
     """|A5| (...) deg of joint vectors q (..., 6) rad: the distance from the wrist singularity,
     compared with ``SINGULAR_A5_DEG`` (or the cell's ``configuration.singular_a5``)."""
     return np.degrees(np.abs(np.asarray(q)[..., 4]))
+
+
+@dataclass(frozen=True)
+class PolicyRequest:
+    """What a command asks of the policy, the same options in every command (``correct``,
+    ``krl``, ``gcode``, ``rapid``, ``rewrite``): positions outside the grid box (``outside``, the
+    ``CorrectionSettings.outside`` word), the orientation against the grid's (flagged beyond
+    ``orientation_tol_deg``, refused beyond ``orientation_limit_deg`` unless
+    ``allow_orientation``; deg), ``strict`` (a model's positions outside its poses refused, not
+    flagged) and the job rule (``allow_partial``: ``Verdict.enforce``)."""
+
+    outside: str = "error"
+    orientation_tol_deg: float = GRID_ORIENTATION_TOL_DEG
+    orientation_limit_deg: float = ORIENTATION_LIMIT_DEG
+    allow_orientation: bool = False
+    strict: bool = False
+    allow_partial: bool = False
+
+    def check(self) -> None:
+        """InputError unless 0 <= orientation_tol_deg <= orientation_limit_deg."""
+        if not 0 <= self.orientation_tol_deg <= self.orientation_limit_deg:
+            raise InputError("need 0 <= --orientation-tol <= --orientation-limit (deg)")
+
+    def limits(self) -> dict:
+        """The fields of ``Policy`` it sets (``Policy.build``'s ``limits``)."""
+        return {
+            "orientation_tol_deg": self.orientation_tol_deg,
+            "orientation_limit_deg": self.orientation_limit_deg,
+            "allow_orientation": self.allow_orientation,
+            "strict": self.strict,
+        }
 
 
 @dataclass(frozen=True)
@@ -389,10 +432,13 @@ class Policy:
             rotations = np.full((n, 3, 3), np.nan)
         oriented = np.isfinite(rotations.reshape(n, 9)).all(axis=1)
         v.refuse(np.flatnonzero(~oriented), NO_ORIENTATION, np.zeros((~oriented).sum()))
+        if own is not None:  # never a Status the robot may not be in
+            unknown = np.flatnonzero(own < 0)
+            v.refuse(unknown, NO_STATUS, np.full(unknown.size, -1.0))
         todo = np.flatnonzero(v.code == CORRECTED)
         if not todo.size:
             return
-        status = None if own is None else np.where(own[todo] >= 0, own[todo], 0)
+        status = None if own is None else own[todo]
         result = model_correct(
             self.calibrated,
             v.points[todo],
@@ -447,7 +493,7 @@ class Policy:
         out = out[v.code[out] == CORRECTED]
         if not out.size:
             return
-        status = None if own is None else np.where(own[out] >= 0, own[out], 0)
+        status = None if own is None else own[out]
         result = model_correct(
             support.fallback,
             v.points[out],
@@ -603,11 +649,10 @@ class Verdict:
         i = int(refused[0])
         text = f"{refused.size} {what}(s) cannot be corrected ({self.counts()})"
         if not allow_partial:
-            raise InputError(
-                f"{text}; first {label(i)}: {self.reason(i)} (--allow-partial writes the job with "
-                "them uncorrected and marked)",
-                *where(i),
+            fix = FIXES.get(
+                int(self.code[i]), "--allow-partial writes the job with them uncorrected and marked"
             )
+            raise InputError(f"{text}; first {label(i)}: {self.reason(i)} ({fix})", *where(i))
         lines = [f"{text}: written uncorrected (--allow-partial)"]
         lines += [f"  {label(int(k))}: {self.reason(int(k))}" for k in refused[:_LISTED]]
         if refused.size > _LISTED:

@@ -3,7 +3,7 @@
 A validation row is a target P (the nominal position the corrected program aimed at, robot
 frame, mm) and the position M the tracker measured there after correction. The **deviation** is
 d = M - P (attained minus commanded, as ISO 9283 and metrology reports state it; the opposite
-sign of the correction error e = P - M of DESIGN.md). Rows with the same target (to 0.001 mm)
+sign of the correction error e = P - M, docs/layout.md). Rows with the same target (to 0.001 mm)
 are repeats of one pose.
 
 Per pose j with n_j rows x_ji (ISO 9283:1998, 7.2.1 and 7.2.2):
@@ -23,13 +23,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
-from accugrid.infra.errors import InputError
 
 __all__ = [
     "FRAME_FACTOR",
     "FRAME_FLOOR_MM",
+    "MeanOffset",
     "ValidationResult",
-    "check_same_frame",
+    "mean_offset",
     "validate_positions",
 ]
 
@@ -147,22 +147,110 @@ def validate_positions(
     )
 
 
-def check_same_frame(
-    result: ValidationResult, validated_max_mm: np.ndarray | None, path: str | None
-) -> None:
-    """InputError when the mean deviation (3,) is longer than FRAME_FACTOR times the model's
-    validated error (per axis (3,) mm; None: not recorded) and than FRAME_FLOOR_MM: the file was
-    measured in another base frame or with another tool than the model's."""
-    mean = result.deviation.mean(axis=0)
-    validated = 0.0 if validated_max_mm is None else float(np.linalg.norm(validated_max_mm))
-    limit = max(FRAME_FACTOR * validated, FRAME_FLOOR_MM)
-    if np.linalg.norm(mean) > limit:
-        shown = " ".join(f"{v:+.3f}" for v in mean)
-        raise InputError(
-            f"mean deviation (measured - target) {shown} mm is {np.linalg.norm(mean):.3f} mm "
-            f"long, more than {limit:.3f} mm ({FRAME_FACTOR:g} x the model's validated error "
-            f"{validated:.3f} mm, at least {FRAME_FLOOR_MM:g}): measured in another base frame "
-            "or with another tool than the model? map the tracker points into the robot frame "
-            "(accugrid transform) and measure with the tool the program was corrected for",
-            path,
+@dataclass(frozen=True)
+class MeanOffset:
+    """What the mean deviation of a validation says about the frame and the tool.
+
+    ``mean_mm`` (3,) the mean deviation d (robot frame); ``limit_mm`` the length beyond which it
+    is another base frame or tool (FRAME_FACTOR x the model's validated error, at least
+    FRAME_FLOOR_MM); ``rms_mm`` the RMS of |d|, ``shift_rms_mm`` of what the mean offset leaves
+    of it, ``rigid_rms_mm`` of what the best rotation with a shift leaves and ``rotation_deg``
+    that rotation's angle; ``tool_mm`` (3,) the mean deviation in the tool frame (None: the
+    file has no a,b,c)."""
+
+    mean_mm: np.ndarray
+    limit_mm: float
+    rms_mm: float
+    shift_rms_mm: float
+    rigid_rms_mm: float
+    rotation_deg: float
+    tool_mm: np.ndarray | None
+
+    @property
+    def other_frame(self) -> bool:
+        """The mean deviation is too long for the model's frame and tool."""
+        return float(np.linalg.norm(self.mean_mm)) > self.limit_mm
+
+    def words(self) -> str:
+        """What the offset suggests, one sentence (robot frame, mm, deg)."""
+        length = float(np.linalg.norm(self.mean_mm))
+        shown = " ".join(f"{v:+.3f}" for v in self.mean_mm)
+        text = (
+            f"mean deviation (measured - target) {shown} mm, {length:.3f} mm long"
+            f" (limit {self.limit_mm:.3f} mm)"
         )
+        if not self.other_frame:
+            return text + ": no sign of another base frame or tool"
+        if self.rigid_rms_mm <= ROTATION_GAIN * self.shift_rms_mm:
+            return text + (
+                f"; a rotation of {self.rotation_deg:.3f} deg with a shift leaves "
+                f"{self.rigid_rms_mm:.3f} mm RMS where the offset alone leaves "
+                f"{self.shift_rms_mm:.3f} mm: the tracker points are in a base frame turned "
+                "against the model's (map them into the robot frame: accugrid fit-frame, "
+                "accugrid transform)"
+            )
+        if self.shift_rms_mm <= SHIFT_LEAVES * self.rms_mm:
+            text += (
+                f"; the offset leaves {self.shift_rms_mm:.3f} mm RMS of {self.rms_mm:.3f}: the "
+                "base frame's origin or the tool (TCP) differs from the model's by about it"
+            )
+            if self.tool_mm is None:
+                return text + " (a file without a,b,c cannot tell the two apart)"
+            tool = " ".join(f"{v:+.3f}" for v in self.tool_mm)
+            along = abs(self.tool_mm[2]) >= (1.0 - SHIFT_LEAVES) * float(
+                np.linalg.norm(self.tool_mm)
+            )
+            return text + (
+                f"; in the tool frame {tool} mm"
+                + (", along the tool axis: a tool length" if along else "")
+                + " (measure with the tool the program was corrected for)"
+            )
+        return text + (
+            f"; neither the offset ({self.shift_rms_mm:.3f} mm RMS left of {self.rms_mm:.3f}) nor "
+            f"a rotation with a shift ({self.rigid_rms_mm:.3f} mm left) explains the deviation: "
+            "the robot does not move as the model says (another robot, a changed robot, or "
+            "another model)"
+        )
+
+
+ROTATION_GAIN = 0.5  # a rotation that leaves at most this share of the offset's rest is told
+SHIFT_LEAVES = 0.3  # an offset that leaves at most this share of the RMS: a frame origin or tool
+
+
+def mean_offset(
+    result: ValidationResult, validated_max_mm: np.ndarray | None, abc_deg: np.ndarray | None
+) -> MeanOffset:
+    """The mean offset of ``result`` against the model's validated error per axis (3,) mm
+    (None: not recorded); ``abc_deg`` (N, 3) KUKA A, B, C of the rows (None: not in the file)."""
+    from accugrid.kinematics.frames import abc_to_matrix
+    from accugrid.kinematics.identification import rigid_fit
+
+    d = result.deviation
+    mean = d.mean(axis=0)
+    validated = 0.0 if validated_max_mm is None else float(np.linalg.norm(validated_max_mm))
+    shift_rms = _rms(d - mean)
+    rigid_rms, angle = shift_rms, 0.0
+    spread = np.linalg.svd(result.target - result.target.mean(axis=0), compute_uv=False)
+    if len(d) >= 3 and spread[1] > 1e-3 * spread[0]:  # a rotation needs a spread in 2 directions
+        measured_T_target = rigid_fit(result.target, result.measured)
+        rest = result.measured - result.target @ measured_T_target[:3, :3].T
+        rigid_rms = min(_rms(rest - measured_T_target[:3, 3]), shift_rms)
+        cos = (np.trace(measured_T_target[:3, :3]) - 1.0) / 2.0
+        angle = float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+    tool = None
+    if abc_deg is not None:  # d_i = R_i u for one tool offset u: u = mean of R_i^T d_i
+        tool = np.einsum("nji,nj->ni", abc_to_matrix(abc_deg), d).mean(axis=0)
+    return MeanOffset(
+        mean_mm=mean,
+        limit_mm=max(FRAME_FACTOR * validated, FRAME_FLOOR_MM),
+        rms_mm=_rms(d),
+        shift_rms_mm=shift_rms,
+        rigid_rms_mm=rigid_rms,
+        rotation_deg=angle,
+        tool_mm=tool,
+    )
+
+
+def _rms(vectors: np.ndarray) -> float:
+    """RMS of the lengths of vectors (N, 3)."""
+    return float(np.sqrt((vectors**2).sum(axis=1).mean()))

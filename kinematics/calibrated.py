@@ -151,6 +151,7 @@ def calibrated_yaml(robot: Robot, summary: dict | None = None, header: str = "")
     doc: dict = {
         "name": robot.name,
         "description": robot.description,
+        **({"controller": robot.controller} if robot.controller else {}),
         "dh": [
             {
                 "a_mm": float(dh.a[i]),

@@ -70,7 +70,9 @@ class IKSolution:
     q: np.ndarray  # (N, 6) rad, NaN rows where there is no solution
     ok: np.ndarray  # (N,) bool
     reason: np.ndarray  # (N,) object: "" when ok, else why not
-    status: np.ndarray  # (N,) int KUKA Status of q (-1 where there is no solution)
+    # (N,) int KUKA Status of q: the configuration code shoulder + 2 elbow + 4 wrist, the
+    # same number on any DH arm (-1 where there is no solution)
+    status: np.ndarray
     turn: np.ndarray  # (N,) int KUKA Turn of q (-1 where there is no solution)
 
 

@@ -633,6 +633,7 @@ def identify(
         f"{robot.name} calibrated by accugrid identify from {data.poses} poses",
         arm.fk_joint_errors,
         validated_max_mm=np.abs(residuals).max(axis=0) if cv is None else cv.max_mm,
+        controller=robot.controller,
     )
     return Identification(
         robot=calibrated,
@@ -838,7 +839,10 @@ def _check_rank(
 
 def _readable_null(null: np.ndarray) -> np.ndarray:
     """The same subspace (n, k) in a sparser basis: reduced row echelon of its transpose (the
-    largest component of each direction is a pivot, its other pivots are 0), columns unit."""
+    largest component of each direction is a pivot, its other pivots are 0), columns unit, each
+    with its first component above 5 % of its largest positive, in the order of those first
+    components' parameters (the SVD's order of directions with singular values near 0, and which
+    of two equal components becomes the pivot, are rounding noise that differs between CPUs)."""
     if null.size == 0:
         return null
     rows = null.T.copy()
@@ -853,12 +857,15 @@ def _readable_null(null: np.ndarray) -> np.ndarray:
         rows[others] -= np.outer(rows[others, pivot], rows[i])
         used.append(pivot)
     rows /= np.linalg.norm(rows, axis=1, keepdims=True)
-    return rows.T
+    first = np.argmax(np.abs(rows) > 0.05 * np.abs(rows).max(axis=1, keepdims=True), axis=1)
+    rows *= np.sign(rows[np.arange(k), first])[:, None]
+    return rows[np.argsort(first, kind="stable")].T
 
 
 def _direction_text(v: np.ndarray, names: list[str]) -> str:
-    """A direction in scaled coordinates as '+0.707 dd2 -0.707 dd3' (components above 0.05)."""
-    v = v / v[np.argmax(np.abs(v))]
+    """A direction in scaled coordinates as '+0.707 dd2 -0.707 dd3' (components above 0.05 of the
+    largest, which is 1 in size; the sign as given)."""
+    v = v / np.abs(v).max()
     keep = np.flatnonzero(np.abs(v) > 0.05 * np.abs(v).max())
     if len(keep) == 1:
         return names[keep[0]]

@@ -18,6 +18,7 @@ class RobotModel(Protocol):
 
     name: str
     flange_T_tool: np.ndarray  # (4, 4) mm
+    controller: str  # the maker of its controller, lower case ("kuka", "abb"; "": not said)
 
     @property
     def joint_limits_deg(self) -> np.ndarray:

@@ -140,16 +140,18 @@ def _seed(robot: Robot, wrist: np.ndarray, code: np.ndarray, reference: np.ndarr
 
 def solve_in(
     robot: Robot, flange: np.ndarray, code: np.ndarray, reference: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Joint vectors (N, 6) rad in (-pi, pi] for flange poses (N, 4, 4) mm in configurations
     ``code`` (N,) int (on a wrist singularity, |A5| < ``SINGULAR_A5_RAD``, either wrist bit
-    fits), seeded from ``reference`` (N, 6) rad, and whether each was found (N,) bool (rows
-    not found: NaN). The first seed for every pose, then the others together for the poses it
-    did not solve; of those, the lowest seed number that solves one."""
+    fits), seeded from ``reference`` (N, 6) rad, whether each was found (N,) bool (rows not
+    found: NaN) and whether any start reached the pose in whatever configuration (N,) bool
+    (the pose is reachable). The first seed for every pose, then the others together for the
+    poses it did not solve; of those, the lowest seed number that solves one."""
     n = len(flange)
     wrist = closed.wrist_points(robot.dh, flange)
     q = np.full((n, 6), np.nan)
     found = np.zeros(n, bool)
+    reached = np.zeros(n, bool)
     for first, last in ((0, 1), (1, SEEDS)):
         rows = np.flatnonzero(~found)
         if not rows.size:
@@ -160,6 +162,7 @@ def solve_in(
         for i, k in enumerate(seeds):
             start[i :: len(seeds)] = _seed(robot, wrist[rows], code[rows], reference[rows], k)
         qk, ok = solve(robot.dh, flange[rows_k], start)
+        reached[rows_k[ok]] = True
         qk = closed.wrap(qk)
         got = Configuration.of_joints(robot, np.where(ok[:, None], qk, 0.0)).to_kuka()[0]
         singular = np.abs(qk[:, 4]) < closed.SINGULAR_A5_RAD
@@ -168,12 +171,13 @@ def solve_in(
         hit = ok.any(axis=1)
         pick = np.argmax(ok, axis=1) + np.arange(len(rows)) * len(seeds)
         q[rows[hit]], found[rows[hit]] = qk[pick[hit]], True
-    return q, found
+    return q, found, reached
 
 
 def select(robot: Robot, flange: np.ndarray, status, reference) -> tuple[np.ndarray, ...]:
     """The solution ``Robot.ik`` picks per flange pose (N, 4, 4) mm, before turns and limits:
-    q (N, 6) rad in (-pi, pi] (NaN where none), found (N,), reachable in some configuration (N,).
+    q (N, 6) rad in (-pi, pi] (NaN where none), found (N,), reachable (N,): some start reached
+    the pose, whatever its configuration (with ``status``: the starts aimed at it).
 
     ``status`` (int or (N,) ints): the configuration code (``solve_in``); None: of the
     solutions in all 8 configurations the one nearest (sum of squared wrapped joint
@@ -182,13 +186,7 @@ def select(robot: Robot, flange: np.ndarray, status, reference) -> tuple[np.ndar
     ref = np.array(np.broadcast_to(HOME_RAD if reference is None else reference, (n, 6)))
     if status is not None:
         want = np.broadcast_to(np.asarray(status, dtype=int), (n,))
-        q, found = solve_in(robot, flange, want, ref)
-        reach = found.copy()
-        missed = np.flatnonzero(~found)  # reachable in another configuration?
-        if missed.size:
-            every = _every_configuration(robot, flange[missed], ref[missed])[1]
-            reach[missed] = every.any(axis=1)
-        return q, found, reach
+        return solve_in(robot, flange, want, ref)
     cand, got = _every_configuration(robot, flange, ref)  # (N, 8, 6), (N, 8)
     distance = np.where(got, (closed.wrap(cand - ref[:, None]) ** 2).sum(axis=2), np.inf)
     q = cand[np.arange(n), np.argmin(distance, axis=1)]
@@ -201,5 +199,7 @@ def _every_configuration(robot: Robot, flange: np.ndarray, reference: np.ndarray
     (N, 8, 6) rad (configuration code = index) and found (N, 8) bool."""
     n = len(flange)
     codes = np.tile(np.arange(8), n)
-    q, found = solve_in(robot, np.repeat(flange, 8, axis=0), codes, np.repeat(reference, 8, axis=0))
+    q, found, _ = solve_in(
+        robot, np.repeat(flange, 8, axis=0), codes, np.repeat(reference, 8, axis=0)
+    )
     return q.reshape(n, 8, 6), found.reshape(n, 8)

@@ -2,11 +2,12 @@
 
 A robot is YAML data (``kinematics/robots/*.yaml`` for the built-ins, or a user file): six DH rows
 ``{a_mm, alpha_deg, d_mm, theta_offset_deg, sign}`` with theta = sign * A + theta_offset, joint
-limits ``limits_deg`` ([min, max] per axis), an optional ``tool`` {x, y, z, a, b, c} (flange_T_tool)
-and optional ``errors`` (per row Δa mm, Δd mm, Δα rad, Δθ rad) and ``joint_errors`` (compliance
-under gravity, transmission harmonics, thermal growth; ``kinematics.joint_errors``) that define the
-"true" robot. A YAML file may instead name a URDF (``urdf: file``, ``tip: frame``), see
-``kinematics.urdf``.
+limits ``limits_deg`` ([min, max] per axis), an optional ``tool`` {x, y, z, a, b, c}
+(flange_T_tool), ``controller``, the maker of its controller (``kuka``, ``abb``: which program
+dialects drive it; absent: any), and optional ``errors`` (per row Δa mm, Δd mm, Δα rad, Δθ rad)
+and ``joint_errors`` (compliance under gravity, transmission harmonics, thermal growth;
+``kinematics.joint_errors``) that define the "true" robot. A YAML file may instead name a URDF
+(``urdf: file``, ``tip: frame``), see ``kinematics.urdf``.
 
 Joint vectors are the controller's axis angles in radians (KUKA A1..A6; ABB axes 1..6 for
 ``irb6700``, as a RAPID jointtarget holds them), shape (N, 6); poses are (N, 4, 4) mm.
@@ -80,6 +81,7 @@ class Robot:
     # file's cross-validated max, else its fit residual max); None: the model makes no claim
     validated_max_mm: np.ndarray | None = None
     source: str | None = None  # the robot file (for messages); None: built in code
+    controller: str = ""  # the maker of its controller, lower case ("kuka", "abb"; "": not said)
 
     def __repr__(self) -> str:
         parts = [repr(self.name)]
@@ -170,7 +172,8 @@ class Robot:
             flange, wrist = self._flange_wrist(robot_T_tcp)
             q, found, reach = select(self, flange, wrist, status, reference)
         else:  # no spherical wrist: numerical
-            flange = stack_times(np.reshape(robot_T_tcp, (-1, 4, 4)), invert(self.flange_T_tool))
+            poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
+            flange = stack_times(poses, invert(self.flange_T_tool))
             q, found, reach = numeric.select(self, flange, status, reference)
             wrist = None
         n = len(flange)
@@ -323,6 +326,7 @@ ERROR_KEYS = ("da_mm", "dd_mm", "dalpha_rad", "dtheta_rad")  # one ``errors:`` r
 ROBOT_SCHEMA: Schema = {
     "name": None,
     "description": None,
+    "controller": None,
     "dh": [dict.fromkeys(("a_mm", "alpha_deg", "d_mm", "theta_offset_deg", "sign"))],
     "limits_deg": None,
     "tool": _POSE,
@@ -376,6 +380,7 @@ def _robot_from_doc(doc: YamlDoc) -> Robot:
         joint_errors,
         validated_max_mm=validated,
         source=doc.path,
+        controller=doc.string("controller", default="").strip().lower(),
     )
 
 

@@ -22,7 +22,7 @@ import sys
 import tempfile
 import warnings
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +40,7 @@ __all__ = ["URDF_ROBOT_SCHEMA", "UrdfRobot", "urdf_robot_from_doc"]
 URDF_ROBOT_SCHEMA: Schema = {
     "name": None,
     "description": None,
+    "controller": None,
     "urdf": None,
     "tip": None,
     "tool": dict.fromkeys("xyzabc"),
@@ -62,6 +63,7 @@ class UrdfRobot:
     tip: int  # frame id of the flange
     flange_T_tool: np.ndarray = field(default_factory=lambda: np.eye(4))
     description: str = ""
+    controller: str = ""  # the maker of its controller, lower case ("": not said)
 
     @property
     def joint_limits_deg(self) -> np.ndarray:
@@ -77,7 +79,7 @@ class UrdfRobot:
 
     def with_tool(self, flange_T_tool: np.ndarray) -> UrdfRobot:
         tool = np.array(flange_T_tool, dtype=float).reshape(4, 4)
-        return UrdfRobot(self.name, self.model, self.tip, tool, self.description)
+        return replace(self, flange_T_tool=tool)
 
     def true_robot(self) -> None:
         """URDF robots carry no parameter errors."""
@@ -180,7 +182,8 @@ def _native_stderr() -> Iterator[list[str]]:
 
 
 def urdf_robot_from_doc(doc: YamlDoc, folder: Path) -> UrdfRobot:
-    """The UrdfRobot a robot YAML describes (keys: name, urdf, tip, optional tool, description)."""
+    """The UrdfRobot a robot YAML describes (keys: name, urdf, tip, optional tool, description,
+    controller)."""
     import pinocchio as pin
 
     doc.check_keys(URDF_ROBOT_SCHEMA)
@@ -212,7 +215,10 @@ def urdf_robot_from_doc(doc: YamlDoc, folder: Path) -> UrdfRobot:
     if doc.has("tool"):
         tool = pose_from_xyzabc([doc.number("tool", k, default=0.0) for k in "xyzabc"])
     description = doc.string("description", default="")
-    return UrdfRobot(doc.string("name"), model, model.getFrameId(tip_name), tool, description)
+    controller = doc.string("controller", default="").strip().lower()
+    return UrdfRobot(
+        doc.string("name"), model, model.getFrameId(tip_name), tool, description, controller
+    )
 
 
 def _to_mm(pose_m: np.ndarray) -> np.ndarray:

@@ -70,7 +70,7 @@ REALWORLD_REWRITES = {
     ),
     "cnc_struc": (
         ["krl/chinamilling_CNC_LOOP.src", "krl/chinamilling_CNC1.dat"],
-        ["--base", "0", "--trust-calls"],
+        ["--base", "0"],
     ),
     "heatsink": (["gcode/norn93_1_heatsink_drill.gcode"], ["--decimals", "3"]),
     "example3_inch": (["gcode/printhor_example3_inch.gcode"], []),
@@ -139,6 +139,15 @@ def write_cell(folder: Path, field="smooth", base_data=None, program_frame=None,
 
 def _frame(f) -> str:
     return ", ".join(f"{k}: {v}" for k, v in zip("xyzabc", f, strict=True))
+
+
+def const_model():
+    """A grid model over +-600 mm whose error is E_CONST everywhere (corrected = P + E_CONST)."""
+    from accugrid.compensation import GridModel
+
+    axes = [np.arange(-600.0, 601.0, 300.0)] * 3
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    return GridModel.from_measurements((pts, pts - E_CONST))
 
 
 def rewrite_gcode(path: str, text: str, opts, robot_T_program: np.ndarray | None = None):

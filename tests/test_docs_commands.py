@@ -102,3 +102,61 @@ def test_the_docs_name_no_issue_numbers():
     for page in PAGES:
         found = re.findall(r"issue [0-9]+", page.read_text(), flags=re.I)
         assert not found, f"{_page_id(page)}: {found}"
+
+
+WRITTEN_MD = {"report.md": "app/study_report.py"}  # Markdown a command writes, and where
+
+
+def _help_texts() -> dict[str, str]:
+    """Every subcommand's --help text, by name."""
+    import argparse
+
+    from accugrid.app.cli import build_parser
+    from accugrid.app.commands import COMMANDS
+
+    texts = {}
+    for name in COMMANDS:
+        parser = build_parser(name)
+        (commands,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        texts[name] = commands.choices[name].format_help()
+    return texts
+
+
+def test_the_docs_and_the_help_name_only_markdown_files_the_project_has():
+    """A page or a --help that names a .md file names one the project ships (beside the page,
+    at the root or in docs/), or one a command writes."""
+    for source, path in WRITTEN_MD.items():
+        assert f'"{source}"' in (ROOT / path).read_text(), (source, path)
+    texts = {_page_id(p): (p.parent, p.read_text()) for p in PAGES + [ROOT / "CHANGELOG.md"]}
+    texts.update({f"accugrid {n} --help": (ROOT, t) for n, t in _help_texts().items()})
+    missing = []
+    for where, (folder, text) in texts.items():
+        for name in re.findall(r"[\w./-]*\.md\b", text):
+            places = (folder / name, ROOT / name, ROOT / "docs" / name)
+            if Path(name).name not in WRITTEN_MD and not any(p.exists() for p in places):
+                missing.append(f"{where}: {name}")
+    assert not missing, missing
+
+
+def test_rewrite_help_says_arcs_move_rigidly():
+    """G-code arcs are rewritten (codegen.gcode.arc_shift): the help does not count them among
+    what is left untouched."""
+    text = " ".join(_help_texts()["rewrite"].split())
+    untouched = text.split(" is left untouched")[0].rsplit("Anything that cannot be placed", 1)[1]
+    assert "arc" not in untouched
+    assert "A G-code arc (G2/G3) moves rigidly" in text
+
+
+HISTORY = ("this round", "load average", "(before)", "earlier code", "earlier run", "not kept")
+
+
+def test_the_docs_state_the_current_method_and_numbers_not_their_history():
+    """README and docs/ describe what the product does and measures now; how it got there is the
+    CHANGELOG's."""
+    found = [
+        f"{_page_id(page)}: {phrase}"
+        for page in PAGES
+        for phrase in HISTORY
+        if phrase in page.read_text().lower()
+    ]
+    assert not found, found

@@ -514,3 +514,35 @@ def test_harmonic_terms_are_checked():
         harmonic_terms([(2, 100_001)])
     with pytest.raises(InputError, match="more than 60 harmonic terms"):
         harmonic_terms((2, k) for k in range(1, 1_000_000))  # refused at the 61st
+
+
+@settings(max_examples=25)
+@given(st.permutations(range(4)), st.lists(st.sampled_from([-1.0, 1.0]), min_size=4, max_size=4))
+def test_unidentifiable_directions_come_in_one_order_whatever_the_svd_gives(order, signs):
+    """The SVD orders directions whose singular values are all ~0 by rounding noise, which differs
+    between CPUs and BLAS kernels: their readable basis comes out in the order of its pivots'
+    parameters whatever order and signs the null-space basis arrives in."""
+    from accugrid.kinematics.identification import _readable_null
+
+    null = np.zeros((8, 4))
+    null[[0, 1], 0] = [1.0, -1.0]  # da1 - dd1
+    null[[2, 5], 1] = [0.6, 0.8]
+    null[4, 2] = 1.0
+    null[[3, 6, 7], 3] = [0.2, 0.9, -0.3]
+    null /= np.linalg.norm(null, axis=0)
+    expected = _readable_null(null)
+    shuffled = _readable_null(null[:, list(order)] * np.array(signs))
+    assert [int(np.argmax(np.abs(c) > 0.05)) for c in expected.T] == [0, 2, 3, 4]
+    assert np.allclose(shuffled, expected, atol=1e-12)
+
+
+def test_an_unidentifiable_pair_reads_the_same_whichever_of_its_equal_components_leads():
+    """da6 - tool_x: which of the two equal components is the larger is rounding noise."""
+    from accugrid.kinematics.identification import _direction_text, _readable_null
+
+    names = ["da6", "tool_x"]
+    texts = {
+        _direction_text(_readable_null(np.array([[a], [b]]) / np.hypot(a, b))[:, 0], names)
+        for a, b in ((1.0, -1.0 + 1e-15), (1.0 - 1e-15, -1.0), (-1.0, 1.0 - 1e-15))
+    }
+    assert texts == {"+1.000 da6 -1.000 tool_x"}

@@ -6,6 +6,8 @@ the nominal controller's IK with the commanded tool, then the true arm's forward
 from __future__ import annotations
 
 import csv
+import dataclasses
+import os
 import re
 from importlib import resources
 from pathlib import Path
@@ -13,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from conftest import EXAMPLES
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -20,6 +23,7 @@ from accugrid.app.cli import main
 from accugrid.codegen.krl.parse import parse_krl
 from accugrid.codegen.points import parse_points
 from accugrid.codegen.program import build_program
+from accugrid.compensation.grid import GridModel
 from accugrid.compensation.policy import F_REGION, OUTSIDE_MODEL, Policy
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc
@@ -683,3 +687,168 @@ def test_krl_model_after_a_one_millimetre_tool_change_lands_the_new_tool(tmp_pat
     abc = np.array([[0.0, 90.0, 0.0]])
     old = model_correct(load_robot(cal), target, abc, 6, None, controller_tool=tool)
     assert abs(np.linalg.norm(old.command[0] - hole) - 1.0) < 0.05
+
+
+def _rewrite_model_job(tmp_path: Path, motions: str, status=None) -> tuple[int, Path]:
+    """Rewrite a KRL .src of ``motions`` (base 1: the robot frame) with a model-only cell (no
+    grid; ``status``: its configuration.status); the exit code and the report."""
+    _calibrated(tmp_path / "cal.yaml")
+    src = tmp_path / "job.src"
+    src.write_text(f"DEF job( )\n$BASE=BASE_DATA[1]\n{motions}END\n")
+    cell = _cell(tmp_path, model="cal.yaml", status=status)
+    out, report = tmp_path / "out.src", tmp_path / "r.csv"
+    argv = ["rewrite", str(src), "--cell", str(cell), "-o", str(out), "--decimals", "6"]
+    return main([*argv, "--report", str(report)]), report
+
+
+def test_rewrite_model_takes_the_programs_last_status_for_a_position_without_s(tmp_path, capsys):
+    # finding: an inline position with no S was corrected in Status 0 although the program's
+    # own positions before it are Status 6 (a LIN keeps the Status the robot is in)
+    first = "X 1500.0,Y 100.0,Z 1400.0,A 0.0,B 90.0,C 0.0"
+    second = "X 1550.0,Y 120.0,Z 1380.0,A 0.0,B 90.0,C 0.0"
+    code, report = _rewrite_model_job(tmp_path, f"PTP {{{first},S 6,T 27}}\nLIN {{{second}}}\n")
+    assert code == 0, capsys.readouterr().err
+    rows = _rows(report)
+    assert [r["status"] for r in rows] == ["corrected", "corrected"]
+    new = np.array([[float(r[k]) for k in ("x_new", "y_new", "z_new")] for r in rows])
+    landed = _landed(tmp_path / "cal.yaml", new, np.tile([0.0, 90.0, 0.0], (2, 1)), 6)
+    assert np.abs(landed - [[1500.0, 100.0, 1400.0], [1550.0, 120.0, 1380.0]]).max() < 1e-3
+
+
+def test_rewrite_model_without_any_status_names_configuration_status(tmp_path, capsys):
+    # finding: the error proposed --allow-partial where the cell's configuration.status is the fix
+    pose = "X 1550.0,Y 120.0,Z 1380.0,A 0.0,B 90.0,C 0.0"
+    code, _ = _rewrite_model_job(tmp_path, f"LIN {{{pose}}}\n")
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "job.src:3" in err and "no KUKA Status" in err and "configuration.status" in err
+    assert "--allow-partial" not in err and "\n" not in err.strip()
+    code, report = _rewrite_model_job(tmp_path, f"LIN {{{pose}}}\n", status=6)
+    assert code == 0, capsys.readouterr().err
+    new = np.array([[float(r[k]) for k in ("x_new", "y_new", "z_new")] for r in _rows(report)])
+    landed = _landed(tmp_path / "cal.yaml", new, [[0.0, 90.0, 0.0]], 6)
+    assert np.abs(landed - [1550.0, 120.0, 1380.0]).max() < 1e-3
+
+
+def _same(a, b) -> bool:
+    """Equal values, arrays element by element, dataclasses and grids field by field, paths as
+    text."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return np.array_equal(a, b)
+    if dataclasses.is_dataclass(a) and type(a) is type(b):
+        return all(_same(getattr(a, f.name), getattr(b, f.name)) for f in dataclasses.fields(a))
+    if type(a) is type(b) and isinstance(a, GridModel):
+        return vars(a).keys() == vars(b).keys() and all(
+            _same(v, vars(b)[k]) for k, v in vars(a).items()
+        )
+    if isinstance(a, tuple | list) and isinstance(b, tuple | list):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, str | os.PathLike) and isinstance(b, str | os.PathLike):
+        return os.fspath(a) == os.fspath(b)
+    return a == b
+
+
+def _differing(policies: dict[str, Policy], left_out: tuple[str, ...] = ()) -> list[str]:
+    """The fields of ``Policy`` in which the policies differ from the first's, by command."""
+    (first, one), *others = policies.items()
+    return [
+        f"{name}.{f.name} differs from {first}'s"
+        for name, other in others
+        for f in dataclasses.fields(Policy)
+        if f.name not in left_out and not _same(getattr(one, f.name), getattr(other, f.name))
+    ]
+
+
+def test_every_command_builds_the_same_policy_from_the_same_cell(tmp_path, monkeypatch):
+    # finding: the policy was assembled in four places that drifted: rewrite had no
+    # wrist-singularity limit of the cell, krl and gcode no orientation options
+    built: list[Policy] = []
+    build = Policy.build.__func__
+
+    def spy(cls, *args, **kwargs):
+        built.append(build(cls, *args, **kwargs))
+        return built[-1]
+
+    monkeypatch.setattr(Policy, "build", classmethod(spy))
+    _calibrated(tmp_path / "cal.yaml")
+    grid = _grid(tmp_path)
+    cell = _cell(tmp_path, grid="grid.csv", model="cal.yaml", status=6)
+    cell.write_text(cell.read_text() + "  singular_a5: 8\n")  # configuration: ...
+    points = tmp_path / "p.csv"
+    points.write_text("id,x,y,z,a,b,c\nH1,1500,100,1400,0,90,0\nH2,1600,-100,1500,10,80,0\n")
+    src = tmp_path / "job.src"
+    src.write_text(
+        "DEF job( )\n$BASE=BASE_DATA[1]\nLIN {X 1500,Y 100,Z 1400,A 0,B 90,C 0,S 6,T 27}\nEND\n"
+    )
+    options = ["--orientation-tol", "3", "--orientation-limit", "20", "--allow-orientation"]
+    options += ["--strict", "--outside", "clamp", "--allow-partial"]
+    runs = {
+        "krl": ["krl", str(points), "--cell", str(cell), "-o", str(tmp_path / "krl")],
+        "gcode": ["gcode", str(points), "--cell", str(cell), "-o", str(tmp_path / "p.ngc")],
+        "rewrite": ["rewrite", str(src), "--cell", str(cell), "-o", str(tmp_path / "out.src")],
+        "correct": [
+            "correct",
+            str(points),
+            "--grid",
+            str(grid),
+            "--model",
+            str(tmp_path / "cal.yaml"),
+        ]
+        + [*TOOL, "--status", "6", "-o", str(tmp_path / "c.csv")],
+    }
+    policies = {}
+    for name, argv in runs.items():
+        built.clear()
+        main([*argv, *options])
+        assert len(built) == 1, name
+        policies[name] = built[0]
+    assert policies["rewrite"].singular_deg == 8.0
+    assert policies["krl"].orientation_limit_deg == 20.0 and policies["krl"].strict
+    assert policies["krl"].settings.outside == "clamp"
+    correct = policies.pop("correct")  # no cell: the default wrist-singularity limit
+    assert not _differing(policies)
+    assert not _differing({"krl": policies["krl"], "correct": correct}, ("singular_deg",))
+
+
+def test_rapid_and_gcode_build_the_same_policy_from_an_abb_cell(monkeypatch, tmp_path):
+    built: list[Policy] = []
+    build = Policy.build.__func__
+
+    def spy(cls, *args, **kwargs):
+        built.append(build(cls, *args, **kwargs))
+        return built[-1]
+
+    monkeypatch.setattr(Policy, "build", classmethod(spy))
+    cell = EXAMPLES / "cell_irb6700.yaml"
+    points = EXAMPLES / "wing_panel_points.csv"
+    options = ["--orientation-tol", "2", "--orientation-limit", "4", "--allow-partial"]
+    policies = {}
+    for name, out in (("rapid", "P.mod"), ("gcode", "p.ngc")):
+        built.clear()
+        main([name, str(points), "--cell", str(cell), "-o", str(tmp_path / out), *options])
+        (policies[name],) = built
+    assert policies["rapid"].orientation_limit_deg == 4.0
+    assert not _differing(policies)
+
+
+def test_the_api_corrects_by_the_cells_model_and_a_header_says_when_nothing_is(tmp_path):
+    # finding: build_program(holes, cell, robot) ignored the cell's correction.model (the
+    # command line applies it) and wrote an uncorrected program that did not say so
+    from accugrid import render_gcode, render_krl
+    from accugrid.codegen.cell import load_cell
+
+    cal = _calibrated(tmp_path / "cal.yaml")
+    cell = load_cell(_cell(tmp_path, model="cal.yaml", status=6))
+    robot = NOMINAL.with_tool(cell.flange_T_tool)
+    pts = parse_points("id,x,y,z,a,b,c\nH1,1500,100,1400,0,90,0\nH2,1600,-100,1500,10,80,0\n", "p")
+    program = build_program(pts, cell, robot)
+    assert program.corrected
+    landed = _landed(cal, pts.xyz + program.correction, pts.abc, 6)
+    assert np.abs(landed - pts.xyz).max() < 1e-3
+    plain = build_program(pts, cell, robot, None, None)  # asked for no correction
+    assert not plain.corrected and not plain.correction.any()
+    for prog, says in ((plain, True), (program, False)):
+        texts = [render_gcode(prog, ["by hand"])]
+        texts += ["".join(text) for text in render_krl(prog, ["by hand"]).values()]
+        said = ["grid none, model none: positions are not corrected" in t for t in texts]
+        assert said == [says] * 3

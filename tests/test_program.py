@@ -23,6 +23,7 @@ from program_helpers import (
 
 from accugrid.codegen.points import parse_points
 from accugrid.codegen.program import STAGES, _branch_jumps, build_program
+from accugrid.compensation.policy import PolicyRequest
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.infra.errors import InputError
 from accugrid.infra.textsafe import fixed
@@ -125,7 +126,8 @@ def test_hole_outside_the_grid_is_named():
         build_program(parse_points(text, "p.csv"), cell(), robot(), grid())
     assert "1 hole(s) cannot be corrected (1 outside the grid)" in info.value.message
     assert "hole 'HIGH' (p.csv:3): outside the grid box by 100.000 mm" in info.value.message
-    prog = build_program(parse_points(text, "p.csv"), cell(), robot(), grid(), allow_partial=True)
+    partial = PolicyRequest(allow_partial=True)
+    prog = build_program(parse_points(text, "p.csv"), cell(), robot(), grid(), request=partial)
     assert prog.correction[1].tolist() == [0.0, 0.0, 0.0] and prog.correction[0].any()
     assert prog.uncorrected == ["not corrected: hole HIGH: outside the grid box by 100.000 mm"]
 

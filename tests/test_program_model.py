@@ -18,7 +18,7 @@ from accugrid.kinematics.robot import load_robot
 def test_every_hole_point_lands_when_the_calibrated_arm_drives_the_program():
     points = read_points(POINTS)
     model = load_robot("kr210-realistic").with_tool(cell().flange_T_tool)
-    program = build_program(points, cell(), robot(), model=model)
+    program = build_program(points, cell(), robot(), None, model=model)
     assert program.corrected
     holes = transform_points(cell().robot_T_base, points.xyz)  # robot frame
     command = holes + program.correction

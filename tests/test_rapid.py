@@ -468,3 +468,47 @@ def test_a_robtarget_in_another_configuration_than_the_grid_is_refused(tmp_path,
     rows = {r.split(",")[2]: r for r in report.read_text().splitlines()[1:]}
     assert ",corrected," not in rows["pHole3"] and "Status" in rows["pHole3"]
     assert ",corrected," in rows["inline MoveL"]
+
+
+@pytest.mark.parametrize(
+    ("command", "cell", "robot", "serving"),
+    [
+        ("rapid", "cell.yaml", "kr210-paper", "accugrid krl"),
+        ("krl", "cell_irb6700.yaml", "irb6700", "accugrid rapid"),
+    ],
+)
+def test_a_dialect_refuses_a_robot_it_does_not_serve(
+    tmp_path, capsys, command, cell, robot, serving
+):
+    # finding: rapid took a KUKA cell and wrote ABB confdata computed from KUKA axes
+    out = tmp_path / ("JOB.mod" if command == "rapid" else "krl")
+    points = EXAMPLES / "wing_panel_points.csv"
+    argv = [command, str(points), "--cell", str(EXAMPLES / cell), "-o", str(out)]
+    assert main([*argv, "--allow-partial"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert f"robot {robot}" in err and serving in err and "\n" not in err
+    assert not out.exists()
+
+
+def test_gcode_serves_a_robot_of_any_controller(tmp_path, capsys):
+    out = tmp_path / "job.ngc"
+    points = EXAMPLES / "wing_panel_points.csv"
+    argv = ["gcode", str(points), "--cell", str(EXAMPLES / "cell_irb6700.yaml"), "-o", str(out)]
+    assert main([*argv, "--allow-partial"]) == 0, capsys.readouterr().err
+
+
+def test_rewrite_by_a_model_refuses_a_rapid_program_on_a_kuka_cell(tmp_path, capsys):
+    out = tmp_path / "out.mod"
+    argv = ["rewrite", str(EXAMPLES / "cam_drill.mod"), "--cell", str(EXAMPLES / "cell.yaml")]
+    assert main([*argv, "--model", "kr210-paper", "--allow-partial", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "robot kr210-paper has a KUKA controller" in err and "accugrid krl" in err
+    assert not out.exists()
+
+
+def test_a_calibrated_robot_keeps_its_controller(tmp_path):
+    from accugrid.kinematics.calibrated import calibrated_yaml
+
+    model = tmp_path / "cal.yaml"
+    model.write_text(calibrated_yaml(load_robot("irb6700")))
+    assert load_robot(model).controller == "abb" and load_robot("kr210").controller == "kuka"

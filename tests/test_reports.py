@@ -3,11 +3,14 @@ inputs with their SHA-256, the verdict; the size for 1e4 holes; bad report paths
 
 from __future__ import annotations
 
+import csv
+import hashlib
+
 import numpy as np
 import pytest
 import yaml
 from conftest import EXAMPLES
-from report_helpers import check_report
+from report_helpers import Page, check_report
 from test_identify_cli import TOOL, joints, write_csv
 
 from accugrid.app.cli import main
@@ -63,7 +66,7 @@ def test_correct_report_lists_the_positions_left_uncorrected_with_their_reason(t
                  "--allow-partial", "--report-html", str(report)])  # fmt: skip
     assert code == 0
     page = check_report(report, [points, GRID], figures=1)
-    assert page.verdict == ["FAIL"]
+    assert page.verdict == ["4 of 40 drilling positions not corrected"]
     text = " ".join(page.text)
     for i in range(4):  # the four holes moved out of the grid, each with the policy's words
         assert f"hole 'H{i}' ({points}:{i + 2})" in text
@@ -94,8 +97,19 @@ def test_a_report_path_that_is_an_input_or_a_folder_writes_nothing(tmp_path, cap
     assert not out.exists() and points.read_bytes() == before
 
 
+def cell_pose_text(pose: dict) -> str:
+    """A cell's tool or base record as the report writes it, formatted here."""
+    xyz = " ".join(f"{k} {float(pose[k]):.3f}" for k in "xyz")
+    abc = " ".join(f"{k} {float(pose[k]):.3f}" for k in "abc")
+    return f"{pose['number']}: {xyz} mm, {abc} deg"
+
+
 @pytest.mark.parametrize("dialect", ["krl", "gcode"])
-def test_program_report_beside_the_same_program_bytes(tmp_path, dialect):
+def test_program_report_beside_the_same_program_bytes(tmp_path, dialect, monkeypatch):
+    """The program is the same with a report or without; the report names every output with
+    its SHA-256, the robot, tool, base and cell, the date (SOURCE_DATE_EPOCH when set), what
+    was checked, and no PASS: generating a program measures nothing."""
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "86400")
     points, cell = EXAMPLES / "wing_panel_points.csv", EXAMPLES / "cell.yaml"
     plain, reported = tmp_path / "plain", tmp_path / "reported"
     out = {"krl": "", "gcode": "w.ngc"}[dialect]
@@ -103,11 +117,101 @@ def test_program_report_beside_the_same_program_bytes(tmp_path, dialect):
     assert main([*base, "-o", str(plain / out)]) == 0
     report = tmp_path / "r.html"
     assert main([*base, "-o", str(reported / out), "--report-html", str(report)]) == 0
-    for path in sorted(plain.rglob("*")):
-        assert (reported / path.relative_to(plain)).read_bytes() == path.read_bytes()
-    page = check_report(report, [points, cell, GRID], figures=1)
-    assert page.verdict == ["PASS"]
-    assert "72 positions: 72 corrected" in " ".join(page.text)
+    written = sorted(reported.rglob("*"))
+    assert written
+    for path in written:
+        assert (plain / path.relative_to(reported)).read_bytes() == path.read_bytes()
+    page = check_report(report, [points, cell, GRID, *written], figures=1)
+    assert page.verdict == ["all 72 drilling positions corrected"]
+    text = " ".join(page.text)
+    assert "PASS" not in report.read_text().split("<body>")[1]
+    for path in written:  # each output named beside its own hash
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+        assert f"{path} {digest}" in " ".join(" ".join(page.text).split())
+    doc = yaml.safe_load(cell.read_text())
+    assert "robot kr210-paper" in " ".join(text.split())
+    assert "tool " + cell_pose_text(doc["tool"]) in " ".join(text.split())
+    assert "base " + cell_pose_text(doc["base"]) in " ".join(text.split())
+    assert f"cell {cell}" in " ".join(text.split())
+    assert "date 1970-01-02 00:00:00 UTC" in " ".join(text.split())
+    assert "Checked for every drilling position before writing: inside the grid box" in text
+    assert "72 positions: 72 corrected" in text
+
+
+def test_a_report_is_byte_identical_for_the_same_inputs_and_source_date_epoch(
+    tmp_path, monkeypatch
+):
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
+    base = ["krl", str(EXAMPLES / "wing_panel_points.csv"), "--cell", str(EXAMPLES / "cell.yaml"),
+            "--grid", str(GRID), "-o", str(tmp_path / "p"),
+            "--report-html", str(tmp_path / "r.html"), "--force"]  # fmt: skip
+    assert main(base) == 0
+    first = (tmp_path / "r.html").read_bytes()
+    assert main(base) == 0
+    assert (tmp_path / "r.html").read_bytes() == first
+    assert b"2023-11-14 22:13:20 UTC" in first
+
+
+def test_the_plan_view_lies_in_the_holes_plane_not_robot_xy(tmp_path, monkeypatch):
+    """A vertical panel (X constant in the robot frame) is drawn over its two in-plane axes
+    (Y and Z), not collapsed onto a line of robot X-Y."""
+    from accugrid.app import correction_report as module
+
+    drawn = []
+    real = module.correction_map_png
+
+    def spy(points, correction, *rest):
+        drawn.append((np.array(points), np.array(correction)))
+        return real(points, correction, *rest)
+
+    monkeypatch.setattr(module, "correction_map_png", spy)
+    ys, zs = np.meshgrid(np.linspace(-400, 400, 5), np.linspace(1200, 2000, 4))
+    rows = ["id,x,y,z"] + [
+        f"H{i},1700.000,{y:.3f},{z:.3f}"
+        for i, (y, z) in enumerate(zip(ys.flat, zs.flat, strict=True))
+    ]
+    points = tmp_path / "vertical.csv"
+    points.write_text("\n".join(rows) + "\n")
+    report = tmp_path / "v.html"
+    assert main(["correct", str(points), "--grid", str(GRID), "-o", str(tmp_path / "c.csv"),
+                 "--report-html", str(report)]) == 0  # fmt: skip
+    ((uv, correction),) = drawn
+    assert np.ptp(uv[:, 0]) == pytest.approx(800.0) and np.ptp(uv[:, 1]) == pytest.approx(800.0)
+    # u, v: robot Y and Z (the frame's axes after the normal X, cyclic); n along X
+    yz = np.round(np.column_stack([ys.ravel(), zs.ravel()]), 3)  # as written
+    centred = yz - yz.mean(axis=0)
+    assert uv == pytest.approx(centred, abs=1e-6)
+    with open(tmp_path / "c.csv", newline="") as f:
+        out = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    command = np.array([[float(r[f"{k}_cmd"]) for k in "xyz"] for r in out])
+    target = np.array([[float(r[k]) for k in "xyz"] for r in out])
+    assert correction == pytest.approx((command - target)[:, [1, 2, 0]], abs=1e-4)
+    text = " ".join(check_report(report, [points, GRID], figures=1).text)
+    assert "u (+0.000 +1.000 +0.000), v (+0.000 +0.000 +1.000), n (+1.000 +0.000 +0.000)" in text
+
+
+def test_identify_report_summary_is_tables_of_numbers_not_key_dumps(tmp_path):
+    meas = write_csv(tmp_path / "meas.csv", joints(60, 1), noise=0.02)
+    out, report = tmp_path / "cal.yaml", tmp_path / "ident.html"
+    assert main(["identify", str(meas), "--robot", "kr210", "--tool", *TOOL, "-o", str(out),
+                 "--structure", "dh", "--report-html", str(report)]) == 0  # fmt: skip
+    check_report(report, [meas], figures=1)
+    summary = yaml.safe_load(out.read_text())["identification"]
+    body = Page()
+    body.feed(report.read_text().split("<body>")[1])
+    cells = [c.strip() for c in body.text if c.strip()]
+    for dump in ("box_min_mm", "validated_max_mm", "joints_deg", "x: ", "{", "}"):
+        assert not any(dump in c for c in cells), dump
+    for name, key in (("residual RMS (fit)", "residual_rms_mm"),
+                      ("residual max (fit)", "residual_max_mm")):  # fmt: skip
+        at = cells.index(name)
+        assert cells[at + 1 : at + 4] == [f"{summary[key][k]:.4f}" for k in "xyz"]
+    validity = summary["validity"]
+    for i, (lo, hi) in enumerate(validity["joints_deg"], 1):
+        at = cells.index(f"A{i}")
+        assert cells[at + 1 : at + 3] == [f"{lo:.2f}", f"{hi:.2f}"]
+    at = cells.index("box min (mm)")
+    assert cells[at + 1 : at + 4] == [f"{v:.3f}" for v in validity["box_min_mm"]]
 
 
 def test_no_correction_has_no_report(tmp_path, capsys):
@@ -127,8 +231,10 @@ def test_rewrite_report_names_each_position_left_as_it_is(tmp_path):
     assert main([*base, "-o", str(tmp_path / "rw"), "--report-html", str(report)]) == 0
     for name in ("cam_drill.src", "cam_drill.dat"):
         assert (tmp_path / "rw" / name).read_bytes() == (tmp_path / "plain" / name).read_bytes()
-    page = check_report(report, [src, dat, cell, GRID], figures=1)
-    assert page.verdict == ["FAIL"]  # the home PTP lies outside the grid: written as it was
+    written = [tmp_path / "rw" / "cam_drill.src", tmp_path / "rw" / "cam_drill.dat"]
+    page = check_report(report, [src, dat, cell, GRID, *written], figures=1)
+    # the home PTP lies outside the grid and a LIN gives Z alone: both written as they were
+    assert page.verdict == ["2 of 10 drilling positions not corrected"]
     text = " ".join(page.text)
     assert "cam_drill.src:20 PTP" in text and "outside the grid box by 250.000 mm" in text
     assert "cam_drill.dat:5 XHOME" in text and "joint-space target" in text

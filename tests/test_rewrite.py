@@ -9,7 +9,15 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from rewrite_helpers import E_CONST, error_field, rewrite_gcode, rewrite_krl, write_cell, write_grid
+from rewrite_helpers import (
+    E_CONST,
+    const_model,
+    error_field,
+    rewrite_gcode,
+    rewrite_krl,
+    write_cell,
+    write_grid,
+)
 from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import main
@@ -20,6 +28,7 @@ from accugrid.compensation import GridModel
 
 BASE2 = (100.0, 50.0, 0.0, 90.0, 0.0, 0.0)  # robot_T_base of BASE_DATA[2]
 R2 = Rotation.from_euler("ZYX", BASE2[3:], degrees=True).as_matrix()
+CONST_MODEL = const_model()  # e = E_CONST everywhere
 
 SRC = (
     "&ACCESS RVP\r\n"
@@ -380,12 +389,3 @@ def test_krl_rewrite_changes_only_the_position_numbers(lines):
         want = np.array([b.x, b.y, b.z]) + E_CONST
         assert np.allclose([a.x, a.y, a.z], want, atol=5e-4)
         assert (a.a, a.b, a.c) == (b.a, b.b, b.c)
-
-
-def _const_model():
-    axes = [np.arange(-600.0, 601.0, 300.0)] * 3
-    pts = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
-    return GridModel.from_measurements((pts, pts - E_CONST))
-
-
-CONST_MODEL = _const_model()

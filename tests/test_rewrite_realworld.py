@@ -30,7 +30,9 @@ AT_LEAST = {
     "xpoints_alone": 100,
     "xpoints_no_base": 0,
     "st1_st2_pair": 1,
-    "job1_side1": 6,  # 7 of the 13 it uses are also left operands of ':' (frames): never corrected
+    # BAS(#INITMOV,0) in T1/T2 only (an IF): the base depends on the mode; and 7 of the 13
+    # positions it uses are also left operands of ':' (frames): never corrected
+    "job1_side1": 0,
     "job1_side1_strict_rules": 0,
     "sample_program": 0,  # tool and base frames, frames passed to a routine: no drilling position
     "cnc_struc": 790,

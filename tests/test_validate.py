@@ -5,6 +5,7 @@ checked against a computation written here, the HTML report's structure, the ref
 from __future__ import annotations
 
 import csv
+import hashlib
 import math
 import shlex
 import statistics
@@ -13,7 +14,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from report_helpers import check_report
+from report_helpers import Page, check_report
 
 from accugrid.app.cli import main
 from accugrid.compensation.validation import validate_positions
@@ -150,17 +151,117 @@ def shifted(cell, name, offset):
     return cell / name
 
 
-def test_a_file_from_another_base_frame_or_tool_is_refused(cell, capsys):
-    moved = shifted(cell, "moved.csv", 25.0)
-    report = cell / "moved.html"
-    code = run("validate", moved, "--model", cell / "cal.yaml", "--report-html", report)
-    err = capsys.readouterr().err
-    assert code == 2
-    assert err.startswith(f"accugrid validate: error: {moved}: mean deviation")
-    assert "another base frame or with another tool" in err and len(err.splitlines()) == 1
-    assert not report.exists()
+def report_text(path):
+    page = Page()
+    page.feed(path.read_text())
+    return page, " ".join(page.text)
+
+
+def test_a_file_from_another_tool_fails_with_its_reports_and_what_the_offset_suggests(cell, capsys):
+    moved = shifted(cell, "moved.csv", 25.0)  # x: along the tool axis of a,b,c = 0,90,0
+    report, rows = cell / "moved.html", cell / "moved_rows.csv"
+    code = run("validate", moved, "--model", cell / "cal.yaml", "--report-html", report,
+               "--report", rows)  # fmt: skip
+    out = capsys.readouterr().out
+    assert code == 3
+    target, measured = read_rows(moved)
+    mean = [statistics.mean(m[k] - t[k] for t, m in zip(target, measured, strict=True))
+            for k in range(3)]  # fmt: skip
+    shown = " ".join(f"{v:+.3f}" for v in mean)
+    assert f"mean deviation (measured - target) {shown} mm" in out
+    assert "the base frame's origin or the tool (TCP) differs from the model's by about it" in out
+    assert "along the tool axis: a tool length" in out
+    assert out.splitlines()[-3].startswith("FAIL: 72 of 72 rows beyond ±0.3 mm")
+    assert "too long for the model's base frame and tool" in out.splitlines()[-3]
+    page, text = report_text(report)
+    assert page.verdict == ["FAIL"]
+    assert f"Mean deviation (measured - target) {shown} mm" in text
+    assert "along the tool axis" in text
+    assert len(rows.read_text().splitlines()) == 73
+    digest = hashlib.sha256(rows.read_bytes()).hexdigest()
+    assert f"{rows} {digest}" in " ".join(text.split())  # the CSV beside it, named with its hash
     # an offset of a few tenths is a failed validation, not another frame
     assert run("validate", shifted(cell, "drift.csv", 0.5), "--model", cell / "cal.yaml") == 3
+    assert "no sign of another base frame or tool" in capsys.readouterr().out
+
+
+def test_a_turned_base_frame_is_told_with_its_angle(cell, capsys):
+    lines = (cell / "after.csv").read_text().splitlines()
+    turn = math.radians(0.4)  # about Z through the robot's origin
+    out = []
+    for line in lines:
+        cells = line.split(",")
+        if not line.startswith(("#", "id")):
+            x, y = float(cells[8]), float(cells[9])
+            cells[8] = f"{x * math.cos(turn) - y * math.sin(turn):.4f}"
+            cells[9] = f"{x * math.sin(turn) + y * math.cos(turn):.4f}"
+        out.append(",".join(cells))
+    (cell / "turned.csv").write_text("\n".join(out) + "\n")
+    code = run("validate", cell / "turned.csv", "--model", cell / "cal.yaml")
+    printed = capsys.readouterr().out
+    assert code == 3
+    said = printed.split("a rotation of ", 1)[1]
+    assert float(said.split()[0]) == pytest.approx(0.4, abs=0.01)
+    assert "a base frame turned against the model's" in said
+
+
+def test_every_row_beyond_the_tolerance_is_listed_in_the_report_and_the_csv(cell):
+    report, rows = cell / "all.html", cell / "all.csv"
+    assert run("validate", cell / "after.csv", "--model", cell / "cal.yaml",
+               "--tolerance", 0.02, "--report-html", report, "--report", rows) == 3  # fmt: skip
+    target, measured = read_rows(cell / "after.csv")
+    beyond = [
+        i for i, (t, m) in enumerate(zip(target, measured, strict=True))
+        if max(abs(m[k] - t[k]) for k in range(3)) > 0.02
+    ]  # fmt: skip
+    assert len(beyond) > 10
+    _, text = report_text(report)
+    assert f"Every row beyond ±0.02 mm ({len(beyond)})" in text
+    lines = (cell / "after.csv").read_text().splitlines()
+    numbers = [n for n, line in enumerate(lines, 1) if not line.startswith(("#", "id,"))]
+    ids = [lines[n - 1].split(",")[0] for n in numbers]
+    for i in beyond:
+        assert f"after.csv:{numbers[i]} {ids[i]}" in text
+    with open(rows, newline="") as f:
+        written = list(csv.DictReader(f))
+    assert len(written) == len(target)
+    for i, row in enumerate(written):
+        assert row["line"] == str(numbers[i]) and row["id"] == ids[i]
+        assert row["result"] == ("beyond" if i in beyond else "within")
+        for k, axis in enumerate("xyz"):
+            assert float(row[f"d{axis}"]) == pytest.approx(measured[i][k] - target[i][k], abs=6e-5)
+
+
+@settings(max_examples=50, deadline=None)
+@given(
+    st.floats(0.1, 5.0),
+    st.tuples(*[st.floats(-1.0, 1.0)] * 3).filter(lambda v: np.linalg.norm(v) > 0.1),
+    st.tuples(*[st.floats(-20.0, 20.0)] * 3),
+    st.integers(0, 2**32 - 1),
+)
+def test_mean_offset_finds_the_rotation_and_the_tool_offset(angle, axis, shift, seed):
+    """Measured = a rigid motion of the targets: the rotation's angle is found and a rotation
+    with a shift leaves nothing of the deviation; measured = target + R_i u for one tool offset
+    u: u is found in the tool frame."""
+    from scipy.spatial.transform import Rotation
+
+    from accugrid.compensation.validation import mean_offset
+    from accugrid.kinematics.frames import abc_to_matrix
+
+    rng = np.random.default_rng(seed)
+    target = rng.uniform([1000, -500, 500], [2000, 500, 1500], (30, 3))
+    turn = Rotation.from_rotvec(np.radians(angle) * np.array(axis) / np.linalg.norm(axis))
+    measured = turn.apply(target - 1500.0) + 1500.0 + np.array(shift)
+    result = validate_positions(target, measured, [str(i) for i in range(30)])
+    found = mean_offset(result, None, None)
+    assert found.rotation_deg == pytest.approx(angle, abs=1e-6)
+    assert found.rigid_rms_mm == pytest.approx(0.0, abs=1e-6)
+    assert found.tool_mm is None
+    abc = rng.uniform(-180, 180, (30, 3))
+    u = np.array(shift)
+    tool = target + np.einsum("nij,j->ni", abc_to_matrix(abc), u)
+    found = mean_offset(validate_positions(target, tool, [str(i) for i in range(30)]), None, abc)
+    assert found.tool_mm == pytest.approx(u, abs=1e-9)
 
 
 def test_bad_report_paths_and_models_are_located_errors(cell, capsys):
@@ -172,6 +273,10 @@ def test_bad_report_paths_and_models_are_located_errors(cell, capsys):
         assert code == 2
         assert str(target) in capsys.readouterr().err
     assert meas.read_bytes() == before
+    same = cell / "same.out"  # one path for both reports: refused, nothing written
+    assert run("validate", meas, "--model", cell / "cal.yaml", "--report", same,
+               "--report-html", same) == 2  # fmt: skip
+    assert "name the same file" in capsys.readouterr().err and not same.exists()
     assert run("validate", meas, "--model", cell / "plan" / "ident.csv") == 2
     assert run("validate", meas, "--model", cell / "targets.csv") == 2  # not a calibrated model
     # a --grid that is no grid measurement

@@ -25,19 +25,18 @@ from pathlib import Path
 
 from accugrid.app.cli_options import (
     COORDINATE_MAX,
-    OUTSIDE_WORDS,
     add_abc,
     add_policy,
     add_status,
     add_table_format,
     add_tool,
     number,
+    policy_request,
 )
 from accugrid.app.corrected import CorrectRequest, correct_points
 from accugrid.compensation.grid import MAX_CORRECTION_MM
 from accugrid.compensation.interpolation import MAX_POWER
 from accugrid.compensation.measurements import REPEAT_TOL_MM
-from accugrid.compensation.policy import GRID_ORIENTATION_TOL_DEG, ORIENTATION_LIMIT_DEG
 from accugrid.compensation.settings import CorrectionSettings
 from accugrid.infra.atomic import check_targets, write_files
 
@@ -103,27 +102,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         f"(default: {MAX_CORRECTION_MM:g})",
     )
     parser.add_argument(
-        "--orientation-tol",
-        type=number("deg", 0, 180),
-        default=GRID_ORIENTATION_TOL_DEG,
-        metavar="DEG",
-        help="flag points whose orientation differs from the grid's by more, deg "
-        f"(default: {GRID_ORIENTATION_TOL_DEG:g})",
-    )
-    parser.add_argument(
-        "--orientation-limit",
-        type=number("deg", 0, 180),
-        default=ORIENTATION_LIMIT_DEG,
-        metavar="DEG",
-        help="refuse points whose orientation differs from the grid's by more, deg "
-        f"(default: {ORIENTATION_LIMIT_DEG:g})",
-    )
-    parser.add_argument(
-        "--allow-orientation",
-        action="store_true",
-        help="correct (and flag) points beyond --orientation-limit instead of refusing",
-    )
-    parser.add_argument(
         "--repeat-tol",
         type=number("mm", 0, COORDINATE_MAX),
         default=REPEAT_TOL_MM,
@@ -146,7 +124,6 @@ def run(args: argparse.Namespace) -> int:
         method=args.method,
         power=args.power,
         iterations=args.iterations,
-        outside=OUTSIDE_WORDS[args.outside],
         max_correction_mm=args.max_correction,
     )
     request = CorrectRequest(
@@ -155,15 +132,11 @@ def run(args: argparse.Namespace) -> int:
         grid=args.grid,
         model=args.model,
         settings=settings,
-        orientation_tol_deg=args.orientation_tol,
-        orientation_limit_deg=args.orientation_limit,
-        allow_orientation=args.allow_orientation,
+        policy=policy_request(args),
         repeat_tol_mm=args.repeat_tol,
         status=args.status,
         abc=tuple(args.abc),
         tool=None if args.tool is None else tuple(args.tool),
-        strict=args.strict,
-        allow_partial=args.allow_partial,
         report_html=args.report_html,
     )
     model_file = args.model if args.model and Path(args.model).is_file() else None

@@ -1,7 +1,7 @@
 """Identify a calibrated robot model from laser-tracker measurements at scattered poses.
 
-MEAS is a measurement CSV (DESIGN.md): commanded x,y,z (robot frame, mm) and a,b,c (KUKA deg),
-measured x_meas,y_meas,z_meas (mm), optionally the joint angles the controller logged (a1..a6,
+MEAS is a measurement CSV (docs/formats.md): commanded x,y,z (robot frame, mm) and a,b,c (KUKA
+deg), measured x_meas,y_meas,z_meas (mm), optionally the joint angles the controller logged (a1..a6,
 KUKA deg; checked to reproduce the commanded position under the nominal model within the
 round-off of their printed decimals) and the Status s. Without logged joints each pose's joints
 are the nominal IK in its Status: column s, else --status, else the IK default per pose.

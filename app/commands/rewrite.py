@@ -5,13 +5,16 @@ Every Cartesian position that can be placed in the robot frame is corrected with
 with the input's decimal places but never coarser than 0.01 mm (0.001 in). Every other byte
 (spacing, comments, line endings, encoding) is kept. Anything that cannot be placed (frame
 arithmetic ':', a base from a variable or a call, EK(), AXIS/E6AXIS targets, $POS_ACT,
-G55-G59/G92 offsets, arcs, unknown motions, parameter words) is left untouched. A placed
-position the grid or model does not correct (outside the grid unless --outside clamp, more than
---orientation-limit from the grid's orientation, another KUKA Status than the grid's: the S of a
-KRL position, the cell's configuration for G-code) fails the job, and so does a rewrite that
-corrects nothing, unless --allow-partial, which leaves them as they are, counts them by reason on
-stderr and marks them in the report and the --header. The report lists each position with its
-status and reason.
+G55-G59/G92 offsets, unknown motions, parameter words) is left untouched. A G-code arc (G2/G3)
+moves rigidly, start, centre and end by one shift (the correction at its centre), where that
+shift holds along the whole arc to the program's written resolution; otherwise the arc is left
+as written and reported. A placed position the grid or model does not correct (outside the
+grid unless --outside clamp, more than --orientation-limit from the grid's orientation, another
+KUKA Status than the grid's: the S of a KRL position, else the last S written before it in its
+file, else the cell's configuration.status, the cell's configuration for G-code) fails the job,
+and so does a rewrite that corrects nothing, unless --allow-partial, which leaves them as they
+are, counts them by reason on stderr and marks them in the report and the --header. The report
+lists each position with its status and reason.
 
 KRL: PROGRAM is a .src or .dat; give the .dat beside it as the second argument. A stored position
 is corrected only if a motion uses it (never a frame given to $TOOL/$BASE/$LOAD, an operand of
@@ -42,15 +45,14 @@ from pathlib import Path
 
 from accugrid.app.cli_options import (
     COORDINATE_MAX,
-    OUTSIDE_WORDS,
     add_policy,
     add_table_format,
     number,
+    policy_request,
 )
 from accugrid.app.rewrite_job import RewriteRequest, rewrite_job
 from accugrid.codegen.dialects import DIALECTS, dialect_of, plugin_of
 from accugrid.codegen.program_text import MAX_BYTES
-from accugrid.compensation.policy import GRID_ORIENTATION_TOL_DEG, ORIENTATION_LIMIT_DEG
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.infra.atomic import check_targets, write_files
 from accugrid.infra.errors import InputError
@@ -102,7 +104,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--trust-calls",
         action="store_true",
-        help="KRL: assume calls to other routines do not change $BASE",
+        help="KRL: assume no call changes $BASE or $TOOL (without it, a call keeps them when its "
+        "routine is in the given files and changes neither)",
     )
     parser.add_argument(
         "--ignore-external-axes",
@@ -124,27 +127,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"refuse program files larger than this, MiB (default: {MAX_BYTES // 2**20})",
     )
     parser.add_argument("--header", action="store_true", help="add the accugrid comment header")
-    parser.add_argument(
-        "--orientation-tol",
-        type=number("deg", 0, 180),
-        default=GRID_ORIENTATION_TOL_DEG,
-        metavar="DEG",
-        help="flag positions whose orientation differs from the grid's by more, deg "
-        f"(default: {GRID_ORIENTATION_TOL_DEG:g}, as accugrid correct)",
-    )
-    parser.add_argument(
-        "--orientation-limit",
-        type=number("deg", 0, 180),
-        default=ORIENTATION_LIMIT_DEG,
-        metavar="DEG",
-        help="leave positions whose orientation differs from the grid's by more uncorrected, "
-        f"deg (default: {ORIENTATION_LIMIT_DEG:g}, as accugrid correct)",
-    )
-    parser.add_argument(
-        "--allow-orientation",
-        action="store_true",
-        help="correct (and flag) positions beyond --orientation-limit",
-    )
     parser.add_argument(
         "--tolerance",
         type=number("mm", 0, COORDINATE_MAX, above=True),
@@ -197,8 +179,6 @@ def run(args: argparse.Namespace) -> int:
     if sum(_size(path) for path in inputs) >= _MAPPED_FROM:
         map_large_buffers()  # a large program's columns freed go back to the system (peak memory)
     pair = _pair(inputs)
-    if not args.orientation_tol <= args.orientation_limit:
-        raise InputError("need --orientation-tol <= --orientation-limit (deg)")
     if args.strict and args.model is None:
         print(
             "accugrid rewrite: note: --strict is no longer needed for positions outside the "
@@ -224,16 +204,11 @@ def run(args: argparse.Namespace) -> int:
             config_dat=Path(args.config_dat) if args.config_dat else None,
             header=args.header,
             decimals=args.decimals,
-            strict=args.strict,
-            allow_partial=args.allow_partial,
-            outside=OUTSIDE_WORDS[args.outside],
+            policy=policy_request(args),
             base=args.base,
             trust_calls=args.trust_calls,
             ignore_external_axes=args.ignore_external_axes,
             max_bytes=int(args.max_mb * 2**20),
-            orientation_tol=args.orientation_tol,
-            orientation_limit=args.orientation_limit,
-            allow_orientation=args.allow_orientation,
             tolerance_mm=args.tolerance,
         )
     )

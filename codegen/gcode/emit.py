@@ -85,6 +85,7 @@ def gcode_text(program: Program, header: list[str], templates=None) -> Iterator[
     around a marker, and the hole lines follow in blocks of ``BLOCK`` holes as the pieces are
     taken."""
     cell = program.cell
+    header = program.header(header)  # says what is not corrected
     env = environment(template_dir("gcode", templates))
     uses = template_uses(env, "program.ngc.j2")
     context = {

@@ -235,6 +235,7 @@ def render_krl(
     a mapping that renders each file when it is asked for (see ``KrlFiles``). ``split``: the
     job's ``module_split`` when the caller already made it."""
     cell = program.cell
+    header = program.header(header)  # says what is not corrected
     files = _file_renderer(cell, header, _Records(program), templates)
     split = split or module_split(cell, len(program), header, templates)
     return KrlFiles(files, *split, len(program), cell)

@@ -16,12 +16,16 @@ inline-form FOLD lines are comments). It finds:
   motion to a local variable is reported as such), FDATs (``BASE_NO``, ``TOOL_NO``,
   ``IPO_FRAME``);
 - base frame context, followed in program order: ``$BASE = BASE_DATA[n]``, ``$BASE = {FRAME: ..}``,
-  ``$BASE = $NULLFRAME``, ``BAS(#BASE, n)``, ``FDAT_ACT = Fname`` (``BASE_NO`` of the FDAT
-  declaration), for one spline motion ``WITH $BASE = SBASE(Fname.BASE_NO)`` and for the
-  segments of a ``SPLINE``/``PTP_SPLINE`` block the block's own ``WITH $BASE = ...`` (until
-  ``ENDSPLINE``). What cannot be decided is an ``unknown`` base with the reason: frame
-  arithmetic ``:``, a variable, ``EK(...)``, the start of a routine (inherited from the caller),
-  a call that may change it, a jump target, a branch or loop that changes it.
+  ``$BASE = $NULLFRAME``, ``BAS(#BASE, n)``, ``BAS(#INITMOV, ..)`` (base 0, tool 1),
+  ``FDAT_ACT = Fname`` (``BASE_NO`` of the FDAT declaration), for one spline motion
+  ``WITH $BASE = SBASE(Fname.BASE_NO)`` and for the segments of a ``SPLINE``/``PTP_SPLINE``
+  block the block's own ``WITH $BASE = ...`` (until ``ENDSPLINE``). What cannot be decided is
+  an ``unknown`` base with the reason: frame arithmetic ``:``, a variable, ``EK(...)``, the
+  start of a routine (inherited from the caller), a call that may change it (``_Flow``: a call
+  keeps it when ``scan_krl``'s ``calls`` says its routine does, or in an inline form that
+  applied its own FDAT, ``_Form``), a jump target, a branch or loop that changes it.
+- routines (``KrlScan.routines``): what each changes of $BASE and $TOOL and what it calls, for
+  ``codegen.krl.routines``;
 - tool context, followed with the base (``BaseRef.tool``): ``$TOOL = TOOL_DATA[n]``,
   ``$TOOL = $NULLFRAME`` (tool 0, the flange), ``BAS(#TOOL, n)``, an FDAT's ``TOOL_NO``,
   ``$TOOL = {FRAME: X .., C ..}`` (a ``ToolFrame``, matched against the cell's tools when the
@@ -83,6 +87,7 @@ __all__ = [
     "Number",
     "RELATIVE",
     "Relative",
+    "Routine",
     "ToolFrame",
     "code_part",
     "match_brace",
@@ -162,6 +167,12 @@ _BAS_RE = re.compile(r"\s*+BAS\s*+\(\s*+#\s*+(\w++)", re.I)
 _BASE_DATA_RE = re.compile(r"\s*+BASE_DATA\s*+\[\s*+(\d++)\s*+\]\s*+$", re.I)
 _TOOL_DATA_RE = re.compile(r"\s*+TOOL_DATA\s*+\[\s*+(\d++)\s*+\]\s*+$", re.I)
 _CALL_RE = re.compile(r"\s*+([A-Za-z_]\w*+)\s*+\(")
+_DO_RE = re.compile(r"\bDO\s++([A-Za-z_]\w*+)\s*+\(", re.I)  # what a trigger or interrupt runs
+_CALLED_RE = re.compile(r"(?<![\w$#.])([A-Za-z_]\w*+)\s*+\(")  # a name called anywhere
+# statements whose "name(" are declarations or asynchronous calls (a trigger's, an interrupt's)
+_NO_EXPRESSION_CALLS = frozenset(
+    "DEF DEFFCT GLOBAL EXT EXTFCT EXTP EXTFCTP DECL TRIGGER INTERRUPT SIGNAL STRUC ENUM".split()
+)
 _ROUTINE_RE = re.compile(
     r"\s*+(?:GLOBAL\s++)?(DEF|DEFFCT)\s++(?:\w++\s++)?([A-Za-z_]\w*+)\s*+\(", re.I
 )
@@ -328,6 +339,22 @@ class FrameUse(NamedTuple):
 
 
 @dataclass
+class Routine:
+    """A routine (``DEF``/``DEFFCT``) of a file as far as $BASE and $TOOL go: its name (upper
+    case), line, whether other modules can call it (``GLOBAL``, or the module's main routine,
+    the first of its .src), what in it changes $BASE or $TOOL itself ("" when nothing; the
+    first such statement), the routines it calls as statements and the names it calls in
+    expressions (functions, built-in ones too), each (name as written, line)."""
+
+    name: str
+    line: int
+    public: bool
+    sets: str = ""
+    calls: list[tuple[str, int]] = field(default_factory=list)
+    uses: list[tuple[str, int]] = field(default_factory=list)
+
+
+@dataclass
 class KrlScan:
     """Everything read from one file. Positions and uses are kept column by column
     (``table``, ``use_table``, their bases in ``bases``); ``positions`` and ``uses`` give them as
@@ -347,6 +374,11 @@ class KrlScan:
     # names given a non-literal value at run time -> first line
     frame_uses: dict[str, FrameUse] = field(default_factory=dict)  # normalized name -> first use
     relative: dict[int, Relative] = field(default_factory=dict)  # table row of a _REL aggregate
+    routines: list[Routine] = field(default_factory=list)  # in file order
+    # every call (name upper case, line, the base in effect there), and the routines a TRIGGER
+    # or an INTERRUPT runs (names upper case): they run wherever the robot is
+    call_sites: list[tuple[str, int, BaseRef]] = field(default_factory=list)
+    async_calls: set[str] = field(default_factory=set)
     _declared: dict[str, Declared] = field(default_factory=dict, repr=False)  # statement reader
     _fast_decls: list[tuple[list, list, np.ndarray]] = field(default_factory=list, repr=False)
     # (names, types, lines) of each block of plain declarations the whole-text scanner read
@@ -666,6 +698,8 @@ class _Rows:
         self.external: dict[int, tuple[str, float]] = {}
         self._ids: dict[int, int] = {}
         self.ops: list[tuple] = []  # ("swap", marks, start, changed) | ("label[_tool]", marks)
+        self.sites: list[int] = []  # the base id at each call, and the name called and line
+        self.site_names: list[tuple[str, int]] = []
 
     def base_id(self, base: BaseRef | None) -> int:
         if base is None:
@@ -676,8 +710,13 @@ class _Rows:
             self.scan.bases.append(base)
         return found
 
-    def mark(self) -> tuple[int, int]:
-        return self.positions.count, self.uses.count
+    def mark(self) -> tuple[int, int, int]:
+        return self.positions.count, self.uses.count, len(self.sites)
+
+    def site(self, name: str, line: int, base: BaseRef) -> None:
+        """A call of ``name`` (upper case) at ``line`` under ``base``."""
+        self.sites.append(self.base_id(base))
+        self.site_names.append((name, line))
 
     def add_position(
         self, lineno, column, kind, agg, base, numbers: dict[str, Number], type_name, name, reason
@@ -723,9 +762,10 @@ class _Rows:
         scan = self.scan
         p = self.positions.finish()
         u = self.uses.finish()
+        sites = np.array(self.sites, np.int64)
         for op in self.ops:
-            (pa, ua), (pb, ub) = op[1]
-            for column, lo, hi in ((p["base"], pa, pb), (u["base"], ua, ub)):
+            (pa, ua, sa), (pb, ub, sb) = op[1]
+            for column, lo, hi in ((p["base"], pa, pb), (u["base"], ua, ub), (sites, sa, sb)):
                 part = column[lo:hi]
                 if op[0] == "swap":
                     part[part == self.base_id(op[2])] = self.base_id(op[3])
@@ -746,6 +786,9 @@ class _Rows:
                         part[part == old] = self.base_id(changed)
         scan.table = PositionTable(external=self.external, **p)
         scan.use_table = UseTable(**u)
+        bases = scan.bases
+        names, ids = self.site_names, sites.tolist()
+        scan.call_sites = [(n, at, bases[b]) for (n, at), b in zip(names, ids, strict=True)]
         scan._rows = None
 
 
@@ -757,18 +800,36 @@ class _Block:
     keyword: str
     line: int
     start: BaseRef
-    mark: tuple[int, int]
+    mark: tuple[int, int, int]
     ends: list[BaseRef] = field(default_factory=list)
     has_else: bool = False
 
 
 class _Flow:
-    """$BASE through a routine: conditionals, loops, jump targets and calls."""
+    """$BASE through a routine: conditionals, loops, jump targets and calls; what each routine
+    of the file changes of $BASE and $TOOL and which routines it calls (``KrlScan.routines``).
 
-    def __init__(self, initial: BaseRef, trust_calls: bool, rows: _Rows) -> None:
+    A call keeps $BASE and $TOOL when ``trust_calls``, when ``calls`` (called name, upper case
+    -> why it may change them, "" when it keeps them: ``codegen.krl.routines``) says so, and in
+    a KUKA inline form that has set its own FDAT (``_Form``)."""
+
+    def __init__(
+        self,
+        initial: BaseRef,
+        trust_calls: bool,
+        rows: _Rows,
+        routines: list[Routine],
+        calls: dict[str, str] | None = None,
+        starts: dict[str, BaseRef] | None = None,
+    ) -> None:
         self.initial = initial
         self.trust_calls = trust_calls
+        self.calls = calls or {}
+        self.starts = starts or {}
         self.rows = rows
+        self.routines = routines
+        self.routine: Routine | None = None  # the routine being read
+        self.folds: list[_Form | None] = []  # the open ;FOLDs, inline forms as _Form
         self.state = initial
         self.blocks: list[_Block] = []
         self.sets_base = False
@@ -778,13 +839,21 @@ class _Flow:
         # the last statement after which the robot's position is not the last motion's target
         self.moved: tuple[int, str] = (0, "the start of the file")
 
-    def start_routine(self, name: str, line: int) -> None:
+    def start_routine(self, name: str, line: int, public: bool) -> None:
+        """``DEF``/``DEFFCT name`` at ``line``; ``public``: GLOBAL (the module's main routine,
+        the first of the file, is public whatever it says)."""
         self.finish_routine()
-        if self.initial.kind == "unknown":
+        self.routine = Routine(name.upper(), line, public or not self.routines)
+        self.routines.append(self.routine)
+        start = self.starts.get(self.routine.name)
+        if start is not None:  # the base every call of this local routine has
+            self.state = replace(start, line=line)
+        elif self.initial.kind == "unknown":
             self.state = BaseRef(
                 "unknown",
                 line,
-                reason=f"start of routine {name} (line {line}): $BASE is inherited from the caller",
+                reason=f"start of routine {name} (line {line}): $BASE is inherited from the caller "
+                "(--base N states it)",
             )
         else:
             self.state = self.initial
@@ -804,13 +873,20 @@ class _Flow:
 
     def end_routine(self) -> None:
         self.finish_routine()
+        self.routine = None
         self.sets_base = self.sets_tool = False
         self.since = self.rows.mark()
+
+    def changes(self, line: int, what: str) -> None:
+        """The routine being read changes $BASE or $TOOL at ``line`` (``what`` says how)."""
+        if self.routine is not None and not self.routine.sets:
+            self.routine.sets = f"{what} at line {line}"
 
     def set(self, base: BaseRef) -> None:
         """A new base; the tool set before stays, unless an FDAT sets both."""
         self.state = _with_tool(base, self.state)
         self.sets_base = True
+        self.changes(base.line, "$BASE set")
         self.moved = (base.line, f"$BASE set at line {base.line}")
 
     def breaks(self, line: int, why: str) -> None:
@@ -824,6 +900,7 @@ class _Flow:
             tool_label=None,
         )
         self.sets_tool = True
+        self.changes(line, "$TOOL set")
 
     def open_spline(self, base: BaseRef | None) -> None:
         """A SPLINE/PTP_SPLINE block: its segments move in ``base`` (None: the base in effect)."""
@@ -841,14 +918,72 @@ class _Flow:
         where = f"{name} (line {line})"
         self.state = replace(self.state, label=where, tool_label=where)
 
-    def call(self, name: str, line: int) -> None:
+    def call(self, name: str, line: int, frames_passed: bool) -> None:
+        """A call of routine ``name`` as a statement; ``frames_passed``: $BASE or $TOOL is
+        among its arguments (an ``:OUT`` parameter may change it)."""
         self.moved = (line, f"the call {name}() at line {line}, which may move the robot")
-        if not self.trust_calls:
+        self.rows.site(name.upper(), line, self.state)
+        if self.routine is not None:
+            self.routine.calls.append((name, line))
+        if self.trust_calls:
+            return
+        why = self.calls.get(name.upper())
+        form = self.form()
+        if why is None and form is not None and form.applied is self.state:
+            why = ""  # a routine not given, in KUKA's own statements of an inline form
+        if frames_passed:
+            why = "has $BASE or $TOOL among its arguments"
+        if why != "":
             self.state = BaseRef(
                 "unknown",
                 line,
-                reason=f"after the call {name}() at line {line}, which may change $BASE",
+                reason=f"after the call {name}() at line {line}, which {why or 'may change $BASE'}",
             )
+
+    def expression_calls(self, code: str, start: int, line: int) -> None:
+        """The names called in the expressions of a statement (``code[start:]``, without its
+        own call): recorded for the routine; a function of the given files that changes $BASE
+        or $TOOL (``calls``) makes them unknown."""
+        for m in _CALLED_RE.finditer(code, start):
+            name = m.group(1)
+            if name.upper() in _NOT_CALLS:
+                continue
+            if self.routine is not None:
+                self.routine.uses.append((name, line))
+            self.rows.site(name.upper(), line, self.state)
+            why = self.calls.get(name.upper())
+            if why and not self.trust_calls:
+                self.state = BaseRef(
+                    "unknown", line, reason=f"after the call {name}() at line {line}, which {why}"
+                )
+
+    def form(self) -> _Form | None:
+        """The innermost open inline form."""
+        for fold in reversed(self.folds):
+            if fold is not None:
+                return fold
+        return None
+
+    def open_fold(self, comment: str) -> None:
+        """A ``;FOLD`` line (``comment``: from its ``;``)."""
+        self.folds.append(_inline_form(comment))
+
+    def close_fold(self) -> None:
+        """A ``;ENDFOLD`` line."""
+        if self.folds:
+            self.folds.pop()
+
+    def activate(self, fdat: str) -> None:
+        """``FDAT_ACT = fdat`` has set the state: an inline form's own FDAT, if it is."""
+        form = self.form()
+        if form is not None and fdat in form.fdats:
+            form.own = self.state
+
+    def apply_fdat(self) -> None:
+        """``BAS(#PTP_PARAMS|#CP_PARAMS|#FRAMES, ..)``: $BASE and $TOOL from FDAT_ACT."""
+        form = self.form()
+        if form is not None and form.own is self.state:
+            form.applied = self.state
 
     def open(self, keyword: str, line: int) -> None:
         self.moved = (line, f"{keyword} at line {line}")
@@ -891,6 +1026,46 @@ class _Flow:
             self.rows.ops.append(("swap", (block.mark, self.rows.mark()), start, changed))
             if block.keyword != "REPEAT":
                 self.state = changed
+
+
+@dataclass(slots=True)
+class _Form:
+    """An open KUKA inline form of a motion (``;FOLD PTP P1 CONT Vel=100 % PDAT1 Tool[1]
+    Base[2];%{PE}..`` up to its ``;ENDFOLD``): the FDAT names that are its own (``FP1`` of the
+    point ``P1`` or ``XP1``), the state its ``FDAT_ACT = FP1`` set (``own``) and that state once
+    its ``BAS(#PTP_PARAMS, ..)`` or ``BAS(#CP_PARAMS, ..)`` applied it (``applied``).
+
+    KUKA's BAS.SRC: ``#PTP_PARAMS`` and ``#CP_PARAMS`` call ``FRAMES()``, which sets $TOOL
+    (``TOOL(FDAT_ACT.TOOL_NO)``) and $BASE (``BASE(FDAT_ACT.BASE_NO)``: BASE_DATA[n]) from
+    FDAT_ACT (public copy: github.com/HugoDanielson/ChinaMilling, KRC/R1/System/bas.src). What
+    the controller writes after it in the form, before the motion (``SET_CD_PARAMS (0)`` on
+    KSS 8.3, as github.com/zserub/TeachPos-Generator reproduces the form; triggers of technology
+    packages) sets neither: a call there keeps the state."""
+
+    fdats: frozenset[str]
+    own: BaseRef | None = None
+    applied: BaseRef | None = None
+
+
+_FORM_RE = re.compile(r";\s*+FOLD\s++(?:PTP|LIN|CIRC)\s++([^;]*+);?%\{PE\}", re.I)
+
+
+def _inline_form(line: str) -> _Form | None:
+    """The inline form a ``;FOLD`` line opens (None: another fold). Its points are the names
+    after the motion word, up to ``Vel=``; ``XP1`` or ``P1`` has the FDAT ``FP1``."""
+    m = _FORM_RE.match(line)
+    if m is None:
+        return None
+    fdats = set()
+    for word in m.group(1).split():
+        if "=" in word or word.upper().startswith("VEL"):
+            break
+        if _IDENT_RE.fullmatch(word):
+            word = word.upper()
+            fdats.add("F" + word)
+            if word.startswith("X"):
+                fdats.add("F" + word[1:])
+    return _Form(frozenset(fdats))
 
 
 def _with_tool(base: BaseRef | None, before: BaseRef) -> BaseRef:
@@ -945,17 +1120,24 @@ def scan_krl(
     *,
     initial_base: BaseRef | None = None,
     trust_calls: bool = False,
+    calls: dict[str, str] | None = None,
+    starts: dict[str, BaseRef] | None = None,
 ) -> KrlScan:
     """Read one KRL file (.src, .dat or $config.dat text).
 
     ``initial_base``: the base in effect at the start of each routine (default: unknown, it is
     the caller's). ``trust_calls``: assume a call to another routine does not change $BASE.
+    ``calls``: what the routines this file calls do to $BASE and $TOOL (name, upper case ->
+    "" when they keep both, else why not; ``codegen.krl.routines``); a call of a routine not in
+    it may change them. ``starts``: the base at the start of local routines (name, upper case ->
+    the base of every call of it, ``codegen.krl.routines``), over ``initial_base``.
     """
     path = None if path is None else os.fspath(path)
     check_text(text, path)
     scan = KrlScan(path, text)
     rows = scan._rows = _Rows(scan, text.count("\n") + 1)
-    flow = _Flow(initial_base or BaseRef("unknown", 0, reason="no $BASE set"), trust_calls, rows)
+    initial = initial_base or BaseRef("unknown", 0, reason="no $BASE set")
+    flow = _Flow(initial, trust_calls, rows, scan.routines, calls, starts)
     if "\n" not in text:  # one line, or lone CR line endings: line by line
         offset = 0
         for lineno, line in enumerate(split_lines(text), start=1):
@@ -979,6 +1161,13 @@ def _line(line: str, offset: int, lineno: int, scan: KrlScan, flow: _Flow) -> No
     """One line of any kind (``offset``: of its first character in the text)."""
     code = code_part(line, scan.path, lineno)
     if not code or code.isspace() or code.lstrip()[:1] == "&":
+        if len(code) < len(line):  # a comment: ;FOLD and ;ENDFOLD open and close folds
+            comment = line[len(code) :]
+            word = comment[1:8].upper()
+            if word == "ENDFOLD":
+                flow.close_fold()
+            elif word[:4] == "FOLD" and word[4:5] in (" ", "\t", ""):
+                flow.open_fold(comment)
         return
     if code.count("{") != code.count("}"):
         col = code.find("{") if code.count("{") > code.count("}") else code.find("}")
@@ -1180,14 +1369,21 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
     word = word_m.group(1).upper()
     rest_at = word_m.end()
 
+    if word in ("TRIGGER", "INTERRUPT", "GLOBAL"):
+        run = _DO_RE.search(code, rest_at)
+        if run is not None:
+            scan.async_calls.add(run.group(1).upper())
     if word in ("DEF", "DEFFCT", "GLOBAL") and not _GLOBAL_DECL_RE.match(code, pos):
         routine = _ROUTINE_RE.match(code, pos)
         if routine:
-            flow.start_routine(routine.group(2), lineno)
+            flow.start_routine(routine.group(2), lineno, word == "GLOBAL")
         return
     if word in ("END", "ENDFCT", "DEFDAT", "ENDDAT"):
         flow.end_routine()
         return
+    if "(" in code and word not in _NO_EXPRESSION_CALLS:
+        call = _CALL_RE.match(code, pos) if word not in _NOT_CALLS else None
+        flow.expression_calls(code, call.end() if call else rest_at, lineno)
     if word in _OPENERS:
         flow.open(word, lineno)
         return
@@ -1201,10 +1397,13 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
         _motion(code, rest_at, word, off, lineno, scan, flow)
         return
     if word in ("SPLINE", "PTP_SPLINE"):
-        flow.open_spline(_spline_base(code, word, lineno))
+        base = _spline_base(code, word, lineno)
+        flow.open_spline(base)
         own = _with_tool_value(code, lineno, flow.state) if "$" in code else None
         if own is not None:  # the block's segments move that tool (until ENDSPLINE)
             flow.state = _tool_changed(flow.state, own)
+        if base is not None or own is not None:
+            flow.changes(lineno, f"{word} WITH $BASE or $TOOL")
         return
     if word == "ENDSPLINE":
         flow.close_spline()
@@ -1226,15 +1425,37 @@ def _statement(code: str, off: int, lineno: int, scan: KrlScan, flow: _Flow) -> 
         return
     call = _CALL_RE.match(code, pos)
     if call and word not in _NOT_CALLS:
-        flow.call(call.group(1), lineno)
+        args = code[call.end() :].upper()
+        flow.call(call.group(1), lineno, "$BASE" in args or "$TOOL" in args)
     elif word not in _NOT_CALLS and _DECL_RE.match(code, pos):
         _declare(code, pos, lineno, scan)  # a local declaration: "INT i", "sCNC1 gs[4]"
 
 
+# The BAS commands that set neither $BASE nor $TOOL (KUKA's BAS.SRC: velocities, accelerations,
+# approximation, outputs, the axis group; public copy: github.com/HugoDanielson/ChinaMilling,
+# KRC/R1/System/bas.src). #INITMOV turns the base and tool corrections off and, on a robot
+# ($KINCLASS not #NONE), sets $BASE = $WORLD (BASE(0)) and $TOOL = TOOL_DATA[1]; #FRAMES,
+# #PTP_PARAMS and #CP_PARAMS set both from FDAT_ACT; #BASE, #TOOL, #EX_BASE set them.
+_BAS_KEEPS = frozenset(
+    "ACC_CP ACC_GLUE ACC_PTP VEL_CP VEL_PTP CP_DAT PTP_DAT OUT_SYNC OUT_ASYNC GROUP".split()
+)
+_BAS_FDAT = frozenset(("FRAMES", "PTP_PARAMS", "CP_PARAMS"))  # $BASE, $TOOL from FDAT_ACT
+
+
 def _bas(code: str, pos: int, lineno: int, flow: _Flow) -> None:
-    """``BAS(#BASE, n)`` sets BASE_DATA[n], ``BAS(#TOOL, n)`` TOOL_DATA[n]; other BAS commands
-    leave them."""
+    """``BAS(#BASE, n)`` sets BASE_DATA[n], ``BAS(#TOOL, n)`` TOOL_DATA[n], ``BAS(#INITMOV, ..)``
+    base 0 ($WORLD) and TOOL_DATA[1]; other BAS commands leave them in the flow (``FDAT_ACT = F``
+    sets the FDAT's), but a routine that runs one of them other than ``_BAS_KEEPS`` changes
+    them."""
     m = _BAS_RE.match(code, pos)
+    command = m.group(1).upper() if m is not None else ""
+    if command not in _BAS_KEEPS:
+        flow.changes(lineno, f"BAS(#{command}, ..)" if command else "BAS() of a variable command")
+    if command in _BAS_FDAT:
+        flow.apply_fdat()
+    if command == "INITMOV":  # BAS.SRC INITMOV: BASE(0) with the base corrections off, tool 1
+        flow.set(BaseRef("number", lineno, number=0, tool=1))
+        return
     if m is not None and m.group(1).upper() == "TOOL":
         flow.breaks(lineno, f"the tool set at line {lineno}")
     if m is None or m.group(1).upper() not in ("BASE", "TOOL"):
@@ -1468,6 +1689,7 @@ def _assignment(
             )
         elif _IDENT_RE.fullmatch(value):
             flow.set(BaseRef("fdat", lineno, fdat=value.upper()))
+            flow.activate(value.upper())
         else:
             flow.set(BaseRef("unknown", lineno, reason=f"FDAT_ACT = {value}: not a name"))
         return
@@ -1681,10 +1903,13 @@ def _motion(
     own_tool = relative and "$" in code and _WITH_TOOL_RE.search(code) is not None
     base = flow.state
     if "$" in code and "WITH" in code.upper():
-        base = _with_tool(_with_base(code, lineno), base)
+        with_base = _with_base(code, lineno)
+        base = _with_tool(with_base, base)
         own = _with_tool_value(code, lineno, base)
         if own is not None:
             base = _tool_changed(base, own)
+        if with_base is not None or own is not None:
+            flow.changes(lineno, f"{word} WITH $BASE or $TOOL")
     for _ in range(count):
         while at < len(code) and code[at] in " \t,":
             at += 1

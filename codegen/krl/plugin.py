@@ -19,6 +19,7 @@ class KrlPlugin(DialectFolder):
     name = "krl"
     title = "KUKA KRL"
     suffixes = (".src", ".dat", ".sub")
+    controllers = ("kuka",)  # the robots it drives
     pair = (".src", ".dat")
     exports = ("render_krl",)
 

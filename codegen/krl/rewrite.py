@@ -7,8 +7,10 @@ position (declared or assigned with a literal) is corrected only if a motion use
 motions that use it (its own FDAT wins over ``--base``) and is corrected once however many
 motions use it. BASE_DATA[n] comes from ``--config-dat`` (if it defines n), else from the cell's
 ``base`` and ``base_data``; base 0 ($NULLFRAME, BAS(#BASE,0)) is the robot frame ($WORLD =
-$ROBROOT). A relative motion (``LIN_REL``...) is corrected as the position it reaches and
-written back as an increment (``codegen.krl.relative``).
+$ROBROOT). A call of a routine of the given files that keeps $BASE and $TOOL keeps them, and a
+local routine starts in the base every call of it has (``codegen.krl.routines``). A relative
+motion (``LIN_REL``...) is corrected as the position it reaches and written back as an
+increment (``codegen.krl.relative``).
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ from accugrid.codegen.krl.parse import (
     wildcard,
 )
 from accugrid.codegen.krl.relative import Chains, resolve, write_increments
+from accugrid.codegen.krl.routines import call_effects, routine_starts
 from accugrid.codegen.krl.tables import MOTION, PositionTable
 from accugrid.codegen.program_text import (
     MIN_PLACES_MM,
@@ -95,6 +98,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: KrlPlacement
         scan_krl(text, path, initial_base=initial, trust_calls=placement.trust_calls)
         for path, text in texts.items()
     ]
+    scans = _with_calls(scans, initial, placement.trust_calls)
     config = placement.config_dat
     config = scan_krl(config, "$config.dat") if config is not None else None
     ctx = _Context(scans, config, initial, placement, opts)
@@ -152,6 +156,34 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: KrlPlacement
         rotations = rotations_of(frames[which[heads]][:, :3, :3], abc[heads])[np.cumsum(first) - 1]
     state = _Files(files, todo, placed, frames, starts, which, base_xyz, chains, relative)
     return Scan(rows, at, robot, rotations, np.concatenate(status), state=state)
+
+
+def _with_calls(scans: list[KrlScan], initial: BaseRef | None, trust: bool) -> list[KrlScan]:
+    """``scans`` read again where what their calls do is known (``codegen.krl.routines``): the
+    routines of the files they call (unless ``trust``: every call keeps $BASE and $TOOL), and
+    the base their local routines start in; until that base is known for no more of them (each
+    round knows it for more, or stops)."""
+    effects = [None] * len(scans) if trust else call_effects(scans)
+    starts: list[dict[str, BaseRef]] = [{} for _ in scans]
+    redo = [e is not None for e in effects]
+    for _ in range(2 + sum(len(scan.routines) for scan in scans)):  # one more known a round
+        found = routine_starts(scans)
+        redo = [r or new != old for r, new, old in zip(redo, found, starts, strict=True)]
+        starts = found
+        if not any(redo):
+            break
+        for s in np.flatnonzero(redo).tolist():
+            text, path = scans[s].text, scans[s].path
+            scans[s] = scan_krl(
+                text,
+                path,
+                initial_base=initial,
+                trust_calls=trust,
+                calls=effects[s],
+                starts=starts[s],
+            )
+        redo = [False] * len(scans)
+    return scans
 
 
 def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[str, bytearray]:

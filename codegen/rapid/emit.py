@@ -76,6 +76,7 @@ def render_rapid(
     that does not print them plainly gets them whole). Waits for the program's IK check (the
     confdata needs its joint angles)."""
     cell = program.cell
+    header = program.header(header)  # says what is not corrected
     section = cell.dialects["rapid"]
     places = section.decimals
     flange_T_tool, robot_T_wobj = cell.flange_T_tool, section.robot_T_wobj

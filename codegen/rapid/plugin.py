@@ -17,6 +17,7 @@ class RapidPlugin(DialectFolder):
     name = "rapid"
     title = "ABB RAPID"
     suffixes = (".mod", ".modx", ".prg", ".sys")
+    controllers = ("abb",)  # the robots it drives
     joints = True  # confdata comes from the joint angles
 
     def targets(self, cell, out):
