@@ -406,9 +406,9 @@ def add_table_format(parser: argparse.ArgumentParser) -> None:
     group.add_argument(
         "--format",
         metavar="FORMAT.yaml",
-        help="a file saying once how a tracker's export is written (keys columns, units, "
-        "delimiter, decimal, with the values of these options); an option given here wins "
-        "over its key",
+        help="a YAML file saying once how a tracker's export is written (keys columns, units, "
+        "delimiter, decimal, with the values of these options); an option on the command line "
+        "wins over its key",
     )
     group.add_argument(
         "--columns",
@@ -416,8 +416,8 @@ def add_table_format(parser: argparse.ArgumentParser) -> None:
         metavar="NAME=HEADER,...",
         help="read the file column HEADER as accugrid's NAME, in every CSV of this command that "
         "has one of the HEADERs, e.g. x=X_nom,y=Y_nom,z=Z_nom,x_meas=X_act,y_meas=Y_act,"
-        "z_meas=Z_act; a1..a6=HEADER for logged joints, a,b,c=HEADER for yaw, pitch, roll "
-        "(header names are case-insensitive)",
+        "z_meas=Z_act; a1..a6 for logged joints; a=YAW,b=PITCH,c=ROLL for a fixed x-y-z "
+        "roll-pitch-yaw (the same rotation as KUKA ABC); header names are case-insensitive",
     )
     group.add_argument(
         "--units",

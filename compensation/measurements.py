@@ -189,19 +189,39 @@ def _check_not_mirrored(table: Table, commanded: np.ndarray, measured: np.ndarra
 
 
 def check_joint_limits(meas: Measurements, limits_deg: np.ndarray, robot: str) -> None:
-    """InputError at the first row whose logged joint lies beyond the robot's limits
-    (6, 2) deg, naming the unit mix-up it suggests (degrees read as radians)."""
+    """InputError at the first row whose logged joints lie beyond the robot's limits (6, 2) deg
+    when the file says why: two joint columns whose values fit the limits exchanged (swapped
+    columns), or joints declared rad (degrees read as radians). Otherwise nothing: the limits
+    of a robot file may be narrower than the controller's."""
     if meas.joints is None:
         return
-    rows, axes = np.nonzero((meas.joints < limits_deg[:, 0]) | (meas.joints > limits_deg[:, 1]))
-    if not rows.size:
+    q = meas.joints
+    beyond = (q < limits_deg[:, 0]) | (q > limits_deg[:, 1])
+    if not beyond.any():
         return
+    swapped = [
+        (i, j)
+        for i in range(6)
+        for j in range(i + 1, 6)
+        if beyond[:, [i, j]].any()
+        and (limits_deg[i, 0] <= q[:, j]).all()
+        and (q[:, j] <= limits_deg[i, 1]).all()
+        and (limits_deg[j, 0] <= q[:, i]).all()
+        and (q[:, i] <= limits_deg[j, 1]).all()
+    ]
+    if swapped:
+        i, j = swapped[0]
+        hint = f": columns a{i + 1} and a{j + 1} swapped? (they fit the limits exchanged)"
+    elif meas.joint_unit == "rad":
+        hint = _DEGREES_AS_RADIANS
+    else:
+        return
+    rows, axes = np.nonzero(beyond)
     r, i = int(rows[0]), int(axes[0])
-    hint = _DEGREES_AS_RADIANS if meas.joint_unit == "rad" else ": is the robot right?"
     lo, hi = limits_deg[i]
     raise InputError(
-        f"logged joint a{i + 1} {meas.joints[r, i]:.3f} deg is beyond {robot}'s limits "
-        f"[{lo:g}, {hi:g}] deg ({rows.size} such cells){hint}",
+        f"logged joint a{i + 1} {q[r, i]:.3f} deg is beyond {robot}'s limits [{lo:g}, {hi:g}] "
+        f"deg ({rows.size} such cells){hint}",
         *_located(meas, r),
     )
 

@@ -129,7 +129,7 @@ def test_swapped_joint_columns_are_refused_naming_them(tmp_path, capsys):
     lines[1] = lines[1].replace("a2,a3", "a3,a2")  # the header names the columns the other way
     csv.write_text("\n".join(lines) + "\n")
     code, _ = identify(tmp_path, csv)
-    refused(capsys, code, tmp_path, "is the robot or the base wrong")
+    refused(capsys, code, tmp_path, "columns a2 and a3 swapped? (they fit the limits exchanged)")
 
 
 def controller_csv(tmp_path, q):

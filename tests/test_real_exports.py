@@ -9,7 +9,6 @@ from __future__ import annotations
 import csv
 import re
 from decimal import Decimal
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -234,13 +233,6 @@ def _ur10_rows(series: str) -> tuple[list[str], list[list[str]]]:
     with open(path, newline="", encoding="utf-8") as f:
         rows = list(csv.reader(f, delimiter=";"))
     return rows[0], rows[1:]
-
-
-@pytest.fixture(scope="module")
-def realdata() -> Path:
-    if not (REALDATA / "ipa-ur10").is_dir():
-        pytest.fail(f"{REALDATA} is missing: the real tracker data must sit beside the checkout")
-    return REALDATA
 
 
 def test_radians_read_as_degrees_are_refused_at_the_joint_column(realdata, tmp_path):
