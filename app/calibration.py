@@ -28,6 +28,7 @@ from accugrid.kinematics.identification import (
 from accugrid.kinematics.model import reach_mm
 from accugrid.kinematics.robot import VALIDATED_MAX_KEYS, Robot
 from accugrid.kinematics.structure import STRUCTURE_WORD, Selection, identify_structure
+from accugrid.kinematics.support import Structure, support_section
 from accugrid.kinematics.validity import validity_section
 
 __all__ = [
@@ -145,6 +146,9 @@ def calibrate(
     summary = identification_summary(result, robot, source, meas.sha256, selection, data.controller)
     validated = _validated_max(summary)  # the same claim the file's reader takes
     summary["validity"] = validity_section(data.commanded, data.rotations, data.q, validated)
+    support = _support(robot, data, options, result, selection)
+    if support is not None:
+        summary["support"] = support
     header = f"accugrid {__version__} identify: {robot.name} calibrated from {source}"
     files = {output: calibrated_yaml(result.robot, summary, header)}
     report = _report(output, robot, result)
@@ -153,6 +157,14 @@ def calibrate(
         report += "\n" + controller
     if selection is not None:
         report += "\n" + _structure_report(selection)
+    if support is not None:
+        leverage, distance = support["loo_leverage_max"], support["loo_distance_max_mm"]
+        report += (
+            f"\n  support: targets of a prediction leverage above {leverage:.4g} or farther than "
+            f"{distance:.1f} mm (TCP motion) in joint space from every pose (the largest among "
+            "these poses, left out in turn) are flagged and corrected by the DH-only fit of the "
+            "same poses, recorded beside the model (--strict refuses them)"
+        )
     if urdf:
         from accugrid.kinematics.urdf_export import urdf_text
 
@@ -183,6 +195,30 @@ def controller_text(robot: Robot, data: PoseSet) -> str:
         f"({mismatch.rows} of {len(data)} rows beyond their printed decimals): the "
         "controller's own calibration; identified from the logged joints (what the robot did)"
     )
+
+
+def _support(
+    robot: Robot,
+    data: PoseSet,
+    options: IdentifyOptions,
+    result: Identification,
+    selection: Selection | None,
+) -> dict | None:
+    """``identification.support`` (``kinematics.support``) of a model with joint-error terms:
+    its leverage map and the DH-only fit of the same poses, the fallback where it has no
+    support; None for a DH + TCP model (its own fallback)."""
+    structure = Structure(
+        options.base_frame,
+        options.compliance,
+        tuple(options.harmonics if selection is None else selection.harmonics),
+        () if selection is None else tuple(selection.gravity),
+    )
+    if not (structure.compliance or structure.harmonics or structure.gravity):
+        return None
+    if structure.names != result.names:
+        raise ValueError("the support's parameters differ from the identification's")
+    dh = identify(robot, data, base_frame=options.base_frame)
+    return support_section(result.robot, data.q, data.group, structure, dh)
 
 
 def _validated_max(summary: dict) -> np.ndarray:

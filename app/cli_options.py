@@ -346,7 +346,9 @@ def add_policy(parser: argparse.ArgumentParser, what: str) -> None:
         "--strict",
         action="store_true",
         help=f"with a model: refuse {what} outside the poses it was identified from (region, "
-        "tool tilt, joint ranges) instead of flagging them",
+        "tool tilt, joint ranges) or without its support among them (far from every "
+        "calibration pose in joint space, or of high prediction leverage) instead of flagging "
+        "them (the latter corrected by the DH-only fit of the same poses)",
     )
     parser.add_argument(
         "--outside",

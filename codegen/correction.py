@@ -10,7 +10,7 @@ own options with the same ``PolicyRequest``.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -65,7 +65,6 @@ def read_model(path: str | os.PathLike[str], nominal: RobotModel | None = None) 
     from accugrid.kinematics.calibrated import check_same_robot
     from accugrid.kinematics.frames import pose_from_xyzabc
     from accugrid.kinematics.robot import load_robot
-    from accugrid.kinematics.validity import Validity
 
     text = os.fspath(path)
     robot = load_robot(text)
@@ -76,11 +75,28 @@ def read_model(path: str | os.PathLike[str], nominal: RobotModel | None = None) 
     validity, tool = None, None
     if Path(text).is_file():
         doc = load_yaml(text)
-        validity = Validity.from_doc(doc)
+        validity = _validity(doc, robot)
         if doc.has("identification", "controller_tool"):
             keys = ("identification", "controller_tool")
             tool = pose_from_xyzabc([doc.number(*keys, k) for k in "xyzabc"])
     return ModelFile(text, robot, validity, tool)
+
+
+def _validity(doc, robot) -> Validity | None:
+    """Where the calibrated file's model holds: its poses' region and, when it records one,
+    its support among them (``kinematics.support``)."""
+    from accugrid.kinematics.calibrated import model_structure
+    from accugrid.kinematics.support import Structure, Support
+    from accugrid.kinematics.validity import Validity
+
+    validity = Validity.from_doc(doc)
+    if validity is None or not doc.has("identification", "support"):
+        return validity
+    chosen = doc.get("identification", "structure", "chosen", default=[]) or []
+    compliance, harmonics, gravity = model_structure(robot, chosen)
+    base_frame = doc.has("identification", "tracker_T_robot")
+    structure = Structure(base_frame, compliance, harmonics, gravity)
+    return replace(validity, support=Support.from_doc(doc, robot, structure))
 
 
 def cell_grid(cell: Cell, path: str | os.PathLike[str] | None = None) -> GridModel | None:

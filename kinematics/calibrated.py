@@ -25,12 +25,15 @@ __all__ = [
     "check_same_robot",
     "chosen_structure",
     "identification_summary",
+    "model_structure",
+    "pose_dict",
 ]
 
 _SAME_TOL = 1e-9  # mm / deg: nominal DH values closer than this are the same robot
 
 
-def _pose_dict(pose: np.ndarray) -> dict[str, float]:
+def pose_dict(pose: np.ndarray) -> dict[str, float]:
+    """A pose (4, 4) mm as YAML data: x, y, z mm, a, b, c KUKA deg."""
     return {k: float(v) for k, v in zip("xyzabc", xyzabc_from_pose(pose), strict=True)}
 
 
@@ -66,7 +69,7 @@ def identification_summary(
     summary: dict = {
         "robot": nominal.name,
         "measurements": {"file": source, "sha256": sha256},
-        "controller_tool": _pose_dict(nominal.flange_T_tool),
+        "controller_tool": pose_dict(nominal.flange_T_tool),
         "poses": result.poses,
         "rows": result.rows,
     }
@@ -88,7 +91,7 @@ def identification_summary(
         "parameters": parameters,
     }
     if result.tracker_T_robot is not None:
-        summary["tracker_T_robot"] = _pose_dict(result.tracker_T_robot)
+        summary["tracker_T_robot"] = pose_dict(result.tracker_T_robot)
     if result.cross_validation is not None:
         cv = result.cross_validation
         summary["cross_validation"] = {
@@ -160,7 +163,7 @@ def calibrated_yaml(robot: Robot, summary: dict | None = None, header: str = "")
             for i in range(dh.n)
         ],
         "limits_deg": [[float(lo), float(hi)] for lo, hi in robot.joint_limits_deg],
-        "tool": _pose_dict(robot.flange_T_tool),
+        "tool": pose_dict(robot.flange_T_tool),
     }
     if robot.errors is not None:
         keys = ("da_mm", "dd_mm", "dalpha_rad", "dtheta_rad")
@@ -262,14 +265,21 @@ def chosen_structure(path, robot: Robot):
     poses on ``robot`` (its nominal model): (compliance under masses, harmonics (axis, order),
     gravity groups of ``kinematics.candidates``). InputError when the file is of another robot."""
     from accugrid.infra.yamlfile import load_yaml
-    from accugrid.kinematics.candidates import gravity_terms
     from accugrid.kinematics.robot import load_robot
 
     model = load_robot(path)
     check_same_robot(model, robot, str(path))
+    chosen = load_yaml(path).get("identification", "structure", "chosen", default=[]) or []
+    return model_structure(model, chosen)
+
+
+def model_structure(model: Robot, chosen: list[str]):
+    """(compliance under masses, harmonics (axis, order), gravity groups) of a calibrated
+    ``model`` whose file names the groups ``chosen`` (``identification.structure.chosen``)."""
+    from accugrid.kinematics.candidates import gravity_terms
+
     moves = model.joint_errors
     harmonics = tuple((h.axis, h.order) for h in moves.harmonics) if moves else ()
     compliance = bool(moves is not None and moves.masses and np.any(moves.compliance))
-    chosen = load_yaml(path).get("identification", "structure", "chosen", default=[]) or []
-    gravity = tuple(t for t in gravity_terms(robot) if t.name in chosen)
+    gravity = tuple(t for t in gravity_terms(model) if t.name in chosen)
     return compliance, harmonics, gravity

@@ -13,7 +13,7 @@ from hypothesis import settings
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 REALWORLD = ROOT.parent / "shared" / "realworld"
-REALDATA = ROOT.parent / "shared" / "realdata"
+REALDATA = ROOT.parent / "shared" / "realdata"  # real tracker measurements (README.md in each)
 RS274 = shutil.which("rs274") or ("/usr/bin/rs274" if os.path.exists("/usr/bin/rs274") else None)
 
 # Property tests must stay quick on a shared 2-core machine; CI uses the same profile.
