@@ -4,7 +4,7 @@ The demo's measurement (kr210-paper with the seed's Table 1 errors, tool 250 mm 
 A 0 B 90 C 0, region X 1200..2200, Y -600..600, Z 1100..2100 mm, step 200 mm, 5 repeats, tracker
 noise 0.02 mm, repeatability 0.03 mm) builds the grid; 200 random targets P in the region are
 commanded uncorrected and corrected, and "measured" once each with the same noise. The residual
-is P - M per axis (mm), e = P - M as in DESIGN.md. Also: the largest jump of IDW across a cell
+is P - M per axis (mm), e = P - M as in docs/formats.md. Also: the largest jump of IDW across a cell
 face of that grid (trilinear has none).
 
 Run: .venv/bin/python bench/accuracy_grid.py [--targets 200] [--seed 7] [--no-noise]

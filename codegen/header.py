@@ -1,4 +1,4 @@
-"""The comment header every output starts with (DESIGN.md "Output safety"): programs (``krl``,
+"""The comment header every output starts with (docs/guarantees.md): programs (``krl``,
 ``gcode``, ``rewrite``, ``plan``) and the corrected-points CSV (``correct``).
 
 In this order: the accugrid version and command; each input file's name and SHA-256; the grid's

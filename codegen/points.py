@@ -1,4 +1,4 @@
-"""The drilling points CSV (DESIGN.md "Points") and the tool orientation of each hole.
+"""The drilling points CSV (docs/formats.md "Points") and the tool orientation of each hole.
 
 Columns: ``x,y,z`` (mm, program BASE frame) required; ``id`` optional (unique, non-empty);
 orientation either ``a,b,c`` (KUKA ABC, deg) or ``i,j,k`` (drill axis into the part, any non-zero

@@ -7,7 +7,7 @@ Per hole, four positions on the drill axis (tool Z, pointing into the part), in 
 - ``BOT`` bottom: ``depth`` mm into the part; drilling feed from CLR to here, then the dwell;
 - ``RET`` retract: ``drilling.retract`` mm before the hole, at approach speed.
 
-Correction (DESIGN.md): the hole point is mapped to the robot frame (robot_T_base), corrected
+Correction (docs/formats.md): the hole point is mapped to the robot frame (robot_T_base), corrected
 with the grid (P' = P + e(P)), and the same vector e is added to all four positions of the hole.
 Correcting each position by its own e would bend the drill axis by the difference, and that is
 not small: the error changes over the 30-40 mm between approach and bottom, and inverse-distance

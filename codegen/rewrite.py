@@ -511,7 +511,8 @@ def partial_check(rows: Rows, opts: Options) -> None:
 
 
 def header_lines(result: Result, program: str, cell: str, opts: Options) -> list[str]:
-    """DESIGN.md header: accugrid version, input and grid SHA-256, grid step, largest correction.
+    """The header of docs/guarantees.md: version, input and grid SHA-256, grid step, largest
+    correction.
 
     File names only (no directories, no dates), so the same inputs give the same bytes."""
     largest, where = result.largest()
@@ -534,7 +535,7 @@ def header_lines(result: Result, program: str, cell: str, opts: Options) -> list
 
 
 def report_csv(rows: Rows, decimals: int = 4) -> str:
-    """The report as CSV text (DESIGN.md style: header row, mm, ``decimals`` places)."""
+    """The report as CSV text (docs/formats.md style: header row, mm, ``decimals`` places)."""
     corrected = ",".join([f"%.{decimals}f"] * 11)  # x..z, x_new..z_new, dx..dz, length, residual
     old_only = ",".join([f"%.{decimals}f"] * 3) + ",,,,,,,,"
     files = [_csv(Path(f).name) for f in rows.files]

@@ -1,11 +1,11 @@
 """The error-similarity grid model (seed Sec. 2.3): measured vertex errors in, predicted errors and
 corrected commands out.
 
-The error is e = P - M (commanded minus measured, DESIGN.md). Inside the grid the error at a point
-is interpolated from the 8 vertices of its cell (``compensation.interpolation``): inverse-distance
-weighting (seed Eq. 12-13, the default, power 1) or trilinear. The corrected command is
-P' = P + e(P) (Eq. 14); with K iterations P'_k = P + e(P'_(k-1)), which removes the second-order
-term e(P) - e(P + e).
+The error is e = P - M (commanded minus measured, docs/formats.md). Inside the grid the error at a
+point is interpolated from the 8 vertices of its cell (``compensation.interpolation``):
+inverse-distance weighting (seed Eq. 12-13, the default, power 1) or trilinear. The corrected
+command is P' = P + e(P) (Eq. 14); with K iterations P'_k = P + e(P'_(k-1)), which removes the
+second-order term e(P) - e(P + e).
 """
 
 from __future__ import annotations

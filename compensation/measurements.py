@@ -106,7 +106,7 @@ class VertexGrid:
 
 
 def read_measurements(path: str | os.PathLike[str], fmt: TableFormat | None = None) -> Measurements:
-    """Read a measurement CSV (DESIGN.md): x,y,z,x_meas,y_meas,z_meas required; a,b,c, the
+    """Read a measurement CSV (docs/formats.md): x,y,z,x_meas,y_meas,z_meas required; a,b,c, the
     logged joints a1..a6 (all six or none) and the Status s optional. ``fmt``: how a tracker
     export is written (delimiter, decimal mark, column mapping, units; default: found)."""
     path = os.fspath(path)

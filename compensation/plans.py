@@ -100,7 +100,7 @@ class Plan:
 
     def csv_text(self) -> str:
         """The plan as CSV: id,x,y,z,a,b,c, extra columns, then empty x_meas,y_meas,z_meas for
-        the operator to fill in. Numbers with 4 decimals (DESIGN.md measurement format)."""
+        the operator to fill in. Numbers with 4 decimals (docs/formats.md measurement format)."""
         header = list(PLAN_COLUMNS) + list(self.extra) + list(MEAS_COLUMNS)
         xyz = [f"{x:.4f},{y:.4f},{z:.4f}" for x, y, z in self.points]
         abc = [f"{a:.4f},{b:.4f},{c:.4f}" for a, b, c in self.abc_rows()]

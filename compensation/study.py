@@ -2,7 +2,7 @@
 
 For every step and every centre, the cube's grid model is built from its 8 measured vertices, its
 9 test points (compensation.cube_points) are corrected (P' = P + e, Eq. 14) and the remaining
-error r = P - M (target minus reached, the sign of DESIGN.md) is collected over all centres.
+error r = P - M (target minus reached, the sign of docs/formats.md) is collected over all centres.
 
 - Table 4: per step and axis, the max, min and standard deviation of r. Repeats follow the seed
   (Sec. 5, "the mean maximum and minimum values of 5 measurements are used as the maximum and

@@ -1,4 +1,4 @@
-"""Reading the CSV files of DESIGN.md with errors that name file, line and column.
+"""Reading the CSV files of docs/formats.md with errors that name file, line and column.
 
 Format: UTF-8 (a BOM is tolerated), a header row, comma-separated, ``.`` decimal point; lines end
 with LF, CRLF or CR; lines whose first field starts with ``#`` (or ``//``, as metrology software
@@ -88,7 +88,7 @@ _ODD_START[np.frombuffer(b"#,\n" + _BLANKS.encode() + bytes(range(0x1C, 0x20)), 
 
 @dataclass(frozen=True)
 class TableFormat:
-    """How a CSV file is written where it differs from DESIGN.md's.
+    """How a CSV file is written where it differs from docs/formats.md's.
 
     ``delimiter`` ``,``, ``;`` or tab (used where the header holds it, else found from the file);
     ``decimal`` ``.`` or ``,`` (None: found; a comma only beside another delimiter); ``columns``:
@@ -189,7 +189,7 @@ _FORMAT: ContextVar[TableFormat | None] = ContextVar("table_format", default=Non
 @contextmanager
 def reading_as(fmt: TableFormat | None) -> Iterator[None]:
     """Within the block, ``read_table``/``parse_table`` calls without a format read with
-    ``fmt`` (None: the default, DESIGN.md's format with the delimiter and decimal found)."""
+    ``fmt`` (None: the default, docs/formats.md's format with the delimiter and decimal found)."""
     token = _FORMAT.set(fmt)
     try:
         yield
@@ -568,7 +568,7 @@ def parse_table(text: str, path: str = "<string>", fmt: TableFormat | None = Non
     """Parse CSV text (see module docstring); ``path`` is used in error messages only."""
     fmt = fmt or _FORMAT.get() or _PLAIN
     delimiter = _delimiter_of(text, path, fmt.delimiter)
-    if delimiter == ",":  # DESIGN.md's format: the fast reader first
+    if delimiter == ",":  # docs/formats.md's format: the fast reader first
         table = _parse_simple(text, path) or _parse_csv(text, path)
     else:
         table = _parse_csv(text, path, delimiter)

@@ -1,4 +1,4 @@
-"""SHA-256 of input files, as the output headers and reports name them (DESIGN.md "Output
+"""SHA-256 of input files, as the output headers and reports name them (docs/guarantees.md "Output
 safety")."""
 
 from __future__ import annotations

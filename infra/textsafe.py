@@ -1,4 +1,4 @@
-"""The only way numbers and user text reach a robot program (DESIGN.md, "Output safety").
+"""The only way numbers and user text reach a robot program (docs/guarantees.md, "Output safety").
 
 - ``fixed`` (and its bulk forms for 100,000-number files: ``fixed_many``, one %-pass, and
   ``fixed_bytes``, built by numpy; each property-tested to print what ``fixed`` prints): the one

@@ -2,7 +2,7 @@
 a unit declaration (``--units``), the check that positions are plausible for a robot's size, and
 how messages write a vector of numbers.
 
-Lengths are mm and angles degrees everywhere inside accugrid files and options (DESIGN.md); an
+Lengths are mm and angles degrees everywhere inside accugrid files and options (docs/formats.md); an
 export in m, inch or rad is converted on read. A column's unit comes from, in this order: the
 declaration (``--units``, a cell's ``tracker.units``), the unit its header names (``x [m]``,
 ``Nominal X (in)``, ``x_mm``), else mm or deg.
@@ -34,7 +34,7 @@ __all__ = [
 
 LENGTH_UNITS = {"mm": "1", "m": "1000", "in": "25.4"}  # mm per unit, as exact decimal text
 ANGLE_UNITS = {"deg": 1.0, "rad": 180.0 / math.pi}  # deg per unit
-# the columns holding lengths (DESIGN.md points, measurements, experiment plans) and angles
+# the columns holding lengths (docs/formats.md points, measurements, experiment plans) and angles
 # (KUKA a,b,c and the logged axis angles a1..a6)
 LENGTH_COLUMNS = frozenset(
     ("x", "y", "z", "x_meas", "y_meas", "z_meas", "diameter", "depth", "step")

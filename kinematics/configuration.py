@@ -9,8 +9,9 @@ taken mod 360 deg (a whole turn does not change the configuration); the wrist po
 5's origin (frame 4's on a spherical wrist), so on a UR the 8 solutions of a pose are the 8
 codes: shoulder left/right, elbow up/down, wrist flipped or not. Each controller's words come
 from it:
-``to_kuka`` gives the KUKA Status and Turn (DESIGN.md, checked against the KUKA/Siemens/Beckhoff
-descriptions: Status bit 0 shoulder, bit 1 elbow, bit 2 wrist; Turn bit i set when A(i+1) < 0).
+``to_kuka`` gives the KUKA Status and Turn (docs/formats.md; checked against the KUKA, Siemens and
+Beckhoff descriptions: Status bit 0 shoulder, bit 1 elbow, bit 2 wrist; Turn bit i set when
+A(i+1) < 0).
 
 The joint angles themselves are the neutral data: a vendor whose words need more than these
 flags takes them from q. ABB ``confdata`` [cf1, cf4, cf6, cfx] (``abb_confdata``, RAPID

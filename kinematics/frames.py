@@ -1,6 +1,6 @@
 """Frame maths: homogeneous transforms and KUKA ABC angles.
 
-Conventions (DESIGN.md): lengths in mm, angles in degrees at the boundary. KUKA ABC is
+Conventions (docs/formats.md): lengths in mm, angles in degrees at the boundary. KUKA ABC is
 R = Rz(A)·Ry(B)·Rx(C) (intrinsic Z-Y'-X''). ``a_T_b`` is the pose of frame b in frame a.
 Every function accepts a single item or a stack: (3,) or (N, 3) angles, (4, 4) or (N, 4, 4) poses.
 """

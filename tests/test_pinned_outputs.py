@@ -4,8 +4,6 @@ positions) and every KRL, G-code and RAPID program in ../shared/realworld, with 
 exit code, recorded in tests/data/pinned_outputs.json (group -> input -> output name -> digest).
 The outputs of the demo's model path are numerically derived and pinned by their structure and
 numbers with a tolerance instead (tests/pins.py).
-The demo's KRL and G-code programs and rewrites have the digests tests/test_rapid.py pinned
-before RAPID came in.
 
 Everything runs through the command line (``accugrid`` resolved from its console-script entry
 point and called in this process with argv), so moving modules between folders does not touch

@@ -15,7 +15,6 @@ import pytest
 from conftest import EXAMPLES
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from pins import digests, first_difference
 from rewrite_helpers import E_CONST, REALWORLD_RAPID, write_rapid_cell
 from rewrite_helpers import RAPID_BASE as BASE
 from scipy.spatial.transform import Rotation
@@ -258,74 +257,9 @@ def test_non_unit_quaternion_external_axes_and_offs_are_reported(tmp_path, capsy
     assert ",corrected," in rows["pOk"]
 
 
-# sha256 of the KRL and G-code outputs of main without the RAPID plug-in (5a07359; run from a
-# checkout of that commit with its own venv), made with:
-#   accugrid krl examples/wing_panel_points.csv --cell examples/cell.yaml -o krl
-#   accugrid gcode examples/wing_panel_points.csv --cell examples/cell.yaml -o wing_panel.ngc
-#   mkdir rewrite
-#   accugrid rewrite examples/cam_drill.src examples/cam_drill.dat --cell examples/cell.yaml \
-#       -o rewrite --report rewrite/krl_report.csv --allow-partial
-#   accugrid rewrite examples/cam_drill.ngc --cell examples/cell.yaml -o rewrite/cam_drill.ngc \
-#       --report rewrite/ngc_report.csv --allow-partial
-#   sha256sum krl/* wing_panel.ngc rewrite/*
-PINNED = {
-    "krl/WING_PANEL.dat": "507206e73d39cff7955cf92fed1992926ae6247673512818d28aa2d0f5ffac6b",
-    "krl/WING_PANEL.src": "5c40827a052c168736debc88b070d0e85faa2a9d8e2f15f5d2f14a3cb821be26",
-    "wing_panel.ngc": "64c9ec5409f11ecf827d77605eb9309d1abe37a064c935dc98851d5613520efe",
-    "rewrite/cam_drill.src": "906b0c5c3880571c3acdfdcbd6b1852cae3046505cbda35f93c4ea7b93d8d49f",
-    "rewrite/cam_drill.dat": "9fe57ed90bf612f68861400420d399b00b75bb951a725fdd9de327c77ec13159",
-    "rewrite/cam_drill.ngc": "2392a6f9bcbce2e58eba23e8ee57833b58708cb8d59697a5f5862379d9a23d69",
-    "rewrite/krl_report.csv": "3cc8cfb5c2a29df187ad05cd0f5d7beedc7575c2476ae4e34b40177a6494230b",
-    "rewrite/ngc_report.csv": "06515ed7e8e793e76d34e1bc2c006760df280a7fde2e25e17d28ce842d94d6a5",
-}
-
-
-def test_krl_and_gcode_outputs_are_byte_identical_to_before_rapid(tmp_path):
-    points, cell = str(EXAMPLES / "wing_panel_points.csv"), str(EXAMPLES / "cell.yaml")
-    cam = EXAMPLES / "cam_drill"
-    assert main(["krl", points, "--cell", cell, "-o", str(tmp_path / "krl")]) == 0
-    assert main(["gcode", points, "--cell", cell, "-o", str(tmp_path / "wing_panel.ngc")]) == 0
-    (tmp_path / "rewrite").mkdir()
-    assert (
-        main(
-            [
-                "rewrite",
-                f"{cam}.src",
-                f"{cam}.dat",
-                "--cell",
-                cell,
-                "-o",
-                str(tmp_path / "rewrite"),
-                "--report",
-                str(tmp_path / "rewrite/krl_report.csv"),
-                "--allow-partial",
-            ]
-        )
-        == 0
-    )
-    assert (
-        main(
-            [
-                "rewrite",
-                f"{cam}.ngc",
-                "--cell",
-                cell,
-                "-o",
-                str(tmp_path / "rewrite/cam_drill.ngc"),
-                "--report",
-                str(tmp_path / "rewrite/ngc_report.csv"),
-                "--allow-partial",
-            ]
-        )
-        == 0
-    )
-    problem = first_difference(digests(tmp_path, list(PINNED)), PINNED)
-    assert problem is None, problem
-
-
 def _places(literal: str) -> int:
     """Decimal places a corrected number must keep for the literal it replaces: those written
-    (0.50: 2); for an exponent form 2, the 0.01 mm every correction keeps (DESIGN.md)."""
+    (0.50: 2); for an exponent form 2, the 0.01 mm every correction keeps (docs/formats.md)."""
     return 2 if "e" in literal.lower() else max(-Decimal(literal).as_tuple().exponent, 0)
 
 
