@@ -312,21 +312,29 @@ def test_identify_refuses_a_non_finite_tool_naming_the_option_and_unit(tmp_path,
     assert not (tmp_path / "cal.yaml").exists()
 
 
-def test_a_robot_without_the_closed_form_inverse_is_refused_naming_its_file(
+def test_a_robot_without_the_closed_form_inverse_gets_its_program_by_the_numerical_one(
     tmp_path, inputs, capsys
 ):
-    # "DH structure has no closed-form inverse" named neither the robot nor its file
+    # A DH structure without a closed-form inverse (a4 = 10 mm: no spherical wrist) is served by
+    # the numerical IK: the same positions, in the configuration (S, T) the closed form of the
+    # unbent arm gives them.
     from importlib import resources
 
     nominal = resources.files("accugrid.kinematics").joinpath("robots", "kr210.yaml").read_text()
     bent = nominal.replace("{a_mm: 0.0, alpha_deg: -90.0", "{a_mm: 10.0, alpha_deg: -90.0", 1)
     assert bent != nominal
     (inputs / "bent.yaml").write_text(bent.replace("name: kr210", "name: bent", 1))
-    cell = inputs / "cell.yaml"
-    cell.write_text(cell.read_text().replace("robot: kr210-paper", "robot: bent.yaml", 1))
+    (inputs / "straight.yaml").write_text(nominal.replace("name: kr210", "name: straight", 1))
     points = inputs / "wing_panel_robot.csv"
-    argv = ["krl", str(points), "--cell", str(cell), "--no-correction", "-o", str(tmp_path / "k")]
-    assert main(argv) == 2
-    err = capsys.readouterr().err
-    assert f"{inputs / 'bent.yaml'}: robot bent: its dh structure has no closed-form inverse" in err
-    assert not (tmp_path / "k").exists()
+    positions = {}
+    for name in ("bent", "straight"):
+        cell = inputs / f"cell_{name}.yaml"
+        text = (inputs / "cell.yaml").read_text()
+        cell.write_text(text.replace("robot: kr210-paper", f"robot: {name}.yaml", 1))
+        out = tmp_path / name
+        argv = ["krl", str(points), "--cell", str(cell), "--no-correction", "-o", str(out)]
+        assert main(argv) == 0
+        dat = (out / "WING_PANEL.dat").read_text()
+        positions[name] = [line for line in dat.splitlines() if line.startswith("DECL E6POS")]
+    assert len(positions["bent"]) >= 72
+    assert positions["bent"] == positions["straight"]

@@ -84,7 +84,7 @@ def test_malformed_robot_yaml_names_the_key(tmp_path, capsys):
     path.write_text(text.replace("a_mm: 1150.0", "a_mm: long"))
     code, out = simulate(tmp_path, "--robot", str(path))
     err = refused(capsys, code, out, "'dh[1].a_mm' must be a finite number")
-    assert f"{path}:11:" in err
+    assert f"{path}:12:" in err
 
 
 @pytest.mark.parametrize("axis", [0, 2, 4])
