@@ -12,12 +12,14 @@ from pathlib import Path
 import numpy as np
 
 from accugrid import __version__
-from accugrid.compensation.measurements import read_measurements
+from accugrid.compensation.measurements import check_joint_limits, read_measurements
 from accugrid.infra.errors import InputError, printable
 from accugrid.infra.inputfile import read_input_bytes
+from accugrid.infra.units import check_scale
 from accugrid.kinematics.calibrated import calibrated_yaml, identification_summary
 from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import Identification, Terms, identify, pose_set
+from accugrid.kinematics.model import reach_mm
 from accugrid.kinematics.robot import VALIDATED_MAX_KEYS, Robot
 from accugrid.kinematics.structure import STRUCTURE_WORD, Selection, identify_structure
 from accugrid.kinematics.validity import validity_section
@@ -89,6 +91,8 @@ def calibrate(
     if not auto and options.max_order is not None:
         raise InputError("--max-order chooses the harmonics searched by --structure auto or search")
     meas = read_measurements(measurements)
+    check_scale(meas.commanded, reach_mm(robot), "commanded position", meas.path, meas.lines)
+    check_joint_limits(meas, robot.joint_limits_deg, robot.name)
     status = meas.status if meas.status is not None else options.status
     data = pose_set(
         robot,

@@ -17,8 +17,15 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from accugrid.compensation.plans import SEED_ABC, SEED_CENTRES, SEED_REPEATS
-from accugrid.infra.csvtable import DECIMALS, DELIMITERS, TableFormat, reading_as
+from accugrid.infra.csvtable import (
+    DECIMALS,
+    DELIMITERS,
+    TableFormat,
+    read_table_format,
+    reading_as,
+)
 from accugrid.infra.errors import InputError
+from accugrid.infra.units import unit_spec
 
 if TYPE_CHECKING:
     from accugrid.app.job import ProgramRequest
@@ -348,24 +355,35 @@ def add_policy(parser: argparse.ArgumentParser, what: str) -> None:
 
 
 def add_table_format(parser: argparse.ArgumentParser) -> None:
-    """How the points and measurement CSVs of the command are written (tracker exports as they
-    come): ``--columns``, ``--units``, ``--delimiter``, ``--decimal``; see ``reading_format``."""
-    group = parser.add_argument_group("points and measurement files as exported")
+    """How the position files of the command are written (tracker exports as they come):
+    ``--format``, ``--columns``, ``--units``, ``--delimiter``, ``--decimal``; see
+    ``reading_format``."""
+    group = parser.add_argument_group("position files as exported (docs/tracker_files.md)")
+    group.add_argument(
+        "--format",
+        metavar="FORMAT.yaml",
+        help="a file saying once how a tracker's export is written (keys columns, units, "
+        "delimiter, decimal, with the values of these options); an option given here wins "
+        "over its key",
+    )
     group.add_argument(
         "--columns",
         type=_column_mapping,
         metavar="NAME=HEADER,...",
         help="read the file column HEADER as accugrid's NAME, in every CSV of this command that "
         "has one of the HEADERs, e.g. x=X_nom,y=Y_nom,z=Z_nom,x_meas=X_act,y_meas=Y_act,"
-        "z_meas=Z_act (header names are case-insensitive)",
+        "z_meas=Z_act; a1..a6=HEADER for logged joints, a,b,c=HEADER for yaw, pitch, roll "
+        "(header names are case-insensitive)",
     )
     group.add_argument(
         "--units",
-        choices=["mm", "m", "in"],
-        default="mm",
-        help="unit of the lengths (x,y,z, x_meas..z_meas, diameter, depth) in the files "
-        "--columns applies to (without --columns: in every CSV of this command), converted to "
-        "mm on read (default: mm)",
+        type=_unit_spec,
+        metavar="UNIT,...",
+        help="units of the files --columns applies to (without --columns: of every CSV of this "
+        "command): a length unit (mm, m, in) for every length column (x,y,z, x_meas..z_meas, "
+        "diameter, depth), an angle unit (deg, rad) for every angle column (a,b,c, a1..a6), "
+        "NAME=UNIT for one column, e.g. m,rad,x_meas=mm,y_meas=mm,z_meas=mm; converted to mm "
+        "and deg on read (default: the unit a header names, x [m], X (in), x_mm; else mm, deg)",
     )
     group.add_argument(
         "--delimiter",
@@ -379,6 +397,15 @@ def add_table_format(parser: argparse.ArgumentParser) -> None:
         help="decimal mark of the export (default: found; a comma-separated file always has a "
         "decimal point)",
     )
+
+
+def _unit_spec(text: str) -> str:
+    """``--units``' text, checked by ``infra.units.unit_spec`` (argparse: exit 2 naming it)."""
+    try:
+        unit_spec(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
 
 
 def _column_mapping(text: str) -> dict[str, str]:
@@ -397,13 +424,14 @@ def _column_mapping(text: str) -> dict[str, str]:
 
 def reading_format(args: argparse.Namespace) -> AbstractContextManager[None]:
     """The block in which every CSV the command reads is read as ``add_table_format``'s
-    options say."""
+    options say (over the keys of ``--format``'s file)."""
+    saved = read_table_format(args.format) if args.format else TableFormat()
     return reading_as(
         TableFormat(
-            delimiter=DELIMITERS.get(args.delimiter or ""),
-            decimal=DECIMALS.get(args.decimal or ""),
-            columns=args.columns,
-            units=args.units,
+            delimiter=DELIMITERS.get(args.delimiter or "", saved.delimiter),
+            decimal=DECIMALS.get(args.decimal or "", saved.decimal),
+            columns=args.columns if args.columns is not None else saved.columns,
+            units=args.units if args.units is not None else saved.units,
         )
     )
 

@@ -33,6 +33,7 @@ from accugrid.compensation.policy import Policy
 from accugrid.infra.atomic import JobFiles
 from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import InputError
+from accugrid.infra.units import check_scale
 from accugrid.infra.yamlfile import load_yaml
 from accugrid.kinematics.frames import (
     abc_to_matrix,
@@ -41,6 +42,7 @@ from accugrid.kinematics.frames import (
     pose_from_xyzabc,
     too_tilted,
 )
+from accugrid.kinematics.model import reach_mm
 from accugrid.kinematics.robot import Robot, load_robot
 
 if TYPE_CHECKING:
@@ -123,6 +125,7 @@ def correct_by_model(request: CorrectRequest) -> JobFiles:
         given = pose_from_xyzabc(np.array(request.tool, dtype=float))
         tools = (given, given)
     points = read_points(request.points)
+    check_scale(points.xyz, reach_mm(calibrated), "target", points.path, points.lines)
     check_added_columns(points)
     abc = point_orientations(points, np.array(request.abc, dtype=float))
     policy = Policy.build(

@@ -12,7 +12,7 @@ import csv
 import io
 import json
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -171,17 +171,12 @@ def transform_csv(
     """``accugrid transform``: the CSV at ``table_path`` with one or both triples x,y,z and
     x_meas,y_meas,z_meas (``columns`` "xyz", "meas", "both"; None: "meas" when the file has
     them, else "xyz") mapped from the tracker frame into the robot frame of ``frame_path``
-    (tracker_T_robot; ``inverse``: back), mm, 4 decimals; every other cell, comment and blank
-    line as it was, a comment naming the frame file first. InputError on a bad file."""
+    (tracker_T_robot; ``inverse``: back), 4 decimals of mm, written in the file's own delimiter,
+    decimal mark and unit of each column (read as ``reading_as`` says); every other cell,
+    comment and blank line as it was, a comment naming the frame file first. InputError on a
+    bad file."""
     text = read_input_text(table_path)[1]
     table = parse_table(text, table_path)
-    if table.delimiter != ",":  # its cells are rewritten in place, as comma-separated text
-        raise InputError(
-            "transform rewrites comma-separated files; this one is separated by "
-            f"{'a semicolon' if table.delimiter == ';' else 'tabs'}",
-            table_path,
-            table.header_line,
-        )
     tracker_T_robot = load_frame(frame_path)
     pose = tracker_T_robot if inverse else invert(tracker_T_robot)
     triples = _chosen(table, columns)
@@ -235,10 +230,12 @@ def _mapped(table: Table, triple: tuple[str, str, str], pose: np.ndarray) -> np.
 
 
 def _rewrite(text: str, table: Table, mapped: dict[int, np.ndarray]) -> str:
-    """The CSV text with the mapped cells replaced; every other line kept as it was."""
+    """The CSV text with the mapped cells (mm) replaced, each in its column's unit and the
+    file's decimal mark; every other line kept as it was."""
     lines = text.splitlines(keepends=True)
     row_at = {line: r for r, line in enumerate(table.lines)}
-    reader = csv.reader(lines, strict=True)
+    written = {i: _cell_text(table, table.header[i].lower()) for i in mapped}
+    reader = csv.reader(lines, delimiter=table.delimiter, strict=True)
     out: list[str] = []
     end = 0
     for record in reader:
@@ -250,12 +247,23 @@ def _rewrite(text: str, table: Table, mapped: dict[int, np.ndarray]) -> str:
         cells = list(record)
         for i, values in mapped.items():
             if not np.isnan(values[r]):
-                cells[i] = fixed(values[r], DECIMALS)
+                cells[i] = written[i](values[r])
         ending = lines[end - 1][len(lines[end - 1].rstrip("\r\n")) :] or "\n"
         buffer = io.StringIO()
-        csv.writer(buffer, lineterminator=ending).writerow(cells)
+        csv.writer(buffer, delimiter=table.delimiter, lineterminator=ending).writerow(cells)
         out.append(buffer.getvalue())
     return "".join(out)
+
+
+def _cell_text(table: Table, name: str) -> Callable[[float], str]:
+    """How a value in mm is written into column ``name`` of ``table``: in the column's unit
+    (``DECIMALS`` of mm: more decimals for m and in) with the file's decimal mark."""
+    scale, extra = {"m": (1e-3, 3), "in": (1 / 25.4, 2)}.get(table.units.get(name, ""), (1.0, 0))
+
+    def text(value_mm: float) -> str:
+        return fixed(value_mm * scale, DECIMALS + extra).replace(".", table.decimal)
+
+    return text
 
 
 def fit_frame_files(

@@ -21,6 +21,9 @@ from accugrid.infra.atomic import check_targets, write_files
 from accugrid.infra.csvtable import declared_or
 from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import InputError
+from accugrid.infra.units import check_scale
+from accugrid.kinematics.frames import transform_points
+from accugrid.kinematics.model import reach_mm
 from accugrid.kinematics.robot import load_robot
 
 __all__ = ["Job", "ProgramRequest", "prepare", "program_job", "summary", "write_program"]
@@ -117,6 +120,8 @@ def prepare(req: ProgramRequest, cell: Cell | None = None) -> tuple[Job, object]
     if grid_file is not None:
         grid = GridModel.from_measurements(grid_file, fmt=declared_or(cell.tracker))
     robot = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
+    in_robot = transform_points(cell.robot_T_base, points.xyz)
+    check_scale(in_robot, reach_mm(robot), "target", points.path, points.lines)
     model = validity = None
     if model_file is not None:  # the arm; the tool is the cell's, never the model's TCP
         from accugrid.app.correct_model import read_model  # model jobs only

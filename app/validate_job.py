@@ -28,8 +28,10 @@ from accugrid.compensation.validation import (
 from accugrid.infra.atomic import JobFiles
 from accugrid.infra.csvtable import read_table
 from accugrid.infra.errors import InputError, printable
-from accugrid.infra.units import mm_text
+from accugrid.infra.units import check_scale, mm_text
 from accugrid.infra.yamlfile import load_yaml
+from accugrid.kinematics.model import reach_mm
+from accugrid.kinematics.robot import load_robot
 from accugrid.kinematics.validity import Validity
 
 __all__ = ["ValidateJob", "ValidateRequest", "validate_files"]
@@ -71,6 +73,8 @@ def validate_files(request: ValidateRequest) -> ValidateJob:
     """Read, check and summarise the validation; the report's text when asked for."""
     validated = _validated_error(request.model)
     meas = read_measurements(request.measurements)
+    reach = reach_mm(load_robot(request.model))
+    check_scale(meas.commanded, reach, "commanded position", meas.path, meas.lines)
     name = printable(Path(request.measurements).name)
     table = read_table(request.measurements)  # the ids (the reader of positions drops them)
     ids = table.text("id") if table.has("id") else [""] * len(table)

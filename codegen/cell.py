@@ -37,7 +37,7 @@ from accugrid.codegen.cellfile import DISTANCE_MAX_MM, FRAME_KEYS, CellReader, S
 from accugrid.codegen.dialects import DIALECTS, plugin_of
 from accugrid.compensation.interpolation import METHODS
 from accugrid.compensation.settings import TOOL_DISTANCE_MM, CorrectionSettings
-from accugrid.infra.csvtable import DECIMALS, DELIMITERS, UNITS, TableFormat
+from accugrid.infra.csvtable import FORMAT_KEYS, TableFormat, table_format_of
 from accugrid.infra.errors import InputError
 from accugrid.infra.yamlfile import load_yaml
 
@@ -120,7 +120,7 @@ _KEYS: SectionKeys = {
     "drilling": frozenset({"approach", "clearance", "retract", "depth", "dwell", "peck"}),
     "configuration": frozenset({"status", "turn", "allow_change", "singular_a5", "reference"}),
     "correction": frozenset({"method", "iterations", "power", "model", "tool_distance"}),
-    "tracker": frozenset({"columns", "units", "delimiter", "decimal"}),
+    "tracker": frozenset(FORMAT_KEYS),
 }
 _TOP_KEYS = {"robot", "grid", "tool", "base", "base_data", "tool_data"}
 TOOL_NUMBER_MAX = 9999  # tool_data keys: KRL TOOL_DATA (1..32), G-code T numbers
@@ -245,23 +245,11 @@ def _configuration(r: CellReader) -> ConfigurationSection:
 
 
 def _tracker(r: CellReader) -> TableFormat | None:
-    """``tracker:``: the grid file's column mapping (accugrid name: the file's header), length
-    unit, delimiter and decimal mark; None when the section is absent."""
+    """``tracker:``: how the cell's tracker software writes the grid file (the keys of a
+    format file: columns, units, delimiter, decimal); None when the section is absent."""
     if not r.section("tracker"):
         return None
-    columns = r.mapping(r.value("tracker", "columns"), "tracker.columns", None)
-    for name, header in columns.items():
-        if not isinstance(header, str) or not header.strip():
-            raise r.error(f"tracker.columns.{name}", "must be the file's column name")
-    try:
-        return TableFormat(
-            delimiter=DELIMITERS.get(r.choice("tracker", "delimiter", "", ["", *DELIMITERS])),
-            decimal=DECIMALS.get(r.choice("tracker", "decimal", "", ["", *DECIMALS])),
-            columns=columns,
-            units=r.choice("tracker", "units", "mm", list(UNITS)),
-        )
-    except ValueError as exc:  # two names for one column, a decimal comma with commas
-        raise r.error("tracker", str(exc)) from None
+    return table_format_of(r.doc, "tracker")
 
 
 def _correction(r: CellReader) -> CorrectionSettings:

@@ -28,6 +28,7 @@ __all__ = [
     "Measurements",
     "VertexGrid",
     "build_grid",
+    "check_joint_limits",
     "measurements_from_arrays",
     "read_measurements",
 ]
@@ -37,6 +38,10 @@ REPEAT_TOL_MM = 0.5  # largest allowed distance of a repeat from the mean of its
 ORIENTATION_TOL_DEG = 0.1  # every row must be commanded at the same a,b,c within this
 COORD_MAX_MM = 1e6  # positions beyond 1 km are refused at their cell (no robot reaches them)
 JOINT_MAX_DEG = 3600.0  # logged axis angles beyond ten turns are refused at their cell
+JOINT_COLUMNS = [f"a{i}" for i in range(1, 7)]  # the logged axis angles
+RADIAN_SPAN = 0.5  # deg: joints that move less over a whole series are not told from radians
+MIRROR_SHARE = 0.2  # a mirrored fit this much better than the rigid one is a mirror image
+MIRROR_MIN_MM = 10.0  # ... when the rigid fit misses by more than this RMS
 _SHOW = 5  # how many offending items an error message lists
 
 
@@ -45,9 +50,10 @@ class Measurements:
     """Rows of a measurement session: commanded and measured (N, 3) mm, a,b,c (N, 3) deg or None.
 
     ``path``/``lines`` locate each row for error messages (``path`` None for arrays).
-    ``joints``: the logged axis angles a1..a6 (N, 6) KUKA deg or None; ``joint_decimals`` (N, 6)
-    and ``position_decimals`` (N, 3) int: digits after the point as printed (for the round-off
-    the logged numbers carry); ``status``: column ``s`` (N,) int KUKA Status or None.
+    ``joints``: the logged axis angles a1..a6 (N, 6) deg or None (``joint_unit``: the file's,
+    deg or rad); ``joint_decimals`` (N, 6) and ``position_decimals`` (N, 3): digits after the
+    point as printed, in deg and mm (``Table.decimals``: for the round-off the logged numbers
+    carry); ``status``: column ``s`` (N,) int KUKA Status or None.
     """
 
     commanded: np.ndarray
@@ -60,6 +66,7 @@ class Measurements:
     joint_decimals: np.ndarray | None = None
     position_decimals: np.ndarray | None = None
     status: np.ndarray | None = None
+    joint_unit: str = "deg"
 
     def __repr__(self) -> str:
         source = f" from {os.path.basename(self.path)}" if self.path else ""
@@ -109,17 +116,18 @@ def read_measurements(path: str | os.PathLike[str], fmt: TableFormat | None = No
     if not len(table):
         raise InputError("no measurement rows", path)
     abc = _abc_columns(table)
-    joint_names = [f"a{i}" for i in range(1, 7)]
     joints = joint_decimals = None
-    if any(table.has(n) for n in joint_names):
-        table.require(joint_names)
-        joints = table.floats(joint_names)
-        table.check_bounds(joints, joint_names, JOINT_MAX_DEG, "deg")
-        joint_decimals = table.decimals(joint_names)
+    if any(table.has(n) for n in JOINT_COLUMNS):
+        table.require(JOINT_COLUMNS)
+        joints = table.floats(JOINT_COLUMNS)
+        table.check_bounds(joints, JOINT_COLUMNS, JOINT_MAX_DEG, "deg", _DEGREES_AS_RADIANS)
+        _check_not_radians(table, joints)
+        joint_decimals = table.decimals(JOINT_COLUMNS)
     columns = {}
     for names in (["x", "y", "z"], ["x_meas", "y_meas", "z_meas"]):
         columns[names[0]] = table.floats(names)
         table.check_bounds(columns[names[0]], names, COORD_MAX_MM, "mm")
+    _check_not_mirrored(table, columns["x"], columns["x_meas"])
     return Measurements(
         commanded=columns["x"],
         measured=columns["x_meas"],
@@ -131,6 +139,70 @@ def read_measurements(path: str | os.PathLike[str], fmt: TableFormat | None = No
         joint_decimals=joint_decimals,
         position_decimals=table.decimals(["x", "y", "z"]),
         status=_status_column(table),
+        joint_unit=table.units.get("a1", "deg"),
+    )
+
+
+_DEGREES_AS_RADIANS = ": degrees read as radians? (check the joints' unit: --units)"
+
+
+def _check_not_radians(table: Table, joints_deg: np.ndarray) -> None:
+    """InputError at column a1's header when joints read as degrees all lie within +-2 pi
+    while the series moves them: radians read as degrees."""
+    if table.units.get("a1", "deg") != "deg" or len(joints_deg) < 2:
+        return
+    moved = np.ptp(joints_deg, axis=0).max() > RADIAN_SPAN
+    if moved and np.abs(joints_deg).max() <= 2.0 * np.pi:
+        raise InputError(
+            f"the logged joints a1..a6 all lie within +-{2.0 * np.pi:.1f} deg over "
+            f"{len(joints_deg)} rows: radians read as degrees? (read them with --units rad, or "
+            "a1=rad,...,a6=rad beside the other units)",
+            table.path,
+            table.header_line,
+            table.index("a1") + 1,
+        )
+
+
+def _check_not_mirrored(table: Table, commanded: np.ndarray, measured: np.ndarray) -> None:
+    """InputError at column x_meas's header when the measured positions (N, 3) are a mirror image
+    of the commanded ones (N, 3), in any frame: two columns swapped or one of the wrong sign.
+    Compares the best rigid fit (a rotation) with the best mirrored one (orthogonal
+    Procrustes); a set that is nearly flat, or fits neither way, passes."""
+    if len(commanded) < 4:
+        return
+    p, m = commanded - commanded.mean(axis=0), measured - measured.mean(axis=0)
+    u, s, vt = np.linalg.svd(p.T @ m)
+    d = np.sign(np.linalg.det(u @ vt)) or 1.0
+    total = (p * p).sum() + (m * m).sum()
+    rms = [
+        np.sqrt(max(total - 2.0 * (s[0] + s[1] + sign * s[2]), 0.0) / len(p)) for sign in (d, -d)
+    ]  # rotation, mirror
+    if rms[1] < MIRROR_SHARE * rms[0] and rms[0] > MIRROR_MIN_MM:
+        raise InputError(
+            f"the measured positions x_meas,y_meas,z_meas are a mirror image of the commanded "
+            f"x,y,z (best rigid fit RMS {rms[0]:.1f} mm, mirrored {rms[1]:.2f} mm): two columns "
+            "swapped or one of the wrong sign? check the file's columns (--columns)",
+            table.path,
+            table.header_line,
+            table.index("x_meas") + 1,
+        )
+
+
+def check_joint_limits(meas: Measurements, limits_deg: np.ndarray, robot: str) -> None:
+    """InputError at the first row whose logged joint lies beyond the robot's limits
+    (6, 2) deg, naming the unit mix-up it suggests (degrees read as radians)."""
+    if meas.joints is None:
+        return
+    rows, axes = np.nonzero((meas.joints < limits_deg[:, 0]) | (meas.joints > limits_deg[:, 1]))
+    if not rows.size:
+        return
+    r, i = int(rows[0]), int(axes[0])
+    hint = _DEGREES_AS_RADIANS if meas.joint_unit == "rad" else ": is the robot right?"
+    lo, hi = limits_deg[i]
+    raise InputError(
+        f"logged joint a{i + 1} {meas.joints[r, i]:.3f} deg is beyond {robot}'s limits "
+        f"[{lo:g}, {hi:g}] deg ({rows.size} such cells){hint}",
+        *_located(meas, r),
     )
 
 

@@ -9,8 +9,11 @@ regular files, size limit).
 
 Tracker exports as they come (``TableFormat``): the delimiter (comma, semicolon, tab) is taken
 from the header row and the rows below it; a decimal comma is recognised with a semicolon or tab
-delimiter; a column mapping renames the file's columns to accugrid's; lengths in m or inch are
-converted to mm as decimal text, exactly. A file that cannot be decided is an InputError that says
+delimiter; a trailing delimiter (an empty last column) is dropped; a column mapping renames the
+file's columns to accugrid's; a header that names a unit (``x [m]``, ``Nominal X (in)``,
+``a1_rad``) is read as the column it names in that unit; lengths in m or inch are converted to mm
+as decimal text, exactly, angles in rad to degrees (``infra.units``). A file that cannot be
+decided, or whose header names another unit than the one declared, is an InputError that says
 what was found and which setting decides it. The CLI sets the format of a command with
 ``reading_as``; the comma, point, mm file without mapping takes the fast reader as before.
 """
@@ -26,35 +29,43 @@ from collections.abc import Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from accugrid.infra.decimals import read_decimals, words_at
 from accugrid.infra.errors import InputError
 from accugrid.infra.inputfile import read_input_text
+from accugrid.infra.units import (
+    ANGLE_UNITS,
+    LENGTH_UNITS,
+    column_kind,
+    header_unit,
+    unit_kind,
+    unit_spec,
+)
+
+if TYPE_CHECKING:
+    from accugrid.infra.yamlfile import YamlDoc
 
 __all__ = [
     "DECIMALS",
     "DELIMITERS",
-    "LENGTH_COLUMNS",
-    "UNITS",
     "Table",
+    "FORMAT_KEYS",
     "TableFormat",
     "decimals_of",
     "declared_or",
     "parse_number",
     "parse_table",
     "read_table",
+    "read_table_format",
     "reading_as",
+    "table_format_of",
 ]
 
 DELIMITERS = {"comma": ",", "semicolon": ";", "tab": "\t"}
 DECIMALS = {"point": ".", "comma": ","}
-UNITS = {"mm": "1", "m": "1000", "in": "25.4"}  # mm per unit, as exact decimal text
-# the columns holding lengths (DESIGN.md points, measurements, experiment plans): --units scales
-LENGTH_COLUMNS = frozenset(
-    ("x", "y", "z", "x_meas", "y_meas", "z_meas", "diameter", "depth", "step")
-)
 _COMMENT = ("#", "//")
 
 _DECIMAL = re.compile(
@@ -82,23 +93,24 @@ class TableFormat:
     ``delimiter`` ``,``, ``;`` or tab (used where the header holds it, else found from the file);
     ``decimal`` ``.`` or ``,`` (None: found; a comma only beside another delimiter); ``columns``:
     accugrid's column name -> the file's header name, applied to each file that has one of those
-    names (the export; a file without any is read as it is); ``units`` of the length columns
-    (``LENGTH_COLUMNS``) of the export (of every file without ``columns``): ``mm``, ``m`` or
-    ``in``, converted to mm on read.
+    names (the export; a file without any is read as it is); ``units``: the declared units
+    of the export's length and angle columns (of every file without ``columns``), as
+    ``infra.units.unit_spec`` reads them (``"m"``, ``"m,rad,x_meas=mm"``; held as {column or
+    kind: unit}), converted to mm and deg on read; a column not declared takes the unit its
+    header names, else mm or deg.
     """
 
     delimiter: str | None = None
     decimal: str | None = None
     columns: Mapping[str, str] | None = None
-    units: str = "mm"
+    units: str | Mapping[str, str] | None = None
 
     def __post_init__(self) -> None:
         if self.delimiter not in (None, *DELIMITERS.values()):
             raise ValueError(f"delimiter must be one of , ; or tab, got {self.delimiter!r}")
         if self.decimal not in (None, *DECIMALS.values()):
             raise ValueError(f"decimal must be '.' or ',', got {self.decimal!r}")
-        if self.units not in UNITS:
-            raise ValueError(f"units must be one of {', '.join(UNITS)}, got {self.units!r}")
+        object.__setattr__(self, "units", unit_spec(self.units))
         if self.delimiter == "," and self.decimal == ",":
             raise ValueError("a decimal comma needs a semicolon or tab delimiter")
         names = {k.strip().lower(): v.strip() for k, v in (self.columns or {}).items()}
@@ -112,8 +124,64 @@ class TableFormat:
     def mapping_text(self) -> str:
         return ",".join(f"{k}={v}" for k, v in self.columns.items())
 
+    def declared_unit(self, name: str) -> str | None:
+        """The unit declared for accugrid column ``name`` (its own, else its kind's), or None."""
+        kind = column_kind(name)
+        return self.units.get(name) or (self.units.get(kind) if kind else None)
+
 
 _PLAIN = TableFormat()
+FORMAT_KEYS = ("columns", "units", "delimiter", "decimal")  # of a format file, a cell's tracker:
+
+
+def table_format_of(doc: YamlDoc, *keys: Any) -> TableFormat:
+    """The TableFormat a YAML mapping at ``keys`` of ``doc`` says (a format file's top level, a
+    cell's ``tracker:``): ``columns`` {NAME: HEADER}, ``units`` (as ``unit_spec`` reads them:
+    text or a mapping), ``delimiter`` comma, semicolon or tab, ``decimal`` point or comma.
+    InputError at the key that is wrong."""
+    doc.check_keys(dict.fromkeys(FORMAT_KEYS), *keys)
+
+    def fail(message: str, *inner: Any) -> InputError:
+        return doc.error(f"{doc.keyname(*keys, *inner)} {message}", *keys, *inner)
+
+    def word(key: str, words: Mapping[str, str]) -> str | None:
+        value = doc.get(*keys, key, default=None)
+        if value is not None and value not in words:
+            raise fail(f"must be {' or '.join(words)}, got {value!r}", key)
+        return None if value is None else words[value]
+
+    columns = doc.get(*keys, "columns", default=None) or {}
+    if not isinstance(columns, dict):
+        raise fail("must be a mapping of accugrid names to the file's column names", "columns")
+    for name, header in columns.items():
+        if not isinstance(header, str) or not header.strip():
+            raise fail("must be the file's column name", "columns", name)
+    units = doc.get(*keys, "units", default=None)
+    try:
+        if not isinstance(units, str | dict | None):
+            raise ValueError(f"must be text such as m,rad or a mapping, got {units!r}")
+        unit_spec(units)
+    except ValueError as exc:
+        raise fail(f": {exc}", "units") from None
+    try:
+        return TableFormat(
+            delimiter=word("delimiter", DELIMITERS),
+            decimal=word("decimal", DECIMALS),
+            columns={str(name): header for name, header in columns.items()},
+            units=units,
+        )
+    except ValueError as exc:  # two names for one column, a decimal comma with commas
+        raise fail(f": {exc}") from None
+
+
+def read_table_format(path: str | os.PathLike[str]) -> TableFormat:
+    """A format file (YAML, ``FORMAT_KEYS`` at the top level): how a tracker's exports are
+    written, said once; InputError at its line."""
+    from accugrid.infra.yamlfile import load_yaml  # only when a format file is given
+
+    return table_format_of(load_yaml(path))
+
+
 _FORMAT: ContextVar[TableFormat | None] = ContextVar("table_format", default=None)
 
 
@@ -158,7 +226,11 @@ class Table:
         self.lines = _Lines([] if lines is None else lines)
         self.header_line = header_line
         self.delimiter = ","  # the file's, as parse_table found it
+        self.decimal = "."  # the file's decimal mark, as parse_table found it
         self.unmapped = ""  # a column mapping that named none of this file's columns
+        self.named: dict[str, tuple[str, str]] = {}  # column -> (header as written, its unit)
+        self.units: dict[str, str] = {}  # column -> the file's unit where declared or named
+        self.printed: dict[int, np.ndarray] = {}  # column index -> decimals as printed, in deg
         self._index = {name.strip().lower(): i for i, name in enumerate(self.header)}
 
     @property
@@ -251,20 +323,26 @@ class Table:
             raise InputError(str(exc), self.path, self.lines[r], i + 1) from None
 
     def decimals(self, names: Sequence[str]) -> np.ndarray:
-        """Digits after the decimal point of each cell as written (N, len(names)) int."""
-        columns = [list(map(decimals_of, self._column(self.index(n)))) for n in names]
-        return np.array(columns, dtype=int).reshape(len(names), len(self)).T
+        """Digits after the decimal point of each cell as written (N, len(names)) float: the
+        round-off of the printed number is half a unit of that digit in mm or deg (a column
+        converted from rad counts log10(180/pi) digits fewer than it printed)."""
+        columns = [
+            self.printed.get(i, list(map(decimals_of, self._column(i))))
+            for i in map(self.index, names)
+        ]
+        return np.array(columns, dtype=float).reshape(len(names), len(self)).T
 
     def check_bounds(
-        self, values: np.ndarray, names: Sequence[str], limit: float, unit: str
+        self, values: np.ndarray, names: Sequence[str], limit: float, unit: str, hint: str = ""
     ) -> None:
         """InputError at the first cell of ``values`` (N, len(names)), read from the columns
-        ``names``, beyond +-``limit`` (in ``unit``)."""
+        ``names``, beyond +-``limit`` (in ``unit``); ``hint`` ends the message."""
         rows, cols = np.nonzero(np.abs(values) > limit)
         if rows.size:
             r, name = int(rows[0]), names[int(cols[0])]
             raise InputError(
-                f"{name} {values[r, cols[0]]:g} {unit} is beyond the limit of {limit:g} {unit}",
+                f"{name} {values[r, cols[0]]:g} {unit} is beyond the limit of {limit:g} {unit}"
+                + hint,
                 *self.where(r, name),
             )
 
@@ -464,6 +542,8 @@ def _parse_simple(text: str, path: str) -> Table | None:
             return None
         pos = end + 1
     header = [cell.strip() for cell in first.split(",")]
+    if not header[-1]:
+        return None  # a trailing delimiter: the csv reader drops it
     _check_header(header, path, line)
     body = "" if end < 0 else text[end + 1 :].rstrip("\n")
     if not body:
@@ -487,17 +567,15 @@ def parse_table(text: str, path: str = "<string>", fmt: TableFormat | None = Non
     """Parse CSV text (see module docstring); ``path`` is used in error messages only."""
     fmt = fmt or _FORMAT.get() or _PLAIN
     delimiter = _delimiter_of(text, path, fmt.delimiter)
-    if delimiter == "," and fmt.units == "mm":  # DESIGN.md's format: the fast reader first
+    if delimiter == ",":  # DESIGN.md's format: the fast reader first
         table = _parse_simple(text, path) or _parse_csv(text, path)
     else:
         table = _parse_csv(text, path, delimiter)
         table.delimiter = delimiter
-        if delimiter != ",":  # a decimal comma only beside another delimiter
-            _convert_cells(table, fmt.decimal or _decimal_of(table), None)
-    if fmt.columns and not _map_columns(table, fmt):
-        return table  # not the export the mapping and units describe
-    if fmt.units != "mm":
-        _convert_cells(table, ".", UNITS[fmt.units])
+        table.decimal = fmt.decimal or _decimal_of(table)  # a comma only beside another delimiter
+        if table.decimal == ",":
+            _decimal_points(table)
+    _read_units(table, fmt if _name_columns(table, fmt) else _PLAIN)
     return table
 
 
@@ -599,54 +677,125 @@ def _decimal_of(table: Table) -> str:
     return "," if "," in first else "."
 
 
-def _convert_cells(table: Table, decimal: str, scale: str | None) -> None:
-    """In place: a decimal comma made a point in every number written with one (``scale``
-    None), or every number of the length columns times ``scale`` (exact decimal arithmetic, so
-    ``1.2345`` m reads as ``1234.5`` mm)."""
-    rows = table.rows
-    table._cells = None  # the cells are now the rows
-    if scale is None:
-        if decimal == ",":
-            pattern = _NUMBER_WITH[","]
-            for row in rows:
-                for i, cell in enumerate(row):
-                    if "," in cell and pattern.fullmatch(cell):
-                        row[i] = cell.replace(",", ".")
-        return
-    from decimal import Decimal  # only files in m or inch need it
-
-    factor = Decimal(scale)
-    columns = [i for i, name in enumerate(table.header) if name.lower() in LENGTH_COLUMNS]
-    for row in rows:
-        for i in columns:
-            text = row[i].strip(_BLANKS)
-            if _DECIMAL.fullmatch(text) and not text[-1].isalpha():  # not nan, inf
-                value = Decimal(text)
-                row[i] = format(value.scaleb(3) if scale == "1000" else value * factor, "f")
+def _decimal_points(table: Table) -> None:
+    """In place: a decimal comma made a point in every number written with one."""
+    pattern = _NUMBER_WITH[","]
+    for row in table.rows:
+        for i, cell in enumerate(row):
+            if "," in cell and pattern.fullmatch(cell):
+                row[i] = cell.replace(",", ".")
 
 
-def _map_columns(table: Table, fmt: TableFormat) -> bool:
-    """Rename the file's columns to accugrid's by ``fmt.columns`` when the file has any of the
-    mapped names (True), else leave it (False); InputError at the header for a mapped name it
+def _name_columns(table: Table, fmt: TableFormat) -> bool:
+    """Rename the file's columns to accugrid's: by ``fmt.columns`` (a mapped HEADER matches the
+    header as written or without the unit it names) when the file has any of the mapped names,
+    and a header that names a unit (``x [m]``) as the column it names; keep each column's
+    header unit in ``table.named``. True when the file is the export ``fmt`` describes (it
+    has a mapped name, or there is no mapping); InputError at the header for a mapped name it
     lacks while having others."""
-    wanted = {source.lower(): name for name, source in fmt.columns.items()}
-    have = {name.strip().lower() for name in table.header}
-    if not have & wanted.keys():
+    parsed = [header_unit(name) for name in table.header]
+    table.named = {}
+    wanted = {source.lower(): name for name, source in (fmt.columns or {}).items()}
+    mapped = [
+        wanted.get(name.strip().lower()) or wanted.get(bare.strip().lower())
+        for name, (bare, _) in zip(table.header, parsed, strict=True)
+    ]
+    export = not wanted or any(mapped)
+    if not export:
         table.unmapped = f"; the column mapping {fmt.mapping_text()} names none of them"
-        return False
-    for name, source in fmt.columns.items():
-        if source.lower() not in have:
+        mapped = [None] * len(mapped)
+    for name, source in (fmt.columns or {}).items() if export else ():
+        if name not in mapped:
             raise InputError(
                 f"column mapping {name}={source}: no column '{source}' in the header "
                 f"(have: {', '.join(table.header)})",
                 table.path,
                 table.header_line,
             )
-    header = [wanted.get(name.strip().lower(), name) for name in table.header]
-    _check_header(header, table.path, table.header_line)
-    table.header = header
-    table._index = {name.strip().lower(): i for i, name in enumerate(header)}
-    return True
+    header = []
+    for name, (bare, unit), target in zip(table.header, parsed, mapped, strict=True):
+        if target is None and unit and column_kind(bare.strip().lower()):
+            target = bare.strip()
+        if target is not None and unit:
+            table.named[target.lower()] = (name, unit)
+        header.append(name if target is None else target)
+    if header != table.header:
+        _check_header(header, table.path, table.header_line)
+        table.header = header
+        table._index = {name.strip().lower(): i for i, name in enumerate(header)}
+    return export
+
+
+def _read_units(table: Table, fmt: TableFormat) -> None:
+    """Convert the length and angle columns to mm and deg in place, each in its unit: the one
+    ``fmt`` declares, else the one its header names (``table.named``), else mm or deg; record
+    the units that are not (``table.units``). InputError at a header whose unit contradicts the
+    declared one or is not of the column's kind."""
+    lengths, angles = {}, {}
+    for i, name in enumerate(table.header):
+        key = name.strip().lower()
+        kind = column_kind(key)
+        if kind is None:
+            continue
+        declared, (written, named) = fmt.declared_unit(key), table.named.get(key, (name, None))
+        if named and unit_kind(named) != kind:
+            raise InputError(
+                f"column '{written}' names the unit {named}, but {key} holds {kind}s "
+                f"({'mm, m, in' if kind == 'length' else 'deg, rad'})",
+                table.path,
+                table.header_line,
+                i + 1,
+            )
+        if declared and named and declared != named:
+            raise InputError(
+                f"column '{written}' is in {named} by its header, but the units declared for "
+                f"{key} are {declared}: drop the declaration (--units) or correct the header",
+                table.path,
+                table.header_line,
+                i + 1,
+            )
+        unit = declared or named
+        if unit in ("m", "in"):
+            lengths[i] = unit
+        elif unit == "rad":
+            angles[i] = unit
+        if unit:
+            table.units[key] = unit
+    if lengths:
+        _scale_lengths(table, lengths)
+    if angles:
+        _scale_angles(table, angles)
+
+
+def _scale_lengths(table: Table, units: dict[int, str]) -> None:
+    """In place: every number of the columns ``units`` (index -> m or in) as mm, in exact
+    decimal arithmetic, so ``1.2345`` m reads as ``1234.5`` mm."""
+    from decimal import Decimal  # only files in m or inch need it
+
+    rows = table.rows
+    table._cells = None  # the cells are now the rows
+    factors = {i: Decimal(LENGTH_UNITS[unit]) for i, unit in units.items()}
+    for row in rows:
+        for i, factor in factors.items():
+            text = row[i].strip(_BLANKS)
+            if _DECIMAL.fullmatch(text) and not text[-1].isalpha():  # not nan, inf
+                value = Decimal(text)
+                row[i] = format(value.scaleb(3) if factor == 1000 else value * factor, "f")
+
+
+def _scale_angles(table: Table, units: dict[int, str]) -> None:
+    """In place: every number of the columns ``units`` (index -> rad) as deg (the float's
+    shortest text); their printed round-off is kept for ``Table.decimals``."""
+    rows = table.rows
+    table._cells = None
+    for i, unit in units.items():
+        scale = ANGLE_UNITS[unit]
+        cells = [row[i] for row in rows]
+        table.printed[i] = np.array([decimals_of(c) for c in cells], float) - math.log10(scale)
+        for row, cell in zip(rows, cells, strict=True):
+            text = cell.strip(_BLANKS)
+            if _DECIMAL.fullmatch(text) and not text[-1].isalpha():  # not nan, inf
+                row[i] = repr(float(text) * scale)
 
 
 def _parse_csv(text: str, path: str, delimiter: str = ",") -> Table:
@@ -664,9 +813,13 @@ def _parse_csv(text: str, path: str, delimiter: str = ",") -> Table:
                 continue  # blank or comment
             if header is None:
                 header = [cell.strip() for cell in record]
+                if len(header) > 1 and not header[-1]:
+                    header.pop()  # a trailing delimiter
                 _check_header(header, path, start_line)
                 header_line = start_line
                 continue
+            if len(record) == len(header) + 1 and not record[-1].strip(_BLANKS):
+                record.pop()  # a trailing delimiter
             if len(record) != len(header):
                 raise InputError(
                     f"{len(record)} fields, but the header has {len(header)}", path, start_line

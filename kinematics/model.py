@@ -9,7 +9,7 @@ import numpy as np
 
 from accugrid.kinematics.configuration import IKSolution
 
-__all__ = ["RobotModel"]
+__all__ = ["RobotModel", "reach_mm"]
 
 
 @runtime_checkable
@@ -40,3 +40,12 @@ class RobotModel(Protocol):
         """Joint solutions for TCP poses (N, 4, 4) mm; KUKA Status/Turn where the model has
         them (-1 otherwise)."""
         ...
+
+
+def reach_mm(robot: RobotModel, samples: int = 2048) -> float:
+    """How far the TCP gets from the robot's base origin, mm: the farthest of the forward
+    kinematics over ``samples`` joint vectors spread within the limits (seeded, so the same
+    robot gives the same number; a few percent short of the true reach at most)."""
+    lo, hi = np.radians(robot.joint_limits_deg).T
+    q = lo + np.random.default_rng(0).random((samples, len(lo))) * (hi - lo)
+    return float(np.linalg.norm(robot.fk(q)[:, :3, 3], axis=1).max())

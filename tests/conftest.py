@@ -1,4 +1,4 @@
-"""Shared test fixtures: paths to the examples, ../shared/realworld and ../shared/realdata."""
+"""Shared test fixtures: paths to the project's examples and to ../shared/realworld."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from hypothesis import settings
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 REALWORLD = ROOT.parent / "shared" / "realworld"
-REALDATA = ROOT.parent / "shared" / "realdata"
+REALDATA = ROOT.parent / "shared" / "realdata"  # real tracker measurements (README.md in each)
 RS274 = shutil.which("rs274") or ("/usr/bin/rs274" if os.path.exists("/usr/bin/rs274") else None)
 
 # Property tests must stay quick on a shared 2-core machine; CI uses the same profile.
@@ -27,14 +27,6 @@ def realworld() -> Path:
     if not REALWORLD.is_dir():
         pytest.fail(f"{REALWORLD} is missing: the real-world programs must sit beside the checkout")
     return REALWORLD
-
-
-@pytest.fixture(scope="session")
-def realdata() -> Path:
-    """../shared/realdata: real tracker measurements (CI has ../shared beside the checkout)."""
-    if not REALDATA.is_dir():
-        pytest.fail(f"{REALDATA} is missing: the real tracker data must sit beside the checkout")
-    return REALDATA
 
 
 @pytest.fixture(scope="module")

@@ -152,27 +152,48 @@ def test_transform_xyz_default_and_quoted_cells(tmp_path, frame_file):
     np.testing.assert_allclose(got, transform_points(pose, [[1, 2, 3], [4, 5, 6]]), atol=5e-5)
 
 
-def test_transform_triples_and_the_former_spelling(tmp_path, frame_file, capsys):
-    """--triples both maps both triples; the former --columns both still does, with a
-    deprecation line on stderr (--columns names a column mapping elsewhere)."""
+def test_transform_triples_both(tmp_path, frame_file, capsys):
+    """--triples both maps both triples; --columns is the column mapping of every command that
+    reads positions, so its former meaning here (a triple) is refused, exit 2."""
     src = TRACKER / "meas_tracker.csv"
     new, old = tmp_path / "new.csv", tmp_path / "old.csv"
     assert transform(src, frame_file, new, "--triples", "both") == 0
-    assert "deprecated" not in capsys.readouterr().err
-    assert transform(src, frame_file, old, "--columns", "both") == 0
-    assert "--columns both is deprecated, use --triples both" in capsys.readouterr().err
-    assert new.read_bytes() == old.read_bytes()
     first = new.read_text().splitlines()[5].split(",")
     original = src.read_text().splitlines()[4].split(",")
     assert first[1:4] != original[1:4] and first[7:] != original[7:]  # both triples mapped
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as exit_info:
+        transform(src, frame_file, old, "--columns", "both")
+    assert exit_info.value.code == 2 and not old.exists()
+    assert "'both' is not NAME=HEADER" in capsys.readouterr().err
 
 
-def test_transform_refuses_a_file_it_cannot_rewrite_as_written(tmp_path, frame_file, capsys):
-    src = tmp_path / "semi.csv"
-    src.write_text("# export\nid;x;y;z\nP1;1,5;2;3\n")
+def test_transform_writes_an_export_as_it_came(tmp_path, frame_file):
+    """A semicolon, decimal-comma export in metres with its own column names and a trailing
+    delimiter: read with --columns/--units like any reader, mapped, and written back in its own
+    delimiter, decimal mark and unit; every other cell as it was."""
+    src = tmp_path / "export.csv"
+    src.write_text(
+        "# tracker export\nName;MX;MY;MZ;Temp;\nP1;1,5;0,25;-0,125;21,5;\nP2;;;;22;\n"
+        "P3;2;-0,5;0,75;21,75;\n"
+    )
     out = tmp_path / "out.csv"
-    assert transform(src, frame_file, out) == 2 and not out.exists()
-    assert f"{src}:2: transform rewrites comma-separated files" in _error_line(capsys)
+    options = ["--columns", "x_meas=MX,y_meas=MY,z_meas=MZ", "--units", "m"]
+    assert transform(src, frame_file, out, *options) == 0
+    lines = out.read_text().splitlines()
+    assert lines[1:3] == ["# tracker export", "Name;MX;MY;MZ;Temp;"]
+    assert lines[4] == "P2;;;;22;"
+    rows = [lines[3].split(";"), lines[5].split(";")]
+    assert [r[0] for r in rows] == ["P1", "P3"] and [r[4:] for r in rows] == [
+        ["21,5", ""],
+        ["21,75", ""],
+    ]
+    got_m = np.array([[float(c.replace(",", ".")) for c in r[1:4]] for r in rows])
+    assert all(len(c.split(",")[1]) == 7 for r in rows for c in r[1:4])  # 4 decimals of mm, in m
+    expected_mm = transform_points(
+        invert(load_frame(frame_file)), [[1500, 250, -125], [2000, -500, 750]]
+    )
+    np.testing.assert_allclose(got_m * 1000, expected_mm, atol=5e-5)
 
 
 def test_transform_refusals(tmp_path, frame_file, capsys):

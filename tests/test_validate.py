@@ -227,3 +227,41 @@ def test_text_from_the_files_reaches_the_report_escaped(cell):
     page = check_report(report, [path, cell / "cal.yaml"], figures=2)
     assert "<script" not in report.read_text()
     assert '<script>alert("x")</script>' in " ".join(page.text)  # shown as text
+
+
+def in_inch(cell, name, header_units):
+    """after.csv with every length in inch (6 decimals); the header names the unit or not."""
+    lines = [ln for ln in (cell / "after.csv").read_text().splitlines() if not ln.startswith("#")]
+    rows = list(csv.reader(lines))
+    lengths = {"x", "y", "z", "x_meas", "y_meas", "z_meas"}
+    header = [f"{n} [in]" if header_units and n in lengths else n for n in rows[0]]
+    scaled = [i for i, n in enumerate(rows[0]) if n in lengths]
+    body = [
+        [f"{float(c) / 25.4:.6f}" if i in scaled else c for i, c in enumerate(r)] for r in rows[1:]
+    ]
+    (cell / name).write_text("\n".join(",".join(r) for r in [header, *body]) + "\n")
+    return cell / name
+
+
+def test_an_inch_file_is_read_in_inch_or_refused_naming_the_unit(cell, capsys):
+    """Read as mm, an inch file's deviations are 25.4x too small and would PASS: refused (exit 2,
+    one line naming inch); with [in] headers it gives the mm file's statistics."""
+    plain = in_inch(cell, "inch.csv", header_units=False)
+    assert run("validate", plain, "--model", cell / "cal.yaml") == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"accugrid validate: error: {plain}:") and len(err.splitlines()) == 1
+    assert "are the file's lengths in in? (read them with --units in)" in err
+    assert run("validate", cell / "after.csv", "--model", cell / "cal.yaml") == 0
+    mm_lines = capsys.readouterr().out.splitlines()
+    named = in_inch(cell, "inch_named.csv", header_units=True)
+    for argv in ([named], [plain, "--units", "in"]):
+        assert run("validate", *argv, "--model", cell / "cal.yaml") == 0
+        lines = capsys.readouterr().out.splitlines()
+        table = [ln.split() for ln in lines if ln[:2] == "  "]
+        expected = [ln.split() for ln in mm_lines if ln[:2] == "  "]
+        assert [row[0] for row in table] == [row[0] for row in expected] and len(table) >= 4
+        for got, want in zip(table, expected, strict=True):  # 1e-6 in is 2.5e-5 mm
+            numbers = [(float(g), float(w)) for g, w in zip(got, want, strict=True)
+                       if g.replace(".", "").lstrip("-").isdigit()]  # fmt: skip
+            assert all(abs(g - w) <= 1.01e-3 for g, w in numbers), (got, want)
+            assert numbers or got == want

@@ -6,16 +6,18 @@ columns are one or both triples x,y,z and x_meas,y_meas,z_meas (mm), chosen by -
          x,y,z are the commanded points, already in the robot frame)
   xyz    x,y,z only (the default for a file without x_meas,y_meas,z_meas)
   both   both triples
-Mapped numbers are written with 4 decimals; a row whose three cells of a triple are all empty
-stays empty. Every other column, comment line and blank line is kept as it was, and a comment
-line naming the frame file (and its SHA-256) is put first.
+Tracker exports are read as they come (--columns, --units, --delimiter, --decimal, --format, as
+in every command that reads positions) and written back as they came: mapped numbers with 4
+decimals of mm, in each column's own unit and the file's delimiter and decimal mark; a row whose
+three cells of a triple are all empty stays empty. Every other column, comment line and blank
+line is kept as it was, and a comment line naming the frame file (and its SHA-256) is put first.
 """
 
 from __future__ import annotations
 
 import argparse
 
-from accugrid.app.cli_options import add_deprecated
+from accugrid.app.cli_options import add_table_format
 from accugrid.app.frame_file import transform_csv
 from accugrid.infra.atomic import check_targets, write_files
 
@@ -36,13 +38,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         choices=TRIPLES,
         help="which triples to map (default: meas if the file has x_meas,y_meas,z_meas, else xyz)",
     )
-    # the former spelling: --columns names a column mapping in the commands that read tracker files
-    add_deprecated(parser, "--columns", "--triples", "triples", choices=TRIPLES)
     parser.add_argument(
         "--inverse",
         action="store_true",
         help="map robot-frame coordinates into the tracker frame instead",
     )
+    add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite an existing output")
 
 
