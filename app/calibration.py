@@ -18,10 +18,17 @@ from accugrid.infra.inputfile import read_input_bytes
 from accugrid.infra.units import check_scale
 from accugrid.kinematics.calibrated import calibrated_yaml, identification_summary
 from accugrid.kinematics.frames import xyzabc_from_pose
-from accugrid.kinematics.identification import Identification, Terms, identify, pose_set
+from accugrid.kinematics.identification import (
+    Identification,
+    PoseSet,
+    Terms,
+    identify,
+    pose_set,
+)
 from accugrid.kinematics.model import reach_mm
 from accugrid.kinematics.robot import VALIDATED_MAX_KEYS, Robot
 from accugrid.kinematics.structure import STRUCTURE_WORD, Selection, identify_structure
+from accugrid.kinematics.support import Structure, support_section
 from accugrid.kinematics.validity import validity_section
 
 __all__ = ["MAX_ROWS", "STRUCTURES", "Calibration", "IdentifyOptions", "calibrate"]
@@ -131,11 +138,21 @@ def calibrate(
     summary = identification_summary(result, robot, source, meas.sha256, selection)
     validated = _validated_max(summary)  # the same claim the file's reader takes
     summary["validity"] = validity_section(data.commanded, data.rotations, data.q, validated)
+    support = _support(robot, data, options, result, selection)
+    if support is not None:
+        summary["support"] = support
     header = f"accugrid {__version__} identify: {robot.name} calibrated from {source}"
     files = {output: calibrated_yaml(result.robot, summary, header)}
     report = _report(output, robot, result)
     if selection is not None:
         report += "\n" + _structure_report(selection)
+    if support is not None:
+        limit = support["loo_leverage_max"]
+        report += (
+            f"\n  support: targets whose prediction leverage exceeds {limit:.3g} (the largest "
+            "leave-one-out leverage of these poses) are flagged and corrected by the DH-only fit "
+            "of the same poses, recorded beside the model (--strict refuses them)"
+        )
     if urdf:
         from accugrid.kinematics.urdf_export import urdf_text
 
@@ -144,6 +161,30 @@ def calibrate(
         extra = " (geometric part only: URDF has no joint errors)" if joint_terms else ""
         report += f"\nwrote {urdf}{extra}"
     return Calibration(result, files, report, selection)
+
+
+def _support(
+    robot: Robot,
+    data: PoseSet,
+    options: IdentifyOptions,
+    result: Identification,
+    selection: Selection | None,
+) -> dict | None:
+    """``identification.support`` (``kinematics.support``) of a model with joint-error terms:
+    its leverage map and the DH-only fit of the same poses, the fallback where it has no
+    support; None for a DH + TCP model (its own fallback)."""
+    structure = Structure(
+        options.base_frame,
+        options.compliance,
+        tuple(options.harmonics if selection is None else selection.harmonics),
+        () if selection is None else tuple(selection.gravity),
+    )
+    if not (structure.compliance or structure.harmonics or structure.gravity):
+        return None
+    if structure.names != result.names:
+        raise ValueError("the support's parameters differ from the identification's")
+    dh = identify(robot, data, base_frame=options.base_frame)
+    return support_section(result.robot, data.q, data.group, structure, dh)
 
 
 def _validated_max(summary: dict) -> np.ndarray:

@@ -14,7 +14,7 @@ The verdicts are the correction policy's (``compensation.policy``).
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -93,7 +93,6 @@ def read_model(path: str | os.PathLike[str], nominal: Robot | None = None) -> Mo
     """Load a calibrated robot YAML (or a built-in robot name) once for a job; with
     ``nominal`` (the cell's robot) InputError unless it is a model of that robot."""
     from accugrid.kinematics.calibrated import check_same_robot
-    from accugrid.kinematics.validity import Validity
 
     text = os.fspath(path)
     robot = load_robot(text)
@@ -104,11 +103,27 @@ def read_model(path: str | os.PathLike[str], nominal: Robot | None = None) -> Mo
     validity, tool = None, None
     if Path(text).is_file():
         doc = load_yaml(text)
-        validity = Validity.from_doc(doc)
+        validity = _validity(doc, robot, text)
         if doc.has("identification", "controller_tool"):
             keys = ("identification", "controller_tool")
             tool = pose_from_xyzabc([doc.number(*keys, k) for k in "xyzabc"])
     return ModelFile(text, robot, validity, tool)
+
+
+def _validity(doc, robot: Robot, path: str) -> Validity | None:
+    """Where the calibrated file's model holds: its poses' region and, when it records one,
+    its support among them (``kinematics.support``)."""
+    from accugrid.kinematics.calibrated import chosen_structure
+    from accugrid.kinematics.support import Structure, Support
+    from accugrid.kinematics.validity import Validity
+
+    validity = Validity.from_doc(doc)
+    if validity is None or not doc.has("identification", "support"):
+        return validity
+    compliance, harmonics, gravity = chosen_structure(path, robot)
+    base_frame = doc.has("identification", "tracker_T_robot")
+    structure = Structure(base_frame, compliance, harmonics, gravity)
+    return replace(validity, support=Support.from_doc(doc, robot, structure))
 
 
 def correct_by_model(request: CorrectRequest) -> JobFiles:

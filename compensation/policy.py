@@ -25,7 +25,10 @@ What is decided, in this order:
   reach the command in the position's own Status, and the calibrated arm carrying ``arm_tool``
   must land it within 0.001 mm (``model_correction``); the command's joints are checked against
   the wrist singularity (|A5| below ``singular_a5_deg``, flagged) and the model's validated poses
-  (``kinematics.validity``: flagged with the distance, refused with ``strict``);
+  (``kinematics.validity``: flagged with the distance, refused with ``strict``) and the model's
+  support among them (``kinematics.support``: a target whose prediction leverage exceeds every
+  calibration pose's leave-one-out leverage is flagged and corrected by the DH-only fit of the
+  same poses without the residual grid, refused with ``strict``);
 - the safety limit ``settings.max_correction_mm`` on |P' - P|.
 
 Tools: a calibrated model is the arm; its identified TCP is the SMR it was measured with.
@@ -67,10 +70,12 @@ __all__ = [
     "F_ORIENTATION",
     "F_REGION",
     "F_SINGULAR",
+    "F_SUPPORT",
     "F_TOOL",
     "GRID_ORIENTATION_TOL_DEG",
     "NO_CONVERGENCE",
     "NO_ORIENTATION",
+    "NO_SUPPORT",
     "NOT_PLACED",
     "ORIENTATION",
     "OTHER_TOOL",
@@ -99,6 +104,7 @@ UNREACHABLE, NO_CONVERGENCE, OUTSIDE_MODEL, TOO_LONG = 5, 6, 7, 8
 # error all the same, so it counts in the job rule like any position not corrected
 NOT_PLACED = 9
 OTHER_TOOL = 10  # a grid's positions of a tool whose TCP is far from the grid's tool's
+NO_SUPPORT = 11  # --strict: the model extrapolates there (``kinematics.support``)
 # code -> (short words for counts, the reason's words; fields: see ``Verdict.reason``)
 REASONS = {
     OUTSIDE_GRID: ("outside the grid", "outside the {grid} box by {value:.3f} mm"),
@@ -119,6 +125,11 @@ REASONS = {
         "outside the model's poses",
         "outside the poses the model was identified from ({region}; --strict refuses)",
     ),
+    NO_SUPPORT: (
+        "without the model's support",
+        "without support in the poses the model was identified from: prediction leverage "
+        "{value:.2f} x the largest of those poses' (--strict refuses)",
+    ),
     TOO_LONG: (
         "beyond the safety limit",
         "correction of {value:.3f} mm exceeds the safety limit of {max:g} mm",
@@ -132,7 +143,7 @@ REASONS = {
     ),
 }
 # flags (bits): corrected, but worth a look
-F_ORIENTATION, F_CLAMPED, F_REGION, F_SINGULAR, F_TOOL = 1, 2, 4, 8, 16
+F_ORIENTATION, F_CLAMPED, F_REGION, F_SINGULAR, F_TOOL, F_SUPPORT = 1, 2, 4, 8, 16, 32
 FLAGS = {
     F_ORIENTATION: "orientation {angle:.1f} deg from the {grid}'s",
     F_CLAMPED: "outside the {grid} box by {clamp:.3f} mm: the nearest cell's error used",
@@ -141,6 +152,11 @@ FLAGS = {
     F_TOOL: (
         "tool {tool:.0f}: corrected by the model alone, its TCP {tool_mm:.3f} mm from that of "
         "the tool the residual grid was measured with (beyond correction.tool_distance)"
+    ),
+    F_SUPPORT: (
+        "without support in the poses the model was identified from (prediction leverage "
+        "{support:.2f} x the largest of those poses'): corrected by the DH-only fit of the same "
+        "poses"
     ),
 }
 _LISTED = 5
@@ -412,6 +428,42 @@ class Policy:
                 v.refuse(done[out], OUTSIDE_MODEL, box[out])
             else:
                 v.flag(done[out], F_REGION, "box", box[out])
+            if self.validity.support is not None:
+                self._by_fallback(v, done, q, rotations, own)
+
+    def _by_fallback(self, v: Verdict, done, q, rotations, own) -> None:
+        """Positions ``done`` (k,) corrected by the model at the controller's joints q (k, 6)
+        rad: those without its support flagged and corrected by its DH-only fallback (the
+        residual grid, the full model's, not added), or refused with ``strict``."""
+        from accugrid.kinematics.frames import matrix_to_abc  # model jobs only
+
+        support = self.validity.support
+        ratio = support.ratio(q)
+        v.numbers.setdefault("support", np.zeros(len(v.points)))[done] = ratio
+        out = done[ratio > 1.0]
+        if self.strict:
+            v.refuse(out, NO_SUPPORT, ratio[ratio > 1.0])
+            return
+        out = out[v.code[out] == CORRECTED]
+        if not out.size:
+            return
+        status = None if own is None else np.where(own[out] >= 0, own[out], 0)
+        result = model_correct(
+            support.fallback,
+            v.points[out],
+            matrix_to_abc(rotations[out]).reshape(-1, 3),
+            status,
+            None,
+            self.settings,
+            controller_tool=self.controller_tool,
+            arm_tool=self.arm_tool,
+        )
+        v.command[out[result.ok]] = result.command[result.ok]
+        v.numbers["miss"][out[result.ok]] = result.miss_mm[result.ok]
+        v.flag(out[result.ok], F_SUPPORT, "support", v.numbers["support"][out[result.ok]])
+        failed = out[~result.ok]
+        v.refuse(failed, NO_CONVERGENCE, np.zeros(failed.size))
+        v.why[failed] = result.reason[~result.ok]
 
 
 @dataclass

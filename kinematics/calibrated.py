@@ -25,12 +25,14 @@ __all__ = [
     "check_same_robot",
     "chosen_structure",
     "identification_summary",
+    "pose_dict",
 ]
 
 _SAME_TOL = 1e-9  # mm / deg: nominal DH values closer than this are the same robot
 
 
-def _pose_dict(pose: np.ndarray) -> dict[str, float]:
+def pose_dict(pose: np.ndarray) -> dict[str, float]:
+    """A pose (4, 4) mm as YAML data: x, y, z mm, a, b, c KUKA deg."""
     return {k: float(v) for k, v in zip("xyzabc", xyzabc_from_pose(pose), strict=True)}
 
 
@@ -63,7 +65,7 @@ def identification_summary(
     summary: dict = {
         "robot": nominal.name,
         "measurements": {"file": source, "sha256": sha256},
-        "controller_tool": _pose_dict(nominal.flange_T_tool),
+        "controller_tool": pose_dict(nominal.flange_T_tool),
         "poses": result.poses,
         "rows": result.rows,
         "identifiable_parameters": result.rank,
@@ -77,7 +79,7 @@ def identification_summary(
         "parameters": parameters,
     }
     if result.tracker_T_robot is not None:
-        summary["tracker_T_robot"] = _pose_dict(result.tracker_T_robot)
+        summary["tracker_T_robot"] = pose_dict(result.tracker_T_robot)
     if result.cross_validation is not None:
         cv = result.cross_validation
         summary["cross_validation"] = {
@@ -148,7 +150,7 @@ def calibrated_yaml(robot: Robot, summary: dict | None = None, header: str = "")
             for i in range(dh.n)
         ],
         "limits_deg": [[float(lo), float(hi)] for lo, hi in robot.joint_limits_deg],
-        "tool": _pose_dict(robot.flange_T_tool),
+        "tool": pose_dict(robot.flange_T_tool),
     }
     if robot.errors is not None:
         keys = ("da_mm", "dd_mm", "dalpha_rad", "dtheta_rad")

@@ -61,6 +61,7 @@ __all__ = [
     "pose_folds",
     "pose_o1",
     "pose_set",
+    "rigid_fit",
     "select_poses",
 ]
 
@@ -533,7 +534,7 @@ def identify(
     too few poses, poses in one plane or one orientation, or data that leave more directions
     unidentifiable than the robot's structural ones.
     """
-    base_T0 = _rigid_fit(data.commanded, data.measured) if base_frame else np.eye(4)
+    base_T0 = rigid_fit(data.commanded, data.measured) if base_frame else np.eye(4)
     target = _in_robot_frame(base_T0, data.measured)
     model = _Model(robot, base_frame, base_T0, compliance, harmonics, gravity)
     names = parameter_names(base_frame, compliance, harmonics, gravity)
@@ -676,7 +677,7 @@ def linearised(
     Jacobian of its identifiable directions X (3N, r) and the columns (3N, m) of the candidate
     harmonics (two per (axis, order), sin then cos) then of the ``gravity`` groups (``size``
     each), all at the fitted parameters, mm per rad."""
-    base_T0 = _rigid_fit(data.commanded, data.measured) if base_frame else np.eye(4)
+    base_T0 = rigid_fit(data.commanded, data.measured) if base_frame else np.eye(4)
     every = tuple(harmonics) + tuple(candidates)
     model = _Model(robot, base_frame, base_T0, compliance, every, gravity)
     fitted = _Model(robot, base_frame, base_T0, compliance, harmonics)
@@ -710,7 +711,7 @@ def _in_robot_frame(base_T0: np.ndarray, points: np.ndarray) -> np.ndarray:
     return (points - base_T0[:3, 3]) @ rot
 
 
-def _rigid_fit(robot_points: np.ndarray, tracker_points: np.ndarray) -> np.ndarray:
+def rigid_fit(robot_points: np.ndarray, tracker_points: np.ndarray) -> np.ndarray:
     """tracker_T_robot (4, 4) that best maps robot_points onto tracker_points (N, 3) mm."""
     from scipy.spatial.transform import Rotation
 

@@ -18,10 +18,14 @@ them back (``Validity.from_doc``) and measures how far each target lies outside
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from accugrid.infra.yamlfile import YamlDoc
+
+if TYPE_CHECKING:
+    from accugrid.kinematics.support import Support
 
 __all__ = ["KEYS", "SECTION", "Validity", "validity_section"]
 
@@ -33,7 +37,8 @@ _EPS = 1e-6  # mm / deg: this close to a bound still counts as inside
 @dataclass(frozen=True)
 class Validity:
     """The poses' region: box lower, upper (3,) mm; tool_axis (3,) unit; tilt_deg; joints_deg
-    (6, 2) KUKA deg; validated_max_mm (3,) mm or None."""
+    (6, 2) KUKA deg; validated_max_mm (3,) mm or None; ``support``: the model's leverage among
+    its poses and its DH-only fallback (``kinematics.support``; None: no record)."""
 
     lower: np.ndarray
     upper: np.ndarray
@@ -41,6 +46,7 @@ class Validity:
     tilt_deg: float
     joints_deg: np.ndarray
     validated_max_mm: np.ndarray | None = None
+    support: Support | None = None
 
     @classmethod
     def of_poses(
