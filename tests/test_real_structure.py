@@ -10,6 +10,7 @@ from conftest import EXAMPLES, REALDATA
 
 from accugrid.compensation.measurements import read_measurements
 from accugrid.infra.csvtable import read_table_format
+from accugrid.kinematics.calibrated import structure_summary
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.identification import Identification, identify, pose_set
 from accugrid.kinematics.robot import load_robot
@@ -77,4 +78,11 @@ def test_terms_chosen_on_one_half_of_a1_do_not_fail_on_the_other(series_c):
     dh = identify(ROBOT, data, base_frame=True)
     e, e_dh = _errors(result, q[high], m[high]), _errors(dh, q[high], m[high])
     assert e.mean() <= 1.1 * e_dh.mean()
-    assert selection.carry_over is not None and selection.carry_over.holds
+    carry = selection.carry_over
+    assert carry is not None and carry.holds
+    # the calibrated YAML records the check: the chosen model and DH + TCP held out by joint range
+    recorded = structure_summary(selection)["carry_over"]
+    assert list(recorded["held_out_rms_mm"].values()) == pytest.approx(carry.rms_mm, rel=1e-12)
+    assert list(recorded["dh_held_out_rms_mm"].values()) == pytest.approx(
+        carry.dh_rms_mm, rel=1e-12
+    )
