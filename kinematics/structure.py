@@ -183,8 +183,8 @@ class Selection:
     """What the search chose: ``pinned`` group names (kept, not searched), ``chosen`` in the
     order added, the fitted ``harmonics`` (pinned + chosen) and ``gravity`` groups, the
     cross-validation ``curve`` (start, every step of the path; ``kept`` steps chosen), what was
-    ``left_out`` ((name, reason) pairs), the highest order searched and why, and the nested
-    estimate."""
+    ``left_out`` ((name, reason) pairs), the highest order searched and why, the nested
+    estimate and the ``carry_over`` check (``CarryOver``)."""
 
     pinned: tuple[str, ...]
     chosen: tuple[str, ...]
