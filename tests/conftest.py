@@ -1,4 +1,4 @@
-"""Shared test fixtures: paths to the project's examples and to ../shared/realworld."""
+"""Shared test fixtures: paths to the examples, ../shared/realworld and ../shared/realdata."""
 
 from __future__ import annotations
 
@@ -27,6 +27,14 @@ def realworld() -> Path:
     if not REALWORLD.is_dir():
         pytest.fail(f"{REALWORLD} is missing: the real-world programs must sit beside the checkout")
     return REALWORLD
+
+
+@pytest.fixture(scope="session")
+def realdata() -> Path:
+    """../shared/realdata: real tracker measurements (CI has ../shared beside the checkout)."""
+    if not REALDATA.is_dir():
+        pytest.fail(f"{REALDATA} is missing: the real tracker data must sit beside the checkout")
+    return REALDATA
 
 
 @pytest.fixture(scope="module")

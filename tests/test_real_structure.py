@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import EXAMPLES, REALDATA
+from conftest import EXAMPLES
 
 from accugrid.compensation.measurements import read_measurements
 from accugrid.infra.csvtable import read_table_format
@@ -20,11 +20,9 @@ ROBOT = load_robot("ur10").with_tool(pose_from_xyzabc([0.0, 0.0, 109.0, 0.0, 0.0
 
 
 @pytest.fixture(scope="module")
-def series_c() -> tuple[np.ndarray, np.ndarray]:
+def series_c(realdata) -> tuple[np.ndarray, np.ndarray]:
     """Joints (N, 6) rad and measured positions (N, 3) mm (tracker frame) of Series C."""
-    path = REALDATA / "ipa-ur10" / "Series_C" / "measurements_random_poses.csv"
-    if not path.is_file():
-        pytest.fail(f"{path} is missing: the real tracker data must sit beside the checkout")
+    path = realdata / "ipa-ur10" / "Series_C" / "measurements_random_poses.csv"
     meas = read_measurements(path, read_table_format(EXAMPLES / "tracker" / "ipa_ur10.yaml"))
     return np.radians(meas.joints), meas.measured
 
