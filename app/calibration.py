@@ -27,7 +27,12 @@ from accugrid.kinematics.identification import (
 )
 from accugrid.kinematics.model import reach_mm
 from accugrid.kinematics.robot import VALIDATED_MAX_KEYS, Robot
-from accugrid.kinematics.structure import STRUCTURE_WORD, Selection, identify_structure
+from accugrid.kinematics.structure import (
+    RANGE_BLOCKS,
+    STRUCTURE_WORD,
+    Selection,
+    identify_structure,
+)
 from accugrid.kinematics.support import Structure, support_section
 from accugrid.kinematics.validity import validity_section
 
@@ -324,4 +329,19 @@ def _structure_report(selection: Selection) -> str:
             model = " ".join(f"{v:.4f}" for v in nested.model_rms_mm)
             line += f"; the model alone (row noise {nested.noise_mm:.4f} mm removed): RMS {model}"
         lines.append(line)
+    carry = selection.carry_over
+    if carry is not None:
+        rms = " ".join(f"{v:.4f}" for v in carry.rms_mm)
+        dh = " ".join(f"{v:.4f}" for v in carry.dh_rms_mm)
+        lines.append(
+            f"  held out by joint range (each joint's range in {RANGE_BLOCKS} blocks, each "
+            f"predicted from the rest): RMS X Y Z {rms}; DH + TCP only {dh}"
+            + (
+                ""
+                if carry.holds
+                else ": the chosen terms do not hold beyond the joint combinations of these "
+                "poses; measure poses that cover the targets' joint space (targets without "
+                "support get the DH-only fit)"
+            )
+        )
     return "\n".join(lines)

@@ -108,7 +108,8 @@ def structure_summary(selection: Selection | None) -> dict:
     and unless 'dh' the search (the highest order and why, folds, number of candidate groups), the
     pinned and chosen groups, what was left out and why, the cross-validation curve (held-out RMS
     and max per axis, mm, against the groups added; the first ``kept_steps`` steps are the chosen
-    model) and the nested estimate (mm). Keys: ``robot.STRUCTURE_SCHEMA``."""
+    model), the nested estimate and the model held out by joint range (``carry_over``, mm: the
+    chosen model and DH + TCP only). Keys: ``robot.STRUCTURE_SCHEMA``."""
     if selection is None:
         return {"mode": "dh"}
     nested = selection.nested
@@ -140,6 +141,11 @@ def structure_summary(selection: Selection | None) -> dict:
             "noise_sigma_mm": None if nested.noise_mm is None else float(nested.noise_mm),
             "model_rms_mm": None if nested.model_rms_mm is None else _axes(nested.model_rms_mm),
             "chosen_by_fold": [list(c) for c in nested.chosen],
+        }
+    if selection.carry_over is not None:
+        out["carry_over"] = {
+            "held_out_rms_mm": _axes(selection.carry_over.rms_mm),
+            "dh_held_out_rms_mm": _axes(selection.carry_over.dh_rms_mm),
         }
     return out
 

@@ -289,6 +289,7 @@ STRUCTURE_SCHEMA: Schema = {
         "model_rms_mm": _XYZ,
         "chosen_by_fold": None,
     },
+    "carry_over": {"held_out_rms_mm": _XYZ, "dh_held_out_rms_mm": _XYZ},
 }
 IDENTIFICATION_SCHEMA: Schema = {
     "robot": None,

@@ -6,7 +6,16 @@ The candidates (``kinematics.candidates``) are groups of linear parameters: redu
 (``kinematics.sparse_bayes``: each group's prior precision by maximum evidence, each group paying
 log m of evidence for being the best of m; its curve adds the groups kept, largest effect first,
 scored by the same cross-validation): near-alias orders share the evidence instead of a greedy
-step committing to one. Method "search" (``--structure search``):
+step committing to one. The groups it keeps are then **pruned by joint range** (``range_prune``):
+each joint's range of the poses is cut in ``RANGE_BLOCKS`` contiguous blocks, each block held out
+in turn and predicted from the rest (every joint in turn, pooled), and the group whose removal
+most lowers that held-out error is dropped, while one does. Random folds test poses drawn like
+the calibration poses; these test a term where one joint leaves the range it was fitted on: a
+reducer harmonic or a gravity term is a function of the joints that holds there, a term that
+only fits the poses' own joint combinations (on a real arm: effects no candidate describes)
+misses there, often by far more than the DH-only fit. The chosen model is scored the same way
+against the DH + TCP model (``Selection.carry_over``, reported). Method "search"
+(``--structure search``):
 
 1. Fit DH errors + TCP (+ the tracker frame, ``--compliance`` with masses and the pinned
    harmonics, which are always kept) with the full nonlinear model; linearise there: residuals y,
@@ -94,6 +103,8 @@ __all__ = [
     "SEPARATE",
     "SEPARATE_GRAVITY",
     "STRUCTURE_WORD",
+    "RANGE_BLOCKS",
+    "CarryOver",
     "Nested",
     "Selection",
     "Step",
@@ -118,6 +129,7 @@ FALSE_STEP = 0.05  # chance that a step on noise alone passes the bar (shared by
 LOOK_AHEAD = 4  # a step that fails may be carried by the next 2..LOOK_AHEAD steps together
 SCREEN_MAX_ORDER = 200  # the highest order the periodogram screens (reducer stages up to ~160)
 SCREEN_KEEP = 3  # orders beyond the library an axis's periodogram adds as candidates
+RANGE_BLOCKS = 5  # the carry-over check holds out each joint's range in this many blocks in turn
 SCREEN_STEPS = 30  # picks of the greedy periodogram (low and high orders together)
 _NESTED_SEED = 1  # inner folds: another permutation of the training poses
 _FIRST_ORDERS = tuple((axis, 1) for axis in range(1, 7))  # sin, cos give each joint's column
@@ -150,12 +162,29 @@ class Nested:
 
 
 @dataclass(frozen=True)
+class CarryOver:
+    """Held out by joint range: each moving joint's range in ``RANGE_BLOCKS`` contiguous blocks
+    of the sorted angles, each block held out in turn (the poses of one part of that joint's range
+    predicted from the others), pooled over the joints: RMS per axis (3,) mm of the chosen model
+    and of the DH + TCP (+ pinned) model on the same folds. Random folds test poses drawn like the
+    calibration poses; these test the model where its terms must extrapolate in one joint."""
+
+    rms_mm: np.ndarray
+    dh_rms_mm: np.ndarray
+
+    @property
+    def holds(self) -> bool:
+        """The chosen model does no worse than DH + TCP held out by joint range."""
+        return float(np.sum(self.rms_mm**2)) <= float(np.sum(self.dh_rms_mm**2))
+
+
+@dataclass(frozen=True)
 class Selection:
     """What the search chose: ``pinned`` group names (kept, not searched), ``chosen`` in the
     order added, the fitted ``harmonics`` (pinned + chosen) and ``gravity`` groups, the
     cross-validation ``curve`` (start, every step of the path; ``kept`` steps chosen), what was
-    ``left_out`` ((name, reason) pairs), the highest order searched and why, and the nested
-    estimate."""
+    ``left_out`` ((name, reason) pairs), the highest order searched and why, the nested
+    estimate and the ``carry_over`` check (``CarryOver``)."""
 
     pinned: tuple[str, ...]
     chosen: tuple[str, ...]
@@ -170,6 +199,7 @@ class Selection:
     candidates: int
     nested: Nested | None
     method: str = "ard"  # how the groups were chosen: "ard" or "search" (``identify_structure``)
+    carry_over: CarryOver | None = None  # the chosen model held out by joint range
 
 
 def max_order_of(q: np.ndarray) -> np.ndarray:
@@ -194,6 +224,18 @@ def screen_limit(q: np.ndarray) -> np.ndarray:
             for g in _angle_gaps(q)
         ]
     )
+
+
+def range_folds(q: np.ndarray, blocks: int = RANGE_BLOCKS) -> list[np.ndarray]:
+    """Per joint that the distinct poses' joints q (P, 6) rad move, the fold (P,) of each pose:
+    its joint's range in ``blocks`` contiguous blocks of the sorted angles (equal counts)."""
+    out = []
+    for axis in range(q.shape[1]):
+        if np.ptp(q[:, axis]) <= 1e-9:
+            continue
+        rank = np.argsort(np.argsort(q[:, axis], kind="stable"), kind="stable")
+        out.append(rank * blocks // len(q))
+    return out
 
 
 def _angle_gaps(q: np.ndarray) -> list[np.ndarray]:
@@ -370,6 +412,7 @@ def _identify_structure(
     problem.separate[len(search) :] = SEPARATE_GRAVITY
     left_out = problem.reduce(names)
     problem.method = method
+    problem.joints = data.q[np.unique(data.group, return_index=True)[1]]
     fold = pose_folds(data.poses, folds)
     path, kept, chosen = problem.choose(fold, np.ones(data.poses, bool))
     replaced = [g for g, _ in path[1 : kept + 1] if g not in chosen]
@@ -380,6 +423,9 @@ def _identify_structure(
     ]
     left_out += [(names[g], "its held-out gain is within its uncertainty") for g in rejected]
     estimate = _nested(problem, fold, folds, names, data) if nested else None
+    carry = problem.carry_over(
+        chosen, range_folds(data.q[np.unique(data.group, return_index=True)[1]])
+    )
     picked_harmonics = pinned + tuple(search[g] for g in chosen if g < len(search))
     picked_gravity = tuple(gravity[g - len(search)] for g in chosen if g >= len(search))
     result = identify(
@@ -415,6 +461,7 @@ def _identify_structure(
         candidates=len(names),
         nested=estimate,
         method=method,
+        carry_over=carry,
     )
     return result, selection
 
@@ -443,6 +490,7 @@ class _Problem:
         self.bars = np.full(len(groups), norm.isf(FALSE_STEP / max(len(groups), 1)))
         self.separate = np.full(len(groups), SEPARATE)
         self.method = "ard"  # "ard" (group sparse Bayesian learning) or "search" (``choose``)
+        self.joints: np.ndarray | None = None  # (P, 6) rad of the distinct poses: range pruning
 
     def reduce(self, names: list[str]) -> list[tuple[str, str]]:
         """Keep of each group only its directions the data separate from the DH + TCP (+ pinned)
@@ -488,7 +536,8 @@ class _Problem:
         """``search`` (method "search") or group ARD (method "ard", ``sparse_bayes``) on the
         poses ``use`` (P,) bool: (path, kept steps, chosen groups). ARD's prior against a group
         is log m, m the candidates a step is the best of as its bar counts them (the library,
-        or the screen's whole pool); its path adds the groups kept, largest effect first."""
+        or the screen's whole pool); the groups it keeps are pruned by joint range
+        (``range_prune``); its path adds the groups left, largest effect first."""
         if self.method == "search":
             return self.search(fold_of_pose, use)
         rows = use[self.pose]
@@ -497,6 +546,8 @@ class _Problem:
         penalty = np.log(FALSE_STEP / norm.sf(self.bars))
         y, x, c, floor = self._pose_means(rows)
         chosen = ard_choice(y, x, c, groups, None, penalty, floor)[0]
+        if self.joints is not None:
+            chosen = self.range_prune(chosen, use)
         fold, rows, folds = self._cv(fold_of_pose, use)
         path = [
             (chosen[i - 1] if i else None, self._held(chosen[:i], fold, rows, folds))
@@ -759,6 +810,68 @@ class _Problem:
                 break
             step += int(passed[0]) + 1
         return step
+
+    def range_prune(self, chosen: list[int], use: np.ndarray) -> list[int]:
+        """``chosen`` without, one at a time, the group whose removal most lowers the error held
+        out by joint range on the poses ``use`` (P,) bool (``range_folds`` of their joints, every
+        joint's blocks in turn, pooled), while a removal does: terms that fit the poses only in
+        their own joint combinations and miss where one joint leaves its block are dropped. The
+        held-out sums come from each fold's normal equations (a removal deletes their rows and
+        columns), solved in one batch per trial."""
+        if not chosen:
+            return chosen
+        x = self.design(chosen)
+        grams, rhs, held_gram, held_rhs, held_yy = [], [], [], [], 0.0
+        for blocks in range_folds(self.joints[use]):
+            fold_of_pose = np.full(self.poses, -1)
+            fold_of_pose[use] = blocks
+            fold, rows, ids = self._cv(fold_of_pose, use)
+            for k in ids:
+                train, test = rows & (fold != k), rows & (fold == k)
+                grams.append(x[train].T @ x[train])
+                rhs.append(x[train].T @ self.y[train])
+                held_gram.append(x[test].T @ x[test])
+                held_rhs.append(x[test].T @ self.y[test])
+                held_yy += float(self.y[test] @ self.y[test])
+        grams, rhs = np.array(grams), np.array(rhs)
+        held_gram, held_rhs = np.array(held_gram), np.array(held_rhs)
+        base = self.x0.shape[1]
+        starts = np.cumsum([base] + [len(self.groups[g]) for g in chosen])
+
+        def sse(kept: list[int]) -> float:
+            cols = np.concatenate(
+                [np.arange(base)] + [np.arange(starts[i], starts[i + 1]) for i in kept]
+            )
+            try:
+                w = np.linalg.solve(grams[:, cols][:, :, cols], rhs[:, cols, None])[..., 0]
+            except np.linalg.LinAlgError:
+                return np.inf
+            fitted = np.einsum("fi,fij,fj->", w, held_gram[:, cols][:, :, cols], w)
+            return held_yy - 2 * float(np.einsum("fi,fi->", w, held_rhs[:, cols])) + fitted
+
+        kept = list(range(len(chosen)))
+        best = sse(kept)
+        while kept:
+            trials = [sse(kept[:i] + kept[i + 1 :]) for i in range(len(kept))]
+            at = int(np.argmin(trials))
+            if not trials[at] < best:
+                break
+            best = trials[at]
+            del kept[at]
+        return [chosen[i] for i in kept]
+
+    def carry_over(self, chosen: list[int], folds_by_joint: list[np.ndarray]) -> CarryOver:
+        """``chosen`` and the DH + TCP (+ pinned) model held out by joint range (``CarryOver``):
+        each fold of ``folds_by_joint`` (per joint, the fold (P,) of each pose) in turn."""
+        every = np.ones(self.poses, bool)
+        sse = np.zeros((2, 3))
+        for fold_of_pose in folds_by_joint:
+            fold, rows, folds = self._cv(fold_of_pose, every)
+            for i, model in enumerate((chosen, [])):
+                held = self._held(model, fold, rows, folds).reshape(-1, 3)
+                sse[i] += np.sum(held**2, axis=0)
+        count = max(len(folds_by_joint), 1) * (len(self.y) // 3)
+        return CarryOver(np.sqrt(sse[0] / count), np.sqrt(sse[1] / count))
 
     def held_out_stats(self, held: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
         """(RMS (3,), max |.| (3,), overall RMS) mm of held-out residuals (M,)."""

@@ -1,0 +1,241 @@
+"""Identification on a real robot: the UR10 laser-tracker series of ``../shared/realdata/ipa-ur10``.
+
+Series C (2,773 random poses with logged joints) and Series A (a grid at up to 24 orientations,
+11,910 rows, another session and another tracker frame), read as they come (``read_series`` of
+``bench_real_grid``). The measurements are in the tracker frame: every fit identifies the
+tracker frame with the arm (``--base-frame``); the built-in ``ur10`` with the T-Mac's origin
+109 mm along the flange z as TCP. The commanded positions are the nominal FK of the logged joints
+(the controller's own model is not the nominal one; the joints are what the robot did).
+
+Table 1 (``in_distribution_table``): N random poses of C (the same seed each run) against the rest
+of C: the 3D error |measured - model| mean, p95, max mm of the nominal arm in its best-fit tracker
+frame, the DH-only fit (``--structure dh``), the default (``--structure auto``) and the default
+where the poses support the target and the DH-only fit where not (``kinematics.support``); the
+default's nested estimate (3D RMS) against the held-out 3D RMS, the groups chosen and the
+identification's wall time and CPU time (nested estimate included; the CPU time is what
+an otherwise idle machine would take, the wall time depends on its load).
+
+Table 2 (``shifted_table``): calibrated on one part of joint space, scored on another: C split at
+the median of A1, A2 or A3 (300 random poses of one half, scored on the whole other half), A by
+elbow (sign of A3) and by wrist (sign of A5) configuration, and C -> A (300 random C poses, scored
+on the A grid; A's tracker frame fitted for each model by the rigid fit of its predictions to 30
+random A rows, the rest scored). Mean 3D error of the DH-only fit, the default, the default with
+the DH-only fit where no support, each ratio to the DH-only fit, and the share without support.
+
+Not a timed test: ``make bench ARGS=real`` (or ``.venv/bin/python bench/bench_real.py``);
+``--tables 1`` or ``--tables 2`` prints one table, ``--poses 100,300`` the sizes of table 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from accugrid.infra.yamlfile import YamlDoc  # noqa: E402
+from accugrid.kinematics.identification import (  # noqa: E402
+    Identification,
+    identify,
+    pose_set,
+    rigid_fit,
+)
+from accugrid.kinematics.robot import load_robot  # noqa: E402
+from accugrid.kinematics.structure import Selection, identify_structure  # noqa: E402
+from accugrid.kinematics.support import Structure, Support, support_section  # noqa: E402
+from bench.bench_real_grid import REAL, TCP_MM, read_series  # noqa: E402
+
+SEED = 0
+SHIFT_POSES = 300
+A_FRAME_ROWS = 30  # Series A rows a model's tracker frame for A is fitted on (C -> A)
+
+
+@dataclass(frozen=True)
+class Fit:
+    """The default identification, its selection, the DH-only fit of the same poses, the
+    support record and the default's wall and CPU time (s; one process, BLAS on one thread)."""
+
+    default: Identification
+    selection: Selection
+    dh: Identification
+    support: Support
+    seconds: tuple[float, float]
+
+
+def ur10():
+    tool = np.eye(4)
+    tool[2, 3] = TCP_MM
+    return load_robot("ur10").with_tool(tool)
+
+
+ROBOT = ur10()
+
+
+def series(name: str) -> tuple[np.ndarray, np.ndarray]:
+    """Joints (N, 6) rad and measured positions (N, 3) mm (tracker frame) of series "A" or "C"."""
+    path = {"A": "Series_A/measurements_grid.csv", "C": "Series_C/measurements_random_poses.csv"}
+    s = read_series(path[name])
+    return s["q"], s["m"]
+
+
+def calibrate(q: np.ndarray, m: np.ndarray) -> Fit:
+    """The default and the DH-only identification from joints q (N, 6) rad and measured m (N, 3)
+    mm (tracker frame identified), with the default's support record."""
+    data = pose_set(ROBOT, ROBOT.fk(q)[:, :3, 3], m, joints_deg=np.degrees(q))
+    started, cpu = time.perf_counter(), time.process_time()
+    result, selection = identify_structure(ROBOT, data, base_frame=True)
+    seconds = (time.perf_counter() - started, time.process_time() - cpu)
+    dh = identify(ROBOT, data, base_frame=True)
+    structure = Structure(True, False, tuple(selection.harmonics), tuple(selection.gravity))
+    section = support_section(result.robot, data.q, data.group, structure, dh)
+    doc = YamlDoc({"identification": {"support": section}}, {}, "identify")
+    support = Support.from_doc(doc, result.robot, structure)
+    return Fit(result, selection, dh, support, seconds)
+
+
+def model_points(result: Identification, q: np.ndarray) -> np.ndarray:
+    """The identified arm's TCP (N, 3) mm, robot frame, at joints q (N, 6) rad."""
+    return (result.robot.true_robot() or result.robot).fk(q)[:, :3, 3]
+
+
+def in_frame(result: Identification, q: np.ndarray) -> np.ndarray:
+    """The identified arm's TCP (N, 3) mm in its identified tracker frame."""
+    frame = result.tracker_T_robot
+    return model_points(result, q) @ frame[:3, :3].T + frame[:3, 3]
+
+
+def errors(fit: Fit, q: np.ndarray, m: np.ndarray, frame_rows: np.ndarray | None = None):
+    """3D errors (N,) mm of the DH-only fit, the default and the default with the DH-only fit
+    where no support, and the share without support, at joints q (N, 6) rad measured m (N, 3)
+    mm: in each model's identified tracker frame, or (``frame_rows``: another session) in the
+    rigid fit of its predictions at those rows to their measurements (those rows not scored)."""
+    out = []
+    for result in (fit.dh, fit.default):
+        if frame_rows is None:
+            predicted = in_frame(result, q)
+        else:
+            points = model_points(result, q)
+            frame = rigid_fit(points[frame_rows], m[frame_rows])
+            predicted = points @ frame[:3, :3].T + frame[:3, 3]
+        out.append(np.linalg.norm(m - predicted, axis=1))
+    flagged = fit.support.ratio(q) > 1.0
+    out.append(np.where(flagged, out[0], out[1]))
+    scored = np.ones(len(q), bool)
+    if frame_rows is not None:
+        scored[frame_rows] = False
+    return [e[scored] for e in out], float(flagged[scored].mean())
+
+
+def nominal_errors(q: np.ndarray, m: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """3D errors (N,) mm of the nominal arm in the tracker frame best fitted on ``rows``."""
+    points = ROBOT.fk(q)[:, :3, 3]
+    frame = rigid_fit(points[rows], m[rows])
+    return np.linalg.norm(m - (points @ frame[:3, :3].T + frame[:3, 3]), axis=1)
+
+
+def _cells(e: np.ndarray) -> str:
+    return f"{e.mean():.3f} | {np.quantile(e, 0.95):.3f} | {e.max():.3f}"
+
+
+def in_distribution_table(sizes: tuple[int, ...]) -> None:
+    """Table 1 (printed)."""
+    q, m = series("C")
+    order = np.random.default_rng(SEED).permutation(len(q))
+    print("\nN random Series C poses -> the rest of C; 3D error mean | p95 | max mm\n")
+    print(
+        "| poses | model | mean | p95 | max | nested est. RMS | held-out RMS | groups "
+        + "| time s (CPU s) |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|")
+    for n in sizes:
+        train, test = order[:n], order[n:]
+        fit = calibrate(q[train], m[train])
+        (dh, default, guarded), flagged = errors(fit, q[test], m[test])
+        nominal = nominal_errors(q, m, train)[test]
+        nested = fit.selection.nested
+        estimate = float(np.linalg.norm(nested.rms_mm)) if nested is not None else float("nan")
+        rms = float(np.sqrt(np.mean(default**2)))
+        print(f"| {n} | nominal, best-fit tracker frame | {_cells(nominal)} | | | | |")
+        print(f"| {n} | DH only | {_cells(dh)} | | {np.sqrt(np.mean(dh**2)):.3f} | | |")
+        print(
+            f"| {n} | default | {_cells(default)} | {estimate:.3f} | {rms:.3f} | "
+            f"{len(fit.selection.chosen)} | {fit.seconds[0]:.1f} ({fit.seconds[1]:.1f}) |"
+        )
+        print(
+            f"| {n} | default, DH-only where no support ({flagged:.0%}) | {_cells(guarded)} "
+            "| | | | |"
+        )
+
+
+def shifted_splits() -> list[tuple[str, str, np.ndarray, np.ndarray]]:
+    """(name, series "C", "A" or "C->A", training rows, scored rows) of table 2."""
+    rng = np.random.default_rng(SEED)
+    q_c, _ = series("C")
+    q_a, _ = series("A")
+
+    def pick(rows: np.ndarray) -> np.ndarray:
+        return np.sort(rng.choice(rows, min(SHIFT_POSES, len(rows)), replace=False))
+
+    out = []
+    rows_c = np.arange(len(q_c))
+    for axis in (0, 1, 2):
+        low = q_c[:, axis] < np.median(q_c[:, axis])
+        out.append((f"C, A{axis + 1} low -> high", "C", pick(rows_c[low]), rows_c[~low]))
+        out.append((f"C, A{axis + 1} high -> low", "C", pick(rows_c[~low]), rows_c[low]))
+    rows_a = np.arange(len(q_a))
+    for name, side in (("elbow (A3 > 0)", q_a[:, 2] > 0), ("wrist (A5 > 0)", q_a[:, 4] > 0)):
+        out.append((f"A, {name} -> other", "A", pick(rows_a[side]), rows_a[~side]))
+        out.append((f"A, other -> {name}", "A", pick(rows_a[~side]), rows_a[side]))
+    out.append(("C -> A", "C->A", pick(rows_c), rows_a))
+    return out
+
+
+def shifted_table() -> None:
+    """Table 2 (printed)."""
+    data = {"C": series("C"), "A": series("A")}
+    print(
+        f"\ncalibrated on {SHIFT_POSES} poses of one part of joint space, scored on another; "
+        "mean 3D error mm (ratio to the DH-only fit)\n"
+    )
+    print("| split | scored | DH only | default | default, DH-only where no support | no support |")
+    print("|---|---|---|---|---|---|")
+    frame_rows = np.random.default_rng(SEED + 1).choice(
+        len(data["A"][0]), A_FRAME_ROWS, replace=False
+    )
+    for name, where, train, test in shifted_splits():
+        q, m = data["A" if where == "A" else "C"]
+        fit = calibrate(q[train], m[train])
+        if where == "C->A":
+            (dh, default, guarded), flagged = errors(fit, *data["A"], frame_rows)
+        else:
+            (dh, default, guarded), flagged = errors(fit, q[test], m[test])
+        ratio = [e.mean() / dh.mean() for e in (default, guarded)]
+        print(
+            f"| {name} | {len(dh)} | {dh.mean():.3f} | {default.mean():.3f} ({ratio[0]:.2f}) | "
+            f"{guarded.mean():.3f} ({ratio[1]:.2f}) | {flagged:.0%} |",
+            flush=True,
+        )
+
+
+def main(argv: list[str]) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--tables", default="1,2")
+    parser.add_argument("--poses", default="100,300")
+    args, _ = parser.parse_known_args(argv)
+    if not REAL.is_dir():
+        print(f"{REAL} is missing: the real data sit beside the checkout (../shared/realdata)")
+        return
+    tables = args.tables.split(",")
+    if "1" in tables:
+        in_distribution_table(tuple(int(n) for n in args.poses.split(",")))
+    if "2" in tables:
+        shifted_table()
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
