@@ -19,17 +19,14 @@ import os
 import signal
 import sys
 import warnings
-from collections.abc import Iterator
 
 from accugrid import __version__
 from accugrid.app.commands import COMMANDS
 from accugrid.infra.errors import InputError, printable
 from accugrid.infra.inputfile import track_inputs
+from accugrid.infra.signals import TERMINATION_SIGNALS, Terminated, signals_raise
 
 EXIT_OK, EXIT_INTERNAL, EXIT_INPUT = 0, 1, 2
-_SIGNALS = tuple(
-    getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)
-)
 
 
 __all__ = ["EXIT_INPUT", "EXIT_INTERNAL", "EXIT_OK", "build_parser", "main"]
@@ -76,36 +73,6 @@ def _reading_format(args: argparse.Namespace) -> contextlib.AbstractContextManag
     return reading_format(args)
 
 
-class _Ended(BaseException):
-    """A termination signal arrived while the command ran."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signum)
-        self.signum = signum
-
-
-def _end(signum: int, frame: object) -> None:
-    raise _Ended(signum)
-
-
-@contextlib.contextmanager
-def _signals_end_command() -> Iterator[None]:
-    """SIGINT, SIGTERM and SIGHUP raise ``_Ended`` in the main thread while the command runs
-    (``infra.atomic`` takes them over while it writes); the handlers before are restored
-    after. Called from another thread, the handlers are left alone."""
-    previous = {}
-    try:
-        for sig in _SIGNALS:
-            previous[sig] = signal.signal(sig, _end)
-    except ValueError:  # not the main thread
-        pass
-    try:
-        yield
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
-
-
 def _ended(command: str | None, signum: int) -> int:
     """The one line of a command ended by signal ``signum``, and its exit code 128 + signum."""
     prog = f"accugrid {command}" if command else "accugrid"
@@ -122,14 +89,14 @@ def main(argv: list[str] | None = None) -> int:
     """
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
     try:
-        with _signals_end_command():
+        with signals_raise():
             return _run(argv)
-    except _Ended as ended:
+    except Terminated as ended:
         return _ended(_command(argv), ended.signum)
     except KeyboardInterrupt:  # SIGINT where no handler of ours was installed
         return _ended(_command(argv), signal.SIGINT)
     except SystemExit as stop:  # ``infra.atomic`` ends a write on a signal with 128 + it
-        if stop.code in {128 + sig for sig in _SIGNALS}:
+        if stop.code in {128 + sig for sig in TERMINATION_SIGNALS}:
             return _ended(_command(argv), stop.code - 128)
         raise
 

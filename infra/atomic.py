@@ -60,6 +60,7 @@ from pathlib import Path
 
 from accugrid.infra.errors import InputError
 from accugrid.infra.inputfile import file_identities, tracked_inputs
+from accugrid.infra.signals import TERMINATION_SIGNALS, Terminated, signals_raise
 
 __all__ = ["JobFiles", "check_targets", "write_files"]
 
@@ -69,9 +70,6 @@ _LINK = "link"  # in the job's other temporary folders: the journal's path
 _MAGIC = b"accugrid journal 1"
 _NAME_MAX = 255  # bytes of one file name (Linux, macOS, Windows filesystems)
 _PATH_MAX = 4096  # bytes of a path given to the system, with its final NUL (Linux)
-_SIGNALS = tuple(
-    getattr(signal, name) for name in ("SIGTERM", "SIGHUP", "SIGINT") if hasattr(signal, name)
-)
 
 PathLike = str | os.PathLike[str]
 
@@ -218,34 +216,6 @@ def _alive(pid: int) -> bool:
     return True
 
 
-class _Stop(BaseException):
-    """A termination signal arrived while the temporaries were being written."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signum)
-        self.signum = signum
-
-
-def _raise_stop(signum: int, frame: object) -> None:
-    raise _Stop(signum)
-
-
-@contextlib.contextmanager
-def _signals_end_write() -> Iterator[None]:
-    """Turn SIGTERM/SIGHUP/SIGINT into an exception (so ``finally`` cleans up); restore after."""
-    previous = {}
-    try:
-        for sig in _SIGNALS:
-            previous[sig] = signal.signal(sig, _raise_stop)
-    except ValueError:  # not the main thread: leave the handlers alone
-        pass
-    try:
-        yield
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
-
-
 @contextlib.contextmanager
 def _signals_held() -> Iterator[None]:
     """Hold the termination signals (delivered after the block) while the renames run."""
@@ -253,7 +223,7 @@ def _signals_held() -> Iterator[None]:
     if mask is None:
         yield
         return
-    old = mask(signal.SIG_BLOCK, _SIGNALS)
+    old = mask(signal.SIG_BLOCK, TERMINATION_SIGNALS)
     try:
         yield
     finally:
@@ -380,7 +350,7 @@ def write_files(
     durable = _Durable()
     committed, several = False, len(paths) > 1 or bool(stale_paths)
     try:
-        with _signals_end_write():
+        with signals_raise():
             for path, key in paths.items():
                 try:
                     temps[path] = _temp_path(path, holders if several else None)
@@ -402,7 +372,7 @@ def write_files(
                     journal = _commit(temps, main_paths, stale_paths, holders)
                     committed = True
                     _finish(journal, next(iter(paths)).parent)
-    except _Stop as stop:
+    except Terminated as stop:
         raise SystemExit(128 + stop.signum) from None
     finally:
         durable.close()
@@ -468,7 +438,7 @@ def _write_new_folder(
     tmp = _temp_name(folder)  # known before it exists: always cleaned
     durable = _Durable()
     try:
-        with _signals_end_write():
+        with signals_raise():
             try:
                 os.mkdir(tmp, 0o777)  # the umask applies
                 for path, key in paths.items():
@@ -484,7 +454,7 @@ def _write_new_folder(
                     os.rename(tmp, folder)  # refused if a non-empty folder appeared meanwhile
                 except OSError as exc:
                     raise InputError(f"cannot create: {exc.strerror or exc}", folder) from None
-    except _Stop as stop:
+    except Terminated as stop:
         raise SystemExit(128 + stop.signum) from None
     finally:
         durable.close()
