@@ -1,7 +1,9 @@
 """The cell file: robot, grid, tool, base frames, and one typed record per concern, as YAML.
 
 Read with ``infra.yamlfile.load_yaml``; every key is validated and an error names the key
-(``tool.z``) with its file line. Paths in the file are relative to the file. Lengths mm, angles
+(``tool.z``) with its file line. Paths in the file are relative to the file. ``base`` is a frame
+or a part file measured by ``accugrid fit-part`` (``base: {file: PART.yaml, number: N}``,
+``codegen.part_file``). Lengths mm, angles
 deg, speeds mm/s, times s. The commented reference is ``examples/cell.yaml``.
 
 ``Cell`` holds what the cell is made of (robot, grid and model files, tool and base frames) and
@@ -35,6 +37,7 @@ import numpy as np
 
 from accugrid.codegen.cellfile import DISTANCE_MAX_MM, FRAME_KEYS, CellReader, SectionKeys
 from accugrid.codegen.dialects import DIALECTS, plugin_of
+from accugrid.codegen.part_file import read_base
 from accugrid.compensation.interpolation import METHODS
 from accugrid.compensation.settings import TOOL_DISTANCE_MM, CorrectionSettings
 from accugrid.infra.csvtable import DECIMALS, DELIMITERS, UNITS, TableFormat
@@ -151,7 +154,7 @@ def load_cell(path: str | os.PathLike[str]) -> Cell:
         robot = os.fspath(path.parent / robot)
     grid_path = r.file_path("", "grid", "a file path")
     tool_number, flange_T_tool = r.frame(r.top.get("tool"), "tool", True)
-    base_number, robot_T_base = r.frame(r.top.get("base"), "base", True)
+    base_number, robot_T_base = read_base(r, robot, flange_T_tool)
     tool_data = _tool_data(r, tool_number, flange_T_tool)
     return Cell(
         path=path,

@@ -128,6 +128,9 @@ class DialectPlugin(Protocol):
       controller accepts comments.
     - ``measurement()``: its laser-tracker measurement program (``MeasurementWriter``), a
       capability a dialect may lack: InputError then.
+    - ``base_line(number, robot_T_base)``: the controller's line that sets base frame
+      ``number`` to ``robot_T_base`` (4, 4) mm, for the user to enter (e.g. after
+      ``accugrid fit-part``).
     """
 
     name: str
@@ -174,14 +177,16 @@ class DialectPlugin(Protocol):
 
     def measurement(self) -> MeasurementWriter: ...
 
+    def base_line(self, number: int, robot_T_base: np.ndarray) -> str: ...
+
 
 class DialectFolder:
     """The members of ``DialectPlugin`` a dialect folder gives by its modules' names, imported
-    when first used: ``section.py`` (``KEYS``, ``read_section``) and ``rewrite.py``
-    (``scan_positions``, ``splice_positions``, ``add_header``); the names in ``exports`` are
-    its ``emit.py``'s (none by default); ``controllers``: the makers of the robot controllers
-    its programs drive (``RobotModel.controller``, lower case; none: every robot). A plug-in
-    derives from it and
+    when first used: ``section.py`` (``KEYS``, ``read_section``), ``rewrite.py``
+    (``scan_positions``, ``splice_positions``, ``add_header``) and ``frames.py``
+    (``base_line``); the names in ``exports`` are its ``emit.py``'s (none by default);
+    ``controllers``: the makers of the robot controllers its programs drive
+    (``RobotModel.controller``, lower case; none: every robot). A plug-in derives from it and
     adds its name, suffixes, ``targets``, ``plan``, ``render`` and ``placement`` (and
     ``measurement`` when it writes measurement programs)."""
 
@@ -215,6 +220,9 @@ class DialectFolder:
 
     def add_header(self, text: str, lines: list[str]) -> str:
         return self._module("rewrite").add_header(text, lines)
+
+    def base_line(self, number: int, robot_T_base: np.ndarray) -> str:
+        return self._module("frames").base_line(number, robot_T_base)
 
     def measurement(self) -> MeasurementWriter:
         raise InputError(f"accugrid writes no laser-tracker measurement program in {self.title}")

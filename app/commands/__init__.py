@@ -25,6 +25,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "fit_frame",
         "robot base frame (tracker_T_robot) from tracker points on base, A1 arc and flange holes",
     ),
+    "fit-part": (
+        "fit_part",
+        "part frame (robot_T_base) from datums measured by the tracker and their CAD coordinates",
+    ),
     "gcode": (
         "gcode",
         "corrected RS274NGC (LinuxCNC) drilling program from a points CSV",

@@ -1,0 +1,151 @@
+"""The part-frame YAML file written by ``accugrid fit-part`` and read by a cell's
+``base: {file: PART.yaml, number: N}``.
+
+``base`` holds ``robot_T_base``: keys ``x, y, z`` (mm) and ``a, b, c`` (KUKA ABC, deg). The rest
+records the fit: the part's ``scale``, the noise ``sigma_mm`` with its ``dof``, the parameter
+``covariance`` about ``centroid`` (translation mm, rotation rad, scale), the largest 95 % bound
+``u95_mm`` at the datums, the inputs' SHA-256 and every datum (id, CAD point, measured point in
+the robot frame, residual). A cell reads ``base`` and the datums' measured points (to check that
+its robot reaches the part).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from accugrid import __version__
+from accugrid.codegen.cellfile import FRAME_KEYS, CellReader
+from accugrid.infra.errors import InputError
+from accugrid.infra.textsafe import fixed
+from accugrid.infra.yamlfile import Schema, load_yaml
+from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
+from accugrid.kinematics.part_frame import PartFit, reach_mm
+from accugrid.kinematics.robot import load_robot
+
+__all__ = ["PART_SCHEMA", "PartFile", "load_part", "part_yaml", "read_base"]
+
+PART_SCHEMA: Schema = {
+    "accugrid": None,
+    "base": dict.fromkeys(FRAME_KEYS),
+    "scale": None,
+    "scale_from": None,
+    "sigma_mm": None,
+    "dof": None,
+    "u95_mm": None,
+    "centroid": None,
+    "covariance": None,
+    "inputs": None,
+    "datums": [{"id": None, "nominal": None, "measured": None, "residual_mm": None}],
+}
+
+
+@dataclass(frozen=True)
+class PartFile:
+    """``robot_T_base`` (4, 4) mm of a part file, its datums' ``ids`` and ``measured`` points
+    (N, 3) mm in the robot frame."""
+
+    robot_T_base: np.ndarray
+    ids: list[str]
+    measured: np.ndarray
+
+
+def part_yaml(
+    fit: PartFit,
+    ids: Sequence[str],
+    nominal: np.ndarray,
+    measured: np.ndarray,
+    scale_from: str,
+    inputs: Mapping[str, tuple[str, str]],
+) -> str:
+    """The YAML text of a fitted part frame; ``nominal`` and ``measured`` (N, 3) mm the datums
+    (CAD, robot frame), ``scale_from`` how the scale was decided (rigid, fit, cte), ``inputs``
+    maps datums/nominal[/frame] to (file name, SHA-256 hex)."""
+    xyzabc = xyzabc_from_pose(fit.robot_T_base)
+    u95 = fit.sigma_at(nominal)[1]
+    lines = [
+        "# Part frame fitted from datums (accugrid fit-part). base is robot_T_base, the part",
+        "# frame in the robot frame: x, y, z in mm, a, b, c KUKA ABC in degrees",
+        "# (R = Rz(a) Ry(b) Rx(c)). A cell takes it as base: {file: <this file>, number: N}.",
+        f"accugrid: {json.dumps(__version__)}",
+        "base:",
+    ]
+    lines += [f"  {k}: {fixed(v, 6)}" for k, v in zip(FRAME_KEYS[:3], xyzabc[:3], strict=True)]
+    lines += [f"  {k}: {fixed(v, 8)}" for k, v in zip(FRAME_KEYS[3:], xyzabc[3:], strict=True)]
+    lines += [
+        f"scale: {fixed(fit.scale, 9)}  # the part's size over its CAD size",
+        f"scale_from: {scale_from}",
+        f"sigma_mm: {fixed(fit.sigma_mm, 5)}  # per-axis noise estimated from the residuals",
+        f"dof: {fit.dof}",
+        f"u95_mm: {fixed(float(u95.max()), 4)}  # largest 95 % bound of the frame at the datums",
+        f"centroid: [{', '.join(fixed(v, 4) for v in fit.centroid)}]  # robot frame, mm",
+        "covariance:  # about the centroid: translation mm, rotation rad[, scale]",
+    ]
+    lines += [f"  - [{', '.join(f'{v:.6e}' for v in row)}]" for row in fit.covariance]
+    lines.append("inputs:")
+    for key, (name, digest) in inputs.items():
+        lines.append(f"  {key}: {{file: {json.dumps(str(name))}, sha256: {digest}}}")
+    lines.append("datums:")
+    for i, name in enumerate(ids):
+        lines.append(
+            f"  - {{id: {json.dumps(name)}, "
+            f"nominal: [{', '.join(fixed(v, 4) for v in nominal[i])}], "
+            f"measured: [{', '.join(fixed(v, 4) for v in measured[i])}], "
+            f"residual_mm: {fixed(fit.residuals_mm[i], 4)}}}"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def load_part(path: str | os.PathLike[str]) -> PartFile:
+    """robot_T_base and the datums of a part file; InputError naming the key and line."""
+    doc = load_yaml(path)
+    doc.check_keys(PART_SCHEMA)
+    if "base" not in doc.data:
+        raise InputError(
+            "missing key 'base' (is this a file written by accugrid fit-part?)", os.fspath(path)
+        )
+    xyzabc = np.array([doc.number("base", k) for k in FRAME_KEYS])
+    datums = doc.get("datums", default=None) or []
+    if not isinstance(datums, list):
+        raise doc.error("'datums' must be a list", "datums")
+    ids = [str(doc.get("datums", i, "id")) for i in range(len(datums))]
+    measured = np.array(
+        [[doc.number("datums", i, "measured", k) for k in range(3)] for i in range(len(datums))]
+    ).reshape(-1, 3)
+    return PartFile(pose_from_xyzabc(xyzabc), ids, measured)
+
+
+def read_base(
+    r: CellReader, robot: str, flange_T_tool: np.ndarray
+) -> tuple[int | None, np.ndarray]:
+    """The cell's ``base``: a frame {x, y, z, a, b, c, number} or a part file {file, number}
+    (relative to the cell); (number, robot_T_base (4, 4) mm). A part whose datums lie beyond the
+    reach of ``robot`` (a name or path) with ``flange_T_tool`` (its origin, when the file lists no
+    datums) is refused at ``base.file``."""
+    data = r.top.get("base")
+    if not isinstance(data, Mapping) or "file" not in data:
+        return r.frame(data, "base", True)
+    d = r.mapping(data, "base", {"file", "number"})
+    number = r.integer("base", "number", None, 1, 32, data=d)
+    name = d["file"]
+    if not isinstance(name, str) or not name.strip():
+        raise r.error("base.file", "must be the path of a part file (accugrid fit-part)")
+    part = load_part(r.path.parent / name)
+    reach = reach_mm(load_robot(robot).with_tool(flange_T_tool))
+    points = part.measured if len(part.ids) else part.robot_T_base[None, :3, 3]
+    far = np.linalg.norm(points, axis=1)
+    worst = int(np.argmax(far))
+    if far[worst] > reach:
+        what = f"datum {part.ids[worst]}" if worst < len(part.ids) else "the part frame's origin"
+        raise r.error(
+            "base.file",
+            f"{Path(name).name}: {what} lies {far[worst]:.0f} mm from the robot's origin, "
+            f"beyond its reach ({reach:.0f} mm): was the part measured in the tracker frame "
+            "without fit-part --frame?",
+        )
+    return number, part.robot_T_base
