@@ -27,6 +27,12 @@ against Δd3 for the parallel A2/A3 axes, Δd1/Δθ1 against the tracker frame).
 identifiable subspace, so the estimate has no component along those directions ("held at
 zero"). A robot's structural directions are those of a spread-out reference pose set; data that
 lose more (all poses in one orientation, ...) are refused.
+
+The split between the last link and the TCP: positions see link 6's Δa6, Δd6, Δα6, Δθ6 only
+together with the TCP offset (each column is the flange rotation times a vector, which the TCP
+columns span), so these four are held at zero (``LAST_LINK``) and the TCP takes the whole
+share: the calibrated flange is the nominal last link on the calibrated wrist, and a tool
+measured on it (``kinematics.tool_calibration``) carries everything beyond the wrist.
 """
 
 from __future__ import annotations
@@ -46,6 +52,7 @@ from accugrid.kinematics.robot import Robot
 
 __all__ = [
     "COMPLIANT_AXES",
+    "LAST_LINK",
     "MAX_HARMONICS",
     "RTOL",
     "CrossValidation",
@@ -65,6 +72,7 @@ __all__ = [
     "select_poses",
 ]
 
+LAST_LINK = slice(20, 24)  # Δa6 Δd6 Δα6 Δθ6 in x: held at zero, their share goes to the TCP
 COMPLIANT_AXES = (1, 2)  # A2, A3 (0-based): the axes that carry the arm against gravity
 RTOL = 1e-7  # singular value / largest below this: unidentifiable direction (scaled Jacobian)
 MAX_HARMONICS = 60  # reducer harmonic terms (axis, order) one identification takes at most
@@ -436,6 +444,7 @@ def _subspace(jac: np.ndarray, rtol: float) -> _Subspace:
     scale = np.sqrt(np.mean(flat**2, axis=0))
     scale = np.where(scale > 1e-12 * scale.max(), scale, 1.0)
     scaled = flat / scale
+    scaled[:, LAST_LINK] = 0.0  # the TCP takes their share (module docstring)
     if len(scaled) < len(scale):  # fewer equations than parameters: pad, same directions
         scaled = np.vstack([scaled, np.zeros((len(scale) - len(scaled), len(scale)))])
     _, sing, vt = np.linalg.svd(scaled, full_matrices=False)

@@ -1,0 +1,177 @@
+"""The drill's TCP measured on the calibrated arm: identify-tool, its file in a cell, the
+controllers' tool lines, bad input; and the split of the last link against the TCP."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import yaml
+
+from accugrid.app.cli import main
+from accugrid.codegen.cell import load_cell
+from accugrid.codegen.dialects import plugin_of
+from accugrid.infra.errors import InputError
+from accugrid.kinematics.calibrated import calibrated_yaml
+from accugrid.kinematics.candidates import reference_joints
+from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.identification import LAST_LINK, identify, pose_set
+from accugrid.kinematics.robot import load_robot
+from accugrid.kinematics.robot_family import (
+    NOISE_REPEAT_MM,
+    NOISE_TRACKER_MM,
+    FamilyRobot,
+    random_robot,
+)
+from accugrid.kinematics.tool_calibration import flange_poses_of, plan_tool_poses
+
+TAUGHT = [10.0, -5.0, 320.0, 0.0, 0.0, 0.0]
+TRUE_TIP = np.array([10.7, -5.4, 320.6])  # the real drill: 0.98 mm off the taught TCP
+TRUE_AXIS = np.array([np.sin(np.radians(0.4)), 0.0, np.cos(np.radians(0.4))])  # 0.4 deg off Z
+BACK_MM = 60.0
+NOISE_MM = 0.02
+CENTRE = np.array([1500.0, 0.0, 1500.0])
+
+
+@pytest.fixture(scope="module")
+def model_path(tmp_path_factory):
+    """A calibrated kr210: seed Table 1's errors on the arm, the SMR at 250 mm."""
+    paper = load_robot("kr210-paper")
+    robot = load_robot("kr210").with_tool(pose_from_xyzabc([0, 0, 250, 0, 0, 0]))
+    model = replace(robot, errors=paper.errors, name="kr210-calibrated")
+    path = tmp_path_factory.mktemp("model") / "cal.yaml"
+    path.write_text(calibrated_yaml(model, {"robot": "kr210", "poses": 60}))
+    return path
+
+
+def measurement_csv(path, model_path, orientations=8, axis=True, joints=True, point_word="axis"):
+    """The SMR at the real drill's tip (and 60 mm back on its axis) measured 3 times at
+    ``orientations`` planned orientations; the model is the real arm."""
+    model = load_robot(model_path)
+    taught = pose_from_xyzabc(TAUGHT)
+    _, q = plan_tool_poses(model, taught, CENTRE, orientations)
+    q = np.repeat(q, 3, axis=0)
+    flange = flange_poses_of(model, q)
+    commanded = (model.with_tool(taught).fk(q))[:, :3, 3]
+    rng = np.random.default_rng(5)
+    rows = []
+    points = [("tip", TRUE_TIP)] + ([(point_word, TRUE_TIP - BACK_MM * TRUE_AXIS)] if axis else [])
+    for word, point in points:
+        measured = flange[:, :3, :3] @ point + flange[:, :3, 3]
+        measured += rng.normal(0.0, NOISE_MM, measured.shape)
+        for c, m, j in zip(commanded, measured, np.degrees(q), strict=True):
+            cells = [f"{v:.4f}" for v in (*c, *m)] + ([f"{v:.5f}" for v in j] if joints else [])
+            rows.append(",".join([*cells, word]))
+    header = "x,y,z,x_meas,y_meas,z_meas" + (",a1,a2,a3,a4,a5,a6" if joints else "") + ",point"
+    path.write_text(header + "\n" + "\n".join(rows) + "\n")
+    return path
+
+
+def run(*args):
+    return main(["identify-tool", *map(str, args)])
+
+
+def test_tip_and_axis_found_within_their_sigma(tmp_path, model_path, capsys):
+    meas = measurement_csv(tmp_path / "tool.csv", model_path)
+    out = tmp_path / "tool.yaml"
+    assert run(meas, "--model", model_path, "--tool", *TAUGHT, "--number", 3, "-o", out) == 0
+    doc = yaml.safe_load(out.read_text())
+    tool = pose_from_xyzabc([doc["tool"][k] for k in "xyzabc"])
+    sigma = np.array([doc["sigma"][k] for k in "xyz"])
+    # 8 pose means of 3 rows: sigma = 0.02 / sqrt(3 * 8) per axis
+    assert sigma == pytest.approx(NOISE_MM / np.sqrt(24), rel=0.5)
+    assert np.all(np.abs(tool[:3, 3] - TRUE_TIP) < 4 * sigma)
+    angle = np.degrees(np.arccos(tool[:3, 2] @ TRUE_AXIS))
+    assert angle < 4 * doc["sigma"]["axis_deg"] and doc["sigma"]["axis_deg"] < 0.05
+    assert doc["measured_on"]["robot"] == "kr210"
+    printed = capsys.readouterr().out
+    krl = re.search(r"TOOL_DATA\[3\]=\{X (\S+),Y (\S+),Z (\S+),A (\S+),B (\S+),C (\S+)\}", printed)
+    assert krl and np.allclose(
+        [float(v) for v in krl.groups()], [doc["tool"][k] for k in "xyzabc"], atol=6e-4
+    )
+    assert "tool3.tframe:=[[" in printed
+    assert f"cell: tool: {{file: {out}, number: 3}}" in printed
+
+
+def test_tool_lines_of_each_dialect():
+    pose = pose_from_xyzabc([1.5, -2.0, 300.25, 0.0, 0.0, 0.0])
+    assert (
+        plugin_of("krl").tool_line(2, pose)
+        == "TOOL_DATA[2]={X 1.500,Y -2.000,Z 300.250,A 0.0000,B 0.0000,C 0.0000}"
+    )
+    assert (
+        plugin_of("rapid")
+        .tool_line(2, pose)
+        .startswith("tool2.tframe:=[[1.500,-2.000,300.250],[1.000000")
+    )
+    assert plugin_of("gcode").tool_line(2, pose) == "G10 L1 P2 X1.500 Y-2.000 Z300.250"
+
+
+def write_cell(tmp_path, tool_file, model=None, robot="kr210"):
+    cell = tmp_path / "cell.yaml"
+    text = f"robot: {robot}\ntool: {{file: {tool_file}, number: 4}}\nbase: {{x: 0, number: 1}}\n"
+    if model:
+        text += f"correction: {{model: {model}}}\n"
+    cell.write_text(text)
+    return cell
+
+
+def test_a_cell_takes_the_tool_file_of_its_model(tmp_path, model_path):
+    meas = measurement_csv(tmp_path / "tool.csv", model_path, axis=False)
+    out = tmp_path / "tool.yaml"
+    assert run(meas, "--model", model_path, "-o", out) == 0
+    doc = yaml.safe_load(out.read_text())
+    cell = load_cell(write_cell(tmp_path, out.name, model_path))
+    assert cell.tool_number == 4
+    np.testing.assert_allclose(cell.flange_T_tool[:3, 3], [doc["tool"][k] for k in "xyz"])
+    assert load_cell(write_cell(tmp_path, out.name)).tool_number == 4  # same robot, no model
+    other = tmp_path / "other.yaml"
+    other.write_text(model_path.read_text() + "# another calibration\n")
+    with pytest.raises(InputError, match=r"tool\.file.*not on the cell's other\.yaml") as e:
+        load_cell(write_cell(tmp_path, out.name, other))
+    assert e.value.line == 2
+    with pytest.raises(InputError, match="measured on robot kr210, the cell's robot is irb6700"):
+        load_cell(write_cell(tmp_path, out.name, robot="irb6700"))
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"orientations": 5}, "at 5 distinct orientations"),
+        ({"joints": False}, "needs the joints the controller logged"),
+        ({"point_word": "back"}, "point 'back': one of tip, axis"),
+    ],
+)
+def test_bad_input_is_one_located_line_and_writes_nothing(
+    tmp_path, model_path, capsys, change, message
+):
+    meas = measurement_csv(tmp_path / "tool.csv", model_path, **change)
+    out = tmp_path / "tool.yaml"
+    assert run(meas, "--model", model_path, "-o", out) == 2
+    err = capsys.readouterr().err
+    assert message in err and str(meas) in err and len(err.strip().splitlines()) == 1
+    assert "Traceback" not in err and not out.exists()
+
+
+def test_joints_not_reaching_the_taught_tcp_are_refused(tmp_path, model_path, capsys):
+    meas = measurement_csv(tmp_path / "tool.csv", model_path, axis=False)
+    wrong = [*TAUGHT[:2], TAUGHT[2] + 5.0, *TAUGHT[3:]]
+    assert run(meas, "--model", model_path, "--tool", *wrong, "-o", tmp_path / "t.yaml") == 2
+    assert "do not reproduce the commanded position" in capsys.readouterr().err
+
+
+def test_the_last_link_share_goes_to_the_tcp():
+    """Position data see link 6's errors only with the TCP: identify holds them at zero and the
+    TCP takes the whole share, with the fit as good as before."""
+    drawn = random_robot(3)  # its DH errors and SMR offset, no joint errors: DH + TCP fit it all
+    family = FamilyRobot(3, replace(drawn.robot, joint_errors=None), drawn.tcp_offset_mm)
+    q = reference_joints(family.nominal, 60)
+    s = family.session(q, repeats=1, seed=1)
+    data = pose_set(family.nominal, s.commanded, s.measured, s.abc_deg, s.joints_deg)
+    result = identify(family.nominal, data)
+    assert np.all(result.x[LAST_LINK] == 0.0)
+    assert {"da6", "dd6", "dalpha6", "dtheta6"} <= set(result.unidentifiable_text)
+    noise = np.hypot(NOISE_REPEAT_MM, NOISE_TRACKER_MM)
+    assert np.sqrt(np.mean(result.residuals**2)) < 1.2 * noise
