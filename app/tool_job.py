@@ -31,9 +31,10 @@ POINTS = ("tip", "axis")  # column ``point``: the SMR at the tool's point, or on
 @dataclass(frozen=True)
 class ToolRequest:
     """MEAS (the measurement CSV: x,y,z commanded, x_meas,y_meas,z_meas in the robot frame,
-    a1..a6 logged, optional ``point``), the calibrated MODEL, the output; ``taught``: the tool
-    as taught (x, y, z mm, a, b, c deg), whose orientation is kept without axis rows and whose
-    TCP the logged joints are checked against; ``number``: the tool number of the printed lines."""
+    a1..a6 logged (or a,b,c and s, solved with ``taught``), optional ``point``), the calibrated
+    MODEL, the output; ``taught``: the tool as taught (x, y, z mm, a, b, c deg), whose
+    orientation is kept without axis rows and whose TCP the logged joints are checked against;
+    ``number``: the tool number of the printed lines."""
 
     measurements: str
     model: str
@@ -60,37 +61,40 @@ def _points(path: str) -> np.ndarray:
 
 def identify_tool_files(req: ToolRequest) -> JobFiles:
     """The tool file at ``req.output`` and the lines to print. InputError for a model that is
-    not a calibrated DH robot, measurements without logged joints, joints that do not reproduce
-    the commanded positions with the taught tool, or too few orientations (located)."""
+    not a calibrated DH robot, measurements without logged joints (and without a,b,c and the
+    taught tool), joints that do not reproduce the commanded positions with the taught tool, or
+    too few orientations (located)."""
     model = load_robot(req.model)
     if not isinstance(model, Robot) or model.errors is None:
         raise InputError(
             "is not a calibrated robot model (accugrid identify writes one)", req.model
         )
     meas = read_measurements(req.measurements)
-    if meas.joints is None:
+    if meas.joints is None and req.taught is None:
         raise InputError(
-            "identify-tool needs the joints the controller logged at each pose: columns a1..a6",
+            "identify-tool needs the joints the controller logged at each pose (columns "
+            "a1..a6), or a,b,c with the taught --tool to solve them",
             req.measurements,
         )
     is_axis = _points(req.measurements)
     labels = [meas.where(r) for r in range(len(meas.commanded))]
     taught = pose_from_xyzabc(np.array(req.taught if req.taught else [0.0] * 6))
-    if req.taught is not None:  # the joints must reach the commanded TCP with the taught tool
-        tip = ~is_axis
-        pose_set(
+    if req.taught is None:
+        q = np.radians(meas.joints)
+    else:  # logged joints must reach the commanded TCP with the taught tool; else solved
+        q = pose_set(
             model.with_tool(taught),
-            meas.commanded[tip],
-            meas.measured[tip],
-            joints_deg=meas.joints[tip],
-            joint_decimals=meas.joint_decimals[tip],
-            position_decimals=meas.position_decimals[tip],
-            labels=[labels[r] for r in np.flatnonzero(tip)],
+            meas.commanded,
+            meas.measured,
+            abc_deg=meas.abc,
+            joints_deg=meas.joints,
+            status=meas.status,
+            joint_decimals=meas.joint_decimals,
+            position_decimals=meas.position_decimals,
+            labels=labels,
             path=meas.path,
-        )
-    fit = fit_tool(
-        model, np.radians(meas.joints), meas.measured, is_axis, taught[:3, :3], labels, meas.path
-    )
+        ).q
+    fit = fit_tool(model, q, meas.measured, is_axis, taught[:3, :3], labels, meas.path)
     nominal = str(load_yaml(req.model).get("identification", "robot", default=model.name))
     text = tool_yaml(
         fit,

@@ -42,7 +42,14 @@ def model_path(tmp_path_factory):
     robot = load_robot("kr210").with_tool(pose_from_xyzabc([0, 0, 250, 0, 0, 0]))
     model = replace(robot, errors=paper.errors, name="kr210-calibrated")
     path = tmp_path_factory.mktemp("model") / "cal.yaml"
-    path.write_text(calibrated_yaml(model, {"robot": "kr210", "poses": 60}))
+    validity = {
+        "box_min_mm": [1200, -400, 1200],
+        "box_max_mm": [1800, 400, 1800],
+        "tool_axis": [0, 0, -1],
+        "tilt_deg": 40,
+        "joints_deg": [[-60, 60], [-130, -40], [20, 150], [-180, 180], [-125, 125], [-180, 180]],
+    }
+    path.write_text(calibrated_yaml(model, {"robot": "kr210", "poses": 60, "validity": validity}))
     return path
 
 
@@ -175,3 +182,40 @@ def test_the_last_link_share_goes_to_the_tcp():
     assert {"da6", "dd6", "dalpha6", "dtheta6"} <= set(result.unidentifiable_text)
     noise = np.hypot(NOISE_REPEAT_MM, NOISE_TRACKER_MM)
     assert np.sqrt(np.mean(result.residuals**2)) < 1.2 * noise
+
+
+def test_planned_orientations_measured_without_logged_joints(tmp_path, model_path, capsys):
+    """plan tool -> the operator's measurements (a,b,c kept, no joints) -> identify-tool --tool."""
+    model = model_path
+    assert main(["plan", "tool", "--model", str(model), "--tool", *map(str, TAUGHT),
+                 "--axis-point", "-o", str(tmp_path / "plan")]) == 0  # fmt: skip
+    printed = capsys.readouterr().out
+    assert "tool plan: 8 orientations x 3 repeats about X 1500.0 Y 0.0 Z 1500.0" in printed
+    plan = (tmp_path / "plan" / "measure_tool.csv").read_text().splitlines()
+    header = plan[0].split(",")
+    assert header[:8] == ["id", "x", "y", "z", "a", "b", "c", "point"] and len(plan) == 49
+    assert (tmp_path / "plan" / "measure_tool.src").exists()
+    robot = load_robot(model).with_tool(pose_from_xyzabc(TAUGHT))
+    rows = [line.split(",") for line in plan[1:]]
+    xyzabc = np.array([[float(v) for v in row[1:7]] for row in rows])
+    q = robot.ik(pose_from_xyzabc(xyzabc)).q
+    flange = flange_poses_of(robot, q)
+    point = np.where(
+        np.array([row[7] == "axis" for row in rows])[:, None],
+        TRUE_TIP - BACK_MM * TRUE_AXIS,
+        TRUE_TIP,
+    )
+    measured = np.einsum("nij,nj->ni", flange[:, :3, :3], point) + flange[:, :3, 3]
+    lines = ["x,y,z,a,b,c,point,x_meas,y_meas,z_meas"] + [
+        ",".join([*row[1:8], *(f"{v:.4f}" for v in m)])
+        for row, m in zip(rows, measured, strict=True)
+    ]
+    meas = tmp_path / "meas.csv"
+    meas.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "tool.yaml"
+    assert main(["identify-tool", str(meas), "--model", str(model), "--tool",
+                 *map(str, TAUGHT), "-o", str(out)]) == 0  # fmt: skip
+    doc = yaml.safe_load(out.read_text())
+    np.testing.assert_allclose([doc["tool"][k] for k in "xyz"], TRUE_TIP, atol=2e-4)  # 4 decimals
+    tool = pose_from_xyzabc([doc["tool"][k] for k in "xyzabc"])
+    assert np.degrees(np.arccos(tool[:3, 2] @ TRUE_AXIS)) < 1e-3
