@@ -86,6 +86,7 @@ _FD_RAD = 1e-5  # central-difference step of the tracker-frame rotation columns
 _REFERENCE_POSES = 96  # size of the spread-out pose set that gives the structural directions
 _GROUP_MM, _GROUP_DEG = 1e-3, 1e-3  # rows this close in commanded pose are repeats of one pose
 _SHOW = 5
+_HELD_TEXT = "da6 dd6 dalpha6 dtheta6 (in the TCP)"  # LAST_LINK, as identify reports it
 _LENGTH = {"a": "mm", "d": "mm", "alpha": "rad", "theta": "rad"}
 
 Terms = tuple[tuple[int, int], ...]  # reducer harmonics to identify: (axis 1..6, order)
@@ -405,8 +406,8 @@ class Identification:
     units: list[str]
     x: np.ndarray  # (n,) identified parameters
     std: np.ndarray  # (n,) standard deviations (0 along nothing identifiable)
-    identifiable: np.ndarray  # (n,) bool: the parameter alone is determined (no null component)
-    null_space: np.ndarray  # (k, n) unidentifiable directions in parameter units
+    identifiable: np.ndarray  # (n,) bool: determined alone (no null component, not held at 0)
+    null_space: np.ndarray  # (k, n) unidentifiable directions in parameter units (LAST_LINK held)
     singular_values: np.ndarray  # (n,) of the column-scaled Jacobian, descending
     rank: int
     condition_number: float
@@ -435,7 +436,7 @@ class Identification:
 class _Subspace:
     scale: np.ndarray  # (n,) column RMS of the nominal Jacobian
     basis: np.ndarray  # (n, r) identifiable directions in scaled coordinates
-    null: np.ndarray  # (n, n - r) unidentifiable directions in scaled coordinates
+    null: np.ndarray  # (n, k) unidentifiable directions in scaled coordinates (LAST_LINK held)
     singular: np.ndarray  # (n,)
 
 
@@ -449,7 +450,13 @@ def _subspace(jac: np.ndarray, rtol: float) -> _Subspace:
         scaled = np.vstack([scaled, np.zeros((len(scale) - len(scaled), len(scale)))])
     _, sing, vt = np.linalg.svd(scaled, full_matrices=False)
     rank = int(np.sum(sing > rtol * sing[0]))
-    return _Subspace(scale, vt[:rank].T, vt[rank:].T, sing)
+    basis = vt[:rank].T.copy()
+    basis[LAST_LINK] = 0.0  # exactly: rounding leaves ~1e-17 there
+    # the null space less the held parameters (their unit directions): what the data cannot see
+    rest = vt[rank:].T.copy()
+    rest[LAST_LINK] = 0.0
+    u, size, _ = np.linalg.svd(rest, full_matrices=False)
+    return _Subspace(scale, basis, u[:, size > 0.5], sing)
 
 
 def select_poses(
@@ -569,6 +576,7 @@ def identify(
     directions = sub.basis / sub.scale[:, None]
     std = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", directions, cov_z, directions), 0.0))
     identifiable = np.linalg.norm(sub.null, axis=1) < 1e-6
+    identifiable[LAST_LINK] = False
     kept = sub.singular[:rank]
     null = _readable_null(sub.null)
     outliers = _outliers(residuals, sigma, data.labels)
@@ -612,7 +620,7 @@ def identify(
         rows=rows,
         tracker_T_robot=tracker,
         cross_validation=cv,
-        unidentifiable_text=[_direction_text(v, names) for v in null.T],
+        unidentifiable_text=[_direction_text(v, names) for v in null.T] + [_HELD_TEXT],
     )
 
 
