@@ -17,7 +17,13 @@ from accugrid.infra.errors import InputError, printable
 from accugrid.infra.inputfile import read_input_bytes
 from accugrid.kinematics.calibrated import calibrated_yaml, identification_summary
 from accugrid.kinematics.frames import xyzabc_from_pose
-from accugrid.kinematics.identification import Identification, Terms, identify, pose_set
+from accugrid.kinematics.identification import (
+    LAST_LINK,
+    Identification,
+    Terms,
+    identify,
+    pose_set,
+)
 from accugrid.kinematics.robot import VALIDATED_MAX_KEYS, Robot
 from accugrid.kinematics.structure import STRUCTURE_WORD, Selection, identify_structure
 from accugrid.kinematics.validity import validity_section
@@ -195,7 +201,12 @@ def _report(path: str, robot: Robot, result: Identification) -> str:
         if ok
     ]
     lines += ["    " + " | ".join(cells[i : i + 4]) for i in range(0, len(cells), 4)]
-    tied = [n for n, ok in zip(result.names, result.identifiable, strict=True) if not ok]
+    held = set(result.names[LAST_LINK])
+    tied = [
+        n
+        for n, ok in zip(result.names, result.identifiable, strict=True)
+        if not ok and n not in held
+    ]
     if tied:
         lines.append(
             "  determined only in the combinations above (minimum-norm values in the file): "

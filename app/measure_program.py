@@ -52,7 +52,7 @@ class PlanRequest:
     candidates, ``compliance`` and ``harmonics`` as (axis, order) pairs pinned) or "dh"
     (D-optimal for the model given by ``compliance``, ``harmonics``, ``gravity``);
     tool: ``count`` orientations of ``robot``'s tool (as taught) about ``centre`` within
-    ``tilt_deg`` of straight down, inside the joint ranges of the calibrated ``model`` file
+    ``tilt_deg`` of ``abc``, inside the joint ranges of the calibrated ``model`` file
     (``seed``), ``repeats`` rounds, with ``axis_point`` the same again for a point on the axis.
     Program: in ``dialect`` (a registered dialect that writes measurement programs), ``name``
     (default measure_KIND), TOOL_DATA ``tool_number``, BASE_DATA ``base_number`` (0: the robot
@@ -241,8 +241,8 @@ def _identification_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
 
 def _tool_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
     """Orientations of the taught tool about one point for ``accugrid identify-tool``, in the
-    Status (given, or the IK default's with the tool straight down) and the joint ranges the
-    arm was calibrated in, and lines describing them."""
+    Status (given, or the IK default's at ``abc``) and the joint ranges the arm was calibrated
+    in, and lines describing them."""
     from accugrid.infra.yamlfile import load_yaml
     from accugrid.kinematics.frames import matrix_to_abc
     from accugrid.kinematics.tool_calibration import (
@@ -260,12 +260,12 @@ def _tool_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
         if r.centre is not None
         else (validity.lower + validity.upper) / 2
     )
-    down = pose_from_xyzabc(np.concatenate([centre, [0.0, 90.0, 0.0]]))
-    status = solve_in_one_status(r.robot, down, r.status)[1]
+    middle = pose_from_xyzabc(np.concatenate([centre, r.abc]))
+    status = solve_in_one_status(r.robot, middle, r.status)[1]
     if status is None:
         raise InputError(
-            f"the tool cannot point straight down at {np.round(centre, 1).tolist()} mm: give "
-            "another --centre or --status"
+            f"the tool cannot reach {np.round(centre, 1).tolist()} mm at A B C "
+            f"{' '.join(map(fixed, r.abc))} deg: give another --centre, --abc or --status"
         )
     poses, q = plan_tool_poses(
         r.robot,
@@ -277,6 +277,7 @@ def _tool_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
         r.seed,
         status,
         validity.joints_deg,
+        r.abc,
     )
     flange = r.robot.with_tool(np.eye(4)).fk(q)[:, :3, :3]
     points = np.tile(poses[:, :3, 3], (r.repeats, 1))
@@ -290,7 +291,8 @@ def _tool_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
     plan = Plan(points, abc, ids, {"point": words})
     info = [
         f"tool plan: {r.count} orientations x {r.repeats} repeats about X {centre[0]:.1f} "
-        f"Y {centre[1]:.1f} Z {centre[2]:.1f} (Status {status}, tilt up to {r.tilt_deg:g} deg, "
+        f"Y {centre[1]:.1f} Z {centre[2]:.1f} (Status {status}, tilt up to {r.tilt_deg:g} deg "
+        f"from A B C {' '.join(map(fixed, r.abc))}, "
         f"{DISTINCT_DEG:g} deg apart or more, inside the calibrated joint ranges); a frame "
         f"offset enters the TCP by {frame_sensitivity(flange):.2f} of itself"
         + ("; then the same poses with the SMR on the drill axis" if r.axis_point else ""),

@@ -228,23 +228,24 @@ def plan_tool_poses(
     seed: int = 0,
     status: int | None = None,
     joints_deg: np.ndarray | None = None,
+    abc_deg: np.ndarray = (0.0, 90.0, 0.0),
 ) -> tuple[np.ndarray, np.ndarray]:
     """``count`` orientations of the tool whose point stays at ``centre_mm`` (3,) in the robot
-    frame: the drill axis tilted up to ``tilt_deg`` from straight down about random azimuths and
-    turned about itself, reachable by the nominal ``model`` with ``flange_T_tool`` (4, 4) in
-    KUKA ``status`` (None: the IK default) with joints inside ``joints_deg`` (6, 2) (the arm's
-    calibrated ranges; None: the limits), chosen greedily to make ``frame_sensitivity`` small
-    (the first: the least tilted). Returns the TCP poses (count, 4, 4) and their joints
+    frame: ``abc_deg`` (KUKA deg) with the drill axis tilted up to ``tilt_deg`` about random
+    azimuths and turned about itself, reachable by the nominal ``model`` with ``flange_T_tool``
+    (4, 4) in KUKA ``status`` (None: the IK default) with joints inside ``joints_deg`` (6, 2) (the
+    arm's calibrated ranges; None: the limits), chosen greedily to make ``frame_sensitivity``
+    small (the first: the least tilted). Returns the TCP poses (count, 4, 4) and their joints
     (count, 6) rad. InputError when fewer than ``count`` candidates qualify."""
     rng = np.random.default_rng(seed)
     tilt = np.radians(tilt_deg) * np.sqrt(rng.random(candidates))
     azimuth = rng.uniform(0.0, 2 * np.pi, candidates)
     spin = rng.uniform(-180.0, 180.0, candidates)
-    down = abc_to_matrix(np.array([0.0, 90.0, 0.0]))  # tool Z straight down
-    axes = np.column_stack(
-        [np.sin(tilt) * np.cos(azimuth), np.sin(tilt) * np.sin(azimuth), -np.cos(tilt)]
+    reference = abc_to_matrix(np.asarray(abc_deg, dtype=float))
+    local = np.column_stack(
+        [np.sin(tilt) * np.cos(azimuth), np.sin(tilt) * np.sin(azimuth), np.cos(tilt)]
     )
-    rotations = orient_along_axes(axes, down)
+    rotations = orient_along_axes(local @ reference.T, reference)
     turn = abc_to_matrix(np.column_stack([spin, np.zeros((candidates, 2))]))
     poses = np.tile(np.eye(4), (candidates, 1, 1))
     poses[:, :3, :3] = rotations @ turn  # turned about the tool's own Z
@@ -258,9 +259,10 @@ def plan_tool_poses(
     if len(ok) < count:
         raise InputError(
             f"only {len(ok)} of {candidates} tool orientations within {tilt_deg:g} deg of "
-            f"straight down are reachable at {np.round(centre_mm, 1).tolist()} mm"
+            f"A B C {' '.join(f'{v:g}' for v in np.ravel(abc_deg))} are reachable at "
+            f"{np.round(centre_mm, 1).tolist()} mm"
             + ("" if joints_deg is None else " inside the joint ranges the arm was calibrated in")
-            + ": choose another --centre or a smaller --tilt"
+            + ": choose another --centre, --abc or a smaller --tilt"
         )
     flange = poses[ok, :3, :3] @ np.asarray(flange_T_tool)[:3, :3].T  # R_flange = R_tcp R_tool^T
     chosen = [int(np.argmin(tilt[ok]))]

@@ -9,8 +9,8 @@ from scipy.spatial.transform import Rotation
 
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.calibrated import calibrated_yaml
-from accugrid.kinematics.frames import matrix_to_abc, pose_from_xyzabc
 from accugrid.kinematics.dh import flange_poses
+from accugrid.kinematics.frames import matrix_to_abc, pose_from_xyzabc
 from accugrid.kinematics.identification import (
     LAST_LINK,
     harmonic_terms,

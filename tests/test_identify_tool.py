@@ -220,3 +220,24 @@ def test_planned_orientations_measured_without_logged_joints(tmp_path, model_pat
     np.testing.assert_allclose([doc["tool"][k] for k in "xyz"], TRUE_TIP, atol=2e-4)  # 4 decimals
     tool = pose_from_xyzabc([doc["tool"][k] for k in "xyzabc"])
     assert np.degrees(np.arccos(tool[:3, 2] @ TRUE_AXIS)) < 1e-3
+
+
+def test_simulate_measures_a_tool_off_its_taught_tcp(tmp_path, model_path):
+    """plan tool -> simulate --smr/--smr-axis (the real drill on the model's arm, joints logged,
+    column point carried) -> identify-tool finds that drill."""
+    assert main(["plan", "tool", "--model", str(model_path), "--tool", *map(str, TAUGHT),
+                 "--axis-point", "--repeats", "1", "-o", str(tmp_path / "plan")]) == 0  # fmt: skip
+    axis_point = TRUE_TIP - BACK_MM * TRUE_AXIS
+    session = tmp_path / "session.csv"
+    assert main(["simulate", "--robot", str(model_path), "--tool", *map(str, TAUGHT),
+                 "--poses", str(tmp_path / "plan" / "measure_tool.csv"),
+                 "--smr", *map(str, TRUE_TIP), "--smr-axis", *map(str, axis_point),
+                 "-o", str(session)]) == 0  # fmt: skip
+    header = session.read_text().splitlines()[1].split(",")
+    assert header[8:16] == ["a1", "a2", "a3", "a4", "a5", "a6", "point", "x_meas"]
+    out = tmp_path / "tool.yaml"
+    assert main(["identify-tool", str(session), "--model", str(model_path), "-o", str(out)]) == 0
+    doc = yaml.safe_load(out.read_text())
+    np.testing.assert_allclose([doc["tool"][k] for k in "xyz"], TRUE_TIP, atol=2e-4)
+    tool = pose_from_xyzabc([doc["tool"][k] for k in "xyzabc"])
+    assert np.degrees(np.arccos(tool[:3, 2] @ TRUE_AXIS)) < 1e-3

@@ -20,8 +20,7 @@
               identify's structure search the poses cannot separate.
   tool        --count orientations (default 8) for `accugrid identify-tool` of the --tool as
               taught, about one point (--centre; default: the centre of --model's calibrated
-              region) with the drill axis within --tilt deg of straight down, turned about
-              itself, inside the joint ranges --model was calibrated in, spread so that an offset
+              region) with the drill axis within --tilt deg of --abc's, turned about itself, inside the joint ranges --model was calibrated in, spread so that an offset
               of the robot frame hardly enters the TCP; column point (tip; --axis-point: the
               same poses again as axis rows for an SMR on the drill axis).
 
@@ -189,7 +188,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         help="orientations to measure (at least 6; default: 8)",
     )
-    add_tilt(tool, "largest tilt of the drill axis from straight down")
+    add_tilt(tool, "largest tilt of the drill axis from --abc")
     tool.add_argument(
         "--repeats",
         type=number("", 1, MAX_REPEATS, whole=True),
