@@ -20,9 +20,10 @@
               identify's structure search the poses cannot separate.
   tool        --count orientations (default 8) for `accugrid identify-tool` of the --tool as
               taught, about one point (--centre; default: the centre of --model's calibrated
-              region) with the drill axis within --tilt deg of --abc's, turned about itself, inside the joint ranges --model was calibrated in, spread so that an offset
-              of the robot frame hardly enters the TCP; column point (tip; --axis-point: the
-              same poses again as axis rows for an SMR on the drill axis).
+              region) with the drill axis within --tilt deg of --abc's, turned about itself,
+              inside the joint ranges --model was calibrated in, spread so that an offset of
+              the robot frame hardly enters the TCP; column point (tip; --axis-point: the same
+              poses again as axis rows for an SMR on the drill axis).
 
 Outputs in DIR: NAME.csv (id,x,y,z,a,b,c[,centre,step,label,repeat],x_meas,y_meas,z_meas with
 the measured columns empty for the operator) and the KUKA KRL program NAME.src/NAME.dat that
