@@ -3,7 +3,8 @@ has described (``kinematics.robot_family``).
 
 Per robot: the arm is calibrated by ``identify`` from 60 poses x 3 repeats of `plan identify`
 (the SMR on the declared tool, joint terms told, as ``--harmonics`` pins them), tracker noise
-0.02 mm and repeatability 0.03 mm per axis. A drill is taught at (10, -5, 320) mm, A B C 0; the
+0.02 mm and repeatability 0.03 mm per axis. A drill is taught at (10, -5, 320) mm (``--drill-z``:
+another length; the SMR sits at 250 mm), A B C 0; the
 real drill sits up to 1 mm and 0.5 deg off that (random per robot). `plan tool` chooses 8
 orientations about one point; the tip and a point 60 mm back on the drill axis are measured 3
 times each (in the arm's calibrated Status and joint ranges); ``fit_tool`` gives the drill.
@@ -14,7 +15,7 @@ sigma; the axis' angle from the truth; at 200 holes tilted up to 25 deg, the lar
 the model (calibrated arm + tool - real arm + real drill) with the taught tool, with the
 measured tool and with the true drill (arm only), and the measured/arm-only ratio.
 
-Run: .venv/bin/python bench/bench_tool.py [--seeds N]
+Run: .venv/bin/python bench/bench_tool.py [--seeds N] [--drill-z MM]
 """
 
 from __future__ import annotations
@@ -48,7 +49,8 @@ from bench.timing import table  # noqa: E402
 LO, HI = np.array(SEED_REGION[0]), np.array(SEED_REGION[1])
 DRILL = (0.0, 90.0, 0.0)
 POSES, REPEATS, HOLES = 60, 3, 200
-TAUGHT = (10.0, -5.0, 320.0, 0.0, 0.0, 0.0)
+DRILL_Z = float(sys.argv[sys.argv.index("--drill-z") + 1]) if "--drill-z" in sys.argv else 320.0
+TAUGHT = (10.0, -5.0, DRILL_Z, 0.0, 0.0, 0.0)
 ORIENTATIONS, AXIS_BACK_MM = 8, 60.0
 OFFSET_MM, OFFSET_DEG = 1.0, 0.5
 
@@ -154,6 +156,7 @@ def one_robot(seed: int) -> tuple:
 def main(seeds: int) -> None:
     rows = [one_robot(seed) for seed in range(seeds)]
     print(
+        f"drill at {DRILL_Z:g} mm, the SMR at 250 mm; "
         f"{ORIENTATIONS} orientations x {REPEATS} repeats of the tip and of an axis point "
         f"{AXIS_BACK_MM:g} mm back; {HOLES} holes tilted up to 25 deg; mm and deg"
     )
