@@ -5,7 +5,8 @@ adapter) at 6 or more orientations: x,y,z (commanded), x_meas,y_meas,z_meas (mea
 frame, mm) and the logged joints a1..a6 (deg; without them, a,b,c (deg) and the taught --tool
 give the joints by the nominal IK, in the Status of column s); optional column point: tip
 (default) or axis (a second SMR point on the drill axis, behind the tip, which gives the drill
-axis). Repeats of a pose are averaged. The TCP is the least-squares point in the calibrated flange's frame.
+axis). Repeats of a pose are averaged. The TCP is the least-squares point in the calibrated
+flange's frame.
 
 The tool file holds tool: {x, y, z (mm), a, b, c (KUKA ABC, deg)}, its 1 sigma and the model it
 was measured on. A cell uses it as tool: {file: TOOL.yaml, number: N}. The command prints the
