@@ -28,6 +28,7 @@ UNITLESS = {
     "--folds",
     "--iterations",
     "--max-order",
+    "--number",
     "--power",
     "--repeats",
     "--seed",
