@@ -9,6 +9,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from accugrid.app.cli import main
 from accugrid.codegen.cell import load_cell
@@ -25,7 +27,7 @@ from accugrid.kinematics.robot_family import (
     FamilyRobot,
     random_robot,
 )
-from accugrid.kinematics.tool_calibration import flange_poses_of, plan_tool_poses
+from accugrid.kinematics.tool_calibration import fit_point, flange_poses_of, plan_tool_poses
 
 TAUGHT = [10.0, -5.0, 320.0, 0.0, 0.0, 0.0]
 TRUE_TIP = np.array([10.7, -5.4, 320.6])  # the real drill: 0.98 mm off the taught TCP
@@ -108,12 +110,18 @@ def test_tool_lines_of_each_dialect():
         plugin_of("krl").tool_line(2, pose)
         == "TOOL_DATA[2]={X 1.500,Y -2.000,Z 300.250,A 0.0000,B 0.0000,C 0.0000}"
     )
-    assert (
-        plugin_of("rapid")
-        .tool_line(2, pose)
-        .startswith("tool2.tframe:=[[1.500,-2.000,300.250],[1.000000")
+    assert plugin_of("rapid").tool_line(2, pose) == (
+        "tool2.tframe:=[[1.500,-2.000,300.250],[1.000000000,0.000000000,0.000000000,0.000000000]];"
     )
     assert plugin_of("gcode").tool_line(2, pose) == "G10 L1 P2 X1.500 Y-2.000 Z300.250"
+    turned = pose_from_xyzabc([0.0, 0.0, 200.0, 0.0, 90.0, 0.0])  # about Y by 90 deg
+    assert plugin_of("rapid").tool_line(1, turned) == (
+        "tool1.tframe:=[[0.000,0.000,200.000],[0.707106781,0.000000000,0.707106781,0.000000000]];"
+    )
+    assert plugin_of("gcode").tool_line(1, turned) == (
+        "G10 L1 P1 X0.000 Y0.000 Z200.000 (turned: A 0.0000 B 90.0000 C 0.0000 deg have no "
+        "tool-table form)"
+    )
 
 
 def write_cell(tmp_path, tool_file, model=None, robot="kr210"):
@@ -241,3 +249,19 @@ def test_simulate_measures_a_tool_off_its_taught_tcp(tmp_path, model_path):
     np.testing.assert_allclose([doc["tool"][k] for k in "xyz"], TRUE_TIP, atol=2e-4)
     tool = pose_from_xyzabc([doc["tool"][k] for k in "xyzabc"])
     assert np.degrees(np.arccos(tool[:3, 2] @ TRUE_AXIS)) < 1e-3
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    tip=st.tuples(st.floats(-80, 80), st.floats(-80, 80), st.floats(50, 450)),
+    seed=st.integers(0, 2**16),
+)
+def test_any_tip_comes_back_from_exact_measurements(tip, seed):
+    """Noise-free: the fitted point is the SMR's, whatever it is, and the residuals vanish."""
+    model = load_robot("kr210-paper")
+    q = reference_joints(model, 7, seed)
+    flange = flange_poses_of(model, q)
+    measured = flange[:, :3, :3] @ np.array(tip) + flange[:, :3, 3]
+    fit = fit_point(model, q, measured)
+    np.testing.assert_allclose(fit.point_mm, tip, atol=1e-9)
+    assert fit.noise_mm < 1e-9 and fit.orientations == 7
