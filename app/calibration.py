@@ -19,6 +19,7 @@ from accugrid.infra.units import check_scale
 from accugrid.kinematics.calibrated import calibrated_yaml, identification_summary
 from accugrid.kinematics.frames import xyzabc_from_pose
 from accugrid.kinematics.identification import (
+    LAST_LINK,
     Identification,
     PoseSet,
     Terms,
@@ -279,7 +280,12 @@ def _report(path: str, robot: Robot, result: Identification) -> str:
         if ok
     ]
     lines += ["    " + " | ".join(cells[i : i + 4]) for i in range(0, len(cells), 4)]
-    tied = [n for n, ok in zip(result.names, result.identifiable, strict=True) if not ok]
+    held = set(result.names[LAST_LINK])
+    tied = [
+        n
+        for n, ok in zip(result.names, result.identifiable, strict=True)
+        if not ok and n not in held
+    ]
     if tied:
         lines.append(
             "  determined only in the combinations above (minimum-norm values in the file): "

@@ -50,7 +50,10 @@ class PlanRequest:
     identify: ``region``, ``count`` poses within ``tilt_deg`` of ``abc`` among ``candidates``
     random ones (``seed``), ``repeats`` rounds, ``design`` "library" (for the structure search's
     candidates, ``compliance`` and ``harmonics`` as (axis, order) pairs pinned) or "dh"
-    (D-optimal for the model given by ``compliance``, ``harmonics``, ``gravity``).
+    (D-optimal for the model given by ``compliance``, ``harmonics``, ``gravity``);
+    tool: ``count`` orientations of ``robot``'s tool (as taught) about ``centre`` within
+    ``tilt_deg`` of ``abc``, inside the joint ranges of the calibrated ``model`` file
+    (``seed``), ``repeats`` rounds, with ``axis_point`` the same again for a point on the axis.
     Program: in ``dialect`` (a registered dialect that writes measurement programs), ``name``
     (default measure_KIND), TOOL_DATA ``tool_number``, BASE_DATA ``base_number`` (0: the robot
     frame), first-PTP ``ptp_percent``, LIN ``vel_m_s``, and after each position ``wait_input``
@@ -85,6 +88,8 @@ class PlanRequest:
     wait_input: int | None = None
     templates: Path | None = None
     dialect: str = DIALECT
+    model: str | None = None  # tool: the calibrated robot file whose joint ranges bound the poses
+    axis_point: bool = False  # tool: the poses again for an SMR on the drill axis (point axis)
 
 
 def _program(dialect: str, kind: str, name: str | None) -> tuple[MeasurementWriter, str]:
@@ -119,7 +124,7 @@ def plan_files(request: PlanRequest, output: str | Path) -> JobFiles:
         speed_m_s=request.vel_m_s,
         wait_sec=request.wait_sec,
         wait_input=request.wait_input,
-        ptp_only=request.kind == "identify",  # reorienting between poses: PTP, not LIN
+        ptp_only=request.kind in ("identify", "tool"),  # reorienting between poses: PTP, not LIN
     )
     details = [
         "inputs none, positions generated from the command-line settings",
@@ -171,6 +176,8 @@ def _build(r: PlanRequest) -> tuple[Plan, list[str]]:
         return plan, info
     if r.kind == "identify":
         return _identification_plan(r)
+    if r.kind == "tool":
+        return _tool_plan(r)
     if r.kind == "cube":
         plan = cube_plan(r.centre, r.step_mm, r.repeats, r.abc)
         return plan, [f"cube plan: 8 vertices + 9 test points x {r.repeats} repeats"]
@@ -229,6 +236,68 @@ def _identification_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
         f"path {plan.path_length():.1f} mm",
     ]
     info.append(_candidates_line(robot, plan, status, r))
+    return plan, info
+
+
+def _tool_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
+    """Orientations of the taught tool about one point for ``accugrid identify-tool``, in the
+    Status (given, or the IK default's at ``abc``) and the joint ranges the arm was calibrated
+    in, and lines describing them."""
+    from accugrid.infra.yamlfile import load_yaml
+    from accugrid.kinematics.frames import matrix_to_abc
+    from accugrid.kinematics.tool_calibration import (
+        DISTINCT_DEG,
+        frame_sensitivity,
+        plan_tool_poses,
+    )
+    from accugrid.kinematics.validity import Validity
+
+    validity = Validity.from_doc(load_yaml(r.model))
+    if validity is None:
+        raise InputError("has no identification.validity (accugrid identify writes it)", r.model)
+    centre = (
+        np.asarray(r.centre, dtype=float)
+        if r.centre is not None
+        else (validity.lower + validity.upper) / 2
+    )
+    middle = pose_from_xyzabc(np.concatenate([centre, r.abc]))
+    status = solve_in_one_status(r.robot, middle, r.status)[1]
+    if status is None:
+        raise InputError(
+            f"the tool cannot reach {np.round(centre, 1).tolist()} mm at A B C "
+            f"{' '.join(map(fixed, r.abc))} deg: give another --centre, --abc or --status"
+        )
+    poses, q = plan_tool_poses(
+        r.robot,
+        r.robot.flange_T_tool,
+        centre,
+        r.count,
+        r.tilt_deg,
+        r.candidates,
+        r.seed,
+        status,
+        validity.joints_deg,
+        r.abc,
+    )
+    flange = r.robot.with_tool(np.eye(4)).fk(q)[:, :3, :3]
+    points = np.tile(poses[:, :3, 3], (r.repeats, 1))
+    abc = np.tile(matrix_to_abc(poses[:, :3, :3]), (r.repeats, 1))
+    ids = [f"T{i + 1}_R{k + 1}" for k in range(r.repeats) for i in range(len(poses))]
+    words = ["tip"] * len(ids)
+    if r.axis_point:
+        points, abc = np.vstack([points, points]), np.vstack([abc, abc])
+        ids += [f"{name}_AXIS" for name in ids]
+        words += ["axis"] * len(words)
+    plan = Plan(points, abc, ids, {"point": words})
+    info = [
+        f"tool plan: {r.count} orientations x {r.repeats} repeats about X {centre[0]:.1f} "
+        f"Y {centre[1]:.1f} Z {centre[2]:.1f} (Status {status}, tilt up to {r.tilt_deg:g} deg "
+        f"from A B C {' '.join(map(fixed, r.abc))}, "
+        f"{DISTINCT_DEG:g} deg apart or more, inside the calibrated joint ranges); a frame "
+        f"offset enters the TCP by {frame_sensitivity(flange):.2f} of itself"
+        + ("; then the same poses with the SMR on the drill axis" if r.axis_point else ""),
+        "log the joints a1..a6 at each pose (or keep a,b,c and give identify-tool the --tool)",
+    ]
     return plan, info
 
 

@@ -61,6 +61,8 @@ class SimulateRequest:
     noise_tracker_mm: float = 0.0
     noise_repeat_mm: float = 0.0
     seed: int = 0
+    smr: tuple[float, float, float] | None = None  # poses: the SMR really on the flange, mm
+    smr_axis: tuple[float, float, float] | None = None  # ... on rows whose column point is axis
 
 
 def simulate_files(request: SimulateRequest) -> JobFiles:
@@ -148,7 +150,8 @@ def _pose_measurement_csv(request: SimulateRequest, report: list[str]) -> str:
         raise InputError("no poses in the plan", r.poses)
     xyzabc = table.floats(["x", "y", "z", "a", "b", "c"])
     ids = table.text("id") if table.has("id") else [f"P{i + 1}" for i in range(len(table))]
-    q, measured = _measure_poses(r, table, xyzabc)
+    smr, points = _smr_points(r, table)
+    q, measured = _measure_poses(r, table, xyzabc, smr)
     status_of = status_turn(robot, q)[0]
     header = comment_text(
         f"accugrid simulate: robot {robot.name}, poses of {Path(r.poses).name}, repeats "
@@ -159,11 +162,25 @@ def _pose_measurement_csv(request: SimulateRequest, report: list[str]) -> str:
     report.append(
         f"{robot.name}: {len(table)} poses x {r.repeats} repeats = {len(table) * r.repeats} rows"
     )
-    return _session_csv(header, ids, xyzabc, status_of, np.degrees(q), measured, r.repeats)
+    return _session_csv(header, ids, xyzabc, status_of, np.degrees(q), measured, r.repeats, points)
+
+
+def _smr_points(r: SimulateRequest, table: Table) -> tuple[np.ndarray | None, list[str] | None]:
+    """Where the SMR sits on the flange at each pose (N, 3) mm (None: at the TCP) and the plan's
+    column point (None without it): ``smr`` on its tip rows, ``smr_axis`` on its axis rows."""
+    words = [w.strip().lower() for w in table.text("point")] if table.has("point") else None
+    if r.smr is None:
+        if r.smr_axis is not None:
+            raise InputError("--smr-axis goes with --smr")
+        return None, words
+    smr = np.tile(np.asarray(r.smr, dtype=float), (len(table), 1))
+    if words is not None and r.smr_axis is not None:
+        smr[np.array([w == "axis" for w in words])] = r.smr_axis
+    return smr, words
 
 
 def _measure_poses(
-    request: SimulateRequest, table: Table, xyzabc: np.ndarray
+    request: SimulateRequest, table: Table, xyzabc: np.ndarray, smr: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """The session at the poses x,y,z,a,b,c (N, 6) mm and KUKA deg of the file ``table``, each
     in its Status (column s, else --status, else the IK default per pose): the controller's
@@ -181,6 +198,7 @@ def _measure_poses(
             noise_tracker_mm=r.noise_tracker_mm,
             noise_repeat_mm=r.noise_repeat_mm,
             seed=r.seed,
+            smr_mm=smr,
         )
     except InputError as exc:
         raise InputError(exc.message, r.poses) from None
@@ -228,12 +246,14 @@ def _session_csv(
     joints_deg: np.ndarray | None,
     measured: np.ndarray,
     repeats: int,
+    points: list[str] | None = None,
 ) -> str:
     """The measurement CSV of a simulated session: the comment ``header``, then per pose
     (``ids``, x,y,z,a,b,c ``poses`` (N, 6) mm and deg, KUKA ``status`` (N,), the controller's
     ``joints_deg`` (N, 6) or None for no a1..a6 columns) its ``repeats`` consecutive rows of
-    ``measured`` (N * repeats, 3) mm, 4 decimals."""
+    ``measured`` (N * repeats, 3) mm, 4 decimals; ``points``: the plan's column point (N,)."""
     columns = "id,x,y,z,a,b,c,s," + ("a1,a2,a3,a4,a5,a6," if joints_deg is not None else "")
+    columns += "point," if points is not None else ""
     lines = [f"# {header}", columns + "x_meas,y_meas,z_meas"]
     rows = np.repeat(np.arange(len(poses)), repeats)
     for row, meas in zip(rows, measured, strict=True):
@@ -243,7 +263,8 @@ def _session_csv(
         )
         meas_text = ",".join(fixed(v, 4) for v in meas)
         ident = comment_text(ids[row], limit=40).replace(",", " ")
-        lines.append(f"{ident},{pose_text},{status[row]},{joint_text}{meas_text}")
+        point = "" if points is None else comment_text(points[row], limit=8).replace(",", " ") + ","
+        lines.append(f"{ident},{pose_text},{status[row]},{joint_text}{point}{meas_text}")
     return "\n".join(lines) + "\n"
 
 

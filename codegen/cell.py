@@ -3,7 +3,8 @@
 Read with ``infra.yamlfile.load_yaml``; every key is validated and an error names the key
 (``tool.z``) with its file line. Paths in the file are relative to the file. ``base`` is a frame
 or a part file measured by ``accugrid fit-part`` (``base: {file: PART.yaml, number: N}``,
-``codegen.part_file``). Lengths mm, angles
+``codegen.part_file``); ``tool`` a frame or a tool file measured by ``accugrid identify-tool``
+(``tool: {file: TOOL.yaml, number: N}``, ``codegen.tool_file``). Lengths mm, angles
 deg, speeds mm/s, times s. The commented reference is ``examples/cell.yaml``.
 
 ``Cell`` holds what the cell is made of (robot, grid and model files, tool and base frames) and
@@ -38,6 +39,7 @@ import numpy as np
 from accugrid.codegen.cellfile import DISTANCE_MAX_MM, FRAME_KEYS, CellReader, SectionKeys
 from accugrid.codegen.dialects import DIALECTS, plugin_of
 from accugrid.codegen.part_file import read_base
+from accugrid.codegen.tool_file import read_tool
 from accugrid.compensation.interpolation import METHODS
 from accugrid.compensation.settings import TOOL_DISTANCE_MM, CorrectionSettings
 from accugrid.infra.csvtable import FORMAT_KEYS, TableFormat, table_format_of
@@ -153,14 +155,15 @@ def load_cell(path: str | os.PathLike[str]) -> Cell:
     if robot.endswith((".yaml", ".yml")):
         robot = os.fspath(path.parent / robot)
     grid_path = r.file_path("", "grid", "a file path")
-    tool_number, flange_T_tool = r.frame(r.top.get("tool"), "tool", True)
+    model_path = r.file_path("correction", "model", "a calibrated robot YAML path")
+    tool_number, flange_T_tool = read_tool(r, robot, model_path)
     base_number, robot_T_base = read_base(r, robot, flange_T_tool)
     tool_data = _tool_data(r, tool_number, flange_T_tool)
     return Cell(
         path=path,
         robot_name=robot,
         grid_path=grid_path,
-        model_path=r.file_path("correction", "model", "a calibrated robot YAML path"),
+        model_path=model_path,
         tool_number=tool_number,
         flange_T_tool=flange_T_tool,
         base_number=base_number,

@@ -131,6 +131,8 @@ class DialectPlugin(Protocol):
     - ``base_line(number, robot_T_base)``: the controller's line that sets base frame
       ``number`` to ``robot_T_base`` (4, 4) mm, for the user to enter (e.g. after
       ``accugrid fit-part``).
+    - ``tool_line(number, flange_T_tool)``: the controller's line that sets tool ``number`` to
+      ``flange_T_tool`` (4, 4) mm (e.g. after ``accugrid identify-tool``).
     """
 
     name: str
@@ -179,14 +181,16 @@ class DialectPlugin(Protocol):
 
     def base_line(self, number: int, robot_T_base: np.ndarray) -> str: ...
 
+    def tool_line(self, number: int, flange_T_tool: np.ndarray) -> str: ...
+
 
 class DialectFolder:
     """The members of ``DialectPlugin`` a dialect folder gives by its modules' names, imported
     when first used: ``section.py`` (``KEYS``, ``read_section``), ``rewrite.py``
-    (``scan_positions``, ``splice_positions``, ``add_header``) and ``frames.py`` (``base_line``);
-    the names in ``exports`` are its ``emit.py``'s (none by default); ``controllers``: the makers
-    of the robot controllers its programs drive (``RobotModel.controller``, lower case; none:
-    every robot). A plug-in derives from it and
+    (``scan_positions``, ``splice_positions``, ``add_header``) and ``frames.py``
+    (``base_line``, ``tool_line``); the names in ``exports`` are its ``emit.py``'s (none by
+    default); ``controllers``: the makers of the robot controllers its programs drive
+    (``RobotModel.controller``, lower case; none: every robot). A plug-in derives from it and
     adds its name, suffixes, ``targets``, ``plan``, ``render`` and ``placement`` (and
     ``measurement`` when it writes measurement programs)."""
 
@@ -223,6 +227,9 @@ class DialectFolder:
 
     def base_line(self, number: int, robot_T_base: np.ndarray) -> str:
         return self._module("frames").base_line(number, robot_T_base)
+
+    def tool_line(self, number: int, flange_T_tool: np.ndarray) -> str:
+        return self._module("frames").tool_line(number, flange_T_tool)
 
     def measurement(self) -> MeasurementWriter:
         raise InputError(f"accugrid writes no laser-tracker measurement program in {self.title}")

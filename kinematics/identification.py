@@ -27,6 +27,12 @@ against Δd3 for the parallel A2/A3 axes, Δd1/Δθ1 against the tracker frame).
 identifiable subspace, so the estimate has no component along those directions ("held at
 zero"). A robot's structural directions are those of a spread-out reference pose set; data that
 lose more (all poses in one orientation, ...) are refused.
+
+The split between the last link and the TCP: positions see link 6's Δa6, Δd6, Δα6, Δθ6 only
+together with the TCP offset (each column is the flange rotation times a vector, which the TCP
+columns span), so these four are held at zero (``LAST_LINK``) and the TCP takes the whole
+share: the calibrated flange is the nominal last link on the calibrated wrist, and a tool
+measured on it (``kinematics.tool_calibration``) carries everything beyond the wrist.
 """
 
 from __future__ import annotations
@@ -47,6 +53,7 @@ from accugrid.kinematics.robot import Robot
 __all__ = [
     "COMPLIANT_AXES",
     "CONTROLLER_MISMATCH_MAX_MM",
+    "LAST_LINK",
     "MAX_HARMONICS",
     "RTOL",
     "ControllerMismatch",
@@ -67,6 +74,7 @@ __all__ = [
     "select_poses",
 ]
 
+LAST_LINK = slice(20, 24)  # Δa6 Δd6 Δα6 Δθ6 in x: held at zero, their share goes to the TCP
 COMPLIANT_AXES = (1, 2)  # A2, A3 (0-based): the axes that carry the arm against gravity
 RTOL = 1e-7  # singular value / largest below this: unidentifiable direction (scaled Jacobian)
 MAX_HARMONICS = 60  # reducer harmonic terms (axis, order) one identification takes at most
@@ -83,6 +91,7 @@ _FD_RAD = 1e-5  # central-difference step of the tracker-frame rotation columns
 _REFERENCE_POSES = 96  # size of the spread-out pose set that gives the structural directions
 _GROUP_MM, _GROUP_DEG = 1e-3, 1e-3  # rows this close in commanded pose are repeats of one pose
 _SHOW = 5
+_HELD_TEXT = "da6 dd6 dalpha6 dtheta6 (in the TCP)"  # LAST_LINK, as identify reports it
 _LENGTH = {"a": "mm", "d": "mm", "alpha": "rad", "theta": "rad"}
 
 Terms = tuple[tuple[int, int], ...]  # reducer harmonics to identify: (axis 1..6, order)
@@ -448,8 +457,8 @@ class Identification:
     units: list[str]
     x: np.ndarray  # (n,) identified parameters
     std: np.ndarray  # (n,) standard deviations (0 along nothing identifiable)
-    identifiable: np.ndarray  # (n,) bool: the parameter alone is determined (no null component)
-    null_space: np.ndarray  # (k, n) unidentifiable directions in parameter units
+    identifiable: np.ndarray  # (n,) bool: determined alone (no null component, not held at 0)
+    null_space: np.ndarray  # (k, n) unidentifiable directions in parameter units (LAST_LINK held)
     singular_values: np.ndarray  # (n,) of the column-scaled Jacobian, descending
     rank: int
     condition_number: float
@@ -478,7 +487,7 @@ class Identification:
 class _Subspace:
     scale: np.ndarray  # (n,) column RMS of the nominal Jacobian
     basis: np.ndarray  # (n, r) identifiable directions in scaled coordinates
-    null: np.ndarray  # (n, n - r) unidentifiable directions in scaled coordinates
+    null: np.ndarray  # (n, k) unidentifiable directions in scaled coordinates (LAST_LINK held)
     singular: np.ndarray  # (n,)
 
 
@@ -487,11 +496,18 @@ def _subspace(jac: np.ndarray, rtol: float) -> _Subspace:
     scale = np.sqrt(np.mean(flat**2, axis=0))
     scale = np.where(scale > 1e-12 * scale.max(), scale, 1.0)
     scaled = flat / scale
+    scaled[:, LAST_LINK] = 0.0  # the TCP takes their share (module docstring)
     if len(scaled) < len(scale):  # fewer equations than parameters: pad, same directions
         scaled = np.vstack([scaled, np.zeros((len(scale) - len(scaled), len(scale)))])
     _, sing, vt = np.linalg.svd(scaled, full_matrices=False)
     rank = int(np.sum(sing > rtol * sing[0]))
-    return _Subspace(scale, vt[:rank].T, vt[rank:].T, sing)
+    basis = vt[:rank].T.copy()
+    basis[LAST_LINK] = 0.0  # exactly: rounding leaves ~1e-17 there
+    # the null space less the held parameters (their unit directions): what the data cannot see
+    rest = vt[rank:].T.copy()
+    rest[LAST_LINK] = 0.0
+    u, size, _ = np.linalg.svd(rest, full_matrices=False)
+    return _Subspace(scale, basis, u[:, size > 0.5], sing)
 
 
 def select_poses(
@@ -611,6 +627,7 @@ def identify(
     directions = sub.basis / sub.scale[:, None]
     std = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", directions, cov_z, directions), 0.0))
     identifiable = np.linalg.norm(sub.null, axis=1) < 1e-6
+    identifiable[LAST_LINK] = False
     kept = sub.singular[:rank]
     null = _readable_null(sub.null)
     outliers = _outliers(residuals, sigma, data.labels)
@@ -654,7 +671,7 @@ def identify(
         rows=rows,
         tracker_T_robot=tracker,
         cross_validation=cv,
-        unidentifiable_text=[_direction_text(v, names) for v in null.T],
+        unidentifiable_text=[_direction_text(v, names) for v in null.T] + [_HELD_TEXT],
     )
 
 

@@ -149,11 +149,14 @@ def simulate_pose_measurements(
     noise_tracker_mm: float = 0.0,
     noise_repeat_mm: float = 0.0,
     seed: int = 0,
+    smr_mm: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """A simulated tracker session at TCP poses (N, 4, 4) mm of any orientation (identification
     poses): the controller's joints (N, 6) rad (nominal IK in ``status``: one int, (N,) ints or
     None for the IK default per pose) and the measured positions (N * repeats, 3) mm, noise as
-    ``simulate_measurements``. InputError naming the first pose (0-based) the IK cannot reach."""
+    ``simulate_measurements``; ``smr_mm`` (N, 3): where the SMR really sits on the true arm's
+    flange at each pose (a tool measured off its taught TCP; None: at the robot's TCP).
+    InputError naming the first pose (0-based) the IK cannot reach."""
     _check_session(repeats, noise_tracker_mm, noise_repeat_mm)
     poses = np.asarray(poses, dtype=float).reshape(-1, 4, 4)
     sol = robot.ik(poses, status=status)
@@ -166,6 +169,9 @@ def simulate_pose_measurements(
         )
     true = robot.true_robot() or robot
     reached = true.fk(sol.q)[:, :3, 3]
+    if smr_mm is not None:
+        flange = (robot.with_tool(np.eye(4)).true_robot() or robot.with_tool(np.eye(4))).fk(sol.q)
+        reached = np.einsum("nij,nj->ni", flange[:, :3, :3], smr_mm) + flange[:, :3, 3]
     return sol.q, _measured(reached, repeats, noise_tracker_mm, noise_repeat_mm, seed)
 
 

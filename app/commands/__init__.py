@@ -37,6 +37,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "identify",
         "calibrated robot model (DH errors, TCP) from tracker measurements at scattered poses",
     ),
+    "identify-tool": (
+        "identify_tool",
+        "the drill's TCP and axis measured on the calibrated arm (SMR at 6+ orientations)",
+    ),
     "krl": (
         "krl",
         "corrected KUKA KRL drilling program (.src/.dat) from a points CSV",

@@ -18,6 +18,12 @@
               --augment CAL.yaml: D-optimal for the structure a calibrated file was fitted
               with (a second session for that model); it also prints which candidates of
               identify's structure search the poses cannot separate.
+  tool        --count orientations (default 8) for `accugrid identify-tool` of the --tool as
+              taught, about one point (--centre; default: the centre of --model's calibrated
+              region) with the drill axis within --tilt deg of --abc's, turned about itself,
+              inside the joint ranges --model was calibrated in, spread so that an offset of
+              the robot frame hardly enters the TCP; column point (tip; --axis-point: the same
+              poses again as axis rows for an SMR on the drill axis).
 
 Outputs in DIR: NAME.csv (id,x,y,z,a,b,c[,centre,step,label,repeat],x_meas,y_meas,z_meas with
 the measured columns empty for the operator) and the KUKA KRL program NAME.src/NAME.dat that
@@ -57,6 +63,7 @@ from accugrid.app.cli_options import (
 from accugrid.app.measure_program import PlanRequest, plan_files, plan_targets
 from accugrid.compensation.plans import SEED_REGION, SEED_REPEATS
 from accugrid.infra.atomic import check_targets, write_files
+from accugrid.infra.errors import InputError
 
 __all__ = ["NAME", "add_arguments", "run"]
 
@@ -160,7 +167,54 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "with (its harmonics, compliance and gravity groups; --design does not apply): a "
         "second, short session for that model",
     )
-    for p in (grid, cube, exp, ident):
+    tool = sub.add_parser("tool", help="orientations for `accugrid identify-tool`")
+    tool.add_argument(
+        "--model",
+        required=True,
+        metavar="CAL.yaml",
+        help="the calibrated arm (accugrid identify): the poses stay in its joint ranges",
+    )
+    tool.add_argument(
+        "--centre",
+        nargs=3,
+        type=number("mm", -COORDINATE_MAX, COORDINATE_MAX),
+        metavar=("X", "Y", "Z"),
+        help="where the tool's point stays, robot frame, mm (default: the centre of the "
+        "model's calibrated region)",
+    )
+    tool.add_argument(
+        "--count",
+        type=number("orientations", 6, MAX_POSES, whole=True),
+        default=8,
+        metavar="N",
+        help="orientations to measure (at least 6; default: 8)",
+    )
+    add_tilt(tool, "largest tilt of the drill axis from --abc")
+    tool.add_argument(
+        "--repeats",
+        type=number("", 1, MAX_REPEATS, whole=True),
+        default=3,
+        help="passes over the orientations (default: 3)",
+    )
+    tool.add_argument(
+        "--candidates",
+        type=number("candidate orientations", 1, MAX_CANDIDATES, whole=True),
+        default=400,
+        help="random candidate orientations to choose from (default: 400)",
+    )
+    tool.add_argument(
+        "--seed",
+        type=number("", 0, 2**32 - 1, whole=True),
+        default=0,
+        help="seed of the candidates (default: 0)",
+    )
+    tool.add_argument(
+        "--axis-point",
+        action="store_true",
+        help="the poses again for an SMR on the drill axis (rows with point axis): measures "
+        "the drill axis too",
+    )
+    for p in (grid, cube, exp, ident, tool):
         _common(p)
 
 
@@ -249,7 +303,9 @@ def _common(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     check_targets(plan_targets(args.output, args.kind, args.name), force=args.force)
     kind = args.kind
-    robot = robot_with_tool(args.robot, args.tool)
+    if kind == "tool" and args.tool is None:
+        raise InputError("plan tool needs --tool X Y Z A B C: the tool as taught")
+    robot = robot_with_tool(args.model if kind == "tool" else args.robot, args.tool)
     compliance = kind == "identify" and args.compliance
     harmonics = harmonics_of(args) if kind == "identify" else ()
     gravity = ()
@@ -271,13 +327,13 @@ def run(args: argparse.Namespace) -> int:
         step_mm=args.step if kind in ("grid", "cube") else None,
         order=args.order if kind == "grid" else "serpentine",
         repeats=args.repeats,
-        centre=tuple(args.centre) if kind == "cube" else None,
+        centre=tuple(args.centre) if kind in ("cube", "tool") and args.centre else None,
         centres=parse_centres(args.centre) if kind == "experiment" else None,
         steps=parse_steps(args.steps) if kind == "experiment" else None,
-        count=args.count if kind == "identify" else 0,
-        tilt_deg=args.tilt if kind == "identify" else 0.0,
-        candidates=args.candidates if kind == "identify" else 0,
-        seed=args.seed if kind == "identify" else 0,
+        count=args.count if kind in ("identify", "tool") else 0,
+        tilt_deg=args.tilt if kind in ("identify", "tool") else 0.0,
+        candidates=args.candidates if kind in ("identify", "tool") else 0,
+        seed=args.seed if kind in ("identify", "tool") else 0,
         compliance=compliance,
         harmonics=harmonics,
         gravity=gravity,
@@ -290,6 +346,8 @@ def run(args: argparse.Namespace) -> int:
         wait_sec=args.wait_sec,
         wait_input=args.wait_input,
         templates=args.templates,
+        model=args.model if kind == "tool" else None,
+        axis_point=kind == "tool" and args.axis_point,
     )
     job = plan_files(request, args.output)
     write_files(job.files, force=args.force, main=job.main)

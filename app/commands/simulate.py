@@ -65,6 +65,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="measure the poses of a plan (x,y,z,a,b,c[,id][,s]) instead of a grid; a corrected "
         "points CSV is measured at its x_cmd,y_cmd,z_cmd (a,b,c, or i,j,k oriented from --abc)",
     )
+    parser.add_argument(
+        "--smr",
+        nargs=3,
+        type=number("mm", -COORDINATE_MAX, COORDINATE_MAX),
+        metavar=("X", "Y", "Z"),
+        help="with --poses: the SMR really sits at this point of the flange, mm (a tool off its "
+        "taught --tool, for identify-tool; default: at the --tool's TCP)",
+    )
+    parser.add_argument(
+        "--smr-axis",
+        nargs=3,
+        type=number("mm", -COORDINATE_MAX, COORDINATE_MAX),
+        metavar=("X", "Y", "Z"),
+        help="with --smr: on the plan's rows whose column point is axis, the SMR sits here, mm "
+        "(a point on the drill axis)",
+    )
     add_abc(parser, "TCP orientation at every vertex")
     add_tool(parser, "tool on the flange")
     add_status(
@@ -119,6 +135,8 @@ def run(args: argparse.Namespace) -> int:
         noise_tracker_mm=args.noise_tracker,
         noise_repeat_mm=args.noise_repeat,
         seed=args.seed,
+        smr=None if args.smr is None else tuple(args.smr),
+        smr_axis=None if args.smr_axis is None else tuple(args.smr_axis),
     )
     job = simulate_files(request)
     write_files(job.files, inputs, force=args.force)
