@@ -32,12 +32,12 @@ its nearest other one. A target beyond either yardstick (``ratio`` > 1) has no s
 ``support_section``, the only writer):
 
 - ``parameters``: the names of the Jacobian's columns (``identification.parameter_names``);
-- ``leverage_map``: (k, p) rows W with h(q) = |W J(q)ᵀ|² (the whitened inverse of Jᵀ J in its k
-  identifiable directions), 7 significant digits, each row one text of numbers separated by
-  blanks (a file of 3,000 poses stays quick to read);
 - ``loo_leverage_max``: the largest leave-one-out leverage of the calibration poses;
-- ``joints_deg``: (n, 6) the distinct calibration poses' joints, KUKA deg, 3 decimals, rows as
-  ``leverage_map``'s;
+- ``joints_deg``: (n, 6) the distinct calibration poses' joints, the robot's deg, 3 decimals,
+  each row one text of numbers separated by blanks (a file of 3,000 poses stays quick to read);
+  the leverage map W (k, p), h(q) = |W J(q)ᵀ|² (the whitened inverse of Jᵀ J in its k
+  identifiable directions), is computed from them when the file is read: any O W with O
+  orthogonal serves, so its numbers (the SVD's basis) would differ between CPUs in a file;
   ``lever_mm_per_rad``: (6,) the levers; ``loo_distance_max_mm``: the largest nearest-pose
   distance among them, mm;
 - ``fallback``: the DH-only fit of the same poses (``errors``: six rows Δa mm, Δd mm, Δα rad,
@@ -74,7 +74,6 @@ __all__ = ["SECTION", "SUPPORT_SCHEMA", "Structure", "Support", "support_section
 SECTION = ("identification", "support")
 SUPPORT_SCHEMA = {
     "parameters": None,
-    "leverage_map": None,
     "loo_leverage_max": None,
     "joints_deg": None,
     "lever_mm_per_rad": None,
@@ -85,7 +84,6 @@ SUPPORT_SCHEMA = {
         "tracker_T_robot": dict.fromkeys("xyzabc"),
     },
 }
-_DIGITS = 7  # significant digits of the leverage map in the file
 _BLOCK = 4096  # targets per Jacobian block
 
 
@@ -196,11 +194,12 @@ class Support:
                 *key,
                 "parameters",
             )
-        w = _rows(doc, (*key, "leverage_map"), len(names))
         loo, far = (doc.number(*key, k) for k in ("loo_leverage_max", "loo_distance_max_mm"))
         if not (loo > 0 and far > 0):
             raise doc.error("loo_leverage_max and loo_distance_max_mm must be > 0", *key)
         joints = _rows(doc, (*key, "joints_deg"), 6)
+        jac = structure.jacobian(robot, np.radians(joints))
+        w = _whitened(jac.reshape(-1, jac.shape[2]))
         doc.sequence(*key, "lever_mm_per_rad", length=6)
         lever = np.array([doc.number(*key, "lever_mm_per_rad", i) for i in range(6)])
         fb = (*key, "fallback")
@@ -242,19 +241,18 @@ def support_section(
     joints q (N, 6) rad whose rows belong to distinct poses ``group`` (N,) int, and ``dh``, the
     DH-only identification of the same poses; plain YAML data."""
     _, first = np.unique(group, return_index=True)
-    jac = structure.jacobian(calibrated, q[first])  # one row triple per distinct pose
+    joints = np.round(np.degrees(q[first]), 3)  # as the file holds them, the map computed from
+    jac = structure.jacobian(calibrated, np.radians(joints))  # one row triple per distinct pose
     w = _whitened(jac.reshape(-1, jac.shape[2]))
     hat = _hat_blocks(w, jac)
     loo = np.einsum("nab,nba->n", hat, np.linalg.inv(np.eye(3) - hat))
     theta = [4 * i + 3 for i in range(6)]  # the Δθ columns: ∂p/∂A_i up to the axis' sign
     lever = np.sqrt(np.mean(np.sum(jac[:, :, theta] ** 2, axis=1), axis=0))
-    joints = np.round(np.degrees(q[first]), 3)
     points = _embedded(np.radians(joints), lever)
     nearest = cKDTree(points).query(points, k=2)[0][:, 1]  # the nearest other pose
     frame = dh.tracker_T_robot
     return {
         "parameters": structure.names,
-        "leverage_map": _row_texts(w, f".{_DIGITS}g"),
         "loo_leverage_max": float(loo.max()),
         "joints_deg": _row_texts(joints, ".3f"),
         "lever_mm_per_rad": [float(v) for v in lever],
