@@ -16,6 +16,7 @@ import yaml
 from accugrid.app.plots import rows_png
 from accugrid.app.report_html import Figure, Section, Table, report_html
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
+from accugrid.kinematics.structure import CarryOver
 
 __all__ = ["identify_report"]
 
@@ -163,6 +164,7 @@ def identify_report(
         worst = max(float(held_out[k]) for k in "xyz")
         verdict = "PASS" if worst <= tolerance_mm else "FAIL"
         lines = [f"{what} PASS when the held-out max is within ±{tolerance_mm:g} mm on every axis."]
+    lines += _carry_over_lines(structure.get("carry_over"))
     summary_tables = _summary_tables(
         summary,
         None if held_out is None else {"rms": rms, "max": held_out},
@@ -203,6 +205,26 @@ def identify_report(
         ],
         [("robot", str(summary.get("robot", "")))],
     )
+
+
+def _carry_over_lines(carry: dict | None) -> list[str]:
+    """The chosen model held out by joint range against DH + TCP (``carry_over``, mm), with the
+    warning when the chosen terms do worse there."""
+    if carry is None:
+        return []
+    chosen, dh = carry["held_out_rms_mm"], carry["dh_held_out_rms_mm"]
+    check = CarryOver(*(np.array([float(v[k]) for k in "xyz"]) for v in (chosen, dh)))
+    line = (
+        f"Held out by joint range (each joint's range in blocks, each predicted from the rest): "
+        f"RMS {_axes_text(chosen)} mm; DH + TCP only {_axes_text(dh)} mm."
+    )
+    if not check.holds:
+        line += (
+            " The chosen terms do not hold beyond the joint combinations of these poses: measure "
+            "poses that cover the targets' joint space (targets without support get the DH-only "
+            "fit)."
+        )
+    return [line]
 
 
 def _structure_table(structure: dict) -> Table:

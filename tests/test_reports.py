@@ -37,6 +37,22 @@ def test_identify_report_shows_what_the_calibrated_file_records(tmp_path):
     for direction in summary["unidentifiable_directions"]:
         assert direction in text
     assert f"{summary['condition_number']:.6g}" in text
+    carry = summary["structure"]["carry_over"]
+    assert "Held out by joint range" in text
+    assert f"x {carry['dh_held_out_rms_mm']['x']:.4f}" in text
+
+
+@pytest.mark.parametrize(("chosen", "warned"), [(0.05, False), (0.5, True)])
+def test_identify_report_warns_when_the_terms_do_not_carry_over(chosen, warned):
+    """The chosen model held out by joint range against DH + TCP (0.2 mm): worse, it is said."""
+    from accugrid.app.identify_report import _carry_over_lines
+
+    xyz = dict.fromkeys("xyz", chosen)
+    (line,) = _carry_over_lines(
+        {"held_out_rms_mm": xyz, "dh_held_out_rms_mm": dict.fromkeys("xyz", 0.2)}
+    )
+    assert f"x {chosen:.4f}" in line and "DH + TCP only x 0.2000" in line
+    assert ("do not hold beyond the joint combinations" in line) == warned
 
 
 def test_identify_without_cross_validation_has_no_verdict(tmp_path):
