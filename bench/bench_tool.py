@@ -28,7 +28,6 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from accugrid.compensation.comparison import tilted_abc  # noqa: E402
 from accugrid.compensation.plans import SEED_REGION, identification_plan  # noqa: E402
 from accugrid.kinematics.candidates import gravity_terms  # noqa: E402
 from accugrid.kinematics.frames import pose_from_xyzabc, rotation_angle_deg  # noqa: E402
@@ -44,6 +43,7 @@ from accugrid.kinematics.tool_calibration import (  # noqa: E402
     plan_tool_poses,
 )
 from accugrid.kinematics.validity import Validity  # noqa: E402
+from bench.bench_structure import tilted_joints  # noqa: E402
 from bench.timing import table  # noqa: E402
 
 LO, HI = np.array(SEED_REGION[0]), np.array(SEED_REGION[1])
@@ -70,17 +70,6 @@ def real_drill(seed: int) -> np.ndarray:
         Rotation.from_rotvec(turn / np.linalg.norm(turn) * angle).as_matrix() @ tool[:3, :3]
     )
     return tool
-
-
-def joints(nominal, status: int, count: int, tilt: float, seed: int) -> np.ndarray:
-    rng = np.random.default_rng(seed)
-    out = np.zeros((0, 6))
-    while len(out) < count:
-        points = rng.uniform(LO + 50.0, HI - 50.0, (count, 3))
-        abc = tilted_abc(rng, count, DRILL, tilt)
-        sol = nominal.ik(pose_from_xyzabc(np.column_stack([points, abc])), status=status)
-        out = np.vstack([out, sol.q[sol.ok & (np.abs(sol.q[:, 4]) > np.radians(10.0))]])
-    return out[:count]
 
 
 def in_model_flange(calibrated, real_arm, drill: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -125,7 +114,7 @@ def one_robot(seed: int) -> tuple:
     measured += rng.normal(0.0, np.hypot(NOISE_REPEAT_MM, NOISE_TRACKER_MM), measured.shape)
     is_axis = np.repeat([False, True], len(qt))
     fit = fit_tool(calibrated, np.vstack([qt, qt]), measured, is_axis, taught[:3, :3])
-    holes = joints(nominal, status, HOLES, 25.0, seed + 1000)
+    holes = tilted_joints(nominal, status, HOLES, 25.0, seed + 1000)
     truth = in_model_flange(calibrated, real_arm, drill, holes)
     tcp_error = float(np.linalg.norm(fit.flange_T_tool[:3, 3] - truth[:3, 3]))
     axis_error = float(
