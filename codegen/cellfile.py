@@ -163,6 +163,19 @@ class CellReader:
         xyzabc += [self.number(key, k, 0.0, -ANGLE_MAX_DEG, ANGLE_MAX_DEG, data=d) for k in "abc"]
         return number, pose_from_xyzabc(np.array(xyzabc))
 
+    def frame_file(self, key: str, writer: str) -> tuple[int | None, str] | None:
+        """The top-level ``key`` given as a file {file, number 1..32} (a path relative to the
+        cell, written by the command ``writer``): (number, path); None when it is a frame."""
+        data = self.top.get(key)
+        if not isinstance(data, Mapping) or "file" not in data:
+            return None
+        d = self.mapping(data, key, {"file", "number"})
+        number = self.integer(key, "number", None, 1, 32, data=d)
+        name = d["file"]
+        if not isinstance(name, str) or not name.strip():
+            raise self.error(f"{key}.file", f"must be the path of a file written by {writer}")
+        return number, name
+
     def abc(self, data: object, key: str, default: tuple) -> tuple[float, float, float]:
         """An optional {a, b, c} orientation (KUKA deg)."""
         if data is None:

@@ -132,14 +132,10 @@ def read_base(
     (relative to the cell); (number, robot_T_base (4, 4) mm). A part whose datums lie beyond the
     reach of ``robot`` (a name or path) with ``flange_T_tool`` (its origin, when the file lists no
     datums) is refused at ``base.file``."""
-    data = r.top.get("base")
-    if not isinstance(data, Mapping) or "file" not in data:
-        return r.frame(data, "base", True)
-    d = r.mapping(data, "base", {"file", "number"})
-    number = r.integer("base", "number", None, 1, 32, data=d)
-    name = d["file"]
-    if not isinstance(name, str) or not name.strip():
-        raise r.error("base.file", "must be the path of a part file (accugrid fit-part)")
+    named = r.frame_file("base", "accugrid fit-part")
+    if named is None:
+        return r.frame(r.top.get("base"), "base", True)
+    number, name = named
     part = load_part(r.path.parent / name)
     reach = reach_mm(load_robot(robot).with_tool(flange_T_tool))
     points = part.measured if len(part.ids) else part.robot_T_base[None, :3, 3]

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -77,14 +76,10 @@ def read_tool(r: CellReader, robot: str, model_path: str | None) -> tuple[int | 
     (relative to the cell); (number, flange_T_tool (4, 4) mm). A tool file measured on another
     model than the cell's (``model_path``, its correction model, else ``robot`` when that is a
     YAML path) or, without one, on another robot than ``robot``, is refused at ``tool.file``."""
-    data = r.top.get("tool")
-    if not isinstance(data, Mapping) or "file" not in data:
-        return r.frame(data, "tool", True)
-    d = r.mapping(data, "tool", {"file", "number"})
-    number = r.integer("tool", "number", None, 1, 32, data=d)
-    name = d["file"]
-    if not isinstance(name, str) or not name.strip():
-        raise r.error("tool.file", "must be the path of a tool file (accugrid identify-tool)")
+    named = r.frame_file("tool", "accugrid identify-tool")
+    if named is None:
+        return r.frame(r.top.get("tool"), "tool", True)
+    number, name = named
     path = r.path.parent / name
     doc = load_yaml(path)
     doc.check_keys(TOOL_SCHEMA)
