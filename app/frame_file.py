@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from accugrid import __version__
+from accugrid.codegen.cellfile import frame_lines
 from accugrid.infra.atomic import JobFiles
 from accugrid.infra.csvtable import Table, parse_table, read_table
 from accugrid.infra.digest import file_sha256, sha256_hex
@@ -71,7 +72,6 @@ def frame_yaml(fit: RobotFrameFit, inputs: Mapping[str, tuple[str, str]]) -> str
     """The YAML text for a fitted frame; ``inputs`` maps base_plane/a1_circle/flange_holes to
     (file name, SHA-256 hex)."""
     pose = fit.tracker_T_robot
-    xyzabc = xyzabc_from_pose(pose)
     lines = [
         "# Robot base frame fitted from laser-tracker points (accugrid fit-frame, seed Sec. 4.1).",
         "# tracker_T_robot is the robot frame in the tracker frame: x, y, z in mm, a, b, c",
@@ -80,8 +80,7 @@ def frame_yaml(fit: RobotFrameFit, inputs: Mapping[str, tuple[str, str]]) -> str
         f"accugrid: {json.dumps(__version__)}",
         "tracker_T_robot:",
     ]
-    lines += [f"  {k}: {fixed(v, 6)}" for k, v in zip(KEYS[:3], xyzabc[:3], strict=True)]
-    lines += [f"  {k}: {fixed(v, 8)}" for k, v in zip(KEYS[3:], xyzabc[3:], strict=True)]
+    lines += frame_lines(pose, 6, 8)
     lines.append("  matrix:")
     for row in pose:
         cells = [fixed(v, 10) for v in row[:3]] + [fixed(row[3], 6)]

@@ -16,13 +16,15 @@ from pathlib import Path
 import numpy as np
 
 from accugrid.infra.errors import InputError
+from accugrid.infra.textsafe import fixed
 from accugrid.infra.yamlfile import YamlDoc, unknown_key
-from accugrid.kinematics.frames import pose_from_xyzabc
+from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
 
 __all__ = [
     "ANGLE_MAX_DEG",
     "DISTANCE_MAX_MM",
     "FRAME_KEYS",
+    "frame_lines",
     "FRAME_MAX_MM",
     "CellReader",
     "SectionKeys",
@@ -34,6 +36,14 @@ ANGLE_MAX_DEG = 360.0  # |a|, |b|, |c|
 DISTANCE_MAX_MM = 1e4  # approach, clearance, retract, depth, peck, apo_cdis
 
 SectionKeys = Mapping[str, frozenset[str]]  # YAML section -> the keys a reader takes from it
+
+
+def frame_lines(pose: np.ndarray, mm_decimals: int, deg_decimals: int) -> list[str]:
+    """A pose (4, 4) mm as the indented YAML lines ``x, y, z`` (mm) and ``a, b, c`` (KUKA ABC
+    deg) of a frame file's frame, each through the fixed-point formatter."""
+    xyzabc = xyzabc_from_pose(pose)
+    places = (mm_decimals,) * 3 + (deg_decimals,) * 3
+    return [f"  {k}: {fixed(v, d)}" for k, v, d in zip(FRAME_KEYS, xyzabc, places, strict=True)]
 
 
 class CellReader:

@@ -20,11 +20,11 @@ from pathlib import Path
 import numpy as np
 
 from accugrid import __version__
-from accugrid.codegen.cellfile import FRAME_KEYS, CellReader
+from accugrid.codegen.cellfile import FRAME_KEYS, CellReader, frame_lines
 from accugrid.infra.errors import InputError
 from accugrid.infra.textsafe import fixed
 from accugrid.infra.yamlfile import Schema, load_yaml
-from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
+from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.part_frame import PartFit, reach_mm
 from accugrid.kinematics.robot import load_robot
 
@@ -67,7 +67,6 @@ def part_yaml(
     """The YAML text of a fitted part frame; ``nominal`` and ``measured`` (N, 3) mm the datums
     (CAD, robot frame), ``scale_from`` how the scale was decided (rigid, fit, cte), ``inputs``
     maps datums/nominal[/frame] to (file name, SHA-256 hex)."""
-    xyzabc = xyzabc_from_pose(fit.robot_T_base)
     u95 = fit.sigma_at(nominal)[1]
     lines = [
         "# Part frame fitted from datums (accugrid fit-part). base is robot_T_base, the part",
@@ -76,8 +75,7 @@ def part_yaml(
         f"accugrid: {json.dumps(__version__)}",
         "base:",
     ]
-    lines += [f"  {k}: {fixed(v, 6)}" for k, v in zip(FRAME_KEYS[:3], xyzabc[:3], strict=True)]
-    lines += [f"  {k}: {fixed(v, 8)}" for k, v in zip(FRAME_KEYS[3:], xyzabc[3:], strict=True)]
+    lines += frame_lines(fit.robot_T_base, 6, 8)
     lines += [
         f"scale: {fixed(fit.scale, 9)}  # the part's size over its CAD size",
         f"scale_from: {scale_from}",

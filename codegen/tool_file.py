@@ -17,12 +17,12 @@ from pathlib import Path
 import numpy as np
 
 from accugrid import __version__
-from accugrid.codegen.cellfile import FRAME_KEYS, CellReader
+from accugrid.codegen.cellfile import FRAME_KEYS, CellReader, frame_lines
 from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import InputError
 from accugrid.infra.textsafe import fixed
 from accugrid.infra.yamlfile import Schema, load_yaml
-from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
+from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.tool_calibration import ToolFit
 
 __all__ = ["TOOL_SCHEMA", "read_tool", "tool_yaml"]
@@ -44,7 +44,6 @@ def tool_yaml(
 ) -> str:
     """The YAML text of a measured tool; ``robot`` the nominal robot's name, ``model`` and
     ``measurements`` (file name, SHA-256 hex)."""
-    xyzabc = xyzabc_from_pose(fit.flange_T_tool)
     lines = [
         "# Tool measured on the calibrated arm (accugrid identify-tool): x, y, z (mm) the TCP in",
         "# the calibrated flange's frame, a, b, c KUKA ABC (deg). A cell takes it as",
@@ -52,8 +51,7 @@ def tool_yaml(
         f"accugrid: {json.dumps(__version__)}",
         "tool:",
     ]
-    lines += [f"  {k}: {fixed(v, 5)}" for k, v in zip(FRAME_KEYS[:3], xyzabc[:3], strict=True)]
-    lines += [f"  {k}: {fixed(v, 6)}" for k, v in zip(FRAME_KEYS[3:], xyzabc[3:], strict=True)]
+    lines += frame_lines(fit.flange_T_tool, 5, 6)
     lines.append("sigma:  # 1 sigma: TCP per axis mm, drill axis deg per transverse axis")
     lines += [f"  {k}: {fixed(v, 5)}" for k, v in zip("xyz", fit.tip.sigma_mm, strict=True)]
     if fit.axis_sigma_deg is not None:
