@@ -24,7 +24,6 @@ from accugrid.kinematics.identification import (
     PoseSet,
     Terms,
     identify,
-    pose_set,
 )
 from accugrid.kinematics.model import reach_mm
 from accugrid.kinematics.robot import VALIDATED_MAX_KEYS, Robot
@@ -115,18 +114,7 @@ def calibrate(
     check_scale(meas.commanded, reach_mm(robot), "commanded position", meas.path, meas.lines)
     check_joint_limits(meas, robot.joint_limits_deg, robot.name)
     status = meas.status if meas.status is not None else options.status
-    data = pose_set(
-        robot,
-        meas.commanded,
-        meas.measured,
-        abc_deg=meas.abc,
-        joints_deg=meas.joints,
-        status=status,
-        joint_decimals=meas.joint_decimals,
-        position_decimals=meas.position_decimals,
-        labels=[meas.where(r) for r in range(len(meas.commanded))],
-        path=meas.path,
-    )
+    data = meas.pose_set(robot, status)
     selection = None
     if auto:
         result, selection = identify_structure(

@@ -19,7 +19,6 @@ from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import InputError, printable
 from accugrid.infra.yamlfile import load_yaml
 from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
-from accugrid.kinematics.identification import pose_set
 from accugrid.kinematics.robot import Robot, load_robot
 from accugrid.kinematics.tool_calibration import ToolFit, fit_tool
 
@@ -82,18 +81,7 @@ def identify_tool_files(req: ToolRequest) -> JobFiles:
     if req.taught is None:
         q = np.radians(meas.joints)
     else:  # logged joints must reach the commanded TCP with the taught tool; else solved
-        q = pose_set(
-            model.with_tool(taught),
-            meas.commanded,
-            meas.measured,
-            abc_deg=meas.abc,
-            joints_deg=meas.joints,
-            status=meas.status,
-            joint_decimals=meas.joint_decimals,
-            position_decimals=meas.position_decimals,
-            labels=labels,
-            path=meas.path,
-        ).q
+        q = meas.pose_set(model.with_tool(taught), meas.status).q
     fit = fit_tool(model, q, meas.measured, is_axis, taught[:3, :3], labels, meas.path)
     nominal = str(load_yaml(req.model).get("identification", "robot", default=model.name))
     text = tool_yaml(

@@ -83,6 +83,25 @@ class Measurements:
         """Human location of a row: 'line 12' for a file, 'row 3' (0-based) for arrays."""
         return f"line {self.lines[row]}" if self.lines is not None else f"row {row}"
 
+    def pose_set(self, robot, status: np.ndarray | int | None):
+        """These rows as ``kinematics.identification.pose_set`` of ``robot`` (its tool the one
+        they were measured with), each row located by ``where``; ``status`` the Status of rows
+        without logged joints."""
+        from accugrid.kinematics.identification import pose_set  # identification jobs only
+
+        return pose_set(
+            robot,
+            self.commanded,
+            self.measured,
+            abc_deg=self.abc,
+            joints_deg=self.joints,
+            status=status,
+            joint_decimals=self.joint_decimals,
+            position_decimals=self.position_decimals,
+            labels=[self.where(r) for r in range(len(self.commanded))],
+            path=self.path,
+        )
+
 
 @dataclass
 class VertexGrid:
