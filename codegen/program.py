@@ -48,7 +48,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from accugrid.codegen.cell import Cell
+from accugrid.codegen.cell_record import Cell
 from accugrid.codegen.correction import (
     FROM_CELL,
     ModelFile,

@@ -39,7 +39,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from accugrid.codegen.cell import Cell
+from accugrid.codegen.cell_record import Cell
 from accugrid.codegen.krl.configuration import configuration_words
 from accugrid.codegen.linebytes import SLOT, image_bytes, line_image, number_cells, text_cells
 from accugrid.codegen.plugin import MeasureSettings, Rendered
