@@ -424,12 +424,12 @@ def _correct(
     rotations: np.ndarray,
     request: PolicyRequest,
 ) -> tuple[np.ndarray, list[str], int | None, list[str], Verdict]:
-    """The correction policy (``compensation.policy``, ``codegen.correction.policy_for``) at
-    every hole point (N, 3) mm with its rotation (N, 3, 3), robot frame: e = P' - P (N, 3) (0
-    for holes left uncorrected), the warnings, the KUKA Status the program runs in (the cell's;
-    else the one the model corrected in, or the grid's), the header lines marking each hole left
-    uncorrected and the verdict (for the report). InputError (the policy's job rule) unless
-    every hole is corrected or ``request.allow_partial``."""
+    """The correction policy (``compensation.policy``, ``codegen.correction.policy_for``) at every
+    hole point (N, 3) mm with its rotation (N, 3, 3), robot frame: e = P' - P (N, 3) (0 for holes
+    left uncorrected), the warnings, the configuration code the program runs in (the cell's; else
+    the one the model corrected in, or the grid's), the header lines marking each hole left
+    uncorrected and the verdict (for the report). InputError (the policy's job rule) unless every
+    hole is corrected or ``request.allow_partial``."""
     status = cell.configuration.status
     targets = None
     if model is not None:  # the A,B,C only for the model's Status rule

@@ -107,10 +107,10 @@ def rewrite(plugin: DialectPlugin, texts: dict[str, str], opts: Options, placeme
 
 
 def last_known(status: np.ndarray, file: np.ndarray) -> np.ndarray:
-    """Each position's KUKA Status (M,) from its own (M,) (-1: none) or, where it has none, the
-    last one written before it in its file (a motion without S keeps the Status the robot is
-    in), -1 where none is; ``file`` (M,) the file of each, the positions of a file together in
-    text order."""
+    """Each position's configuration code (M,) from its own (M,) (-1: none) or, where it has none,
+    the last one written before it in its file (a motion that names none keeps the configuration the
+    robot is in), -1 where none is; ``file`` (M,) the file of each, the positions of a file together
+    in text order."""
     n = len(status)
     status = np.asarray(status)
     if not n:
@@ -135,12 +135,12 @@ def correct_points(
     commands, NaN rows where a point is not corrected.
 
     ``at`` (N,): the report row of each point in ``rows`` (an error names its file and line).
-    ``rotations`` (N, 3, 3): each point's orientation, robot frame (NaN rows: none; with a model
-    and ``opts.reference_abc`` such a point takes the reference). ``status`` (N,): each point's
-    own KUKA Status (-1: the job's). With ``mark``, rows not corrected get status "outside"
-    (outside the grid) or stay "skipped", with the policy's code and words as the reason;
-    flagged rows a ``flag:`` reason. InputError at the row when a correction is longer than the
-    safety limit."""
+    ``rotations`` (N, 3, 3): each point's orientation, robot frame (NaN rows: none; with a model and
+    ``opts.reference_abc`` such a point takes the reference). ``status`` (N,): each point's own
+    configuration code (``Configuration.code``; -1: the job's). With ``mark``, rows not corrected
+    get status "outside" (outside the grid) or stay "skipped", with the policy's code and words as
+    the reason; flagged rows a ``flag:`` reason. InputError at the row when a correction is longer
+    than the safety limit."""
     out = np.full_like(points_robot, np.nan)
     if not len(points_robot):
         return out
