@@ -49,6 +49,7 @@ __all__ = [
 
 HOME_RAD = np.radians([0.0, -90.0, 90.0, 0.0, 0.0, 0.0])  # the default IK reference
 QUARTER_RAD = np.pi / 2  # a quarter turn
+_BLOCK = 1 << 16  # angles ``quarters`` turns into numbers at a time
 
 
 @dataclass(frozen=True)
@@ -103,8 +104,14 @@ class Configuration:
 def quarters(q: np.ndarray) -> np.ndarray:
     """The quarter turn (..., 6) int8 of joint angles q (..., 6) rad: floor(angle / 90 deg) (NaN
     angles: any number)."""
+    q = np.asarray(q, dtype=float)
+    out = np.empty(q.shape, np.int8)
+    flat, into = q.reshape(-1), out.reshape(-1)
     with np.errstate(invalid="ignore"):
-        return np.floor(np.asarray(q, dtype=float) / QUARTER_RAD).astype(np.int8)
+        for start in range(0, len(flat), _BLOCK):  # in blocks: small float temporaries
+            part = flat[start : start + _BLOCK] / QUARTER_RAD
+            into[start : start + _BLOCK] = np.floor(part, out=part)
+    return out
 
 
 def solve_in_one_status(
