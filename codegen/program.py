@@ -539,9 +539,10 @@ def _configuration(
 def _stage_configuration(code: np.ndarray, q: np.ndarray) -> Configuration:
     """The configuration (H, 4) of holes whose S stages' poses have configuration codes (H, S)
     and joint angles (H, S, 6) rad; S = 3: RET is the APP position."""
+    quarter = quarters(q)
     if code.shape[1] == 3:
-        code, q = (np.concatenate([a, a[:, :1]], axis=1) for a in (code, q))
-    return Configuration.of_code(code, quarters(q))
+        code, quarter = (np.concatenate([a, a[:, :1]], axis=1) for a in (code, quarter))
+    return Configuration.of_code(code, quarter)
 
 
 def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
