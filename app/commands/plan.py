@@ -61,6 +61,7 @@ from accugrid.app.cli_options import (
     robot_with_tool,
 )
 from accugrid.app.jobs.plan import PlanRequest, plan_files, plan_targets
+from accugrid.codegen.dialects import measuring
 from accugrid.compensation.plans import SEED_REGION, SEED_REPEATS
 from accugrid.infra.atomic import check_targets, write_files
 from accugrid.infra.errors import InputError
@@ -295,13 +296,20 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--templates",
         type=Path,
-        help="copy of the templates folder (or of its krl/) with measure.src.j2 and "
-        "measure.dat.j2 (default: built-in)",
+        help="copy of the templates folder (or of its folder of the --dialect) with the "
+        "measurement program's templates (default: built-in)",
+    )
+    dialects = measuring()
+    parser.add_argument(
+        "--dialect",
+        choices=dialects,
+        default=dialects[0],
+        help="language of the measurement program (default: %(default)s)",
     )
 
 
 def run(args: argparse.Namespace) -> int:
-    check_targets(plan_targets(args.output, args.kind, args.name), force=args.force)
+    check_targets(plan_targets(args.output, args.kind, args.name, args.dialect), force=args.force)
     kind = args.kind
     if kind == "tool" and args.tool is None:
         raise InputError("plan tool needs --tool X Y Z A B C: the tool as taught")
@@ -346,6 +354,7 @@ def run(args: argparse.Namespace) -> int:
         wait_sec=args.wait_sec,
         wait_input=args.wait_input,
         templates=args.templates,
+        dialect=args.dialect,
         model=args.model if kind == "tool" else None,
         axis_point=kind == "tool" and args.axis_point,
     )
