@@ -50,13 +50,15 @@ class DialectHelp:
     program from a points CSV): ``summary`` (its line in ``accugrid --help``), ``description``
     (its ``--help`` text), ``output`` (the metavar and help of its ``-o``), ``report`` (the
     title of its HTML report); ``rewrite``: its paragraph in ``accugrid rewrite --help`` (what
-    is corrected in its programs and what is left)."""
+    is corrected in its programs and what is left); ``measure``: its measurement program's
+    paragraph in ``accugrid plan --help`` ("" when it writes none)."""
 
     summary: str
     description: str
     output: tuple[str, str]
     report: str
     rewrite: str
+    measure: str = ""
 
 
 @dataclass(frozen=True)

@@ -46,6 +46,13 @@ AXIS/E6AXIS targets, $POS_ACT, and external axes in use (non-zero E1..E6) unless
 in its file, else the cell's configuration.status. The files of a .src/.dat pair keep their
 names, which KRL needs to match DEF/DEFDAT.
 """,
+    measure="""\
+KUKA KRL: NAME.src/NAME.dat, LIN at the fixed orientation (first motion a complete PTP), waiting
+at each row for the tracker: WAIT SEC (--wait-sec) or WAIT FOR $IN[n] (--wait-input); $VEL.CP
+from --speed, TOOL_DATA[--tool-number]. Positions are in the robot frame ($BASE = $NULLFRAME,
+i.e. $ROBROOT = $WORLD) unless --base-number names a BASE_DATA that equals the robot frame; the
+IK gives each E6POS its T.
+""",
 )
 OPTIONS = (
     DialectOption("--config-dat", "$config.dat with BASE_DATA[n] values", metavar="$config.dat"),
