@@ -12,7 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from accugrid.app.cli import main
-from accugrid.app.frame_file import load_frame
+from accugrid.app.jobs.robot_frame import load_frame
 from accugrid.codegen.cell import load_cell
 from accugrid.infra.csvtable import parse_number, parse_table, read_table
 from accugrid.infra.errors import MESSAGE_MAX, InputError, printable
@@ -262,7 +262,7 @@ def test_library_warnings_are_held_back_on_error_and_shown_on_success(monkeypatc
 @pytest.mark.parametrize("name", ["END", "def", "Lin", "DECL"])
 def test_krl_keywords_are_no_program_names(tmp_path, name):
     """Item 13: `DEF END( )` must never be written."""
-    from accugrid.infra.textsafe import krl_identifier
+    from accugrid.codegen.krl.names import krl_identifier
 
     path = tmp_path / "cell.yaml"
     path.write_text((EXAMPLES / "cell.yaml").read_text().replace("WING_PANEL", name))

@@ -33,7 +33,7 @@ from accugrid.app.cli_options import (
     number,
     policy_request,
 )
-from accugrid.app.corrected import CorrectRequest, correct_points
+from accugrid.app.jobs.correct import CorrectRequest, correct_points
 from accugrid.compensation.grid import MAX_CORRECTION_MM
 from accugrid.compensation.interpolation import MAX_POWER
 from accugrid.compensation.measurements import REPEAT_TOL_MM
@@ -143,7 +143,7 @@ def run(args: argparse.Namespace) -> int:
     targets = [args.output] + ([args.report_html] if args.report_html else [])
     check_targets(targets, [args.points, args.grid, model_file], args.force)
     if request.model is not None:
-        from accugrid.app.correct_model import correct_by_model  # only when asked: slower
+        from accugrid.app.jobs.correct_model import correct_by_model  # only when asked: slower
 
         job = correct_by_model(request)
     else:

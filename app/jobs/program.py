@@ -1,7 +1,7 @@
-"""``accugrid krl``, ``gcode`` and ``rapid`` as one job over the dialect's plug-in
-(``codegen.plugin``): read the inputs, build the corrected program, make the header, render the
-files, write them (``write_program``). The commands only parse their arguments into a
-``ProgramRequest``."""
+"""The program command of every dialect (``accugrid krl``, ``gcode``, ``rapid``, ...) as one
+job over the dialect's plug-in (``codegen.plugin``): read the inputs, build the corrected
+program, make the header, render the files, write them (``write_program``). The commands only
+parse their arguments into a ``ProgramRequest``."""
 
 from __future__ import annotations
 
@@ -34,11 +34,11 @@ __all__ = ["Job", "ProgramRequest", "prepare", "program_job", "summary", "write_
 
 @dataclass(frozen=True)
 class ProgramRequest:
-    """What ``accugrid krl|gcode|rapid`` asks: the dialect (a name of ``codegen.dialects``),
-    the points and cell files, the output (a folder or file, as the dialect writes), the grid
-    and model overriding the cell's (``no_correction``: neither), ``allow_config_change``
-    (configuration.allow_change), a templates folder, the policy's options (``policy``) and the
-    HTML report with its title."""
+    """What a program command (``accugrid DIALECT``) asks: the dialect (a name of
+    ``codegen.dialects``), the points and cell files, the output (a folder or file, as the
+    dialect writes), the grid and model overriding the cell's (``no_correction``: neither),
+    ``allow_config_change`` (configuration.allow_change), a templates folder, the policy's
+    options (``policy``) and the HTML report with its title."""
 
     dialect: str
     points: str
@@ -185,7 +185,7 @@ def write_program(req: ProgramRequest, force: bool = False) -> str:
 
 
 def with_report(job: Job, report: Path | None, title: str) -> Mapping[Path, object]:
-    """The job's files plus its HTML report (``app.correction_report``) at ``report``, written
+    """The job's files plus its HTML report (``app.reports.correction``) at ``report``, written
     last and naming each of them with its SHA-256; the files alone without one. The program's
     files stay rendered on demand (hashed as they are written, not copied). The plan view is in
     the cell's base frame, the points' frame. InputError for an uncorrected program
@@ -194,7 +194,7 @@ def with_report(job: Job, report: Path | None, title: str) -> Mapping[Path, obje
         return job.files
     if job.program.verdict is None:
         raise InputError("--report-html reports the corrections; --no-correction makes none")
-    from accugrid.app.correction_report import (
+    from accugrid.app.reports.correction import (
         ReportedFiles,
         cell_setup,
         checks_text,

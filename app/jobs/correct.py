@@ -166,7 +166,7 @@ def corrected_file(
     model = request.model if request.model and Path(request.model).is_file() else None
     files = {request.output: text}
     if request.report_html:
-        from accugrid.app.correction_report import (
+        from accugrid.app.reports.correction import (
             ReportedFiles,
             checks_text,
             correction_report,
