@@ -151,13 +151,15 @@ SKIPPED, CORRECTED, OUTSIDE = 0, 1, 2
 
 class Rows:
     """The report rows (N), column by column: ``files`` (distinct paths) and ``file`` (N,) index
-    into it, ``line`` (N,) int, ``name`` and ``reason`` lists of str, ``status`` (N,) codes of
-    ``STATUSES``, ``old`` and ``new`` (N, 3) mm (NaN: none), ``residual_mm`` and ``rounding_mm``
-    (N,) mm, ``code`` (N,) the policy's reason code of a position it did not correct
-    (``compensation.policy.REASONS``, 0: none), ``commanded`` (N,) bool: a Cartesian position a
-    motion of the program commands (set by the dialect's reader; ``partial_check`` counts those
-    left uncorrected), ``tool`` (N,) the tool number each position is commanded with (-1: the
-    cell's tool; set by the dialect's reader with ``Options.tool_data``). Iterating gives
+        into it, ``line`` (N,) int, ``name`` and ``reason`` lists of str, ``status`` (N,) codes of
+        ``STATUSES``, ``old`` and ``new`` (N, 3) mm (NaN: none), ``residual_mm`` and ``rounding_mm``
+        (N,) mm, ``code`` (N,) the policy's reason code of a position it did not correct
+        (``compensation.policy.REASONS``, 0: none), ``commanded`` (N,) bool: a Cartesian position a
+        motion of the program commands (set by the dialect's reader; ``partial_check`` counts those
+        left uncorrected), ``tool`` (N,) the tool number each position is commanded with (-1: the
+        cell's tool; set by the dialect's reader with ``Options.tool_data``), ``u95_mm`` (N,) mm the
+        95 % bound of a corrected position's error (``compensation.budget``; NaN: none). Iterating
+        gives
     ``Row`` objects (copies)."""
 
     def __init__(
@@ -183,6 +185,7 @@ class Rows:
         self.new = np.full((n, 3), math.nan)
         self.residual_mm = np.full(n, math.nan)
         self.rounding_mm = np.full(n, math.nan)
+        self.u95_mm = np.full(n, math.nan)
 
     @classmethod
     def concat(cls, parts: list[Rows]) -> Rows:
@@ -208,7 +211,17 @@ class Rows:
             list(chain.from_iterable(p.reason for p in parts)),
             np.concatenate([p.old for p in parts] or [np.zeros((0, 3))]),
         )
-        for key in ("status", "code", "commanded", "tool", "new", "residual_mm", "rounding_mm"):
+        keys = (
+            "status",
+            "code",
+            "commanded",
+            "tool",
+            "new",
+            "residual_mm",
+            "rounding_mm",
+            "u95_mm",
+        )
+        for key in keys:
             setattr(out, key, np.concatenate([getattr(p, key) for p in parts] or [out.status]))
         return out
 
@@ -407,6 +420,8 @@ def _decide(points, rows, at, opts, rotations, mark, status, tool, out, sub=slic
                 rows.reason[block[i]] = words if verdict.code[i] else f"flag: {words}"
         use = np.flatnonzero(verdict.code == POLICY_CORRECTED)
         out[index[b][use]] = verdict.command[use]
+        if "u95" in verdict.numbers:
+            rows.u95_mm[block[use]] = verdict.numbers["u95"][use]
     if worst is not None:  # the safety limit (the rows' verdicts are counted for the whole job)
         _, verdict, a = worst
         verdict.enforce(
@@ -531,7 +546,7 @@ def header_lines(result: Result, program: str, cell: str, opts: Options) -> list
     closing = [f"positions corrected {rows.count(CORRECTED)}"]
     for i in np.flatnonzero(rows.code != POLICY_CORRECTED).tolist():
         closing.append(f"not corrected: line {rows.line[i]} {rows.name[i]}: {rows.reason[i]}")
-    return make_header("rewrite", inputs, (), largest, at, closing)
+    return make_header("rewrite", inputs, (), largest, at, closing, rows.u95_mm)
 
 
 def report_csv(rows: Rows, decimals: int = 4) -> str:

@@ -235,7 +235,17 @@ def test_cell_with_part_file_writes_the_program_of_the_same_base_typed_in(tmp_pa
             for p in sorted(out.iterdir())
         }
     assert set(programs["file"]) == {"WING_PANEL.src", "WING_PANEL.dat"}
+    # the same program; only the error budget's bound grows by the part frame's uncertainty
+    bounds = {}
+    for name, files in programs.items():
+        found = [re.search(r"^; largest u95 (\S+) mm.*\n", t, re.M) for t in files.values()]
+        bounds[name] = {float(m.group(1)) for m in found}
+        programs[name] = {
+            k: t.replace(m.group(0), "") for (k, t), m in zip(files.items(), found, strict=True)
+        }
     assert programs["file"] == programs["typed"]
+    assert len(bounds["file"]) == len(bounds["typed"]) == 1
+    assert bounds["file"].pop() > bounds["typed"].pop()
 
 
 def test_cell_refuses_a_part_out_of_the_robots_reach(tmp_path, capsys):
