@@ -51,8 +51,8 @@ def header_lines(
         u95 = np.asarray(u95_mm, dtype=float)
         known = u95[np.isfinite(u95)]
         bound.append(
-            f"largest u95 {fixed(float(known.max()))} mm (95 percent bound of the error) over "
-            f"{known.size} positions"
+            f"largest u95 {fixed(float(known.max()))} mm over {known.size} positions: the 95 "
+            "percent bound of the error"
             if known.size
             else "largest u95 unknown: no corrected position with an error budget"
         )
