@@ -2,11 +2,11 @@
 ``rewrite``, ``plan``) and the corrected-points CSV (``correct``).
 
 In this order: the accugrid version and command; each input file's name and SHA-256; the grid's
-name, SHA-256 and step; command-specific details; the largest correction applied; for the corrections (programs, rewrites,
-the corrected CSV) the largest 95 % bound of a corrected position's error (``compensation.budget``);
-a closing count. Nothing time- or machine-dependent (no dates, no absolute paths), so the same
-inputs give byte-identical outputs. Lines are plain text; the templates wrap them as comments
-through the ``comment`` filter, ``csv_comment`` for CSV files."""
+name, SHA-256 and step; command-specific details; the largest correction applied; for the
+corrections (programs, rewrites, the corrected CSV) the largest 95 % bound of a corrected position's
+error (``compensation.budget``); a closing count. Nothing time- or machine-dependent (no dates, no
+absolute paths), so the same inputs give byte-identical outputs. Lines are plain text; the templates
+wrap them as comments through the ``comment`` filter, ``csv_comment`` for CSV files."""
 
 from __future__ import annotations
 
