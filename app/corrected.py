@@ -212,6 +212,7 @@ def corrected_file(
                 roles,
                 outputs=outputs,
                 checked=checks_text(verdict.policy),
+                u95=verdict.numbers.get("u95"),
             )
 
         files = ReportedFiles(files, request.report_html, page)

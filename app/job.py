@@ -226,6 +226,7 @@ def with_report(job: Job, report: Path | None, title: str) -> Mapping[Path, obje
             outputs=outputs,
             setup=cell_setup(cell),
             checked=checks_text(verdict.policy),
+            u95=verdict.numbers.get("u95"),
         )
 
     return ReportedFiles(job.files, Path(report), page)
