@@ -9,6 +9,7 @@ import re
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -17,8 +18,6 @@ from accugrid.compensation.budget import FrameBudget, grid_covariance
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.measurements import build_grid, measurements_from_arrays
 from accugrid.kinematics.part_frame import frame_jacobian, length_bound_95
-
-from conftest import EXAMPLES
 
 ORIGIN, STEP = np.array([1000.0, -200.0, 1200.0]), np.array([100.0, 100.0, 100.0])
 
