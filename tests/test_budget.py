@@ -169,3 +169,26 @@ def test_identify_scales_the_budget_on_its_folds_and_validate_finds_it_calibrate
     line = next(ln for ln in capsys.readouterr().out.splitlines() if "error budget" in ln)
     share = float(re.search(r"(\d+\.\d) % of 288 rows", line).group(1))
     assert 90.0 <= share <= 98.0 and line.endswith("calibrated (90-98 % expected)")
+
+
+def test_rewrite_refuses_positions_beyond_max_u95_unless_partial(tmp_path, capsys):
+    """The header names the largest bound; a bound below it refuses the rewrite at the worst
+    position's line, nothing written; --allow-partial writes it and reports the flag."""
+    program, cell = EXAMPLES / "cam_drill.ngc", EXAMPLES / "cell.yaml"
+    out = tmp_path / "out.ngc"
+    base = ["rewrite", str(program), "--cell", str(cell), "-o", str(out), "--header"]
+    base.append("--allow-partial")
+    assert main(base) == 0
+    found = re.search(r"\(largest u95 (\d+\.\d+) mm over (\d+) positions", out.read_text())
+    largest = float(found.group(1))
+    assert 0 < largest < 0.3 and int(found.group(2)) > 0
+    out.unlink()
+    capsys.readouterr()
+    strict = [a for a in base if a != "--allow-partial"] + ["--max-u95", f"{largest - 0.002}"]
+    assert main(strict) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "cam_drill.ngc:" in err and "--max-u95" in err
+    assert not out.exists()
+    report = tmp_path / "report.csv"
+    assert main([*base, "--max-u95", f"{largest - 0.002}", "--report", str(report)]) == 0
+    assert "beyond --max-u95" in report.read_text()
