@@ -192,3 +192,16 @@ def test_rewrite_refuses_positions_beyond_max_u95_unless_partial(tmp_path, capsy
     report = tmp_path / "report.csv"
     assert main([*base, "--max-u95", f"{largest - 0.002}", "--report", str(report)]) == 0
     assert "beyond --max-u95" in report.read_text()
+
+
+def test_a_program_report_maps_the_bounds_and_counts_those_beyond_the_tolerance(tmp_path):
+    points, cell = EXAMPLES / "wing_panel_points.csv", EXAMPLES / "cell.yaml"
+    out, report = tmp_path / "w.ngc", tmp_path / "w.html"
+    assert main(["gcode", str(points), "--cell", str(cell), "-o", str(out),
+                 "--report-html", str(report)]) == 0  # fmt: skip
+    largest = re.search(r"\(largest u95 (\d+\.\d+) mm over 72 positions", out.read_text())
+    html = report.read_text()
+    assert "<h2>Error budget</h2>" in html and html.count("data:image/png;base64,") == 2
+    said = re.search(r"72 positions with a bound: largest (\d+\.\d+) mm, median (\d+\.\d+) mm; "
+                     r"0 beyond the tolerance of 0.3 mm", html)  # fmt: skip
+    assert said and abs(float(said.group(1)) - float(largest.group(1))) <= 0.0005
