@@ -384,11 +384,11 @@ def add_policy(parser: argparse.ArgumentParser, what: str) -> None:
     )
     parser.add_argument(
         "--max-u95",
-        type=float,
+        type=number("mm", 0, 1000, above=True),
         metavar="MM",
         help=f"flag {what} whose error budget's 95 percent bound (u95_mm: the calibrated model, "
-        "the residual grid, the measured tool and part frame) exceeds MM; the job is refused "
-        "unless --allow-partial, which writes them corrected and flagged",
+        "the residual grid, the measured tool and part frame) exceeds this, mm; the job is "
+        "refused unless --allow-partial, which writes them corrected and flagged (default: none)",
     )
 
 

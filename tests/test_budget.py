@@ -122,10 +122,22 @@ def test_max_u95_must_be_a_positive_length(tmp_path, capsys, value):
     out = tmp_path / "out.csv"
     args = ["correct", str(EXAMPLES / "wing_panel_robot.csv"), "--grid"]
     args += [str(EXAMPLES / "grid_200mm.csv"), "-o", str(out), "--max-u95", value]
-    assert main(args) == 2
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and "--max-u95" in err and "positive" in err
+    with pytest.raises(SystemExit) as done:
+        main(args)
+    assert done.value.code == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]  # after argparse's usage
+    assert last.startswith("accugrid correct: error: argument --max-u95:") and value in last
     assert not out.exists()
+
+
+def test_the_policy_refuses_a_bound_that_is_not_a_positive_length():
+    """The library's own check (the Python API has no argparse)."""
+    from accugrid.compensation.policy import PolicyRequest
+    from accugrid.infra.errors import InputError
+
+    for value in (0.0, -1.0, float("inf"), float("nan")):
+        with pytest.raises(InputError, match="--max-u95 .*positive length"):
+            PolicyRequest(max_u95_mm=value).check()
 
 
 @pytest.fixture(scope="module")
