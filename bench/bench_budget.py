@@ -34,8 +34,8 @@ from accugrid.app.calibration import IdentifyOptions, calibrate  # noqa: E402
 from accugrid.codegen.correction import read_model  # noqa: E402
 from accugrid.compensation.budget import COVERAGE_RANGE, coverage  # noqa: E402
 from accugrid.compensation.plans import SEED_REGION, identification_plan  # noqa: E402
+from accugrid.infra.bounds import length_bound_95  # noqa: E402
 from accugrid.kinematics.frames import pose_from_xyzabc  # noqa: E402
-from accugrid.kinematics.part_frame import length_bound_95  # noqa: E402
 from accugrid.kinematics.robot_family import (  # noqa: E402
     NOISE_REPEAT_MM,
     NOISE_TRACKER_MM,

@@ -14,7 +14,7 @@ Each term is a covariance (N, 3, 3) mm²; the terms are independent and add:
     formula predicts for a row left out of its fit, H (I − H)⁻¹ per pose:
     k² = Σ_axes held_out_rms² / Σ_axes s² (1 + mean H_loo). ``budget_section`` writes
     ``identification.budget`` of the calibrated YAML; ``ModelBudget.from_doc`` reads it.
-(b) **the grid** where one corrects (``grid_covariance``, diagonal): the interpolated vertex means
+(b) **the grid** where one corrects (``grid_variance``, diagonal): the interpolated vertex means
     carry the rows' noise σ_n² Σ w_i² / repeats (w the trilinear weights of the 8 vertices), and
     the interpolation misses the error's curvature by ½ Δ² t (1 − t) per grid axis (Δ² the RMS
     second difference of the vertex errors along that axis, the noise's share removed; t the local
@@ -25,7 +25,7 @@ Each term is a covariance (N, 3, 3) mm²; the terms are independent and add:
 (d) **the repeatability**: a model's floor s² I holds it (the calibration rows' scatter); a grid
     alone adds its rows' scatter σ_n² I.
 
-The bound: |e|² ≈ g χ²_h (Satterthwaite, ``kinematics.part_frame.length_bound_95``).
+The bound: |e|² ≈ g χ²_h (Satterthwaite, ``infra.bounds``).
 ``Budget.assess`` fills a verdict's numbers ``sigma_x``, ``sigma_y``, ``sigma_z`` and ``u95``
 (N,) mm for its corrected positions (NaN elsewhere, and where a term is unknown: a model file
 without the section).
@@ -38,7 +38,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from accugrid.compensation.interpolation import locate, trilinear_weights
+from accugrid.compensation.interpolation import locate
+from accugrid.infra.bounds import bound_from_moments, length_bound_95
 
 if TYPE_CHECKING:  # a grid-only job never loads the robot modules
     from accugrid.compensation.grid import GridModel
@@ -54,7 +55,7 @@ __all__ = [
     "ModelBudget",
     "budget_section",
     "coverage",
-    "grid_covariance",
+    "grid_variance",
 ]
 
 SECTION = ("identification", "budget")
@@ -160,24 +161,26 @@ def _axes(values: np.ndarray) -> dict[str, float]:
     return {k: float(v) for k, v in zip("xyz", values, strict=True)}
 
 
-def grid_covariance(grid: GridModel, points: np.ndarray) -> np.ndarray:
-    """Term (b) (N, 3, 3) mm², diagonal, of a grid at points (N, 3) mm robot frame (clamped into
-    its box), from its rows' noise (0 without repeats) and its vertex errors' curvature."""
+def grid_variance(grid: GridModel, points: np.ndarray) -> np.ndarray:
+    """Term (b) (N, 3) mm², the diagonal of its covariance, of a grid at points (N, 3) mm robot
+    frame (clamped into its box), from its rows' noise (0 without repeats) and its vertex errors'
+    curvature."""
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     noise = 0.0 if grid.noise_mm is None else grid.noise_mm
     repeats = 1.0 if grid.repeats is None else float(np.mean(grid.repeats))
-    cell, frac = locate(points.T, grid.origin, grid.step, grid.counts)
+    _, frac = locate(points.T, grid.origin, grid.step, grid.counts)
     np.clip(frac, 0.0, 1.0, out=frac)
     mean_noise = noise**2 / repeats
-    share = np.sum(trilinear_weights(frac) ** 2, axis=0)  # (N,) Σ w²
+    spread = frac * (1.0 - frac)  # (3, N) t (1 - t)
+    weights = 1.0 - 2.0 * spread  # per axis t² + (1 - t)²: Σ w² of the 8 trilinear weights is
+    share = weights[0] * weights[1] * weights[2]  # their product (N,)
     curvature = np.zeros((3, 3))  # (grid axis, error component) RMS second difference
     for axis in range(3):
         if grid.counts[axis] >= 3:
             d2 = np.diff(grid.errors, n=2, axis=axis).reshape(-1, 3)
             curvature[axis] = np.sqrt(np.clip(np.mean(d2**2, axis=0) - 6 * mean_noise, 0, None))
-    miss = 0.5 * (frac * (1.0 - frac)).T @ curvature  # (N, 3): ½ Δ² t (1 - t) summed over axes
-    variance = share[:, None] * mean_noise + miss**2
-    return variance[:, :, None] * np.eye(3)
+    miss = (0.5 * curvature).T @ spread  # (3, N): ½ Δ² t (1 - t) summed over the grid axes
+    return (share * mean_noise + miss**2).T
 
 
 @dataclass(frozen=True)
@@ -190,18 +193,15 @@ class FrameBudget:
     part_covariance: np.ndarray | None = None
     part_centroid: np.ndarray | None = None
 
-    def covariance(self, points: np.ndarray) -> np.ndarray:
-        """(N, 3, 3) mm² at points (N, 3) mm robot frame."""
-        points = np.asarray(points, dtype=float).reshape(-1, 3)
-        out = np.zeros((len(points), 3, 3))
-        if self.tool_sigma_mm is not None:
-            out += np.mean(np.asarray(self.tool_sigma_mm) ** 2) * np.eye(3)
-        if self.part_covariance is not None:
-            from accugrid.kinematics.part_frame import frame_jacobian
+    def part_term(self, points: np.ndarray) -> np.ndarray | None:
+        """The part frame's covariance (N, 3, 3) mm² at points (N, 3) mm robot frame (None:
+        no part file)."""
+        if self.part_covariance is None:
+            return None
+        from accugrid.kinematics.part_frame import frame_jacobian
 
-            jac = frame_jacobian(points, self.part_centroid)
-            out += jac @ self.part_covariance @ jac.transpose(0, 2, 1)
-        return out
+        jac = frame_jacobian(points, self.part_centroid)
+        return jac @ self.part_covariance @ jac.transpose(0, 2, 1)
 
 
 @dataclass(frozen=True)
@@ -214,34 +214,44 @@ class Budget:
     modelled: bool = False
     frames: FrameBudget = FrameBudget()
 
-    def covariance(
-        self, points: np.ndarray, grid: GridModel | None, model: np.ndarray | None
-    ) -> np.ndarray:
-        """(N, 3, 3) mm² at positions (N, 3) mm robot frame: ``grid`` the grid that corrects
-        them (None: none), ``model`` term (a) (N, 3, 3) already evaluated at their joints (None:
-        no model); NaN where a model corrects without its term."""
-        points = np.asarray(points, dtype=float).reshape(-1, 3)
-        cov = self.frames.covariance(points)
-        if self.modelled:
-            cov += np.nan if model is None else model
-        if grid is not None:
-            cov += grid_covariance(grid, points)
-            if not self.modelled and grid.noise_mm is not None:
-                cov += grid.noise_mm**2 * np.eye(3)  # (d): the rows' scatter, a hole's too
-        elif not self.modelled:
-            cov += np.nan  # neither model nor grid: nothing known
-        return cov
-
-    @staticmethod
-    def assess(numbers: dict, n: int, at: np.ndarray, cov: np.ndarray) -> None:
+    def assess(
+        self,
+        numbers: dict,
+        n: int,
+        at: np.ndarray,
+        points: np.ndarray,
+        grid: GridModel | None,
+        model: np.ndarray | None,
+    ) -> None:
         """Write ``sigma_x``, ``sigma_y``, ``sigma_z`` and ``u95`` (n,) mm into a verdict's
-        ``numbers`` for positions ``at`` (k,) of covariances (k, 3, 3) (NaN elsewhere)."""
-        from accugrid.kinematics.part_frame import length_bound_95
-
-        sigma = np.sqrt(np.clip(np.diagonal(cov, axis1=1, axis2=2), 0.0, None))
+        ``numbers`` for its positions ``at`` (k,) at ``points`` (k, 3) mm robot frame (NaN
+        elsewhere): ``grid`` the grid that corrects them (None: none), ``model`` term (a) (k, 3,
+        3) mm² already evaluated at their joints (None: no model's term); NaN where a model
+        corrects without its term, or nothing corrects. Diagonal terms stay (k, 3): a grid
+        alone costs no (k, 3, 3) arrays."""
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        diagonal = np.zeros((len(points), 3))
+        if grid is not None:
+            diagonal += grid_variance(grid, points)
+            if not self.modelled and grid.noise_mm is not None:
+                diagonal += grid.noise_mm**2  # (d): the rows' scatter, a hole's too
+        if self.modelled and model is None or not self.modelled and grid is None:
+            diagonal += np.nan  # a model without its term, or nothing corrects: unknown
+        if self.frames.tool_sigma_mm is not None:
+            diagonal += np.mean(np.asarray(self.frames.tool_sigma_mm) ** 2)
+        full = self.frames.part_term(points)
+        if model is not None:
+            full = model if full is None else full + model
+        if full is None:
+            sigma = np.sqrt(diagonal)
+            u95 = bound_from_moments(diagonal.sum(axis=1), (diagonal**2).sum(axis=1))
+        else:
+            np.einsum("naa->na", full)[:] += diagonal
+            sigma = np.sqrt(np.clip(np.einsum("naa->na", full), 0.0, None))
+            u95 = length_bound_95(full)
         for i, key in enumerate(("sigma_x", "sigma_y", "sigma_z")):
             numbers.setdefault(key, np.full(n, np.nan))[at] = sigma[:, i]
-        numbers.setdefault("u95", np.full(n, np.nan))[at] = length_bound_95(cov)
+        numbers.setdefault("u95", np.full(n, np.nan))[at] = u95
 
 
 def coverage(deviations: np.ndarray, u95: np.ndarray) -> tuple[float, int]:

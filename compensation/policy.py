@@ -401,8 +401,7 @@ class Policy:
         model = None
         if self.budget.model is not None and v.joints is not None:
             model = self.budget.model.covariance(v.joints[at])
-        cov = self.budget.covariance(v.points[at], self.grid, model)
-        self.budget.assess(v.numbers, len(v), at, cov)
+        self.budget.assess(v.numbers, len(v), at, v.points[at], self.grid, model)
         if self.max_u95_mm is not None:
             u95 = v.numbers["u95"][at]
             over = np.flatnonzero(u95 > self.max_u95_mm)

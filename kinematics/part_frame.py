@@ -26,6 +26,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from accugrid.infra.bounds import length_bound_95
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.identification import rigid_fit
 from accugrid.kinematics.model import RobotModel
@@ -39,7 +40,6 @@ __all__ = [
     "PartFit",
     "fit_part_frame",
     "frame_jacobian",
-    "length_bound_95",
     "reach_mm",
     "thermal_scale",
 ]
@@ -53,7 +53,6 @@ MOVED_MIN_MM = 0.1
 """A datum is called moved when its prediction by the others misses it by ``MOVED_RATIO`` times
 the expected miss and by at least this much (a tracker's noise is a few 0.01 mm)."""
 REFERENCE_TEMPERATURE_C = 20.0  # ISO 1: CAD dimensions hold at 20 degC
-_COVERAGE = 0.95
 
 
 def frame_jacobian(points: np.ndarray, centroid: np.ndarray) -> np.ndarray:
@@ -66,22 +65,6 @@ def frame_jacobian(points: np.ndarray, centroid: np.ndarray) -> np.ndarray:
     jac[:, 1, 3], jac[:, 1, 5] = -lever[:, 2], lever[:, 0]
     jac[:, 2, 3], jac[:, 2, 4] = lever[:, 1], -lever[:, 0]
     return jac
-
-
-def length_bound_95(cov: np.ndarray, dof: float = np.inf) -> np.ndarray:
-    """The 95 % bound (N,) mm on the length of Gaussian errors of covariances (N, 3, 3) mm²
-    (module docstring: Satterthwaite's |e|² ~ g chi²_h, from the eigenvalues' sum, the trace,
-    and their squares' sum, the squared Frobenius norm; ``dof``: the degrees of freedom of an
-    estimated scale, F(h, dof); inf: known). NaN covariances give NaN."""
-    from scipy.special import chdtri, fdtri
-
-    cov = np.asarray(cov, dtype=float).reshape(-1, 3, 3)
-    total = np.einsum("naa->n", cov)
-    square = np.einsum("nab,nab->n", cov, cov)
-    safe = np.where(square > 0.0, square, 1.0)
-    h = np.where(square > 0.0, total**2 / safe, 3.0)  # effective degrees of freedom
-    factor = chdtri(h, 1.0 - _COVERAGE) / h if np.isinf(dof) else fdtri(h, dof, _COVERAGE)
-    return np.sqrt(np.clip(total, 0.0, None) * factor)  # g h F with g h = total
 
 
 def thermal_scale(cte_per_k: float, temperature_c: float) -> float:

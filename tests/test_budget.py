@@ -14,10 +14,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from accugrid.app.cli import main
-from accugrid.compensation.budget import FrameBudget, grid_covariance
+from accugrid.compensation.budget import FrameBudget, grid_variance
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.measurements import build_grid, measurements_from_arrays
-from accugrid.kinematics.part_frame import frame_jacobian, length_bound_95
+from accugrid.infra.bounds import length_bound_95
+from accugrid.kinematics.part_frame import frame_jacobian
 
 ORIGIN, STEP = np.array([1000.0, -200.0, 1200.0]), np.array([100.0, 100.0, 100.0])
 
@@ -38,9 +39,9 @@ def test_the_grid_curvature_term_is_the_interpolation_miss_of_a_quadratic_error(
     rng = np.random.default_rng(1)
     points = ORIGIN + rng.uniform(0, 1, (200, 3)) * STEP * (np.array(grid.counts) - 1)
     miss = grid.predict(points, method="trilinear")[:, 0] - c * (points[:, 0] - ORIGIN[0]) ** 2
-    sigma = np.sqrt(grid_covariance(grid, points)[:, 0, 0])
+    sigma = np.sqrt(grid_variance(grid, points)[:, 0])
     np.testing.assert_allclose(sigma, np.abs(miss), rtol=1e-9, atol=1e-12)
-    np.testing.assert_allclose(grid_covariance(grid, vertices.reshape(-1, 3)), 0.0, atol=1e-15)
+    np.testing.assert_allclose(grid_variance(grid, vertices.reshape(-1, 3)), 0.0, atol=1e-15)
 
 
 def test_the_grid_noise_term_is_the_vertex_mean_interpolated():
@@ -56,10 +57,10 @@ def test_the_grid_noise_term_is_the_vertex_mean_interpolated():
     grid = GridModel(
         built.origin, built.step, built.errors, repeats=built.repeats, noise_mm=built.noise_mm
     )
-    at_vertex = grid_covariance(grid, vertices[:1])[0]
-    np.testing.assert_allclose(np.diag(at_vertex), built.noise_mm**2 / repeats, rtol=1e-12)
-    centre = grid_covariance(grid, (vertices.min(axis=0) + vertices.max(axis=0))[None] / 2)[0]
-    np.testing.assert_allclose(np.diag(centre), built.noise_mm**2 / repeats / 8, rtol=1e-12)
+    at_vertex = grid_variance(grid, vertices[:1])[0]
+    np.testing.assert_allclose(at_vertex, built.noise_mm**2 / repeats, rtol=1e-12)
+    centre = grid_variance(grid, (vertices.min(axis=0) + vertices.max(axis=0))[None] / 2)[0]
+    np.testing.assert_allclose(centre, built.noise_mm**2 / repeats / 8, rtol=1e-12)
 
 
 @settings(max_examples=20, deadline=None)
@@ -81,14 +82,19 @@ def test_the_95_bound_holds_95_percent_of_gaussian_errors(scales, seed):
 def test_the_frame_term_carries_the_part_rotation_to_the_hole():
     """A part frame uncertain only in its rotation about z by s rad: a hole r mm from the
     centroid along x moves along y by r s; the tool's sigma adds on every axis."""
+    from accugrid.compensation.budget import Budget
+
     s, r = 1e-4, 500.0
     cov = np.zeros((6, 6))
     cov[5, 5] = s**2
     frames = FrameBudget(np.array([0.01, 0.02, 0.02]), cov, np.zeros(3))
-    out = frames.covariance(np.array([[r, 0.0, 0.0]]))[0]
+    numbers = {}
+    model = np.zeros((1, 3, 3))  # a model of no uncertainty corrects the hole
+    Budget(modelled=True, frames=frames).assess(numbers, 1, np.array([0]), [[r, 0, 0]], None, model)
     tool = np.mean(np.square([0.01, 0.02, 0.02]))
-    np.testing.assert_allclose(np.diag(out), [tool, tool + (r * s) ** 2, tool], rtol=1e-12)
-    assert frame_jacobian(np.zeros((1, 3)), np.zeros(3))[0, :, 3:].any() == 0
+    sigma = [numbers[k][0] for k in ("sigma_x", "sigma_y", "sigma_z")]
+    np.testing.assert_allclose(np.square(sigma), [tool, tool + (r * s) ** 2, tool], rtol=1e-12)
+    assert not frame_jacobian(np.zeros((1, 3)), np.zeros(3))[0, :, 3:].any()
 
 
 def _rows(path):
@@ -217,3 +223,15 @@ def test_a_program_report_maps_the_bounds_and_counts_those_beyond_the_tolerance(
     said = re.search(r"72 positions with a bound: largest (\d+\.\d+) mm, median (\d+\.\d+) mm; "
                      r"0 beyond the tolerance of 0.3 mm", html)  # fmt: skip
     assert said and abs(float(said.group(1)) - float(largest.group(1))) <= 0.0005
+
+
+def test_the_tabulated_chi_square_quantile_is_scipys():
+    from scipy.stats import chi2
+
+    from accugrid.infra.bounds import bound_from_moments
+
+    lam = np.array([[1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [1.0, 1.0, 1.0], [4.0, 1.0, 0.3]])
+    total, square = lam.sum(axis=1), (lam**2).sum(axis=1)
+    h = total**2 / square
+    exact = np.sqrt(total * chi2.ppf(0.95, h) / h)
+    np.testing.assert_allclose(bound_from_moments(total, square), exact, rtol=3e-4)
