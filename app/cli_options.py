@@ -382,6 +382,14 @@ def add_policy(parser: argparse.ArgumentParser, what: str) -> None:
         action="store_true",
         help=f"correct (and flag) {what} beyond --orientation-limit",
     )
+    parser.add_argument(
+        "--max-u95",
+        type=number("mm", 0, 1000, above=True),
+        metavar="MM",
+        help=f"flag {what} whose error budget's 95 percent bound (u95_mm: the calibrated model, "
+        "the residual grid, the measured tool and part frame) exceeds this, mm; the job is "
+        "refused unless --allow-partial, which writes them corrected and flagged (default: none)",
+    )
 
 
 def policy_request(args: argparse.Namespace) -> PolicyRequest:
@@ -395,6 +403,7 @@ def policy_request(args: argparse.Namespace) -> PolicyRequest:
         allow_orientation=args.allow_orientation,
         strict=args.strict,
         allow_partial=args.allow_partial,
+        max_u95_mm=args.max_u95,
     )
 
 

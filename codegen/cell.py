@@ -40,6 +40,7 @@ from accugrid.codegen.cellfile import DISTANCE_MAX_MM, FRAME_KEYS, CellReader, S
 from accugrid.codegen.dialects import DIALECTS, plugin_of
 from accugrid.codegen.part_file import read_base
 from accugrid.codegen.tool_file import read_tool
+from accugrid.compensation.budget import FrameBudget
 from accugrid.compensation.interpolation import METHODS
 from accugrid.compensation.settings import TOOL_DISTANCE_MM, CorrectionSettings
 from accugrid.infra.csvtable import FORMAT_KEYS, TableFormat, table_format_of
@@ -86,8 +87,8 @@ def load_cell(path: str | os.PathLike[str]) -> Cell:
         robot = os.fspath(path.parent / robot)
     grid_path = r.file_path("", "grid", "a file path")
     model_path = r.file_path("correction", "model", "a calibrated robot YAML path")
-    tool_number, flange_T_tool = read_tool(r, robot, model_path)
-    base_number, robot_T_base = read_base(r, robot, flange_T_tool)
+    tool_number, flange_T_tool, tool_sigma = read_tool(r, robot, model_path)
+    base_number, robot_T_base, part = read_base(r, robot, flange_T_tool)
     tool_data = _tool_data(r, tool_number, flange_T_tool)
     return Cell(
         path=path,
@@ -106,6 +107,11 @@ def load_cell(path: str | os.PathLike[str]) -> Cell:
         sha256=doc.sha256,
         tracker=_tracker(r),
         tool_data=tool_data,
+        frames=FrameBudget(
+            tool_sigma,
+            None if part is None else part.covariance,
+            None if part is None else part.centroid,
+        ),
     )
 
 

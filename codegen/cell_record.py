@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from accugrid.compensation.budget import FrameBudget
 from accugrid.infra.errors import InputError
 
 if TYPE_CHECKING:
@@ -77,6 +78,7 @@ class Cell:
     sha256: str = ""
     tracker: TableFormat | None = None  # how the grid file is written (tracker:), None: found
     tool_data: dict[int, np.ndarray] | None = None
+    frames: FrameBudget = FrameBudget()  # the measured tool's and part frame's uncertainty
 
     def grid_file(self, override: str | os.PathLike[str] | None = None, hint: str = "") -> Path:
         """The measurement to correct with: ``override`` (--grid), else the cell's ``grid``;

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from accugrid.codegen.cell_record import Cell
+from accugrid.compensation.budget import Budget, ModelBudget
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.policy import Policy, PolicyRequest
 from accugrid.infra.csvtable import declared_or
@@ -44,13 +45,15 @@ FROM_CELL = _FromCell()
 class ModelFile:
     """A calibrated model as every command reads it: the robot (its ``true_robot()`` the arm,
     its tool the identified TCP: the SMR it was measured with), where it holds (``validity``,
-    None without a record) and the controller's tool of its measurements (flange_T_tool (4, 4)
-    mm, None when the file does not record it)."""
+    None without a record), the controller's tool of its measurements (flange_T_tool (4, 4)
+    mm, None when the file does not record it) and its error budget (``compensation.budget``,
+    None without a record)."""
 
     path: str
     robot: Robot
     validity: Validity | None
     measured_with: np.ndarray | None
+    budget: ModelBudget | None = None
 
     @property
     def smr_tools(self) -> tuple[np.ndarray | None, np.ndarray]:
@@ -72,30 +75,38 @@ def read_model(path: str | os.PathLike[str], nominal: RobotModel | None = None) 
         raise InputError("a calibrated model must be a DH robot file (accugrid identify)", text)
     if nominal is not None:
         check_same_robot(robot, nominal, text)
-    validity, tool = None, None
+    validity, tool, budget = None, None, None
     if Path(text).is_file():
         doc = load_yaml(text)
-        validity = _validity(doc, robot)
+        structure = _structure(doc, robot)
+        validity = _validity(doc, robot, structure)
+        budget = ModelBudget.from_doc(doc, robot, structure)
         if doc.has("identification", "controller_tool"):
             keys = ("identification", "controller_tool")
             tool = pose_from_xyzabc([doc.number(*keys, k) for k in "xyzabc"])
-    return ModelFile(text, robot, validity, tool)
+    return ModelFile(text, robot, validity, tool, budget)
 
 
-def _validity(doc, robot) -> Validity | None:
+def _structure(doc, robot):
+    """The parameters the calibrated file's model was identified with (``support.Structure``)."""
+    from accugrid.kinematics.calibrated import model_structure
+    from accugrid.kinematics.support import Structure
+
+    chosen = doc.get("identification", "structure", "chosen", default=[]) or []
+    compliance, harmonics, gravity = model_structure(robot, chosen)
+    base_frame = doc.has("identification", "tracker_T_robot")
+    return Structure(base_frame, compliance, harmonics, gravity)
+
+
+def _validity(doc, robot, structure) -> Validity | None:
     """Where the calibrated file's model holds: its poses' region and, when it records one,
     its support among them (``kinematics.support``)."""
-    from accugrid.kinematics.calibrated import model_structure
-    from accugrid.kinematics.support import Structure, Support
+    from accugrid.kinematics.support import Support
     from accugrid.kinematics.validity import Validity
 
     validity = Validity.from_doc(doc)
     if validity is None or not doc.has("identification", "support"):
         return validity
-    chosen = doc.get("identification", "structure", "chosen", default=[]) or []
-    compliance, harmonics, gravity = model_structure(robot, chosen)
-    base_frame = doc.has("identification", "tracker_T_robot")
-    structure = Structure(base_frame, compliance, harmonics, gravity)
     return replace(validity, support=Support.from_doc(doc, robot, structure))
 
 
@@ -123,16 +134,16 @@ def policy_for(
     robot: RobotModel | None = None,
     targets: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> Policy:
-    """The correction policy of a job on ``cell`` (``compensation.policy``): ``grid`` the
-    measured grid (the residual after ``model`` is computed here; None: none), ``model`` the
-    calibrated model (None: none), ``request`` the command's options, checked here. From the
-    cell: the correction settings (``request.outside`` in them), the job's KUKA Status and Turn,
-    the wrist-singularity limit, the tool (the drill as taught, on the controller and on the
-    calibrated arm). ``robot``: the controller's robot with the cell's tool (None: the cell's
-    robot, loaded when the model or a grid without its Status needs it); ``targets``: robot-frame
-    points (N, 3) mm and their A, B, C (N, 3) deg, whose first gives a model's Status when
-    neither the cell nor the grid does. InputError for bad options, a model of another robot, a
-    residual grid the model cannot compute."""
+    """The correction policy of a job on ``cell`` (``compensation.policy``): ``grid`` the measured
+    grid (the residual after ``model`` is computed here; None: none), ``model`` the calibrated model
+    (None: none), ``request`` the command's options, checked here. From the cell: the correction
+    settings (``request.outside`` in them), the job's KUKA Status and Turn, the wrist-singularity
+    limit, the tool (the drill as taught, on the controller and on the calibrated arm), the measured
+    tool's and part's uncertainty (the error budget's). ``robot``: the controller's robot with the
+    cell's tool (None: the cell's robot, loaded when the model or a grid without its Status needs
+    it); ``targets``: robot-frame points (N, 3) mm and their A, B, C (N, 3) deg, whose first gives a
+    model's Status when neither the cell nor the grid does. InputError for bad options, a model of
+    another robot, a residual grid the model cannot compute."""
     request.check()
     if robot is None and (model is not None or (grid is not None and grid.status is None)):
         from accugrid.kinematics.robot import load_robot
@@ -159,6 +170,7 @@ def policy_for(
         turn=cell.configuration.turn,
         nominal=nominal,
         validity=None if model is None else model.validity,
+        budget=Budget(None if model is None else model.budget, frames=cell.frames),
         singular_deg=cell.configuration.singular_a5_deg,
         **request.limits(),
     )

@@ -48,12 +48,16 @@ PART_SCHEMA: Schema = {
 @dataclass(frozen=True)
 class PartFile:
     """``robot_T_base`` (4, 4) mm of a part file, its datums' ``ids`` and ``measured`` points
-    (N, 3) mm in the robot frame, and the part's ``scale`` (its size over its CAD size)."""
+    (N, 3) mm in the robot frame, the part's ``scale`` (its size over its CAD size) and the
+    frame's ``covariance`` (6, 6) of (translation mm at ``centroid`` (3,) mm robot frame,
+    rotation rad) (None: not recorded)."""
 
     robot_T_base: np.ndarray
     ids: list[str]
     measured: np.ndarray
     scale: float = 1.0
+    covariance: np.ndarray | None = None
+    centroid: np.ndarray | None = None
 
 
 def part_yaml(
@@ -117,7 +121,17 @@ def load_part(path: str | os.PathLike[str]) -> PartFile:
         [[doc.number("datums", i, "measured", k) for k in range(3)] for i in range(len(datums))]
     ).reshape(-1, 3)
     scale = doc.number("scale", default=1.0)
-    return PartFile(pose_from_xyzabc(xyzabc), ids, measured, scale)
+    covariance = centroid = None
+    if doc.has("covariance") and doc.has("centroid"):
+        rows = doc.sequence("covariance")
+        size = len(rows)
+        if size not in (6, 7):
+            raise doc.error("'covariance' must be 6 or 7 rows", "covariance")
+        covariance = np.array(
+            [[doc.number("covariance", i, j) for j in range(size)] for i in range(size)]
+        )[:6, :6]  # a cell's base is rigid: the scale's row is not a frame's
+        centroid = np.array([doc.number("centroid", k) for k in range(3)])
+    return PartFile(pose_from_xyzabc(xyzabc), ids, measured, scale, covariance, centroid)
 
 
 SCALE_LIMIT_MM = 0.005  # the largest datum move by a part's scale a rigid cell base may ignore
@@ -125,14 +139,15 @@ SCALE_LIMIT_MM = 0.005  # the largest datum move by a part's scale a rigid cell 
 
 def read_base(
     r: CellReader, robot: str, flange_T_tool: np.ndarray
-) -> tuple[int | None, np.ndarray]:
+) -> tuple[int | None, np.ndarray, PartFile | None]:
     """The cell's ``base``: a frame {x, y, z, a, b, c, number} or a part file {file, number}
-    (relative to the cell); (number, robot_T_base (4, 4) mm). A part whose datums lie beyond the
+    (relative to the cell); (number, robot_T_base (4, 4) mm, the part file, None for a frame).
+    A part whose datums lie beyond the
     reach of ``robot`` (a name or path) with ``flange_T_tool`` (its origin, when the file lists no
     datums) is refused at ``base.file``."""
     named = r.frame_file("base", "accugrid fit-part")
     if named is None:
-        return r.frame(r.top.get("base"), "base", True)
+        return (*r.frame(r.top.get("base"), "base", True), None)
     number, name = named
     part = load_part(r.path.parent / name)
     reach = reach_mm(load_robot(robot).with_tool(flange_T_tool))
@@ -158,4 +173,4 @@ def read_base(
             "multiply the CAD coordinates of the datums and the holes by the scale and fit the "
             "part again without --scale/--cte",
         )
-    return number, part.robot_T_base
+    return number, part.robot_T_base, part

@@ -119,8 +119,9 @@ class Rows:
     (``compensation.policy.REASONS``, 0: none), ``commanded`` (N,) bool: a Cartesian position a
     motion of the program commands (set by the dialect's reader; ``partial_check`` counts those
     left uncorrected), ``tool`` (N,) the tool number each position is commanded with (-1: the
-    cell's tool; set by the dialect's reader with ``Options.tool_data``). Iterating gives
-    ``Row`` objects (copies)."""
+    cell's tool; set by the dialect's reader with ``Options.tool_data``), ``u95_mm`` (N,) mm the
+    95 % bound of a corrected position's error (``compensation.budget``; NaN: none). Iterating
+    gives ``Row`` objects (copies)."""
 
     def __init__(
         self,
@@ -145,6 +146,7 @@ class Rows:
         self.new = np.full((n, 3), math.nan)
         self.residual_mm = np.full(n, math.nan)
         self.rounding_mm = np.full(n, math.nan)
+        self.u95_mm = np.full(n, math.nan)
 
     @classmethod
     def concat(cls, parts: list[Rows]) -> Rows:
@@ -170,7 +172,17 @@ class Rows:
             list(chain.from_iterable(p.reason for p in parts)),
             np.concatenate([p.old for p in parts] or [np.zeros((0, 3))]),
         )
-        for key in ("status", "code", "commanded", "tool", "new", "residual_mm", "rounding_mm"):
+        keys = (
+            "status",
+            "code",
+            "commanded",
+            "tool",
+            "new",
+            "residual_mm",
+            "rounding_mm",
+            "u95_mm",
+        )
+        for key in keys:
             setattr(out, key, np.concatenate([getattr(p, key) for p in parts] or [out.status]))
         return out
 

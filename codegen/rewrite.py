@@ -210,6 +210,8 @@ def _decide(points, rows, at, opts, rotations, mark, status, tool, out, sub=slic
                 rows.reason[block[i]] = words if verdict.code[i] else f"flag: {words}"
         use = np.flatnonzero(verdict.code == POLICY_CORRECTED)
         out[index[b][use]] = verdict.command[use]
+        if "u95" in verdict.numbers:
+            rows.u95_mm[block[use]] = verdict.numbers["u95"][use]
     if worst is not None:  # the safety limit (the rows' verdicts are counted for the whole job)
         _, verdict, a = worst
         verdict.enforce(
@@ -276,8 +278,9 @@ def partial_check(rows: Rows, opts: Options) -> None:
     that could not be placed in the robot frame (skipped, with its reason) lands off by the
     robot's error like one the policy refused: it gets the code ``NOT_PLACED`` and counts.
     Joint targets, tool and base frames, offsets and data no motion uses are not positions to
-    correct and do not count. InputError at the first position not corrected, with the counts
-    by reason, and when nothing at all is corrected, unless ``opts.allow_partial``."""
+    correct and do not count. InputError at the worst position whose 95 % bound exceeds the
+    policy's ``max_u95_mm``, at the first position not corrected, with the counts by reason, and
+    when nothing at all is corrected, unless ``opts.allow_partial``."""
     unplaced = rows.commanded & (rows.status == SKIPPED) & (rows.code == POLICY_CORRECTED)
     if unplaced.any():
         rows.code[unplaced] = NOT_PLACED
@@ -285,6 +288,16 @@ def partial_check(rows: Rows, opts: Options) -> None:
             rows.reason[i] = rows.reason[i] or "its position is not known"
     if opts.allow_partial:
         return
+    limit = opts.policy.max_u95_mm
+    over = np.flatnonzero(rows.u95_mm > limit) if limit is not None else np.zeros(0, int)
+    if over.size:
+        i = int(over[np.argmax(rows.u95_mm[over])])
+        raise InputError(
+            f"{over.size} position(s) beyond the largest 95 % bound; the worst {rows.name[i]}: "
+            f"95 % bound {rows.u95_mm[i]:.4f} mm beyond --max-u95 {limit:g} mm "
+            "(--allow-partial writes them corrected and flagged)",
+            *rows.where(i),
+        )
     refused = np.flatnonzero(rows.code != POLICY_CORRECTED)
     if refused.size:
         i = int(refused[0])
@@ -334,7 +347,7 @@ def header_lines(result: Result, program: str, cell: str, opts: Options) -> list
     closing = [f"positions corrected {rows.count(CORRECTED)}"]
     for i in np.flatnonzero(rows.code != POLICY_CORRECTED).tolist():
         closing.append(f"not corrected: line {rows.line[i]} {rows.name[i]}: {rows.reason[i]}")
-    return make_header("rewrite", inputs, (), largest, at, closing)
+    return make_header("rewrite", inputs, (), largest, at, closing, rows.u95_mm)
 
 
 def report_csv(rows: Rows, decimals: int = 4) -> str:

@@ -69,14 +69,17 @@ def tool_yaml(
     return "\n".join(lines) + "\n"
 
 
-def read_tool(r: CellReader, robot: str, model_path: str | None) -> tuple[int | None, np.ndarray]:
+def read_tool(
+    r: CellReader, robot: str, model_path: str | None
+) -> tuple[int | None, np.ndarray, np.ndarray | None]:
     """The cell's ``tool``: a frame {x, y, z, a, b, c, number} or a tool file {file, number}
-    (relative to the cell); (number, flange_T_tool (4, 4) mm). A tool file measured on another
+    (relative to the cell); (number, flange_T_tool (4, 4) mm, the TCP's 1 sigma per axis (3,) mm
+    of a tool file, None for a frame). A tool file measured on another
     model than the cell's (``model_path``, its correction model, else ``robot`` when that is a
     YAML path) or, without one, on another robot than ``robot``, is refused at ``tool.file``."""
     named = r.frame_file("tool", "accugrid identify-tool")
     if named is None:
-        return r.frame(r.top.get("tool"), "tool", True)
+        return (*r.frame(r.top.get("tool"), "tool", True), None)
     number, name = named
     path = r.path.parent / name
     doc = load_yaml(path)
@@ -106,4 +109,7 @@ def read_tool(r: CellReader, robot: str, model_path: str | None) -> tuple[int | 
             f"{Path(name).name} was measured on robot {measured_robot}, the cell's robot is "
             f"{robot}",
         )
-    return number, pose
+    sigma = None
+    if doc.has("sigma"):
+        sigma = np.array([doc.number("sigma", k) for k in "xyz"])
+    return number, pose, sigma

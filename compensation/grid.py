@@ -50,7 +50,8 @@ class GridModel:
     origin, step (3,) mm; counts (3,) int (vertices per axis, >= 2); errors (nx, ny, nz, 3) mm,
     e = P - M at the vertices; orientation_abc (3,) deg or None: the TCP orientation of the
     measurement; status: the KUKA Status it was measured in (column s; None: not recorded);
-    source_sha256: SHA-256 of the measurement file (None for arrays).
+    source_sha256: SHA-256 of the measurement file (None for arrays); noise_mm: a measured row's
+    scatter about its vertex mean, 1 sigma per axis mm (None: no repeats).
     """
 
     def __init__(
@@ -64,6 +65,7 @@ class GridModel:
         repeats: np.ndarray | None = None,
         spread_mm: float = 0.0,
         status: int | None = None,
+        noise_mm: float | None = None,
     ) -> None:
         self.errors = np.array(errors, dtype=float)
         if self.errors.ndim != 4 or self.errors.shape[3] != 3 or min(self.errors.shape[:3]) < 2:
@@ -78,6 +80,7 @@ class GridModel:
         self.source_path = source_path
         self.repeats = repeats
         self.spread_mm = float(spread_mm)
+        self.noise_mm = noise_mm
         self.status = None if status is None else int(status)
         self.errors.flags.writeable = False  # predict works from the copy below
         # per-axis vertex values (3, nx*ny*nz), contiguous for the gathers in predict
@@ -122,6 +125,7 @@ class GridModel:
             repeats=grid.repeats,
             spread_mm=grid.spread_mm,
             status=grid.status,
+            noise_mm=grid.noise_mm,
         )
 
     def __repr__(self) -> str:

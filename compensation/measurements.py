@@ -109,6 +109,7 @@ class VertexGrid:
 
     origin, step (3,) mm; counts (3,) int; errors (nx, ny, nz, 3) mm, e = P - M;
     repeats (nx, ny, nz) int; spread_mm: largest distance of a repeat from its vertex mean;
+    noise_mm: a row's scatter about its vertex mean, 1 sigma per axis (None: no repeats);
     abc (3,) deg the common orientation, status the common KUKA Status (None: not recorded).
     """
 
@@ -122,6 +123,7 @@ class VertexGrid:
     status: int | None = (
         None  # the KUKA Status the grid was measured in (column s), None: not recorded
     )
+    noise_mm: float | None = None
 
 
 def read_measurements(path: str | os.PathLike[str], fmt: TableFormat | None = None) -> Measurements:
@@ -340,7 +342,17 @@ def build_grid(
         spread_mm=float(spread.max()),
         abc=_common_orientation(meas),
         status=_common_status(meas),
+        noise_mm=_repeat_noise(spread, len(flat), n_vertices),
     )
+
+
+def _repeat_noise(spread: np.ndarray, rows: int, vertices: int) -> float | None:
+    """A row's scatter about its vertex mean, 1 sigma per axis mm (pooled over the vertices,
+    3 (rows - vertices) degrees of freedom) from the rows' distances ``spread`` (rows,) mm;
+    None without repeats."""
+    if rows <= vertices:
+        return None
+    return float(np.sqrt(np.sum(spread**2) / (3 * (rows - vertices))))
 
 
 def _common_status(meas: Measurements) -> int | None:

@@ -232,6 +232,7 @@ def residual_grid(
         source_path=measured.source_path,
         repeats=measured.repeats,
         spread_mm=measured.spread_mm,
+        noise_mm=measured.noise_mm,
     )
 
 

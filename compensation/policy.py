@@ -54,6 +54,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from accugrid.compensation.budget import Budget
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.model_correction import model_correct, residual_grid
 from accugrid.compensation.settings import CorrectionSettings
@@ -67,6 +68,7 @@ __all__ = [
     "CORRECTED",
     "FIXES",
     "FLAGS",
+    "F_BUDGET",
     "F_CLAMPED",
     "F_ORIENTATION",
     "F_REGION",
@@ -156,6 +158,7 @@ REASONS = {
 FIXES = {NO_STATUS: "set configuration.status in the cell file: the Status the robot runs in"}
 # flags (bits): corrected, but worth a look
 F_ORIENTATION, F_CLAMPED, F_REGION, F_SINGULAR, F_TOOL, F_SUPPORT = 1, 2, 4, 8, 16, 32
+F_BUDGET = 64  # its 95 % bound (``compensation.budget``) beyond --max-u95
 FLAGS = {
     F_ORIENTATION: "orientation {angle:.1f} deg from the {grid}'s",
     F_CLAMPED: "outside the {grid} box by {clamp:.3f} mm: the nearest cell's error used",
@@ -170,6 +173,7 @@ FLAGS = {
         "largest prediction leverage or joint-space distance among them): corrected by the "
         "DH-only fit of the same poses"
     ),
+    F_BUDGET: "95 % bound {u95:.4f} mm beyond --max-u95 {max_u95:g} mm",
 }
 _LISTED = 5
 
@@ -187,7 +191,9 @@ class PolicyRequest:
     ``CorrectionSettings.outside`` word), the orientation against the grid's (flagged beyond
     ``orientation_tol_deg``, refused beyond ``orientation_limit_deg`` unless
     ``allow_orientation``; deg), ``strict`` (a model's positions outside its poses refused, not
-    flagged) and the job rule (``allow_partial``: ``Verdict.enforce``)."""
+    flagged), the largest 95 % bound of a position (``max_u95_mm``, mm; None: any; beyond it
+    flagged, the job refused unless ``allow_partial``) and the job rule (``allow_partial``:
+    ``Verdict.enforce``)."""
 
     outside: str = "error"
     orientation_tol_deg: float = GRID_ORIENTATION_TOL_DEG
@@ -195,11 +201,15 @@ class PolicyRequest:
     allow_orientation: bool = False
     strict: bool = False
     allow_partial: bool = False
+    max_u95_mm: float | None = None
 
     def check(self) -> None:
-        """InputError unless 0 <= orientation_tol_deg <= orientation_limit_deg."""
+        """InputError unless 0 <= orientation_tol_deg <= orientation_limit_deg and
+        max_u95_mm, when given, is a positive number."""
         if not 0 <= self.orientation_tol_deg <= self.orientation_limit_deg:
             raise InputError("need 0 <= --orientation-tol <= --orientation-limit (deg)")
+        if self.max_u95_mm is not None and not (0 < self.max_u95_mm < np.inf):
+            raise InputError(f"--max-u95 {self.max_u95_mm:g}: must be a positive length, mm")
 
     def limits(self) -> dict:
         """The fields of ``Policy`` it sets (``Policy.build``'s ``limits``)."""
@@ -208,6 +218,7 @@ class PolicyRequest:
             "orientation_limit_deg": self.orientation_limit_deg,
             "allow_orientation": self.allow_orientation,
             "strict": self.strict,
+            "max_u95_mm": self.max_u95_mm,
         }
 
 
@@ -218,7 +229,8 @@ class Policy:
     Status (positions without their own); ``grid_status``: the Status the grid holds in (None:
     unknown, not checked); ``controller_tool``/``arm_tool`` (4, 4) mm (None: the calibrated TCP);
     ``validity``: where the model holds (None: no record); ``tool``: the job's tool, the one the
-    grid was measured with (flange_T_tool (4, 4) mm, None: not given)."""
+    grid was measured with (flange_T_tool (4, 4) mm, None: not given); ``budget``: each
+    corrected position's error budget (``compensation.budget``), flagged beyond ``max_u95_mm``."""
 
     settings: CorrectionSettings
     grid: GridModel | None
@@ -235,6 +247,8 @@ class Policy:
     strict: bool = False
     singular_deg: float = SINGULAR_A5_DEG
     tool: np.ndarray | None = None
+    budget: Budget = Budget()
+    max_u95_mm: float | None = None
 
     @classmethod
     def build(
@@ -250,6 +264,7 @@ class Policy:
         turn: int | None = None,
         nominal: Robot | None = None,
         validity: Validity | None = None,
+        budget: Budget | None = None,
         **limits,
     ) -> Policy:
         """The policy of one job. ``grid``: a measurement CSV path, a measured GridModel or
@@ -257,7 +272,8 @@ class Policy:
         ``status``: the job's configuration code (None: the grid's, else the IK default at the
         first of ``points`` (N, 3) mm at ``abc_deg`` (N, 3) deg with ``turn``); ``nominal``: the
         controller's robot, with the tool the grid was measured with, which finds the Status of
-        a grid that does not record it; ``limits``: the orientation and strictness fields.
+        a grid that does not record it; ``budget``: the model's and frames' terms of the error
+        budget (None: none known); ``limits``: the orientation, strictness and bound fields.
         InputError for a bad grid, a residual grid the model cannot reach or measured with
         another set-up."""
         measured = grid
@@ -271,6 +287,7 @@ class Policy:
                 calibrated if controller_tool is None else calibrated.with_tool(controller_tool)
             )
         grid_status, source = _grid_status(measured, solver)
+        limits["budget"] = replace(budget or Budget(), modelled=calibrated is not None)
         if calibrated is None:
             return cls(
                 settings,
@@ -374,7 +391,21 @@ class Policy:
             v.refuse(over, TOO_LONG, length[over])
         v.command[v.code != CORRECTED] = points[v.code != CORRECTED]
         v.length = np.where(v.code == CORRECTED, length, 0.0)
+        self._assess(v)
         return v
+
+    def _assess(self, v: Verdict) -> None:
+        """The error budget of the corrected positions (``compensation.budget``), those beyond
+        ``max_u95_mm`` flagged."""
+        at = np.flatnonzero(v.code == CORRECTED)
+        model = None
+        if self.budget.model is not None and v.joints is not None:
+            model = self.budget.model.covariance(v.joints[at])
+        self.budget.assess(v.numbers, len(v), at, v.points[at], self.grid, model)
+        if self.max_u95_mm is not None:
+            u95 = v.numbers["u95"][at]
+            over = np.flatnonzero(u95 > self.max_u95_mm)
+            v.flag(at[over], F_BUDGET, "u95", u95[over])
 
     def decide_tool(
         self,
@@ -462,6 +493,8 @@ class Policy:
         done = todo[result.ok]
         v.command[done] = result.command[result.ok]
         q = result.q[result.ok]  # the controller's joints at the final commands
+        v.joints = np.full((n, 6), np.nan)
+        v.joints[done] = q
         a5 = singular_a5_deg(q)
         near = np.flatnonzero(a5 < self.singular_deg)
         v.flag(done[near], F_SINGULAR, "a5", a5[near])
@@ -517,8 +550,9 @@ class Verdict:
     """``Policy.decide`` for N targets: points and commands (N, 3) mm robot frame (the target
     where not corrected), code (N,) int8 (``CORRECTED`` or a ``REASONS`` key), value (N,) the
     number of the code's words, flags (N,) uint8 (``FLAGS`` bits), why (N,) object (the IK's
-    words), length (N,) |P' - P| mm (0 where not corrected) and the flags' numbers by name
-    (N,) each."""
+    words), length (N,) |P' - P| mm (0 where not corrected), the flags' numbers by name
+    (N,) each (the error budget's too: ``sigma_x``, ``sigma_y``, ``sigma_z``, ``u95`` mm) and
+    the controller's joints (N, 6) rad where a model corrected (None: no model; NaN rows)."""
 
     policy: Policy
     points: np.ndarray
@@ -529,6 +563,7 @@ class Verdict:
     why: np.ndarray = field(default=None)
     length: np.ndarray = field(default=None)
     numbers: dict[str, np.ndarray] = field(default_factory=dict)
+    joints: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.code)
@@ -590,6 +625,7 @@ class Verdict:
                 "max": p.settings.max_correction_mm or 0.0,
                 "singular": p.singular_deg,
                 "tool_distance": p.settings.tool_distance_mm,
+                "max_u95": p.max_u95_mm or 0.0,
                 "region": "",
             }
         return dict(self.__dict__["_shared"])
@@ -641,6 +677,14 @@ class Verdict:
             raise InputError(
                 f"{label(i)}: {self.reason(i)}; refusing the whole job (check the grid, the "
                 "model, the tool and the base frame)",
+                *where(i),
+            )
+        over = np.flatnonzero(((self.flags & F_BUDGET) != 0) & (self.code == CORRECTED))
+        if over.size and not allow_partial:
+            i = int(over[np.nanargmax(self.numbers["u95"][over])])
+            raise InputError(
+                f"{over.size} {what}(s) beyond the largest 95 % bound; the worst {label(i)}: "
+                f"{self.reason(i, F_BUDGET)} (--allow-partial writes them corrected and flagged)",
                 *where(i),
             )
         refused = self.refused

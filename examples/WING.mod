@@ -5,6 +5,7 @@ MODULE WING
     ! grid grid_irb6700_200mm.csv sha256 a595bed6b2ca0d6ce01bb72e1888c2462fdd63e98a49c3ba94f7576afe7e2791
     ! grid step 200.000 x 200.000 x 200.000 mm
     ! largest correction 4.039 mm at hole WP-R3-001
+    ! largest u95 0.113 mm over 72 positions: the 95 percent bound of the error
     ! holes 72
     ! tool: the cell's TCP in the flange frame; work object: the cell's base frame
     PERS tooldata tDrill:=[TRUE,[[0.000,0.000,250.000],[1.000000000,0.000000000,0.000000000,0.000000000]],[25.000,[0,0,0],[1,0,0,0],0,0,0]];

@@ -5,6 +5,7 @@ MODULE CAM_DRILL
     ! grid grid_irb6700_200mm.csv sha256 a595bed6b2ca0d6ce01bb72e1888c2462fdd63e98a49c3ba94f7576afe7e2791
     ! grid step 200.000 x 200.000 x 200.000 mm
     ! largest correction 3.923 mm at pHole3 line 9
+    ! largest u95 0.113 mm over 2 positions: the 95 percent bound of the error
     ! positions corrected 2
     ! not corrected: line 7 pHole1: used by Drill at line 15, not a move accugrid places
     ! not corrected: line 8 pHole2: operand of Offs_..._ at line 16: the offset point is not a drilling position

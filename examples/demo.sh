@@ -55,6 +55,12 @@ accugrid rewrite examples/cam_drill.ngc --cell examples/cell.yaml \
     --allow-partial
 diff examples/cam_drill.dat out/rewrite/cam_drill.dat || true
 
+# The whole chain to the hole, on simulated measurements. The robot's base frame from tracker
+# points (fit-frame: the mounting plane, the flange circle about A1, the flange holes at zero).
+accugrid fit-frame --base-plane examples/tracker/base_plane.csv \
+    --a1-circle examples/tracker/a1_circle.csv --flange-holes examples/tracker/flange_holes.csv \
+    -o out/model/robot_frame.yaml --force
+
 # Model-based calibration on kr210-realistic (seed Table 1 errors + compliance under gravity +
 # reducer harmonics, none of which the user states): 60 D-optimal poses tilted up to 25 deg (CSV
 # skeleton + KRL measurement program) -> a simulated tracker session at those poses, 3 repeats,
@@ -68,6 +74,30 @@ accugrid simulate --robot kr210-realistic --poses out/model/ident.csv --tool 0 0
     -o out/model/ident_measured.csv --force
 accugrid identify out/model/ident_measured.csv --robot kr210-realistic --tool 0 0 250 0 0 0 \
     -o out/model/calibrated.yaml --force
+# The drill on the calibrated arm: taught at 10 -5 320 mm, it really sits at 10.6 -5.4 320.5 mm
+# with its axis 0.2 deg off; an SMR in a tip adapter (and one on the axis 60 mm behind) measured
+# at 8 planned orientations, 3 repeats -> TOOL.yaml. The part: its 5 tooling balls measured 3
+# times on a fixture that stands 1.8 mm and 0.1 deg off the cell's typed base -> PART.yaml.
+# A cell with both files and the model -> the KRL program and its report, whose header and map
+# carry each hole's 95 % bound (tool, part and model included).
+accugrid plan tool --model out/model/calibrated.yaml --tool 10 -5 320 0 0 0 --axis-point \
+    -o out/model/tool --force
+accugrid simulate --robot kr210-realistic --poses out/model/tool/measure_tool.csv \
+    --tool 10 -5 320 0 0 0 --smr 10.6 -5.4 320.5 --smr-axis 10.39 -5.4 260.5 --repeats 3 \
+    --noise-tracker 0.02 --noise-repeat 0.03 --seed 5 -o out/model/tool_session.csv --force
+accugrid identify-tool out/model/tool_session.csv --model out/model/calibrated.yaml \
+    --tool 10 -5 320 0 0 0 --number 1 -o out/model/tool.yaml --force
+accugrid simulate --datums examples/panel_nominal.csv \
+    --part 1701.8 298.8 1000.9 -89.88 -0.08 90.05 --repeats 3 --noise-tracker 0.02 --seed 6 \
+    -o out/model/datums.csv --force
+accugrid fit-part out/model/datums.csv --nominal examples/panel_nominal.csv \
+    -o out/model/part.yaml --force
+sed -e 's|^grid: .*||' -e 's|^tool: {.*}|tool: {file: tool.yaml, number: 1}|' \
+    -e 's|^base: {.*}|base: {file: part.yaml, number: 1}|' \
+    -e 's|^correction:$|correction:\n  model: calibrated.yaml|' examples/cell.yaml \
+    > out/model/cell_measured.yaml
+accugrid krl examples/wing_panel_points.csv --cell out/model/cell_measured.yaml \
+    -o out/model/krl_measured --report-html out/model/krl_measured.html --force
 accugrid simulate --robot kr210-realistic --region 1200 2200 -500 500 1100 2100 --step 500 \
     --abc 0 90 0 --tool 0 0 250 0 0 0 --repeats 3 --noise-tracker 0.02 --noise-repeat 0.03 \
     --seed 3 -o out/model/residual_27.csv --force

@@ -287,5 +287,6 @@ def model_structure(model: Robot, chosen: list[str]):
     moves = model.joint_errors
     harmonics = tuple((h.axis, h.order) for h in moves.harmonics) if moves else ()
     compliance = bool(moves is not None and moves.masses and np.any(moves.compliance))
-    gravity = tuple(t for t in gravity_terms(model) if t.name in chosen)
+    library = {t.name: t for t in gravity_terms(model)}
+    gravity = tuple(library[name] for name in chosen if name in library)  # identify's order
     return compliance, harmonics, gravity

@@ -26,6 +26,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from accugrid.infra.bounds import length_bound_95
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.identification import rigid_fit
 from accugrid.kinematics.model import RobotModel
@@ -38,6 +39,7 @@ __all__ = [
     "REFERENCE_TEMPERATURE_C",
     "PartFit",
     "fit_part_frame",
+    "frame_jacobian",
     "reach_mm",
     "thermal_scale",
 ]
@@ -51,7 +53,18 @@ MOVED_MIN_MM = 0.1
 """A datum is called moved when its prediction by the others misses it by ``MOVED_RATIO`` times
 the expected miss and by at least this much (a tracker's noise is a few 0.01 mm)."""
 REFERENCE_TEMPERATURE_C = 20.0  # ISO 1: CAD dimensions hold at 20 degC
-_COVERAGE = 0.95
+
+
+def frame_jacobian(points: np.ndarray, centroid: np.ndarray) -> np.ndarray:
+    """(N, 3, 6) derivative of robot-frame points (N, 3) mm carried by a frame by its
+    translation at ``centroid`` (3,) mm and its small rotation (rad)."""
+    lever = np.asarray(points, dtype=float).reshape(-1, 3) - centroid
+    jac = np.zeros((len(lever), 3, 6))
+    jac[:, :, :3] = np.eye(3)
+    jac[:, 0, 4], jac[:, 0, 5] = lever[:, 2], -lever[:, 1]  # -[lever]x : d(w x lever)/dw
+    jac[:, 1, 3], jac[:, 1, 5] = -lever[:, 2], lever[:, 0]
+    jac[:, 2, 3], jac[:, 2, 4] = lever[:, 1], -lever[:, 0]
+    return jac
 
 
 def thermal_scale(cte_per_k: float, temperature_c: float) -> float:
@@ -91,30 +104,19 @@ class PartFit:
         """(N, 3, k) derivative of the robot-frame position of CAD points (N, 3) mm by the
         parameters."""
         x = self.robot_T_base[:3, :3] @ (self.scale * nominal.T) + self.robot_T_base[:3, 3:]
-        lever = x.T - self.centroid
-        jac = np.zeros((len(nominal), 3, 7 if self.scale_fitted else 6))
-        jac[:, :, :3] = np.eye(3)
-        jac[:, 0, 4], jac[:, 0, 5] = lever[:, 2], -lever[:, 1]  # -[lever]x : d(w x lever)/dw
-        jac[:, 1, 3], jac[:, 1, 5] = -lever[:, 2], lever[:, 0]
-        jac[:, 2, 3], jac[:, 2, 4] = lever[:, 1], -lever[:, 0]
+        jac = frame_jacobian(x.T, self.centroid)
         if self.scale_fitted:
-            jac[:, :, 6] = (nominal - self.nominal_centroid) @ self.robot_T_base[:3, :3].T
+            scale = (nominal - self.nominal_centroid) @ self.robot_T_base[:3, :3].T
+            jac = np.concatenate([jac, scale[:, :, None]], axis=2)
         return jac
 
     def sigma_at(self, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The frame's uncertainty at CAD points (N, 3) mm of the part: per-axis 1 sigma (N, 3)
         mm in the robot frame and the 95 % bound on the error's length ``u95_mm`` (N,)."""
-        from scipy.stats import f
-
         jac = self._jacobian(np.asarray(nominal, dtype=float).reshape(-1, 3))
         cov = jac @ self.covariance @ jac.transpose(0, 2, 1)
         per_axis = np.sqrt(np.clip(np.diagonal(cov, axis1=1, axis2=2), 0.0, None))
-        lam = np.clip(np.linalg.eigvalsh(cov), 0.0, None)
-        total, square = lam.sum(axis=1), (lam**2).sum(axis=1)
-        safe = np.where(square > 0.0, square, 1.0)
-        h = np.where(square > 0.0, total**2 / safe, 3.0)  # effective degrees of freedom
-        u95 = np.sqrt(total * f.ppf(_COVERAGE, h, self.dof))  # g h F with g h = total
-        return per_axis, u95
+        return per_axis, length_bound_95(cov, self.dof)
 
     @property
     def moved(self) -> int | None:

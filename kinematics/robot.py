@@ -306,6 +306,7 @@ IDENTIFICATION_SCHEMA: Schema = {
     "validity": dict.fromkeys(VALIDITY_KEYS),  # kinematics.validity reads and checks its values
     "structure": STRUCTURE_SCHEMA,
     "support": None,  # kinematics.support reads and checks its keys
+    "budget": None,  # compensation.budget reads and checks its keys
 }
 # ``joint_errors:`` (``_joint_errors_from_doc``)
 JOINT_ERRORS_SCHEMA: Schema = {

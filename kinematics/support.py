@@ -69,7 +69,17 @@ from accugrid.kinematics.identification import (
 )
 from accugrid.kinematics.robot import ERROR_KEYS, Robot
 
-__all__ = ["SECTION", "SUPPORT_SCHEMA", "Structure", "Support", "support_section"]
+__all__ = [
+    "SECTION",
+    "SUPPORT_SCHEMA",
+    "Structure",
+    "Support",
+    "hat_blocks",
+    "number_rows",
+    "row_texts",
+    "support_section",
+    "whitened",
+]
 
 SECTION = ("identification", "support")
 SUPPORT_SCHEMA = {
@@ -113,7 +123,7 @@ class Structure:
         )
 
 
-def _whitened(jac: np.ndarray) -> np.ndarray:
+def whitened(jac: np.ndarray) -> np.ndarray:
     """W (k, p) with |W j|² = j (Jᵀ J)⁺ jᵀ for rows J (M, p), in the directions whose singular
     value (columns scaled to unit RMS) is at least ``RTOL`` times the largest."""
     scale = np.sqrt(np.mean(jac**2, axis=0))
@@ -129,7 +139,7 @@ def _embedded(q: np.ndarray, lever: np.ndarray) -> np.ndarray:
     return np.concatenate([lever * np.cos(q), lever * np.sin(q)], axis=1)
 
 
-def _hat_blocks(w: np.ndarray, jac: np.ndarray) -> np.ndarray:
+def hat_blocks(w: np.ndarray, jac: np.ndarray) -> np.ndarray:
     """(N, 3, 3) J(q) (Jᵀ J)⁺ J(q)ᵀ of Jacobians jac (N, 3, p)."""
     z = np.einsum("kp,nap->nak", w, jac)
     return np.einsum("nak,nbk->nab", z, z)
@@ -169,7 +179,7 @@ class Support:
         out = np.empty(len(q))
         for lo in range(0, len(q), _BLOCK):
             jac = self.structure.jacobian(self.robot, q[lo : lo + _BLOCK])
-            out[lo : lo + _BLOCK] = np.einsum("naa->n", _hat_blocks(self.leverage_map, jac))
+            out[lo : lo + _BLOCK] = np.einsum("naa->n", hat_blocks(self.leverage_map, jac))
         return out
 
     def ratio(self, q: np.ndarray) -> np.ndarray:
@@ -197,9 +207,9 @@ class Support:
         loo, far = (doc.number(*key, k) for k in ("loo_leverage_max", "loo_distance_max_mm"))
         if not (loo > 0 and far > 0):
             raise doc.error("loo_leverage_max and loo_distance_max_mm must be > 0", *key)
-        joints = _rows(doc, (*key, "joints_deg"), 6)
+        joints = number_rows(doc, (*key, "joints_deg"), 6)
         jac = structure.jacobian(robot, np.radians(joints))
-        w = _whitened(jac.reshape(-1, jac.shape[2]))
+        w = whitened(jac.reshape(-1, jac.shape[2]))
         doc.sequence(*key, "lever_mm_per_rad", length=6)
         lever = np.array([doc.number(*key, "lever_mm_per_rad", i) for i in range(6)])
         fb = (*key, "fallback")
@@ -215,7 +225,7 @@ class Support:
         return cls(structure, robot, w, loo, np.radians(joints), lever, far, fallback, frame)
 
 
-def _rows(doc: YamlDoc, key: tuple, width: int) -> np.ndarray:
+def number_rows(doc: YamlDoc, key: tuple, width: int) -> np.ndarray:
     """The numbers (n, width) at ``key``: a list of rows, each a text of ``width`` numbers
     separated by blanks; InputError naming the key unless so and finite."""
     value = doc.get(*key)
@@ -228,7 +238,7 @@ def _rows(doc: YamlDoc, key: tuple, width: int) -> np.ndarray:
     return rows
 
 
-def _row_texts(rows: np.ndarray, form: str) -> list[str]:
+def row_texts(rows: np.ndarray, form: str) -> list[str]:
     """Rows (n, m) as texts of m numbers in ``form`` (a format spec) separated by blanks."""
     return [" ".join(format(float(v), form) for v in row) for row in rows]
 
@@ -243,8 +253,8 @@ def support_section(
     _, first = np.unique(group, return_index=True)
     joints = np.round(np.degrees(q[first]), 3)  # as the file holds them, the map computed from
     jac = structure.jacobian(calibrated, np.radians(joints))  # one row triple per distinct pose
-    w = _whitened(jac.reshape(-1, jac.shape[2]))
-    hat = _hat_blocks(w, jac)
+    w = whitened(jac.reshape(-1, jac.shape[2]))
+    hat = hat_blocks(w, jac)
     loo = np.einsum("nab,nba->n", hat, np.linalg.inv(np.eye(3) - hat))
     theta = [4 * i + 3 for i in range(6)]  # the Δθ columns: ∂p/∂A_i up to the axis' sign
     lever = np.sqrt(np.mean(np.sum(jac[:, :, theta] ** 2, axis=1), axis=0))
@@ -254,7 +264,7 @@ def support_section(
     return {
         "parameters": structure.names,
         "loo_leverage_max": float(loo.max()),
-        "joints_deg": _row_texts(joints, ".3f"),
+        "joints_deg": row_texts(joints, ".3f"),
         "lever_mm_per_rad": [float(v) for v in lever],
         "loo_distance_max_mm": float(nearest.max()),
         "fallback": {

@@ -89,3 +89,15 @@ def test_compliance_section_reloads(tmp_path):
     loaded = load_robot(path)
     np.testing.assert_array_equal(loaded.joint_errors.compliance, moves.compliance)
     np.testing.assert_array_equal(loaded.true_robot().fk(Q), robot.true_robot().fk(Q))
+
+
+def test_the_structure_read_back_keeps_the_chosen_order_of_the_gravity_groups():
+    """identify orders a model's parameters as its structure chose the groups; a file that chose
+    A3's group before A2's must give back the same columns, or every command refuses it (the
+    support's and the budget's parameters no longer match)."""
+    from accugrid.kinematics.calibrated import model_structure
+
+    robot = load_robot("kr210")
+    chosen = ["gravity A3 forearm", "gravity A2 upper arm", "A2 k15"]
+    _, _, gravity = model_structure(robot, chosen)
+    assert [t.name for t in gravity] == ["gravity A3 forearm", "gravity A2 upper arm"]

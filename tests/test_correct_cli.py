@@ -62,9 +62,24 @@ def test_constant_error_is_added_and_input_columns_are_untouched(tmp_path, capsy
     code, out = run(tmp_path, points)
     assert code == 0
     rows = read_rows(out)
-    assert rows[0] == "id,x,y,z,note,a,b,c,x_cmd,y_cmd,z_cmd,ex,ey,ez,flag".split(",")
+    assert rows[
+        0
+    ] == "id,x,y,z,note,a,b,c,x_cmd,y_cmd,z_cmd,ex,ey,ez,sigma_x,sigma_y,sigma_z,u95_mm,flag".split(
+        ","
+    )
     assert rows[1][:8] == ["H1", "1100.5", "-12", "1399.25", "countersink, 100 deg", "0", "90", "0"]
-    assert rows[1][8:] == ["1100.6000", "-12.2000", "1399.5500", "0.1000", "-0.2000", "0.3000", ""]
+    # an exact grid of a constant error: nothing uncertain
+    zero = ["0.0000"] * 4
+    assert rows[1][8:] == [
+        "1100.6000",
+        "-12.2000",
+        "1399.5500",
+        "0.1000",
+        "-0.2000",
+        "0.3000",
+        *zero,
+        "",
+    ]
     assert rows[2][8:14] == ["1400.1000", "199.8000", "1000.3000", "0.1000", "-0.2000", "0.3000"]
     head = [line for line in out.read_text().splitlines() if line.startswith("#")]
     assert head[0] == f"# accugrid {accugrid.__version__} correct"
@@ -107,14 +122,16 @@ def test_outside_points_are_named_or_clamped_and_flagged(tmp_path, capsys):
     assert code == 0
     rows = read_rows(out)
     assert rows[2][4:] == ["1450.1000", "-0.2000", "1200.3000", "0.1000", "-0.2000", "0.3000"] + [
-        "outside the grid box by 50.000 mm: the nearest cell's error used"
+        *["0.0000"] * 4,  # the constant error's exact grid, clamped: nothing uncertain
+        "outside the grid box by 50.000 mm: the nearest cell's error used",
     ]
     assert "flagged    1 point(s)" in capsys.readouterr().out
     code, out = run(tmp_path, points, "--allow-partial", "--force")  # written, far left as is
     assert code == 0
     rows = read_rows(out)
     assert rows[2][4:] == ["1450.0000", "0.0000", "1200.0000", "0.0000", "0.0000", "0.0000"] + [
-        "not corrected: outside the grid box by 50.000 mm"
+        *[""] * 4,  # not corrected: no budget
+        "not corrected: outside the grid box by 50.000 mm",
     ]
     assert "1 point(s) cannot be corrected (1 outside the grid)" in capsys.readouterr().err
 

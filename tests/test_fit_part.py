@@ -235,7 +235,17 @@ def test_cell_with_part_file_writes_the_program_of_the_same_base_typed_in(tmp_pa
             for p in sorted(out.iterdir())
         }
     assert set(programs["file"]) == {"WING_PANEL.src", "WING_PANEL.dat"}
+    # the same program; only the error budget's bound grows by the part frame's uncertainty
+    bounds = {}
+    for name, files in programs.items():
+        found = [re.search(r"^; largest u95 (\S+) mm.*\n", t, re.M) for t in files.values()]
+        bounds[name] = {float(m.group(1)) for m in found}
+        programs[name] = {
+            k: t.replace(m.group(0), "") for (k, t), m in zip(files.items(), found, strict=True)
+        }
     assert programs["file"] == programs["typed"]
+    assert len(bounds["file"]) == len(bounds["typed"]) == 1
+    assert bounds["file"].pop() > bounds["typed"].pop()
 
 
 def test_cell_refuses_a_part_out_of_the_robots_reach(tmp_path, capsys):
@@ -341,3 +351,31 @@ def test_cell_names_the_bad_key_of_a_part_file(tmp_path, capsys):
     assert main(args) == 2
     assert re.search(r"part\.yaml:8:3: base\.zz: unknown key; did you mean z\?", _one_line(capsys))
     assert not out.exists()
+
+
+def test_simulate_measures_the_datums_where_the_part_stands(tmp_path):
+    """simulate --datums/--part -> fit-part: the frame comes back within the noise's reach, its
+    covariance about the datums' centre read back for the error budget."""
+    true = np.array([1702.5, 297.9, 1001.4, -89.9, 0.12, 90.1])
+    datums = tmp_path / "datums.csv"
+    assert main(["simulate", "--datums", str(NOMINAL), "--part", *map(str, true),
+                 "--repeats", "3", "--noise-tracker", "0.02", "--seed", "3",
+                 "-o", str(datums)]) == 0  # fmt: skip
+    rows = [ln for ln in datums.read_text().splitlines() if not ln.startswith("#")]
+    assert rows[0] == "id,x,y,z" and len(rows) == 1 + 5 * 3
+    code, part = _fit_part(tmp_path, datums)
+    assert code == 0
+    fitted = load_part(part)
+    at_holes = transform_points(fitted.robot_T_base, _holes())
+    truth = transform_points(pose_from_xyzabc(true), _holes())
+    assert np.linalg.norm(at_holes - truth, axis=1).max() < 0.05  # 15 rows of 0.02 mm noise
+    assert fitted.covariance.shape == (6, 6) and np.allclose(
+        fitted.centroid, fitted.measured.mean(axis=0)
+    )
+
+
+def test_simulate_datums_needs_the_part_frame(tmp_path, capsys):
+    out = tmp_path / "datums.csv"
+    assert main(["simulate", "--datums", str(NOMINAL), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--part" in err and not out.exists()

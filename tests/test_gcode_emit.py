@@ -235,7 +235,7 @@ def test_command_header_names_the_inputs(tmp_path):
 
     out = tmp_path / "h.ngc"
     assert run_cli("-o", out) == 0
-    head = [ln[1:-1] for ln in out.read_text().split("\n")[:7]]
+    head = [ln[1:-1] for ln in out.read_text().split("\n")[:8]]
     grid_file = CELL.parent / "grid_200mm.csv"
 
     def sha(p):
@@ -245,6 +245,12 @@ def test_command_header_names_the_inputs(tmp_path):
     pts = read_points(POINTS)
     e = model.predict(transform_points(cell().robot_T_base, pts.xyz))
     worst = int(np.argmax(np.linalg.norm(e, axis=1)))
+    bound = re.fullmatch(
+        r"largest u95 (\d+\.\d{3}) mm over 72 positions: the 95 percent bound "
+        r"of the error",
+        head.pop(6),
+    )
+    assert bound and 0.0 < float(bound.group(1)) < 0.3  # a grid of 0.02 + 0.03 mm noise
     assert head == [
         f"accugrid {__version__} gcode",
         f"points wing_panel_points.csv sha256 {sha(POINTS)}",

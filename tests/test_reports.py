@@ -81,7 +81,7 @@ def test_correct_report_lists_the_positions_left_uncorrected_with_their_reason(t
     code = main(["correct", str(points), "--grid", str(GRID), "-o", str(tmp_path / "c.csv"),
                  "--allow-partial", "--report-html", str(report)])  # fmt: skip
     assert code == 0
-    page = check_report(report, [points, GRID], figures=1)
+    page = check_report(report, [points, GRID], figures=2)
     assert page.verdict == ["4 of 40 drilling positions not corrected"]
     text = " ".join(page.text)
     for i in range(4):  # the four holes moved out of the grid, each with the policy's words
@@ -95,7 +95,7 @@ def test_correct_report_of_1e4_holes_stays_under_2_mb(tmp_path):
     report = tmp_path / "c.html"
     assert main(["correct", str(points), "--grid", str(GRID), "-o", str(tmp_path / "c.csv"),
                  "--allow-partial", "--report-html", str(report)]) == 0  # fmt: skip
-    check_report(report, [points, GRID], figures=1)
+    check_report(report, [points, GRID], figures=2)
     assert report.stat().st_size <= MAX_REPORT_BYTES
 
 
@@ -137,7 +137,7 @@ def test_program_report_beside_the_same_program_bytes(tmp_path, dialect, monkeyp
     assert written
     for path in written:
         assert (plain / path.relative_to(reported)).read_bytes() == path.read_bytes()
-    page = check_report(report, [points, cell, GRID, *written], figures=1)
+    page = check_report(report, [points, cell, GRID, *written], figures=2)
     assert page.verdict == ["all 72 drilling positions corrected"]
     text = " ".join(page.text)
     assert "PASS" not in report.read_text().split("<body>")[1]
@@ -202,7 +202,7 @@ def test_the_plan_view_lies_in_the_holes_plane_not_robot_xy(tmp_path, monkeypatc
     command = np.array([[float(r[f"{k}_cmd"]) for k in "xyz"] for r in out])
     target = np.array([[float(r[k]) for k in "xyz"] for r in out])
     assert correction == pytest.approx((command - target)[:, [1, 2, 0]], abs=1e-4)
-    text = " ".join(check_report(report, [points, GRID], figures=1).text)
+    text = " ".join(check_report(report, [points, GRID], figures=2).text)
     assert "u (+0.000 +1.000 +0.000), v (+0.000 +0.000 +1.000), n (+1.000 +0.000 +0.000)" in text
 
 
@@ -248,7 +248,7 @@ def test_rewrite_report_names_each_position_left_as_it_is(tmp_path):
     for name in ("cam_drill.src", "cam_drill.dat"):
         assert (tmp_path / "rw" / name).read_bytes() == (tmp_path / "plain" / name).read_bytes()
     written = [tmp_path / "rw" / "cam_drill.src", tmp_path / "rw" / "cam_drill.dat"]
-    page = check_report(report, [src, dat, cell, GRID, *written], figures=1)
+    page = check_report(report, [src, dat, cell, GRID, *written], figures=2)
     # the home PTP lies outside the grid and a LIN gives Z alone: both written as they were
     assert page.verdict == ["2 of 10 drilling positions not corrected"]
     text = " ".join(page.text)

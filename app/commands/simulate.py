@@ -16,6 +16,11 @@ deg, 4 decimals) in the output, for `accugrid identify`. A corrected points CSV 
 correct`, with x_cmd,y_cmd,z_cmd) is measured at its commands and the rows keep its x,y,z, the
 targets: the measurement after correction that `accugrid validate` checks.
 
+--datums NOMINAL.csv --part X Y Z A B C instead measures the datums of a part (tooling balls:
+id,x,y,z in the part's CAD frame) standing at robot_T_base = the --part frame, with the tracker's
+noise, --repeats rows per datum: the DATUMS.csv that `accugrid fit-part` reads (id,x,y,z in the
+robot frame).
+
 --plot FILE draws seed Fig. 3: the X, Y, Z components of the error e = P - M over the plane of
 seed Table 2 (X 1000..2000, Y -500..500, Z 1800 mm, A 0, B 90, C 0 deg). Lengths in mm, angles in
 degrees.
@@ -81,6 +86,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="with --smr: on the plan's rows whose column point is axis, the SMR sits here, mm "
         "(a point on the drill axis)",
     )
+    parser.add_argument(
+        "--datums",
+        metavar="NOMINAL.csv",
+        help="measure the datums of a part (id,x,y,z in its CAD frame, mm) standing at --part "
+        "instead of a grid: the datums file of accugrid fit-part",
+    )
+    parser.add_argument(
+        "--part",
+        nargs=6,
+        type=number("mm or deg", -COORDINATE_MAX, COORDINATE_MAX),
+        metavar=("X", "Y", "Z", "A", "B", "C"),
+        help="with --datums: where the part really stands, robot_T_base: x, y, z mm, a, b, c "
+        "KUKA deg",
+    )
     add_abc(parser, "TCP orientation at every vertex")
     add_tool(parser, "tool on the flange")
     add_status(
@@ -120,7 +139,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     robot_file = args.robot if Path(args.robot).is_file() else None
-    inputs = [robot_file, args.poses]
+    inputs = [robot_file, args.poses, args.datums]
     check_targets([t for t in (args.output, args.plot) if t], inputs, args.force)
     request = SimulateRequest(
         robot=robot_with_tool(args.robot, args.tool),
@@ -137,6 +156,8 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
         smr=None if args.smr is None else tuple(args.smr),
         smr_axis=None if args.smr_axis is None else tuple(args.smr_axis),
+        datums=args.datums,
+        part=None if args.part is None else tuple(args.part),
     )
     job = simulate_files(request)
     write_files(job.files, inputs, force=args.force)

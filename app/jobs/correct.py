@@ -1,7 +1,9 @@
 """``accugrid correct`` (``correct_points``): the corrected-points CSV (docs/formats.md)
 both jobs (grid here, model in ``correct_model``) write from the correction policy's
 verdict (``compensation.policy``): every input column untouched, then x_cmd,y_cmd,z_cmd (the
-command, mm), ex,ey,ez (the correction applied, P' - P, mm; 4 decimals) and flag (why a point
+command, mm), ex,ey,ez (the correction applied, P' - P, mm; 4 decimals), sigma_x,sigma_y,
+sigma_z,u95_mm (the point's error budget, ``compensation.budget``: 1 sigma per axis and the 95 %
+bound on the error's length, mm; empty where not corrected or unknown) and flag (why a point
 deserves a look, or "not corrected: ..." with --allow-partial)."""
 
 from __future__ import annotations
@@ -27,9 +29,13 @@ from accugrid.infra.errors import InputError
 from accugrid.infra.textsafe import fixed_texts
 from accugrid.kinematics.frames import abc_to_matrix
 
+BUDGET_COLUMNS = ["sigma_x", "sigma_y", "sigma_z", "u95_mm"]
+_BUDGET_NUMBERS = ("sigma_x", "sigma_y", "sigma_z", "u95")  # the verdict's names
+
 __all__ = [
     "ADDED",
     "BLOCK",
+    "BUDGET_COLUMNS",
     "DECIMALS",
     "CorrectRequest",
     "check_added_columns",
@@ -40,7 +46,7 @@ __all__ = [
     "point_status",
 ]
 
-ADDED = ["x_cmd", "y_cmd", "z_cmd", "ex", "ey", "ez", "flag"]
+ADDED = ["x_cmd", "y_cmd", "z_cmd", "ex", "ey", "ez", *BUDGET_COLUMNS, "flag"]
 DECIMALS = 4
 _LISTED = 5  # how many points a message names
 
@@ -80,6 +86,13 @@ def flag_texts(verdict: Verdict) -> list[str]:
     return out
 
 
+def budget_numbers(verdict: Verdict) -> np.ndarray:
+    """(N, 4) mm: each position's 1 sigma per axis and 95 % bound (``compensation.budget``),
+    NaN where not corrected or unknown."""
+    n = len(verdict)
+    return np.column_stack([verdict.numbers.get(k, np.full(n, np.nan)) for k in _BUDGET_NUMBERS])
+
+
 def _plain_lines(rows: np.ndarray, numbers: np.ndarray, flags: list[str]) -> bytes:
     """CSV lines, UTF-8: each row as read (``rows`` (n, r) uint8 NUL-padded), its numbers
     (n, k) as ``fixed`` text with ``DECIMALS`` places, its flag (n) (nothing ``csv.writer``
@@ -98,15 +111,24 @@ def corrected_csv(
     correction: np.ndarray,
     flag: list[str],
     header: list[str],
+    budget: np.ndarray | None = None,
 ) -> Iterator[str | bytes]:
     """The corrected CSV text in pieces (comment header and column names, then blocks of
-    ``BLOCK`` rows), for writing a million points without holding the text whole."""
+    ``BLOCK`` rows), for writing a million points without holding the text whole; ``budget``
+    (N, 4) mm (``budget_numbers``; None: unknown everywhere)."""
     out = io.StringIO()
     out.write(csv_comment(header))
     csv.writer(out, lineterminator="\n").writerow([*points.table.header, *ADDED])
     yield out.getvalue()
-    numbers = np.column_stack([command, correction])
-    plain = points.table.row_bytes(0, 0) is not None and not _NEEDS_QUOTES.search("".join(flag))
+    if budget is None:
+        budget = np.full((len(points), len(BUDGET_COLUMNS)), np.nan)
+    numbers = np.column_stack([command, correction, budget])
+    known = np.isfinite(budget).all()
+    plain = (
+        known
+        and points.table.row_bytes(0, 0) is not None
+        and not _NEEDS_QUOTES.search("".join(flag))
+    )
     for lo in range(0, len(points), BLOCK):
         hi = min(lo + BLOCK, len(points))
         if plain:  # the block's lines built as bytes by numpy from the rows as read
@@ -114,7 +136,9 @@ def corrected_csv(
             continue
         out = io.StringIO()
         writer = csv.writer(out, lineterminator="\n")
-        texts = fixed_texts(numbers[lo:hi], DECIMALS).tolist()
+        block = numbers[lo:hi]
+        texts = np.where(np.isnan(block), "", fixed_texts(np.nan_to_num(block), DECIMALS))
+        texts = texts.tolist()
         for row, text, note in zip(points.table.rows[lo:hi], texts, flag[lo:hi], strict=True):
             writer.writerow([*row, *text, note])
         yield out.getvalue()
@@ -149,9 +173,10 @@ def corrected_file(
     closing = [f"points {len(points)}"]
     if verdict.refused.size:
         closing.append(f"not corrected {verdict.refused.size} ({verdict.counts()})")
-    header = header_lines("correct", inputs, details, largest, where, closing)
+    budget = budget_numbers(verdict)
+    header = header_lines("correct", inputs, details, largest, where, closing, budget[:, 3])
     flags = flag_texts(verdict)
-    text = corrected_csv(points, verdict.command, correction, flags, header)
+    text = corrected_csv(points, verdict.command, correction, flags, header, budget)
     if worst is not None:
         lines.append(
             f"largest correction {length[worst]:.4f} mm at {points.label(worst)}; "
@@ -187,6 +212,7 @@ def corrected_file(
                 roles,
                 outputs=outputs,
                 checked=checks_text(verdict.policy),
+                u95=verdict.numbers.get("u95"),
             )
 
         files = ReportedFiles(files, request.report_html, page)

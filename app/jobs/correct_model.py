@@ -27,6 +27,7 @@ from accugrid.app.jobs.correct import (
 from accugrid.codegen.correction import read_model
 from accugrid.codegen.header import grid_lines, input_line
 from accugrid.codegen.points import Points, read_points
+from accugrid.compensation.budget import Budget
 from accugrid.compensation.model_correction import TOL_MM
 from accugrid.compensation.policy import Policy
 from accugrid.infra.atomic import JobFiles
@@ -96,6 +97,7 @@ def correct_by_model(request: CorrectRequest) -> JobFiles:
         points.xyz,
         abc,
         validity=model.validity,
+        budget=Budget(model.budget),
         **request.policy.limits(),
     )
     grid, status = policy.grid, policy.status

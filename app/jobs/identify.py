@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from accugrid import __version__
+from accugrid.compensation.budget import budget_section
 from accugrid.compensation.measurements import check_joint_limits, read_measurements
 from accugrid.infra.errors import InputError, printable
 from accugrid.infra.inputfile import read_input_bytes
@@ -140,9 +141,15 @@ def calibrate(
     summary = identification_summary(result, robot, source, meas.sha256, selection, data.controller)
     validated = _validated_max(summary)  # the same claim the file's reader takes
     summary["validity"] = validity_section(data.commanded, data.rotations, data.q, validated)
-    support = _support(robot, data, options, result, selection)
+    structure = _structure(options, result, selection)
+    support = _support(robot, data, options, result, structure)
     if support is not None:
         summary["support"] = support
+    held_out = _held_out_rms(result, selection)
+    if held_out is not None:
+        summary["budget"] = budget_section(
+            result.robot, data.q, data.group, structure, result.residuals, held_out
+        )
     header = f"accugrid {__version__} identify: {robot.name} calibrated from {source}"
     files = {output: calibrated_yaml(result.robot, summary, header)}
     report = _report(output, robot, result)
@@ -191,26 +198,44 @@ def controller_text(robot: Robot, data: PoseSet) -> str:
     )
 
 
-def _support(
-    robot: Robot,
-    data: PoseSet,
-    options: IdentifyOptions,
-    result: Identification,
-    selection: Selection | None,
-) -> dict | None:
-    """``identification.support`` (``kinematics.support``) of a model with joint-error terms:
-    its leverage map and the DH-only fit of the same poses, the fallback where it has no
-    support; None for a DH + TCP model (its own fallback)."""
+def _structure(
+    options: IdentifyOptions, result: Identification, selection: Selection | None
+) -> Structure:
+    """The parameters the model was identified with (``kinematics.support.Structure``)."""
     structure = Structure(
         options.base_frame,
         options.compliance,
         tuple(options.harmonics if selection is None else selection.harmonics),
         () if selection is None else tuple(selection.gravity),
     )
+    if structure.names != result.names:
+        raise ValueError("the structure's parameters differ from the identification's")
+    return structure
+
+
+def _held_out_rms(result: Identification, selection: Selection | None) -> np.ndarray | None:
+    """(3,) mm: the k-fold held-out RMS of the chosen model (the last kept step of the
+    structure's cross-validation curve, which starts with DH + TCP, else the identification's own
+    folds); None without folds."""
+    if selection is not None:
+        return selection.curve[selection.kept].rms_mm
+    if result.cross_validation is not None:
+        return result.cross_validation.rms_mm
+    return None
+
+
+def _support(
+    robot: Robot,
+    data: PoseSet,
+    options: IdentifyOptions,
+    result: Identification,
+    structure: Structure,
+) -> dict | None:
+    """``identification.support`` (``kinematics.support``) of a model with joint-error terms:
+    its leverage map and the DH-only fit of the same poses, the fallback where it has no
+    support; None for a DH + TCP model (its own fallback)."""
     if not (structure.compliance or structure.harmonics or structure.gravity):
         return None
-    if structure.names != result.names:
-        raise ValueError("the support's parameters differ from the identification's")
     dh = identify(robot, data, base_frame=options.base_frame)
     return support_section(result.robot, data.q, data.group, structure, dh)
 

@@ -136,7 +136,10 @@ def prepare(req: ProgramRequest, cell: Cell | None = None) -> tuple[Job, object]
         inputs += grid_lines(Path(grid_file).name, grid.source_sha256, grid.step)
     closing = [f"holes {len(points)}"]
     plan = plugin.plan(
-        cell, len(points), header_lines(command, inputs, details, 0.0, "", closing), req.templates
+        cell,
+        len(points),
+        header_lines(command, inputs, details, 0.0, "", closing, np.zeros(0)),
+        req.templates,
     )
     program = build_program(
         points,
@@ -151,7 +154,9 @@ def prepare(req: ProgramRequest, cell: Cell | None = None) -> tuple[Job, object]
     largest, hole = program.largest_correction()
     where = f" at hole {points.ids[hole]}" if hole is not None else ""
     closing += program.uncorrected
-    header = header_lines(command, inputs, details, largest, where, closing)
+    verdict = program.verdict
+    u95 = np.zeros(0) if verdict is None else verdict.numbers.get("u95", np.zeros(0))
+    header = header_lines(command, inputs, details, largest, where, closing, u95)
     inputs = [Path(req.points), Path(req.cell)] + ([grid_file] if grid_file else [])
     inputs += [model_file] if model_file is not None and model_file.is_file() else []
     return Job(program, header, inputs, command), plan
@@ -222,6 +227,7 @@ def with_report(job: Job, report: Path | None, title: str) -> Mapping[Path, obje
             outputs=outputs,
             setup=cell_setup(cell),
             checked=checks_text(verdict.policy),
+            u95=verdict.numbers.get("u95"),
         )
 
     return ReportedFiles(job.files, Path(report), page)

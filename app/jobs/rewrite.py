@@ -187,4 +187,5 @@ def _html_report(req: RewriteRequest, rows, read: list[Path], files, cell, polic
         outputs=[(os.fspath(p), sha256_hex(data)) for p, data in files.items()],
         setup=cell_setup(cell),
         checked=checks_text(policy),
+        u95=rows.u95_mm,
     ).encode("utf-8")

@@ -8,6 +8,11 @@ the poses is measured after correction: the robot is commanded to x_cmd.. (at ea
 or its i,j,k drill axis oriented as ``correct`` does from ``--abc``) and the rows keep x,y,z, the
 targets, beside x_meas.. (id,x,y,z,a,b,c,s,x_meas,y_meas,z_meas): the file ``accugrid validate``
 checks.
+
+The datums of a part (``datums``: its CAD file, id,x,y,z in the part frame) are measured where the
+part really stands (``part``: robot_T_base, x, y, z mm, a, b, c KUKA deg) with the tracker's noise,
+``repeats`` rows each (id,x,y,z in the robot frame, mm, 4 decimals): ``accugrid fit-part``'s
+datums file.
 """
 
 from __future__ import annotations
@@ -63,6 +68,8 @@ class SimulateRequest:
     seed: int = 0
     smr: tuple[float, float, float] | None = None  # poses: the SMR really on the flange, mm
     smr_axis: tuple[float, float, float] | None = None  # ... on rows whose column point is axis
+    datums: str | None = None  # a part's CAD datums (id,x,y,z part frame): measure them instead
+    part: tuple[float, ...] | None = None  # where that part stands: robot_T_base x..c
 
 
 def simulate_files(request: SimulateRequest) -> JobFiles:
@@ -78,7 +85,9 @@ def simulate_files(request: SimulateRequest) -> JobFiles:
             f"note: robot {robot.name} has no parameter errors; the simulated error is noise only"
         )
     files: dict[str, bytes | str] = {}
-    if request.output and request.poses and _is_corrected(request.poses):
+    if request.output and request.datums:
+        files[request.output] = _datum_csv(request, lines)
+    elif request.output and request.poses and _is_corrected(request.poses):
         files[request.output] = _corrected_measurement_csv(request, lines)
     elif request.output and request.poses:
         files[request.output] = _pose_measurement_csv(request, lines)
@@ -92,6 +101,37 @@ def simulate_files(request: SimulateRequest) -> JobFiles:
         files[request.plot] = fig3_png(robot.name, xs, ys, error, FIG3_Z, FIG3_ABC)
     lines += [f"wrote {path}" for path in files]
     return JobFiles(files, [request.poses], lines)
+
+
+def _datum_csv(request: SimulateRequest, report: list[str]) -> str:
+    """The datums file of a part (module docstring); ``report`` gets a line on the part."""
+    from accugrid.kinematics.frames import transform_points
+
+    if request.part is None:
+        raise InputError("--datums needs --part X Y Z A B C: where the part stands")
+    if request.poses or request.region:
+        raise InputError("--datums measures a part: give no --poses and no --region")
+    table = read_table(request.datums)
+    table.require(["id", "x", "y", "z"])
+    ids = [comment_text(i.strip(), limit=40).replace(",", " ") for i in table.text("id")]
+    points = transform_points(
+        pose_from_xyzabc(np.array(request.part)), table.floats(["x", "y", "z"])
+    )
+    rows = np.repeat(np.arange(len(ids)), request.repeats)
+    rng = np.random.default_rng(request.seed)
+    measured = points[rows] + rng.normal(0.0, request.noise_tracker_mm, (len(rows), 3))
+    part = " ".join(fixed(v, 4) for v in request.part)
+    lines = [
+        f"# accugrid simulate: datums of {comment_text(Path(request.datums).name, limit=80)} on a "
+        f"part at x y z a b c {part}, repeats {request.repeats}, noise tracker "
+        f"{request.noise_tracker_mm:g} mm, seed {request.seed}",
+        "id,x,y,z",
+    ]
+    lines += [
+        f"{ids[r]}," + ",".join(fixed(v, 4) for v in m) for r, m in zip(rows, measured, strict=True)
+    ]
+    report.append(f"{len(ids)} datums measured {request.repeats} time(s), part at {part}")
+    return "\n".join(lines) + "\n"
 
 
 def _measurement_csv(request: SimulateRequest, report: list[str]) -> str:

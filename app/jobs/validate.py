@@ -115,16 +115,71 @@ def validate_files(request: ValidateRequest) -> ValidateJob:
             f"{mm_text(grid.step)} mm: {outside} of {len(result.ap_mm)} poses outside its box"
         )
         lines.insert(-1, grid_note)
+    budget_note = _budget_coverage(request, meas, result)
+    lines.insert(-1, budget_note)
     files: dict[str, str] = {}
     if request.report_csv:
         files[request.report_csv] = rows_csv(result, meas.lines, ids)
         lines.append(f"wrote {request.report_csv}")
     if request.report_html:
         outputs = [(path, sha256_hex(text.encode("utf-8"))) for path, text in files.items()]
-        files[request.report_html] = _report(request, result, validated, offset, grid_note, outputs)
+        files[request.report_html] = _report(
+            request, result, validated, offset, grid_note, outputs, budget_note
+        )
         lines.append(f"wrote {request.report_html}")
     inputs = [request.measurements, request.model, request.grid]
     return ValidateJob(JobFiles(files, inputs, lines), result, offset)
+
+
+def _budget_coverage(request: ValidateRequest, meas, result: ValidationResult) -> str:
+    """One line: the share of rows whose deviation lies within the 95 % bound the error budget
+    (``compensation.budget``) predicts at their target, by the model (and residual grid) at
+    the rows' orientation and Status with the SMR the model was measured with, as ``correct``
+    computes it; whether that share says the bounds are calibrated (``COVERAGE_RANGE``)."""
+    from accugrid.codegen.correction import read_model
+    from accugrid.compensation.budget import COVERAGE_RANGE, Budget, coverage
+    from accugrid.compensation.policy import Policy
+    from accugrid.compensation.settings import CorrectionSettings
+    from accugrid.kinematics.frames import abc_to_matrix
+
+    model = read_model(request.model)
+    if model.budget is None:
+        return (
+            "error budget: the model records none (identified without folds, or by an older "
+            "version): its coverage is not checked"
+        )
+    if meas.abc is None:
+        return "error budget: the rows have no orientation (a,b,c): its coverage is not checked"
+    policy = Policy.build(
+        CorrectionSettings(outside="clamp"),
+        request.grid,
+        model.robot,
+        None,
+        model.smr_tools,
+        points=meas.commanded,
+        abc_deg=meas.abc,
+        validity=model.validity,
+        budget=Budget(model.budget),
+        allow_orientation=True,
+    )
+    status = -1 if meas.status is None else meas.status
+    verdict = policy.decide(meas.commanded, abc_to_matrix(meas.abc), status=status)
+    u95 = verdict.numbers["u95"]
+    share, count = coverage(result.deviation, u95)
+    if not count:
+        return "error budget: no row's target could be corrected: its coverage is not checked"
+    lo, hi = COVERAGE_RANGE
+    if share < lo:
+        verdict_text = "not calibrated: the bounds are too narrow"
+    elif share > hi:
+        verdict_text = "not calibrated: the bounds are wider than the errors need"
+    else:
+        verdict_text = "calibrated"
+    return (
+        f"error budget: {100 * share:.1f} % of {count} rows within their 95 % bound u95 "
+        f"(median {np.nanmedian(u95):.3f} mm, largest {np.nanmax(u95):.3f} mm): {verdict_text} "
+        f"({100 * lo:.0f}-{100 * hi:.0f} % expected)"
+    )
 
 
 # the per-row CSV report (``--report``): mm, d = measured - target
@@ -231,8 +286,10 @@ def _report(
     offset: MeanOffset,
     grid_note: str | None,
     outputs: list[tuple[str, str]],
+    budget_note: str = "",
 ) -> str:
-    """The HTML report of the validation; ``outputs`` (path, SHA-256) of the files beside it."""
+    """The HTML report of the validation; ``outputs`` (path, SHA-256) of the files beside it,
+    ``budget_note`` the error budget's coverage (``_budget_coverage``)."""
     tol = result.tolerance_mm
     stats = Table(
         ["axis", "min (mm)", "max (mm)", "max |d| (mm)", "mean (mm)", "std (mm)"],
@@ -292,6 +349,8 @@ def _report(
         )
     if grid_note:
         notes.append(grid_note[0].upper() + grid_note[1:] + ".")
+    if budget_note:
+        notes.append(budget_note[0].upper() + budget_note[1:] + ".")
     offset_text = offset.words()
     facts = [
         ("rows / poses", f"{len(result.deviation)} / {len(result.ap_mm)}"),

@@ -1,8 +1,10 @@
 """The HTML report of a correction job (``correct``, ``krl``, ``gcode``, ``rapid``, ``rewrite``
 with ``--report-html``): the outputs with their SHA-256, the robot, tool, base and cell, what was
 checked for every position, the correction applied per position on a plan view of the holes'
-best-fit plane, its statistics, and every position flagged or left uncorrected with the
-correction policy's words (``compensation.policy.Verdict``).
+best-fit plane, its statistics, every position flagged or left uncorrected with the correction
+policy's words (``compensation.policy.Verdict``), and the error budget's 95 % bound of every
+position (``compensation.budget``) on the same plan view with the positions whose bound exceeds
+the tolerance listed.
 
 The box on top says what was done, never PASS: every drilling position corrected, or how many
 were left as they are (a job written with --allow-partial, in the FAIL colour). Where the robot
@@ -18,7 +20,7 @@ from os import PathLike
 import numpy as np
 
 from accugrid.app.reports.html import Figure, Section, Table, report_html
-from accugrid.app.reports.plots import correction_map_png
+from accugrid.app.reports.plots import budget_map_png, correction_map_png
 from accugrid.compensation.policy import Policy, Verdict
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 
@@ -172,12 +174,14 @@ def correction_report(
     outputs: list[tuple[str, str]] | None = None,
     setup: list[tuple[str, str]] | None = None,
     checked: str = "",
+    u95: np.ndarray | None = None,
 ) -> str:
     """The report page: positions and commands (N, 3) mm in ``frame`` (the part's frame of the
     holes; NaN rows: positions that are not points, left off the map), ``state`` (N,) of
     CORRECTED..SKIPPED, the policy's ``reasons`` (N), ``label(i)`` naming position i (file:line,
     id), ``inputs`` (role, path), ``outputs`` (path, SHA-256) of the files written, ``setup``
-    (key, text): the robot, tool, base and cell; ``checked``: what the policy checked.
+    (key, text): the robot, tool, base and cell; ``checked``: what the policy checked; ``u95``
+    (N,) mm the error budget's 95 % bound of each position (NaN: none; None: no budget section).
     SKIPPED: what is not a drilling position (a frame, a constant), listed, never a failure."""
     state = np.asarray(state)
     correction = np.where(state[:, None] <= FLAGGED, command - points, 0.0)
@@ -243,6 +247,12 @@ def correction_report(
             "Positions flagged, not corrected or skipped",
         ),
     ]
+    sections = [
+        Section("Corrections", notes, tables[:1], [figure]),
+        Section("Positions", [], tables[1:]),
+    ]
+    if u95 is not None:
+        sections.append(_budget_section(uv, np.asarray(u95)[on_map], on_map, label, tolerance_mm))
     if counts[NOT_CORRECTED]:
         box, said = (
             "FAIL",
@@ -255,8 +265,48 @@ def correction_report(
         box,
         f"±{tolerance_mm:g} mm per axis, checked after correction by accugrid validate",
         inputs,
-        [Section("Corrections", notes, tables[:1], [figure]), Section("Positions", [], tables[1:])],
+        sections,
         [*(setup or []), ("correction", f"{said}; accuracy not measured (accugrid validate)")],
         outputs=outputs,
         verdict_text=said,
     )
+
+
+def _budget_section(
+    uv: np.ndarray,
+    u95: np.ndarray,
+    index: np.ndarray,
+    label: Callable[[int], str],
+    tolerance_mm: float,
+) -> Section:
+    """The error budget's section: the plan view ``uv`` (M, 2) mm of the mapped positions
+    ``index`` (M,) coloured by their bound ``u95`` (M,) mm, and the positions beyond
+    ``tolerance_mm`` listed, largest first."""
+    known = np.isfinite(u95)
+    over = np.flatnonzero(known & (u95 > tolerance_mm))
+    over = over[np.argsort(-u95[over], kind="stable")]
+    rows = [[label(int(index[i])), f"{u95[i]:.3f}"] for i in over[:_LISTED]]
+    notes = [
+        "The error budget of each corrected position: the calibrated model's uncertainty at "
+        "its joints (scaled on identification's held-out poses), the grid's interpolation, the "
+        "measured tool and part frame; u95 bounds the length of the position's error with 95 % "
+        "probability.",
+        f"{int(known.sum())} positions with a bound: largest "
+        + (
+            f"{np.nanmax(u95):.3f} mm, median {np.nanmedian(u95):.3f} mm; "
+            if known.any()
+            else "-; "
+        )
+        + f"{over.size} beyond the tolerance of {tolerance_mm:g} mm.",
+    ]
+    figure = Figure(
+        budget_map_png(uv, u95, tolerance_mm, "best-fit plane"),
+        "Plan view of the positions coloured by their 95 % bound u95; red rings: beyond the "
+        "tolerance; black crosses: no bound (not corrected, or a model without an error budget).",
+    )
+    table = Table(
+        ["position", "u95 (mm)"],
+        rows or [["none", ""]],
+        f"Positions whose 95 % bound exceeds {tolerance_mm:g} mm",
+    )
+    return Section("Error budget", notes, [table], [figure])

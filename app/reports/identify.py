@@ -39,6 +39,7 @@ _IN_TABLES = (  # the summary keys the report's own tables show; any other is li
     "parameters",
     "unidentifiable_directions",
     "structure",
+    "budget",
 )
 
 
@@ -96,6 +97,10 @@ def _summary_tables(summary: dict, held_out: dict | None, what: str) -> list[Tab
     validity = summary.get("validity") or {}
     if validity.get("validated_max_mm"):
         errors.append(["validated error (max)", validity["validated_max_mm"]])
+    budget = summary.get("budget")
+    if budget:  # compensation.budget: the model's term of every hole's error budget
+        errors.append(["error budget sigma (1 sigma floor)", budget["sigma_mm"]])
+        fit.append(["error budget scale (from the held-out folds)", f"{budget['scale']:.3f}"])
     tables = [
         Table(["quantity", "value"], fit, "Identification"),
         Table(

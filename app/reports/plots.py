@@ -373,3 +373,34 @@ def correction_map_png(
     if ax.get_legend_handles_labels()[1]:
         _legend_outside(fig, ax)
     return _png(plt, fig, dpi=90)
+
+
+def budget_map_png(
+    points: np.ndarray, u95: np.ndarray, tolerance_mm: float, plane: str = "robot frame"
+) -> bytes:
+    """Plan view of the positions (N, 2) mm in a plane's axes u, v (named by ``plane``)
+    coloured by their error budget's 95 % bound ``u95`` (N,) mm (NaN: none, black crosses), those
+    beyond ``tolerance_mm`` ringed in red; rasterised, small for 1e4 holes."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(10, 5.2), layout="constrained")
+    known = np.flatnonzero(np.isfinite(u95))
+    mesh = ax.scatter(
+        points[known, 0], points[known, 1], c=u95[known], s=14, cmap="magma_r", rasterized=True
+    )
+    fig.colorbar(mesh, ax=ax, label="u95: 95 % bound of the error (mm)")
+    unknown = np.flatnonzero(~np.isfinite(u95))
+    if unknown.size:
+        ax.plot(points[unknown, 0], points[unknown, 1], "kx", ms=6, label="no bound")
+    over = known[u95[known] > tolerance_mm]
+    if over.size:
+        ax.plot(
+            points[over, 0], points[over, 1], "o", mfc="none", mec="tab:red", ms=9,
+            label=f"u95 beyond {tolerance_mm:g} mm",
+        )  # fmt: skip
+    ax.set_xlabel(f"u (mm), {plane}")
+    ax.set_ylabel("v (mm)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(alpha=0.3)
+    if ax.get_legend_handles_labels()[1]:
+        _legend_outside(fig, ax)
+    return _png(plt, fig, dpi=90)
