@@ -21,6 +21,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "correct",
         "corrected points CSV: P' = P + e from a measured error grid and/or a calibrated model",
     ),
+    "fanuc": (
+        "fanuc",
+        "corrected FANUC TP drilling program (.ls) from a points CSV",
+    ),
     "fit-frame": (
         "fit_frame",
         "robot base frame (tracker_T_robot) from tracker points on base, A1 arc and flange holes",
