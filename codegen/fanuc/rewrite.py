@@ -50,15 +50,19 @@ class FanucPlacement:
 
 @dataclass
 class _Found:
-    """The positions of one program as columns (one row per /POS entry, in its order)."""
+    """The positions of one program as columns: a row per Cartesian or remote-TCP /POS entry
+    (``positions``), in its order; the joint positions and entries without group 1 as report
+    rows of data never corrected (``others``: line, name, reason)."""
 
     text: str
     path: str
     program: LsProgram
+    positions: list
     reason: list[str]
     commanded: np.ndarray
     frame: np.ndarray  # 0 world, 1 the cell's user frame, -1 not placed
     places: int
+    others: list[tuple[int, str, str]]
 
 
 def _uses(program: LsProgram) -> dict[int, list]:
@@ -94,19 +98,25 @@ def _judge(path: str, text: str, section, opts: Options, ignore_external_axes: b
     check_text(text, path)
     program = read_ls(path, text)
     uses = _uses(program)
-    n = len(program.positions)
+    positions = [p for p in program.positions if p.kind in ("cartesian", "remote")]
+    others = [
+        (p.line, f"P[{p.number}]", _reason(program, p, [], [], section, opts, False))
+        for p in program.positions
+        if p.kind not in ("cartesian", "remote")
+    ]
+    n = len(positions)
     reason = [""] * n
     commanded = np.zeros(n, bool)
     frame = np.full(n, -1, np.int64)
-    for i, p in enumerate(program.positions):
+    for i, p in enumerate(positions):
         mine = uses.get(p.number, [])
         moves = [ins for how, ins in mine if how == "move"]
         commanded[i] = bool(moves)
         reason[i] = _reason(program, p, mine, moves, section, opts, ignore_external_axes)
         if not reason[i]:
             frame[i] = 0 if p.uf == 0 else 1
-    places = precision([t for p in program.positions for t in p.literals], MIN_PLACES_MM)
-    return _Found(text, path, program, reason, commanded, frame, places)
+    places = precision([t for p in positions for t in p.literals], MIN_PLACES_MM)
+    return _Found(text, path, program, positions, reason, commanded, frame, places, others)
 
 
 def _reason(program, p, mine, moves, section, opts, ignore_external_axes) -> str:
@@ -160,14 +170,17 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: FanucPlaceme
     ``opts.allow_partial``)."""
     section = placement.section.check()
     frames = np.stack([np.eye(4), section.robot_T_uframe])
-    parts, found_all, robot, rotations, status, at = [], [], [], [], [], []
+    parts, others, found_all, robot, rotations, status, at = [], [], [], [], [], [], []
     start = 0
     for path, text in texts.items():
         found = _judge(path, text, section, opts, placement.ignore_external_axes)
-        positions = found.program.positions
+        positions = found.positions
         n = len(positions)
         if not n and not opts.allow_partial:
-            raise InputError("no /POS position in this program: nothing to correct", path, 1)
+            what = f"; {len(found.others)} joint position(s) left" if found.others else ""
+            raise InputError(
+                f"no Cartesian /POS position in this program: nothing to correct{what}", path, 1
+            )
         xyz = np.full((n, 3), np.nan)
         wpr = np.full((n, 3), np.nan)
         for i, p in enumerate(positions):
@@ -191,6 +204,17 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: FanucPlaceme
         status.append(kuka_status_of(words))
         at.append(start + mine)
         parts.append(rows)
+        k = len(found.others)
+        others.append(
+            Rows(
+                [path],
+                np.zeros(k, np.int64),
+                np.array([o[0] for o in found.others], np.int64),
+                [o[1] for o in found.others],
+                [o[2] for o in found.others],
+                np.full((k, 3), np.nan),
+            )
+        )
         found_all.append((found, start, mine, xyz))
         start += n
     return Scan(
@@ -199,6 +223,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: FanucPlaceme
         np.concatenate(robot or [np.zeros((0, 3))]),
         np.concatenate(rotations or [np.zeros((0, 3, 3))]),
         np.concatenate(status or [np.zeros(0, np.int64)]),
+        others=Rows.concat(others),
         state=(frames, found_all),
     )
 
@@ -222,9 +247,9 @@ def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[s
         rows.status[start + rows_done] = CORRECTED
         rows.new[start + rows_done] = written
         rows.rounding_mm[start + rows_done] = np.linalg.norm(written - new, axis=1)
-        spans = np.array(
-            [found.program.positions[i].spans for i in rows_done.tolist()], np.int64
-        ).reshape(-1, 2)
+        spans = np.array([found.positions[i].spans for i in rows_done.tolist()], np.int64).reshape(
+            -1, 2
+        )
         out = ByteSplicer(found.text)
         if len(spans):
             out.add(spans[:, 0], spans[:, 1], text_bytes, lengths)
