@@ -116,7 +116,7 @@ def plan_files(request: PlanRequest, output: str | Path) -> JobFiles:
     plan, info = _build(request)
     writer, name = _program(request.dialect, request.kind, request.name)
     csv = plan_targets(output, request.kind, request.name, request.dialect)[0]
-    status, turn, config = reach_in_one_status(plan, request.robot, request.status)
+    configuration, config = reach_in_one_status(plan, request.robot, request.status)
     settings = MeasureSettings(
         tool=request.tool_number,
         base=request.base_number,
@@ -140,7 +140,7 @@ def plan_files(request: PlanRequest, output: str | Path) -> JobFiles:
     )
     _check_program(request)
     program = writer.render(
-        plan, status, turn, name, header, settings, request.templates, Path(output)
+        plan, configuration, name, header, settings, request.templates, Path(output)
     )
     files = {csv: plan.csv_text(), **program.files}
     lines = [*info, f"wrote {', '.join(str(p) for p in files)}"]

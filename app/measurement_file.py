@@ -23,7 +23,7 @@ from accugrid.infra.atomic import JobFiles
 from accugrid.infra.csvtable import Table, read_table
 from accugrid.infra.errors import InputError
 from accugrid.infra.textsafe import comment_text, fixed
-from accugrid.kinematics.configuration import status_turn
+from accugrid.kinematics.configuration import ik_codes
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.simulation import (
@@ -152,7 +152,7 @@ def _pose_measurement_csv(request: SimulateRequest, report: list[str]) -> str:
     ids = table.text("id") if table.has("id") else [f"P{i + 1}" for i in range(len(table))]
     smr, points = _smr_points(r, table)
     q, measured = _measure_poses(r, table, xyzabc, smr)
-    status_of = status_turn(robot, q)[0]
+    status_of = ik_codes(robot, q)[0]
     header = comment_text(
         f"accugrid simulate: robot {robot.name}, poses of {Path(r.poses).name}, repeats "
         f"{r.repeats}, noise tracker {r.noise_tracker_mm:g} mm, repeat "
@@ -223,7 +223,7 @@ def _corrected_measurement_csv(request: SimulateRequest, report: list[str]) -> s
     command = points.table.floats(list(_COMMAND))
     abc = point_orientations(points, np.array(r.abc, dtype=float))
     q, measured = _measure_poses(r, points.table, np.hstack([command, abc]))
-    status_of = status_turn(robot, q)[0]
+    status_of = ik_codes(robot, q)[0]
     header = comment_text(
         f"accugrid simulate: robot {robot.name}, after correction: commands of "
         f"{Path(r.poses).name}, targets as x,y,z, repeats {r.repeats}, noise tracker "

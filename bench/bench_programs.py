@@ -25,6 +25,7 @@ sys.path.insert(0, str(ROOT))
 from accugrid.app.cli import main as cli  # noqa: E402
 from accugrid.codegen.cell import load_cell  # noqa: E402
 from accugrid.codegen.gcode.emit import render_gcode  # noqa: E402
+from accugrid.codegen.krl.configuration import configuration_words  # noqa: E402
 from accugrid.codegen.krl.emit import render_krl  # noqa: E402
 from accugrid.codegen.points import parse_points  # noqa: E402
 from accugrid.codegen.program import build_program  # noqa: E402
@@ -87,7 +88,7 @@ def numbers_floor(program, krl: bool) -> int:
     stages = [0, 1, 2, 3]
     if krl and cell.drilling.retract_mm == cell.drilling.approach_mm:
         stages = [0, 1, 2]  # the RET position is the APP one
-    status, turn = program.configuration.to_kuka()
+    status, turn = np.moveaxis(configuration_words(program.configuration), -1, 0)
     size = 0
     for lo in range(0, len(program), 16384):
         hi = min(lo + 16384, len(program))

@@ -30,6 +30,7 @@ if TYPE_CHECKING:
     from accugrid.codegen.program import Program
     from accugrid.codegen.rewrite import Options, ProgramContext, Scan
     from accugrid.compensation.plans import Plan
+    from accugrid.kinematics.configuration import Configuration
     from accugrid.kinematics.model import RobotModel
 
 __all__ = ["DialectFolder", "DialectPlugin", "MeasureSettings", "MeasurementWriter", "Rendered"]
@@ -71,10 +72,11 @@ class MeasurementWriter(Protocol):
       its controller accepts); ``targets(out, name)``: its files in folder ``out``;
     - ``motion(settings)``: how it moves and waits, as its header says ("first by PTP, then
       LIN, each followed by WAIT SEC 3.000"); ``listing``: where it lists its positions;
-    - ``render(plan, status, turn, name, header, settings, templates, out)``: its files
+    - ``render(plan, configuration, name, header, settings, templates, out)``: its files
       (``Rendered``) visiting the rows of ``plan`` (``compensation.plans.Plan``: N positions mm
-      in the robot frame, or ``settings.base``'s, KUKA A, B, C deg, ids) in KUKA Status and Turn
-      (N,); numbers through ``infra.textsafe`` only.
+      in the robot frame, or ``settings.base``'s, KUKA A, B, C deg, ids) in the robot
+      configurations (N,) ``configuration`` (``kinematics.configuration.Configuration``); numbers
+      through ``infra.textsafe`` only.
     """
 
     listing: str
@@ -88,8 +90,7 @@ class MeasurementWriter(Protocol):
     def render(
         self,
         plan: Plan,
-        status: np.ndarray,
-        turn: np.ndarray,
+        configuration: Configuration,
         name: str,
         header: list[str],
         settings: MeasureSettings,
@@ -126,6 +127,13 @@ class DialectPlugin(Protocol):
       rows of what it wrote.
     - ``add_header(text, lines)``: the program with the comment header inserted where its
       controller accepts comments.
+    - ``configuration_words(configuration)``: the words (..., k) int its controller writes for
+      robot configurations (...) (``kinematics.configuration.Configuration``: shoulder, elbow,
+      wrist, each axis' quarter turn), e.g. KUKA [S, T], ABB [cf1, cf4, cf6, cfx];
+      ``read_configuration(words)``: the configurations (...) written words (..., k) name (what
+      they leave open taken as 0..90 deg), for the correction policy to hold a position against
+      the configuration its grid was measured in. A dialect whose programs name no
+      configuration (G-code) refuses both (InputError).
     - ``measurement()``: its laser-tracker measurement program (``MeasurementWriter``), a
       capability a dialect may lack: InputError then.
     - ``base_line(number, robot_T_base)``: the controller's line that sets base frame
@@ -177,6 +185,10 @@ class DialectPlugin(Protocol):
 
     def add_header(self, text: str, lines: list[str]) -> str: ...
 
+    def configuration_words(self, configuration: Configuration) -> np.ndarray: ...
+
+    def read_configuration(self, words: np.ndarray) -> Configuration: ...
+
     def measurement(self) -> MeasurementWriter: ...
 
     def base_line(self, number: int, robot_T_base: np.ndarray) -> str: ...
@@ -187,12 +199,13 @@ class DialectPlugin(Protocol):
 class DialectFolder:
     """The members of ``DialectPlugin`` a dialect folder gives by its modules' names, imported
     when first used: ``section.py`` (``KEYS``, ``read_section``), ``rewrite.py``
-    (``scan_positions``, ``splice_positions``, ``add_header``) and ``frames.py``
-    (``base_line``, ``tool_line``); the names in ``exports`` are its ``emit.py``'s (none by
-    default); ``controllers``: the makers of the robot controllers its programs drive
-    (``RobotModel.controller``, lower case; none: every robot). A plug-in derives from it and
-    adds its name, suffixes, ``targets``, ``plan``, ``render`` and ``placement`` (and
-    ``measurement`` when it writes measurement programs)."""
+    (``scan_positions``, ``splice_positions``, ``add_header``), ``frames.py``
+    (``base_line``, ``tool_line``) and ``configuration.py`` (``configuration_words``,
+    ``read_configuration``; a folder without it names no configuration); the names in
+    ``exports`` are its ``emit.py``'s (none by default); ``controllers``: the makers of the
+    robot controllers its programs drive (``RobotModel.controller``, lower case; none: every
+    robot). A plug-in derives from it and adds its name, suffixes, ``targets``, ``plan``,
+    ``render`` and ``placement`` (and ``measurement`` when it writes measurement programs)."""
 
     name: str
     title: str
@@ -230,6 +243,21 @@ class DialectFolder:
 
     def tool_line(self, number: int, flange_T_tool: np.ndarray) -> str:
         return self._module("frames").tool_line(number, flange_T_tool)
+
+    def configuration_words(self, configuration: Configuration) -> np.ndarray:
+        return self._configuration().configuration_words(configuration)
+
+    def read_configuration(self, words: np.ndarray) -> Configuration:
+        return self._configuration().read_configuration(words)
+
+    def _configuration(self):
+        module = f"accugrid.codegen.{self.name}.configuration"
+        try:
+            return importlib.import_module(module)
+        except ModuleNotFoundError as exc:
+            if exc.name != module:
+                raise
+        raise InputError(f"{self.title} programs name no robot configuration")
 
     def measurement(self) -> MeasurementWriter:
         raise InputError(f"accugrid writes no laser-tracker measurement program in {self.title}")

@@ -26,14 +26,15 @@ decides which holes are not corrected (outside the grid, orientation, Status, ..
 refused unless ``allow_partial``, then those holes keep e = 0 and are listed in the header.
 
 Every corrected pose goes through IK: unreachable or out-of-limit poses are InputErrors naming
-the hole; |A5| below ``configuration.singular_a5`` is a warning. The KUKA Status/Turn is the
+the hole; |A5| below ``configuration.singular_a5`` is a warning. The configuration code is the
 cell's; else, with a grid or a model, the one it corrected in (the grid's measurement Status, or
 the first hole's IK default); else the first pose's IK solution; it stays the same for the whole
 program unless ``configuration.allow_change`` lets a hole that cannot reach it take its own (an
 uncorrected hole only: a correction holds in the Status it was made for). The jobs run this
 check on a background thread (``build_program(..., background=True)``) while they write what
-needs only the positions; ``Program.wait`` joins it, ``Program.kuka_words`` hands out the
-Status and Turn of holes its IK blocks have reached. The joint angles of every pose (the IK
+needs only the positions; ``Program.wait`` joins it, ``Program.configuration_of`` hands out the
+configuration (``kinematics.configuration``) of holes its IK blocks have reached, which each
+dialect writes in its own words. The joint angles of every pose (the IK
 solution each pose is written with) are kept when a dialect asks (``keep_joints``:
 ``Program.joints``): ABB confdata comes from them.
 """
@@ -61,7 +62,7 @@ from accugrid.compensation.policy import PolicyRequest, Verdict, singular_a5_deg
 from accugrid.infra.blocks import run_blocks
 from accugrid.infra.errors import InputError
 from accugrid.infra.textsafe import fixed_texts
-from accugrid.kinematics.configuration import Configuration, kuka_turn
+from accugrid.kinematics.configuration import Configuration, quarters
 from accugrid.kinematics.frames import (
     MAX_TILT_DEG,
     abc_to_matrix,
@@ -125,18 +126,15 @@ class Program:
         million-hole job keeps no second copy of its positions)."""
         return _nominal(self.cell, self.points.xyz, self.rotations[:, :, 2], self.depth_mm)
 
-    def kuka_words(self, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
-        """KUKA Status and Turn (hi - lo, 4) of holes lo..hi-1, stage order ``STAGES``. With
-        the IK check in the background, as soon as its blocks have reached these holes (what
-        the check keeps, see ``IKCheck.early``); else after ``wait``."""
+    def configuration_of(self, lo: int, hi: int) -> Configuration:
+        """The configuration (hi - lo, 4) of holes lo..hi-1, stage order ``STAGES``. With the IK
+        check in the background, as soon as its blocks have reached these holes (what the
+        check keeps, see ``IKCheck.early``); else after ``wait``."""
         if self.checking is not None:
             early = self.checking.early(lo, hi)
             if early is not None:
                 return early
-        c = self.wait().configuration
-        return Configuration(
-            c.shoulder[lo:hi], c.elbow[lo:hi], c.wrist[lo:hi], c.negative[lo:hi]
-        ).to_kuka()
+        return self.wait().configuration[lo:hi]
 
     def wait(self) -> Program:
         """This program with its IK check done: waits for a check running in the background,
@@ -206,7 +204,7 @@ class Program:
 class IKCheck:
     """A program's IK check (``_configuration``) on a background thread: ``result()`` waits for
     it, (Configuration, warnings, joint angles) or its exception raised in the caller's thread;
-    ``early`` hands out Status and Turn of holes its blocks have reached."""
+    ``early`` hands out the configuration of holes its blocks have reached."""
 
     def __init__(self, check: Callable[[_Progress], tuple]) -> None:
         self._outcome: tuple | BaseException | None = None
@@ -228,8 +226,8 @@ class IKCheck:
             raise self._outcome
         return self._outcome
 
-    def early(self, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray] | None:
-        """KUKA Status and Turn (hi - lo, 4) of holes lo..hi-1 once the IK blocks have reached
+    def early(self, lo: int, hi: int) -> Configuration | None:
+        """The configuration (hi - lo, 4) of holes lo..hi-1 once the IK blocks have reached
         them, before the check ends: the numbers the check keeps, since it changes only holes
         with a failing pose (``allow_change``); None when one of these holes has one or the
         check ended first (then ``result()`` tells)."""
@@ -237,8 +235,8 @@ class IKCheck:
 
 
 class _Progress:
-    """How far the IK blocks of a check have come: the first pass's ``ok``, ``status`` and
-    ``turn`` per pose (holes * stages, hole-major; each block writes its rows once and the
+    """How far the IK blocks of a check have come: the first pass's ``ok``, ``status`` and ``q``
+    per pose (holes * stages, hole-major; each block writes its rows once and the
     check never changes them after) and the holes done so far."""
 
     def __init__(self) -> None:
@@ -264,7 +262,7 @@ class _Progress:
             self._closed = True
             self._changed.notify_all()
 
-    def early(self, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray] | None:
+    def early(self, lo: int, hi: int) -> Configuration | None:
         with self._changed:
             self._changed.wait_for(lambda: self._reached(hi) or self._closed)
             if not self._reached(hi):
@@ -273,10 +271,7 @@ class _Progress:
         rows = slice(lo * k, hi * k)
         if not sol.ok[rows].all():
             return None
-        status, turn = (a[rows].reshape(-1, k).astype(int) for a in (sol.status, sol.turn))
-        if k == 3:  # RET is the APP position
-            status, turn = (np.concatenate([a, a[:, :1]], axis=1) for a in (status, turn))
-        return status, turn
+        return _stage_configuration(sol.status[rows].reshape(-1, k), sol.q[rows].reshape(-1, k, 6))
 
 
 def build_program(
@@ -296,11 +291,11 @@ def build_program(
     the cell's (``grid``, ``correction.model``), None for none; with a model the grid holds its
     residual. ``robot``: the controller's, with the cell's tool. ``request``: the policy's
     options and job rule (``compensation.policy``; None: the defaults). ``background``: the
-    IK check (Status, Turn, reach, limits, branch jumps, the wrist singularity) runs on a
+    IK check (configuration, reach, limits, branch jumps, the wrist singularity) runs on a
     background thread while the caller goes on with what needs only the positions (a G-code
     program, the .src of a KRL job); ``Program.wait()`` joins it. ``keep_joints``: keep the
     joint angles of every pose (``Program.joints``, 144 bytes a hole: only for a dialect whose
-    configuration words need more than KUKA Status/Turn, e.g. ABB confdata)."""
+    configuration words need more than the configuration, e.g. ABB confdata)."""
     request = PolicyRequest() if request is None else request
     if grid is FROM_CELL:
         grid = cell_grid(cell)
@@ -344,10 +339,10 @@ def build_program(
     corrected_in = status if model is not None or grid is not None else None
 
     def check(progress: _Progress | None = None) -> tuple:
-        pose_status, turn, ik_warnings, q = _configuration(
+        configuration, ik_warnings, q = _configuration(
             points, cell, robot, positions, rotations, status, progress, corrected_in, correction
         )
-        return Configuration.from_kuka(pose_status, turn), ik_warnings, q if keep_joints else None
+        return configuration, ik_warnings, q if keep_joints else None
 
     program = Program(
         cell=cell,
@@ -464,16 +459,18 @@ def _configuration(
     progress: _Progress | None = None,
     corrected_in: int | None = None,
     correction: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray]:
-    """IK of every pose (positions (N, 4, 3) mm and rotations (N, 3, 3), BASE frame) in KUKA
-    ``status`` (None: the first pose's IK default): Status and Turn (N, 4) per pose, the
-    warnings and the joint angles (N, S, 6) rad (S: the stages solved, 3 when RET is APP).
+) -> tuple[Configuration, list[str], np.ndarray]:
+    """IK of every pose (positions (N, 4, 3) mm and rotations (N, 3, 3), BASE frame) in the
+    configuration code ``status`` (None: the first pose's IK default): the configuration
+    (N, 4) per pose, the warnings and the joint angles (N, S, 6) rad (S: the stages solved, 3
+    when RET is APP).
     ``progress``: told of the IK blocks as they are done. ``corrected_in``: the Status the
     corrections (N, 3) mm ``correction`` hold in (the policy's): a corrected hole that takes
     another one (allow_change) is an InputError."""
     n = len(points)
     if n == 0:
-        return np.zeros((0, 4), int), np.zeros((0, 4), int), [], np.zeros((0, 4, 6))
+        q = np.zeros((0, 4, 6))
+        return _stage_configuration(np.zeros((0, 4), int), q), [], q
     stages = len(STAGES) - (1 if cell.drilling.retract_mm == cell.drilling.approach_mm else 0)
 
     def poses(holes) -> np.ndarray:
@@ -489,7 +486,6 @@ def _configuration(
     ok = sol.ok.reshape(n, stages).copy()  # the retry changes this, never the blocks' own
     q = sol.q.reshape(n, stages, 6)
     pose_status = sol.status.reshape(n, stages).astype(int)
-    pose_turn = sol.turn.reshape(n, stages).astype(int)
     warnings: list[str] = []
     failed = np.flatnonzero(~ok.all(axis=1))
     if failed.size and cell.configuration.allow_change:
@@ -503,7 +499,6 @@ def _configuration(
         ok[failed] = retry.ok.reshape(-1, stages) & own.ok[:, None]
         q[failed] = retry.q.reshape(-1, stages, 6)
         pose_status[failed] = retry.status.reshape(-1, stages)
-        pose_turn[failed] = retry.turn.reshape(-1, stages)
         changed = failed[ok[failed].all(axis=1)]
         moved = changed[np.any(correction[changed] != 0, axis=1)] if correction is not None else []
         if corrected_in is not None and len(moved):
@@ -538,10 +533,15 @@ def _configuration(
             f"{near.size} hole(s) within {cell.configuration.singular_a5_deg:g} deg of the wrist "
             f"singularity (A5 = 0): {named}{more}"
         )
-    if stages == 3:  # RET is the APP position
-        pose_status = np.concatenate([pose_status, pose_status[:, :1]], axis=1)
-        pose_turn = np.concatenate([pose_turn, pose_turn[:, :1]], axis=1)
-    return pose_status, pose_turn, warnings, q
+    return _stage_configuration(pose_status, q), warnings, q
+
+
+def _stage_configuration(code: np.ndarray, q: np.ndarray) -> Configuration:
+    """The configuration (H, 4) of holes whose S stages' poses have configuration codes (H, S)
+    and joint angles (H, S, 6) rad; S = 3: RET is the APP position."""
+    if code.shape[1] == 3:
+        code, q = (np.concatenate([a, a[:, :1]], axis=1) for a in (code, q))
+    return Configuration.of_code(code, quarters(q))
 
 
 def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
@@ -570,7 +570,6 @@ def _ik_blocks(
         ok=np.empty(m, bool),
         reason=np.empty(m, object),
         status=np.empty(m, np.int16),  # -1..7
-        turn=np.empty(m, np.int16),  # -1..63
     )
 
     def block(i: int) -> None:  # holes i .. i + per - 1, written into their rows of out
@@ -598,7 +597,7 @@ class _WristFollower:
     """A4 and A6 along the program (Turn free): the Status fixes the arm and the wrist, not the
     turn of A4 and A6, so each solved pose takes the angle closest to the pose before it (a
     full turn more or less than the IK's (-180, 180] deg one: 181 deg, not -179 deg, after 178
-    deg) where that stays within the joint limits; the KUKA Turn of a moved pose follows.
+    deg) where that stays within the joint limits.
     Called on the rows of each block in program order (``run_blocks``' ``done``), before the
     block is published to an early reader."""
 
@@ -611,7 +610,6 @@ class _WristFollower:
         q, solved = self._sol.q[rows], np.flatnonzero(self._sol.ok[rows])
         if not solved.size:
             return
-        moved = np.zeros(len(solved), dtype=bool)
         for axis in (3, 5):
             angles = q[solved, axis]
             start = self._last.get(axis, angles[0])
@@ -621,13 +619,8 @@ class _WristFollower:
             path[path < lo] += 2 * np.pi
             outside = (path < lo) | (path > hi)
             path[outside] = angles[outside]
-            moved |= path != angles
             q[solved, axis] = path
             self._last[axis] = float(path[-1])
-        if moved.any():
-            rows_moved = solved[moved]
-            turn = self._sol.turn[rows]  # a view, as q
-            turn[rows_moved] = kuka_turn(q[rows_moved] < 0)
 
 
 def _branch_jumps(points: Points, cell: Cell, q: np.ndarray) -> list[str]:

@@ -33,6 +33,7 @@ from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import pose_from_xyzabc
 
 if TYPE_CHECKING:
+    from accugrid.kinematics.configuration import Configuration
     from accugrid.kinematics.model import RobotModel
 
 __all__ = [
@@ -385,12 +386,17 @@ def identification_plan(
 
 def reach_in_one_status(
     plan: Plan, robot: RobotModel, status: int | None = None
-) -> tuple[np.ndarray, np.ndarray, int]:
-    """KUKA S and T (N,) of every plan position and the Status used (``status``, or the IK
-    default at the first position): LIN moves keep the configuration of the first PTP, so the
-    whole plan must be reachable in it. InputError naming the first position that is not."""
+) -> tuple[Configuration, int]:
+    """The configuration (N,) of every plan position (``kinematics.configuration``) and the
+    configuration code used (``status``, or the IK default's at the first position): linear
+    moves keep the configuration of the first joint move, so the whole plan must be reachable
+    in it. InputError naming the first position that is not."""
     poses = pose_from_xyzabc(np.column_stack([plan.points, plan.abc_rows()]))
-    from accugrid.kinematics.configuration import solve_in_one_status  # IK: only when asked
+    from accugrid.kinematics.configuration import (  # IK: only when asked
+        Configuration,
+        quarters,
+        solve_in_one_status,
+    )
 
     sol, status = solve_in_one_status(robot, poses, status)
     if not sol.ok.all():
@@ -402,4 +408,4 @@ def reach_in_one_status(
             f"{'' if status is None else f' in Status {status}'}; first: {plan.ids[i]} "
             f"X {x:.3f} Y {y:.3f} Z {z:.3f} ({sol.reason[i]})"
         )
-    return sol.status, sol.turn, int(status)
+    return Configuration.of_code(sol.status, quarters(sol.q)), int(status)

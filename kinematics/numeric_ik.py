@@ -164,7 +164,7 @@ def solve_in(
         qk, ok = solve(robot.dh, flange[rows_k], start)
         reached[rows_k[ok]] = True
         qk = closed.wrap(qk)
-        got = Configuration.of_joints(robot, np.where(ok[:, None], qk, 0.0)).to_kuka()[0]
+        got = Configuration.of_joints(robot, np.where(ok[:, None], qk, 0.0)).code
         singular = np.abs(qk[:, 4]) < closed.SINGULAR_A5_RAD
         ok &= (got == code[rows_k]) | (singular & ((got & 3) == (code[rows_k] & 3)))
         ok = ok.reshape(len(rows), len(seeds))

@@ -12,8 +12,8 @@ and ``joint_errors`` (compliance under gravity, transmission harmonics, thermal 
 Joint vectors are the controller's axis angles in radians (KUKA A1..A6; ABB axes 1..6 for
 ``irb6700``, as a RAPID jointtarget holds them), shape (N, 6); poses are (N, 4, 4) mm.
 
-KUKA Status and Turn, ABB confdata, the branch selection of ``Robot.ik`` / ``Robot.ik_confdata``
-and ``IKSolution``: ``kinematics.configuration``.
+The configuration, its codes, the branch selection of ``Robot.ik`` and ``IKSolution``:
+``kinematics.configuration``.
 """
 
 from __future__ import annotations
@@ -30,13 +30,7 @@ from accugrid.infra.units import mm_text
 from accugrid.infra.yamlfile import Schema, YamlDoc, load_yaml
 from accugrid.kinematics import ik as closed
 from accugrid.kinematics import numeric_ik as numeric
-from accugrid.kinematics.configuration import (
-    IKSolution,
-    kuka_words,
-    select,
-    select_confdata,
-    status_turn,
-)
+from accugrid.kinematics.configuration import IKSolution, ik_codes, ik_codes_at, select
 from accugrid.kinematics.dh import DHTable, flange_poses
 from accugrid.kinematics.frames import invert, pose_from_xyzabc, stack_times
 from accugrid.kinematics.joint_errors import (
@@ -155,9 +149,10 @@ class Robot:
         return _pinocchio_model(self.dh, self.joint_limits_deg, self.flange_T_tool)
 
     def ik(self, robot_T_tcp: np.ndarray, status=None, turn=None, reference=None) -> IKSolution:
-        """Joint solutions for TCP poses (N, 4, 4) mm with KUKA Status/Turn (int or (N,) ints).
+        """Joint solutions for TCP poses (N, 4, 4) mm in configuration and sign codes
+        (``kinematics.configuration``; int or (N,) ints: KUKA's Status and Turn numbers).
 
-        ``status=None``: basic area and A3 >= phi (Status bits 0, 1 = 0, 1), and of the two wrist
+        ``status=None``: basic area and A3 >= phi (code bits 0, 1 = 0, 1), and of the two wrist
         solutions the one closest (sum of squared joint differences, angles wrapped) to the
         reference configuration ``reference`` ((6,) or (N, 6) rad; default KUKA home
         A = 0, -90, 90, 0, 0, 0 deg), i.e. by default the wrist with |A4| + |A6| < 180 deg.
@@ -169,7 +164,7 @@ class Robot:
         4 wrist) and ``status=None`` takes, of all its solutions, the one nearest ``reference``.
         """
         if closed.closed_form_supported(self.dh):
-            flange, wrist = self._flange_wrist(robot_T_tcp)
+            flange, wrist = self.flange_wrist(robot_T_tcp)
             q, found, reach = select(self, flange, wrist, status, reference)
         else:  # no spherical wrist: numerical
             poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
@@ -187,19 +182,9 @@ class Robot:
             q = np.where(round_off, 0.0, q)
             q = np.where(want_neg & (q >= 0), q - 2 * np.pi, q)
             q = np.where(~want_neg & (q < 0), q + 2 * np.pi, q)
-        return self._within_limits(q, found, reason, wrist)
+        return self.within_limits(q, found, reason, wrist)
 
-    def ik_confdata(self, robot_T_tcp: np.ndarray, confdata: np.ndarray) -> IKSolution:
-        """Joint solutions (ABB axis angles) for TCP poses (N, 4, 4) mm in ABB confdata
-        [cf1, cf4, cf6, cfx] ((4,) or (N, 4) int): the one solution whose
-        ``configuration.abb_confdata`` is the given one (``configuration.select_confdata``),
-        then the joint limits. ``status`` and ``turn`` of the result are the KUKA words of the
-        same joints."""
-        flange, wrist = self._flange_wrist(robot_T_tcp)
-        q, reason = select_confdata(self, flange, wrist, confdata)
-        return self._within_limits(q, reason == "", reason, wrist)
-
-    def _flange_wrist(self, robot_T_tcp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def flange_wrist(self, robot_T_tcp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Flange poses (N, 4, 4) mm and wrist centres (N, 3) mm of TCP poses (N, 4, 4) mm;
         InputError for a DH structure without the closed-form inverse."""
         poses = np.asarray(robot_T_tcp, dtype=float).reshape(-1, 4, 4)
@@ -212,7 +197,7 @@ class Robot:
         flange = stack_times(poses, invert(self.flange_T_tool))
         return flange, closed.wrist_points(self.dh, flange)
 
-    def _within_limits(self, q, found, reason, wrist) -> IKSolution:
+    def within_limits(self, q, found, reason, wrist) -> IKSolution:
         """The IKSolution of the chosen joints q (N, 6) rad (found (N,) bool, ``reason`` (N,)
         object, changed in place) with the joint limits applied; wrist centres (N, 3) mm (None:
         from q)."""
@@ -228,15 +213,15 @@ class Robot:
             reason[hit] = f"A{axis + 1} outside limits {lo_deg:g}..{hi_deg:g} deg"
         ok = found.copy()
         ok[beyond] = False
-        # after Turn: A3, A5 may have moved by 360 deg
+        # after the sign code: A3, A5 may have moved by 360 deg
         final = q if found.all() else np.where(found[:, None], q, 0.0)
-        s, t = status_turn(self, final) if wrist is None else kuka_words(self, final, wrist)
+        s, t = ik_codes(self, final) if wrist is None else ik_codes_at(self, final, wrist)
         return IKSolution(q, ok, reason, np.where(found, s, -1), np.where(found, t, -1))
 
     def ik_all(self, robot_T_tcp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """All 8 closed-form solutions (N, 8, 6) rad in (-pi, pi] and their reachability mask
         (N, 8); InputError for a DH structure without the closed-form inverse."""
-        return closed.all_solutions(self.dh, self._flange_wrist(robot_T_tcp)[0])
+        return closed.all_solutions(self.dh, self.flange_wrist(robot_T_tcp)[0])
 
 
 def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:

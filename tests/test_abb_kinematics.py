@@ -14,7 +14,8 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from scipy.spatial.transform import Rotation
 
-from accugrid.kinematics.configuration import abb_confdata, abb_quadrant, status_turn
+from accugrid.codegen.rapid.confdata import abb_confdata, abb_quadrant, ik_confdata
+from accugrid.kinematics.configuration import ik_codes
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
 
@@ -188,11 +189,11 @@ def test_ik_in_the_confdata_of_a_pose_gives_back_that_pose(q, tool):
     r = robot(tool=tool)
     q = off_singularities(q)
     confdata = abb_confdata(r, q)
-    sol = r.ik_confdata(r.fk(q), confdata)
+    sol = ik_confdata(r, r.fk(q), confdata)
     assert sol.ok.all(), sol.reason[~sol.ok]
     np.testing.assert_allclose(sol.q, q, rtol=0, atol=1e-9)
     np.testing.assert_array_equal(abb_confdata(r, sol.q), confdata)
-    np.testing.assert_array_equal(sol.status, status_turn(r, sol.q)[0])
+    np.testing.assert_array_equal(sol.status, ik_codes(r, sol.q)[0])
 
 
 @settings(max_examples=30)
@@ -210,7 +211,7 @@ def test_every_cfx_gives_the_branch_with_that_confdata_or_a_reason(q, cfx):
     branch = every[np.arange(len(q)), np.argmax(cand_cfx == cfx, axis=1)]
     wanted = abb_confdata(r, np.where(has[:, None], branch, q))
     wanted[:, 3] = cfx
-    sol = r.ik_confdata(target, wanted)
+    sol = ik_confdata(r, target, wanted)
     assert (sol.reason[~has] == "no solution with the requested cfx").all()
     # axes 1, 4, 6: the branch's own turn (its quadrants were asked for); 2, 3, 5 any turn
     lo, hi = np.radians(r.joint_limits_deg).T - [[1e-9], [-1e-9]]
@@ -246,19 +247,19 @@ def test_wrong_or_unreachable_confdata_is_refused_with_the_reason():
         ([2, 0, 0, 4], "no solution with the requested cfx"),  # behind axis 1: out of reach
     ]
     for confdata, reason in cases:
-        sol = r.ik_confdata(pose, confdata)
+        sol = ik_confdata(r, pose, confdata)
         assert not sol.ok[0], confdata
         assert sol.reason[0] == reason, (confdata, sol.reason[0])
-    elbow_down = r.ik_confdata(pose, [0, 0, 1, 2])
+    elbow_down = ik_confdata(r, pose, [0, 0, 1, 2])
     assert elbow_down.ok[0], elbow_down.reason[0]
     np.testing.assert_array_equal(abb_confdata(r, elbow_down.q)[0], [0, 0, 1, 2])
     np.testing.assert_allclose(r.fk(elbow_down.q), pose, rtol=0, atol=1e-9)
     far = pose.copy()
     far[0, :3, 3] = [4000.0, 0.0, 1000.0]
-    sol = r.ik_confdata(far, good)
+    sol = ik_confdata(r, far, good)
     assert not sol.ok[0] and sol.reason[0] == "unreachable"
     assert np.isnan(sol.q[0]).all()
-    sol = r.ik_confdata(np.concatenate([pose, pose]), [good, [0, 4, 0, 0]])
+    sol = ik_confdata(r, np.concatenate([pose, pose]), [good, [0, 4, 0, 0]])
     np.testing.assert_array_equal(sol.ok, [True, False])
     np.testing.assert_allclose(sol.q[0], q[0], atol=1e-9)
     np.testing.assert_allclose(sol.q[1, 3], q[0, 3] + 2 * np.pi, atol=1e-9)  # the turn asked for
@@ -273,7 +274,7 @@ def test_angles_on_a_quadrant_edge_keep_the_wanted_quadrant():
     confdata = abb_confdata(r, q)
     np.testing.assert_array_equal(confdata, [[0, 1, -1, 0]])
     for wanted in ([0, 1, -1, 0], [-1, 0, -2, 0]):
-        sol = r.ik_confdata(r.fk(q), wanted)
+        sol = ik_confdata(r, r.fk(q), wanted)
         assert sol.ok[0], sol.reason[0]
         np.testing.assert_array_equal(abb_confdata(r, sol.q)[0], wanted)
         np.testing.assert_allclose(sol.q, q, rtol=0, atol=1e-9)
@@ -289,8 +290,8 @@ def test_cfx_branch_is_the_pick_over_all_8_candidates(q, cfx, tool):
     """``_cfx_branch`` solves only the wrists of the arm solution cfx names where that is clear;
     its numbers must be the first match over all 8 candidates, bit for bit (cfx -1 and 8, which
     name no solution, included)."""
+    from accugrid.codegen.rapid.confdata import _cfx_branch, _cfx_candidates
     from accugrid.kinematics import ik
-    from accugrid.kinematics.configuration import _cfx_branch, _cfx_candidates
 
     r = robot(tool=tool)
     flange = r.fk(q) @ np.linalg.inv(r.flange_T_tool)

@@ -63,9 +63,7 @@ def test_a_program_checked_in_the_background_is_the_one_checked_at_once(case):
     assert later.warnings == at_once.warnings
     if case in ("allow change", "singular wrist"):
         assert later.warnings  # the IK's own warnings come after the correction's
-    for got, want in zip(
-        later.configuration.to_kuka(), at_once.configuration.to_kuka(), strict=True
-    ):
+    for got, want in zip(_fields(later.configuration), _fields(at_once.configuration), strict=True):
         np.testing.assert_array_equal(got, want)
     np.testing.assert_array_equal(later.positions, at_once.positions)
 
@@ -76,9 +74,9 @@ def test_a_program_checked_in_the_background_is_the_one_checked_at_once(case):
     st.integers(1, 40),
     st.lists(st.tuples(st.integers(0, len(ROWS)), st.integers(0, len(ROWS))), max_size=6),
 )
-def test_status_and_turn_from_the_ik_blocks_are_what_the_finished_check_keeps(case, block, ranges):
+def test_the_configuration_from_the_ik_blocks_is_what_the_finished_check_keeps(case, block, ranges):
     """Holes lo..hi-1 asked for while the check runs (IK blocks of ``block`` poses, some holes
-    changing Status with allow_change): the Status and Turn the finished check keeps."""
+    changing Status with allow_change): the configuration the finished check keeps."""
     c = (
         cell()
         if case == "fixed Status"
@@ -86,13 +84,19 @@ def test_status_and_turn_from_the_ik_blocks_are_what_the_finished_check_keeps(ca
     )
     pts = panel_points(ROWS)
     g = grid() if case == "fixed Status" else None  # the grid holds in Status 6 only
-    final = build_program(pts, c, robot(), g).configuration.to_kuka()
+    final = _fields(build_program(pts, c, robot(), g).configuration)
     with mock.patch.object(program, "IK_BLOCK", block):
         prog = build_program(pts, c, robot(), g, background=True)
         for lo, hi in [(min(a, b), max(a, b)) for a, b in ranges] + [(0, len(ROWS))]:
-            for got, want in zip(prog.kuka_words(lo, hi), final, strict=True):
+            for got, want in zip(_fields(prog.configuration_of(lo, hi)), final, strict=True):
                 np.testing.assert_array_equal(got, want[lo:hi])
         prog.wait()
+
+
+def _fields(configuration) -> tuple[np.ndarray, ...]:
+    """Every field of a configuration: shoulder, elbow, wrist, quarter."""
+    c = configuration
+    return c.shoulder, c.elbow, c.wrist, c.quarter
 
 
 def test_an_unreachable_hole_checked_in_the_background_is_raised_by_wait():

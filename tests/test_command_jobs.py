@@ -33,8 +33,8 @@ def test_reach_in_one_status_names_the_first_position_out_of_reach():
     plan = Plan(points, np.array([0.0, 90.0, 0.0]), ["A", "B", "FAR"])
     with pytest.raises(InputError, match=r"1 of 3 plan positions .*first: FAR X 9000\.000"):
         reach_in_one_status(plan, robot)
-    status, turn, used = reach_in_one_status(Plan(points[:2], plan.abc, ["A", "B"]), robot)
-    assert used == 6 and (status == 6).all() and turn.shape == (2,)
+    configuration, used = reach_in_one_status(Plan(points[:2], plan.abc, ["A", "B"]), robot)
+    assert used == 6 and (configuration.code == 6).all() and configuration.quarter.shape == (2, 6)
 
 
 def test_a_study_validates_by_itself_only_when_simulated():

@@ -9,7 +9,7 @@ import pytest
 import yaml
 
 from accugrid.app.cli import main
-from accugrid.kinematics.configuration import status_turn
+from accugrid.kinematics.configuration import ik_codes
 from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
 from accugrid.kinematics.robot import load_robot
 
@@ -36,7 +36,7 @@ def write_csv(path, q, noise=0.0, logged=True, seed=0, status=False, repeats=1):
     header += ",a1,a2,a3,a4,a5,a6" if logged else ""
     header += ",s" if status else ""
     lines = ["# a comment line", header]
-    codes = status_turn(PAPER, q)[0]  # the Status of the visited joints
+    codes = ik_codes(PAPER, q)[0]  # the Status of the visited joints
     for i in range(len(q)):
         cells = [f"P{i}"] + [f"{v:.4f}" for v in (*commanded[i], *measured[i])]
         cells += [f"{v:.4f}" for v in np.degrees(q[i])] if logged else []

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from accugrid.infra.errors import InputError
-from accugrid.kinematics.configuration import Configuration, status_turn
+from accugrid.kinematics.configuration import Configuration, ik_codes
 from accugrid.kinematics.dh import chain
 from accugrid.kinematics.frames import abc_to_matrix, pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
@@ -112,7 +112,7 @@ def test_ik_with_the_status_and_turn_of_a_pose_gives_back_that_pose(q, tool):
     r = robot(tool=tool)
     q = q[np.abs(q[:, 4]) > 1e-3]  # off the wrist singularity (A5 = 0)
     target = r.fk(q)
-    status, turn = status_turn(r, q)
+    status, turn = ik_codes(r, q)
     sol = r.ik(target, status=status, turn=turn)
     assert sol.ok.all(), sol.reason[~sol.ok]
     reached = r.fk(sol.q)
@@ -120,7 +120,7 @@ def test_ik_with_the_status_and_turn_of_a_pose_gives_back_that_pose(q, tool):
     np.testing.assert_allclose(reached[:, :3, :3], target[:, :3, :3], rtol=0, atol=1e-9)
     np.testing.assert_array_equal(sol.status, status)
     np.testing.assert_array_equal(sol.turn, turn)
-    np.testing.assert_array_equal(status_turn(r, sol.q)[0], status)
+    np.testing.assert_array_equal(ik_codes(r, sol.q)[0], status)
     # Status and Turn pick exactly one of the 8 x turns solutions: the joint vector itself.
     np.testing.assert_allclose(sol.q, q, atol=1e-6)
 
@@ -134,7 +134,7 @@ def test_default_ik_solves_the_pose_and_reports_its_status(q):
     good = sol.ok
     np.testing.assert_allclose(r.fk(sol.q[good]), target[good], atol=1e-9)
     np.testing.assert_array_equal(sol.status[good] & 3, 2)  # basic area, A3 >= phi
-    s, t = status_turn(r, sol.q[good])
+    s, t = ik_codes(r, sol.q[good])
     np.testing.assert_array_equal(s, sol.status[good])
     np.testing.assert_array_equal(t, sol.turn[good])
 
@@ -184,7 +184,7 @@ def test_phi_is_where_a2_axis_a3_axis_and_wrist_point_are_in_line():
         if in_line:
             reach = np.linalg.norm(wrist - a2_axis)
             assert reach == pytest.approx(1150.0 + np.hypot(41.0, 1200.0))
-    status, _ = status_turn(r, np.radians([[0, -90, 90, 0, 20, 0], [0, -90, -10, 0, -20, 0]]))
+    status, _ = ik_codes(r, np.radians([[0, -90, 90, 0, 20, 0], [0, -90, -10, 0, -20, 0]]))
     assert list(status) == [2, 4]  # A3 = 90 >= phi, A5 > 0; A3 = -10 < phi, A5 < 0
 
 
@@ -197,13 +197,13 @@ def test_status_bit0_is_the_overhead_area():
     for q, sign in [(behind, -1), (front, 1)]:
         wrist = chain(r.dh, q)[3][0, :3, 3]
         assert np.sign(wrist[:2] @ [np.cos(-q[0, 0]), np.sin(-q[0, 0])]) == sign  # A1 turns -z
-    assert status_turn(r, behind)[0][0] & 1 == 1
-    assert status_turn(r, front)[0][0] & 1 == 0
+    assert ik_codes(r, behind)[0][0] & 1 == 1
+    assert ik_codes(r, front)[0][0] & 1 == 0
 
 
 def test_turn_bits_are_the_negative_axes():
     q = np.radians([[-1.0, -90.0, 90.0, -200.0, 10.0, 5.0]])
-    assert status_turn(robot(), q)[1][0] == 0b001011
+    assert ik_codes(robot(), q)[1][0] == 0b001011
 
 
 def test_unknown_robot_name_is_a_clear_error():
@@ -261,10 +261,10 @@ def test_neutral_configuration_names_the_branches_and_round_trips_kuka():
     np.testing.assert_array_equal(config.elbow, [True, False])  # A3 = 90 >= phi; -30 < phi
     np.testing.assert_array_equal(config.wrist, [False, True])  # A5 < 0
     np.testing.assert_array_equal(config.negative, q < 0)
-    status, turn = config.to_kuka()
-    np.testing.assert_array_equal(status, [2, 5])
-    back = Configuration.from_kuka(status, turn)
-    for name in ("shoulder", "elbow", "wrist", "negative"):
+    np.testing.assert_array_equal(config.code, [2, 5])
+    np.testing.assert_array_equal(config.quarter, np.floor(np.degrees(q) / 90))
+    back = Configuration.of_code(config.code, config.quarter)
+    for name in ("shoulder", "elbow", "wrist", "quarter"):
         np.testing.assert_array_equal(getattr(back, name), getattr(config, name))
 
 

@@ -14,6 +14,7 @@ from program_helpers import CELL, POINTS, ROOT, cell, cell_with, grid, panel_poi
 
 from accugrid.app.cli import main
 from accugrid.codegen.krl import emit
+from accugrid.codegen.krl.configuration import configuration_words
 from accugrid.codegen.krl.emit import module_split, render_krl, render_measurement
 from accugrid.codegen.krl.parse import parse_krl
 from accugrid.codegen.plugin import MeasureSettings
@@ -61,7 +62,7 @@ def check_round_trip(program, files):
     stages = ("APP", "CLR", "BOT") if same_ret else ("APP", "CLR", "BOT", "RET")
     assert len(parsed) == len(program) * len(stages)
     half = 0.5 * 10.0 ** -program.cell.dialects["krl"].decimals + 1e-9
-    status, turn = program.configuration.to_kuka()
+    status, turn = np.moveaxis(configuration_words(program.configuration), -1, 0)
     for i in range(len(program)):
         for k, stage in enumerate(stages):
             p = parsed[f"XH{i + 1}_{stage}"]

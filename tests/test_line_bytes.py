@@ -17,6 +17,7 @@ from program_helpers import cell, cell_with
 
 from accugrid.codegen.gcode import emit as gcode_emit
 from accugrid.codegen.krl import emit as krl_emit
+from accugrid.codegen.krl.configuration import configuration_words, read_configuration
 from accugrid.codegen.linebytes import (
     SLOT,
     image_bytes,
@@ -29,7 +30,6 @@ from accugrid.codegen.points import Points
 from accugrid.codegen.program import STAGES, Program
 from accugrid.infra.csvtable import Table
 from accugrid.infra.textsafe import comment_text, fixed
-from accugrid.kinematics.configuration import Configuration
 from accugrid.kinematics.frames import abc_to_matrix
 
 VALUES = st.one_of(
@@ -173,7 +173,7 @@ def programs(draw):
         correction=np.zeros((n, 3)),
         feed_mm_s=feed,
         depth_mm=np.full(n, depth),
-        configuration=Configuration.from_kuka(status.reshape(n, 4), turn.reshape(n, 4)),
+        configuration=read_configuration(np.stack([status, turn], axis=-1).reshape(n, 4, 2)),
         warnings=[],
         corrected=False,
     )
@@ -219,7 +219,7 @@ def krl_lines(program: Program) -> tuple[str, str]:
     d = c.dialects["krl"].decimals
     stages = STAGES[:3] if dr.retract_mm == dr.approach_mm else STAGES
     pos, abc = program.in_frame(c.robot_T_base)
-    status, turn = program.configuration.to_kuka()
+    status, turn = np.moveaxis(configuration_words(program.configuration), -1, 0)
     ext = "".join(f",E{k + 1} {fixed(v, d)}" for k, v in enumerate(c.dialects["krl"].external_axes))
     approach = f"$VEL.CP = {fixed(dr.approach_mm_s / 1000.0, 4)}"
     src, dat = [], []

@@ -533,7 +533,7 @@ def test_a_corrected_hole_that_takes_another_status_is_refused():
     c = cell_with(configuration={"status": 0, "allow_change": True})
     pts = panel_points([(0.0, 100.0), (250.0, 300.0)])
     uncorrected = build_program(pts, c, robot(), None)  # no correction: they may change
-    assert (uncorrected.configuration.to_kuka()[0] != 0).any()
+    assert (uncorrected.configuration.code != 0).any()
     positions, rotations = uncorrected.positions, uncorrected.rotations
     correction = np.full((len(pts), 3), 0.5)
     with pytest.raises(

@@ -21,6 +21,7 @@ from program_helpers import (
     robot,
 )
 
+from accugrid.codegen.krl.configuration import configuration_words
 from accugrid.codegen.points import parse_points
 from accugrid.codegen.program import STAGES, _branch_jumps, build_program
 from accugrid.compensation.policy import PolicyRequest
@@ -99,7 +100,7 @@ def test_correction_iterations_come_from_the_cell():
 def test_ik_status_constant_and_fk_reproduces_every_pose():
     pts = panel_points(ROWS)
     prog = build_program(pts, cell(), robot(), grid())
-    status, turn = prog.configuration.to_kuka()
+    status, turn = np.moveaxis(configuration_words(prog.configuration), -1, 0)
     assert status.shape == (len(pts), 4)
     assert len(set(status.ravel().tolist())) == 1
     for stage in range(4):
@@ -140,7 +141,7 @@ def test_status_that_cannot_be_kept_is_an_error_unless_allowed():
     assert "configuration.allow_change" in info.value.message
     prog = build_program(pts, cell_with(c, configuration={"allow_change": True}), robot(), None)
     assert any("another Status than 0" in w for w in prog.warnings)
-    assert (prog.configuration.to_kuka()[0] != 0).all()
+    assert (prog.configuration.code != 0).all()
 
 
 def test_wrist_singularity_warning_names_the_hole():
@@ -208,7 +209,7 @@ def test_any_panel_point_set_keeps_axis_straight_and_status(xy):
     # all four positions on one line along the tool Z axis
     cross = np.cross(d, prog.rotations[:, None, :, 2])
     assert np.abs(cross).max() < 1e-9
-    assert len(set(prog.configuration.to_kuka()[0].ravel().tolist())) == 1
+    assert len(set(prog.configuration.code.ravel().tolist())) == 1
     np.testing.assert_allclose(
         prog.correction, error_field(transform_points(cell().robot_T_base, pts.xyz)), atol=0.2
     )

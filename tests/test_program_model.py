@@ -25,7 +25,7 @@ def test_every_hole_point_lands_when_the_calibrated_arm_drives_the_program():
     poses = np.tile(np.eye(4), (len(holes), 1, 1))
     poses[:, :3, :3] = cell().robot_T_base[:3, :3] @ program.rotations
     poses[:, :3, 3] = command
-    status = int(program.configuration.to_kuka()[0][0, 0])
+    status = int(program.configuration.code[0, 0])
     sol = robot().ik(poses, status=status)  # the controller: nominal model, the cell's tool
     assert sol.ok.all()
     landed = model.true_robot().fk(sol.q)[:, :3, 3]

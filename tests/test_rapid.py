@@ -20,8 +20,9 @@ from rewrite_helpers import RAPID_BASE as BASE
 from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import main
-from accugrid.codegen.rapid.rewrite import kuka_status_of
-from accugrid.kinematics.configuration import abb_confdata, status_turn
+from accugrid.codegen.rapid.confdata import abb_confdata, ik_confdata
+from accugrid.codegen.rapid.rewrite import code_of_cfx
+from accugrid.kinematics.configuration import ik_codes
 from accugrid.kinematics.robot import load_robot
 
 NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
@@ -78,7 +79,7 @@ def test_every_robtarget_has_the_confdata_of_its_ik_solution(tmp_path_factory, x
     poses = ROBOT_T_WOBJ @ wobj_T_tcp
     robot = load_robot("irb6700").with_tool(TOOL)
     # the controller's solution in the written confdata reaches the pose ...
-    sol = robot.ik_confdata(poses, conf)
+    sol = ik_confdata(robot, poses, conf)
     assert sol.ok.all(), sol.reason
     np.testing.assert_allclose(robot.fk(sol.q)[:, :3, 3], poses[:, :3, 3], atol=1e-6)
     # ... and is the program's IK solution: one Status, the first pose's IK default
@@ -87,7 +88,7 @@ def test_every_robtarget_has_the_confdata_of_its_ik_solution(tmp_path_factory, x
     assert own.ok.all()
     np.testing.assert_array_equal(abb_confdata(robot, own.q), conf)
     # the rewrite's reading of a cfx as a KUKA Status is the Status of that joint solution
-    np.testing.assert_array_equal(kuka_status_of(conf[:, 3]), status_turn(robot, sol.q)[0])
+    np.testing.assert_array_equal(code_of_cfx(conf[:, 3]), ik_codes(robot, sol.q)[0])
 
 
 def test_module_frame_tool_and_work_object():

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from accugrid.infra.errors import InputError
-from accugrid.kinematics.configuration import status_turn
+from accugrid.kinematics.configuration import ik_codes
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.ik import wrap
 from accugrid.kinematics.robot import load_robot
@@ -42,7 +42,7 @@ def test_the_whole_grid_is_solved_in_the_status_of_its_first_point():
     first = robot().ik(commanded_poses(points[:1], ABC))
     assert grid_status(robot(), points, ABC) == first.status[0] == 6
     q = commanded_joints(robot(), points, ABC)
-    status, _ = status_turn(robot(), q)
+    status, _ = ik_codes(robot(), q)
     assert (status == 6).all()
     # the per-point default would have flipped the wrist (Status 2 and 6 mixed) on this grid
     assert set(robot().ik(commanded_poses(points, ABC)).status) == {2, 6}
@@ -65,7 +65,7 @@ def test_error_field_has_no_wrist_flip_kinks_away_from_the_wrist_singularity():
 def test_given_status_is_used_and_unreachable_status_is_an_error():
     points = demo_grid()[:20]
     q = commanded_joints(robot(), points, ABC, status=2)
-    assert (status_turn(robot(), q)[0] == 2).all()
+    assert (ik_codes(robot(), q)[0] == 2).all()
     with pytest.raises(InputError, match=r"20 of 20 points cannot be reached .*first: X 1200"):
         reached_positions(robot(), points, ABC, status=3)
 
@@ -99,7 +99,7 @@ def test_default_ik_takes_the_candidate_closest_to_the_reference(u):
     q = wrap(lo + u * (hi - lo))
     poses = r.fk(q)
     cand, reach = r.ik_all(poses)
-    status = status_turn(r, np.nan_to_num(cand.reshape(-1, 6)))[0].reshape(-1, 8)
+    status = ik_codes(r, np.nan_to_num(cand.reshape(-1, 6)))[0].reshape(-1, 8)
     home = np.radians([0.0, -90.0, 90.0, 0.0, 0.0, 0.0])
     distance = np.where(reach & (status & 3 == 2), (wrap(cand - home) ** 2).sum(axis=2), np.inf)
     has = np.isfinite(distance).any(axis=1)
@@ -108,5 +108,5 @@ def test_default_ik_takes_the_candidate_closest_to_the_reference(u):
     np.testing.assert_allclose(sol.q[has], best[has], atol=1e-12)
     # with the pose's own joints as reference, the default gives those joints back (off the wrist
     # singularity, where only A4 + A6 is defined and the closed form puts it all into A6)
-    own = ((status_turn(r, q)[0] & 3) == 2) & (np.abs(q[:, 4]) > 1e-6)
+    own = ((ik_codes(r, q)[0] & 3) == 2) & (np.abs(q[:, 4]) > 1e-6)
     np.testing.assert_allclose(r.ik(poses[own], reference=q[own]).q, q[own], atol=1e-6)

@@ -22,7 +22,7 @@ from accugrid.app.correct_model import read_model
 from accugrid.compensation.model_correction import model_correct
 from accugrid.infra.csvtable import TableFormat, read_table
 from accugrid.infra.yamlfile import YamlDoc
-from accugrid.kinematics.configuration import status_turn
+from accugrid.kinematics.configuration import ik_codes
 from accugrid.kinematics.frames import pose_from_xyzabc, xyzabc_from_pose
 from accugrid.kinematics.identification import identify, pose_set
 from accugrid.kinematics.joint_errors import Harmonic, JointErrors
@@ -83,7 +83,7 @@ def calibrated(tmp_path_factory) -> str:
 def write_points(path, q: np.ndarray):
     """Targets at the nominal poses of joints q (N, 6) rad, each with its own Status."""
     xyzabc = xyzabc_from_pose(PAPER.fk(q))
-    status = status_turn(PAPER, q)[0]
+    status = ik_codes(PAPER, q)[0]
     lines = ["id,x,y,z,a,b,c,s"]
     for i in range(len(q)):
         lines.append(",".join([f"T{i}", *(f"{v:.4f}" for v in xyzabc[i]), str(status[i])]))

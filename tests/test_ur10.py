@@ -19,8 +19,9 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import main
+from accugrid.codegen.rapid.confdata import ik_confdata
 from accugrid.infra.errors import InputError
-from accugrid.kinematics.configuration import _wrist_points, status_turn
+from accugrid.kinematics.configuration import ik_codes, wrist_points_of
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
 
@@ -90,7 +91,7 @@ SHOULDER_MARGIN_MM = 50.0  # wrist point at least this outside the cylinder axis
 
 def regular(q: np.ndarray) -> np.ndarray:
     """(N,) bool: joint vectors (N, 6) rad off the UR's singularities by the margins above."""
-    radius = np.hypot(*_wrist_points(UR10, q)[:, :2].T)
+    radius = np.hypot(*wrist_points_of(UR10, q)[:, :2].T)
     return (
         (np.abs(np.sin(q[:, 2])) >= MARGIN_RAD)
         & (np.abs(np.sin(q[:, 4])) >= MARGIN_RAD)
@@ -130,7 +131,7 @@ def test_ur10_ik_returns_the_joints_of_the_asked_configuration(q):
     """IK(FK(q)) in q's configuration (shoulder, elbow, wrist) and turns is q itself."""
     q = q[None]
     assume(regular(q)[0])  # the shoulder margin
-    status, turn = status_turn(UR10, q)
+    status, turn = ik_codes(UR10, q)
     pose = UR10.fk(q)
     sol = UR10.ik(pose, status=status, turn=turn)
     assert sol.ok[0], sol.reason[0]
@@ -143,7 +144,7 @@ def test_ur10_ik_batch_every_regular_pose_in_its_configuration():
     """500 random regular joint vectors at once: every one found again in its configuration."""
     q = np.random.default_rng(7).uniform(-np.pi, np.pi, (2000, 6))
     q = q[regular(q)][:500]
-    status = status_turn(UR10, q)[0]
+    status = ik_codes(UR10, q)[0]
     sol = UR10.ik(UR10.fk(q), status=status)
     assert sol.ok.all(), set(sol.reason[~sol.ok])
     np.testing.assert_allclose(sol.q, q, rtol=0, atol=1e-9)  # (-180, 180] without turns
@@ -275,6 +276,6 @@ def test_ur10_has_no_closed_form_or_confdata_ik():
     """The closed form's 8 candidates and ABB confdata need a spherical wrist: asked of the UR10
     they are refused with the reason, not answered with another arm's solutions."""
     pose = UR10.fk(np.radians([[10.0, -80.0, 100.0, -110.0, -80.0, 30.0]]))
-    for ask in (lambda: UR10.ik_all(pose), lambda: UR10.ik_confdata(pose, [0, 0, 0, 0])):
+    for ask in (lambda: UR10.ik_all(pose), lambda: ik_confdata(UR10, pose, [0, 0, 0, 0])):
         with pytest.raises(InputError, match="no closed-form inverse"):
             ask()

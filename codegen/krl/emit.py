@@ -40,6 +40,7 @@ from typing import NamedTuple
 import numpy as np
 
 from accugrid.codegen.cell import Cell
+from accugrid.codegen.krl.configuration import configuration_words
 from accugrid.codegen.linebytes import SLOT, image_bytes, line_image, number_cells, text_cells
 from accugrid.codegen.plugin import MeasureSettings, Rendered
 from accugrid.codegen.points import Points
@@ -201,8 +202,9 @@ class KrlMeasurement:
         moves = "each by PTP" if settings.ptp_only else "first by PTP, then LIN"
         return f"{moves}, each followed by {wait}"
 
-    def render(self, plan, status, turn, name, header, settings, templates, out):
-        rows = (plan.points, plan.abc_rows(), plan.ids, status, turn)
+    def render(self, plan, configuration, name, header, settings, templates, out):
+        words = configuration_words(configuration)  # (N, 2) S, T
+        rows = (plan.points, plan.abc_rows(), plan.ids, words[:, 0], words[:, 1])
         src, dat = render_measurement(*rows, name, header, settings, templates)
         paths = self.targets(out, name)
         return Rendered({paths[0]: src, paths[1]: dat}, [paths[0]])
@@ -440,7 +442,7 @@ def _placeholder(cell: Cell) -> Program:
         correction=zeros[:, 0],
         feed_mm_s=np.full(2, cell.drilling.feed_mm_s),
         depth_mm=np.full(2, cell.drilling.depth_mm),
-        configuration=Configuration.from_kuka(np.zeros((2, 4), int), np.zeros((2, 4), int)),
+        configuration=Configuration.of_code(np.zeros((2, 4), int), np.zeros((2, 4, 6), int)),
         warnings=[],
         corrected=False,
     )
@@ -507,10 +509,9 @@ class _Records:
     def status_turn(self, lo: int, hi: int) -> np.ndarray:
         """KUKA Status and Turn (hi - lo, stages, 2) of holes lo..hi-1: the .dat needs them (the
         .src does not), so this is where a job waits for the program's IK check to reach
-        them (``Program.kuka_words``)."""
-        status, turn = self.program.kuka_words(lo, hi)  # S 0..7, T 0..63
-        pair = np.stack([status[:, self.stages], turn[:, self.stages]], axis=2)
-        return pair.astype(np.int16)
+        them (``Program.configuration_of``)."""
+        configuration = self.program.configuration_of(lo, hi)[:, self.stages]
+        return configuration_words(configuration).astype(np.int16)  # S 0..7, T 0..63
 
     def _block_of(self, lo: int, hi: int) -> tuple[int, SimpleNamespace]:
         """The first hole and the block that holds holes lo..hi-1 (a new one when a file first

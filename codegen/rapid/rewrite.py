@@ -47,18 +47,18 @@ from accugrid.codegen.program_text import (
     distinct_ints,
     precision,
 )
+from accugrid.codegen.rapid.confdata import read_configuration
 from accugrid.codegen.rapid.rigid import RigidModule, read_rigid
 from accugrid.codegen.rewrite import CORRECTED, Options, Rows, Scan
 from accugrid.codegen.splice import ByteSplicer, texts_of
 from accugrid.infra.errors import InputError
 from accugrid.infra.textsafe import fixed_bytes
-from accugrid.kinematics.configuration import kuka_status
 
 __all__ = [
     "RapidPlacement",
     "RapidPositions",
     "add_header",
-    "kuka_status_of",
+    "code_of_cfx",
     "scan",
     "scan_positions",
     "splice",
@@ -918,7 +918,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: RapidPlaceme
                 t = frames[found.frame[k]]
                 robot[-1][b] = np.einsum("nij,nj->ni", t[:, :3, :3], found.xyz[k]) + t[:, :3, 3]
                 rotations[-1][b] = _rotations(frames, found.frame[k], found.quat[k])
-            status.append(kuka_status_of(found.cfx[mine]))
+            status.append(code_of_cfx(found.cfx[mine]))
             at.append(start + mine)
         parts.append(rows)
         others.append(_other_rows(path, found))
@@ -960,16 +960,14 @@ def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[s
     return data
 
 
-def kuka_status_of(cfx: np.ndarray) -> np.ndarray:
-    """The KUKA Status (N,) of the arm configuration a confdata's cfx (N,) names (-1 where cfx
-    is not 0..7), so that the policy holds each robtarget against the Status its grid was
-    measured in. cfx = 4 * (wrist centre behind axis 1) + 2 * (behind the lower arm) + (axis 5
-    negative); behind axis 1 is the shoulder flag (Status bit 0), axis 5 negative the wrist
-    (bit 2), and behind the lower arm is the elbow flag (bit 1) negated within the IRB 6700's
-    axis 3 range (``kinematics.configuration``)."""
+def code_of_cfx(cfx: np.ndarray) -> np.ndarray:
+    """The configuration code (N,) of the arm configuration a confdata's cfx (N,) names
+    (``confdata.read_configuration``; -1 where cfx is not 0..7), so that the policy holds each
+    robtarget against the configuration its grid was measured in."""
     cfx = np.asarray(cfx, dtype=np.int64)
-    status = kuka_status((cfx >> 2) & 1, 1 - ((cfx >> 1) & 1), cfx & 1)
-    return np.where((cfx >= 0) & (cfx <= 7), status, -1)
+    confdata = np.zeros((len(cfx), 4), np.int64)
+    confdata[:, 3] = cfx
+    return np.where((cfx >= 0) & (cfx <= 7), read_configuration(confdata).code, -1)
 
 
 def _rotations(frames: np.ndarray, frame: np.ndarray, quats: np.ndarray) -> np.ndarray:
