@@ -1,7 +1,7 @@
 """The application: the ``accugrid`` command (``app.cli``, one module per subcommand in
-``app.commands``), each job as one call, the reports (text, HTML) and the plots. It uses every
-other room; nothing imports it. ``main(argv)`` runs the command in this process and returns its
-exit code; it is imported on first use."""
+``app.commands``), each job as one call (``app.jobs``), the reports and plots (``app.reports``).
+It uses every other room; nothing imports it. ``main(argv)`` runs the command in this process
+and returns its exit code; it is imported on first use."""
 
 from accugrid.infra.exports import lazy_namespace
 

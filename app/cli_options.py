@@ -28,7 +28,7 @@ from accugrid.infra.errors import InputError
 from accugrid.infra.units import unit_spec
 
 if TYPE_CHECKING:
-    from accugrid.app.job import ProgramRequest
+    from accugrid.app.jobs.program import ProgramRequest
     from accugrid.compensation.policy import PolicyRequest
     from accugrid.kinematics.identification import Terms
     from accugrid.kinematics.robot import Robot
@@ -530,7 +530,7 @@ def add_program_arguments(
 def program_request(args: argparse.Namespace, dialect: str, title: str) -> ProgramRequest:
     """The request of a program command's arguments (``add_program_arguments``); ``title``: the
     HTML report's."""
-    from accugrid.app.job import ProgramRequest
+    from accugrid.app.jobs.program import ProgramRequest
 
     return ProgramRequest(
         dialect=dialect,

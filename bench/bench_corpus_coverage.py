@@ -32,7 +32,7 @@ from rewrite_helpers import (  # noqa: E402
     write_rapid_cell,
 )
 
-from accugrid.app.rewrite_job import RewriteRequest, rewrite_job  # noqa: E402
+from accugrid.app.jobs.rewrite import RewriteRequest, rewrite_job  # noqa: E402
 from accugrid.codegen.rewrite import CORRECTED  # noqa: E402
 from accugrid.compensation.policy import CORRECTED as POLICY_CORRECTED  # noqa: E402
 from accugrid.compensation.policy import PolicyRequest  # noqa: E402

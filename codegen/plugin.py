@@ -3,10 +3,10 @@
 A dialect is one folder ``codegen/<name>/`` whose ``plugin.py`` holds ``PLUGIN``, an object with
 the members below, light to import (its emitter and reader are imported when first used);
 ``codegen.dialects.DIALECTS`` names the module (the one registry). The jobs go through the
-plug-in only: ``app.job`` writes a new program (``targets``, ``plan``, ``render``),
+plug-in only: ``app.jobs.program`` writes a new program (``targets``, ``plan``, ``render``),
 ``codegen.rewrite.rewrite`` corrects an existing one (``placement``, ``scan``, ``splice``),
 ``codegen.cell`` reads its cell section (``section_keys``, ``read_section``), and
-``app.measure_program`` writes a laser-tracker measurement program (``measurement``, a
+``app.jobs.plan`` writes a laser-tracker measurement program (``measurement``, a
 capability a dialect may lack). Program text is latin-1 decoded bytes (one character per byte,
 offsets are byte offsets), so a rewrite keeps any encoding and line ending.
 """

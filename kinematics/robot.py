@@ -250,7 +250,7 @@ def load_robot(name_or_path: str | os.PathLike[str]) -> Robot:
 _XYZ: Schema = dict.fromkeys("xyz")
 _POSE: Schema = dict.fromkeys("xyzabc")
 # The ``identification:`` summary of a calibrated file (``calibrated.identification_summary``
-# writes it; ``_validated_max`` and ``app.correct_model`` read it). A key written there is
+# writes it; ``_validated_max`` and ``app.jobs.correct_model`` read it). A key written there is
 # declared here.
 # ``identification.structure`` (written by ``calibrated.structure_summary`` only)
 STRUCTURE_SCHEMA: Schema = {

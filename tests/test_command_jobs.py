@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from accugrid.app.cli import main
-from accugrid.app.study_report import StudyRequest, study_files
+from accugrid.app.jobs.study import StudyRequest, study_files
 from accugrid.compensation.plans import Plan, grid_vertices, reach_in_one_status
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.robot import load_robot

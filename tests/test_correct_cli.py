@@ -11,9 +11,9 @@ import pytest
 from conftest import EXAMPLES
 
 import accugrid
-from accugrid.app import corrected
 from accugrid.app.cli import main
-from accugrid.app.corrected import ADDED
+from accugrid.app.jobs import correct as corrected
+from accugrid.app.jobs.correct import ADDED
 from accugrid.compensation import GridModel
 
 SHIFT = np.array([0.1, -0.2, 0.3])  # a constant error e = P - M of the synthetic grid

@@ -73,7 +73,7 @@ def test_the_measurement_program_is_a_capability_a_dialect_may_lack(tmp_path):
     """The plan job reaches the measurement program through the plug-in: KRL writes one (a .src
     and .dat beside the plan CSV); asking a dialect without one is a one-line InputError naming
     it, and nothing is written."""
-    from accugrid.app.measure_program import PlanRequest, plan_files, plan_targets
+    from accugrid.app.jobs.plan import PlanRequest, plan_files, plan_targets
     from accugrid.codegen.dialects import plugin_of
     from accugrid.kinematics.robot import load_robot
 

@@ -104,7 +104,7 @@ def test_the_docs_name_no_issue_numbers():
         assert not found, f"{_page_id(page)}: {found}"
 
 
-WRITTEN_MD = {"report.md": "app/study_report.py"}  # Markdown a command writes, and where
+WRITTEN_MD = {"report.md": "app/jobs/study.py"}  # Markdown a command writes, and where
 
 
 def _help_texts() -> dict[str, str]:

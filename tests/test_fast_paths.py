@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from accugrid.app.corrected import DECIMALS, _plain_lines
+from accugrid.app.jobs.correct import DECIMALS, _plain_lines
 from accugrid.infra.csvtable import (
     _Cells,
     _parse_csv,

@@ -10,7 +10,7 @@ import pytest
 from conftest import EXAMPLES
 
 from accugrid.app.cli import main
-from accugrid.app.frame_file import load_frame
+from accugrid.app.jobs.robot_frame import load_frame
 from accugrid.kinematics.frames import invert, pose_from_xyzabc, transform_points
 
 TRACKER = EXAMPLES / "tracker"

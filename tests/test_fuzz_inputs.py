@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 from rewrite_helpers import write_cell
 
 from accugrid.app.cli import main
-from accugrid.app.frame_file import load_frame
+from accugrid.app.jobs.robot_frame import load_frame
 from accugrid.codegen.cell import load_cell
 from accugrid.codegen.points import read_points
 from accugrid.codegen.program_text import read_program

@@ -12,7 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from accugrid.app.cli import main
-from accugrid.app.frame_file import load_frame
+from accugrid.app.jobs.robot_frame import load_frame
 from accugrid.codegen.cell import load_cell
 from accugrid.infra.csvtable import parse_number, parse_table, read_table
 from accugrid.infra.errors import MESSAGE_MAX, InputError, printable

@@ -255,7 +255,7 @@ def test_input_names_with_a_non_utf8_byte_work(tmp_path, inputs):
 
 
 def test_identify_refuses_more_rows_than_its_bound(tmp_path, monkeypatch):
-    from accugrid.app import calibration
+    from accugrid.app.jobs import identify as calibration
 
     robot = ["--robot", "kr210", "--tool", "0", "0", "250", "0", "0", "0"]
     plan, meas = tmp_path / "plan", tmp_path / "meas.csv"

@@ -45,7 +45,7 @@ def test_identify_report_shows_what_the_calibrated_file_records(tmp_path):
 @pytest.mark.parametrize(("chosen", "warned"), [(0.05, False), (0.5, True)])
 def test_identify_report_warns_when_the_terms_do_not_carry_over(chosen, warned):
     """The chosen model held out by joint range against DH + TCP (0.2 mm): worse, it is said."""
-    from accugrid.app.identify_report import _carry_over_lines
+    from accugrid.app.reports.identify import _carry_over_lines
 
     xyz = dict.fromkeys("xyz", chosen)
     (line,) = _carry_over_lines(
@@ -171,7 +171,7 @@ def test_a_report_is_byte_identical_for_the_same_inputs_and_source_date_epoch(
 def test_the_plan_view_lies_in_the_holes_plane_not_robot_xy(tmp_path, monkeypatch):
     """A vertical panel (X constant in the robot frame) is drawn over its two in-plane axes
     (Y and Z), not collapsed onto a line of robot X-Y."""
-    from accugrid.app import correction_report as module
+    from accugrid.app.reports import correction as module
 
     drawn = []
     real = module.correction_map_png

@@ -9,7 +9,7 @@ import pytest
 from conftest import EXAMPLES
 
 from accugrid.app.cli import main
-from accugrid.app.frame_file import load_frame
+from accugrid.app.jobs.robot_frame import load_frame
 from accugrid.codegen.cell import load_cell
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.robot import BUILTIN, load_robot

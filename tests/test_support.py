@@ -18,7 +18,7 @@ import pytest
 import yaml
 
 from accugrid.app.cli import main
-from accugrid.app.correct_model import read_model
+from accugrid.app.jobs.correct_model import read_model
 from accugrid.compensation.model_correction import model_correct
 from accugrid.infra.csvtable import TableFormat, read_table
 from accugrid.infra.yamlfile import YamlDoc

@@ -1,7 +1,7 @@
 """One module per ``accugrid`` subcommand (see ``app.cli``): ``NAME``,
 ``add_arguments(parser)`` and ``run(args) -> int``. A command parses its arguments, refuses
 existing outputs (``atomic.check_targets``), calls one domain function (e.g.
-``corrected.correct_points``, ``measure_program.plan_files``), which returns the job's files
+``jobs.correct.correct_points``, ``jobs.plan.plan_files``), which returns the job's files
 and the lines to print (``atomic.JobFiles``), writes them as one job (``atomic.write_files``)
 and prints the lines.
 

@@ -40,7 +40,7 @@ from accugrid.app.cli_options import (
     number,
     robot_with_tool,
 )
-from accugrid.app.comparison_report import csv_text, html_report, report_text
+from accugrid.app.reports.comparison import csv_text, html_report, report_text
 from accugrid.compensation.comparison import compare_methods
 from accugrid.compensation.plans import SEED_REGION
 from accugrid.infra.atomic import check_targets, write_files
@@ -148,7 +148,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
-    from accugrid.app.plots import COMPARISON_STATS, comparison_png
+    from accugrid.app.reports.plots import COMPARISON_STATS, comparison_png
 
     paths = [str(out / "comparison.csv")]
     paths += [str(out / f"comparison_{stat}.png") for stat in COMPARISON_STATS]

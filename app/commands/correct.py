@@ -33,7 +33,7 @@ from accugrid.app.cli_options import (
     number,
     policy_request,
 )
-from accugrid.app.corrected import CorrectRequest, correct_points
+from accugrid.app.jobs.correct import CorrectRequest, correct_points
 from accugrid.compensation.grid import MAX_CORRECTION_MM
 from accugrid.compensation.interpolation import MAX_POWER
 from accugrid.compensation.measurements import REPEAT_TOL_MM

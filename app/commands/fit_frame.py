@@ -19,7 +19,7 @@ from __future__ import annotations
 import argparse
 
 from accugrid.app.cli_options import add_table_format, number
-from accugrid.app.frame_file import fit_frame_files
+from accugrid.app.jobs.robot_frame import fit_frame_files
 from accugrid.infra.atomic import check_targets, write_files
 from accugrid.kinematics.base_frame import SMR_RADIUS_MM
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 import argparse
 
 from accugrid.app.cli_options import add_table_format, number
-from accugrid.app.part_job import PartRequest, fit_part_files
+from accugrid.app.jobs.fit_part import PartRequest, fit_part_files
 from accugrid.infra.atomic import check_targets, write_files
 
 __all__ = ["NAME", "add_arguments", "run"]

@@ -32,7 +32,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from accugrid.app.calibration import MAX_ROWS, IdentifyOptions, calibrate
 from accugrid.app.cli_options import (
     add_harmonics,
     add_robot,
@@ -42,6 +41,7 @@ from accugrid.app.cli_options import (
     harmonics_of,
     robot_with_tool,
 )
+from accugrid.app.jobs.identify import MAX_ROWS, IdentifyOptions, calibrate
 from accugrid.infra.atomic import check_targets, write_files
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.robot import Robot
@@ -139,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
     )
     calibration = calibrate(args.measurements, robot, options, args.output, args.urdf)
     if args.report_html:
-        from accugrid.app.identify_report import identify_report
+        from accugrid.app.reports.identify import identify_report
 
         roles = [("measurements", args.measurements), ("nominal robot", args.robot)]
         calibration.files[args.report_html] = identify_report(

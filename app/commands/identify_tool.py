@@ -19,7 +19,7 @@ from __future__ import annotations
 import argparse
 
 from accugrid.app.cli_options import add_table_format, add_tool, number, reading_format
-from accugrid.app.tool_job import ToolRequest, identify_tool_files
+from accugrid.app.jobs.identify_tool import ToolRequest, identify_tool_files
 from accugrid.infra.atomic import check_targets, write_files
 
 __all__ = ["NAME", "add_arguments", "run"]

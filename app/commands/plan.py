@@ -60,7 +60,7 @@ from accugrid.app.cli_options import (
     parse_steps,
     robot_with_tool,
 )
-from accugrid.app.measure_program import PlanRequest, plan_files, plan_targets
+from accugrid.app.jobs.plan import PlanRequest, plan_files, plan_targets
 from accugrid.compensation.plans import SEED_REGION, SEED_REPEATS
 from accugrid.infra.atomic import check_targets, write_files
 from accugrid.infra.errors import InputError

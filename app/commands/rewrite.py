@@ -50,7 +50,7 @@ from accugrid.app.cli_options import (
     number,
     policy_request,
 )
-from accugrid.app.rewrite_job import RewriteRequest, rewrite_job
+from accugrid.app.jobs.rewrite import RewriteRequest, rewrite_job
 from accugrid.codegen.dialects import DIALECTS, dialect_of, plugin_of
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM

@@ -37,7 +37,7 @@ from accugrid.app.cli_options import (
     number,
     robot_with_tool,
 )
-from accugrid.app.measurement_file import SimulateRequest, simulate_files
+from accugrid.app.jobs.simulate import SimulateRequest, simulate_files
 from accugrid.infra.atomic import check_targets, write_files
 
 __all__ = ["NAME", "add_arguments", "run"]

@@ -42,8 +42,8 @@ from accugrid.app.cli_options import (
     parse_steps,
     robot_with_tool,
 )
+from accugrid.app.jobs.study import OUTPUTS, StudyRequest, study_files
 from accugrid.app.progress import progress
-from accugrid.app.study_report import OUTPUTS, StudyRequest, study_files
 from accugrid.compensation.plans import SEED_REGION
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.compensation.study import DEFAULT_STD_FRACTION, REPEAT_RULES

@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 
 from accugrid.app.cli_options import add_table_format
-from accugrid.app.frame_file import transform_csv
+from accugrid.app.jobs.robot_frame import transform_csv
 from accugrid.infra.atomic import check_targets, write_files
 
 __all__ = ["NAME", "TRIPLES", "add_arguments", "run"]

@@ -28,7 +28,7 @@ import argparse
 import os
 
 from accugrid.app.cli_options import COORDINATE_MAX, add_table_format, number
-from accugrid.app.validate_job import ValidateRequest, validate_files
+from accugrid.app.jobs.validate import ValidateRequest, validate_files
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.infra.atomic import check_targets, write_files
 from accugrid.infra.errors import InputError

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.app.frame_file import load_frame
+from accugrid.app.jobs.robot_frame import load_frame
 from accugrid.codegen.dialects import DIALECTS, plugin_of
 from accugrid.codegen.part_file import part_yaml
 from accugrid.infra.atomic import JobFiles

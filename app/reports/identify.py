@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 import yaml
 
-from accugrid.app.plots import rows_png
-from accugrid.app.report_html import Figure, Section, Table, report_html
+from accugrid.app.reports.html import Figure, Section, Table, report_html
+from accugrid.app.reports.plots import rows_png
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.kinematics.structure import CarryOver
 
@@ -139,7 +139,7 @@ def identify_report(
 ) -> str:
     """The report page: ``yaml_text`` the calibrated robot YAML written, ``residuals`` (N, 3)
     mm measured - model per row, ``inputs`` (role, path), ``controller`` the line on the
-    controller's own kinematics (``calibration.controller_text``; "" for none)."""
+    controller's own kinematics (``jobs.identify.controller_text``; "" for none)."""
     summary = yaml.safe_load(yaml_text)["identification"]
     structure = summary.get("structure") or {}
     nested = structure.get("nested")

@@ -156,10 +156,10 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
 
 
 def _html_report(req: RewriteRequest, rows, read: list[Path], files, cell, policy) -> bytes:
-    """The HTML report of the rewrite (``app.correction_report``): the ``files`` written with
+    """The HTML report of the rewrite (``app.reports.correction``): the ``files`` written with
     their SHA-256, the ``cell``'s robot, tool and base, what the ``policy`` checked, every
     position as written and as rewritten (program frame), its status and reason."""
-    from accugrid.app.correction_report import (
+    from accugrid.app.reports.correction import (
         CORRECTED,
         FLAGGED,
         NOT_CORRECTED,

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from accugrid.app.corrected import (
+from accugrid.app.jobs.correct import (
     CorrectRequest,
     check_added_columns,
     corrected_file,

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.app.plots import fig12_png, hist_png
+from accugrid.app.reports.plots import fig12_png, hist_png
 from accugrid.compensation.plans import SEED_REGION, SEED_REPEATS
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.compensation.study import (

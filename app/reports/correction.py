@@ -17,8 +17,8 @@ from os import PathLike
 
 import numpy as np
 
-from accugrid.app.plots import correction_map_png
-from accugrid.app.report_html import Figure, Section, Table, report_html
+from accugrid.app.reports.html import Figure, Section, Table, report_html
+from accugrid.app.reports.plots import correction_map_png
 from accugrid.compensation.policy import Policy, Verdict
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 

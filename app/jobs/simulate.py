@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.app.plots import fig3_png
+from accugrid.app.reports.plots import fig3_png
 from accugrid.compensation.plans import grid_vertices
 from accugrid.infra.atomic import JobFiles
 from accugrid.infra.csvtable import Table, read_table
@@ -213,7 +213,7 @@ def _is_corrected(path: str) -> bool:
 def _corrected_measurement_csv(request: SimulateRequest, report: list[str]) -> str:
     """The tracker session after correction: commanded at x_cmd.., the rows keeping the
     targets x,y,z (id,x,y,z,a,b,c,s,x_meas,y_meas,z_meas)."""
-    from accugrid.app.correct_model import point_orientations
+    from accugrid.app.jobs.correct_model import point_orientations
     from accugrid.codegen.points import read_points
 
     robot, r = request.robot, request

@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.app.plots import rows_png, validation_hist_png
-from accugrid.app.report_html import Figure, Section, Table, report_html
+from accugrid.app.reports.html import Figure, Section, Table, report_html
+from accugrid.app.reports.plots import rows_png, validation_hist_png
 from accugrid.compensation.measurements import read_measurements
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.compensation.validation import (

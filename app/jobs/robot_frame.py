@@ -293,7 +293,7 @@ def fit_frame_files(
     digests = {key: (Path(path).name, sha256_hex(loaded[key][1])) for key, path in inputs.items()}
     files: dict[str, bytes | str] = {output: frame_yaml(fit, digests)}
     if plot:
-        from accugrid.app.plots import frame_fit_png
+        from accugrid.app.reports.plots import frame_fit_png
 
         files[plot] = frame_fit_png(fit, {key: value[0] for key, value in loaded.items()})
     return JobFiles(files, list(inputs.values()), [_fit_summary(output, fit)])

@@ -71,7 +71,7 @@ def html_report(
     """The HTML report: the settings, the methods within the tolerance on both target sets at
     the largest budget, the table, the figures (``figures``: stat -> PNG). A comparison of
     methods has no pass criterion (verdict INFO)."""
-    from accugrid.app.report_html import Figure, Section, Table, report_html
+    from accugrid.app.reports.html import Figure, Section, Table, report_html
 
     largest = max(r.budget for r in result.rows)
     at_largest = [r for r in result.rows if r.budget == largest and r.method != "uncorrected"]

@@ -184,7 +184,7 @@ def write_program(req: ProgramRequest, force: bool = False) -> str:
 
 
 def with_report(job: Job, report: Path | None, title: str) -> Mapping[Path, object]:
-    """The job's files plus its HTML report (``app.correction_report``) at ``report``, written
+    """The job's files plus its HTML report (``app.reports.correction``) at ``report``, written
     last and naming each of them with its SHA-256; the files alone without one. The program's
     files stay rendered on demand (hashed as they are written, not copied). The plan view is in
     the cell's base frame, the points' frame. InputError for an uncorrected program
@@ -193,7 +193,7 @@ def with_report(job: Job, report: Path | None, title: str) -> Mapping[Path, obje
         return job.files
     if job.program.verdict is None:
         raise InputError("--report-html reports the corrections; --no-correction makes none")
-    from accugrid.app.correction_report import (
+    from accugrid.app.reports.correction import (
         ReportedFiles,
         cell_setup,
         checks_text,

@@ -166,7 +166,7 @@ def corrected_file(
     model = request.model if request.model and Path(request.model).is_file() else None
     files = {request.output: text}
     if request.report_html:
-        from accugrid.app.correction_report import (
+        from accugrid.app.reports.correction import (
             ReportedFiles,
             checks_text,
             correction_report,
@@ -228,7 +228,7 @@ def correct_points(request: CorrectRequest) -> JobFiles:
     Status than the grid's) unless ``allow_partial``."""
     request.policy.check()
     if request.model is not None:
-        from accugrid.app.correct_model import correct_by_model  # only when asked: slower
+        from accugrid.app.jobs.correct_model import correct_by_model  # only when asked: slower
 
         return correct_by_model(request)
     if request.grid is None:
