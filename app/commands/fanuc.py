@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 
 from accugrid.app.cli_options import add_program_arguments, program_request
-from accugrid.app.job import write_program
+from accugrid.app.jobs.program import write_program
 
 __all__ = ["NAME", "add_arguments", "run"]
 

@@ -13,7 +13,7 @@ controller takes them.
 Every pose is a Cartesian ``P[n]`` of GP1 in the user frame and tool frame of the cell (its
 base frame and TCP), X, Y, Z mm and W, P, R deg: fixed angles about X, Y, Z (R = Rz(R) Ry(P)
 Rx(W), scipy's extrinsic ``"xyz"``), with the ``CONFIG`` of the joint angles the program's IK
-check solved it with (``config``). Numbers go through ``textsafe`` only; hole ids only into
+check solved it with (``configuration``). Numbers go through ``textsafe`` only; hole ids only into
 remarks (sanitised). The lines of the holes are made by numpy from one template per hole
 (``codegen.linebytes``), a block of ``BLOCK`` holes at a time as the pieces are taken.
 """
@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen.fanuc.config import config_columns
+from accugrid.codegen.fanuc.configuration import configuration_words
 from accugrid.codegen.fanuc.names import program_name_problem
 from accugrid.codegen.linebytes import (
     SLOT,
@@ -41,7 +41,6 @@ from accugrid.codegen.render import environment, printed_plainly, render_around,
 from accugrid.infra.errors import InputError
 from accugrid.infra.textsafe import comment_text, comment_texts, fixed
 from accugrid.kinematics.frames import matrix_to_abc
-from accugrid.kinematics.robot import load_robot
 
 __all__ = [
     "BLOCK",
@@ -96,8 +95,8 @@ def render_fanuc(
     program: Program, header: list[str], templates=None, out: Path = Path("ACCUGRID.ls")
 ) -> dict[Path, Iterator[str | bytes]]:
     """{out: the program's text in pieces}: the frame rendered by Jinja around the hole lines and
-    the positions, which follow in blocks of ``BLOCK`` holes as the pieces are taken. Waits for
-    the program's IK check (the CONFIG needs its joint angles). InputError at the hole whose
+    the positions, which follow in blocks of ``BLOCK`` holes as the pieces are taken, the CONFIG
+    of each as soon as the program's IK check has reached it. InputError at the hole whose
     feed is not a whole number of mm/sec."""
     cell = program.cell
     section = cell.dialects["fanuc"].check()
@@ -166,14 +165,13 @@ def _numbered(lines: list[str], start: int) -> str:
 def _pieces(program, cell, section, head, middle, after, first) -> Iterator[str | bytes]:
     """The program: ``head`` (to the last numbered line before the holes), the hole lines,
     ``middle`` (to /POS), the positions, ``after`` (from /END)."""
-    robot = load_robot(cell.robot_name)
     yield head
     blocks = range(0, len(program), BLOCK)
     for lo in blocks:
         yield _hole_bytes(program, cell, section, lo, first)
     yield middle
     for lo in blocks:
-        yield _position_bytes(program, robot, section, lo)
+        yield _position_bytes(program, section, lo)
     yield after.removeprefix(_NEWLINE)  # the line end after the positions: theirs
 
 
@@ -228,18 +226,22 @@ _POSITION = (
 )
 
 
-def _position_bytes(program, robot, section, lo: int) -> bytes:
+_LETTERS = np.array([[ord("N"), ord("F")], [ord("D"), ord("U")], [ord("T"), ord("B")]], np.uint8)
+
+
+def _position_bytes(program, section, lo: int) -> bytes:
     """The /POS entries of holes lo..lo+BLOCK-1, four per hole (P numbers 4h+1 .. 4h+4)."""
     hi = min(lo + BLOCK, len(program))
-    q = program.joint_angles(lo, hi).reshape(-1, 6)
-    letters, turns = config_columns(robot, q)
+    words = configuration_words(program.configuration_of(lo, hi)).reshape(-1, 6)
+    letters = [_LETTERS[k][words[:, k], None] for k in range(3)]  # (n, 1) each
+    turns = words[:, 3:]
     wpr = matrix_to_abc(program.rotations[lo:hi])[:, ::-1]  # W, P, R = C, B, A
     places = section.decimals
     numbers = number_cells(np.arange(4 * lo + 1, 4 * hi + 1), 0)
     turn = number_cells(turns, 0)
     xyz = number_cells(program.positions[lo:hi].reshape(-1, 3), places)
     angles = number_cells(np.repeat(wpr, 4, axis=0), 3)
-    cells = [numbers, *(letters[:, k : k + 1] for k in range(3))]
+    cells = [numbers, *letters]
     cells += [turn[:, k] for k in range(3)] + [xyz[:, k] for k in range(3)]
     cells += [angles[:, k] for k in range(3)]
     template = _POSITION % (section.uframe, section.utool)

@@ -11,13 +11,12 @@ __all__ = ["PLUGIN", "FanucPlugin"]
 
 class FanucPlugin(DialectFolder):
     """FANUC TP programs in their ASCII form (``.ls``). A new program is one file, its CONFIG
-    from every pose's joint angles. Members as ``DialectPlugin`` says."""
+    from every pose's configuration. Members as ``DialectPlugin`` says."""
 
     name = "fanuc"
     title = "FANUC TP"
     suffixes = (".ls",)
     controllers = ("fanuc",)  # the robots it drives
-    joints = True  # CONFIG comes from the joint angles
     exports = ("render_fanuc",)
 
     def targets(self, cell, out):

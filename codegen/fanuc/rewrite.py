@@ -14,7 +14,7 @@ motion, read by another instruction, with other motion groups or extended axes (
 ``--ignore-external-axes``), or not used by a motion. Moves to ``PR[n]`` are no /POS position:
 nothing to correct there. Only the X, Y, Z numbers of a corrected position change (the file's
 decimals, at least 0.01 mm); W, P, R, CONFIG and every other byte stay. The policy holds each
-position against the KUKA Status of its CONFIG's arm configuration (``config``).
+position against the configuration its CONFIG names (``configuration``).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from accugrid.codegen.fanuc.config import CONFIG, kuka_status_of
+from accugrid.codegen.fanuc.configuration import read_configuration, words_of_config
 from accugrid.codegen.fanuc.emit import header_remarks
 from accugrid.codegen.fanuc.parse import LsProgram, read_ls
 from accugrid.codegen.program_text import MIN_PLACES_MM, check_text, precision
@@ -150,7 +150,7 @@ def _reason(program, p, mine, moves, section, opts, ignore_external_axes) -> str
             f"user frame {p.uf} is not the cell's ({section.uframe}, base.number) nor the world "
             "frame 0"
         )
-    if p.config and CONFIG.fullmatch(f"'{p.config}'") is None:
+    if p.config and words_of_config(p.config) is None:
         return f"CONFIG '{p.config}' is not one accugrid reads"
     why = _frame_reason(program, "uf", p.uf) if p.uf else ""
     why = why or _frame_reason(program, "ut", p.ut)
@@ -200,8 +200,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: FanucPlaceme
         t = frames[found.frame[mine]]
         robot.append(np.einsum("nij,nj->ni", t[:, :3, :3], xyz[mine]) + t[:, :3, 3])
         rotations.append(rotations_of(t[:, :3, :3], wpr[mine][:, ::-1]))  # A, B, C = R, P, W
-        words = [positions[i].config[:5].replace(" ", "") for i in mine.tolist()]
-        status.append(kuka_status_of(words))
+        status.append(_codes([positions[i].config for i in mine.tolist()]))
         at.append(start + mine)
         parts.append(rows)
         k = len(found.others)
@@ -226,6 +225,17 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: FanucPlaceme
         others=Rows.concat(others),
         state=(frames, found_all),
     )
+
+
+def _codes(configs: list[str]) -> np.ndarray:
+    """The configuration codes (N,) of CONFIG texts (N,) ("": none, -1), so that the policy
+    holds each position against the configuration its grid was measured in."""
+    out = np.full(len(configs), -1, np.int64)
+    given = [i for i, text in enumerate(configs) if text]
+    if given:
+        words = np.stack([words_of_config(configs[i]) for i in given])
+        out[given] = read_configuration(words).code
+    return out
 
 
 def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[str, bytearray]:
