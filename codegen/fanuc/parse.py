@@ -242,8 +242,13 @@ def _entry(path: str, text: str, m: re.Match, number: int, line: int) -> Positio
     body_at = m.start(2)
     body = m.group(2)
     groups = list(_GROUP.finditer(body))
-    if not groups:
-        return Position(number, line, "none")
+
+    def fail(offset: int, what: str) -> InputError:
+        return InputError(f"P[{number}]: {what}", path, *_where(text, body_at + offset))
+
+    if not groups or body[: groups[0].start()].strip():
+        at = len(body) - len(body.lstrip())
+        raise fail(at, "expected a motion group (GP1: UF : n, UT : n, ...)")
     others = tuple(int(g.group(1)) for g in groups if g.group(1) != "1")
     first = next((k for k, g in enumerate(groups) if g.group(1) == "1"), None)
     if first is None:
@@ -251,10 +256,6 @@ def _entry(path: str, text: str, m: re.Match, number: int, line: int) -> Positio
     g = groups[first]
     stop = groups[first + 1].start() if first + 1 < len(groups) else len(body)
     at = g.end()
-
-    def fail(offset: int, what: str) -> InputError:
-        return InputError(f"P[{number}]: {what}", path, *_where(text, body_at + offset))
-
     frames = _FRAMES.match(body, at, stop)
     if frames is None:
         raise fail(

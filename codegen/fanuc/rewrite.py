@@ -177,7 +177,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: FanucPlaceme
         positions = found.positions
         n = len(positions)
         if not n and not opts.allow_partial:
-            what = f"; {len(found.others)} joint position(s) left" if found.others else ""
+            what = f"; {len(found.others)} other position(s) left" if found.others else ""
             raise InputError(
                 f"no Cartesian /POS position in this program: nothing to correct{what}", path, 1
             )
