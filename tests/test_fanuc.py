@@ -194,7 +194,7 @@ def test_a_constant_error_moves_every_position_by_it_in_the_user_frame(tmp_path)
     before, after = _positions(plain.read_text()), _positions(corrected.read_text())
     shift = ROBOT_T_BASE[:3, :3].T @ E_CONST  # P' = P + e, e in the robot frame
     assert len(before) == 4 * 72
-    for n, (uf, ut, config, xyz, wpr) in before.items():
+    for n, (*_, xyz, wpr) in before.items():
         np.testing.assert_allclose(after[n][3], np.array(xyz) + shift, atol=1.5e-3)
         assert after[n][4] == wpr
 
@@ -314,7 +314,7 @@ def test_realworld_fanuc_rewrite_changes_only_the_corrected_numbers(
     rot = Rotation.from_euler("ZYX", REALWORLD_BASE[3:], degrees=True).as_matrix()
     before, after = _positions(old), _positions(new)
     changed = 0
-    for n, (p_uf, p_ut, config, xyz, wpr) in before.items():
+    for n, (p_uf, *_, xyz, wpr) in before.items():
         entry = re.compile(rf"P\[{n}[\]:]").search(old, old.index("/POS"))
         line = old[: entry.start()].count("\n") + 1
         if line not in corrected:
