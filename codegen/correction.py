@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from accugrid.codegen.cell import Cell
+from accugrid.codegen.cell_record import Cell
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.policy import Policy, PolicyRequest
 from accugrid.infra.csvtable import declared_or

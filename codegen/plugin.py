@@ -25,10 +25,10 @@ from accugrid.infra.errors import InputError
 if TYPE_CHECKING:
     import numpy as np
 
-    from accugrid.codegen.cell import Cell
+    from accugrid.codegen.cell_record import Cell
     from accugrid.codegen.cellfile import CellReader, SectionKeys
+    from accugrid.codegen.plugin_types import Options, ProgramContext, Scan
     from accugrid.codegen.program import Program
-    from accugrid.codegen.rewrite import Options, ProgramContext, Scan
     from accugrid.compensation.plans import Plan
     from accugrid.kinematics.configuration import Configuration
     from accugrid.kinematics.model import RobotModel

@@ -48,7 +48,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from accugrid.codegen.cell import Cell
+from accugrid.codegen.cell_record import Cell
 from accugrid.codegen.correction import (
     FROM_CELL,
     ModelFile,
@@ -424,12 +424,12 @@ def _correct(
     rotations: np.ndarray,
     request: PolicyRequest,
 ) -> tuple[np.ndarray, list[str], int | None, list[str], Verdict]:
-    """The correction policy (``compensation.policy``, ``codegen.correction.policy_for``) at
-    every hole point (N, 3) mm with its rotation (N, 3, 3), robot frame: e = P' - P (N, 3) (0
-    for holes left uncorrected), the warnings, the KUKA Status the program runs in (the cell's;
-    else the one the model corrected in, or the grid's), the header lines marking each hole left
-    uncorrected and the verdict (for the report). InputError (the policy's job rule) unless
-    every hole is corrected or ``request.allow_partial``."""
+    """The correction policy (``compensation.policy``, ``codegen.correction.policy_for``) at every
+    hole point (N, 3) mm with its rotation (N, 3, 3), robot frame: e = P' - P (N, 3) (0 for holes
+    left uncorrected), the warnings, the configuration code the program runs in (the cell's; else
+    the one the model corrected in, or the grid's), the header lines marking each hole left
+    uncorrected and the verdict (for the report). InputError (the policy's job rule) unless every
+    hole is corrected or ``request.allow_partial``."""
     status = cell.configuration.status
     targets = None
     if model is not None:  # the A,B,C only for the model's Status rule
@@ -539,9 +539,10 @@ def _configuration(
 def _stage_configuration(code: np.ndarray, q: np.ndarray) -> Configuration:
     """The configuration (H, 4) of holes whose S stages' poses have configuration codes (H, S)
     and joint angles (H, S, 6) rad; S = 3: RET is the APP position."""
+    quarter = quarters(q)
     if code.shape[1] == 3:
-        code, q = (np.concatenate([a, a[:, :1]], axis=1) for a in (code, q))
-    return Configuration.of_code(code, quarters(q))
+        code, quarter = (np.concatenate([a, a[:, :1]], axis=1) for a in (code, quarter))
+    return Configuration.of_code(code, quarter)
 
 
 def _poses(cell: Cell, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:

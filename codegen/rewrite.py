@@ -16,9 +16,7 @@ corrects nothing.
 from __future__ import annotations
 
 import math
-from copy import copy
 from dataclasses import dataclass
-from itertools import chain
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -26,8 +24,8 @@ import numpy as np
 
 from accugrid.codegen.header import grid_lines, input_line
 from accugrid.codegen.header import header_lines as make_header
-from accugrid.codegen.program_text import MAX_BYTES, distinct_ints
-from accugrid.compensation import GridModel
+from accugrid.codegen.plugin_types import CORRECTED, OUTSIDE, SKIPPED, STATUSES, Options, Row, Rows
+from accugrid.codegen.program_text import distinct_ints
 from accugrid.compensation.policy import CORRECTED as POLICY_CORRECTED
 from accugrid.compensation.policy import (
     FIXES,
@@ -35,29 +33,17 @@ from accugrid.compensation.policy import (
     OUTSIDE_GRID,
     REASONS,
     TOO_LONG,
-    Policy,
 )
-from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM, CorrectionSettings
 from accugrid.infra.digest import file_sha256
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
 
-if TYPE_CHECKING:  # loaded by the model's reader, only with --model
+if TYPE_CHECKING:
     from accugrid.codegen.plugin import DialectPlugin
-    from accugrid.kinematics.robot import Robot
 
 __all__ = [
     "REPORT_COLUMNS",
-    "Options",
-    "ProgramContext",
     "Result",
-    "Row",
-    "Rows",
-    "CORRECTED",
-    "OUTSIDE",
-    "SKIPPED",
-    "STATUSES",
-    "Scan",
     "correct_points",
     "header_lines",
     "last_known",
@@ -71,172 +57,7 @@ __all__ = [
 REPORT_COLUMNS = (
     "file,line,name,status,reason,x,y,z,x_new,y_new,z_new,dx,dy,dz,correction_mm,residual_mm"
 )
-NAN3 = (math.nan, math.nan, math.nan)
 _DECIDE = 1 << 16  # positions the policy decides at a time
-
-
-@dataclass
-class Options:
-    """How to rewrite, whatever the dialect (what places a dialect's positions in the robot frame
-    is its own record: ``DialectPlugin.placement``)."""
-
-    model: GridModel | None  # the grid (the residual grid with a model; None: the model alone)
-    correction: CorrectionSettings = CorrectionSettings()
-    decimals: int | None = None  # None: the file's precision (see ``precision``)
-    allow_partial: bool = False  # write although the policy leaves positions uncorrected
-    tool_number: int | None = None  # the cell's TOOL_DATA number (the TCP the grid holds for)
-    flange_T_tool: np.ndarray | None = None  # the cell's tool (None: not given, not checked)
-    tool_data: dict[int, np.ndarray] | None = None  # tool number -> flange_T_tool (the cell's
-    # tool_data with its tool; None: the cell's tool alone, every position corrected with it)
-    max_bytes: int = MAX_BYTES
-    tolerance_mm: float = DEFAULT_TOLERANCE_MM  # warn when rounding leaves more than a tenth
-    policy: Policy | None = None  # decides every position (None: the grid's, default limits)
-    model_file: str | None = None  # the calibrated robot YAML (header)
-    reference_abc: tuple[float, float, float] | None = None  # robot-frame A,B,C deg the model
-    # assumes where a position has none (3-axis G-code): the cell's configuration.reference
-
-    def __post_init__(self) -> None:
-        if self.policy is None:
-            self.policy = Policy(self.correction, self.model)
-
-    def other_tool(self, tool: int) -> str:
-        """Without ``tool_data``: why the positions a program commands with tool number ``tool``
-        (-1: none selected, the cell's) are not corrected, "" when it is the cell's tool."""
-        if tool < 0 or self.tool_number is None or tool == self.tool_number:
-            return ""
-        return (
-            f"tool {tool} is not the cell's tool {self.tool_number}, which the grid holds for "
-            "(declare it in the cell file's tool_data)"
-        )
-
-    @property
-    def calibrated(self) -> Robot | None:
-        """The calibrated model the policy uses, None for the grid alone."""
-        return self.policy.calibrated
-
-
-@dataclass(frozen=True)
-class ProgramContext:
-    """What the command line says about a program's frames that its own text does not; each
-    dialect's ``placement`` reads what applies to it. ``base``: the base (BASE_DATA number, 0
-    the robot frame) in effect where the program sets none; ``trust_calls``: calls to other
-    routines keep the base; ``ignore_external_axes``: positions with external axes in use are
-    corrected (the axes move neither robot nor base); ``controller_data``: the text of a
-    controller file with frame values (KRL ``$config.dat``), None without one."""
-
-    base: int | None = None
-    trust_calls: bool = False
-    ignore_external_axes: bool = False
-    controller_data: str | None = None
-
-
-@dataclass(slots=True)
-class Row:
-    """One position (or unresolved motion target) in the report."""
-
-    file: str
-    line: int
-    name: str
-    status: str  # "corrected", "outside", "skipped"
-    reason: str = ""
-    old: tuple[float, float, float] = NAN3  # position as written (program/base frame, mm)
-    new: tuple[float, float, float] = NAN3  # as rewritten (corrected rows)
-    residual_mm: float = math.nan
-    rounding_mm: float = math.nan  # how far rounding to the written decimals leaves it (mm)
-
-
-STATUSES = ("skipped", "corrected", "outside")
-SKIPPED, CORRECTED, OUTSIDE = 0, 1, 2
-
-
-class Rows:
-    """The report rows (N), column by column: ``files`` (distinct paths) and ``file`` (N,) index
-    into it, ``line`` (N,) int, ``name`` and ``reason`` lists of str, ``status`` (N,) codes of
-    ``STATUSES``, ``old`` and ``new`` (N, 3) mm (NaN: none), ``residual_mm`` and ``rounding_mm``
-    (N,) mm, ``code`` (N,) the policy's reason code of a position it did not correct
-    (``compensation.policy.REASONS``, 0: none), ``commanded`` (N,) bool: a Cartesian position a
-    motion of the program commands (set by the dialect's reader; ``partial_check`` counts those
-    left uncorrected), ``tool`` (N,) the tool number each position is commanded with (-1: the
-    cell's tool; set by the dialect's reader with ``Options.tool_data``). Iterating gives
-    ``Row`` objects (copies)."""
-
-    def __init__(
-        self,
-        files: list[str],
-        file: np.ndarray,
-        line: np.ndarray,
-        name: list[str],
-        reason: list[str],
-        old: np.ndarray,
-    ) -> None:
-        n = len(line)
-        self.files = files
-        self.file = np.asarray(file, dtype=np.int64).reshape(n)
-        self.line = np.asarray(line, dtype=np.int64).reshape(n)
-        self.name = name
-        self.reason = reason
-        self.status = np.zeros(n, np.int8)
-        self.code = np.zeros(n, np.int8)
-        self.commanded = np.zeros(n, bool)
-        self.tool = np.full(n, -1, np.int64)
-        self.old = np.asarray(old, dtype=float).reshape(n, 3)
-        self.new = np.full((n, 3), math.nan)
-        self.residual_mm = np.full(n, math.nan)
-        self.rounding_mm = np.full(n, math.nan)
-
-    @classmethod
-    def concat(cls, parts: list[Rows]) -> Rows:
-        """The rows of each part, in order (the arrays of the one part with rows, not copies,
-        when the others have none: a part is not used after it is concatenated)."""
-        files = sorted({f for p in parts for f in p.files})
-        index = {f: i for i, f in enumerate(files)}
-        full = [p for p in parts if len(p)]
-        if len(full) == 1:
-            (one,) = full
-            out = copy(one)
-            out.files = files
-            out.file = np.array([index[f] for f in one.files], np.int64)[one.file]
-            return out
-        out = cls(
-            files,
-            np.concatenate(
-                [np.array([index[f] for f in p.files], np.int64)[p.file] for p in parts]
-                or [np.zeros(0, np.int64)]
-            ),
-            np.concatenate([p.line for p in parts] or [np.zeros(0, np.int64)]),
-            list(chain.from_iterable(p.name for p in parts)),
-            list(chain.from_iterable(p.reason for p in parts)),
-            np.concatenate([p.old for p in parts] or [np.zeros((0, 3))]),
-        )
-        for key in ("status", "code", "commanded", "tool", "new", "residual_mm", "rounding_mm"):
-            setattr(out, key, np.concatenate([getattr(p, key) for p in parts] or [out.status]))
-        return out
-
-    def __len__(self) -> int:
-        return len(self.line)
-
-    def __getitem__(self, i: int) -> Row:
-        return Row(
-            self.files[self.file[i]],
-            int(self.line[i]),
-            self.name[i],
-            STATUSES[self.status[i]],
-            self.reason[i],
-            tuple(self.old[i].tolist()),
-            tuple(self.new[i].tolist()),
-            float(self.residual_mm[i]),
-            float(self.rounding_mm[i]),
-        )
-
-    def __iter__(self):
-        return (self[i] for i in range(len(self)))
-
-    def where(self, i: int) -> tuple[str, int]:
-        """(file, line) of row ``i``, for an error message."""
-        return self.files[self.file[i]], int(self.line[i])
-
-    def count(self, status: int) -> int:
-        return int(np.count_nonzero(self.status == status))
 
 
 @dataclass
@@ -271,32 +92,14 @@ class Result:
         return best, None if where is None else rows[where]
 
 
-@dataclass
-class Scan:
-    """The positions a dialect's ``scan`` found in the programs of a rewrite. ``rows``: the
-    report rows the job rule judges (``partial_check``); ``at`` (M,): the rows of the positions
-    placed in the robot frame, ``robot`` (M, 3) mm where they are (robot frame), ``rotations``
-    (M, 3, 3) their orientations (robot frame; NaN rows or None: none), ``status`` (M,) their own
-    KUKA Status (-1 or None: the job's); ``others``: rows reported after them that are no
-    position to correct (data no motion uses); ``state``: what the dialect's ``splice`` needs."""
-
-    rows: Rows
-    at: np.ndarray
-    robot: np.ndarray
-    rotations: np.ndarray | None = None
-    status: np.ndarray | None = None
-    others: Rows | None = None
-    state: object = None
-
-
 def rewrite(plugin: DialectPlugin, texts: dict[str, str], opts: Options, placement) -> Result:
     """Rewrite the programs ``texts`` (path -> latin-1 text) of one dialect: its ``scan``, the
     one correction (``correct_points``), its ``splice``, the job rule (``partial_check``).
     ``placement``: the dialect's record of the frames (``plugin.placement``)."""
     scan = plugin.scan(texts, opts, placement)
-    status = None if scan.status is None else last_known(scan.status, scan.rows.file[scan.at])
+    status = None if scan.code is None else last_known(scan.code, scan.rows.file[scan.at])
     corrected = correct_points(scan.robot, scan.rows, scan.at, opts, scan.rotations, status=status)
-    scan.rotations = scan.status = None  # the splice needs neither: memory for its output
+    scan.rotations = scan.code = None  # the splice needs neither: memory for its output
     data = plugin.splice(scan, corrected, opts)
     partial_check(scan.rows, opts)
     rows = scan.rows if scan.others is None else Rows.concat([scan.rows, scan.others])
@@ -304,10 +107,10 @@ def rewrite(plugin: DialectPlugin, texts: dict[str, str], opts: Options, placeme
 
 
 def last_known(status: np.ndarray, file: np.ndarray) -> np.ndarray:
-    """Each position's KUKA Status (M,) from its own (M,) (-1: none) or, where it has none, the
-    last one written before it in its file (a motion without S keeps the Status the robot is
-    in), -1 where none is; ``file`` (M,) the file of each, the positions of a file together in
-    text order."""
+    """Each position's configuration code (M,) from its own (M,) (-1: none) or, where it has none,
+    the last one written before it in its file (a motion that names none keeps the configuration the
+    robot is in), -1 where none is; ``file`` (M,) the file of each, the positions of a file together
+    in text order."""
     n = len(status)
     status = np.asarray(status)
     if not n:
@@ -332,12 +135,12 @@ def correct_points(
     commands, NaN rows where a point is not corrected.
 
     ``at`` (N,): the report row of each point in ``rows`` (an error names its file and line).
-    ``rotations`` (N, 3, 3): each point's orientation, robot frame (NaN rows: none; with a model
-    and ``opts.reference_abc`` such a point takes the reference). ``status`` (N,): each point's
-    own KUKA Status (-1: the job's). With ``mark``, rows not corrected get status "outside"
-    (outside the grid) or stay "skipped", with the policy's code and words as the reason;
-    flagged rows a ``flag:`` reason. InputError at the row when a correction is longer than the
-    safety limit."""
+    ``rotations`` (N, 3, 3): each point's orientation, robot frame (NaN rows: none; with a model and
+    ``opts.reference_abc`` such a point takes the reference). ``status`` (N,): each point's own
+    configuration code (``Configuration.code``; -1: the job's). With ``mark``, rows not corrected
+    get status "outside" (outside the grid) or stay "skipped", with the policy's code and words as
+    the reason; flagged rows a ``flag:`` reason. InputError at the row when a correction is longer
+    than the safety limit."""
     out = np.full_like(points_robot, np.nan)
     if not len(points_robot):
         return out

@@ -254,8 +254,8 @@ class Policy:
     ) -> Policy:
         """The policy of one job. ``grid``: a measurement CSV path, a measured GridModel or
         None; ``tools``: (controller, arm) flange_T_tool (4, 4) mm of a model job;
-        ``status``: the job's KUKA Status (None: the grid's, else the IK default at the first
-        of ``points`` (N, 3) mm at ``abc_deg`` (N, 3) deg with ``turn``); ``nominal``: the
+        ``status``: the job's configuration code (None: the grid's, else the IK default at the
+        first of ``points`` (N, 3) mm at ``abc_deg`` (N, 3) deg with ``turn``); ``nominal``: the
         controller's robot, with the tool the grid was measured with, which finds the Status of
         a grid that does not record it; ``limits``: the orientation and strictness fields.
         InputError for a bad grid, a residual grid the model cannot reach or measured with
@@ -337,8 +337,8 @@ class Policy:
         status: int | np.ndarray | None = None,
     ) -> Verdict:
         """The verdict for targets P (N, 3) mm, robot frame, with their rotations (N, 3, 3)
-        (NaN rows: none) or drill axes (N, 3), and their KUKA Status (int or (N,) ints, -1:
-        none; None: the job's). Vectorized over N."""
+        (NaN rows: none) or drill axes (N, 3), and their configuration codes (int or (N,) ints,
+        -1: none; None: the job's; ``kinematics.configuration``). Vectorized over N."""
         points = np.asarray(points, dtype=float).reshape(-1, 3)
         n = len(points)
         v = Verdict(self, points, points.copy(), np.zeros(n, np.int8), np.zeros(n))

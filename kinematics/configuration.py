@@ -14,9 +14,8 @@ wrist flipped or not. Each dialect maps it to its controller's words
 The IK (``Robot.ik``) takes and returns the configuration as two integer codes: the
 configuration code shoulder + 2 elbow + 4 wrist (``configuration_code``, 0..7) and the sign code,
 bit i set when axis i + 1 is negative (``sign_code``, 0..63). Branch selection (``select``: the
-one joint solution ``Robot.ik`` returns for a wanted code, or the one nearest a reference) and the
-``IKSolution`` record live here too, so the DH robot (``kinematics.robot``) and the URDF robot
-(``kinematics.urdf``) share them without importing each other.
+one joint solution ``Robot.ik`` returns for a wanted code, or the one nearest a reference) lives
+here too. The functions read of a DH robot only its ``DHArm`` members (``kinematics.dh``).
 """
 
 from __future__ import annotations
@@ -27,18 +26,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from accugrid.kinematics import ik as closed
-from accugrid.kinematics.dh import chain
+from accugrid.kinematics.dh import DHArm, chain
 
 if TYPE_CHECKING:
-    from accugrid.kinematics.model import RobotModel
-    from accugrid.kinematics.robot import Robot
+    from accugrid.kinematics.model import IKSolution, RobotModel
 
 __all__ = [
     "HOME_RAD",
     "OFF_AXIS_MM",
     "QUARTER_RAD",
     "Configuration",
-    "IKSolution",
     "arm_flags",
     "configuration_code",
     "ik_codes",
@@ -52,19 +49,7 @@ __all__ = [
 
 HOME_RAD = np.radians([0.0, -90.0, 90.0, 0.0, 0.0, 0.0])  # the default IK reference
 QUARTER_RAD = np.pi / 2  # a quarter turn
-
-
-@dataclass(frozen=True)
-class IKSolution:
-    """Result of ``Robot.ik`` for N poses (see the field comments for shapes)."""
-
-    q: np.ndarray  # (N, 6) rad, NaN rows where there is no solution
-    ok: np.ndarray  # (N,) bool
-    reason: np.ndarray  # (N,) object: "" when ok, else why not
-    # (N,) int configuration code of q: shoulder + 2 elbow + 4 wrist, the same number on any
-    # DH arm (-1 where there is no solution)
-    status: np.ndarray
-    turn: np.ndarray  # (N,) int sign code of q (-1 where there is no solution)
+_BLOCK = 1 << 16  # angles ``quarters`` turns into numbers at a time
 
 
 @dataclass(frozen=True)
@@ -81,7 +66,7 @@ class Configuration:
     quarter: np.ndarray
 
     @classmethod
-    def of_joints(cls, robot: Robot, q: np.ndarray) -> Configuration:
+    def of_joints(cls, robot: DHArm, q: np.ndarray) -> Configuration:
         """The configuration (N,) of joint vectors q (N, 6) rad of a DH robot."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
         shoulder, elbow, wrist = arm_flags(robot, q, wrist_points_of(robot, q))
@@ -119,8 +104,14 @@ class Configuration:
 def quarters(q: np.ndarray) -> np.ndarray:
     """The quarter turn (..., 6) int8 of joint angles q (..., 6) rad: floor(angle / 90 deg) (NaN
     angles: any number)."""
+    q = np.asarray(q, dtype=float)
+    out = np.empty(q.shape, np.int8)
+    flat, into = q.reshape(-1), out.reshape(-1)
     with np.errstate(invalid="ignore"):
-        return np.floor(np.asarray(q, dtype=float) / QUARTER_RAD).astype(np.int8)
+        for start in range(0, len(flat), _BLOCK):  # in blocks: small float temporaries
+            part = flat[start : start + _BLOCK] / QUARTER_RAD
+            into[start : start + _BLOCK] = np.floor(part, out=part)
+    return out
 
 
 def solve_in_one_status(
@@ -153,13 +144,13 @@ def sign_code(negative: np.ndarray) -> np.ndarray:
     return code
 
 
-def ik_codes(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def ik_codes(robot: DHArm, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The configuration and sign codes (N,) int of joint vectors q (N, 6) rad of a DH robot."""
     c = Configuration.of_joints(robot, q)
     return c.code, sign_code(c.negative)
 
 
-def wrist_points_of(robot: Robot, q: np.ndarray) -> np.ndarray:
+def wrist_points_of(robot: DHArm, q: np.ndarray) -> np.ndarray:
     """Wrist points (N, 3) mm, robot frame, of joint vectors q (N, 6) rad: the origin of DH
     frame 5, where axes 5 and 6 cross the common normal of axis 5 (of frame 4 where that is
     the same point: a spherical wrist, a5 = d5 = 0)."""
@@ -174,14 +165,14 @@ def wrist_points_of(robot: Robot, q: np.ndarray) -> np.ndarray:
     return np.einsum("nij,jn->ni", base_T_3[:, :3, :3], offset) + base_T_3[:, :3, 3]
 
 
-def arm_flags(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> tuple[np.ndarray, ...]:
+def arm_flags(robot: DHArm, q: np.ndarray, wrist: np.ndarray) -> tuple[np.ndarray, ...]:
     """Shoulder, elbow, wrist flags (N,) of joint vectors q (N, 6) rad with wrist points (N, 3)."""
     a1 = robot.dh.sign[0] * q[:, 0] + robot.dh.theta_offset[0]
     x_a1 = wrist[:, 0] * np.cos(a1) + wrist[:, 1] * np.sin(a1)
     return x_a1 < 0, closed.wrap(q[:, 2] - robot.phi_rad) >= 0, closed.wrap(q[:, 4]) < 0
 
 
-def _arm_status(robot: Robot, th1: np.ndarray, th3: np.ndarray, wrist: np.ndarray) -> np.ndarray:
+def _arm_status(robot: DHArm, th1: np.ndarray, th3: np.ndarray, wrist: np.ndarray) -> np.ndarray:
     """Configuration code bits 0 and 1 (N, 2, 2) of the 4 arm solutions per pose: DH angles th1
     (N, 2 shoulder), th3 (N, 2 shoulder, 2 elbow) rad, wrist points (N, 3) mm. The numbers of
     ``_status`` on the arm's joint vectors (A1 and A3 wrapped as ``wrap(axis_angles)`` does),
@@ -205,19 +196,19 @@ def _arm_status(robot: Robot, th1: np.ndarray, th3: np.ndarray, wrist: np.ndarra
 OFF_AXIS_MM = 1e-100  # mm: |x|, |y| of a wrist point off the A1 axis are far above this
 
 
-def _status(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> np.ndarray:
+def _status(robot: DHArm, q: np.ndarray, wrist: np.ndarray) -> np.ndarray:
     """Configuration code (N,) of joint vectors q (N, 6) rad whose wrist point is ``wrist``
     (N, 3) mm."""
     return configuration_code(*arm_flags(robot, q, wrist))
 
 
-def ik_codes_at(robot: Robot, q: np.ndarray, wrist: np.ndarray) -> tuple[np.ndarray, ...]:
+def ik_codes_at(robot: DHArm, q: np.ndarray, wrist: np.ndarray) -> tuple[np.ndarray, ...]:
     """Configuration and sign codes (N,) of joint vectors q (N, 6) rad whose wrist points
     ``wrist`` (N, 3) mm are known (saves the forward kinematics of ``ik_codes``)."""
     return _status(robot, q, wrist), sign_code(q < 0)
 
 
-def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, ...]:
+def select(robot: DHArm, flange, wrist, status, reference) -> tuple[np.ndarray, ...]:
     """The solution ``Robot.ik`` picks per flange pose (N, 4, 4), before the sign code and
     limits: q (N, 6) rad in (-pi, pi] (NaN where none), found (N,), any candidate reachable (N,).
 
@@ -276,7 +267,7 @@ def select(robot: Robot, flange, wrist, status, reference) -> tuple[np.ndarray, 
     return q, found, reach[:, 0] | reach[:, 2]  # reach repeats each shoulder's for 2 elbows
 
 
-def _select_all(robot: Robot, flange, wrist, want, rows, reference):
+def _select_all(robot: DHArm, flange, wrist, want, rows, reference):
     """``select`` over all 8 candidates for poses ``rows``; want = 2 means the default."""
     m = len(flange)
     cand, reach = closed.all_solutions(robot.dh, flange)

@@ -9,10 +9,19 @@ Lengths in mm, angles in radians.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Protocol
 
 import numpy as np
 
-__all__ = ["PARAMETERS", "DHTable", "chain", "flange_poses", "link_derivatives", "link_matrices"]
+__all__ = [
+    "PARAMETERS",
+    "DHArm",
+    "DHTable",
+    "chain",
+    "flange_poses",
+    "link_derivatives",
+    "link_matrices",
+]
 
 # Order of the four parameters of one link, used by the error vector and the error Jacobian.
 PARAMETERS = ("a", "d", "alpha", "theta")
@@ -50,6 +59,17 @@ class DHTable:
             alpha=self.alpha + errors[:, 2],
             theta_offset=self.theta_offset + errors[:, 3],
         )
+
+
+class DHArm(Protocol):
+    """What the configuration and the numerical IK read of a DH arm (``kinematics.robot.Robot``):
+    its DH table and ``phi_rad``, the A3 angle (rad) at which the A2 axis, the A3 axis and the
+    wrist point are in line (the arm stretched)."""
+
+    dh: DHTable
+
+    @property
+    def phi_rad(self) -> float: ...
 
 
 def link_matrices(theta: np.ndarray, d: float, a: float, alpha: float) -> np.ndarray:

@@ -1,15 +1,28 @@
 """What every robot model offers the rest of accugrid: the DH ``kinematics.robot.Robot`` and the
-``kinematics.urdf.UrdfRobot`` both satisfy ``RobotModel``."""
+``kinematics.urdf.UrdfRobot`` both satisfy ``RobotModel``; ``IKSolution`` is what their IK
+returns."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from accugrid.kinematics.configuration import IKSolution
+__all__ = ["IKSolution", "RobotModel", "reach_mm"]
 
-__all__ = ["RobotModel", "reach_mm"]
+
+@dataclass(frozen=True)
+class IKSolution:
+    """Result of ``Robot.ik`` for N poses (see the field comments for shapes)."""
+
+    q: np.ndarray  # (N, 6) rad, NaN rows where there is no solution
+    ok: np.ndarray  # (N,) bool
+    reason: np.ndarray  # (N,) object: "" when ok, else why not
+    # (N,) int configuration code of q: shoulder + 2 elbow + 4 wrist, the same number on any
+    # DH arm (-1 where there is no solution)
+    status: np.ndarray
+    turn: np.ndarray  # (N,) int sign code of q (-1 where there is no solution)
 
 
 @runtime_checkable
@@ -38,8 +51,8 @@ class RobotModel(Protocol):
         ...
 
     def ik(self, robot_T_tcp: np.ndarray, status=None, turn=None, reference=None) -> IKSolution:
-        """Joint solutions for TCP poses (N, 4, 4) mm; KUKA Status/Turn where the model has
-        them (-1 otherwise)."""
+        """Joint solutions for TCP poses (N, 4, 4) mm; the configuration and sign codes
+        (``kinematics.configuration``) where the model has them (-1 otherwise)."""
         ...
 
 

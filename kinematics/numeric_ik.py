@@ -16,16 +16,11 @@ Lengths in mm, angles in radians.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from accugrid.kinematics import ik as closed
 from accugrid.kinematics.configuration import HOME_RAD, Configuration
-from accugrid.kinematics.dh import DHTable, chain
-
-if TYPE_CHECKING:
-    from accugrid.kinematics.robot import Robot
+from accugrid.kinematics.dh import DHArm, DHTable, chain
 
 __all__ = ["MAX_ITERATIONS", "SEEDS", "TOL_MM", "TOL_RAD", "select", "solve", "solve_in"]
 
@@ -119,7 +114,7 @@ _ARM_TURNS = np.array([0.0, np.pi / 2, -np.pi / 2, np.pi])
 _WRIST_TURNS = np.array([0.0, np.pi / 2, np.pi, -np.pi / 2])
 
 
-def _seed(robot: Robot, wrist: np.ndarray, code: np.ndarray, reference: np.ndarray, k: int):
+def _seed(robot: DHArm, wrist: np.ndarray, code: np.ndarray, reference: np.ndarray, k: int):
     """Start joint vectors (M, 6) rad number k (0 .. SEEDS - 1) for flange poses whose wrist
     points (frame 5's origin) are ``wrist`` (M, 3) mm, aimed at configuration codes ``code``
     (M,) int, other axes from ``reference`` (M, 6) rad."""
@@ -139,7 +134,7 @@ def _seed(robot: Robot, wrist: np.ndarray, code: np.ndarray, reference: np.ndarr
 
 
 def solve_in(
-    robot: Robot, flange: np.ndarray, code: np.ndarray, reference: np.ndarray
+    robot: DHArm, flange: np.ndarray, code: np.ndarray, reference: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Joint vectors (N, 6) rad in (-pi, pi] for flange poses (N, 4, 4) mm in configurations
     ``code`` (N,) int (on a wrist singularity, |A5| < ``SINGULAR_A5_RAD``, either wrist bit
@@ -174,7 +169,7 @@ def solve_in(
     return q, found, reached
 
 
-def select(robot: Robot, flange: np.ndarray, status, reference) -> tuple[np.ndarray, ...]:
+def select(robot: DHArm, flange: np.ndarray, status, reference) -> tuple[np.ndarray, ...]:
     """The solution ``Robot.ik`` picks per flange pose (N, 4, 4) mm, before turns and limits:
     q (N, 6) rad in (-pi, pi] (NaN where none), found (N,), reachable (N,): some start reached
     the pose, whatever its configuration (with ``status``: the starts aimed at it).
@@ -194,7 +189,7 @@ def select(robot: Robot, flange: np.ndarray, status, reference) -> tuple[np.ndar
     return q, found, found
 
 
-def _every_configuration(robot: Robot, flange: np.ndarray, reference: np.ndarray):
+def _every_configuration(robot: DHArm, flange: np.ndarray, reference: np.ndarray):
     """``solve_in`` of flange poses (N, 4, 4) mm in each of the 8 configurations: joint vectors
     (N, 8, 6) rad (configuration code = index) and found (N, 8) bool."""
     n = len(flange)

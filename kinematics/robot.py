@@ -12,8 +12,8 @@ and ``joint_errors`` (compliance under gravity, transmission harmonics, thermal 
 Joint vectors are the controller's axis angles in radians (KUKA A1..A6; ABB axes 1..6 for
 ``irb6700``, as a RAPID jointtarget holds them), shape (N, 6); poses are (N, 4, 4) mm.
 
-The configuration, its codes, the branch selection of ``Robot.ik`` and ``IKSolution``:
-``kinematics.configuration``.
+The configuration, its codes and the branch selection of ``Robot.ik``:
+``kinematics.configuration``; ``IKSolution``: ``kinematics.model``.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from accugrid.infra.units import mm_text
 from accugrid.infra.yamlfile import Schema, YamlDoc, load_yaml
 from accugrid.kinematics import ik as closed
 from accugrid.kinematics import numeric_ik as numeric
-from accugrid.kinematics.configuration import IKSolution, ik_codes, ik_codes_at, select
+from accugrid.kinematics.configuration import ik_codes, ik_codes_at, select
 from accugrid.kinematics.dh import DHTable, flange_poses
 from accugrid.kinematics.frames import invert, pose_from_xyzabc, stack_times
 from accugrid.kinematics.joint_errors import (
@@ -41,7 +41,7 @@ from accugrid.kinematics.joint_errors import (
     PointMass,
     Thermal,
 )
-from accugrid.kinematics.validity import KEYS as VALIDITY_KEYS
+from accugrid.kinematics.model import IKSolution
 
 __all__ = [
     "BUILTIN",
@@ -51,6 +51,7 @@ __all__ = [
     "ROBOT_SCHEMA",
     "STRUCTURE_SCHEMA",
     "VALIDATED_MAX_KEYS",
+    "VALIDITY_KEYS",
     "Robot",
     "load_robot",
 ]
@@ -276,6 +277,14 @@ STRUCTURE_SCHEMA: Schema = {
     },
     "carry_over": {"held_out_rms_mm": _XYZ, "dh_held_out_rms_mm": _XYZ},
 }
+VALIDITY_KEYS = (  # identification.validity, read by kinematics.validity
+    "box_min_mm",
+    "box_max_mm",
+    "tool_axis",
+    "tilt_deg",
+    "joints_deg",
+    "validated_max_mm",
+)
 IDENTIFICATION_SCHEMA: Schema = {
     "robot": None,
     "measurements": {"file": None, "sha256": None},

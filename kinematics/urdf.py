@@ -30,9 +30,9 @@ import numpy as np
 from accugrid.infra.errors import InputError
 from accugrid.infra.inputfile import note_input
 from accugrid.infra.yamlfile import Schema, YamlDoc
-from accugrid.kinematics.configuration import IKSolution
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.ik import wrap
+from accugrid.kinematics.model import IKSolution
 
 __all__ = ["URDF_ROBOT_SCHEMA", "UrdfRobot", "urdf_robot_from_doc"]
 

@@ -23,14 +23,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from accugrid.infra.yamlfile import YamlDoc
+from accugrid.kinematics.robot import VALIDITY_KEYS
 
 if TYPE_CHECKING:
     from accugrid.kinematics.support import Support
 
-__all__ = ["KEYS", "SECTION", "Validity", "validity_section"]
+__all__ = ["SECTION", "Validity", "validity_section"]
 
 SECTION = ("identification", "validity")
-KEYS = ("box_min_mm", "box_max_mm", "tool_axis", "tilt_deg", "joints_deg", "validated_max_mm")
 _EPS = 1e-6  # mm / deg: this close to a bound still counts as inside
 
 
@@ -79,7 +79,7 @@ class Validity:
         if not doc.has(*SECTION):
             return None
         key = SECTION
-        doc.check_keys(dict.fromkeys(KEYS), *key)
+        doc.check_keys(dict.fromkeys(VALIDITY_KEYS), *key)
         lower = np.array([doc.number(*key, "box_min_mm", i) for i in range(3)])
         upper = np.array([doc.number(*key, "box_max_mm", i) for i in range(3)])
         axis = np.array([doc.number(*key, "tool_axis", i) for i in range(3)])

@@ -11,7 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen.cell import Cell, load_cell
+from accugrid.codegen.cell import load_cell
+from accugrid.codegen.cell_record import Cell
 from accugrid.codegen.points import parse_points
 from accugrid.compensation import GridModel
 from accugrid.infra.textsafe import fixed

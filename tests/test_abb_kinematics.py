@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from scipy.spatial.transform import Rotation
 
-from accugrid.codegen.rapid.confdata import abb_confdata, abb_quadrant, ik_confdata
+from accugrid.codegen.rapid.configuration import abb_confdata, abb_quadrant, ik_confdata
 from accugrid.kinematics.configuration import ik_codes
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import load_robot
@@ -290,7 +290,7 @@ def test_cfx_branch_is_the_pick_over_all_8_candidates(q, cfx, tool):
     """``_cfx_branch`` solves only the wrists of the arm solution cfx names where that is clear;
     its numbers must be the first match over all 8 candidates, bit for bit (cfx -1 and 8, which
     name no solution, included)."""
-    from accugrid.codegen.rapid.confdata import _cfx_branch, _cfx_candidates
+    from accugrid.codegen.rapid.configuration import _cfx_branch, _cfx_candidates
     from accugrid.kinematics import ik
 
     r = robot(tool=tool)

@@ -24,7 +24,7 @@ from rewrite_helpers import rewrite_gcode, write_cell
 from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import main
-from accugrid.codegen.rewrite import Options
+from accugrid.codegen.plugin_types import Options
 from accugrid.compensation import GridModel
 
 

@@ -24,8 +24,8 @@ from accugrid.codegen.gcode import parse, rewrite
 from accugrid.codegen.gcode.numbers import literal_values
 from accugrid.codegen.gcode.parse import gcode_moves
 from accugrid.codegen.gcode.rewrite import _bulk_block, _Commanded, _file_precision, _walk_block
+from accugrid.codegen.plugin_types import CORRECTED, Rows
 from accugrid.codegen.program_text import decimals_of, precision, split_lines
-from accugrid.codegen.rewrite import CORRECTED, Rows
 from accugrid.infra.errors import InputError
 
 NUMBER = st.one_of(

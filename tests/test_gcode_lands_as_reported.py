@@ -22,7 +22,7 @@ from test_gcode_rs274 import canonical
 from test_real_programs import HALF, T_PROGRAM, corrected, gcode_rewrite, holes
 
 from accugrid.app.jobs.rewrite import RewriteRequest, rewrite_job
-from accugrid.codegen.rewrite import STATUSES, Options
+from accugrid.codegen.plugin_types import STATUSES, Options
 
 STEEPER = linear_grid(2e-3)  # corrections that differ by 1.2 mm over 300 mm
 LOOPS = 40

@@ -17,8 +17,8 @@ from accugrid.codegen import splice
 from accugrid.codegen.bytescan import PAD, text_bytes
 from accugrid.codegen.krl import parse
 from accugrid.codegen.krl import rewrite as krl_rewrite
+from accugrid.codegen.plugin_types import Options
 from accugrid.codegen.program_text import splice as splice_text
-from accugrid.codegen.rewrite import Options
 from accugrid.compensation import GridModel
 from accugrid.infra.errors import InputError
 from accugrid.infra.textsafe import fixed

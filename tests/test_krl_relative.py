@@ -21,7 +21,7 @@ from rewrite_helpers import error_field, rewrite_krl, write_cell
 from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import main
-from accugrid.codegen.rewrite import Options
+from accugrid.codegen.plugin_types import Options
 from accugrid.compensation import GridModel
 
 HALF = 0.5e-3 * np.sqrt(3) + 1e-9  # 3 decimals, each axis off by at most half a unit

@@ -17,7 +17,8 @@ from rewrite_helpers import const_model, rewrite_krl
 
 from accugrid.codegen.dialects import plugin_of
 from accugrid.codegen.krl.rewrite import KrlPlacement
-from accugrid.codegen.rewrite import CORRECTED, Options, rewrite
+from accugrid.codegen.plugin_types import CORRECTED, Options
+from accugrid.codegen.rewrite import rewrite
 from accugrid.kinematics.frames import pose_from_xyzabc
 
 OPTS = Options(model=const_model(), tool_number=1, allow_partial=True)

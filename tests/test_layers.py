@@ -68,3 +68,70 @@ def test_a_dialect_folder_imports_no_other_dialect(dialect):
                     wrong.append(f"{path.relative_to(ROOT)}:{node.lineno} imports {name}")
     assert len(others) >= 2, "the registry's dialects are folders under codegen/"
     assert not wrong, "\n".join(wrong)
+
+
+def _module_name(path: Path) -> str:
+    """``accugrid.ROOM.MODULE`` of a source file (a package by its folder)."""
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    return ".".join(("accugrid", *(parts[:-1] if parts[-1] == "__init__" else parts)))
+
+
+def _import_graph(room: str) -> dict[str, set[str]]:
+    """Module -> the modules of the same room it imports, every import statement counted: at
+    the top, inside a function (lazy) and under ``if TYPE_CHECKING`` (a type hint); a module's
+    own packages, which Python imports before it, are left out."""
+    paths = {_module_name(p): p for p in sorted((ROOT / room).rglob("*.py"))}
+    graph = {}
+    for name, path in paths.items():
+        found = set()
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                targets = [f"{node.module}.{a.name}" for a in node.names] + [node.module]
+            elif isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            else:
+                continue
+            for target in targets:
+                while target and target not in paths:
+                    target = target.rpartition(".")[0]
+                if target and target != name and not name.startswith(f"{target}."):
+                    found.add(target)
+                    break
+        graph[name] = found
+    return graph
+
+
+def _cycle(graph: dict[str, set[str]]) -> list[str]:
+    """One import circle of ``graph`` (module names, the first repeated at the end), or []."""
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
+    path: list[str] = []
+
+    def visit(node: str) -> list[str]:
+        state[node] = 1
+        path.append(node)
+        for nxt in sorted(graph[node]):
+            if state.get(nxt) == 1:
+                return [*path[path.index(nxt) :], nxt]
+            if nxt not in state and (found := visit(nxt)):
+                return found
+        state[node] = 2
+        path.pop()
+        return []
+
+    for start in sorted(graph):
+        if start not in state and (found := visit(start)):
+            return found
+    return []
+
+
+def test_the_cycle_finder_finds_a_circle_and_passes_a_chain():
+    assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert _cycle({"a": {"b", "c"}, "b": {"c"}, "c": set()}) == []
+
+
+@pytest.mark.parametrize("room", ORDER)
+def test_no_import_circle_within_a_room(room):
+    """No module imports itself round a circle, not even by a type hint or a lazy import (such
+    a circle works only as long as nobody moves an import)."""
+    circle = _cycle(_import_graph(room))
+    assert not circle, " -> ".join(circle)

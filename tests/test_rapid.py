@@ -20,7 +20,7 @@ from rewrite_helpers import RAPID_BASE as BASE
 from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import main
-from accugrid.codegen.rapid.confdata import abb_confdata, ik_confdata
+from accugrid.codegen.rapid.configuration import abb_confdata, ik_confdata
 from accugrid.codegen.rapid.rewrite import code_of_cfx
 from accugrid.kinematics.configuration import ik_codes
 from accugrid.kinematics.robot import load_robot

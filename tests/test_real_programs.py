@@ -21,7 +21,7 @@ from test_gcode_rs274 import MOVE_RE, canonical
 
 from accugrid.app.cli import main
 from accugrid.codegen.krl.parse import scan_krl
-from accugrid.codegen.rewrite import Options
+from accugrid.codegen.plugin_types import Options
 from accugrid.compensation import GridModel
 
 BASE2 = (100.0, 50.0, 0.0, 90.0, 0.0, 0.0)  # robot_T_base of BASE_DATA[2]

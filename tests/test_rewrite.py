@@ -23,7 +23,7 @@ from scipy.spatial.transform import Rotation
 from accugrid.app.cli import main
 from accugrid.codegen.gcode.parse import parse_gcode
 from accugrid.codegen.krl.parse import parse_krl
-from accugrid.codegen.rewrite import Options
+from accugrid.codegen.plugin_types import Options
 from accugrid.compensation import GridModel
 
 BASE2 = (100.0, 50.0, 0.0, 90.0, 0.0, 0.0)  # robot_T_base of BASE_DATA[2]

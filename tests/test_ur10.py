@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from accugrid.app.cli import main
-from accugrid.codegen.rapid.confdata import ik_confdata
+from accugrid.codegen.rapid.configuration import ik_confdata
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.configuration import ik_codes, wrist_points_of
 from accugrid.kinematics.frames import pose_from_xyzabc

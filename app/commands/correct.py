@@ -142,7 +142,12 @@ def run(args: argparse.Namespace) -> int:
     model_file = args.model if args.model and Path(args.model).is_file() else None
     targets = [args.output] + ([args.report_html] if args.report_html else [])
     check_targets(targets, [args.points, args.grid, model_file], args.force)
-    job = correct_points(request)
+    if request.model is not None:
+        from accugrid.app.jobs.correct_model import correct_by_model  # only when asked: slower
+
+        job = correct_by_model(request)
+    else:
+        job = correct_points(request)
     write_files(job.files, job.inputs, args.force)
     for line in job.warnings:
         print(f"accugrid correct: warning: {line}", file=sys.stderr)

@@ -222,15 +222,12 @@ class CorrectRequest:
 
 
 def correct_points(request: CorrectRequest) -> JobFiles:
-    """The whole ``accugrid correct`` job: the corrected-points CSV and the printed summary.
-    InputError (nothing to write) on bad input, a correction beyond the safety limit, or a
-    point the policy does not correct (outside the grid, orientation beyond the limit, another
-    Status than the grid's) unless ``allow_partial``."""
+    """The ``accugrid correct`` job with the grid alone (with a model: ``correct_model``): the
+    corrected-points CSV and the printed summary. InputError (nothing to write) on bad input, a
+    correction beyond the safety limit, or a point the policy does not correct (outside the
+    grid, orientation beyond the limit, another Status than the grid's) unless
+    ``allow_partial``."""
     request.policy.check()
-    if request.model is not None:
-        from accugrid.app.jobs.correct_model import correct_by_model  # only when asked: slower
-
-        return correct_by_model(request)
     if request.grid is None:
         raise InputError("give --grid MEAS, --model CAL.yaml or both")
     settings = request.correction

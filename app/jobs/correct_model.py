@@ -69,9 +69,10 @@ def point_orientations(points: Points, reference_abc: np.ndarray) -> np.ndarray:
 
 
 def correct_by_model(request: CorrectRequest) -> JobFiles:
-    """The ``correct`` job with a model (``correct_points`` dispatches here): the corrected CSV
-    and the printed summary; InputError naming the first point not corrected (unless
-    ``allow_partial``)."""
+    """The ``correct`` job with a model (``corrected.correct_points`` without one): the
+    corrected CSV and the printed summary; InputError naming the first point not corrected
+    (unless ``allow_partial``)."""
+    request.policy.check()
     settings, model_file = request.correction, request.model
     is_file = Path(model_file).is_file()
     model = read_model(model_file)

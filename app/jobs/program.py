@@ -13,7 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen.cell import Cell, load_cell
+from accugrid.codegen.cell import load_cell
+from accugrid.codegen.cell_record import Cell
 from accugrid.codegen.correction import cell_grid, read_model
 from accugrid.codegen.dialects import check_serves, plugin_of
 from accugrid.codegen.header import grid_lines, header_lines, input_line

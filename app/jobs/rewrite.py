@@ -17,19 +17,9 @@ import numpy as np
 from accugrid.codegen.cell import load_cell
 from accugrid.codegen.correction import cell_grid, policy_for, read_model
 from accugrid.codegen.dialects import check_serves, dialect_of, plugin_of
+from accugrid.codegen.plugin_types import CORRECTED, OUTSIDE, SKIPPED, Options, ProgramContext
 from accugrid.codegen.program_text import read_program
-from accugrid.codegen.rewrite import (
-    CORRECTED,
-    OUTSIDE,
-    SKIPPED,
-    Options,
-    ProgramContext,
-    Result,
-    header_lines,
-    report_csv,
-    rewrite,
-    warning_lines,
-)
+from accugrid.codegen.rewrite import Result, header_lines, report_csv, rewrite, warning_lines
 from accugrid.compensation.policy import PolicyRequest
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 
@@ -168,8 +158,8 @@ def _html_report(req: RewriteRequest, rows, read: list[Path], files, cell, polic
         checks_text,
         correction_report,
     )
-    from accugrid.codegen.rewrite import CORRECTED as DONE
-    from accugrid.codegen.rewrite import OUTSIDE
+    from accugrid.codegen.plugin_types import CORRECTED as DONE
+    from accugrid.codegen.plugin_types import OUTSIDE
     from accugrid.infra.digest import sha256_hex
 
     state = np.full(len(rows.line), SKIPPED, np.int8)

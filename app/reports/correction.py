@@ -50,7 +50,7 @@ def verdict_states(verdict: Verdict) -> tuple[np.ndarray, list[str]]:
 
 
 def cell_setup(cell) -> list[tuple[str, str]]:
-    """The robot, tool, base and cell file of a ``codegen.cell.Cell``: (key, text) lines, the
+    """The robot, tool, base and cell file of a ``codegen.cell_record.Cell``: (key, text) lines, the
     tool (flange_T_tool) and base (robot_T_base) as their number in the cell, x, y, z mm and
     a, b, c deg as the cell file writes them."""
     from accugrid.kinematics.frames import xyzabc_from_pose

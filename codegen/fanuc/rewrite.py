@@ -28,9 +28,10 @@ from accugrid.codegen.fanuc.configuration import read_configuration, words_of_co
 from accugrid.codegen.fanuc.emit import header_remarks
 from accugrid.codegen.fanuc.parse import LsProgram, read_ls
 from accugrid.codegen.program_text import MIN_PLACES_MM, check_text, precision
-from accugrid.codegen.rewrite import CORRECTED, Options, Rows, Scan, rotations_of
+from accugrid.codegen.plugin_types import CORRECTED, Options, Rows, Scan
 from accugrid.codegen.splice import ByteSplicer, literals
 from accugrid.infra.errors import InputError
+from accugrid.kinematics.frames import abc_to_matrix
 
 __all__ = ["FanucPlacement", "add_header", "scan_positions", "splice_positions"]
 
@@ -199,7 +200,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: FanucPlaceme
         mine = np.flatnonzero(found.frame >= 0)
         t = frames[found.frame[mine]]
         robot.append(np.einsum("nij,nj->ni", t[:, :3, :3], xyz[mine]) + t[:, :3, 3])
-        rotations.append(rotations_of(t[:, :3, :3], wpr[mine][:, ::-1]))  # A, B, C = R, P, W
+        rotations.append(t[:, :3, :3] @ abc_to_matrix(wpr[mine][:, ::-1]))  # A, B, C = R, P, W
         status.append(_codes([positions[i].config for i in mine.tolist()]))
         at.append(start + mine)
         parts.append(rows)

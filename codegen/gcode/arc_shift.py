@@ -25,7 +25,8 @@ import numpy as np
 
 from accugrid.codegen.gcode.arc import PLANE_AXES, arc_centres, arc_samples
 from accugrid.codegen.gcode.parse import AXES, GcodeMoves
-from accugrid.codegen.rewrite import CORRECTED, SKIPPED, Options, Rows, correct_points, rotations_of
+from accugrid.codegen.plugin_types import CORRECTED, SKIPPED, Options, Rows
+from accugrid.codegen.rewrite import correct_points, rotations_of
 from accugrid.infra.textsafe import fixed
 from accugrid.kinematics.frames import rows_times, transform_points
 

@@ -26,7 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from accugrid.codegen.cell import Cell
+from accugrid.codegen.cell_record import Cell
 from accugrid.codegen.linebytes import (
     SLOT,
     image_bytes,

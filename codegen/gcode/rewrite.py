@@ -31,6 +31,7 @@ import numpy as np
 from accugrid.codegen.gcode.arc_shift import shift_arcs
 from accugrid.codegen.gcode.parse import RESETS, GcodeMoves, gcode_moves, modal_fill, polar_xy
 from accugrid.codegen.gcode.section import GcodeSection
+from accugrid.codegen.plugin_types import CORRECTED, SKIPPED, Options, Rows, Scan
 from accugrid.codegen.program_text import (
     MIN_PLACES_INCH,
     MIN_PLACES_MM,
@@ -41,15 +42,7 @@ from accugrid.codegen.program_text import (
     number_text,
     precision,
 )
-from accugrid.codegen.rewrite import (
-    CORRECTED,
-    SKIPPED,
-    Options,
-    Rows,
-    Scan,
-    correct_points,
-    rotations_of,
-)
+from accugrid.codegen.rewrite import correct_points, rotations_of
 from accugrid.codegen.splice import ByteSplicer, texts_of
 from accugrid.infra.textsafe import fixed, fixed_bytes
 from accugrid.kinematics.frames import rows_times, transform_points

@@ -39,7 +39,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from accugrid.codegen.cell import Cell
+from accugrid.codegen.cell_record import Cell
 from accugrid.codegen.krl.configuration import configuration_words
 from accugrid.codegen.linebytes import SLOT, image_bytes, line_image, number_cells, text_cells
 from accugrid.codegen.plugin import MeasureSettings, Rendered
@@ -510,8 +510,8 @@ class _Records:
         """KUKA Status and Turn (hi - lo, stages, 2) of holes lo..hi-1: the .dat needs them (the
         .src does not), so this is where a job waits for the program's IK check to reach
         them (``Program.configuration_of``)."""
-        configuration = self.program.configuration_of(lo, hi)[:, self.stages]
-        return configuration_words(configuration).astype(np.int16)  # S 0..7, T 0..63
+        words = configuration_words(self.program.configuration_of(lo, hi))  # S 0..7, T 0..63
+        return words[:, self.stages].astype(np.int16)
 
     def _block_of(self, lo: int, hi: int) -> tuple[int, SimpleNamespace]:
         """The first hole and the block that holds holes lo..hi-1 (a new one when a file first

@@ -40,6 +40,7 @@ from accugrid.codegen.krl.parse import (
 from accugrid.codegen.krl.relative import Chains, resolve, write_increments
 from accugrid.codegen.krl.routines import call_effects, routine_starts
 from accugrid.codegen.krl.tables import MOTION, PositionTable
+from accugrid.codegen.plugin_types import CORRECTED, Options, Rows, Scan
 from accugrid.codegen.program_text import (
     MIN_PLACES_MM,
     UTF8_BOM,
@@ -48,7 +49,7 @@ from accugrid.codegen.program_text import (
     insert_after_lines,
     precision,
 )
-from accugrid.codegen.rewrite import CORRECTED, Options, Rows, Scan, rotations_of
+from accugrid.codegen.rewrite import rotations_of
 from accugrid.codegen.splice import ByteSplicer, literals
 from accugrid.kinematics.frames import pose_from_xyzabc, rotation_angle_deg
 

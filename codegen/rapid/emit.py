@@ -4,7 +4,7 @@ Every pose is a ``CONST robtarget p<n>_APP|CLR|BOT|RET`` (n: the hole's number i
 the cell's work object (``rapid.wobj``, its user frame the cell's base frame), with the
 orientation as a unit quaternion [q1, q2, q3, q4] (q1 the scalar part, q1 >= 0, 9 decimals:
 |q| = 1 within 1e-9) and the confdata [cf1, cf4, cf6, cfx] of the joint angles the program's IK
-check solved the pose with (``codegen.rapid.confdata.abb_confdata``); unused external axes are
+check solved the pose with (``codegen.rapid.configuration.abb_confdata``); unused external axes are
 9E+09. Each hole: MoveJ to the approach point (``vTravel``, ``zTravel``), MoveL to the clearance
 point (``vApproach``, fine), MoveL at the hole's feed to the bottom (fine), WaitTime dwell, MoveL
 to the retract point; the spindle output is set before the first hole and reset after the last.
@@ -23,7 +23,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from accugrid.codegen.program import STAGES, Program
-from accugrid.codegen.rapid.confdata import abb_confdata
+from accugrid.codegen.rapid.configuration import abb_confdata
 from accugrid.codegen.rapid.names import rapid_name_problem
 from accugrid.codegen.render import (
     environment,

@@ -40,6 +40,7 @@ from itertools import repeat
 
 import numpy as np
 
+from accugrid.codegen.plugin_types import CORRECTED, Options, Rows, Scan
 from accugrid.codegen.program_text import (
     MIN_PLACES_MM,
     check_text,
@@ -47,9 +48,8 @@ from accugrid.codegen.program_text import (
     distinct_ints,
     precision,
 )
-from accugrid.codegen.rapid.confdata import read_configuration
+from accugrid.codegen.rapid.configuration import read_configuration
 from accugrid.codegen.rapid.rigid import RigidModule, read_rigid
-from accugrid.codegen.rewrite import CORRECTED, Options, Rows, Scan
 from accugrid.codegen.splice import ByteSplicer, texts_of
 from accugrid.infra.errors import InputError
 from accugrid.infra.textsafe import fixed_bytes
@@ -962,7 +962,7 @@ def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[s
 
 def code_of_cfx(cfx: np.ndarray) -> np.ndarray:
     """The configuration code (N,) of the arm configuration a confdata's cfx (N,) names
-    (``confdata.read_configuration``; -1 where cfx is not 0..7), so that the policy holds each
+    (``configuration.read_configuration``; -1 where cfx is not 0..7), so that the policy holds each
     robtarget against the configuration its grid was measured in."""
     cfx = np.asarray(cfx, dtype=np.int64)
     confdata = np.zeros((len(cfx), 4), np.int64)

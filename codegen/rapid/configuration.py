@@ -21,12 +21,12 @@ from accugrid.kinematics.configuration import (
     OFF_AXIS_MM,
     QUARTER_RAD,
     Configuration,
-    IKSolution,
     arm_flags,
     wrist_points_of,
 )
 
 if TYPE_CHECKING:
+    from accugrid.kinematics.model import IKSolution
     from accugrid.kinematics.robot import Robot
 
 __all__ = [
