@@ -27,8 +27,8 @@ import numpy as np
 from accugrid.codegen.fanuc.configuration import read_configuration, words_of_config
 from accugrid.codegen.fanuc.emit import header_remarks
 from accugrid.codegen.fanuc.parse import LsProgram, read_ls
-from accugrid.codegen.program_text import MIN_PLACES_MM, check_text, precision
 from accugrid.codegen.plugin_types import CORRECTED, Options, Rows, Scan
+from accugrid.codegen.program_text import MIN_PLACES_MM, check_text, precision
 from accugrid.codegen.splice import ByteSplicer, literals
 from accugrid.infra.errors import InputError
 from accugrid.kinematics.frames import abc_to_matrix
