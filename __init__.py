@@ -58,6 +58,8 @@ def _metadata_version(folder: str, kind: str) -> str | None:
 
 __version__ = _version()
 
+from accugrid.codegen.dialects import EXPORTS  # noqa: E402 - accugrid.codegen reads __version__
+
 # the names a script needs, by the package that lists (and lazily imports) them
 _PUBLIC = {
     "accugrid.infra": ("InputError", "TableFormat"),
@@ -90,8 +92,7 @@ _PUBLIC = {
         "load_cell",
         "Program",
         "build_program",
-        "render_krl",
-        "render_gcode",
+        *EXPORTS,  # each dialect's renderer, as its plug-in declares (``codegen.dialects``)
     ),
 }
 _API = {name: package for package, names in _PUBLIC.items() for name in names}

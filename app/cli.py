@@ -1,8 +1,10 @@
 """The ``accugrid`` command line.
 
 Every module in ``app/commands/`` is one subcommand: it defines ``NAME``,
-``add_arguments(parser)`` and ``run(args) -> int``; ``commands.COMMANDS`` lists them with their
-help. Only the module of the command that runs is imported (``accugrid --help`` imports none).
+``add_arguments(parser)`` and ``run(args) -> int``, or gives them as ``command(name)``
+(``program``: one command per dialect; ``rewrite``: its help from every dialect's);
+``commands.COMMANDS`` lists them with their help. Only the module of the command that runs is
+imported (``accugrid --help`` imports none).
 Exit codes (docs/guarantees.md): 0 success, 2 bad input or arguments (one line naming file, line and
 column, no traceback), 1 internal error, 128 + the signal's number when SIGINT, SIGTERM or SIGHUP
 ends the command (one line, no traceback, from the first statement of ``main`` on: the imports of
@@ -47,14 +49,15 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
             sub.add_parser(name, help=help_text, add_help=False)
             continue
         module = importlib.import_module(f"accugrid.app.commands.{module_name}")
+        command = module.command(name) if hasattr(module, "command") else module
         cmd = sub.add_parser(
             name,
             help=help_text,
-            description=module.__doc__,
+            description=command.__doc__,
             formatter_class=argparse.RawDescriptionHelpFormatter,
         )
-        module.add_arguments(cmd)
-        cmd.set_defaults(handler=module.run)
+        command.add_arguments(cmd)
+        cmd.set_defaults(handler=command.run)
     return parser
 
 

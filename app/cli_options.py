@@ -481,9 +481,9 @@ def reading_format(args: argparse.Namespace) -> AbstractContextManager[None]:
 
 
 def add_program_arguments(
-    parser: argparse.ArgumentParser, output_metavar: str, output: str
+    parser: argparse.ArgumentParser, dialect: str, output_metavar: str, output: str
 ) -> None:
-    """The options of every program command (``accugrid krl|gcode|rapid``); ``-o`` with the
+    """The options of the program command of ``dialect`` (``commands.program``); ``-o`` with the
     command's metavar and help."""
     parser.add_argument("points", metavar="POINTS", help="drilling points CSV (BASE frame, mm)")
     parser.add_argument("--cell", required=True, metavar="CELL", help="cell YAML file")
@@ -513,7 +513,7 @@ def add_program_arguments(
         "--templates",
         metavar="DIR",
         help="folder with your copies of the templates (a copy of templates/ or of its "
-        "krl/ or gcode/ folder)",
+        f"{dialect}/ folder)",
     )
     add_policy(parser, "holes")
     parser.add_argument(

@@ -40,8 +40,7 @@ from bench.timing import table  # noqa: E402
 
 REALWORLD = ROOT.parent / "shared" / "realworld"
 MODEL = ROOT / "out" / "model" / "calibrated.yaml"
-_FLAGS = {"--trust-calls": "trust_calls", "--ignore-external-axes": "ignore_external_axes"}
-_VALUES = {"--base": "base", "--decimals": "decimals"}
+_FLAGS = ("--trust-calls", "--ignore-external-axes")  # the dialects' own switches
 # what varies inside one kind of reason: numbers, quoted text, names with digits or brackets
 _VARYING = re.compile(r"'[^']*'|\"[^\"]*\"|\b\w*\d[\w.]*|\w+\[[^\]]*\](?:\.\w+)*")
 
@@ -49,12 +48,17 @@ _VARYING = re.compile(r"'[^']*'|\"[^\"]*\"|\b\w*\d[\w.]*|\w+\[[^\]]*\](?:\.\w+)*
 def _request(cell: Path, inputs: list[Path], options: list[str], out: Path, model) -> dict:
     """The RewriteRequest fields of one case (the realworld tests' command-line options)."""
     fields = {"cell": str(cell), "policy": PolicyRequest(allow_partial=True), "model": model}
+    own = {}  # the dialects' own options (``RewriteRequest.options``)
     it = iter(options)
     for option in it:
+        key = option.lstrip("-").replace("-", "_")
         if option in _FLAGS:
-            fields[_FLAGS[option]] = True
+            own[key] = True
+        elif option == "--decimals":
+            fields[key] = int(next(it))
         else:
-            fields[_VALUES[option]] = int(next(it))
+            own[key] = int(next(it))
+    fields["options"] = own
     fields["outputs"] = {p: out / p.name for p in inputs}
     return fields
 

@@ -1,9 +1,10 @@
 """Programs: the points and cell files, the neutral program model and the dialects (one folder
-each: KRL, G-code, RAPID). The names of ``__all__`` besides ``__version__`` are imported on
-first use; a dialect's renderer (``render_krl``, ``render_gcode``: its plug-in's ``exports``)
-through the registry, ``codegen.dialects``."""
+each, registered in ``codegen.dialects``). The names of ``__all__`` besides ``__version__`` are
+imported on first use; the names a dialect's plug-in exports (``EXPORTS``, its renderer)
+through the registry."""
 
 from accugrid import __version__
+from accugrid.codegen.dialects import EXPORTS
 from accugrid.infra.exports import lazy_namespace
 
 _API = {
@@ -14,8 +15,7 @@ _API = {
     "load_cell": "accugrid.codegen.cell",
     "Program": "accugrid.codegen.program",
     "build_program": "accugrid.codegen.program",
-    "render_krl": "accugrid.codegen.dialects",
-    "render_gcode": "accugrid.codegen.dialects",
+    **dict.fromkeys(EXPORTS, "accugrid.codegen.dialects"),
 }
 __all__ = ["__version__", *_API]
 __getattr__, __dir__ = lazy_namespace(__name__, _API)

@@ -4,8 +4,8 @@ A dialect is a plug-in (``codegen.plugin.DialectPlugin``): the folder ``codegen/
 ``plugin.py`` with ``PLUGIN``, emitter, reader and rewrite, cell section), ``templates/<name>/``
 and a command. It is registered here by one line naming its ``plugin`` module; nothing else
 branches on its name. A file whose suffix no dialect claims is refused instead of being guessed.
-The library names a dialect's folder defines (its plug-in's ``exports``, e.g. ``render_krl``)
-are resolved here, so ``accugrid.codegen`` lists them without naming a dialect's module.
+The library names a dialect's folder defines (its plug-in's ``exports``, ``EXPORTS``) are
+resolved here, so ``accugrid.codegen`` lists them without naming a dialect's module.
 """
 
 from __future__ import annotations
@@ -22,25 +22,35 @@ if TYPE_CHECKING:
     from accugrid.codegen.plugin import DialectPlugin
     from accugrid.kinematics.model import RobotModel
 
-__all__ = ["DIALECTS", "Dialect", "check_serves", "dialect_of", "plugin_of"]
+__all__ = [
+    "DIALECTS",
+    "EXPORTS",
+    "Dialect",
+    "check_serves",
+    "dialect_of",
+    "measuring",
+    "plugin_of",
+    "programs_text",
+]
 
 
 @dataclass(frozen=True)
 class Dialect:
-    """name (the ``codegen`` and ``templates`` folder), what it is, its file suffixes and the
-    module holding its ``PLUGIN``."""
+    """name (the ``codegen`` and ``templates`` folder), what it is, its file suffixes, the
+    module holding its ``PLUGIN`` and the library names it exports."""
 
     name: str
     title: str
     suffixes: tuple[str, ...]
     plugin: str
+    exports: tuple[str, ...] = ()
 
     @classmethod
     def of_plugin(cls, module: str) -> Dialect:
-        """The entry of the plug-in in ``module`` (a light module: its name, title and suffixes
-        are read here, at start-up)."""
+        """The entry of the plug-in in ``module`` (a light module: its name, title, suffixes and
+        exports are read here, at start-up)."""
         plugin = importlib.import_module(module).PLUGIN
-        return cls(plugin.name, plugin.title, tuple(plugin.suffixes), module)
+        return cls(plugin.name, plugin.title, tuple(plugin.suffixes), module, plugin.exports)
 
 
 DIALECTS = {
@@ -55,13 +65,15 @@ DIALECTS = {
         ),
     )
 }
+EXPORTS = tuple(name for dialect in DIALECTS.values() for name in dialect.exports)
+"""The library names the dialects' plug-ins export (``accugrid.codegen`` lists them)."""
 
 
 def __getattr__(name: str) -> object:
     """The library name ``name`` some dialect's plug-in exports, from that dialect's ``emit``
     module (PEP 562)."""
     for dialect in DIALECTS.values():
-        if name in plugin_of(dialect.name).exports:
+        if name in dialect.exports:
             folder = dialect.plugin.rpartition(".")[0]
             return getattr(importlib.import_module(f"{folder}.emit"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
@@ -72,6 +84,18 @@ def plugin_of(name: str) -> DialectPlugin:
     return importlib.import_module(DIALECTS[name].plugin).PLUGIN
 
 
+def programs_text() -> str:
+    """The programs accugrid reads, each dialect's title and suffixes ("KUKA KRL .src .dat
+    .sub; ...")."""
+    return "; ".join(f"{d.title} {' '.join(d.suffixes)}" for d in DIALECTS.values())
+
+
+def measuring() -> list[str]:
+    """The names of the dialects that write laser-tracker measurement programs
+    (``DialectPlugin.measures``), in the registry's order."""
+    return [name for name in DIALECTS if plugin_of(name).measures]
+
+
 def dialect_of(path: str | os.PathLike[str]) -> str:
     """The name of the dialect whose suffixes include ``path``'s (case-insensitive); InputError
     naming the known suffixes otherwise."""
@@ -79,9 +103,9 @@ def dialect_of(path: str | os.PathLike[str]) -> str:
     for dialect in DIALECTS.values():
         if suffix in dialect.suffixes:
             return dialect.name
-    known = "; ".join(f"{d.title} {' '.join(d.suffixes)}" for d in DIALECTS.values())
     raise InputError(
-        f"unknown program type {suffix or '(no suffix)'!r}: known are {known}", os.fspath(path)
+        f"unknown program type {suffix or '(no suffix)'!r}: known are {programs_text()}",
+        os.fspath(path),
     )
 
 

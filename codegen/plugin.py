@@ -33,7 +33,65 @@ if TYPE_CHECKING:
     from accugrid.kinematics.configuration import Configuration
     from accugrid.kinematics.model import RobotModel
 
-__all__ = ["DialectFolder", "DialectPlugin", "MeasureSettings", "MeasurementWriter", "Rendered"]
+__all__ = [
+    "EXTERNAL_AXES",
+    "DialectFolder",
+    "DialectOption",
+    "DialectPlugin",
+    "MeasureSettings",
+    "MeasurementWriter",
+    "DialectHelp",
+    "Rendered",
+]
+
+
+@dataclass(frozen=True)
+class DialectHelp:
+    """What the command line says of a dialect. Its program command (``accugrid NAME``: a new
+    program from a points CSV): ``summary`` (its line in ``accugrid --help``), ``description``
+    (its ``--help`` text), ``output`` (the metavar and help of its ``-o``), ``report`` (the
+    title of its HTML report); ``rewrite``: its paragraph in ``accugrid rewrite --help`` (what
+    is corrected in its programs and what is left); ``measure``: its measurement program's
+    paragraph in ``accugrid plan --help`` ("" when it writes none)."""
+
+    summary: str
+    description: str
+    output: tuple[str, str]
+    report: str
+    rewrite: str
+    measure: str = ""
+
+
+@dataclass(frozen=True)
+class DialectOption:
+    """An option of ``accugrid rewrite`` read by the programs of the dialects that declare it
+    (``DialectPlugin.options``) only: a switch (``metavar`` None: False unless given), a whole
+    number within ``whole`` (low, high), or else a file, whose text (read as a program's) the
+    job hands over and counts among its inputs. Its value reaches ``placement`` as
+    ``ProgramContext.options[key]`` (None: not given)."""
+
+    flag: str
+    help: str
+    metavar: str | None = None
+    whole: tuple[int, int] | None = None
+
+    @property
+    def key(self) -> str:
+        """The option's name in ``ProgramContext.options`` (``--config-dat``: ``config_dat``)."""
+        return self.flag.lstrip("-").replace("-", "_")
+
+    @property
+    def file(self) -> bool:
+        """Whether its value is a file."""
+        return self.metavar is not None and self.whole is None
+
+
+EXTERNAL_AXES = DialectOption(
+    "--ignore-external-axes",
+    "correct positions with external axes in use: the external axes move neither the robot "
+    "nor the base",
+)
+"""The option of the dialects whose positions carry external axes."""
 
 
 @dataclass
@@ -108,7 +166,10 @@ class DialectPlugin(Protocol):
       a KRL ``.src`` and ``.dat``), None when one file is a program; ``joints``: its
       configuration words need every pose's joint angles (``Program.joints``); ``exports``:
       the names of its ``emit`` module the library exports (``accugrid.render_krl``), resolved
-      through the registry; ``serves(robot)``: whether its programs drive ``robot`` (by the
+      through the registry; ``help``: what the command line says of it
+      (``DialectHelp``); ``options``: its own options of ``accugrid rewrite``
+      (``DialectOption``); ``measures``: it writes measurement programs (``measurement()``);
+      ``serves(robot)``: whether its programs drive ``robot`` (by the
       maker of the robot's controller, ``RobotModel.controller``; a robot that does not say is
       served).
     - ``section_keys()``, ``read_section(reader, robot_T_base)``: the YAML keys of its cell
@@ -149,6 +210,9 @@ class DialectPlugin(Protocol):
     pair: tuple[str, str] | None
     joints: bool
     exports: tuple[str, ...]
+    help: DialectHelp
+    options: tuple[DialectOption, ...]
+    measures: bool
 
     def serves(self, robot: RobotModel) -> bool: ...
 
@@ -204,8 +268,9 @@ class DialectFolder:
     ``read_configuration``; a folder without it names no configuration); the names in
     ``exports`` are its ``emit.py``'s (none by default); ``controllers``: the makers of the
     robot controllers its programs drive (``RobotModel.controller``, lower case; none: every
-    robot). A plug-in derives from it and adds its name, suffixes, ``targets``, ``plan``,
-    ``render`` and ``placement`` (and ``measurement`` when it writes measurement programs)."""
+    robot). A plug-in derives from it and adds its name, suffixes, ``help``, ``targets``,
+    ``plan``, ``render`` and ``placement`` (and ``measurement`` with ``measures`` when it writes
+    measurement programs, ``options`` when it reads options of its own)."""
 
     name: str
     title: str
@@ -213,6 +278,8 @@ class DialectFolder:
     joints: bool = False
     exports: tuple[str, ...] = ()
     controllers: tuple[str, ...] = ()
+    options: tuple[DialectOption, ...] = ()
+    measures = False
 
     def serves(self, robot: RobotModel) -> bool:
         return not self.controllers or not robot.controller or robot.controller in self.controllers

@@ -8,8 +8,9 @@ found). Plain records over the correction policy (``compensation``): they import
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from copy import copy
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from itertools import chain
 from typing import TYPE_CHECKING
 
@@ -80,17 +81,15 @@ class Options:
 
 @dataclass(frozen=True)
 class ProgramContext:
-    """What the command line says about a program's frames that its own text does not; each
-    dialect's ``placement`` reads what applies to it. ``base``: the base (BASE_DATA number, 0
-    the robot frame) in effect where the program sets none; ``trust_calls``: calls to other
-    routines keep the base; ``ignore_external_axes``: positions with external axes in use are
-    corrected (the axes move neither robot nor base); ``controller_data``: the text of a
-    controller file with frame values (KRL ``$config.dat``), None without one."""
+    """What the command line says about a program's frames that its own text does not: the
+    values of its dialect's own options (``DialectPlugin.options``) by key, a file option's as
+    the file's text; a key not given is None (a switch: False). Each dialect's ``placement``
+    reads its own."""
 
-    base: int | None = None
-    trust_calls: bool = False
-    ignore_external_axes: bool = False
-    controller_data: str | None = None
+    options: Mapping[str, object] = field(default_factory=dict)
+
+    def __getitem__(self, key: str) -> object:
+        return self.options.get(key)
 
 
 @dataclass(slots=True)

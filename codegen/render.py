@@ -2,8 +2,9 @@
 
 StrictUndefined (a misspelt variable is an error, never an empty string), no autoescaping (the
 output is not HTML), and numbers and user text only through the ``infra.textsafe`` filters:
-``fixed`` (numbers), ``comment`` (user text inside a comment), ``ident`` (KRL names). A template
-error (in a user's ``--templates`` copy) is an InputError naming the template file and line.
+``fixed`` (numbers), ``comment`` (user text inside a comment), and a dialect's own (its names).
+A template error (in a user's ``--templates`` copy) is an InputError naming the template file
+and line.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import contextlib
 import functools
 import os
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import jinja2
@@ -20,7 +21,7 @@ import jinja2.meta
 
 from accugrid.infra.errors import InputError
 from accugrid.infra.inputfile import note_input
-from accugrid.infra.textsafe import comment_text, fixed, krl_identifier
+from accugrid.infra.textsafe import comment_text, fixed
 from accugrid.templates import TEMPLATE_DIR
 
 __all__ = [
@@ -47,16 +48,21 @@ def template_dir(dialect: str, templates: str | os.PathLike[str] | None = None) 
     return root / dialect if (root / dialect).is_dir() else root
 
 
-def environment(folder: Path, newline: str = "\n") -> jinja2.Environment:
-    """A strict environment loading from ``folder``; ``newline`` is the output line ending.
-    One per folder and line ending in a process, so each template is compiled once (Jinja
+def environment(
+    folder: Path, newline: str = "\n", filters: tuple[tuple[str, Callable], ...] = ()
+) -> jinja2.Environment:
+    """A strict environment loading from ``folder``; ``newline`` is the output line ending;
+    ``filters``: the dialect's own (name, function) besides ``fixed`` and ``comment``. One per
+    folder, line ending and filters in a process, so each template is compiled once (Jinja
     reloads a template whose file changed)."""
     note_input(folder)  # templates are inputs: no output may replace them
-    return _environment(os.fspath(folder), newline)
+    return _environment(os.fspath(folder), newline, filters)
 
 
 @functools.lru_cache(maxsize=16)
-def _environment(folder: str, newline: str) -> jinja2.Environment:
+def _environment(
+    folder: str, newline: str, filters: tuple[tuple[str, Callable], ...]
+) -> jinja2.Environment:
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(folder),
         undefined=jinja2.StrictUndefined,
@@ -68,7 +74,7 @@ def _environment(folder: str, newline: str) -> jinja2.Environment:
     )
     env.filters["fixed"] = fixed
     env.filters["comment"] = comment_text
-    env.filters["ident"] = krl_identifier
+    env.filters.update(filters)
     return env
 
 

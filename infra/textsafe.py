@@ -5,8 +5,6 @@
   fixed-point formatter; never ``str(float)`` or ``%g`` in
   a program. ``fixed_same``: whether two numbers print the same.
 - ``comment_text``: user text made harmless inside a one-line comment of any dialect.
-- ``krl_identifier``: a valid KRL name ([A-Za-z_][A-Za-z0-9_]*, at most 24 characters, not a
-  reserved word: ``KRL_RESERVED``).
 """
 
 from __future__ import annotations
@@ -20,8 +18,6 @@ import numpy as np
 
 __all__ = [
     "COMMENT_MAX",
-    "KRL_NAME_MAX",
-    "KRL_RESERVED",
     "comment_text",
     "comment_texts",
     "fixed",
@@ -29,26 +25,13 @@ __all__ = [
     "fixed_many",
     "fixed_same",
     "fixed_texts",
-    "krl_identifier",
 ]
 
-KRL_NAME_MAX = 24
-KRL_RESERVED = frozenset(
-    """AND ANIN ANOUT AXIS B_AND B_EXOR B_NOT B_OR BOOL BRAKE C_DIS C_ORI C_PTP C_SPL C_VEL CASE
-    CHAR CIRC CIRC_REL CONST CONTINUE DECL DEF DEFAULT DEFDAT DEFFCT DELAY DISTANCE DO E6AXIS
-    E6POS ELSE END ENDDAT ENDFCT ENDFOR ENDIF ENDLOOP ENDSPLINE ENDSWITCH ENDWHILE ENUM EXIT EXOR
-    EXT EXTFCT FALSE FOR FRAME GLOBAL GOTO HALT IF IMPORT IN INT INTERRUPT IS LIN LIN_REL LOOP
-    MAXIMUM MINIMUM NOT OFF ON OR POS PRIO PTP PTP_REL PUBLIC REAL REPEAT RESUME RETURN SCIRC SEC
-    SIGNAL SLIN SPL SPLINE SPTP STEP STRUC SWITCH THEN TIME_BLOCK TO TRIGGER TRUE UNTIL WAIT WHEN
-    WHILE""".split()
-)
-"""KRL keywords and type names (KUKA System Software 8 manual): never a name we write."""
 COMMENT_MAX = 60
 
 _SAFE = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789 _.,:+-=/#@"
 _NOT_SAFE = re.compile(f"[^{re.escape(_SAFE)}]")
 _SAFE_BYTES = (_SAFE + "\n").encode()  # and the line break that comment_texts joins with
-_NOT_IDENT = re.compile(r"[^A-Za-z0-9_]")
 
 
 def fixed(value: float, decimals: int = 3) -> str:
@@ -333,13 +316,3 @@ def comment_texts(texts: list[str], limit: int = COMMENT_MAX, prefix: str = "") 
     ):
         return [comment_text(t, limit) for t in texts]
     return texts if max(map(len, texts), default=0) <= limit else [t[:limit] for t in texts]
-
-
-def krl_identifier(text: str, prefix: str = "P", limit: int = KRL_NAME_MAX) -> str:
-    """A KRL identifier derived from user text: invalid characters become ``_``, a leading digit
-    or a reserved word gets ``prefix``, and the result is cut to ``limit`` (24) characters."""
-    name = _NOT_IDENT.sub("_", unicodedata.normalize("NFKD", str(text)))
-    name = name.encode("ascii", "ignore").decode("ascii") or prefix
-    if not (name[0].isalpha() or name[0] == "_") or name[:limit].upper() in KRL_RESERVED:
-        name = prefix + name
-    return name[:limit]

@@ -1,6 +1,8 @@
 """A dialect is its folder: no module outside ``codegen/<dialect>/`` branches on a dialect's name
-or file suffix or imports a dialect folder's module (the registry, ``codegen/dialects.py``,
-excepted), and no job below the command modules takes an ``argparse.Namespace``.
+or file suffix, imports a dialect folder's module (the registry, ``codegen/dialects.py``,
+excepted) or names a dialect at all (its name, the words of its title, its suffixes, its
+vocabulary: in a string, an identifier or an import; ``ALLOWED_FILES`` says where and why one
+may), and no job below the command modules takes an ``argparse.Namespace``.
 
 The source of every module is read as a syntax tree. A branch is a comparison (``==``, ``!=``,
 ``in``, ``not in``, ``is``) with a string that is a registered dialect name or suffix (case
@@ -220,3 +222,142 @@ def test_no_job_below_the_commands_takes_an_argparse_namespace():
                 if isinstance(node.value, ast.Name) and node.value.id == "argparse":
                     found.append(f"{path.relative_to(ROOT)}:{node.lineno}")
     assert not found, "argparse.Namespace below the commands: " + ", ".join(found)
+
+
+# A dialect's words besides its name, its title's words and its suffixes (registry).
+VOCABULARY = {
+    "krl": {"e6pos", "e6axis"},
+    "gcode": {"g-code", "rs274ngc", "ngc"},
+    "rapid": {"robtarget", "robtargets", "confdata"},
+}
+GENERIC = {"iso"}  # a title's word that is no dialect's own (ISO 9283, the standard)
+ALLOWED_FILES = {
+    "codegen/dialects.py": "the registry: one line per dialect names its plug-in's module",
+    "kinematics/configuration.py": "robot file: each maker's configuration words, from the joints",
+    "kinematics/robot.py": "robot file: the built-in arms, their controllers and their words",
+}
+# The KUKA Status and Turn as the configuration every layer still speaks (RAPID's confdata checked
+# as one), the KUKA A, B, C angles as the orientation convention and joint angles "(KUKA)" in its
+# signs, until a vendor-neutral configuration replaces them.
+ALLOWED_PHRASE = re.compile(r"KUKA (Status|Turn|ABC|A,? B,? C)\b|\(KUKA\)")
+ALLOWED_NAMES = {"kuka_turn", "kuka_words", "to_kuka", "from_kuka", "kuka_status", "kuka_status_of"}
+
+
+def _words_of(name: str) -> set[str]:
+    title = {w.lower() for w in re.split(r"[\s/()]+", DIALECTS[name].title) if len(w) > 2}
+    return {name.lower()} | (title - GENERIC) | VOCABULARY.get(name, set())
+
+
+def _tokens(identifier: str) -> list[str]:
+    """The words of an identifier: split at ``_`` and where lower case meets upper case."""
+    return [t.lower() for t in re.split(r"_+|(?<=[a-z0-9])(?=[A-Z])", identifier) if t]
+
+
+def _docstrings(tree: ast.AST) -> set[int]:
+    """ids of the string nodes that document: a string standing alone as a statement (a
+    module's, class's or function's docstring, or one after an assignment)."""
+    return {
+        id(node.value)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Expr)
+        and isinstance(node.value, ast.Constant)
+        and isinstance(node.value.value, str)
+    }
+
+
+def named_dialects(source: str, names) -> list[tuple[int, str]]:
+    """(line, word) of every word of the dialects ``names`` in ``source``'s strings (documents
+    aside), identifiers and imports, and of every one of their suffixes in its strings."""
+    words = {w for name in names for w in _words_of(name)}
+    suffixes = [re.escape(s) for n in names for s in DIALECTS[n].suffixes]
+    suffix = re.compile(rf"(?:{'|'.join(suffixes)})(?![\w-])", re.IGNORECASE)
+    tree = ast.parse(source)
+    documents = _docstrings(tree)
+    found = []
+    for node in ast.walk(tree):
+        identifiers: list[str] = []
+        text = ""
+        if isinstance(node, ast.Name):
+            identifiers = [node.id]
+        elif isinstance(node, ast.Attribute):
+            identifiers = [node.attr]
+        elif isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            identifiers = [node.name]
+        elif isinstance(node, ast.arg | ast.keyword):
+            identifiers = [node.arg or ""]
+        elif isinstance(node, ast.alias):
+            identifiers = [*node.name.split("."), node.asname or ""]
+        elif isinstance(node, ast.ImportFrom):
+            identifiers = (node.module or "").split(".")
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            text = "" if id(node) in documents else ALLOWED_PHRASE.sub("", node.value)
+            text = " ".join(w for w in text.split() if w.strip("\"'") not in ALLOWED_NAMES)
+        line = getattr(node, "lineno", 0)
+        for identifier in identifiers:
+            if identifier not in ALLOWED_NAMES:
+                found += [(line, w) for w in _tokens(identifier) if w in words]
+        spoken = re.findall(r"[A-Za-z0-9][A-Za-z0-9-]*", text)
+        found += [(line, w) for w in spoken if w.lower() in words]
+        found += [(line, s) for s in suffix.findall(text)]
+    return sorted(set(found))
+
+
+@pytest.mark.parametrize(
+    "snippet",
+    [
+        "text = 'a KUKA KRL program'",
+        "text = f'{name}.src and {name}.DAT'",
+        "text = 'write the G-code'",
+        "files = render_krl(program)",
+        "def write_rapid(): pass",
+        "class KrlReader: pass",
+        "def f(robtarget): pass",
+        "f(gcodeFrame=1)",
+        "value = cell.rapid_module",
+        "import accugrid.codegen.krl.emit",
+        "from accugrid.codegen.rapid import emit",
+        "from accugrid.codegen.x import confdata_of as words",
+        "def f():\n    return 'E6POS'",
+    ],
+)
+def test_the_word_detector_finds_a_dialect_in_every_form(snippet):
+    assert named_dialects(snippet, DIALECTS), snippet
+
+
+@pytest.mark.parametrize(
+    "snippet",
+    [
+        '"""The KRL reader and its .src files."""',
+        'def f():\n    """Reads RAPID."""',
+        "text = 'in KUKA Status 3 with KUKA A, B, C'",
+        "text = 'ISO 9283 cube'",
+        "name = sys.modules[__name__]",
+        "krlike = kind",
+        "text = 'a .srcx file'",
+        "turn = kuka_turn(q)",
+        "# a KRL comment\nx = 1",
+    ],
+)
+def test_the_word_detector_passes_what_names_no_dialect(snippet):
+    assert not named_dialects(snippet, DIALECTS), snippet
+
+
+def test_no_module_outside_a_dialect_folder_names_a_dialect():
+    """In a string, an identifier or an import, only its folder (and ``ALLOWED_FILES``) names a
+    dialect; another dialect's folder does not either."""
+    found = []
+    modules = _modules() + [p for f in sorted(DIALECT_FOLDERS) for p in sorted(f.rglob("*.py"))]
+    for path in modules:
+        rel = path.relative_to(ROOT).as_posix()
+        own = {name for name in DIALECTS if ROOT / "codegen" / name in path.parents}
+        if rel in ALLOWED_FILES:
+            continue
+        for line, word in named_dialects(path.read_text(encoding="utf-8"), set(DIALECTS) - own):
+            found.append(f"{rel}:{line}: {word!r}")
+    assert not found, "a dialect named outside its folder:\n" + "\n".join(found)
+
+
+def test_every_allowed_file_still_names_a_dialect():
+    """An allowance no longer needed is dropped, so that the list holds only the exceptions."""
+    for rel in ALLOWED_FILES:
+        assert named_dialects((ROOT / rel).read_text(encoding="utf-8"), DIALECTS), rel

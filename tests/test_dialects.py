@@ -124,3 +124,39 @@ def test_the_library_names_a_dialect_exports_resolve_through_the_registry():
 
     with pytest.raises(AttributeError, match="render_fanuc"):
         registry.render_fanuc  # noqa: B018
+
+
+def test_a_plugin_says_whether_it_writes_measurement_programs_as_it_does():
+    from accugrid.codegen.dialects import measuring, plugin_of
+
+    for name in DIALECTS:
+        plugin = plugin_of(name)
+        if plugin.measures:
+            assert plugin.measurement().name("probe 1")
+        else:
+            with pytest.raises(InputError, match="no laser-tracker measurement program"):
+                plugin.measurement()
+    assert measuring() == [name for name in DIALECTS if plugin_of(name).measures]
+    assert measuring(), "a dialect writes the measurement program of accugrid plan"
+
+
+def test_plan_writes_the_measurement_program_of_its_dialect(tmp_path, capsys):
+    """``plan --dialect``: the dialects that write measurement programs, by default the first;
+    another is refused by the parser (exit 2), nothing written."""
+    from accugrid.codegen.dialects import measuring, plugin_of
+
+    argv = ["plan", "cube", "--centre", "1700", "0", "1500", "--step", "200", "-o"]
+    for name in measuring():
+        out = tmp_path / name
+        assert main([*argv, str(out), "--dialect", name]) == 0
+        program = plugin_of(name).measurement().targets(out, "measure_cube")
+        assert all(path.exists() for path in program)
+    default = tmp_path / "default"
+    assert main([*argv, str(default)]) == 0
+    first = plugin_of(measuring()[0]).measurement().targets(default, "measure_cube")
+    assert sorted(default.iterdir()) == sorted([first[0].with_suffix(".csv"), *first])
+    for name in set(DIALECTS) - set(measuring()):
+        with pytest.raises(SystemExit) as stop:
+            main([*argv, str(tmp_path / name), "--dialect", name])
+        assert stop.value.code == 2 and "invalid choice" in capsys.readouterr().err
+        assert not (tmp_path / name).exists()

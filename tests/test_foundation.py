@@ -8,16 +8,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from accugrid.app.cli import main
+from accugrid.codegen.krl.names import krl_identifier
 from accugrid.infra.atomic import write_files
 from accugrid.infra.csvtable import parse_table
 from accugrid.infra.errors import InputError
-from accugrid.infra.textsafe import (
-    comment_text,
-    fixed,
-    fixed_many,
-    fixed_same,
-    krl_identifier,
-)
+from accugrid.infra.textsafe import comment_text, fixed, fixed_many, fixed_same
 from accugrid.kinematics import frames
 
 

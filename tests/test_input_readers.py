@@ -262,7 +262,7 @@ def test_library_warnings_are_held_back_on_error_and_shown_on_success(monkeypatc
 @pytest.mark.parametrize("name", ["END", "def", "Lin", "DECL"])
 def test_krl_keywords_are_no_program_names(tmp_path, name):
     """Item 13: `DEF END( )` must never be written."""
-    from accugrid.infra.textsafe import krl_identifier
+    from accugrid.codegen.krl.names import krl_identifier
 
     path = tmp_path / "cell.yaml"
     path.write_text((EXAMPLES / "cell.yaml").read_text().replace("WING_PANEL", name))

@@ -6,13 +6,17 @@ and the lines to print (``atomic.JobFiles``), writes them as one job (``atomic.w
 and prints the lines.
 
 ``COMMANDS`` names them with their one-line help, so the parser (and ``accugrid --help``) is
-built without importing any command module; only the command that runs is imported.
+built without importing any command module; only the command that runs is imported. One module,
+``program``, serves a command per registered dialect (``codegen.dialects.DIALECTS``), named as
+the dialect, its help from the dialect's plug-in; it gives each by ``command(name)``.
 """
+
+from accugrid.codegen.dialects import DIALECTS, plugin_of
 
 __all__ = ["COMMANDS"]
 
-# NAME -> (module in this package, one-line help)
-COMMANDS: dict[str, tuple[str, str]] = {
+# NAME -> (module in this package, one-line help), besides the program commands
+_COMMANDS: dict[str, tuple[str, str]] = {
     "compare": (
         "compare",
         "grid only vs model vs model + residual grid against the number of measured points",
@@ -20,10 +24,6 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "correct": (
         "correct",
         "corrected points CSV: P' = P + e from a measured error grid and/or a calibrated model",
-    ),
-    "fanuc": (
-        "fanuc",
-        "corrected FANUC TP drilling program (.ls) from a points CSV",
     ),
     "fit-frame": (
         "fit_frame",
@@ -33,10 +33,6 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "fit_part",
         "part frame (robot_T_base) from datums measured by the tracker and their CAD coordinates",
     ),
-    "gcode": (
-        "gcode",
-        "corrected RS274NGC (LinuxCNC) drilling program from a points CSV",
-    ),
     "identify": (
         "identify",
         "calibrated robot model (DH errors, TCP) from tracker measurements at scattered poses",
@@ -45,21 +41,14 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "identify_tool",
         "the drill's TCP and axis measured on the calibrated arm (SMR at 6+ orientations)",
     ),
-    "krl": (
-        "krl",
-        "corrected KUKA KRL drilling program (.src/.dat) from a points CSV",
-    ),
     "plan": (
         "plan",
         "measurement plans: grid, ISO 9283 cube, the seed's step experiment, identification poses",
     ),
-    "rapid": (
-        "rapid",
-        "corrected ABB RAPID drilling module (.mod) from a points CSV",
-    ),
     "rewrite": (
         "rewrite",
-        "correct the positions of an existing KRL, G-code or RAPID program in place (pre-flight)",
+        "correct the positions of an existing robot program in place (pre-flight): "
+        + ", ".join(d.title for d in DIALECTS.values()),
     ),
     "simulate": (
         "simulate",
@@ -79,3 +68,5 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "map tracker-frame x,y,z / x_meas,y_meas,z_meas columns into the robot frame",
     ),
 }
+_PROGRAMS = {name: ("program", plugin_of(name).help.summary) for name in DIALECTS}
+COMMANDS = dict(sorted({**_COMMANDS, **_PROGRAMS}.items()))

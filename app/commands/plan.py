@@ -1,4 +1,43 @@
-"""Write a measurement plan: the positions a laser-tracker operator measures, in order.
+"""``accugrid plan``: measurement plans (``jobs.plan``) and the measurement program of the
+``--dialect``, its paragraph of the help from the dialect's plug-in (``DialectHelp.measure``).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from types import SimpleNamespace
+
+from accugrid.app.cli_options import (
+    COORDINATE_MAX,
+    MAX_CANDIDATES,
+    MAX_POSES,
+    MAX_REPEATS,
+    add_abc,
+    add_deprecated,
+    add_experiment_arguments,
+    add_harmonics,
+    add_robot,
+    add_status,
+    add_tilt,
+    add_tool,
+    harmonics_of,
+    number,
+    parse_centres,
+    parse_steps,
+    robot_with_tool,
+)
+from accugrid.app.jobs.plan import PlanRequest, plan_files, plan_targets
+from accugrid.codegen.dialects import measuring, plugin_of
+from accugrid.compensation.plans import SEED_REGION, SEED_REPEATS
+from accugrid.infra.atomic import check_targets, write_files
+from accugrid.infra.errors import InputError
+
+__all__ = ["command"]
+
+NAME = "plan"
+_DESCRIPTION = """\
+Write a measurement plan: the positions a laser-tracker operator measures, in order.
 
   grid        vertices of a regular grid over a region, serpentine (boustrophedon) order: every
               move goes to a neighbouring vertex, so the path is as short as a grid allows; the
@@ -26,48 +65,26 @@
               poses again as axis rows for an SMR on the drill axis).
 
 Outputs in DIR: NAME.csv (id,x,y,z,a,b,c[,centre,step,label,repeat],x_meas,y_meas,z_meas with
-the measured columns empty for the operator) and the KUKA KRL program NAME.src/NAME.dat that
-visits every row with LIN at the fixed orientation (first motion a complete PTP) and waits at
-each for the tracker: WAIT SEC (--wait-sec) or WAIT FOR $IN[n] (--wait-input). Positions are in
-the robot frame ($BASE = $NULLFRAME, i.e. $ROBROOT = $WORLD) unless --base-number names a
-BASE_DATA that equals the robot frame. Every position is checked with the robot's IK (--robot,
---tool) in one KUKA Status for the whole plan (--status; default: the IK default at the first
-position), since LIN moves keep the first PTP's configuration; the IK also gives each E6POS its T.
-Lengths in mm, angles in deg, speeds in mm/s.
+the measured columns empty for the operator) and the measurement program in the language of
+--dialect, which visits every row and waits at each for the tracker:
+
+{programs}
+Every position is checked with the robot's IK (--robot, --tool) in one KUKA Status for the whole
+plan (--status; default: the IK default at the first position), since linear moves keep the
+first joint move's configuration. Lengths in mm, angles in deg, speeds in mm/s.
 """
 
-from __future__ import annotations
 
-import argparse
-from pathlib import Path
-
-from accugrid.app.cli_options import (
-    COORDINATE_MAX,
-    MAX_CANDIDATES,
-    MAX_POSES,
-    MAX_REPEATS,
-    add_abc,
-    add_deprecated,
-    add_experiment_arguments,
-    add_harmonics,
-    add_robot,
-    add_status,
-    add_tilt,
-    add_tool,
-    harmonics_of,
-    number,
-    parse_centres,
-    parse_steps,
-    robot_with_tool,
-)
-from accugrid.app.jobs.plan import PlanRequest, plan_files, plan_targets
-from accugrid.compensation.plans import SEED_REGION, SEED_REPEATS
-from accugrid.infra.atomic import check_targets, write_files
-from accugrid.infra.errors import InputError
-
-__all__ = ["NAME", "add_arguments", "run"]
-
-NAME = "plan"
+def command(name: str) -> SimpleNamespace:
+    """The command: ``NAME``, ``__doc__`` (its description, with the measurement program of
+    every dialect that writes one), ``add_arguments`` and ``run``."""
+    programs = "\n".join(plugin_of(dialect).help.measure for dialect in measuring())
+    return SimpleNamespace(
+        NAME=name,
+        __doc__=_DESCRIPTION.format(programs=programs),
+        add_arguments=add_arguments,
+        run=run,
+    )
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -244,27 +261,27 @@ def _common(parser: argparse.ArgumentParser) -> None:
         "--tool-number",
         type=number("", 1, 32, whole=True),
         default=1,
-        help="TOOL_DATA index in the program (default: 1)",
+        help="tool number in the program (default: 1)",
     )
     parser.add_argument(
         "--base-number",
         type=number("", 0, 32, whole=True),
         default=0,
-        help="BASE_DATA index in the program; 0 = $NULLFRAME, the robot frame (default: 0)",
+        help="base number in the program; 0 = the robot frame (default: 0)",
     )
     parser.add_argument(
         "--ptp-percent",
         type=number("%", 1, 100, whole=True),
         default=20,
         metavar="P",
-        help="speed of the first PTP, %% of maximum (default: 20)",
+        help="speed of the first joint move, %% of maximum (default: 20)",
     )
     parser.add_argument(
         "--speed",
         type=number("mm/s", 0, 2000, above=True),
         default=250.0,
         metavar="MM_S",
-        help="LIN speed between positions ($VEL.CP in the program), mm/s (default: 250)",
+        help="linear speed between positions, mm/s (default: 250)",
     )
     add_deprecated(
         parser,
@@ -287,7 +304,7 @@ def _common(parser: argparse.ArgumentParser) -> None:
         "--wait-input",
         type=number("", 1, 4096, whole=True),
         metavar="N",
-        help="instead of a dwell, wait at each position until $IN[N] is TRUE",
+        help="instead of a dwell, wait at each position until digital input N is on",
     )
     parser.add_argument("--name", help="program and file name (default: measure_KIND)")
     parser.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder")
@@ -295,13 +312,20 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--templates",
         type=Path,
-        help="copy of the templates folder (or of its krl/) with measure.src.j2 and "
-        "measure.dat.j2 (default: built-in)",
+        help="copy of the templates folder (or of its folder of the --dialect) with the "
+        "measurement program's templates (default: built-in)",
+    )
+    dialects = measuring()
+    parser.add_argument(
+        "--dialect",
+        choices=dialects,
+        default=dialects[0],
+        help="language of the measurement program (default: %(default)s)",
     )
 
 
 def run(args: argparse.Namespace) -> int:
-    check_targets(plan_targets(args.output, args.kind, args.name), force=args.force)
+    check_targets(plan_targets(args.output, args.kind, args.name, args.dialect), force=args.force)
     kind = args.kind
     if kind == "tool" and args.tool is None:
         raise InputError("plan tool needs --tool X Y Z A B C: the tool as taught")
@@ -346,6 +370,7 @@ def run(args: argparse.Namespace) -> int:
         wait_sec=args.wait_sec,
         wait_input=args.wait_input,
         templates=args.templates,
+        dialect=args.dialect,
         model=args.model if kind == "tool" else None,
         axis_point=kind == "tool" and args.axis_point,
     )

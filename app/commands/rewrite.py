@@ -1,39 +1,7 @@
-"""Pre-flight correction of an existing KRL (.src/.dat), G-code or ABB RAPID program.
-
-Every Cartesian position that can be placed in the robot frame is corrected with the grid
-(P' = P + e, robot frame, converted back to the program frame); only those X, Y, Z numbers change,
-with the input's decimal places but never coarser than 0.01 mm (0.001 in). Every other byte
-(spacing, comments, line endings, encoding) is kept. Anything that cannot be placed (frame
-arithmetic ':', a base from a variable or a call, EK(), AXIS/E6AXIS targets, $POS_ACT,
-G55-G59/G92 offsets, unknown motions, parameter words) is left untouched. A G-code arc (G2/G3)
-moves rigidly, start, centre and end by one shift (the correction at its centre), where that
-shift holds along the whole arc to the program's written resolution; otherwise the arc is left
-as written and reported. A placed position the grid or model does not correct (outside the
-grid unless --outside clamp, more than --orientation-limit from the grid's orientation, another
-KUKA Status than the grid's: the S of a KRL position, else the last S written before it in its
-file, else the cell's configuration.status, the cell's configuration for G-code) fails the job,
-and so does a rewrite that corrects nothing, unless --allow-partial, which leaves them as they
-are, counts them by reason on stderr and marks them in the report and the --header. The report
-lists each position with its status and reason.
-
-KRL: PROGRAM is a .src or .dat; give the .dat beside it as the second argument. A stored position
-is corrected only if a motion uses it (never a frame given to $TOOL/$BASE/$LOAD, an operand of
-':' or a CONST) and takes the base of the motions that use it ($BASE = BASE_DATA[n],
-BAS(#BASE,n), FDAT BASE_NO); BASE_DATA values come from --config-dat or the cell file (base,
-base_data); base 0 is the robot frame. Where a routine starts without setting $BASE, and for the
-POS/E6POS of a .dat given alone, --base N says which BASE_DATA they are in (a position's own FDAT
-wins over it).
-G-code: positions are in the cell's program_frame (default: its base), G54 active; A, B, C
-words are the tool orientation and stay as written.
-
-RAPID (.mod/.modx/.prg/.sys): robtargets moved only by MoveL/MoveJ (and their DO/AO/GO/Sync
-forms, TriggL/TriggJ) with the cell's rapid.tool in its rapid.wobj (the base frame) or wobj0 (the
-robot frame); never tooldata, wobjdata, jointtarget, loaddata, pose, Offs/RelTool operands or
-robtargets changed at run time.
-
-Output: for one file, -o is the output file (or an existing directory). For a .src/.dat pair,
--o is a directory (the files keep their names, which KRL needs to match DEF/DEFDAT) or the output
-.src path, with the .dat written beside it under the same stem.
+"""``accugrid rewrite``: the pre-flight correction of existing programs, of every registered
+dialect (``codegen.dialects.DIALECTS``): the programs it reads, their paragraphs of its
+``--help`` and their own options come from the dialects' plug-ins (``DialectPlugin.help``,
+``options``); the job is ``jobs.rewrite.rewrite_job``.
 """
 
 from __future__ import annotations
@@ -42,6 +10,7 @@ import argparse
 import os
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 from accugrid.app.cli_options import (
     COORDINATE_MAX,
@@ -52,15 +21,36 @@ from accugrid.app.cli_options import (
 )
 from accugrid.app.jobs.rewrite import RewriteRequest, rewrite_job
 from accugrid.codegen.dialects import DIALECTS, dialect_of, plugin_of
+from accugrid.codegen.plugin import DialectOption
 from accugrid.codegen.program_text import MAX_BYTES
 from accugrid.compensation.settings import DEFAULT_TOLERANCE_MM
 from accugrid.infra.atomic import check_targets, write_files
 from accugrid.infra.errors import InputError
 from accugrid.infra.memory import map_large_buffers
 
-__all__ = ["NAME", "add_arguments", "run"]
+__all__ = ["command"]
 
 NAME = "rewrite"
+_HEAD = """Pre-flight correction of an existing program, one of:
+{programs}
+
+Every Cartesian position that can be placed in the robot frame is corrected with the grid
+(P' = P + e, robot frame, converted back to the program frame); only those X, Y, Z numbers change,
+with the input's decimal places but never coarser than 0.01 mm (0.001 in). Every other byte
+(spacing, comments, line endings, encoding) is kept. Anything that cannot be placed (each kind of
+program below says what) is left untouched. A placed position the grid or model does not correct
+(outside the grid unless --outside clamp, more than --orientation-limit from the grid's
+orientation, another Status than the grid's) fails the job, and so does a rewrite that corrects
+nothing, unless --allow-partial, which leaves them as they are, counts them by reason on stderr
+and marks them in the report and the --header. The report lists each position with its status
+and reason.
+
+"""
+_TAIL = """
+Output: for one file, -o is the output file (or an existing directory). For a program given as
+two files, -o is a directory (the files keep their names) or the path of the first output, with
+the second written beside it under the same stem.
+"""
 # program bytes from which large buffers are mapped (``infra.memory``): a million positions' 55
 # to 206 MiB, not 100,000 positions' 6 to 20 MiB, whose peak is small and whose every fresh mapped
 # page would cost it time (a 1e5-position KRL pair rewrite 0.60 -> 0.50 s without)
@@ -69,9 +59,16 @@ _MAPPED_FROM = 32 << 20
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "program", metavar="PROGRAM", help="KRL .src/.dat, G-code or RAPID (.mod/.modx/.prg/.sys)"
+        "program", metavar="PROGRAM", help="the program: one of the kinds above, by its suffix"
     )
-    parser.add_argument("dat", nargs="?", metavar="PROGRAM.dat", help="the .dat of a KRL .src")
+    pairs = _pairs()
+    parser.add_argument(
+        "second",
+        nargs="?",
+        metavar="PROGRAM" + "|".join(pair[1] for _, pair in pairs),
+        help="the second file of a program given as two: "
+        + "; ".join(f"the {pair[1]} of a {title} {pair[0]}" for title, pair in pairs),
+    )
     parser.add_argument("--cell", required=True, metavar="CELL.yaml", help="cell file (frames)")
     parser.add_argument("--grid", metavar="MEAS.csv", help="measurement CSV (overrides the cell)")
     parser.add_argument(
@@ -91,28 +88,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_policy(parser, "positions")
     add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
-    parser.add_argument(
-        "--config-dat", metavar="$config.dat", help="KRL $config.dat with BASE_DATA[n] values"
-    )
-    parser.add_argument(
-        "--base",
-        type=number("", 0, 32, whole=True),
-        metavar="N",
-        help="BASE_DATA number in effect where the program does not set one (a lone .dat, or "
-        "the start of a routine); 0 = robot frame",
-    )
-    parser.add_argument(
-        "--trust-calls",
-        action="store_true",
-        help="KRL: assume no call changes $BASE or $TOOL (without it, a call keeps them when its "
-        "routine is in the given files and changes neither)",
-    )
-    parser.add_argument(
-        "--ignore-external-axes",
-        action="store_true",
-        help="KRL, RAPID: correct positions with external axes in use (non-zero E1..E6, RAPID "
-        "eax values other than 9E+09): the external axes move neither the robot nor the base",
-    )
     parser.add_argument(
         "--decimals",
         type=number("", 0, 9, whole=True),
@@ -135,6 +110,51 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="hole position tolerance, mm: a move that the axes its line does not write leave "
         "farther than this from its correction is reported, not corrected; warn when rounding to "
         f"the written decimals leaves more than a tenth of it (default: {DEFAULT_TOLERANCE_MM:g})",
+    )
+    _add_dialect_options(parser)
+
+
+def _add_dialect_options(parser: argparse.ArgumentParser) -> None:
+    """Each dialect's own options (``DialectPlugin.options``), in a group named by the dialects
+    that read it."""
+    readers: dict[DialectOption, list[str]] = {}
+    for dialect in DIALECTS.values():
+        for option in plugin_of(dialect.name).options:
+            readers.setdefault(option, []).append(dialect.title)
+    groups: dict[str, argparse._ArgumentGroup] = {}
+    for option, titles in readers.items():
+        title = " and ".join(titles) + " programs"
+        group = groups.get(title) or groups.setdefault(title, parser.add_argument_group(title))
+        if option.metavar is None:
+            group.add_argument(option.flag, action="store_true", help=option.help)
+        elif option.whole is not None:
+            kind = number("", *option.whole, whole=True)
+            group.add_argument(option.flag, type=kind, metavar=option.metavar, help=option.help)
+        else:
+            group.add_argument(option.flag, metavar=option.metavar, help=option.help)
+
+
+def _dialect_options() -> list[DialectOption]:
+    """Every dialect's own options, each once."""
+    return list(dict.fromkeys(o for d in DIALECTS for o in plugin_of(d).options))
+
+
+def _pairs() -> list[tuple[str, tuple[str, str]]]:
+    """(title, pair) of every dialect whose program may be two files (``DialectPlugin.pair``)."""
+    pairs = [(d.title, plugin_of(d.name).pair) for d in DIALECTS.values()]
+    return [(title, pair) for title, pair in pairs if pair]
+
+
+def command(name: str) -> SimpleNamespace:
+    """The command: ``NAME``, ``__doc__`` (its description, with every dialect's paragraph),
+    ``add_arguments`` and ``run``."""
+    programs = "\n".join(f"  {d.title}: {' '.join(d.suffixes)}" for d in DIALECTS.values())
+    paragraphs = "\n".join(plugin_of(d).help.rewrite for d in DIALECTS)
+    return SimpleNamespace(
+        NAME=name,
+        __doc__=_HEAD.format(programs=programs) + paragraphs + _TAIL,
+        add_arguments=add_arguments,
+        run=run,
     )
 
 
@@ -161,8 +181,7 @@ def _pair(inputs: list[Path]) -> tuple[str, str] | None:
     if len(inputs) == 2 and (
         pair is None or kinds[1] != kinds[0] or inputs[0].suffix.lower() == inputs[1].suffix.lower()
     ):
-        pairs = [(d.title, plugin_of(d.name).pair) for d in DIALECTS.values()]
-        what = " or ".join(f"the {p[1]} of a {title} {p[0]}" for title, p in pairs if p)
+        what = " or ".join(f"the {pair[1]} of a {title} {pair[0]}" for title, pair in _pairs())
         raise InputError(f"the second file must be {what}", os.fspath(inputs[1]))
     return pair
 
@@ -176,7 +195,7 @@ def _size(path: Path) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    inputs = [Path(args.program)] + ([Path(args.dat)] if args.dat else [])
+    inputs = [Path(args.program)] + ([Path(args.second)] if args.second else [])
     if sum(_size(path) for path in inputs) >= _MAPPED_FROM:
         map_large_buffers()  # a large program's columns freed go back to the system (peak memory)
     pair = _pair(inputs)
@@ -192,7 +211,9 @@ def run(args: argparse.Namespace) -> int:
     targets = list(outputs.values()) + reports
     if len(set(map(os.path.abspath, targets))) != len(targets):
         raise InputError("two outputs would have the same name", args.output)
-    read = inputs + [Path(args.cell)] + ([Path(args.config_dat)] if args.config_dat else [])
+    options = {option.key: getattr(args, option.key) for option in _dialect_options()}
+    files = [options[o.key] for o in _dialect_options() if o.file and options[o.key]]
+    read = inputs + [Path(args.cell)] + [Path(file) for file in files]
     check_targets(targets, read, args.force)
     job = rewrite_job(
         RewriteRequest(
@@ -202,13 +223,10 @@ def run(args: argparse.Namespace) -> int:
             model=args.model,
             report=Path(args.report) if args.report else None,
             report_html=Path(args.report_html) if args.report_html else None,
-            config_dat=Path(args.config_dat) if args.config_dat else None,
             header=args.header,
             decimals=args.decimals,
             policy=policy_request(args),
-            base=args.base,
-            trust_calls=args.trust_calls,
-            ignore_external_axes=args.ignore_external_axes,
+            options=options,
             max_bytes=int(args.max_mb * 2**20),
             tolerance_mm=args.tolerance,
         )

@@ -1,8 +1,9 @@
 """The measurement-plan job (``accugrid plan``): the positions a laser-tracker operator
 measures, in order, as a CSV skeleton (``Plan.csv_text``) and the robot program that visits them
-(the measurement program of a dialect's plug-in, ``codegen.plugin.MeasurementWriter``; the
-command writes KUKA KRL), every position checked with the robot's IK in one KUKA Status
-(``compensation.plans.reach_in_one_status``). Lengths mm, angles deg, speeds m/s.
+(the measurement program of a dialect's plug-in, ``codegen.plugin.MeasurementWriter``; by
+default the first registered dialect that writes one), every position checked with the robot's
+IK in one KUKA Status (``compensation.plans.reach_in_one_status``). Lengths mm, angles deg,
+speeds m/s.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.codegen.dialects import plugin_of
+from accugrid.codegen.dialects import measuring, plugin_of
 from accugrid.codegen.header import header_lines
 from accugrid.codegen.plugin import MeasurementWriter, MeasureSettings
 from accugrid.compensation.plans import (
@@ -31,11 +32,10 @@ from accugrid.kinematics.configuration import solve_in_one_status
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.robot import Robot
 
-__all__ = ["DIALECT", "KINDS", "MAX_WAIT_SEC", "PlanRequest", "plan_files", "plan_targets"]
+__all__ = ["KINDS", "MAX_WAIT_SEC", "PlanRequest", "plan_files", "plan_targets"]
 
 KINDS = ("grid", "cube", "experiment", "identify")
 MAX_WAIT_SEC = 600.0
-DIALECT = "krl"  # the language of the measurement program ``accugrid plan`` writes
 
 
 @dataclass(frozen=True)
@@ -54,7 +54,8 @@ class PlanRequest:
     tool: ``count`` orientations of ``robot``'s tool (as taught) about ``centre`` within
     ``tilt_deg`` of ``abc``, inside the joint ranges of the calibrated ``model`` file
     (``seed``), ``repeats`` rounds, with ``axis_point`` the same again for a point on the axis.
-    Program: in ``dialect`` (a registered dialect that writes measurement programs), ``name``
+    Program: in ``dialect`` (a registered dialect that writes measurement programs; None: the
+    first, ``codegen.dialects.measuring``), ``name``
     (default measure_KIND), TOOL_DATA ``tool_number``, BASE_DATA ``base_number`` (0: the robot
     frame), first-PTP ``ptp_percent``, LIN ``vel_m_s``, and after each position ``wait_input``
     ($IN number) or ``wait_sec`` s; ``templates``: a folder with the dialect's measurement
@@ -87,20 +88,21 @@ class PlanRequest:
     wait_sec: float = 3.0
     wait_input: int | None = None
     templates: Path | None = None
-    dialect: str = DIALECT
+    dialect: str | None = None
     model: str | None = None  # tool: the calibrated robot file whose joint ranges bound the poses
     axis_point: bool = False  # tool: the poses again for an SMR on the drill axis (point axis)
 
 
-def _program(dialect: str, kind: str, name: str | None) -> tuple[MeasurementWriter, str]:
-    """The measurement program of ``dialect`` (InputError when it writes none) and its name:
-    ``name`` (default measure_KIND) made one the dialect accepts."""
-    writer = plugin_of(dialect).measurement()
+def _program(dialect: str | None, kind: str, name: str | None) -> tuple[MeasurementWriter, str]:
+    """The measurement program of ``dialect`` (None: the first that writes one; InputError when
+    it writes none) and its name: ``name`` (default measure_KIND) made one the dialect
+    accepts."""
+    writer = plugin_of(dialect or measuring()[0]).measurement()
     return writer, writer.name(name or f"measure_{kind}")
 
 
 def plan_targets(
-    output: str | Path, kind: str, name: str | None, dialect: str = DIALECT
+    output: str | Path, kind: str, name: str | None, dialect: str | None = None
 ) -> list[Path]:
     """The files of the job in folder ``output``: the plan CSV (named as the program's first
     file), then the measurement program's (KRL: NAME.csv, NAME.src, NAME.dat, lower case)."""

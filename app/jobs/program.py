@@ -1,7 +1,7 @@
-"""``accugrid krl``, ``gcode`` and ``rapid`` as one job over the dialect's plug-in
-(``codegen.plugin``): read the inputs, build the corrected program, make the header, render the
-files, write them (``write_program``). The commands only parse their arguments into a
-``ProgramRequest``."""
+"""The program command of every dialect (``accugrid krl``, ``gcode``, ``rapid``, ...) as one
+job over the dialect's plug-in (``codegen.plugin``): read the inputs, build the corrected
+program, make the header, render the files, write them (``write_program``). The commands only
+parse their arguments into a ``ProgramRequest``."""
 
 from __future__ import annotations
 
@@ -34,11 +34,11 @@ __all__ = ["Job", "ProgramRequest", "prepare", "program_job", "summary", "write_
 
 @dataclass(frozen=True)
 class ProgramRequest:
-    """What ``accugrid krl|gcode|rapid`` asks: the dialect (a name of ``codegen.dialects``),
-    the points and cell files, the output (a folder or file, as the dialect writes), the grid
-    and model overriding the cell's (``no_correction``: neither), ``allow_config_change``
-    (configuration.allow_change), a templates folder, the policy's options (``policy``) and the
-    HTML report with its title."""
+    """What a program command (``accugrid DIALECT``) asks: the dialect (a name of
+    ``codegen.dialects``), the points and cell files, the output (a folder or file, as the
+    dialect writes), the grid and model overriding the cell's (``no_correction``: neither),
+    ``allow_config_change`` (configuration.allow_change), a templates folder, the policy's
+    options (``policy``) and the HTML report with its title."""
 
     dialect: str
     points: str

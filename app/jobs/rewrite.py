@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import gc
 import os
-from dataclasses import dataclass, replace
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -30,8 +31,10 @@ __all__ = ["RewriteJob", "RewriteRequest", "rewrite_job"]
 class RewriteRequest:
     """What to rewrite: the programs (one file, or the two files of a dialect whose program is a
     pair, e.g. a KRL .src/.dat) and the output path of each, and the options of ``accugrid
-    rewrite`` (``Options`` and ``ProgramContext`` for their meaning; ``policy``: the policy's
-    options, ``compensation.policy.PolicyRequest``)."""
+    rewrite`` (``Options`` for their meaning; ``policy``: the policy's options,
+    ``compensation.policy.PolicyRequest``; ``options``: the dialects' own options by key,
+    ``codegen.plugin.DialectOption``, a file's as its path: the programs' dialect reads its
+    own)."""
 
     outputs: dict[Path, Path]  # input program -> output file, the .src (what runs) first
     cell: str
@@ -39,13 +42,10 @@ class RewriteRequest:
     model: str | None = None
     report: Path | None = None
     report_html: Path | None = None
-    config_dat: Path | None = None
     header: bool = False
     decimals: int | None = None
     policy: PolicyRequest = PolicyRequest()
-    base: int | None = None
-    trust_calls: bool = False
-    ignore_external_axes: bool = False
+    options: Mapping[str, object] = field(default_factory=dict)
     max_bytes: int = 64 * 2**20
     tolerance_mm: float = DEFAULT_TOLERANCE_MM
 
@@ -73,7 +73,10 @@ class RewriteJob:
 def rewrite_job(req: RewriteRequest) -> RewriteJob:
     """Read everything ``req`` names, rewrite the programs and return what to write."""
     inputs = list(req.outputs)
-    read = [*inputs, Path(req.cell)] + ([req.config_dat] if req.config_dat else [])
+    plugin = plugin_of(dialect_of(inputs[0]))
+    own = {option.key: req.options.get(option.key) for option in plugin.options}
+    files = {o.key: Path(own[o.key]) for o in plugin.options if o.file and own[o.key] is not None}
+    read = [*inputs, Path(req.cell), *files.values()]
     cell = load_cell(req.cell)
     cell = replace(cell, correction=cell.correction.but(outside=req.policy.outside))
     model_file = Path(req.model) if req.model is not None else cell.model_path
@@ -86,7 +89,7 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
         from accugrid.kinematics.robot import load_robot
 
         nominal = load_robot(cell.robot_name).with_tool(cell.flange_T_tool)
-        check_serves(dialect_of(inputs[0]), nominal, req.cell)
+        check_serves(plugin.name, nominal, req.cell)
     if model_file is not None:  # the arm; the tool is the cell's, never the model's TCP
         model = read_model(model_file)
         read.append(model_file)
@@ -107,13 +110,8 @@ def rewrite_job(req: RewriteRequest) -> RewriteJob:
         reference_abc=cell.configuration.reference_abc if model is not None else None,
     )
     texts = {os.fspath(p): read_program(p, req.max_bytes) for p in inputs}
-    plugin = plugin_of(dialect_of(inputs[0]))
-    context = ProgramContext(
-        base=req.base,
-        trust_calls=req.trust_calls,
-        ignore_external_axes=req.ignore_external_axes,
-        controller_data=read_program(req.config_dat, req.max_bytes) if req.config_dat else None,
-    )
+    own.update({key: read_program(path, req.max_bytes) for key, path in files.items()})
+    context = ProgramContext(own)
     placement = plugin.placement(cell, context)
     del context
     # The readers build their tables from many small strings and tuples; the cycle collector

@@ -41,6 +41,7 @@ import numpy as np
 
 from accugrid.codegen.cell_record import Cell
 from accugrid.codegen.krl.configuration import configuration_words
+from accugrid.codegen.krl.names import KRL_NAME_MAX, krl_identifier
 from accugrid.codegen.linebytes import SLOT, image_bytes, line_image, number_cells, text_cells
 from accugrid.codegen.plugin import MeasureSettings, Rendered
 from accugrid.codegen.points import Points
@@ -56,17 +57,12 @@ from accugrid.codegen.render import (
 )
 from accugrid.infra.csvtable import Table
 from accugrid.infra.errors import InputError
-from accugrid.infra.textsafe import (
-    KRL_NAME_MAX,
-    comment_texts,
-    fixed,
-    fixed_texts,
-    krl_identifier,
-)
+from accugrid.infra.textsafe import comment_texts, fixed, fixed_texts
 from accugrid.kinematics.configuration import Configuration
 
 __all__ = [
     "BLOCK",
+    "FILTERS",
     "MEASUREMENT",
     "MODULE_DIGITS",
     "KrlFiles",
@@ -80,6 +76,7 @@ __all__ = [
 ]
 
 BLOCK = 16384  # holes whose numbers are made at a time
+FILTERS = (("ident", krl_identifier),)  # the templates' own filters: ``ident``, a KRL name
 MODULE_DIGITS = 3  # NAME_001..NAME_999; a job of more modules numbers them with more digits
 
 
@@ -150,7 +147,7 @@ def render_measurement(
     table[:, 1:7] = fixed_texts(np.column_stack([points[rows], abc[rows]]), 3)
     table[:, 7:9] = fixed_texts(np.stack([status[rows], turn[rows]], axis=1), 0)
     targets = names[rank[index]].tolist()  # the E6POS of every row
-    env = environment(template_dir("krl", templates), newline="\r\n")
+    env = environment(template_dir("krl", templates), newline="\r\n", filters=FILTERS)
     src_uses = template_uses(env, "measure.src.j2")
     dat_uses = template_uses(env, "measure.dat.j2")
     uses = None if src_uses is None or dat_uses is None else src_uses | dat_uses
@@ -329,7 +326,7 @@ def _file_renderer(cell: Cell, header: list[str], records: _Records, templates):
     """files(name, role, lo, hi, ext, calls=()) -> the ``ext`` (".src" or ".dat") text of
     holes lo..hi-1 in pieces of UTF-8, and its number of lines. Where the template prints its
     per-hole lines as they are, its text is rendered around them and they stay bytes."""
-    env = environment(template_dir("krl", templates), newline="\r\n")
+    env = environment(template_dir("krl", templates), newline="\r\n", filters=FILTERS)
     krl = cell.dialects["krl"]
     common = {
         "header": header,

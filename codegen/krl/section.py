@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from accugrid.codegen.cellfile import DISTANCE_MAX_MM, FRAME_MAX_MM, CellReader, SectionKeys
-from accugrid.infra.textsafe import KRL_RESERVED
+from accugrid.codegen.krl.names import KRL_RESERVED
 
 __all__ = ["KEYS", "KrlSection", "read_section"]
 
