@@ -229,12 +229,11 @@ VOCABULARY = {
     "krl": {"e6pos", "e6axis"},
     "gcode": {"g-code", "rs274ngc", "ngc"},
     "rapid": {"robtarget", "robtargets", "confdata"},
+    "fanuc": {"uframe_num", "utool_num"},
 }
 GENERIC = {"iso"}  # a title's word that is no dialect's own (ISO 9283, the standard)
 ALLOWED_FILES = {
     "codegen/dialects.py": "the registry: one line per dialect names its plug-in's module",
-    "kinematics/configuration.py": "robot file: each maker's configuration words, from the joints",
-    "kinematics/robot.py": "robot file: the built-in arms, their controllers and their words",
 }
 # The KUKA Status and Turn as the configuration every layer still speaks (RAPID's confdata checked
 # as one), the KUKA A, B, C angles as the orientation convention and joint angles "(KUKA)" in its
