@@ -213,7 +213,7 @@ def _hole_bytes(program, cell, section, lo: int, first: int) -> bytes:
     cells += [lines[:, 3], points[:, 2], feed, lines[:, 4], lines[:, 5], points[:, 3]]
     approach = fixed(cell.drilling.approach_mm_s, 0)
     template = _hole_template(section, approach, fixed(cell.drilling.dwell_s, 2))
-    return image_bytes(line_image(template, [np.ascontiguousarray(c) for c in cells]))
+    return image_bytes(line_image(template, cells))
 
 
 _POSITION = (
@@ -240,9 +240,9 @@ def _position_bytes(program, section, lo: int) -> bytes:
     numbers = number_cells(np.arange(4 * lo + 1, 4 * hi + 1), 0)
     turn = number_cells(turns, 0)
     xyz = number_cells(program.positions[lo:hi].reshape(-1, 3), places)
-    angles = number_cells(np.repeat(wpr, 4, axis=0), 3)
+    angles = np.repeat(number_cells(wpr, 3), 4, axis=0)  # one orientation per hole
     cells = [numbers, *letters]
     cells += [turn[:, k] for k in range(3)] + [xyz[:, k] for k in range(3)]
     cells += [angles[:, k] for k in range(3)]
     template = _POSITION % (section.uframe, section.utool)
-    return image_bytes(line_image(template, [np.ascontiguousarray(c) for c in cells]))
+    return image_bytes(line_image(template, cells))
