@@ -1,5 +1,6 @@
 """100,000 drilling holes to KUKA KRL, to G-code and to FANUC TP, including the grid correction
-and the IK of every pose (issue target: under 5 s each). Stages timed separately, then the whole job.
+and the IK of every pose (issue target: under 5 s each). Stages timed separately, then the whole
+job.
 
 Holes: a 400 x 250 pattern at 1.5 mm pitch on the example wing panel (examples/cell.yaml, drill
 axis normal to the 4 m radius skin), corrected with examples/grid_200mm.csv; for FANUC the same
