@@ -184,7 +184,9 @@ def test_every_position_is_its_hole_reached_in_its_config(tmp_path_factory, hole
 def test_a_constant_error_moves_every_position_by_it_in_the_user_frame(tmp_path):
     write_grid(tmp_path / "grid.csv", (-3000,) * 3, (3000,) * 3, 1500.0, field="constant")
     cell = tmp_path / "cell.yaml"
-    cell.write_text(f"grid: {tmp_path / 'grid.csv'}\n" + CELL.read_text())
+    cell.write_text(
+        CELL.read_text().replace("grid: grid_r2000ic_200mm.csv", f"grid: {tmp_path / 'grid.csv'}")
+    )
     points = EXAMPLES / "wing_panel_points.csv"
     plain, corrected = tmp_path / "plain.ls", tmp_path / "corrected.ls"
     assert (
