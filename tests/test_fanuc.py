@@ -468,3 +468,62 @@ def test_the_example_cell_reaches_the_wing_panel(tmp_path):
     points = EXAMPLES / "wing_panel_points.csv"
     assert main(["fanuc", str(points), "--cell", str(CELL), "-o", str(out), "--no-correction"]) == 0
     assert len(_positions(out.read_text())) == 4 * 72
+
+
+def _literal(value: float, places: int, bare: bool) -> str:
+    """``value`` written with ``places`` decimals, without its leading zero when ``bare``."""
+    text = f"{value:.{places}f}"
+    if bare and text.lstrip("-").startswith("0."):
+        text = text.replace("0.", ".", 1)
+    return text
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    data=st.lists(
+        st.tuples(
+            st.lists(st.floats(-2000, 2000), min_size=3, max_size=3),
+            st.integers(1, 6),  # decimals
+            st.booleans(),  # bare (.5)
+            st.sampled_from([" ", "\t", "  "]),  # separator
+            st.booleans(),  # CONFIG given
+            st.booleans(),  # a label P[n:"..."]
+        ),
+        min_size=1,
+        max_size=5,
+    ),
+    crlf=st.booleans(),
+    tab_numbers=st.booleans(),
+)
+def test_rewrite_finds_every_position_in_any_layout(tmp_path_factory, data, crlf, tab_numbers):
+    tmp = tmp_path_factory.mktemp("layout")
+    mn, pos = [], []
+    for n, (xyz, places, bare, sep, config, label) in enumerate(data, start=1):
+        mn.append(
+            f"{'L' if n > 1 else 'J'} P[{n}{':' + chr(34) * 2 if label else ''}] 100mm/sec FINE ;"
+        )
+        numbers = [_literal(v, places, bare) for v in xyz]
+        words = f"CONFIG : 'N U T, 0, 0, 0',{sep}" if config else ""
+        pos.append(
+            f"P[{n}{':' + chr(34) * 2 if label else ''}]{{\n   GP1:\n{sep}UF : 1, UT : 1,{sep}{words}\n"
+            f"{sep}X ={sep}{numbers[0]}{sep}mm,{sep}Y ={sep}{numbers[1]}{sep}mm,{sep}Z ={sep}"
+            f"{numbers[2]}{sep}mm,\n{sep}W = 180.000 deg,{sep}P = 0.000 deg,{sep}R = 0.000 deg\n}};\n"
+        )
+    text = _program(mn, pos)
+    if tab_numbers:
+        text = re.sub(r"(?m)^ +(\d+):", "\t\\1:", text)
+    if crlf:
+        text = text.replace("\n", "\r\n")
+    program, out = tmp / "T.ls", tmp / "out.ls"
+    program.write_bytes(text.encode("latin-1"))
+    cell = write_fanuc_cell(tmp, 1, 1)
+    assert main(["rewrite", str(program), "--cell", str(cell), "-o", str(out)]) == 0
+    new = out.read_bytes().decode("latin-1")
+    changed_lines(text, new)  # numbers only
+    rot = Rotation.from_euler("ZYX", REALWORLD_BASE[3:], degrees=True).as_matrix()
+    e = rot.T @ E_CONST
+    after = _positions(new)
+    places = max(2, max(p for _, p, *_ in data))
+    for n, (xyz, *_) in enumerate(data, start=1):
+        written = np.array([float(_literal(v, data[n - 1][1], False)) for v in xyz])
+        np.testing.assert_allclose(after[n][3], written + e, atol=0.5 * 10.0**-places + 1e-9)
