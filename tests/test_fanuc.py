@@ -499,13 +499,12 @@ def test_rewrite_finds_every_position_in_any_layout(tmp_path_factory, data, crlf
     tmp = tmp_path_factory.mktemp("layout")
     mn, pos = [], []
     for n, (xyz, places, bare, sep, config, label) in enumerate(data, start=1):
-        mn.append(
-            f"{'L' if n > 1 else 'J'} P[{n}{':' + chr(34) * 2 if label else ''}] 100mm/sec FINE ;"
-        )
+        name = f'P[{n}:""]' if label else f"P[{n}]"
+        mn.append(f"{'L' if n > 1 else 'J'} {name} 100mm/sec FINE ;")
         numbers = [_literal(v, places, bare) for v in xyz]
         words = f"CONFIG : 'N U T, 0, 0, 0',{sep}" if config else ""
         pos.append(
-            f"P[{n}{':' + chr(34) * 2 if label else ''}]{{\n   GP1:\n{sep}UF : 1, UT : 1,{sep}{words}\n"
+            f"{name}{{\n   GP1:\n{sep}UF : 1, UT : 1,{sep}{words}\n"
             f"{sep}X ={sep}{numbers[0]}{sep}mm,{sep}Y ={sep}{numbers[1]}{sep}mm,{sep}Z ={sep}"
             f"{numbers[2]}{sep}mm,\n{sep}W = 180.000 deg,{sep}P = 0.000 deg,{sep}R = 0.000 deg\n}};\n"
         )
