@@ -506,7 +506,8 @@ def test_rewrite_finds_every_position_in_any_layout(tmp_path_factory, data, crlf
         pos.append(
             f"{name}{{\n   GP1:\n{sep}UF : 1, UT : 1,{sep}{words}\n"
             f"{sep}X ={sep}{numbers[0]}{sep}mm,{sep}Y ={sep}{numbers[1]}{sep}mm,{sep}Z ={sep}"
-            f"{numbers[2]}{sep}mm,\n{sep}W = 180.000 deg,{sep}P = 0.000 deg,{sep}R = 0.000 deg\n}};\n"
+            f"{numbers[2]}{sep}mm,\n{sep}W = 180.000 deg,{sep}P = 0.000 deg,{sep}R = 0.000 deg"
+            "\n};\n"
         )
     text = _program(mn, pos)
     if tab_numbers:
