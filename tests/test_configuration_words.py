@@ -17,8 +17,6 @@ from accugrid.infra.errors import InputError
 from accugrid.kinematics.configuration import Configuration, quarters
 from accugrid.kinematics.robot import load_robot
 
-ANGLES_DEG = arrays(float, (12, 6), elements=st.floats(-700.0, 700.0))
-
 
 @lru_cache(maxsize=2)
 def robot(name: str):
@@ -32,10 +30,16 @@ def _within_limits(name: str, unit: np.ndarray) -> np.ndarray:
 
 
 @settings(max_examples=60, deadline=None)
-@given(ANGLES_DEG)
-def test_quarters_and_turns_are_the_axis_angles_counted_in_quarter_and_whole_turns(deg):
+@given(
+    arrays(int, (12, 6), elements=st.integers(-7, 7)),
+    arrays(float, (12, 6), elements=st.floats(1e-6, 1 - 1e-6)),
+)
+def test_quarters_and_turns_are_the_axis_angles_counted_in_quarter_and_whole_turns(k, part):
+    """Angles within quarter k (a fraction ``part`` of it, off its edges, which the next test
+    pins): quarter k, the whole turn t of -180 + 360 t <= angle < 180 + 360 t, the sign."""
+    deg = 90.0 * (k + part)
     c = Configuration.of_code(np.zeros(len(deg), int), quarters(np.radians(deg)))
-    np.testing.assert_array_equal(c.quarter, np.floor(deg / 90.0))  # degrees, not radians
+    np.testing.assert_array_equal(c.quarter, k)
     np.testing.assert_array_equal(c.turns, np.floor((deg + 180.0) / 360.0))
     np.testing.assert_array_equal(c.negative, deg < 0)
 
