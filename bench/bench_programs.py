@@ -4,10 +4,11 @@ job.
 
 Holes: a 400 x 250 pattern at 1.5 mm pitch on the example wing panel (examples/cell.yaml, drill
 axis normal to the 4 m radius skin), corrected with examples/grid_200mm.csv; for FANUC the same
-holes in examples/cell_fanuc.yaml (an R-2000iC/165F, no grid: uncorrected). The last two rows are
-the whole commands (CSV file in, program files out). Best of 3; peak MiB is traced Python memory.
+holes in examples/cell_fanuc.yaml (an R-2000iC/165F), corrected with its grid_r2000ic_200mm.csv.
+The last three rows are the whole commands (CSV file in, program files out). Best of 3; peak MiB is traced Python memory.
 Each render row is compared with its floor, measured in the same run: the numbers it prints made
-into text alone, each value once per hole (``numbers_floor``), without the lines around them.
+into text alone, each value once per hole (``numbers_floor``, ``fanuc_numbers_floor``), without
+the lines around them.
 """
 
 from __future__ import annotations
@@ -140,7 +141,7 @@ def main() -> None:
     header = ["bench"]
     fanuc_cell = load_cell(ROOT / "examples" / "cell_fanuc.yaml")
     fanuc_robot = load_robot(fanuc_cell.robot_name).with_tool(fanuc_cell.flange_T_tool)
-    fanuc = build_program(points, fanuc_cell, fanuc_robot, None, None)
+    fanuc = build_program(points, fanuc_cell, fanuc_robot)  # the cell's grid
 
     def fanuc_render() -> int:
         return sum(len(piece) for piece in render_fanuc(fanuc, header)[Path("ACCUGRID.ls")])
@@ -157,8 +158,8 @@ def main() -> None:
         assert cli(["gcode", *common, "-o", str(tmp / "holes.ngc")]) == 0
 
     def fanuc_job():
-        cell_args = ["--cell", str(ROOT / "examples" / "cell_fanuc.yaml"), "--no-correction"]
-        args = [str(points_file), *cell_args, "--force", "-o", str(tmp / "HOLES.ls")]
+        cell_args = ["--cell", str(ROOT / "examples" / "cell_fanuc.yaml"), "--force"]
+        args = [str(points_file), *cell_args, "-o", str(tmp / "HOLES.ls")]
         assert cli(["fanuc", *args]) == 0
 
     stages = [
@@ -172,7 +173,7 @@ def main() -> None:
         ("floor: FANUC numbers as text", lambda: fanuc_numbers_floor(fanuc)),
         ("accugrid krl (read, correct, IK, render, write)", krl_job),
         ("accugrid gcode (read, correct, IK, render, write)", gcode_job),
-        ("accugrid fanuc (read, IK, render, write)", fanuc_job),
+        ("accugrid fanuc (read, correct, IK, render, write)", fanuc_job),
     ]
     rows = []
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
