@@ -5,7 +5,8 @@ job.
 Holes: a 400 x 250 pattern at 1.5 mm pitch on the example wing panel (examples/cell.yaml, drill
 axis normal to the 4 m radius skin), corrected with examples/grid_200mm.csv; for FANUC the same
 holes in examples/cell_fanuc.yaml (an R-2000iC/165F), corrected with its grid_r2000ic_200mm.csv.
-The last three rows are the whole commands (CSV file in, program files out). Best of 3; peak MiB is traced Python memory.
+The last three rows are the whole commands (CSV file in, program files out). Best of 3; peak MiB
+is traced Python memory.
 Each render row is compared with its floor, measured in the same run: the numbers it prints made
 into text alone, each value once per hole (``numbers_floor``, ``fanuc_numbers_floor``), without
 the lines around them.
