@@ -527,3 +527,24 @@ def test_rewrite_finds_every_position_in_any_layout(tmp_path_factory, data, crlf
     for n, (xyz, *_) in enumerate(data, start=1):
         written = np.array([float(_literal(v, data[n - 1][1], False)) for v in xyz])
         np.testing.assert_allclose(after[n][3], written + e, atol=0.5 * 10.0**-places + 1e-9)
+
+
+def test_frame_entries_are_the_pose_in_fixed_xyz_angles():
+    from accugrid.codegen.dialects import plugin_of
+
+    pose = np.eye(4)
+    pose[:3, :3] = Rotation.from_euler("xyz", [10.0, -20.0, 30.0], degrees=True).as_matrix()
+    pose[:3, 3] = [1700.0, 300.0, 400.0]
+    assert plugin_of("fanuc").base_line(3, pose) == (
+        "UFRAME[3]: X = 1700.000 mm, Y = 300.000 mm, Z = 400.000 mm, W = 10.000 deg, "
+        "P = -20.000 deg, R = 30.000 deg"
+    )
+    turned = np.eye(4)
+    turned[:3, :3] = Rotation.from_euler("y", 90.0, degrees=True).as_matrix()
+    turned[2, 3] = 250.0
+    line = plugin_of("fanuc").tool_line(1, turned)
+    assert line.startswith("UTOOL[1]: X = 0.000 mm, Y = 0.000 mm, Z = 250.000 mm, ")
+    wpr = [float(v) for v in re.findall(rf"[WPR] = ({NUM}) deg", line)]
+    np.testing.assert_allclose(
+        Rotation.from_euler("xyz", wpr, degrees=True).as_matrix(), turned[:3, :3], atol=1e-6
+    )
