@@ -250,7 +250,7 @@ REALWORLD = {
         0,
         (75, "user frame 9 is set at run time (line 37)"),
     ),
-    "WILDER-SYSTEMS-LLC__git-ftp__auto_calib_drill.ls": (1, 1, [], 0, (1, "no Cartesian")),
+    "WILDER-SYSTEMS-LLC__git-ftp__auto_calib_drill.ls": (1, 1, [], 0, (28, "PR[73]: a position")),
     "kamilkozdro__FanucProgramAnalyze__FanucProgramAnalyze_fanucPrograms_gratowanie.ls": (
         7,
         1,
@@ -265,7 +265,13 @@ REALWORLD = {
         1,
         (193, "Offset at line 85"),
     ),
-    "ros-industrial__fanuc__fanuc_driver_tpe_ros_movesm.ls": (1, 1, [], 0, (1, "no Cartesian")),
+    "ros-industrial__fanuc__fanuc_driver_tpe_ros_movesm.ls": (
+        1,
+        1,
+        [],
+        0,
+        (43, "PR[2]: a position"),
+    ),
     "rpiRobotics__fanuc_motion_program_exec__tp_EXAMPLE.LS": (1, 1, [], 6, None),
     "rpiRobotics__fanuc_motion_program_exec__tp_EXAMPLE_COOR.LS": (
         1,
@@ -275,7 +281,7 @@ REALWORLD = {
         (27, "COORD) at line 22"),
     ),
     "rpiRobotics__fanuc_motion_program_exec__tp_TMPA.LS": (1, 1, [], 2, None),
-    "salmanTaj__MPL_Spain_Enclosure__TP_clean1.ls": (1, 1, [], 0, (1, "no Cartesian")),
+    "salmanTaj__MPL_Spain_Enclosure__TP_clean1.ls": (1, 1, [], 0, (53, "PR[115]: a position")),
 }
 
 
@@ -379,6 +385,7 @@ def test_what_the_rewrite_leaves_it_reports_with_the_reason(tmp_path, capsys):
         "L P[7] 100mm/sec FINE ;",
         "J P[8] 50% CNT100 ;",
         "L PR[2] 100mm/sec FINE ;",
+        "L P[10] 100mm/sec FINE ;",
     ]
     joint = "J1 = 1.000 deg, J2 = 2.000 deg, J3 = 3.000 deg,\n J4 = 4.000 deg, J5 = 5.000 deg"
     positions = [_entry(1), _entry(2), _entry(3, uf=2), _entry(4), _entry(5), _entry(6)]
@@ -395,6 +402,10 @@ def test_what_the_rewrite_leaves_it_reports_with_the_reason(tmp_path, capsys):
     assert "tool frame 3" in by["P[7]"]["reason"]
     assert "joint position" in by["P[8]"]["reason"]
     assert "not used by a motion" in by["P[9]"]["reason"]
+    assert "position register" in by["PR[2]"]["reason"] and by["PR[2]"]["line"] == "15"
+    assert "no position P[n] in /POS" in by["P[10]"]["reason"]
+    code, err, _ = _rewrite(tmp_path, text, capsys, "--force")  # a motion left: the job fails
+    assert code == 2 and "T.ls:24: 6 position(s) cannot be corrected" in err, err
 
 
 def test_header_is_remarks_at_the_top_and_the_lines_after_it_renumbered(tmp_path, capsys):

@@ -36,6 +36,7 @@ _NUMBERED = re.compile(r"([ \t]*)(\d+):")
 _CONTINUED = re.compile(r"[ \t]*:")
 _LABEL = re.compile(r"\[([^\]:\[]*):[^\]\[]*\]")  # [n:label] -> [n]
 _MOTION = re.compile(r"\s*([JLCA])\s+(P|PR)\[([^\]]*)\]", re.I)
+_TARGET = re.compile(r"\s*(P|PR)\[([^\]]*)\]", re.I)
 _POINT = re.compile(r"(?<![A-Za-z_\[])P\[\s*(\d+)\s*\]")
 _OFFSET = re.compile(r"\b(?:(?:Tool_|WKZ_)?Offset|VOFFSET|INC)\b", re.I)
 _COORD = re.compile(r"\bCOORD\b", re.I)
@@ -57,14 +58,16 @@ _ASSIGNED = {"uframe": "uf", "benutzer": "uf", "utool": "ut", "wkz": "ut"}
 @dataclass
 class Instruction:
     """A /MN instruction: its ``line`` (of its number), its text (labels masked, continuation
-    lines joined), the motion (``J``/``L``/``C``/``A``, "" for none), the positions P[n] it
-    moves to (``targets``) and those it reads otherwise (``reads``), its options (``offset``,
-    ``coord``, ``rtcp``: the word found, "" for none)."""
+    lines after a line break), the motion (``J``/``L``/``C``/``A``, "" for none), the positions
+    P[n] it moves to (``targets``), the targets that are no P[n] of /POS (``unknown``: ``PR[2]``,
+    ``P[R[3]]``), the positions it reads otherwise (``reads``), its options (``offset``: the word
+    found, "" for none; ``coord``, ``rtcp``)."""
 
     line: int
     text: str
     motion: str = ""
     targets: list[int] = field(default_factory=list)
+    unknown: list[str] = field(default_factory=list)
     reads: list[int] = field(default_factory=list)
     offset: str = ""
     coord: bool = False
@@ -171,7 +174,7 @@ def _body(path: str, text: str, start: int, end: int):
             pieces.append((line, body[numbered.end() :]))
         elif _CONTINUED.match(body) and pieces:
             last_line, last = pieces[-1]
-            pieces[-1] = (last_line, last + " " + body[_CONTINUED.match(body).end() :])
+            pieces[-1] = (last_line, last + "\n" + body[_CONTINUED.match(body).end() :])
     for line, statement in pieces:
         instruction = _instruction(line, statement)
         if instruction is None:
@@ -192,16 +195,27 @@ def _instruction(line: int, statement: str) -> Instruction | None:
         return None
     text = _LABEL.sub(r"[\1]", text)
     out = Instruction(line, text)
-    motion = _MOTION.match(text)
+    parts = text.split("\n")  # a circular move's end point continues it on a line of its own
+    motion = _MOTION.match(parts[0])
     points = [int(n) for n in _POINT.findall(text)]
     if motion is None:
         out.reads = points
         return out
     out.motion = motion.group(1).upper()
-    out.targets = points if out.motion in ("C", "A") else points[:1]
-    if motion.group(2).upper() == "PR":
-        out.targets = points if out.motion == "C" else []
-    out.reads = points[len(out.targets) :]
+    goals = [motion.groups()[1:]]
+    end = _TARGET.match(parts[1]) if out.motion == "C" and len(parts) > 1 else None
+    if end is not None:
+        goals.append(end.groups())
+    for kind, value in goals:
+        value = value.strip() + ("]" if value.count("[") > value.count("]") else "")
+        if kind.upper() == "P" and value.isdigit():
+            out.targets.append(int(value))
+        else:
+            out.unknown.append(f"{kind.upper()}[{value}]")
+    reads = list(points)
+    for n in out.targets:
+        reads.remove(n)
+    out.reads = reads
     found = _OFFSET.search(text)
     out.offset = found.group() if found else ""
     out.coord = bool(_COORD.search(text))

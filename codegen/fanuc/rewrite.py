@@ -11,8 +11,10 @@ time (``UFRAME[n]=..``, ``UTOOL[n]=..``) or selects by a register, in a user fra
 never selects while it selects others, positions moved with ``Offset``/``Tool_Offset``/``INC``
 (the register's value is not in the file), by coordinated (``COORD``) or remote-TCP (``RTCP``)
 motion, read by another instruction, with other motion groups or extended axes (unless
-``--ignore-external-axes``), or not used by a motion. Moves to ``PR[n]`` are no /POS position:
-nothing to correct there. Only the X, Y, Z numbers of a corrected position change (the file's
+``--ignore-external-axes``), or not used by a motion. A motion to a position register
+(``PR[n]``), to an indirect position (``P[R[n]]``) or to a P[n] /POS does not hold is a row of
+its own, never corrected; like a commanded position left as it is, it fails the job unless
+``--allow-partial``. Only the X, Y, Z numbers of a corrected position change (the file's
 decimals, at least 0.01 mm); W, P, R, CONFIG and every other byte stay. The policy holds each
 position against the configuration its CONFIG names (``configuration``).
 """
@@ -52,8 +54,9 @@ class FanucPlacement:
 @dataclass
 class _Found:
     """The positions of one program as columns: a row per Cartesian or remote-TCP /POS entry
-    (``positions``), in its order; the joint positions and entries without group 1 as report
-    rows of data never corrected (``others``: line, name, reason)."""
+    (``positions``), in its order, then a row per motion to a position that is not in /POS
+    (``unplaced``: line, name, reason: a register, an indirect or a missing P[n]); the joint
+    positions as report rows of data never corrected (``others``: line, name, reason)."""
 
     text: str
     path: str
@@ -64,6 +67,7 @@ class _Found:
     frame: np.ndarray  # 0 world, 1 the cell's user frame, -1 not placed
     places: int
     others: list[tuple[int, str, str]]
+    unplaced: list[tuple[int, str, str]]
 
 
 def _uses(program: LsProgram) -> dict[int, list]:
@@ -117,7 +121,27 @@ def _judge(path: str, text: str, section, opts: Options, ignore_external_axes: b
         if not reason[i]:
             frame[i] = 0 if p.uf == 0 else 1
     places = precision([t for p in positions for t in p.literals], MIN_PLACES_MM)
-    return _Found(text, path, program, positions, reason, commanded, frame, places, others)
+    recorded = {p.number for p in program.positions}
+    unplaced = [
+        (ins.line, name, _WHY_UNKNOWN[name[:2]])
+        for ins in program.instructions
+        for name in ins.unknown
+    ]
+    unplaced += [
+        (ins.line, f"P[{n}]", "no position P[n] in /POS")
+        for ins in program.instructions
+        for n in ins.targets
+        if n not in recorded
+    ]
+    return _Found(
+        text, path, program, positions, reason, commanded, frame, places, others, unplaced
+    )
+
+
+_WHY_UNKNOWN = {
+    "PR": "a position register: its value is not in the file",
+    "P[": "an indirect position: its number is known at run time",
+}
 
 
 def _reason(program, p, mine, moves, section, opts, ignore_external_axes) -> str:
@@ -176,27 +200,28 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: FanucPlaceme
     for path, text in texts.items():
         found = _judge(path, text, section, opts, placement.ignore_external_axes)
         positions = found.positions
-        n = len(positions)
-        if not n and not opts.allow_partial:
-            what = f"; {len(found.others)} other position(s) left" if found.others else ""
+        n, u = len(positions), len(found.unplaced)
+        if not n + u and not opts.allow_partial:
+            what = f"; {len(found.others)} joint position(s) left" if found.others else ""
             raise InputError(
                 f"no Cartesian /POS position in this program: nothing to correct{what}", path, 1
             )
-        xyz = np.full((n, 3), np.nan)
+        xyz = np.full((n + u, 3), np.nan)
         wpr = np.full((n, 3), np.nan)
         for i, p in enumerate(positions):
             if p.kind == "cartesian":
                 xyz[i], wpr[i] = p.values[:3], p.values[3:]
         rows = Rows(
             [path],
-            np.zeros(n, np.int64),
-            np.array([p.line for p in positions], np.int64),
-            [f"P[{p.number}]" for p in positions],
-            found.reason,
+            np.zeros(n + u, np.int64),
+            np.array([p.line for p in positions] + [r[0] for r in found.unplaced], np.int64),
+            [f"P[{p.number}]" for p in positions] + [r[1] for r in found.unplaced],
+            found.reason + [r[2] for r in found.unplaced],
             xyz,
         )
-        rows.commanded[:] = found.commanded
-        rows.tool[:] = [p.ut if p.ut != section.utool else -1 for p in positions]
+        rows.commanded[:n] = found.commanded
+        rows.commanded[n:] = True  # a motion goes there
+        rows.tool[:n] = [p.ut if p.ut != section.utool else -1 for p in positions]
         mine = np.flatnonzero(found.frame >= 0)
         t = frames[found.frame[mine]]
         robot.append(np.einsum("nij,nj->ni", t[:, :3, :3], xyz[mine]) + t[:, :3, 3])
@@ -216,7 +241,7 @@ def scan_positions(texts: dict[str, str], opts: Options, placement: FanucPlaceme
             )
         )
         found_all.append((found, start, mine, xyz))
-        start += n
+        start += n + u
     return Scan(
         Rows.concat(parts),
         np.concatenate(at or [np.zeros(0, np.int64)]),
