@@ -22,6 +22,7 @@ angle to the lower arm, ``kinematics/robots/r2000ic-165f.yaml``):
 from __future__ import annotations
 
 import re
+from functools import lru_cache
 
 import numpy as np
 
@@ -56,11 +57,12 @@ def read_configuration(words: np.ndarray) -> Configuration:
     return Configuration(words[..., 2] == 1, words[..., 1] == 1, words[..., 0] == 0, quarter)
 
 
-def words_of_config(text: str) -> np.ndarray | None:
-    """The words (6,) int of a CONFIG text (``F U T, 0, 0, 0``, without its quotes), None when it
-    is not one accugrid reads."""
+@lru_cache(maxsize=1024)  # a program holds a few distinct CONFIG texts, many times each
+def words_of_config(text: str) -> tuple[int, ...] | None:
+    """The words (6 ints) of a CONFIG text (``F U T, 0, 0, 0``, without its quotes), None when
+    it is not one accugrid reads."""
     m = CONFIG.fullmatch(f"'{text}'")
     if m is None:
         return None
-    flip, up, top = m.group(1) == "F", m.group(2) == "U", m.group(3) == "B"
-    return np.array([flip, up, top, *map(int, m.groups()[3:])], dtype=np.int64)
+    flip, up, back = m.group(1) == "F", m.group(2) == "U", m.group(3) == "B"
+    return (int(flip), int(up), int(back), *map(int, m.groups()[3:]))

@@ -228,6 +228,7 @@ def _positions(path: str, text: str, start: int, end: int) -> list[Position]:
     out: list[Position] = []
     seen: dict[int, int] = {}
     at = start
+    line, counted = _where(text, start)[0], start  # the line of offset ``counted``
     for m in _ENTRY.finditer(text, start, end):
         gap = text[at : m.start()]
         if gap.strip():
@@ -237,7 +238,8 @@ def _positions(path: str, text: str, start: int, end: int) -> list[Position]:
             )
         at = m.end()
         number = int(m.group(1))
-        line = _where(text, m.start())[0]
+        line += text.count("\n", counted, m.start())  # counted on: one pass over /POS
+        counted = m.start()
         if number in seen:
             raise InputError(f"P[{number}] is defined twice (line {seen[number]})", path, line, 1)
         seen[number] = line

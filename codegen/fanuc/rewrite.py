@@ -37,7 +37,7 @@ from accugrid.kinematics.frames import abc_to_matrix
 
 __all__ = ["FanucPlacement", "add_header", "scan_positions", "splice_positions"]
 
-_LINE_COUNT = re.compile(r"^LINE_COUNT\s*=\s*(\d+)", re.M)
+_LINE_COUNT = re.compile(r"^(?:LINE_COUNT|ZEILEN)\s*=\s*(\d+)", re.M)
 
 
 @dataclass(frozen=True)
@@ -259,7 +259,7 @@ def _codes(configs: list[str]) -> np.ndarray:
     out = np.full(len(configs), -1, np.int64)
     given = [i for i, text in enumerate(configs) if text]
     if given:
-        words = np.stack([words_of_config(configs[i]) for i in given])
+        words = np.array([words_of_config(configs[i]) for i in given], np.int64)
         out[given] = read_configuration(words).code
     return out
 
