@@ -336,6 +336,18 @@ def test_realworld_fanuc_rewrite_changes_only_the_corrected_numbers(
     assert changed == len(corrected)
     pos_at = old[: old.index("/POS")].count("\n") + 1 if "/POS" in old else 10**9
     assert all(line >= pos_at for line in lines)  # numbers of /POS only
+    # with the header: remarks at the top of /MN, the lines after them renumbered, numbers only
+    headed = tmp_path / "headed" / name
+    assert main([*argv, "--allow-partial", "--header", "-o", str(headed)]) == 0
+    text = headed.read_bytes().decode("latin-1")
+    added = text.count("\n") - new.count("\n")  # the header's remarks, right after /MN
+    at = text.index("\n", text.index("/MN")) + 1
+    lines = text[at:].split("\n")
+    assert added > 3 and all(re.match(r" *\d+:  !.* ;\r?$", line) for line in lines[:added])
+    changed_lines(new, text[:at] + "\n".join(lines[added:]))
+    body = text[text.index("/MN") : text.index("/POS") if "/POS" in text else len(text)]
+    top = [int(n) for n in re.findall(r"(?m)^[ \t]{0,4}(\d+):", body)]
+    assert top == list(range(1, len(top) + 1))
 
 
 def _rewrite(tmp_path, text: str, capsys, *extra: str) -> tuple[int, str, list[dict]]:
@@ -414,9 +426,10 @@ def test_header_is_remarks_at_the_top_and_the_lines_after_it_renumbered(tmp_path
     assert code == 0, err
     new = (tmp_path / "out.ls").read_text()
     mn = new[new.index("/MN\n") + 4 : new.index("/POS")].splitlines()
-    assert [int(line[:4]) for line in mn] == list(range(1, len(mn) + 1))
-    assert all(line[4:8] == ":  !" for line in mn[:-2]) and len(mn) > 4
-    assert [line[4:] for line in mn[-2:]] == [":  UFRAME_NUM=1 ;", ":J P[1] 100% FINE ;"]
+    assert [int(line.split(":")[0]) for line in mn] == list(range(1, len(mn) + 1))
+    assert all(re.match(r"   \d:  !| {2}\d\d:  !", line) for line in mn[:-2]) and len(mn) > 4
+    k = len(mn) - 2  # the header's remarks
+    assert mn[-2:] == [f"   {k + 1}:  UFRAME_NUM=1 ;", f"   {k + 2}:J P[1] 100% FINE ;"]
 
 
 @pytest.mark.parametrize(

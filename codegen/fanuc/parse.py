@@ -100,8 +100,8 @@ class LsProgram:
     """What ``read_ls`` found: the instructions of /MN, the positions of /POS (in order), the
     frame selections and assignments of the body (``selects``/``assigns``: "uf"/"ut" ->
     [(line, value text)]), the end of the /MN line (``mn``, where a header goes) and the line
-    numbers of /MN (``numbers``: (start, end) offsets of each number with the spaces before it,
-    and the number)."""
+    numbers of /MN (``numbers``: (start, end) offsets of each number's digits, and the
+    number)."""
 
     path: str
     instructions: list[Instruction]
@@ -167,8 +167,7 @@ def _body(path: str, text: str, start: int, end: int):
                     column,
                 )
             expect += 1
-            lead = len(numbered.group(1).rstrip(" "))  # the spaces just before the number
-            numbers.append((m.start() + lead, m.start() + numbered.end(2), number))
+            numbers.append((m.start() + numbered.start(2), m.start() + numbered.end(2), number))
             pieces.append((line, body[numbered.end() :]))
         elif numbered:  # a point-logic sub-line: a statement of its own
             pieces.append((line, body[numbered.end() :]))

@@ -295,8 +295,7 @@ def splice_positions(scan: Scan, corrected: np.ndarray, opts: Options) -> dict[s
 
 def add_header(text: str, lines: list[str]) -> str:
     """The program with the header as remarks at the top of /MN, numbered from 1, the lines
-    after it numbered on (their numbers only change, right-aligned in the columns they had),
-    in the program's line ending."""
+    after it numbered on (their digits only change), in the program's line ending."""
     program = read_ls("", text)
     newline = "\r\n" if "\r\n" in text else "\n"
     remarks = header_remarks(lines)
@@ -315,8 +314,8 @@ def add_header(text: str, lines: list[str]) -> str:
     else:
         head = text[:at]
     pieces, last = [head, block], at
-    for start, end, number in program.numbers:  # the same width where it fits
-        pieces += (text[last:start], str(number + shift).rjust(end - start))
+    for start, end, number in program.numbers:  # the digits only: every other byte stays
+        pieces += (text[last:start], str(number + shift))
         last = end
     pieces.append(text[last:])
     return "".join(pieces)
