@@ -470,6 +470,7 @@ def test_a_program_the_reader_cannot_read_is_a_located_error(tmp_path, capsys, t
         (("  program: WING ", "  program: 9WING "), "WING.ls", "fanuc.program"),
         (("  program: WING ", "  program: " + "W" * 37 + " "), "WING.ls", "at most 36"),
         (("  program: WING ", "  # program"), "1WING.ls", "1WING"),
+        (("  approach: 50 ", "  approach: 50.5 "), "WING.ls", "speeds.approach"),
     ],
 )
 def test_a_cell_or_name_the_controller_refuses_is_a_located_error(
@@ -572,3 +573,14 @@ def test_frame_entries_are_the_pose_in_fixed_xyz_angles():
     np.testing.assert_allclose(
         Rotation.from_euler("xyz", wpr, degrees=True).as_matrix(), turned[:3, :3], atol=1e-6
     )
+
+
+def test_a_feed_the_controller_cannot_take_is_a_located_error(tmp_path, capsys):
+    points = tmp_path / "p.csv"
+    points.write_text("id,x,y,z,i,j,k,feed\nH1,100,200,0,0,0,-1,5\nH2,120,200,0,0,0,-1,2.5\n")
+    out = tmp_path / "WING.ls"
+    argv = ["fanuc", str(points), "--cell", str(CELL), "-o", str(out), "--no-correction"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"{points}:3:8: " in err and "whole number of mm/sec" in err, err
+    assert not out.exists()

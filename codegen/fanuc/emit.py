@@ -29,6 +29,7 @@ import numpy as np
 
 from accugrid.codegen.fanuc.configuration import configuration_words
 from accugrid.codegen.fanuc.names import program_name_problem
+from accugrid.codegen.fanuc.section import WHOLE_SPEED
 from accugrid.codegen.linebytes import (
     SLOT,
     image_bytes,
@@ -49,7 +50,6 @@ __all__ = [
     "header_remarks",
     "program_name",
     "render_fanuc",
-    "whole_speed",
 ]
 
 BLOCK = 16384  # holes whose lines are made at a time
@@ -77,11 +77,6 @@ def program_name(section_program: str | None, out: Path) -> str:
     return out.stem.upper()
 
 
-def whole_speed(mm_s: float) -> bool:
-    """Whether a linear speed (mm/s) is one a TP motion takes: a whole number of mm/sec."""
-    return float(mm_s).is_integer() and mm_s >= 1
-
-
 def header_remarks(lines: list[str]) -> list[str]:
     """The header ``lines`` as remarks of at most ``REMARK_MAX`` characters, each line wrapped
     into as many as it needs (made safe first)."""
@@ -100,14 +95,12 @@ def render_fanuc(
     feed is not a whole number of mm/sec."""
     cell = program.cell
     section = cell.dialects["fanuc"].check()
-    slow = np.flatnonzero(
-        (program.feed_mm_s != np.round(program.feed_mm_s)) | (program.feed_mm_s < 1)
-    )
+    feed = program.points.feed  # the points' own feeds (the cell's: checked with the cell)
+    slow = np.flatnonzero(np.isfinite(feed) & ((feed != np.round(feed)) | (feed < 1)))
     if slow.size:
         i = int(slow[0])
         raise InputError(
-            f"{program.points.name(i)}: feed {program.feed_mm_s[i]:g} mm/s: a FANUC linear "
-            "speed is a whole number of mm/sec",
+            f"{program.points.name(i)}: feed {feed[i]:g} mm/s: {WHOLE_SPEED}",
             *program.points.table.where(i, "feed"),
         )
     env = environment(template_dir("fanuc", templates), newline=_NEWLINE)

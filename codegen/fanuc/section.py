@@ -15,7 +15,9 @@ from accugrid.codegen.cellfile import CellReader, SectionKeys
 from accugrid.codegen.fanuc.names import program_name_problem
 from accugrid.infra.errors import InputError
 
-__all__ = ["KEYS", "UFRAME_MAX", "UTOOL_MAX", "FanucSection", "read_section"]
+__all__ = ["KEYS", "UFRAME_MAX", "UTOOL_MAX", "WHOLE_SPEED", "FanucSection", "read_section"]
+
+WHOLE_SPEED = "a FANUC linear speed is a whole number of mm/sec, at least 1"
 
 UFRAME_MAX = 9  # user frames 1..9 (0: the world frame)
 UTOOL_MAX = 10  # tool frames 1..10
@@ -55,8 +57,9 @@ class FanucSection:
 def read_section(r: CellReader, robot_T_base: np.ndarray) -> FanucSection:
     """The FANUC record of the cell ``r`` reads (the user frame is the cell's base frame,
     ``robot_T_base``); InputError naming the key and line. Every cell is read by every dialect:
-    a base or tool number FANUC has not is kept as the located error ``problem`` raises, when
-    the cell drives a FANUC program."""
+    a base or tool number FANUC has not, or an approach speed or feed that is no whole number
+    of mm/sec, is kept as the located error ``problem`` raises when the cell drives a FANUC
+    program."""
     numbers = []
     problem = None
     for key, limit, what in (("base", UFRAME_MAX, "user"), ("tool", UTOOL_MAX, "tool")):
@@ -68,6 +71,10 @@ def read_section(r: CellReader, robot_T_base: np.ndarray) -> FanucSection:
                 f"{key}.number",
                 f"is the FANUC {what} frame of the program: 1..{limit}, got {number}",
             )
+    for key in ("approach", "feed"):  # the cell's own (the cell reader checks their range)
+        speed = r.top.get("speeds", {}).get(key) if isinstance(r.top.get("speeds"), dict) else None
+        if problem is None and isinstance(speed, (int, float)) and not _whole(speed):
+            problem = r.error(f"speeds.{key}", f"{WHOLE_SPEED}, got {speed}")
     program = r.value("fanuc", "program", None)
     if program is not None:
         why = program_name_problem(program) if isinstance(program, str) else "must be a name"
@@ -84,3 +91,8 @@ def read_section(r: CellReader, robot_T_base: np.ndarray) -> FanucSection:
         decimals=r.integer("program", "decimals", 3, 1, 6),
         problem=problem,
     )
+
+
+def _whole(mm_s: float) -> bool:
+    """Whether a linear speed (mm/s) is one a TP motion takes: a whole number of mm/sec."""
+    return float(mm_s).is_integer() and mm_s >= 1
