@@ -584,3 +584,20 @@ def test_a_feed_the_controller_cannot_take_is_a_located_error(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"{points}:3:8: " in err and "whole number of mm/sec" in err, err
     assert not out.exists()
+
+
+@settings(max_examples=60, deadline=None)
+@given(q=st.tuples(*(st.floats(lo, hi) for lo, hi in load_robot("r2000ic-165f").joint_limits_deg)))
+def test_config_words_are_the_arm_geometry_of_any_joints(q):
+    from accugrid.codegen.fanuc.configuration import configuration_words, read_configuration
+    from accugrid.kinematics.configuration import Configuration
+
+    robot = load_robot("r2000ic-165f")
+    q = np.radians(q)
+    if min(abs(np.degrees(q[4])), abs(np.degrees(q[4]) % 180.0 - 180.0)) < 1e-6:
+        return  # J5 on the wrist singularity: either wrist
+    words = configuration_words(Configuration.of_joints(robot, q[None]))[0]
+    letters = "{} {} {}".format("NF"[words[0]], "DU"[words[1]], "TB"[words[2]])
+    assert f"{letters}, {words[3]}, {words[4]}, {words[5]}" == _config_of(q)
+    back = read_configuration(words)  # the words read back name the same configuration
+    np.testing.assert_array_equal(configuration_words(back), words)
