@@ -1,11 +1,15 @@
-"""100,000 drilling holes to KUKA KRL and to G-code, including the grid correction and the IK of
-every pose (issue target: under 5 s each). Stages timed separately, then the whole job.
+"""100,000 drilling holes to KUKA KRL, to G-code and to FANUC TP, including the grid correction
+and the IK of every pose (issue target: under 5 s each). Stages timed separately, then the whole
+job.
 
 Holes: a 400 x 250 pattern at 1.5 mm pitch on the example wing panel (examples/cell.yaml, drill
-axis normal to the 4 m radius skin), corrected with examples/grid_200mm.csv. The last two rows are
-the whole commands (CSV file in, program files out). Best of 3; peak MiB is traced Python memory.
+axis normal to the 4 m radius skin), corrected with examples/grid_200mm.csv; for FANUC the same
+holes in examples/cell_fanuc.yaml (an R-2000iC/165F), corrected with its grid_r2000ic_200mm.csv.
+The last three rows are the whole commands (CSV file in, program files out). Best of 3; peak MiB
+is traced Python memory.
 Each render row is compared with its floor, measured in the same run: the numbers it prints made
-into text alone, each value once per hole (``numbers_floor``), without the lines around them.
+into text alone, each value once per hole (``numbers_floor``, ``fanuc_numbers_floor``), without
+the lines around them.
 """
 
 from __future__ import annotations
@@ -24,6 +28,8 @@ sys.path.insert(0, str(ROOT))
 
 from accugrid.app.cli import main as cli  # noqa: E402
 from accugrid.codegen.cell import load_cell  # noqa: E402
+from accugrid.codegen.fanuc.configuration import configuration_words as fanuc_words  # noqa: E402
+from accugrid.codegen.fanuc.emit import HOLE_LINES, render_fanuc  # noqa: E402
 from accugrid.codegen.gcode.emit import render_gcode  # noqa: E402
 from accugrid.codegen.krl.configuration import configuration_words  # noqa: E402
 from accugrid.codegen.krl.emit import render_krl  # noqa: E402
@@ -105,6 +111,27 @@ def numbers_floor(program, krl: bool) -> int:
     return size
 
 
+def fanuc_numbers_floor(program) -> int:
+    """``numbers_floor`` of a FANUC TP program: positions (n, 4, 3) in the user frame (the base)
+    and W P R (n, 3) with the cell's decimals, the feed (n,), and the line numbers, the P
+    numbers and the turn numbers of every position."""
+    places = program.cell.dialects["fanuc"].decimals
+    size = 0
+    for lo in range(0, len(program), 16384):
+        hi = min(lo + 16384, len(program))
+        pos, abc = program.in_frame(program.cell.robot_T_base, lo, hi)
+        mm = np.concatenate([pos.reshape(-1), abc.reshape(-1)])
+        turns = fanuc_words(program.configuration_of(lo, hi))[..., 3:]
+        ints = [np.arange(HOLE_LINES * lo, HOLE_LINES * hi), np.arange(4 * lo, 4 * hi), turns]
+        cells = [
+            fixed_bytes(mm, places)[0],
+            fixed_bytes(program.feed_mm_s[lo:hi], 0)[0],
+            fixed_bytes(np.concatenate([i.reshape(-1) for i in ints]), 0)[0],
+        ]
+        size += sum(len(c.tobytes().translate(None, b"\0")) for c in cells)
+    return size
+
+
 def main() -> None:
     cell = load_cell(ROOT / "examples" / "cell.yaml")
     grid = GridModel.from_measurements(ROOT / "examples" / "grid_200mm.csv")
@@ -113,6 +140,12 @@ def main() -> None:
     points = parse_points(text, "bench.csv")
     program = build_program(points, cell, robot, grid)
     header = ["bench"]
+    fanuc_cell = load_cell(ROOT / "examples" / "cell_fanuc.yaml")
+    fanuc_robot = load_robot(fanuc_cell.robot_name).with_tool(fanuc_cell.flange_T_tool)
+    fanuc = build_program(points, fanuc_cell, fanuc_robot)  # the cell's grid
+
+    def fanuc_render() -> int:
+        return sum(len(piece) for piece in render_fanuc(fanuc, header)[Path("ACCUGRID.ls")])
 
     tmp = Path(tempfile.mkdtemp(prefix="accugrid-bench-"))
     points_file = tmp / "holes.csv"
@@ -125,6 +158,11 @@ def main() -> None:
     def gcode_job():
         assert cli(["gcode", *common, "-o", str(tmp / "holes.ngc")]) == 0
 
+    def fanuc_job():
+        cell_args = ["--cell", str(ROOT / "examples" / "cell_fanuc.yaml"), "--force"]
+        args = [str(points_file), *cell_args, "-o", str(tmp / "HOLES.ls")]
+        assert cli(["fanuc", *args]) == 0
+
     stages = [
         ("parse points CSV", lambda: parse_points(text, "bench.csv")),
         ("correction + IK (program model)", lambda: build_program(points, cell, robot, grid)),
@@ -132,8 +170,11 @@ def main() -> None:
         ("floor: KRL numbers as text", lambda: numbers_floor(program, True)),
         ("render G-code (.ngc)", lambda: render_gcode(program, header)),
         ("floor: G-code numbers as text", lambda: numbers_floor(program, False)),
+        ("render FANUC (.ls)", fanuc_render),
+        ("floor: FANUC numbers as text", lambda: fanuc_numbers_floor(fanuc)),
         ("accugrid krl (read, correct, IK, render, write)", krl_job),
         ("accugrid gcode (read, correct, IK, render, write)", gcode_job),
+        ("accugrid fanuc (read, correct, IK, render, write)", fanuc_job),
     ]
     rows = []
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
@@ -152,7 +193,8 @@ def main() -> None:
     print(
         "render / floor: KRL "
         f"{best['render KRL (.src/.dat)'] / best['floor: KRL numbers as text']:.1f}x, G-code "
-        f"{best['render G-code (.ngc)'] / best['floor: G-code numbers as text']:.1f}x"
+        f"{best['render G-code (.ngc)'] / best['floor: G-code numbers as text']:.1f}x, FANUC "
+        f"{best['render FANUC (.ls)'] / best['floor: FANUC numbers as text']:.1f}x"
     )
     print()
     print(number_table())

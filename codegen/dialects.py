@@ -61,6 +61,7 @@ DIALECTS = {
             "accugrid.codegen.krl.plugin",
             "accugrid.codegen.gcode.plugin",
             "accugrid.codegen.rapid.plugin",
+            "accugrid.codegen.fanuc.plugin",
         ),
     )
 }

@@ -30,6 +30,14 @@ accugrid rapid examples/wing_panel_points.csv --cell examples/cell_irb6700.yaml 
 accugrid rewrite examples/cam_drill.mod --cell examples/cell_irb6700.yaml --header \
     -o out/cam_drill.mod --report out/cam_drill_rapid_report.csv --force --allow-partial
 
+# The same holes for a FANUC R-2000iC/165F (examples/cell_fanuc.yaml): a simulated grid of that
+# robot (examples/r2000ic_simulated.yaml), then the corrected TP program (WING.ls).
+accugrid simulate --robot examples/r2000ic_simulated.yaml --region 1600 1800 -400 400 400 1000 \
+    --step 200 --abc 0 90 0 --tool 0 0 250 0 0 0 --repeats 5 --noise-tracker 0.02 \
+    --noise-repeat 0.03 --seed 1 -o out/grid_r2000ic_200mm.csv --force
+cmp out/grid_r2000ic_200mm.csv examples/grid_r2000ic_200mm.csv
+accugrid fanuc examples/wing_panel_points.csv --cell examples/cell_fanuc.yaml -o out/WING.ls --force
+
 # The grid model on its own: the same holes in the robot frame -> corrected points CSV
 # (every input column, then x_cmd,y_cmd,z_cmd = P + e and ex,ey,ez = e, mm).
 accugrid correct examples/wing_panel_robot.csv --grid out/grid_200mm.csv \

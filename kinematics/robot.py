@@ -56,7 +56,7 @@ __all__ = [
     "load_robot",
 ]
 
-BUILTIN = ("kr210", "kr210-paper", "kr210-realistic", "irb6700", "ur10")
+BUILTIN = ("kr210", "kr210-paper", "kr210-realistic", "irb6700", "r2000ic-165f", "ur10")
 _LIMIT_TOL = 1e-9
 
 

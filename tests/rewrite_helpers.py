@@ -7,6 +7,8 @@ constant), ``field="smooth"`` a linear field that IDW reproduces only approximat
 
 from __future__ import annotations
 
+import difflib
+import re
 from pathlib import Path
 
 import numpy as np
@@ -168,3 +170,31 @@ def rewrite_krl(texts: dict[str, str], opts, base_data: dict | None = None):
     from accugrid.codegen.rewrite import rewrite
 
     return rewrite(plugin_of("krl"), texts, opts, KrlPlacement(base_data or {}))
+
+
+TOKEN = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?|\s+|[^\d\s.+-]+|.", re.S)
+NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?$")
+ADDED = re.compile(r"(?: ?[ZzRr][-+]?(?:\d+\.\d*|\.\d+|\d+) ?)+")  # words a rewrite may add
+
+
+def changed_lines(before: str, after: str, added_words: bool = False) -> set[int]:
+    """Lines whose numbers differ; fails when anything but a number differs, except (with
+    ``added_words``) ` Z<number>` / ` R<number>` words added to a line (G-code cycles)."""
+    old_lines, new_lines = before.split("\n"), after.split("\n")
+    assert len(old_lines) == len(new_lines), "line count changed"
+    lines = set()
+    for number, (x, y) in enumerate(zip(old_lines, new_lines, strict=True), start=1):
+        if x == y:
+            continue
+        a, b = TOKEN.findall(x), TOKEN.findall(y)
+        for op, i1, i2, j1, j2 in difflib.SequenceMatcher(None, a, b, autojunk=False).get_opcodes():
+            if op == "equal":
+                continue
+            old, new = a[i1:i2], b[j1:j2]
+            assert len(new) >= len(old), (old, new)
+            for ta, tb in zip(old, new[: len(old)], strict=True):
+                assert NUMBER.match(ta) and NUMBER.match(tb), (ta, tb)
+            extra = "".join(new[len(old) :])
+            assert not extra or (added_words and ADDED.fullmatch(extra)), extra
+        lines.add(number)
+    return lines

@@ -229,6 +229,7 @@ VOCABULARY = {
     "krl": {"e6pos", "e6axis"},
     "gcode": {"g-code", "rs274ngc", "ngc"},
     "rapid": {"robtarget", "robtargets", "confdata"},
+    "fanuc": {"uframe_num", "utool_num"},
 }
 GENERIC = {"iso"}  # a title's word that is no dialect's own (ISO 9283, the standard)
 ALLOWED_FILES = {

@@ -9,20 +9,15 @@ reported new positions; the report has a row for every position the parser finds
 from __future__ import annotations
 
 import csv
-import difflib
-import re
 import subprocess
 
 import numpy as np
 import pytest
-from rewrite_helpers import REALWORLD_BASE_DATA, REALWORLD_REWRITES, write_cell
+from rewrite_helpers import REALWORLD_BASE_DATA, REALWORLD_REWRITES, changed_lines, write_cell
 
 from accugrid.app.cli import main
 from accugrid.codegen.gcode.parse import parse_gcode
 from accugrid.codegen.krl.parse import scan_krl
-
-TOKEN = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?|\s+|[^\d\s.+-]+|.", re.S)
-NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?$")
 
 # how many positions must be corrected at least, per case of REALWORLD_REWRITES
 AT_LEAST = {
@@ -51,30 +46,6 @@ CASES = {case: (*REALWORLD_REWRITES[case], AT_LEAST[case]) for case in REALWORLD
 
 
 KRL = (".src", ".dat")
-ADDED = re.compile(r"(?: ?[ZzRr][-+]?(?:\d+\.\d*|\.\d+|\d+) ?)+")  # words a rewrite may add
-
-
-def changed_lines(before: str, after: str, added_words: bool = False) -> set[int]:
-    """Lines whose numbers differ; fails when anything but a number differs, except (with
-    ``added_words``) ` Z<number>` / ` R<number>` words added to a line (G-code cycles)."""
-    old_lines, new_lines = before.split("\n"), after.split("\n")
-    assert len(old_lines) == len(new_lines), "line count changed"
-    lines = set()
-    for number, (x, y) in enumerate(zip(old_lines, new_lines, strict=True), start=1):
-        if x == y:
-            continue
-        a, b = TOKEN.findall(x), TOKEN.findall(y)
-        for op, i1, i2, j1, j2 in difflib.SequenceMatcher(None, a, b, autojunk=False).get_opcodes():
-            if op == "equal":
-                continue
-            old, new = a[i1:i2], b[j1:j2]
-            assert len(new) >= len(old), (old, new)
-            for ta, tb in zip(old, new[: len(old)], strict=True):
-                assert NUMBER.match(ta) and NUMBER.match(tb), (ta, tb)
-            extra = "".join(new[len(old) :])
-            assert not extra or (added_words and ADDED.fullmatch(extra)), extra
-        lines.add(number)
-    return lines
 
 
 @pytest.mark.parametrize("case", sorted(CASES))

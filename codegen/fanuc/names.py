@@ -1,0 +1,21 @@
+"""FANUC TP program names: a letter, then letters, digits or ``_``, at most 36 characters (the
+R-30iA/R-30iB limit; older controllers keep 8). The controller holds them in upper case: a name
+is written upper-cased, so a file ``wing.ls`` holds ``/PROG WING``."""
+
+from __future__ import annotations
+
+import re
+
+__all__ = ["PROGRAM_NAME_MAX", "program_name_problem"]
+
+PROGRAM_NAME_MAX = 36
+_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+
+
+def program_name_problem(name: str) -> str | None:
+    """Why the controller refuses ``name`` as a program name, None when it takes it."""
+    if not _NAME.fullmatch(name):
+        return "must be a letter, then letters, digits or _"
+    if len(name) > PROGRAM_NAME_MAX:
+        return f"has {len(name)} characters, a FANUC program name at most {PROGRAM_NAME_MAX}"
+    return None
