@@ -145,9 +145,7 @@ def shifted_table() -> None:
     )
     print("| split | scored | DH only | default | default, DH-only where no support | no support |")
     print("|---|---|---|---|---|---|")
-    frame_rows = np.random.default_rng(SEED + 1).choice(
-        len(data["A"][0]), A_FRAME_ROWS, replace=False
-    )
+    frame_rows = np.random.default_rng(SEED + 1).choice(len(data["A"]), A_FRAME_ROWS, replace=False)
     for name, where, train, test in shifted_splits():
         series = data["A" if where == "A" else "C"]
         q, m = series.q, series.m

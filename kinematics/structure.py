@@ -1,15 +1,15 @@
 """Choosing the joint-error structure of a calibrated model from the measurements.
 
-The candidates (``kinematics.candidates``) are groups of linear parameters: reducer harmonics
-(axis, order 1..K) and the mass-free gravity parts of A2 and A3. By default (method "ard") step
-2-3 below is replaced by group sparse Bayesian learning over every candidate at once
+The candidates (``kinematics.candidates``) are groups of linear parameters: reducer harmonics (axis,
+order 1..K) and the mass-free gravity parts of every axis gravity loads. By default (method "ard")
+step 2-3 below is replaced by group sparse Bayesian learning over every candidate at once
 (``kinematics.sparse_bayes``: each group's prior precision by maximum evidence, each group paying
 log m of evidence for being the best of m; its curve adds the groups kept, largest effect first,
-scored by the same cross-validation): near-alias orders share the evidence instead of a greedy
-step committing to one. The groups it keeps are then **pruned by joint range** (``range_prune``):
-each joint's range of the poses is cut in ``RANGE_BLOCKS`` contiguous blocks, each block held out
-in turn and predicted from the rest (every joint in turn, pooled), and the group whose removal
-most lowers that held-out error is dropped, while one does. Random folds test poses drawn like
+scored by the same cross-validation): near-alias orders share the evidence instead of a greedy step
+committing to one. The groups it keeps are then **pruned by joint range** (``range_prune``): each
+joint's range of the poses is cut in ``RANGE_BLOCKS`` contiguous blocks, each block held out in turn
+and predicted from the rest (every joint in turn, pooled), and the group whose removal most lowers
+that held-out error is dropped, while one does. Random folds test poses drawn like
 the calibration poses; these test a term where one joint leaves the range it was fitted on: a
 reducer harmonic or a gravity term is a function of the joints that holds there, a term that
 only fits the poses' own joint combinations (on a real arm: effects no candidate describes)
