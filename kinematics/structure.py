@@ -310,6 +310,7 @@ def observability(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, list[tuple[s
 def identify_structure(
     robot: Robot,
     data: PoseSet,
+    *,
     base_frame: bool = False,
     compliance: bool = False,
     harmonics: Terms = (),
