@@ -1,11 +1,9 @@
 """Identification on a real robot: the UR10 laser-tracker series of ``../shared/realdata/ipa-ur10``.
 
 Series C (2,773 random poses with logged joints) and Series A (a grid at up to 24 orientations,
-11,910 rows, another session and another tracker frame), read as they come (``read_series`` of
-``bench_real_grid``). The measurements are in the tracker frame: every fit identifies the
-tracker frame with the arm (``--base-frame``); the built-in ``ur10`` with the T-Mac's origin
-109 mm along the flange z as TCP. The commanded positions are the nominal FK of the logged joints
-(the controller's own model is not the nominal one; the joints are what the robot did).
+11,910 rows, another session and another tracker frame), read as they come and calibrated as the
+command line does (``bench.real_ur10``: the built-in ``ur10``, the T-Mac's TCP, the tracker frame
+identified with the arm).
 
 Table 1 (``in_distribution_table``): N random poses of C (the same seed each run) against the rest
 of C: the 3D error |measured - model| mean, p95, max mm of the nominal arm in its best-fit tracker
@@ -30,83 +28,26 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from accugrid.infra.yamlfile import YamlDoc  # noqa: E402
-from accugrid.kinematics.identification import (  # noqa: E402
-    Identification,
-    identify,
-    pose_set,
-    rigid_fit,
+from accugrid.kinematics.identification import rigid_fit  # noqa: E402
+from bench.real_ur10 import (  # noqa: E402
+    REAL,
+    ROBOT,
+    Fit,
+    calibrate,
+    in_frame,
+    model_points,
+    read_series,
 )
-from accugrid.kinematics.robot import load_robot  # noqa: E402
-from accugrid.kinematics.structure import Selection, identify_structure  # noqa: E402
-from accugrid.kinematics.support import Structure, Support, support_section  # noqa: E402
-from bench.bench_real_grid import REAL, TCP_MM, read_series  # noqa: E402
 
 SEED = 0
 SHIFT_POSES = 300
 A_FRAME_ROWS = 30  # Series A rows a model's tracker frame for A is fitted on (C -> A)
-
-
-@dataclass(frozen=True)
-class Fit:
-    """The default identification, its selection, the DH-only fit of the same poses, the
-    support record and the default's wall and CPU time (s; one process, BLAS on one thread)."""
-
-    default: Identification
-    selection: Selection
-    dh: Identification
-    support: Support
-    seconds: tuple[float, float]
-
-
-def ur10():
-    tool = np.eye(4)
-    tool[2, 3] = TCP_MM
-    return load_robot("ur10").with_tool(tool)
-
-
-ROBOT = ur10()
-
-
-def series(name: str) -> tuple[np.ndarray, np.ndarray]:
-    """Joints (N, 6) rad and measured positions (N, 3) mm (tracker frame) of series "A" or "C"."""
-    path = {"A": "Series_A/measurements_grid.csv", "C": "Series_C/measurements_random_poses.csv"}
-    s = read_series(path[name])
-    return s["q"], s["m"]
-
-
-def calibrate(q: np.ndarray, m: np.ndarray) -> Fit:
-    """The default and the DH-only identification from joints q (N, 6) rad and measured m (N, 3)
-    mm (tracker frame identified), with the default's support record."""
-    data = pose_set(ROBOT, ROBOT.fk(q)[:, :3, 3], m, joints_deg=np.degrees(q))
-    started, cpu = time.perf_counter(), time.process_time()
-    result, selection = identify_structure(ROBOT, data, base_frame=True)
-    seconds = (time.perf_counter() - started, time.process_time() - cpu)
-    dh = identify(ROBOT, data, base_frame=True)
-    structure = Structure(True, False, tuple(selection.harmonics), tuple(selection.gravity))
-    section = support_section(result.robot, data.q, data.group, structure, dh)
-    doc = YamlDoc({"identification": {"support": section}}, {}, "identify")
-    support = Support.from_doc(doc, result.robot, structure)
-    return Fit(result, selection, dh, support, seconds)
-
-
-def model_points(result: Identification, q: np.ndarray) -> np.ndarray:
-    """The identified arm's TCP (N, 3) mm, robot frame, at joints q (N, 6) rad."""
-    return (result.robot.true_robot() or result.robot).fk(q)[:, :3, 3]
-
-
-def in_frame(result: Identification, q: np.ndarray) -> np.ndarray:
-    """The identified arm's TCP (N, 3) mm in its identified tracker frame."""
-    frame = result.tracker_T_robot
-    return model_points(result, q) @ frame[:3, :3].T + frame[:3, 3]
 
 
 def errors(fit: Fit, q: np.ndarray, m: np.ndarray, frame_rows: np.ndarray | None = None):
@@ -144,7 +85,8 @@ def _cells(e: np.ndarray) -> str:
 
 def in_distribution_table(sizes: tuple[int, ...]) -> None:
     """Table 1 (printed)."""
-    q, m = series("C")
+    c = read_series("C")
+    q, m = c.q, c.m
     order = np.random.default_rng(SEED).permutation(len(q))
     print("\nN random Series C poses -> the rest of C; 3D error mean | p95 | max mm\n")
     print(
@@ -154,7 +96,7 @@ def in_distribution_table(sizes: tuple[int, ...]) -> None:
     print("|---|---|---|---|---|---|---|---|---|")
     for n in sizes:
         train, test = order[:n], order[n:]
-        fit = calibrate(q[train], m[train])
+        fit = calibrate(c, train)
         (dh, default, guarded), flagged = errors(fit, q[test], m[test])
         nominal = nominal_errors(q, m, train)[test]
         nested = fit.selection.nested
@@ -175,8 +117,7 @@ def in_distribution_table(sizes: tuple[int, ...]) -> None:
 def shifted_splits() -> list[tuple[str, str, np.ndarray, np.ndarray]]:
     """(name, series "C", "A" or "C->A", training rows, scored rows) of table 2."""
     rng = np.random.default_rng(SEED)
-    q_c, _ = series("C")
-    q_a, _ = series("A")
+    q_c, q_a = read_series("C").q, read_series("A").q
 
     def pick(rows: np.ndarray) -> np.ndarray:
         return np.sort(rng.choice(rows, min(SHIFT_POSES, len(rows)), replace=False))
@@ -197,21 +138,20 @@ def shifted_splits() -> list[tuple[str, str, np.ndarray, np.ndarray]]:
 
 def shifted_table() -> None:
     """Table 2 (printed)."""
-    data = {"C": series("C"), "A": series("A")}
+    data = {"C": read_series("C"), "A": read_series("A")}
     print(
         f"\ncalibrated on {SHIFT_POSES} poses of one part of joint space, scored on another; "
         "mean 3D error mm (ratio to the DH-only fit)\n"
     )
     print("| split | scored | DH only | default | default, DH-only where no support | no support |")
     print("|---|---|---|---|---|---|")
-    frame_rows = np.random.default_rng(SEED + 1).choice(
-        len(data["A"][0]), A_FRAME_ROWS, replace=False
-    )
+    frame_rows = np.random.default_rng(SEED + 1).choice(len(data["A"]), A_FRAME_ROWS, replace=False)
     for name, where, train, test in shifted_splits():
-        q, m = data["A" if where == "A" else "C"]
-        fit = calibrate(q[train], m[train])
+        series = data["A" if where == "A" else "C"]
+        q, m = series.q, series.m
+        fit = calibrate(series, train)
         if where == "C->A":
-            (dh, default, guarded), flagged = errors(fit, *data["A"], frame_rows)
+            (dh, default, guarded), flagged = errors(fit, data["A"].q, data["A"].m, frame_rows)
         else:
             (dh, default, guarded), flagged = errors(fit, q[test], m[test])
         ratio = [e.mean() / dh.mean() for e in (default, guarded)]

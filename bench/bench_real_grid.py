@@ -1,7 +1,7 @@
 """The seed's grid method on a real grid: Series A of the UR10 laser-tracker data.
 
-Series A (``../shared/realdata/ipa-ur10/Series_A``, read as it comes: semicolon, decimal comma,
-commanded positions in m) is a grid of TCP positions, x 650..1000 step 50, y -600..600 step 100,
+Series A (``../shared/realdata/ipa-ur10/Series_A``, read as it comes, ``bench.real_ur10``) is a
+grid of TCP positions, x 650..1000 step 50, y -600..600 step 100,
 z 400..900 step 100 mm, each at up to 22 tool orientations. The tracker frame is the rigid fit of
 the commanded to the measured positions of the grid's own orientation (the orientation with the
 most grid positions): the best a grid user can have without a model. The error is e = P - M.
@@ -35,56 +35,27 @@ from pathlib import Path
 
 import numpy as np
 
-from accugrid.compensation.grid import GridModel
-from accugrid.compensation.interpolation import CORNERS
-from accugrid.infra.csvtable import TableFormat, read_table
-from accugrid.infra.yamlfile import YamlDoc
-from accugrid.kinematics.frames import abc_to_matrix, rotation_angle_deg
-from accugrid.kinematics.identification import identify, pose_set, rigid_fit
-from accugrid.kinematics.robot import load_robot
-from accugrid.kinematics.structure import identify_structure
-from accugrid.kinematics.support import Structure, Support, support_section
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-REAL = Path(__file__).resolve().parents[2] / "shared" / "realdata" / "ipa-ur10"
-FORMAT = TableFormat(delimiter=";", decimal=",")
-GOAL = ["Goal x", "Goal y", "Goal z"]
-RPY = ["Goal roll", "Goal pitch", "Goal yaw"]
-MEASURED = ["measurement_x", "measurement_y", "measurement_z"]
-JOINTS = [
-    "shoulder_pan_joint",
-    "shoulder_lift_joint",
-    "elbow_joint",
-    "wrist_1_joint",
-    "wrist_2_joint",
-    "wrist_3_joint",
-]
+from accugrid.compensation.grid import GridModel  # noqa: E402
+from accugrid.compensation.interpolation import CORNERS  # noqa: E402
+from accugrid.kinematics.frames import rotation_angle_deg  # noqa: E402
+from accugrid.kinematics.identification import rigid_fit  # noqa: E402
+from bench.real_ur10 import REAL, Series, calibrate, random_pick, read_series  # noqa: E402
+
 GRID = (np.arange(650, 1001, 50), np.arange(-600, 601, 100), np.arange(400, 901, 100))  # mm
 STEPS = (100, 200, 300)  # mm
 ANGLE_BINS = (0.0, 1.0, 20.0, 40.0, 60.0, 180.0)  # deg from the grid's orientation
-TCP_MM = 109.0  # the T-Mac's origin along the flange z
 
 
-def read_series(name: str) -> dict[str, np.ndarray]:
-    """Commanded P (N, 3) mm, rotations (N, 3, 3), joints (N, 6) rad, measured (N, 3) mm
-    (tracker frame) of a series file as it comes."""
-    table = read_table(REAL / name, FORMAT)
-    rpy = table.floats(RPY)  # R = Rz(yaw) Ry(pitch) Rx(roll): KUKA A, B, C = yaw, pitch, roll
-    return {
-        "p": table.floats(GOAL) * 1000.0,
-        "rot": abc_to_matrix(np.degrees(rpy[:, ::-1])),
-        "q": table.floats(JOINTS),
-        "m": table.floats(MEASURED),
-    }
-
-
-def grid_rows(a: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def grid_rows(a: Series) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per row: its grid index (N, 3) (-1 rows off the grid), its orientation id (N,) and the id
     of the orientation with the most grid positions."""
-    index = np.stack([np.searchsorted(g, np.round(a["p"][:, k])) for k, g in enumerate(GRID)], 1)
+    index = np.stack([np.searchsorted(g, np.round(a.p[:, k])) for k, g in enumerate(GRID)], 1)
     index = np.minimum(index, [len(g) - 1 for g in GRID])
     snapped = np.stack([GRID[k][index[:, k]] for k in range(3)], 1)
-    index[np.abs(snapped - a["p"]).max(axis=1) > 1.0] = -1
-    _, orient = np.unique(np.round(a["rot"].reshape(-1, 9), 3), axis=0, return_inverse=True)
+    index[np.abs(snapped - a.p).max(axis=1) > 1.0] = -1
+    _, orient = np.unique(np.round(a.rot.reshape(-1, 9), 3), axis=0, return_inverse=True)
     orient = orient.reshape(-1)
     on = (index >= 0).all(axis=1)
     counts = [len(np.unique(index[on & (orient == o)], axis=0)) for o in range(orient.max() + 1)]
@@ -136,12 +107,12 @@ def stats_row(label: str, r: np.ndarray) -> str:
     return f"| {label} | {len(r)} | " + " | ".join(f"{v:.3f}" for v in cells) + " |"
 
 
-def table4(a: dict, index: np.ndarray, orient: np.ndarray, o_grid: int, e: np.ndarray) -> dict:
+def table4(a: Series, index: np.ndarray, orient: np.ndarray, o_grid: int, e: np.ndarray) -> dict:
     """Table 1 (printed); returns the subsampled grid models by step."""
     rows = (orient == o_grid) & (index >= 0).all(axis=1)
     errors, measured = vertex_errors(index[rows], e[rows])
     config = np.full(measured.shape, -1)
-    config[tuple(index[rows].T)] = configuration(a["q"][rows])
+    config[tuple(index[rows].T)] = configuration(a.q[rows])
     kinds = np.unique(config[measured], return_counts=True)
     print(
         f"Series A, grid orientation: {measured.sum()} of {measured.size} grid positions; "
@@ -181,54 +152,29 @@ def table4(a: dict, index: np.ndarray, orient: np.ndarray, o_grid: int, e: np.nd
     return models
 
 
-def calibrated(series: dict, pick: np.ndarray):
-    """The default identification (tracker frame identified) from the rows ``pick`` of a
-    series and its support record: (identification, selection, Support)."""
-    robot = load_robot("ur10").with_tool(_tcp())
-    q = series["q"][pick]
-    commanded = robot.fk(q)[:, :3, 3]  # the controller's own model is not the nominal one
-    data = pose_set(robot, commanded, series["m"][pick], joints_deg=np.degrees(q))
-    result, selection = identify_structure(robot, data, base_frame=True)
-    structure = Structure(True, False, tuple(selection.harmonics), tuple(selection.gravity))
-    dh = identify(robot, data, base_frame=True)
-    section = support_section(result.robot, data.q, data.group, structure, dh)
-    doc = YamlDoc({"identification": {"support": section}}, {}, "identify")
-    return result, selection, Support.from_doc(doc, result.robot, structure)
-
-
-def random_pick(rows: int, poses: int) -> np.ndarray:
-    """``poses`` random row indices of ``rows`` (the same each run)."""
-    return np.random.default_rng(0).permutation(rows)[:poses]
-
-
-def _tcp() -> np.ndarray:
-    tool = np.eye(4)
-    tool[2, 3] = TCP_MM
-    return tool
-
-
 def orientations_table(a, index, orient, o_grid, e, grid: GridModel, poses: int) -> None:
     """Table 2 (printed)."""
     t0 = time.perf_counter()
-    c = read_series("Series_C/measurements_random_poses.csv")
-    result, selection, support = calibrated(c, random_pick(len(c["p"]), poses))
+    c = read_series("C")
+    fit = calibrate(c, random_pick(len(c), poses))
+    result, selection, support = fit.default, fit.selection, fit.support
     took, groups = time.perf_counter() - t0, len(selection.chosen)
     own = orient == o_grid
     arm, fallback = result.robot.true_robot(), support.fallback.true_robot()
-    model_p, dh_p = arm.fk(a["q"])[:, :3, 3], fallback.fk(a["q"])[:, :3, 3]
+    model_p, dh_p = arm.fk(a.q)[:, :3, 3], fallback.fk(a.q)[:, :3, 3]
 
     def residual(predicted: np.ndarray) -> np.ndarray:
-        frame = rigid_fit(predicted[own], a["m"][own])  # Series A's tracker frame by the model
-        measured = (a["m"] - frame[:3, 3]) @ frame[:3, :3]
+        frame = rigid_fit(predicted[own], a.m[own])  # Series A's tracker frame by the model
+        measured = (a.m - frame[:3, 3]) @ frame[:3, :3]
         return np.linalg.norm(measured - predicted, axis=1)
 
     model_r, dh_r = residual(model_p), residual(dh_p)
-    flagged = support.ratio(a["q"]) > 1.0
+    flagged = support.ratio(a.q) > 1.0
     guarded = np.where(flagged, dh_r, model_r)
-    inside = (a["p"] >= grid.origin - 1e-6).all(axis=1) & (a["p"] <= grid.upper + 1e-6).all(axis=1)
+    inside = (a.p >= grid.origin - 1e-6).all(axis=1) & (a.p <= grid.upper + 1e-6).all(axis=1)
     grid_r = np.full(len(e), np.nan)
-    grid_r[inside] = np.linalg.norm(e[inside] - grid.predict(a["p"][inside], "idw", 1.0), axis=1)
-    angle = rotation_angle_deg(a["rot"], a["rot"][np.flatnonzero(own)[0]])
+    grid_r[inside] = np.linalg.norm(e[inside] - grid.predict(a.p[inside], "idw", 1.0), axis=1)
+    angle = rotation_angle_deg(a.rot, a.rot[np.flatnonzero(own)[0]])
     print(
         f"\nmodel: identify from {poses} random Series C poses ({groups} joint-error groups "
         f"chosen, {took:.0f} s); the 100 mm grid at A's other orientations (positions inside "
@@ -255,17 +201,15 @@ def main(argv: list[str]) -> None:
     if not REAL.is_dir():
         print(f"{REAL} is missing: the real data sit beside the checkout (../shared/realdata)")
         return
-    a = read_series("Series_A/measurements_grid.csv")
+    a = read_series("A")
     index, orient, o_grid = grid_rows(a)
     on = (index >= 0).all(axis=1)
-    frame = rigid_fit(a["p"][on & (orient == o_grid)], a["m"][on & (orient == o_grid)])
-    e = a["p"] - (a["m"] - frame[:3, 3]) @ frame[:3, :3]  # e = P - M, robot frame
+    frame = rigid_fit(a.p[on & (orient == o_grid)], a.m[on & (orient == o_grid)])
+    e = a.p - (a.m - frame[:3, 3]) @ frame[:3, :3]  # e = P - M, robot frame
     models = table4(a, index, orient, o_grid, e)
     if "--grid-only" in argv:
         return
-    keep = on
-    a = {k: v[keep] for k, v in a.items()}
-    orientations_table(a, index[keep], orient[keep], o_grid, e[keep], models[100], args.poses)
+    orientations_table(a.rows(on), index[on], orient[on], o_grid, e[on], models[100], args.poses)
 
 
 if __name__ == "__main__":

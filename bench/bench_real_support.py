@@ -1,17 +1,19 @@
 """Where a calibrated model has support, on the real UR10 (``kinematics.support``).
 
 Models identified (the default structure, tracker frame identified) from 300 poses of Series C
-(``../shared/realdata/ipa-ur10``, read as it comes; the commanded positions are the nominal FK of
-the logged joints, the controller's own model not being the nominal one) and scored on poses they
+(``../shared/realdata/ipa-ur10``, read as it comes and calibrated as the command line does,
+``bench.real_ur10``) and scored on poses they
 never saw: the rest of C (each model's own identified tracker frame), Series A (its tracker frame
 fitted with each model on all its rows), the shifted distributions of C's joint-space halves (A1
 or A4 below their median for calibration, above for scoring) and Series A's elbow configurations
 (300 poses with the elbow angle above 0, scored on those below). Per row, 3D errors in mm: the
 model's mean and max, the DH-only fit's mean (the fallback, ``--structure dh`` on the same
 poses), the mean of the model where it has support and the fallback where not, the share of
-poses without support, how many of the poses the model misses by more than twice its own nested
-estimate are flagged, and on the flagged poses the model's mean against the fallback's. Not a
-timed test: ``make bench ARGS=real`` (or ``.venv/bin/python bench/bench_real_support.py``).
+poses without support, how many of the poses the model misses by more than twice its nested
+estimate are flagged, the same for twice each pose's own estimate (the nested estimate scaled by
+the pose's prediction variance, ``own_estimate``), and on the flagged poses the model's mean
+against the fallback's. Not a timed test: ``make bench ARGS=real`` (or ``.venv/bin/python
+bench/bench_real_support.py``).
 """
 
 from __future__ import annotations
@@ -21,36 +23,49 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_real_grid import REAL, calibrated, random_pick, read_series  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from accugrid.kinematics.identification import rigid_fit  # noqa: E402
+from bench.real_ur10 import REAL, Fit, Series, calibrate, random_pick, read_series  # noqa: E402
 
 POSES = 300
 
 
-def errors(robot, frame, series: dict, rows: np.ndarray) -> np.ndarray:
+def errors(robot, frame, series: Series, rows: np.ndarray) -> np.ndarray:
     """|measured - model| (N,) mm at ``rows``; ``frame``: tracker_T_robot (None: fitted with
     the model on these rows)."""
-    predicted = robot.true_robot().fk(series["q"][rows])[:, :3, 3]
-    measured = series["m"][rows]
+    predicted = robot.true_robot().fk(series.q[rows])[:, :3, 3]
+    measured = series.m[rows]
     frame = rigid_fit(predicted, measured) if frame is None else frame
     return np.linalg.norm((measured - frame[:3, 3]) @ frame[:3, :3] - predicted, axis=1)
 
 
-def row(label: str, model, series: dict, rows: np.ndarray, own_frame: bool) -> str:
-    result, selection, support = model
+def own_estimate(model: Fit, q: np.ndarray) -> np.ndarray:
+    """Each target's own error estimate (N,) mm at joints q (N, 6) rad: the nested estimate (3D
+    RMS) scaled by the target's prediction variance against the calibration poses' average,
+    sqrt((3 + h(q)) / (3 + mean leave-one-out h)), h the leverage in noise units (3 axes of
+    noise plus the model's own variance there)."""
+    support = model.support
+    inside = support.leverage(support.joints)
+    loo = np.mean(inside / np.maximum(1.0 - inside / 3.0, 1e-9))
+    nested = float(np.linalg.norm(model.selection.nested.rms_mm))
+    return nested * np.sqrt((3.0 + support.leverage(q)) / (3.0 + loo))
+
+
+def row(label: str, model: Fit, series: Series, rows: np.ndarray, own_frame: bool) -> str:
+    result, selection, support = model.default, model.selection, model.support
     frames = (result.tracker_T_robot, support.fallback_frame) if own_frame else (None, None)
     full = errors(result.robot, frames[0], series, rows)
     dh = errors(support.fallback, frames[1], series, rows)
-    flagged = support.ratio(series["q"][rows]) > 1.0
+    flagged = support.ratio(series.q[rows]) > 1.0
     miss = full > 2.0 * float(np.linalg.norm(selection.nested.rms_mm))
+    own = full > 2.0 * own_estimate(model, series.q[rows])
     on = f"{full[flagged].mean():.3f} → {dh[flagged].mean():.3f}" if flagged.any() else "-"
     guarded = np.where(flagged, dh, full).mean()
     return (
         f"| {label} | {len(rows)} | {full.mean():.3f} / {full.max():.2f} | {dh.mean():.3f} | "
         f"{guarded:.3f} | {flagged.mean():.1%} | {(flagged & miss).sum()} of {miss.sum()} "
-        f"| {on} |"
+        f"| {(flagged & own).sum()} of {own.sum()} | {on} |"
     )
 
 
@@ -58,32 +73,33 @@ def main() -> None:
     if not REAL.is_dir():
         print(f"{REAL} is missing: the real data sit beside the checkout (../shared/realdata)")
         return
-    c = read_series("Series_C/measurements_random_poses.csv")
-    a = read_series("Series_A/measurements_grid.csv")
+    c = read_series("C")
+    a = read_series("A")
     print(
         "| calibrated on → scored on | poses | model mean / max | DH-only mean | with the "
-        "fallback: mean | flagged | misses flagged | on the flagged: model → fallback mean |"
+        "fallback: mean | flagged | misses flagged | misses of their own estimate flagged | "
+        "on the flagged: model → fallback mean |"
     )
-    print("|---|---|---|---|---|---|---|---|")
-    pick = random_pick(len(c["p"]), POSES)
-    model = calibrated(c, pick)
-    rest = np.setdiff1d(np.arange(len(c["p"])), pick)
+    print("|---|---|---|---|---|---|---|---|---|")
+    pick = random_pick(len(c), POSES)
+    model = calibrate(c, pick)
+    rest = np.setdiff1d(np.arange(len(c)), pick)
     print(row(f"{POSES} random C → the rest of C", model, c, rest, True), flush=True)
-    print(row(f"{POSES} random C → Series A", model, a, np.arange(len(a["p"])), False), flush=True)
+    print(row(f"{POSES} random C → Series A", model, a, np.arange(len(a)), False), flush=True)
     for axis in (0, 3):
-        low = c["q"][:, axis] < np.median(c["q"][:, axis])
+        low = c.q[:, axis] < np.median(c.q[:, axis])
         half = np.flatnonzero(low)
         pick = half[random_pick(len(half), POSES)]
-        model = calibrated(c, pick)
+        model = calibrate(c, pick)
         name = f"{POSES} of C, A{axis + 1} below its median"
         inside = np.setdiff1d(half, pick)
         print(row(f"{name} → the rest of that half", model, c, inside, True), flush=True)
         print(row(f"{name} → the other half", model, c, np.flatnonzero(~low), True), flush=True)
-    up = np.flatnonzero(a["q"][:, 2] > 0)  # Series A, elbow angle above 0: one configuration
+    up = np.flatnonzero(a.q[:, 2] > 0)  # Series A, elbow angle above 0: one configuration
     pick = up[random_pick(len(up), POSES)]
-    model = calibrated(a, pick)
+    model = calibrate(a, pick)
     name = f"{POSES} of A with the elbow above 0"
-    others = np.flatnonzero(a["q"][:, 2] <= 0)
+    others = np.flatnonzero(a.q[:, 2] <= 0)
     print(row(f"{name} → the rest of them", model, a, np.setdiff1d(up, pick), True), flush=True)
     print(row(f"{name} → A with the elbow below", model, a, others, True), flush=True)
 

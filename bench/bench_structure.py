@@ -44,7 +44,7 @@ from accugrid.compensation.comparison import tilted_abc  # noqa: E402
 from accugrid.compensation.plans import SEED_REGION, identification_plan  # noqa: E402
 from accugrid.kinematics.candidates import gravity_terms, harmonic_name  # noqa: E402
 from accugrid.kinematics.frames import pose_from_xyzabc  # noqa: E402
-from accugrid.kinematics.identification import identify, pose_set  # noqa: E402
+from accugrid.kinematics.identification import COMPLIANT_AXES, identify, pose_set  # noqa: E402
 from accugrid.kinematics.joint_errors import JointErrors  # noqa: E402
 from accugrid.kinematics.robot import load_robot  # noqa: E402
 from accugrid.kinematics.robot_family import DECLARED_TOOL, FamilyRobot, random_robot  # noqa: E402
@@ -126,7 +126,12 @@ def one_robot(robot: FamilyRobot, q: np.ndarray, targets: np.ndarray, seed: int)
     auto, selection = identify_structure(nominal, data, method=METHOD)
     seconds = time.perf_counter() - started
     harmonics, compliant = true_terms(robot)
-    gravity = gravity_terms(nominal) if compliant else ()
+    # the family is compliant on COMPLIANT_AXES only: the told model has their gravity groups
+    gravity = (
+        tuple(t for t in gravity_terms(nominal) if t.axis - 1 in COMPLIANT_AXES)
+        if compliant
+        else ()
+    )
     told = identify(nominal, data, harmonics=harmonics, gravity=gravity, selected=True)
     dh = identify(nominal, data)
     errors = [model_error(r.robot, truth, targets) for r in (auto, told, dh)]

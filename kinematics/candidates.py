@@ -2,13 +2,15 @@
 
 - **Reducer harmonic** (axis 1..6, order k): δ_axis += s · sin(k · A_axis) + c · cos(k · A_axis),
   one group of two linear parameters s, c (rad).
-- **Gravity compliance without masses** (axis A2 or A3, part): the static gravity torque on an
-  axis of unknown lumped masses fixed in the link frames is linear in their first moments (m and
-  m · r per link, ``joint_errors.gravity_basis``), so compliance × first moment products are
-  linear parameters whose Jacobian columns come from the nominal geometry only. The functions of
-  the joint angles they span are split into parts by what carries the mass: the **upper arm**
-  (link 2), the **forearm** (link 3 and a mass at the wrist point) and the **wrist** (first
-  moments of links 4-6: a tool or payload off the wrist point). Each part's parameters are the
+- **Gravity compliance without masses** (an axis gravity loads, part): on every axis not
+  parallel to gravity (``gravity_axes``: a UR's A2, A3 and A4 all carry load, a KUKA's A4-A6 the
+  wrist and tool), the static gravity torque of unknown lumped masses fixed in the link frames is
+  linear in their first moments (m and m · r per link, ``joint_errors.gravity_basis``), so
+  compliance × first moment products are linear parameters whose Jacobian columns come from the
+  nominal geometry only. The functions of the joint angles they span are split into parts by what
+  carries the mass: the **upper arm** (link 2), the **forearm** (link 3 and a mass at the wrist
+  point) and the **wrist** (first moments of links 4-6: a tool or payload off the wrist point).
+  Each part's parameters are the
   coordinates of an orthonormal basis of the torque functions it adds beyond the parts before it
   (SVD over a fixed spread-out set of reference joints), so no two parameters are the same
   function. ``GravityTerm.moments`` maps them back to the first-moment products the calibrated
@@ -25,7 +27,7 @@ from accugrid.kinematics.joint_errors import GRAVITY_MPS2, gravity_basis
 from accugrid.kinematics.robot import Robot
 
 __all__ = [
-    "GRAVITY_AXES",
+    "gravity_axes",
     "GRAVITY_PARTS",
     "GravityTerm",
     "gravity_terms",
@@ -33,7 +35,6 @@ __all__ = [
     "reference_joints",
 ]
 
-GRAVITY_AXES = (2, 3)  # the axes that carry the arm against gravity (KUKA A2, A3)
 # part name -> (link 1..6, u) first-moment quantities (u = 0 mass at the origin, 1..3 x, y, z)
 GRAVITY_PARTS = {
     "upper arm": tuple((2, u) for u in range(4)),
@@ -90,13 +91,21 @@ def reference_joints(robot: Robot, count: int, seed: int = 0) -> np.ndarray:
     return q
 
 
+def gravity_axes(unit: np.ndarray) -> tuple[int, ...]:
+    """The axes 1..6 that gravity loads at the joints of the unit torques ``unit`` (P, 6, 6, 4)
+    (``gravity_basis``): every axis whose direction is not parallel to gravity at those poses
+    (an axis along gravity, e.g. a floor-mounted arm's A1, carries no gravity torque)."""
+    scale = np.sqrt(np.mean(unit**2, axis=(0, 2, 3)))  # (6,)
+    return tuple(int(a) + 1 for a in np.flatnonzero(scale > _RTOL * scale.max()))
+
+
 def gravity_terms(robot: Robot) -> tuple[GravityTerm, ...]:
     """The gravity groups of ``robot``'s nominal geometry, axis by axis, part by part (parts
     that add no new torque function, e.g. the upper arm on A3, are left out)."""
     q = reference_joints(robot, _REFERENCE_POSES)
     unit = gravity_basis(robot.dh, q, GRAVITY_MPS2)  # (P, 6, 6, 4)
     terms = []
-    for axis in GRAVITY_AXES:
+    for axis in gravity_axes(unit):
         table = unit[:, axis - 1].reshape(len(q), 24)
         scale = np.sqrt(np.mean(table**2, axis=0))
         top = scale.max()

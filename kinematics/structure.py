@@ -1,15 +1,15 @@
 """Choosing the joint-error structure of a calibrated model from the measurements.
 
-The candidates (``kinematics.candidates``) are groups of linear parameters: reducer harmonics
-(axis, order 1..K) and the mass-free gravity parts of A2 and A3. By default (method "ard") step
-2-3 below is replaced by group sparse Bayesian learning over every candidate at once
+The candidates (``kinematics.candidates``) are groups of linear parameters: reducer harmonics (axis,
+order 1..K) and the mass-free gravity parts of every axis gravity loads. By default (method "ard")
+step 2-3 below is replaced by group sparse Bayesian learning over every candidate at once
 (``kinematics.sparse_bayes``: each group's prior precision by maximum evidence, each group paying
 log m of evidence for being the best of m; its curve adds the groups kept, largest effect first,
-scored by the same cross-validation): near-alias orders share the evidence instead of a greedy
-step committing to one. The groups it keeps are then **pruned by joint range** (``range_prune``):
-each joint's range of the poses is cut in ``RANGE_BLOCKS`` contiguous blocks, each block held out
-in turn and predicted from the rest (every joint in turn, pooled), and the group whose removal
-most lowers that held-out error is dropped, while one does. Random folds test poses drawn like
+scored by the same cross-validation): near-alias orders share the evidence instead of a greedy step
+committing to one. The groups it keeps are then **pruned by joint range** (``range_prune``): each
+joint's range of the poses is cut in ``RANGE_BLOCKS`` contiguous blocks, each block held out in turn
+and predicted from the rest (every joint in turn, pooled), and the group whose removal most lowers
+that held-out error is dropped, while one does. Random folds test poses drawn like
 the calibration poses; these test a term where one joint leaves the range it was fitted on: a
 reducer harmonic or a gravity term is a function of the joints that holds there, a term that
 only fits the poses' own joint combinations (on a real arm: effects no candidate describes)
@@ -70,6 +70,7 @@ poses, also in the nested estimate (it only proposes; the choice is made in the 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Protocol
 
 import numpy as np
 from scipy.linalg import solve_triangular
@@ -103,6 +104,10 @@ __all__ = [
     "SEPARATE",
     "SEPARATE_GRAVITY",
     "STRUCTURE_WORD",
+    "SELECTION",
+    "ArdSelection",
+    "ForwardSearch",
+    "SelectionStrategy",
     "RANGE_BLOCKS",
     "CarryOver",
     "Nested",
@@ -305,6 +310,7 @@ def observability(robot: Robot, q: np.ndarray) -> tuple[np.ndarray, list[tuple[s
 def identify_structure(
     robot: Robot,
     data: PoseSet,
+    *,
     base_frame: bool = False,
     compliance: bool = False,
     harmonics: Terms = (),
@@ -323,7 +329,7 @@ def identify_structure(
     ``sparse_bayes``: every group's prior precision by maximum evidence, each paying log m; the
     groups kept are fitted as the search's are) or "search" (forward selection, module docstring).
     InputError for too few poses, a bad ``max_order`` or ``folds``."""
-    if method not in STRUCTURE_WORD:
+    if method not in SELECTION:
         raise ValueError(f"unknown structure selection method {method!r}")
     with one_blas_thread():  # thousands of small solves: BLAS threads only wait on each other
         return _identify_structure(
@@ -396,7 +402,10 @@ def _identify_structure(
         rule += f"; screened beyond: {ranges} (π / the smallest gap): {found}"
     y, x0, columns = linearised(robot, data, base, base_frame, compliance, pinned, search, gravity)
     names, groups = _library(search, gravity)
-    problem = _Problem(y, x0, columns, groups, np.repeat(data.group, 3), data.poses)
+    distinct = data.q[np.unique(data.group, return_index=True)[1]]
+    problem = _Problem(
+        y, x0, columns, groups, np.repeat(data.group, 3), data.poses, joints=distinct
+    )
     # a screened order is the best of its axis's whole periodogram: its bar counts that pool
     offered = library + len(screened)
     # the bar of a step: the best of the offered groups; a screened order's, of the whole pool
@@ -411,10 +420,9 @@ def _identify_structure(
     }
     problem.separate[len(search) :] = SEPARATE_GRAVITY
     left_out = problem.reduce(names)
-    problem.method = method
-    problem.joints = data.q[np.unique(data.group, return_index=True)[1]]
+    strategy = SELECTION[method]
     fold = pose_folds(data.poses, folds)
-    path, kept, chosen = problem.choose(fold, np.ones(data.poses, bool))
+    path, kept, chosen = strategy.choose(problem, fold, np.ones(data.poses, bool))
     replaced = [g for g, _ in path[1 : kept + 1] if g not in chosen]
     rejected = [g for g, _ in path[kept + 1 :] if g not in chosen]
     left_out += [
@@ -422,10 +430,8 @@ def _identify_structure(
         for g in replaced
     ]
     left_out += [(names[g], "its held-out gain is within its uncertainty") for g in rejected]
-    estimate = _nested(problem, fold, folds, names, data) if nested else None
-    carry = problem.carry_over(
-        chosen, range_folds(data.q[np.unique(data.group, return_index=True)[1]])
-    )
+    estimate = _nested(problem, strategy, fold, folds, names, data) if nested else None
+    carry = problem.carry_over(chosen, range_folds(distinct))
     picked_harmonics = pinned + tuple(search[g] for g in chosen if g < len(search))
     picked_gravity = tuple(gravity[g - len(search)] for g in chosen if g >= len(search))
     result = identify(
@@ -478,7 +484,9 @@ class _Problem:
     """The linearised search: residuals y (M,), base columns X (M, r), candidate columns C
     (M, m) in groups (index arrays into C), the pose (M,) of each equation."""
 
-    def __init__(self, y, x0, columns, groups, pose_of_row, poses: int) -> None:
+    def __init__(
+        self, y, x0, columns, groups, pose_of_row, poses: int, *, joints: np.ndarray | None = None
+    ) -> None:
         self.y, self.x0, self.c, self.groups = y, x0, columns, groups
         self.pose, self.poses = pose_of_row, poses
         self.neighbours: dict[int, list[int]] = {}  # harmonic group -> neighbouring orders
@@ -489,8 +497,7 @@ class _Problem:
         self.offered = np.ones(len(groups), bool)  # False: a screened order's neighbour (swap)
         self.bars = np.full(len(groups), norm.isf(FALSE_STEP / max(len(groups), 1)))
         self.separate = np.full(len(groups), SEPARATE)
-        self.method = "ard"  # "ard" (group sparse Bayesian learning) or "search" (``choose``)
-        self.joints: np.ndarray | None = None  # (P, 6) rad of the distinct poses: range pruning
+        self.joints = joints  # (P, 6) rad of the distinct poses (range pruning), or None
 
     def reduce(self, names: list[str]) -> list[tuple[str, str]]:
         """Keep of each group only its directions the data separate from the DH + TCP (+ pinned)
@@ -532,169 +539,9 @@ class _Problem:
         self.others = [i for i, g in enumerate(groups) if len(g) not in (0, 2)]
         return out
 
-    def choose(self, fold_of_pose: np.ndarray, use: np.ndarray):
-        """``search`` (method "search") or group ARD (method "ard", ``sparse_bayes``) on the
-        poses ``use`` (P,) bool: (path, kept steps, chosen groups). ARD's prior against a group
-        is log m, m the candidates a step is the best of as its bar counts them (the library,
-        or the screen's whole pool); the groups it keeps are pruned by joint range
-        (``range_prune``); its path adds the groups left, largest effect first."""
-        if self.method == "search":
-            return self.search(fold_of_pose, use)
-        rows = use[self.pose]
-        live = self.observable & self.offered
-        groups = [g if live[i] else g[:0] for i, g in enumerate(self.groups)]
-        penalty = np.log(FALSE_STEP / norm.sf(self.bars))
-        y, x, c, floor = self._pose_means(rows)
-        chosen = ard_choice(y, x, c, groups, None, penalty, floor)[0]
-        if self.joints is not None:
-            chosen = self.range_prune(chosen, use)
-        fold, rows, folds = self._cv(fold_of_pose, use)
-        path = [
-            (chosen[i - 1] if i else None, self._held(chosen[:i], fold, rows, folds))
-            for i in range(len(chosen) + 1)
-        ]
-        return path, len(chosen), chosen
-
-    def _pose_means(self, rows: np.ndarray):
-        """The equations ``rows`` (M,) bool averaged over each distinct pose and axis (K of them;
-        equation e is axis e % 3 of a row): y (K,), X (K, r), C (K, m), and the variance the
-        repeats' own scatter puts in such a mean (pooled; 0 without repeats), a floor for the
-        noise of the means. ARD weighs equations as independent: repeats of a pose share its
-        joints (identical without logged joints) and its tracker error, so counted one by one
-        they would make a pose's error look like evidence; the search keeps them in one fold."""
-        key = self.pose * 3 + np.arange(len(self.pose)) % 3
-        at = np.flatnonzero(rows)
-        at = at[np.argsort(key[at], kind="stable")]
-        starts = np.flatnonzero(np.diff(key[at], prepend=-1))
-        counts = np.diff(starts, append=len(at))
-
-        def mean(a: np.ndarray) -> np.ndarray:
-            sums = np.add.reduceat(a[at], starts, axis=0)
-            return sums / counts.reshape(-1, *(1,) * (a.ndim - 1))
-
-        y = mean(self.y)
-        scatter = self.y[at] - np.repeat(y, counts)
-        dof = int(np.sum(counts - 1))
-        floor = float(scatter @ scatter) / dof / float(np.mean(counts)) if dof else 0.0
-        return y, mean(self.x0), mean(self.c), floor
-
-    def search(self, fold_of_pose: np.ndarray, use: np.ndarray):
-        """The whole search on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,): the
-        library's path, its kept steps refined (neighbouring orders), then the path on from there
-        with the screened orders offered too (their steps must clear the pool's bar), then the
-        second pass. Returns (path: start, library steps kept, the continuation; kept steps; the
-        chosen groups)."""
-        first = self.path(fold_of_pose, use, [], self.offered & ~self.screened)
-        kept = self.one_standard_error(first)
-        greedy = [g for g, _ in first[1 : kept + 1]]
-        chosen = self.refine(greedy, fold_of_pose, use)
-        if not self.screened.any():
-            return first, kept, self.second_pass(chosen, fold_of_pose, use)
-        on = self.path(fold_of_pose, use, chosen, self.offered)
-        more = self.one_standard_error(on)
-        path = first[: kept + 1] + on[1:]
-        added = chosen + [g for g, _ in on[1 : more + 1]]
-        chosen = self.refine(added, fold_of_pose, use, len(chosen))
-        return path, kept + more, self.second_pass(chosen, fold_of_pose, use)
-
-    def second_pass(self, chosen: list[int], fold_of_pose: np.ndarray, use: np.ndarray):
-        """``chosen`` revisited up to ``SECOND_PASSES`` times on the poses ``use`` (P,) bool with
-        folds ``fold_of_pose`` (P,): terms the model no longer needs are dropped, terms are
-        exchanged for others (``exchange``), and the path continues from there over the groups
-        not dropped (steps must clear their bar again). A forward path never takes a step back:
-        an early term that later ones made redundant, or an alias of two true terms, stays."""
-        offered = self.offered.copy()
-        for _ in range(SECOND_PASSES):
-            before = list(chosen)
-            changed = self.prune(chosen, fold_of_pose, use)
-            changed = self.exchange(changed, fold_of_pose, use, offered)
-            if changed == before:
-                break
-            offered[[g for g in before if g not in changed]] = False
-            on = self.path(fold_of_pose, use, changed, offered)
-            more = self.one_standard_error(on)
-            added = changed + [g for g, _ in on[1 : more + 1]]
-            chosen = self.refine(added, fold_of_pose, use, len(changed))
-        return chosen
-
-    def exchange(self, chosen: list[int], fold_of_pose, use, offered: np.ndarray) -> list[int]:
-        """``chosen`` with, one at a time, the swap of a chosen group for an ``offered`` (groups,)
-        bool group of the same size that most lowers the held-out sum of squares, while one does
-        (the model's size stays; each swap is scored by the QR-updated trial of a forward step)."""
-        fold, rows, folds = self._cv(fold_of_pose, use)
-        chosen = list(chosen)
-        best = np.nansum(self._held(chosen, fold, rows, folds) ** 2)
-        for _ in range(len(chosen)):
-            top, swap = best, None
-            for at, group in enumerate(chosen):
-                allowed = self.observable & offered & (self.size == self.size[group])
-                allowed[chosen] = False
-                if not allowed.any():
-                    continue
-                trial = self._trial(chosen[:at] + chosen[at + 1 :], allowed, fold, rows, folds)
-                other = int(np.argmin(trial))
-                if trial[other] < top:
-                    top, swap = trial[other], (at, other)
-            if swap is None:
-                break
-            chosen[swap[0]] = swap[1]
-            best = top
-        return chosen
-
-    def prune(self, chosen: list[int], fold_of_pose: np.ndarray, use: np.ndarray) -> list[int]:
-        """``chosen`` without, one at a time, the group whose removal most lowers the held-out sum
-        of squares, while a removal does."""
-        fold, rows, folds = self._cv(fold_of_pose, use)
-        chosen = list(chosen)
-        best = np.nansum(self._held(chosen, fold, rows, folds) ** 2)
-        while chosen:
-            trials = [
-                np.nansum(self._held(chosen[:i] + chosen[i + 1 :], fold, rows, folds) ** 2)
-                for i in range(len(chosen))
-            ]
-            at = int(np.argmin(trials))
-            if trials[at] >= best:
-                break
-            best = trials[at]
-            del chosen[at]
-        return chosen
-
-    def _cv(self, fold_of_pose: np.ndarray, use: np.ndarray):
+    def cv_rows(self, fold_of_pose: np.ndarray, use: np.ndarray):
         """Per equation the fold (M,) and whether it is used (M,), and the folds used."""
         return fold_of_pose[self.pose], use[self.pose], np.unique(fold_of_pose[use])
-
-    def path(
-        self, fold_of_pose: np.ndarray, use: np.ndarray, start: list[int], offered: np.ndarray
-    ) -> list[tuple[int | None, np.ndarray]]:
-        """Forward selection on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,) from
-        the groups ``start`` over the groups ``offered`` (groups,) bool: [(group added or None,
-        held-out residuals (M,) with NaN off ``use``)], the start first."""
-        rows = use[self.pose]
-        fold = fold_of_pose[self.pose]
-        folds = np.unique(fold_of_pose[use])
-        train_eq = min(int(np.sum(rows & (fold != k))) for k in folds)
-        chosen = list(start)
-        held = self._held(chosen, fold, rows, folds)
-        path = [(None, held)]
-        sse = self._pose_sse(held)
-        free = self.observable & offered
-        free[chosen] = False
-        budget = MAX_SHARE * train_eq - self.x0.shape[1]
-        for _ in range(MAX_STEPS):
-            used = int(self.size[chosen].sum()) if chosen else 0
-            allowed = free & (used + self.size <= budget)
-            if not allowed.any():
-                break
-            trial = self._trial(chosen, allowed, fold, rows, folds)
-            best = int(np.argmin(trial))
-            if not np.isfinite(trial[best]) or trial[best] >= sse.sum():
-                break
-            chosen.append(best)
-            free[best] = False
-            held = self._held(chosen, fold, rows, folds)
-            sse = self._pose_sse(held)
-            path.append((best, held))
-        return path
 
     def design(self, chosen: list[int]) -> np.ndarray:
         if not chosen:
@@ -702,7 +549,7 @@ class _Problem:
         cols = np.concatenate([self.groups[g] for g in chosen])
         return np.column_stack([self.x0, self.c[:, cols]])
 
-    def _held(self, chosen, fold, rows, folds) -> np.ndarray:
+    def held_out(self, chosen, fold, rows, folds) -> np.ndarray:
         """Held-out residuals (M,) of the model ``chosen`` (NaN outside ``rows``)."""
         held = np.full(len(self.y), np.nan)
         x = self.design(chosen)
@@ -712,106 +559,92 @@ class _Problem:
             held[test] = self.y[test] - x[test] @ beta
         return held
 
-    def _pose_sse(self, held: np.ndarray) -> np.ndarray:
+    def pose_sse(self, held: np.ndarray) -> np.ndarray:
         ok = ~np.isnan(held)
         return np.bincount(self.pose[ok], held[ok] ** 2, minlength=self.poses)
 
-    def _trial(self, chosen, allowed, fold, rows, folds) -> np.ndarray:
-        """Held-out sum of squares (groups,) of the model ``chosen`` plus each allowed group
-        (inf where not allowed or inseparable on the data or a fold)."""
-        x = self.design(chosen)
-        out = np.where(allowed, 0.0, np.inf)
-        q_all, _ = np.linalg.qr(x[rows])
-        c_all = self.c[rows]
-        rest_all = c_all - q_all @ (q_all.T @ c_all)
-        # separable from the model so far: the smallest singular value of each group's rest
-        # against its own largest (eigenvalues of the small Gram matrices, pairs in one batch)
-        pairs = self.pairs[allowed[self.pairs]]
-        if pairs.size:
-            idx = np.stack([self.groups[i] for i in pairs])
-            rest_gram = np.einsum("ngi,ngj->gij", rest_all[:, idx], rest_all[:, idx])
-            own_gram = np.einsum("ngi,ngj->gij", c_all[:, idx], c_all[:, idx])
-            ratio = np.linalg.eigvalsh(rest_gram)[:, 0] / np.linalg.eigvalsh(own_gram)[:, -1]
-            out[pairs[ratio < self.separate[pairs] ** 2]] = np.inf
-        for i in self.others:
-            if (
-                allowed[i]
-                and _relative_floor(rest_all[:, self.groups[i]], c_all[:, self.groups[i]])
-                < self.separate[i]
-            ):
-                out[i] = np.inf
-        pairs = self.pairs[np.isfinite(out[self.pairs])]
-        others = [i for i in self.others if np.isfinite(out[i])]
-        for k in folds:
-            train, test = rows & (fold != k), rows & (fold == k)
-            q, r = np.linalg.qr(x[train])
-            yt = self.y[train]
-            qty = q.T @ yt
-            rt = yt - q @ qty
-            et = self.y[test] - x[test] @ solve_triangular(r, qty)
-            ct = self.c[train]
-            a = q.T @ ct
-            p = ct - q @ a
-            t = self.c[test] - x[test] @ solve_triangular(r, a)
-            if pairs.size:
-                idx = np.stack([self.groups[i] for i in pairs])  # (G, 2)
-                pg, tg = p[:, idx], t[:, idx]  # (n, G, 2)
-                gram = np.einsum("ngi,ngj->gij", pg, pg)
-                rhs = np.einsum("ngi,n->gi", pg, rt)
-                det = gram[:, 0, 0] * gram[:, 1, 1] - gram[:, 0, 1] ** 2
-                ok = det > 1e-12 * np.maximum(gram[:, 0, 0] * gram[:, 1, 1], 1e-300)
-                safe = np.where(ok[:, None, None], gram, np.eye(2))
-                w = np.linalg.solve(safe, rhs[:, :, None])[:, :, 0]
-                new = et[:, None] - np.einsum("ngi,gi->ng", tg, w)
-                out[pairs] += np.where(ok, np.sum(new**2, axis=0), np.inf)
-            for i in others:
-                g = self.groups[i]
-                w = np.linalg.lstsq(p[:, g], rt, rcond=None)[0]
-                out[i] += np.sum((et - t[:, g] @ w) ** 2)
-        return out
+    def carry_over(self, chosen: list[int], folds_by_joint: list[np.ndarray]) -> CarryOver:
+        """``chosen`` and the DH + TCP (+ pinned) model held out by joint range (``CarryOver``):
+        each fold of ``folds_by_joint`` (per joint, the fold (P,) of each pose) in turn."""
+        every = np.ones(self.poses, bool)
+        sse = np.zeros((2, 3))
+        for fold_of_pose in folds_by_joint:
+            fold, rows, folds = self.cv_rows(fold_of_pose, every)
+            for i, model in enumerate((chosen, [])):
+                held = self.held_out(model, fold, rows, folds).reshape(-1, 3)
+                sse[i] += np.sum(held**2, axis=0)
+        count = max(len(folds_by_joint), 1) * (len(self.y) // 3)
+        return CarryOver(np.sqrt(sse[0] / count), np.sqrt(sse[1] / count))
 
-    def refine(
-        self, chosen: list[int], fold_of_pose: np.ndarray, use: np.ndarray, start: int = 0
-    ) -> list[int]:
-        """``chosen`` with each harmonic from ``start`` on swapped for a neighbouring order of its
-        axis (k ± 1, 2) where that lowers the held-out sum of squares (over a narrow angle range
-        neighbouring orders differ by a fraction of a period; the greedy step may take the wrong
-        one)."""
-        rows = use[self.pose]
-        fold = fold_of_pose[self.pose]
-        folds = np.unique(fold_of_pose[use])
-        best = np.nansum(self._held(chosen, fold, rows, folds) ** 2)
-        chosen = list(chosen)
-        for at in range(start, len(chosen)):
-            for other in self.neighbours.get(chosen[at], []):
-                if other in chosen or not self.observable[other]:
-                    continue
-                trial = chosen[:at] + [other] + chosen[at + 1 :]
-                sse = np.nansum(self._held(trial, fold, rows, folds) ** 2)
-                if sse < best:
-                    chosen, best = trial, sse
-        return chosen
+    def held_out_stats(self, held: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """(RMS (3,), max |.| (3,), overall RMS) mm of held-out residuals (M,)."""
+        per_axis = held.reshape(-1, 3)
+        per_axis = per_axis[~np.isnan(per_axis[:, 0])]
+        rms = np.sqrt(np.mean(per_axis**2, axis=0))
+        return rms, np.abs(per_axis).max(axis=0), float(np.sqrt(np.mean(per_axis**2)))
 
-    def one_standard_error(self, path) -> int:
-        """The number of steps of ``path`` kept: steps are kept while the next one, or the next
-        2..``LOOK_AHEAD`` together (terms that only help as a set, e.g. neighbouring orders),
-        lower the held-out sum of squares by more than ``bar`` standard errors of their paired
-        per-pose differences (the gain's own uncertainty)."""
-        used = np.unique(self.pose[~np.isnan(path[0][1])])
-        sse = np.array([self._pose_sse(held)[used] for _, held in path])  # (steps, poses)
-        step = 0
-        while step + 1 < len(path):
-            ahead = sse[step] - sse[step + 1 : step + 1 + LOOK_AHEAD]  # (1..LOOK_AHEAD, poses)
-            se = ahead.std(axis=1, ddof=1) / np.sqrt(ahead.shape[1])
-            added = [g for g, _ in path[step + 1 : step + 1 + len(ahead)]]
-            bar = np.maximum.accumulate(self.bars[added])  # a set passes the bar of its hardest
-            passed = np.flatnonzero(ahead.mean(axis=1) > bar * se)
-            if not passed.size:
-                break
-            step += int(passed[0]) + 1
-        return step
 
-    def range_prune(self, chosen: list[int], use: np.ndarray) -> list[int]:
+Choice = tuple[list[tuple[int | None, np.ndarray]], int, list[int]]  # (path, kept, chosen)
+
+
+class SelectionStrategy(Protocol):
+    """How the candidate groups of a linearised problem are chosen."""
+
+    def choose(self, p: _Problem, fold_of_pose: np.ndarray, use: np.ndarray) -> Choice:
+        """On the poses ``use`` (P,) bool with cross-validation folds ``fold_of_pose`` (P,):
+        (the path: [(group added or None, held-out residuals (M,))], its kept steps, the chosen
+        groups)."""
+        ...
+
+
+class ArdSelection:
+    """Group sparse Bayesian learning (``sparse_bayes``) over every candidate at once, the groups
+    it keeps pruned by joint range (``range_prune``) when the problem knows its poses' joints."""
+
+    def choose(self, p: _Problem, fold_of_pose: np.ndarray, use: np.ndarray) -> Choice:
+        """Group ARD on the poses ``use`` (P,) bool (``SelectionStrategy``). The prior against a
+        group is log m, m the candidates a step is the best of as its bar counts them (the
+        library, or the screen's whole pool); its path adds the groups kept, largest effect
+        first."""
+        rows = use[p.pose]
+        live = p.observable & p.offered
+        groups = [g if live[i] else g[:0] for i, g in enumerate(p.groups)]
+        penalty = np.log(FALSE_STEP / norm.sf(p.bars))
+        y, x, c, floor = self._pose_means(p, rows)
+        chosen = ard_choice(y, x, c, groups, None, penalty, floor)[0]
+        if p.joints is not None:
+            chosen = self.range_prune(p, chosen, use)
+        fold, rows, folds = p.cv_rows(fold_of_pose, use)
+        path = [
+            (chosen[i - 1] if i else None, p.held_out(chosen[:i], fold, rows, folds))
+            for i in range(len(chosen) + 1)
+        ]
+        return path, len(chosen), chosen
+
+    def _pose_means(self, p: _Problem, rows: np.ndarray):
+        """The equations ``rows`` (M,) bool averaged over each distinct pose and axis (K of them;
+        equation e is axis e % 3 of a row): y (K,), X (K, r), C (K, m), and the variance the
+        repeats' own scatter puts in such a mean (pooled; 0 without repeats), a floor for the
+        noise of the means. ARD weighs equations as independent: repeats of a pose share its
+        joints (identical without logged joints) and its tracker error, so counted one by one
+        they would make a pose's error look like evidence; the search keeps them in one fold."""
+        key = p.pose * 3 + np.arange(len(p.pose)) % 3
+        at = np.flatnonzero(rows)
+        at = at[np.argsort(key[at], kind="stable")]
+        starts = np.flatnonzero(np.diff(key[at], prepend=-1))
+        counts = np.diff(starts, append=len(at))
+
+        def mean(a: np.ndarray) -> np.ndarray:
+            sums = np.add.reduceat(a[at], starts, axis=0)
+            return sums / counts.reshape(-1, *(1,) * (a.ndim - 1))
+
+        y = mean(p.y)
+        scatter = p.y[at] - np.repeat(y, counts)
+        dof = int(np.sum(counts - 1))
+        floor = float(scatter @ scatter) / dof / float(np.mean(counts)) if dof else 0.0
+        return y, mean(p.x0), mean(p.c), floor
+
+    def range_prune(self, p: _Problem, chosen: list[int], use: np.ndarray) -> list[int]:
         """``chosen`` without, one at a time, the group whose removal most lowers the error held
         out by joint range on the poses ``use`` (P,) bool (``range_folds`` of their joints, every
         joint's blocks in turn, pooled), while a removal does: terms that fit the poses only in
@@ -820,23 +653,23 @@ class _Problem:
         columns), solved in one batch per trial."""
         if not chosen:
             return chosen
-        x = self.design(chosen)
+        x = p.design(chosen)
         grams, rhs, held_gram, held_rhs, held_yy = [], [], [], [], 0.0
-        for blocks in range_folds(self.joints[use]):
-            fold_of_pose = np.full(self.poses, -1)
+        for blocks in range_folds(p.joints[use]):
+            fold_of_pose = np.full(p.poses, -1)
             fold_of_pose[use] = blocks
-            fold, rows, ids = self._cv(fold_of_pose, use)
+            fold, rows, ids = p.cv_rows(fold_of_pose, use)
             for k in ids:
                 train, test = rows & (fold != k), rows & (fold == k)
                 grams.append(x[train].T @ x[train])
-                rhs.append(x[train].T @ self.y[train])
+                rhs.append(x[train].T @ p.y[train])
                 held_gram.append(x[test].T @ x[test])
-                held_rhs.append(x[test].T @ self.y[test])
-                held_yy += float(self.y[test] @ self.y[test])
+                held_rhs.append(x[test].T @ p.y[test])
+                held_yy += float(p.y[test] @ p.y[test])
         grams, rhs = np.array(grams), np.array(rhs)
         held_gram, held_rhs = np.array(held_gram), np.array(held_rhs)
-        base = self.x0.shape[1]
-        starts = np.cumsum([base] + [len(self.groups[g]) for g in chosen])
+        base = p.x0.shape[1]
+        starts = np.cumsum([base] + [len(p.groups[g]) for g in chosen])
 
         def sse(kept: list[int]) -> float:
             cols = np.concatenate(
@@ -860,25 +693,238 @@ class _Problem:
             del kept[at]
         return [chosen[i] for i in kept]
 
-    def carry_over(self, chosen: list[int], folds_by_joint: list[np.ndarray]) -> CarryOver:
-        """``chosen`` and the DH + TCP (+ pinned) model held out by joint range (``CarryOver``):
-        each fold of ``folds_by_joint`` (per joint, the fold (P,) of each pose) in turn."""
-        every = np.ones(self.poses, bool)
-        sse = np.zeros((2, 3))
-        for fold_of_pose in folds_by_joint:
-            fold, rows, folds = self._cv(fold_of_pose, every)
-            for i, model in enumerate((chosen, [])):
-                held = self._held(model, fold, rows, folds).reshape(-1, 3)
-                sse[i] += np.sum(held**2, axis=0)
-        count = max(len(folds_by_joint), 1) * (len(self.y) // 3)
-        return CarryOver(np.sqrt(sse[0] / count), np.sqrt(sse[1] / count))
 
-    def held_out_stats(self, held: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-        """(RMS (3,), max |.| (3,), overall RMS) mm of held-out residuals (M,)."""
-        per_axis = held.reshape(-1, 3)
-        per_axis = per_axis[~np.isnan(per_axis[:, 0])]
-        rms = np.sqrt(np.mean(per_axis**2, axis=0))
-        return rms, np.abs(per_axis).max(axis=0), float(np.sqrt(np.mean(per_axis**2)))
+class ForwardSearch:
+    """Grouped forward selection by cross-validation, steps kept while they beat their own
+    uncertainty, neighbouring orders swapped in, then a second pass (module docstring)."""
+
+    def choose(self, p: _Problem, fold_of_pose: np.ndarray, use: np.ndarray) -> Choice:
+        """The whole search on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,): the
+        library's path, its kept steps refined (neighbouring orders), then the path on from there
+        with the screened orders offered too (their steps must clear the pool's bar), then the
+        second pass. Returns (path: start, library steps kept, the continuation; kept steps; the
+        chosen groups)."""
+        first = self.path(p, fold_of_pose, use, [], p.offered & ~p.screened)
+        kept = self.one_standard_error(p, first)
+        greedy = [g for g, _ in first[1 : kept + 1]]
+        chosen = self.refine(p, greedy, fold_of_pose, use)
+        if not p.screened.any():
+            return first, kept, self.second_pass(p, chosen, fold_of_pose, use)
+        on = self.path(p, fold_of_pose, use, chosen, p.offered)
+        more = self.one_standard_error(p, on)
+        path = first[: kept + 1] + on[1:]
+        added = chosen + [g for g, _ in on[1 : more + 1]]
+        chosen = self.refine(p, added, fold_of_pose, use, len(chosen))
+        return path, kept + more, self.second_pass(p, chosen, fold_of_pose, use)
+
+    def second_pass(
+        self, p: _Problem, chosen: list[int], fold_of_pose: np.ndarray, use: np.ndarray
+    ):
+        """``chosen`` revisited up to ``SECOND_PASSES`` times on the poses ``use`` (P,) bool with
+        folds ``fold_of_pose`` (P,): terms the model no longer needs are dropped, terms are
+        exchanged for others (``exchange``), and the path continues from there over the groups
+        not dropped (steps must clear their bar again). A forward path never takes a step back:
+        an early term that later ones made redundant, or an alias of two true terms, stays."""
+        offered = p.offered.copy()
+        for _ in range(SECOND_PASSES):
+            before = list(chosen)
+            changed = self.prune(p, chosen, fold_of_pose, use)
+            changed = self.exchange(p, changed, fold_of_pose, use, offered)
+            if changed == before:
+                break
+            offered[[g for g in before if g not in changed]] = False
+            on = self.path(p, fold_of_pose, use, changed, offered)
+            more = self.one_standard_error(p, on)
+            added = changed + [g for g, _ in on[1 : more + 1]]
+            chosen = self.refine(p, added, fold_of_pose, use, len(changed))
+        return chosen
+
+    def exchange(
+        self, p: _Problem, chosen: list[int], fold_of_pose, use, offered: np.ndarray
+    ) -> list[int]:
+        """``chosen`` with, one at a time, the swap of a chosen group for an ``offered`` (groups,)
+        bool group of the same size that most lowers the held-out sum of squares, while one does
+        (the model's size stays; each swap is scored by the QR-updated trial of a forward step)."""
+        fold, rows, folds = p.cv_rows(fold_of_pose, use)
+        chosen = list(chosen)
+        best = np.nansum(p.held_out(chosen, fold, rows, folds) ** 2)
+        for _ in range(len(chosen)):
+            top, swap = best, None
+            for at, group in enumerate(chosen):
+                allowed = p.observable & offered & (p.size == p.size[group])
+                allowed[chosen] = False
+                if not allowed.any():
+                    continue
+                trial = self._trial(p, chosen[:at] + chosen[at + 1 :], allowed, fold, rows, folds)
+                other = int(np.argmin(trial))
+                if trial[other] < top:
+                    top, swap = trial[other], (at, other)
+            if swap is None:
+                break
+            chosen[swap[0]] = swap[1]
+            best = top
+        return chosen
+
+    def prune(
+        self, p: _Problem, chosen: list[int], fold_of_pose: np.ndarray, use: np.ndarray
+    ) -> list[int]:
+        """``chosen`` without, one at a time, the group whose removal most lowers the held-out sum
+        of squares, while a removal does."""
+        fold, rows, folds = p.cv_rows(fold_of_pose, use)
+        chosen = list(chosen)
+        best = np.nansum(p.held_out(chosen, fold, rows, folds) ** 2)
+        while chosen:
+            trials = [
+                np.nansum(p.held_out(chosen[:i] + chosen[i + 1 :], fold, rows, folds) ** 2)
+                for i in range(len(chosen))
+            ]
+            at = int(np.argmin(trials))
+            if trials[at] >= best:
+                break
+            best = trials[at]
+            del chosen[at]
+        return chosen
+
+    def path(
+        self,
+        p: _Problem,
+        fold_of_pose: np.ndarray,
+        use: np.ndarray,
+        start: list[int],
+        offered: np.ndarray,
+    ) -> list[tuple[int | None, np.ndarray]]:
+        """Forward selection on the poses ``use`` (P,) bool with folds ``fold_of_pose`` (P,) from
+        the groups ``start`` over the groups ``offered`` (groups,) bool: [(group added or None,
+        held-out residuals (M,) with NaN off ``use``)], the start first."""
+        rows = use[p.pose]
+        fold = fold_of_pose[p.pose]
+        folds = np.unique(fold_of_pose[use])
+        train_eq = min(int(np.sum(rows & (fold != k))) for k in folds)
+        chosen = list(start)
+        held = p.held_out(chosen, fold, rows, folds)
+        path = [(None, held)]
+        sse = p.pose_sse(held)
+        free = p.observable & offered
+        free[chosen] = False
+        budget = MAX_SHARE * train_eq - p.x0.shape[1]
+        for _ in range(MAX_STEPS):
+            used = int(p.size[chosen].sum()) if chosen else 0
+            allowed = free & (used + p.size <= budget)
+            if not allowed.any():
+                break
+            trial = self._trial(p, chosen, allowed, fold, rows, folds)
+            best = int(np.argmin(trial))
+            if not np.isfinite(trial[best]) or trial[best] >= sse.sum():
+                break
+            chosen.append(best)
+            free[best] = False
+            held = p.held_out(chosen, fold, rows, folds)
+            sse = p.pose_sse(held)
+            path.append((best, held))
+        return path
+
+    def _trial(self, p: _Problem, chosen, allowed, fold, rows, folds) -> np.ndarray:
+        """Held-out sum of squares (groups,) of the model ``chosen`` plus each allowed group
+        (inf where not allowed or inseparable on the data or a fold)."""
+        x = p.design(chosen)
+        out = np.where(allowed, 0.0, np.inf)
+        q_all, _ = np.linalg.qr(x[rows])
+        c_all = p.c[rows]
+        rest_all = c_all - q_all @ (q_all.T @ c_all)
+        # separable from the model so far: the smallest singular value of each group's rest
+        # against its own largest (eigenvalues of the small Gram matrices, pairs in one batch)
+        pairs = p.pairs[allowed[p.pairs]]
+        if pairs.size:
+            idx = np.stack([p.groups[i] for i in pairs])
+            rest_gram = np.einsum("ngi,ngj->gij", rest_all[:, idx], rest_all[:, idx])
+            own_gram = np.einsum("ngi,ngj->gij", c_all[:, idx], c_all[:, idx])
+            ratio = np.linalg.eigvalsh(rest_gram)[:, 0] / np.linalg.eigvalsh(own_gram)[:, -1]
+            out[pairs[ratio < p.separate[pairs] ** 2]] = np.inf
+        for i in p.others:
+            if (
+                allowed[i]
+                and _relative_floor(rest_all[:, p.groups[i]], c_all[:, p.groups[i]]) < p.separate[i]
+            ):
+                out[i] = np.inf
+        pairs = p.pairs[np.isfinite(out[p.pairs])]
+        others = [i for i in p.others if np.isfinite(out[i])]
+        for k in folds:
+            train, test = rows & (fold != k), rows & (fold == k)
+            q, r = np.linalg.qr(x[train])
+            yt = p.y[train]
+            qty = q.T @ yt
+            rt = yt - q @ qty
+            et = p.y[test] - x[test] @ solve_triangular(r, qty)
+            ct = p.c[train]
+            a = q.T @ ct
+            rest = ct - q @ a
+            t = p.c[test] - x[test] @ solve_triangular(r, a)
+            if pairs.size:
+                idx = np.stack([p.groups[i] for i in pairs])  # (G, 2)
+                pg, tg = rest[:, idx], t[:, idx]  # (n, G, 2)
+                gram = np.einsum("ngi,ngj->gij", pg, pg)
+                rhs = np.einsum("ngi,n->gi", pg, rt)
+                det = gram[:, 0, 0] * gram[:, 1, 1] - gram[:, 0, 1] ** 2
+                ok = det > 1e-12 * np.maximum(gram[:, 0, 0] * gram[:, 1, 1], 1e-300)
+                safe = np.where(ok[:, None, None], gram, np.eye(2))
+                w = np.linalg.solve(safe, rhs[:, :, None])[:, :, 0]
+                new = et[:, None] - np.einsum("ngi,gi->ng", tg, w)
+                out[pairs] += np.where(ok, np.sum(new**2, axis=0), np.inf)
+            for i in others:
+                g = p.groups[i]
+                w = np.linalg.lstsq(rest[:, g], rt, rcond=None)[0]
+                out[i] += np.sum((et - t[:, g] @ w) ** 2)
+        return out
+
+    def refine(
+        self,
+        p: _Problem,
+        chosen: list[int],
+        fold_of_pose: np.ndarray,
+        use: np.ndarray,
+        start: int = 0,
+    ) -> list[int]:
+        """``chosen`` with each harmonic from ``start`` on swapped for a neighbouring order of its
+        axis (k ± 1, 2) where that lowers the held-out sum of squares (over a narrow angle range
+        neighbouring orders differ by a fraction of a period; the greedy step may take the wrong
+        one)."""
+        rows = use[p.pose]
+        fold = fold_of_pose[p.pose]
+        folds = np.unique(fold_of_pose[use])
+        best = np.nansum(p.held_out(chosen, fold, rows, folds) ** 2)
+        chosen = list(chosen)
+        for at in range(start, len(chosen)):
+            for other in p.neighbours.get(chosen[at], []):
+                if other in chosen or not p.observable[other]:
+                    continue
+                trial = chosen[:at] + [other] + chosen[at + 1 :]
+                sse = np.nansum(p.held_out(trial, fold, rows, folds) ** 2)
+                if sse < best:
+                    chosen, best = trial, sse
+        return chosen
+
+    def one_standard_error(self, p: _Problem, path) -> int:
+        """The number of steps of ``path`` kept: steps are kept while the next one, or the next
+        2..``LOOK_AHEAD`` together (terms that only help as a set, e.g. neighbouring orders),
+        lower the held-out sum of squares by more than ``bar`` standard errors of their paired
+        per-pose differences (the gain's own uncertainty)."""
+        used = np.unique(p.pose[~np.isnan(path[0][1])])
+        sse = np.array([p.pose_sse(held)[used] for _, held in path])  # (steps, poses)
+        step = 0
+        while step + 1 < len(path):
+            ahead = sse[step] - sse[step + 1 : step + 1 + LOOK_AHEAD]  # (1..LOOK_AHEAD, poses)
+            se = ahead.std(axis=1, ddof=1) / np.sqrt(ahead.shape[1])
+            added = [g for g, _ in path[step + 1 : step + 1 + len(ahead)]]
+            bar = np.maximum.accumulate(p.bars[added])  # a set passes the bar of its hardest
+            passed = np.flatnonzero(ahead.mean(axis=1) > bar * se)
+            if not passed.size:
+                break
+            step += int(passed[0]) + 1
+        return step
+
+
+# the selection strategies by method name (``identify_structure``'s ``method``)
+SELECTION: dict[str, SelectionStrategy] = {"ard": ArdSelection(), "search": ForwardSearch()}
 
 
 def _relative_floor(rest: np.ndarray, cols: np.ndarray) -> float:
@@ -889,7 +935,9 @@ def _relative_floor(rest: np.ndarray, cols: np.ndarray) -> float:
     return float(np.linalg.svd(rest, compute_uv=False)[-1] / top[0])
 
 
-def _nested(problem: _Problem, fold: np.ndarray, folds: int, names, data: PoseSet) -> Nested:
+def _nested(
+    problem: _Problem, strategy: SelectionStrategy, fold: np.ndarray, folds: int, names, data
+) -> Nested:
     """The whole search repeated inside each outer fold (inner folds: another permutation of the
     training poses), the chosen groups fitted on the training poses, the held-out poses
     predicted (``Nested``)."""
@@ -899,7 +947,7 @@ def _nested(problem: _Problem, fold: np.ndarray, folds: int, names, data: PoseSe
         use = fold != k
         inner = np.full(problem.poses, -1)
         inner[use] = pose_folds(int(use.sum()), folds, _NESTED_SEED + k)
-        chosen = problem.choose(inner, use)[2]
+        chosen = strategy.choose(problem, inner, use)[2]
         chosen_by_fold.append(tuple(names[g] for g in chosen))
         x = problem.design(chosen)
         train, test = use[problem.pose], ~use[problem.pose]

@@ -103,6 +103,28 @@ def test_gravity_groups_span_any_lumped_masses(seed):
         assert np.abs(left).max() <= 1e-6 * np.abs(delta[:, axis - 1]).max()
 
 
+@settings(max_examples=10, deadline=None)
+@given(st.integers(0, 10_000), st.sampled_from(["kr210", "ur10"]))
+def test_every_axis_gravity_loads_has_gravity_groups(seed, name):
+    """Compliance on every axis under any masses: the deflection of each axis gravity loads is a
+    combination of that axis's groups (a UR's A4 carries the wrist like A2, A3 carry the arm);
+    A1, along gravity on a floor-mounted arm, carries no torque and has none."""
+    robot = load_robot(name)
+    rng = np.random.default_rng(seed)
+    truth = JointErrors(np.full(6, 1e-7), random_masses(rng))
+    q = reference_joints(robot, 300, seed + 1)
+    delta = truth.delta(robot.dh, q)
+    unit = gravity_basis(robot.dh, q, truth.gravity_mps2)
+    terms = gravity_terms(robot)
+    assert {t.axis for t in terms} == {2, 3, 4, 5, 6}
+    assert np.abs(delta[:, 0]).max() <= 1e-12
+    for axis in range(2, 7):
+        functions = np.column_stack([t.functions(unit) for t in terms if t.axis == axis])
+        w = np.linalg.lstsq(functions, delta[:, axis - 1], rcond=None)[0]
+        left = delta[:, axis - 1] - functions @ w
+        assert np.abs(left).max() <= 1e-6 * np.abs(delta[:, axis - 1]).max()
+
+
 def test_gravity_moments_round_trip_through_the_calibrated_yaml(tmp_path):
     rng = np.random.default_rng(3)
     moments = np.zeros((6, 6, 4))
