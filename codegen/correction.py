@@ -21,7 +21,6 @@ from accugrid.compensation.budget import Budget, ModelBudget
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.policy import Policy, PolicyRequest
 from accugrid.infra.csvtable import declared_or
-from accugrid.infra.errors import InputError
 
 if TYPE_CHECKING:  # a grid-only job never loads the robot modules
     from accugrid.kinematics.model import RobotModel
@@ -65,14 +64,13 @@ def read_model(path: str | os.PathLike[str], nominal: RobotModel | None = None) 
     """Load a calibrated robot YAML (or a built-in robot name) once for a job; with
     ``nominal`` (the cell's robot) InputError unless it is a model of that robot."""
     from accugrid.infra.yamlfile import load_yaml
-    from accugrid.kinematics.calibrated import check_same_robot
+    from accugrid.kinematics.calibrated import check_dh_model, check_same_robot
     from accugrid.kinematics.frames import pose_from_xyzabc
     from accugrid.kinematics.robot import load_robot
 
     text = os.fspath(path)
     robot = load_robot(text)
-    if not hasattr(robot, "true_robot"):
-        raise InputError("a calibrated model must be a DH robot file (accugrid identify)", text)
+    check_dh_model(robot, text)
     if nominal is not None:
         check_same_robot(robot, nominal, text)
     validity, tool, budget = None, None, None

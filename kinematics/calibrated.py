@@ -10,6 +10,8 @@ reloaded model gives the same FK to the last bit of the DH values.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import yaml
 
@@ -20,8 +22,12 @@ from accugrid.kinematics.joint_errors import JointErrors
 from accugrid.kinematics.robot import Robot
 from accugrid.kinematics.structure import STRUCTURE_WORD, Selection
 
+if TYPE_CHECKING:
+    from accugrid.kinematics.model import RobotModel
+
 __all__ = [
     "calibrated_yaml",
+    "check_dh_model",
     "check_same_robot",
     "chosen_structure",
     "identification_summary",
@@ -222,16 +228,21 @@ def _joint_errors_dict(moves: JointErrors) -> dict:
     return out
 
 
-def check_same_robot(model: Robot, robot: Robot, where: str | None = None) -> None:
-    """InputError unless ``model`` (e.g. a calibrated file) has ``robot``'s nominal DH and
-    joint limits (within 1e-9 mm/deg): a model identified on another robot type, or either of
-    them a URDF robot (no DH table to compare)."""
+def check_dh_model(model: RobotModel, where: str | None = None) -> None:
+    """InputError unless ``model`` is a DH robot (a URDF robot has no calibrated model)."""
     if not isinstance(model, Robot):
         raise InputError(
             f"model {model.name} is a URDF robot, not a calibrated DH model "
             "(accugrid identify writes one)",
             where,
         )
+
+
+def check_same_robot(model: Robot, robot: Robot, where: str | None = None) -> None:
+    """InputError unless ``model`` (e.g. a calibrated file) has ``robot``'s nominal DH and
+    joint limits (within 1e-9 mm/deg): a model identified on another robot type, or either of
+    them a URDF robot (no DH table to compare)."""
+    check_dh_model(model, where)
     if not isinstance(robot, Robot):
         raise InputError(
             f"robot {robot.name} is a URDF robot: a calibrated model applies to a DH robot only",

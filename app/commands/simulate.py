@@ -97,8 +97,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         nargs=6,
         type=number("mm or deg", -COORDINATE_MAX, COORDINATE_MAX),
         metavar=("X", "Y", "Z", "A", "B", "C"),
-        help="with --datums: where the part really stands, robot_T_base: x, y, z mm, a, b, c "
-        "KUKA deg",
+        help="with --datums: where the part really stands, robot_T_base: x, y, z mm, "
+        "KUKA A, B, C deg",
     )
     add_abc(parser, "TCP orientation at every vertex")
     add_tool(parser, "tool on the flange")
