@@ -11,9 +11,10 @@ errors of seed Eq. 2 (Δa, Δd mm; Δα, Δθ rad), the TCP offset in the flange
 --base-frame the tracker-to-robot frame (then x_meas.. may be in tracker coordinates), and the
 joint errors the measurements show (--structure auto, the default; kinematics.structure): reducer
 harmonics s*sin(k*A)+c*cos(k*A) per axis and order k <= --max-order, and the gravity compliance
-of A2 and A3 without masses (compliance x first moments of the links), chosen from the data: every
-candidate group weighed at once by sparse Bayesian learning (each group's prior by maximum
-evidence; --structure search: forward selection on the held-out error instead), with the
+of every axis gravity loads, without masses (compliance x first moments of the links),
+chosen from the data: every candidate group weighed at once by sparse Bayesian learning (each
+group's prior by maximum evidence; --structure search: forward selection on the held-out error
+instead), with the
 cross-validation curve and an accuracy estimate by nested cross-validation over the distinct
 poses. --harmonics pins
 orders known from the reducers' data sheets and --compliance the compliance of A2 and A3 under the

@@ -317,8 +317,8 @@ def _structure_report(selection: Selection) -> str:
     }[selection.method]
     lines = [
         f"  structure chosen by {how} from {selection.candidates} candidate groups (harmonic "
-        f"orders 1..{selection.max_order}: {selection.max_order_rule}; gravity of A2, A3 "
-        f"without masses): {chosen}"
+        f"orders 1..{selection.max_order}: {selection.max_order_rule}; gravity of every "
+        f"axis gravity loads, without masses): {chosen}"
     ]
     if selection.pinned:
         lines.append("  pinned (always kept): " + ", ".join(selection.pinned))

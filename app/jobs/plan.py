@@ -229,7 +229,8 @@ def _identification_plan(r: PlanRequest) -> tuple[Plan, list[str]]:
     if r.design == "library":
         from accugrid.kinematics.structure import DEFAULT_MAX_ORDER
 
-        model += f" + candidates: harmonic orders 1..{DEFAULT_MAX_ORDER} per axis, gravity A2/A3"
+        orders = f"harmonic orders 1..{DEFAULT_MAX_ORDER} per axis"
+        model += f" + candidates: {orders}, gravity per loaded axis"
         how = "Bayesian D-optimally"
     info = [
         f"identification plan ({model}): {r.count} poses x {r.repeats} repeats chosen {how} "
