@@ -49,6 +49,7 @@ if TYPE_CHECKING:  # a grid-only job never loads the robot modules
 
 __all__ = [
     "COVERAGE_RANGE",
+    "coverage_range",
     "SECTION",
     "Budget",
     "FrameBudget",
@@ -252,6 +253,16 @@ class Budget:
         for i, key in enumerate(("sigma_x", "sigma_y", "sigma_z")):
             numbers.setdefault(key, np.full(n, np.nan))[at] = sigma[:, i]
         numbers.setdefault("u95", np.full(n, np.nan))[at] = u95
+
+
+def coverage_range(targets: int) -> tuple[float, float]:
+    """The shares within their 95 % bounds that call the bounds calibrated when they were checked
+    at ``targets`` distinct targets: ``COVERAGE_RANGE``, widened to three binomial standard
+    errors of a 95 % share where the targets are too few to tell more (the repeats of one
+    target share its error, so they are not counted apart)."""
+    spread = 3.0 * np.sqrt(0.95 * 0.05 / max(targets, 1))
+    lo, hi = COVERAGE_RANGE
+    return min(lo, 0.95 - spread), min(1.0, max(hi, 0.95 + spread))
 
 
 def coverage(deviations: np.ndarray, u95: np.ndarray) -> tuple[float, int]:

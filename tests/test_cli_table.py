@@ -73,10 +73,10 @@ def test_a_dialect_registered_by_one_line_is_a_command_and_a_kind_rewrite_reads(
     text = _toy("rewrite", "--help")
     assert "Toy Robot Language: .toy .tyy" in text and "Toy: its own paragraph." in text
     assert "Toy Robot Language programs: --toy-frame N the toy's frame number" in text
-    assert "unknown program type '.ls': known are" in _toy(
-        "rewrite", "x.ls", "--cell", "c", "-o", "o"
+    assert "unknown program type '.pdl': known are" in _toy(
+        "rewrite", "x.pdl", "--cell", "c", "-o", "o"
     )
-    assert "Toy Robot Language .toy .tyy" in _toy("rewrite", "x.ls", "--cell", "c", "-o", "o")
+    assert "Toy Robot Language .toy .tyy" in _toy("rewrite", "x.pdl", "--cell", "c", "-o", "o")
 
 
 def _imported_commands(*argv: str) -> set[str]:

@@ -34,19 +34,19 @@ def test_no_suffix_is_claimed_twice():
     assert len(suffixes) == len(set(suffixes))
 
 
-@pytest.mark.parametrize("name", ["notes.txt", "program", "drill.ls"])
+@pytest.mark.parametrize("name", ["notes.txt", "program", "drill.pdl"])
 def test_unknown_suffix_is_refused_not_taken_for_gcode(name):
     with pytest.raises(InputError, match="unknown program type"):
         dialect_of(name)
 
 
 def test_rewrite_refuses_an_unknown_suffix(tmp_path, capsys):
-    program = tmp_path / "drill.ls"
-    program.write_text("/PROG DRILL\n/END\n")
-    out = tmp_path / "out.ls"
+    program = tmp_path / "drill.pdl"
+    program.write_text("PROGRAM drill\nEND drill\n")
+    out = tmp_path / "out.pdl"
     code = main(["rewrite", str(program), "--cell", "examples/cell.yaml", "-o", str(out)])
     assert code == 2 and not out.exists()
-    assert "unknown program type '.ls'" in capsys.readouterr().err
+    assert "unknown program type '.pdl'" in capsys.readouterr().err
 
 
 def test_every_dialect_is_a_plugin_with_every_member_of_the_interface():
@@ -122,8 +122,8 @@ def test_the_library_names_a_dialect_exports_resolve_through_the_registry():
     assert accugrid.render_krl is codegen.render_krl is render_krl
     import accugrid.codegen.dialects as registry
 
-    with pytest.raises(AttributeError, match="render_fanuc"):
-        registry.render_fanuc  # noqa: B018
+    with pytest.raises(AttributeError, match="render_toy"):
+        registry.render_toy  # noqa: B018
 
 
 def test_a_plugin_says_whether_it_writes_measurement_programs_as_it_does():

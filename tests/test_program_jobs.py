@@ -18,6 +18,7 @@ JOBS = {
     "krl": ("examples/cell.yaml", "out", ["out/WING_PANEL.src", "out/WING_PANEL.dat"]),
     "gcode": ("examples/cell.yaml", "wing.ngc", ["wing.ngc"]),
     "rapid": ("examples/cell_irb6700.yaml", "WING.mod", ["WING.mod"]),
+    "fanuc": ("examples/cell_fanuc.yaml", "WING.ls", ["WING.ls"]),
 }
 
 
@@ -63,6 +64,6 @@ def test_rewrite_takes_a_second_file_only_as_the_other_half_of_a_pair(
 
 def test_only_a_pair_dialect_names_the_suffixes_of_a_two_file_program():
     pairs = {name: plugin_of(name).pair for name in DIALECTS}
-    assert pairs == {"krl": (".src", ".dat"), "gcode": None, "rapid": None}
+    assert pairs == {"krl": (".src", ".dat"), "gcode": None, "rapid": None, "fanuc": None}
     for name, pair in pairs.items():
         assert pair is None or set(pair) <= set(DIALECTS[name].suffixes)

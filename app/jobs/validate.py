@@ -135,9 +135,10 @@ def _budget_coverage(request: ValidateRequest, meas, result: ValidationResult) -
     """One line: the share of rows whose deviation lies within the 95 % bound the error budget
     (``compensation.budget``) predicts at their target, by the model (and residual grid) at
     the rows' orientation and Status with the SMR the model was measured with, as ``correct``
-    computes it; whether that share says the bounds are calibrated (``COVERAGE_RANGE``)."""
+    computes it; whether that share says the bounds are calibrated (``coverage_range`` of the
+    distinct targets checked)."""
     from accugrid.codegen.correction import read_model
-    from accugrid.compensation.budget import COVERAGE_RANGE, Budget, coverage
+    from accugrid.compensation.budget import Budget, coverage, coverage_range
     from accugrid.compensation.policy import Policy
     from accugrid.compensation.settings import CorrectionSettings
     from accugrid.kinematics.frames import abc_to_matrix
@@ -168,7 +169,8 @@ def _budget_coverage(request: ValidateRequest, meas, result: ValidationResult) -
     share, count = coverage(result.deviation, u95)
     if not count:
         return "error budget: no row's target could be corrected: its coverage is not checked"
-    lo, hi = COVERAGE_RANGE
+    targets = len(np.unique(meas.commanded[np.isfinite(u95)], axis=0))
+    lo, hi = coverage_range(targets)
     if share < lo:
         verdict_text = "not calibrated: the bounds are too narrow"
     elif share > hi:
@@ -178,7 +180,7 @@ def _budget_coverage(request: ValidateRequest, meas, result: ValidationResult) -
     return (
         f"error budget: {100 * share:.1f} % of {count} rows within their 95 % bound u95 "
         f"(median {np.nanmedian(u95):.3f} mm, largest {np.nanmax(u95):.3f} mm): {verdict_text} "
-        f"({100 * lo:.0f}-{100 * hi:.0f} % expected)"
+        f"({100 * lo:.0f}-{100 * hi:.0f} % expected at {targets} targets)"
     )
 
 
