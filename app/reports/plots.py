@@ -366,6 +366,11 @@ def correction_map_png(
             points[ringed, 0], points[ringed, 1], "o", mfc="none", mec="tab:orange", ms=9,
             label="flagged",
         )  # fmt: skip
+    return _plan_view_png(plt, fig, ax, plane)
+
+
+def _plan_view_png(plt, fig, ax, plane: str) -> bytes:
+    """A plan view's axes (u, v mm in ``plane``), equal scale, grid and legend; its PNG."""
     ax.set_xlabel(f"u (mm), {plane}")
     ax.set_ylabel("v (mm)")
     ax.set_aspect("equal", adjustable="datalim")
@@ -397,10 +402,4 @@ def budget_map_png(
             points[over, 0], points[over, 1], "o", mfc="none", mec="tab:red", ms=9,
             label=f"u95 beyond {tolerance_mm:g} mm",
         )  # fmt: skip
-    ax.set_xlabel(f"u (mm), {plane}")
-    ax.set_ylabel("v (mm)")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.grid(alpha=0.3)
-    if ax.get_legend_handles_labels()[1]:
-        _legend_outside(fig, ax)
-    return _png(plt, fig, dpi=90)
+    return _plan_view_png(plt, fig, ax, plane)
