@@ -454,10 +454,39 @@ class Policy:
             own[own < 0] = self.status
         return own
 
-    def _by_model(self, v: Verdict, rotations: np.ndarray | None, own: np.ndarray | None) -> None:
-        """The model's commands for the positions still corrected, the joints' flags."""
+    def _commands(self, v: Verdict, model, grid, rows: np.ndarray, rotations, own):
+        """``model``'s commands (with ``grid``, its residual grid, or None) for the positions
+        ``rows`` (k,) at their ``rotations`` and Status ``own``: set where it lands them, refused
+        as not reachable or not converging where not; the ``model_correct`` result (k rows)."""
         from accugrid.kinematics.frames import matrix_to_abc  # model jobs only
 
+        status = None if own is None else own[rows]
+        abc = matrix_to_abc(rotations[rows]).reshape(-1, 3)
+        result = model_correct(
+            model,
+            v.points[rows],
+            abc,
+            status,
+            grid,
+            self.settings,
+            controller_tool=self.controller_tool,
+            arm_tool=self.arm_tool,
+        )
+        v.numbers.setdefault("miss", np.full(len(v.points), np.nan))[rows] = result.miss_mm
+        failed = result.failed
+        if failed.size:
+            converging = np.char.startswith(result.reason[failed].astype(str), "no convergence")
+            code = np.where(converging, NO_CONVERGENCE, UNREACHABLE)
+            for c in (UNREACHABLE, NO_CONVERGENCE):
+                at = failed[code == c]
+                got = -1.0 if status is None else status[at].astype(float)
+                v.refuse(rows[at], c, np.broadcast_to(got, at.shape).astype(float))
+                v.why[rows[at]] = result.reason[at]
+        v.command[rows[result.ok]] = result.command[result.ok]
+        return result
+
+    def _by_model(self, v: Verdict, rotations: np.ndarray | None, own: np.ndarray | None) -> None:
+        """The model's commands for the positions still corrected, the joints' flags."""
         n = len(v.points)
         if rotations is None:
             rotations = np.full((n, 3, 3), np.nan)
@@ -469,29 +498,8 @@ class Policy:
         todo = np.flatnonzero(v.code == CORRECTED)
         if not todo.size:
             return
-        status = None if own is None else own[todo]
-        result = model_correct(
-            self.calibrated,
-            v.points[todo],
-            matrix_to_abc(rotations[todo]).reshape(-1, 3),
-            status,
-            self.grid,
-            self.settings,
-            controller_tool=self.controller_tool,
-            arm_tool=self.arm_tool,
-        )
-        v.numbers.setdefault("miss", np.full(n, np.nan))[todo] = result.miss_mm
-        failed = result.failed
-        if failed.size:
-            converging = np.char.startswith(result.reason[failed].astype(str), "no convergence")
-            code = np.where(converging, NO_CONVERGENCE, UNREACHABLE)
-            for c in (UNREACHABLE, NO_CONVERGENCE):
-                at = failed[code == c]
-                got = -1.0 if status is None else status[at].astype(float)
-                v.refuse(todo[at], c, np.broadcast_to(got, at.shape).astype(float))
-                v.why[todo[at]] = result.reason[at]
+        result = self._commands(v, self.calibrated, self.grid, todo, rotations, own)
         done = todo[result.ok]
-        v.command[done] = result.command[result.ok]
         q = result.q[result.ok]  # the controller's joints at the final commands
         v.joints = np.full((n, 6), np.nan)
         v.joints[done] = q
@@ -514,8 +522,6 @@ class Policy:
         """Positions ``done`` (k,) corrected by the model at the controller's joints q (k, 6)
         rad: those without its support flagged and corrected by its DH-only fallback (the
         residual grid, the full model's, not added), or refused with ``strict``."""
-        from accugrid.kinematics.frames import matrix_to_abc  # model jobs only
-
         support = self.validity.support
         ratio = support.ratio(q)
         v.numbers.setdefault("support", np.zeros(len(v.points)))[done] = ratio
@@ -526,23 +532,9 @@ class Policy:
         out = out[v.code[out] == CORRECTED]
         if not out.size:
             return
-        status = None if own is None else own[out]
-        result = model_correct(
-            support.fallback,
-            v.points[out],
-            matrix_to_abc(rotations[out]).reshape(-1, 3),
-            status,
-            None,
-            self.settings,
-            controller_tool=self.controller_tool,
-            arm_tool=self.arm_tool,
-        )
-        v.command[out[result.ok]] = result.command[result.ok]
-        v.numbers["miss"][out[result.ok]] = result.miss_mm[result.ok]
+        result = self._commands(v, support.fallback, None, out, rotations, own)
+        v.joints[out[result.ok]] = result.q[result.ok]
         v.flag(out[result.ok], F_SUPPORT, "support", v.numbers["support"][out[result.ok]])
-        failed = out[~result.ok]
-        v.refuse(failed, NO_CONVERGENCE, np.zeros(failed.size))
-        v.why[failed] = result.reason[~result.ok]
 
 
 @dataclass

@@ -233,3 +233,39 @@ def test_a_damaged_support_record_is_a_located_error(calibrated, tmp_path, capsy
     assert len(err) == 1 and "support.joints_deg' must be rows of 6 numbers" in err[0]
     line = text[:at].count("\n") + 1
     assert f"cal.yaml:{line}:" in err[0]
+
+
+def test_a_target_the_fallback_cannot_reach_is_refused_as_not_reachable(
+    calibrated, tmp_path, monkeypatch, capsys
+):
+    """Where the DH-only fallback finds no joints for a target, the target is refused for the
+    fallback's own reason (not reachable), as the full model's failures are, and its command is
+    the target itself."""
+    from dataclasses import replace
+
+    from accugrid.compensation import policy
+
+    fallback = read_model(calibrated).validity.support.fallback
+    real = policy.model_correct
+
+    def fallback_unreachable(robot, *args, **kwargs):
+        result = real(robot, *args, **kwargs)
+        if robot.errors is None or not np.allclose(robot.errors, fallback.errors):
+            return result
+        failed = np.zeros(len(result.ok), bool)
+        failed[:3] = True
+        reason = result.reason.copy()
+        reason[failed] = "A1 beyond its limit"
+        return replace(result, ok=result.ok & ~failed, reason=reason)
+
+    monkeypatch.setattr(policy, "model_correct", fallback_unreachable)
+    xyzabc, _ = write_points(tmp_path / "points.csv", CROSSED[:10])
+    out = tmp_path / "out.csv"
+    argv = ["correct", str(tmp_path / "points.csv"), "--model", calibrated, "--tool", *TOOL]
+    assert main([*argv, "--allow-partial", "-o", str(out)]) == 0
+    rows = list(csv.DictReader(line for line in open(out) if not line.startswith("#")))
+    notes = [next(reversed(r.values())) for r in rows]
+    assert all(n.startswith("not corrected: not reachable") and "A1 beyond" in n for n in notes[:3])
+    assert all("corrected by the DH-only fit" in n for n in notes[3:])
+    command = np.array([[float(r[k]) for k in ("x_cmd", "y_cmd", "z_cmd")] for r in rows[:3]])
+    np.testing.assert_allclose(command, xyzabc[:3, :3], atol=1e-3)
