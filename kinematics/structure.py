@@ -9,12 +9,13 @@ scored by the same cross-validation): near-alias orders share the evidence inste
 committing to one. The groups it keeps are then **pruned by joint range** (``range_prune``): each
 joint's range of the poses is cut in ``RANGE_BLOCKS`` contiguous blocks, each block held out in turn
 and predicted from the rest (every joint in turn, pooled), and the group whose removal most lowers
-that held-out error is dropped, while one does. Random folds test poses drawn like
-the calibration poses; these test a term where one joint leaves the range it was fitted on: a
-reducer harmonic or a gravity term is a function of the joints that holds there, a term that
-only fits the poses' own joint combinations (on a real arm: effects no candidate describes)
-misses there, often by far more than the DH-only fit. The chosen model is scored the same way
-against the DH + TCP model (``Selection.carry_over``, reported). Method "search"
+that held-out error is dropped, while that gain clears ``PRUNE_BAR`` standard errors of its
+paired differences over the blocks (a gain in one block alone is not evidence). Random folds
+test poses drawn like the calibration poses; these test a term where one joint leaves the range
+it was fitted on: a reducer harmonic or a gravity term is a function of the joints that holds
+there, a term that only fits the poses' own joint combinations (on a real arm: effects no
+candidate describes) misses there, often by far more than the DH-only fit. The chosen model is
+scored the same way against the DH + TCP model (``Selection.carry_over``, reported). Method "search"
 (``--structure search``):
 
 1. Fit DH errors + TCP (+ the tracker frame, ``--compliance`` with masses and the pinned
@@ -58,10 +59,10 @@ sorted angles of the distinct poses on every axis. Higher orders (reducer stages
 not excluded: irregular samples alias only approximately, so a few sparse high orders can be
 identified. A **screen** before step 2 offers them: a greedy periodogram of the DH fit's
 residuals (beyond DH, TCP and the gravity groups) over every (axis, order 1..π / the smallest
-gap between the axis's angles, at most ``SCREEN_MAX_ORDER``), ``SCREEN_STEPS`` picks, each
-deflating what it explains, keeps the first ``SCREEN_KEEP`` picks beyond K per axis as
-candidates. Such a candidate is the best of a pool of hundreds, so its step must pass the bar
-of that whole pool (Bonferroni over library + pool). The library's search (steps 2-3) runs
+gap between the axis's angles, at most ``SCREEN_MAX_ORDER``), ``SCREEN_PICKS_PER_KEPT`` picks
+per order kept, each deflating what it explains, keeps the first ``SCREEN_KEEP`` picks beyond K
+per axis as candidates. Such a candidate is the best of a pool of hundreds, so its step must pass
+the bar of that whole pool (Bonferroni over library + pool). The library's search (steps 2-3) runs
 first; then it continues from there with the screened orders offered too, and those it keeps
 are swapped for a neighbouring order where that lowers the held-out error. The screen sees all
 poses, also in the nested estimate (it only proposes; the choice is made in the folds).
@@ -99,6 +100,7 @@ __all__ = [
     "LOOK_AHEAD",
     "MAX_STEPS",
     "SCREEN_KEEP",
+    "SCREEN_PICKS_PER_KEPT",
     "SCREEN_MAX_ORDER",
     "SECOND_PASSES",
     "SEPARATE",
@@ -109,6 +111,7 @@ __all__ = [
     "ForwardSearch",
     "SelectionStrategy",
     "RANGE_BLOCKS",
+    "PRUNE_BAR",
     "CarryOver",
     "Nested",
     "Selection",
@@ -134,8 +137,9 @@ FALSE_STEP = 0.05  # chance that a step on noise alone passes the bar (shared by
 LOOK_AHEAD = 4  # a step that fails may be carried by the next 2..LOOK_AHEAD steps together
 SCREEN_MAX_ORDER = 200  # the highest order the periodogram screens (reducer stages up to ~160)
 SCREEN_KEEP = 3  # orders beyond the library an axis's periodogram adds as candidates
+SCREEN_PICKS_PER_KEPT = 10  # picks of the greedy periodogram (low and high orders) per kept order
 RANGE_BLOCKS = 5  # the carry-over check holds out each joint's range in this many blocks in turn
-SCREEN_STEPS = 30  # picks of the greedy periodogram (low and high orders together)
+PRUNE_BAR = 1.0  # a group is pruned when its removal gains this many standard errors held out
 _NESTED_SEED = 1  # inner folds: another permutation of the training poses
 _FIRST_ORDERS = tuple((axis, 1) for axis in range(1, 7))  # sin, cos give each joint's column
 
@@ -249,13 +253,14 @@ def _angle_gaps(q: np.ndarray) -> list[np.ndarray]:
     return [gaps[:, axis][gaps[:, axis] > 1e-9] for axis in range(6)]
 
 
-def _screen(y, base, joint, angle, caps, last) -> list[tuple[int, int]]:
+def _screen(y, base, joint, angle, caps, last, keep: int) -> list[tuple[int, int]]:
     """Harmonics beyond the library (orders caps[axis]+1..last[axis] (6,)) that a greedy
     periodogram of the residuals y (M,) mm picks: beyond the columns ``base`` (M, r) (DH, TCP,
     gravity), each pick is the (axis, order) of orders 1..last whose two columns, on the joint's
     column joint (M, 6) mm/rad at the rows' angles (M, 6) rad, remove most of what is left; picks
     are deflated, so a low order taken first no longer leaks into the high ones and a peak's
-    neighbours lose what it explained. The first ``SCREEN_KEEP`` high orders per axis, sorted."""
+    neighbours lose what it explained; ``SCREEN_PICKS_PER_KEPT`` × ``keep`` picks. The first
+    ``keep`` high orders per axis, sorted."""
     q_, _ = np.linalg.qr(base)
     terms = [(a + 1, k) for a in range(6) for k in range(1, int(last[a]) + 1)]
     if not terms:
@@ -265,14 +270,20 @@ def _screen(y, base, joint, angle, caps, last) -> list[tuple[int, int]]:
     phase = angle[:, axis] * order  # (M, G)
     rest = joint[:, axis, None] * np.stack([np.sin(phase), np.cos(phase)], axis=2)  # (M, G, 2)
     rest /= np.sqrt(np.mean(rest**2, axis=0)) + 1e-300
-    rest -= np.einsum("mr,rgi->mgi", q_, np.einsum("mr,mgi->rgi", q_, rest))
+    flat = rest.reshape(len(y), -1)  # (M, 2G)
+    flat = flat - q_ @ (q_.T @ flat)
+    rest = flat.reshape(rest.shape)
     left = y - q_ @ (q_.T @ y)
     own = np.einsum("mgi,mgi->gi", rest, rest)
+    # each pick deflates every pair by its two directions u: the Gram matrices and right-hand
+    # sides are downdated by uᵀ·rest (u is orthogonal to the picks before, so uᵀ of the columns
+    # as first projected is uᵀ of the deflated ones); only the pick's own pair is deflated fully
+    gram = np.einsum("mgi,mgj->gij", rest, rest)
+    rhs = (flat.T @ left).reshape(-1, 2)
+    taken = np.zeros((len(y), 0))
     picked: list[tuple[int, int]] = []
     found = np.zeros(6, dtype=int)
-    for _ in range(SCREEN_STEPS):
-        gram = np.einsum("mgi,mgj->gij", rest, rest)
-        rhs = np.einsum("mgi,m->gi", rest, left)
+    for _ in range(SCREEN_PICKS_PER_KEPT * keep):
         # a pair whose columns are (nearly) spanned already has nothing left to give
         alive = np.linalg.eigvalsh(gram)[:, 0] > SEPARATE**2 * own.max(axis=1)
         safe = np.where(alive[:, None, None], gram, np.eye(2))
@@ -281,11 +292,15 @@ def _screen(y, base, joint, angle, caps, last) -> list[tuple[int, int]]:
         best = int(np.argmax(gain))
         if not np.isfinite(gain[best]):
             break
-        u, _ = np.linalg.qr(rest[:, best])  # (M, 2)
-        rest -= np.einsum("mj,jgi->mgi", u, np.einsum("mj,mgi->jgi", u, rest))
-        left -= u @ (u.T @ left)
+        u, _ = np.linalg.qr(rest[:, best] - taken @ (taken.T @ rest[:, best]))  # (M, 2)
+        cut = (u.T @ flat).reshape(2, -1, 2)  # (2, G, 2)
+        along = u.T @ left
+        gram -= np.einsum("jgi,jgk->gik", cut, cut)
+        rhs -= np.einsum("jgi,j->gi", cut, along)
+        left -= u @ along
+        taken = np.column_stack([taken, u])
         a, k = terms[best]
-        if k > caps[a - 1] and found[a - 1] < SCREEN_KEEP:
+        if k > caps[a - 1] and found[a - 1] < keep:
             picked.append((a, k))
             found[a - 1] += 1
     return sorted(picked)
@@ -382,7 +397,15 @@ def _identify_structure(
         joint = np.sin(angle) * ones[:, 0:12:2] + np.cos(angle) * ones[:, 1:12:2]  # (M, 6)
         screened = [
             t
-            for t in _screen(y, np.column_stack([x0, ones[:, 12:]]), joint, angle, caps, last)
+            for t in _screen(
+                y,
+                np.column_stack([x0, ones[:, 12:]]),
+                joint,
+                angle,
+                caps,
+                last,
+                SCREEN_KEEP,
+            )
             if t not in pinned
         ]
         # their neighbouring orders, for the swap only (k149 may be picked for k150)
@@ -647,14 +670,16 @@ class ArdSelection:
     def range_prune(self, p: _Problem, chosen: list[int], use: np.ndarray) -> list[int]:
         """``chosen`` without, one at a time, the group whose removal most lowers the error held
         out by joint range on the poses ``use`` (P,) bool (``range_folds`` of their joints, every
-        joint's blocks in turn, pooled), while a removal does: terms that fit the poses only in
-        their own joint combinations and miss where one joint leaves its block are dropped. The
-        held-out sums come from each fold's normal equations (a removal deletes their rows and
-        columns), solved in one batch per trial."""
+        joint's blocks in turn, pooled), while that removal's gain clears ``PRUNE_BAR`` standard
+        errors of its paired per-block differences: terms that fit the poses only in their own
+        joint combinations and miss where one joint leaves its block are dropped, a term whose
+        removal gains no more than the blocks' scatter is kept. The held-out sums come from each
+        fold's normal equations (a removal deletes their rows and columns), solved in one batch
+        per trial."""
         if not chosen:
             return chosen
         x = p.design(chosen)
-        grams, rhs, held_gram, held_rhs, held_yy = [], [], [], [], 0.0
+        grams, rhs, held_gram, held_rhs, held_yy = [], [], [], [], []
         for blocks in range_folds(p.joints[use]):
             fold_of_pose = np.full(p.poses, -1)
             fold_of_pose[use] = blocks
@@ -665,31 +690,35 @@ class ArdSelection:
                 rhs.append(x[train].T @ p.y[train])
                 held_gram.append(x[test].T @ x[test])
                 held_rhs.append(x[test].T @ p.y[test])
-                held_yy += float(p.y[test] @ p.y[test])
+                held_yy.append(float(p.y[test] @ p.y[test]))
         grams, rhs = np.array(grams), np.array(rhs)
-        held_gram, held_rhs = np.array(held_gram), np.array(held_rhs)
+        held_gram, held_rhs, held_yy = np.array(held_gram), np.array(held_rhs), np.array(held_yy)
         base = p.x0.shape[1]
         starts = np.cumsum([base] + [len(p.groups[g]) for g in chosen])
 
-        def sse(kept: list[int]) -> float:
+        def sse(kept: list[int]) -> np.ndarray:
+            """Held-out sum of squares per block (B,) of the groups ``kept``."""
             cols = np.concatenate(
                 [np.arange(base)] + [np.arange(starts[i], starts[i + 1]) for i in kept]
             )
             try:
                 w = np.linalg.solve(grams[:, cols][:, :, cols], rhs[:, cols, None])[..., 0]
             except np.linalg.LinAlgError:
-                return np.inf
-            fitted = np.einsum("fi,fij,fj->", w, held_gram[:, cols][:, :, cols], w)
-            return held_yy - 2 * float(np.einsum("fi,fi->", w, held_rhs[:, cols])) + fitted
+                return np.full(len(held_yy), np.inf)
+            fitted = np.einsum("fi,fij,fj->f", w, held_gram[:, cols][:, :, cols], w)
+            return held_yy - 2 * np.einsum("fi,fi->f", w, held_rhs[:, cols]) + fitted
 
         kept = list(range(len(chosen)))
         best = sse(kept)
         while kept:
-            trials = [sse(kept[:i] + kept[i + 1 :]) for i in range(len(kept))]
-            at = int(np.argmin(trials))
-            if not trials[at] < best:
+            gains = np.array([best - sse(kept[:i] + kept[i + 1 :]) for i in range(len(kept))])
+            at = int(np.argmax(np.nan_to_num(gains.sum(axis=1), nan=-np.inf)))
+            gain = gains[at]
+            if not (np.isfinite(gain).all() and gain.sum() > 0):
                 break
-            best = trials[at]
+            if gain.mean() <= PRUNE_BAR * gain.std(ddof=1) / np.sqrt(len(gain)):
+                break
+            best = best - gain
             del kept[at]
         return [chosen[i] for i in kept]
 
