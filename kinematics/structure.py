@@ -9,13 +9,12 @@ scored by the same cross-validation): near-alias orders share the evidence inste
 committing to one. The groups it keeps are then **pruned by joint range** (``range_prune``): each
 joint's range of the poses is cut in ``RANGE_BLOCKS`` contiguous blocks, each block held out in turn
 and predicted from the rest (every joint in turn, pooled), and the group whose removal most lowers
-that held-out error is dropped, while that gain clears ``PRUNE_BAR`` standard errors of its
-paired differences over the blocks (a gain in one block alone is not evidence). Random folds
-test poses drawn like the calibration poses; these test a term where one joint leaves the range
-it was fitted on: a reducer harmonic or a gravity term is a function of the joints that holds
-there, a term that only fits the poses' own joint combinations (on a real arm: effects no
-candidate describes) misses there, often by far more than the DH-only fit. The chosen model is
-scored the same way against the DH + TCP model (``Selection.carry_over``, reported). Method "search"
+that held-out error is dropped, while one does. Random folds test poses drawn like
+the calibration poses; these test a term where one joint leaves the range it was fitted on: a
+reducer harmonic or a gravity term is a function of the joints that holds there, a term that
+only fits the poses' own joint combinations (on a real arm: effects no candidate describes)
+misses there, often by far more than the DH-only fit. The chosen model is scored the same way
+against the DH + TCP model (``Selection.carry_over``, reported). Method "search"
 (``--structure search``):
 
 1. Fit DH errors + TCP (+ the tracker frame, ``--compliance`` with masses and the pinned
@@ -60,9 +59,10 @@ not excluded: irregular samples alias only approximately, so a few sparse high o
 identified. A **screen** before step 2 offers them: a greedy periodogram of the DH fit's
 residuals (beyond DH, TCP and the gravity groups) over every (axis, order 1..π / the smallest
 gap between the axis's angles, at most ``SCREEN_MAX_ORDER``), ``SCREEN_PICKS_PER_KEPT`` picks
-per order kept, each deflating what it explains, keeps the first ``SCREEN_KEEP`` picks beyond K
-per axis as candidates. Such a candidate is the best of a pool of hundreds, so its step must pass
-the bar of that whole pool (Bonferroni over library + pool). The library's search (steps 2-3) runs
+per order kept, each deflating what it explains, keeps the first picks beyond K per axis (one
+per ``POSES_PER_SCREENED`` distinct poses, at least ``SCREEN_KEEP``: ``screen_keep``) as
+candidates. Such a candidate is the best of a pool of hundreds, so its step must pass the bar
+of that whole pool (Bonferroni over library + pool). The library's search (steps 2-3) runs
 first; then it continues from there with the screened orders offered too, and those it keeps
 are swapped for a neighbouring order where that lowers the held-out error. The screen sees all
 poses, also in the nested estimate (it only proposes; the choice is made in the folds).
@@ -100,6 +100,7 @@ __all__ = [
     "LOOK_AHEAD",
     "MAX_STEPS",
     "SCREEN_KEEP",
+    "POSES_PER_SCREENED",
     "SCREEN_PICKS_PER_KEPT",
     "SCREEN_MAX_ORDER",
     "SECOND_PASSES",
@@ -111,7 +112,6 @@ __all__ = [
     "ForwardSearch",
     "SelectionStrategy",
     "RANGE_BLOCKS",
-    "PRUNE_BAR",
     "CarryOver",
     "Nested",
     "Selection",
@@ -119,6 +119,7 @@ __all__ = [
     "identify_structure",
     "max_order_of",
     "observability",
+    "screen_keep",
     "screen_limit",
 ]
 
@@ -136,10 +137,10 @@ MAX_STEPS = 40  # groups one search adds at most
 FALSE_STEP = 0.05  # chance that a step on noise alone passes the bar (shared by the candidates)
 LOOK_AHEAD = 4  # a step that fails may be carried by the next 2..LOOK_AHEAD steps together
 SCREEN_MAX_ORDER = 200  # the highest order the periodogram screens (reducer stages up to ~160)
-SCREEN_KEEP = 3  # orders beyond the library an axis's periodogram adds as candidates
+SCREEN_KEEP = 3  # orders beyond the library an axis's periodogram adds as candidates, at least
+POSES_PER_SCREENED = 32  # and one per this many distinct poses where that is more
 SCREEN_PICKS_PER_KEPT = 10  # picks of the greedy periodogram (low and high orders) per kept order
 RANGE_BLOCKS = 5  # the carry-over check holds out each joint's range in this many blocks in turn
-PRUNE_BAR = 1.0  # a group is pruned when its removal gains this many standard errors held out
 _NESTED_SEED = 1  # inner folds: another permutation of the training poses
 _FIRST_ORDERS = tuple((axis, 1) for axis in range(1, 7))  # sin, cos give each joint's column
 
@@ -233,6 +234,13 @@ def screen_limit(q: np.ndarray) -> np.ndarray:
             for g in _angle_gaps(q)
         ]
     )
+
+
+def screen_keep(poses: int) -> int:
+    """Orders beyond the library the periodogram offers per axis for ``poses`` distinct poses:
+    one per ``POSES_PER_SCREENED`` poses, at least ``SCREEN_KEEP`` (the screened orders' 2 × 6
+    parameters per ``POSES_PER_SCREENED`` poses stay an eighth of their 3 equations each)."""
+    return max(SCREEN_KEEP, poses // POSES_PER_SCREENED)
 
 
 def range_folds(q: np.ndarray, blocks: int = RANGE_BLOCKS) -> list[np.ndarray]:
@@ -384,7 +392,7 @@ def _identify_structure(
     library = len(search)
     screened: list[tuple[int, int]] = []
     # orders beyond the library: a periodogram of the DH fit's residuals per axis screens
-    # caps+1..screen_limit and offers its SCREEN_KEEP best to the same selection
+    # caps+1..screen_limit and offers its screen_keep best to the same selection
     last = screen_limit(data.q[np.unique(data.group, return_index=True)[1]])
     first = caps + 1
     pool = int(np.maximum(last - first + 1, 0).sum())
@@ -404,7 +412,7 @@ def _identify_structure(
                 angle,
                 caps,
                 last,
-                SCREEN_KEEP,
+                screen_keep(data.poses),
             )
             if t not in pinned
         ]
@@ -670,16 +678,14 @@ class ArdSelection:
     def range_prune(self, p: _Problem, chosen: list[int], use: np.ndarray) -> list[int]:
         """``chosen`` without, one at a time, the group whose removal most lowers the error held
         out by joint range on the poses ``use`` (P,) bool (``range_folds`` of their joints, every
-        joint's blocks in turn, pooled), while that removal's gain clears ``PRUNE_BAR`` standard
-        errors of its paired per-block differences: terms that fit the poses only in their own
-        joint combinations and miss where one joint leaves its block are dropped, a term whose
-        removal gains no more than the blocks' scatter is kept. The held-out sums come from each
-        fold's normal equations (a removal deletes their rows and columns), solved in one batch
-        per trial."""
+        joint's blocks in turn, pooled), while a removal does: terms that fit the poses only in
+        their own joint combinations and miss where one joint leaves its block are dropped. The
+        held-out sums come from each fold's normal equations (a removal deletes their rows and
+        columns), solved in one batch per trial."""
         if not chosen:
             return chosen
         x = p.design(chosen)
-        grams, rhs, held_gram, held_rhs, held_yy = [], [], [], [], []
+        grams, rhs, held_gram, held_rhs, held_yy = [], [], [], [], 0.0
         for blocks in range_folds(p.joints[use]):
             fold_of_pose = np.full(p.poses, -1)
             fold_of_pose[use] = blocks
@@ -690,35 +696,31 @@ class ArdSelection:
                 rhs.append(x[train].T @ p.y[train])
                 held_gram.append(x[test].T @ x[test])
                 held_rhs.append(x[test].T @ p.y[test])
-                held_yy.append(float(p.y[test] @ p.y[test]))
+                held_yy += float(p.y[test] @ p.y[test])
         grams, rhs = np.array(grams), np.array(rhs)
-        held_gram, held_rhs, held_yy = np.array(held_gram), np.array(held_rhs), np.array(held_yy)
+        held_gram, held_rhs = np.array(held_gram), np.array(held_rhs)
         base = p.x0.shape[1]
         starts = np.cumsum([base] + [len(p.groups[g]) for g in chosen])
 
-        def sse(kept: list[int]) -> np.ndarray:
-            """Held-out sum of squares per block (B,) of the groups ``kept``."""
+        def sse(kept: list[int]) -> float:
             cols = np.concatenate(
                 [np.arange(base)] + [np.arange(starts[i], starts[i + 1]) for i in kept]
             )
             try:
                 w = np.linalg.solve(grams[:, cols][:, :, cols], rhs[:, cols, None])[..., 0]
             except np.linalg.LinAlgError:
-                return np.full(len(held_yy), np.inf)
-            fitted = np.einsum("fi,fij,fj->f", w, held_gram[:, cols][:, :, cols], w)
-            return held_yy - 2 * np.einsum("fi,fi->f", w, held_rhs[:, cols]) + fitted
+                return np.inf
+            fitted = np.einsum("fi,fij,fj->", w, held_gram[:, cols][:, :, cols], w)
+            return held_yy - 2 * float(np.einsum("fi,fi->", w, held_rhs[:, cols])) + fitted
 
         kept = list(range(len(chosen)))
         best = sse(kept)
         while kept:
-            gains = np.array([best - sse(kept[:i] + kept[i + 1 :]) for i in range(len(kept))])
-            at = int(np.argmax(np.nan_to_num(gains.sum(axis=1), nan=-np.inf)))
-            gain = gains[at]
-            if not (np.isfinite(gain).all() and gain.sum() > 0):
+            trials = [sse(kept[:i] + kept[i + 1 :]) for i in range(len(kept))]
+            at = int(np.argmin(trials))
+            if not trials[at] < best:
                 break
-            if gain.mean() <= PRUNE_BAR * gain.std(ddof=1) / np.sqrt(len(gain)):
-                break
-            best = best - gain
+            best = trials[at]
             del kept[at]
         return [chosen[i] for i in kept]
 

@@ -14,7 +14,7 @@ from accugrid.kinematics.calibrated import structure_summary
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.identification import Identification, identify, pose_set
 from accugrid.kinematics.robot import load_robot
-from accugrid.kinematics.structure import ArdSelection, _Problem, identify_structure, range_folds
+from accugrid.kinematics.structure import identify_structure, range_folds
 
 ROBOT = load_robot("ur10").with_tool(pose_from_xyzabc([0.0, 0.0, 109.0, 0.0, 0.0, 0.0]))
 
@@ -47,43 +47,6 @@ def test_range_folds_are_contiguous_blocks_of_each_moving_joint():
     assert folds.tolist() == [4, 4, 3, 3, 2, 2, 1, 1, 0, 0]
 
 
-def test_a_term_that_holds_in_all_but_one_block_of_its_joints_range_is_kept():
-    """A trend in A1 that the poses follow except in the lowest fifth of A1's range (where
-    something the candidates do not describe adds 0.5): dropping it lowers the error held out in
-    that one block and raises it in the four others. The pooled sum alone would drop it; the
-    gain of dropping does not clear its standard error over the blocks, so it stays."""
-    poses = 50
-    q = np.zeros((poses, 6))
-    q[:, 0] = np.linspace(0.0, 1.0, poses)
-    angle = np.repeat(q[:, 0], 3)
-    y = angle + 0.5 * (angle < 0.2) + 0.01 * np.random.default_rng(0).standard_normal(len(angle))
-    problem = _Problem(
-        y,
-        np.ones((len(y), 1)),
-        angle[:, None],
-        [np.array([0])],
-        np.repeat(np.arange(poses), 3),
-        poses,
-        joints=q,
-    )
-    problem.reduce(["trend"])
-    assert ArdSelection().range_prune(problem, [0], np.ones(poses, bool)) == [0]
-    # where the step departs everywhere but at the top block, dropping the trend gains in most
-    # blocks and it is dropped
-    y_flat = 0.01 * np.random.default_rng(1).standard_normal(len(angle)) + 2.0 * (angle > 0.8)
-    problem = _Problem(
-        y_flat,
-        np.ones((len(y), 1)),
-        angle[:, None],
-        [np.array([0])],
-        np.repeat(np.arange(poses), 3),
-        poses,
-        joints=q,
-    )
-    problem.reduce(["trend"])
-    assert ArdSelection().range_prune(problem, [0], np.ones(poses, bool)) == []
-
-
 def test_100_random_poses_predict_the_rest_of_the_series(series_c):
     """Measured: mean 0.19, p95 0.43 mm (DH only 0.45, 0.87); nested estimate 0.199 against the
     held-out RMS 0.229 mm."""
@@ -98,6 +61,17 @@ def test_100_random_poses_predict_the_rest_of_the_series(series_c):
     estimate = float(np.linalg.norm(selection.nested.rms_mm))
     held_out = float(np.sqrt(np.mean(e**2)))
     assert 0.75 * held_out <= estimate <= 1.25 * held_out
+
+
+def test_300_random_poses_predict_the_rest_of_the_series(series_c):
+    """Measured: mean 0.116, p95 0.225 mm (DH only 0.44, 0.87); with three screened orders per
+    axis whatever the poses 0.133, 0.279."""
+    q, m = series_c
+    order = np.random.default_rng(0).permutation(len(q))
+    train, test = order[:300], order[300:]
+    result, _ = identify_structure(ROBOT, _data(q[train], m[train]), base_frame=True, nested=False)
+    e = _errors(result, q[test], m[test])
+    assert e.mean() <= 0.125 and np.quantile(e, 0.95) <= 0.25
 
 
 def test_terms_chosen_on_one_half_of_a1_do_not_fail_on_the_other(series_c):
