@@ -58,8 +58,9 @@ sorted angles of the distinct poses on every axis. Higher orders (reducer stages
 not excluded: irregular samples alias only approximately, so a few sparse high orders can be
 identified. A **screen** before step 2 offers them: a greedy periodogram of the DH fit's
 residuals (beyond DH, TCP and the gravity groups) over every (axis, order 1..π / the smallest
-gap between the axis's angles, at most ``SCREEN_MAX_ORDER``), ``SCREEN_STEPS`` picks, each
-deflating what it explains, keeps the first ``SCREEN_KEEP`` picks beyond K per axis as
+gap between the axis's angles, at most ``SCREEN_MAX_ORDER``), ``SCREEN_PICKS_PER_KEPT`` picks
+per order kept, each deflating what it explains, keeps the first picks beyond K per axis (one
+per ``POSES_PER_SCREENED`` distinct poses, at least ``SCREEN_KEEP``: ``screen_keep``) as
 candidates. Such a candidate is the best of a pool of hundreds, so its step must pass the bar
 of that whole pool (Bonferroni over library + pool). The library's search (steps 2-3) runs
 first; then it continues from there with the screened orders offered too, and those it keeps
@@ -99,6 +100,8 @@ __all__ = [
     "LOOK_AHEAD",
     "MAX_STEPS",
     "SCREEN_KEEP",
+    "POSES_PER_SCREENED",
+    "SCREEN_PICKS_PER_KEPT",
     "SCREEN_MAX_ORDER",
     "SECOND_PASSES",
     "SEPARATE",
@@ -116,6 +119,7 @@ __all__ = [
     "identify_structure",
     "max_order_of",
     "observability",
+    "screen_keep",
     "screen_limit",
 ]
 
@@ -133,9 +137,10 @@ MAX_STEPS = 40  # groups one search adds at most
 FALSE_STEP = 0.05  # chance that a step on noise alone passes the bar (shared by the candidates)
 LOOK_AHEAD = 4  # a step that fails may be carried by the next 2..LOOK_AHEAD steps together
 SCREEN_MAX_ORDER = 200  # the highest order the periodogram screens (reducer stages up to ~160)
-SCREEN_KEEP = 3  # orders beyond the library an axis's periodogram adds as candidates
+SCREEN_KEEP = 3  # orders beyond the library an axis's periodogram adds as candidates, at least
+POSES_PER_SCREENED = 32  # and one per this many distinct poses where that is more
+SCREEN_PICKS_PER_KEPT = 10  # picks of the greedy periodogram (low and high orders) per kept order
 RANGE_BLOCKS = 5  # the carry-over check holds out each joint's range in this many blocks in turn
-SCREEN_STEPS = 30  # picks of the greedy periodogram (low and high orders together)
 _NESTED_SEED = 1  # inner folds: another permutation of the training poses
 _FIRST_ORDERS = tuple((axis, 1) for axis in range(1, 7))  # sin, cos give each joint's column
 
@@ -231,6 +236,13 @@ def screen_limit(q: np.ndarray) -> np.ndarray:
     )
 
 
+def screen_keep(poses: int) -> int:
+    """Orders beyond the library the periodogram offers per axis for ``poses`` distinct poses:
+    one per ``POSES_PER_SCREENED`` poses, at least ``SCREEN_KEEP`` (the screened orders' 2 × 6
+    parameters per ``POSES_PER_SCREENED`` poses stay an eighth of their 3 equations each)."""
+    return max(SCREEN_KEEP, poses // POSES_PER_SCREENED)
+
+
 def range_folds(q: np.ndarray, blocks: int = RANGE_BLOCKS) -> list[np.ndarray]:
     """Per joint that the distinct poses' joints q (P, 6) rad move, the fold (P,) of each pose:
     its joint's range in ``blocks`` contiguous blocks of the sorted angles (equal counts)."""
@@ -249,13 +261,14 @@ def _angle_gaps(q: np.ndarray) -> list[np.ndarray]:
     return [gaps[:, axis][gaps[:, axis] > 1e-9] for axis in range(6)]
 
 
-def _screen(y, base, joint, angle, caps, last) -> list[tuple[int, int]]:
+def _screen(y, base, joint, angle, caps, last, keep: int) -> list[tuple[int, int]]:
     """Harmonics beyond the library (orders caps[axis]+1..last[axis] (6,)) that a greedy
     periodogram of the residuals y (M,) mm picks: beyond the columns ``base`` (M, r) (DH, TCP,
     gravity), each pick is the (axis, order) of orders 1..last whose two columns, on the joint's
     column joint (M, 6) mm/rad at the rows' angles (M, 6) rad, remove most of what is left; picks
     are deflated, so a low order taken first no longer leaks into the high ones and a peak's
-    neighbours lose what it explained. The first ``SCREEN_KEEP`` high orders per axis, sorted."""
+    neighbours lose what it explained; ``SCREEN_PICKS_PER_KEPT`` × ``keep`` picks. The first
+    ``keep`` high orders per axis, sorted."""
     q_, _ = np.linalg.qr(base)
     terms = [(a + 1, k) for a in range(6) for k in range(1, int(last[a]) + 1)]
     if not terms:
@@ -265,14 +278,20 @@ def _screen(y, base, joint, angle, caps, last) -> list[tuple[int, int]]:
     phase = angle[:, axis] * order  # (M, G)
     rest = joint[:, axis, None] * np.stack([np.sin(phase), np.cos(phase)], axis=2)  # (M, G, 2)
     rest /= np.sqrt(np.mean(rest**2, axis=0)) + 1e-300
-    rest -= np.einsum("mr,rgi->mgi", q_, np.einsum("mr,mgi->rgi", q_, rest))
+    flat = rest.reshape(len(y), -1)  # (M, 2G)
+    flat = flat - q_ @ (q_.T @ flat)
+    rest = flat.reshape(rest.shape)
     left = y - q_ @ (q_.T @ y)
     own = np.einsum("mgi,mgi->gi", rest, rest)
+    # each pick deflates every pair by its two directions u: the Gram matrices and right-hand
+    # sides are downdated by uᵀ·rest (u is orthogonal to the picks before, so uᵀ of the columns
+    # as first projected is uᵀ of the deflated ones); only the pick's own pair is deflated fully
+    gram = np.einsum("mgi,mgj->gij", rest, rest)
+    rhs = (flat.T @ left).reshape(-1, 2)
+    taken = np.zeros((len(y), 0))
     picked: list[tuple[int, int]] = []
     found = np.zeros(6, dtype=int)
-    for _ in range(SCREEN_STEPS):
-        gram = np.einsum("mgi,mgj->gij", rest, rest)
-        rhs = np.einsum("mgi,m->gi", rest, left)
+    for _ in range(SCREEN_PICKS_PER_KEPT * keep):
         # a pair whose columns are (nearly) spanned already has nothing left to give
         alive = np.linalg.eigvalsh(gram)[:, 0] > SEPARATE**2 * own.max(axis=1)
         safe = np.where(alive[:, None, None], gram, np.eye(2))
@@ -281,11 +300,15 @@ def _screen(y, base, joint, angle, caps, last) -> list[tuple[int, int]]:
         best = int(np.argmax(gain))
         if not np.isfinite(gain[best]):
             break
-        u, _ = np.linalg.qr(rest[:, best])  # (M, 2)
-        rest -= np.einsum("mj,jgi->mgi", u, np.einsum("mj,mgi->jgi", u, rest))
-        left -= u @ (u.T @ left)
+        u, _ = np.linalg.qr(rest[:, best] - taken @ (taken.T @ rest[:, best]))  # (M, 2)
+        cut = (u.T @ flat).reshape(2, -1, 2)  # (2, G, 2)
+        along = u.T @ left
+        gram -= np.einsum("jgi,jgk->gik", cut, cut)
+        rhs -= np.einsum("jgi,j->gi", cut, along)
+        left -= u @ along
+        taken = np.column_stack([taken, u])
         a, k = terms[best]
-        if k > caps[a - 1] and found[a - 1] < SCREEN_KEEP:
+        if k > caps[a - 1] and found[a - 1] < keep:
             picked.append((a, k))
             found[a - 1] += 1
     return sorted(picked)
@@ -369,7 +392,7 @@ def _identify_structure(
     library = len(search)
     screened: list[tuple[int, int]] = []
     # orders beyond the library: a periodogram of the DH fit's residuals per axis screens
-    # caps+1..screen_limit and offers its SCREEN_KEEP best to the same selection
+    # caps+1..screen_limit and offers its screen_keep best to the same selection
     last = screen_limit(data.q[np.unique(data.group, return_index=True)[1]])
     first = caps + 1
     pool = int(np.maximum(last - first + 1, 0).sum())
@@ -382,7 +405,15 @@ def _identify_structure(
         joint = np.sin(angle) * ones[:, 0:12:2] + np.cos(angle) * ones[:, 1:12:2]  # (M, 6)
         screened = [
             t
-            for t in _screen(y, np.column_stack([x0, ones[:, 12:]]), joint, angle, caps, last)
+            for t in _screen(
+                y,
+                np.column_stack([x0, ones[:, 12:]]),
+                joint,
+                angle,
+                caps,
+                last,
+                screen_keep(data.poses),
+            )
             if t not in pinned
         ]
         # their neighbouring orders, for the swap only (k149 may be picked for k150)

@@ -63,6 +63,17 @@ def test_100_random_poses_predict_the_rest_of_the_series(series_c):
     assert 0.75 * held_out <= estimate <= 1.25 * held_out
 
 
+def test_300_random_poses_predict_the_rest_of_the_series(series_c):
+    """Measured: mean 0.116, p95 0.225 mm (DH only 0.44, 0.87); with three screened orders per
+    axis whatever the poses 0.133, 0.279."""
+    q, m = series_c
+    order = np.random.default_rng(0).permutation(len(q))
+    train, test = order[:300], order[300:]
+    result, _ = identify_structure(ROBOT, _data(q[train], m[train]), base_frame=True, nested=False)
+    e = _errors(result, q[test], m[test])
+    assert e.mean() <= 0.125 and np.quantile(e, 0.95) <= 0.25
+
+
 def test_terms_chosen_on_one_half_of_a1_do_not_fail_on_the_other(series_c):
     """300 poses with A1 below its median, scored on every pose above it. Measured: the default
     0.48 mm mean against the DH-only fit's 0.52; the sparse Bayesian choice without the pruning by

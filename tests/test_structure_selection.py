@@ -21,7 +21,7 @@ from accugrid.kinematics.identification import identify, pose_set
 from accugrid.kinematics.joint_errors import Harmonic, JointErrors, PointMass, gravity_basis
 from accugrid.kinematics.robot import STRUCTURE_SCHEMA, Robot, load_robot
 from accugrid.kinematics.robot_family import MAX_FAMILY_ORDER, random_robot
-from accugrid.kinematics.structure import identify_structure
+from accugrid.kinematics.structure import SCREEN_KEEP, identify_structure, screen_keep
 
 TOOL = pose_from_xyzabc([20.0, -10.0, 250.0, 0.0, 0.0, 0.0])
 NOMINAL = load_robot("kr210").with_tool(TOOL)
@@ -246,6 +246,19 @@ def test_a_dominant_high_order_harmonic_beyond_the_library_is_found(axis, order,
     other = other[np.all((other >= q.min(axis=0)) & (other <= q.max(axis=0)), axis=1)]
     error = result.robot.true_robot().fk(other)[:, :3, 3] - arm([h]).fk(other)[:, :3, 3]
     assert np.sqrt(np.mean(error**2)) <= 3 * NOISE_MM
+
+
+def test_with_more_poses_the_screen_offers_more_high_orders_per_axis():
+    """Five reducer harmonics of orders 40..110 on A1 (beyond the library): 200 poses give the
+    screen one offered order per 32 poses and axis (6), so all five are found and chosen; three
+    per axis, whatever the poses, left two of them out."""
+    orders = (40, 55, 70, 90, 110)
+    harmonics = [Harmonic(1, k, 2e-4, 0.7 * i) for i, k in enumerate(orders)]
+    assert screen_keep(200) >= len(orders) > SCREEN_KEEP
+    data = session(arm(harmonics), joints(200, 31), seed=32)
+    _, selection = identify_structure(NOMINAL, data, nested=False)
+    for k in orders:
+        assert f"A1 k{k}" in selection.chosen
 
 
 @pytest.mark.slow
