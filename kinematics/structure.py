@@ -278,11 +278,11 @@ def _screen(y, base, joint, angle, caps, last, keep: int) -> list[tuple[int, int
     phase = angle[:, axis] * order  # (M, G)
     rest = joint[:, axis, None] * np.stack([np.sin(phase), np.cos(phase)], axis=2)  # (M, G, 2)
     rest /= np.sqrt(np.mean(rest**2, axis=0)) + 1e-300
+    own = np.einsum("mgi,mgi->gi", rest, rest)  # each column's size before the base takes its share
     flat = rest.reshape(len(y), -1)  # (M, 2G)
     flat = flat - q_ @ (q_.T @ flat)
     rest = flat.reshape(rest.shape)
     left = y - q_ @ (q_.T @ y)
-    own = np.einsum("mgi,mgi->gi", rest, rest)
     # each pick deflates every pair by its two directions u: the Gram matrices and right-hand
     # sides are downdated by uᵀ·rest (u is orthogonal to the picks before, so uᵀ of the columns
     # as first projected is uᵀ of the deflated ones); only the pick's own pair is deflated fully
@@ -292,7 +292,9 @@ def _screen(y, base, joint, angle, caps, last, keep: int) -> list[tuple[int, int
     picked: list[tuple[int, int]] = []
     found = np.zeros(6, dtype=int)
     for _ in range(SCREEN_PICKS_PER_KEPT * keep):
-        # a pair whose columns are (nearly) spanned already has nothing left to give
+        # a pair whose columns keep less than SEPARATE of their own size beyond the base and the
+        # picks has nothing left to give (what is left of it is rounding, which BLAS kernels and
+        # thread counts do differently)
         alive = np.linalg.eigvalsh(gram)[:, 0] > SEPARATE**2 * own.max(axis=1)
         safe = np.where(alive[:, None, None], gram, np.eye(2))
         gain = np.einsum("gi,gi->g", rhs, np.linalg.solve(safe, rhs[:, :, None])[:, :, 0])
@@ -300,7 +302,8 @@ def _screen(y, base, joint, angle, caps, last, keep: int) -> list[tuple[int, int
         best = int(np.argmax(gain))
         if not np.isfinite(gain[best]):
             break
-        u, _ = np.linalg.qr(rest[:, best] - taken @ (taken.T @ rest[:, best]))  # (M, 2)
+        v = rest[:, best] - taken @ (taken.T @ rest[:, best])
+        u, _ = np.linalg.qr(v - taken @ (taken.T @ v))  # (M, 2): twice, or u drifts off ⊥ taken
         cut = (u.T @ flat).reshape(2, -1, 2)  # (2, G, 2)
         along = u.T @ left
         gram -= np.einsum("jgi,jgk->gik", cut, cut)

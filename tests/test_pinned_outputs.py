@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
+import sys
 from importlib.metadata import entry_points
 from pathlib import Path
 
@@ -143,6 +145,22 @@ def test_demo_model_program_is_pinned(tmp_path):
     codes = [accugrid(*argv) for argv in steps]
     actual = {"plan identify .. krl --model": {"exit": codes, **numbers(model)}}
     check("demo model", actual)
+
+
+@pytest.mark.skipif(bool(os.environ.get("ACCUGRID_REPIN")), reason="re-pinning")
+def test_demo_model_is_the_same_under_another_blas_kernel_and_one_thread():
+    """The model path's pin holds where OpenBLAS computes differently (another CPU's kernel, one
+    thread): a choice that hangs on rounding (a candidate only rounding keeps alive) fails here
+    on any machine, not only on a CI machine with another CPU."""
+    env = {**os.environ, "OPENBLAS_CORETYPE": "Sandybridge", "OPENBLAS_NUM_THREADS": "1"}
+    test = f"{Path(__file__)}::test_demo_model_program_is_pinned"
+    done = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", test],
+        env=env,
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0, done.stdout[-2000:]
 
 
 def test_bench_outputs_are_pinned(tmp_path, monkeypatch):
