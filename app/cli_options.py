@@ -45,6 +45,7 @@ __all__ = [
     "add_abc",
     "add_deprecated",
     "add_experiment_arguments",
+    "add_frame_number",
     "add_harmonics",
     "add_policy",
     "add_program_arguments",
@@ -210,6 +211,17 @@ def add_tool(parser: argparse.ArgumentParser, help_text: str, default: str = "th
         type=number("mm or deg", -COORDINATE_MAX, COORDINATE_MAX),
         metavar=("X", "Y", "Z", "A", "B", "C"),
         help=f"{help_text}: flange_T_tool, X Y Z in mm and A B C in deg (default: {default})",
+    )
+
+
+def add_frame_number(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--number N``: the controller's ``what`` number (1..32) its printed lines set."""
+    parser.add_argument(
+        "--number",
+        type=number("", 1, 32, whole=True),
+        default=1,
+        metavar="N",
+        help=f"the {what} number of the printed controller lines (default 1)",
     )
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import argparse
 
-from accugrid.app.cli_options import add_table_format, number
+from accugrid.app.cli_options import add_frame_number, add_table_format, number
 from accugrid.app.jobs.fit_part import PartRequest, fit_part_files
 from accugrid.infra.atomic import check_targets, write_files
 
@@ -60,13 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="C",
         help="the part's temperature in degC during the measurement (with --cte)",
     )
-    parser.add_argument(
-        "--number",
-        type=number("", 1, 32, whole=True),
-        default=1,
-        metavar="N",
-        help="the base number of the printed controller lines (default 1)",
-    )
+    add_frame_number(parser, "base")
     add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 

@@ -18,7 +18,12 @@ from __future__ import annotations
 
 import argparse
 
-from accugrid.app.cli_options import add_table_format, add_tool, number, reading_format
+from accugrid.app.cli_options import (
+    add_frame_number,
+    add_table_format,
+    add_tool,
+    reading_format,
+)
 from accugrid.app.jobs.identify_tool import ToolRequest, identify_tool_files
 from accugrid.infra.atomic import check_targets, write_files
 
@@ -43,13 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "the logged joints are checked against its TCP, and the measured TCP is compared with it",
         "not checked; A B C 0",
     )
-    parser.add_argument(
-        "--number",
-        type=number("", 1, 32, whole=True),
-        default=1,
-        metavar="N",
-        help="the tool number of the printed controller lines (default 1)",
-    )
+    add_frame_number(parser, "tool")
     add_table_format(parser)
     parser.add_argument("--force", action="store_true", help="overwrite existing outputs")
 
