@@ -248,6 +248,18 @@ def test_cell_with_part_file_writes_the_program_of_the_same_base_typed_in(tmp_pa
     assert bounds["file"].pop() > bounds["typed"].pop()
 
 
+def _krl_refused_with_the_part(tmp_path, capsys) -> str:
+    """``accugrid krl`` with a cell whose base is the fitted part.yaml: exit 2, nothing written;
+    its one error line."""
+    capsys.readouterr()
+    cell = _cell(tmp_path, "base: {file: ../part.yaml, number: 1}")
+    out = tmp_path / "krl"
+    args = ["krl", str(EXAMPLES / "wing_panel_points.csv"), "--cell", str(cell), "-o", str(out)]
+    assert main(args) == 2
+    assert not out.exists()
+    return _one_line(capsys)
+
+
 def test_cell_refuses_a_part_out_of_the_robots_reach(tmp_path, capsys):
     """Datums given in the tracker frame (metres away) without --frame: the cell names
     base.file at its line."""
@@ -257,15 +269,9 @@ def test_cell_refuses_a_part_out_of_the_robots_reach(tmp_path, capsys):
     datums = _csv(tmp_path / "d.csv", [[i, *p] for i, p in zip(ids, far, strict=True)])
     code, part = _fit_part(tmp_path, datums)
     assert code == 0
-    capsys.readouterr()
-    cell = _cell(tmp_path, "base: {file: ../part.yaml, number: 1}")
-    out = tmp_path / "krl"
-    args = ["krl", str(EXAMPLES / "wing_panel_points.csv"), "--cell", str(cell), "-o", str(out)]
-    assert main(args) == 2
-    line = _one_line(capsys)
+    line = _krl_refused_with_the_part(tmp_path, capsys)
     assert re.search(r"cell\.yaml:\d+: base\.file: part\.yaml: datum TB\d lies \d+ mm from", line)
     assert "beyond its reach" in line
-    assert not out.exists()
 
 
 def test_cell_refuses_a_part_of_another_size_than_its_cad(tmp_path, capsys):
@@ -277,15 +283,9 @@ def test_cell_refuses_a_part_of_another_size_than_its_cad(tmp_path, capsys):
     datums = _csv(tmp_path / "d.csv", [[i, *p] for i, p in zip(ids, measured, strict=True)])
     code, part = _fit_part(tmp_path, datums, NOMINAL, "--scale", "fit")
     assert code == 0
-    capsys.readouterr()
-    cell = _cell(tmp_path, "base: {file: ../part.yaml, number: 1}")
-    out = tmp_path / "krl"
-    args = ["krl", str(EXAMPLES / "wing_panel_points.csv"), "--cell", str(cell), "-o", str(out)]
-    assert main(args) == 2
-    line = _one_line(capsys)
+    line = _krl_refused_with_the_part(tmp_path, capsys)
     assert re.search(r"cell\.yaml:\d+: base\.file: part\.yaml: the part is 1\.000200 times", line)
     assert "fit the part again without --scale/--cte" in line
-    assert not out.exists()
 
 
 def test_base_lines_of_each_dialect_byte_for_byte():
