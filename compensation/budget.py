@@ -14,6 +14,10 @@ Each term is a covariance (N, 3, 3) mm²; the terms are independent and add:
     formula predicts for a row left out of its fit, H (I − H)⁻¹ per pose:
     k² = Σ_axes held_out_rms² / Σ_axes s² (1 + mean H_loo). ``budget_section`` writes
     ``identification.budget`` of the calibrated YAML; ``ModelBudget.from_doc`` reads it.
+    A position the model's DH-only fallback corrects (a target without the model's support,
+    ``kinematics.support``) carries that fit's own term instead, diag(s_fb²) with s_fb its k-fold
+    held-out RMS per axis (``Support.fallback_sigma_mm``), and no grid term (the fallback adds
+    no grid).
 (b) **the grid** where one corrects (``grid_variance``, diagonal): the interpolated vertex means
     carry the rows' noise σ_n² Σ w_i² / repeats (w the trilinear weights of the 8 vertices), and
     the interpolation misses the error's curvature by ½ Δ² t (1 − t) per grid axis (Δ² the RMS
@@ -135,6 +139,7 @@ def budget_section(
     TCP) identified with ``structure`` from rows with joints q (N, 6) rad of distinct poses
     ``group`` (N,) int, its fit's ``residuals`` (N, 3) mm and its k-fold held-out RMS (3,) mm;
     plain YAML data (module docstring, term (a))."""
+    from accugrid.kinematics.calibrated import axes_dict
     from accugrid.kinematics.support import hat_blocks, row_texts, whitened
 
     _, first = np.unique(group, return_index=True)
@@ -151,15 +156,11 @@ def budget_section(
         "parameters": structure.names,
         "joints_deg": row_texts(joints, ".3f"),
         "repeats": float(repeats),
-        "residual_rms_mm": _axes(rms),
-        "held_out_rms_mm": _axes(held),
+        "residual_rms_mm": axes_dict(rms),
+        "held_out_rms_mm": axes_dict(held),
         "scale": scale,
-        "sigma_mm": _axes(scale * rms),
+        "sigma_mm": axes_dict(scale * rms),
     }
-
-
-def _axes(values: np.ndarray) -> dict[str, float]:
-    return {k: float(v) for k, v in zip("xyz", values, strict=True)}
 
 
 def grid_variance(grid: GridModel, points: np.ndarray) -> np.ndarray:

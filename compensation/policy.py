@@ -395,13 +395,20 @@ class Policy:
         return v
 
     def _assess(self, v: Verdict) -> None:
-        """The error budget of the corrected positions (``compensation.budget``), those beyond
-        ``max_u95_mm`` flagged."""
+        """The error budget of the corrected positions (``compensation.budget``): the model's
+        (and the grid's) where the model corrected, the DH-only fallback's own where it did;
+        those beyond ``max_u95_mm`` flagged."""
         at = np.flatnonzero(v.code == CORRECTED)
+        by_fallback = (v.flags[at] & F_SUPPORT) != 0
+        own, fallback = at[~by_fallback], at[by_fallback]
         model = None
         if self.budget.model is not None and v.joints is not None:
-            model = self.budget.model.covariance(v.joints[at])
-        self.budget.assess(v.numbers, len(v), at, v.points[at], self.grid, model)
+            model = self.budget.model.covariance(v.joints[own])
+        self.budget.assess(v.numbers, len(v), own, v.points[own], self.grid, model)
+        if fallback.size:
+            sigma = self.validity.support.fallback_sigma_mm
+            term = None if sigma is None else np.tile(np.diag(sigma**2), (fallback.size, 1, 1))
+            self.budget.assess(v.numbers, len(v), fallback, v.points[fallback], None, term)
         if self.max_u95_mm is not None:
             u95 = v.numbers["u95"][at]
             over = np.flatnonzero(u95 > self.max_u95_mm)

@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from accugrid.kinematics.model import RobotModel
 
 __all__ = [
+    "axes_dict",
     "calibrated_yaml",
     "check_dh_model",
     "check_same_robot",
@@ -43,7 +44,8 @@ def pose_dict(pose: np.ndarray) -> dict[str, float]:
     return {k: float(v) for k, v in zip("xyzabc", xyzabc_from_pose(pose), strict=True)}
 
 
-def _axes(values: np.ndarray) -> dict[str, float]:
+def axes_dict(values: np.ndarray) -> dict[str, float]:
+    """Values (3,) per axis as YAML data: x, y, z."""
     return {axis: float(v) for axis, v in zip("xyz", values, strict=True)}
 
 
@@ -90,8 +92,8 @@ def identification_summary(
         "unidentifiable_directions": list(result.unidentifiable_text),
         "condition_number": float(result.condition_number),
         "observability_o1": float(result.o1),
-        "residual_rms_mm": _axes(result.rms_mm),
-        "residual_max_mm": _axes(result.max_mm),
+        "residual_rms_mm": axes_dict(result.rms_mm),
+        "residual_max_mm": axes_dict(result.max_mm),
         "robust_sigma_mm": float(result.sigma_mm),
         "outliers": list(result.outliers),
         "parameters": parameters,
@@ -102,8 +104,8 @@ def identification_summary(
         cv = result.cross_validation
         summary["cross_validation"] = {
             "folds": cv.folds,
-            "predicted_rms_mm": _axes(cv.rms_mm),
-            "predicted_max_mm": _axes(cv.max_mm),
+            "predicted_rms_mm": axes_dict(cv.rms_mm),
+            "predicted_max_mm": axes_dict(cv.max_mm),
         }
     summary["structure"] = structure_summary(selection)
     return summary
@@ -132,8 +134,8 @@ def structure_summary(selection: Selection | None) -> dict:
             {
                 "added": step.added or "start",
                 "parameters": step.parameters,
-                "held_out_rms_mm": _axes(step.rms_mm),
-                "held_out_max_mm": _axes(step.max_mm),
+                "held_out_rms_mm": axes_dict(step.rms_mm),
+                "held_out_max_mm": axes_dict(step.max_mm),
             }
             for step in selection.curve
         ],
@@ -142,16 +144,16 @@ def structure_summary(selection: Selection | None) -> dict:
     if nested is not None:
         out["nested"] = {
             "folds": nested.folds,
-            "held_out_rms_mm": _axes(nested.rms_mm),
-            "held_out_max_mm": _axes(nested.max_mm),
+            "held_out_rms_mm": axes_dict(nested.rms_mm),
+            "held_out_max_mm": axes_dict(nested.max_mm),
             "noise_sigma_mm": None if nested.noise_mm is None else float(nested.noise_mm),
-            "model_rms_mm": None if nested.model_rms_mm is None else _axes(nested.model_rms_mm),
+            "model_rms_mm": None if nested.model_rms_mm is None else axes_dict(nested.model_rms_mm),
             "chosen_by_fold": [list(c) for c in nested.chosen],
         }
     if selection.carry_over is not None:
         out["carry_over"] = {
-            "held_out_rms_mm": _axes(selection.carry_over.rms_mm),
-            "dh_held_out_rms_mm": _axes(selection.carry_over.dh_rms_mm),
+            "held_out_rms_mm": axes_dict(selection.carry_over.rms_mm),
+            "dh_held_out_rms_mm": axes_dict(selection.carry_over.dh_rms_mm),
         }
     return out
 

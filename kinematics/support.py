@@ -43,7 +43,9 @@ its nearest other one. A target beyond either yardstick (``ratio`` > 1) has no s
 - ``fallback``: the DH-only fit of the same poses (``errors``: six rows Δa mm, Δd mm, Δα rad,
   Δθ rad; ``tool``: its TCP x, y, z mm, a, b, c deg; with a tracker frame identified, that fit's
   ``tracker_T_robot``), which corrects the targets without support (``Support.fallback``): it
-  holds no term that the poses pin only in their own joint combinations.
+  holds no term that the poses pin only in their own joint combinations; with that fit's k-fold
+  held-out RMS per axis, ``sigma_mm``, the error budget of the positions it corrects
+  (``compensation.budget``; a file without it leaves their bound unknown).
 
 The correction policy (``compensation.policy``) flags targets without support and corrects them
 with the fallback (``--strict``: refuses them).
@@ -58,7 +60,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from accugrid.infra.yamlfile import YamlDoc
-from accugrid.kinematics.calibrated import pose_dict
+from accugrid.kinematics.calibrated import axes_dict, pose_dict
 from accugrid.kinematics.candidates import GravityTerm
 from accugrid.kinematics.frames import pose_from_xyzabc
 from accugrid.kinematics.identification import (
@@ -92,6 +94,7 @@ SUPPORT_SCHEMA = {
         "errors": [dict.fromkeys(ERROR_KEYS)],
         "tool": dict.fromkeys("xyzabc"),
         "tracker_T_robot": dict.fromkeys("xyzabc"),
+        "sigma_mm": dict.fromkeys("xyz"),
     },
 }
 _BLOCK = 4096  # targets per Jacobian block
@@ -151,7 +154,8 @@ class Support:
     Jacobian's), the leverage map W (k, p), the largest leave-one-out leverage of its poses,
     their joints (n, 6) rad, the levers (6,) mm/rad, their largest nearest-pose distance mm, the
     DH-only ``fallback`` (a calibrated robot: its ``true_robot()`` the DH-only arm, its tool that
-    fit's TCP) and that fit's tracker frame (4, 4) mm (None: not identified)."""
+    fit's TCP), that fit's tracker frame (4, 4) mm (None: not identified) and its held-out RMS
+    (3,) mm per axis (None: not recorded)."""
 
     structure: Structure
     robot: Robot
@@ -162,6 +166,7 @@ class Support:
     loo_distance_mm: float
     fallback: Robot
     fallback_frame: np.ndarray | None = None
+    fallback_sigma_mm: np.ndarray | None = None
 
     @cached_property
     def _tree(self) -> cKDTree:
@@ -222,7 +227,13 @@ class Support:
         frame = None
         if doc.has(*fb, "tracker_T_robot"):
             frame = pose_from_xyzabc([doc.number(*fb, "tracker_T_robot", k) for k in "xyzabc"])
-        return cls(structure, robot, w, loo, np.radians(joints), lever, far, fallback, frame)
+        sigma = None
+        if doc.has(*fb, "sigma_mm"):
+            sigma = np.array([doc.number(*fb, "sigma_mm", k) for k in "xyz"])
+            if not (sigma >= 0).all():
+                raise doc.error("sigma_mm must be >= 0", *fb, "sigma_mm")
+        joints = np.radians(joints)
+        return cls(structure, robot, w, loo, joints, lever, far, fallback, frame, sigma)
 
 
 def number_rows(doc: YamlDoc, key: tuple, width: int) -> np.ndarray:
@@ -249,7 +260,8 @@ def support_section(
     """The ``identification.support`` mapping (module docstring) of a model ``calibrated``
     (its nominal DH and identified TCP give the Jacobian) identified with ``structure`` from
     joints q (N, 6) rad whose rows belong to distinct poses ``group`` (N,) int, and ``dh``, the
-    DH-only identification of the same poses; plain YAML data."""
+    DH-only identification of the same poses (run with folds: its held-out RMS is the budget of
+    the positions it corrects); plain YAML data."""
     _, first = np.unique(group, return_index=True)
     joints = np.round(np.degrees(q[first]), 3)  # as the file holds them, the map computed from
     jac = structure.jacobian(calibrated, np.radians(joints))  # one row triple per distinct pose
@@ -260,7 +272,7 @@ def support_section(
     lever = np.sqrt(np.mean(np.sum(jac[:, :, theta] ** 2, axis=1), axis=0))
     points = _embedded(np.radians(joints), lever)
     nearest = cKDTree(points).query(points, k=2)[0][:, 1]  # the nearest other pose
-    frame = dh.tracker_T_robot
+    frame, held = dh.tracker_T_robot, dh.cross_validation
     return {
         "parameters": structure.names,
         "loo_leverage_max": float(loo.max()),
@@ -274,5 +286,6 @@ def support_section(
             ],
             "tool": pose_dict(dh.robot.flange_T_tool),
             **({} if frame is None else {"tracker_T_robot": pose_dict(frame)}),
+            **({} if held is None else {"sigma_mm": axes_dict(held.rms_mm)}),
         },
     }

@@ -236,7 +236,7 @@ def _support(
     support; None for a DH + TCP model (its own fallback)."""
     if not (structure.compliance or structure.harmonics or structure.gravity):
         return None
-    dh = identify(robot, data, base_frame=options.base_frame)
+    dh = identify(robot, data, base_frame=options.base_frame, folds=options.folds)
     return support_section(result.robot, data.q, data.group, structure, dh)
 
 
