@@ -12,7 +12,10 @@ poses), the mean of the model where it has support and the fallback where not, t
 poses without support, how many of the poses the model misses by more than twice its nested
 estimate are flagged, the same for twice each pose's own estimate (the nested estimate scaled by
 the pose's prediction variance, ``own_estimate``), and on the flagged poses the model's mean
-against the fallback's. Not a timed test: ``make bench ARGS=real`` (or ``.venv/bin/python
+against the fallback's; and the share of errors within their 95 % bound (``compensation.budget``):
+the model's at the poses it corrects, the DH-only fallback's own (its held-out RMS) at the
+flagged ones, and there too the model's (what the fallback's errors would be held to without
+a bound of their own). Not a timed test: ``make bench ARGS=real`` (or ``.venv/bin/python
 bench/bench_real_support.py``).
 """
 
@@ -25,6 +28,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from accugrid.infra.bounds import length_bound_95  # noqa: E402
 from accugrid.kinematics.identification import rigid_fit  # noqa: E402
 from bench.real_ur10 import REAL, Fit, Series, calibrate, random_pick, read_series  # noqa: E402
 
@@ -62,10 +66,20 @@ def row(label: str, model: Fit, series: Series, rows: np.ndarray, own_frame: boo
     own = full > 2.0 * own_estimate(model, series.q[rows])
     on = f"{full[flagged].mean():.3f} → {dh[flagged].mean():.3f}" if flagged.any() else "-"
     guarded = np.where(flagged, dh, full).mean()
+    u95 = length_bound_95(model.budget.covariance(series.q[rows]))
+    u95_fallback = length_bound_95(np.diag(support.fallback_sigma_mm**2)[None])[0]
+    within = [
+        f"{np.mean(e <= bound):.0%}" if e.size else "-"
+        for e, bound in (
+            (full[~flagged], u95[~flagged]),
+            (dh[flagged], u95_fallback),
+            (dh[flagged], u95[flagged]),
+        )
+    ]
     return (
         f"| {label} | {len(rows)} | {full.mean():.3f} / {full.max():.2f} | {dh.mean():.3f} | "
         f"{guarded:.3f} | {flagged.mean():.1%} | {(flagged & miss).sum()} of {miss.sum()} "
-        f"| {(flagged & own).sum()} of {own.sum()} | {on} |"
+        f"| {(flagged & own).sum()} of {own.sum()} | {on} | {' | '.join(within)} |"
     )
 
 
@@ -78,9 +92,10 @@ def main() -> None:
     print(
         "| calibrated on → scored on | poses | model mean / max | DH-only mean | with the "
         "fallback: mean | flagged | misses flagged | misses of their own estimate flagged | "
-        "on the flagged: model → fallback mean |"
+        "on the flagged: model → fallback mean | within u95: model | flagged: within the "
+        "fallback's u95 | flagged: within the model's u95 |"
     )
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     pick = random_pick(len(c), POSES)
     model = calibrate(c, pick)
     rest = np.setdiff1d(np.arange(len(c)), pick)

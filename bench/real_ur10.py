@@ -8,7 +8,7 @@ TCP. ``calibrate`` is the calibration every real-data bench scores: the rows as 
 turns them into poses (``Measurements.pose_set``: the logged joints are what the robot did, the
 controller's own model not being the nominal one), the default identification (the structure
 chosen from the data) and the DH-only fit, tracker frame identified, and the default's support
-record (``kinematics.support``).
+record (``kinematics.support``) and its error budget (``compensation.budget``).
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from accugrid.compensation.budget import ModelBudget, budget_section
 from accugrid.compensation.measurements import Measurements, read_measurements
 from accugrid.infra.csvtable import read_table_format
 from accugrid.infra.yamlfile import YamlDoc
@@ -97,28 +98,38 @@ def random_pick(rows: int, poses: int, seed: int = 0) -> np.ndarray:
 @dataclass(frozen=True)
 class Fit:
     """The default identification, its selection, the DH-only fit of the same poses, the
-    support record and the default's wall and CPU time (s; one process, BLAS on one thread)."""
+    support record, the default's error budget (term (a)) and its wall and CPU time (s; one
+    process, BLAS on one thread)."""
 
     default: Identification
     selection: Selection
     dh: Identification
     support: Support
+    budget: ModelBudget
     seconds: tuple[float, float]
 
 
 def calibrate(series: Series, rows: np.ndarray) -> Fit:
     """The default and the DH-only identification from the rows ``rows`` of ``series`` (tracker
-    frame identified), with the default's support record."""
+    frame identified), with the default's support record and error budget, as ``identify``
+    writes them."""
     data = series.rows(rows).measurements.pose_set(ROBOT, None)
     started, cpu = time.perf_counter(), time.process_time()
     result, selection = identify_structure(ROBOT, data, base_frame=True)
     seconds = (time.perf_counter() - started, time.process_time() - cpu)
-    dh = identify(ROBOT, data, base_frame=True)
+    dh = identify(ROBOT, data, base_frame=True, folds=5)
     structure = Structure(True, False, tuple(selection.harmonics), tuple(selection.gravity))
-    section = support_section(result.robot, data.q, data.group, structure, dh)
-    doc = YamlDoc({"identification": {"support": section}}, {}, "identify")
+    held_out = selection.curve[selection.kept].rms_mm
+    sections = {
+        "support": support_section(result.robot, data.q, data.group, structure, dh),
+        "budget": budget_section(
+            result.robot, data.q, data.group, structure, result.residuals, held_out
+        ),
+    }
+    doc = YamlDoc({"identification": sections}, {}, "identify")
     support = Support.from_doc(doc, result.robot, structure)
-    return Fit(result, selection, dh, support, seconds)
+    budget = ModelBudget.from_doc(doc, result.robot, structure)
+    return Fit(result, selection, dh, support, budget, seconds)
 
 
 def model_points(result: Identification, q: np.ndarray) -> np.ndarray:
