@@ -55,7 +55,7 @@ __all__ = [
 ]
 
 REPORT_COLUMNS = (
-    "file,line,name,status,reason,x,y,z,x_new,y_new,z_new,dx,dy,dz,correction_mm,residual_mm"
+    "file,line,name,status,reason,x,y,z,x_new,y_new,z_new,dx,dy,dz,correction_mm,residual_mm,u95_mm"
 )
 _DECIDE = 1 << 16  # positions the policy decides at a time
 
@@ -278,9 +278,11 @@ def partial_check(rows: Rows, opts: Options) -> None:
     that could not be placed in the robot frame (skipped, with its reason) lands off by the
     robot's error like one the policy refused: it gets the code ``NOT_PLACED`` and counts.
     Joint targets, tool and base frames, offsets and data no motion uses are not positions to
-    correct and do not count. InputError at the worst position whose 95 % bound exceeds the
+    correct and do not count. A position the splice left uncorrected has no 95 % bound (the
+    policy's was for its correction). InputError at the worst position whose bound exceeds the
     policy's ``max_u95_mm``, at the first position not corrected, with the counts by reason, and
     when nothing at all is corrected, unless ``opts.allow_partial``."""
+    rows.u95_mm[rows.status != CORRECTED] = np.nan
     unplaced = rows.commanded & (rows.status == SKIPPED) & (rows.code == POLICY_CORRECTED)
     if unplaced.any():
         rows.code[unplaced] = NOT_PLACED
@@ -351,12 +353,13 @@ def header_lines(result: Result, program: str, cell: str, opts: Options) -> list
 
 
 def report_csv(rows: Rows, decimals: int = 4) -> str:
-    """The report as CSV text (docs/formats.md style: header row, mm, ``decimals`` places)."""
-    corrected = ",".join([f"%.{decimals}f"] * 11)  # x..z, x_new..z_new, dx..dz, length, residual
-    old_only = ",".join([f"%.{decimals}f"] * 3) + ",,,,,,,,"
+    """The report as CSV text (docs/formats.md style: header row, mm, ``decimals`` places; the
+    95 % bound of a corrected position empty where unknown)."""
+    corrected = ",".join([f"%.{decimals}f"] * 12)  # x..z, new x..z, dx..dz, length, residual, u95
+    old_only = ",".join([f"%.{decimals}f"] * 3) + ",,,,,,,,,"
     files = [_csv(Path(f).name) for f in rows.files]
     out = [REPORT_COLUMNS]
-    for file, line, name, status, reason, old, new, residual in zip(
+    for file, line, name, status, reason, old, new, residual, u95 in zip(
         rows.file.tolist(),
         rows.line.tolist(),
         rows.name,
@@ -365,6 +368,7 @@ def report_csv(rows: Rows, decimals: int = 4) -> str:
         rows.old.tolist(),
         rows.new.tolist(),
         rows.residual_mm.tolist(),
+        rows.u95_mm.tolist(),
         strict=True,
     ):
         head = f"{files[file]},{line},{_csv(name)},{STATUSES[status]},{_csv(reason)},"
@@ -372,11 +376,11 @@ def report_csv(rows: Rows, decimals: int = 4) -> str:
             (x, y, z), (u, v, w) = old, new
             dx, dy, dz = u - x, v - y, w - z
             length = math.sqrt(dx * dx + dy * dy + dz * dz)
-            numbers = corrected % (x, y, z, u, v, w, dx, dy, dz, length, residual)
+            numbers = corrected % (x, y, z, u, v, w, dx, dy, dz, length, residual, u95)
         elif old[0] == old[0] and old[1] == old[1] and old[2] == old[2]:
             numbers = old_only % tuple(old)
         else:
-            numbers = ",,,,,,,,,,"
+            numbers = ",,,,,,,,,,,"
         out.append(head + numbers.replace("-0.0000,", "0.0000,").replace("nan", ""))
     return "\n".join(out) + "\n"
 

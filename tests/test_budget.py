@@ -211,6 +211,11 @@ def test_rewrite_refuses_positions_beyond_max_u95_unless_partial(tmp_path, capsy
     report = tmp_path / "report.csv"
     assert main([*base, "--max-u95", f"{largest - 0.002}", "--report", str(report)]) == 0
     assert "beyond --max-u95" in report.read_text()
+    rows = list(csv.DictReader(report.open()))
+    bounds = [float(r["u95_mm"]) for r in rows if r["status"] == "corrected"]
+    assert len(bounds) == int(found.group(2))
+    assert abs(max(bounds) - largest) <= 0.00055  # the header has 3 decimals, the report 4
+    assert all(r["u95_mm"] == "" for r in rows if r["status"] != "corrected")
 
 
 def test_a_program_report_maps_the_bounds_and_counts_those_beyond_the_tolerance(tmp_path):
