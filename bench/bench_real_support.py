@@ -11,7 +11,9 @@ model's mean and max, the DH-only fit's mean (the fallback, ``--structure dh`` o
 poses), the mean of the model where it has support and the fallback where not, the share of
 poses without support, how many of the poses the model misses by more than twice its nested
 estimate are flagged, the same for twice each pose's own estimate (the nested estimate scaled by
-the pose's prediction variance, ``own_estimate``), and on the flagged poses the model's mean
+the pose's prediction variance, ``own_estimate``) and how many of those carry any of the flags a
+corrected position gets for where it lies (no support, or outside the poses' region: box, tool
+tilt or a joint's range, ``kinematics.validity``), and on the flagged poses the model's mean
 against the fallback's; and the share of errors within their 95 % bound (``compensation.budget``):
 the model's at the poses it corrects, the DH-only fallback's own (its held-out RMS) at the
 flagged ones, and there too the model's (what the fallback's errors would be held to without
@@ -30,7 +32,16 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from accugrid.infra.bounds import length_bound_95  # noqa: E402
 from accugrid.kinematics.identification import rigid_fit  # noqa: E402
-from bench.real_ur10 import REAL, Fit, Series, calibrate, random_pick, read_series  # noqa: E402
+from bench.real_ur10 import (  # noqa: E402
+    REAL,
+    Fit,
+    Series,
+    calibrate,
+    flagged_anywhere,
+    own_estimate,
+    random_pick,
+    read_series,
+)
 
 POSES = 300
 
@@ -44,24 +55,13 @@ def errors(robot, frame, series: Series, rows: np.ndarray) -> np.ndarray:
     return np.linalg.norm((measured - frame[:3, 3]) @ frame[:3, :3] - predicted, axis=1)
 
 
-def own_estimate(model: Fit, q: np.ndarray) -> np.ndarray:
-    """Each target's own error estimate (N,) mm at joints q (N, 6) rad: the nested estimate (3D
-    RMS) scaled by the target's prediction variance against the calibration poses' average,
-    sqrt((3 + h(q)) / (3 + mean leave-one-out h)), h the leverage in noise units (3 axes of
-    noise plus the model's own variance there)."""
-    support = model.support
-    inside = support.leverage(support.joints)
-    loo = np.mean(inside / np.maximum(1.0 - inside / 3.0, 1e-9))
-    nested = float(np.linalg.norm(model.selection.nested.rms_mm))
-    return nested * np.sqrt((3.0 + support.leverage(q)) / (3.0 + loo))
-
-
 def row(label: str, model: Fit, series: Series, rows: np.ndarray, own_frame: bool) -> str:
     result, selection, support = model.default, model.selection, model.support
     frames = (result.tracker_T_robot, support.fallback_frame) if own_frame else (None, None)
     full = errors(result.robot, frames[0], series, rows)
     dh = errors(support.fallback, frames[1], series, rows)
     flagged = support.ratio(series.q[rows]) > 1.0
+    outside = flagged_anywhere(model, series.rows(rows))
     miss = full > 2.0 * float(np.linalg.norm(selection.nested.rms_mm))
     own = full > 2.0 * own_estimate(model, series.q[rows])
     on = f"{full[flagged].mean():.3f} → {dh[flagged].mean():.3f}" if flagged.any() else "-"
@@ -79,7 +79,8 @@ def row(label: str, model: Fit, series: Series, rows: np.ndarray, own_frame: boo
     return (
         f"| {label} | {len(rows)} | {full.mean():.3f} / {full.max():.2f} | {dh.mean():.3f} | "
         f"{guarded:.3f} | {flagged.mean():.1%} | {(flagged & miss).sum()} of {miss.sum()} "
-        f"| {(flagged & own).sum()} of {own.sum()} | {on} | {' | '.join(within)} |"
+        f"| {(flagged & own).sum()} of {own.sum()} | {(outside & own).sum()} of {own.sum()} "
+        f"| {on} | {' | '.join(within)} |"
     )
 
 
@@ -92,10 +93,11 @@ def main() -> None:
     print(
         "| calibrated on → scored on | poses | model mean / max | DH-only mean | with the "
         "fallback: mean | flagged | misses flagged | misses of their own estimate flagged | "
+        "those with any flag (support or region) | "
         "on the flagged: model → fallback mean | within u95: model | flagged: within the "
         "fallback's u95 | flagged: within the model's u95 |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     pick = random_pick(len(c), POSES)
     model = calibrate(c, pick)
     rest = np.setdiff1d(np.arange(len(c)), pick)

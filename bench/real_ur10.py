@@ -8,7 +8,8 @@ TCP. ``calibrate`` is the calibration every real-data bench scores: the rows as 
 turns them into poses (``Measurements.pose_set``: the logged joints are what the robot did, the
 controller's own model not being the nominal one), the default identification (the structure
 chosen from the data) and the DH-only fit, tracker frame identified, and the default's support
-record (``kinematics.support``) and its error budget (``compensation.budget``).
+record (``kinematics.support``), region (``kinematics.validity``) and error budget
+(``compensation.budget``).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from accugrid.kinematics.identification import Identification, identify
 from accugrid.kinematics.robot import Robot, load_robot
 from accugrid.kinematics.structure import Selection, identify_structure
 from accugrid.kinematics.support import Structure, Support, support_section
+from accugrid.kinematics.validity import Validity
 
 ROOT = Path(__file__).resolve().parents[1]
 REAL = ROOT.parent / "shared" / "realdata" / "ipa-ur10"
@@ -98,21 +100,22 @@ def random_pick(rows: int, poses: int, seed: int = 0) -> np.ndarray:
 @dataclass(frozen=True)
 class Fit:
     """The default identification, its selection, the DH-only fit of the same poses, the
-    support record, the default's error budget (term (a)) and its wall and CPU time (s; one
-    process, BLAS on one thread)."""
+    support record, the region of its poses, the default's error budget (term (a)) and its wall
+    and CPU time (s; one process, BLAS on one thread)."""
 
     default: Identification
     selection: Selection
     dh: Identification
     support: Support
+    validity: Validity
     budget: ModelBudget
     seconds: tuple[float, float]
 
 
 def calibrate(series: Series, rows: np.ndarray) -> Fit:
     """The default and the DH-only identification from the rows ``rows`` of ``series`` (tracker
-    frame identified), with the default's support record and error budget, as ``identify``
-    writes them."""
+    frame identified), with the default's support record, region and error budget, as
+    ``identify`` writes them."""
     data = series.rows(rows).measurements.pose_set(ROBOT, None)
     started, cpu = time.perf_counter(), time.process_time()
     result, selection = identify_structure(ROBOT, data, base_frame=True)
@@ -129,7 +132,8 @@ def calibrate(series: Series, rows: np.ndarray) -> Fit:
     doc = YamlDoc({"identification": sections}, {}, "identify")
     support = Support.from_doc(doc, result.robot, structure)
     budget = ModelBudget.from_doc(doc, result.robot, structure)
-    return Fit(result, selection, dh, support, budget, seconds)
+    validity = Validity.of_poses(data.commanded, data.rotations, data.q)
+    return Fit(result, selection, dh, support, validity, budget, seconds)
 
 
 def model_points(result: Identification, q: np.ndarray) -> np.ndarray:
@@ -141,3 +145,23 @@ def in_frame(result: Identification, q: np.ndarray) -> np.ndarray:
     """The identified arm's TCP (N, 3) mm in its identified tracker frame at joints q (N, 6)."""
     frame = result.tracker_T_robot
     return model_points(result, q) @ frame[:3, :3].T + frame[:3, 3]
+
+
+def own_estimate(model: Fit, q: np.ndarray) -> np.ndarray:
+    """Each target's own error estimate (N,) mm at joints q (N, 6) rad: the nested estimate (3D
+    RMS) scaled by the target's prediction variance against the calibration poses' average,
+    sqrt((3 + h(q)) / (3 + mean leave-one-out h)), h the leverage in noise units (3 axes of
+    noise plus the model's own variance there)."""
+    support = model.support
+    inside = support.leverage(support.joints)
+    loo = np.mean(inside / np.maximum(1.0 - inside / 3.0, 1e-9))
+    nested = float(np.linalg.norm(model.selection.nested.rms_mm))
+    return nested * np.sqrt((3.0 + support.leverage(q)) / (3.0 + loo))
+
+
+def flagged_anywhere(fit: Fit, series: Series) -> np.ndarray:
+    """(N,) bool: the poses of ``series`` a corrected position there would be flagged at for
+    where it lies: without the model's support, or outside its poses' region (box, tool tilt,
+    a joint's range)."""
+    box, tilt, joint, _ = fit.validity.excess(series.p, series.rot, series.q)
+    return (fit.support.ratio(series.q) > 1.0) | (box > 0) | (tilt > 0) | (joint > 0)
