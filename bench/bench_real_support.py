@@ -15,8 +15,8 @@ the pose's prediction variance, ``own_estimate``) and how many of those carry an
 corrected position gets for where it lies (no support, or outside the poses' region: box, tool
 tilt or a joint's range, ``kinematics.validity``), and on the flagged poses the model's mean
 against the fallback's; and the share of errors within their 95 % bound (``compensation.budget``):
-the model's at the poses it corrects, the DH-only fallback's own (its held-out RMS) at the
-flagged ones, and there too the model's (what the fallback's errors would be held to without
+the model's at the poses it corrects, the DH-only fallback's own (``ModelBudget.of_fallback``)
+at the flagged ones, and there too the model's (what the fallback's errors would be held to without
 a bound of their own). Not a timed test: ``make bench ARGS=real`` (or ``.venv/bin/python
 bench/bench_real_support.py``).
 """
@@ -30,6 +30,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from accugrid.compensation.budget import ModelBudget  # noqa: E402
 from accugrid.infra.bounds import length_bound_95  # noqa: E402
 from accugrid.kinematics.identification import rigid_fit  # noqa: E402
 from bench.real_ur10 import (  # noqa: E402
@@ -67,12 +68,12 @@ def row(label: str, model: Fit, series: Series, rows: np.ndarray, own_frame: boo
     on = f"{full[flagged].mean():.3f} → {dh[flagged].mean():.3f}" if flagged.any() else "-"
     guarded = np.where(flagged, dh, full).mean()
     u95 = length_bound_95(model.budget.covariance(series.q[rows]))
-    u95_fallback = length_bound_95(np.diag(support.fallback_sigma_mm**2)[None])[0]
+    u95_fallback = length_bound_95(ModelBudget.of_fallback(support).covariance(series.q[rows]))
     within = [
         f"{np.mean(e <= bound):.0%}" if e.size else "-"
         for e, bound in (
             (full[~flagged], u95[~flagged]),
-            (dh[flagged], u95_fallback),
+            (dh[flagged], u95_fallback[flagged]),
             (dh[flagged], u95[flagged]),
         )
     ]

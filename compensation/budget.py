@@ -15,9 +15,11 @@ Each term is a covariance (N, 3, 3) mm²; the terms are independent and add:
     k² = Σ_axes held_out_rms² / Σ_axes s² (1 + mean H_loo). ``budget_section`` writes
     ``identification.budget`` of the calibrated YAML; ``ModelBudget.from_doc`` reads it.
     A position the model's DH-only fallback corrects (a target without the model's support,
-    ``kinematics.support``) carries that fit's own term instead, diag(s_fb²) with s_fb its k-fold
-    held-out RMS per axis (``Support.fallback_sigma_mm``), and no grid term (the fallback adds
-    no grid).
+    ``kinematics.support``) carries that fit's own term instead (``ModelBudget.of_fallback``):
+    D_fb (I + H_fb(q)) D_fb, D_fb = diag(s_fb) with s_fb its k-fold held-out RMS per axis (a
+    held-out RMS already holds a left-out pose's leverage: a few per cent high where the poses
+    are, p / n) and H_fb its prediction leverage among the same poses; and no grid term (the
+    fallback adds no grid).
 (b) **the grid** where one corrects (``grid_variance``, diagonal): the interpolated vertex means
     carry the rows' noise σ_n² Σ w_i² / repeats (w the trilinear weights of the 8 vertices), and
     the interpolation misses the error's curvature by ½ Δ² t (1 − t) per grid axis (Δ² the RMS
@@ -49,7 +51,7 @@ if TYPE_CHECKING:  # a grid-only job never loads the robot modules
     from accugrid.compensation.grid import GridModel
     from accugrid.infra.yamlfile import YamlDoc
     from accugrid.kinematics.robot import Robot
-    from accugrid.kinematics.support import Structure
+    from accugrid.kinematics.support import Structure, Support
 
 __all__ = [
     "COVERAGE_RANGE",
@@ -99,6 +101,15 @@ class ModelBudget:
             jac = self.structure.jacobian(self.robot, q[lo : lo + _BLOCK])
             out[lo : lo + _BLOCK] = (np.eye(3) + hat_blocks(self.leverage_map, jac)) * scale
         return out
+
+    @classmethod
+    def of_fallback(cls, support: Support) -> ModelBudget | None:
+        """The term of the positions a model's DH-only fallback corrects (module docstring);
+        None where its file records no ``sigma_mm``."""
+        if support.fallback_sigma_mm is None:
+            return None
+        structure, robot = support.fallback_structure, support.robot
+        return cls(structure, robot, support.fallback_map, support.fallback_sigma_mm)
 
     @classmethod
     def from_doc(cls, doc: YamlDoc, robot: Robot, structure: Structure) -> ModelBudget | None:

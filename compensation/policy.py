@@ -54,7 +54,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from accugrid.compensation.budget import Budget
+from accugrid.compensation.budget import Budget, ModelBudget
 from accugrid.compensation.grid import GridModel
 from accugrid.compensation.model_correction import model_correct, residual_grid
 from accugrid.compensation.settings import CorrectionSettings
@@ -406,8 +406,8 @@ class Policy:
             model = self.budget.model.covariance(v.joints[own])
         self.budget.assess(v.numbers, len(v), own, v.points[own], self.grid, model)
         if fallback.size:
-            sigma = self.validity.support.fallback_sigma_mm
-            term = None if sigma is None else np.tile(np.diag(sigma**2), (fallback.size, 1, 1))
+            own_term = ModelBudget.of_fallback(self.validity.support)
+            term = None if own_term is None else own_term.covariance(v.joints[fallback])
             self.budget.assess(v.numbers, len(v), fallback, v.points[fallback], None, term)
         if self.max_u95_mm is not None:
             u95 = v.numbers["u95"][at]

@@ -44,8 +44,10 @@ its nearest other one. A target beyond either yardstick (``ratio`` > 1) has no s
   Δθ rad; ``tool``: its TCP x, y, z mm, a, b, c deg; with a tracker frame identified, that fit's
   ``tracker_T_robot``), which corrects the targets without support (``Support.fallback``): it
   holds no term that the poses pin only in their own joint combinations; with that fit's k-fold
-  held-out RMS per axis, ``sigma_mm``, the error budget of the positions it corrects
-  (``compensation.budget``; a file without it leaves their bound unknown).
+  held-out RMS per axis, ``sigma_mm``: the error budget of the positions it corrects is
+  sigma² (I + H_fb(q)), H_fb that fit's prediction leverage among the same poses
+  (``fallback_map``; ``compensation.budget``; a file without the key leaves their bound
+  unknown).
 
 The correction policy (``compensation.policy``) flags targets without support and corrects them
 with the fallback (``--strict``: refuses them).
@@ -167,6 +169,18 @@ class Support:
     fallback: Robot
     fallback_frame: np.ndarray | None = None
     fallback_sigma_mm: np.ndarray | None = None
+
+    @cached_property
+    def fallback_structure(self) -> Structure:
+        """The DH-only fallback's parameters: DH errors, TCP (and the tracker frame)."""
+        return Structure(base_frame=self.structure.base_frame)
+
+    @cached_property
+    def fallback_map(self) -> np.ndarray:
+        """The DH-only fit's leverage map (k, p) among the calibration poses, as
+        ``leverage_map`` is the model's."""
+        jac = self.fallback_structure.jacobian(self.robot, self.joints)
+        return whitened(jac.reshape(-1, jac.shape[2]))
 
     @cached_property
     def _tree(self) -> cKDTree:
