@@ -1,5 +1,6 @@
-"""Program text shared by the dialects' readers and rewriters: reading a program byte for byte,
-lines, number literals, precision, replacing spans of text and comment blocks.
+"""Program text shared by the dialects' readers, writers and rewriters: reading a program byte for
+byte, lines, number literals, precision, replacing spans of text, comment blocks and the names a
+controller takes (identifiers, a program named after its output file).
 
 Programs are handled as bytes decoded as latin-1 (one character per byte), so any encoding and any
 line ending survives a rewrite unchanged; offsets are character (= byte) offsets.
@@ -28,6 +29,7 @@ __all__ = [
     "decimals_of",
     "distinct_ints",
     "formatted",
+    "identifier_problem",
     "insert_after_lines",
     "number_text",
     "precision",
@@ -35,6 +37,7 @@ __all__ = [
     "row_counts",
     "splice",
     "split_lines",
+    "stem_name",
 ]
 
 MAX_BYTES = 64 * 2**20
@@ -42,6 +45,7 @@ MIN_PLACES_MM = 2  # a corrected number is never coarser than 0.01 mm ...
 MIN_PLACES_INCH = 3  # ... or 0.001 in, unless the user asks (--decimals)
 UTF8_BOM = "\xef\xbb\xbf"  # as latin-1 text
 _FRACTION_RE = re.compile(r"\.(\d*+)")
+_IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 
 
 def read_program(path: str | os.PathLike[str], max_bytes: int = MAX_BYTES) -> str:
@@ -155,3 +159,27 @@ def insert_after_lines(text: str, block: str, lead: str) -> str:
             return text + ("\r\n" if "\r\n" in text else "\n") + block
         pos = nl + 1
     return text[:pos] + block + text[pos:]
+
+
+def identifier_problem(name: str, most: int, limit: str) -> str | None:
+    """Why ``name`` is not an identifier of at most ``most`` characters (a letter, then letters,
+    digits or _), ``limit`` naming the limit ("RAPID allows at most"); None when it is one."""
+    if not _IDENTIFIER.fullmatch(name):
+        return "must be a letter, then letters, digits or _"
+    if len(name) > most:
+        return f"has {len(name)} characters, {limit} {most}"
+    return None
+
+
+def stem_name(out: Path, what: str, cell_key: str, problem_of) -> str:
+    """The stem of the output file ``out`` as the program's ``what`` name ("module"); InputError
+    naming the file when ``problem_of(name)`` says why the controller refuses it, pointing to the
+    cell file's ``cell_key`` that names it instead."""
+    problem = problem_of(out.stem)
+    if problem:
+        raise InputError(
+            f"the {what} name {out.stem!r} (the file's stem) {problem}: rename the output or set "
+            f"{cell_key} in the cell file",
+            os.fspath(out),
+        )
+    return out.stem

@@ -38,6 +38,7 @@ from accugrid.codegen.linebytes import (
     text_cells,
 )
 from accugrid.codegen.program import Program
+from accugrid.codegen.program_text import stem_name
 from accugrid.codegen.render import environment, printed_plainly, render_around, template_dir
 from accugrid.infra.errors import InputError
 from accugrid.infra.textsafe import comment_text, comment_texts, fixed
@@ -67,14 +68,7 @@ def program_name(section_program: str | None, out: Path) -> str:
     refuses it."""
     if section_program is not None:
         return section_program
-    problem = program_name_problem(out.stem)
-    if problem:
-        raise InputError(
-            f"the program name {out.stem!r} (the file's stem) {problem}: rename the output or "
-            "set fanuc.program in the cell file",
-            os.fspath(out),
-        )
-    return out.stem.upper()
+    return stem_name(out, "program", "fanuc.program", program_name_problem).upper()
 
 
 def header_remarks(lines: list[str]) -> list[str]:

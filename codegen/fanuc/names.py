@@ -4,18 +4,13 @@ is written upper-cased, so a file ``wing.ls`` holds ``/PROG WING``."""
 
 from __future__ import annotations
 
-import re
+from accugrid.codegen.program_text import identifier_problem
 
 __all__ = ["PROGRAM_NAME_MAX", "program_name_problem"]
 
 PROGRAM_NAME_MAX = 36
-_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 
 
 def program_name_problem(name: str) -> str | None:
     """Why the controller refuses ``name`` as a program name, None when it takes it."""
-    if not _NAME.fullmatch(name):
-        return "must be a letter, then letters, digits or _"
-    if len(name) > PROGRAM_NAME_MAX:
-        return f"has {len(name)} characters, a FANUC program name at most {PROGRAM_NAME_MAX}"
-    return None
+    return identifier_problem(name, PROGRAM_NAME_MAX, "a FANUC program name at most")

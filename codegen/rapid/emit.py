@@ -15,7 +15,6 @@ at most 32 characters (``rapid.module``, else the output file's stem): an InputE
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -23,6 +22,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from accugrid.codegen.program import STAGES, Program
+from accugrid.codegen.program_text import stem_name
 from accugrid.codegen.rapid.configuration import abb_confdata
 from accugrid.codegen.rapid.names import rapid_name_problem
 from accugrid.codegen.render import (
@@ -32,7 +32,6 @@ from accugrid.codegen.render import (
     render_around,
     template_dir,
 )
-from accugrid.infra.errors import InputError
 from accugrid.infra.textsafe import comment_texts, fixed, fixed_texts
 from accugrid.kinematics.robot import load_robot
 
@@ -58,14 +57,7 @@ def module_name(section_module: str | None, out: Path) -> str:
     stem of the output file; InputError naming the file when that is not a RAPID identifier."""
     if section_module is not None:
         return section_module
-    problem = rapid_name_problem(out.stem)
-    if problem:
-        raise InputError(
-            f"the module name {out.stem!r} (the file's stem) {problem}: rename the output or set "
-            "rapid.module in the cell file",
-            os.fspath(out),
-        )
-    return out.stem
+    return stem_name(out, "module", "rapid.module", rapid_name_problem)
 
 
 def render_rapid(

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-import re
+from accugrid.codegen.program_text import identifier_problem
 
 __all__ = ["RAPID_NAME_MAX", "RAPID_RESERVED", "is_rapid_name", "rapid_name_problem"]
 
@@ -14,18 +14,14 @@ RAPID_RESERVED = frozenset(
     INOUT LOCAL MOD MODULE NOSTEPIN NOT NOVIEW OR PERS PROC RAISE READONLY RECORD RETRY RETURN
     STEP SYSMODULE TEST THEN TO TRAP TRUE TRYNEXT UNDO VAR VIEWONLY WHILE WITH XOR""".split()
 )
-_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 
 
 def rapid_name_problem(name: str) -> str | None:
     """Why ``name`` is not a RAPID identifier, None when it is one."""
-    if not _NAME.fullmatch(name):
-        return "must be a letter, then letters, digits or _"
-    if len(name) > RAPID_NAME_MAX:
-        return f"has {len(name)} characters, RAPID allows at most {RAPID_NAME_MAX}"
-    if name.upper() in RAPID_RESERVED:
+    problem = identifier_problem(name, RAPID_NAME_MAX, "RAPID allows at most")
+    if problem is None and name.upper() in RAPID_RESERVED:
         return "is a RAPID reserved word"
-    return None
+    return problem
 
 
 def is_rapid_name(name: str) -> bool:
