@@ -601,25 +601,3 @@ def test_config_words_are_the_arm_geometry_of_any_joints(q):
     assert f"{letters}, {words[3]}, {words[4]}, {words[5]}" == _config_of(q)
     back = read_configuration(words)  # the words read back name the same configuration
     np.testing.assert_array_equal(configuration_words(back), words)
-
-
-@pytest.mark.parametrize(
-    ("stem", "why"),
-    [
-        ("1panel", "must be a letter, then letters, digits or _"),
-        ("P" * 37, "has 37 characters, a FANUC program name at most 36"),
-    ],
-)
-def test_an_output_stem_the_controller_refuses_as_a_program_name_is_a_located_error(stem, why):
-    from accugrid.codegen.fanuc.emit import program_name
-    from accugrid.infra.errors import InputError
-
-    out = Path("out") / f"{stem}.ls"
-    with pytest.raises(InputError) as raised:
-        program_name(None, out)
-    assert str(raised.value).endswith(
-        f"the program name {stem!r} (the file's stem) {why}: rename the output or set "
-        "fanuc.program in the cell file"
-    )
-    assert str(out) in str(raised.value)
-    assert program_name(None, Path("panel.ls")) == "PANEL"

@@ -67,3 +67,36 @@ def test_only_a_pair_dialect_names_the_suffixes_of_a_two_file_program():
     assert pairs == {"krl": (".src", ".dat"), "gcode": None, "rapid": None, "fanuc": None}
     for name, pair in pairs.items():
         assert pair is None or set(pair) <= set(DIALECTS[name].suffixes)
+
+
+@pytest.mark.parametrize(
+    ("dialect", "stem", "why"),
+    [
+        ("rapid", "1panel", "must be a letter, then letters, digits or _"),
+        ("rapid", "P" * 33, "has 33 characters, RAPID allows at most 32"),
+        ("rapid", "Module", "is a RAPID reserved word"),
+        ("fanuc", "1panel", "must be a letter, then letters, digits or _"),
+        ("fanuc", "P" * 37, "has 37 characters, a FANUC program name at most 36"),
+    ],
+)
+def test_an_output_stem_the_controller_refuses_as_its_name_is_a_located_error(dialect, stem, why):
+    """Without a name in the cell a RAPID module and a FANUC program are named after the output
+    file; a stem the controller refuses is an error naming the file and the cell key to set."""
+    from accugrid.codegen.fanuc.emit import program_name
+    from accugrid.codegen.rapid.emit import module_name
+    from accugrid.infra.errors import InputError
+
+    name_of, what, suffix = {
+        "rapid": (module_name, "module", ".mod"),
+        "fanuc": (program_name, "program", ".ls"),
+    }[dialect]
+    out = Path("out") / f"{stem}{suffix}"
+    with pytest.raises(InputError) as raised:
+        name_of(None, out)
+    assert str(raised.value).endswith(
+        f"the {what} name {stem!r} (the file's stem) {why}: rename the output or set "
+        f"{dialect}.{what} in the cell file"
+    )
+    assert str(out) in str(raised.value)
+    assert name_of("PANEL", out) == "PANEL"
+    assert name_of(None, Path(f"panel{suffix}")) == {"rapid": "panel", "fanuc": "PANEL"}[dialect]

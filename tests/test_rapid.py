@@ -447,26 +447,3 @@ def test_a_calibrated_robot_keeps_its_controller(tmp_path):
     model = tmp_path / "cal.yaml"
     model.write_text(calibrated_yaml(load_robot("irb6700")))
     assert load_robot(model).controller == "abb" and load_robot("kr210").controller == "kuka"
-
-
-@pytest.mark.parametrize(
-    ("stem", "why"),
-    [
-        ("1panel", "must be a letter, then letters, digits or _"),
-        ("P" * 33, "has 33 characters, RAPID allows at most 32"),
-        ("Module", "is a RAPID reserved word"),
-    ],
-)
-def test_an_output_stem_rapid_refuses_as_a_module_name_is_a_located_error(stem, why):
-    from accugrid.codegen.rapid.emit import module_name
-    from accugrid.infra.errors import InputError
-
-    out = Path("out") / f"{stem}.mod"
-    with pytest.raises(InputError) as raised:
-        module_name(None, out)
-    assert str(raised.value).endswith(
-        f"the module name {stem!r} (the file's stem) {why}: rename the output or set "
-        "rapid.module in the cell file"
-    )
-    assert str(out) in str(raised.value)
-    assert module_name("PANEL", out) == "PANEL" and module_name(None, Path("panel.mod")) == "panel"
